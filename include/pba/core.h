@@ -1,0 +1,108 @@
+// pba core: math aliases, errors, validation helpers, state hashing and timing.
+//
+// Every other pba header includes this one. It never includes graphics.
+#pragma once
+
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+namespace pba {
+
+/// Double-precision 3-vector: positions in metres, velocities in m/s, accelerations in m/s^2.
+using Vec3 = glm::dvec3;
+/// Double-precision 2-vector.
+using Vec2 = glm::dvec2;
+/// Double-precision 3x3 matrix (rotations, inertia tensors).
+using Mat3 = glm::dmat3;
+/// Double-precision 4x4 matrix (rigid transforms).
+using Mat4 = glm::dmat4;
+/// Double-precision unit quaternion (orientations).
+using Quat = glm::dquat;
+/// Single-precision 3-vector, for bulk data such as large particle arrays.
+using Vec3f = glm::vec3;
+
+/// The one exception type pba throws for bad input and diverged simulations.
+/// Its message names the bad value and where it came from, for example
+/// "StepperSettings.fixed_dt (--dt): must be finite and > 0, got -0.01".
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Formats a double for error messages: shortest round-trip form, "nan", "inf", "-inf".
+std::string format_value(double v);
+
+/// Throws Error "<where>: must be finite, got <v>" unless v is finite.
+void require_finite(double v, std::string_view where);
+/// Throws Error unless v is finite and strictly positive.
+void require_positive(double v, std::string_view where);
+/// Throws Error unless v is finite and >= 0.
+void require_non_negative(double v, std::string_view where);
+/// Throws Error unless lo <= v <= hi (both inclusive) and v is finite.
+void require_in_range(double v, double lo, double hi, std::string_view where);
+/// Throws Error unless lo <= v <= hi for an integer count.
+void require_count(long long v, long long lo, long long hi, std::string_view where);
+
+/// True when every component of v is finite.
+template <class V>
+bool is_finite(const V& v) {
+  if constexpr (std::is_arithmetic_v<V>) {
+    return std::isfinite(v);
+  } else {
+    for (int i = 0; i < V::length(); ++i)
+      if (!std::isfinite(v[i])) return false;
+    return true;
+  }
+}
+
+/// Where a simulation's state first became non-finite: the object's index and
+/// kind, the simulated time (s) and step. `ok` is true when everything is finite.
+struct FiniteCheck {
+  bool ok = true;           ///< true when every checked value is finite
+  std::size_t index = 0;    ///< index of the first non-finite object
+  std::string message;      ///< human-readable report, empty when ok
+};
+
+/// Scans positions and velocities of `kind` objects (e.g. "particle") for NaN or
+/// infinity. On failure the message reads
+/// "particle 3 became non-finite at t = 1.25 s (step 75): position (nan, 0, 1)".
+template <class V>
+FiniteCheck check_finite(std::span<const V> x, std::span<const V> v, std::string_view kind, double t,
+                         long long step);
+
+/// 64-bit FNV-1a over raw bytes, for state hashes in tests and benchmarks.
+/// Hashes bit patterns, so +0.0 and -0.0 differ, as determinism requires.
+std::uint64_t hash_bytes(const void* data, std::size_t size,
+                         std::uint64_t seed = 0xcbf29ce484222325ULL);
+
+/// Hash of a contiguous array of trivially-copyable values (vectors, doubles).
+template <class T>
+std::uint64_t hash_span(std::span<const T> values, std::uint64_t seed = 0xcbf29ce484222325ULL) {
+  return hash_bytes(values.data(), values.size_bytes(), seed);
+}
+
+/// Monotonic wall-clock stopwatch for profiling; seconds as double.
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  /// Restarts timing from now.
+  void reset() { start_ = std::chrono::steady_clock::now(); }
+  /// Seconds elapsed since construction or the last reset().
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace pba

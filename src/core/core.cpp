@@ -1,0 +1,102 @@
+// Implementation of pba/core.h: formatting, validation and hashing.
+#include "pba/core.h"
+
+#include <charconv>
+#include <cstring>
+
+namespace pba {
+
+std::string format_value(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[64];
+  auto res = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, res.ptr);
+}
+
+namespace {
+[[noreturn]] void fail(std::string_view where, std::string_view rule, double v) {
+  throw Error(std::string(where) + ": " + std::string(rule) + ", got " + format_value(v));
+}
+}  // namespace
+
+void require_finite(double v, std::string_view where) {
+  if (!std::isfinite(v)) fail(where, "must be finite", v);
+}
+
+void require_positive(double v, std::string_view where) {
+  if (!std::isfinite(v) || !(v > 0)) fail(where, "must be finite and > 0", v);
+}
+
+void require_non_negative(double v, std::string_view where) {
+  if (!std::isfinite(v) || !(v >= 0)) fail(where, "must be finite and >= 0", v);
+}
+
+void require_in_range(double v, double lo, double hi, std::string_view where) {
+  if (!std::isfinite(v) || v < lo || v > hi)
+    fail(where, "must be in [" + format_value(lo) + ", " + format_value(hi) + "]", v);
+}
+
+void require_count(long long v, long long lo, long long hi, std::string_view where) {
+  if (v < lo || v > hi)
+    throw Error(std::string(where) + ": must be an integer in [" + std::to_string(lo) + ", " +
+                std::to_string(hi) + "], got " + std::to_string(v));
+}
+
+namespace {
+template <class V>
+std::string format_vec(const V& v) {
+  if constexpr (std::is_arithmetic_v<V>) {
+    return format_value(static_cast<double>(v));
+  } else {
+    std::string s = "(";
+    for (int i = 0; i < V::length(); ++i) {
+      if (i) s += ", ";
+      s += format_value(static_cast<double>(v[i]));
+    }
+    return s + ")";
+  }
+}
+}  // namespace
+
+template <class V>
+FiniteCheck check_finite(std::span<const V> x, std::span<const V> v, std::string_view kind, double t,
+                         long long step) {
+  FiniteCheck r;
+  // scan both arrays; report the first object whose position or velocity is bad
+  const std::size_t n = x.size() < v.size() ? v.size() : x.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool bad_x = i < x.size() && !is_finite(x[i]);
+    const bool bad_v = i < v.size() && !is_finite(v[i]);
+    if (!bad_x && !bad_v) continue;
+    r.ok = false;
+    r.index = i;
+    r.message = std::string(kind) + " " + std::to_string(i) + " became non-finite at t = " +
+                format_value(t) + " s (step " + std::to_string(step) + "): " +
+                (bad_x ? "position " + format_vec(x[i]) : "velocity " + format_vec(v[i]));
+    return r;
+  }
+  return r;
+}
+
+template FiniteCheck check_finite<double>(std::span<const double>, std::span<const double>,
+                                          std::string_view, double, long long);
+template FiniteCheck check_finite<Vec2>(std::span<const Vec2>, std::span<const Vec2>, std::string_view,
+                                        double, long long);
+template FiniteCheck check_finite<Vec3>(std::span<const Vec3>, std::span<const Vec3>, std::string_view,
+                                        double, long long);
+template FiniteCheck check_finite<Vec3f>(std::span<const Vec3f>, std::span<const Vec3f>,
+                                         std::string_view, double, long long);
+
+std::uint64_t hash_bytes(const void* data, std::size_t size, std::uint64_t seed) {
+  // FNV-1a, 64-bit: simple, stable across platforms, fast enough for state hashes
+  const auto* p = static_cast<const unsigned char*>(data);
+  std::uint64_t h = seed;
+  for (std::size_t i = 0; i < size; ++i) {
+    h ^= p[i];
+    h *= 0x100000001b3ULL;
+  }
+  return h;
+}
+
+}  // namespace pba

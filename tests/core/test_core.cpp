@@ -1,0 +1,58 @@
+// Tests for pba/core.h: validation messages, finite checks and state hashing.
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <vector>
+
+#include "pba/core.h"
+
+namespace {
+
+std::string error_of(auto&& f) {
+  try {
+    f();
+  } catch (const pba::Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Validate, MessagesNameTheValueAndWhere) {
+  EXPECT_EQ(error_of([] { pba::require_positive(-0.5, "settings.dt"); }),
+            "settings.dt: must be finite and > 0, got -0.5");
+  EXPECT_EQ(error_of([] { pba::require_positive(0.0, "settings.dt"); }),
+            "settings.dt: must be finite and > 0, got 0");
+  EXPECT_EQ(error_of([] { pba::require_finite(std::numeric_limits<double>::quiet_NaN(), "x"); }),
+            "x: must be finite, got nan");
+  EXPECT_EQ(error_of([] { pba::require_count(-3, 0, 100, "--substeps"); }),
+            "--substeps: must be an integer in [0, 100], got -3");
+  EXPECT_EQ(error_of([] { pba::require_positive(0.25, "ok"); }), "");
+}
+
+TEST(CheckFinite, ReportsFirstBadObjectWithTimeAndStep) {
+  std::vector<pba::Vec3> x{{0, 0, 0}, {1, std::numeric_limits<double>::infinity(), 0}};
+  std::vector<pba::Vec3> v{{0, 0, 0}, {0, 0, 0}};
+  auto r = pba::check_finite<pba::Vec3>(x, v, "particle", 1.25, 75);
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.index, 1u);
+  EXPECT_EQ(r.message, "particle 1 became non-finite at t = 1.25 s (step 75): position (1, inf, 0)");
+  x[1].y = 2;
+  EXPECT_TRUE((pba::check_finite<pba::Vec3>(x, v, "particle", 1.25, 75).ok));
+}
+
+TEST(Hash, SensitiveToEveryBitAndStable) {
+  std::vector<double> a{1.0, 2.0, 3.0};
+  const auto h = pba::hash_span<double>(a);
+  // FNV-1a is a fixed function of the bytes: the same array hashes the same
+  EXPECT_EQ(h, pba::hash_span<double>(std::vector<double>{1.0, 2.0, 3.0}));
+  // one ulp anywhere changes the hash
+  a[1] = std::nextafter(2.0, 3.0);
+  EXPECT_NE(h, pba::hash_span<double>(a));
+  // the sign of zero is part of the state
+  EXPECT_NE(pba::hash_span<double>(std::vector<double>{0.0}),
+            pba::hash_span<double>(std::vector<double>{-0.0}));
+  // FNV-1a of the empty input is its offset basis
+  EXPECT_EQ(pba::hash_bytes(nullptr, 0), 0xcbf29ce484222325ULL);
+}
+
+}  // namespace
