@@ -1,0 +1,246 @@
+// Tests for pba/lab.h: observed orders of convergence against theory, the closed-form
+// solutions and special functions the lab relies on, stability limits, user problems,
+// bad input and the CSV output.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+
+#include "pba/lab.h"
+
+namespace {
+
+using pba::Method;
+namespace lab = pba::lab;
+
+std::string error_of(auto&& f) {
+  try {
+    f();
+  } catch (const pba::Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Convergence, OscillatorOrdersMatchTheoryWithinATenth) {
+  // the headline: 1, 1, 2, 2, 4, 1
+  const lab::Problem p = lab::oscillator();
+  for (Method m : pba::kAllMethods) {
+    SCOPED_TRACE(std::string(pba::name(m)));
+    const auto r = lab::measure_convergence(p, m);
+    EXPECT_NEAR(r.observed_order, pba::order(m), 0.1);
+    int fitted = 0;
+    for (bool f : r.fitted) fitted += f;
+    EXPECT_GE(fitted, 3);
+  }
+}
+
+TEST(Convergence, LinearDragClosedFormMatchedAtEachMethodsOrder) {
+  const lab::Problem p = lab::projectile_drag();
+  for (Method m : pba::kAllMethods) {
+    SCOPED_TRACE(std::string(pba::name(m)));
+    EXPECT_NEAR(lab::measure_convergence(p, m).observed_order, pba::order(m), 0.1);
+  }
+}
+
+TEST(Convergence, EveryStandardProblemMatchesTheory) {
+  // orders within 0.1 everywhere, except where no order exists: constant acceleration is
+  // integrated exactly by the second-order methods and RK4 (error at round-off), and RK4
+  // on the small pendulum is more accurate than the small-angle formula it is compared to
+  for (const auto& p : lab::standard_problems()) {
+    for (Method m : pba::kAllMethods) {
+      SCOPED_TRACE(p.name + " / " + std::string(pba::name(m)));
+      const auto r = lab::measure_convergence(p, m);
+      const bool exact = p.name == "projectile" && pba::order(m) >= 2;
+      const bool model_limited = p.name == "pendulum-small" && m == Method::RK4;
+      if (exact || model_limited) {
+        EXPECT_TRUE(std::isnan(r.observed_order)) << r.observed_order;
+        EXPECT_FALSE(r.note.empty());
+      } else {
+        EXPECT_NEAR(r.observed_order, pba::order(m), 0.1);
+      }
+    }
+  }
+}
+
+TEST(SpecialFunctions, EllipticKAndJacobiFunctions) {
+  // K(0) = pi/2; K(1/2) = Gamma(1/4)^2 / (4 sqrt(pi)) = 1.854074677301372 (A&S table 17.1)
+  EXPECT_DOUBLE_EQ(lab::elliptic_k(0.0), std::numbers::pi / 2);
+  EXPECT_NEAR(lab::elliptic_k(0.5), std::pow(std::tgamma(0.25), 2) / (4 * std::sqrt(std::numbers::pi)), 1e-15);
+  for (double m : {0.0, 0.1, 0.5, 0.9, 0.99}) {
+    const double K = lab::elliptic_k(m);
+    // sn(K) = 1, cn(K) = 0 and the identities sn^2 + cn^2 = 1, dn^2 + m sn^2 = 1
+    const auto jk = lab::jacobi_elliptic(K, m);
+    EXPECT_NEAR(jk.sn, 1.0, 1e-14);
+    EXPECT_NEAR(jk.cn, 0.0, 1e-7);  // cn ~ sqrt(1 - sn): loses half the digits near K
+    for (double u : {-2.0, 0.3, 1.1, 4.0}) {
+      const auto j = lab::jacobi_elliptic(u, m);
+      EXPECT_NEAR(j.sn * j.sn + j.cn * j.cn, 1.0, 1e-14);
+      EXPECT_NEAR(j.dn * j.dn + m * j.sn * j.sn, 1.0, 1e-14);
+    }
+  }
+  // m = 0 reduces to sin and cos
+  EXPECT_NEAR(lab::jacobi_elliptic(0.7, 1e-18).sn, std::sin(0.7), 1e-15);
+  EXPECT_NE(error_of([] { lab::elliptic_k(1.0); }).find("elliptic_k(m)"), std::string::npos);
+}
+
+TEST(ClosedForms, LargePendulumExactSolutionMatchesAFineRK4Run) {
+  // the Jacobi solution against RK4 at a step 1000x finer than needed, and its period
+  const lab::Problem p = lab::pendulum(2.5, false);
+  std::vector<double> x, v, xe(1), ve(1);
+  const long long steps = 30000;
+  lab::simulate(p, Method::RK4, p.t_end / steps, steps, x, v);
+  p.exact(p.t_end, xe, ve);
+  EXPECT_NEAR(x[0], xe[0], 1e-11);
+  EXPECT_NEAR(v[0], ve[0], 1e-10);
+  // after one exact period T = 4 K(sin^2(theta0/2)) / omega0 the pendulum is back at rest
+  const double T = lab::pendulum_period(2.5, std::sqrt(9.81));
+  EXPECT_GT(T, 2 * std::numbers::pi / std::sqrt(9.81) * 1.5);  // much longer than small-angle
+  p.exact(T, xe, ve);
+  EXPECT_NEAR(xe[0], 2.5, 1e-12);
+  EXPECT_NEAR(ve[0], 0.0, 1e-6);
+  lab::Problem q = p;
+  q.t_end = T;
+  lab::simulate(q, Method::RK4, T / 40000, 40000, x, v);
+  EXPECT_NEAR(x[0], 2.5, 1e-10);
+  EXPECT_NEAR(v[0], 0.0, 1e-9);
+}
+
+TEST(ClosedForms, KeplerSolutionConservesEnergyAndAngularMomentum) {
+  const lab::Problem p = lab::kepler(0.5);
+  std::vector<double> x(2), v(2);
+  for (double t : {0.0, 0.5, 2.0, 3.14159, 5.0, 100.0}) {
+    p.exact(t, x, v);
+    EXPECT_NEAR(p.energy(x, v), -0.5, 1e-14);
+    EXPECT_NEAR(p.invariant(x, v), std::sqrt(0.75), 1e-14);
+  }
+  // one period (2 pi) brings it back to periapsis
+  p.exact(2 * std::numbers::pi, x, v);
+  EXPECT_NEAR(x[0], 0.5, 1e-14);
+  EXPECT_NEAR(x[1], 0.0, 1e-14);
+}
+
+TEST(ClosedForms, SmallAnglePendulumKnowsItsOwnModelError) {
+  // the small-angle formula is off by ~theta0^3: it is used only above 10x that error
+  const lab::Problem p = lab::pendulum(0.001, true);
+  EXPECT_GT(p.model_error, 0);
+  EXPECT_LT(p.model_error, 1e-10);
+  const lab::Problem big = lab::pendulum(0.1, true);
+  EXPECT_GT(big.model_error, 1e5 * p.model_error);  // ~ (0.1/0.001)^3
+}
+
+TEST(Stability, MeasuredLimitsMatchTheory) {
+  for (Method m : pba::kAllMethods) {
+    SCOPED_TRACE(std::string(pba::name(m)));
+    const auto r = lab::measure_stability(m);
+    const double th = lab::theory_stability_limit(m);
+    if (m == Method::ExplicitEuler) {
+      // rho = sqrt(1 + z^2) exceeds 1 + tolerance from z = sqrt(2 tolerance) on
+      EXPECT_LT(r.limit, 2e-6);
+    } else if (std::isinf(th)) {
+      EXPECT_TRUE(std::isinf(r.limit));
+    } else {
+      EXPECT_NEAR(r.limit, th, 1e-6);
+    }
+  }
+  EXPECT_NEAR(lab::spectral_radius(Method::ExplicitEuler, 1.0), std::sqrt(2.0), 1e-15);
+  EXPECT_NEAR(lab::spectral_radius(Method::ImplicitEuler, 1.0), 1 / std::sqrt(2.0), 1e-15);
+}
+
+TEST(Energy, LongRunMeasurementsReportBoundsAndFailures) {
+  lab::EnergySettings s;
+  s.steps = 100000;
+  s.samples = 101;
+  const lab::Problem osc = lab::oscillator();
+  const auto vv = lab::measure_energy(osc, Method::VelocityVerlet, s);
+  EXPECT_EQ(vv.steps_done, 100000);
+  EXPECT_EQ(vv.t.size(), 101u);
+  EXPECT_LE(vv.max_abs_rel_error, 2.5e-5 / (1 - 2.5e-5) + 1e-12);  // (z^2/4)/(1 - z^2/4), z = 0.01
+  // symplectic Euler on the orbit conserves angular momentum to round-off
+  const auto orbit = lab::measure_energy(lab::kepler(0.5), Method::SemiImplicitEuler, s);
+  EXPECT_LT(orbit.invariant_max_abs_error, 1e-11);
+  // implicit Euler's orbit decays into the centre, where Newton fails: reported, not thrown
+  s.steps = 20000;
+  const auto ie = lab::measure_energy(lab::kepler(0.5), Method::ImplicitEuler, s);
+  EXPECT_LT(ie.steps_done, 20000);
+  EXPECT_NE(ie.failure.find("implicit Euler: Newton did not converge"), std::string::npos) << ie.failure;
+}
+
+TEST(UserProblems, OwnAccelerationWithoutClosedFormUsesAnRK4Reference) {
+  // the workbook's "add additional acceleration functions": a hardening spring x'' = -x - x^3
+  lab::Problem p;
+  p.name = "duffing";
+  p.description = "hardening spring";
+  p.x0 = {1.0};
+  p.v0 = {0.0};
+  p.t_end = 5;
+  p.dt_coarse = 0.05;
+  p.accel = [](double, std::span<const double> x, std::span<const double>, std::span<double> a) {
+    a[0] = -x[0] - x[0] * x[0] * x[0];
+  };
+  for (Method m : {Method::SemiImplicitEuler, Method::VelocityVerlet, Method::RK4}) {
+    SCOPED_TRACE(std::string(pba::name(m)));
+    EXPECT_NEAR(lab::measure_convergence(p, m).observed_order, pba::order(m), 0.1);
+  }
+  // and it runs through the whole lab beside the standard ones
+  auto problems = lab::standard_problems();
+  problems.push_back(p);
+  lab::LabOptions o;
+  o.problems = {"duffing"};
+  o.methods = {Method::RK4};
+  const auto rep = lab::run_lab(problems, o);
+  ASSERT_EQ(rep.convergence.size(), 1u);
+  EXPECT_TRUE(rep.energy.empty());  // no energy function: no energy run
+  EXPECT_NE(lab::summary_table(rep).find("duffing"), std::string::npos);
+}
+
+TEST(BadInput, ProblemsAndSettingsNameTheField) {
+  lab::Problem p = lab::oscillator();
+  p.accel = nullptr;
+  EXPECT_EQ(error_of([&] { p.validate(); }), "Problem 'oscillator'.accel: must be set");
+  p = lab::oscillator();
+  p.t_end = -1;
+  EXPECT_EQ(error_of([&] { p.validate(); }), "Problem 'oscillator'.t_end: must be finite and > 0, got -1");
+  p = lab::oscillator();
+  p.v0 = {0, 0};
+  EXPECT_EQ(error_of([&] { p.validate(); }), "Problem 'oscillator'.v0: has 2 values but x0 has 1");
+  lab::ConvergenceSettings cs;
+  cs.levels = 1;
+  EXPECT_EQ(error_of([&] { lab::measure_convergence(lab::oscillator(), Method::RK4, cs); }),
+            "ConvergenceSettings.levels: must be an integer in [2, 20], got 1");
+  const auto probs = lab::standard_problems();
+  EXPECT_EQ(error_of([&] { lab::find_problem(probs, "pendulum", "--problem"); }),
+            "--problem: unknown problem 'pendulum'; valid names: projectile, projectile-drag, oscillator, "
+            "damped-oscillator, pendulum-small, pendulum-large, orbit, orbit-circular");
+  EXPECT_NE(error_of([&] { lab::measure_energy(lab::Problem{}, Method::RK4); }).find("Problem.name"),
+            std::string::npos);
+}
+
+TEST(Output, CsvFilesAndSummaryTable) {
+  lab::LabOptions o;
+  o.problems = {"oscillator"};
+  o.energy.steps = 1000;
+  const auto rep = lab::run_lab(lab::standard_problems(), o);
+  const auto dir = std::filesystem::temp_directory_path() / "pba_test_lab_csv";
+  std::filesystem::remove_all(dir);
+  lab::write_csv(rep, dir.string());
+  for (const char* f : {"convergence.csv", "orders.csv", "energy.csv", "stability.csv", "energy_summary.csv"}) {
+    std::ifstream in(dir / f);
+    std::string header;
+    EXPECT_TRUE(std::getline(in, header)) << f;
+    EXPECT_NE(header.find(','), std::string::npos) << f;
+  }
+  const std::string table = lab::summary_table(rep);
+  for (const char* s : {"Explicit Euler", "RK4", "2.8284", "Implicit Euler"})
+    EXPECT_NE(table.find(s), std::string::npos) << s << "\n" << table;
+  // an output path under a regular file cannot be created
+  const auto file = dir / "not_a_dir";
+  std::ofstream(file) << "x";
+  EXPECT_NE(error_of([&] { lab::write_csv(rep, (file / "sub").string()); }).find("cannot create directory"),
+            std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
