@@ -1,0 +1,417 @@
+// The samples application's frame loop, sample switching and headless capture.
+#include "app.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <thread>
+
+#include <GLFW/glfw3.h>
+#include <glm/gtc/matrix_transform.hpp>
+#include <imgui.h>
+
+#include "gl.h"
+#include "image_check.h"
+
+namespace pba::app {
+
+namespace fs = std::filesystem;
+
+App::App(const Options& options) : options_(options) {
+  headless_ = options.headless || options.selftest;
+}
+
+App::~App() {
+  // the physics thread must stop before the sample, and GL objects go before the context
+  if (physics_) physics_->attach(nullptr);
+  sample_.reset();
+  physics_.reset();
+  target_.reset();
+  renderer_.reset();
+}
+
+bool App::init() {
+  // window and GL context: hidden for headless capture
+  WindowConfig wc;
+  wc.width = options_.width;
+  wc.height = options_.height;
+  wc.visible = !headless_;
+  std::string error;
+  if (!window_.open(wc, &error)) {
+    std::fprintf(stderr, "pba_samples: %s\n", error.c_str());
+    return false;
+  }
+  renderer_ = std::make_unique<Renderer>();
+  if (!renderer_->init(&error)) {
+    std::fprintf(stderr, "pba_samples: renderer: %s\n", error.c_str());
+    return false;
+  }
+  target_ = std::make_unique<FrameTarget>();
+  // anti-aliasing: 4x, except live on a software rasteriser, where it would cost the frame rate
+  if (options_.msaa <= 0) {
+    const char* gl_renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    const bool software = gl_renderer && (std::strstr(gl_renderer, "llvmpipe") || std::strstr(gl_renderer, "softpipe"));
+    options_.msaa = (software && !headless_) ? 1 : 4;
+  }
+  physics_ = std::make_unique<PhysicsLoop>(ctx_.settings, headless_);
+  ctx_.renderer = renderer_.get();
+  ctx_.camera = &camera_;
+  ctx_.physics = physics_.get();
+  ctx_.virtual_time = headless_;
+  ctx_.settings.show_ui = !options_.hide_ui;
+  ctx_.options = options_.sample_options;
+  last_frame_start_ = std::chrono::steady_clock::now();
+  return true;
+}
+
+void App::apply_options_to_settings() {
+  // command-line choices win over a sample's preferences
+  Settings& s = ctx_.settings;
+  if (options_.dt) s.stepper.fixed_dt = *options_.dt;
+  if (options_.strategy) s.stepper.strategy = *options_.strategy;
+  if (options_.method) s.method = *options_.method;
+  if (options_.substeps) s.substeps = *options_.substeps;
+}
+
+void App::load_sample(int index) {
+  const bool restart = sample_ && index == sample_index_;
+  // stop the physics before the sample goes away
+  physics_->attach(nullptr);
+  sample_.reset();
+  const Camera keep = camera_;
+  if (!restart) {
+    // a new sample starts from the app's defaults, then the command line
+    const Settings old = ctx_.settings;
+    ctx_.settings = Settings{};
+    ctx_.settings.show_ui = old.show_ui;
+    ctx_.settings.show_labels = old.show_labels;
+    ctx_.settings.show_grid = old.show_grid;
+    ctx_.settings.show_profiler = old.show_profiler;
+    ctx_.settings.paused = old.paused;
+    apply_options_to_settings();
+    camera_ = Camera{};
+  }
+  renderer_->style = SceneStyle{};
+  ctx_.settings.single_step = false;
+  ctx_.virtual_charge = 0;
+  diverged_.clear();
+  sample_index_ = index;
+  sample_ = Samples()[index].create(ctx_);
+  if (restart) camera_ = keep;
+  else apply_options_to_settings();
+  physics_->attach(sample_.get());
+}
+
+void App::handle_input() {
+  const ImGuiIO& io = ImGui::GetIO();
+  Settings& s = ctx_.settings;
+  const int n = static_cast<int>(Samples().size());
+  // key presses the UI does not want (queued, so short taps at low frame rates count)
+  const auto keys = window_.take_key_presses();
+  if (!io.WantCaptureKeyboard) {
+    for (const auto& [key, mods] : keys) {
+      switch (key) {
+        case GLFW_KEY_P: s.paused = !s.paused; break;
+        case GLFW_KEY_O: s.paused = true, s.single_step = true; break;
+        case GLFW_KEY_R: s.restart = true; break;
+        case GLFW_KEY_F1: s.show_ui = !s.show_ui; break;
+        case GLFW_KEY_ESCAPE: quit_ = true; break;
+        case GLFW_KEY_LEFT_BRACKET:
+        case GLFW_KEY_PAGE_UP: load_sample((sample_index_ + n - 1) % n); break;
+        case GLFW_KEY_RIGHT_BRACKET:
+        case GLFW_KEY_PAGE_DOWN: load_sample((sample_index_ + 1) % n); break;
+        default: {
+          auto lock = physics_->lock_state();
+          sample_->Keyboard(key, mods);
+          break;
+        }
+      }
+    }
+  }
+  // camera: left-drag orbits, right/middle-drag or shift+left pans, wheel zooms
+  if (!io.WantCaptureMouse) {
+    const ImVec2 d = io.MouseDelta;
+    const bool pan = io.MouseDown[1] || io.MouseDown[2] || (io.MouseDown[0] && io.KeyShift);
+    if (pan && (d.x != 0 || d.y != 0)) camera_.pan(d.x, d.y, io.DisplaySize.y);
+    else if (io.MouseDown[0] && (d.x != 0 || d.y != 0)) camera_.orbit(d.x, d.y);
+    if (io.MouseWheel != 0) camera_.zoom(io.MouseWheel);
+    // clicks go to the sample with a world-space ray under the cursor
+    for (int b = 0; b < 3; ++b) {
+      if (!ImGui::IsMouseClicked(b) && !ImGui::IsMouseReleased(b)) continue;
+      const float w = std::max(io.DisplaySize.x, 1.0f), h = std::max(io.DisplaySize.y, 1.0f);
+      const glm::mat4 inv = glm::inverse(camera_.projection(w / h) * camera_.view());
+      const float nx = 2 * io.MousePos.x / w - 1, ny = 1 - 2 * io.MousePos.y / h;
+      glm::vec4 a = inv * glm::vec4(nx, ny, -1, 1), c = inv * glm::vec4(nx, ny, 1, 1);
+      a /= a.w, c /= c.w;
+      auto lock = physics_->lock_state();
+      sample_->Mouse(b, ImGui::IsMouseClicked(b), Vec3(glm::vec3(a)), Vec3(glm::normalize(glm::vec3(c - a))));
+    }
+  }
+}
+
+double App::next_frame_dt() {
+  const Settings& s = ctx_.settings;
+  if (headless_) {
+    // virtual time: the frame lasts its nominal length, or longer when the render delay
+    // and the work a sample charged do not fit in it
+    double base = 1.0 / options_.fps;
+    if (s.frame_limit_hz > 0) base = std::max(base, 1.0 / s.frame_limit_hz);
+    const double work = s.render_delay_ms / 1000.0 + ctx_.virtual_charge;
+    ctx_.virtual_charge = 0;
+    return std::max(base, work);
+  }
+  const auto now = std::chrono::steady_clock::now();
+  const double dt = std::chrono::duration<double>(now - last_frame_start_).count();
+  last_frame_start_ = now;
+  return std::clamp(dt, 0.0, 10.0);
+}
+
+void App::check_frame(int frame_index, const std::vector<std::uint8_t>& rgb) {
+  // the first frames may still show an empty scene; then check every 4th and the last
+  const bool last = frame_index + 1 >= options_.frames;
+  if (frame_index < 2 || (frame_index % 4 != 0 && !last)) return;
+  const std::vector<Color> expected = sample_->ExpectedColors();
+  ImageRules rules;
+  const ImageStats st = MeasureImage(
+      rgb, target_->width(), target_->height(), [&](int y) { return renderer_->background_at_row(y); }, expected,
+      rules.color_tolerance);
+  const std::string err = CheckImage(st, rules, expected);
+  if (!err.empty()) failures_.push_back("frame " + std::to_string(frame_index) + ": " + err);
+  if (first_checked_.empty()) first_checked_ = rgb;
+  else if (last && ImageDifference(first_checked_, rgb) < 0.002)
+    failures_.push_back("frames do not change over time (frame 2 and frame " + std::to_string(frame_index) +
+                        " are the same)");
+}
+
+bool App::frame() {
+  window_.poll();
+  if (window_.should_close() || quit_) return false;
+  const double frame_dt = next_frame_dt();
+  last_frame_dt_ = frame_dt;
+  const auto frame_start = std::chrono::steady_clock::now();
+  Settings& s = ctx_.settings;
+
+  window_.begin_ui_frame();
+  if (!headless_) handle_input();
+  if (s.restart) {
+    s.restart = false;
+    load_sample(sample_index_);
+  }
+
+  // keep the orbit target centred in the part of the window the panels leave free
+  int w = 0, h = 0;
+  window_.framebuffer_size(&w, &h);
+  float left = 0, right = 0;
+  const float display_w = std::max(ImGui::GetIO().DisplaySize.x, 1.0f);
+  PanelWidths(ui_, s, display_w, &left, &right);
+  camera_.shift_x = (left - right) / display_w;
+
+  // physics: the sample advances one frame (through the app's time stepper by default)
+  ctx_.frame_dt = frame_dt;
+  if (diverged_.empty()) {
+    try {
+      sample_->Update(frame_dt);
+    } catch (const std::exception& e) {
+      diverged_ = e.what();
+    }
+    const std::string thread_error = physics_->take_thread_error();
+    if (!thread_error.empty()) diverged_ = thread_error;
+    if (diverged_.empty()) {
+      auto lock = physics_->lock_state();
+      const FiniteCheck fc = sample_->CheckFinite();
+      if (!fc.ok) diverged_ = fc.message;
+    }
+    if (!diverged_.empty()) {
+      s.paused = true;
+      std::fprintf(stderr, "pba_samples: %s: %s\n", Samples()[sample_index_].full_name().c_str(), diverged_.c_str());
+    }
+  }
+  const PhysicsReadout& pr = physics_->readout();
+  ui_.frame_ms.push(static_cast<float>(frame_dt * 1000));
+  ui_.physics_ms.push(static_cast<float>(pr.ticks * pr.tick_wall * 1000));
+  ui_.ticks.push(static_cast<float>(pr.ticks));
+  ui_.dropped_ms.push(static_cast<float>(pr.dropped * 1000));
+
+  // the 3D scene: the sample queues shapes, the renderer draws them off-screen
+  renderer_->begin_frame();
+  if (diverged_.empty()) {
+    auto lock = physics_->lock_state();
+    sample_->Draw(*renderer_, physics_->alpha());
+  }
+  const bool ground = renderer_->style.ground;
+  renderer_->style.ground = ground && s.show_grid;
+  target_->resize(w, h, options_.msaa);
+  target_->bind_scene();
+  renderer_->render(camera_, w, h);
+  renderer_->style.ground = ground;
+  target_->resolve();
+
+  // labels and panels over it
+  if (s.show_labels) renderer_->draw_labels(ImGui::GetBackgroundDrawList());
+  UiActions act;
+  if (s.show_ui) {
+    UiFrame uf;
+    uf.sample_index = sample_index_;
+    uf.sample = sample_.get();
+    uf.physics = &pr;
+    uf.draw = &renderer_->stats();
+    uf.frame_dt = frame_dt;
+    uf.diverged = &diverged_;
+    uf.headless = headless_;
+    // the sample's panel reads (and may reset) its state: keep the physics thread out
+    auto lock = physics_->lock_state();
+    act = DrawUi(ui_, ctx_, uf);
+  }
+  if (!diverged_.empty()) {
+    const UiActions d = DrawDiverged(diverged_, headless_);
+    act.restart = act.restart || d.restart;
+  }
+  window_.end_ui_frame();
+
+  // the workbook's doWork(): an artificial render cost
+  if (!headless_ && s.render_delay_ms > 0)
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(s.render_delay_ms));
+
+  // capture and self-test read the finished frame back
+  if (capture_ || options_.selftest) {
+    target_->read_rgb(&rgb_);
+    if (capture_) {
+      capture_->write_video(rgb_);
+      const int k = options_.screenshot_every;
+      const bool last = frame_index_ + 1 >= options_.frames;
+      if (k > 0 && (frame_index_ % k == 0 || last)) {
+        std::string error;
+        if (!capture_->write_png(frame_index_, rgb_, &error)) failures_.push_back(error);
+      }
+    }
+    if (options_.selftest) check_frame(frame_index_, rgb_);
+  }
+
+  // show it
+  if (!headless_) {
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window_.handle(), &fw, &fh);
+    target_->present(fw, fh);
+    window_.swap();
+  }
+
+  // frame-rate limit
+  if (!headless_ && s.frame_limit_hz > 0) {
+    const auto until = frame_start + std::chrono::duration<double>(1.0 / s.frame_limit_hz);
+    std::this_thread::sleep_until(until);
+  }
+
+  // what the panels asked for takes effect next frame
+  if (act.quit) quit_ = true;
+  if (act.select >= 0) load_sample(act.select);
+  else if (act.restart) load_sample(sample_index_);
+  return !quit_;
+}
+
+int App::run_headless(int sample_index, const std::string& out_dir) {
+  const SampleEntry& e = Samples()[sample_index];
+  failures_.clear();
+  first_checked_.clear();
+  frame_index_ = 0;
+  ctx_.settings.paused = false;
+  load_sample(sample_index);
+
+  // capture set-up: PNGs and the MP4 go to out_dir
+  Capture capture;
+  capture_ = nullptr;
+  if (!out_dir.empty()) {
+    std::string error;
+    const std::string video = options_.video ? SampleSlug(e) + ".mp4" : "";
+    if (!capture.open(out_dir, options_.width, options_.height, options_.fps, video, &error)) {
+      std::fprintf(stderr, "pba_samples: %s\n", error.c_str());
+      return 1;
+    }
+    capture_ = &capture;
+  }
+
+  // fixed number of frames of fixed virtual length
+  const auto t0 = std::chrono::steady_clock::now();
+  for (frame_index_ = 0; frame_index_ < options_.frames; ++frame_index_) frame();
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  capture_ = nullptr;
+  const bool video_ok = capture.close();
+
+  // report where things went
+  std::printf("%s: rendered %d frames (%dx%d) in %.1f s\n", e.full_name().c_str(), options_.frames, options_.width,
+              options_.height, secs);
+  if (!out_dir.empty()) {
+    const auto& pngs = capture.pngs();
+    const std::string where = fs::absolute(out_dir).lexically_normal().string();
+    if (!pngs.empty())
+      std::printf("  images: %zu PNG files in %s/ (%s ... %s)\n", pngs.size(), where.c_str(),
+                  fs::path(pngs.front()).filename().c_str(), fs::path(pngs.back()).filename().c_str());
+    if (!capture.video_path().empty() && video_ok)
+      std::printf("  video:  %s\n", fs::absolute(capture.video_path()).lexically_normal().c_str());
+    else if (!capture.video_note().empty()) std::printf("  %s\n", capture.video_note().c_str());
+  }
+  std::fflush(stdout);
+  if (!diverged_.empty()) failures_.push_back("simulation stopped: " + diverged_);
+  if (options_.selftest) {
+    for (const std::string& f : failures_) std::fprintf(stderr, "SELFTEST FAIL %s: %s\n", e.full_name().c_str(), f.c_str());
+    if (failures_.empty()) std::printf("SELFTEST PASS %s\n", e.full_name().c_str());
+  } else {
+    for (const std::string& f : failures_) std::fprintf(stderr, "pba_samples: %s\n", f.c_str());
+  }
+  return failures_.empty() ? 0 : 1;
+}
+
+int App::run() {
+  if (!init()) return 1;
+  const auto all = Samples();
+  if (all.empty()) {
+    std::fprintf(stderr, "pba_samples: no samples registered\n");
+    return 1;
+  }
+  // the starting sample: the one asked for, else the default
+  int index = 0;
+  std::string error;
+  if (!options_.sample.empty()) index = FindSample(options_.sample, &error);
+  else {
+    const int d = FindSample("Dynamics/Integrators", &error);
+    index = d >= 0 ? d : 0;
+  }
+  if (index < 0) {
+    std::fprintf(stderr, "pba_samples: %s\n", error.c_str());
+    return 2;
+  }
+
+  // a sample rejects a bad --option in its constructor: a usage error
+  try {
+    load_sample(index);
+  } catch (const Error& e) {
+    std::fprintf(stderr, "pba_samples: %s\n", e.what());
+    return 2;
+  }
+  if (!headless_) {
+    // interactive
+    while (frame()) {
+    }
+    return 0;
+  }
+
+  // headless: one sample or all of them, each into its own directory
+  if (options_.frames < 0) options_.frames = options_.selftest ? 60 : 300;
+  std::vector<int> indices;
+  if (options_.all)
+    for (int i = 0; i < static_cast<int>(all.size()); ++i) indices.push_back(i);
+  else
+    indices.push_back(index);
+  int rc = 0;
+  for (int i : indices) {
+    std::string dir;
+    const std::string slug = SampleSlug(all[i]);
+    if (!options_.out.empty()) dir = options_.all ? (fs::path(options_.out) / slug).string() : options_.out;
+    else if (!options_.selftest) dir = (fs::path("captures") / slug).string();
+    rc |= run_headless(i, dir);
+  }
+  return rc;
+}
+
+}  // namespace pba::app

@@ -1,0 +1,115 @@
+// Samples: the base class, the shared context and the self-registering catalogue.
+//
+// A sample lives in one .cpp under app/samples/ and registers itself:
+//
+//   static int reg = pba::app::RegisterSample("Dynamics", "Integrators", Integrators::Create);
+//
+// The app constructs it with a SampleContext, drives its physics through the time-stepping
+// module (Step() once per tick and substep), then calls Draw() and DrawUI() every frame.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pba/core.h"
+#include "pba/draw.h"
+#include "settings.h"
+
+namespace pba::app {
+
+class Renderer;
+class PhysicsLoop;
+struct Camera;
+
+/// What a sample may use from the app. Owned by the app; outlives every sample.
+struct SampleContext {
+  Settings settings;              ///< shared settings (the UI and command line edit them)
+  Renderer* renderer = nullptr;   ///< the 3D renderer (a pba::DebugDraw with extras)
+  Camera* camera = nullptr;       ///< the view; samples frame it in their constructor
+  PhysicsLoop* physics = nullptr; ///< the app's time stepper for Step()-driven samples
+  /// True when frames advance by a fixed virtual frame time (headless capture): samples
+  /// must then not measure wall-clock time, so images are reproducible.
+  bool virtual_time = false;
+  /// Virtual seconds of work the current frame pretends to have cost (a sample's simulated
+  /// physics load); added to the next virtual frame time. Ignored with real time.
+  double virtual_charge = 0;
+  /// Real time (s) of the frame being advanced, as handed to Sample::Update.
+  double frame_dt = 0;
+  /// Sample-specific settings from --option KEY=VALUE. A sample reads the keys it knows
+  /// in its constructor and throws pba::Error naming a bad value.
+  std::map<std::string, std::string> options;
+
+  /// The option `key`, or `fallback` when it was not given.
+  std::string option(const std::string& key, const std::string& fallback) const {
+    const auto it = options.find(key);
+    return it == options.end() ? fallback : it->second;
+  }
+};
+
+/// Base class of every sample: override what you need.
+class Sample {
+ public:
+  explicit Sample(SampleContext& ctx) : ctx_(ctx) {}
+  virtual ~Sample() = default;
+  Sample(const Sample&) = delete;
+  Sample& operator=(const Sample&) = delete;
+
+  /// One physics step of `dt` seconds starting at simulated time `t`. Called by the app's
+  /// time stepper (on the physics thread with the "threaded" strategy).
+  virtual void Step(double t, double dt) { (void)t, (void)dt; }
+  /// Advances one rendered frame of `frame_dt` seconds of real time. The default hands
+  /// the frame to the app's time stepper, which calls Step(); samples that run their own
+  /// steppers (e.g. "Time stepping") override this.
+  virtual void Update(double frame_dt);
+  /// Draws the state. `alpha` in [0, 1] is how far real time has moved from the previous
+  /// tick towards the latest one (for interpolated drawing; 1 draws the latest state).
+  virtual void Draw(Renderer& r, double alpha) { (void)r, (void)alpha; }
+  /// Adds the sample's own controls to its panel (called inside an ImGui window).
+  virtual void DrawUI() {}
+  /// A key press that the UI did not take (GLFW key code and modifier bits).
+  virtual void Keyboard(int key, int mods) { (void)key, (void)mods; }
+  /// A mouse button press or release at world ray origin/direction (no UI over it).
+  virtual void Mouse(int button, bool down, const Vec3& ray_origin, const Vec3& ray_dir) {
+    (void)button, (void)down, (void)ray_origin, (void)ray_dir;
+  }
+  /// Scans the state for NaN or infinity (pba::check_finite); the app pauses and shows
+  /// the message when it fails.
+  virtual FiniteCheck CheckFinite() const { return {}; }
+  /// Colours that must be visible in a rendered frame (the self-test looks for them).
+  virtual std::vector<Color> ExpectedColors() const { return {}; }
+  /// True when the sample runs its own time steppers and ignores the app's strategy.
+  virtual bool OwnsTime() const { return false; }
+
+ protected:
+  SampleContext& ctx_;
+};
+
+/// Creates a sample for the app's context.
+using SampleFactory = std::unique_ptr<Sample> (*)(SampleContext& ctx);
+
+/// One registered sample.
+struct SampleEntry {
+  std::string category;  ///< menu group, e.g. "Dynamics"
+  std::string name;      ///< title, e.g. "Integrators"
+  SampleFactory create;  ///< factory
+  /// "Category/Name", the unique full name used by --sample and --list.
+  std::string full_name() const { return category + "/" + name; }
+};
+
+/// Adds a sample to the catalogue; returns its registration number. Call from a static
+/// initialiser in the sample's .cpp.
+int RegisterSample(const char* category, const char* name, SampleFactory create);
+/// Every registered sample, sorted by category then name.
+std::span<const SampleEntry> Samples();
+/// Index of the sample matching `query`: its full name "Category/Name" or its name
+/// (case-insensitive, exact), else a unique case-insensitive substring of the full name.
+/// Returns -1 and sets `error` (listing the valid names) when none or several match.
+int FindSample(std::string_view query, std::string* error);
+/// A file-system friendly name, e.g. "dynamics_integrators".
+std::string SampleSlug(const SampleEntry& e);
+
+}  // namespace pba::app

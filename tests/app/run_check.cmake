@@ -1,0 +1,36 @@
+# Runs one command and checks its exit code and output.
+#   cmake -DCMD="prog;arg;..." -DEXPECT_RC=2 -DEXPECT_REGEX="..." [-DREJECT_REGEX="..."]
+#         [-DWORKDIR=dir] [-DCLEAN=1] -P run_check.cmake
+# stdout and stderr are checked together; every regex in EXPECT_REGEX (a list) must match.
+# Lists arrive joined by "@@".
+foreach(v CMD EXPECT_REGEX EXPECT_FILES)
+  string(REPLACE "@@" ";" ${v} "${${v}}")
+endforeach()
+if(WORKDIR)
+  if(CLEAN)
+    file(REMOVE_RECURSE ${WORKDIR})
+  endif()
+  file(MAKE_DIRECTORY ${WORKDIR})
+else()
+  set(WORKDIR ${CMAKE_CURRENT_BINARY_DIR})
+endif()
+execute_process(COMMAND ${CMD} WORKING_DIRECTORY ${WORKDIR} RESULT_VARIABLE rc OUTPUT_VARIABLE out
+                ERROR_VARIABLE err TIMEOUT 300)
+set(all "${out}${err}")
+message("exit code ${rc}\n--- output ---\n${all}--------------")
+if(NOT "${rc}" STREQUAL "${EXPECT_RC}")
+  message(FATAL_ERROR "expected exit code ${EXPECT_RC}, got ${rc}")
+endif()
+foreach(re IN LISTS EXPECT_REGEX)
+  if(NOT all MATCHES "${re}")
+    message(FATAL_ERROR "output does not match '${re}'")
+  endif()
+endforeach()
+if(REJECT_REGEX AND all MATCHES "${REJECT_REGEX}")
+  message(FATAL_ERROR "output matches the forbidden '${REJECT_REGEX}'")
+endif()
+foreach(f IN LISTS EXPECT_FILES)
+  if(NOT EXISTS ${WORKDIR}/${f})
+    message(FATAL_ERROR "expected file ${WORKDIR}/${f} is missing")
+  endif()
+endforeach()
