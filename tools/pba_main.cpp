@@ -1,5 +1,6 @@
 // `pba`: the headless multi-tool. Subcommands live in a table; add one by writing a
-// function `int cmd_x(Args&)` and a row in kCommands (`pba run scene.json` comes later).
+// function `int cmd_x(Args&)` and a row in kCommands. Larger subcommands live in their
+// own tools/cmd_<name>.cpp with a classic (argc, argv) entry point (pba run).
 //
 // Exit codes: 0 success, 1 a failure while running, 2 bad command line.
 #include <algorithm>
@@ -14,6 +15,7 @@
 
 #include "pba/integrate.h"
 #include "pba/lab.h"
+#include "commands_run.h"
 
 namespace {
 
@@ -159,6 +161,16 @@ int cmd_lab(Args& args) {
   return plot ? run_plot(out) : 0;
 }
 
+// `pba run`: hands the command word and what follows to tools/cmd_run.cpp
+int cmd_run(Args& a) {
+  std::vector<std::string> words{"run"};
+  while (!a.done()) words.emplace_back(a.take());
+  std::vector<char*> argv;
+  for (auto& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  return pba_run_command(static_cast<int>(words.size()), argv.data());
+}
+
 // ---- the command table --------------------------------------------------------------
 
 struct Command {
@@ -169,6 +181,7 @@ struct Command {
 
 constexpr Command kCommands[] = {
     {"lab", "integrator accuracy lab: convergence, energy and stability of every method", cmd_lab},
+    {"run", "run a scene file headless for N steps; per-step state as CSV", cmd_run},
 };
 
 void print_help() {

@@ -41,8 +41,17 @@ class Error : public std::runtime_error {
 /// Formats a double for error messages: shortest round-trip form, "nan", "inf", "-inf".
 std::string format_value(double v);
 
+/// Formats a vector for error messages as "(x, y, z)" with format_value's numbers.
+std::string format_vec3(const Vec3& v);
+/// Joins a field path for error messages: field_path("def", "mass") is "def.mass".
+std::string field_path(std::string_view where, std::string_view name);
+
 /// Throws Error "<where>: must be finite, got <v>" unless v is finite.
 void require_finite(double v, std::string_view where);
+/// Throws Error "<where>: must be finite, got (x, y, z)" unless every component is finite.
+void require_finite(const Vec3& v, std::string_view where);
+/// Throws Error unless q is finite with norm within 1e-6 of 1.
+void require_unit_quat(const Quat& q, std::string_view where);
 /// Throws Error unless v is finite and strictly positive.
 void require_positive(double v, std::string_view where);
 /// Throws Error unless v is finite and >= 0.

@@ -24,6 +24,31 @@ void require_finite(double v, std::string_view where) {
   if (!std::isfinite(v)) fail(where, "must be finite", v);
 }
 
+std::string format_vec3(const Vec3& v) {
+  // appended piece by piece (GCC 12 warns falsely on chained operator+ of strings)
+  std::string s = "(";
+  s.append(format_value(v.x)).append(", ").append(format_value(v.y)).append(", ").append(format_value(v.z));
+  return s.append(")");
+}
+
+std::string field_path(std::string_view where, std::string_view name) {
+  std::string s;
+  s.reserve(where.size() + name.size() + 1);
+  s.append(where).append(1, '.').append(name);
+  return s;
+}
+
+void require_finite(const Vec3& v, std::string_view where) {
+  if (!is_finite(v)) throw Error(std::string(where) + ": must be finite, got " + format_vec3(v));
+}
+
+void require_unit_quat(const Quat& q, std::string_view where) {
+  const double n = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+  if (!std::isfinite(n) || std::abs(n - 1) > 1e-6)
+    throw Error(std::string(where) + ": must be a finite unit quaternion, got (" + format_value(q.w) + ", " +
+                format_value(q.x) + ", " + format_value(q.y) + ", " + format_value(q.z) + ")");
+}
+
 void require_positive(double v, std::string_view where) {
   if (!std::isfinite(v) || !(v > 0)) fail(where, "must be finite and > 0", v);
 }

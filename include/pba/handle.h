@@ -1,0 +1,102 @@
+// pba handles: generation-checked ids for entities and components (Box2D v3's b2BodyId
+// idea in C++). A handle is an index into a slot table plus the slot's generation; the
+// generation changes every time the slot is freed, so a handle kept after destroy() is
+// recognised as stale and rejected with an Error instead of touching a reused slot.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pba/core.h"
+
+namespace pba {
+
+/// A generation-checked id. `Tag` makes entity ids and particle ids distinct types.
+/// A default-constructed handle is null (never valid).
+template <class Tag>
+struct Handle {
+  /// Slot index in the owner's table; kNullIndex for the null handle.
+  std::uint32_t index = kNullIndex;
+  /// Generation of the slot when the handle was issued (starts at 1; 0 is never issued).
+  std::uint32_t generation = 0;
+
+  /// Index value of the null handle.
+  static constexpr std::uint32_t kNullIndex = std::numeric_limits<std::uint32_t>::max();
+  /// True unless this is the null handle (says nothing about staleness: ask the owner).
+  bool is_null() const { return index == kNullIndex; }
+  bool operator==(const Handle&) const = default;
+};
+
+/// The slot table behind a family of handles: allocates indices (reusing freed ones in
+/// LIFO order, deterministically), bumps a slot's generation when it is freed, and checks
+/// handles. Growth allocates; create()/destroy() with a reused slot never do.
+template <class Tag>
+class HandlePool {
+ public:
+  using Id = Handle<Tag>;
+
+  /// Issues a handle, reusing the most recently freed slot if any.
+  Id create() {
+    // reuse a freed slot (its generation was bumped at destroy)
+    if (!free_.empty()) {
+      const std::uint32_t i = free_.back();
+      free_.pop_back();
+      alive_[i] = 1;
+      ++live_;
+      return Id{i, generation_[i]};
+    }
+    // or append a new slot at generation 1
+    generation_.push_back(1);
+    alive_.push_back(1);
+    ++live_;
+    return Id{static_cast<std::uint32_t>(generation_.size() - 1), 1};
+  }
+  /// Frees the handle's slot (throws Error naming `where` if the handle is stale or null).
+  void destroy(Id id, std::string_view where) {
+    require(id, where);
+    // bump the generation so every copy of `id` becomes stale; skip 0 on wrap-around
+    alive_[id.index] = 0;
+    if (++generation_[id.index] == 0) generation_[id.index] = 1;
+    free_.push_back(id.index);
+    --live_;
+  }
+  /// True when `id` names a live slot with a matching generation.
+  bool valid(Id id) const {
+    return id.index < generation_.size() && alive_[id.index] && generation_[id.index] == id.generation;
+  }
+  /// Throws Error "<where>: stale handle (index i, generation g; slot is now at
+  /// generation h)" or "...: null handle" unless valid(id).
+  void require(Id id, std::string_view where) const {
+    if (valid(id)) return;
+    if (id.is_null()) throw Error(std::string(where) + ": null handle");
+    if (id.index >= generation_.size())
+      throw Error(std::string(where) + ": invalid handle (index " + std::to_string(id.index) +
+                  " was never issued)");
+    throw Error(std::string(where) + ": stale handle (index " + std::to_string(id.index) + ", generation " +
+                std::to_string(id.generation) + "; the slot is now at generation " +
+                std::to_string(generation_[id.index]) + (alive_[id.index] ? "" : " and free") + ")");
+  }
+  /// The current generation of slot `index` (for tests and debugging).
+  std::uint32_t generation(std::uint32_t index) const { return generation_.at(index); }
+  /// Live handles.
+  std::size_t size() const { return live_; }
+  /// Slots ever issued (live + free): the table's capacity in use.
+  std::size_t slots() const { return generation_.size(); }
+  /// Reserves room for `n` slots so creating up to n handles never allocates.
+  void reserve(std::size_t n) {
+    generation_.reserve(n);
+    alive_.reserve(n);
+    free_.reserve(n);
+  }
+
+ private:
+  std::vector<std::uint32_t> generation_;
+  std::vector<std::uint8_t> alive_;
+  std::vector<std::uint32_t> free_;
+  std::size_t live_ = 0;
+};
+
+}  // namespace pba

@@ -1,0 +1,431 @@
+// pba particles (workbook 4.2): objects with mass and size that move in every direction
+// and never rotate. A ParticleSystem stores its particles as a structure of arrays of
+// floats (x, y, z, vx, vy, vz, inverse mass, radius; birth and death times), steps them with any
+// of the foundation's integrators under gravity, linear and quadratic drag, steady and
+// gusting wind and Forcer volumes, collides them continuously with planes, spheres and
+// boxes (static or moving), emits them from emitters, and recycles the dead without
+// allocating.
+//
+//   pba::ParticleSystem ps({.capacity = 4096});
+//   ps.forces().quadratic_drag = 0.01;
+//   auto ball = ps.create({.position = {0, 1, 0}, .mass = 0.1, .radius = 0.05});
+//   pba::Collider ground = pba::Collider::plane({0, 1, 0}, 0.0, {.restitution = 0.8});
+//   ps.step(t, dt, std::span(&ground, 1), {});
+//
+// Everything here is usable without a World (the benchmark and many tests do that); the
+// World (pba/world.h) wires entities, kinematic paths and poses to it. See docs/particles.md.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pba/core.h"
+#include "pba/draw.h"
+#include "pba/handle.h"
+#include "pba/integrate.h"
+
+namespace pba {
+
+// ---------------------------------------------------------------------------------------
+// poses and surfaces
+
+/// A rigid placement: position (m) and unit rotation.
+struct Pose {
+  Vec3 position{0, 0, 0};  ///< world position (m), finite
+  Quat rotation{1, 0, 0, 0};  ///< world rotation, unit quaternion (w, x, y, z)
+};
+
+/// Coefficients of a surface's collision response.
+struct SurfaceMaterial {
+  /// Coefficient of restitution e in [0, 1]: the normal speed after a bounce is e times
+  /// the normal speed before it, so a ball dropped from height h rebounds to e^2 h.
+  double restitution = 0.5;
+  /// Coulomb friction coefficient mu >= 0 (finite): each contact removes up to mu times
+  /// the normal impulse from the tangential velocity, never reversing it.
+  double friction = 0.0;
+};
+
+/// Collider shapes.
+enum class ShapeType : std::uint8_t {
+  Plane,   ///< the half-space below a plane; particles stay on the side the normal points to
+  Sphere,  ///< a solid ball; particles stay outside
+  Box,     ///< a solid oriented box; particles stay outside
+};
+
+/// A collision surface's shape in its own frame (the frame of the entity that owns it).
+struct ColliderShape {
+  ShapeType type = ShapeType::Plane;  ///< which of the fields below apply
+  /// Plane: unit normal in the local frame. Particles are kept on its positive side.
+  Vec3 normal{0, 1, 0};
+  /// Plane: the plane is { p : normal . p = offset } in the local frame (m, finite).
+  double offset = 0;
+  /// Sphere: radius (m), finite and > 0.
+  double radius = 0.5;
+  /// Box: half extents (m) along the local axes, each finite and > 0.
+  Vec3 half_extents{0.5, 0.5, 0.5};
+};
+
+/// One collision surface as the particle system sees it during one step: its shape, its
+/// material, and its pose at the start and the end of the step (equal for a static
+/// surface). The motion in between is taken as linear, so moving surfaces are swept too.
+struct Collider {
+  ColliderShape shape{};           ///< shape in the surface's frame
+  SurfaceMaterial material{};      ///< restitution and friction
+  Pose begin{};                    ///< pose at the start of the step
+  Pose end{};                      ///< pose at the end of the step
+  Vec3 velocity{0, 0, 0};        ///< linear velocity of the frame origin (m/s), for friction and bounces
+  Vec3 angular_velocity{0, 0, 0};  ///< angular velocity (rad/s) about the frame origin
+
+  /// A static world plane { p : normal . p = offset } (normal need not be unit).
+  static Collider plane(const Vec3& normal, double offset, SurfaceMaterial m = {});
+  /// A static sphere.
+  static Collider sphere(const Vec3& center, double radius, SurfaceMaterial m = {});
+  /// A static axis-aligned (or rotated) box.
+  static Collider box(const Vec3& center, const Vec3& half_extents, SurfaceMaterial m = {},
+                      const Quat& rotation = Quat(1, 0, 0, 0));
+  /// Throws Error naming `where` and the bad field (non-finite pose, zero normal, radius
+  /// or half extent <= 0, restitution outside [0, 1], negative friction).
+  void validate(std::string_view where) const;
+  /// Draws the surface at its end pose.
+  void draw(DebugDraw& draw, Color c) const;
+};
+
+// ---------------------------------------------------------------------------------------
+// forcer volumes
+
+/// What a Forcer volume does to the particles inside it.
+enum class ForcerKind : std::uint8_t {
+  Fan,        ///< a force along `direction` (a fan, or an air cannon with a pulse)
+  Vortex,     ///< a force around the local +Y axis (tangential), plus an inward pull
+  Attractor,  ///< a force toward the volume's centre (negative strength repels)
+};
+
+/// The volume a Forcer acts in, in its local frame centred at its pose.
+enum class ForcerShape : std::uint8_t {
+  Box,       ///< |x| <= half.x, |y| <= half.y, |z| <= half.z
+  Cylinder,  ///< x^2 + z^2 <= radius^2 and |y| <= half_height (axis = local +Y)
+  Sphere,    ///< |p| <= radius
+};
+
+/// A Forcer volume (workbook 4.1): adds a force to everything inside it. The force is in
+/// newtons, so light particles are pushed harder (a = F / m).
+struct Forcer {
+  ForcerKind kind = ForcerKind::Fan;     ///< what it does
+  ForcerShape shape = ForcerShape::Box;  ///< where it acts
+  Pose pose{};                             ///< placement of the volume (world)
+  Vec3 half_extents{0.5, 0.5, 0.5};      ///< Box: half extents (m), each > 0
+  double radius = 0.5;                   ///< Cylinder and Sphere: radius (m), > 0
+  double half_height = 0.5;              ///< Cylinder: half height along local +Y (m), > 0
+  Vec3 direction{0, 1, 0};               ///< Fan: push direction in the local frame (normalised)
+  double strength = 1.0;                 ///< force magnitude (N), finite; Vortex: tangential
+  double pull = 0.0;                     ///< Vortex: inward radial force (N), finite
+  double softening = 0.1;                ///< Attractor: inside this distance (m, > 0) the force fades linearly to 0
+  double pulse_period = 0.0;             ///< air cannon: period (s, >= 0); 0 means always on
+  double pulse_duration = 0.0;           ///< air cannon: on-time at the start of each period (s), in [0, period]
+
+  /// Throws Error naming `where` and the bad field.
+  void validate(std::string_view where) const;
+  /// True when the forcer is on at time t (s).
+  bool active(double t) const;
+  /// The force (N) on a point p (m) at time t (s): zero outside the volume or when off.
+  Vec3 force_at(const Vec3& p, double t) const;
+  /// Draws the volume outline and its push direction.
+  void draw(DebugDraw& draw, Color c) const;
+};
+
+// ---------------------------------------------------------------------------------------
+// forces
+
+/// Uniform wind: a steady velocity plus deterministic gusts from seeded value noise
+/// (no rand()): each axis gets gust * n_k(t / gust_period), where n_k is a smooth (C2)
+/// interpolation of hashed lattice values in [-1, 1]. The same seed gives the same gusts.
+struct Wind {
+  Vec3 velocity{0, 0, 0};  ///< steady wind (m/s), finite
+  double gust = 0;         ///< gust amplitude per axis (m/s), finite and >= 0
+  double gust_period = 1;  ///< time between independent gust values (s), finite and > 0
+  std::uint32_t seed = 1;  ///< noise seed
+
+  /// The air velocity (m/s) at time t (s).
+  Vec3 at(double t) const;
+};
+
+/// The forces on every particle: gravity, drag relative to the wind, and wind gusts.
+/// Drag force: F = -(linear_drag + quadratic_drag |u|) u with u = v - wind(t), so with
+/// linear drag alone a particle relaxes to the wind with time constant tau = m / b.
+struct Forces {
+  Vec3 gravity{0, -9.81, 0};  ///< gravitational acceleration (m/s^2), finite
+  double linear_drag = 0;     ///< b (kg/s), finite and >= 0 (Stokes drag)
+  double quadratic_drag = 0;  ///< c (kg/m), finite and >= 0 (c = rho Cd A / 2 for a blunt body)
+  Wind wind{};                  ///< the air's velocity
+
+  /// Throws Error naming `where` and the bad field.
+  void validate(std::string_view where) const;
+};
+
+/// Collision settings shared by all surfaces.
+struct CollisionSettings {
+  /// Approach speeds (m/s) below this bounce with restitution 0, so resting particles
+  /// settle instead of jittering (Box2D's restitution threshold). Negative means
+  /// automatic: 2 |gravity| dt, the speed gravity adds in two steps. Finite.
+  double restitution_threshold = -1;
+};
+
+// ---------------------------------------------------------------------------------------
+// particles and emitters
+
+/// Tag for particle handles.
+struct ParticleTag {};
+/// Generation-checked handle to a tracked particle (one created with ParticleSystem::create).
+using ParticleId = Handle<ParticleTag>;
+/// Tag for emitter handles.
+struct EmitterTag {};
+/// Generation-checked handle to an emitter.
+using EmitterId = Handle<EmitterTag>;
+
+/// Lifetime that means "never dies".
+inline constexpr double kForever = std::numeric_limits<double>::infinity();
+
+/// Definition of one particle. Start from the defaults and change what you need.
+struct ParticleDef {
+  Vec3 position{0, 0, 0};  ///< initial position (m), finite
+  Vec3 velocity{0, 0, 0};  ///< initial velocity (m/s), finite
+  double mass = 1.0;       ///< mass (kg), finite and > 0
+  double radius = 0.05;    ///< radius (m), finite and > 0; collisions keep the sphere outside surfaces
+  double lifetime = kForever;  ///< seconds until it dies (> 0; kForever for immortal)
+  Color color = colors::white;  ///< colour at birth
+  Color end_color = colors::white;  ///< colour at the end of its life (mortal particles)
+
+  /// Throws Error "<where>.mass: must be finite and > 0, got -1" and so on.
+  void validate(std::string_view where) const;
+};
+
+/// Definition of an emitter: a point that emits particles into a cone.
+struct EmitterDef {
+  Pose pose{};                    ///< placement; emission is along the local `direction`
+  Vec3 direction{0, 1, 0};      ///< cone axis in the local frame (normalised), non-zero
+  double spread = 0.3;          ///< cone half-angle (rad), in [0, pi]
+  double speed = 5.0;           ///< mean launch speed (m/s), finite and >= 0
+  double speed_jitter = 0.1;    ///< speeds are uniform in speed * [1 - j, 1 + j]; j in [0, 1]
+  double rate = 100.0;          ///< particles per second, finite and >= 0 (fractions carry over)
+  double lifetime = 2.0;        ///< particle lifetime (s), finite and > 0
+  double lifetime_jitter = 0.0; ///< lifetimes uniform in lifetime * [1 - j, 1 + j]; j in [0, 1)
+  double mass = 0.001;          ///< particle mass (kg), finite and > 0
+  double radius = 0.01;         ///< particle radius (m), finite and > 0
+  Color start_color = colors::yellow;  ///< colour at birth
+  Color end_color = Color::rgb(0.3f, 0.3f, 0.3f, 0.0f);  ///< colour at death (linear blend over life)
+  std::size_t max_alive = 0;    ///< stop emitting while this many of its particles live; 0 = no cap
+  std::uint64_t seed = 1;       ///< random stream for directions, speeds and lifetimes
+  bool enabled = true;          ///< emits only when enabled
+
+  /// Throws Error naming `where` and the bad field, e.g. "emitter.rate: must be finite
+  /// and >= 0, got -5".
+  void validate(std::string_view where) const;
+};
+
+/// Settings of a ParticleSystem.
+struct ParticleSystemDef {
+  std::size_t capacity = 1024;  ///< particles reserved up front; growth past it allocates once
+  Method method = Method::SemiImplicitEuler;  ///< integrator (any of pba::Method)
+  Forces forces{};                ///< gravity, drag and wind
+  CollisionSettings collision{};  ///< restitution threshold
+};
+
+/// Wall-clock seconds per phase of the last ParticleSystem::step (b2Profile style).
+struct ParticleProfile {
+  double emit = 0;       ///< spawning from emitters
+  double integrate = 0;  ///< forces, forcers and the integrator (and, fused, collisions)
+  double collide = 0;    ///< collisions when not fused into integration
+  double recycle = 0;    ///< ageing and removing dead particles
+  double total = 0;      ///< the whole step
+};
+
+/// Particles in structure-of-arrays layout, stepped together.
+///
+/// Semi-implicit Euler (the default) runs a fused, vectorised kernel: forces, forcers,
+/// the integrator and the collisions in one pass over memory in blocks that stay in L1.
+/// Every other method gathers positions and velocities into glm::vec3 arrays, calls
+/// Integrator<glm::vec3> with the same force code, and collides afterwards; both paths
+/// give bit-identical results for semi-implicit Euler. Implicit Euler is solved particle
+/// by particle (the forces here do not couple particles, so the Jacobian is block
+/// diagonal and each 3x3 Newton solve is exact); its dense-size limit therefore never
+/// applies here. Position Verlet keeps velocity in x - x_prev, so after any collision
+/// or spawn its history is restarted from the corrected x and v (second order).
+///
+/// Steps never allocate once the arrays have grown to the live count (reserve with
+/// `capacity`); the one exception is implicit Euler's fallback at a discontinuous force
+/// (the integrator reports the failed Newton solve by throwing, which allocates).
+/// Not thread-safe.
+class ParticleSystem {
+ public:
+  /// Creates an empty system (validates `def`, throws Error naming the bad field).
+  explicit ParticleSystem(const ParticleSystemDef& def = {});
+
+  // ---- settings ----
+
+  /// The integration method.
+  Method method() const { return integ_.method(); }
+  /// Switches the integration method (takes effect at the next step).
+  void set_method(Method m);
+  /// Gravity, drag and wind; change fields freely between steps (validated at step()).
+  Forces& forces() { return forces_; }
+  /// Gravity, drag and wind.
+  const Forces& forces() const { return forces_; }
+  /// Collision settings.
+  CollisionSettings& collision() { return collision_; }
+
+  // ---- particles ----
+
+  /// Adds a tracked particle and returns its handle (validates `def`; the Error names
+  /// `where` and the field). Tracked particles keep their handle while they live.
+  ParticleId create(const ParticleDef& def, std::string_view where = "ParticleDef");
+  /// Removes a tracked particle (throws Error for a stale handle).
+  void destroy(ParticleId id);
+  /// True when `id` names a live particle.
+  bool valid(ParticleId id) const { return ids_.valid(id); }
+  /// The array index of a tracked particle now (indices move when others die).
+  std::size_t index_of(ParticleId id) const;
+  /// Adds an anonymous particle (no handle) and returns its index (validates `def`).
+  std::size_t spawn(const ParticleDef& def, std::string_view where = "ParticleDef");
+  /// Removes every particle; keeps the capacity, emitters and settings.
+  void clear();
+
+  /// Live particles.
+  std::size_t size() const { return x_.size(); }
+  /// Reserved capacity in particles.
+  std::size_t capacity() const { return x_.capacity(); }
+  /// Position of particle i (m).
+  Vec3 position(std::size_t i) const { return {x_[i], y_[i], z_[i]}; }
+  /// Velocity of particle i (m/s).
+  Vec3 velocity(std::size_t i) const { return {vx_[i], vy_[i], vz_[i]}; }
+  /// Position of a tracked particle (throws Error for a stale handle).
+  Vec3 position(ParticleId id) const { return position(index_of(id)); }
+  /// Velocity of a tracked particle (throws Error for a stale handle).
+  Vec3 velocity(ParticleId id) const { return velocity(index_of(id)); }
+  /// Mass of particle i (kg).
+  double mass(std::size_t i) const { return 1.0 / static_cast<double>(inv_mass_[i]); }
+  /// Radius of particle i (m).
+  double radius(std::size_t i) const { return radius_[i]; }
+  /// Age of particle i (s) at the current time().
+  double age(std::size_t i) const { return time_ - birth_[i]; }
+  /// Lifetime of particle i (s; infinity for immortal particles).
+  double lifetime(std::size_t i) const { return death_[i] - birth_[i]; }
+  /// Simulated time (s) at the end of the last step (or the start time of the next).
+  double time() const { return time_; }
+  /// Colour of particle i now: the birth colour blended toward the end colour over its life.
+  Color color(std::size_t i) const;
+  /// Teleports particle i (validated; restarts position Verlet's history).
+  void set_position(std::size_t i, const Vec3& p);
+  /// Sets the velocity of particle i (validated; restarts position Verlet's history).
+  void set_velocity(std::size_t i, const Vec3& v);
+
+  /// The SoA columns, read-only (for rendering and CSV output).
+  std::span<const float> xs() const { return x_; }
+  std::span<const float> ys() const { return y_; }   ///< y positions (m)
+  std::span<const float> zs() const { return z_; }   ///< z positions (m)
+  std::span<const float> vxs() const { return vx_; }  ///< x velocities (m/s)
+  std::span<const float> vys() const { return vy_; }  ///< y velocities (m/s)
+  std::span<const float> vzs() const { return vz_; }  ///< z velocities (m/s)
+  /// Copies positions into `out` (size() elements) as vec3, e.g. for a vertex buffer.
+  void copy_positions(std::span<Vec3f> out) const;
+
+  // ---- emitters ----
+
+  /// Adds an emitter (validates `def`; the Error names `where` and the field).
+  EmitterId add_emitter(const EmitterDef& def, std::string_view where = "EmitterDef");
+  /// Removes an emitter (its particles live on).
+  void remove_emitter(EmitterId id);
+  /// The emitter's definition, to change rate, speed, colours... between steps
+  /// (re-validated at the next step).
+  EmitterDef& emitter(EmitterId id);
+  /// Moves an emitter (the world does this from its entity's pose each step).
+  void set_emitter_pose(EmitterId id, const Pose& pose);
+  /// Particles an emitter has emitted since it was added.
+  long long emitted(EmitterId id) const;
+  /// Live emitters.
+  std::size_t emitter_count() const { return emitters_.size(); }
+
+  // ---- stepping ----
+
+  /// Advances every particle from time t to t + dt (s, finite and > 0): emit, forces and
+  /// integration, collisions with `colliders`, ageing and recycling. `forcers` push the
+  /// particles inside them. Throws Error if the state becomes non-finite, naming the
+  /// particle, the time and the step; the state is left as it was computed.
+  void step(double t, double dt, std::span<const Collider> colliders, std::span<const Forcer> forcers);
+
+  /// Steps taken.
+  long long steps() const { return steps_; }
+  /// Implicit Euler only: particles whose Newton solve failed (at a discontinuous force,
+  /// such as a forcer's edge) and took a semi-implicit Euler step instead, since creation.
+  long long newton_fallbacks() const { return newton_fallbacks_; }
+  /// Collision responses in the last step.
+  std::size_t contacts() const { return contacts_; }
+  /// Timings of the last step.
+  const ParticleProfile& profile() const { return profile_; }
+  /// 64-bit hash of positions and velocities (bit patterns), for determinism checks.
+  std::uint64_t hash() const;
+  /// Draws every particle as a point (or sphere when `spheres`), at most `max_points`.
+  void draw(DebugDraw& draw, bool spheres = false, std::size_t max_points = 200000) const;
+
+  /// Internal: the acceleration of particles [begin, begin + n) at time t given AoS
+  /// positions and velocities (the callback the integrator calls). Public for tests.
+  void accelerations(double t, std::size_t begin, std::span<const Vec3f> x, std::span<const Vec3f> v,
+                     std::span<Vec3f> a) const;
+
+ private:
+  struct EmitterState {
+    EmitterId id;
+    EmitterDef def;
+    double elapsed = 0;         // seconds since the rate last changed
+    double rate = 0;            // the rate elapsed refers to
+    long long emitted_phase = 0;  // particles emitted since the rate last changed
+    long long emitted_total = 0;
+    std::size_t alive = 0;      // live particles from this emitter
+    std::uint64_t rng = 0;
+  };
+  std::size_t push_particle(const ParticleDef& def, std::uint32_t owner, std::uint32_t source);
+  void remove_at(std::size_t i);
+  void emit(double t, double dt);
+  void step_fused(double t, double dt, std::span<const Collider> colliders, std::span<const Forcer> forcers,
+                  float threshold);
+  void step_generic(double t, double dt, std::span<const Collider> colliders,
+                    std::span<const Forcer> forcers, float threshold);
+  void recycle();
+  void report_non_finite(double t) const;
+  std::size_t emitter_index(EmitterId id, std::string_view where) const;
+
+  Integrator<Vec3f> integ_;
+  Integrator<Vec3f> integ_one_;  // implicit Euler, one particle at a time
+  Forces forces_;
+  CollisionSettings collision_;
+  // the particle columns
+  std::vector<float> x_, y_, z_, vx_, vy_, vz_, inv_mass_, radius_;
+  std::vector<double> birth_, death_;  // birth and death times (s); death = inf for immortal
+  std::vector<std::uint32_t> color0_, color1_;  // packed RGBA8 birth and death colours
+  std::vector<std::uint32_t> owner_;   // tracked: handle index; kNone for anonymous
+  std::vector<std::uint32_t> source_;  // emitter slot index + 1; 0 for none
+  // tracked particles: handle slot -> array index
+  HandlePool<ParticleTag> ids_;
+  std::vector<std::uint32_t> slot_;
+  // emitters, dense, and their handle slots -> dense index
+  HandlePool<EmitterTag> emitter_ids_;
+  std::vector<EmitterState> emitters_;
+  std::vector<std::uint32_t> emitter_slot_;
+  // scratch for the generic integrators (AoS), sized to the live count
+  std::vector<Vec3f> gx_, gv_;
+  std::size_t mortal_ = 0;  // particles with a finite lifetime
+  double time_ = 0;         // simulated time of the state
+  std::span<const Forcer> forcers_now_;  // the forcers of the step in progress
+  bool history_dirty_ = true;
+  long long steps_ = 0;
+  long long newton_fallbacks_ = 0;
+  std::size_t contacts_ = 0;
+  ParticleProfile profile_;
+};
+
+
+}  // namespace pba

@@ -1,0 +1,295 @@
+// pba world (workbook 4.1): the entity-component model that ties the physics together.
+//
+// An entity is a generation-checked handle (EntityId) with a name and a pose. Components
+// attach behaviour to it: Particle, Collider, Forcer, Emitter, Kinematic and Constraint
+// now; RigidBody and IK arrive with their own issues as WorldSystems (see add_system).
+// Components are plain data stored contiguously by the system that steps them (particles
+// in the ParticleSystem's arrays, colliders and forcers in the World's dense arrays); the
+// World wires entities to systems and never dispatches per entity.
+//
+// Each tick runs the phases in a fixed order and times each (Box2D's b2Profile):
+//   1. kinematic    scripted paths, motors and thrusters move their entities
+//   2. sync         collider, forcer and emitter poses follow their entities
+//   3. particles    emit, forces + integration, swept collisions, recycling
+//   4. constraints  distance constraints between particle entities
+//   5. systems      the extension systems, in the order they were added
+//
+//   pba::World world({.stepper = {.fixed_dt = 1.0 / 120}});
+//   auto ground = world.create_entity({.name = "ground"});
+//   world.add_collider(ground, {.shape = {.type = pba::ShapeType::Plane}});
+//   auto ball = world.create_entity({.name = "ball"});
+//   world.add_particle(ball, {.position = {0, 1, 0}, .radius = 0.05});
+//   world.advance(frame_seconds);   // as many fixed ticks as real time asks for
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pba/core.h"
+#include "pba/draw.h"
+#include "pba/handle.h"
+#include "pba/particles.h"
+#include "pba/time.h"
+
+namespace pba {
+
+/// Tag for entity handles.
+struct EntityTag {};
+/// Generation-checked entity handle: index + generation. A handle kept after
+/// destroy_entity() is stale and every World call rejects it with an Error.
+using EntityId = Handle<EntityTag>;
+
+/// Definition of an entity.
+struct EntityDef {
+  std::string name{};  ///< optional; used by find() and in error messages
+  Pose pose{};         ///< initial pose (finite position, unit rotation)
+};
+
+/// A collision surface component: the shape in the entity's frame and its material.
+/// The World turns it into a world-space Collider each tick from the entity's pose.
+struct ColliderDef {
+  ColliderShape shape{};       ///< shape in the entity frame
+  SurfaceMaterial material{};  ///< restitution and friction
+};
+
+/// How a Kinematic component moves its entity. Paths are closed-form functions of the
+/// time since the component was added, so they never drift.
+enum class PathType : std::uint8_t {
+  Linear,     ///< p(t) = p0 + velocity t
+  Circular,   ///< a circle of `radius` about `center` and `axis` at `angular_speed`
+  Waypoints,  ///< straight segments through `waypoints` at `speed`, looping or stopping
+  Motor,      ///< stays at p0 and spins at `spin` (a motor); spin applies to every path
+  Thruster,   ///< constant acceleration: p(t) = p0 + velocity t + thrust t^2 / 2
+};
+
+/// A Kinematic component: drives its entity along a scripted path, by a motor or by a
+/// thruster. Moving colliders, forcers and emitters are entities with one of these.
+struct KinematicDef {
+  PathType path = PathType::Linear;  ///< which motion
+  Vec3 velocity{0, 0, 0};  ///< Linear: velocity (m/s); Thruster: initial velocity (m/s)
+  Vec3 center{0, 0, 0};    ///< Circular: centre (m)
+  Vec3 axis{0, 1, 0};      ///< Circular: axis of the circle (non-zero)
+  double radius = 1;       ///< Circular: radius (m), finite and > 0
+  double angular_speed = 1;  ///< Circular: rad/s, finite
+  double phase = 0;        ///< Circular: starting angle (rad)
+  std::vector<Vec3> waypoints{};  ///< Waypoints: at least 2 points (m)
+  double speed = 1;        ///< Waypoints: speed along the path (m/s), finite and > 0
+  bool loop = true;        ///< Waypoints: return to the first point and repeat; else stop at the last
+  Vec3 spin{0, 0, 0};      ///< angular velocity (rad/s, world axes) added to any path
+  Vec3 thrust{0, 0, 0};    ///< Thruster: acceleration (m/s^2)
+
+  /// Throws Error naming `where` and the bad field.
+  void validate(std::string_view where) const;
+};
+
+/// A Constraint component (placeholder until the springs issue): keeps this entity's
+/// particle at `rest_length` from `other`'s particle by projecting both positions after
+/// the particle step (mass-weighted), correcting velocities by the displacement / dt.
+struct ConstraintDef {
+  EntityId other{};          ///< the other end: an entity with a Particle component
+  double rest_length = -1; ///< target distance (m); negative means "the distance when added"
+  double stiffness = 1;    ///< fraction of the error removed per tick, in [0, 1]
+};
+
+/// Wall-clock seconds per phase of the last tick (b2Profile style).
+struct WorldProfile {
+  double kinematic = 0;    ///< scripted paths
+  double sync = 0;         ///< collider, forcer and emitter poses
+  double emit = 0;         ///< particle emission
+  double integrate = 0;    ///< forces and integration (fused with collisions for semi-implicit Euler)
+  double collide = 0;      ///< collisions (generic integrator path only)
+  double recycle = 0;      ///< removing dead particles
+  double constraints = 0;  ///< constraint projection
+  double systems = 0;      ///< extension systems
+  double total = 0;        ///< the whole tick
+};
+
+class World;
+
+/// Extension point for later modules (rigid bodies, IK, cloth): a system with its own
+/// contiguous component storage, stepped once per tick after the constraints. One
+/// virtual call per system per tick, never per entity.
+class WorldSystem {
+ public:
+  virtual ~WorldSystem() = default;
+  /// A short name for profiles and errors.
+  virtual std::string_view name() const = 0;
+  /// Advances the system from t to t + dt (s).
+  virtual void step(World& world, double t, double dt) = 0;
+  /// Removes whatever the system keeps for an entity that is being destroyed.
+  virtual void on_destroy(EntityId) {}
+  /// Draws the system.
+  virtual void draw(const World&, DebugDraw&) const {}
+  /// Mixes the system's state into a hash.
+  virtual std::uint64_t hash(std::uint64_t seed) const { return seed; }
+};
+
+/// Settings of a World.
+struct WorldDef {
+  StepperSettings stepper{};      ///< time stepping (fixed_dt is the tick)
+  ParticleSystemDef particles{};  ///< integrator, forces, capacity
+};
+
+/// The entity-component world. Movable, not copyable. Not thread-safe.
+class World {
+ public:
+  /// Validates `def` (throws Error naming the bad field).
+  explicit World(const WorldDef& def = {});
+  ~World();
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  // ---- entities ----
+
+  /// Creates an entity (validates the pose).
+  EntityId create_entity(const EntityDef& def = {});
+  /// Destroys an entity and all its components (its particle, emitter... go too).
+  void destroy_entity(EntityId e);
+  /// True when `e` names a live entity.
+  bool valid(EntityId e) const { return entities_.valid(e); }
+  /// Live entities.
+  std::size_t entity_count() const { return entities_.size(); }
+  /// The first live entity with this name, or the null handle.
+  EntityId find(std::string_view name) const;
+  /// The entity's name.
+  const std::string& name(EntityId e) const;
+  /// The entity's pose: its particle's position for particle entities.
+  Pose pose(EntityId e) const;
+  /// Moves an entity (and its particle; restarts position Verlet's history).
+  void set_pose(EntityId e, const Pose& pose);
+  /// The entity's linear velocity (m/s): its particle's, or its kinematic path's.
+  Vec3 velocity(EntityId e) const;
+
+  // ---- components (one of each kind per entity; each throws Error for a stale handle,
+  //      a duplicate component or bad data, naming the entity) ----
+
+  /// Gives the entity a particle; `def.position` is taken relative to the entity pose.
+  ParticleId add_particle(EntityId e, const ParticleDef& def);
+  /// Makes the entity a collision surface.
+  void add_collider(EntityId e, const ColliderDef& def);
+  /// Makes the entity a Forcer volume; `def.pose` is relative to the entity pose.
+  void add_forcer(EntityId e, const Forcer& def);
+  /// Makes the entity an emitter; `def.pose` is relative to the entity pose.
+  EmitterId add_emitter(EntityId e, const EmitterDef& def);
+  /// Drives the entity by a path, motor or thruster, from the current time.
+  void add_kinematic(EntityId e, const KinematicDef& def);
+  /// Constrains the entity's particle to another particle entity.
+  void add_constraint(EntityId e, const ConstraintDef& def);
+
+  /// The entity's particle handle, or the null handle.
+  ParticleId particle(EntityId e) const;
+  /// The entity's emitter handle, or the null handle.
+  EmitterId emitter(EntityId e) const;
+  /// The entity's collider definition, changeable between ticks (throws if it has none).
+  ColliderDef& collider(EntityId e);
+  /// The entity's forcer definition, changeable between ticks (throws if it has none).
+  Forcer& forcer(EntityId e);
+  /// The entity's kinematic definition, changeable between ticks (throws if it has none).
+  KinematicDef& kinematic(EntityId e);
+
+  /// The particle system (particles, emitters, forces, integrator).
+  ParticleSystem& particles() { return particles_; }
+  /// The particle system.
+  const ParticleSystem& particles() const { return particles_; }
+  /// World-space colliders of the last tick (or of now, before the first).
+  std::span<const Collider> colliders() const { return world_colliders_; }
+  /// World-space forcers of the last tick.
+  std::span<const Forcer> forcers() const { return world_forcers_; }
+
+  /// Adds an extension system (stepped after the constraints, in the order added).
+  void add_system(std::unique_ptr<WorldSystem> system);
+
+  // ---- stepping ----
+
+  /// The time stepper (settings, totals).
+  TimeStepper& stepper() { return stepper_; }
+  /// Advances by one frame of real time: as many ticks as the stepper's strategy asks.
+  FrameStats advance(double frame_seconds);
+  /// Exactly one tick of fixed_dt (TimeStepper::single_step with the fixed strategy).
+  void step();
+  /// One tick from t to t + dt: the fixed phase order. advance() and step() call it.
+  /// Throws Error if the state becomes non-finite (which particle, when); the world then
+  /// refuses to tick again and repeats that message.
+  void tick(double t, double dt);
+  /// Simulated time (s) of the state.
+  double time() const { return time_; }
+  /// Ticks run.
+  long long ticks() const { return ticks_; }
+  /// Timings of the last tick.
+  const WorldProfile& profile() const { return profile_; }
+  /// Hash of the particle state, the entity poses and every extension system.
+  std::uint64_t hash() const;
+  /// Draws colliders, forcers and particles.
+  void draw(DebugDraw& draw) const;
+
+ private:
+  struct EntityRecord {
+    std::string name;
+    Pose pose;
+    Vec3 velocity{0, 0, 0};
+    Vec3 angular_velocity{0, 0, 0};
+    ParticleId particle;
+    EmitterId emitter;
+    Pose emitter_local;
+    std::uint32_t collider = kNone, forcer = kNone, kinematic = kNone, constraint = kNone;
+  };
+  struct ColliderEntry {
+    EntityId owner;
+    ColliderDef def;
+  };
+  struct ForcerEntry {
+    EntityId owner;
+    Forcer def;  // pose relative to the entity
+  };
+  struct KinematicEntry {
+    EntityId owner;
+    KinematicDef def;
+    double start = 0;  // time it was added (s)
+    Pose start_pose;
+    double length = 0;  // waypoints: total path length (m)
+  };
+  struct ConstraintEntry {
+    EntityId owner;
+    ConstraintDef def;
+  };
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+
+  EntityRecord& record(EntityId e, std::string_view where);
+  const EntityRecord& record(EntityId e, std::string_view where) const;
+  std::string describe(EntityId e) const;
+  void run_kinematics(double t, double dt);
+  void sync(double t, double dt);
+  void solve_constraints(double dt);
+  template <class Entry>
+  void remove_dense(std::vector<Entry>& v, std::uint32_t EntityRecord::*member, std::uint32_t i);
+
+  StepperSettings settings_;
+  TimeStepper stepper_;
+  ParticleSystem particles_;
+  HandlePool<EntityTag> entities_;
+  std::vector<EntityRecord> records_;  // by handle slot
+  std::vector<ColliderEntry> colliders_;
+  std::vector<Collider> world_colliders_;  // parallel to colliders_
+  std::vector<ForcerEntry> forcers_;
+  std::vector<Forcer> world_forcers_;      // parallel to forcers_
+  std::vector<KinematicEntry> kinematics_;
+  std::vector<ConstraintEntry> constraints_;
+  std::vector<std::unique_ptr<WorldSystem>> systems_;
+  double time_ = 0;
+  long long ticks_ = 0;
+  WorldProfile profile_;
+  std::string failure_;
+};
+
+/// The pose a kinematic path gives at `t` seconds after it started from `start`, and its
+/// linear velocity (m/s). `length` is the waypoint path length (0 to compute it).
+Pose kinematic_pose(const KinematicDef& def, const Pose& start, double t, Vec3* velocity = nullptr,
+                    double length = 0);
+
+}  // namespace pba

@@ -1,0 +1,631 @@
+// The particle system: storage, validation, emitters, the generic integrator path,
+// recycling. The fused kernel is in kernels.cpp; shapes and forcers in shapes.cpp.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "kernels.h"
+#include "pba/particles.h"
+
+namespace pba {
+
+namespace {
+
+constexpr std::uint32_t kNone = 0xffffffffu;
+
+
+
+std::uint32_t pack(Color c) {
+  // RGBA8, clamped
+  auto q = [](float f) {
+    const float g = f < 0 ? 0 : (f > 1 ? 1 : f);
+    return static_cast<std::uint32_t>(std::lround(g * 255.0f));
+  };
+  return q(c.r) << 24 | q(c.g) << 16 | q(c.b) << 8 | q(c.a);
+}
+
+Color unpack(std::uint32_t p) {
+  return {((p >> 24) & 0xff) / 255.0f, ((p >> 16) & 0xff) / 255.0f, ((p >> 8) & 0xff) / 255.0f,
+          (p & 0xff) / 255.0f};
+}
+
+// splitmix64 (Steele, Lea & Flood, "Fast splittable pseudorandom number generators",
+// OOPSLA 2014): a tiny deterministic stream per emitter, no global state
+std::uint64_t next_u64(std::uint64_t& s) {
+  std::uint64_t z = (s += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+double uniform01(std::uint64_t& s) { return static_cast<double>(next_u64(s) >> 11) * 0x1.0p-53; }
+
+detail::ForceParams force_params(const Forces& f, double t) {
+  const Vec3 w = f.wind.at(t);
+  return {static_cast<float>(f.gravity.x), static_cast<float>(f.gravity.y), static_cast<float>(f.gravity.z),
+          static_cast<float>(f.linear_drag), static_cast<float>(f.quadratic_drag), static_cast<float>(w.x),
+          static_cast<float>(w.y), static_cast<float>(w.z)};
+}
+
+void rotation_columns(const Quat& q, float* r) {
+  const Mat3 m = glm::mat3_cast(glm::normalize(q));
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 3; ++k) r[c * 3 + k] = static_cast<float>(m[c][k]);
+}
+
+// flatten forcers that are on at time t (at most kMaxForcers)
+constexpr std::size_t kMaxForcers = 64;
+constexpr std::size_t kMaxColliders = 256;
+
+std::size_t forcer_params(std::span<const Forcer> forcers, double t, detail::ForcerParams* out) {
+  std::size_t n = 0;
+  for (const Forcer& f : forcers) {
+    if (!f.active(t)) continue;
+    detail::ForcerParams& p = out[n++];
+    p.kind = f.kind;
+    p.shape = f.shape;
+    p.cx = static_cast<float>(f.pose.position.x);
+    p.cy = static_cast<float>(f.pose.position.y);
+    p.cz = static_cast<float>(f.pose.position.z);
+    rotation_columns(f.pose.rotation, p.r);
+    if (f.shape == ForcerShape::Box) {
+      p.hx = static_cast<float>(f.half_extents.x);
+      p.hy = static_cast<float>(f.half_extents.y);
+      p.hz = static_cast<float>(f.half_extents.z);
+    } else {
+      p.hx = static_cast<float>(f.radius);
+      p.hy = static_cast<float>(f.half_height);
+      p.hz = static_cast<float>(f.radius);
+    }
+    const Quat q = glm::normalize(f.pose.rotation);
+    const Vec3 push = q * glm::normalize(f.direction) * f.strength;
+    const Vec3 axis = q * Vec3(0, 1, 0);
+    p.fx = static_cast<float>(push.x);
+    p.fy = static_cast<float>(push.y);
+    p.fz = static_cast<float>(push.z);
+    p.ax = static_cast<float>(axis.x);
+    p.ay = static_cast<float>(axis.y);
+    p.az = static_cast<float>(axis.z);
+    p.strength = static_cast<float>(f.strength);
+    p.pull = static_cast<float>(f.pull);
+    p.softening = static_cast<float>(f.softening);
+  }
+  return n;
+}
+
+detail::ColliderParams collider_params(const Collider& c) {
+  detail::ColliderParams p{};
+  p.type = c.shape.type;
+  p.e = static_cast<float>(c.material.restitution);
+  p.mu = static_cast<float>(c.material.friction);
+  // planes in world: n = R n_local, d = offset + n . origin
+  auto plane = [&](const Pose& pose, float& nx, float& ny, float& nz, float& d) {
+    const Vec3 n = glm::normalize(glm::normalize(pose.rotation) * c.shape.normal);
+    nx = static_cast<float>(n.x);
+    ny = static_cast<float>(n.y);
+    nz = static_cast<float>(n.z);
+    d = static_cast<float>(c.shape.offset + glm::dot(n, pose.position));
+  };
+  plane(c.begin, p.n0x, p.n0y, p.n0z, p.d0);
+  plane(c.end, p.n1x, p.n1y, p.n1z, p.d1);
+  p.c0x = static_cast<float>(c.begin.position.x);
+  p.c0y = static_cast<float>(c.begin.position.y);
+  p.c0z = static_cast<float>(c.begin.position.z);
+  p.c1x = static_cast<float>(c.end.position.x);
+  p.c1y = static_cast<float>(c.end.position.y);
+  p.c1z = static_cast<float>(c.end.position.z);
+  p.radius = static_cast<float>(c.shape.radius);
+  p.hx = static_cast<float>(c.shape.half_extents.x);
+  p.hy = static_cast<float>(c.shape.half_extents.y);
+  p.hz = static_cast<float>(c.shape.half_extents.z);
+  rotation_columns(c.begin.rotation, p.r0);
+  rotation_columns(c.end.rotation, p.r1);
+  p.vx = static_cast<float>(c.velocity.x);
+  p.vy = static_cast<float>(c.velocity.y);
+  p.vz = static_cast<float>(c.velocity.z);
+  p.wx = static_cast<float>(c.angular_velocity.x);
+  p.wy = static_cast<float>(c.angular_velocity.y);
+  p.wz = static_cast<float>(c.angular_velocity.z);
+  p.is_static = p.n0x == p.n1x && p.n0y == p.n1y && p.n0z == p.n1z && p.d0 == p.d1 && p.c0x == p.c1x &&
+                p.c0y == p.c1y && p.c0z == p.c1z && c.velocity == Vec3(0) && c.angular_velocity == Vec3(0);
+  return p;
+}
+
+}  // namespace
+
+
+// ---------------------------------------------------------------------------------------
+// definitions
+
+void ParticleDef::validate(std::string_view where) const {
+  if (!is_finite(position)) require_finite(position, field_path(where, "position"));
+  if (!is_finite(velocity)) require_finite(velocity, field_path(where, "velocity"));
+  if (!(std::isfinite(mass) && (mass) > 0)) require_positive(mass, field_path(where, "mass"));
+  if (!(std::isfinite(radius) && (radius) > 0)) require_positive(radius, field_path(where, "radius"));
+  if (!(lifetime > 0))
+    throw Error(field_path(where, "lifetime") + ": must be > 0 (infinity for immortal), got " + format_value(lifetime));
+}
+
+void EmitterDef::validate(std::string_view where) const {
+  if (!is_finite(pose.position)) require_finite(pose.position, field_path(where, "position"));
+  if (!is_finite(direction)) require_finite(direction, field_path(where, "direction"));
+  if (glm::length(direction) == 0) throw Error(field_path(where, "direction") + ": must be non-zero, got (0, 0, 0)");
+  if (!((spread) >= (0) && (spread) <= (3.141592653589793))) require_in_range(spread, 0, 3.141592653589793, field_path(where, "spread"));
+  if (!(std::isfinite(speed) && (speed) >= 0)) require_non_negative(speed, field_path(where, "speed"));
+  if (!((speed_jitter) >= (0) && (speed_jitter) <= (1))) require_in_range(speed_jitter, 0, 1, field_path(where, "speed_jitter"));
+  if (!(std::isfinite(rate) && (rate) >= 0)) require_non_negative(rate, field_path(where, "rate"));
+  if (!(std::isfinite(lifetime) && (lifetime) > 0)) require_positive(lifetime, field_path(where, "lifetime"));
+  if (!((lifetime_jitter) >= (0) && (lifetime_jitter) <= (0.999))) require_in_range(lifetime_jitter, 0, 0.999, field_path(where, "lifetime_jitter"));
+  if (!(std::isfinite(mass) && (mass) > 0)) require_positive(mass, field_path(where, "mass"));
+  if (!(std::isfinite(radius) && (radius) > 0)) require_positive(radius, field_path(where, "radius"));
+}
+
+void Forces::validate(std::string_view where) const {
+  if (!is_finite(gravity)) require_finite(gravity, field_path(where, "gravity"));
+  if (!(std::isfinite(linear_drag) && (linear_drag) >= 0)) require_non_negative(linear_drag, field_path(where, "linear_drag"));
+  if (!(std::isfinite(quadratic_drag) && (quadratic_drag) >= 0)) require_non_negative(quadratic_drag, field_path(where, "quadratic_drag"));
+  if (!is_finite(wind.velocity)) require_finite(wind.velocity, field_path(where, "wind.velocity"));
+  if (!(std::isfinite(wind.gust) && (wind.gust) >= 0)) require_non_negative(wind.gust, field_path(where, "wind.gust"));
+  if (!(std::isfinite(wind.gust_period) && (wind.gust_period) > 0)) require_positive(wind.gust_period, field_path(where, "wind.gust_period"));
+}
+
+// value noise: hashed lattice values in [-1, 1], quintic (C2) interpolation
+// (Perlin, "Improving noise", SIGGRAPH 2002, the 6t^5 - 15t^4 + 10t^3 fade)
+Vec3 Wind::at(double t) const {
+  if (gust == 0) return velocity;
+  const double u = t / gust_period;
+  const double cell = std::floor(u);
+  const double f = u - cell;
+  const double s = f * f * f * (f * (f * 6 - 15) + 10);
+  const auto k = static_cast<long long>(cell);
+  auto lattice = [&](long long i, std::uint64_t channel) {
+    std::uint64_t st = (static_cast<std::uint64_t>(seed) << 32) ^ (channel * 0x632be59bd9b4e019ULL) ^
+                       static_cast<std::uint64_t>(i) * 0x9e3779b97f4a7c15ULL;
+    return uniform01(st) * 2 - 1;
+  };
+  Vec3 g;
+  for (int c = 0; c < 3; ++c) {
+    const double a = lattice(k, static_cast<std::uint64_t>(c) + 1), b = lattice(k + 1, static_cast<std::uint64_t>(c) + 1);
+    g[c] = a + (b - a) * s;
+  }
+  return velocity + gust * g;
+}
+
+// ---------------------------------------------------------------------------------------
+// the system
+
+ParticleSystem::ParticleSystem(const ParticleSystemDef& def)
+    : integ_(def.method), integ_one_(Method::ImplicitEuler), forces_(def.forces), collision_(def.collision) {
+  // validate, then reserve every column
+  forces_.validate("ParticleSystemDef.forces");
+  require_finite(collision_.restitution_threshold, "ParticleSystemDef.collision.restitution_threshold");
+  require_count(static_cast<long long>(def.capacity), 0, 1LL << 31, "ParticleSystemDef.capacity");
+  for (auto* col : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &inv_mass_, &radius_}) col->reserve(def.capacity);
+  for (auto* col : {&birth_, &death_}) col->reserve(def.capacity);
+  for (auto* col : {&color0_, &color1_, &owner_, &source_}) col->reserve(def.capacity);
+  gx_.reserve(def.capacity);
+  gv_.reserve(def.capacity);
+}
+
+void ParticleSystem::set_method(Method m) {
+  integ_.set_method(m);
+  history_dirty_ = true;
+}
+
+std::size_t ParticleSystem::push_particle(const ParticleDef& d, std::uint32_t owner, std::uint32_t source) {
+  // append to every column (allocates only past the reserved capacity)
+  x_.push_back(static_cast<float>(d.position.x));
+  y_.push_back(static_cast<float>(d.position.y));
+  z_.push_back(static_cast<float>(d.position.z));
+  vx_.push_back(static_cast<float>(d.velocity.x));
+  vy_.push_back(static_cast<float>(d.velocity.y));
+  vz_.push_back(static_cast<float>(d.velocity.z));
+  inv_mass_.push_back(static_cast<float>(1.0 / d.mass));
+  radius_.push_back(static_cast<float>(d.radius));
+  birth_.push_back(time_);
+  death_.push_back(time_ + d.lifetime);
+  color0_.push_back(pack(d.color));
+  color1_.push_back(pack(d.end_color));
+  owner_.push_back(owner);
+  source_.push_back(source);
+  if (std::isfinite(d.lifetime)) ++mortal_;
+  history_dirty_ = true;
+  return x_.size() - 1;
+}
+
+ParticleId ParticleSystem::create(const ParticleDef& def, std::string_view where) {
+  def.validate(where);
+  const ParticleId id = ids_.create();
+  if (slot_.size() <= id.index) slot_.resize(id.index + 1, kNone);
+  slot_[id.index] = static_cast<std::uint32_t>(push_particle(def, id.index, 0));
+  return id;
+}
+
+std::size_t ParticleSystem::spawn(const ParticleDef& def, std::string_view where) {
+  def.validate(where);
+  return push_particle(def, kNone, 0);
+}
+
+std::size_t ParticleSystem::index_of(ParticleId id) const {
+  ids_.require(id, "ParticleSystem: particle");
+  return slot_[id.index];
+}
+
+void ParticleSystem::destroy(ParticleId id) {
+  const std::size_t i = index_of(id);
+  remove_at(i);
+}
+
+void ParticleSystem::remove_at(std::size_t i) {
+  // release the handle and the emitter's count of the particle being removed
+  if (owner_[i] != kNone) {
+    const std::uint32_t slot = owner_[i];
+    ids_.destroy(ParticleId{slot, ids_.generation(slot)}, "ParticleSystem::remove");
+    slot_[slot] = kNone;
+  }
+  if (source_[i] != 0) {
+    const std::uint32_t es = source_[i] - 1;
+    if (es < emitter_slot_.size() && emitter_slot_[es] != kNone) --emitters_[emitter_slot_[es]].alive;
+  }
+  if (std::isfinite(death_[i])) --mortal_;
+  // swap the last particle into i (deterministic: depends only on the order of removals)
+  const std::size_t last = x_.size() - 1;
+  if (i != last) {
+    x_[i] = x_[last], y_[i] = y_[last], z_[i] = z_[last];
+    vx_[i] = vx_[last], vy_[i] = vy_[last], vz_[i] = vz_[last];
+    inv_mass_[i] = inv_mass_[last], radius_[i] = radius_[last];
+    birth_[i] = birth_[last], death_[i] = death_[last];
+    color0_[i] = color0_[last], color1_[i] = color1_[last];
+    owner_[i] = owner_[last], source_[i] = source_[last];
+    if (owner_[i] != kNone) slot_[owner_[i]] = static_cast<std::uint32_t>(i);
+  }
+  for (auto* col : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &inv_mass_, &radius_}) col->pop_back();
+  birth_.pop_back();
+  death_.pop_back();
+  for (auto* col : {&color0_, &color1_, &owner_, &source_}) col->pop_back();
+  history_dirty_ = true;
+}
+
+void ParticleSystem::clear() {
+  // release every handle, then empty the columns (capacity kept)
+  for (std::size_t i = 0; i < owner_.size(); ++i)
+    if (owner_[i] != kNone) {
+      ids_.destroy(ParticleId{owner_[i], ids_.generation(owner_[i])}, "ParticleSystem::clear");
+      slot_[owner_[i]] = kNone;
+    }
+  for (auto* col : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &inv_mass_, &radius_}) col->clear();
+  birth_.clear();
+  death_.clear();
+  for (auto* col : {&color0_, &color1_, &owner_, &source_}) col->clear();
+  for (auto& e : emitters_) e.alive = 0;
+  mortal_ = 0;
+  history_dirty_ = true;
+}
+
+Color ParticleSystem::color(std::size_t i) const {
+  // blend birth to death colour by the fraction of life lived
+  const Color a = unpack(color0_[i]);
+  if (!std::isfinite(death_[i])) return a;
+  const Color b = unpack(color1_[i]);
+  const double life = death_[i] - birth_[i];
+  const float f = static_cast<float>(std::clamp((time_ - birth_[i]) / life, 0.0, 1.0));
+  return {a.r + (b.r - a.r) * f, a.g + (b.g - a.g) * f, a.b + (b.b - a.b) * f, a.a + (b.a - a.a) * f};
+}
+
+void ParticleSystem::set_position(std::size_t i, const Vec3& p) {
+  require_finite(p, "ParticleSystem::set_position");
+  x_.at(i) = static_cast<float>(p.x);
+  y_[i] = static_cast<float>(p.y);
+  z_[i] = static_cast<float>(p.z);
+  history_dirty_ = true;
+}
+
+void ParticleSystem::set_velocity(std::size_t i, const Vec3& v) {
+  require_finite(v, "ParticleSystem::set_velocity");
+  vx_.at(i) = static_cast<float>(v.x);
+  vy_[i] = static_cast<float>(v.y);
+  vz_[i] = static_cast<float>(v.z);
+  history_dirty_ = true;
+}
+
+void ParticleSystem::copy_positions(std::span<Vec3f> out) const {
+  const std::size_t n = std::min(out.size(), x_.size());
+  for (std::size_t i = 0; i < n; ++i) out[i] = Vec3f(x_[i], y_[i], z_[i]);
+}
+
+// ---------------------------------------------------------------------------------------
+// emitters
+
+std::size_t ParticleSystem::emitter_index(EmitterId id, std::string_view where) const {
+  emitter_ids_.require(id, where);
+  return emitter_slot_[id.index];
+}
+
+EmitterId ParticleSystem::add_emitter(const EmitterDef& def, std::string_view where) {
+  def.validate(where);
+  const EmitterId id = emitter_ids_.create();
+  if (emitter_slot_.size() <= id.index) emitter_slot_.resize(id.index + 1, kNone);
+  emitter_slot_[id.index] = static_cast<std::uint32_t>(emitters_.size());
+  EmitterState s;
+  s.id = id;
+  s.def = def;
+  s.rate = def.rate;
+  s.rng = def.seed;
+  emitters_.push_back(s);
+  return id;
+}
+
+void ParticleSystem::remove_emitter(EmitterId id) {
+  const std::size_t i = emitter_index(id, "ParticleSystem::remove_emitter");
+  // its particles become sourceless
+  for (auto& s : source_)
+    if (s == id.index + 1) s = 0;
+  emitter_ids_.destroy(id, "ParticleSystem::remove_emitter");
+  emitter_slot_[id.index] = kNone;
+  // swap-remove from the dense array
+  if (i + 1 != emitters_.size()) {
+    emitters_[i] = emitters_.back();
+    emitter_slot_[emitters_[i].id.index] = static_cast<std::uint32_t>(i);
+  }
+  emitters_.pop_back();
+}
+
+EmitterDef& ParticleSystem::emitter(EmitterId id) {
+  return emitters_[emitter_index(id, "ParticleSystem::emitter")].def;
+}
+
+void ParticleSystem::set_emitter_pose(EmitterId id, const Pose& pose) {
+  emitters_[emitter_index(id, "ParticleSystem::set_emitter_pose")].def.pose = pose;
+}
+
+long long ParticleSystem::emitted(EmitterId id) const {
+  return emitters_[emitter_index(id, "ParticleSystem::emitted")].emitted_total;
+}
+
+// Emission over (t, t + dt]: the i-th particle since the rate was last set is due at
+// i / rate seconds, so after T seconds exactly floor(rate T) have been emitted (up to a
+// relative 1e-9 of round-off), with no drift from summing fractions. Each particle is
+// born at its due time and advanced ballistically to t + dt.
+void ParticleSystem::emit(double t, double dt) {
+  for (EmitterState& e : emitters_) {
+    e.def.validate("emitter");
+    // a new rate or a paused emitter restarts the schedule
+    if (e.def.rate != e.rate || !e.def.enabled) {
+      e.rate = e.def.rate;
+      e.elapsed = 0;
+      e.emitted_phase = 0;
+      if (!e.def.enabled) continue;
+    }
+    e.elapsed += dt;
+    const double due_real = e.rate * e.elapsed;
+    const auto due = static_cast<long long>(std::floor(due_real + 1e-9 * std::max(1.0, due_real)));
+    const Quat q = glm::normalize(e.def.pose.rotation);
+    const Vec3 axis = q * glm::normalize(e.def.direction);
+    // an orthonormal basis around the cone axis
+    const Vec3 helper = std::abs(axis.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+    const Vec3 u = glm::normalize(glm::cross(axis, helper));
+    const Vec3 w = glm::cross(axis, u);
+    const double cos_spread = std::cos(e.def.spread);
+    for (long long i = e.emitted_phase + 1; i <= due; ++i) {
+      // the particle's due time and how long it has lived by t + dt
+      const double t_due = static_cast<double>(i) / e.rate;
+      const double lived = std::clamp(e.elapsed - t_due, 0.0, dt);
+      e.emitted_phase = i;
+      if (e.def.max_alive && e.alive >= e.def.max_alive) continue;
+      // direction uniform over the spherical cap, speed and lifetime jittered
+      const double cz = 1 - uniform01(e.rng) * (1 - cos_spread);
+      const double sz = std::sqrt(std::max(0.0, 1 - cz * cz));
+      const double phi = 2 * 3.141592653589793 * uniform01(e.rng);
+      const Vec3 dir = axis * cz + (u * std::cos(phi) + w * std::sin(phi)) * sz;
+      const double speed = e.def.speed * (1 + e.def.speed_jitter * (2 * uniform01(e.rng) - 1));
+      const double life = e.def.lifetime * (1 + e.def.lifetime_jitter * (2 * uniform01(e.rng) - 1));
+      ParticleDef d;
+      d.velocity = dir * speed + forces_.gravity * lived;
+      d.position = e.def.pose.position + dir * speed * lived + forces_.gravity * (0.5 * lived * lived);
+      d.mass = e.def.mass;
+      d.radius = e.def.radius;
+      d.lifetime = life;
+      d.color = e.def.start_color;
+      d.end_color = e.def.end_color;
+      const std::size_t idx = push_particle(d, kNone, e.id.index + 1);
+      birth_[idx] = t + dt - lived;
+      death_[idx] = birth_[idx] + life;
+      ++e.alive;
+      ++e.emitted_total;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// stepping
+
+void ParticleSystem::accelerations(double t, std::size_t begin, std::span<const Vec3f> x,
+                                   std::span<const Vec3f> v, std::span<Vec3f> a) const {
+  // the forcers on at t, flattened once per call
+  detail::ForcerParams fp[kMaxForcers];
+  const std::size_t nf = forcer_params(forcers_now_, t, fp);
+  const detail::ForceParams f = force_params(forces_, t);
+  // block by block: de-interleave, the kernels' force code, interleave
+  alignas(64) float bx[detail::kBlock], by[detail::kBlock], bz[detail::kBlock];
+  alignas(64) float bvx[detail::kBlock], bvy[detail::kBlock], bvz[detail::kBlock];
+  alignas(64) float ax[detail::kBlock], ay[detail::kBlock], az[detail::kBlock];
+  for (std::size_t b = 0; b < x.size(); b += detail::kBlock) {
+    const int n = static_cast<int>(std::min<std::size_t>(detail::kBlock, x.size() - b));
+    for (int k = 0; k < n; ++k) {
+      bx[k] = x[b + k].x, by[k] = x[b + k].y, bz[k] = x[b + k].z;
+      bvx[k] = v[b + k].x, bvy[k] = v[b + k].y, bvz[k] = v[b + k].z;
+    }
+    const float* im = inv_mass_.data() + begin + b;
+    detail::base_accel(n, bvx, bvy, bvz, im, f, ax, ay, az);
+    for (std::size_t j = 0; j < nf; ++j) detail::forcer_accel(n, bx, by, bz, im, fp[j], ax, ay, az);
+    for (int k = 0; k < n; ++k) a[b + k] = Vec3f(ax[k], ay[k], az[k]);
+  }
+}
+
+void ParticleSystem::step(double t, double dt, std::span<const Collider> colliders,
+                          std::span<const Forcer> forcers) {
+  Stopwatch total;
+  // validate the step and the settings once
+  require_positive(dt, "ParticleSystem::step(dt)");
+  require_finite(t, "ParticleSystem::step(t)");
+  forces_.validate("ParticleSystem.forces");
+  if (colliders.size() > kMaxColliders)
+    throw Error("ParticleSystem::step: at most " + std::to_string(kMaxColliders) + " colliders, got " +
+                std::to_string(colliders.size()));
+  if (forcers.size() > kMaxForcers)
+    throw Error("ParticleSystem::step: at most " + std::to_string(kMaxForcers) + " forcers, got " +
+                std::to_string(forcers.size()));
+  time_ = t;
+  forcers_now_ = forcers;
+  const double g = glm::length(forces_.gravity);
+  const float threshold = static_cast<float>(
+      collision_.restitution_threshold >= 0 ? collision_.restitution_threshold : 2 * g * dt);
+  profile_ = {};
+  contacts_ = 0;
+  // forces, integration and collisions
+  Stopwatch sw;
+  if (integ_.method() == Method::SemiImplicitEuler)
+    step_fused(t, dt, colliders, forcers, threshold);
+  else
+    step_generic(t, dt, colliders, forcers, threshold);
+  profile_.integrate = sw.seconds() - profile_.collide;
+  time_ = t + dt;
+  ++steps_;
+  // ageing and recycling, then emission of the particles due in this step
+  sw.reset();
+  recycle();
+  profile_.recycle = sw.seconds();
+  sw.reset();
+  emit(t, dt);
+  profile_.emit = sw.seconds();
+  forcers_now_ = {};
+  profile_.total = total.seconds();
+}
+
+void ParticleSystem::step_fused(double t, double dt, std::span<const Collider> colliders,
+                                std::span<const Forcer> forcers, float threshold) {
+  // flatten forcers and colliders for the kernel (stack arrays, no allocation)
+  detail::ForcerParams fp[kMaxForcers];
+  detail::ColliderParams cp[kMaxColliders];
+  const std::size_t nf = forcer_params(forcers, t, fp);
+  for (std::size_t i = 0; i < colliders.size(); ++i) cp[i] = collider_params(colliders[i]);
+  detail::FusedArgs a{x_.data(),        y_.data(),
+                      z_.data(),        vx_.data(),
+                      vy_.data(),       vz_.data(),
+                      inv_mass_.data(), radius_.data(),
+                      x_.size(),        static_cast<float>(dt),
+                      force_params(forces_, t), fp,
+                      nf,               cp,
+                      colliders.size(), threshold};
+  const detail::FusedResult r = detail::fused_semi_implicit_euler(a);
+  contacts_ = r.contacts;
+  if (r.non_finite) report_non_finite(t + dt);
+}
+
+void ParticleSystem::step_generic(double t, double dt, std::span<const Collider> colliders,
+                                  std::span<const Forcer> /*forcers*/, float threshold) {
+  const std::size_t n = x_.size();
+  if (n == 0) return;
+  // gather into AoS vec3 (resizing allocates only when the count grows past capacity)
+  gx_.resize(n);
+  gv_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    gx_[i] = Vec3f(x_[i], y_[i], z_[i]);
+    gv_[i] = Vec3f(vx_[i], vy_[i], vz_[i]);
+  }
+  // integrate: implicit Euler one particle at a time, the others all at once
+  if (integ_.method() == Method::ImplicitEuler) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3f x0 = gx_[i], v0 = gv_[i];
+      auto accel = [this, i](double tt, std::span<const Vec3f> x, std::span<const Vec3f> v, std::span<Vec3f> a) {
+        accelerations(tt, i, x, v, a);
+      };
+      try {
+        integ_one_.step(t, dt, std::span<Vec3f>(&gx_[i], 1), std::span<Vec3f>(&gv_[i], 1), accel);
+      } catch (const Error&) {
+        // Newton fails where the force is discontinuous (a forcer volume's edge): that
+        // particle takes a semi-implicit Euler step instead, and is counted
+        gx_[i] = x0;
+        gv_[i] = v0;
+        Vec3f a;
+        accel(t, std::span<const Vec3f>(&x0, 1), std::span<const Vec3f>(&v0, 1), std::span<Vec3f>(&a, 1));
+        gv_[i] = v0 + a * static_cast<float>(dt);
+        gx_[i] = x0 + gv_[i] * static_cast<float>(dt);
+        ++newton_fallbacks_;
+      }
+    }
+  } else {
+    if (history_dirty_) integ_.reset_history();
+    history_dirty_ = false;
+    integ_.step(t, dt, std::span<Vec3f>(gx_), std::span<Vec3f>(gv_),
+                [this](double tt, std::span<const Vec3f> x, std::span<const Vec3f> v, std::span<Vec3f> a) {
+                  accelerations(tt, 0, x, v, a);
+                });
+  }
+  // collide block by block: old positions from the columns, new ones from the integrator
+  Stopwatch sw;
+  detail::ColliderParams cp[kMaxColliders];
+  for (std::size_t i = 0; i < colliders.size(); ++i) cp[i] = collider_params(colliders[i]);
+  alignas(64) float bx[detail::kBlock], by[detail::kBlock], bz[detail::kBlock];
+  alignas(64) float bvx[detail::kBlock], bvy[detail::kBlock], bvz[detail::kBlock];
+  int bad = 0;
+  for (std::size_t b = 0; b < n; b += detail::kBlock) {
+    const int m = static_cast<int>(std::min<std::size_t>(detail::kBlock, n - b));
+    for (int k = 0; k < m; ++k) {
+      bx[k] = gx_[b + k].x, by[k] = gx_[b + k].y, bz[k] = gx_[b + k].z;
+      bvx[k] = gv_[b + k].x, bvy[k] = gv_[b + k].y, bvz[k] = gv_[b + k].z;
+    }
+    contacts_ += static_cast<std::size_t>(detail::collide_block(m, &x_[b], &y_[b], &z_[b], &vx_[b], &vy_[b], &vz_[b], bx,
+                                                                by, bz, bvx, bvy, bvz, &radius_[b], cp,
+                                                                colliders.size(), threshold, static_cast<float>(dt),
+                                                                bad));
+    bad |= detail::any_non_finite(m, bx, by, bz) | detail::any_non_finite(m, bvx, bvy, bvz);
+    for (int k = 0; k < m; ++k) {
+      x_[b + k] = bx[k], y_[b + k] = by[k], z_[b + k] = bz[k];
+      vx_[b + k] = bvx[k], vy_[b + k] = bvy[k], vz_[b + k] = bvz[k];
+    }
+  }
+  // position verlet's velocity lives in its history: restart it after any contact
+  if (contacts_) history_dirty_ = true;
+  profile_.collide = sw.seconds();
+  if (bad) report_non_finite(t + dt);
+}
+
+// remove particles whose death time has passed (swap-remove; deterministic order)
+void ParticleSystem::recycle() {
+  if (mortal_ == 0) return;
+  for (std::size_t i = 0; i < x_.size();) {
+    if (death_[i] <= time_ + 1e-12)
+      remove_at(i);
+    else
+      ++i;
+  }
+}
+
+void ParticleSystem::report_non_finite(double t) const {
+  // format through core's check_finite (allocates: this is the error path)
+  std::vector<Vec3f> px(x_.size()), pv(x_.size());
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    px[i] = Vec3f(x_[i], y_[i], z_[i]);
+    pv[i] = Vec3f(vx_[i], vy_[i], vz_[i]);
+  }
+  const FiniteCheck c = check_finite<Vec3f>(px, pv, "particle", t, steps_ + 1);
+  if (!c.ok) throw Error(c.message);
+}
+
+std::uint64_t ParticleSystem::hash() const {
+  std::uint64_t h = hash_span<float>(x_);
+  for (const auto* col : {&y_, &z_, &vx_, &vy_, &vz_}) h = hash_span<float>(*col, h);
+  return h;
+}
+
+void ParticleSystem::draw(DebugDraw& draw, bool spheres, std::size_t max_points) const {
+  const std::size_t n = std::min(max_points, x_.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (spheres)
+      draw.sphere(position(i), radius_[i], color(i));
+    else
+      draw.point(position(i), 4.0f, color(i));
+  }
+}
+
+}  // namespace pba

@@ -1,0 +1,260 @@
+// The entity-component world: generation-checked handles, components, kinematic paths,
+// the phase order, profiles, the stepper, failure on a non-finite state.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "pba/world.h"
+
+namespace {
+
+using pba::EntityId;
+using pba::Vec3;
+using pba::World;
+
+TEST(Entities, StaleHandleIsRejectedAndGenerationIncrements) {
+  World w;
+  const EntityId a = w.create_entity({.name = "a"});
+  const EntityId b = w.create_entity({.name = "b"});
+  EXPECT_EQ(a.generation, 1u);
+  w.destroy_entity(a);
+  EXPECT_FALSE(w.valid(a));
+  EXPECT_TRUE(w.valid(b));
+  try {
+    w.pose(a);
+    FAIL() << "stale handle accepted";
+  } catch (const pba::Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "World::pose: entity: stale handle (index 0, generation 1; the slot is now at generation 2 and free)");
+  }
+  // the freed slot is reused with the next generation; the old handle stays stale
+  const EntityId c = w.create_entity({.name = "c"});
+  EXPECT_EQ(c.index, a.index);
+  EXPECT_EQ(c.generation, 2u);
+  EXPECT_FALSE(w.valid(a));
+  EXPECT_THROW(w.destroy_entity(a), pba::Error);
+  EXPECT_THROW(w.add_particle(a, {}), pba::Error);
+  EXPECT_THROW(w.pose(EntityId{}), pba::Error);
+  EXPECT_THROW(w.pose(EntityId{99, 1}), pba::Error);
+  EXPECT_EQ(w.entity_count(), 2u);
+  EXPECT_EQ(w.find("c"), c);
+  EXPECT_TRUE(w.find("a").is_null());
+}
+
+TEST(Entities, CapacityIsReused) {
+  World w;
+  std::vector<EntityId> ids;
+  for (int round = 0; round < 5; ++round) {
+    for (int i = 0; i < 100; ++i) {
+      ids.push_back(w.create_entity({}));
+      w.add_particle(ids.back(), {.position = {i * 1.0, 0, 0}});
+    }
+    for (EntityId e : ids) w.destroy_entity(e);
+    ids.clear();
+  }
+  EXPECT_EQ(w.entity_count(), 0u);
+  EXPECT_EQ(w.particles().size(), 0u);
+  // the handle table never grew past one round
+  const EntityId e = w.create_entity({});
+  EXPECT_LT(e.index, 100u);
+  EXPECT_EQ(e.generation, 6u);
+}
+
+TEST(Entities, DestroyRemovesEveryComponent) {
+  World w;
+  const EntityId keep = w.create_entity({.name = "keep"});
+  w.add_particle(keep, {.position = {7, 0, 0}});
+  const EntityId e = w.create_entity({.name = "all"});
+  w.add_particle(e, {});
+  w.add_collider(e, {.shape = {.type = pba::ShapeType::Sphere, .radius = 0.1}});
+  w.add_forcer(e, {});
+  w.add_emitter(e, {.rate = 10});
+  w.add_kinematic(e, {.path = pba::PathType::Linear, .velocity = {1, 0, 0}});
+  w.add_constraint(e, {.other = keep});
+  w.step();
+  w.destroy_entity(e);
+  EXPECT_TRUE(w.colliders().empty());
+  EXPECT_TRUE(w.forcers().empty());
+  EXPECT_EQ(w.particles().emitter_count(), 0u);
+  // the constraint went with its owner: keep now moves freely (x at constant velocity)
+  const double x1 = w.pose(keep).position.x, vx1 = w.velocity(keep).x;
+  w.step();
+  EXPECT_NEAR(w.pose(keep).position.x, x1 + vx1 / 60, 1e-5);
+}
+
+TEST(Components, DuplicatesAndBadDataAreErrorsNamingTheEntity) {
+  World w;
+  const EntityId e = w.create_entity({.name = "ball"});
+  w.add_particle(e, {});
+  try {
+    w.add_particle(e, {});
+    FAIL();
+  } catch (const pba::Error& err) {
+    EXPECT_EQ(std::string(err.what()), "World::add_particle: entity 0 'ball' already has a particle");
+  }
+  const EntityId f = w.create_entity({.name = "bad"});
+  try {
+    w.add_particle(f, {.mass = -2});
+    FAIL();
+  } catch (const pba::Error& err) {
+    EXPECT_EQ(std::string(err.what()), "particle of entity 1 'bad'.mass: must be finite and > 0, got -2");
+  }
+  try {
+    w.add_emitter(f, {.rate = -5});
+    FAIL();
+  } catch (const pba::Error& err) {
+    EXPECT_EQ(std::string(err.what()), "emitter of entity 1 'bad'.rate: must be finite and >= 0, got -5");
+  }
+  EXPECT_THROW(w.add_collider(f, {.material = {.restitution = 1.5}}), pba::Error);
+  EXPECT_THROW(w.add_kinematic(f, {.path = pba::PathType::Waypoints, .waypoints = {{0, 0, 0}}}), pba::Error);
+  EXPECT_THROW(w.create_entity({.pose = {.position = {std::nan(""), 0, 0}}}), pba::Error);
+}
+
+// ---------------------------------------------------------------------------------------
+// kinematic paths are closed-form and drive colliders, forcers and emitters
+
+TEST(Kinematic, PathsFollowTheirClosedForms) {
+  World w({.stepper = {.fixed_dt = 0.01}});
+  const EntityId lin = w.create_entity({.pose = {.position = {1, 2, 3}}});
+  w.add_kinematic(lin, {.path = pba::PathType::Linear, .velocity = {1, 0, -2}});
+  const EntityId circ = w.create_entity({});
+  w.add_kinematic(circ, {.path = pba::PathType::Circular, .center = {0, 1, 0}, .axis = {0, 1, 0}, .radius = 2,
+                         .angular_speed = 0.5});
+  const EntityId way = w.create_entity({});
+  w.add_kinematic(way, {.path = pba::PathType::Waypoints, .waypoints = {{0, 0, 0}, {4, 0, 0}, {4, 3, 0}},
+                        .speed = 2, .loop = true});
+  const EntityId thr = w.create_entity({});
+  w.add_kinematic(thr, {.path = pba::PathType::Thruster, .velocity = {0, 1, 0}, .thrust = {0, 2, 0}});
+  const EntityId motor = w.create_entity({});
+  w.add_kinematic(motor, {.path = pba::PathType::Motor, .spin = {0, 3.141592653589793, 0}});
+  for (int i = 0; i < 300; ++i) w.step();
+  const double t = w.time();
+  EXPECT_NEAR(t, 3.0, 1e-12);
+  EXPECT_NEAR(glm::length(w.pose(lin).position - Vec3(4, 2, -3)), 0, 1e-12);
+  EXPECT_NEAR(glm::length(w.pose(circ).position - Vec3(0, 1, 0)), 2, 1e-12);
+  EXPECT_NEAR(w.pose(circ).position.y, 1, 1e-12);
+  // 6 m along a 12 m loop: 4 m to the corner, then 2 m up
+  EXPECT_NEAR(glm::length(w.pose(way).position - Vec3(4, 2, 0)), 0, 1e-9);
+  EXPECT_NEAR(w.pose(thr).position.y, 1 * 3 + 0.5 * 2 * 9, 1e-9);
+  EXPECT_NEAR(w.velocity(thr).y, 1 + 2 * 3, 1e-9);
+  // half a turn per second for 3 s: rotated by 3 pi about y, i.e. by pi
+  EXPECT_NEAR(std::abs(glm::dot(w.pose(motor).rotation, glm::angleAxis(3.141592653589793, Vec3(0, 1, 0)))), 1,
+              1e-9);
+}
+
+TEST(Kinematic, MovingColliderLiftsAParticle) {
+  World w({.stepper = {.fixed_dt = 1.0 / 120}});
+  const EntityId lift = w.create_entity({.name = "lift"});
+  w.add_collider(lift, {.shape = {.type = pba::ShapeType::Box, .half_extents = {1, 0.1, 1}},
+                        .material = {.restitution = 0}});
+  w.add_kinematic(lift, {.path = pba::PathType::Linear, .velocity = {0, 0.5, 0}});
+  const EntityId ball = w.create_entity({.pose = {.position = {0, 0.15, 0}}});
+  w.add_particle(ball, {.radius = 0.05});
+  for (int i = 0; i < 240; ++i) w.step();
+  // the lift's top is at 0.5 t + 0.1; the ball rides on it
+  EXPECT_NEAR(w.pose(ball).position.y, 0.5 * w.time() + 0.1 + 0.05, 2e-3);
+  EXPECT_NEAR(w.velocity(ball).y, 0.5, 0.05);
+}
+
+TEST(Forcers, FanEntityPushesParticlesInsideIt) {
+  World w;
+  w.particles().forces().gravity = Vec3(0);
+  const EntityId fan = w.create_entity({.pose = {.position = {0, 1, 0}}});
+  w.add_forcer(fan, {.kind = pba::ForcerKind::Fan, .half_extents = {1, 1, 1}, .direction = {1, 0, 0}, .strength = 1});
+  const EntityId in = w.create_entity({.pose = {.position = {0, 1, 0}}});
+  const EntityId out = w.create_entity({.pose = {.position = {0, 5, 0}}});
+  w.add_particle(in, {.mass = 0.5});
+  w.add_particle(out, {.mass = 0.5});
+  w.step();
+  EXPECT_NEAR(w.velocity(in).x, 2.0 / 60, 1e-6);
+  EXPECT_EQ(w.velocity(out).x, 0.0);
+}
+
+TEST(Constraints, DistanceIsKept) {
+  World w({.stepper = {.fixed_dt = 1.0 / 120}});
+  const EntityId anchor = w.create_entity({.pose = {.position = {0, 2, 0}}});
+  w.add_particle(anchor, {.mass = 1e6});
+  w.particles().forces().gravity = Vec3(0, -9.81, 0);
+  const EntityId bob = w.create_entity({.pose = {.position = {1, 2, 0}}});
+  w.add_particle(bob, {.mass = 1});
+  w.add_constraint(bob, {.other = anchor});
+  for (int i = 0; i < 240; ++i) w.step();
+  EXPECT_NEAR(glm::length(w.pose(bob).position - w.pose(anchor).position), 1.0, 1e-3);
+  EXPECT_LT(w.pose(bob).position.y, 1.5);  // it swung down
+}
+
+// ---------------------------------------------------------------------------------------
+// stepping
+
+class CountingSystem final : public pba::WorldSystem {
+ public:
+  explicit CountingSystem(std::vector<double>* log) : log_(log) {}
+  std::string_view name() const override { return "counter"; }
+  void step(World& w, double t, double) override {
+    // the particles have already moved this tick
+    log_->push_back(t);
+    EXPECT_GE(w.particles().steps(), static_cast<long long>(log_->size()));
+  }
+
+ private:
+  std::vector<double>* log_;
+};
+
+TEST(Stepping, AdvanceRunsFixedTicksThroughTheStepper) {
+  World w({.stepper = {.strategy = pba::Strategy::Fixed, .fixed_dt = 1.0 / 60}});
+  std::vector<double> log;
+  w.add_system(std::make_unique<CountingSystem>(&log));
+  const EntityId e = w.create_entity({});
+  w.add_particle(e, {});
+  for (int i = 0; i < 10; ++i) {
+    const pba::FrameStats f = w.advance(1.0 / 30);
+    EXPECT_EQ(f.ticks, 2);
+  }
+  EXPECT_EQ(w.ticks(), 20);
+  ASSERT_EQ(log.size(), 20u);
+  EXPECT_NEAR(log.back(), 19.0 / 60, 1e-12);
+  EXPECT_NEAR(w.time(), 20.0 / 60, 1e-12);
+  // per-phase timings are filled and add up to no more than the total
+  const pba::WorldProfile& p = w.profile();
+  EXPECT_GT(p.total, 0);
+  EXPECT_LE(p.kinematic + p.sync + p.integrate + p.collide + p.recycle + p.emit + p.constraints + p.systems,
+            p.total * 1.0001 + 1e-6);
+}
+
+TEST(Stepping, NonFiniteStateStopsTheWorld) {
+  World w;
+  w.particles().forces().quadratic_drag = 1;
+  const EntityId e = w.create_entity({});
+  w.add_particle(e, {.velocity = {1e30, 0, 0}, .mass = 1e-30});
+  try {
+    w.step();
+    FAIL();
+  } catch (const pba::Error& err) {
+    EXPECT_NE(std::string(err.what()).find("particle 0 became non-finite at t = "), std::string::npos) << err.what();
+  }
+  try {
+    w.step();
+    FAIL();
+  } catch (const pba::Error& err) {
+    EXPECT_EQ(std::string(err.what()).rfind("World::tick: the simulation stopped: particle 0", 0), 0u) << err.what();
+  }
+}
+
+TEST(Stepping, EveryIntegratorIsSelectable) {
+  for (pba::Method m : pba::kAllMethods) {
+    pba::WorldDef def;
+    def.particles.method = m;
+    World w(def);
+    const EntityId g = w.create_entity({});
+    w.add_collider(g, {.shape = {.type = pba::ShapeType::Plane}});
+    const EntityId e = w.create_entity({.pose = {.position = {0, 1, 0}}});
+    w.add_particle(e, {});
+    for (int i = 0; i < 120; ++i) w.step();
+    EXPECT_EQ(w.particles().method(), m);
+    EXPECT_NEAR(w.pose(e).position.y, 0.05, 1e-5) << pba::name(m);
+  }
+}
+
+}  // namespace
