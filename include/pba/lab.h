@@ -126,6 +126,17 @@ struct ConvergenceResult {
 /// an integer and dt adjusted to land exactly on t_end).
 ConvergenceResult measure_convergence(const Problem& p, Method m, const ConvergenceSettings& s = {});
 
+/// The lab's rule for the observed order of convergence, for callers that measure the
+/// points themselves (the samples app fills them in a few per frame). dts (s), errors and
+/// steps are coarse to fine, one entry per measured point; scale = max(1, |x_exact|) at
+/// t_end; model_error is the reference's own error (Problem::model_error). Usable points
+/// and the fit window follow ConvergenceSettings. Sets fitted[i] for the points used.
+/// Returns the least-squares slope of log(error) against log(dt), or NaN when fewer than
+/// 3 points are usable.
+double fit_order(std::span<const double> dts, std::span<const double> errors,
+                 std::span<const long long> steps, double scale, double model_error,
+                 const ConvergenceSettings& s, std::vector<bool>& fitted);
+
 /// Settings for the long energy run.
 struct EnergySettings {
   long long steps = 1000000;  ///< steps of size energy_dt; [1, 1e9]

@@ -41,6 +41,66 @@ void simulate(const Problem& p, Method m, double dt, long long steps, std::vecto
   }
 }
 
+double fit_order(std::span<const double> dts, std::span<const double> errors,
+                 std::span<const long long> steps, double scale, double model_error,
+                 const ConvergenceSettings& s, std::vector<bool>& fitted) {
+  const double eps = std::numeric_limits<double>::epsilon();
+  // usable points: above round-off (a fixed floor, and n steps each adding ~eps of random
+  // rounding, a sqrt(n) walk, with a 100x margin) and above the closed form's model error
+  std::vector<bool> usable(dts.size(), false);
+  for (std::size_t i = 0; i < dts.size(); ++i) {
+    const double walk = 100 * std::sqrt(static_cast<double>(steps[i])) * eps * scale;
+    const double floor = std::max({s.roundoff_floor * scale, walk, 10 * model_error});
+    usable[i] = std::isfinite(errors[i]) && errors[i] > floor;
+  }
+  // the fit window: consecutive usable points, each halving shrinking the error by at
+  // least 1.5x (any order >= 1 gives 2x; less means round-off or model error has taken
+  // over, e.g. position Verlet's round-off growth), choosing among windows of the
+  // largest possible size up to fit_points the one whose local slopes agree best (the
+  // asymptotic regime: coarse steps are pre-asymptotic, fine ones feel round-off)
+  const std::size_t count = dts.size();
+  auto local_slope = [&](std::size_t i) {  // between points i and i + 1
+    return std::log(errors[i] / errors[i + 1]) / std::log(dts[i] / dts[i + 1]);
+  };
+  std::size_t best_start = 0, best_size = 0;
+  for (std::size_t w = static_cast<std::size_t>(s.fit_points); w >= 3 && best_size == 0; --w) {
+    double best_spread = kInf;
+    for (std::size_t j = 0; j + w <= count; ++j) {
+      bool ok = true;
+      double lo = kInf, hi = -kInf;
+      for (std::size_t i = j; i < j + w && ok; ++i) {
+        ok = usable[i] && (i == j || errors[i] * 1.5 <= errors[i - 1]);
+        if (ok && i > j) {
+          lo = std::min(lo, local_slope(i - 1));
+          hi = std::max(hi, local_slope(i - 1));
+        }
+      }
+      // ties go to the finer window
+      if (ok && hi - lo <= best_spread) {
+        best_spread = hi - lo;
+        best_start = j;
+        best_size = w;
+      }
+    }
+  }
+  fitted.assign(count, false);
+  for (std::size_t i = best_start; i < best_start + best_size; ++i) fitted[i] = true;
+  const int used = static_cast<int>(best_size);
+  if (used < 3) return kNaN;
+  // least-squares slope of log(error) against log(dt)
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < dts.size(); ++i) {
+    if (!fitted[i]) continue;
+    const double lx = std::log(dts[i]), ly = std::log(errors[i]);
+    sx += lx;
+    sy += ly;
+    sxx += lx * lx;
+    sxy += lx * ly;
+  }
+  const double k = used;
+  return (k * sxy - sx * sy) / (k * sxx - sx * sx);
+}
+
 ConvergenceResult measure_convergence(const Problem& p, Method m, const ConvergenceSettings& s) {
   p.validate();
   require_count(s.levels, 2, 20, "ConvergenceSettings.levels");
@@ -79,65 +139,11 @@ ConvergenceResult measure_convergence(const Problem& p, Method m, const Converge
     r.dts.push_back(dt);
     r.errors.push_back(err);
   }
-  // usable points: above round-off (a fixed floor, and n steps each adding ~eps of random
-  // rounding, a sqrt(n) walk, with a 100x margin) and above the closed form's model error
-  std::vector<bool> usable(r.dts.size(), false);
-  for (std::size_t i = 0; i < r.dts.size(); ++i) {
-    const double walk = 100 * std::sqrt(static_cast<double>(counts[i])) * eps * scale;
-    const double floor = std::max({s.roundoff_floor * scale, walk, 10 * p.model_error});
-    usable[i] = std::isfinite(r.errors[i]) && r.errors[i] > floor;
-  }
-  // the fit window: consecutive usable points, each halving shrinking the error by at
-  // least 1.5x (any order >= 1 gives 2x; less means round-off or model error has taken
-  // over, e.g. position Verlet's round-off growth), choosing among windows of the
-  // largest possible size up to fit_points the one whose local slopes agree best (the
-  // asymptotic regime: coarse steps are pre-asymptotic, fine ones feel round-off)
-  const std::size_t count = r.dts.size();
-  auto local_slope = [&](std::size_t i) {  // between points i and i + 1
-    return std::log(r.errors[i] / r.errors[i + 1]) / std::log(r.dts[i] / r.dts[i + 1]);
-  };
-  std::size_t best_start = 0, best_size = 0;
-  for (std::size_t w = static_cast<std::size_t>(s.fit_points); w >= 3 && best_size == 0; --w) {
-    double best_spread = kInf;
-    for (std::size_t j = 0; j + w <= count; ++j) {
-      bool ok = true;
-      double lo = kInf, hi = -kInf;
-      for (std::size_t i = j; i < j + w && ok; ++i) {
-        ok = usable[i] && (i == j || r.errors[i] * 1.5 <= r.errors[i - 1]);
-        if (ok && i > j) {
-          lo = std::min(lo, local_slope(i - 1));
-          hi = std::max(hi, local_slope(i - 1));
-        }
-      }
-      // ties go to the finer window
-      if (ok && hi - lo <= best_spread) {
-        best_spread = hi - lo;
-        best_start = j;
-        best_size = w;
-      }
-    }
-  }
-  r.fitted.assign(count, false);
-  for (std::size_t i = best_start; i < best_start + best_size; ++i) r.fitted[i] = true;
-  const int used = static_cast<int>(best_size);
-  if (used < 3) {
-    r.observed_order = kNaN;
+  // the observed order by the lab's fit rule
+  r.observed_order = fit_order(r.dts, r.errors, counts, scale, p.model_error, s, r.fitted);
+  if (std::isnan(r.observed_order))
     r.note = p.model_error > 0 ? "error below the closed form's own model error (or round-off)"
                                : "error at round-off for every dt (exact for this problem)";
-    return r;
-  }
-  // least-squares slope of log(error) against log(dt)
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (std::size_t i = 0; i < r.dts.size(); ++i) {
-    if (!r.fitted[i]) continue;
-    const double lx = std::log(r.dts[i]), ly = std::log(r.errors[i]);
-    sx += lx;
-    sy += ly;
-    sxx += lx * lx;
-    sxy += lx * ly;
-  }
-  const double k = used;
-  r.observed_order = (k * sxy - sx * sy) / (k * sxx - sx * sx);
   return r;
 }
 
