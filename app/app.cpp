@@ -130,24 +130,33 @@ void App::handle_input() {
       }
     }
   }
+  // the world-space ray under the cursor
+  const float w = std::max(io.DisplaySize.x, 1.0f), h = std::max(io.DisplaySize.y, 1.0f);
+  const glm::mat4 inv = glm::inverse(camera_.projection(w / h) * camera_.view());
+  const float nx = 2 * io.MousePos.x / w - 1, ny = 1 - 2 * io.MousePos.y / h;
+  glm::vec4 a = inv * glm::vec4(nx, ny, -1, 1), c = inv * glm::vec4(nx, ny, 1, 1);
+  a /= a.w, c /= c.w;
+  const Vec3 ray_origin{glm::vec3(a)}, ray_dir{glm::normalize(glm::vec3(c - a))};
+  const bool captured = sample_->MouseCaptured();
+  if (!io.WantCaptureMouse || captured) {
+    auto lock = physics_->lock_state();
+    // clicks go to the sample first, so a press that grabs something does not orbit
+    for (int b = 0; b < 3; ++b) {
+      if (!ImGui::IsMouseClicked(b) && !ImGui::IsMouseReleased(b)) continue;
+      if (io.WantCaptureMouse && !sample_->MouseCaptured()) continue;
+      sample_->Mouse(b, ImGui::IsMouseClicked(b), ray_origin, ray_dir);
+    }
+    const ImVec2 d = io.MouseDelta;
+    if (d.x != 0 || d.y != 0 || sample_->MouseCaptured()) sample_->MouseMove(ray_origin, ray_dir);
+  }
   // camera: left-drag orbits, right/middle-drag or shift+left pans, wheel zooms
   if (!io.WantCaptureMouse) {
     const ImVec2 d = io.MouseDelta;
-    const bool pan = io.MouseDown[1] || io.MouseDown[2] || (io.MouseDown[0] && io.KeyShift);
+    const bool held = sample_->MouseCaptured();
+    const bool pan = io.MouseDown[1] || io.MouseDown[2] || (io.MouseDown[0] && io.KeyShift && !held);
     if (pan && (d.x != 0 || d.y != 0)) camera_.pan(d.x, d.y, io.DisplaySize.y);
-    else if (io.MouseDown[0] && (d.x != 0 || d.y != 0)) camera_.orbit(d.x, d.y);
+    else if (io.MouseDown[0] && !held && (d.x != 0 || d.y != 0)) camera_.orbit(d.x, d.y);
     if (io.MouseWheel != 0) camera_.zoom(io.MouseWheel);
-    // clicks go to the sample with a world-space ray under the cursor
-    for (int b = 0; b < 3; ++b) {
-      if (!ImGui::IsMouseClicked(b) && !ImGui::IsMouseReleased(b)) continue;
-      const float w = std::max(io.DisplaySize.x, 1.0f), h = std::max(io.DisplaySize.y, 1.0f);
-      const glm::mat4 inv = glm::inverse(camera_.projection(w / h) * camera_.view());
-      const float nx = 2 * io.MousePos.x / w - 1, ny = 1 - 2 * io.MousePos.y / h;
-      glm::vec4 a = inv * glm::vec4(nx, ny, -1, 1), c = inv * glm::vec4(nx, ny, 1, 1);
-      a /= a.w, c /= c.w;
-      auto lock = physics_->lock_state();
-      sample_->Mouse(b, ImGui::IsMouseClicked(b), Vec3(glm::vec3(a)), Vec3(glm::normalize(glm::vec3(c - a))));
-    }
   }
 }
 

@@ -44,7 +44,9 @@ options:
   --help                 show this help and exit
   --list                 list the samples ("Category/Name") and exit
   --sample NAME          start with this sample: "Category/Name", its name, or a unique
-                         part of it (case-insensitive), e.g. --sample integr
+                         part of it (case-insensitive), e.g. --sample stepping
+  --scene FILE.json      open a scene file (docs/scene-format.md) in the "Particles/Scene
+                         file" sample; the same as --sample "scene file" --option file=FILE
   --headless             render in a hidden window with a fixed frame time and capture
   --frames N             frames to render headless (default 300)
   --out DIR              where PNGs and the MP4 go (default ./captures/<sample>)
@@ -130,6 +132,12 @@ ParseResult ParseOptions(const std::vector<std::string>& args) {
       if (!take()) return r;
       if (value.empty()) return r.error = bad(flag, value, "expected a sample name (see --list)"), r;
       o.sample = value;
+    } else if (flag == "--scene") {
+      // shorthand for the scene-file sample with its file option
+      if (!take()) return r;
+      if (value.empty()) return r.error = bad(flag, value, "expected a scene file (.json)"), r;
+      o.sample = "Particles/Scene file";
+      o.sample_options["file"] = value;
     } else if (flag == "--out") {
       if (!take()) return r;
       if (value.empty()) return r.error = bad(flag, value, "expected a directory"), r;

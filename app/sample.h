@@ -76,6 +76,11 @@ class Sample {
   virtual void Mouse(int button, bool down, const Vec3& ray_origin, const Vec3& ray_dir) {
     (void)button, (void)down, (void)ray_origin, (void)ray_dir;
   }
+  /// The cursor moved (no UI over it, or the sample holds the mouse): its world ray.
+  virtual void MouseMove(const Vec3& ray_origin, const Vec3& ray_dir) { (void)ray_origin, (void)ray_dir; }
+  /// True while the sample drags something with the left button: the camera then does not
+  /// orbit, and MouseMove keeps coming even over the panels.
+  virtual bool MouseCaptured() const { return false; }
   /// Scans the state for NaN or infinity (pba::check_finite); the app pauses and shows
   /// the message when it fails.
   virtual FiniteCheck CheckFinite() const { return {}; }

@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# The IK chain sample in a real (visible, non-headless) window on the current X display
+# (ctest runs under xvfb-run): xdotool grabs the red target with the mouse and drags it;
+# the sample's --option report=FILE (target in world and pixels, the chain's effector,
+# every 5 frames) must show that the target moved with the mouse and the chain followed.
+#   ik_mouse_check.sh PBA_SAMPLES WORKDIR
+# Robust on a slow machine: every wait polls the report with a generous hang guard and
+# nothing asserts on timing.
+set -u
+app=$1
+work=$2
+guard=${PBA_IK_MOUSE_GUARD:-120}   # seconds per wait before giving up
+
+fail() {
+  echo "FAIL: $*"
+  [ -f "$work/report.txt" ] && echo "last report: $(cat "$work/report.txt")"
+  [ -f "$work/app.log" ] && { echo "--- app output ---"; cat "$work/app.log"; }
+  exit 1
+}
+[ -n "${DISPLAY:-}" ] || fail "DISPLAY is not set (run under xvfb-run, as scripts/test does)"
+command -v xdotool >/dev/null || fail "xdotool is not installed (scripts/install-deps)"
+
+rm -rf "$work"
+mkdir -p "$work"
+report=$work/report.txt
+
+# the chain, still until dragged, in a visible window
+"$app" --sample "Inverse kinematics/Chain solvers" --size 960x600 --option animate=0 --option bones=10 \
+  --option solver=fabrik --option "report=$report" >"$work/app.log" 2>&1 &
+pid=$!
+trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null' EXIT
+
+# field NAME [K]: the K-th value (default 1) after NAME in the report
+field() { awk -v n="$1" -v k="${2:-1}" '{for (i = 1; i <= NF; ++i) if ($i == n) {print $(i + k); exit}}' "$report" 2>/dev/null; }
+# waits until the shell condition "$1" holds, re-reading the report; fails after the guard
+wait_until() {
+  local what=$1 cond=$2 t0=$SECONDS
+  while ! eval "$cond"; do
+    kill -0 $pid 2>/dev/null || fail "the app exited while waiting for $what"
+    [ $((SECONDS - t0)) -lt "$guard" ] || fail "timed out after ${guard}s waiting for $what"
+    sleep 0.2
+  done
+}
+ge() { awk -v a="$1" -v b="$2" 'BEGIN {exit !(a + 0 >= b + 0)}'; }
+
+# the window is up and the sample has drawn some frames
+wait_until "the first frames" '[ -s "$report" ] && ge "$(field frame)" 10'
+wid=$(xdotool search --onlyvisible --name '^pba samples$' 2>/dev/null | head -n 1)
+[ -n "$wid" ] || fail "no visible window named 'pba samples'"
+f0=$(field frame)
+wait_until "a newer report" 'ge "$(field frame)" $((f0 + 5))'
+tx0=$(field target 1); ty0=$(field target 2); tz0=$(field target 3)
+px=$(field pixel 1); py=$(field pixel 2)
+echo "target at ($tx0, $ty0, $tz0), pixel ($px, $py)"
+x0=$(printf '%.0f' "$px"); y0=$(printf '%.0f' "$py")
+
+# press on the target and wait until the sample has grabbed it
+xdotool mousemove --window "$wid" "$x0" "$y0"
+sleep 0.5
+xdotool mousedown 1
+wait_until "the grab" 'ge "$(field grabs)" 1'
+
+# drag it in small steps to the left and down
+x1=$((x0 - 110)); y1=$((y0 + 45))
+for k in 1 2 3 4 5 6 7 8 9 10; do
+  xdotool mousemove --window "$wid" $((x0 + (x1 - x0) * k / 10)) $((y0 + (y1 - y0) * k / 10))
+  sleep 0.15
+done
+# the target follows the cursor (its pixel within 4 px of the mouse)
+near_mouse='awk -v x="$(field pixel 1)" -v y="$(field pixel 2)" -v mx='$x1' -v my='$y1' "BEGIN {exit !((x - mx)^2 + (y - my)^2 < 16)}"'
+wait_until "the target under the mouse at ($x1, $y1)" "$near_mouse"
+xdotool mouseup 1
+
+# the chain reaches it: effector within 1 mm of the target
+wait_until "the chain to reach the target" 'r=$(field residual); [ -n "$r" ] && ge 0.001 "$r" && ge "$r" 0'
+tx=$(field target 1); ty=$(field target 2); tz=$(field target 3)
+ex=$(field effector 1); ey=$(field effector 2); ez=$(field effector 3)
+echo "after the drag: target ($tx, $ty, $tz), effector ($ex, $ey, $ez), residual $(field residual) m"
+moved=$(awk -v a="$tx" -v b="$ty" -v c="$tz" -v d="$tx0" -v e="$ty0" -v f="$tz0" \
+  'BEGIN {printf "%.4f", sqrt((a - d)^2 + (b - e)^2 + (c - f)^2)}')
+gap=$(awk -v a="$tx" -v b="$ty" -v c="$tz" -v d="$ex" -v e="$ey" -v f="$ez" \
+  'BEGIN {printf "%.6f", sqrt((a - d)^2 + (b - e)^2 + (c - f)^2)}')
+echo "target moved $moved m; effector to target $gap m"
+ge "$moved" 0.05 || fail "the target moved only $moved m"
+ge 0.001 "$gap" || fail "the effector is $gap m from the target"
+echo "PASS: the mouse moved the target and the chain followed"
