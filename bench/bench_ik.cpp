@@ -32,7 +32,7 @@
 
 // count heap allocations (alloc_count.cpp replaces the global operator new)
 namespace {
-using pba::ik::alloc_counter::g_allocs;
+using pba::test_support::g_allocations;
 }
 
 namespace {
@@ -117,11 +117,11 @@ Row run_pba_cold(int n, bool limited, Method m, const std::vector<scenes::Target
     scenes::bent_pose(s);
     s.set_target(0, t.position);
     s.set_orientation_target(0, orientation ? std::optional<Quat>(t.rotation) : std::nullopt);
-    const long long a0 = g_allocs.load();
+    const long long a0 = g_allocations.load();
     const double t0 = cpu_now();
     const SolveResult res = solver.solve();
     const double t1 = cpu_now();
-    allocs += g_allocs.load() - a0;
+    allocs += g_allocations.load() - a0;
     r.solves++;
     r.success += res.converged;
     r.iters.push_back(res.iterations);
@@ -155,11 +155,11 @@ Row run_pba_unreachable(int n, Method m, double tol, int count) {
     d = glm::normalize(d);
     scenes::bent_pose(s);
     s.set_target(0, 1.5 * d);
-    const long long a0 = g_allocs.load();
+    const long long a0 = g_allocations.load();
     const double t0 = cpu_now();
     const SolveResult res = solver.solve();
     const double t1 = cpu_now();
-    allocs += g_allocs.load() - a0;
+    allocs += g_allocations.load() - a0;
     const double excess = std::abs(res.residual - 0.5);
     r.solves++;
     r.success += excess <= 1e-3;
@@ -205,11 +205,11 @@ Row run_pba_tracking(int n, bool limited, Method m, double tol) {
   for (int f = 1; f <= 600; ++f) {
     drive(f / 60.0);
     s.set_target(0, driver.tips()[n - 1]);
-    const long long a0 = g_allocs.load();
+    const long long a0 = g_allocations.load();
     const double t0 = cpu_now();
     const SolveResult res = solver.solve();
     const double t1 = cpu_now();
-    allocs += g_allocs.load() - a0;
+    allocs += g_allocations.load() - a0;
     r.solves++;
     r.success += res.converged;
     r.iters.push_back(res.iterations);
@@ -258,11 +258,11 @@ Row run_kdl_lma(int n, const std::vector<scenes::Target>& targets, double tol, d
   const auto t_begin = Clock::now();
   for (const auto& t : targets) {
     const KDL::Frame goal = kdl_frame(t);
-    const long long a0 = g_allocs.load();
+    const long long a0 = g_allocations.load();
     const double t0 = cpu_now();
     ik.CartToJnt(q0, goal, q);
     const double t1 = cpu_now();
-    allocs += g_allocs.load() - a0;
+    allocs += g_allocations.load() - a0;
     KDL::Frame f;
     fk.JntToCart(q, f);
     const double err = (f.p - goal.p).Norm();
@@ -293,11 +293,11 @@ Row run_kdl_nrjl(int n, const std::vector<scenes::Target>& targets, double tol, 
   const auto t_begin = Clock::now();
   for (const auto& t : targets) {
     const KDL::Frame goal = kdl_frame(t);
-    const long long a0 = g_allocs.load();
+    const long long a0 = g_allocations.load();
     const double t0 = cpu_now();
     ik.CartToJnt(q0, goal, q);
     const double t1 = cpu_now();
-    allocs += g_allocs.load() - a0;
+    allocs += g_allocations.load() - a0;
     KDL::Frame f;
     fk.JntToCart(q, f);
     const double err = (f.p - goal.p).Norm();
@@ -341,7 +341,7 @@ Row run_two_bone(int count) {
     if (glm::length(t) <= 0.54 && glm::length(t) >= 0.06) targets.push_back(t);
   }
   for (int batch = 0; batch < count / 100; ++batch) {
-    const long long a0 = g_allocs.load();
+    const long long a0 = g_allocations.load();
     double worst = 0;
     bool all = true;
     const double t0 = cpu_now();
@@ -352,7 +352,7 @@ Row run_two_bone(int count) {
       all = all && res.converged;
     }
     const double t1 = cpu_now();
-    allocs += g_allocs.load() - a0;
+    allocs += g_allocations.load() - a0;
     r.solves += 100;
     r.success += all ? 100 : 0;
     r.iters.push_back(1);

@@ -4,12 +4,12 @@
 #include <cstdlib>
 #include <new>
 
-namespace pba::ik::alloc_counter {
-std::atomic<long long> g_allocs{0};
+namespace pba::test_support {
+std::atomic<long long> g_allocations{0};
 }
 
 void* operator new(std::size_t n) {
-  pba::ik::alloc_counter::g_allocs.fetch_add(1, std::memory_order_relaxed);
+  pba::test_support::g_allocations.fetch_add(1, std::memory_order_relaxed);
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
