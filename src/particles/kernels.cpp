@@ -61,8 +61,10 @@ PBA_INLINE void fused_block(float* PBA_RESTRICT x, float* PBA_RESTRICT y, float*
 
 // compiled for AVX2 and for the baseline; the loader picks one at start-up (GCC function
 // multi-versioning). -ffp-contract=off keeps both free of fused multiply-adds, so both
-// give the same bits.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
+// give the same bits. Not under the sanitizers: the ifunc resolver runs during
+// relocation, before the sanitizer runtime is up, and crashes the program (TSan).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
 __attribute__((target_clones("avx2", "default")))
 #endif
 FusedResult fused_semi_implicit_euler(const FusedArgs& a) {
