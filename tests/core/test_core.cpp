@@ -1,6 +1,8 @@
 // Tests for pba/core.h: validation messages, finite checks and state hashing.
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include <limits>
 #include <vector>
 
@@ -8,14 +10,7 @@
 
 namespace {
 
-std::string error_of(auto&& f) {
-  try {
-    f();
-  } catch (const pba::Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using pba::test_support::error_of;
 
 TEST(Validate, MessagesNameTheValueAndWhere) {
   EXPECT_EQ(error_of([] { pba::require_positive(-0.5, "settings.dt"); }),

@@ -4,6 +4,8 @@
 // two-bone pole, several effectors on a tree, determinism and zero allocations.
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include <atomic>
 #include <cstdlib>
 #include <limits>
@@ -27,14 +29,7 @@ using namespace pba::ik;
 constexpr double kPi = 3.141592653589793;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::string error_of(auto&& f) {
-  try {
-    f();
-  } catch (const pba::Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using pba::test_support::error_of;
 
 SkeletonDef two_bones() {
   SkeletonDef def;

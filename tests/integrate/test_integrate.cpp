@@ -4,6 +4,8 @@
 // angular momentum on an orbit, implicit Euler's Newton solve, and determinism.
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -16,14 +18,7 @@ namespace {
 using pba::Method;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-std::string error_of(auto&& f) {
-  try {
-    f();
-  } catch (const pba::Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using pba::test_support::error_of;
 
 // x'' = -omega^2 x for one coordinate, as an array function
 struct Spring {

@@ -3,6 +3,8 @@
 // bad input and the CSV output.
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -15,14 +17,7 @@ namespace {
 using pba::Method;
 namespace lab = pba::lab;
 
-std::string error_of(auto&& f) {
-  try {
-    f();
-  } catch (const pba::Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using pba::test_support::error_of;
 
 TEST(Convergence, OscillatorOrdersMatchTheoryWithinATenth) {
   // the headline: 1, 1, 2, 2, 4, 1

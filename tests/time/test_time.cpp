@@ -3,6 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -27,14 +29,7 @@ using pba::Strategy;
 using pba::TimeStepper;
 using ::testing::HasSubstr;
 
-std::string error_of(auto&& f) {
-  try {
-    f();
-  } catch (const pba::Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using pba::test_support::error_of;
 
 // records every tick's start time and length
 struct TickLog {

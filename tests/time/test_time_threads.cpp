@@ -4,6 +4,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -19,14 +21,7 @@ using pba::StepperSettings;
 
 constexpr double kHangGuard = 60.0;  // seconds; only ever reached if something hangs
 
-std::string error_of(auto&& f) {
-  try {
-    f();
-  } catch (const pba::Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using pba::test_support::error_of;
 
 StepperSettings fixed(double dt) {
   StepperSettings s;
