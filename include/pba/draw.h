@@ -60,6 +60,13 @@ class DebugDraw {
   virtual void arrow(const Vec3& from, const Vec3& to, double head, Color c) = 0;
   /// Text anchored at a world point, drawn facing the screen.
   virtual void text(const Vec3& p, std::string_view s, Color c) = 0;
+  /// A filled triangle a-b-c (counter-clockwise seen from the front). The default draws
+  /// its outline with line(); renderers that can fill triangles override it.
+  virtual void triangle(const Vec3& a, const Vec3& b, const Vec3& c, Color col) {
+    line(a, b, col);
+    line(b, c, col);
+    line(c, a, col);
+  }
 };
 
 /// A DebugDraw that draws nothing: for headless stepping and benchmarks.

@@ -17,6 +17,7 @@
 #include <string>
 #include <string_view>
 
+#include "pba/soft.h"
 #include "pba/world.h"
 
 namespace pba {
@@ -101,6 +102,94 @@ struct ForcerStreamParams {
 };
 /// Builds the forcer stream.
 void forcer_stream(World& world, const ForcerStreamParams& p = {});
+
+// ---- soft bodies (workbook 4.3): each is a SoftBody component of one entity in the
+//      world's SoftSystem (soft_system(world)); gravity and wind come from the world ----
+
+/// Workbook 4.3 exercise 2: one spring hanging from a fixed anchor at (0, 2, 0), released
+/// `stretch` beyond its rest length, to compare integrators (one integrator step per tick).
+struct SpringParams {
+  SoftSolver solver = SoftSolver::MassSpring;  ///< mass-spring (any integrator) or XPBD (alpha = 1/k)
+  Method method = Method::SemiImplicitEuler;   ///< the integrator (mass-spring)
+  double stiffness = 40;   ///< k (N/m), > 0
+  double mass = 0.5;       ///< the bob's mass (kg), > 0
+  double damping = 0;      ///< c (N s/m), >= 0
+  double rest_length = 1;  ///< l0 (m), > 0
+  double stretch = 0.4;    ///< initial extension beyond the rest length (m), > -rest_length
+};
+/// Builds the spring; returns its entity ("spring").
+EntityId spring(World& world, const SpringParams& p = {});
+
+/// A rope (XPBD) pinned at one end, released horizontally to swing over a sphere and
+/// fall onto the ground.
+struct RopeParams {
+  int segments = 30;     ///< segments, in [1, 10000]
+  double length = 2;     ///< m, > 0
+  double mass = 0.5;     ///< kg, > 0
+  int substeps = 20;     ///< XPBD substeps per tick, in [1, 10000]
+  bool obstacle = true;  ///< add the sphere under it
+};
+/// Builds the rope; returns its entity ("rope").
+EntityId rope(World& world, const RopeParams& p = {});
+
+/// A flag (XPBD cloth) on a pole in gusting wind, with per-triangle drag and lift.
+struct ClothFlagParams {
+  int nx = 40;                          ///< particles along the flag, in [2, 4096]
+  int ny = 26;                          ///< particles up the pole, in [2, 4096]
+  double width = 2.0, height = 1.3;     ///< m, > 0
+  double mass = 0.3;                    ///< kg, > 0
+  int substeps = 12;                    ///< in [1, 10000]
+  Wind wind{{7, 0, 1.5}, 3, 0.7, 5};    ///< the wind
+  double drag = 1.0, lift = 0.6;        ///< aerodynamic coefficients, >= 0
+};
+/// Builds the flag (and sets the world's wind); returns its entity ("flag").
+EntityId cloth_flag(World& world, const ClothFlagParams& p = {});
+
+/// A square cloth (XPBD) dropped flat onto a sphere above a ground plane with friction.
+struct ClothDrapeParams {
+  int n = 40;             ///< particles per side, in [2, 4096]
+  double size = 1.6;      ///< side (m), > 0
+  int substeps = 15;      ///< in [1, 10000]
+  double friction = 0.4;  ///< Coulomb coefficient of the sphere and ground, >= 0
+};
+/// Builds the drape; returns the cloth's entity ("cloth").
+EntityId cloth_drape(World& world, const ClothDrapeParams& p = {});
+
+/// A tearable hanging cloth (XPBD) pinned along its top edge, for pulling with the mouse
+/// (SoftBody::grab) until it tears.
+struct ClothTearParams {
+  int n = 40;                ///< particles per side, in [2, 4096]
+  double tear_strain = 0.4;  ///< strain at which a constraint breaks, > 0
+  int substeps = 15;         ///< in [1, 10000]
+};
+/// Builds the cloth; returns its entity ("cloth").
+EntityId cloth_tear(World& world, const ClothTearParams& p = {});
+
+/// A jelly cube (XPBD tetrahedra with volume constraints) dropped onto the ground,
+/// tilted so that it lands on an edge, bounces and wobbles.
+struct JellyDropParams {
+  int cells = 4;                   ///< cells per axis, in [1, 64]
+  double size = 0.6;               ///< edge (m), > 0
+  double height = 1.5;             ///< initial centre height (m)
+  double mass = 1;                 ///< kg, > 0
+  double compliance = 5e-5;        ///< edge compliance alpha (m/N), >= 0
+  double volume_compliance = 0;    ///< volume compliance (m^5/N), >= 0
+  int substeps = 20;               ///< in [1, 10000]
+};
+/// Builds the jelly; returns its entity ("jelly").
+EntityId jelly_drop(World& world, const JellyDropParams& p = {});
+
+/// The same hanging cloth twice, side by side: a mass-spring network under `method`
+/// (stiff springs need many substeps) on the left, XPBD on the right.
+struct ClothCompareParams {
+  int n = 16;                                 ///< particles per side, in [2, 4096]
+  Method method = Method::SemiImplicitEuler;  ///< the mass-spring integrator
+  double stiffness = 2000;                    ///< mass-spring k (N/m), > 0
+  int mass_spring_substeps = 40;              ///< in [1, 10000]
+  int xpbd_substeps = 10;                     ///< in [1, 10000]
+};
+/// Builds both cloths ("mass-spring cloth" and "xpbd cloth").
+void cloth_compare(World& world, const ClothCompareParams& p = {});
 
 /// A named builder with its default parameters, for menus, tests and `pba run --builder`.
 struct Builder {

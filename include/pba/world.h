@@ -204,6 +204,10 @@ class World {
 
   /// Adds an extension system (stepped after the constraints, in the order added).
   void add_system(std::unique_ptr<WorldSystem> system);
+  /// The first extension system whose name() is `name`, or nullptr.
+  WorldSystem* find_system(std::string_view name);
+  /// The first extension system whose name() is `name`, or nullptr.
+  const WorldSystem* find_system(std::string_view name) const;
 
   // ---- stepping ----
 

@@ -155,8 +155,150 @@ void forcer_stream(World& w, const ForcerStreamParams& p) {
                         .angular_speed = 0.8});
 }
 
+// ---------------------------------------------------------------------------------------
+// soft bodies
+
+namespace {
+// a soft body's settings with the world's gravity and wind (not its per-particle drag,
+// whose kg/s would be far too strong for cloth particles of a few grams)
+SoftBodyDef soft_def(const World& w) {
+  SoftBodyDef d;
+  d.forces.gravity = w.particles().forces().gravity;
+  d.forces.wind = w.particles().forces().wind;
+  return d;
+}
+
+EntityId add_soft(World& w, const char* name, SoftBody body) {
+  const EntityId e = w.create_entity({.name = name});
+  soft_system(w).add(w, e, std::move(body));
+  return e;
+}
+}  // namespace
+
+EntityId spring(World& w, const SpringParams& p) {
+  // the bob hangs below the anchor, stretched; one integrator step per tick
+  require_positive(p.rest_length, "SpringParams.rest_length");
+  if (!(p.rest_length + p.stretch > 0))
+    throw Error("SpringParams.stretch: must be > -rest_length, got " + format_value(p.stretch));
+  SoftBodyDef d = soft_def(w);
+  d.solver = p.solver;
+  d.method = p.method;
+  d.substeps = 1;
+  const Vec3 anchor(0, 2, 0);
+  return add_soft(w, "spring",
+                  SoftBody::spring({.a = anchor,
+                                    .b = anchor - Vec3(0, p.rest_length + p.stretch, 0),
+                                    .mass = p.mass,
+                                    .stiffness = p.stiffness,
+                                    .damping = p.damping,
+                                    .rest_length = p.rest_length},
+                                   d));
+}
+
+EntityId rope(World& w, const RopeParams& p) {
+  require_positive(p.length, "RopeParams.length");
+  ground(w, 0.0, 0.5);
+  if (p.obstacle) {
+    const EntityId ball = w.create_entity({.name = "ball", .pose = {.position = {0.2, 1.0, 0}}});
+    w.add_collider(ball, {.shape = {.type = ShapeType::Sphere, .radius = 0.35}, .material = {.friction = 0.3}});
+  }
+  SoftBodyDef d = soft_def(w);
+  d.substeps = p.substeps;
+  d.bend_compliance = 1e-3;
+  d.thickness = 0.02;
+  return add_soft(w, "rope",
+                  SoftBody::rope({.from = {-1, 2.2, 0}, .to = {-1 + p.length, 2.2, 0}, .segments = p.segments,
+                                  .mass = p.mass},
+                                 d));
+}
+
+EntityId cloth_flag(World& w, const ClothFlagParams& p) {
+  // the wind is the world's, so particles and other bodies feel it too
+  w.particles().forces().wind = p.wind;
+  ground(w, 0.0, 0.5);
+  const EntityId pole = w.create_entity({.name = "pole", .pose = {.position = {0, 1.25, 0}}});
+  w.add_collider(pole, {.shape = {.type = ShapeType::Box, .half_extents = {0.03, 1.25, 0.03}}});
+  SoftBodyDef d = soft_def(w);
+  d.substeps = p.substeps;
+  d.aero = {.air_density = 1.2, .drag = p.drag, .lift = p.lift};
+  d.bend_compliance = 1e-3;
+  d.thickness = 0.005;
+  return add_soft(w, "flag",
+                  SoftBody::cloth_grid({.origin = {0.05, 2.45, 0}, .edge_u = {p.width, 0, 0},
+                                        .edge_v = {0, -p.height, 0}, .nx = p.nx, .ny = p.ny, .mass = p.mass,
+                                        .pins = ClothPins::FirstColumn},
+                                       d));
+}
+
+EntityId cloth_drape(World& w, const ClothDrapeParams& p) {
+  require_positive(p.size, "ClothDrapeParams.size");
+  ground(w, 0.0, p.friction);
+  const EntityId ball = w.create_entity({.name = "ball", .pose = {.position = {0, 0.6, 0}}});
+  w.add_collider(ball, {.shape = {.type = ShapeType::Sphere, .radius = 0.5}, .material = {.friction = p.friction}});
+  SoftBodyDef d = soft_def(w);
+  d.substeps = p.substeps;
+  d.bend_compliance = 2e-3;
+  d.thickness = 0.01;
+  d.damping = 0.2;
+  return add_soft(w, "cloth",
+                  SoftBody::cloth_grid({.origin = {-p.size / 2, 1.6, -p.size / 2}, .edge_u = {p.size, 0, 0},
+                                        .edge_v = {0, 0, p.size}, .nx = p.n, .ny = p.n, .mass = 0.5,
+                                        .pins = ClothPins::None},
+                                       d));
+}
+
+EntityId cloth_tear(World& w, const ClothTearParams& p) {
+  require_positive(p.tear_strain, "ClothTearParams.tear_strain");
+  SoftBodyDef d = soft_def(w);
+  d.substeps = p.substeps;
+  d.tear_strain = p.tear_strain;
+  d.bend_compliance = 1e-3;
+  d.damping = 0.1;
+  return add_soft(w, "cloth",
+                  SoftBody::cloth_grid({.origin = {-0.8, 2.4, 0}, .edge_u = {1.6, 0, 0}, .edge_v = {0, -1.6, 0},
+                                        .nx = p.n, .ny = p.n, .mass = 0.5, .pins = ClothPins::FirstRow},
+                                       d));
+}
+
+EntityId jelly_drop(World& w, const JellyDropParams& p) {
+  require_positive(p.size, "JellyDropParams.size");
+  ground(w, 0.0, 0.6);
+  SoftBodyDef d = soft_def(w);
+  d.substeps = p.substeps;
+  d.stretch_compliance = p.compliance;
+  d.volume_compliance = p.volume_compliance;
+  d.thickness = 0.005;
+  d.friction = 0.6;
+  const Quat tilt = glm::angleAxis(0.5, glm::normalize(Vec3(1, 0, 1)));
+  return add_soft(w, "jelly",
+                  SoftBody::jelly_box({.center = {0, p.height, 0}, .size = Vec3(p.size), .rotation = tilt,
+                                       .nx = p.cells, .ny = p.cells, .nz = p.cells, .mass = p.mass},
+                                      d));
+}
+
+void cloth_compare(World& w, const ClothCompareParams& p) {
+  // mass-spring on the left, XPBD on the right, the same grid and mass
+  SoftBodyDef ms = soft_def(w);
+  ms.solver = SoftSolver::MassSpring;
+  ms.method = p.method;
+  ms.substeps = p.mass_spring_substeps;
+  ms.stretch_stiffness = ms.shear_stiffness = p.stiffness;
+  ms.bend_stiffness = p.stiffness / 100;
+  ms.spring_damping = 0.01;
+  add_soft(w, "mass-spring cloth",
+           SoftBody::cloth_grid({.origin = {-2.1, 2.2, 0}, .edge_u = {1.6, 0, 0}, .edge_v = {0, 0, 1.6}, .nx = p.n,
+                                 .ny = p.n, .mass = 0.5},
+                                ms));
+  SoftBodyDef x = soft_def(w);
+  x.substeps = p.xpbd_substeps;
+  add_soft(w, "xpbd cloth",
+           SoftBody::cloth_grid({.origin = {0.5, 2.2, 0}, .edge_u = {1.6, 0, 0}, .edge_v = {0, 0, 1.6}, .nx = p.n,
+                                 .ny = p.n, .mass = 0.5},
+                                x));
+}
+
 std::span<const Builder> builders() {
-  static constexpr std::array<Builder, 6> kBuilders = {{
+  static constexpr std::array<Builder, 13> kBuilders = {{
       {"ballistic", "one projectile fired at 45 degrees over a ground plane (workbook 4.2 ex. 1)",
        [](World& w) { ballistic(w); }},
       {"ballistic-drag", "the projectile with linear drag, tau = 2 s (workbook 4.2 ex. 2)",
@@ -167,6 +309,15 @@ std::span<const Builder> builders() {
       {"wind-drag", "light particles in gusting wind with quadratic drag", [](World& w) { wind_and_drag(w); }},
       {"forcer-stream", "a particle stream through a fan, a vortex and an attractor",
        [](World& w) { forcer_stream(w); }},
+      {"spring", "one spring from a fixed anchor, mass-spring with semi-implicit Euler (workbook 4.3 ex. 2)",
+       [](World& w) { spring(w); }},
+      {"rope", "an XPBD rope swinging over a sphere onto the ground", [](World& w) { rope(w); }},
+      {"cloth-flag", "an XPBD flag on a pole in gusting wind with drag and lift", [](World& w) { cloth_flag(w); }},
+      {"cloth-drape", "an XPBD cloth dropped onto a sphere and the ground", [](World& w) { cloth_drape(w); }},
+      {"cloth-tear", "a tearable hanging XPBD cloth (pull it with the mouse)", [](World& w) { cloth_tear(w); }},
+      {"jelly-drop", "a tetrahedral jelly cube dropped on the ground", [](World& w) { jelly_drop(w); }},
+      {"cloth-compare", "the same cloth as a mass-spring network and with XPBD, side by side",
+       [](World& w) { cloth_compare(w); }},
   }};
   return kBuilders;
 }

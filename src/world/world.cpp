@@ -341,6 +341,18 @@ void World::add_system(std::unique_ptr<WorldSystem> system) {
   systems_.push_back(std::move(system));
 }
 
+WorldSystem* World::find_system(std::string_view name) {
+  for (auto& s : systems_)
+    if (s->name() == name) return s.get();
+  return nullptr;
+}
+
+const WorldSystem* World::find_system(std::string_view name) const {
+  for (const auto& s : systems_)
+    if (s->name() == name) return s.get();
+  return nullptr;
+}
+
 // ---------------------------------------------------------------------------------------
 // stepping
 

@@ -1,0 +1,470 @@
+// pba soft bodies (workbook 4.3): springs, ropes, cloth and jelly, built from particles
+// joined by distance constraints (and, for jelly, tetrahedral volume constraints), and
+// solved two ways:
+//
+//   * XPBD (extended position-based dynamics; Macklin, Mueller & Chentanez 2016) with
+//     substeps and one or more iterations per substep (Macklin et al. 2019, "Small Steps
+//     in Physics Simulation"): stiff and unconditionally stable. Compliance alpha (m/N)
+//     is the inverse of a spring stiffness; alpha = 0 is a rigid constraint.
+//   * MassSpring: Hooke springs with damping, integrated by any pba::Method through
+//     pba::Integrator (so the samples can show why stiff springs are hard explicitly).
+//
+// A SoftBody stores its particles as float columns (positions, previous positions,
+// velocities, inverse masses; inverse mass 0 means pinned) and its distance constraints
+// grouped by graph colour into runs of evenly spaced particle indices, so each colour is
+// Gauss-Seidel-correct and each run is a dependency-free loop that vectorises.
+// A step never allocates once the body is built.
+//
+//   pba::SoftBody cloth = pba::SoftBody::cloth_grid(
+//       {.origin = {-0.5, 1.5, 0}, .nx = 64, .ny = 64, .mass = 1},
+//       {.solver = pba::SoftSolver::XPBD, .substeps = 20});
+//   pba::Collider ball = pba::Collider::sphere({0, 0.5, 0}, 0.3);
+//   cloth.step(t, 1.0 / 60, std::span(&ball, 1));
+//
+// Everything here is usable without a World; SoftSystem makes soft bodies components of
+// World entities, and scene files describe them in a "soft_bodies" array
+// (docs/scene-format.md).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pba/core.h"
+#include "pba/draw.h"
+#include "pba/handle.h"
+#include "pba/integrate.h"
+#include "pba/particles.h"
+#include "pba/world.h"
+
+namespace pba {
+
+namespace detail {
+struct SoftAccess;  // internal: the tests' access to a body's solver state
+}
+
+// ---------------------------------------------------------------------------------------
+// settings
+
+/// How a soft body is solved.
+enum class SoftSolver : std::uint8_t {
+  MassSpring,  ///< "mass-spring": Hooke springs + damping, integrated by SoftBodyDef::method
+  XPBD,        ///< "xpbd": compliant distance and volume constraints, substepped
+};
+
+/// The role of a distance constraint (each kind has its own compliance or stiffness).
+enum class SoftConstraintKind : std::uint8_t {
+  Stretch,  ///< "stretch": structural edges (rope segments, cloth grid edges, jelly edges)
+  Shear,    ///< "shear": cloth quad diagonals
+  Bend,     ///< "bend": particles two apart (rope, cloth), resisting folding
+};
+
+/// Per-triangle aerodynamics for cloth (used when drag or lift is > 0 and the body has
+/// triangles): each triangle of area A and unit normal n moving at u = v - wind(t)
+/// relative to the air gets the drag F_d = -1/2 rho C_d A |u| (u . n) n and the lift
+/// F_l = -1/2 rho C_l A (u . n) (|u|^2 n - (u . n) u) / |u| (zero when u is parallel to
+/// n), split equally among its three particles. Evaluated once per step (held over the
+/// substeps). Model of Bullet's btSoftBody aero "V_TwoSided"/Keckeisen et al. 2004.
+struct SoftAero {
+  double air_density = 1.2;  ///< rho (kg/m^3), finite and >= 0
+  double drag = 0;           ///< C_d, the normal drag coefficient, finite and >= 0 (0 = off)
+  double lift = 0;           ///< C_l, the lift coefficient, finite and >= 0 (0 = off)
+};
+
+/// Settings of a soft body. Start from the defaults and change what you need; every
+/// field is validated when the body is built and again at each step (fields may be
+/// changed between steps through SoftBody::settings()).
+struct SoftBodyDef {
+  SoftSolver solver = SoftSolver::XPBD;       ///< which solver
+  /// MassSpring only: the integrator (any pba::Method). Implicit Euler is a dense Newton
+  /// solve limited to 1536 unknowns (512 particles); larger bodies get an Error.
+  Method method = Method::SemiImplicitEuler;
+  int substeps = 10;    ///< XPBD: substeps per step, in [1, 10000]; MassSpring: also used (steps of dt/substeps)
+  int iterations = 1;   ///< XPBD: constraint iterations per substep, in [1, 1000]
+
+  /// XPBD compliance of stretch constraints (m/N; alpha = 1/k), finite and >= 0; 0 = rigid.
+  double stretch_compliance = 0;
+  /// XPBD compliance of shear constraints (m/N), finite and >= 0.
+  double shear_compliance = 0;
+  /// XPBD compliance of bend constraints (m/N), finite and >= 0.
+  double bend_compliance = 1e-4;
+  /// XPBD compliance of tetrahedron volume constraints C = V - V0 (m^5/N, i.e.
+  /// 1/(bulk modulus x rest volume) per tet scaled by V0^2), finite and >= 0; 0 = incompressible.
+  double volume_compliance = 0;
+
+  /// MassSpring stiffness of stretch springs (N/m), finite and >= 0.
+  double stretch_stiffness = 1000;
+  /// MassSpring stiffness of shear springs (N/m), finite and >= 0.
+  double shear_stiffness = 1000;
+  /// MassSpring stiffness of bend springs (N/m), finite and >= 0.
+  double bend_stiffness = 100;
+  /// MassSpring stiffness of the volume force -k_v (V - V0) grad V (N/m^5), finite, >= 0.
+  double volume_stiffness = 0;
+  /// Damping along every spring (N s/m), finite and >= 0: F = -c ((v_b - v_a) . n) n on b.
+  /// MassSpring: a force. XPBD: constraint damping with beta = c (Macklin et al. 2016,
+  /// eq. 26), applied to compliant constraints (alpha > 0) only.
+  double spring_damping = 0;
+
+  /// Gravity, linear and quadratic drag (per particle, relative to the wind) and wind.
+  Forces forces{};
+  /// Per-triangle aerodynamic drag and lift (cloth).
+  SoftAero aero{};
+  /// A distance constraint breaks for good when its strain (l - l0)/l0 exceeds this at
+  /// the end of a step; finite and >= 0; 0 = never tears.
+  double tear_strain = 0;
+  /// Collision thickness (m): particles are kept this far outside colliders; finite, >= 0.
+  double thickness = 0.01;
+  /// Coulomb friction coefficient against colliders, finite and >= 0; each contact uses
+  /// the larger of this and the collider material's friction.
+  double friction = 0;
+  /// Velocity damping rate (1/s), finite and >= 0 (a drag that does not depend on the
+  /// air): XPBD scales velocities by exp(-damping h) each substep of h seconds, MassSpring
+  /// adds the force -damping m v; both decay a free velocity as exp(-damping t).
+  double damping = 0;
+
+  /// Throws Error "<where>.<field>: ..." naming the first bad field and its value.
+  void validate(std::string_view where) const;
+};
+
+// ---------------------------------------------------------------------------------------
+// meshes and builders
+
+/// Index meaning "no particle" (returned by picking when nothing is near).
+inline constexpr std::uint32_t kNoParticle = std::numeric_limits<std::uint32_t>::max();
+
+/// A distance constraint between particles a and b.
+struct SoftConstraint {
+  std::uint32_t a = 0;  ///< first particle index
+  std::uint32_t b = 0;  ///< second particle index (different from a)
+  /// Rest length (m): finite and > 0; negative in a SoftMesh means "the distance at build".
+  double rest_length = -1;
+  SoftConstraintKind kind = SoftConstraintKind::Stretch;  ///< which compliance/stiffness applies
+  bool broken = false;  ///< true once torn (queries only; ignored in a SoftMesh)
+};
+
+/// A triangle (particle indices), for drawing, aerodynamics and tearing.
+struct SoftTriangle {
+  std::uint32_t a = 0, b = 0, c = 0;  ///< particle indices, counter-clockwise seen from the front
+};
+
+/// A tetrahedron (particle indices) with a volume constraint.
+struct SoftTet {
+  std::uint32_t a = 0, b = 0, c = 0, d = 0;  ///< particle indices
+};
+
+/// A generic soft body description: particles, constraints, triangles, tetrahedra, pins.
+/// SoftBody::from_mesh validates every index and value (Error names the field and index).
+struct SoftMesh {
+  std::vector<Vec3> positions{};       ///< initial positions (m), finite
+  std::vector<Vec3> velocities{};      ///< initial velocities (m/s), finite; empty = all zero
+  std::vector<double> masses{};        ///< per particle (kg), finite and > 0; same size as positions
+  std::vector<SoftConstraint> constraints{};  ///< distance constraints (a != b, both < positions.size())
+  std::vector<SoftTriangle> triangles{};      ///< triangles (indices < positions.size())
+  std::vector<SoftTet> tets{};                ///< tetrahedra with non-zero rest volume
+  std::vector<std::uint32_t> pinned{};        ///< particles pinned where they start
+  /// Optional graph colour per constraint (same size as constraints, or empty): a colour
+  /// must never hold two constraints sharing a particle (checked). Empty: greedy colouring.
+  std::vector<std::uint32_t> colors{};
+};
+
+/// A single Hooke spring between two particles (workbook exercise 2).
+struct SpringDef {
+  Vec3 a{0, 1, 0};         ///< first end (m), finite
+  Vec3 b{0, 0, 0};         ///< second end (m), finite
+  Vec3 velocity_b{0, 0, 0};  ///< initial velocity of b (m/s), finite
+  double mass = 1;         ///< mass of each free end (kg), finite and > 0
+  double stiffness = 100;  ///< k (N/m), finite and > 0; XPBD uses compliance alpha = 1/k
+  double damping = 0;      ///< c (N s/m), finite and >= 0
+  double rest_length = -1; ///< l0 (m), finite and > 0; negative = |b - a| (which must then be > 0)
+  bool fixed_a = true;     ///< a is pinned (a fixed anchor)
+};
+
+/// A rope (or chain): `segments` + 1 particles on a straight line, stretch constraints
+/// between neighbours and bend constraints between particles two apart.
+struct RopeDef {
+  Vec3 from{0, 2, 0};   ///< first particle (m), finite
+  Vec3 to{1, 2, 0};     ///< last particle (m), finite, != from
+  int segments = 20;    ///< segments, in [1, 100000]
+  double mass = 1;      ///< total mass (kg), finite and > 0, split evenly among the particles
+  bool pin_start = true;  ///< pin the first particle
+  bool pin_end = false;   ///< pin the last particle
+  bool bending = true;    ///< add bend constraints (i, i+2)
+};
+
+/// Which particles of a cloth grid start pinned.
+enum class ClothPins : std::uint8_t {
+  None,             ///< "none": nothing pinned (a falling sheet)
+  FirstRow,         ///< "first-row": the nx particles of row 0 (along edge_u from origin), e.g. a hanging cloth
+  FirstRowCorners,  ///< "first-row-corners": particles (0, 0) and (nx-1, 0)
+  FirstColumn,      ///< "first-column": the ny particles of column 0 (along edge_v from origin), e.g. a flag on a pole
+};
+
+/// A rectangular cloth: nx x ny particles at origin + edge_u i/(nx-1) + edge_v j/(ny-1),
+/// particle index j nx + i; structural edges between grid neighbours, shear constraints
+/// on both quad diagonals, bend constraints between particles two apart in each
+/// direction; two triangles per quad.
+struct ClothDef {
+  Vec3 origin{-0.5, 1.5, 0};  ///< corner particle (0, 0) (m), finite
+  Vec3 edge_u{1, 0, 0};       ///< the row direction and length (m), finite, non-zero
+  Vec3 edge_v{0, 0, 1};       ///< the column direction and length (m), finite, non-zero, not parallel to edge_u
+  int nx = 32;                ///< particles per row, in [2, 4096]
+  int ny = 32;                ///< particles per column, in [2, 4096]
+  double mass = 1;            ///< total mass (kg), finite and > 0, split evenly
+  ClothPins pins = ClothPins::FirstRow;  ///< which particles start pinned
+  bool shear = true;          ///< add shear (diagonal) constraints
+  bool bending = true;        ///< add bend constraints
+};
+
+/// A jelly box: a lattice of (nx+1)(ny+1)(nz+1) particles, each cube cell split into 6
+/// tetrahedra around its main diagonal (Freudenthal/Kuhn split, conforming across cells),
+/// with a distance constraint on every tet edge and a volume constraint per tet
+/// (Macklin et al. 2016; Mueller et al. 2020 "Detailed rigid body simulation with XPBD").
+struct JellyDef {
+  Vec3 center{0, 1, 0};        ///< box centre (m), finite
+  Vec3 size{0.5, 0.5, 0.5};    ///< full edge lengths (m), each finite and > 0
+  Quat rotation{1, 0, 0, 0};   ///< orientation, unit quaternion
+  int nx = 3, ny = 3, nz = 3;  ///< cells per axis, each in [1, 64]
+  double mass = 1;             ///< total mass (kg), finite and > 0, split evenly
+  Vec3 velocity{0, 0, 0};      ///< initial velocity of every particle (m/s), finite
+};
+
+/// Mean and maximum strain |l - l0| / l0 over the intact stretch constraints.
+struct StrainStats {
+  double mean = 0;  ///< mean strain (dimensionless)
+  double max = 0;   ///< largest strain (dimensionless)
+};
+
+/// Wall-clock seconds of the last SoftBody::step, by phase.
+struct SoftProfile {
+  double forces = 0;    ///< wind, aerodynamics and pins, once per step
+  double solve = 0;     ///< XPBD: predict, projection, collisions and velocities; MassSpring: integration
+  double collide = 0;   ///< MassSpring: collisions (XPBD collides inside each substep: counted in solve)
+  double total = 0;     ///< the whole step
+};
+
+/// What SoftBody::draw shows.
+struct SoftDrawOptions {
+  bool triangles = true;     ///< filled triangles (DebugDraw::triangle), shaded by facing
+  bool edges = true;         ///< stretch constraints as lines (all constraints when `all_edges`)
+  bool all_edges = false;    ///< also shear and bend constraints
+  bool strain_colors = true; ///< colour edges from `color` (no strain) to red at `strain_scale`
+  double strain_scale = 0.1; ///< strain drawn fully red, > 0
+  bool pins = true;          ///< pinned and grabbed particles as points
+  bool particles = false;    ///< every particle as a point
+  Color color = colors::cyan;  ///< base colour
+};
+
+// ---------------------------------------------------------------------------------------
+// the soft body
+
+/// A soft body: particles, distance constraints, tetrahedra and triangles, stepped by
+/// XPBD or as a mass-spring network. Movable, not copyable; not thread-safe.
+class SoftBody {
+ public:
+  /// An empty body (no particles) with default settings.
+  SoftBody();
+  ~SoftBody();
+  SoftBody(SoftBody&&) noexcept;
+  SoftBody& operator=(SoftBody&&) noexcept;
+  SoftBody(const SoftBody&) = delete;
+  SoftBody& operator=(const SoftBody&) = delete;
+
+  // ---- builders (each validates its definition and `def`; Error names the field) ----
+
+  /// Builds a body from a generic mesh. `where` prefixes error messages ("SoftMesh").
+  static SoftBody from_mesh(const SoftMesh& mesh, const SoftBodyDef& def = {},
+                            std::string_view where = "SoftMesh");
+  /// One Hooke spring between two particles; `spring.stiffness` and `spring.damping`
+  /// replace def's stretch_stiffness and spring_damping, and XPBD uses compliance 1/k.
+  static SoftBody spring(const SpringDef& spring, const SoftBodyDef& def = {});
+  /// A rope or chain.
+  static SoftBody rope(const RopeDef& rope, const SoftBodyDef& def = {});
+  /// A rectangular cloth grid (constraints pre-coloured in 12 vectorisable sets).
+  static SoftBody cloth_grid(const ClothDef& cloth, const SoftBodyDef& def = {});
+  /// A tetrahedral jelly box.
+  static SoftBody jelly_box(const JellyDef& jelly, const SoftBodyDef& def = {});
+
+  // ---- settings ----
+
+  /// The settings; change fields freely between steps (validated at the next step).
+  SoftBodyDef& settings();
+  /// The settings.
+  const SoftBodyDef& settings() const;
+
+  // ---- stepping ----
+
+  /// Advances from time t to t + dt (s; dt finite and > 0), colliding with `colliders`
+  /// (their end-of-step poses, centres interpolated over the substeps). Throws Error if
+  /// the state becomes non-finite, naming the particle and the time; the body then
+  /// refuses to step again and repeats that message. Never allocates.
+  void step(double t, double dt, std::span<const Collider> colliders = {});
+  /// Steps taken.
+  long long steps() const;
+  /// Simulated time (s) at the end of the last step.
+  double time() const;
+  /// True after a step failed (non-finite state).
+  bool failed() const;
+  /// Timings of the last step.
+  const SoftProfile& profile() const;
+
+  // ---- particles ----
+
+  /// Number of particles.
+  std::size_t size() const;
+  /// Position of particle i (m); i < size().
+  Vec3 position(std::size_t i) const;
+  /// Velocity of particle i (m/s); i < size().
+  Vec3 velocity(std::size_t i) const;
+  /// Mass of particle i (kg; infinity while pinned or grabbed).
+  double mass(std::size_t i) const;
+  /// Inverse mass of particle i (1/kg; 0 while pinned or grabbed).
+  double inverse_mass(std::size_t i) const;
+  /// Total mass of the particles (kg), pinned ones included.
+  double total_mass() const;
+  /// Teleports particle i (validated: index and finite position).
+  void set_position(std::size_t i, const Vec3& p);
+  /// Sets the velocity of particle i (validated).
+  void set_velocity(std::size_t i, const Vec3& v);
+  /// Adds dv (m/s) to every free particle's velocity (validated).
+  void add_velocity(const Vec3& dv);
+  /// The position columns (m), read-only.
+  std::span<const float> xs() const;
+  std::span<const float> ys() const;  ///< y positions (m)
+  std::span<const float> zs() const;  ///< z positions (m)
+  /// Copies positions into `out` (size() elements), e.g. for a vertex buffer.
+  void copy_positions(std::span<Vec3f> out) const;
+
+  // ---- pins and grabbing ----
+
+  /// Pins particle i where it is (inverse mass 0; it moves only to its pin target).
+  void pin(std::size_t i);
+  /// Pins particle i at `target` (m); it is moved there over the next step.
+  void pin(std::size_t i, const Vec3& target);
+  /// Unpins particle i (restores its mass). No effect if it is not pinned.
+  void unpin(std::size_t i);
+  /// True when particle i is pinned.
+  bool is_pinned(std::size_t i) const;
+  /// Moves a pinned particle's target (m): over the next step the pin slides linearly
+  /// there, ending exactly at the target. Throws Error if i is not pinned.
+  void set_pin_target(std::size_t i, const Vec3& target);
+  /// The pinned particles' indices (in pinning order).
+  std::span<const std::uint32_t> pins() const;
+  /// Grabs particle i with the mouse: it becomes a kinematic pin at `target` (m) until
+  /// release(). Grabbing a pinned particle moves its pin. Replaces any previous grab.
+  void grab(std::size_t i, const Vec3& target);
+  /// Moves the grabbed particle's target (m); no effect when nothing is grabbed.
+  void move_grab(const Vec3& target);
+  /// Releases the grabbed particle (keeping the velocity the drag gave it).
+  void release();
+  /// The grabbed particle, or kNoParticle.
+  std::uint32_t grabbed() const;
+  /// The particle nearest to `point`, or kNoParticle for an empty body.
+  std::uint32_t nearest_particle(const Vec3& point) const;
+  /// The particle nearest to the ray origin + s direction (s >= 0) within `radius`
+  /// (m) of it, the one closest to the origin among those; kNoParticle if none.
+  std::uint32_t nearest_particle(const Vec3& origin, const Vec3& direction, double radius) const;
+
+  // ---- structure ----
+
+  /// Number of distance constraints (broken ones included).
+  std::size_t constraint_count() const;
+  /// Distance constraint c (in solver order, fixed at build), with its broken flag.
+  SoftConstraint constraint(std::size_t c) const;
+  /// Constraints broken so far by tearing.
+  std::size_t broken_constraints() const;
+  /// The triangles whose edges are all intact (shrinks as the cloth tears).
+  std::span<const SoftTriangle> triangles() const;
+  /// The tetrahedra.
+  std::span<const SoftTet> tets() const;
+  /// Number of graph colours of the constraints (the batches solved in sequence).
+  std::size_t color_count() const;
+
+  // ---- measurements ----
+
+  /// Kinetic energy 1/2 sum m v^2 of the free particles (J).
+  double kinetic_energy() const;
+  /// Potential energy (J): gravity -sum m g . x over free particles plus the elastic
+  /// energy the solver stores: XPBD sum C^2 / (2 alpha) over constraints with alpha > 0;
+  /// MassSpring sum k C^2 / 2 (distance C = l - l0, volume C = V - V0).
+  double potential_energy() const;
+  /// Mean and maximum strain over intact stretch constraints.
+  StrainStats strain_stats() const;
+  /// Sum of the signed tetrahedron volumes now (m^3).
+  double volume() const;
+  /// Sum of the tetrahedron rest volumes (m^3).
+  double rest_volume() const;
+  /// Centre of mass of the free particles (m), or of all when every particle is pinned.
+  Vec3 center_of_mass() const;
+  /// 64-bit hash of positions, velocities and broken flags (bit patterns).
+  std::uint64_t hash(std::uint64_t seed = 0xcbf29ce484222325ULL) const;
+  /// Draws the body.
+  void draw(DebugDraw& draw, const SoftDrawOptions& options = {}) const;
+
+  /// Internal state (defined in src/soft).
+  struct Impl;
+
+ private:
+  friend struct detail::SoftAccess;
+  explicit SoftBody(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// ---------------------------------------------------------------------------------------
+// world integration
+
+/// Soft bodies as components of World entities: add one with add(), and the system steps
+/// every body each world tick (after the particles and constraints) with the world's
+/// colliders, draws and hashes them. Bodies live in world coordinates (the entity pose is
+/// not applied). Get the world's system with soft_system(world).
+class SoftSystem final : public WorldSystem {
+ public:
+  /// The name World::find_system knows it by.
+  static constexpr std::string_view kName = "soft";
+
+  std::string_view name() const override { return kName; }
+  /// Makes `body` the soft-body component of entity e (throws Error for a stale handle or
+  /// an entity that already has one). Returns the body's index (stable until a removal).
+  std::size_t add(const World& world, EntityId e, SoftBody body);
+  /// True when entity e has a soft body.
+  bool has(EntityId e) const;
+  /// The soft body of entity e (throws Error if it has none).
+  SoftBody& body(EntityId e);
+  /// The soft body of entity e (throws Error if it has none).
+  const SoftBody& body(EntityId e) const;
+  /// Number of soft bodies.
+  std::size_t size() const { return bodies_.size(); }
+  /// Body i (i < size()), in the order added (removals move the last one into the gap).
+  SoftBody& at(std::size_t i) { return bodies_.at(i); }
+  /// Body i.
+  const SoftBody& at(std::size_t i) const { return bodies_.at(i); }
+  /// The entity owning body i.
+  EntityId owner(std::size_t i) const { return owners_.at(i); }
+  /// Draw options for every body.
+  SoftDrawOptions& draw_options() { return options_; }
+
+  /// Steps every body from t to t + dt with world.colliders(); a body that becomes
+  /// non-finite throws Error naming its entity, the particle and the time.
+  void step(World& world, double t, double dt) override;
+  /// Removes the entity's body.
+  void on_destroy(EntityId e) override;
+  /// Draws every body.
+  void draw(const World& world, DebugDraw& draw) const override;
+  /// Mixes every body's hash.
+  std::uint64_t hash(std::uint64_t seed) const override;
+
+ private:
+  std::size_t index_of(EntityId e, std::string_view where) const;
+  std::vector<SoftBody> bodies_;
+  std::vector<EntityId> owners_;
+  SoftDrawOptions options_;
+};
+
+/// The world's SoftSystem, added on first use.
+SoftSystem& soft_system(World& world);
+
+}  // namespace pba

@@ -1,0 +1,218 @@
+// Soft body builders: a spring, a rope, a cloth grid and a jelly box, each a SoftMesh
+// handed to SoftBody::from_mesh. The rope and cloth builders colour their constraints
+// themselves so that every colour splits into long contiguous or interleaved runs.
+#include <algorithm>
+#include <array>
+#include <set>
+#include <utility>
+
+#include "soft_impl.h"
+
+namespace pba {
+
+namespace {
+
+void positive(double v, std::string_view where) {
+  if (!(std::isfinite(v) && v > 0)) require_positive(v, where);
+}
+
+}  // namespace
+
+SoftBody SoftBody::spring(const SpringDef& sp, const SoftBodyDef& def) {
+  // the ends, the mass and the spring constants
+  require_finite(sp.a, "SpringDef.a");
+  require_finite(sp.b, "SpringDef.b");
+  require_finite(sp.velocity_b, "SpringDef.velocity_b");
+  positive(sp.mass, "SpringDef.mass");
+  positive(sp.stiffness, "SpringDef.stiffness");
+  if (!(std::isfinite(sp.damping) && sp.damping >= 0)) require_non_negative(sp.damping, "SpringDef.damping");
+  if (!std::isfinite(sp.rest_length)) require_finite(sp.rest_length, "SpringDef.rest_length");
+  const double dist = glm::length(sp.b - sp.a);
+  if (!(dist > 0))
+    throw Error("SpringDef.b: zero rest length between coincident particles a and b at " + format_vec3(sp.a));
+  if (sp.rest_length >= 0 && !(sp.rest_length > 0))
+    throw Error("SpringDef.rest_length: must be > 0 (or negative for |b - a|), got " + format_value(sp.rest_length));
+  // the spring's k and c replace the body's stretch settings (XPBD: alpha = 1/k)
+  SoftBodyDef d = def;
+  d.stretch_stiffness = sp.stiffness;
+  d.stretch_compliance = 1.0 / sp.stiffness;
+  d.spring_damping = sp.damping;
+  SoftMesh m;
+  m.positions = {sp.a, sp.b};
+  m.velocities = {Vec3(0, 0, 0), sp.velocity_b};
+  m.masses = {sp.mass, sp.mass};
+  m.constraints = {{.a = 0, .b = 1, .rest_length = sp.rest_length < 0 ? dist : sp.rest_length}};
+  if (sp.fixed_a) m.pinned = {0};
+  return from_mesh(m, d, "SpringDef");
+}
+
+SoftBody SoftBody::rope(const RopeDef& r, const SoftBodyDef& def) {
+  // shape
+  require_finite(r.from, "RopeDef.from");
+  require_finite(r.to, "RopeDef.to");
+  require_count(r.segments, 1, 100000, "RopeDef.segments");
+  positive(r.mass, "RopeDef.mass");
+  if (!(glm::length(r.to - r.from) > 0))
+    throw Error("RopeDef.to: must differ from RopeDef.from, both are " + format_vec3(r.from));
+  const int n = r.segments + 1;
+  SoftMesh m;
+  m.positions.resize(n);
+  m.masses.assign(n, r.mass / n);
+  for (int i = 0; i < n; ++i) m.positions[i] = r.from + (r.to - r.from) * (double(i) / r.segments);
+  // stretch (i, i+1) in two colours by parity; bend (i, i+2) in two by i mod 4
+  for (int i = 0; i + 1 < n; ++i) {
+    m.constraints.push_back({.a = std::uint32_t(i), .b = std::uint32_t(i + 1)});
+    m.colors.push_back(i % 2);
+  }
+  if (r.bending) {
+    for (int i = 0; i + 2 < n; ++i) {
+      m.constraints.push_back({.a = std::uint32_t(i), .b = std::uint32_t(i + 2), .kind = SoftConstraintKind::Bend});
+      m.colors.push_back(2 + (i % 4 < 2 ? 0 : 1));
+    }
+  }
+  if (r.pin_start) m.pinned.push_back(0);
+  if (r.pin_end) m.pinned.push_back(std::uint32_t(n - 1));
+  return from_mesh(m, def, "RopeDef");
+}
+
+SoftBody SoftBody::cloth_grid(const ClothDef& c, const SoftBodyDef& def) {
+  // shape
+  require_finite(c.origin, "ClothDef.origin");
+  require_finite(c.edge_u, "ClothDef.edge_u");
+  require_finite(c.edge_v, "ClothDef.edge_v");
+  if (c.nx < 2 || c.nx > 4096)
+    throw Error("ClothDef.nx: cloth grids must be at least 2x2 (and at most 4096 per side), got nx = " +
+                std::to_string(c.nx));
+  if (c.ny < 2 || c.ny > 4096)
+    throw Error("ClothDef.ny: cloth grids must be at least 2x2 (and at most 4096 per side), got ny = " +
+                std::to_string(c.ny));
+  positive(c.mass, "ClothDef.mass");
+  if (!(glm::length(c.edge_u) > 0)) throw Error("ClothDef.edge_u: must be non-zero, got (0, 0, 0)");
+  if (!(glm::length(c.edge_v) > 0)) throw Error("ClothDef.edge_v: must be non-zero, got (0, 0, 0)");
+  if (!(glm::length(glm::cross(c.edge_u, c.edge_v)) > 1e-12 * glm::length(c.edge_u) * glm::length(c.edge_v)))
+    throw Error("ClothDef.edge_v: must not be parallel to edge_u " + format_vec3(c.edge_u) + ", got " +
+                format_vec3(c.edge_v));
+  const int nx = c.nx, ny = c.ny;
+  const std::size_t n = std::size_t(nx) * ny;
+  SoftMesh m;
+  m.positions.resize(n);
+  m.masses.assign(n, c.mass / double(n));
+  auto id = [nx](int i, int j) { return std::uint32_t(j * nx + i); };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      m.positions[id(i, j)] = c.origin + c.edge_u * (double(i) / (nx - 1)) + c.edge_v * (double(j) / (ny - 1));
+  // 12 colours, each one parity class of one family, so that each is a set of long
+  // contiguous (rows) or interleaved (along a row) runs
+  auto add = [&](std::uint32_t a, std::uint32_t b, SoftConstraintKind k, std::uint32_t color) {
+    m.constraints.push_back({.a = a, .b = b, .kind = k});
+    m.colors.push_back(color);
+  };
+  using K = SoftConstraintKind;
+  for (int j = 0; j + 1 < ny; ++j)
+    for (int i = 0; i < nx; ++i) add(id(i, j), id(i, j + 1), K::Stretch, 0 + j % 2);  // vertical
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i + 1 < nx; ++i) add(id(i, j), id(i + 1, j), K::Stretch, 2 + i % 2);  // horizontal
+  if (c.shear) {
+    for (int j = 0; j + 1 < ny; ++j)
+      for (int i = 0; i + 1 < nx; ++i) add(id(i, j), id(i + 1, j + 1), K::Shear, 4 + j % 2);
+    for (int j = 0; j + 1 < ny; ++j)
+      for (int i = 0; i + 1 < nx; ++i) add(id(i + 1, j), id(i, j + 1), K::Shear, 6 + j % 2);
+  }
+  if (c.bending) {
+    for (int j = 0; j + 2 < ny; ++j)
+      for (int i = 0; i < nx; ++i) add(id(i, j), id(i, j + 2), K::Bend, 8 + (j % 4 < 2 ? 0 : 1));
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i + 2 < nx; ++i) add(id(i, j), id(i + 2, j), K::Bend, 10 + (i % 4 < 2 ? 0 : 1));
+  }
+  // two triangles per quad, counter-clockwise seen from edge_u x edge_v
+  for (int j = 0; j + 1 < ny; ++j)
+    for (int i = 0; i + 1 < nx; ++i) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  // pins
+  switch (c.pins) {
+    case ClothPins::None: break;
+    case ClothPins::FirstRow:
+      for (int i = 0; i < nx; ++i) m.pinned.push_back(id(i, 0));
+      break;
+    case ClothPins::FirstRowCorners: m.pinned = {id(0, 0), id(nx - 1, 0)}; break;
+    case ClothPins::FirstColumn:
+      for (int j = 0; j < ny; ++j) m.pinned.push_back(id(0, j));
+      break;
+    default: throw Error("ClothDef.pins: unknown value " + std::to_string(static_cast<int>(c.pins)));
+  }
+  return from_mesh(m, def, "ClothDef");
+}
+
+SoftBody SoftBody::jelly_box(const JellyDef& jd, const SoftBodyDef& def) {
+  // shape
+  require_finite(jd.center, "JellyDef.center");
+  positive(jd.size.x, "JellyDef.size.x");
+  positive(jd.size.y, "JellyDef.size.y");
+  positive(jd.size.z, "JellyDef.size.z");
+  require_unit_quat(jd.rotation, "JellyDef.rotation");
+  require_count(jd.nx, 1, 64, "JellyDef.nx");
+  require_count(jd.ny, 1, 64, "JellyDef.ny");
+  require_count(jd.nz, 1, 64, "JellyDef.nz");
+  positive(jd.mass, "JellyDef.mass");
+  require_finite(jd.velocity, "JellyDef.velocity");
+  const int px = jd.nx + 1, py = jd.ny + 1, pz = jd.nz + 1;
+  const std::size_t n = std::size_t(px) * py * pz;
+  auto id = [&](int i, int j, int k) { return std::uint32_t((k * py + j) * px + i); };
+  SoftMesh m;
+  m.positions.resize(n);
+  m.velocities.assign(n, jd.velocity);
+  m.masses.assign(n, jd.mass / double(n));
+  for (int k = 0; k < pz; ++k)
+    for (int j = 0; j < py; ++j)
+      for (int i = 0; i < px; ++i) {
+        const Vec3 local = jd.size * (Vec3(double(i) / jd.nx, double(j) / jd.ny, double(k) / jd.nz) - 0.5);
+        m.positions[id(i, j, k)] = jd.center + jd.rotation * local;
+      }
+  // six tetrahedra per cell along the main diagonal (Freudenthal/Kuhn): for each order of
+  // the axes, the path (0,0,0) -> e_p -> e_p + e_q -> (1,1,1); the split is the same in
+  // every cell, so faces match between cells
+  static constexpr std::array<std::array<int, 3>, 6> kPerm = {
+      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+  std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+  for (int k = 0; k < jd.nz; ++k)
+    for (int j = 0; j < jd.ny; ++j)
+      for (int i = 0; i < jd.nx; ++i)
+        for (const auto& p : kPerm) {
+          int c[3] = {i, j, k};
+          std::uint32_t v[4];
+          v[0] = id(c[0], c[1], c[2]);
+          for (int s = 0; s < 3; ++s) {
+            ++c[p[s]];
+            v[s + 1] = id(c[0], c[1], c[2]);
+          }
+          m.tets.push_back({v[0], v[1], v[2], v[3]});
+          for (int a = 0; a < 4; ++a)
+            for (int b = a + 1; b < 4; ++b) edges.insert({std::min(v[a], v[b]), std::max(v[a], v[b])});
+        }
+  for (const auto& e : edges) m.constraints.push_back({.a = e.first, .b = e.second});
+  // the boundary surface as triangles (for drawing): two per boundary cell face
+  auto quad = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
+    m.triangles.push_back({a, b, c});
+    m.triangles.push_back({a, c, d});
+  };
+  for (int j = 0; j < jd.ny; ++j)
+    for (int i = 0; i < jd.nx; ++i) {
+      quad(id(i, j, 0), id(i, j + 1, 0), id(i + 1, j + 1, 0), id(i + 1, j, 0));              // -z
+      quad(id(i, j, jd.nz), id(i + 1, j, jd.nz), id(i + 1, j + 1, jd.nz), id(i, j + 1, jd.nz));  // +z
+    }
+  for (int k = 0; k < jd.nz; ++k)
+    for (int i = 0; i < jd.nx; ++i) {
+      quad(id(i, 0, k), id(i + 1, 0, k), id(i + 1, 0, k + 1), id(i, 0, k + 1));              // -y
+      quad(id(i, jd.ny, k), id(i, jd.ny, k + 1), id(i + 1, jd.ny, k + 1), id(i + 1, jd.ny, k));  // +y
+    }
+  for (int k = 0; k < jd.nz; ++k)
+    for (int j = 0; j < jd.ny; ++j) {
+      quad(id(0, j, k), id(0, j, k + 1), id(0, j + 1, k + 1), id(0, j + 1, k));              // -x
+      quad(id(jd.nx, j, k), id(jd.nx, j + 1, k), id(jd.nx, j + 1, k + 1), id(jd.nx, j, k + 1));  // +x
+    }
+  return from_mesh(m, def, "JellyDef");
+}
+
+}  // namespace pba

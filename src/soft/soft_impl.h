@@ -1,0 +1,173 @@
+// Private: the soft body's state (SoftBody::Impl) and the solver kernels' interface.
+//
+// Particles are float columns. Distance constraints are stored in solver order: by graph
+// colour, and within a colour as runs of evenly spaced particle indices (see Run), so
+// each run is a loop without dependencies that the compiler vectorises.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "pba/integrate.h"
+#include "pba/soft.h"
+
+#if defined(__GNUC__)
+#define PBA_SOFT_INLINE inline __attribute__((always_inline))
+#define PBA_SOFT_RESTRICT __restrict__
+#else
+#define PBA_SOFT_INLINE inline
+#define PBA_SOFT_RESTRICT
+#endif
+
+namespace pba::detail {
+
+/// How a run of constraints addresses its particles.
+enum class RunType : std::uint8_t {
+  Contiguous,   ///< constraint k joins a0 + k and a0 + k + offset
+  Interleaved,  ///< L = offset in {1, 2}: constraint k joins a0 + (k / L) 2L + k % L and that + L
+  Indexed,      ///< constraint k joins ca[c0 + k] and cb[c0 + k] (any mesh)
+};
+
+/// A run of constraints of one colour and kind, stored at [c0, c0 + count) in the
+/// constraint arrays. Within a colour no two constraints share a particle, so every
+/// particle a run touches is touched once: the loop has no dependencies.
+struct Run {
+  std::uint32_t c0 = 0;      ///< first constraint
+  std::uint32_t count = 0;   ///< constraints
+  std::uint32_t a0 = 0;      ///< first particle (Contiguous, Interleaved)
+  std::uint32_t offset = 0;  ///< b - a (Contiguous, Interleaved)
+  RunType type = RunType::Indexed;
+  SoftConstraintKind kind = SoftConstraintKind::Stretch;
+  std::uint32_t color = 0;  ///< graph colour
+  /// The rest length shared by every constraint of the run (m, > 0), or -1 when they
+  /// differ or one has torn: then the kernel reads Impl::rest.
+  float rest = -1;
+};
+
+/// A collider flattened for one step: shape, friction and its motion.
+struct SoftCollider {
+  ShapeType type = ShapeType::Plane;
+  double mu = 0;                       // friction coefficient used (max of body and surface)
+  Vec3 n{0, 1, 0};                     // plane: unit normal (world, end pose)
+  double d0 = 0, d1 = 0;               // plane offset at the start and end of the step
+  Vec3 c0{0, 0, 0}, c1{0, 0, 0};       // sphere/box centre at the start and end of the step
+  double radius = 0;                   // sphere
+  Vec3 half{0, 0, 0};                  // box half extents
+  Mat3 rot{1.0};                       // box rotation (end pose); columns are the local axes
+  Vec3 v{0, 0, 0}, w{0, 0, 0};         // linear and angular velocity (surface motion for friction)
+};
+
+/// Padding (elements) after the particle columns x, y, z, px, py, pz, w and the
+/// constraint columns rest and lambda: the AVX2 kernels load and store whole 8-float
+/// windows at the ends of runs (writing back the values they loaded in lanes they do
+/// not own), so a window may reach up to 15 elements past the last one.
+inline constexpr std::size_t kSoftPad = 16;
+
+}  // namespace pba::detail
+
+namespace pba {
+
+struct SoftBody::Impl {
+  SoftBodyDef def{};
+  std::size_t n = 0;  // particles (the padded columns hold n + kSoftPad)
+
+  // ---- particles (float columns) ----
+  std::vector<float> x, y, z;        // positions (m)
+  std::vector<float> px, py, pz;     // positions at the start of the substep (m)
+  std::vector<float> vx, vy, vz;     // velocities (m/s)
+  std::vector<float> w;              // inverse masses in use (1/kg; 0 pinned or grabbed)
+  std::vector<float> ax, ay, az;     // external accelerations held over a step (m/s^2)
+  std::vector<double> mass;          // masses (kg)
+  std::vector<std::uint8_t> pinned;  // 1 while pinned (grab included)
+
+  // ---- pins: index, start of step and target ----
+  std::vector<std::uint32_t> pins;
+  std::vector<Vec3> pin_from, pin_to;
+  std::uint32_t grab = kNoParticle;  // grabbed particle
+  bool grab_pinned = false;          // grab() pinned it (release() unpins)
+
+  // ---- distance constraints in solver order ----
+  std::vector<std::uint32_t> ca, cb;   // particle indices
+  std::vector<float> rest;             // rest length in use (m); -1 once broken (masks the kernel)
+  std::vector<float> rest0;            // rest length at build (m)
+  std::vector<std::uint8_t> kind;      // SoftConstraintKind
+  std::vector<std::uint8_t> broken;    // 1 once torn
+  std::vector<float> lambda;           // XPBD multipliers (iterations > 1 or damping)
+  std::vector<detail::Run> runs;       // in solver order: colour by colour
+  std::vector<std::uint32_t> run_of;   // the run holding each constraint (for tearing)
+  std::size_t n_colors = 0;
+  std::size_t n_broken = 0;
+
+  // ---- tetrahedra ----
+  std::vector<SoftTet> tets;
+  std::vector<float> tet_rest;  // rest volumes (m^3), > 0
+  std::vector<float> tet_lambda;
+  double rest_volume = 0;
+
+  // ---- triangles (all, and those intact) ----
+  std::vector<SoftTriangle> tris_all;
+  std::vector<std::array<std::uint32_t, 3>> tri_edges;  // constraint per edge, or kNoParticle
+  std::vector<SoftTriangle> tris;
+
+  // ---- mass-spring state (double) and integrator ----
+  Integrator<Vec3> integ{};
+  std::vector<Vec3> msx, msv;
+  bool ms_valid = false;  // msx/msv mirror x/v
+  bool jacobian_set = false;  // the analytic jacobian is installed in integ
+
+  // ---- solver options ----
+  bool simd = true;  // use the explicit AVX2 kernels when the CPU has them (same bits either way)
+
+  // ---- per-step scratch ----
+  std::vector<detail::SoftCollider> colliders;
+
+  // ---- bookkeeping ----
+  bool has_aext = false;  // ax/ay/az hold something this step
+  double time = 0;
+  long long steps = 0;
+  std::string failure;
+  SoftProfile profile{};
+
+  // solver steps (xpbd.cpp, mass_spring.cpp)
+  void step_xpbd(double t, double dt);
+  void step_mass_spring(double t, double dt);
+  // shared pieces (soft_body.cpp)
+  void prepare_colliders(std::span<const Collider> colliders, double dt);
+  void external_accelerations(double t);
+  void tear();
+  void rebuild_triangles();
+  void check_finite(double t);
+};
+
+namespace detail {
+
+/// The XPBD compliance (m/N) of a constraint kind.
+inline double kind_compliance(const SoftBodyDef& d, SoftConstraintKind k) {
+  const double v[3] = {d.stretch_compliance, d.shear_compliance, d.bend_compliance};
+  return v[static_cast<int>(k)];
+}
+/// The mass-spring stiffness (N/m) of a constraint kind.
+inline double kind_stiffness(const SoftBodyDef& d, SoftConstraintKind k) {
+  const double v[3] = {d.stretch_stiffness, d.shear_stiffness, d.bend_stiffness};
+  return v[static_cast<int>(k)];
+}
+
+/// Internal access to a body's state, for tests (e.g. the scalar and AVX2 kernels must
+/// give the same bits).
+struct SoftAccess {
+  static SoftBody::Impl& impl(SoftBody& b) { return *b.impl_; }
+  static const SoftBody::Impl& impl(const SoftBody& b) { return *b.impl_; }
+};
+
+/// Projects the particles [0, n) out of every collider at substep fraction f in (0, 1]
+/// of the step (centres interpolated), with position-based friction over a substep of
+/// h seconds. Returns the number of contacts. Shared by both solvers.
+std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double fraction_step);
+/// Mass-spring contacts at step fraction f: projects the double positions out and
+/// removes approaching normal velocity with Coulomb friction. Returns the contacts.
+std::size_t collide_velocities(SoftBody::Impl& s, std::span<Vec3> xs, std::span<Vec3> vs, double f);
+
+}  // namespace detail
+}  // namespace pba

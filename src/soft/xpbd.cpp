@@ -1,0 +1,575 @@
+// The XPBD solver: substeps of predict, constraint projection (distance constraints by
+// colour and run, then tetrahedron volumes), collisions and the velocity update.
+//
+// Macklin, Mueller & Chentanez 2016, "XPBD: position-based simulation of compliant
+// constrained dynamics", eqs. 18 (the multiplier update), 26 (damping);
+// Macklin, Storey, Lu, Terdiman, Chentanez, Jeschke & Mueller 2019, "Small steps in
+// physics simulation" (substeps with one iteration, multipliers reset each substep).
+#include <cmath>
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
+#include "soft_impl.h"
+
+namespace pba {
+
+namespace {
+
+using detail::Run;
+using detail::RunType;
+
+// Everything one substep's projection needs, as plain pointers and values.
+struct SolveArgs {
+  float* x;
+  float* y;
+  float* z;
+  const float* px;
+  const float* py;
+  const float* pz;
+  const float* w;
+  const std::uint32_t* ca;
+  const std::uint32_t* cb;
+  const float* rest;
+  float* lambda;
+  const Run* runs;
+  std::size_t n_runs;
+  float at[3];     // alpha / h^2 per constraint kind
+  float gamma[3];  // alpha beta / h per kind (eq. 26), 0 without damping
+  bool avx2;       // use the AVX2 interleaved kernels
+};
+
+// One distance constraint C = |x_b - x_a| - l0 (eq. 18 with eq. 26's damping term):
+//   dlambda = (-C - at lambda - gamma grad C . (x - x_prev)) / ((1 + gamma)(w_a + w_b) + at)
+//   x_a -= w_a dlambda n,  x_b += w_b dlambda n,  n = (x_b - x_a)/l.
+// Written as s = dlambda / l so one division serves both; masked (s = 0) when the
+// constraint is broken (rest <= 0), degenerate (l = 0) or between two pinned particles.
+//
+// Rigid constraints (alpha = 0, no damping) use the squared form C' = (l^2 - l0^2)/(2 l0)
+// instead: the same zero set, with the exact gradient d / l0, so one PBD step is
+//   s = (l0^2 - l^2) / (2 (w_a + w_b) l^2),  x_a -= w_a s d,  x_b += w_b s d,
+// a Newton step that needs one division and no square root (the sqrt-free projection of
+// Jakobsen 2001, "Advanced character physics"); it differs from the exact step by the
+// factor (l + l0)/(2 l) = 1 + O(strain), and converges to the same l = l0.
+template <bool kLambda, bool kDamp, bool kRigid = false>
+PBA_SOFT_INLINE void project(float& xa, float& ya, float& za, float& xb, float& yb, float& zb, float wa, float wb,
+                             float r, float* lam, float pxa, float pya, float pza, float pxb, float pyb, float pzb,
+                             float at, float gamma) {
+  const float dx = xb - xa, dy = yb - ya, dz = zb - za;
+  const float l2 = dx * dx + dy * dy + dz * dz;
+  if constexpr (kRigid) {
+    (void)lam, (void)pxa, (void)pya, (void)pza, (void)pxb, (void)pyb, (void)pzb, (void)at, (void)gamma;
+    const float q = (wa + wb) * l2;
+    const float s = (q > 0.0f && r > 0.0f) ? (r * r - l2) / (q + q) : 0.0f;
+    const float sa = wa * s, sb = wb * s;
+    xa -= sa * dx, ya -= sa * dy, za -= sa * dz;
+    xb += sb * dx, yb += sb * dy, zb += sb * dz;
+    return;
+  }
+  const float l = std::sqrt(l2);
+  const float wsum = wa + wb;
+  float c = l - r;
+  if constexpr (kLambda) c += at * *lam;
+  float s;
+  if constexpr (kDamp) {
+    // s = (-(C + at lambda) l - gamma d . (dx_b - dx_a)) / (den l^2)
+    const float ddot = dx * ((xb - pxb) - (xa - pxa)) + dy * ((yb - pyb) - (ya - pya)) + dz * ((zb - pzb) - (za - pza));
+    const float q = ((1.0f + gamma) * wsum + at) * l2;
+    const float num = -c * l - gamma * ddot;
+    s = (q > 0.0f && r > 0.0f) ? num / q : 0.0f;
+  } else {
+    (void)pxa, (void)pya, (void)pza, (void)pxb, (void)pyb, (void)pzb, (void)gamma;
+    const float q = (wsum + at) * l;
+    s = (q > 0.0f && r > 0.0f) ? -c / q : 0.0f;
+  }
+  if constexpr (kLambda) *lam += s * l;
+  const float sa = wa * s, sb = wb * s;
+  xa -= sa * dx, ya -= sa * dy, za -= sa * dz;
+  xb += sb * dx, yb += sb * dy, zb += sb * dz;
+}
+
+// a contiguous run: constraint k joins a0 + k and a0 + k + offset; the two index ranges
+// are disjoint (a colour touches a particle once), hence the restrict pointers
+template <bool kLambda, bool kDamp, bool kUniform, bool kRigid>
+PBA_SOFT_INLINE void run_contiguous(int n, float* PBA_SOFT_RESTRICT xa, float* PBA_SOFT_RESTRICT ya,
+                                    float* PBA_SOFT_RESTRICT za, float* PBA_SOFT_RESTRICT xb,
+                                    float* PBA_SOFT_RESTRICT yb, float* PBA_SOFT_RESTRICT zb,
+                                    const float* PBA_SOFT_RESTRICT pxa, const float* PBA_SOFT_RESTRICT pya,
+                                    const float* PBA_SOFT_RESTRICT pza, const float* PBA_SOFT_RESTRICT pxb,
+                                    const float* PBA_SOFT_RESTRICT pyb, const float* PBA_SOFT_RESTRICT pzb,
+                                    const float* PBA_SOFT_RESTRICT wa, const float* PBA_SOFT_RESTRICT wb,
+                                    const float* PBA_SOFT_RESTRICT rest, float ru, float* PBA_SOFT_RESTRICT lam,
+                                    float at, float gamma) {
+  for (int k = 0; k < n; ++k) {
+    float dummy = 0;
+    project<kLambda, kDamp, kRigid>(xa[k], ya[k], za[k], xb[k], yb[k], zb[k], wa[k], wb[k], kUniform ? ru : rest[k],
+                            kLambda ? lam + k : &dummy, kDamp ? pxa[k] : 0.f, kDamp ? pya[k] : 0.f,
+                            kDamp ? pza[k] : 0.f, kDamp ? pxb[k] : 0.f, kDamp ? pyb[k] : 0.f, kDamp ? pzb[k] : 0.f,
+                            at, gamma);
+  }
+}
+
+// an interleaved run: groups of 2L particles, the first L joined to the next L
+template <int L, bool kLambda, bool kDamp, bool kUniform, bool kRigid>
+PBA_SOFT_INLINE void run_interleaved(int groups, float* PBA_SOFT_RESTRICT x, float* PBA_SOFT_RESTRICT y,
+                                     float* PBA_SOFT_RESTRICT z, const float* PBA_SOFT_RESTRICT px,
+                                     const float* PBA_SOFT_RESTRICT py, const float* PBA_SOFT_RESTRICT pz,
+                                     const float* PBA_SOFT_RESTRICT w, const float* PBA_SOFT_RESTRICT rest,
+                                     float ru, float* PBA_SOFT_RESTRICT lam, float at, float gamma) {
+  for (int g = 0; g < groups; ++g) {
+    for (int j = 0; j < L; ++j) {
+      const int a = g * 2 * L + j, b = a + L, c = g * L + j;
+      float dummy = 0;
+      project<kLambda, kDamp, kRigid>(x[a], y[a], z[a], x[b], y[b], z[b], w[a], w[b], kUniform ? ru : rest[c], kLambda ? lam + c : &dummy,
+                              kDamp ? px[a] : 0.f, kDamp ? py[a] : 0.f, kDamp ? pz[a] : 0.f, kDamp ? px[b] : 0.f,
+                              kDamp ? py[b] : 0.f, kDamp ? pz[b] : 0.f, at, gamma);
+    }
+  }
+}
+
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PBA_SOFT_HAVE_AVX2 1
+#define PBA_SOFT_AVX2_INLINE inline __attribute__((target("avx2"), always_inline))
+
+// The a and b particles of 8 constraints. L = 0 (contiguous runs): 8 consecutive floats
+// at a + k and at b + k. L = 1, 2 (interleaved runs): 16 consecutive floats from a + 2k,
+// deinterleaved with in-lane shuffles, which leave the constraints in lane order
+// [0 1 4 5 2 3 6 7].
+template <int L>
+PBA_SOFT_AVX2_INLINE void load_ab(const float* base, std::uint32_t a, std::uint32_t b, int k, __m256& va,
+                                  __m256& vb) {
+  if constexpr (L == 0) {
+    va = _mm256_loadu_ps(base + a + k);
+    vb = _mm256_loadu_ps(base + b + k);
+  } else {
+    (void)b;
+    const __m256 lo = _mm256_loadu_ps(base + a + 2 * k), hi = _mm256_loadu_ps(base + a + 2 * k + 8);
+    va = _mm256_shuffle_ps(lo, hi, L == 1 ? 0x88 : 0x44);
+    vb = _mm256_shuffle_ps(lo, hi, L == 1 ? 0xDD : 0xEE);
+  }
+}
+// and back (a's window first: in a contiguous tail, b's window may overlap lanes of a's
+// that a does not own, and b's values must be the ones that stay)
+template <int L>
+PBA_SOFT_AVX2_INLINE void store_ab(float* base, std::uint32_t a, std::uint32_t b, int k, __m256 va, __m256 vb) {
+  if constexpr (L == 0) {
+    _mm256_storeu_ps(base + a + k, va);
+    _mm256_storeu_ps(base + b + k, vb);
+  } else if constexpr (L == 1) {
+    (void)b;
+    _mm256_storeu_ps(base + a + 2 * k, _mm256_unpacklo_ps(va, vb));
+    _mm256_storeu_ps(base + a + 2 * k + 8, _mm256_unpackhi_ps(va, vb));
+  } else {
+    (void)b;
+    _mm256_storeu_ps(base + a + 2 * k, _mm256_shuffle_ps(va, vb, 0x44));
+    _mm256_storeu_ps(base + a + 2 * k + 8, _mm256_shuffle_ps(va, vb, 0xEE));
+  }
+}
+// per-constraint values in the lanes' constraint order: for interleaved runs swap the
+// middle 64-bit halves ([0 1 2 3 4 5 6 7] <-> [0 1 4 5 2 3 6 7]; its own inverse)
+template <int L>
+PBA_SOFT_AVX2_INLINE __m256 perm(__m256 v) {
+  if constexpr (L == 0) return v;
+  else return _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(v), 0xD8));
+}
+// the new value in the lanes the group owns, the loaded one elsewhere (tails only)
+template <bool kTail>
+PBA_SOFT_AVX2_INLINE __m256 keep(__m256 old, __m256 now, __m256 own) {
+  if constexpr (kTail) return _mm256_blendv_ps(old, now, own);
+  else return (void)old, (void)own, now;
+}
+
+// 8 constraints k .. k+7 of a contiguous (L = 0) or interleaved (L = 1, 2) run with
+// exactly the scalar project()'s operations in the same order (no fused multiply-adds;
+// sqrt and division are correctly rounded), so both give the same bits. a and b are the
+// first particles of the run's a and b ends (b unused when L > 0). A tail group (kTail)
+// owns only the constraint lanes in `own` (in lane order): it still loads and stores
+// whole windows (the columns are padded by kSoftPad) but gives s = 0 to the other lanes
+// and writes back exactly the values it loaded there, which is much faster than masked
+// moves (microcoded on AMD).
+template <int L, bool kLambda, bool kDamp, bool kUniform, bool kRigid, bool kTail>
+PBA_SOFT_AVX2_INLINE void group_avx2(int k, __m256 own, float* x, float* y, float* z, const float* px,
+                                     const float* py, const float* pz, const float* w, std::uint32_t a,
+                                     std::uint32_t b, const float* rest, float ru, float* lam, float at_s,
+                                     float gamma_s) {
+  const __m256 zero = _mm256_setzero_ps();
+  __m256 xa, xb, ya, yb, za, zb, wa, wb;
+  load_ab<L>(x, a, b, k, xa, xb);
+  load_ab<L>(y, a, b, k, ya, yb);
+  load_ab<L>(z, a, b, k, za, zb);
+  load_ab<L>(w, a, b, k, wa, wb);
+  // lanes the group does not own get r = 0, so s = 0 there
+  __m256 r = kUniform ? _mm256_set1_ps(ru) : perm<L>(_mm256_loadu_ps(rest + k));
+  if constexpr (kTail) r = _mm256_and_ps(r, own);
+  // the scalar project(), lane by lane
+  const __m256 dx = _mm256_sub_ps(xb, xa), dy = _mm256_sub_ps(yb, ya), dz = _mm256_sub_ps(zb, za);
+  const __m256 l2 =
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+  __m256 s, l = zero, lv = zero;
+  if constexpr (kRigid) {
+    (void)at_s, (void)gamma_s, (void)lam, (void)px, (void)py, (void)pz;
+    const __m256 q = _mm256_mul_ps(_mm256_add_ps(wa, wb), l2);
+    const __m256 ok = _mm256_and_ps(_mm256_cmp_ps(q, zero, _CMP_GT_OQ), _mm256_cmp_ps(r, zero, _CMP_GT_OQ));
+    s = _mm256_blendv_ps(zero, _mm256_div_ps(_mm256_sub_ps(_mm256_mul_ps(r, r), l2), _mm256_add_ps(q, q)), ok);
+  } else {
+    const __m256 sign = _mm256_set1_ps(-0.0f), at = _mm256_set1_ps(at_s);
+    l = _mm256_sqrt_ps(l2);
+    const __m256 wsum = _mm256_add_ps(wa, wb);
+    __m256 c = _mm256_sub_ps(l, r);
+    if constexpr (kLambda) {
+      lv = perm<L>(_mm256_loadu_ps(lam + k));
+      c = _mm256_add_ps(c, _mm256_mul_ps(at, lv));
+    }
+    __m256 q, num;
+    if constexpr (kDamp) {
+      const __m256 gamma = _mm256_set1_ps(gamma_s), one = _mm256_set1_ps(1.0f);
+      __m256 pxa, pxb, pya, pyb, pza, pzb;
+      load_ab<L>(px, a, b, k, pxa, pxb);
+      load_ab<L>(py, a, b, k, pya, pyb);
+      load_ab<L>(pz, a, b, k, pza, pzb);
+      const __m256 ex = _mm256_sub_ps(_mm256_sub_ps(xb, pxb), _mm256_sub_ps(xa, pxa));
+      const __m256 ey = _mm256_sub_ps(_mm256_sub_ps(yb, pyb), _mm256_sub_ps(ya, pya));
+      const __m256 ez = _mm256_sub_ps(_mm256_sub_ps(zb, pzb), _mm256_sub_ps(za, pza));
+      const __m256 ddot =
+          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, ex), _mm256_mul_ps(dy, ey)), _mm256_mul_ps(dz, ez));
+      q = _mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_add_ps(one, gamma), wsum), at), l2);
+      num = _mm256_sub_ps(_mm256_mul_ps(_mm256_xor_ps(c, sign), l), _mm256_mul_ps(gamma, ddot));
+    } else {
+      (void)px, (void)py, (void)pz, (void)gamma_s;
+      q = _mm256_mul_ps(_mm256_add_ps(wsum, at), l);
+      num = _mm256_xor_ps(c, sign);
+    }
+    const __m256 ok = _mm256_and_ps(_mm256_cmp_ps(q, zero, _CMP_GT_OQ), _mm256_cmp_ps(r, zero, _CMP_GT_OQ));
+    s = _mm256_blendv_ps(zero, _mm256_div_ps(num, q), ok);
+  }
+  if constexpr (kLambda && !kRigid)
+    _mm256_storeu_ps(lam + k, perm<L>(keep<kTail>(lv, _mm256_add_ps(lv, _mm256_mul_ps(s, l)), own)));
+  const __m256 sa = _mm256_mul_ps(wa, s), sb = _mm256_mul_ps(wb, s);
+  store_ab<L>(x, a, b, k, keep<kTail>(xa, _mm256_sub_ps(xa, _mm256_mul_ps(sa, dx)), own),
+              keep<kTail>(xb, _mm256_add_ps(xb, _mm256_mul_ps(sb, dx)), own));
+  store_ab<L>(y, a, b, k, keep<kTail>(ya, _mm256_sub_ps(ya, _mm256_mul_ps(sa, dy)), own),
+              keep<kTail>(yb, _mm256_add_ps(yb, _mm256_mul_ps(sb, dy)), own));
+  store_ab<L>(z, a, b, k, keep<kTail>(za, _mm256_sub_ps(za, _mm256_mul_ps(sa, dz)), own),
+              keep<kTail>(zb, _mm256_add_ps(zb, _mm256_mul_ps(sb, dz)), own));
+}
+
+// A whole run with AVX2: groups of 8, then one tail group for the rest.
+template <int L, bool kLambda, bool kDamp, bool kUniform, bool kRigid>
+__attribute__((target("avx2"))) void run_avx2(int n, float* x, float* y, float* z, const float* px, const float* py,
+                                               const float* pz, const float* w, std::uint32_t a, std::uint32_t b,
+                                               const float* rest, float ru, float* lam, float at, float gamma) {
+  int k = 0;
+  for (; k + 8 <= n; k += 8)
+    group_avx2<L, kLambda, kDamp, kUniform, kRigid, false>(k, _mm256_setzero_ps(), x, y, z, px, py, pz, w, a, b,
+                                                          rest, ru, lam, at, gamma);
+  if (k < n) {
+    // constraint j < n - k is owned; in lane order for interleaved runs
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    const __m256 own = perm<L>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(n - k), lane)));
+    group_avx2<L, kLambda, kDamp, kUniform, kRigid, true>(k, own, x, y, z, px, py, pz, w, a, b, rest, ru, lam, at,
+                                                         gamma);
+  }
+}
+
+// true when the CPU runs AVX2 (asked once)
+bool has_avx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+#else
+#define PBA_SOFT_HAVE_AVX2 0
+#endif
+
+// an indexed run (any mesh): scalar, through the index arrays
+template <bool kLambda, bool kDamp>
+PBA_SOFT_INLINE void run_indexed(int n, float* x, float* y, float* z, const float* px, const float* py,
+                                 const float* pz, const float* w, const std::uint32_t* ca, const std::uint32_t* cb,
+                                 const float* rest, float* lam, float at, float gamma) {
+  for (int k = 0; k < n; ++k) {
+    const std::uint32_t a = ca[k], b = cb[k];
+    float dummy = 0;
+    project<kLambda, kDamp>(x[a], y[a], z[a], x[b], y[b], z[b], w[a], w[b], rest[k], kLambda ? lam + k : &dummy,
+                            kDamp ? px[a] : 0.f, kDamp ? py[a] : 0.f, kDamp ? pz[a] : 0.f, kDamp ? px[b] : 0.f,
+                            kDamp ? py[b] : 0.f, kDamp ? pz[b] : 0.f, at, gamma);
+  }
+}
+
+// one Gauss-Seidel sweep over every run, in solver order
+template <bool kLambda, bool kDamp, bool kUniform, bool kRigid>
+PBA_SOFT_INLINE void solve_run(const SolveArgs& s, const Run& run) {
+  const int kind = static_cast<int>(run.kind);
+  const float at = s.at[kind], gamma = s.gamma[kind], ru = run.rest;
+  const float* rest = s.rest + run.c0;
+  float* lam = s.lambda + run.c0;
+  const int n = static_cast<int>(run.count);
+  const std::uint32_t a = run.a0, b = run.a0 + run.offset;
+  // contiguous and interleaved runs with AVX2 when the CPU has it, else scalar; the same bits
+#if PBA_SOFT_HAVE_AVX2
+  if (s.avx2 && run.type != RunType::Indexed) {
+    if (run.type == RunType::Contiguous)
+      run_avx2<0, kLambda, kDamp, kUniform, kRigid>(n, s.x, s.y, s.z, s.px, s.py, s.pz, s.w, a, b, rest, ru, lam, at,
+                                                    gamma);
+    else if (run.offset == 1)
+      run_avx2<1, kLambda, kDamp, kUniform, kRigid>(n, s.x, s.y, s.z, s.px, s.py, s.pz, s.w, a, b, rest, ru, lam, at,
+                                                    gamma);
+    else
+      run_avx2<2, kLambda, kDamp, kUniform, kRigid>(n, s.x, s.y, s.z, s.px, s.py, s.pz, s.w, a, b, rest, ru, lam, at,
+                                                    gamma);
+    return;
+  }
+#endif
+  switch (run.type) {
+    case RunType::Contiguous:
+      run_contiguous<kLambda, kDamp, kUniform, kRigid>(n, s.x + a, s.y + a, s.z + a, s.x + b, s.y + b, s.z + b,
+                                                       s.px + a, s.py + a, s.pz + a, s.px + b, s.py + b, s.pz + b,
+                                                       s.w + a, s.w + b, rest, ru, lam, at, gamma);
+      break;
+    case RunType::Interleaved:
+      if (run.offset == 1)
+        run_interleaved<1, kLambda, kDamp, kUniform, kRigid>(n, s.x + a, s.y + a, s.z + a, s.px + a, s.py + a,
+                                                             s.pz + a, s.w + a, rest, ru, lam, at, gamma);
+      else
+        run_interleaved<2, kLambda, kDamp, kUniform, kRigid>(n / 2, s.x + a, s.y + a, s.z + a, s.px + a, s.py + a,
+                                                             s.pz + a, s.w + a, rest, ru, lam, at, gamma);
+      break;
+    case RunType::Indexed:
+      run_indexed<kLambda, kDamp>(n, s.x, s.y, s.z, s.px, s.py, s.pz, s.w, s.ca + run.c0, s.cb + run.c0, rest, lam,
+                                  at, gamma);
+      break;
+  }
+}
+
+template <bool kLambda, bool kDamp>
+PBA_SOFT_INLINE void sweep(const SolveArgs& s) {
+  for (std::size_t r = 0; r < s.n_runs; ++r) {
+    const Run& run = s.runs[r];
+    const int kind = static_cast<int>(run.kind);
+    const bool rigid = s.at[kind] == 0.0f && s.gamma[kind] == 0.0f && run.type != RunType::Indexed;
+    const bool uniform = run.rest > 0.0f;
+    if (rigid) {
+      if (uniform) solve_run<false, false, true, true>(s, run);
+      else solve_run<false, false, false, true>(s, run);
+    } else {
+      if (uniform) solve_run<kLambda, kDamp, true, false>(s, run);
+      else solve_run<kLambda, kDamp, false, false>(s, run);
+    }
+  }
+}
+
+// compiled for AVX2 and for the baseline; the loader picks one (GCC function
+// multi-versioning). -ffp-contract=off keeps both free of fused multiply-adds, so both
+// give the same bits. Not under the sanitizers (the ifunc resolver runs before them).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
+    !defined(__SANITIZE_THREAD__)
+#define PBA_SOFT_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define PBA_SOFT_CLONES
+#endif
+
+PBA_SOFT_CLONES void sweep_any(const SolveArgs& s, bool lambda, bool damp) {
+  if (lambda) {
+    if (damp) sweep<true, true>(s);
+    else sweep<true, false>(s);
+  } else {
+    if (damp) sweep<false, true>(s);
+    else sweep<false, false>(s);
+  }
+}
+
+// Predict: the velocity, from the stored one (first substep) or from the last substep's
+// displacement v = (x - x_prev) scale (the velocity update of the previous substep, fused
+// here so velocities are stored once per step), then (semi-implicit) v += h a,
+// x_prev = x, x += h v, for free particles (w > 0). Linear and quadratic drag toward the
+// wind are implicit in v: v' = (v + h (g + a_ext + k u_w)) / (1 + h k) with
+// k = (b + c |v - u_w|) w, which damps without ever overshooting the wind.
+struct PredictArgs {
+  float* x;
+  float* y;
+  float* z;
+  float* px;
+  float* py;
+  float* pz;
+  float* vx;
+  float* vy;
+  float* vz;
+  const float* w;
+  const float* ax;
+  const float* ay;
+  const float* az;
+  std::size_t n;
+  float h, scale, gx, gy, gz, b, c, wx, wy, wz;
+};
+
+template <bool kExt, bool kDrag, bool kFromX>
+PBA_SOFT_INLINE void predict_impl(std::size_t n, float* PBA_SOFT_RESTRICT x, float* PBA_SOFT_RESTRICT y,
+                                  float* PBA_SOFT_RESTRICT z, float* PBA_SOFT_RESTRICT px,
+                                  float* PBA_SOFT_RESTRICT py, float* PBA_SOFT_RESTRICT pz,
+                                  const float* PBA_SOFT_RESTRICT vx, const float* PBA_SOFT_RESTRICT vy,
+                                  const float* PBA_SOFT_RESTRICT vz, const float* PBA_SOFT_RESTRICT w,
+                                  const float* PBA_SOFT_RESTRICT ax, const float* PBA_SOFT_RESTRICT ay,
+                                  const float* PBA_SOFT_RESTRICT az, const PredictArgs& p) {
+  const float h = p.h, scale = p.scale, gx = p.gx, gy = p.gy, gz = p.gz;
+  const float b = p.b, c = p.c, wx = p.wx, wy = p.wy, wz = p.wz;
+  for (std::size_t i = 0; i < n; ++i) {
+    // the velocity at the start of the substep
+    float ux, uy, uz;
+    if constexpr (kFromX) {
+      ux = (x[i] - px[i]) * scale, uy = (y[i] - py[i]) * scale, uz = (z[i] - pz[i]) * scale;
+    } else {
+      (void)scale;
+      ux = vx[i], uy = vy[i], uz = vz[i];
+    }
+    // gravity on free particles, held accelerations, drag
+    const float m = w[i] > 0.0f ? 1.0f : 0.0f;
+    float fx = gx * m, fy = gy * m, fz = gz * m;
+    if constexpr (kExt) fx += ax[i], fy += ay[i], fz += az[i];
+    float nvx, nvy, nvz;
+    if constexpr (kDrag) {
+      const float rx = ux - wx, ry = uy - wy, rz = uz - wz;
+      const float k = (b + c * std::sqrt(rx * rx + ry * ry + rz * rz)) * w[i];
+      const float inv = 1.0f / (1.0f + h * k);
+      nvx = (ux + h * (fx + k * wx)) * inv;
+      nvy = (uy + h * (fy + k * wy)) * inv;
+      nvz = (uz + h * (fz + k * wz)) * inv;
+    } else {
+      (void)b, (void)c, (void)wx, (void)wy, (void)wz;
+      nvx = ux + h * fx, nvy = uy + h * fy, nvz = uz + h * fz;
+    }
+    // drift
+    px[i] = x[i], py[i] = y[i], pz[i] = z[i];
+    x[i] += h * nvx, y[i] += h * nvy, z[i] += h * nvz;
+  }
+}
+
+PBA_SOFT_CLONES void predict(const PredictArgs& p, bool ext, bool drag, bool from_x) {
+#define PBA_SOFT_PREDICT(E, D, F) \
+  predict_impl<E, D, F>(p.n, p.x, p.y, p.z, p.px, p.py, p.pz, p.vx, p.vy, p.vz, p.w, p.ax, p.ay, p.az, p)
+  const int variant = (ext ? 4 : 0) + (drag ? 2 : 0) + (from_x ? 1 : 0);
+  switch (variant) {
+    case 0: PBA_SOFT_PREDICT(false, false, false); break;
+    case 1: PBA_SOFT_PREDICT(false, false, true); break;
+    case 2: PBA_SOFT_PREDICT(false, true, false); break;
+    case 3: PBA_SOFT_PREDICT(false, true, true); break;
+    case 4: PBA_SOFT_PREDICT(true, false, false); break;
+    case 5: PBA_SOFT_PREDICT(true, false, true); break;
+    case 6: PBA_SOFT_PREDICT(true, true, false); break;
+    default: PBA_SOFT_PREDICT(true, true, true); break;
+  }
+#undef PBA_SOFT_PREDICT
+}
+
+// Velocity update v = (x - x_prev) scale, with scale = exp(-damping h) / h.
+PBA_SOFT_CLONES void update_velocities(std::size_t n, const float* PBA_SOFT_RESTRICT x, const float* PBA_SOFT_RESTRICT y,
+                                       const float* PBA_SOFT_RESTRICT z, const float* PBA_SOFT_RESTRICT px,
+                                       const float* PBA_SOFT_RESTRICT py, const float* PBA_SOFT_RESTRICT pz,
+                                       float* PBA_SOFT_RESTRICT vx, float* PBA_SOFT_RESTRICT vy,
+                                       float* PBA_SOFT_RESTRICT vz, float scale) {
+  for (std::size_t i = 0; i < n; ++i) {
+    vx[i] = (x[i] - px[i]) * scale;
+    vy[i] = (y[i] - py[i]) * scale;
+    vz[i] = (z[i] - pz[i]) * scale;
+  }
+}
+
+// Tetrahedron volume constraints C = V - V0 (Macklin et al. 2016 eq. 18; gradients as in
+// Mueller, Macklin, Chentanez, Jeschke & Kim 2020, "Detailed rigid body simulation with
+// extended position based dynamics", section 5.1): grad_d V = (b-a)x(c-a)/6 and cyclic,
+// grad_a V = -(grad_b + grad_c + grad_d). With G_j = 6 grad_j V the update
+//   dlambda = -(C + at lambda) / (sum w |G|^2 / 36 + at),  dx_j = w_j dlambda G_j / 6
+// is written with one division: dx_j = w_j G_j s, s = -6 (C + at lambda) / (sum w |G|^2
+// + 36 at), dlambda = 6 s.
+void solve_volumes(SoftBody::Impl& s, float at, bool use_lambda) {
+  float* x = s.x.data();
+  float* y = s.y.data();
+  float* z = s.z.data();
+  const float* w = s.w.data();
+  for (std::size_t k = 0; k < s.tets.size(); ++k) {
+    const SoftTet& t = s.tets[k];
+    const std::uint32_t id[4] = {t.a, t.b, t.c, t.d};
+    // edges from a, the scaled gradients and the volume
+    const Vec3f p0(x[t.a], y[t.a], z[t.a]);
+    const Vec3f e1 = Vec3f(x[t.b], y[t.b], z[t.b]) - p0, e2 = Vec3f(x[t.c], y[t.c], z[t.c]) - p0,
+                e3 = Vec3f(x[t.d], y[t.d], z[t.d]) - p0;
+    Vec3f g[4];
+    g[1] = glm::cross(e2, e3);
+    g[2] = glm::cross(e3, e1);
+    g[3] = glm::cross(e1, e2);
+    g[0] = -(g[1] + g[2] + g[3]);
+    const float vol = glm::dot(e3, g[3]) * (1.0f / 6.0f);
+    // the multiplier update, one division
+    float den = 36.0f * at;
+    for (int j = 0; j < 4; ++j) den += w[id[j]] * glm::dot(g[j], g[j]);
+    if (!(den > 0.0f)) continue;
+    float c = vol - s.tet_rest[k];
+    if (use_lambda) c += at * s.tet_lambda[k];
+    const float sc = -6.0f * c / den;
+    if (use_lambda) s.tet_lambda[k] += 6.0f * sc;
+    for (int j = 0; j < 4; ++j) {
+      const float f = w[id[j]] * sc;
+      x[id[j]] += f * g[j].x, y[id[j]] += f * g[j].y, z[id[j]] += f * g[j].z;
+    }
+  }
+}
+
+}  // namespace
+
+void SoftBody::Impl::step_xpbd(double t, double dt) {
+  const int S = def.substeps;
+  const double h = dt / S;
+  // per-kind alpha / h^2 and damping gamma = alpha beta / h (eq. 26 with beta = c)
+  const double alpha[3] = {def.stretch_compliance, def.shear_compliance, def.bend_compliance};
+  SolveArgs a{x.data(), y.data(), z.data(), px.data(), py.data(), pz.data(), w.data(), ca.data(), cb.data(),
+              rest.data(), lambda.data(), runs.data(), runs.size(), {}, {}, false};
+#if PBA_SOFT_HAVE_AVX2
+  a.avx2 = simd && has_avx2();
+#endif
+  bool damp = false;
+  for (int k = 0; k < 3; ++k) {
+    a.at[k] = static_cast<float>(alpha[k] / (h * h));
+    a.gamma[k] = static_cast<float>(alpha[k] * def.spring_damping / h);
+    damp = damp || a.gamma[k] > 0;
+  }
+  const bool use_lambda = def.iterations > 1 || damp;
+  const float at_volume = static_cast<float>(def.volume_compliance / (h * h));
+  // predict's inputs: gravity, held external accelerations, drag toward the wind
+  const Vec3 wind = def.forces.wind.at(t);
+  const bool drag = def.forces.linear_drag > 0 || def.forces.quadratic_drag > 0;
+  const float vscale = static_cast<float>(std::exp(-def.damping * h) / h);
+  const PredictArgs pa{x.data(), y.data(), z.data(), px.data(), py.data(), pz.data(), vx.data(), vy.data(),
+                       vz.data(), w.data(), ax.data(), ay.data(), az.data(), n, static_cast<float>(h), vscale,
+                       static_cast<float>(def.forces.gravity.x), static_cast<float>(def.forces.gravity.y),
+                       static_cast<float>(def.forces.gravity.z), static_cast<float>(def.forces.linear_drag),
+                       static_cast<float>(def.forces.quadratic_drag), static_cast<float>(wind.x),
+                       static_cast<float>(wind.y), static_cast<float>(wind.z)};
+  for (int sub = 1; sub <= S; ++sub) {
+    // predict (with the previous substep's velocity update), then the pins slide toward
+    // their targets (exactly there at the last substep)
+    predict(pa, has_aext, drag, sub > 1);
+    const double f = static_cast<double>(sub) / S;
+    for (std::size_t k = 0; k < pins.size(); ++k) {
+      const Vec3 p = sub == S ? pin_to[k] : pin_from[k] + (pin_to[k] - pin_from[k]) * f;
+      const std::uint32_t i = pins[k];
+      x[i] = static_cast<float>(p.x), y[i] = static_cast<float>(p.y), z[i] = static_cast<float>(p.z);
+    }
+    // constraint iterations, multipliers reset each substep ("small steps")
+    if (use_lambda) {
+      std::fill(lambda.begin(), lambda.end(), 0.f);
+      std::fill(tet_lambda.begin(), tet_lambda.end(), 0.f);
+    }
+    for (int it = 0; it < def.iterations; ++it) {
+      sweep_any(a, use_lambda, damp);
+      if (!tets.empty()) solve_volumes(*this, at_volume, use_lambda);
+    }
+    // collisions (timed per step, not per substep: a clock read costs as much as
+    // colliding a small body)
+    if (!colliders.empty()) detail::collide_particles(*this, f, h, 1.0 / S);
+  }
+  // velocities from the last substep's displacement
+  update_velocities(n, x.data(), y.data(), z.data(), px.data(), py.data(), pz.data(), vx.data(), vy.data(), vz.data(),
+                    vscale);
+  profile.collide = 0;  // XPBD collides inside each substep: counted in solve
+}
+
+}  // namespace pba

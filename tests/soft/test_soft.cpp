@@ -1,0 +1,720 @@
+// Soft bodies: springs against their closed forms, XPBD against its spring equivalent,
+// ropes, hanging and draped cloth, friction, tearing, aerodynamics, jelly volume,
+// determinism, the SIMD kernels against the scalar ones, and bad input.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "error_of.h"
+#include "pba/soft.h"
+#include "soft/soft_impl.h"
+
+using pba::test_support::error_of;
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// A spring of stiffness k between a fixed anchor at the origin and a particle of mass m
+// hanging below it at rest length 1, released from length 1 + amplitude, no gravity.
+pba::SoftBody make_spring(pba::SoftSolver solver, pba::Method method, double k, double m, double amplitude,
+                          int substeps = 1) {
+  pba::SoftBodyDef d;
+  d.solver = solver;
+  d.method = method;
+  d.substeps = substeps;
+  d.forces.gravity = {0, 0, 0};
+  return pba::SoftBody::spring(
+      {.a = {0, 0, 0}, .b = {0, -(1 + amplitude), 0}, .mass = m, .stiffness = k, .rest_length = 1.0}, d);
+}
+
+// Period of a decaying or steady oscillation of f(t), from its upward zero crossings
+// (linear interpolation between samples): (last - first) / (crossings - 1).
+struct PeriodMeter {
+  double prev_t = 0, prev_f = 0, first = -1, last = -1;
+  int crossings = 0;
+  bool started = false;
+  void add(double t, double f) {
+    if (started && prev_f < 0 && f >= 0) {
+      const double tc = prev_t + (t - prev_t) * (-prev_f) / (f - prev_f);
+      if (first < 0) first = tc;
+      last = tc;
+      ++crossings;
+    }
+    prev_t = t, prev_f = f, started = true;
+  }
+  double period() const { return (last - first) / (crossings - 1); }
+};
+
+double spring_extension(const pba::SoftBody& s) { return glm::length(s.position(1) - s.position(0)) - 1.0; }
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// a single spring (workbook exercise 2)
+
+// The three symplectic integrators share the recurrence x_{n+1} - 2 x_n + x_{n-1} =
+// -(omega h)^2 x_n on the linear oscillator, whose solutions rotate by theta = 2
+// asin(omega h / 2) per step: the discrete period is T_h = pi h / asin(omega h / 2) =
+// T (1 + (omega h)^2 / 24 + O(h^4)). The measured period must match T_h to the
+// measurement's own error (zero crossings interpolated linearly over 60 periods: < 1e-5
+// relative) and so T within (omega h)^2 / 24 + 1e-5.
+TEST(Spring, PeriodUnderSymplecticIntegrators) {
+  const double k = 100, m = 1, omega = std::sqrt(k / m), T = 2 * kPi / omega;
+  for (pba::Method method : {pba::Method::SemiImplicitEuler, pba::Method::VelocityVerlet, pba::Method::PositionVerlet}) {
+    for (double wh : {0.05, 0.2}) {
+      const double h = wh / omega;
+      pba::SoftBody s = make_spring(pba::SoftSolver::MassSpring, method, k, m, 0.1);
+      PeriodMeter pm;
+      for (int i = 0; i * h < 60 * T; ++i) {
+        s.step(i * h, h);
+        pm.add((i + 1) * h, spring_extension(s));
+      }
+      const double Th = kPi * h / std::asin(wh / 2);
+      EXPECT_NEAR(pm.period() / Th, 1.0, 1e-5) << pba::name(method) << " omega h = " << wh;
+      EXPECT_LE(std::abs(pm.period() / T - 1), wh * wh / 24 + 1e-5) << pba::name(method);
+      EXPECT_GE(pm.crossings, 58);
+    }
+  }
+}
+
+// Bounded energy: on the oscillator, semi-implicit Euler conserves
+// v^2 + omega^2 x^2 - omega^2 h x v exactly, so E = (v^2 + omega^2 x^2)/2 stays within
+// the band (E_max - E_min)/E_min = omega h / (1 - omega h / 2); velocity Verlet (and
+// position Verlet, whose velocity estimate equals it) conserve v^2 + omega^2 x^2 (1 -
+// (omega h)^2 / 4), so the band is (omega h)^2 / (4 - (omega h)^2). Over 500 periods the
+// band must be at most that (plus 1e-5 for float positions: relative rounding 6e-8 of
+// 1 m lengths, in an energy of a 0.1 m extension squared), and never drift beyond it.
+TEST(Spring, EnergyBoundedUnderSymplecticIntegrators) {
+  const double k = 100, m = 1, omega = 10, wh = 0.1, h = wh / omega;
+  struct Case {
+    pba::Method method;
+    double band;
+  };
+  for (const Case c : {Case{pba::Method::SemiImplicitEuler, wh / (1 - wh / 2)},
+                       Case{pba::Method::VelocityVerlet, wh * wh / (4 - wh * wh)},
+                       Case{pba::Method::PositionVerlet, wh * wh / (4 - wh * wh)}}) {
+    pba::SoftBody s = make_spring(pba::SoftSolver::MassSpring, c.method, k, m, 0.1);
+    double lo = 1e300, hi = 0;
+    const int steps = static_cast<int>(500 * 2 * kPi / omega / h);
+    for (int i = 0; i < steps; ++i) {
+      s.step(i * h, h);
+      const double e = s.kinetic_energy() + s.potential_energy();
+      lo = std::min(lo, e), hi = std::max(hi, e);
+    }
+    EXPECT_LE((hi - lo) / lo, c.band + 1e-5) << pba::name(c.method);
+    EXPECT_GT((hi - lo) / lo, 0.5 * c.band) << pba::name(c.method);  // the band is real, not damping
+  }
+}
+
+// Explicit Euler multiplies the oscillator's energy by exactly 1 + (omega h)^2 each step
+// (|1 + i omega h|^2), so after n steps E_n / E_0 = (1 + (omega h)^2)^n.
+TEST(Spring, EnergyGrowsUnderExplicitEuler) {
+  const double k = 100, m = 1, omega = 10, wh = 0.05, h = wh / omega;
+  pba::SoftBody s = make_spring(pba::SoftSolver::MassSpring, pba::Method::ExplicitEuler, k, m, 0.1);
+  const double e0 = s.potential_energy();
+  const int n = 400;
+  for (int i = 0; i < n; ++i) s.step(i * h, h);
+  const double ratio = (s.kinetic_energy() + s.potential_energy()) / e0;
+  const double theory = std::pow(1 + wh * wh, n);  // 2.718...
+  EXPECT_GT(ratio, 2.5);
+  EXPECT_NEAR(ratio / theory, 1.0, 1e-5);
+}
+
+// XPBD's compliant constraint with alpha = 1/k is a spring: one substep projects the
+// predicted position x~ to x = x~ - C(x~) (w/(w + alpha/h^2)), which for a linear spring
+// is exactly backward Euler, whose discrete period is T_h = 2 pi h / atan(omega h) =
+// T (1 + (omega h)^2 / 3 + O(h^4)).
+TEST(Spring, XpbdComplianceIsInverseStiffness) {
+  const double k = 100, m = 1, omega = 10, T = 2 * kPi / omega;
+  const int substeps = 20;
+  const double dt = 1.0 / 60, h = dt / substeps;
+  pba::SoftBody s = make_spring(pba::SoftSolver::XPBD, pba::Method::SemiImplicitEuler, k, m, 0.1, substeps);
+  EXPECT_DOUBLE_EQ(s.settings().stretch_compliance, 1.0 / k);
+  PeriodMeter pm;
+  for (int i = 0; i * dt < 10 * T; ++i) {
+    s.step(i * dt, dt);
+    pm.add((i + 1) * dt, spring_extension(s));
+  }
+  // sampled once per frame (dt, not h): linear interpolation of the crossing is good to
+  // (omega dt)^2 / 6 of a sample = 2.8e-4 s over 9 periods, 5e-5 relative
+  const double Th = 2 * kPi * h / std::atan(omega * h);
+  EXPECT_NEAR(pm.period() / Th, 1.0, 1e-4);
+  EXPECT_LE(std::abs(pm.period() / T - 1), (omega * h) * (omega * h) / 3 + 1e-4);
+}
+
+// ---------------------------------------------------------------------------------------
+// ropes
+
+// A rope of N rigid segments hanging from its pinned top, settled. At the resting fixed
+// point each substep's predict moves every free particle down by g h^2 and the single
+// projection sweep must lift them back; for small strains the sweep is linear, so the
+// strain it leaves is K(N) g h^2 / l0 for a constant K(N): the stretch converges to zero
+// at second order in the substep h (Macklin et al. 2019). Halving h divides it by 4 up to
+// the nonlinear terms, O(strain) = 1e-3 relative; and at 20 substeps it is below 1%.
+TEST(Rope, HangingRopeStretchIsSecondOrderInTheSubstep) {
+  const int n = 20;
+  double strain[3];
+  for (int k = 0; k < 3; ++k) {
+    pba::SoftBodyDef d;
+    d.substeps = 10 << k;
+    d.damping = 2;
+    pba::SoftBody r = pba::SoftBody::rope(
+        {.from = {0, 2, 0}, .to = {1, 2, 0}, .segments = n, .mass = 1, .bending = false}, d);
+    for (int i = 0; i < 900; ++i) r.step(i / 60.0, 1.0 / 60);
+    strain[k] = r.strain_stats().max;
+    // it hangs straight down from the pin, about 1 m long
+    EXPECT_NEAR(r.position(n).y, 1.0, 0.01);
+    EXPECT_NEAR(r.position(n).x, 0.0, 1e-3);
+    EXPECT_EQ(r.position(0), pba::Vec3(0, 2, 0));
+    EXPECT_NEAR(r.velocity(n).y, 0.0, 1e-4);  // at rest
+  }
+  // the strain is measured from float positions near 2 m (two ulps of 2.4e-7 over a
+  // 0.05 m segment: 1e-5 of strain), which limits the ratio's precision at small strains
+  EXPECT_LE(strain[1], 0.01);
+  for (int k = 0; k < 2; ++k) {
+    const double tol = 0.01 + 4 * (2 * 2.4e-7 / (1.0 / n)) / strain[k + 1];
+    EXPECT_NEAR(strain[k] / strain[k + 1], 4.0, 4 * tol) << "substeps " << (10 << k);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// cloth
+
+namespace {
+pba::SoftBody hanging_cloth(int n, int substeps, pba::SoftSolver solver = pba::SoftSolver::XPBD) {
+  pba::SoftBodyDef d;
+  d.solver = solver;
+  d.substeps = substeps;
+  d.forces.gravity = {0, -10, 0};
+  d.thickness = 0;
+  return pba::SoftBody::cloth_grid(
+      {.origin = {-0.5, 1, 0}, .edge_u = {1, 0, 0}, .edge_v = {0, 0, 1}, .nx = n, .ny = n, .mass = 1}, d);
+}
+}  // namespace
+
+// The hanging cloth: it swings down from its pinned edge and comes to rest. At
+// rest the mean strain is at most 1% (the bound), the total energy does not grow
+// over 10^4 steps, and the pinned particles never move by a single bit. XPBD only
+// removes energy (each projection is a dissipative implicit step), so the energy may
+// rise above its starting value by no more than its float noise: positions are floats
+// (relative rounding 2^-24, so |dx| <= 1.2e-7 m here), the gravity term changes by at
+// most sum m g |dy| and the elastic term sum C^2 / 2 alpha by sum |C| / alpha |dC| with
+// |dC| <= 2 |dx|. The average over the last 1000 steps must also be below the first's.
+TEST(Cloth, HangingClothAtRest) {
+  const int n = 24;
+  pba::SoftBody c = hanging_cloth(n, 10);
+  c.settings().damping = 1;  // settle in a few seconds of simulated time
+  std::vector<pba::Vec3> pinned;
+  for (int i = 0; i < n; ++i) pinned.push_back(c.position(i));
+  double t = 0;
+  const double dt = 1.0 / 60;
+  for (int i = 0; i < 600; ++i, t += dt) c.step(t, dt);
+  c.settings().damping = 0;
+  // the float-noise band of the energy at the start of the window
+  const double ulp = 1.2e-7;
+  double band = c.total_mass() * 10 * ulp;
+  for (std::size_t k = 0; k < c.constraint_count(); ++k) {
+    const pba::SoftConstraint sc = c.constraint(k);
+    if (sc.kind != pba::SoftConstraintKind::Bend) continue;  // stretch and shear are rigid (no energy)
+    const double C = glm::length(c.position(sc.b) - c.position(sc.a)) - sc.rest_length;
+    band += std::abs(C) / c.settings().bend_compliance * 2 * ulp;
+  }
+  const double e_start = c.kinetic_energy() + c.potential_energy();
+  double e_max = e_start, first = 0, last = 0;
+  for (int i = 0; i < 10000; ++i, t += dt) {
+    c.step(t, dt);
+    const double e = c.kinetic_energy() + c.potential_energy();
+    e_max = std::max(e_max, e);
+    if (i < 1000) first += e / 1000;
+    if (i >= 9000) last += e / 1000;
+  }
+  EXPECT_LE(e_max, e_start + band);
+  EXPECT_LE(last, first);
+  EXPECT_LE(c.strain_stats().mean, 0.01);
+  for (int i = 0; i < n; ++i) EXPECT_EQ(c.position(i), pinned[i]) << "pin " << i;
+  // it hangs: the free edge is about 1 m below the pinned one
+  EXPECT_NEAR(c.position(n * n - 1).y, 0.0, 0.05);
+}
+
+// Moving a pin moves it exactly there by the end of the step (in float), and the cloth
+// follows.
+TEST(Cloth, MovingAPinMovesItExactly) {
+  pba::SoftBody c = hanging_cloth(8, 10);
+  const pba::Vec3 target(0.2, 1.3, -0.1);
+  c.set_pin_target(0, target);
+  c.step(0, 1.0 / 60);
+  const pba::Vec3 in_float(static_cast<float>(target.x), static_cast<float>(target.y), static_cast<float>(target.z));
+  EXPECT_EQ(c.position(0), in_float);
+  EXPECT_TRUE(c.is_pinned(0));
+  // unpinned particles are not pinned and have their mass back
+  c.unpin(0);
+  EXPECT_FALSE(c.is_pinned(0));
+  EXPECT_NEAR(c.mass(0), 1.0 / 64, 1e-9);
+  EXPECT_EQ(c.pins().size(), 7u);
+}
+
+// Draped over a sphere: after the last substep's collision projection every particle is
+// at least radius + thickness from the centre, to float rounding (1e-6 m at 1 m).
+TEST(Cloth, DrapedOverSphereStaysOutside) {
+  pba::SoftBodyDef d;
+  d.substeps = 10;
+  d.thickness = 0.01;
+  pba::SoftBody c = pba::SoftBody::cloth_grid(
+      {.origin = {-0.6, 1.0, -0.6}, .edge_u = {1.2, 0, 0}, .edge_v = {0, 0, 1.2}, .nx = 20, .ny = 20,
+       .pins = pba::ClothPins::None},
+      d);
+  const pba::Collider ball = pba::Collider::sphere({0, 0.5, 0}, 0.3, {.friction = 0.3});
+  double min_gap = 1e9;
+  for (int i = 0; i < 240; ++i) {
+    c.step(i / 60.0, 1.0 / 60, std::span(&ball, 1));
+    for (std::size_t p = 0; p < c.size(); ++p)
+      min_gap = std::min(min_gap, glm::length(c.position(p) - pba::Vec3(0, 0.5, 0)) - 0.31);
+  }
+  EXPECT_GE(min_gap, -1e-6);
+  // it drapes: the middle rests on top of the ball, the corners hang below its top
+  EXPECT_NEAR(c.position(10 * 20 + 10).y, 0.81, 0.02);
+  EXPECT_LT(c.position(0).y, 0.6);
+}
+
+// Sliding on a plane with friction mu: position-based friction removes up to mu d of
+// tangential displacement per substep, where d = g h^2 is the depth gravity pushes a
+// resting particle into the plane each substep, so the velocity drops by mu g h per
+// substep: Coulomb's deceleration mu g. A sheet thrown sideways at v0 stops after
+// t = v0 / (mu g) having slid v0^2 / (2 mu g) (up to one substep of travel, v0 h).
+TEST(Cloth, FrictionStopsASlidingSheet) {
+  const double mu = 0.5, g = 9.81, v0 = 1.0;
+  pba::SoftBodyDef d;
+  d.substeps = 10;
+  d.thickness = 0.005;
+  d.friction = mu;
+  d.bend_compliance = 0;
+  pba::SoftBody c = pba::SoftBody::cloth_grid(
+      {.origin = {-0.25, 0.005, -0.25}, .edge_u = {0.5, 0, 0}, .edge_v = {0, 0, 0.5}, .nx = 6, .ny = 6,
+       .pins = pba::ClothPins::None},
+      d);
+  c.add_velocity({v0, 0, 0});
+  const pba::Collider ground = pba::Collider::plane({0, 1, 0}, 0);
+  const double x0 = c.center_of_mass().x;
+  double t = 0;
+  for (int i = 0; i < 60; ++i, t += 1.0 / 60) c.step(t, 1.0 / 60, std::span(&ground, 1));
+  const double slid = c.center_of_mass().x - x0, expected = v0 * v0 / (2 * mu * g);
+  EXPECT_NEAR(slid, expected, v0 / 600 + 0.01 * expected);
+  for (std::size_t p = 0; p < c.size(); ++p) EXPECT_LT(glm::length(c.velocity(p)), 1e-3);
+}
+
+// Tearing: dragging a corner of a hanging cloth far away breaks constraints, more and
+// more as it is pulled; the torn cloth has fewer triangles and stays finite.
+TEST(Cloth, TearsWhenPulled) {
+  pba::SoftBodyDef d;
+  d.substeps = 10;
+  d.tear_strain = 0.5;
+  pba::SoftBody c = pba::SoftBody::cloth_grid(
+      {.origin = {-0.5, 1.5, 0}, .edge_u = {1, 0, 0}, .edge_v = {0, -1, 0}, .nx = 16, .ny = 16}, d);
+  const std::size_t tris = c.triangles().size();
+  const std::uint32_t corner = c.nearest_particle(pba::Vec3(0.5, 0.5, 0));
+  EXPECT_EQ(corner, 16u * 16u - 1u);
+  c.grab(corner, c.position(corner));
+  EXPECT_EQ(c.grabbed(), corner);
+  std::size_t first = 0;
+  for (int i = 0; i < 120; ++i) {
+    c.move_grab(pba::Vec3(0.5, 0.5, 0) + pba::Vec3(0.03 * i, -0.02 * i, 0.02 * i));
+    c.step(i / 60.0, 1.0 / 60);
+    if (first == 0) first = c.broken_constraints();
+  }
+  EXPECT_GT(first, 0u);
+  EXPECT_GT(c.broken_constraints(), first);
+  EXPECT_LT(c.triangles().size(), tris);
+  c.release();
+  EXPECT_EQ(c.grabbed(), pba::kNoParticle);
+  EXPECT_FALSE(c.is_pinned(corner));
+  for (int i = 0; i < 120; ++i) c.step(2 + i / 60.0, 1.0 / 60);
+  for (std::size_t p = 0; p < c.size(); ++p) EXPECT_TRUE(pba::is_finite(c.position(p)));
+}
+
+// Aerodynamic drag on a horizontal triangle falling flat: the drag 1/2 rho C_d A v^2
+// equals the weight at the terminal velocity v_t = sqrt(2 m g / (rho C_d A)). Each corner
+// carries a third of the mass and gets a third of the force, so it falls flat; the force
+// is evaluated each step from the velocity, so the fixed point is exact to float (the
+// velocity is a float difference of positions a few metres from the origin over one
+// substep: 5e-7 m / (v_t h) = 1e-4 relative).
+TEST(Cloth, AeroDragTerminalVelocity) {
+  const double m = 0.01, g = 9.81, rho = 1.2, cd = 1.0, area = 0.5;
+  pba::SoftBodyDef d;
+  d.substeps = 1;
+  d.forces.gravity = {0, -g, 0};
+  d.aero = {.air_density = rho, .drag = cd};
+  pba::SoftMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}};
+  mesh.masses = {m / 3, m / 3, m / 3};
+  mesh.constraints = {{.a = 0, .b = 1}, {.a = 1, .b = 2}, {.a = 2, .b = 0}};
+  mesh.triangles = {{0, 2, 1}};
+  pba::SoftBody c = pba::SoftBody::from_mesh(mesh, d);
+  for (int i = 0; i < 180; ++i) c.step(i / 60.0, 1.0 / 60);
+  const double vt = std::sqrt(2 * m * g / (rho * cd * area));
+  for (std::size_t p = 0; p < c.size(); ++p) {
+    EXPECT_NEAR(c.velocity(p).y, -vt, 1e-4 * vt);
+    EXPECT_NEAR(c.velocity(p).x, 0.0, 1e-6);
+  }
+}
+
+// Linear drag toward the wind: a free particle's velocity relaxes to the wind plus the
+// terminal fall m g / b with time constant m / b = 0.2 s (implicit in the predict step,
+// so the fixed point is exact); after 2 s (10 time constants, e^-10 = 5e-5) the velocity
+// is there to 5e-5 of 2 m/s plus the float velocity error 5e-7 m / (v dt) = 1e-5.
+TEST(Cloth, LinearDragTerminalVelocityInWind) {
+  pba::SoftBodyDef d;
+  d.substeps = 1;
+  d.forces.linear_drag = 0.5;
+  d.forces.wind.velocity = {2, 0, 0};
+  pba::SoftBody r = pba::SoftBody::rope({.from = {0, 0, 0}, .to = {1, 0, 0}, .segments = 1, .mass = 0.2,
+                                         .pin_start = false, .bending = false},
+                                        d);
+  for (int i = 0; i < 120; ++i) r.step(i / 60.0, 1.0 / 60);
+  const double m = 0.1;  // each end
+  EXPECT_NEAR(r.velocity(0).x, 2.0, 2e-4);
+  EXPECT_NEAR(r.velocity(0).y, -m * 9.81 / 0.5, 2e-4);
+}
+
+// A flag in wind: with drag, the cloth streams downwind of its pole.
+TEST(Cloth, FlagStreamsDownwind) {
+  pba::SoftBodyDef d;
+  d.substeps = 8;
+  d.aero = {.drag = 1.0, .lift = 0.5};
+  d.forces.wind = {.velocity = {6, 0, 0.5}, .gust = 2, .gust_period = 0.5, .seed = 3};
+  pba::SoftBody f = pba::SoftBody::cloth_grid({.origin = {0, 2, 0}, .edge_u = {1.5, 0, 0}, .edge_v = {0, -1, 0},
+                                               .nx = 16, .ny = 11, .mass = 0.3, .pins = pba::ClothPins::FirstColumn},
+                                              d);
+  for (int i = 0; i < 300; ++i) f.step(i / 60.0, 1.0 / 60);
+  // without wind it would hang below the pole (x near 0): the free edge is downwind
+  EXPECT_GT(f.position(15).x, 1.0);
+  EXPECT_GT(f.center_of_mass().y, 1.2);
+}
+
+// ---------------------------------------------------------------------------------------
+// mass-spring cloth
+
+// The same cloth as a mass-spring network under the stable integrators. Stiff springs
+// need small steps: k = 500 N/m on m = 1/36 kg gives omega = sqrt(k/m) = 134 rad/s per
+// spring and at most about 4 omega for the grid's fastest mode, so h = 1/600 s keeps it
+// below 0.9, inside the stable range of the symplectic methods (2) and RK4 (2.8);
+// implicit Euler is stable for any step and takes one per frame. At rest
+// the top row of nx vertical springs carries at most the weight below it, M g (ny-1)/ny,
+// so their strain is at most M g / (nx k l0) (less: the shear springs share the load).
+TEST(MassSpring, ClothUnderStableIntegratorsHangs) {
+  const int nx = 6, ny = 6;
+  const double k = 500, l0 = 1.0 / (ny - 1), M = 1, g = 9.81;
+  for (pba::Method m : {pba::Method::SemiImplicitEuler, pba::Method::VelocityVerlet, pba::Method::PositionVerlet,
+                        pba::Method::RK4, pba::Method::ImplicitEuler}) {
+    pba::SoftBodyDef d;
+    d.solver = pba::SoftSolver::MassSpring;
+    d.method = m;
+    d.substeps = m == pba::Method::ImplicitEuler ? 1 : 10;
+    d.stretch_stiffness = k;
+    d.shear_stiffness = k;
+    d.bend_stiffness = 5;
+    d.spring_damping = 0.05;
+    d.damping = 1;
+    pba::SoftBody c = pba::SoftBody::cloth_grid(
+        {.origin = {-0.5, 1, 0}, .edge_u = {1, 0, 0}, .edge_v = {0, -1, 0}, .nx = nx, .ny = ny, .mass = M}, d);
+    for (int i = 0; i < 600; ++i) c.step(i / 60.0, 1.0 / 60);
+    EXPECT_LE(c.strain_stats().max, M * g / (nx * k * l0)) << pba::name(m);
+    EXPECT_GT(c.strain_stats().max, 0.2 * M * g / (nx * k * l0)) << pba::name(m);  // the springs do stretch
+    EXPECT_EQ(c.position(0), pba::Vec3(-0.5, 1, 0));
+    EXPECT_LT(c.kinetic_energy(), 1e-6) << pba::name(m);
+  }
+}
+
+// Implicit Euler on a cloth larger than the dense solver allows: a clear Error.
+TEST(MassSpring, ImplicitEulerSizeLimitIsAClearError) {
+  pba::SoftBodyDef d;
+  d.solver = pba::SoftSolver::MassSpring;
+  d.method = pba::Method::ImplicitEuler;
+  pba::SoftBody c = pba::SoftBody::cloth_grid({.nx = 32, .ny = 32}, d);
+  const std::string msg = error_of([&] { c.step(0, 1.0 / 60); });
+  EXPECT_NE(msg.find("SoftBodyDef.method"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("1024"), std::string::npos) << msg;
+}
+
+// ---------------------------------------------------------------------------------------
+// jelly
+
+// A jelly cube dropped on the ground: it lands, bounces off its compressed elastic
+// constraints and settles. Its volume stays within 3% of rest: the volume constraints
+// are rigid (alpha = 0), so the only volume error is what one sweep per substep leaves,
+// which is of the order of the strain of the compliant edges under the landing impulse.
+TEST(Jelly, KeepsVolumeAfterLanding) {
+  pba::SoftBodyDef d;
+  d.substeps = 20;
+  d.stretch_compliance = 1e-4;
+  d.volume_compliance = 0;
+  d.thickness = 0.005;
+  d.friction = 0.5;
+  pba::SoftBody j = pba::SoftBody::jelly_box({.center = {0, 1, 0}, .size = {0.5, 0.5, 0.5}, .nx = 3, .ny = 3, .nz = 3}, d);
+  EXPECT_NEAR(j.rest_volume(), 0.125, 1e-9);
+  EXPECT_NEAR(j.volume(), 0.125, 1e-6);
+  const pba::Collider ground = pba::Collider::plane({0, 1, 0}, 0);
+  bool landed = false, rebounded = false;
+  double worst = 0;
+  for (int i = 0; i < 240; ++i) {
+    j.step(i / 60.0, 1.0 / 60, std::span(&ground, 1));
+    double vy = 0;
+    for (std::size_t p = 0; p < j.size(); ++p) vy += j.velocity(p).y / j.size();
+    double ymin = 1e9;
+    for (std::size_t p = 0; p < j.size(); ++p) ymin = std::min(ymin, j.position(p).y);
+    if (ymin < 0.01) landed = true;
+    if (landed && vy > 0.05) rebounded = true;
+    if (landed) worst = std::max(worst, std::abs(j.volume() / j.rest_volume() - 1));
+  }
+  EXPECT_TRUE(landed);
+  EXPECT_TRUE(rebounded);  // the compressed edges push it back up: it bounces
+  EXPECT_LE(worst, 0.03);
+  // at rest on the ground: centre at half its height
+  EXPECT_NEAR(j.center_of_mass().y, 0.25 + 0.005, 0.02);
+}
+
+// The 6-tet split of a box has tets of total volume equal to the box, all positive.
+TEST(Jelly, TetrahedraTileTheBox) {
+  pba::SoftBody j = pba::SoftBody::jelly_box({.size = {0.3, 0.4, 0.5}, .nx = 2, .ny = 3, .nz = 4});
+  EXPECT_EQ(j.tets().size(), 6u * 2 * 3 * 4);
+  EXPECT_EQ(j.size(), 3u * 4 * 5);
+  EXPECT_NEAR(j.rest_volume(), 0.3 * 0.4 * 0.5, 1e-9);
+  EXPECT_NEAR(j.volume(), 0.3 * 0.4 * 0.5, 1e-6);
+  EXPECT_EQ(j.triangles().size(), 2u * 2 * (2 * 3 + 3 * 4 + 2 * 4));
+}
+
+// ---------------------------------------------------------------------------------------
+// determinism, SIMD, long runs
+
+namespace {
+struct Scene {
+  const char* name;
+  pba::SoftBody body;
+  std::vector<pba::Collider> colliders;
+};
+
+std::vector<Scene> every_builder(int substeps) {
+  std::vector<Scene> v;
+  pba::SoftBodyDef d;
+  d.substeps = substeps;
+  v.push_back({"spring", pba::SoftBody::spring({.b = {0.3, 0, 0}, .stiffness = 50, .damping = 0.1}, d), {}});
+  v.push_back({"rope", pba::SoftBody::rope({.segments = 12}, d), {pba::Collider::sphere({0.5, 1.5, 0}, 0.2)}});
+  pba::SoftBodyDef flag = d;
+  flag.aero = {.drag = 1, .lift = 0.5};
+  flag.forces.wind = {.velocity = {5, 0, 0}, .gust = 2, .gust_period = 0.5};
+  v.push_back({"flag", pba::SoftBody::cloth_grid({.nx = 8, .ny = 6, .pins = pba::ClothPins::FirstColumn}, flag), {}});
+  pba::SoftBodyDef tear = d;
+  tear.tear_strain = 0.3;
+  v.push_back({"drape",
+               pba::SoftBody::cloth_grid({.origin = {-0.5, 1.2, -0.5}, .nx = 8, .ny = 8, .pins = pba::ClothPins::None},
+                                         tear),
+               {pba::Collider::sphere({0, 0.6, 0}, 0.3), pba::Collider::plane({0, 1, 0}, 0, {.friction = 0.4}),
+                pba::Collider::box({0.6, 0.2, 0}, {0.2, 0.2, 0.2})}});
+  pba::SoftBodyDef jelly = d;
+  jelly.stretch_compliance = 1e-4;
+  v.push_back({"jelly", pba::SoftBody::jelly_box({.nx = 2, .ny = 2, .nz = 2}, jelly),
+               {pba::Collider::plane({0, 1, 0}, 0, {.friction = 0.5})}});
+  pba::SoftBodyDef ms = d;
+  ms.solver = pba::SoftSolver::MassSpring;
+  ms.spring_damping = 0.02;
+  ms.stretch_stiffness = ms.shear_stiffness = 200;
+  ms.substeps = 2 * substeps;  // k = 200 N/m on 1/36 kg: 4 omega = 340 rad/s, stable for h < 1/170 s
+  v.push_back({"mass-spring cloth", pba::SoftBody::cloth_grid({.nx = 6, .ny = 6}, ms),
+               {pba::Collider::plane({0, 1, 0}, 0)}});
+  return v;
+}
+}  // namespace
+
+// Every builder's scene for 10^5 steps at 120 Hz (one substep; two for the mass-spring
+// cloth): never non-finite.
+TEST(SoftLongRun, NoNaNIn100kStepsOfEveryBuilder) {
+  for (Scene& s : every_builder(1)) {
+    const double dt = 1.0 / 120;
+    for (int i = 0; i < 100000; ++i) s.body.step(i * dt, dt, s.colliders);  // throws on NaN
+    for (std::size_t p = 0; p < s.body.size(); ++p) ASSERT_TRUE(pba::is_finite(s.body.position(p))) << s.name;
+  }
+}
+
+// Same inputs, same bits: two runs of every scene give identical hashes.
+TEST(SoftDeterminism, SameHashTwice) {
+  std::vector<std::uint64_t> h[2];
+  for (int run = 0; run < 2; ++run)
+    for (Scene& s : every_builder(4)) {
+      for (int i = 0; i < 200; ++i) s.body.step(i / 60.0, 1.0 / 60, s.colliders);
+      h[run].push_back(s.body.hash());
+    }
+  EXPECT_EQ(h[0], h[1]);
+}
+
+// The explicit AVX2 kernels and the scalar ones give the same bits (so results do not
+// depend on the CPU), with one and several iterations and with constraint damping.
+TEST(SoftDeterminism, SimdAndScalarKernelsAgreeBitForBit) {
+  for (int iterations : {1, 3})
+    for (double damping : {0.0, 0.002}) {
+      std::uint64_t h[2];
+      for (int simd = 0; simd < 2; ++simd) {
+        pba::SoftBodyDef d;
+        d.substeps = 5;
+        d.iterations = iterations;
+        d.spring_damping = damping;
+        d.stretch_compliance = simd == 0 && iterations == 3 ? 1e-6 : 1e-6;
+        d.tear_strain = 0.4;
+        pba::SoftBody c = pba::SoftBody::cloth_grid({.nx = 37, .ny = 29}, d);
+        pba::detail::SoftAccess::impl(c).simd = simd != 0;
+        c.grab(36, c.position(36));
+        for (int f = 0; f < 120; ++f) {
+          c.move_grab(pba::Vec3(0.5 + 0.01 * f, 1.5, 0.01 * f));
+          c.step(f / 60.0, 1.0 / 60);
+        }
+        h[simd] = c.hash();
+      }
+      EXPECT_EQ(h[0], h[1]) << "iterations " << iterations << " damping " << damping;
+    }
+}
+
+// The cloth builder's constraints are coloured so that each colour splits into long
+// vectorisable runs and no colour touches a particle twice.
+TEST(SoftStructure, ClothColoursAndRuns) {
+  pba::SoftBody c = pba::SoftBody::cloth_grid({.nx = 16, .ny = 12});
+  EXPECT_EQ(c.color_count(), 12u);
+  // structural 2 nx ny - nx - ny, shear 2 (nx-1)(ny-1), bend nx (ny-2) + ny (nx-2)
+  EXPECT_EQ(c.constraint_count(), std::size_t(2 * 16 * 12 - 16 - 12 + 2 * 15 * 11 + 16 * 10 + 12 * 14));
+  const auto& impl = pba::detail::SoftAccess::impl(c);
+  std::size_t vectorised = 0;
+  for (const auto& r : impl.runs)
+    if (r.type != pba::detail::RunType::Indexed) vectorised += r.count;
+  EXPECT_EQ(vectorised, c.constraint_count());
+  EXPECT_EQ(c.triangles().size(), 2u * 15 * 11);
+}
+
+// ---------------------------------------------------------------------------------------
+// bad input: the Error names the field and the value
+
+TEST(SoftBadInput, SpringBetweenCoincidentParticles) {
+  const std::string msg = error_of([] { pba::SoftBody::spring({.a = {1, 2, 3}, .b = {1, 2, 3}}); });
+  EXPECT_NE(msg.find("SpringDef.b"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("zero rest length"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("(1, 2, 3)"), std::string::npos) << msg;
+  const std::string zero = error_of([] { pba::SoftBody::spring({.rest_length = 0}); });
+  EXPECT_NE(zero.find("SpringDef.rest_length"), std::string::npos) << zero;
+  // a mesh constraint between coincident particles
+  pba::SoftMesh m;
+  m.positions = {{0, 0, 0}, {0, 0, 0}};
+  m.masses = {1, 1};
+  m.constraints = {{.a = 0, .b = 1}};
+  const std::string mesh = error_of([&] { pba::SoftBody::from_mesh(m); });
+  EXPECT_NE(mesh.find("SoftMesh.constraints[0].rest_length"), std::string::npos) << mesh;
+  EXPECT_NE(mesh.find("coincident particles 0 and 1"), std::string::npos) << mesh;
+}
+
+TEST(SoftBadInput, NegativeStiffnessAndCompliance) {
+  const std::string k = error_of([] { pba::SoftBody::spring({.stiffness = -5}); });
+  EXPECT_NE(k.find("SpringDef.stiffness"), std::string::npos) << k;
+  EXPECT_NE(k.find("-5"), std::string::npos) << k;
+  struct Field {
+    const char* name;
+    double pba::SoftBodyDef::*member;
+  };
+  for (const Field f : {Field{"stretch_compliance", &pba::SoftBodyDef::stretch_compliance},
+                        Field{"shear_compliance", &pba::SoftBodyDef::shear_compliance},
+                        Field{"bend_compliance", &pba::SoftBodyDef::bend_compliance},
+                        Field{"volume_compliance", &pba::SoftBodyDef::volume_compliance},
+                        Field{"stretch_stiffness", &pba::SoftBodyDef::stretch_stiffness},
+                        Field{"shear_stiffness", &pba::SoftBodyDef::shear_stiffness},
+                        Field{"bend_stiffness", &pba::SoftBodyDef::bend_stiffness},
+                        Field{"spring_damping", &pba::SoftBodyDef::spring_damping},
+                        Field{"tear_strain", &pba::SoftBodyDef::tear_strain},
+                        Field{"thickness", &pba::SoftBodyDef::thickness}}) {
+    pba::SoftBodyDef d;
+    d.*f.member = -0.25;
+    const std::string msg = error_of([&] { pba::SoftBody::rope({}, d); });
+    EXPECT_NE(msg.find(std::string("SoftBodyDef.") + f.name), std::string::npos) << msg;
+    EXPECT_NE(msg.find("-0.25"), std::string::npos) << msg;
+    // also when changed between steps: the next step refuses it
+    pba::SoftBody r = pba::SoftBody::rope({});
+    r.settings().*f.member = -0.25;
+    EXPECT_NE(error_of([&] { r.step(0, 0.01); }).find(f.name), std::string::npos);
+  }
+}
+
+TEST(SoftBadInput, ClothGridSmallerThan2x2) {
+  const std::string msg = error_of([] { pba::SoftBody::cloth_grid({.nx = 1, .ny = 5}); });
+  EXPECT_NE(msg.find("ClothDef.nx"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("2x2"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("got nx = 1"), std::string::npos) << msg;
+  EXPECT_NE(error_of([] { pba::SoftBody::cloth_grid({.nx = 4, .ny = 0}); }).find("ClothDef.ny"), std::string::npos);
+}
+
+TEST(SoftBadInput, ConstraintsNamingMissingParticles) {
+  pba::SoftMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.masses = {1, 1, 1};
+  m.constraints = {{.a = 0, .b = 1}, {.a = 1, .b = 7}};
+  std::string msg = error_of([&] { pba::SoftBody::from_mesh(m); });
+  EXPECT_NE(msg.find("SoftMesh.constraints[1].b"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("particle 7 does not exist"), std::string::npos) << msg;
+  m.constraints = {{.a = 2, .b = 2}};
+  EXPECT_NE(error_of([&] { pba::SoftBody::from_mesh(m); }).find("joins particle 2 to itself"), std::string::npos);
+  m.constraints = {};
+  m.triangles = {{0, 1, 3}};
+  EXPECT_NE(error_of([&] { pba::SoftBody::from_mesh(m); }).find("SoftMesh.triangles[0].c"), std::string::npos);
+  m.triangles = {};
+  m.tets = {{0, 1, 2, 9}};
+  EXPECT_NE(error_of([&] { pba::SoftBody::from_mesh(m); }).find("SoftMesh.tets[0].d"), std::string::npos);
+  m.tets = {};
+  m.pinned = {5};
+  EXPECT_NE(error_of([&] { pba::SoftBody::from_mesh(m); }).find("SoftMesh.pinned[0]"), std::string::npos);
+  // a colouring that puts two constraints on one particle in the same colour
+  m.pinned = {};
+  m.constraints = {{.a = 0, .b = 1}, {.a = 1, .b = 2}};
+  m.colors = {0, 0};
+  msg = error_of([&] { pba::SoftBody::from_mesh(m); });
+  EXPECT_NE(msg.find("sharing particle 1"), std::string::npos) << msg;
+  // and a body's own accessors
+  pba::SoftBody r = pba::SoftBody::rope({.segments = 3});
+  EXPECT_NE(error_of([&] { r.pin(4); }).find("particle 4 does not exist"), std::string::npos);
+  EXPECT_NE(error_of([&] { r.set_pin_target(2, {0, 0, 0}); }).find("not pinned"), std::string::npos);
+}
+
+TEST(SoftBadInput, NonFiniteInputsAndCounts) {
+  EXPECT_NE(error_of([] { pba::SoftBody::rope({.from = {0, NAN, 0}}); }).find("RopeDef.from"), std::string::npos);
+  EXPECT_NE(error_of([] { pba::SoftBody::jelly_box({.mass = INFINITY}); }).find("JellyDef.mass"), std::string::npos);
+  EXPECT_NE(error_of([] { pba::SoftBody::cloth_grid({.edge_u = {0, 0, 0}}); }).find("ClothDef.edge_u"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { pba::SoftBody::cloth_grid({.edge_u = {1, 0, 0}, .edge_v = {2, 0, 0}}); })
+                .find("parallel"),
+            std::string::npos);
+  pba::SoftBodyDef d;
+  d.substeps = 0;
+  std::string msg = error_of([&] { pba::SoftBody::rope({}, d); });
+  EXPECT_NE(msg.find("SoftBodyDef.substeps"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("0"), std::string::npos) << msg;
+  d = {};
+  d.iterations = -2;
+  msg = error_of([&] { pba::SoftBody::rope({}, d); });
+  EXPECT_NE(msg.find("SoftBodyDef.iterations"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("-2"), std::string::npos) << msg;
+  d = {};
+  d.forces.gravity = {0, NAN, 0};
+  EXPECT_NE(error_of([&] { pba::SoftBody::rope({}, d); }).find("SoftBodyDef.forces.gravity"), std::string::npos);
+  pba::SoftBody r = pba::SoftBody::rope({});
+  EXPECT_NE(error_of([&] { r.step(0, -1); }).find("dt"), std::string::npos);
+  EXPECT_NE(error_of([&] { r.set_velocity(3, {INFINITY, 0, 0}); }).find("SoftBody::set_velocity"), std::string::npos);
+}
+
+// A state that overflows to infinity stops the body with an Error naming the particle
+// and the time; the body then refuses to step and repeats the message.
+TEST(SoftBadInput, NonFiniteStateStopsTheBody) {
+  pba::SoftBodyDef d;
+  d.substeps = 1;
+  pba::SoftBody r = pba::SoftBody::rope({.segments = 4}, d);
+  r.set_position(3, {3e38, 0, 0});
+  const std::string msg = error_of([&] { r.step(0.5, 0.25); });
+  EXPECT_NE(msg.find("particle"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("became non-finite at t = 0.75 s"), std::string::npos) << msg;
+  EXPECT_TRUE(r.failed());
+  EXPECT_EQ(error_of([&] { r.step(0.75, 0.25); }), msg);
+}
