@@ -244,10 +244,77 @@ struct ParticleProfile {
   double total = 0;      ///< the whole step
 };
 
+namespace detail {
+
+/// Particles per block of the fused kernel and of its broad phase (a few KB of columns,
+/// so one block's scratch stays in L1).
+inline constexpr std::size_t kParticleBlock = 256;
+
+/// What the broad phase knows about one block of kParticleBlock particles at the start of
+/// a step: a box around their positions, a bound on their speeds, their largest radius and
+/// inverse mass. A step tests the box, grown by how far any of them can move in the step,
+/// against every collider's swept bounds; a block far from all of them skips the collision
+/// code (and the copy of the start-of-step state that the swept tests need), and the grown
+/// box becomes its bounds for the next step. A block that is near is measured again and,
+/// if still near, takes the exact path. Any change to a particle outside the fused kernel
+/// (spawn, removal, teleport, another integrator) clears `valid`.
+struct BlockBounds {
+  double lo[3] = {0, 0, 0};  ///< no position in the block has a smaller x, y, z (m)
+  double hi[3] = {0, 0, 0};  ///< nor a larger one (m)
+  double maxabs = 0;         ///< largest |coordinate| of that box (m), for rounding margins
+  double speed = 0;          ///< upper bound on every |v| in the block (m/s), >= 0
+  double radius = 0;         ///< largest radius in the block (m)
+  double inv_mass = 0;       ///< largest inverse mass in the block (1/kg)
+  bool valid = false;        ///< false: nothing known, the block takes the exact path
+  bool measured = false;     ///< the box and speed were measured (not grown by a sweep)
+};
+
+/// The hot float columns of a ParticleSystem (x, y, z, vx, vy, vz, inverse mass,
+/// radius) in one 64-byte aligned allocation. Consecutive columns are staggered (by 320 B
+/// modulo 4 KB, and by 32 KB more when they are large; see column_stride in particles.cpp):
+/// seven streams that sit at the same address modulo the page and the memory interleave
+/// compete for the same cache sets and DRAM banks, and on the development machine that
+/// halved the bandwidth of the step from main memory. Move-only; grows geometrically (the
+/// only allocation).
+class HotColumns {
+ public:
+  static constexpr int kCount = 8;  ///< number of columns
+  HotColumns() = default;
+  HotColumns(const HotColumns&) = delete;
+  HotColumns& operator=(const HotColumns&) = delete;
+  HotColumns(HotColumns&& o) noexcept;
+  HotColumns& operator=(HotColumns&& o) noexcept;
+  ~HotColumns();
+  /// Column c in [0, kCount): capacity() floats, the first size() of them live.
+  float* operator[](int c) { return base_ + static_cast<std::size_t>(c) * stride_; }
+  /// Column c, read-only.
+  const float* operator[](int c) const { return base_ + static_cast<std::size_t>(c) * stride_; }
+  /// Live rows.
+  std::size_t size() const { return size_; }
+  /// Rows allocated.
+  std::size_t capacity() const { return capacity_; }
+  /// Makes room for at least `rows` rows, keeping the live ones (allocates when it grows).
+  void reserve(std::size_t rows);
+  /// Appends one uninitialised row (doubling the capacity when full) and returns its index.
+  std::size_t push();
+  /// Drops the last row.
+  void pop() { --size_; }
+  /// Drops every row, keeping the capacity.
+  void clear() { size_ = 0; }
+
+ private:
+  float* base_ = nullptr;
+  std::size_t size_ = 0, capacity_ = 0, stride_ = 0;  // stride in floats
+};
+
+}  // namespace detail
+
 /// Particles in structure-of-arrays layout, stepped together.
 ///
 /// Semi-implicit Euler (the default) runs a fused, vectorised kernel: forces, forcers,
 /// the integrator and the collisions in one pass over memory in blocks that stay in L1.
+/// A per-block broad phase (detail::BlockBounds) lets blocks that no collider can reach
+/// in the step skip the collision code; it never changes a result bit.
 /// Every other method gathers positions and velocities into glm::vec3 arrays, calls
 /// Integrator<glm::vec3> with the same force code, and collides afterwards; both paths
 /// give bit-identical results for semi-implicit Euler. Implicit Euler is solved particle
@@ -295,21 +362,21 @@ class ParticleSystem {
   void clear();
 
   /// Live particles.
-  std::size_t size() const { return x_.size(); }
+  std::size_t size() const { return hot_.size(); }
   /// Reserved capacity in particles.
-  std::size_t capacity() const { return x_.capacity(); }
+  std::size_t capacity() const { return hot_.capacity(); }
   /// Position of particle i (m).
-  Vec3 position(std::size_t i) const { return {x_[i], y_[i], z_[i]}; }
+  Vec3 position(std::size_t i) const { return {hot_[kX][i], hot_[kY][i], hot_[kZ][i]}; }
   /// Velocity of particle i (m/s).
-  Vec3 velocity(std::size_t i) const { return {vx_[i], vy_[i], vz_[i]}; }
+  Vec3 velocity(std::size_t i) const { return {hot_[kVX][i], hot_[kVY][i], hot_[kVZ][i]}; }
   /// Position of a tracked particle (throws Error for a stale handle).
   Vec3 position(ParticleId id) const { return position(index_of(id)); }
   /// Velocity of a tracked particle (throws Error for a stale handle).
   Vec3 velocity(ParticleId id) const { return velocity(index_of(id)); }
   /// Mass of particle i (kg).
-  double mass(std::size_t i) const { return 1.0 / static_cast<double>(inv_mass_[i]); }
+  double mass(std::size_t i) const { return 1.0 / static_cast<double>(hot_[kInvMass][i]); }
   /// Radius of particle i (m).
-  double radius(std::size_t i) const { return radius_[i]; }
+  double radius(std::size_t i) const { return hot_[kRadius][i]; }
   /// Age of particle i (s) at the current time().
   double age(std::size_t i) const { return time_ - birth_[i]; }
   /// Lifetime of particle i (s; infinity for immortal particles).
@@ -324,12 +391,12 @@ class ParticleSystem {
   void set_velocity(std::size_t i, const Vec3& v);
 
   /// The SoA columns, read-only (for rendering and CSV output).
-  std::span<const float> xs() const { return x_; }
-  std::span<const float> ys() const { return y_; }   ///< y positions (m)
-  std::span<const float> zs() const { return z_; }   ///< z positions (m)
-  std::span<const float> vxs() const { return vx_; }  ///< x velocities (m/s)
-  std::span<const float> vys() const { return vy_; }  ///< y velocities (m/s)
-  std::span<const float> vzs() const { return vz_; }  ///< z velocities (m/s)
+  std::span<const float> xs() const { return column(kX); }
+  std::span<const float> ys() const { return column(kY); }    ///< y positions (m)
+  std::span<const float> zs() const { return column(kZ); }    ///< z positions (m)
+  std::span<const float> vxs() const { return column(kVX); }  ///< x velocities (m/s)
+  std::span<const float> vys() const { return column(kVY); }  ///< y velocities (m/s)
+  std::span<const float> vzs() const { return column(kVZ); }  ///< z velocities (m/s)
   /// Copies positions into `out` (size() elements) as vec3, e.g. for a vertex buffer.
   void copy_positions(std::span<Vec3f> out) const;
 
@@ -364,6 +431,16 @@ class ParticleSystem {
   long long newton_fallbacks() const { return newton_fallbacks_; }
   /// Collision responses in the last step.
   std::size_t contacts() const { return contacts_; }
+  /// Switches the fused kernel's per-block broad phase on (the default) or off. Off, every
+  /// collider is tested against every particle; the results are bit-identical either way
+  /// (the tests compare them; the benchmark measures the difference).
+  void set_broad_phase(bool on) { broad_phase_ = on; }
+  /// True when the broad phase is on.
+  bool broad_phase() const { return broad_phase_; }
+  /// Blocks of detail::kParticleBlock particles that ran the exact collision path in the
+  /// last fused step (the others were skipped by the broad phase, or there were no
+  /// colliders); in [0, ceil(size() / kParticleBlock)].
+  std::size_t exact_blocks() const { return exact_blocks_; }
   /// Timings of the last step.
   const ParticleProfile& profile() const { return profile_; }
   /// 64-bit hash of positions and velocities (bit patterns), for determinism checks.
@@ -398,12 +475,25 @@ class ParticleSystem {
   void report_non_finite(double t) const;
   std::size_t emitter_index(EmitterId id, std::string_view where) const;
 
+  // the hot columns, in this order
+  enum : int { kX, kY, kZ, kVX, kVY, kVZ, kInvMass, kRadius };
+  std::span<const float> column(int c) const { return {hot_[c], hot_.size()}; }
+  // particle i changed outside the fused kernel: its block's bounds are stale
+  void touch(std::size_t i) {
+    const std::size_t b = i / detail::kParticleBlock;
+    if (b < bounds_.size()) bounds_[b].valid = false;
+  }
+  void reserve_rows(std::size_t rows);
+  void count_uniform(float inv_mass, float radius, int sign);
+
   Integrator<Vec3f> integ_;
   Integrator<Vec3f> integ_one_;  // implicit Euler, one particle at a time
   Forces forces_;
   CollisionSettings collision_;
-  // the particle columns
-  std::vector<float> x_, y_, z_, vx_, vy_, vz_, inv_mass_, radius_;
+  // the particle columns: hot floats (x, y, z, vx, vy, vz, inverse mass, radius) ...
+  detail::HotColumns hot_;
+  std::vector<detail::BlockBounds> bounds_;  // one per block of hot_'s capacity
+  // ... and cold ones
   std::vector<double> birth_, death_;  // birth and death times (s); death = inf for immortal
   std::vector<std::uint32_t> color0_, color1_;  // packed RGBA8 birth and death colours
   std::vector<std::uint32_t> owner_;   // tracked: handle index; kNone for anonymous
@@ -418,6 +508,13 @@ class ParticleSystem {
   // scratch for the generic integrators (AoS), sized to the live count
   std::vector<Vec3f> gx_, gv_;
   std::size_t mortal_ = 0;  // particles with a finite lifetime
+  double next_death_ = kForever;  // no particle dies before this time (s; a lower bound)
+  // uniform inverse mass and radius: the values of the first particle of a non-empty
+  // system, and how many live particles differ from them (0: the column need not be read)
+  float inv_mass_ref_ = 0, radius_ref_ = 0;
+  std::size_t inv_mass_odd_ = 0, radius_odd_ = 0;
+  bool broad_phase_ = true;
+  std::size_t exact_blocks_ = 0;
   double time_ = 0;         // simulated time of the state
   std::span<const Forcer> forcers_now_;  // the forcers of the step in progress
   bool history_dirty_ = true;

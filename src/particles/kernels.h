@@ -20,8 +20,9 @@
 
 namespace pba::detail {
 
-/// Particles per block: 256 x (3 accelerations + 3 old positions) x 4 bytes = 6 KB.
-inline constexpr int kBlock = 256;
+/// Particles per block: 256 x (3 accelerations + 6 start-of-step values) x 4 bytes = 9 KB
+/// of scratch, in L1.
+inline constexpr int kBlock = static_cast<int>(kParticleBlock);
 
 /// Gravity, drag and the wind at one time, in float.
 struct ForceParams {
@@ -57,20 +58,26 @@ struct ColliderParams {
   bool is_static;                    // same pose at start and end, no velocity
 };
 
-// a = g - (1/m) (b + c |u|) u with u = v - wind: gravity plus linear and quadratic drag
+// Gravity and drag on one particle: a = g - (1/m) (b + c |u|) u with u = v - wind
+// (linear and quadratic drag). Returns |u| (m/s). Every path computes the force with this
+// one function, in this order, so all of them give the same bits.
+PBA_INLINE float gravity_drag(float vx, float vy, float vz, float inv_mass, const ForceParams& f, float& ax,
+                              float& ay, float& az) {
+  const float ux = vx - f.wx, uy = vy - f.wy, uz = vz - f.wz;
+  const float speed = std::sqrt(ux * ux + uy * uy + uz * uz);
+  const float kd = inv_mass * (f.b + f.c * speed);
+  ax = f.gx - kd * ux;
+  ay = f.gy - kd * uy;
+  az = f.gz - kd * uz;
+  return speed;
+}
+
+// gravity and drag for a block, into a
 PBA_INLINE void base_accel(int n, const float* PBA_RESTRICT vx, const float* PBA_RESTRICT vy,
                            const float* PBA_RESTRICT vz, const float* PBA_RESTRICT inv_mass,
                            const ForceParams& f, float* PBA_RESTRICT ax, float* PBA_RESTRICT ay,
                            float* PBA_RESTRICT az) {
-  const float gx = f.gx, gy = f.gy, gz = f.gz, b = f.b, c = f.c, wx = f.wx, wy = f.wy, wz = f.wz;
-  for (int k = 0; k < n; ++k) {
-    const float ux = vx[k] - wx, uy = vy[k] - wy, uz = vz[k] - wz;
-    const float speed = std::sqrt(ux * ux + uy * uy + uz * uz);
-    const float kd = inv_mass[k] * (b + c * speed);
-    ax[k] = gx - kd * ux;
-    ay[k] = gy - kd * uy;
-    az[k] = gz - kd * uz;
-  }
+  for (int k = 0; k < n; ++k) gravity_drag(vx[k], vy[k], vz[k], inv_mass[k], f, ax[k], ay[k], az[k]);
 }
 
 // the force of one forcer on the particles of a block, added to a as F / m
@@ -498,8 +505,12 @@ struct FusedArgs {
   float* vx;
   float* vy;
   float* vz;
-  const float* inv_mass;
-  const float* radius;
+  const float* inv_mass;  // nullptr: every particle has inv_mass_value
+  float inv_mass_value;
+  const float* radius;    // nullptr: every particle has radius_value
+  float radius_value;
+  BlockBounds* bounds;    // one per block, read and updated (the broad phase)
+  bool broad_phase;       // false: every block takes the exact collision path
   std::size_t n;
   float h;  // dt
   ForceParams forces;
@@ -512,8 +523,9 @@ struct FusedArgs {
 
 /// Result of the fused kernel.
 struct FusedResult {
-  std::size_t contacts = 0;
-  bool non_finite = false;
+  std::size_t contacts = 0;      // collision responses
+  std::size_t exact_blocks = 0;  // blocks that ran the exact collision path
+  bool non_finite = false;       // some particle became NaN or infinite
 };
 
 /// The fused semi-implicit Euler step over all particles (kernels.cpp).

@@ -2,6 +2,8 @@
 // recycling. The fused kernel is in kernels.cpp; shapes and forcers in shapes.cpp.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <new>
 #include <string>
 
 #include "kernels.h"
@@ -12,6 +14,12 @@ namespace pba {
 namespace {
 
 constexpr std::uint32_t kNone = 0xffffffffu;
+
+void require_index(std::size_t i, std::size_t n, std::string_view where) {
+  if (i >= n)
+    throw Error(std::string(where) + ": particle index " + std::to_string(i) + " out of range (" + std::to_string(n) +
+                " particles)");
+}
 
 
 
@@ -134,6 +142,75 @@ detail::ColliderParams collider_params(const Collider& c) {
 
 
 // ---------------------------------------------------------------------------------------
+// the hot columns
+
+namespace detail {
+
+namespace {
+
+constexpr std::align_val_t kColumnAlign{64};
+// Bytes added between columns beyond their length rounded up to 4 KB. 320 B puts the
+// columns' rows in different L1 sets (no 4 KB aliasing between a store to x[i] and a
+// load of vx[i]). Large columns get 32 KB more: with columns at the same address modulo
+// 32 KB the fused step from main memory ran at about half the bandwidth (measured on the
+// development VM with the read-modify-write pattern of the kernel: 19 GB/s against 40;
+// docs/benchmarks.md), the signature of every stream hitting the same DRAM banks.
+constexpr std::size_t kColumnStagger = 320;
+constexpr std::size_t kLargeColumnStagger = 32768 + 320;
+constexpr std::size_t kLargeColumn = 256 * 1024;  // bytes
+
+std::size_t column_stride(std::size_t rows) {
+  // bytes per column rounded up to a page, plus the stagger, in floats
+  const std::size_t bytes = (rows * sizeof(float) + 4095) / 4096 * 4096;
+  return (bytes + (bytes >= kLargeColumn ? kLargeColumnStagger : kColumnStagger)) / sizeof(float);
+}
+
+float* allocate_columns(std::size_t stride) {
+  return static_cast<float*>(::operator new(stride * sizeof(float) * HotColumns::kCount, kColumnAlign));
+}
+
+}  // namespace
+
+HotColumns::HotColumns(HotColumns&& o) noexcept
+    : base_(o.base_), size_(o.size_), capacity_(o.capacity_), stride_(o.stride_) {
+  o.base_ = nullptr;
+  o.size_ = o.capacity_ = o.stride_ = 0;
+}
+
+HotColumns& HotColumns::operator=(HotColumns&& o) noexcept {
+  std::swap(base_, o.base_);
+  std::swap(size_, o.size_);
+  std::swap(capacity_, o.capacity_);
+  std::swap(stride_, o.stride_);
+  return *this;
+}
+
+HotColumns::~HotColumns() {
+  if (base_ != nullptr) ::operator delete(base_, kColumnAlign);
+}
+
+void HotColumns::reserve(std::size_t rows) {
+  if (rows <= capacity_ && base_ != nullptr) return;
+  // a new block, the live rows copied column by column
+  const std::size_t stride = column_stride(rows);
+  float* base = allocate_columns(stride);
+  if (base_ != nullptr) {
+    for (int c = 0; c < kCount; ++c) std::memcpy(base + c * stride, (*this)[c], size_ * sizeof(float));
+    ::operator delete(base_, kColumnAlign);
+  }
+  base_ = base;
+  stride_ = stride;
+  capacity_ = rows;
+}
+
+std::size_t HotColumns::push() {
+  if (size_ == capacity_ || base_ == nullptr) reserve(std::max<std::size_t>(16, 2 * capacity_));
+  return size_++;
+}
+
+}  // namespace detail
+
+// ---------------------------------------------------------------------------------------
 // definitions
 
 void ParticleDef::validate(std::string_view where) const {
@@ -199,11 +276,32 @@ ParticleSystem::ParticleSystem(const ParticleSystemDef& def)
   forces_.validate("ParticleSystemDef.forces");
   require_finite(collision_.restitution_threshold, "ParticleSystemDef.collision.restitution_threshold");
   require_count(static_cast<long long>(def.capacity), 0, 1LL << 31, "ParticleSystemDef.capacity");
-  for (auto* col : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &inv_mass_, &radius_}) col->reserve(def.capacity);
-  for (auto* col : {&birth_, &death_}) col->reserve(def.capacity);
-  for (auto* col : {&color0_, &color1_, &owner_, &source_}) col->reserve(def.capacity);
-  gx_.reserve(def.capacity);
-  gv_.reserve(def.capacity);
+  reserve_rows(std::max<std::size_t>(def.capacity, 16));
+}
+
+void ParticleSystem::reserve_rows(std::size_t rows) {
+  // every column and the broad phase's per-block bounds, together (allocates)
+  hot_.reserve(rows);
+  const std::size_t cap = hot_.capacity();
+  bounds_.resize((cap + detail::kParticleBlock - 1) / detail::kParticleBlock);
+  for (auto* col : {&birth_, &death_}) col->reserve(cap);
+  for (auto* col : {&color0_, &color1_, &owner_, &source_}) col->reserve(cap);
+  gx_.reserve(cap);
+  gv_.reserve(cap);
+}
+
+// Counts the particles whose inverse mass or radius differs from the system's reference
+// values (those of the first particle of a non-empty system); sign is +1 when a particle
+// is added, -1 when it is removed. When a count is zero the kernel need not read that
+// column: every particle has the reference value.
+void ParticleSystem::count_uniform(float inv_mass, float radius, int sign) {
+  if (sign > 0 && hot_.size() == 0) {
+    inv_mass_ref_ = inv_mass;
+    radius_ref_ = radius;
+    inv_mass_odd_ = radius_odd_ = 0;
+  }
+  if (inv_mass != inv_mass_ref_) inv_mass_odd_ += static_cast<std::size_t>(sign);
+  if (radius != radius_ref_) radius_odd_ += static_cast<std::size_t>(sign);
 }
 
 void ParticleSystem::set_method(Method m) {
@@ -213,23 +311,31 @@ void ParticleSystem::set_method(Method m) {
 
 std::size_t ParticleSystem::push_particle(const ParticleDef& d, std::uint32_t owner, std::uint32_t source) {
   // append to every column (allocates only past the reserved capacity)
-  x_.push_back(static_cast<float>(d.position.x));
-  y_.push_back(static_cast<float>(d.position.y));
-  z_.push_back(static_cast<float>(d.position.z));
-  vx_.push_back(static_cast<float>(d.velocity.x));
-  vy_.push_back(static_cast<float>(d.velocity.y));
-  vz_.push_back(static_cast<float>(d.velocity.z));
-  inv_mass_.push_back(static_cast<float>(1.0 / d.mass));
-  radius_.push_back(static_cast<float>(d.radius));
+  const float inv_mass = static_cast<float>(1.0 / d.mass), radius = static_cast<float>(d.radius);
+  if (hot_.size() == hot_.capacity()) reserve_rows(2 * hot_.capacity());
+  count_uniform(inv_mass, radius, +1);
+  const std::size_t i = hot_.push();
+  hot_[kX][i] = static_cast<float>(d.position.x);
+  hot_[kY][i] = static_cast<float>(d.position.y);
+  hot_[kZ][i] = static_cast<float>(d.position.z);
+  hot_[kVX][i] = static_cast<float>(d.velocity.x);
+  hot_[kVY][i] = static_cast<float>(d.velocity.y);
+  hot_[kVZ][i] = static_cast<float>(d.velocity.z);
+  hot_[kInvMass][i] = inv_mass;
+  hot_[kRadius][i] = radius;
+  touch(i);
   birth_.push_back(time_);
   death_.push_back(time_ + d.lifetime);
   color0_.push_back(pack(d.color));
   color1_.push_back(pack(d.end_color));
   owner_.push_back(owner);
   source_.push_back(source);
-  if (std::isfinite(d.lifetime)) ++mortal_;
+  if (std::isfinite(d.lifetime)) {
+    ++mortal_;
+    next_death_ = std::min(next_death_, time_ + d.lifetime);
+  }
   history_dirty_ = true;
-  return x_.size() - 1;
+  return i;
 }
 
 ParticleId ParticleSystem::create(const ParticleDef& def, std::string_view where) {
@@ -267,18 +373,19 @@ void ParticleSystem::remove_at(std::size_t i) {
     if (es < emitter_slot_.size() && emitter_slot_[es] != kNone) --emitters_[emitter_slot_[es]].alive;
   }
   if (std::isfinite(death_[i])) --mortal_;
+  count_uniform(hot_[kInvMass][i], hot_[kRadius][i], -1);
   // swap the last particle into i (deterministic: depends only on the order of removals)
-  const std::size_t last = x_.size() - 1;
+  const std::size_t last = hot_.size() - 1;
+  touch(i);
+  touch(last);
   if (i != last) {
-    x_[i] = x_[last], y_[i] = y_[last], z_[i] = z_[last];
-    vx_[i] = vx_[last], vy_[i] = vy_[last], vz_[i] = vz_[last];
-    inv_mass_[i] = inv_mass_[last], radius_[i] = radius_[last];
+    for (int c = 0; c < detail::HotColumns::kCount; ++c) hot_[c][i] = hot_[c][last];
     birth_[i] = birth_[last], death_[i] = death_[last];
     color0_[i] = color0_[last], color1_[i] = color1_[last];
     owner_[i] = owner_[last], source_[i] = source_[last];
     if (owner_[i] != kNone) slot_[owner_[i]] = static_cast<std::uint32_t>(i);
   }
-  for (auto* col : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &inv_mass_, &radius_}) col->pop_back();
+  hot_.pop();
   birth_.pop_back();
   death_.pop_back();
   for (auto* col : {&color0_, &color1_, &owner_, &source_}) col->pop_back();
@@ -292,7 +399,10 @@ void ParticleSystem::clear() {
       ids_.destroy(ParticleId{owner_[i], ids_.generation(owner_[i])}, "ParticleSystem::clear");
       slot_[owner_[i]] = kNone;
     }
-  for (auto* col : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &inv_mass_, &radius_}) col->clear();
+  hot_.clear();
+  for (auto& b : bounds_) b.valid = false;
+  inv_mass_odd_ = radius_odd_ = 0;
+  next_death_ = kForever;
   birth_.clear();
   death_.clear();
   for (auto* col : {&color0_, &color1_, &owner_, &source_}) col->clear();
@@ -313,23 +423,27 @@ Color ParticleSystem::color(std::size_t i) const {
 
 void ParticleSystem::set_position(std::size_t i, const Vec3& p) {
   require_finite(p, "ParticleSystem::set_position");
-  x_.at(i) = static_cast<float>(p.x);
-  y_[i] = static_cast<float>(p.y);
-  z_[i] = static_cast<float>(p.z);
+  require_index(i, size(), "ParticleSystem::set_position");
+  hot_[kX][i] = static_cast<float>(p.x);
+  hot_[kY][i] = static_cast<float>(p.y);
+  hot_[kZ][i] = static_cast<float>(p.z);
+  touch(i);
   history_dirty_ = true;
 }
 
 void ParticleSystem::set_velocity(std::size_t i, const Vec3& v) {
   require_finite(v, "ParticleSystem::set_velocity");
-  vx_.at(i) = static_cast<float>(v.x);
-  vy_[i] = static_cast<float>(v.y);
-  vz_[i] = static_cast<float>(v.z);
+  require_index(i, size(), "ParticleSystem::set_velocity");
+  hot_[kVX][i] = static_cast<float>(v.x);
+  hot_[kVY][i] = static_cast<float>(v.y);
+  hot_[kVZ][i] = static_cast<float>(v.z);
+  touch(i);
   history_dirty_ = true;
 }
 
 void ParticleSystem::copy_positions(std::span<Vec3f> out) const {
-  const std::size_t n = std::min(out.size(), x_.size());
-  for (std::size_t i = 0; i < n; ++i) out[i] = Vec3f(x_[i], y_[i], z_[i]);
+  const std::size_t n = std::min(out.size(), size());
+  for (std::size_t i = 0; i < n; ++i) out[i] = Vec3f(hot_[kX][i], hot_[kY][i], hot_[kZ][i]);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -429,6 +543,7 @@ void ParticleSystem::emit(double t, double dt) {
       const std::size_t idx = push_particle(d, kNone, e.id.index + 1);
       birth_[idx] = t + dt - lived;
       death_[idx] = birth_[idx] + life;
+      next_death_ = std::min(next_death_, death_[idx]);
       ++e.alive;
       ++e.emitted_total;
     }
@@ -454,7 +569,7 @@ void ParticleSystem::accelerations(double t, std::size_t begin, std::span<const 
       bx[k] = x[b + k].x, by[k] = x[b + k].y, bz[k] = x[b + k].z;
       bvx[k] = v[b + k].x, bvy[k] = v[b + k].y, bvz[k] = v[b + k].z;
     }
-    const float* im = inv_mass_.data() + begin + b;
+    const float* im = hot_[kInvMass] + begin + b;
     detail::base_accel(n, bvx, bvy, bvz, im, f, ax, ay, az);
     for (std::size_t j = 0; j < nf; ++j) detail::forcer_accel(n, bx, by, bz, im, fp[j], ax, ay, az);
     for (int k = 0; k < n; ++k) a[b + k] = Vec3f(ax[k], ay[k], az[k]);
@@ -481,24 +596,24 @@ void ParticleSystem::step(double t, double dt, std::span<const Collider> collide
       collision_.restitution_threshold >= 0 ? collision_.restitution_threshold : 2 * g * dt);
   profile_ = {};
   contacts_ = 0;
-  // forces, integration and collisions
-  Stopwatch sw;
+  // forces, integration and collisions (the phases are timed off one stopwatch: four
+  // clock reads per step)
   if (integ_.method() == Method::SemiImplicitEuler)
     step_fused(t, dt, colliders, forcers, threshold);
   else
     step_generic(t, dt, colliders, forcers, threshold);
-  profile_.integrate = sw.seconds() - profile_.collide;
+  const double integrated = total.seconds();
+  profile_.integrate = integrated - profile_.collide;
   time_ = t + dt;
   ++steps_;
   // ageing and recycling, then emission of the particles due in this step
-  sw.reset();
   recycle();
-  profile_.recycle = sw.seconds();
-  sw.reset();
+  const double recycled = total.seconds();
+  profile_.recycle = recycled - integrated;
   emit(t, dt);
-  profile_.emit = sw.seconds();
-  forcers_now_ = {};
   profile_.total = total.seconds();
+  profile_.emit = profile_.total - recycled;
+  forcers_now_ = {};
 }
 
 void ParticleSystem::step_fused(double t, double dt, std::span<const Collider> colliders,
@@ -508,29 +623,44 @@ void ParticleSystem::step_fused(double t, double dt, std::span<const Collider> c
   detail::ColliderParams cp[kMaxColliders];
   const std::size_t nf = forcer_params(forcers, t, fp);
   for (std::size_t i = 0; i < colliders.size(); ++i) cp[i] = collider_params(colliders[i]);
-  detail::FusedArgs a{x_.data(),        y_.data(),
-                      z_.data(),        vx_.data(),
-                      vy_.data(),       vz_.data(),
-                      inv_mass_.data(), radius_.data(),
-                      x_.size(),        static_cast<float>(dt),
-                      force_params(forces_, t), fp,
-                      nf,               cp,
-                      colliders.size(), threshold};
+  // a column whose values are all equal is not read (the kernel uses the value)
+  detail::FusedArgs a{};
+  a.x = hot_[kX], a.y = hot_[kY], a.z = hot_[kZ];
+  a.vx = hot_[kVX], a.vy = hot_[kVY], a.vz = hot_[kVZ];
+  a.inv_mass = inv_mass_odd_ == 0 ? nullptr : hot_[kInvMass];
+  a.inv_mass_value = inv_mass_ref_;
+  a.radius = radius_odd_ == 0 ? nullptr : hot_[kRadius];
+  a.radius_value = radius_ref_;
+  a.bounds = bounds_.data();
+  a.broad_phase = broad_phase_;
+  a.n = size();
+  a.h = static_cast<float>(dt);
+  a.forces = force_params(forces_, t);
+  a.forcers = fp;
+  a.n_forcers = nf;
+  a.colliders = cp;
+  a.n_colliders = colliders.size();
+  a.threshold = threshold;
   const detail::FusedResult r = detail::fused_semi_implicit_euler(a);
   contacts_ = r.contacts;
+  exact_blocks_ = r.exact_blocks;
   if (r.non_finite) report_non_finite(t + dt);
 }
 
 void ParticleSystem::step_generic(double t, double dt, std::span<const Collider> colliders,
                                   std::span<const Forcer> /*forcers*/, float threshold) {
-  const std::size_t n = x_.size();
+  const std::size_t n = size();
+  // the broad phase's bounds are not kept up to date here
+  for (auto& b : bounds_) b.valid = false;
+  exact_blocks_ = 0;
   if (n == 0) return;
+  float *x = hot_[kX], *y = hot_[kY], *z = hot_[kZ], *vx = hot_[kVX], *vy = hot_[kVY], *vz = hot_[kVZ];
   // gather into AoS vec3 (resizing allocates only when the count grows past capacity)
   gx_.resize(n);
   gv_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    gx_[i] = Vec3f(x_[i], y_[i], z_[i]);
-    gv_[i] = Vec3f(vx_[i], vy_[i], vz_[i]);
+    gx_[i] = Vec3f(x[i], y[i], z[i]);
+    gv_[i] = Vec3f(vx[i], vy[i], vz[i]);
   }
   // integrate: implicit Euler one particle at a time, the others all at once
   if (integ_.method() == Method::ImplicitEuler) {
@@ -574,14 +704,14 @@ void ParticleSystem::step_generic(double t, double dt, std::span<const Collider>
       bx[k] = gx_[b + k].x, by[k] = gx_[b + k].y, bz[k] = gx_[b + k].z;
       bvx[k] = gv_[b + k].x, bvy[k] = gv_[b + k].y, bvz[k] = gv_[b + k].z;
     }
-    contacts_ += static_cast<std::size_t>(detail::collide_block(m, &x_[b], &y_[b], &z_[b], &vx_[b], &vy_[b], &vz_[b], bx,
-                                                                by, bz, bvx, bvy, bvz, &radius_[b], cp,
+    contacts_ += static_cast<std::size_t>(detail::collide_block(m, x + b, y + b, z + b, vx + b, vy + b, vz + b, bx, by,
+                                                                bz, bvx, bvy, bvz, hot_[kRadius] + b, cp,
                                                                 colliders.size(), threshold, static_cast<float>(dt),
                                                                 bad));
     bad |= detail::any_non_finite(m, bx, by, bz) | detail::any_non_finite(m, bvx, bvy, bvz);
     for (int k = 0; k < m; ++k) {
-      x_[b + k] = bx[k], y_[b + k] = by[k], z_[b + k] = bz[k];
-      vx_[b + k] = bvx[k], vy_[b + k] = bvy[k], vz_[b + k] = bvz[k];
+      x[b + k] = bx[k], y[b + k] = by[k], z[b + k] = bz[k];
+      vx[b + k] = bvx[k], vy[b + k] = bvy[k], vz[b + k] = bvz[k];
     }
   }
   // position verlet's velocity lives in its history: restart it after any contact
@@ -590,39 +720,50 @@ void ParticleSystem::step_generic(double t, double dt, std::span<const Collider>
   if (bad) report_non_finite(t + dt);
 }
 
-// remove particles whose death time has passed (swap-remove; deterministic order)
+// remove particles whose death time has passed (swap-remove; deterministic order). No
+// scan while the earliest death is still ahead: the scan would remove nothing.
 void ParticleSystem::recycle() {
-  if (mortal_ == 0) return;
-  for (std::size_t i = 0; i < x_.size();) {
-    if (death_[i] <= time_ + 1e-12)
+  if (mortal_ == 0 || next_death_ > time_ + 1e-12) return;
+  double next = kForever;
+  for (std::size_t i = 0; i < size();) {
+    if (death_[i] <= time_ + 1e-12) {
       remove_at(i);
-    else
+    } else {
+      next = std::min(next, death_[i]);
       ++i;
+    }
   }
+  next_death_ = next;
 }
 
 void ParticleSystem::report_non_finite(double t) const {
+  // the kernel's check may be a false alarm (a sum of huge positions overflowing): look
+  // first, without allocating
+  bool all_finite = true;
+  for (int c : {kX, kY, kZ, kVX, kVY, kVZ})
+    for (float v : column(c)) all_finite &= std::isfinite(v);
+  if (all_finite) return;
   // format through core's check_finite (allocates: this is the error path)
-  std::vector<Vec3f> px(x_.size()), pv(x_.size());
-  for (std::size_t i = 0; i < x_.size(); ++i) {
-    px[i] = Vec3f(x_[i], y_[i], z_[i]);
-    pv[i] = Vec3f(vx_[i], vy_[i], vz_[i]);
+  std::vector<Vec3f> px(size()), pv(size());
+  for (std::size_t i = 0; i < size(); ++i) {
+    px[i] = position(i);
+    pv[i] = velocity(i);
   }
   const FiniteCheck c = check_finite<Vec3f>(px, pv, "particle", t, steps_ + 1);
   if (!c.ok) throw Error(c.message);
 }
 
 std::uint64_t ParticleSystem::hash() const {
-  std::uint64_t h = hash_span<float>(x_);
-  for (const auto* col : {&y_, &z_, &vx_, &vy_, &vz_}) h = hash_span<float>(*col, h);
+  std::uint64_t h = hash_span<float>(column(kX));
+  for (int c : {kY, kZ, kVX, kVY, kVZ}) h = hash_span<float>(column(c), h);
   return h;
 }
 
 void ParticleSystem::draw(DebugDraw& draw, bool spheres, std::size_t max_points) const {
-  const std::size_t n = std::min(max_points, x_.size());
+  const std::size_t n = std::min(max_points, size());
   for (std::size_t i = 0; i < n; ++i) {
     if (spheres)
-      draw.sphere(position(i), radius_[i], color(i));
+      draw.sphere(position(i), hot_[kRadius][i], color(i));
     else
       draw.point(position(i), 4.0f, color(i));
   }
