@@ -71,6 +71,8 @@ struct EffectorDef {
 /// Options for Skeleton::draw.
 struct SkeletonDrawOptions {
   bool bones = true;                ///< capsules for bones
+  double bone_radius = 0;           ///< capsule radius (m), >= 0; 0: each bone's BoneDef::radius, or 8% of its length
+  double min_radius = 0;            ///< smallest capsule radius (m), >= 0, so that the many short bones of a long chain stay visible
   bool joints = true;               ///< spheres at joints, coloured by type
   bool limits = false;              ///< hinge arcs and ball cones
   bool targets = true;              ///< effector targets and their error lines
@@ -196,6 +198,7 @@ class Skeleton {
   std::vector<double> length_;
   std::vector<JointType> type_;
   std::vector<Quat> rest_;
+  std::vector<std::uint8_t> rest_identity_;  // 1 when rest_ is exactly the identity
   std::vector<Vec3> axis_;
   std::vector<double> lo_, hi_;          // hinge angle or ball twist limits (rad)
   std::vector<double> swing_;            // ball swing limit (rad)
@@ -256,6 +259,10 @@ struct SolverSettings {
                                     ///< 0 picks 0.5 (pi/4 for sdls, Buss and Kim's gamma_max)
   bool warm_start = true;           ///< start from the current pose; false starts from the rest pose
   double stall_ratio = 1e-9;        ///< stop early when an iteration improves the error by less than this fraction (unreachable targets)
+  double max_seconds = 0.0;         ///< time budget per solve (s), >= 0; 0: none. The iterative methods stop
+                                    ///< once it is spent (checked every iteration from 64 bones on, every 8
+                                    ///< below; one check costs about 60 ns). With a budget, results depend
+                                    ///< on the machine's speed: leave 0 where runs must repeat bit for bit
   /// Validates every field; throws pba::Error naming the field and value.
   void validate(std::string_view where = "SolverSettings") const;
 };
@@ -267,6 +274,7 @@ struct SolveResult {
   double orientation_residual = 0;  ///< largest orientation error (rad), 0 without orientation targets
   bool converged = false;    ///< residual <= tolerance, and orientation residual <= its tolerance for
                              ///< the methods that honour orientation targets (FABRIK and the Jacobian family)
+  bool out_of_time = false;  ///< the solve stopped because SolverSettings::max_seconds was spent
 };
 
 /// Default iteration cap of a method (used when SolverSettings::max_iterations is 0).
@@ -374,7 +382,8 @@ struct TwoBoneJob {
   Quat mid_correction{1, 0, 0, 0};    ///< world rotation about mid_axis to pre-multiply onto the mid bone (applied before start_correction)
   bool reached = false;               ///< true when the target is within reach (to 1e-9 of the limb)
 
-  /// True when all inputs are finite, mid_axis is unit length and bones have non-zero lengths.
+  /// True when all inputs are finite (and below about 1e150 m, so that their squares are),
+  /// mid_axis is unit length, bones have non-zero lengths and weight and angles are in range.
   bool Validate() const;
   /// Computes the corrections; returns false (outputs untouched) when Validate() fails.
   bool Run();

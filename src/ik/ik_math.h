@@ -11,6 +11,23 @@ namespace pba::ik::detail {
 
 inline constexpr double kPi = 3.141592653589793;
 
+// Hot IK functions are compiled for AVX2 and for the baseline; the loader picks one (GCC
+// function multi-versioning). -ffp-contract=off keeps both free of fused multiply-adds, so
+// both give the same bits. Not under the sanitizers: the ifunc resolver runs during
+// relocation, before the sanitizer runtime is up.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
+    !defined(__SANITIZE_THREAD__)
+#define PBA_IK_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define PBA_IK_CLONES
+#endif
+
+/// d = v, component by component. A plain quaternion assignment after scalar arithmetic
+/// makes GCC assemble the value on the stack with 8-byte stores and copy it with 16-byte
+/// loads, which cannot be forwarded from those stores and wait for them to retire
+/// (~10 cycles each); on the solvers' dependent paths that adds up.
+inline void put(Quat& d, const Quat& v) { d.w = v.w, d.x = v.x, d.y = v.y, d.z = v.z; }
+
 /// Hamilton product a * b, written out so it always inlines (glm's may not).
 inline Quat qmul(const Quat& a, const Quat& b) {
   return Quat(a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,

@@ -102,6 +102,7 @@ Skeleton::Skeleton(const SkeletonDef& def) {
   length_.resize(n);
   type_.resize(n);
   rest_.resize(n);
+  rest_identity_.resize(n);
   axis_.resize(n);
   lo_.resize(n);
   hi_.resize(n);
@@ -119,6 +120,7 @@ Skeleton::Skeleton(const SkeletonDef& def) {
     length_[k] = b.length;
     type_[k] = b.joint;
     rest_[k] = glm::normalize(b.rest);
+    rest_identity_[k] = rest_[k] == Quat(1, 0, 0, 0);
     axis_[k] = glm::normalize(b.axis);
     dof_offset_[k] = dof;
     total_length_ += b.length;
@@ -195,14 +197,14 @@ void Skeleton::clamp_joint(int i) {
       if (limited_[i]) a = std::clamp(a, lo_[i], hi_[i]);
       angle_[i] = a;
       const double s = std::sin(0.5 * a);
-      q_[i] = Quat(std::cos(0.5 * a), axis_[i].x * s, axis_[i].y * s, axis_[i].z * s);
+      detail::put(q_[i], Quat(std::cos(0.5 * a), axis_[i].x * s, axis_[i].y * s, axis_[i].z * s));
       break;
     }
     case JointType::ball:
       if (limited_[i])
-        q_[i] = detail::clamp_ball(q_[i], swing_[i], lo_[i], hi_[i]);
+        detail::put(q_[i], detail::clamp_ball(q_[i], swing_[i], lo_[i], hi_[i]));
       else
-        q_[i] = glm::normalize(q_[i]);
+        detail::put(q_[i], glm::normalize(q_[i]));
       break;
   }
 }
@@ -277,19 +279,31 @@ bool Skeleton::within_limits(double tol, int* bad) const {
   return true;
 }
 
+namespace {
+
+// forward kinematics over a skeleton's arrays, parents before children (compiled for AVX2
+// and the baseline, same bits: see PBA_IK_CLONES)
+PBA_IK_CLONES void forward_pass(int n, const int* parent, const std::uint8_t* rest_identity, const Quat* rest,
+                                const Quat* q, const double* length, const Quat& root_rotation,
+                                const Vec3& root_position, Quat* world, Vec3* start, Vec3* tip) {
+  for (int i = 0; i < n; ++i) {
+    const int p = parent[i];
+    const Quat base = p >= 0 ? world[p] : root_rotation;
+    const Quat w = rest_identity[i] ? detail::qmul(base, q[i]) : detail::qmul(detail::qmul(base, rest[i]), q[i]);
+    detail::put(world[i], w);
+    const Vec3 st = p >= 0 ? tip[p] : root_position;
+    start[i] = st;
+    tip[i] = st + detail::rotate_x(w, length[i]);
+  }
+}
+
+}  // namespace
+
 void Skeleton::forward_kinematics() {
   // one pass, parents before children
   fk_dirty_ = false;
-  const int n = bone_count();
-  for (int i = 0; i < n; ++i) {
-    const int p = parent_[i];
-    const Quat& base = p >= 0 ? world_[p] : root_rotation_;
-    const Quat& r = rest_[i];
-    const bool identity = r.w == 1 && r.x == 0 && r.y == 0 && r.z == 0;
-    world_[i] = identity ? detail::qmul(base, q_[i]) : detail::qmul(detail::qmul(base, r), q_[i]);
-    start_[i] = p >= 0 ? tip_[p] : root_position_;
-    tip_[i] = start_[i] + detail::rotate_x(world_[i], length_[i]);
-  }
+  forward_pass(bone_count(), parent_.data(), rest_identity_.data(), rest_.data(), q_.data(), length_.data(),
+               root_rotation_, root_position_, world_.data(), start_.data(), tip_.data());
 }
 
 int Skeleton::add_effector(const EffectorDef& e) {
@@ -375,8 +389,12 @@ std::uint64_t Skeleton::state_hash() const {
 }
 
 void Skeleton::draw(DebugDraw& dd, const SkeletonDrawOptions& o) const {
+  require_non_negative(o.bone_radius, "SkeletonDrawOptions.bone_radius");
+  require_non_negative(o.min_radius, "SkeletonDrawOptions.min_radius");
   for (int i = 0; i < bone_count(); ++i) {
-    const double r = defs_[i].radius > 0 ? defs_[i].radius : 0.08 * length_[i];
+    const double r = std::max(o.min_radius, o.bone_radius > 0   ? o.bone_radius
+                                            : defs_[i].radius > 0 ? defs_[i].radius
+                                                                  : 0.08 * length_[i]);
     // the bone as a capsule from its joint to its tip
     if (o.bones) dd.capsule(start_[i], tip_[i], r, o.bone_color);
     // the joint, coloured by type

@@ -3,6 +3,7 @@
 // squares) and FABRIK on trees with joint limits. All work in place on the
 // skeleton's structure-of-arrays pose; their workspace is sized in prepare().
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -65,9 +66,9 @@ int default_max_iterations(Method m) {
     case Method::ccd: return 1000;
     case Method::jacobian_transpose: return 2000;
     case Method::pseudo_inverse: return 200;
-    case Method::dls: return 1000;  // reachable targets take ~5-10; unreachable ones straighten slowly
+    case Method::dls: return 1000;  // reachable targets take ~5-10; a limited chain pressed on its limits creeps
     case Method::sdls: return 300;
-    case Method::fabrik: return 1000;  // free ball chains take tens; hinge chains converge slower
+    case Method::fabrik: return 1000;  // free ball chains take tens (76 at 1000 bones); limited chains hand over to DLS
   }
   return 100;
 }
@@ -80,6 +81,7 @@ void SolverSettings::validate(std::string_view where) const {
   require_non_negative(damping, w + ".damping");
   require_non_negative(max_step_angle, w + ".max_step_angle");
   require_in_range(stall_ratio, 0, 1, w + ".stall_ratio");
+  require_non_negative(max_seconds, w + ".max_seconds");
   if (static_cast<int>(method) > static_cast<int>(Method::fabrik))
     throw Error(w + ".method: unknown value " + std::to_string(static_cast<int>(method)));
 }
@@ -202,6 +204,124 @@ void jacobi_eigen(const double* Am, int m, double* V, double* w, double* a) {
   for (int i = 0; i < m; ++i) w[i] = a[i * m + i];
 }
 
+PBA_IK_CLONES Vec3 reach_pass(const Vec3& from, const Vec3* q, const double* len, Vec3* out, int count) {
+  constexpr double kTiny = 1e-300;  // below this squared distance the direction is undefined
+  // a direction for a step whose point coincides with its goal: the one between the goals
+  // (the bone keeps the pose it had), else +X
+  auto fallback = [&](int i, double& dx, double& dy, double& dz) {
+    dx = q[-i].x - q[1 - i].x, dy = q[-i].y - q[1 - i].y, dz = q[-i].z - q[1 - i].z;
+    double l2 = dx * dx + dy * dy + dz * dz;
+    if (!(l2 > kTiny)) dx = 1, dy = 0, dz = 0, l2 = 1;
+    return l2;
+  };
+  double px = from.x, py = from.y, pz = from.z;
+  out[0] = from;
+  // the first step's difference and squared distance, from the vector
+  double dx = q[0].x - px, dy = q[0].y - py, dz = q[0].z - pz;
+  double l2e = dx * dx + dy * dy + dz * dz;
+  if (!(l2e > kTiny)) l2e = fallback(0, dx, dy, dz);
+  double l2 = l2e;
+  for (int i = 0;; ++i) {
+    // the step: scale len / |d| as sqrt(l2) (len / l2), the division beside the root
+    const double li = len[i];
+    const double inv = li / l2;
+    const double root = std::sqrt(l2);
+    const double sc = root * inv;
+    const double sx = sc * dx, sy = sc * dy, sz = sc * dz;
+    const double nx = px + sx, ny = py + sy, nz = pz + sz;
+    out[i + 1] = Vec3(nx, ny, nz);
+    if (i + 1 == count) return out[i + 1];
+    // the next difference d' = e - sc d with e = Q_{i+1} - p, and its squared length
+    // |e|^2 + sc^2 |d|^2 - 2 sc (e . d), where sc^2 |d|^2 = len (len / l2) |d|^2 and
+    // 2 sc (e . d) = sqrt(l2) (2 (len / l2) (e . d)): one product after the root
+    const Vec3& qn = q[-(i + 1)];
+    const double ex = qn.x - px, ey = qn.y - py, ez = qn.z - pz;
+    const double ee = ex * ex + ey * ey + ez * ez;
+    const double ed2 = 2 * (ex * dx + ey * dy + ez * dz);
+    const double c = ee + inv * (li * l2e);
+    dx = ex - sx, dy = ey - sy, dz = ez - sz;
+    px = nx, py = ny, pz = nz;
+    l2e = dx * dx + dy * dy + dz * dz;
+    l2 = c - root * (inv * ed2);
+    // cancellation (the new distance small next to the terms): take it from the vector
+    if (!(l2 > c * (1.0 / 64))) {
+      l2 = l2e;
+      if (!(l2 > kTiny)) l2 = l2e = fallback(i + 1, dx, dy, dz);
+    }
+  }
+}
+
+PBA_IK_CLONES void rebuild_rotations(const RebuildArgs& a) {
+  // Three passes, so that the bones' independent work overlaps: in one loop, a bone's turn,
+  // product and normalisation formed a dependent path of ~90 cycles in ~190 instructions,
+  // about what the out-of-order window holds, so bones hardly overlapped (108 cycles per
+  // bone on a chain of 10; 54 in three passes, with the square roots and divisions
+  // vectorised in the second and the quaternions stored component by component).
+  // 1. each bone's world rotation turned by the shortest arc from its old direction (the x
+  //    column of the old rotation, unit) to its new one (unit: the bone is its length long
+  //    by construction). The turn (1 + c, a x b) is 2 cos(angle / 2) times a unit
+  //    quaternion: the product with the old rotation is normalised once, in pass 2.
+  for (int k = 0; k < a.count; ++k) {
+    const int i = a.bones[k];
+    const Quat w0 = a.world[i];
+    const double yy = w0.y * w0.y, zz = w0.z * w0.z;
+    const double ax = 1 - 2 * (yy + zz), ay = 2 * (w0.x * w0.y + w0.w * w0.z), az = 2 * (w0.x * w0.z - w0.w * w0.y);
+    const double il = a.inv_len[i];
+    const Vec3& t0 = a.points ? a.points[k + 1] : a.tip[i];
+    const Vec3& s0 = a.points ? a.points[k] : a.start[i];
+    const double bx = (t0.x - s0.x) * il, by = (t0.y - s0.y) * il, bz = (t0.z - s0.z) * il;
+    const double c = ax * bx + ay * by + az * bz;
+    Quat w;
+    if (c > -1 + 1e-12) {
+      const double tw = 1 + c, tx = ay * bz - az * by, ty = az * bx - ax * bz, tz = ax * by - ay * bx;
+      w = Quat(tw * w0.w - tx * w0.x - ty * w0.y - tz * w0.z, tw * w0.x + tx * w0.w + ty * w0.z - tz * w0.y,
+               tw * w0.y - tx * w0.z + ty * w0.w + tz * w0.x, tw * w0.z + tx * w0.y - ty * w0.x + tz * w0.w);
+    } else {
+      w = qmul(from_to(Vec3(ax, ay, az), Vec3(bx, by, bz)), w0);
+    }
+    put(a.world[i], w);
+    a.scratch[k] = w.w * w.w + w.x * w.x + w.y * w.y + w.z * w.z;
+  }
+  // 2. the normalising factors 1 / sqrt(n2) = sqrt(n2) (1 / n2), on a contiguous array
+  for (int k = 0; k < a.count; ++k) a.scratch[k] = std::sqrt(a.scratch[k]) * (1 / a.scratch[k]);
+  // 3. normalise; the joint rotation is conj(frame) world; forward kinematics of the bone.
+  //    Quaternions are stored component by component (detail::put).
+  if (a.chain) {
+    // bone k is bone k - 1's child: the parent's new rotation and tip stay in registers
+    Quat base = a.root_rotation;
+    Vec3 st = a.root;
+    for (int i = 0; i < a.count; ++i) {
+      const double nk = a.scratch[i];
+      const Quat& wu = a.world[i];
+      const Quat w(wu.w * nk, wu.x * nk, wu.y * nk, wu.z * nk);
+      put(a.world[i], w);
+      const Quat F = a.rest_identity[i] ? base : qmul(base, a.rest[i]);
+      // both factors are unit to rounding, so the product is too (no drift: world is
+      // renormalised every solve)
+      put(a.q[i], qmul(Quat(F.w, -F.x, -F.y, -F.z), w));
+      a.start[i] = st;
+      st = st + rotate_x(w, a.lengths[i]);
+      a.tip[i] = st;
+      base = w;
+    }
+    return;
+  }
+  for (int k = 0; k < a.count; ++k) {
+    const int i = a.bones[k];
+    const double nk = a.scratch[k];
+    const Quat& wu = a.world[i];
+    const Quat w(wu.w * nk, wu.x * nk, wu.y * nk, wu.z * nk);
+    put(a.world[i], w);
+    const int p = a.parents[i];
+    const Quat base = p >= 0 ? a.world[p] : a.root_rotation;
+    const Quat F = a.rest_identity[i] ? base : qmul(base, a.rest[i]);
+    put(a.q[i], qmul(Quat(F.w, -F.x, -F.y, -F.z), w));
+    const Vec3 st = p >= 0 ? a.tip[p] : a.root;
+    a.start[i] = st;
+    a.tip[i] = st + rotate_x(w, a.lengths[i]);
+  }
+}
+
 }  // namespace detail
 
 // ---------------------------------------------------------------------------
@@ -211,13 +331,20 @@ struct Solver::Impl {
   Skeleton* sk = nullptr;
   SolverSettings set;
   std::uint64_t prepared_version = ~std::uint64_t(0);
+  bool has_deadline = false;             // SolverSettings::max_seconds > 0 for this solve
+  std::chrono::steady_clock::time_point deadline;  // ... and when it ends
+  int active_count = 0;                  // active bones (sets how often the clock is read)
+  std::uint64_t supported_version = ~std::uint64_t(0);  // effectors for which supports() held
+  Method supported_method = Method::fabrik;              // ... with this method
 
   // effector structure (rebuilt when effectors change)
   int n = 0, ne = 0;
   std::vector<std::uint8_t> active;      // bone is an effector's bone or one of its ancestors
   std::vector<int> active_rev;           // active bones, children before parents
   std::vector<int> active_fwd;           // active bones, parents before children
-  bool fabrik_positions_only = false;    // every active joint is an unlimited ball without orientation target
+  bool all_free_balls = false;           // every active joint is an unlimited ball (FABRIK on positions)
+  bool simple_chain = false;             // bone i is bone i - 1's child, every bone active
+  double path_reach = 0;                 // summed length of the active bones (m): one effector's reach
   std::vector<int> eff_off, eff_list;    // effectors on each bone
   std::vector<int> under_off, under;     // effectors in each bone's subtree
   std::vector<int> path_off, path;       // each effector's bones up to the root
@@ -230,10 +357,14 @@ struct Solver::Impl {
   std::vector<int> col_of;               // first column of each bone's joint, -1 if none
   std::vector<int> row_of, ori_row_of;   // rows of each effector (-1: no orientation rows)
   std::vector<double> J, Amat, L, V, w, work, e, y, t, dtheta, v, rho;
+  // one position effector (3 rows): J is never stored, only each joint's vector (see build_compact)
+  bool compact = false;
+  std::vector<Vec3> jd;
 
   // FABRIK and CCD workspace
-  std::vector<Vec3> goal, acc, eff_pos, cp, cg;
-  std::vector<double> cl;
+  std::vector<Vec3> goal, acc, eff_pos, cp, fw;  // fw: FABRIK stage 1 points, target first
+  std::vector<double> cl, clr, inv_len;           // chain lengths forward, reversed; 1 / length
+  std::vector<double> scratch;                    // n doubles for detail::rebuild_rotations
   std::vector<Quat> saved_q;
   std::vector<double> saved_angle;
   Vec3 saved_root{0};
@@ -349,13 +480,35 @@ struct Solver::Impl {
     dtheta.assign(std::max(ncols, 1), 0.0);
     v.assign(std::max(ncols, 1), 0.0);
     rho.assign(std::max(ncols, 1), 0.0);
+    jd.assign(n, Vec3(0));
     goal.assign(n, Vec3(0));
     acc.assign(n, Vec3(0));
     accw.assign(n, 0.0);
     eff_pos.assign(std::max(ne, 1), Vec3(0));
     cp.assign(n + 1, Vec3(0));
-    cg.assign(n + 1, Vec3(0));
+    fw.assign(n + 1, Vec3(0));
     cl.assign(n, 0.0);
+    clr.assign(n, 0.0);
+    inv_len.assign(n, 0.0);
+    scratch.assign(n, 0.0);
+    for (int i = 0; i < n; ++i) inv_len[i] = 1 / s.lengths()[i];
+    // the lengths along active_fwd (a chain when there is one effector), forward and reversed
+    const int na = static_cast<int>(active_fwd.size());
+    active_count = na;
+    path_reach = 0;
+    for (int k = 0; k < na; ++k) {
+      cl[k] = s.lengths()[active_fwd[k]];
+      clr[na - 1 - k] = cl[k];
+      path_reach += cl[k];
+    }
+    // one chain in stored order (bone i the child of bone i - 1, every bone active)
+    simple_chain = na == n;
+    for (int i = 0; i < n; ++i)
+      if (parents[i] != i - 1) simple_chain = false;
+    // FABRIK iterates on positions only when every active joint is an unlimited ball
+    all_free_balls = true;
+    for (int j : active_rev)
+      if (s.joint_types()[j] != JointType::ball || A::limited(s)[j]) all_free_balls = false;
     saved_q.assign(n, Quat(1, 0, 0, 0));
     saved_angle.assign(n, 0.0);
   }
@@ -404,6 +557,35 @@ struct Solver::Impl {
   bool stalled(double prev, double now) const {
     return std::abs(prev - now) <= set.stall_ratio * std::max(now, 1e-300);
   }
+
+  // the time budget: whether SolverSettings::max_seconds is spent, read from the clock on
+  // every iteration from 64 active bones on and every 8th below (a read costs ~60 ns)
+  bool out_of_time(int iteration, SolveResult& r) const {
+    if (!has_deadline || (active_count < 64 && iteration % 8 != 0)) return false;
+    if (std::chrono::steady_clock::now() < deadline) return false;
+    r.out_of_time = true;
+    return true;
+  }
+
+  // A solve that creeps (pressed against joint limits, or circling a target outside the
+  // reachable set in ever smaller steps) improves each iteration by more than stall_ratio
+  // yet gets nowhere: once per `window` iterations (rejected Levenberg-Marquardt steps
+  // included), it stops when the error fell by less than `ratio` since the last check.
+  // A converging DLS solve gains far more than 1% in 16 iterations (at least linearly);
+  // CCD, which can plateau for a while before it finds its way, gets 0.1% in 64.
+  struct Creep {
+    double checkpoint;
+    int window = 16;
+    double ratio = 1e-2;
+    int next = window;
+    bool operator()(int iterations, double residual) {
+      if (iterations < next) return false;
+      next = iterations + window;
+      if (residual > (1 - ratio) * checkpoint) return true;
+      checkpoint = residual;
+      return false;
+    }
+  };
 
   // -------------------------------------------------------------------------
   // analytic: one hinge aims the effector at the target (workbook 2.3, ik_1dof):
@@ -455,7 +637,8 @@ struct Solver::Impl {
     const double tol = set.tolerance;
     double prev = r.residual;
     for (int k = 0; k < ne; ++k) eff_pos[k] = s.tips()[s.effector(k).bone];
-    for (int it = 0; it < cap && !r.converged; ++it) {
+    Creep creep{r.residual, 64, 1e-3};
+    for (int it = 0; it < cap && !r.converged && !out_of_time(it, r); ++it) {
       bool done = false;
       for (int j : active_rev) {
         if (types[j] == JointType::fixed) continue;
@@ -531,7 +714,7 @@ struct Solver::Impl {
       for (int k = 0; k < ne; ++k) eff_pos[k] = s.tips()[s.effector(k).bone];
       r.iterations = it + 1;
       measure(r);
-      if (!r.converged && stalled(prev, r.residual)) break;
+      if (!r.converged && (stalled(prev, r.residual) || creep(r.iterations, r.residual))) break;
       prev = r.residual;
     }
   }
@@ -629,6 +812,76 @@ struct Solver::Impl {
     }
   }
 
+  // One position effector, the rows of J are never formed: a ball joint's 3 x 3 block is
+  // v -> v x D with D = w (e - p_j) (the columns are the world axes crossed with D), so its
+  // share of J J^T is |D|^2 I - D D^T and of J^T y is D x y; a hinge's column is
+  // g = w (a_j x (e - p_j)), its share g g^T and g . y; a free root's block is w I. Fills
+  // e (the clamped, weighted error), Amat (J J^T) and jd (D or g per joint) in one pass over
+  // the effector's path, dropping saturated hinges as drop_saturated_columns does.
+  void build_compact(double clamp) {
+    Skeleton& s = *sk;
+    const auto types = s.joint_types();
+    const auto starts = s.starts();
+    const EffectorDef& ef = s.effector(0);
+    const double wk = ef.weight;
+    const Vec3 ep = s.tips()[ef.bone];
+    // position error, clamped (Buss 2004 sec. 7: clamp the target distance)
+    Vec3 err = ef.target - ep;
+    const double len = glm::length(err);
+    if (len > clamp) err *= clamp / len;
+    const Vec3 ew = wk * err;
+    e[0] = ew.x, e[1] = ew.y, e[2] = ew.z;
+    double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0;
+    if (s.root_free()) a00 = a11 = a22 = wk * wk;
+    const auto& limited = A::limited(s);
+    for (int pi = path_off[0]; pi < path_off[1]; ++pi) {
+      const int j = path[pi];
+      if (col_of[j] < 0) continue;
+      const Vec3 D = wk * (ep - starts[j]);
+      if (types[j] == JointType::ball) {
+        const double xx = D.x * D.x, yy = D.y * D.y, zz = D.z * D.z;
+        a00 += yy + zz, a11 += xx + zz, a22 += xx + yy;
+        a01 -= D.x * D.y, a02 -= D.x * D.z, a12 -= D.y * D.z;
+        jd[j] = D;
+      } else {
+        Vec3 g = glm::cross(detail::rotate(frame(j), A::axis(s)[j]), D);
+        // a hinge held at a limit that the error pushes further out takes no part
+        if (limited[j]) {
+          const double ang = A::angle(s)[j], gd = glm::dot(g, ew);
+          if ((ang >= A::hi(s)[j] - 1e-12 && gd > 0) || (ang <= A::lo(s)[j] + 1e-12 && gd < 0)) g = Vec3(0);
+        }
+        a00 += g.x * g.x, a01 += g.x * g.y, a02 += g.x * g.z;
+        a11 += g.y * g.y, a12 += g.y * g.z, a22 += g.z * g.z;
+        jd[j] = g;
+      }
+    }
+    Amat[0] = a00, Amat[1] = a01, Amat[2] = a02;
+    Amat[3] = a01, Amat[4] = a11, Amat[5] = a12;
+    Amat[6] = a02, Amat[7] = a12, Amat[8] = a22;
+  }
+
+  // dtheta = J^T x from the vectors build_compact kept
+  void jt_times_compact(const double* x) {
+    Skeleton& s = *sk;
+    const auto types = s.joint_types();
+    const Vec3 y3(x[0], x[1], x[2]);
+    if (s.root_free()) {
+      const double wk = s.effector(0).weight;
+      dtheta[0] = wk * x[0], dtheta[1] = wk * x[1], dtheta[2] = wk * x[2];
+    }
+    for (int pi = path_off[0]; pi < path_off[1]; ++pi) {
+      const int j = path[pi];
+      const int c = col_of[j];
+      if (c < 0) continue;
+      if (types[j] == JointType::ball) {
+        const Vec3 r = glm::cross(jd[j], y3);
+        dtheta[c] = r.x, dtheta[c + 1] = r.y, dtheta[c + 2] = r.z;
+      } else {
+        dtheta[c] = glm::dot(jd[j], y3);
+      }
+    }
+  }
+
   // A = J J^T (m x m, symmetric): the only matrix product formed
   void gram() {
     std::fill(Amat.begin(), Amat.begin() + m * m, 0.0);
@@ -658,6 +911,10 @@ struct Solver::Impl {
 
   // dtheta = J^T x
   void jt_times(const double* x) {
+    if (compact) {
+      jt_times_compact(x);
+      return;
+    }
     for (int c = 0; c < ncols; ++c) {
       const double* col = &J[static_cast<std::size_t>(c) * m];
       double sum = 0;
@@ -676,23 +933,36 @@ struct Solver::Impl {
     }
   }
 
-  // apply dtheta to the pose, projecting every joint into its limits
-  void apply_dtheta() {
+  // apply dtheta to the pose, projecting every joint into its limits; with `save`, the
+  // joint values it changes go to saved_q / saved_angle first (for restore_pose)
+  void apply_dtheta(bool save) {
     Skeleton& s = *sk;
     const auto types = s.joint_types();
+    const auto& limited = A::limited(s);
+    auto& q = A::q(s);
+    auto& angle = A::angle(s);
+    saved_root = A::root_position(s);
     if (s.root_free()) A::root_position(s) += Vec3(dtheta[0], dtheta[1], dtheta[2]);
     for (int j : active_rev) {
       const int c = col_of[j];
       if (c < 0) continue;
+      if (save) detail::put(saved_q[j], q[j]), saved_angle[j] = angle[j];
       if (types[j] == JointType::hinge) {
-        A::angle(s)[j] += dtheta[c];
-      } else {
-        // world rotation vector -> joint frame; q <- exp(w_local) q
-        // (1, w/2) normalised turns by 2 atan(|w|/2) = |w| + O(|w|^3) about w, without trigonometry
-        const Vec3 om = detail::rotate_inv(frame(j), Vec3(dtheta[c], dtheta[c + 1], dtheta[c + 2]));
-        A::q(s)[j] = detail::qmul(Quat(1, 0.5 * om.x, 0.5 * om.y, 0.5 * om.z), A::q(s)[j]);
+        angle[j] += dtheta[c];
+        A::clamp_joint(s, j);
+        continue;
       }
-      A::clamp_joint(s, j);
+      // world rotation vector -> joint frame; q <- exp(w_local) q
+      // (1, w/2) normalised turns by 2 atan(|w|/2) = |w| + O(|w|^3) about w, without trigonometry
+      const Vec3 om = detail::rotate_inv(frame(j), Vec3(dtheta[c], dtheta[c + 1], dtheta[c + 2]));
+      const Quat qn = detail::qmul(Quat(1, 0.5 * om.x, 0.5 * om.y, 0.5 * om.z), q[j]);
+      if (limited[j]) {
+        detail::put(q[j], qn);
+        A::clamp_joint(s, j);
+      } else {
+        // an unlimited ball joint only needs the normalisation
+        detail::put(q[j], qn * (1 / std::sqrt(qn.w * qn.w + qn.x * qn.x + qn.y * qn.y + qn.z * qn.z)));
+      }
     }
   }
 
@@ -743,10 +1013,11 @@ struct Solver::Impl {
     clamp_max_abs(dtheta.data(), ncols, gamma_max);
   }
 
-  void jacobian(SolveResult& r) {
+  // the Jacobian methods' loop; `meth` is set.method, or dls when FABRIK hands over its
+  // last iterations (iterations then count on from r.iterations)
+  void jacobian(SolveResult& r, Method meth) {
     Skeleton& s = *sk;
     layout_rows();
-    const Method meth = set.method;
     const int cap = max_iterations();
     const double reach = std::max(largest_reach(), 1e-9);
     // per-effector error clamp and orientation row scale (m per rad)
@@ -764,11 +1035,16 @@ struct Solver::Impl {
     const bool monotone = meth == Method::dls || meth == Method::sdls;
     double gamma = step_cap;
     double prev_cost = monotone ? cost(ori_scale) : 0.0;
-    for (int it = 0; it < cap && !r.converged; ++it) {
-      if (monotone) save_pose();
-      build_jacobian(clamp, ori_scale);
-      drop_saturated_columns();
-      gram();
+    compact = m == 3 && meth != Method::sdls;
+    Creep creep{r.residual, 16, 1e-2, r.iterations + 16};
+    for (int it = r.iterations; it < cap && !r.converged && !out_of_time(it, r); ++it) {
+      if (compact) {
+        build_compact(clamp);
+      } else {
+        build_jacobian(clamp, ori_scale);
+        drop_saturated_columns();
+        gram();
+      }
       switch (meth) {
         case Method::jacobian_transpose: {
           // Buss 2004 eq. 7: alpha = <e, J J^T e> / <J J^T e, J J^T e>
@@ -810,7 +1086,7 @@ struct Solver::Impl {
           break;
       }
       clamp_max_abs(dtheta.data(), ncols, meth == Method::sdls ? gamma : step_cap);
-      apply_dtheta();
+      apply_dtheta(monotone);
       s.forward_kinematics();
       r.iterations = it + 1;
       if (monotone) {
@@ -821,7 +1097,7 @@ struct Solver::Impl {
           s.forward_kinematics();
           lambda *= 4;
           gamma *= 0.25;
-          if (lambda > 1e6 * lambda0 || gamma < 1e-6 * step_cap) break;
+          if (lambda > 1e6 * lambda0 || gamma < 1e-6 * step_cap || creep(r.iterations, r.residual)) break;
           continue;
         }
         prev_cost = c;
@@ -829,7 +1105,7 @@ struct Solver::Impl {
         gamma = std::min(2 * gamma, step_cap);
       }
       measure(r);
-      if (!r.converged && stalled(prev, r.residual)) break;
+      if (!r.converged && (stalled(prev, r.residual) || creep(r.iterations, r.residual))) break;
       prev = r.residual;
     }
     measure(r);
@@ -851,16 +1127,11 @@ struct Solver::Impl {
     return c;
   }
 
-  void save_pose() {
-    Skeleton& s = *sk;
-    std::copy(A::q(s).begin(), A::q(s).end(), saved_q.begin());
-    std::copy(A::angle(s).begin(), A::angle(s).end(), saved_angle.begin());
-    saved_root = A::root_position(s);
-  }
+  // undo the last apply_dtheta(true): only the joints it changed
   void restore_pose() {
     Skeleton& s = *sk;
-    std::copy(saved_q.begin(), saved_q.end(), A::q(s).begin());
-    std::copy(saved_angle.begin(), saved_angle.end(), A::angle(s).begin());
+    for (int j : active_rev)
+      if (col_of[j] >= 0) A::q(s)[j] = saved_q[j], A::angle(s)[j] = saved_angle[j];
     A::root_position(s) = saved_root;
   }
 
@@ -892,16 +1163,15 @@ struct Solver::Impl {
     const Quat root_rot = s.root_rotation();
     // unlimited ball joints without orientation targets constrain nothing but the bone
     // lengths: iterate on positions only and recover the rotations once at the end
-    bool positions_only = true;
-    for (int j : active_rev)
-      if (types[j] != JointType::ball || limited[j]) positions_only = false;
+    bool positions_only = all_free_balls;
     for (int k = 0; k < ne; ++k)
       if (s.effector(k).orientation) positions_only = false;
-    double prev = r.residual;
+    double prev = r.residual, checkpoint = r.residual;
+    bool handover = false;
     // one effector on free ball joints: the dedicated chain loop does all the iterations
     const bool chain_fast = positions_only && ne == 1;
     if (chain_fast) fabrik_chain(r);
-    for (int it = 0; it < cap && !r.converged && !chain_fast; ++it) {
+    for (int it = 0; it < cap && !r.converged && !chain_fast && !out_of_time(it, r); ++it) {
       // stage 1: forward reaching, effectors to root
       Vec3 root_goal = root;
       for (int j : active_rev) {
@@ -1049,49 +1319,45 @@ struct Solver::Impl {
             }
           }
         }
-        world[i] = detail::qmul(F, q[i]);
+        const Quat wi = detail::qmul(F, q[i]);
+        detail::put(world[i], wi);
         start[i] = st;
-        tip[i] = st + detail::rotate_x(world[i], lengths[i]);
+        tip[i] = st + detail::rotate_x(wi, lengths[i]);
       }
       r.iterations = it + 1;
       measure(r);
       if (!r.converged && stalled(prev, r.residual)) break;
       prev = r.residual;
-    }
-    if (positions_only) {
-      // joint rotations from the new bone directions: the shortest world-space turn from
-      // each bone's old direction (world still holds the old rotations), parents first
-      for (int i : active_fwd) {
-        // both directions are unit: the old one from a unit rotation, the new one a bone
-        // length long by construction
-        const Vec3 a = detail::rotate_x(world[i], 1.0);
-        const Vec3 b = (tip[i] - start[i]) / lengths[i];
-        const double c = glm::dot(a, b);
-        Quat turn;
-        if (c > -1 + 1e-12) {
-          const Vec3 x = glm::cross(a, b);
-          turn = Quat(1 + c, x.x, x.y, x.z);
-          turn = turn * (1 / std::sqrt(turn.w * turn.w + glm::dot(x, x)));
-        } else {
-          turn = detail::from_to(a, b);
-        }
-        // the new world rotation is the turn applied to the old one; no bone waits for
-        // another except through its parent's (already updated) world rotation.
-        // Renormalise by one Newton step, x (3 - |x|^2) / 2: exact to rounding near |x| = 1
-        auto renorm = [](Quat x) { return x * (0.5 * (3 - (x.w * x.w + x.x * x.x + x.y * x.y + x.z * x.z))); };
-        const Quat w = renorm(detail::qmul(turn, world[i]));
-        world[i] = w;
-        const int p = parents[i];
-        const Quat base = p >= 0 ? world[p] : root_rot;
-        const Quat F = rest_identity[i] ? base : detail::qmul(base, A::rest(s)[i]);
-        q[i] = renorm(detail::qmul(glm::conjugate(F), w));
-        // forward kinematics of the bone, in the same pass
-        start[i] = p >= 0 ? tip[p] : root;
-        tip[i] = start[i] + detail::rotate_x(w, lengths[i]);
+      // with joint constraints the passes can fight the limits and creep (or circle an
+      // unreachable target) instead of converging: when 8 iterations have not halved the
+      // error, damped least squares (monotone, limit-aware) takes the remaining iterations
+      if (r.converged || (it + 1) % 8 != 0) continue;
+      if (r.residual > 0.5 * checkpoint) {
+        handover = true;
+        break;
       }
-      // bones off every effector's path still need their transforms
-      if (static_cast<int>(active_fwd.size()) != n) s.forward_kinematics();
+      checkpoint = r.residual;
     }
+    // (a simple chain's new positions are still in cp: fabrik_chain did not scatter them)
+    if (positions_only) rebuild_rotations(chain_fast && simple_chain ? cp.data() : nullptr);
+    if (handover && !r.out_of_time) jacobian(r, Method::dls);
+  }
+
+  // joint rotations from the bone directions positions-only FABRIK left in start/tip
+  // (detail::rebuild_rotations), then the transforms of bones off every effector's path
+  void rebuild_rotations(const Vec3* points) {
+    Skeleton& s = *sk;
+    detail::RebuildArgs args{active_fwd.data(),      static_cast<int>(active_fwd.size()),
+                             s.parents().data(),     s.lengths().data(),
+                             inv_len.data(),         rest_identity.data(),
+                             A::rest(s).data(),      A::root_position(s),
+                             s.root_rotation(),      A::world(s).data(),
+                             A::q(s).data(),         A::start(s).data(),
+                             A::tip(s).data(),       scratch.data(),
+                             simple_chain,           points};
+    detail::rebuild_rotations(args);
+    // bones off every effector's path still need their transforms
+    if (static_cast<int>(active_fwd.size()) != s.bone_count()) s.forward_kinematics();
   }
 
   // The twist of ball joint i that turns its hinge child's plane onto the child's goal
@@ -1130,57 +1396,74 @@ struct Solver::Impl {
   }
 
   // FABRIK on one chain of unlimited ball joints (the root-to-effector path), on
-  // contiguous joint positions with the running point kept in registers: each stage is
-  // one dependent sweep. The scale len / |d| is computed as len * sqrt(l2) * (1 / l2)
-  // so the square root and the division run side by side instead of one after the other
-  // (the loop is latency-bound: each joint waits for the previous one)
+  // contiguous joint positions: stage 1 is a reaching pass from the target over the
+  // joints in reverse, stage 2 one from the root over stage 1's points in reverse, both
+  // by reach_pass (whose dependent path per joint is a square root, a multiplication
+  // and a subtraction). Rotations are rebuilt once, after the last iteration.
   void fabrik_chain(SolveResult& r) {
     Skeleton& s = *sk;
     const int L = static_cast<int>(active_fwd.size());
     const int cap = max_iterations();
     auto& start = A::start(s);
     auto& tip = A::tip(s);
-    const auto lengths = s.lengths();
-    // gather the path: cp[0] the root joint, cp[k + 1] the tip of path bone k
+    // gather the path: cp[0] the root joint, cp[k + 1] the tip of path bone k (cl and clr,
+    // its lengths forward and reversed, are set in prepare())
     cp[0] = start[active_fwd[0]];
-    for (int k = 0; k < L; ++k) {
-      cl[k] = lengths[active_fwd[k]];
-      cp[k + 1] = tip[active_fwd[k]];
-    }
+    for (int k = 0; k < L; ++k) cp[k + 1] = tip[active_fwd[k]];
     const Vec3 target = s.effector(0).target;
     const bool free_root = s.root_free();
     const double tol = set.tolerance;
     double prev = r.residual;
-    for (int it = 0; it < cap && !r.converged; ++it) {
-      // stage 1: from the target back to the root
-      Vec3 g = target;
-      for (int k = L - 1; k >= 0; --k) {
-        cg[k + 1] = g;
-        const Vec3 d = cp[k] - g;
-        const double l2 = glm::dot(d, d);
-        g = l2 > 1e-300 ? g + d * (cl[k] * std::sqrt(l2) * (1 / l2)) : g + (cp[k] - cp[k + 1]);
-      }
-      if (free_root) cp[0] = g;
-      // stage 2: from the root out to the effector
-      Vec3 st = cp[0];
-      for (int k = 0; k < L; ++k) {
-        const Vec3 d = cg[k + 1] - st;
-        const double l2 = glm::dot(d, d);
-        st = l2 > 1e-300 ? st + d * (cl[k] * std::sqrt(l2) * (1 / l2)) : st + (cp[k + 1] - cp[k]);
-        cp[k + 1] = st;
-      }
+    for (int it = 0; it < cap && !r.converged && !out_of_time(it, r); ++it) {
+      // stage 1: from the target back to the root; fw[j] is the new tip of bone L-1-j
+      const Vec3 root_goal = detail::reach_pass(target, &cp[L - 1], clr.data(), fw.data(), L);
+      if (free_root) cp[0] = root_goal;
+      // stage 2: from the root out to the effector, toward stage 1's tips
+      const Vec3 end = detail::reach_pass(cp[0], &fw[L - 1], cl.data(), cp.data(), L);
       r.iterations = it + 1;
-      r.residual = glm::length(st - target);
+      r.residual = glm::length(end - target);
       r.converged = r.residual <= tol;
       if (!r.converged && stalled(prev, r.residual)) break;
       prev = r.residual;
     }
-    // scatter back to the skeleton's arrays
+    // scatter back to the skeleton's arrays (a simple chain's rebuild reads cp itself)
     if (free_root) A::root_position(s) = cp[0];
+    if (simple_chain) return;
     for (int k = 0; k < L; ++k) {
       start[active_fwd[k]] = cp[k];
       tip[active_fwd[k]] = cp[k + 1];
     }
+  }
+
+  // An unreachable target for one effector on a path of unlimited ball joints from a fixed
+  // root: the closest reachable point is the tip of the straight path pointing at the target
+  // (Aristidou and Lasenby 2011, Algorithm 1, tests this first), which the iterative methods
+  // only approach slowly (DLS, SDLS and CCD need more than their caps at 1000 bones). Every
+  // bone on the path turns, by its shortest arc, onto the root-target direction; returns
+  // true when it did (the result is then final: no iteration improves on it).
+  bool straighten_if_unreachable(SolveResult& r) {
+    Skeleton& s = *sk;
+    if (ne != 1 || !all_free_balls || s.root_free() || s.effector(0).orientation) return false;
+    const int L = static_cast<int>(active_fwd.size());
+    auto& start = A::start(s);
+    auto& tip = A::tip(s);
+    const Vec3 root = start[active_fwd[0]];
+    const Vec3 d = s.effector(0).target - root;
+    const double d2 = glm::dot(d, d);
+    if (!(d2 > path_reach * path_reach)) return false;
+    // the straight path, then the rotations and forward kinematics from it
+    const Vec3 u = d / std::sqrt(d2);
+    Vec3 p = root;
+    for (int k = 0; k < L; ++k) {
+      const int i = active_fwd[k];
+      start[i] = p;
+      p += u * cl[k];
+      tip[i] = p;
+    }
+    rebuild_rotations(nullptr);
+    r.iterations = 1;
+    measure(r);
+    return true;
   }
 
   // residual from the tips only (positions-only FABRIK keeps world rotations stale)
@@ -1197,14 +1480,28 @@ struct Solver::Impl {
   SolveResult solve() {
     Skeleton& s = *sk;
     prepare();
-    std::string why;
-    if (!supports(set.method, s, &why)) throw Error("ik::Solver: " + why);
+    // whether the method applies depends only on the effectors and the method: checked once
+    if (supported_version != prepared_version || supported_method != set.method) {
+      std::string why;
+      if (!supports(set.method, s, &why)) throw Error("ik::Solver: " + why);
+      supported_version = prepared_version;
+      supported_method = set.method;
+    }
+    has_deadline = set.max_seconds > 0;
+    if (has_deadline)
+      deadline = std::chrono::steady_clock::now() +
+                 std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                     std::chrono::duration<double>(std::min(set.max_seconds, 1e9)));
     if (!set.warm_start) s.reset_pose();
     // every solver leaves kinematics current, so a warm start usually skips this pass
     if (s.kinematics_dirty()) s.forward_kinematics();
     SolveResult r;
     measure(r);
     if (ne == 0 || r.converged) return r;
+    if (set.method == Method::ccd || set.method == Method::fabrik || set.method == Method::dls ||
+        set.method == Method::sdls || set.method == Method::pseudo_inverse ||
+        set.method == Method::jacobian_transpose)
+      if (straighten_if_unreachable(r)) return r;
     switch (set.method) {
       case Method::analytic_1dof: analytic_1dof(r); break;
       case Method::analytic_3dof: analytic_3dof(r); break;
@@ -1217,7 +1514,7 @@ struct Solver::Impl {
       case Method::jacobian_transpose:
       case Method::pseudo_inverse:
       case Method::dls:
-      case Method::sdls: jacobian(r); break;
+      case Method::sdls: jacobian(r, set.method); break;
       case Method::fabrik: fabrik(r); break;
     }
     measure(r);
