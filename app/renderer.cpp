@@ -164,6 +164,24 @@ glm::quat from_y(const glm::vec3& d) {
 
 glm::vec3 f3(const Vec3& v) { return glm::vec3(v); }
 
+// filled triangles: per-vertex position, normal and colour, lit by the solids' fragment
+// shader (shaders::kMeshFs, which flips the normal on back faces: two-sided)
+constexpr const char* kTriangleVs = R"(#version 330 core
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec3 a_nrm;
+layout(location = 2) in vec4 a_color;
+uniform mat4 u_view_proj;
+out vec3 v_world;
+out vec3 v_nrm;
+out vec4 v_color;
+void main() {
+  v_world = a_pos;
+  v_nrm = a_nrm;
+  v_color = a_color;
+  gl_Position = u_view_proj * vec4(a_pos, 1.0);
+}
+)";
+
 }  // namespace
 
 Renderer::Renderer() = default;
@@ -181,7 +199,10 @@ Renderer::~Renderer() {
   glDeleteVertexArrays(1, &line_vao_);
   glDeleteVertexArrays(1, &point_vao_);
   glDeleteVertexArrays(1, &empty_vao_);
-  for (unsigned p : {mesh_program_, line_program_, point_program_, ground_program_, sky_program_, shadow_program_})
+  glDeleteBuffers(1, &triangle_vbo_);
+  glDeleteVertexArrays(1, &triangle_vao_);
+  for (unsigned p : {mesh_program_, line_program_, point_program_, ground_program_, sky_program_, shadow_program_,
+                     triangle_program_})
     glDeleteProgram(p);
 }
 
@@ -193,8 +214,9 @@ bool Renderer::init(std::string* error) {
   ground_program_ = link(shaders::kGroundVs, nullptr, shaders::kGroundFs, error);
   sky_program_ = link(shaders::kSkyVs, nullptr, shaders::kSkyFs, error);
   shadow_program_ = link(shaders::kShadowVs, nullptr, shaders::kShadowFs, error);
+  triangle_program_ = link(kTriangleVs, nullptr, shaders::kMeshFs, error);
   if (!mesh_program_ || !line_program_ || !point_program_ || !ground_program_ || !sky_program_ ||
-      !shadow_program_)
+      !shadow_program_ || !triangle_program_)
     return false;
 
   // meshes
@@ -222,6 +244,20 @@ bool Renderer::init(std::string* error) {
   };
   stream(&line_vao_, &line_vbo_);
   stream(&point_vao_, &point_vbo_);
+  // the triangle stream: position, normal, colour
+  glGenVertexArrays(1, &triangle_vao_);
+  glGenBuffers(1, &triangle_vbo_);
+  glBindVertexArray(triangle_vao_);
+  glBindBuffer(GL_ARRAY_BUFFER, triangle_vbo_);
+  {
+    const GLsizei stride = sizeof(TriVertex);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(offsetof(TriVertex, pos)));
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(offsetof(TriVertex, nrm)));
+    glEnableVertexAttribArray(2);
+    glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(offsetof(TriVertex, color)));
+  }
   glGenVertexArrays(1, &empty_vao_);
   glBindVertexArray(0);
   ready_ = true;
@@ -266,6 +302,8 @@ void Renderer::begin_frame() {
   lines_.clear();
   points_.clear();
   labels_.clear();
+  triangles_.clear();
+  transparent_triangles_.clear();
 }
 
 void Renderer::add_instance(Mesh m, const glm::vec3& pos, const glm::vec3& scale, const glm::quat& q, Color c) {
@@ -349,6 +387,53 @@ void Renderer::arrow(const Vec3& from, const Vec3& to, double head, Color c) {
 
 void Renderer::text(const Vec3& p, std::string_view s, Color c) { text(p, s, c, 1.0f, 0.0f); }
 
+void Renderer::triangle(const Vec3& a, const Vec3& b, const Vec3& c, Color col) {
+  // one flat normal for the three corners (push_triangle handles degenerate ones)
+  const Vec3 n = glm::cross(b - a, c - a);
+  const TriangleCorner v[3] = {{a, n, col}, {b, n, col}, {c, n, col}};
+  push_triangle(v);
+}
+
+void Renderer::triangle(const TriangleCorner& a, const TriangleCorner& b, const TriangleCorner& c) {
+  const TriangleCorner v[3] = {a, b, c};
+  push_triangle(v);
+}
+
+void Renderer::push_triangle(const TriangleCorner (&v)[3]) {
+  // a zero normal takes the face normal, a degenerate face points up (never NaN in the shader)
+  glm::vec3 face = glm::cross(f3(v[1].p - v[0].p), f3(v[2].p - v[0].p));
+  const float fl = glm::length(face);
+  face = fl > 0 && std::isfinite(fl) ? face / fl : glm::vec3(0, 1, 0);
+  const bool translucent = v[0].c.a < 0.999f || v[1].c.a < 0.999f || v[2].c.a < 0.999f;
+  std::vector<TriVertex>& out = translucent ? transparent_triangles_ : triangles_;
+  for (const TriangleCorner& k : v) {
+    glm::vec3 n = f3(k.n);
+    const float nl = glm::length(n);
+    n = nl > 0 && std::isfinite(nl) ? n / nl : face;
+    out.push_back(TriVertex{{float(k.p.x), float(k.p.y), float(k.p.z)}, {n.x, n.y, n.z}, {k.c.r, k.c.g, k.c.b, k.c.a}});
+  }
+}
+
+void Renderer::shadow(const Vec3& center, double radius) { add_shadow(f3(center), static_cast<float>(radius)); }
+
+void Renderer::draw_triangles(const std::vector<TriVertex>& list, const glm::vec3& eye, const glm::vec3& key,
+                              const glm::vec3& fill) {
+  if (list.empty()) return;
+  // the solids' lighting, with the surface pushed back a little so lines on it win
+  glUseProgram(triangle_program_);
+  glUniformMatrix4fv(glGetUniformLocation(triangle_program_, "u_view_proj"), 1, GL_FALSE, glm::value_ptr(view_proj_));
+  glUniform3fv(glGetUniformLocation(triangle_program_, "u_eye"), 1, glm::value_ptr(eye));
+  glUniform3fv(glGetUniformLocation(triangle_program_, "u_key"), 1, glm::value_ptr(key));
+  glUniform3fv(glGetUniformLocation(triangle_program_, "u_fill"), 1, glm::value_ptr(fill));
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  glPolygonOffset(1.0f, 1.0f);
+  glBindVertexArray(triangle_vao_);
+  glBindBuffer(GL_ARRAY_BUFFER, triangle_vbo_);
+  glBufferData(GL_ARRAY_BUFFER, list.size() * sizeof(TriVertex), list.data(), GL_STREAM_DRAW);
+  glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(list.size()));
+  glDisable(GL_POLYGON_OFFSET_FILL);
+}
+
 void Renderer::text(const Vec3& p, std::string_view s, Color c, float scale, float align_x) {
   labels_.push_back(Label{p, std::string(s), c, scale, align_x});
 }
@@ -374,6 +459,7 @@ void Renderer::render(const Camera& camera, int width, int height) {
   stats_.lines = int(lines_.size() / 2);
   stats_.points = int(points_.size());
   stats_.labels = int(labels_.size());
+  stats_.triangles = int((triangles_.size() + transparent_triangles_.size()) / 3);
 
   glViewport(0, 0, width, height);
   glDisable(GL_SCISSOR_TEST);
@@ -428,6 +514,7 @@ void Renderer::render(const Camera& camera, int width, int height) {
   glUniform3fv(glGetUniformLocation(mesh_program_, "u_key"), 1, glm::value_ptr(key));
   glUniform3fv(glGetUniformLocation(mesh_program_, "u_fill"), 1, glm::value_ptr(fill));
   for (int m = 0; m < kMeshCount; ++m) draw_instances(static_cast<Mesh>(m), opaque_[m]);
+  draw_triangles(triangles_, eye, key, fill);
 
   // lines as screen-space quads
   if (!lines_.empty()) {
@@ -455,6 +542,7 @@ void Renderer::render(const Camera& camera, int width, int height) {
   glDepthMask(GL_FALSE);
   glUseProgram(mesh_program_);
   for (int m = 0; m < kMeshCount; ++m) draw_instances(static_cast<Mesh>(m), transparent_[m]);
+  draw_triangles(transparent_triangles_, eye, key, fill);
   glDepthMask(GL_TRUE);
 
   glBindVertexArray(0);

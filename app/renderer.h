@@ -34,6 +34,15 @@ struct DrawStats {
   int lines = 0;   ///< line segments (including arrow shafts and the grid)
   int points = 0;  ///< points
   int labels = 0;  ///< text labels
+  int triangles = 0;  ///< filled triangles (triangle(), e.g. cloth)
+};
+
+/// One corner of a smooth-shaded triangle (Renderer::triangle): world position (m),
+/// normal (any length > 0; zero falls back to the face normal) and colour.
+struct TriangleCorner {
+  Vec3 p{0, 0, 0};  ///< position (m)
+  Vec3 n{0, 0, 0};  ///< normal, not necessarily unit
+  Color c{};        ///< colour (alpha < 1: drawn translucent, after the opaque scene)
 };
 
 /// OpenGL 3.3 renderer implementing pba::DebugDraw. Create after a GL context is current.
@@ -56,6 +65,16 @@ class Renderer final : public pba::DebugDraw {
   void plane(const Vec3& normal, double offset, double half_size, Color c) override;
   void arrow(const Vec3& from, const Vec3& to, double head, Color c) override;
   void text(const Vec3& p, std::string_view s, Color c) override;
+  /// A filled, lit, two-sided triangle with the flat normal of its plane (both faces lit
+  /// alike; a, b, c counter-clockwise seen from the front). Drawn slightly behind lines
+  /// at the same depth, so edges drawn on a surface stay visible.
+  void triangle(const Vec3& a, const Vec3& b, const Vec3& c, Color col) override;
+
+  /// A lit, two-sided triangle with a normal and colour per corner (smooth shading, e.g.
+  /// cloth with vertex normals); counter-clockwise seen from the side the normals face.
+  void triangle(const TriangleCorner& a, const TriangleCorner& b, const TriangleCorner& c);
+  /// A soft blob shadow on the ground under `center`, as solids cast (`radius` m, > 0).
+  void shadow(const Vec3& center, double radius);
 
   /// A line `width_px` pixels wide (line() uses the current default width).
   void line(const Vec3& a, const Vec3& b, Color c, float width_px);
@@ -94,6 +113,7 @@ class Renderer final : public pba::DebugDraw {
     float color[4];
   };
   struct LineVertex { float pos[3]; float color[4]; float width; };
+  struct TriVertex { float pos[3]; float nrm[3]; float color[4]; };
   struct Label { Vec3 p; std::string s; Color c; float scale; float align_x; };
   enum Mesh { kSphere, kCube, kCylinder, kCone, kQuad, kMeshCount };
   struct MeshBuffers { unsigned vao = 0, vbo = 0, ibo = 0, instance_vbo = 0; int index_count = 0; };
@@ -102,6 +122,9 @@ class Renderer final : public pba::DebugDraw {
   void add_shadow(const glm::vec3& pos, float radius);
   void build_mesh(Mesh m, const std::vector<float>& vertices, const std::vector<unsigned>& indices);
   void draw_instances(Mesh m, const std::vector<Instance>& list);
+  void push_triangle(const TriangleCorner (&v)[3]);
+  void draw_triangles(const std::vector<TriVertex>& list, const glm::vec3& eye, const glm::vec3& key,
+                      const glm::vec3& fill);
 
   float line_width_ = 1.5f;
   std::vector<Instance> opaque_[kMeshCount];
@@ -110,12 +133,15 @@ class Renderer final : public pba::DebugDraw {
   std::vector<LineVertex> lines_;
   std::vector<LineVertex> points_;
   std::vector<Label> labels_;
+  std::vector<TriVertex> triangles_;              // opaque filled triangles
+  std::vector<TriVertex> transparent_triangles_;  // translucent ones, drawn last
   DrawStats stats_;
 
   MeshBuffers meshes_[kMeshCount];
   unsigned mesh_program_ = 0, line_program_ = 0, point_program_ = 0, ground_program_ = 0,
-           sky_program_ = 0, shadow_program_ = 0;
+           sky_program_ = 0, shadow_program_ = 0, triangle_program_ = 0;
   unsigned line_vao_ = 0, line_vbo_ = 0, point_vao_ = 0, point_vbo_ = 0, empty_vao_ = 0;
+  unsigned triangle_vao_ = 0, triangle_vbo_ = 0;
   glm::mat4 view_proj_{1.0f};
   glm::vec2 viewport_{1.0f, 1.0f};
   bool ready_ = false;
