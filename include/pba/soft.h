@@ -23,7 +23,7 @@
 //
 // Everything here is usable without a World; SoftSystem makes soft bodies components of
 // World entities, and scene files describe them in a "soft_bodies" array
-// (docs/scene-format.md).
+// (docs/scene-format.md). The models and samples are explained in docs/soft-bodies.md.
 #pragma once
 
 #include <cstddef>
@@ -117,6 +117,19 @@ struct SoftBodyDef {
   /// A distance constraint breaks for good when its strain (l - l0)/l0 exceeds this at
   /// the end of a step; finite and >= 0; 0 = never tears.
   double tear_strain = 0;
+  /// XPBD long-range attachments (Kim, Chentanez & Mueller 2012, "Long range attachments
+  /// - a method to simulate inextensible clothing in computer games", sec. 4): each free
+  /// particle i is tethered to its nearest pinned particle a (nearest in the rest shape),
+  /// and once per substep, after the constraint iterations, if |x_i - x_a| > L_i it is
+  /// moved onto the sphere of radius L_i about x_a (the pin has infinite mass). L_i is
+  /// the straight-line distance between the two particles as built (the rest geodesic
+  /// for a sheet built flat, a rope built straight or a solid). Unilateral: a particle
+  /// within its tether is never touched, so a slack cloth is unaffected. Tethers follow
+  /// pin(), unpin() and grab() (recomputed before the next step); set_pin_target() moves
+  /// the anchor but keeps L_i. Ignored by MassSpring, and off while tear_strain > 0: a
+  /// tether is a shortcut through the cloth, which would keep holding a piece that has
+  /// torn away from its pins.
+  bool tethers = true;
   /// Collision thickness (m): particles are kept this far outside colliders; finite, >= 0.
   double thickness = 0.01;
   /// Coulomb friction coefficient against colliders, finite and >= 0; each contact uses

@@ -320,6 +320,12 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
   s.n = n;
   for (auto* col : {&s.x, &s.y, &s.z, &s.w}) col->resize(n + detail::kSoftPad, 0.f);
   s.px = s.x, s.py = s.y, s.pz = s.z;
+  // rest shape and tethers (filled before the first step)
+  s.rx.assign(s.x.begin(), s.x.begin() + static_cast<std::ptrdiff_t>(n));
+  s.ry.assign(s.y.begin(), s.y.begin() + static_cast<std::ptrdiff_t>(n));
+  s.rz.assign(s.z.begin(), s.z.begin() + static_cast<std::ptrdiff_t>(n));
+  s.tether.resize(n), s.tether_len.assign(n, 0.f);
+  for (std::size_t i = 0; i < n; ++i) s.tether[i] = static_cast<std::uint32_t>(i);
   s.ax.assign(n, 0.f), s.ay.assign(n, 0.f), s.az.assign(n, 0.f);
   // constraints in solver order, runs per colour
   const std::size_t nc = cons.size();
@@ -793,6 +799,7 @@ void SoftBody::pin(std::size_t i, const Vec3& target) {
   s.pin_from.push_back(position(i));
   s.pin_to.push_back(target);
   s.ms_valid = false;
+  s.tethers_dirty = true;
 }
 
 void SoftBody::unpin(std::size_t i) {
@@ -808,6 +815,7 @@ void SoftBody::unpin(std::size_t i) {
   s.w[i] = static_cast<float>(1.0 / s.mass[i]);
   if (s.grab == i) s.grab = kNoParticle;
   s.ms_valid = false;
+  s.tethers_dirty = true;
 }
 
 bool SoftBody::is_pinned(std::size_t i) const {

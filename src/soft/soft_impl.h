@@ -100,6 +100,12 @@ struct SoftBody::Impl {
   std::size_t n_colors = 0;
   std::size_t n_broken = 0;
 
+  // ---- long-range attachments (Kim, Chentanez & Mueller 2012) ----
+  std::vector<float> rx, ry, rz;           // rest positions (m): the positions at build
+  std::vector<std::uint32_t> tether;       // each particle's anchor (nearest pin), or itself: no tether
+  std::vector<float> tether_len;           // max distance to the anchor (m); 0 without a tether
+  bool tethers_dirty = true;               // pins changed: recompute before the next XPBD step
+
   // ---- tetrahedra ----
   std::vector<SoftTet> tets;
   std::vector<float> tet_rest;  // rest volumes (m^3), > 0
@@ -133,6 +139,7 @@ struct SoftBody::Impl {
   // solver steps (xpbd.cpp, mass_spring.cpp)
   void step_xpbd(double t, double dt);
   void step_mass_spring(double t, double dt);
+  void update_tethers();  // xpbd.cpp: each particle's nearest pin in the rest shape
   // shared pieces (soft_body.cpp)
   void prepare_colliders(std::span<const Collider> colliders, double dt);
   void external_accelerations(double t);

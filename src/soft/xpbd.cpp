@@ -6,6 +6,7 @@
 // Macklin, Storey, Lu, Terdiman, Chentanez, Jeschke & Mueller 2019, "Small steps in
 // physics simulation" (substeps with one iteration, multipliers reset each substep).
 #include <cmath>
+#include <limits>
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
@@ -513,7 +514,84 @@ void solve_volumes(SoftBody::Impl& s, float at, bool use_lambda) {
   }
 }
 
+// Long-range attachments (Kim, Chentanez & Mueller 2012, sec. 4, the unilateral
+// constraint C_i = |x_i - x_a| - L_i <= 0 with the anchor's inverse mass 0): a particle
+// beyond its tether is moved onto the sphere of radius L_i about its anchor a; one
+// within it is not touched. Particles without a tether are their own anchor with L = 0
+// (|x_i - x_i|^2 = 0 is never > 0), so the loop has no branch on the tether's presence.
+// Each particle reads only its anchor, a pinned particle no tether moves: no dependencies.
+void project_tethers(std::size_t i0, std::size_t n, float* PBA_SOFT_RESTRICT x, float* PBA_SOFT_RESTRICT y,
+                     float* PBA_SOFT_RESTRICT z, const std::uint32_t* PBA_SOFT_RESTRICT anchor,
+                     const float* PBA_SOFT_RESTRICT len) {
+  for (std::size_t i = i0; i < n; ++i) {
+    // the offset from the anchor and its length
+    const std::uint32_t a = anchor[i];
+    const float ax = x[a], ay = y[a], az = z[a];
+    const float dx = x[i] - ax, dy = y[i] - ay, dz = z[i] - az;
+    const float d2 = dx * dx + dy * dy + dz * dz;
+    const float l = len[i];
+    // beyond the tether: onto the sphere (selects, not a branch: the loop if-converts;
+    // without a tether l = d2 = 0 and s is NaN, never selected)
+    const bool out = d2 > l * l;
+    const float s = l / std::sqrt(d2);
+    const float nx = ax + dx * s, ny = ay + dy * s, nz = az + dz * s;
+    x[i] = out ? nx : x[i], y[i] = out ? ny : y[i], z[i] = out ? nz : z[i];
+  }
+}
+
+#if PBA_SOFT_HAVE_AVX2
+// project_tethers for particles [0, 8 floor(n / 8)), 8 at a time with gathered anchors:
+// the same operations in the same order (sqrt and division are correctly rounded in
+// both), so the same bits. A gathered anchor is a pinned particle (never written) or the
+// lane's own particle (read before the store). Returns the particles done.
+__attribute__((target("avx2"))) std::size_t project_tethers_avx2(std::size_t n, float* x, float* y, float* z,
+                                                                 const std::uint32_t* anchor, const float* len) {
+  std::size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    // the offset from the anchors and its squared length
+    const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(anchor + i));
+    const __m256 ax = _mm256_i32gather_ps(x, a, 4), ay = _mm256_i32gather_ps(y, a, 4);
+    const __m256 az = _mm256_i32gather_ps(z, a, 4);
+    const __m256 xi = _mm256_loadu_ps(x + i), yi = _mm256_loadu_ps(y + i), zi = _mm256_loadu_ps(z + i);
+    const __m256 dx = _mm256_sub_ps(xi, ax), dy = _mm256_sub_ps(yi, ay), dz = _mm256_sub_ps(zi, az);
+    const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+    const __m256 l = _mm256_loadu_ps(len + i);
+    // beyond the tether: onto the sphere
+    const __m256 out = _mm256_cmp_ps(d2, _mm256_mul_ps(l, l), _CMP_GT_OQ);
+    const __m256 sc = _mm256_div_ps(l, _mm256_sqrt_ps(d2));
+    _mm256_storeu_ps(x + i, _mm256_blendv_ps(xi, _mm256_add_ps(ax, _mm256_mul_ps(dx, sc)), out));
+    _mm256_storeu_ps(y + i, _mm256_blendv_ps(yi, _mm256_add_ps(ay, _mm256_mul_ps(dy, sc)), out));
+    _mm256_storeu_ps(z + i, _mm256_blendv_ps(zi, _mm256_add_ps(az, _mm256_mul_ps(dz, sc)), out));
+  }
+  return i;
+}
+#endif
+
 }  // namespace
+
+// Each free particle's anchor: the pinned particle nearest to it in the rest shape (ties
+// to the earliest pin), and the tether length, their rest distance rounded up to float
+// plus a relative margin of 2^-20 so that a particle exactly at its rest distance, whose
+// float distance may round a few ulps long, is not moved (Kim et al. 2012, sec. 4; the
+// paper tethers to several pins, one nearest is enough for a grid pinned along an edge).
+// O(particles x pins), run only after pins change; writes preallocated columns.
+void SoftBody::Impl::update_tethers() {
+  tethers_dirty = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    // no tether unless a pin is found (pinned particles keep none)
+    tether[i] = static_cast<std::uint32_t>(i);
+    tether_len[i] = 0.f;
+    if (pinned[i]) continue;
+    // the nearest pin in the rest shape
+    double best = std::numeric_limits<double>::infinity();
+    for (const std::uint32_t p : pins) {
+      const double dx = double(rx[i]) - rx[p], dy = double(ry[i]) - ry[p], dz = double(rz[i]) - rz[p];
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      if (d2 < best) best = d2, tether[i] = p;
+    }
+    if (tether[i] != i) tether_len[i] = static_cast<float>(std::sqrt(best) * (1.0 + 0x1p-20));
+  }
+}
 
 void SoftBody::Impl::step_xpbd(double t, double dt) {
   const int S = def.substeps;
@@ -543,6 +621,9 @@ void SoftBody::Impl::step_xpbd(double t, double dt) {
                        static_cast<float>(def.forces.gravity.z), static_cast<float>(def.forces.linear_drag),
                        static_cast<float>(def.forces.quadratic_drag), static_cast<float>(wind.x),
                        static_cast<float>(wind.y), static_cast<float>(wind.z)};
+  // tethers: on unless tearing, recomputed after the pins changed
+  const bool tethered = def.tethers && !(def.tear_strain > 0) && !pins.empty();
+  if (tethered && tethers_dirty) update_tethers();
   for (int sub = 1; sub <= S; ++sub) {
     // predict (with the previous substep's velocity update), then the pins slide toward
     // their targets (exactly there at the last substep)
@@ -561,6 +642,15 @@ void SoftBody::Impl::step_xpbd(double t, double dt) {
     for (int it = 0; it < def.iterations; ++it) {
       sweep_any(a, use_lambda, damp);
       if (!tets.empty()) solve_volumes(*this, at_volume, use_lambda);
+    }
+    // long-range attachments, after the constraints (Kim et al. 2012)
+    if (tethered) {
+      std::size_t done = 0;
+#if PBA_SOFT_HAVE_AVX2
+      if (a.avx2 && n < (std::size_t{1} << 31))
+        done = project_tethers_avx2(n, x.data(), y.data(), z.data(), tether.data(), tether_len.data());
+#endif
+      project_tethers(done, n, x.data(), y.data(), z.data(), tether.data(), tether_len.data());
     }
     // collisions (timed per step, not per substep: a clock read costs as much as
     // colliding a small body)

@@ -86,3 +86,22 @@ TEST(SoftAllocations, NonePerWorldTick) {
   for (int i = 0; i < 200; ++i) w.step();
   EXPECT_EQ(g_allocations.load() - before, 0);
 }
+
+// Tethers (on by default, off in the tearing cloth above): re-anchoring after unpin()
+// and grab() writes preallocated columns, so stepping through pin changes allocates nothing.
+TEST(SoftAllocations, NonePerTetheredStepThroughPinChanges) {
+  pba::SoftBodyDef d;
+  d.substeps = 4;
+  pba::SoftBody c = pba::SoftBody::cloth_grid({.nx = 16, .ny = 16}, d);
+  double t = 0;
+  for (int i = 0; i < 20; ++i, t += 1.0 / 60) c.step(t, 1.0 / 60);
+  const long long before = g_allocations.load();
+  for (int i = 0; i < 100; ++i, t += 1.0 / 60) {
+    if (i == 10) c.unpin(3);
+    if (i == 30) c.grab(255, c.position(255));
+    if (i == 50) c.release();
+    if (i == 70) c.pin(3);
+    c.step(t, 1.0 / 60);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0);
+}
