@@ -5,22 +5,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/clones.h"
 #include "pba/core.h"
 
 namespace pba::ik::detail {
 
 inline constexpr double kPi = 3.141592653589793;
 
-// Hot IK functions are compiled for AVX2 and for the baseline; the loader picks one (GCC
-// function multi-versioning). -ffp-contract=off keeps both free of fused multiply-adds, so
-// both give the same bits. Not under the sanitizers: the ifunc resolver runs during
-// relocation, before the sanitizer runtime is up.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
-    !defined(__SANITIZE_THREAD__)
-#define PBA_IK_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define PBA_IK_CLONES
-#endif
+// Hot IK functions are compiled for AVX2 and the baseline: PBA_CLONES (core/clones.h).
 
 /// d = v, component by component. A plain quaternion assignment after scalar arithmetic
 /// makes GCC assemble the value on the stack with 8-byte stores and copy it with 16-byte

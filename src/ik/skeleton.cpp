@@ -282,8 +282,8 @@ bool Skeleton::within_limits(double tol, int* bad) const {
 namespace {
 
 // forward kinematics over a skeleton's arrays, parents before children (compiled for AVX2
-// and the baseline, same bits: see PBA_IK_CLONES)
-PBA_IK_CLONES void forward_pass(int n, const int* parent, const std::uint8_t* rest_identity, const Quat* rest,
+// and the baseline, same bits: see PBA_CLONES)
+PBA_CLONES void forward_pass(int n, const int* parent, const std::uint8_t* rest_identity, const Quat* rest,
                                 const Quat* q, const double* length, const Quat& root_rotation,
                                 const Vec3& root_position, Quat* world, Vec3* start, Vec3* tip) {
   for (int i = 0; i < n; ++i) {

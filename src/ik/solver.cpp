@@ -204,7 +204,7 @@ void jacobi_eigen(const double* Am, int m, double* V, double* w, double* a) {
   for (int i = 0; i < m; ++i) w[i] = a[i * m + i];
 }
 
-PBA_IK_CLONES Vec3 reach_pass(const Vec3& from, const Vec3* q, const double* len, Vec3* out, int count) {
+PBA_CLONES Vec3 reach_pass(const Vec3& from, const Vec3* q, const double* len, Vec3* out, int count) {
   constexpr double kTiny = 1e-300;  // below this squared distance the direction is undefined
   // a direction for a step whose point coincides with its goal: the one between the goals
   // (the bone keeps the pose it had), else +X
@@ -251,7 +251,7 @@ PBA_IK_CLONES Vec3 reach_pass(const Vec3& from, const Vec3* q, const double* len
   }
 }
 
-PBA_IK_CLONES void rebuild_rotations(const RebuildArgs& a) {
+PBA_CLONES void rebuild_rotations(const RebuildArgs& a) {
   // Three passes, so that the bones' independent work overlaps: in one loop, a bone's turn,
   // product and normalisation formed a dependent path of ~90 cycles in ~190 instructions,
   // about what the out-of-order window holds, so bones hardly overlapped (108 cycles per

@@ -154,7 +154,7 @@ namespace detail {
 // TwoBoneJob::Run, compiled for AVX2 and for the baseline (GCC function multi-versioning:
 // the three-operand encoding spares the register copies of the two-operand one); both give
 // the same bits (-ffp-contract=off: no fused multiply-adds)
-PBA_IK_CLONES bool run_two_bone(TwoBoneJob& job) {
+PBA_CLONES bool run_two_bone(TwoBoneJob& job) {
   const Limb l(job);
   if (!l.valid(job)) return false;
   const double min_mid_angle = job.min_mid_angle, max_mid_angle = job.max_mid_angle;

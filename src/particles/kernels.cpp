@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/clones.h"
 #include "kernels.h"
 
 namespace pba::detail {
@@ -308,14 +309,8 @@ PBA_INLINE bool far_from_all(const Swept& s, const Reach* reach, std::size_t n) 
 
 }  // namespace
 
-// compiled for AVX2 and for the baseline; the loader picks one at start-up (GCC function
-// multi-versioning). -ffp-contract=off keeps both free of fused multiply-adds, so both
-// give the same bits. Not under the sanitizers: the ifunc resolver runs during
-// relocation, before the sanitizer runtime is up, and crashes the program (TSan).
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
-    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+// compiled for AVX2 and for the baseline, same bits: PBA_CLONES (core/clones.h)
+PBA_CLONES
 FusedResult fused_semi_implicit_euler(const FusedArgs& a) {
   FusedResult out;
   // a uniform inverse mass or radius: one L1 array of the value stands in for the column

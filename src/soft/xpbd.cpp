@@ -12,6 +12,7 @@
 #include <immintrin.h>
 #endif
 
+#include "core/clones.h"
 #include "soft_impl.h"
 
 namespace pba {
@@ -359,17 +360,9 @@ PBA_SOFT_INLINE void sweep(const SolveArgs& s) {
   }
 }
 
-// compiled for AVX2 and for the baseline; the loader picks one (GCC function
-// multi-versioning). -ffp-contract=off keeps both free of fused multiply-adds, so both
-// give the same bits. Not under the sanitizers (the ifunc resolver runs before them).
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
-    !defined(__SANITIZE_THREAD__)
-#define PBA_SOFT_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define PBA_SOFT_CLONES
-#endif
+// compiled for AVX2 and for the baseline, same bits: PBA_CLONES (core/clones.h)
 
-PBA_SOFT_CLONES void sweep_any(const SolveArgs& s, bool lambda, bool damp) {
+PBA_CLONES void sweep_any(const SolveArgs& s, bool lambda, bool damp) {
   if (lambda) {
     if (damp) sweep<true, true>(s);
     else sweep<true, false>(s);
@@ -444,7 +437,7 @@ PBA_SOFT_INLINE void predict_impl(std::size_t n, float* PBA_SOFT_RESTRICT x, flo
   }
 }
 
-PBA_SOFT_CLONES void predict(const PredictArgs& p, bool ext, bool drag, bool from_x) {
+PBA_CLONES void predict(const PredictArgs& p, bool ext, bool drag, bool from_x) {
 #define PBA_SOFT_PREDICT(E, D, F) \
   predict_impl<E, D, F>(p.n, p.x, p.y, p.z, p.px, p.py, p.pz, p.vx, p.vy, p.vz, p.w, p.ax, p.ay, p.az, p)
   const int variant = (ext ? 4 : 0) + (drag ? 2 : 0) + (from_x ? 1 : 0);
@@ -462,7 +455,7 @@ PBA_SOFT_CLONES void predict(const PredictArgs& p, bool ext, bool drag, bool fro
 }
 
 // Velocity update v = (x - x_prev) scale, with scale = exp(-damping h) / h.
-PBA_SOFT_CLONES void update_velocities(std::size_t n, const float* PBA_SOFT_RESTRICT x, const float* PBA_SOFT_RESTRICT y,
+PBA_CLONES void update_velocities(std::size_t n, const float* PBA_SOFT_RESTRICT x, const float* PBA_SOFT_RESTRICT y,
                                        const float* PBA_SOFT_RESTRICT z, const float* PBA_SOFT_RESTRICT px,
                                        const float* PBA_SOFT_RESTRICT py, const float* PBA_SOFT_RESTRICT pz,
                                        float* PBA_SOFT_RESTRICT vx, float* PBA_SOFT_RESTRICT vy,
