@@ -164,24 +164,6 @@ glm::quat from_y(const glm::vec3& d) {
 
 glm::vec3 f3(const Vec3& v) { return glm::vec3(v); }
 
-// filled triangles: per-vertex position, normal and colour, lit by the solids' fragment
-// shader (shaders::kMeshFs, which flips the normal on back faces: two-sided)
-constexpr const char* kTriangleVs = R"(#version 330 core
-layout(location = 0) in vec3 a_pos;
-layout(location = 1) in vec3 a_nrm;
-layout(location = 2) in vec4 a_color;
-uniform mat4 u_view_proj;
-out vec3 v_world;
-out vec3 v_nrm;
-out vec4 v_color;
-void main() {
-  v_world = a_pos;
-  v_nrm = a_nrm;
-  v_color = a_color;
-  gl_Position = u_view_proj * vec4(a_pos, 1.0);
-}
-)";
-
 }  // namespace
 
 Renderer::Renderer() = default;
@@ -214,7 +196,7 @@ bool Renderer::init(std::string* error) {
   ground_program_ = link(shaders::kGroundVs, nullptr, shaders::kGroundFs, error);
   sky_program_ = link(shaders::kSkyVs, nullptr, shaders::kSkyFs, error);
   shadow_program_ = link(shaders::kShadowVs, nullptr, shaders::kShadowFs, error);
-  triangle_program_ = link(kTriangleVs, nullptr, shaders::kMeshFs, error);
+  triangle_program_ = link(shaders::kTriangleVs, nullptr, shaders::kMeshFs, error);
   if (!mesh_program_ || !line_program_ || !point_program_ || !ground_program_ || !sky_program_ ||
       !shadow_program_ || !triangle_program_)
     return false;

@@ -51,6 +51,24 @@ void main() {
 }
 )";
 
+/// Filled triangles: per-vertex position, normal and colour, lit by the solids' fragment
+/// shader (kMeshFs, which flips the normal on back faces: two-sided)
+inline constexpr const char* kTriangleVs = R"(#version 330 core
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec3 a_nrm;
+layout(location = 2) in vec4 a_color;
+uniform mat4 u_view_proj;
+out vec3 v_world;
+out vec3 v_nrm;
+out vec4 v_color;
+void main() {
+  v_world = a_pos;
+  v_nrm = a_nrm;
+  v_color = a_color;
+  gl_Position = u_view_proj * vec4(a_pos, 1.0);
+}
+)";
+
 /// Screen-space thick lines: a geometry shader turns each segment into a quad.
 inline constexpr const char* kLineVs = R"(#version 330 core
 layout(location = 0) in vec3 a_pos;
