@@ -104,6 +104,8 @@ struct SoftBody::Impl {
   std::vector<float> rx, ry, rz;           // rest positions (m): the positions at build
   std::vector<std::uint32_t> tether;       // each particle's anchor (nearest pin), or itself: no tether
   std::vector<float> tether_len;           // max distance to the anchor (m); 0 without a tether
+  std::vector<float> anchor_x, anchor_y, anchor_z;  // each anchor's position (m), copied when pins move
+  long long anchors_step = -1;             // the last step whose tether pass ran (anchors valid after it)
   bool tethers_dirty = true;               // pins changed: recompute before the next XPBD step
 
   // ---- tetrahedra ----

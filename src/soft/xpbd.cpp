@@ -512,14 +512,16 @@ void solve_volumes(SoftBody::Impl& s, float at, bool use_lambda) {
 // beyond its tether is moved onto the sphere of radius L_i about its anchor a; one
 // within it is not touched. Particles without a tether are their own anchor with L = 0
 // (|x_i - x_i|^2 = 0 is never > 0), so the loop has no branch on the tether's presence.
-// Each particle reads only its anchor, a pinned particle no tether moves: no dependencies.
+// The anchors' positions come from the columns (ax, ay, az), copied from the pins by
+// copy_anchors whenever a pin moves, so the pass streams contiguous memory; a pinned
+// particle no tether moves, so the copies stay exact between pin moves.
 void project_tethers(std::size_t i0, std::size_t n, float* PBA_SOFT_RESTRICT x, float* PBA_SOFT_RESTRICT y,
-                     float* PBA_SOFT_RESTRICT z, const std::uint32_t* PBA_SOFT_RESTRICT anchor,
+                     float* PBA_SOFT_RESTRICT z, const float* PBA_SOFT_RESTRICT anchor_x,
+                     const float* PBA_SOFT_RESTRICT anchor_y, const float* PBA_SOFT_RESTRICT anchor_z,
                      const float* PBA_SOFT_RESTRICT len) {
   for (std::size_t i = i0; i < n; ++i) {
     // the offset from the anchor and its length
-    const std::uint32_t a = anchor[i];
-    const float ax = x[a], ay = y[a], az = z[a];
+    const float ax = anchor_x[i], ay = anchor_y[i], az = anchor_z[i];
     const float dx = x[i] - ax, dy = y[i] - ay, dz = z[i] - az;
     const float d2 = dx * dx + dy * dy + dz * dz;
     const float l = len[i];
@@ -533,18 +535,18 @@ void project_tethers(std::size_t i0, std::size_t n, float* PBA_SOFT_RESTRICT x, 
 }
 
 #if PBA_SOFT_HAVE_AVX2
-// project_tethers for particles [0, 8 floor(n / 8)), 8 at a time with gathered anchors:
-// the same operations in the same order (sqrt and division are correctly rounded in
-// both), so the same bits. A gathered anchor is a pinned particle (never written) or the
-// lane's own particle (read before the store). Returns the particles done.
-__attribute__((target("avx2"))) std::size_t project_tethers_avx2(std::size_t n, float* x, float* y, float* z,
-                                                                 const std::uint32_t* anchor, const float* len) {
+// project_tethers for particles [0, 8 floor(n / 8)), 8 at a time: the same operations
+// in the same order (sqrt and division are correctly rounded in both), so the same bits.
+// Returns the particles done.
+__attribute__((target("avx2"))) std::size_t project_tethers_avx2(std::size_t n, float* PBA_SOFT_RESTRICT x,
+                                                                 float* PBA_SOFT_RESTRICT y, float* PBA_SOFT_RESTRICT z,
+                                                                 const float* anchor_x, const float* anchor_y,
+                                                                 const float* anchor_z, const float* len) {
   std::size_t i = 0;
   for (; i + 8 <= n; i += 8) {
     // the offset from the anchors and its squared length
-    const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(anchor + i));
-    const __m256 ax = _mm256_i32gather_ps(x, a, 4), ay = _mm256_i32gather_ps(y, a, 4);
-    const __m256 az = _mm256_i32gather_ps(z, a, 4);
+    const __m256 ax = _mm256_loadu_ps(anchor_x + i), ay = _mm256_loadu_ps(anchor_y + i);
+    const __m256 az = _mm256_loadu_ps(anchor_z + i);
     const __m256 xi = _mm256_loadu_ps(x + i), yi = _mm256_loadu_ps(y + i), zi = _mm256_loadu_ps(z + i);
     const __m256 dx = _mm256_sub_ps(xi, ax), dy = _mm256_sub_ps(yi, ay), dz = _mm256_sub_ps(zi, az);
     const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
@@ -559,6 +561,15 @@ __attribute__((target("avx2"))) std::size_t project_tethers_avx2(std::size_t n, 
   return i;
 }
 #endif
+
+// Copies each particle's anchor position (its tether's pin, or itself) into the anchor
+// columns: a gather, run only in substeps where a pin has moved.
+void copy_anchors(SoftBody::Impl& s) {
+  for (std::size_t i = 0; i < s.n; ++i) {
+    const std::uint32_t a = s.tether[i];
+    s.anchor_x[i] = s.x[a], s.anchor_y[i] = s.y[a], s.anchor_z[i] = s.z[a];
+  }
+}
 
 }  // namespace
 
@@ -614,9 +625,17 @@ void SoftBody::Impl::step_xpbd(double t, double dt) {
                        static_cast<float>(def.forces.gravity.z), static_cast<float>(def.forces.linear_drag),
                        static_cast<float>(def.forces.quadratic_drag), static_cast<float>(wind.x),
                        static_cast<float>(wind.y), static_cast<float>(wind.z)};
-  // tethers: on unless tearing, recomputed after the pins changed
+  // tethers: on unless tearing, recomputed after the pins changed; their anchors'
+  // positions are copied again in every substep where a pin moves, and after any step
+  // that skipped the tether pass (a mass-spring step, tethers off)
   const bool tethered = def.tethers && !(def.tear_strain > 0) && !pins.empty();
-  if (tethered && tethers_dirty) update_tethers();
+  bool copy = false;
+  if (tethered) {
+    copy = tethers_dirty || anchors_step != steps - 1;
+    anchors_step = steps;
+    if (tethers_dirty) update_tethers();
+    for (std::size_t k = 0; k < pins.size() && !copy; ++k) copy = pin_from[k] != pin_to[k];
+  }
   for (int sub = 1; sub <= S; ++sub) {
     // predict (with the previous substep's velocity update), then the pins slide toward
     // their targets (exactly there at the last substep)
@@ -638,12 +657,15 @@ void SoftBody::Impl::step_xpbd(double t, double dt) {
     }
     // long-range attachments, after the constraints (Kim et al. 2012)
     if (tethered) {
+      if (copy) copy_anchors(*this);
       std::size_t done = 0;
 #if PBA_SOFT_HAVE_AVX2
-      if (a.avx2 && n < (std::size_t{1} << 31))
-        done = project_tethers_avx2(n, x.data(), y.data(), z.data(), tether.data(), tether_len.data());
+      if (a.avx2)
+        done = project_tethers_avx2(n, x.data(), y.data(), z.data(), anchor_x.data(), anchor_y.data(),
+                                    anchor_z.data(), tether_len.data());
 #endif
-      project_tethers(done, n, x.data(), y.data(), z.data(), tether.data(), tether_len.data());
+      project_tethers(done, n, x.data(), y.data(), z.data(), anchor_x.data(), anchor_y.data(), anchor_z.data(),
+                      tether_len.data());
     }
     // collisions (timed per step, not per substep: a clock read costs as much as
     // colliding a small body)
