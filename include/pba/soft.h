@@ -255,8 +255,8 @@ struct StrainStats {
 /// Wall-clock seconds of the last SoftBody::step, by phase.
 struct SoftProfile {
   double forces = 0;    ///< wind, aerodynamics and pins, once per step
-  double solve = 0;     ///< XPBD: predict, projection, collisions and velocities; MassSpring: integration
-  double collide = 0;   ///< MassSpring: collisions (XPBD collides inside each substep: counted in solve)
+  double solve = 0;     ///< XPBD: predict, projection and velocities; MassSpring: integration
+  double collide = 0;   ///< collisions; for XPBD the first substep's collision time x substeps (an estimate)
   double total = 0;     ///< the whole step
 };
 

@@ -433,7 +433,8 @@ void SoftBody::step(double t, double dt, std::span<const Collider> colliders) {
   } else {
     s.step_mass_spring(t, dt);
   }
-  s.profile.solve = sw.seconds() - s.profile.collide;
+  // (XPBD's collision time is an estimate, which may exceed what the collisions took)
+  s.profile.solve = std::max(0.0, sw.seconds() - s.profile.collide);
   // pins end exactly at their targets
   for (std::size_t k = 0; k < s.pins.size(); ++k) s.pin_from[k] = s.pin_to[k];
   // tearing, then the finite check

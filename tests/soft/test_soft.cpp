@@ -282,6 +282,12 @@ TEST(Cloth, DrapedOverSphereStaysOutside) {
   // it drapes: the middle rests on top of the ball, the corners hang below its top
   EXPECT_NEAR(c.position(10 * 20 + 10).y, 0.81, 0.02);
   EXPECT_LT(c.position(0).y, 0.6);
+  // the profile splits the step: resting on the ball, the collisions take time (the
+  // first substep's, counted 10 times), and the phases add up to at most the whole
+  const pba::SoftProfile& p = c.profile();
+  EXPECT_GT(p.collide, 0.0);
+  EXPECT_GT(p.solve, 0.0);
+  EXPECT_LE(p.forces + p.solve + p.collide, p.total * (1 + 1e-9));
 }
 
 // Sliding on a plane with friction mu: position-based friction removes up to mu d of
