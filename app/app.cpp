@@ -97,6 +97,7 @@ void App::load_sample(int index) {
   ctx_.settings.single_step = false;
   ctx_.virtual_charge = 0;
   diverged_.clear();
+  stop_expected_ = false;
   sample_index_ = index;
   sample_ = Samples()[index].create(ctx_);
   if (restart) camera_ = keep;
@@ -231,6 +232,7 @@ bool App::frame() {
       auto lock = physics_->lock_state();
       const FiniteCheck fc = sample_->CheckFinite();
       if (!fc.ok) diverged_ = fc.message;
+      else diverged_ = sample_->ExpectedStop(), stop_expected_ = !diverged_.empty();
     }
     if (!diverged_.empty()) {
       s.paused = true;
@@ -245,7 +247,7 @@ bool App::frame() {
 
   // the 3D scene: the sample queues shapes, the renderer draws them off-screen
   renderer_->begin_frame();
-  if (diverged_.empty()) {
+  if (diverged_.empty() || stop_expected_) {
     auto lock = physics_->lock_state();
     sample_->Draw(*renderer_, physics_->alpha());
   }
@@ -273,7 +275,7 @@ bool App::frame() {
     auto lock = physics_->lock_state();
     act = DrawUi(ui_, ctx_, uf);
   }
-  if (!diverged_.empty()) {
+  if (!diverged_.empty() && !stop_expected_) {
     const UiActions d = DrawDiverged(diverged_, headless_);
     act.restart = act.restart || d.restart;
   }
@@ -361,7 +363,7 @@ int App::run_headless(int sample_index, const std::string& out_dir) {
     else if (!capture.video_note().empty()) std::printf("  %s\n", capture.video_note().c_str());
   }
   std::fflush(stdout);
-  if (!diverged_.empty()) failures_.push_back("simulation stopped: " + diverged_);
+  if (!diverged_.empty() && !stop_expected_) failures_.push_back("simulation stopped: " + diverged_);
   if (options_.selftest) {
     for (const std::string& f : failures_) std::fprintf(stderr, "SELFTEST FAIL %s: %s\n", e.full_name().c_str(), f.c_str());
     if (failures_.empty()) std::printf("SELFTEST PASS %s\n", e.full_name().c_str());

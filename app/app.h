@@ -52,6 +52,7 @@ class App {
   int sample_index_ = 0;
   UiState ui_;
   std::string diverged_;        // non-empty: the sample stopped with this message
+  bool stop_expected_ = false;  // diverged_ is a stop the sample is designed to show
   bool quit_ = false;
   bool headless_ = false;
   double last_frame_dt_ = 1.0 / 60;

@@ -84,6 +84,11 @@ class Sample {
   /// Scans the state for NaN or infinity (pba::check_finite); the app pauses and shows
   /// the message when it fails.
   virtual FiniteCheck CheckFinite() const { return {}; }
+  /// A stop the sample is designed to show (e.g. a spring integrated past its method's
+  /// stability limit): the message, naming what stopped, when and why; empty while it runs.
+  /// The app reports it like a divergence (printed to stderr, app paused) but keeps drawing
+  /// the sample, and the self-test does not fail on it: it is an expected outcome.
+  virtual std::string ExpectedStop() const { return {}; }
   /// Colours that must be visible in a rendered frame (the self-test looks for them).
   virtual std::vector<Color> ExpectedColors() const { return {}; }
   /// True when the sample runs its own time steppers and ignores the app's strategy.

@@ -79,6 +79,18 @@ struct Row {
   std::vector<double> iters, t_solve, t_iter, err;
   double allocs = 0;
   std::string note;
+
+  // one timed solve: thread CPU clock readings t0, t1 around it, its iteration count (< 0
+  // when the solver does not expose it: 0 iterations and 0 per iteration are reported),
+  // whether it succeeded and its error (m)
+  void add(double t0, double t1, int iterations, bool ok, double error) {
+    solves++;
+    success += ok;
+    iters.push_back(std::max(0, iterations));
+    t_solve.push_back(cpu_elapsed(t0, t1));
+    t_iter.push_back(iterations < 0 ? 0.0 : cpu_elapsed(t0, t1) / std::max(1, iterations));
+    err.push_back(error);
+  }
 };
 
 void print_header(const char* title) {
@@ -122,12 +134,7 @@ Row run_pba_cold(int n, bool limited, Method m, const std::vector<scenes::Target
     const SolveResult res = solver.solve();
     const double t1 = cpu_now();
     allocs += g_allocations.load() - a0;
-    r.solves++;
-    r.success += res.converged;
-    r.iters.push_back(res.iterations);
-    r.t_solve.push_back(cpu_elapsed(t0, t1));
-    r.t_iter.push_back(cpu_elapsed(t0, t1) / std::max(1, res.iterations));
-    r.err.push_back(res.residual);
+    r.add(t0, t1, res.iterations, res.converged, res.residual);
     if (!s.within_limits(1e-9)) r.note = "LIMITS VIOLATED";
     if (seconds(t_begin, Clock::now()) > budget) break;
   }
@@ -161,12 +168,7 @@ Row run_pba_unreachable(int n, Method m, double tol, int count) {
     const double t1 = cpu_now();
     allocs += g_allocations.load() - a0;
     const double excess = std::abs(res.residual - 0.5);
-    r.solves++;
-    r.success += excess <= 1e-3;
-    r.iters.push_back(res.iterations);
-    r.t_solve.push_back(cpu_elapsed(t0, t1));
-    r.t_iter.push_back(cpu_elapsed(t0, t1) / std::max(1, res.iterations));
-    r.err.push_back(excess);
+    r.add(t0, t1, res.iterations, excess <= 1e-3, excess);
   }
   r.allocs = double(allocs) / count;
   r.note = "(success: within 1e-3 m of the closest reachable distance)";
@@ -210,12 +212,7 @@ Row run_pba_tracking(int n, bool limited, Method m, double tol) {
     const SolveResult res = solver.solve();
     const double t1 = cpu_now();
     allocs += g_allocations.load() - a0;
-    r.solves++;
-    r.success += res.converged;
-    r.iters.push_back(res.iterations);
-    r.t_solve.push_back(cpu_elapsed(t0, t1));
-    r.t_iter.push_back(cpu_elapsed(t0, t1) / std::max(1, res.iterations));
-    r.err.push_back(res.residual);
+    r.add(t0, t1, res.iterations, res.converged, res.residual);
   }
   r.allocs = double(allocs) / 600;
   return r;
@@ -246,13 +243,15 @@ KDL::Frame kdl_frame(const scenes::Target& t) {
   return KDL::Frame(R, KDL::Vector(t.position.x, t.position.y, t.position.z));
 }
 
-Row run_kdl_lma(int n, const std::vector<scenes::Target>& targets, double tol, double budget) {
-  KDL::Chain chain = kdl_chain(n);
-  Eigen::Matrix<double, 6, 1> L;
-  L << 1, 1, 1, 0, 0, 0;  // position only
-  KDL::ChainIkSolverPos_LMA ik(chain, L, tol, 500, 1e-15);
+// cold solves of a KDL position solver from the same bent pose to each target, timed like
+// pba's rows; the error is measured by a separate forward-kinematics pass. `six_d` also
+// asks the end rotation within 1e-3 rad (for solvers that stop only on the full 6D twist
+// error); solvers that do not expose their iteration count report 0 iterations
+template <class Ik>
+Row run_kdl(Ik& ik, const KDL::Chain& chain, int n, const char* name, const std::vector<scenes::Target>& targets,
+            double tol, double budget, bool six_d) {
   KDL::ChainFkSolverPos_recursive fk(chain);
-  Row r{std::to_string(n), "no", "KDL LMA"};
+  Row r{std::to_string(n), "no", name};
   KDL::JntArray q0 = kdl_bent(n), q(3 * n);
   long long allocs = 0;
   const auto t_begin = Clock::now();
@@ -266,16 +265,21 @@ Row run_kdl_lma(int n, const std::vector<scenes::Target>& targets, double tol, d
     KDL::Frame f;
     fk.JntToCart(q, f);
     const double err = (f.p - goal.p).Norm();
-    r.solves++;
-    r.success += err <= tol;
-    r.iters.push_back(ik.lastNrOfIter);
-    r.t_solve.push_back(cpu_elapsed(t0, t1));
-    r.t_iter.push_back(cpu_elapsed(t0, t1) / std::max(1, ik.lastNrOfIter));
-    r.err.push_back(err);
+    int iterations = -1;
+    if constexpr (requires { ik.lastNrOfIter; }) iterations = ik.lastNrOfIter;
+    r.add(t0, t1, iterations, err <= tol && (!six_d || KDL::diff(f.M, goal.M).Norm() <= 1e-3), err);
     if (seconds(t_begin, Clock::now()) > budget) break;
   }
   r.allocs = r.solves ? double(allocs) / r.solves : 0;
   return r;
+}
+
+Row run_kdl_lma(int n, const std::vector<scenes::Target>& targets, double tol, double budget) {
+  KDL::Chain chain = kdl_chain(n);
+  Eigen::Matrix<double, 6, 1> L;
+  L << 1, 1, 1, 0, 0, 0;  // position only
+  KDL::ChainIkSolverPos_LMA ik(chain, L, tol, 500, 1e-15);
+  return run_kdl(ik, chain, n, "KDL LMA", targets, tol, budget, false);
 }
 
 // NR_JL stops only on the full 6D twist error, so it gets 6D targets (position and the
@@ -287,30 +291,7 @@ Row run_kdl_nrjl(int n, const std::vector<scenes::Target>& targets, double tol, 
   KDL::ChainFkSolverPos_recursive fk(chain);
   KDL::ChainIkSolverVel_pinv vel(chain);
   KDL::ChainIkSolverPos_NR_JL ik(chain, qmin, qmax, fk, vel, 500, tol);
-  Row r{std::to_string(n), "no", "KDL NR_JL 6D"};
-  KDL::JntArray q0 = kdl_bent(n), q(3 * n);
-  long long allocs = 0;
-  const auto t_begin = Clock::now();
-  for (const auto& t : targets) {
-    const KDL::Frame goal = kdl_frame(t);
-    const long long a0 = g_allocations.load();
-    const double t0 = cpu_now();
-    ik.CartToJnt(q0, goal, q);
-    const double t1 = cpu_now();
-    allocs += g_allocations.load() - a0;
-    KDL::Frame f;
-    fk.JntToCart(q, f);
-    const double err = (f.p - goal.p).Norm();
-    const KDL::Vector rot = KDL::diff(f.M, goal.M);
-    r.solves++;
-    r.success += err <= tol && rot.Norm() <= 1e-3;
-    r.iters.push_back(0);
-    r.t_solve.push_back(cpu_elapsed(t0, t1));
-    r.t_iter.push_back(0);
-    r.err.push_back(err);
-    if (seconds(t_begin, Clock::now()) > budget) break;
-  }
-  r.allocs = r.solves ? double(allocs) / r.solves : 0;
+  Row r = run_kdl(ik, chain, n, "KDL NR_JL 6D", targets, tol, budget, true);
   r.note = "(iterations not exposed)";
   return r;
 }

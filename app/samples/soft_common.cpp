@@ -10,6 +10,7 @@
 #include <imgui.h>
 
 #include "camera.h"
+#include "pba/lab.h"
 
 namespace pba::app {
 
@@ -313,10 +314,10 @@ void SoftSample::Mouse(int button, bool down, const Vec3& o, const Vec3& d) {
   if (grab_.Press(Bodies(), *ctx_.camera, o, d)) Grabbed();
 }
 
-void SoftSample::SolverFromOption(SoftBodyDef& def, SoftBody& body) {
+void OneBodySample::SolverFromOption() {
   if (SolverOption(ctx_, SoftSolver::XPBD) != SoftSolver::MassSpring) return;
-  UseMassSpring(def, body, ctx_.settings.stepper.fixed_dt);
-  body.settings() = def;
+  UseMassSpring(def_, body_, ctx_.settings.stepper.fixed_dt);
+  body_.settings() = def_;
 }
 
 bool SubstepControls(SoftBodyDef& def, int max_substeps, int max_iterations) {
@@ -404,18 +405,9 @@ void DrawBanner(const SampleContext& ctx, const std::string& text, Color color) 
 // [[1, h], [-w^2 h, 1]] has eigenvalues 1 +- i omega h, |.| > 1 for every h; semi-implicit
 // Euler and the Verlets have det 1 and trace 2 - (omega h)^2, bounded iff |trace| < 2;
 // RK4's stability polynomial 1 + z + z^2/2 + z^3/6 + z^4/24 has |.| <= 1 on the imaginary
-// axis up to |z| = 2 sqrt(2); implicit Euler 1 / (1 - i omega h) is always inside.
-double StabilityLimit(Method m) {
-  switch (m) {
-    case Method::ExplicitEuler: return 0;
-    case Method::SemiImplicitEuler:
-    case Method::PositionVerlet:
-    case Method::VelocityVerlet: return 2;
-    case Method::RK4: return 2 * std::sqrt(2.0);
-    case Method::ImplicitEuler: return std::numeric_limits<double>::infinity();
-  }
-  return 0;
-}
+// axis up to |z| = 2 sqrt(2); implicit Euler 1 / (1 - i omega h) is always inside. The
+// library's integrator lab holds the table (and measures it: tests/lab).
+double StabilityLimit(Method m) { return lab::theory_stability_limit(m); }
 
 double MaxAngularFrequency(const SoftBody& body, int iterations) {
   return MaxAngularFrequency(body, body.settings(), iterations);

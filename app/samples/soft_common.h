@@ -156,19 +156,8 @@ class SoftSample : public Sample {
   virtual std::span<SoftBody* const> Bodies() = 0;
   /// Called after a press grabbed a particle (e.g. the user takes over from a script).
   virtual void Grabbed() {}
-  /// Bodies() of a sample with one body.
-  std::span<SoftBody* const> One(SoftBody& body) {
-    one_ = &body;
-    return std::span<SoftBody* const>(&one_, 1);
-  }
-  /// Honours --option solver=mass-spring: `def` becomes the mass-spring settings of `body`
-  /// (UseMassSpring) and the body takes them.
-  void SolverFromOption(SoftBodyDef& def, SoftBody& body);
 
   SoftGrab grab_;  ///< the mouse grab
-
- private:
-  SoftBody* one_ = nullptr;
 };
 
 /// XPBD substeps and iterations sliders; true when one changed.
@@ -182,6 +171,45 @@ void ViewControls(SoftView& view, bool scale_slider = true);
 void SoftReadout(const SoftBody& body);
 /// A line of text centred at the bottom of the 3D view (e.g. help, or a red warning).
 void DrawBanner(const SampleContext& ctx, const std::string& text, Color color = colors::white);
+
+/// Base of the samples built around one soft body (the flag, the draped and the tearable
+/// cloth, the jelly): the body and its settings, the painter and view, the solver rows and
+/// the sample's clock; the mouse grabs that body.
+class OneBodySample : public SoftSample {
+ public:
+  using SoftSample::SoftSample;
+
+ protected:
+  std::span<SoftBody* const> Bodies() override {
+    one_ = &body_;
+    return std::span<SoftBody* const>(&one_, 1);
+  }
+  /// Honours --option solver=mass-spring (call once the body is built): def_ becomes the
+  /// mass-spring settings of body_ (UseMassSpring) and the body takes them.
+  void SolverFromOption();
+  /// The start of a rebuild: lets go of the grab and restarts the clock.
+  void Restart() {
+    grab_.Reset();
+    t_ = 0;
+  }
+  /// The solver rows of the panel (SolverPanel) for def_ and body_ at the app's step.
+  void SolverRows() { solver_.Draw(def_, body_, ctx_.settings.stepper.fixed_dt); }
+  /// The view toggles (with the strain scale slider if `scale_slider`) and the readouts.
+  void ViewRows(bool scale_slider = true) {
+    ViewControls(view_, scale_slider);
+    SoftReadout(body_);
+  }
+
+  SoftBodyDef def_;     ///< the settings the panel edits (the body takes them each step)
+  SoftBody body_;       ///< the body
+  SoftPainter painter_; ///< draws it
+  SoftView view_;       ///< what is drawn
+  SolverPanel solver_;  ///< the solver rows' state
+  double t_ = 0;        ///< time since the last rebuild (s)
+
+ private:
+  SoftBody* one_ = nullptr;
+};
 
 /// omega h below which an undamped linear spring stays bounded under `m` (Hairer, Lubich &
 /// Wanner 2006, ch. I.1; Butcher 2016, sec. 238 for RK4): 0 for explicit Euler (it grows

@@ -21,19 +21,20 @@ namespace {
 
 constexpr double kOffset = 0.25;  // the cloth's centre is dropped this far off the sphere's (m)
 
-class DrapeSample final : public SoftSample {
+class DrapeSample final : public OneBodySample {
  public:
-  explicit DrapeSample(SampleContext& ctx) : SoftSample(ctx) {
+  explicit DrapeSample(SampleContext& ctx) : OneBodySample(ctx) {
     // --option friction=MU n=N radius=M solver=xpbd|mass-spring
     def_ = XpbdCloth(12, 0.1);
     def_.friction = OptionNumber(ctx, "friction", 0.4, 0, 2);
     n_ = static_cast<int>(OptionNumber(ctx, "n", n_, 2, 256));
     radius_ = OptionNumber(ctx, "radius", radius_, 0.1, 1.0);
     def_.thickness = 0.012;
+    view_.strain = false;
     ctx.renderer->style.grid_spacing = 0.25f;
     ctx.camera->frame({0.0f, 0.45f, 0.0f}, 1.45f, 0.55f, 0.42f);
     build();
-    SolverFromOption(def_, body_);
+    SolverFromOption();
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<DrapeSample>(ctx); }
 
@@ -71,12 +72,11 @@ class DrapeSample final : public SoftSample {
     }
     ImGui::SetNextItemWidth(-110);
     rebuild |= ImGui::SliderInt("particles per side", &n_, 8, 96);
-    solver_.Draw(def_, body_, ctx_.settings.stepper.fixed_dt);
+    SolverRows();
     if (ImGui::Button("Drop again") || rebuild) build();
     ImGui::SameLine();
     ImGui::Checkbox("every 7 s", &auto_drop_);
-    ViewControls(view_);
-    SoftReadout(body_);
+    ViewRows();
     ImGui::Text("%zu particles, %zu constraints in %zu colours", body_.size(), body_.constraint_count(),
                 body_.color_count());
     ImGui::TextWrapped(
@@ -89,13 +89,10 @@ class DrapeSample final : public SoftSample {
   std::vector<Color> ExpectedColors() const override { return {}; }
 
  private:
-  std::span<SoftBody* const> Bodies() override { return One(body_); }
-
   // a flat square cloth above the sphere (its centre 25 cm off the sphere's, so that it
   // slides off unless friction holds it), the sphere and the ground
   void build() {
-    grab_.Reset();
-    t_ = 0;
+    Restart();
     const double side = 1.5;
     ClothDef c;
     c.origin = Vec3(-0.5 * side + kOffset, 2 * radius_ + 0.45, -0.5 * side);
@@ -108,14 +105,9 @@ class DrapeSample final : public SoftSample {
     colliders_ = {Collider::sphere(Vec3(0, radius_, 0), radius_), Collider::plane(Vec3(0, 1, 0), 0)};
   }
 
-  SoftBodyDef def_;
-  SoftBody body_;
   std::vector<Collider> colliders_;
-  SoftPainter painter_;
-  SoftView view_{.strain = false};
-  SolverPanel solver_;
   int n_ = 40;
-  double radius_ = 0.35, t_ = 0;
+  double radius_ = 0.35;
   bool auto_drop_ = true;
 };
 

@@ -22,12 +22,13 @@ namespace {
 
 constexpr double kPoleTop = 3.3;  // top of the pole (m)
 
-class FlagSample final : public SoftSample {
+class FlagSample final : public OneBodySample {
  public:
-  explicit FlagSample(SampleContext& ctx) : SoftSample(ctx) {
+  explicit FlagSample(SampleContext& ctx) : OneBodySample(ctx) {
     // --option wind=M/S gust=M/S drag=CD lift=CL nx=N ny=N solver=xpbd|mass-spring
     def_ = XpbdCloth(12, 0.2);
     def_.bend_compliance = 2e-3;
+    view_.strain = false;
     wind_ = OptionNumber(ctx, "wind", wind_, 0, 30);
     def_.forces.wind.gust = OptionNumber(ctx, "gust", 3.0, 0, 20);
     def_.aero.drag = OptionNumber(ctx, "drag", 1.0, 0, 5);
@@ -39,7 +40,7 @@ class FlagSample final : public SoftSample {
     ctx.renderer->style.grid_spacing = 0.5f;
     ctx.camera->frame({0.85f, 2.45f, 0.0f}, 1.9f, 0.42f, 0.14f);
     build();
-    SolverFromOption(def_, body_);
+    SolverFromOption();
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<FlagSample>(ctx); }
 
@@ -92,10 +93,9 @@ class FlagSample final : public SoftSample {
     ImGui::SetNextItemWidth(-110);
     if (ImGui::SliderFloat("lift C_l", &cl, 0.0f, 3.0f, "%.2f")) def_.aero.lift = cl;
     // solver and cloth
-    solver_.Draw(def_, body_, ctx_.settings.stepper.fixed_dt);
+    SolverRows();
     if (ImGui::Button("Restart flag")) build();
-    ViewControls(view_);
-    SoftReadout(body_);
+    ViewRows();
 
     PlotAxes ax;
     ax.x_label = "t (s)";
@@ -112,12 +112,9 @@ class FlagSample final : public SoftSample {
   std::vector<Color> ExpectedColors() const override { return {particle_colors::wind}; }
 
  private:
-  std::span<SoftBody* const> Bodies() override { return One(body_); }
-
   // the flag: nx x ny particles hanging off the pole, hoist pinned, in three bands
   void build() {
-    grab_.Reset();
-    t_ = 0;
+    Restart();
     hist_.Clear();
     ClothDef c;
     c.origin = Vec3(0.04, kPoleTop, 0);
@@ -136,15 +133,10 @@ class FlagSample final : public SoftSample {
       }
   }
 
-  SoftBodyDef def_;
-  SoftBody body_;
-  SoftPainter painter_;
-  SoftView view_{.strain = false};
-  SolverPanel solver_;
   std::vector<Color> stripes_;
   PlotHistory hist_{1, 6.0};  // wind speed over the last 6 s
   int nx_ = 36, ny_ = 24;
-  double wind_ = 6.0, heading_deg_ = 15, t_ = 0;
+  double wind_ = 6.0, heading_deg_ = 15;
 };
 
 static int reg = RegisterSample("Soft bodies", "Flag in the wind", FlagSample::Create);

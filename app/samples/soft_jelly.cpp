@@ -20,9 +20,9 @@
 namespace pba::app {
 namespace {
 
-class JellySample final : public SoftSample {
+class JellySample final : public OneBodySample {
  public:
-  explicit JellySample(SampleContext& ctx) : SoftSample(ctx) {
+  explicit JellySample(SampleContext& ctx) : OneBodySample(ctx) {
     // --option compliance=M/N volume=M5/N cells=N height=M solver=xpbd|mass-spring
     def_.stretch_compliance = OptionNumber(ctx, "compliance", 3e-3, 0, 1);
     def_.volume_compliance = OptionNumber(ctx, "volume", 1e-6, 0, 1);
@@ -33,10 +33,11 @@ class JellySample final : public SoftSample {
     def_.iterations = 1;
     def_.friction = 0.6;
     def_.thickness = 0.005;
+    view_.strain = false;
     ctx.renderer->style.grid_spacing = 0.25f;
     ctx.camera->frame({0.0f, 0.5f, -0.2f}, 1.6f, 0.6f, 0.25f);
     build();
-    SolverFromOption(def_, body_);
+    SolverFromOption();
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<JellySample>(ctx); }
 
@@ -64,7 +65,7 @@ class JellySample final : public SoftSample {
   }
 
   void DrawUI() override {
-    solver_.Draw(def_, body_, ctx_.settings.stepper.fixed_dt);
+    SolverRows();
     float mu = static_cast<float>(def_.friction);
     ImGui::SetNextItemWidth(-110);
     if (ImGui::SliderFloat("friction", &mu, 0.0f, 1.5f, "%.2f")) def_.friction = mu;
@@ -98,12 +99,9 @@ class JellySample final : public SoftSample {
   std::vector<Color> ExpectedColors() const override { return {colors::white}; }
 
  private:
-  std::span<SoftBody* const> Bodies() override { return One(body_); }
-
   // a tilted cube above the ground, and the ground
   void build() {
-    grab_.Reset();
-    t_ = 0;
+    Restart();
     hist_.Clear();
     JellyDef j;
     j.center = Vec3(0, height_, 0);
@@ -116,15 +114,10 @@ class JellySample final : public SoftSample {
     colliders_ = {Collider::plane(Vec3(0, 1, 0), 0)};
   }
 
-  SoftBodyDef def_;
-  SoftBody body_;
   std::vector<Collider> colliders_;
-  SoftPainter painter_;
-  SoftView view_{.strain = false};
-  SolverPanel solver_;
   PlotHistory hist_{1, 6.0};  // volume (% of rest) over the last 6 s
   int cells_ = 4;
-  double height_ = 1.4, t_ = 0, volume_ = 1;
+  double height_ = 1.4, volume_ = 1;
   bool auto_drop_ = true;
 };
 

@@ -4,7 +4,9 @@
 // mass is its height over the last seconds; the panel plots the oscillation energy, reads
 // the period against 2 pi sqrt(m/k) and tabulates each method's largest stable step, from
 // theory (omega h limits) and measured on this very spring. Raise dt past a limit and the
-// spring blows up: the sample pauses with a message instead of drawing garbage.
+// spring blows up: the sample stops with a message (ExpectedStop: the app prints it and
+// pauses, and the self-test passes, since showing the blow-up is the sample's purpose)
+// instead of drawing garbage.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -17,6 +19,7 @@
 
 #include "camera.h"
 #include "method_colors.h"
+#include "pba/lab.h"
 #include "particles_common.h"
 #include "plot.h"
 #include "renderer.h"
@@ -106,9 +109,9 @@ class SpringSample final : public Sample {
       options_read_ = true;
     }
     params_ = g_params;
-    // a restart after a blow-up runs again (the blow-up paused the app)
-    if (g_paused_by_failure) ctx.settings.paused = false;
-    g_paused_by_failure = false;
+    // a restart after a blow-up runs again (the app paused on the blow-up)
+    if (g_stopped) ctx.settings.paused = false;
+    g_stopped = false;
     ctx.renderer->style.grid_spacing = 0.5f;
     ctx.camera->frame({0.0f, 2.3f, -1.3f}, 2.9f, 0.62f, 0.16f);
     build();
@@ -133,11 +136,6 @@ class SpringSample final : public Sample {
   }
 
   void Draw(Renderer& r, double alpha) override {
-    // a blown-up spring pauses the app (here, on the render thread)
-    if (!failure_.empty() && !paused_for_failure_) {
-      ctx_.settings.paused = true;
-      paused_for_failure_ = g_paused_by_failure = true;
-    }
     const Color mc = MethodColor(method_);
     // a blown-up spring is drawn where it was before the step that took it out of bounds
     const double a = failure_.empty() ? std::clamp(alpha, 0.0, 1.0) : 0.0;
@@ -158,19 +156,19 @@ class SpringSample final : public Sample {
     r.polyline(coil, Color{0.80f, 0.82f, 0.86f, 1.0f}, 2.0f);
     r.sphere(p, radius, mc);
     // the exact motion as a ghost, the equilibrium as a tick
-    if (ghost_) r.sphere(Vec3(0, exact_y(t_draw), 0), radius * 1.02, Color{0.92f, 0.94f, 1.0f, 0.30f});
+    if (g_ghost) r.sphere(Vec3(0, exact_y(t_draw), 0), radius * 1.02, Color{0.92f, 0.94f, 1.0f, 0.30f});
     r.line(Vec3(-0.35, y_eq_, 0), Vec3(0.35, y_eq_, 0), Color{1, 1, 1, 0.5f}, 1.5f);
     // the trace: height against time, receding into the depth behind the mass
     const double speed = 0.45;  // m of depth per second
     const std::vector<float>& tt = trail_.t();
-    if (trace_ && !tt.empty()) {
+    if (g_trace && !tt.empty()) {
       std::vector<Vec3> pts;
       pts.reserve(tt.size() + 1);
       for (std::size_t k = 0; k < tt.size(); ++k)
         if (tt[k] >= t_draw - kTrail) pts.push_back(Vec3(0, trail_.column(0)[k], -(t_draw - tt[k]) * speed));
       pts.push_back(p);
       r.polyline(pts, mc, 2.0f);
-      if (ghost_) {
+      if (g_ghost) {
         std::vector<Vec3> ex;
         for (double s = 0; s <= kTrail && s <= t_draw; s += 0.02) ex.push_back(Vec3(0, exact_y(t_draw - s), -s * speed));
         r.polyline(ex, Color{1, 1, 1, 0.3f}, 1.2f);
@@ -216,17 +214,13 @@ class SpringSample final : public Sample {
     if (ImGui::SliderFloat("amplitude", &amp, 0.05f, 1.0f, "%.2f m")) p.amplitude = amp;
     if (!(p == params_)) {
       params_ = g_params = p;
-      build();
+      restart();
     }
-    if (ImGui::Button("Restart spring")) {
-      if (paused_for_failure_) ctx_.settings.paused = false;
-      g_paused_by_failure = false;
-      build();
-    }
+    if (ImGui::Button("Restart spring")) restart();
     ImGui::SameLine();
-    ImGui::Checkbox("exact", &ghost_);
+    ImGui::Checkbox("exact", &g_ghost);
     ImGui::SameLine();
-    ImGui::Checkbox("trace", &trace_);
+    ImGui::Checkbox("trace", &g_trace);
     if (!failure_.empty()) {
       ImGui::PushTextWrapPos(0);
       ImGui::TextColored(ImVec4(1, 0.45f, 0.4f, 1), "%s", failure_.c_str());
@@ -300,11 +294,14 @@ class SpringSample final : public Sample {
   }
 
   std::vector<Color> ExpectedColors() const override { return {MethodColor(method_)}; }
+  std::string ExpectedStop() const override { return failure_; }
 
  private:
   static inline Params g_params{};
   static inline bool options_read_ = false;
-  static inline bool g_paused_by_failure = false;  // the app is paused because of a blow-up
+  static inline bool g_stopped = false;  // a blow-up stopped the spring (and the app paused)
+  // the view toggles survive a reload (a restart after a stop reloads the sample)
+  static inline bool g_ghost = true, g_trace = true;
   static constexpr double kTrail = 8.0;  // seconds of trace
 
   double omega() const { return std::sqrt(params_.k / params_.m); }
@@ -359,7 +356,6 @@ class SpringSample final : public Sample {
     t_ = t_prev_ = 0;
     y_prev_draw_ = body_.position(1).y;
     failure_.clear();
-    paused_for_failure_ = false;
     period_ = 0;
     last_up_ = -1;
     periods_.clear();
@@ -377,7 +373,16 @@ class SpringSample final : public Sample {
     measured_ = g_measured;
   }
 
-  void fail(const std::string& why) { failure_ = why; }
+  void fail(const std::string& why) {
+    failure_ = why;
+    g_stopped = true;
+  }
+
+  // a new spring; after a stop the app reloads the sample (it holds the stop until then)
+  void restart() {
+    if (failure_.empty()) build();
+    else ctx_.settings.restart = true;
+  }
 
   // energy, period, trace and the blow-up check after each step
   void after_step(double y_prev, double dt) {
@@ -401,20 +406,25 @@ class SpringSample final : public Sample {
     // histories: the exact and the simulated energy ratio, the height for the trace
     hist_.Push(t_, {exact_energy(t_), energy_ratio_});
     trail_.Push(t_, {y});
-    // blown up: stop with the reason, in the method's terms
+    // blown up: stop with the reason, in the method's terms; the growth factor is the
+    // energy's per step, rho^2 with rho the spectral radius of one step on the undamped
+    // oscillator (lab::spectral_radius; 1 + (omega h)^2 for explicit Euler)
     if (!(std::abs(u) < kBlowUp * params_.amplitude)) {
       const double wh = omega() * dt, lim = StabilityLimit(method_);
-      char buf[320];
+      const double rho = lab::spectral_radius(method_, wh);
+      const char* undamped = params_.c > 0 ? " (undamped)" : "";
+      char buf[360];
       if (lim <= 0)
         std::snprintf(buf, sizeof buf,
                       "%s blew up at t = %.2f s: the mass is %.3g m from equilibrium (%gx the start). It gains "
-                      "energy at every step size: x%.4f per step at omega h = %.3f.",
-                      std::string(label(method_)).c_str(), t_, std::abs(u), kBlowUp, 1 + wh * wh, wh);
+                      "energy at every step size: x%.4f per step%s at omega h = %.3f.",
+                      std::string(label(method_)).c_str(), t_, std::abs(u), kBlowUp, rho * rho, undamped, wh);
       else
         std::snprintf(buf, sizeof buf,
                       "%s blew up at t = %.2f s: the mass is %.3g m from equilibrium (%gx the start). omega h = %.3f "
-                      "is above its limit %.3f: use dt < %.4f s.",
-                      std::string(label(method_)).c_str(), t_, std::abs(u), kBlowUp, wh, lim, lim / omega());
+                      "is above its limit %.3f, so the energy grows x%.4f per step%s: use dt < %.4f s.",
+                      std::string(label(method_)).c_str(), t_, std::abs(u), kBlowUp, wh, lim, rho * rho, undamped,
+                      lim / omega());
       fail(buf);
     }
   }
@@ -429,7 +439,6 @@ class SpringSample final : public Sample {
   PlotHistory trail_{1, kTrail};  // the height (m) over the last kTrail s
   std::array<double, kAllMethods.size()> measured_{};
   std::string failure_;
-  bool paused_for_failure_ = false, ghost_ = true, trace_ = true;
 
   static inline std::array<double, kAllMethods.size()> g_measured{};
   static inline Params g_measured_for{};

@@ -25,9 +25,9 @@ constexpr double kSide = 1.6;     // curtain width and height (m)
 constexpr double kPullStart = 0.25, kPullEnd = 3.0, kRestartAt = 6.0;  // the scripted pull (s)
 constexpr double kPullSpeed = 0.3;  // speed of each hand (m/s)
 
-class TearSample final : public SoftSample {
+class TearSample final : public OneBodySample {
  public:
-  explicit TearSample(SampleContext& ctx) : SoftSample(ctx) {
+  explicit TearSample(SampleContext& ctx) : OneBodySample(ctx) {
     // --option tear=STRAIN n=N demo=0|1 pull=down|apart|corners|point (the scripted hands)
     //          solver=xpbd|mass-spring
     def_ = XpbdCloth(12, 0.2);
@@ -43,7 +43,7 @@ class TearSample final : public SoftSample {
     ctx.renderer->style.grid_spacing = 0.5f;
     ctx.camera->frame({0.0f, 1.75f, 0.45f}, 1.75f, 0.5f, 0.12f);
     build();
-    SolverFromOption(def_, body_);
+    SolverFromOption();
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<TearSample>(ctx); }
 
@@ -98,15 +98,14 @@ class TearSample final : public SoftSample {
     bool rebuild = false;
     ImGui::SetNextItemWidth(-110);
     rebuild |= ImGui::SliderInt("particles per side", &n_, 8, 96);
-    solver_.Draw(def_, body_, ctx_.settings.stepper.fixed_dt);
+    SolverRows();
     if (ImGui::Button("Mend the curtain") || rebuild) build();
     ImGui::SameLine();
     if (ImGui::Checkbox("scripted hands", &demo_)) {
       if (demo_) user_ = false;
       else release_hands();
     }
-    ViewControls(view_, false);
-    SoftReadout(body_);
+    ViewRows(false);
     ImGui::Text("torn: %zu of %zu constraints, %zu triangles left", body_.broken_constraints(),
                 body_.constraint_count(), body_.triangles().size());
     ImGui::TextWrapped(
@@ -118,8 +117,6 @@ class TearSample final : public SoftSample {
   std::vector<Color> ExpectedColors() const override { return {colors::orange}; }
 
  private:
-  std::span<SoftBody* const> Bodies() override { return One(body_); }
-
   // the user takes over from the scripted hands
   void Grabbed() override {
     user_ = true;
@@ -128,8 +125,7 @@ class TearSample final : public SoftSample {
 
   // the curtain hanging from the rail, top row pinned
   void build() {
-    grab_.Reset();
-    t_ = 0;
+    Restart();
     ClothDef c;
     c.origin = Vec3(-0.5 * kSide, kTop, 0);
     c.edge_u = Vec3(kSide, 0, 0);
@@ -185,13 +181,7 @@ class TearSample final : public SoftSample {
     Vec3 direction{0};                     // the pull (unit)
   };
 
-  SoftBodyDef def_;
-  SoftBody body_;
-  SoftPainter painter_;
-  SoftView view_{.strain = true};
-  SolverPanel solver_;
   int n_ = 40;
-  double t_ = 0;
   bool demo_ = true, user_ = false, demo_started_ = false;
   std::vector<Hand> hands_;
   Pull pull_ = Pull::Apart;
