@@ -383,6 +383,7 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
     }
   }
   s.tris = s.tris_all;
+  s.init_tethers();
   // pins, scratch and the mass-spring integrator
   SoftBody body(std::move(impl));
   for (std::uint32_t p : m.pinned)

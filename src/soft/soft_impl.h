@@ -107,6 +107,13 @@ struct SoftBody::Impl {
   std::vector<float> anchor_x, anchor_y, anchor_z;  // each anchor's position (m), copied when pins move
   long long anchors_step = -1;             // the last step whose tether pass ran (anchors valid after it)
   bool tethers_dirty = true;               // pins changed: recompute before the next XPBD step
+  // tether lengths along the body (update_tethers, when the rest shape is not convex):
+  // the stretch and shear constraints at each particle (constraint indices, particle i's
+  // at [graph_start[i], graph_start[i + 1])) and Dijkstra's scratch, all sized at build
+  bool tether_straight = true;             // rest shape convex: straight rest distances are geodesics
+  std::vector<std::uint32_t> graph_start, graph_edge;
+  std::vector<double> geo_dist;            // path length to the nearest pin (m)
+  std::vector<std::uint32_t> heap, heap_pos;  // binary heap of particles, and each one's slot
 
   // ---- tetrahedra ----
   std::vector<SoftTet> tets;
@@ -142,6 +149,7 @@ struct SoftBody::Impl {
   void step_xpbd(double t, double dt);
   void step_mass_spring(double t, double dt);
   void update_tethers();  // xpbd.cpp: each particle's nearest pin in the rest shape
+  void init_tethers();    // xpbd.cpp, at build: straight or path lengths, and the graph
   // shared pieces (soft_body.cpp)
   void prepare_colliders(std::span<const Collider> colliders, double dt);
   void external_accelerations(double t);

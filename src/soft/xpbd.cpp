@@ -5,8 +5,13 @@
 // constrained dynamics", eqs. 18 (the multiplier update), 26 (damping);
 // Macklin, Storey, Lu, Terdiman, Chentanez, Jeschke & Mueller 2019, "Small steps in
 // physics simulation" (substeps with one iteration, multipliers reset each substep).
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <numbers>
+#include <utility>
+#include <vector>
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
@@ -573,14 +578,199 @@ void copy_anchors(SoftBody::Impl& s) {
 
 }  // namespace
 
-// Each free particle's anchor: the pinned particle nearest to it in the rest shape (ties
-// to the earliest pin), and the tether length, their rest distance rounded up to float
-// plus a relative margin of 2^-20 so that a particle exactly at its rest distance, whose
-// float distance may round a few ulps long, is not moved (Kim et al. 2012, sec. 4; the
-// paper tethers to several pins, one nearest is enough for a grid pinned along an edge).
-// O(particles x pins), run only after pins change; writes preallocated columns.
+// ---------------------------------------------------------------------------------------
+// tether lengths: a tether may never be shorter than the rest distance to its pin
+// measured through the material (the geodesic), or it holds the body short; the straight
+// distance is that geodesic only when the straight segment stays within the body
+
+namespace {
+
+// True when the straight segment between any two particles of the rest shape stays in
+// the body, so that their straight rest distance is the geodesic between them. Sufficient
+// tests: the rest shape is collinear (a rope built straight, taken to be connected along
+// its line), or planar with triangles that cover every particle, all face the same way
+// and have a boundary that is one loop turning left at every vertex and once round in
+// all (a convex polygon: any cloth_grid). Tolerances 1e-4 (of the body's size off the
+// line or plane, in radians of a right turn) change a straight distance against the
+// geodesic by a relative O(1e-8), inside the tethers' 2^-20 margin.
+// Runs once at build (allocates there); O(n + T log T) for T triangles.
+bool rest_shape_convex(const SoftBody::Impl& s) {
+  const std::size_t n = s.n;
+  auto r = [&](std::size_t i) { return Vec3(s.rx[i], s.ry[i], s.rz[i]); };
+  if (n < 3) return true;
+  // the body's size: the farthest particle from the farthest particle from particle 0
+  auto farthest = [&](std::size_t from) {
+    std::size_t best = from;
+    double d2 = -1;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 e = r(i) - r(from);
+      if (glm::dot(e, e) > d2) d2 = glm::dot(e, e), best = i;
+    }
+    return best;
+  };
+  const std::size_t p = farthest(0), q = farthest(p);
+  const Vec3 o = r(p);
+  const double size = glm::length(r(q) - o);
+  if (!(size > 0)) return true;
+  const double tol = 1e-4 * size;
+  // collinear: every particle within tol of the line through p and q
+  const Vec3 u = (r(q) - o) / size;
+  bool line = true;
+  for (std::size_t i = 0; i < n && line; ++i) line = glm::length(glm::cross(r(i) - o, u)) <= tol;
+  if (line) return true;
+  // planar: every particle within tol of the plane of the triangles' summed normal, and
+  // every triangle facing along it (none folded over)
+  Vec3 nsum(0.0);
+  for (const SoftTriangle& t : s.tris_all) nsum += glm::cross(r(t.b) - r(t.a), r(t.c) - r(t.a));
+  if (!(glm::length(nsum) > 0)) return false;
+  const Vec3 nrm = nsum / glm::length(nsum);
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::abs(glm::dot(r(i) - o, nrm)) > tol) return false;
+  for (const SoftTriangle& t : s.tris_all)
+    if (!(glm::dot(glm::cross(r(t.b) - r(t.a), r(t.c) - r(t.a)), nrm) > 0)) return false;
+  // every particle on a triangle (one off them could lie outside the outline)
+  std::vector<std::uint8_t> covered(n, 0);
+  for (const SoftTriangle& t : s.tris_all) covered[t.a] = covered[t.b] = covered[t.c] = 1;
+  if (std::find(covered.begin(), covered.end(), 0) != covered.end()) return false;
+  // the boundary: directed triangle edges (interior on their left) whose reverse is in no
+  // triangle; each boundary particle must have exactly one outgoing boundary edge
+  std::vector<std::uint64_t> edges;
+  edges.reserve(3 * s.tris_all.size());
+  for (const SoftTriangle& t : s.tris_all)
+    for (const auto& [a, b] : {std::pair{t.a, t.b}, std::pair{t.b, t.c}, std::pair{t.c, t.a}})
+      edges.push_back(std::uint64_t(a) << 32 | b);
+  std::sort(edges.begin(), edges.end());
+  if (std::adjacent_find(edges.begin(), edges.end()) != edges.end()) return false;  // overlapping triangles
+  std::vector<std::uint32_t> next(n, kNoParticle);
+  std::size_t boundary = 0;
+  std::uint32_t start = kNoParticle;
+  for (const std::uint64_t e : edges) {
+    const auto a = static_cast<std::uint32_t>(e >> 32), b = static_cast<std::uint32_t>(e);
+    if (std::binary_search(edges.begin(), edges.end(), std::uint64_t(b) << 32 | a)) continue;
+    if (next[a] != kNoParticle) return false;
+    next[a] = b, start = a, ++boundary;
+  }
+  if (boundary < 3) return false;
+  // one loop, turning left (about the normal) at every vertex and 2 pi in all
+  double turning = 0;
+  std::size_t steps = 0;
+  std::uint32_t a = start;
+  do {
+    const std::uint32_t b = next[a];
+    const std::uint32_t c = next[b];
+    if (c == kNoParticle || ++steps > boundary) return false;
+    const Vec3 e1 = r(b) - r(a), e2 = r(c) - r(b);
+    const double sn = glm::dot(glm::cross(e1, e2), nrm), cs = glm::dot(e1, e2);
+    if (sn < -1e-4 * glm::length(e1) * glm::length(e2)) return false;
+    turning += std::atan2(sn, cs);
+    a = b;
+  } while (a != start);
+  return steps == boundary && std::abs(turning - 2 * std::numbers::pi) < 1e-3;
+}
+
+// Each free particle's nearest pin along the body and the length of that path (m), by
+// Dijkstra's algorithm (Dijkstra 1959) from all pins at once over the intact stretch and
+// shear constraints weighted by their rest lengths (bend constraints are left out: each
+// spans two edges, a shortcut across a fold). Writes geo_dist and tether; a particle no path
+// reaches keeps itself. An indexed binary heap in preallocated columns: O(E log n), no
+// allocation.
+void shortest_paths_from_pins(SoftBody::Impl& s) {
+  constexpr std::uint32_t kOff = kNoParticle;  // not in the heap
+  double* d = s.geo_dist.data();
+  std::uint32_t* heap = s.heap.data();
+  std::uint32_t* slot = s.heap_pos.data();
+  std::size_t m = 0;
+  // sift particle v up from slot k, or down
+  auto up = [&](std::size_t k, std::uint32_t v) {
+    while (k > 0) {
+      const std::size_t parent = (k - 1) / 2;
+      if (!(d[v] < d[heap[parent]])) break;
+      heap[k] = heap[parent], slot[heap[k]] = static_cast<std::uint32_t>(k), k = parent;
+    }
+    heap[k] = v, slot[v] = static_cast<std::uint32_t>(k);
+  };
+  auto down = [&](std::size_t k, std::uint32_t v) {
+    for (;;) {
+      std::size_t c = 2 * k + 1;
+      if (c >= m) break;
+      if (c + 1 < m && d[heap[c + 1]] < d[heap[c]]) ++c;
+      if (!(d[heap[c]] < d[v])) break;
+      heap[k] = heap[c], slot[heap[k]] = static_cast<std::uint32_t>(k), k = c;
+    }
+    heap[k] = v, slot[v] = static_cast<std::uint32_t>(k);
+  };
+  // every pin is a source at distance 0, its own anchor
+  for (std::size_t i = 0; i < s.n; ++i) {
+    d[i] = std::numeric_limits<double>::infinity();
+    s.tether[i] = static_cast<std::uint32_t>(i);
+    slot[i] = kOff;
+  }
+  for (const std::uint32_t p : s.pins) d[p] = 0, up(m++, p);
+  // settle the nearest particle, relax its edges
+  while (m > 0) {
+    const std::uint32_t u = heap[0];
+    slot[u] = kOff;
+    if (--m > 0) down(0, heap[m]);
+    for (std::uint32_t k = s.graph_start[u]; k < s.graph_start[u + 1]; ++k) {
+      const std::uint32_t c = s.graph_edge[k];
+      if (s.broken[c]) continue;
+      const std::uint32_t v = s.ca[c] ^ s.cb[c] ^ u;
+      const double dv = d[u] + s.rest0[c];
+      if (!(dv < d[v])) continue;
+      const bool queued = slot[v] != kOff;
+      d[v] = dv, s.tether[v] = s.tether[u];
+      if (queued) up(slot[v], v);
+      else up(m++, v);
+    }
+  }
+}
+
+}  // namespace
+
+// The straight-or-path decision and, for path lengths, the graph and Dijkstra's scratch.
+void SoftBody::Impl::init_tethers() {
+  tether_straight = rest_shape_convex(*this);
+  if (tether_straight) return;
+  // constraint indices by particle (CSR), stretch and shear only
+  const std::size_t nc = ca.size();
+  const auto bend = static_cast<std::uint8_t>(SoftConstraintKind::Bend);
+  graph_start.assign(n + 1, 0);
+  for (std::size_t c = 0; c < nc; ++c)
+    if (kind[c] != bend) ++graph_start[ca[c] + 1], ++graph_start[cb[c] + 1];
+  for (std::size_t i = 0; i < n; ++i) graph_start[i + 1] += graph_start[i];
+  graph_edge.resize(graph_start[n]);
+  std::vector<std::uint32_t> fill(graph_start.begin(), graph_start.end() - 1);
+  for (std::uint32_t c = 0; c < nc; ++c)
+    if (kind[c] != bend) graph_edge[fill[ca[c]]++] = c, graph_edge[fill[cb[c]]++] = c;
+  // Dijkstra's scratch
+  geo_dist.assign(n, 0.0), heap.assign(n, 0), heap_pos.assign(n, 0);
+}
+
+// Each free particle's anchor and tether length L (Kim et al. 2012, sec. 4), rounded up
+// to float with a relative margin of 2^-20 so that a particle exactly at its rest
+// distance, whose float distance may round a few ulps long, is not moved. For a convex
+// rest shape (init_tethers) the anchor is the pinned particle nearest in a straight line
+// (ties to the earliest pin) and L their straight rest distance, exact. Otherwise (a
+// folded or curved sheet, a mesh in pieces, any solid) the straight distance may be a
+// shortcut through the air that holds the body short, so the anchor is the pin nearest
+// along the body's edges and L the length of that path (shortest_paths_from_pins). No
+// shape that keeps the edges at their rest lengths puts the particle farther than L from
+// its anchor (the triangle inequality along the path), so the tether never holds the
+// body short; it is slack by the edge graph's metric error (on a flat grid with both
+// diagonals at most sqrt(4 - 2 sqrt 2) - 1 = 8.2%, where a path mixes axis and diagonal
+// steps). Run only after pins change; writes preallocated columns. O(particles x pins),
+// or O(E log particles) for E edges.
 void SoftBody::Impl::update_tethers() {
   tethers_dirty = false;
+  if (!tether_straight) {
+    shortest_paths_from_pins(*this);
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool tied = tether[i] != i && !pinned[i];
+      if (!tied) tether[i] = static_cast<std::uint32_t>(i);
+      tether_len[i] = tied ? static_cast<float>(geo_dist[i] * (1.0 + 0x1p-20)) : 0.f;
+    }
+    return;
+  }
   for (std::size_t i = 0; i < n; ++i) {
     // no tether unless a pin is found (pinned particles keep none)
     tether[i] = static_cast<std::uint32_t>(i);

@@ -104,4 +104,16 @@ TEST(SoftAllocations, NonePerTetheredStepThroughPinChanges) {
     c.step(t, 1.0 / 60);
   }
   EXPECT_EQ(g_allocations.load() - before, 0);
+  // a solid is not a convex sheet: its tethers run along its edges (Dijkstra's scratch
+  // is sized at build)
+  pba::SoftBody jelly = pba::SoftBody::jelly_box({.nx = 3, .ny = 3, .nz = 3}, d);
+  for (int i = 0; i < 5; ++i, t += 1.0 / 60) jelly.step(t, 1.0 / 60);
+  const long long before_jelly = g_allocations.load();
+  for (int i = 0; i < 60; ++i, t += 1.0 / 60) {
+    if (i == 10) jelly.grab(63, jelly.position(63));
+    if (i == 20) jelly.pin(0);
+    if (i == 40) jelly.release();
+    jelly.step(t, 1.0 / 60);
+  }
+  EXPECT_EQ(g_allocations.load() - before_jelly, 0);
 }
