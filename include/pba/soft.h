@@ -93,8 +93,11 @@ struct SoftBodyDef {
   double shear_compliance = 0;
   /// XPBD compliance of bend constraints (m/N), finite and >= 0.
   double bend_compliance = 1e-4;
-  /// XPBD compliance of tetrahedron volume constraints C = V - V0 (m^5/N, i.e.
-  /// 1/(bulk modulus x rest volume) per tet scaled by V0^2), finite and >= 0; 0 = incompressible.
+  /// XPBD compliance of tetrahedron volume constraints C = V - V0 (m^5/N), finite and >= 0;
+  /// 0 = incompressible. A tet of rest volume V0 in a material whose volume stiffness
+  /// (Lame's lambda) is L has alpha = V0 / L: its energy (V - V0)^2 / (2 alpha) is then
+  /// L tr(eps)^2 / 2 per unit volume. 0 locks a fine tet lattice (more tets than degrees
+  /// of freedom); jelly_settings derives it from a material.
   double volume_compliance = 0;
 
   /// MassSpring stiffness of stretch springs (N/m), finite and >= 0.
@@ -244,18 +247,68 @@ struct ClothDef {
   bool bending = true;        ///< add bend constraints
 };
 
-/// A jelly box: a lattice of (nx+1)(ny+1)(nz+1) particles, each cube cell split into 6
-/// tetrahedra around its main diagonal (Freudenthal/Kuhn split, conforming across cells),
-/// with a distance constraint on every tet edge and a volume constraint per tet
-/// (Macklin et al. 2016; Mueller et al. 2020 "Detailed rigid body simulation with XPBD").
+/// A jelly box: a lattice of (nx+1)(ny+1)(nz+1) particles, each cell split into 6
+/// tetrahedra around one of its diagonals (the Freudenthal/Kuhn split), with a distance
+/// constraint on every tet edge and a volume constraint per tet (Macklin et al. 2016;
+/// Mueller et al. 2020 "Detailed rigid body simulation with XPBD").
+/// The split is mirrored from cell to cell (along each axis the cells alternate between
+/// the split and its mirror image, symmetrically about the box's mid-plane), so faces
+/// still match and the lattice has the box's mirror symmetries when the cell count along
+/// an axis is even (an odd count leaves the middle layer unpaired). The plain Kuhn
+/// lattice, every cell split about a diagonal parallel to (1, 1, 1), is anisotropic:
+/// squashed along y it shears toward (1, 0, 1), which friction turns into sliding.
 struct JellyDef {
   Vec3 center{0, 1, 0};        ///< box centre (m), finite
   Vec3 size{0.5, 0.5, 0.5};    ///< full edge lengths (m), each finite and > 0
   Quat rotation{1, 0, 0, 0};   ///< orientation, unit quaternion
-  int nx = 3, ny = 3, nz = 3;  ///< cells per axis, each in [1, 64]
+  int nx = 4, ny = 4, nz = 4;  ///< cells per axis, each in [1, 64] (even: mirror-symmetric)
   double mass = 1;             ///< total mass (kg), finite and > 0, split evenly
   Vec3 velocity{0, 0, 0};      ///< initial velocity of every particle (m/s), finite
 };
+
+/// An isotropic elastic material for a jelly, turned into XPBD settings by jelly_settings.
+struct JellyMaterial {
+  double young = 5e3;     ///< Young's modulus E (Pa), finite and > 0 (gelatin: about 1e3 to 1e4)
+  /// Poisson ratio nu, in [0.27, 0.49]: the edge springs alone give nu = 5/19 (about
+  /// 0.263, a central-force lattice), the volume constraints add the rest of the bulk
+  /// modulus; nu -> 0.5 (incompressible) locks the lattice (see jelly_settings).
+  double poisson = 0.4;
+  /// Stiffness-proportional (Rayleigh) damping time tau (s), finite and >= 0: every edge
+  /// gets the damping c = tau k, which damps a mode of angular frequency omega with the
+  /// ratio tau omega / 2 (the default: about 0.04 for the default cube's sway, omega
+  /// about 30 rad/s, so it bounces and wobbles; its fastest lattice modes are overdamped).
+  double damping_time = 2.5e-3;
+};
+
+/// XPBD settings that give a jelly box the material `m` (Error names the bad field).
+/// Start from SoftBodyDef{} and set, with cell edge a = cbrt(cell volume) and shear
+/// modulus G = E / (2 (1 + nu)):
+///   * stretch_compliance = 1 / k with k = 4 G a / 3. Every tet edge is a spring of
+///     stiffness k; per cell there are 3 axis edges, 3 face and 1 body diagonal, and
+///     averaged over the mirrored cells the lattice has cubic symmetry with
+///     C11 = 7k/(3a), C12 = C44 = 5k/(6a) (central springs: Cauchy), so G = (C11 -
+///     C12)/2 = 3k/(4a) (C44 is 11% stiffer) and the bulk modulus of the springs alone
+///     is K_s = (C11 + 2 C12)/3 = 4k/(3a) = 16 G / 9.
+///   * volume_compliance = V0 / lambda_v (m^5/N) with V0 = a^3/6 the tet rest volume and
+///     lambda_v = K - 16 G/9, K = E / (3 (1 - 2 nu)): the energy (V - V0)^2 / (2 alpha)
+///     per tet is the bulk energy lambda_v tr(eps)^2 / 2 per unit volume.
+///   * spring_damping = tau k.
+///   * substeps: the smallest count >= 10 with omega_max h <= 1 at the step dt (s, > 0),
+///     where omega_max^2 = 2 (d - 1) k w bounds the lattice's fastest vibration
+///     (Gershgorin; d = 26 edges meet at a particle where mirrored cells' diagonals meet,
+///     w = particles / mass). Then alpha / h^2 = 1 / (k h^2) >= 2 (d - 1) w, the sum of
+///     the couplings to the constraints sharing a particle: the system each sweep solves
+///     is diagonally dominant and one Gauss-Seidel sweep per substep nearly converges it,
+///     so the elastic energy the solver stores is the energy it reports. A stiffer or
+///     finer jelly gets more substeps rather than an unconverged, hidden compliance
+///     (the default cube: 23 at 60 Hz).
+/// Why not rigid: alpha = 0 on every edge and tet is a rigid body (604 edges and 384
+/// tets on the 369 deformation degrees of freedom of a 4 x 4 x 4 lattice; the volumes
+/// are redundant once the edges are rigid, and the edges alone are over-determined). One
+/// sweep per substep cannot converge it within an impact, and the residual acts as a
+/// spring whose energy potential_energy() cannot see: such a cube dropped flat bounces
+/// back at about 0.4 of its impact speed, and dropped tilted it tumbles for metres.
+SoftBodyDef jelly_settings(const JellyDef& jelly, const JellyMaterial& m = {}, double dt = 1.0 / 60);
 
 /// Mean and maximum strain |l - l0| / l0 over the intact stretch constraints.
 struct StrainStats {
@@ -310,8 +363,11 @@ class SoftBody {
   static SoftBody rope(const RopeDef& rope, const SoftBodyDef& def = {});
   /// A rectangular cloth grid (constraints pre-coloured in 12 vectorisable sets).
   static SoftBody cloth_grid(const ClothDef& cloth, const SoftBodyDef& def = {});
-  /// A tetrahedral jelly box.
-  static SoftBody jelly_box(const JellyDef& jelly, const SoftBodyDef& def = {});
+  /// A tetrahedral jelly box of the default material: jelly_box(jelly, jelly_settings(jelly)).
+  static SoftBody jelly_box(const JellyDef& jelly);
+  /// A tetrahedral jelly box with the given settings (all of them: with SoftBodyDef{}
+  /// its edges and volumes are rigid, see jelly_settings).
+  static SoftBody jelly_box(const JellyDef& jelly, const SoftBodyDef& def);
 
   // ---- settings ----
 

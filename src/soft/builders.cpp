@@ -3,6 +3,8 @@
 // themselves so that every colour splits into long contiguous or interleaved runs.
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <cstdlib>
 #include <set>
 #include <utility>
 
@@ -14,6 +16,17 @@ namespace {
 
 void positive(double v, std::string_view where) {
   if (!(std::isfinite(v) && v > 0)) require_positive(v, where);
+}
+
+// Whether cell i of n along an axis is split as the mirror image of the Kuhn cell:
+// cells alternate (so the lattice is locally isotropic: the four diagonal directions
+// and both diagonals of every face kind occur equally in each 2 x 2 x 2 block) and cell
+// n-1-i is the mirror image of cell i about the mid-plane (exactly so for even n; for
+// odd n the middle cell has no partner). With d = 2i + 1 - n (the cell centre's offset
+// from the mid-plane in half cells): flipped past the mid-plane, toggled every cell.
+int mirrored(int i, int n) {
+  const int d = 2 * i + 1 - n;
+  return (d > 0 ? 1 : 0) ^ ((std::abs(d) / 2) % 2);
 }
 
 }  // namespace
@@ -145,6 +158,48 @@ SoftBody SoftBody::cloth_grid(const ClothDef& c, const SoftBodyDef& def) {
   return from_mesh(m, def, "ClothDef");
 }
 
+// The material's XPBD settings (derivation at the declaration in pba/soft.h): the edge
+// stiffness from the shear modulus, the volume compliance from the rest of the bulk
+// modulus, Rayleigh damping, and enough substeps to resolve an edge's vibration.
+SoftBodyDef jelly_settings(const JellyDef& jd, const JellyMaterial& mat, double dt) {
+  // the inputs it reads
+  positive(jd.size.x, "JellyDef.size.x");
+  positive(jd.size.y, "JellyDef.size.y");
+  positive(jd.size.z, "JellyDef.size.z");
+  require_count(jd.nx, 1, 64, "JellyDef.nx");
+  require_count(jd.ny, 1, 64, "JellyDef.ny");
+  require_count(jd.nz, 1, 64, "JellyDef.nz");
+  positive(jd.mass, "JellyDef.mass");
+  positive(mat.young, "JellyMaterial.young");
+  if (!(mat.poisson >= 0.27 && mat.poisson <= 0.49))
+    throw Error("JellyMaterial.poisson: must be in [0.27, 0.49] (the edges alone give 5/19; 0.5 locks), got " +
+                format_value(mat.poisson));
+  if (!(std::isfinite(mat.damping_time) && mat.damping_time >= 0))
+    require_non_negative(mat.damping_time, "JellyMaterial.damping_time");
+  positive(dt, "jelly_settings dt");
+  // moduli and the cell edge a = cbrt(cell volume)
+  const double g = mat.young / (2 * (1 + mat.poisson));
+  const double bulk = mat.young / (3 * (1 - 2 * mat.poisson));
+  const double cell = (jd.size.x / jd.nx) * (jd.size.y / jd.ny) * (jd.size.z / jd.nz);
+  const double a = std::cbrt(cell);
+  // edges: k = 4 G a / 3; volumes: alpha = V0 / lambda_v, lambda_v = K - 16 G / 9 > 0
+  const double k = 4 * g * a / 3;
+  const double lambda_v = bulk - 16 * g / 9;
+  SoftBodyDef d;
+  d.stretch_compliance = 1 / k;
+  d.volume_compliance = (cell / 6) / lambda_v;
+  d.spring_damping = mat.damping_time * k;
+  // substeps: omega_max h <= 1 with omega_max^2 = 2 (d - 1) k w (Gershgorin), d = 26
+  // edges at a particle where mirrored cells' diagonals meet, w = particles / mass
+  const double particles = double(jd.nx + 1) * (jd.ny + 1) * (jd.nz + 1);
+  const double omega = std::sqrt(2 * 25 * k * particles / jd.mass);
+  const double need = std::ceil(omega * dt);
+  d.substeps = static_cast<int>(std::clamp(need, 10.0, 10000.0));
+  return d;
+}
+
+SoftBody SoftBody::jelly_box(const JellyDef& jd) { return jelly_box(jd, jelly_settings(jd)); }
+
 SoftBody SoftBody::jelly_box(const JellyDef& jd, const SoftBodyDef& def) {
   // shape
   require_finite(jd.center, "JellyDef.center");
@@ -170,9 +225,12 @@ SoftBody SoftBody::jelly_box(const JellyDef& jd, const SoftBodyDef& def) {
         const Vec3 local = jd.size * (Vec3(double(i) / jd.nx, double(j) / jd.ny, double(k) / jd.nz) - 0.5);
         m.positions[id(i, j, k)] = jd.center + jd.rotation * local;
       }
-  // six tetrahedra per cell along the main diagonal (Freudenthal/Kuhn): for each order of
-  // the axes, the path (0,0,0) -> e_p -> e_p + e_q -> (1,1,1); the split is the same in
-  // every cell, so faces match between cells
+  // six tetrahedra per cell about a diagonal (Freudenthal/Kuhn): for each order of the
+  // axes, the path (0,0,0) -> e_p -> e_p + e_q -> (1,1,1) in the cell's own frame, which
+  // is mirrored along the axes where mirrored() says so. Faces match: the diagonal of a
+  // face normal to x depends only on the y and z flags, which the two cells sharing it
+  // have in common (and likewise for y and z).
+  const int cells[3] = {jd.nx, jd.ny, jd.nz};
   static constexpr std::array<std::array<int, 3>, 6> kPerm = {
       {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
   std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
@@ -180,11 +238,18 @@ SoftBody SoftBody::jelly_box(const JellyDef& jd, const SoftBodyDef& def) {
     for (int j = 0; j < jd.ny; ++j)
       for (int i = 0; i < jd.nx; ++i)
         for (const auto& p : kPerm) {
-          int c[3] = {i, j, k};
+          // the cell's mirror flags and the path's start corner
+          const int cell[3] = {i, j, k};
+          int c[3], step[3];
+          for (int a = 0; a < 3; ++a) {
+            const int f = mirrored(cell[a], cells[a]);
+            c[a] = cell[a] + f;
+            step[a] = f ? -1 : 1;
+          }
           std::uint32_t v[4];
           v[0] = id(c[0], c[1], c[2]);
           for (int s = 0; s < 3; ++s) {
-            ++c[p[s]];
+            c[p[s]] += step[p[s]];
             v[s + 1] = id(c[0], c[1], c[2]);
           }
           m.tets.push_back({v[0], v[1], v[2], v[3]});
