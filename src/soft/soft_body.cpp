@@ -324,7 +324,7 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
   s.rx.assign(s.x.begin(), s.x.begin() + static_cast<std::ptrdiff_t>(n));
   s.ry.assign(s.y.begin(), s.y.begin() + static_cast<std::ptrdiff_t>(n));
   s.rz.assign(s.z.begin(), s.z.begin() + static_cast<std::ptrdiff_t>(n));
-  s.tether.resize(n), s.tether_len.assign(n, 0.f);
+  s.tether.resize(n), s.tether_len.assign(n, detail::kNoTether);
   s.anchor_x.assign(n, 0.f), s.anchor_y.assign(n, 0.f), s.anchor_z.assign(n, 0.f);
   for (std::size_t i = 0; i < n; ++i) s.tether[i] = static_cast<std::uint32_t>(i);
   s.ax.assign(n, 0.f), s.ay.assign(n, 0.f), s.az.assign(n, 0.f);

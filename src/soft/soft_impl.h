@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,10 @@ struct SoftCollider {
 /// not own), so a window may reach up to 15 elements past the last one.
 inline constexpr std::size_t kSoftPad = 16;
 
+/// The tether length of a particle without a tether (pinned, or out of every pin's
+/// reach): no distance exceeds it, so the tether pass never moves the particle.
+inline constexpr float kNoTether = std::numeric_limits<float>::infinity();
+
 }  // namespace pba::detail
 
 namespace pba {
@@ -103,7 +108,7 @@ struct SoftBody::Impl {
   // ---- long-range attachments (Kim, Chentanez & Mueller 2012) ----
   std::vector<float> rx, ry, rz;           // rest positions (m): the positions at build
   std::vector<std::uint32_t> tether;       // each particle's anchor (nearest pin), or itself: no tether
-  std::vector<float> tether_len;           // max distance to the anchor (m); 0 without a tether
+  std::vector<float> tether_len;           // max distance to the anchor (m); kNoTether without one
   std::vector<float> anchor_x, anchor_y, anchor_z;  // each anchor's position (m), copied when pins move
   long long anchors_step = -1;             // the last step whose tether pass ran (anchors valid after it)
   bool tethers_dirty = true;               // pins changed: recompute before the next XPBD step

@@ -515,8 +515,8 @@ void solve_volumes(SoftBody::Impl& s, float at, bool use_lambda) {
 // Long-range attachments (Kim, Chentanez & Mueller 2012, sec. 4, the unilateral
 // constraint C_i = |x_i - x_a| - L_i <= 0 with the anchor's inverse mass 0): a particle
 // beyond its tether is moved onto the sphere of radius L_i about its anchor a; one
-// within it is not touched. Particles without a tether are their own anchor with L = 0
-// (|x_i - x_i|^2 = 0 is never > 0), so the loop has no branch on the tether's presence.
+// within it is not touched. Particles without a tether have L = +infinity (kNoTether),
+// which no distance exceeds, so the loop has no branch on the tether's presence.
 // The anchors' positions come from the columns (ax, ay, az), copied from the pins by
 // copy_anchors whenever a pin moves, so the pass streams contiguous memory; a pinned
 // particle no tether moves, so the copies stay exact between pin moves.
@@ -531,7 +531,7 @@ void project_tethers(std::size_t i0, std::size_t n, float* PBA_SOFT_RESTRICT x, 
     const float d2 = dx * dx + dy * dy + dz * dz;
     const float l = len[i];
     // beyond the tether: onto the sphere (selects, not a branch: the loop if-converts;
-    // without a tether l = d2 = 0 and s is NaN, never selected)
+    // without a tether l is infinite and s too, never selected)
     const bool out = d2 > l * l;
     const float s = l / std::sqrt(d2);
     const float nx = ax + dx * s, ny = ay + dy * s, nz = az + dz * s;
@@ -767,14 +767,14 @@ void SoftBody::Impl::update_tethers() {
     for (std::size_t i = 0; i < n; ++i) {
       const bool tied = tether[i] != i && !pinned[i];
       if (!tied) tether[i] = static_cast<std::uint32_t>(i);
-      tether_len[i] = tied ? static_cast<float>(geo_dist[i] * (1.0 + 0x1p-20)) : 0.f;
+      tether_len[i] = tied ? static_cast<float>(geo_dist[i] * (1.0 + 0x1p-20)) : detail::kNoTether;
     }
     return;
   }
   for (std::size_t i = 0; i < n; ++i) {
     // no tether unless a pin is found (pinned particles keep none)
     tether[i] = static_cast<std::uint32_t>(i);
-    tether_len[i] = 0.f;
+    tether_len[i] = detail::kNoTether;
     if (pinned[i]) continue;
     // the nearest pin in the rest shape
     double best = std::numeric_limits<double>::infinity();
