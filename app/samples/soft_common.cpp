@@ -440,6 +440,22 @@ double MaxAngularFrequency(const SoftBody& body, const SoftBodyDef& d, int itera
     const double l = glm::length(dd);
     if (l > 0) springs.push_back({s.a, s.b, dd / l, k});
   }
+  // the volume force's stiffness k_v g g^T per tet, g the gradient of its volume at its
+  // four particles (g_1 = (x_2 - x_0) x (x_3 - x_0) / 6 and so on, g_0 = -g_1 - g_2 - g_3)
+  struct Tet {
+    std::uint32_t id[4];
+    Vec3 g[4];
+  };
+  std::vector<Tet> tets;
+  if (d.volume_stiffness > 0) {
+    tets.reserve(body.tets().size());
+    for (const SoftTet& t : body.tets()) {
+      const Vec3 x0 = body.position(t.a);
+      const Vec3 e1 = body.position(t.b) - x0, e2 = body.position(t.c) - x0, e3 = body.position(t.d) - x0;
+      const Vec3 g1 = glm::cross(e2, e3) / 6.0, g2 = glm::cross(e3, e1) / 6.0, g3 = glm::cross(e1, e2) / 6.0;
+      tets.push_back({{t.a, t.b, t.c, t.d}, {-(g1 + g2 + g3), g1, g2, g3}});
+    }
+  }
   std::vector<double> w(n);
   for (std::size_t i = 0; i < n; ++i) w[i] = body.inverse_mass(i);
   // power iteration on A = M^-1 K from a fixed, non-symmetric start
@@ -453,6 +469,11 @@ double MaxAngularFrequency(const SoftBody& body, const SoftBodyDef& d, int itera
       const Vec3 f = s.k * glm::dot(v[s.b] - v[s.a], s.n) * s.n;
       kv[s.b] += f;
       kv[s.a] -= f;
+    }
+    for (const Tet& t : tets) {
+      double dv = 0;
+      for (int k = 0; k < 4; ++k) dv += glm::dot(t.g[k], v[t.id[k]]);
+      for (int k = 0; k < 4; ++k) kv[t.id[k]] += d.volume_stiffness * dv * t.g[k];
     }
     // the Rayleigh quotient in the mass inner product: v^T K v / v^T M v
     double num = 0, den = 0, norm = 0;

@@ -219,7 +219,8 @@ double StabilityLimit(Method m);
 
 /// The highest angular frequency omega_max (rad/s) of `body`'s mass-spring network about
 /// its current shape: sqrt of the largest eigenvalue of M^-1 K with K = sum k n n^T over
-/// the intact springs (the tension terms dropped), by power iteration from a fixed start
+/// the intact springs (the tension terms dropped) plus k_v g g^T over the tets when the
+/// volume stiffness k_v > 0 (g the gradient of a tet's volume), by power iteration from a fixed start
 /// vector, so a lower estimate converging from below. Pinned particles are excluded.
 /// Explicit integrators need h omega_max below their limit (2 for semi-implicit Euler).
 double MaxAngularFrequency(const SoftBody& body, int iterations = 200);

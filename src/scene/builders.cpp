@@ -261,19 +261,19 @@ EntityId cloth_tear(World& w, const ClothTearParams& p) {
 }
 
 EntityId jelly_drop(World& w, const JellyDropParams& p) {
+  // the cube, tilted about (1, 0, 1) so that it lands on an edge
   require_positive(p.size, "JellyDropParams.size");
+  const Quat tilt = glm::angleAxis(0.1, glm::normalize(Vec3(1, 0, 1)));
+  const JellyDef j{.center = {0, p.height, 0}, .size = Vec3(p.size), .rotation = tilt, .nx = p.cells,
+                   .ny = p.cells, .nz = p.cells, .mass = p.mass};
+  // its settings from the material at the world's step, then gravity, wind and contact
   ground(w, 0.0, 0.6);
-  SoftBodyDef d = soft_def(w);
-  d.substeps = p.substeps;
-  d.stretch_compliance = p.compliance;
-  d.volume_compliance = p.volume_compliance;
+  SoftBodyDef d = jelly_settings(j, p.material, w.stepper().settings().fixed_dt);
+  const SoftBodyDef world = soft_def(w);
+  d.forces = world.forces;
   d.thickness = 0.005;
   d.friction = 0.6;
-  const Quat tilt = glm::angleAxis(0.5, glm::normalize(Vec3(1, 0, 1)));
-  return add_soft(w, "jelly",
-                  SoftBody::jelly_box({.center = {0, p.height, 0}, .size = Vec3(p.size), .rotation = tilt,
-                                       .nx = p.cells, .ny = p.cells, .nz = p.cells, .mass = p.mass},
-                                      d));
+  return add_soft(w, "jelly", SoftBody::jelly_box(j, d));
 }
 
 void cloth_compare(World& w, const ClothCompareParams& p) {

@@ -407,9 +407,45 @@ void read_collider(const Node& n, World& w) {
   read_common(n, w, e);
 }
 
+// a jelly's shape fields: centre, size, rotation, cells, mass and velocity
+JellyDef read_jelly_shape(const Node& n) {
+  JellyDef j;
+  j.center = n.vec("center", j.center);
+  if (n.has("size")) {
+    j.size = n.at("size").vec3();
+    for (int i = 0; i < 3; ++i)
+      if (!(j.size[i] > 0)) n.at("size").item(i).fail("must be > 0, got " + format_value(j.size[i]));
+  }
+  j.rotation = read_rotation(n);
+  if (n.has("cells")) {
+    const Node c = n.at("cells");
+    if (!c.raw().is_array() || c.size() != 3) c.fail("must be an array of 3 integers, got " + Node::type_name(c.raw()));
+    j.nx = static_cast<int>(c.item(0).integer(1, 64));
+    j.ny = static_cast<int>(c.item(1).integer(1, 64));
+    j.nz = static_cast<int>(c.item(2).integer(1, 64));
+  }
+  j.mass = n.positive("mass", j.mass);
+  j.velocity = n.vec("velocity", j.velocity);
+  return j;
+}
+
+// a jelly's optional "material": {"young": Pa, "poisson": nu, "damping_time": s}, with the
+// ranges jelly_settings accepts (checked here so that the message names the JSON path)
+JellyMaterial read_jelly_material(const Node& n) {
+  JellyMaterial m;
+  if (!n.has("material")) return m;
+  const Node mn = n.at("material");
+  mn.allow_only({"young", "poisson", "damping_time"});
+  m.young = mn.positive("young", m.young);
+  m.poisson = mn.in_range("poisson", 0.27, 0.49, m.poisson);
+  m.damping_time = mn.non_negative("damping_time", m.damping_time);
+  return m;
+}
+
 // A soft body (pba/soft.h): "type" is "spring", "rope", "cloth" or "jelly"; the solver
 // settings are shared by all types, the shape fields belong to one type each. Gravity and
-// wind are the world's (settings); drag is per body.
+// wind are the world's (settings); drag is per body. A jelly's settings start from
+// jelly_settings(shape, material, the world's step) (Error names the JSON path).
 void read_soft_body(const Node& n, World& w) {
   enum class Type { Spring, Rope, Cloth, Jelly };
   const Type type = n.required_choice<Type>(
@@ -437,11 +473,16 @@ void read_soft_body(const Node& n, World& w) {
       n.allow_only({"type", "name", "solver", "integrator", "substeps", "iterations", "stretch_compliance",
                     "volume_compliance", "stretch_stiffness", "volume_stiffness", "spring_damping", "damping", "drag",
                     "thickness", "friction", "center", "size", "rotation", "rotation_deg", "cells", "mass",
-                    "velocity"});
+                    "velocity", "material"});
       break;
   }
-  // solver settings
-  SoftBodyDef d;
+  // a jelly's shape comes first: its settings start from its material at the world's step
+  JellyDef j;
+  if (type == Type::Jelly) j = read_jelly_shape(n);
+  // solver settings (the fields given override the jelly's)
+  SoftBodyDef d = type == Type::Jelly
+                      ? jelly_settings(j, read_jelly_material(n), w.stepper().settings().fixed_dt)
+                      : SoftBodyDef{};
   d.forces.gravity = w.particles().forces().gravity;
   d.forces.wind = w.particles().forces().wind;
   d.solver = n.choice<SoftSolver>("solver", {{"xpbd", SoftSolver::XPBD}, {"mass-spring", SoftSolver::MassSpring}},
@@ -529,23 +570,6 @@ void read_soft_body(const Node& n, World& w) {
       break;
     }
     case Type::Jelly: {
-      JellyDef j;
-      j.center = n.vec("center", j.center);
-      if (n.has("size")) {
-        j.size = n.at("size").vec3();
-        for (int i = 0; i < 3; ++i)
-          if (!(j.size[i] > 0)) n.at("size").item(i).fail("must be > 0, got " + format_value(j.size[i]));
-      }
-      j.rotation = read_rotation(n);
-      if (n.has("cells")) {
-        const Node c = n.at("cells");
-        if (!c.raw().is_array() || c.size() != 3) c.fail("must be an array of 3 integers, got " + Node::type_name(c.raw()));
-        j.nx = static_cast<int>(c.item(0).integer(1, 64));
-        j.ny = static_cast<int>(c.item(1).integer(1, 64));
-        j.nz = static_cast<int>(c.item(2).integer(1, 64));
-      }
-      j.mass = n.positive("mass", j.mass);
-      j.velocity = n.vec("velocity", j.velocity);
       body = SoftBody::jelly_box(j, d);
       break;
     }
