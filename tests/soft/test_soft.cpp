@@ -249,6 +249,28 @@ TEST(Cloth, HangingClothAtRest) {
   }
 }
 
+// Free fall at many substeps: a sheet released at rest 1.5 m up with 300 substeps per
+// 1/60 s step. From rest a substep adds g h^2 = 3e-8 m to the height, under half a float
+// step at 1.5 m (6e-8 m), so a velocity taken only from position differences would keep
+// it hanging there for ever. The velocity carries what the positions could not hold, so
+// after N substeps the sheet is at y0 - g h^2 N (N + 1) / 2 (semi-implicit Euler) up to
+// rounding: half a float step of position per substep, N u (u = 6e-8 m), and the
+// velocity's relative rounding of a few 2^-24 per substep, 4 N 2^-24 of the drop.
+TEST(Cloth, FreeFallAtManySubsteps) {
+  pba::SoftBodyDef d;
+  d.substeps = 300;
+  pba::SoftBody c = pba::SoftBody::cloth_grid(
+      {.origin = {-0.5, 1.5, -0.5}, .edge_u = {1, 0, 0}, .edge_v = {0, 0, 1}, .nx = 4, .ny = 4,
+       .pins = pba::ClothPins::None},
+      d);
+  const int steps = 30;
+  for (int f = 0; f < steps; ++f) c.step(f / 60.0, 1.0 / 60);
+  const double h = 1.0 / 60 / d.substeps, N = double(steps) * d.substeps;
+  const double drop = -d.forces.gravity.y * h * h * N * (N + 1) / 2;
+  for (std::size_t p = 0; p < c.size(); ++p)
+    EXPECT_NEAR(c.position(p).y, 1.5 - drop, N * 6e-8 + 4 * N * 0x1p-24 * drop) << "particle " << p;
+}
+
 // Moving a pin moves it exactly there by the end of the step (in float), and the cloth
 // follows.
 TEST(Cloth, MovingAPinMovesItExactly) {
