@@ -124,7 +124,6 @@ ConvergenceResult measure_convergence(const Problem& p, Method m, const Converge
   }
   double scale = 1;
   for (double xr : x_ref) scale = std::max(scale, std::abs(xr));
-  const double eps = std::numeric_limits<double>::epsilon();
   // global error at t_end for each step size
   for (long long steps : counts) {
     const double dt = p.t_end / static_cast<double>(steps);
