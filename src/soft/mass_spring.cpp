@@ -37,7 +37,6 @@ void accelerations(const SoftBody::Impl& s, double t, std::span<const Vec3> x, s
     a[i] = ai;
   }
   // springs
-  const double kk[3] = {d.stretch_stiffness, d.shear_stiffness, d.bend_stiffness};
   const double c = d.spring_damping;
   for (std::size_t k = 0; k < s.ca.size(); ++k) {
     if (s.broken[k]) continue;
@@ -46,7 +45,8 @@ void accelerations(const SoftBody::Impl& s, double t, std::span<const Vec3> x, s
     const double l = glm::length(dd);
     if (!(l > 0)) continue;
     const Vec3 n = dd / l;
-    const Vec3 fb = -(kk[s.kind[k]] * (l - s.rest0[k]) + c * glm::dot(v[ib] - v[ia], n)) * n;
+    const double kk = detail::kind_stiffness(d, static_cast<SoftConstraintKind>(s.kind[k]));
+    const Vec3 fb = -(kk * (l - s.rest0[k]) + c * glm::dot(v[ib] - v[ia], n)) * n;
     a[ib] += double(s.w[ib]) * fb;
     a[ia] -= double(s.w[ia]) * fb;
   }
@@ -93,7 +93,6 @@ void jacobian(const SoftBody::Impl& s, double t, std::span<const Vec3> x, std::s
     add(dadv, i, i, m, 1.0);
   }
   // springs
-  const double kk[3] = {d.stretch_stiffness, d.shear_stiffness, d.bend_stiffness};
   const double c = d.spring_damping;
   for (std::size_t k = 0; k < s.ca.size(); ++k) {
     if (s.broken[k]) continue;
@@ -103,8 +102,9 @@ void jacobian(const SoftBody::Impl& s, double t, std::span<const Vec3> x, std::s
     if (!(l > 0)) continue;
     const Vec3 n = dd / l, vr = v[ib] - v[ia];
     const Mat3 P = Mat3(1.0) - glm::outerProduct(n, n);
-    const double sf = kk[s.kind[k]] * (l - s.rest0[k]) + c * glm::dot(vr, n);
-    const Mat3 K = -(kk[s.kind[k]] * glm::outerProduct(n, n) + (c / l) * glm::outerProduct(n, P * vr) + (sf / l) * P);
+    const double kk = detail::kind_stiffness(d, static_cast<SoftConstraintKind>(s.kind[k]));
+    const double sf = kk * (l - s.rest0[k]) + c * glm::dot(vr, n);
+    const Mat3 K = -(kk * glm::outerProduct(n, n) + (c / l) * glm::outerProduct(n, P * vr) + (sf / l) * P);
     const Mat3 D = -c * glm::outerProduct(n, n);
     const double wa = s.w[ia], wb = s.w[ib];
     add(dadx, ib, ib, K, wb), add(dadx, ib, ia, K, -wb), add(dadx, ia, ib, K, -wa), add(dadx, ia, ia, K, wa);

@@ -1102,15 +1102,15 @@ TEST(Tethers, OnlyAlongTheBody) {
   // and a particle without a tether is never moved by the tether pass: the second square
   // falls freely. After N substeps of h from rest, semi-implicit Euler has it at
   // y0 + g h^2 N (N + 1) / 2 (each substep adds g h to v, then h v to y); its rigid
-  // constraints stay satisfied, so only float rounding separates it from that. Velocities
-  // are position differences, so y follows y_{k+1} = 2 y_k - y_{k-1} + g h^2, which
-  // carries each substep's rounding of y (at most u = 6e-8 m for |y| <= 1) forward as a
-  // ramp: N substeps accumulate at most u N^2 / 2 (2.7e-3 m for these 300; measured
-  // 4.6e-4). Held still by a stale anchor, as once, it would stay 1.2 m above that.
+  // constraints stay satisfied, so only float rounding separates it from that: the
+  // velocity keeps the drift's rounding (FreeFallAtManySubsteps), so it is half a float
+  // step of position per substep, N u (u = 6e-8 m for |y| <= 1), plus the velocity's
+  // relative rounding of a few 2^-24 per substep, 4 N 2^-24 of the drop. Held still by a
+  // stale anchor, as once, it would stay 1.2 m above that.
   const int steps = 30, sub = c.settings().substeps;
   for (int f = 1; f < steps; ++f) c.step(f / 60.0, 1.0 / 60);
   const double h = 1.0 / 60 / sub, N = double(steps) * sub;
-  const double y = 1 + c.settings().forces.gravity.y * h * h * N * (N + 1) / 2;
+  const double drop = -c.settings().forces.gravity.y * h * h * N * (N + 1) / 2;
   for (std::size_t p = static_cast<std::size_t>(n * n); p < c.size(); ++p)
-    EXPECT_NEAR(c.position(p).y, y, 6e-8 * N * N / 2) << "particle " << p;
+    EXPECT_NEAR(c.position(p).y, 1 - drop, N * 6e-8 + 4 * N * 0x1p-24 * drop) << "particle " << p;
 }
