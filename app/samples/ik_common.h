@@ -21,7 +21,6 @@
 
 namespace pba::app::ik_demo {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // one colour per role, the same in every IK sample
 inline constexpr Color kBoneColor = Color::hex(0xa7b0c0);

@@ -22,7 +22,6 @@
 namespace pba::app {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 enum class Scenario { Ballistic, Spring, Orbit };
 constexpr const char* kScenarioNames[] = {"Ballistic shot", "Spring", "Orbit"};

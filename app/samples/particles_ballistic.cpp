@@ -19,7 +19,6 @@
 namespace pba::app {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr Color kSim = colors::orange;
 constexpr Color kExact = Color{0.95f, 0.96f, 1.0f, 0.75f};
 

@@ -11,7 +11,6 @@
 namespace pba::app {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 Color with_alpha(Color c, float a) { return Color{c.r, c.g, c.b, a}; }
 }  // namespace

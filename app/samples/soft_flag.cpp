@@ -47,7 +47,7 @@ class FlagSample final : public OneBodySample {
   void Step(double, double dt) override {
     // the panel's wind (heading in the ground plane) applies from the next step
     SoftBodyDef& d = body_.settings();
-    const double a = heading_deg_ * 3.14159265358979 / 180;
+    const double a = heading_deg_ * pba::kPi / 180;
     def_.forces.wind.velocity = Vec3(wind_ * std::cos(a), 0, wind_ * std::sin(a));
     d = def_;
     body_.step(t_, dt);

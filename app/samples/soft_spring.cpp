@@ -29,7 +29,6 @@
 namespace pba::app {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kG = 9.81;           // gravity (m/s^2)
 constexpr double kRest = 1.0;         // rest length (m)
 constexpr double kAnchorY = 3.6;      // the fixed end (m)

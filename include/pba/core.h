@@ -30,6 +30,32 @@ using Quat = glm::dquat;
 /// Single-precision 3-vector, for bulk data such as large particle arrays.
 using Vec3f = glm::vec3;
 
+/// pi, the one definition every module uses.
+inline constexpr double kPi = 3.141592653589793238462643383279502884;
+
+/// A rigid placement: position (m) and unit rotation. A pose maps a point p of its local
+/// frame to the world point position + rotation * p.
+struct Pose {
+  Vec3 position{0, 0, 0};     ///< world position (m), finite
+  Quat rotation{1, 0, 0, 0};  ///< world rotation, unit quaternion (w, x, y, z)
+};
+
+/// The pose of a frame placed at `local` within `parent`: parent * local (renormalised).
+inline Pose compose(const Pose& parent, const Pose& local) {
+  return {parent.position + parent.rotation * local.position, glm::normalize(parent.rotation * local.rotation)};
+}
+/// The inverse placement: inverse(p) * p is the identity.
+inline Pose inverse(const Pose& p) {
+  const Quat qi = glm::conjugate(p.rotation);
+  return {qi * -p.position, qi};
+}
+/// The world point of the local point `local` (m).
+inline Vec3 apply(const Pose& p, const Vec3& local) { return p.position + p.rotation * local; }
+/// The local point of the world point `world` (m): apply(inverse(p), world).
+inline Vec3 apply_inverse(const Pose& p, const Vec3& world) {
+  return glm::conjugate(p.rotation) * (world - p.position);
+}
+
 /// The one exception type pba throws for bad input and diverged simulations.
 /// Its message names the bad value and where it came from, for example
 /// "StepperSettings.fixed_dt (--dt): must be finite and > 0, got -0.01".

@@ -43,11 +43,11 @@ struct BoneDef {
   Quat rest{1, 0, 0, 0};            ///< rotation of the joint frame relative to the parent bone's frame (unit)
   JointType joint = JointType::ball;  ///< joint kind
   Vec3 axis{0, 0, 1};               ///< hinge axis in the joint frame (unit); should not be parallel to +X
-  double min_angle = -3.141592653589793;  ///< hinge lower limit (rad), in [-pi, pi]
-  double max_angle = 3.141592653589793;   ///< hinge upper limit (rad), in [min_angle, pi]; a 2 pi range is unlimited
-  double swing_limit = 3.141592653589793; ///< ball: max angle (rad) between the bone axis and the rest +X, in [0, pi]
-  double min_twist = -3.141592653589793;  ///< ball: lower twist limit about the bone axis (rad), in [-pi, pi]
-  double max_twist = 3.141592653589793;   ///< ball: upper twist limit (rad), in [min_twist, pi]
+  double min_angle = -kPi;  ///< hinge lower limit (rad), in [-pi, pi]
+  double max_angle = kPi;   ///< hinge upper limit (rad), in [min_angle, pi]; a 2 pi range is unlimited
+  double swing_limit = kPi; ///< ball: max angle (rad) between the bone axis and the rest +X, in [0, pi]
+  double min_twist = -kPi;  ///< ball: lower twist limit about the bone axis (rad), in [-pi, pi]
+  double max_twist = kPi;   ///< ball: upper twist limit (rad), in [min_twist, pi]
   double radius = 0;                ///< drawing radius of the capsule (m); 0 picks 8% of the length
 };
 
@@ -376,7 +376,7 @@ struct TwoBoneJob {
   Vec3 mid_axis{0, 0, 1};   ///< world hinge axis of the mid joint (unit)
   double weight = 1.0;      ///< blend from no correction (0) to full (1), in [0, 1]
   double min_mid_angle = 0;    ///< smallest interior elbow angle allowed (rad), in [0, pi)
-  double max_mid_angle = 3.141592653589793; ///< largest interior elbow angle (rad), in (min, pi]
+  double max_mid_angle = kPi; ///< largest interior elbow angle (rad), in (min, pi]
   // outputs (written by Run)
   Quat start_correction{1, 0, 0, 0};  ///< world rotation to pre-multiply onto the start bone
   Quat mid_correction{1, 0, 0, 0};    ///< world rotation about mid_axis to pre-multiply onto the mid bone (applied before start_correction)

@@ -66,7 +66,7 @@ inline void random_pose(Skeleton& s, std::mt19937_64& rng) {
       s.set_hinge_angle(i, lo + (hi - lo) * u01(rng));
     } else if (b.joint == JointType::ball) {
       const double sw = std::min(b.swing_limit, half_pi) * u01(rng);
-      const double phi = 2 * 3.141592653589793 * u01(rng);
+      const double phi = 2 * kPi * u01(rng);
       const double tlo = std::max(b.min_twist, -half_pi), thi = std::min(b.max_twist, half_pi);
       const double tw = tlo + (thi - tlo) * u01(rng);
       const Quat swing = glm::angleAxis(sw, Vec3(0, std::cos(phi), std::sin(phi)));
@@ -149,7 +149,7 @@ inline Skeleton make_humanoid(const Vec3& pelvis = Vec3(0, 0.95, 0), bool root_f
   def.root_position = pelvis;
   def.root_free = root_free;
   auto add = [&](const char* name, int parent, double length, JointType joint, double rest_z,
-                 double swing = 3.141592653589793) {
+                 double swing = kPi) {
     BoneDef b;
     b.name = name;
     b.parent = parent;
@@ -184,7 +184,7 @@ inline Skeleton make_humanoid(const Vec3& pelvis = Vec3(0, 0.95, 0), bool root_f
     add(left ? "hand_l" : "hand_r", fore, 0.08, JointType::ball, 0, 0.9);
     // hip sideways-down from the pelvis, thigh and shin down
     const int hip = add(left ? "hip_l" : "hip_r", root, 0.1, JointType::fixed, s * 2.3);
-    const int thigh = add(left ? "thigh_l" : "thigh_r", hip, 0.42, JointType::ball, s * (3.141592653589793 - 2.3), 1.6);
+    const int thigh = add(left ? "thigh_l" : "thigh_r", hip, 0.42, JointType::ball, s * (kPi - 2.3), 1.6);
     const int shin = add(left ? "shin_l" : "shin_r", thigh, 0.4, JointType::hinge, s * 0.2);
     def.bones[shin].axis = Vec3(0, 0, 1);
     def.bones[shin].min_angle = left ? -0.2 : -2.2;

@@ -24,6 +24,7 @@
 #include <string_view>
 #include <vector>
 
+#include "pba/collide/shape.h"
 #include "pba/core.h"
 #include "pba/draw.h"
 #include "pba/handle.h"
@@ -33,42 +34,6 @@ namespace pba {
 
 // ---------------------------------------------------------------------------------------
 // poses and surfaces
-
-/// A rigid placement: position (m) and unit rotation.
-struct Pose {
-  Vec3 position{0, 0, 0};  ///< world position (m), finite
-  Quat rotation{1, 0, 0, 0};  ///< world rotation, unit quaternion (w, x, y, z)
-};
-
-/// Coefficients of a surface's collision response.
-struct SurfaceMaterial {
-  /// Coefficient of restitution e in [0, 1]: the normal speed after a bounce is e times
-  /// the normal speed before it, so a ball dropped from height h rebounds to e^2 h.
-  double restitution = 0.5;
-  /// Coulomb friction coefficient mu >= 0 (finite): each contact removes up to mu times
-  /// the normal impulse from the tangential velocity, never reversing it.
-  double friction = 0.0;
-};
-
-/// Collider shapes.
-enum class ShapeType : std::uint8_t {
-  Plane,   ///< the half-space below a plane; particles stay on the side the normal points to
-  Sphere,  ///< a solid ball; particles stay outside
-  Box,     ///< a solid oriented box; particles stay outside
-};
-
-/// A collision surface's shape in its own frame (the frame of the entity that owns it).
-struct ColliderShape {
-  ShapeType type = ShapeType::Plane;  ///< which of the fields below apply
-  /// Plane: unit normal in the local frame. Particles are kept on its positive side.
-  Vec3 normal{0, 1, 0};
-  /// Plane: the plane is { p : normal . p = offset } in the local frame (m, finite).
-  double offset = 0;
-  /// Sphere: radius (m), finite and > 0.
-  double radius = 0.5;
-  /// Box: half extents (m) along the local axes, each finite and > 0.
-  Vec3 half_extents{0.5, 0.5, 0.5};
-};
 
 /// One collision surface as the particle system sees it during one step: its shape, its
 /// material, and its pose at the start and the end of the step (equal for a static

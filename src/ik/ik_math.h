@@ -10,7 +10,6 @@
 
 namespace pba::ik::detail {
 
-inline constexpr double kPi = 3.141592653589793;
 
 // Hot IK functions are compiled for AVX2 and the baseline: PBA_CLONES (core/clones.h).
 

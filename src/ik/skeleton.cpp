@@ -9,7 +9,6 @@
 
 namespace pba::ik {
 
-using detail::kPi;
 
 namespace {
 

@@ -14,7 +14,6 @@
 
 namespace pba::ik {
 
-using detail::kPi;
 using A = SolverAccess;
 
 // ---------------------------------------------------------------------------

@@ -19,7 +19,6 @@
 
 namespace pba::ik {
 
-using detail::kPi;
 
 namespace {
 

@@ -8,7 +8,6 @@
 namespace pba::lab {
 
 namespace {
-constexpr double kPi = std::numbers::pi;
 
 [[noreturn]] void bad_field(const Problem& p, std::string_view field, std::string_view why) {
   throw Error("Problem '" + p.name + "'." + std::string(field) + ": " + std::string(why));

@@ -226,7 +226,7 @@ void EmitterDef::validate(std::string_view where) const {
   if (!is_finite(pose.position)) require_finite(pose.position, field_path(where, "position"));
   if (!is_finite(direction)) require_finite(direction, field_path(where, "direction"));
   if (glm::length(direction) == 0) throw Error(field_path(where, "direction") + ": must be non-zero, got (0, 0, 0)");
-  if (!((spread) >= (0) && (spread) <= (3.141592653589793))) require_in_range(spread, 0, 3.141592653589793, field_path(where, "spread"));
+  if (!((spread) >= (0) && (spread) <= (kPi))) require_in_range(spread, 0, kPi, field_path(where, "spread"));
   if (!(std::isfinite(speed) && (speed) >= 0)) require_non_negative(speed, field_path(where, "speed"));
   if (!((speed_jitter) >= (0) && (speed_jitter) <= (1))) require_in_range(speed_jitter, 0, 1, field_path(where, "speed_jitter"));
   if (!(std::isfinite(rate) && (rate) >= 0)) require_non_negative(rate, field_path(where, "rate"));
@@ -528,7 +528,7 @@ void ParticleSystem::emit(double t, double dt) {
       // direction uniform over the spherical cap, speed and lifetime jittered
       const double cz = 1 - uniform01(e.rng) * (1 - cos_spread);
       const double sz = std::sqrt(std::max(0.0, 1 - cz * cz));
-      const double phi = 2 * 3.141592653589793 * uniform01(e.rng);
+      const double phi = 2 * kPi * uniform01(e.rng);
       const Vec3 dir = axis * cz + (u * std::cos(phi) + w * std::sin(phi)) * sz;
       const double speed = e.def.speed * (1 + e.def.speed_jitter * (2 * uniform01(e.rng) - 1));
       const double life = e.def.lifetime * (1 + e.def.lifetime_jitter * (2 * uniform01(e.rng) - 1));

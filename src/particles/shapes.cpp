@@ -53,6 +53,9 @@ void Collider::validate(std::string_view where) const {
       if (!(std::isfinite(shape.half_extents.y) && (shape.half_extents.y) > 0)) require_positive(shape.half_extents.y, field_path(where, "half_extents.y"));
       if (!(std::isfinite(shape.half_extents.z) && (shape.half_extents.z) > 0)) require_positive(shape.half_extents.z, field_path(where, "half_extents.z"));
       break;
+    default:
+      throw Error(field_path(where, "type") + ": particle and soft-body collisions take a plane, sphere or box, got a " +
+                  std::string(to_string(shape.type)));
   }
   // material and motion
   if (!((material.restitution) >= (0) && (material.restitution) <= (1))) require_in_range(material.restitution, 0, 1, field_path(where, "restitution"));
@@ -74,6 +77,7 @@ void Collider::draw(DebugDraw& draw, Color c) const {
     }
     case ShapeType::Sphere: draw.sphere(end.position, shape.radius, c); break;
     case ShapeType::Box: draw.box(end.position, shape.half_extents, end.rotation, c); break;
+    default: break;
   }
 }
 
@@ -158,7 +162,7 @@ void Forcer::draw(DebugDraw& draw, Color c) const {
     const double hh = shape == ForcerShape::Cylinder ? half_height : 0;
     const int segments = 24;
     for (int i = 0; i < segments; ++i) {
-      const double a0 = 2 * 3.141592653589793 * i / segments, a1 = 2 * 3.141592653589793 * (i + 1) / segments;
+      const double a0 = 2 * kPi * i / segments, a1 = 2 * kPi * (i + 1) / segments;
       for (double y : {-hh, hh}) {
         const Vec3 p0(radius * std::cos(a0), y, radius * std::sin(a0));
         const Vec3 p1(radius * std::cos(a1), y, radius * std::sin(a1));

@@ -9,7 +9,6 @@
 namespace pba::scenes {
 
 namespace {
-constexpr double kPi = 3.141592653589793;
 
 EntityId ground(World& w, double restitution, double friction) {
   const EntityId g = w.create_entity({.name = "ground"});

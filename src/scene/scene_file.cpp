@@ -22,7 +22,6 @@ namespace pba {
 namespace {
 
 using json = nlohmann::json;
-constexpr double kPi = 3.141592653589793;
 
 // the file name that prefixes every message
 struct Context {

@@ -675,7 +675,7 @@ bool rest_shape_convex(const SoftBody::Impl& s) {
     turning += std::atan2(sn, cs);
     a = b;
   } while (a != start);
-  return steps == boundary && std::abs(turning - 2 * std::numbers::pi) < 1e-3;
+  return steps == boundary && std::abs(turning - 2 * kPi) < 1e-3;
 }
 
 // Each free particle's nearest pin along the body and the length of that path (m), by

@@ -10,7 +10,6 @@ namespace pba {
 
 namespace {
 
-constexpr double kPi = 3.141592653589793;
 
 
 
@@ -20,10 +19,6 @@ void require_pose(const Pose& p, std::string_view where) {
   const double n = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
   if (!std::isfinite(n) || std::abs(n - 1) > 1e-6)
     throw Error(field_path(where, "rotation") + ": must be a finite unit quaternion");
-}
-
-Pose compose(const Pose& parent, const Pose& local) {
-  return {parent.position + parent.rotation * local.position, glm::normalize(parent.rotation * local.rotation)};
 }
 
 double waypoint_length(const KinematicDef& d) {
