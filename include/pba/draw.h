@@ -38,6 +38,19 @@ inline constexpr Color purple = Color::hex(0x8e4ec6);
 inline constexpr Color pink = Color::hex(0xd6409f);
 }  // namespace colors
 
+/// What the library's draw functions show (Box2D's b2DebugDraw flags). Every draw function
+/// of the library takes the flags; the app's View menu toggles them.
+struct DrawFlags {
+  bool shapes = true;      ///< collision shapes, solid
+  bool aabbs = false;      ///< world bounds of every shape
+  bool tree = false;       ///< the broad phase's tree (or grid) nodes
+  bool contacts = false;   ///< contact points, coloured by depth
+  bool normals = false;    ///< contact normals
+  bool particles = true;   ///< particles and soft-body nodes
+  bool forcers = true;     ///< forcer volumes and emitters
+  bool constraints = true; ///< springs, tethers, distance constraints
+};
+
 /// Interface the library draws through. Every call is immediate: the implementer
 /// draws (or queues) the shape for the current frame only.
 class DebugDraw {
