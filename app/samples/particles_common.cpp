@@ -200,8 +200,16 @@ std::string Thousands(long long n) {
 
 void ProfileReadout(const World& world) {
   const WorldProfile& p = world.profile();
-  ImGui::Text("step %.2f ms  (integrate %.2f, emit %.2f, recycle %.2f)", 1e3 * p.total, 1e3 * (p.integrate + p.collide),
-              1e3 * p.emit, 1e3 * p.recycle);
+  const ParticleSystem& ps = world.particles();
+  ImGui::Text("step %.2f ms: emit %.2f, recycle %.2f", 1e3 * p.total, 1e3 * p.emit, 1e3 * p.recycle);
+  // semi-implicit Euler runs the fused kernel, whose collisions are timed with the
+  // integration (ParticleProfile::integrate); the other integrators time them apart
+  if (ps.method() == Method::SemiImplicitEuler)
+    ImGui::Text("integrate + collide %.2f ms (fused), %zu contacts", 1e3 * (p.integrate + p.collide), ps.contacts());
+  else
+    ImGui::Text("integrate %.2f, collide %.2f ms, %zu contacts", 1e3 * p.integrate, 1e3 * p.collide, ps.contacts());
+  if (p.constraints > 0 || p.systems > 0)
+    ImGui::Text("constraints %.2f, soft bodies %.2f ms", 1e3 * p.constraints, 1e3 * p.systems);
 }
 
 }  // namespace pba::app
