@@ -95,7 +95,7 @@ class SceneFile final : public Sample {
     if (f.particles) DrawParticles(r, w.particles(), 3.0f, 0.008 * view_radius_);
     // the soft bodies: cloth and jelly as shaded surfaces, ropes and springs as links and nodes
     if (const SoftSystem* soft = Soft(w))
-      for (std::size_t b = 0; b < soft->size(); ++b) DrawSoftBody(r, soft->at(b), f);
+      for (std::size_t b = 0; b < soft->size(); ++b) DrawSoftBody(r, soft->at(b), b, f);
   }
 
   void DrawUI() override {
@@ -174,11 +174,14 @@ class SceneFile final : public Sample {
     return dynamic_cast<const SoftSystem*>(w.find_system(SoftSystem::kName));
   }
 
-  // one soft body as the flags say: a surface when it has triangles (jelly green with tets,
-  // cloth blue without), else its stretch links as lit sticks (constraints) and its nodes as
-  // spheres (particles), sized from its mean link length
-  void DrawSoftBody(Renderer& r, const SoftBody& b, const DrawFlags& f) {
+  // soft body `index` as the flags say: a surface when it has triangles (jelly green with
+  // tets, cloth blue without), else its stretch links as thin lit sticks (constraints) and its
+  // nodes as spheres (particles), sized from its mean link length
+  void DrawSoftBody(Renderer& r, const SoftBody& b, std::size_t index, const DrawFlags& f) {
     if (b.size() == 0) return;
+    // ropes and springs: one colour per body, so side-by-side bodies tell apart
+    static constexpr Color kLinkColors[] = {soft_colors::fabric, colors::cyan, colors::green, colors::purple};
+    const Color color = kLinkColors[index % 4];
     if (!b.triangles().empty()) {
       SoftView v;
       v.edges = false;
@@ -193,8 +196,8 @@ class SceneFile final : public Sample {
       if (k.kind == SoftConstraintKind::Stretch) mean += k.rest_length, ++links;
     }
     mean = links ? mean / links : 0.1 * view_radius_;
-    const double stick = std::clamp(0.2 * mean, 0.004 * view_radius_, 0.012 * view_radius_);
-    const double node = std::clamp(0.3 * mean, 0.006 * view_radius_, 0.03 * view_radius_);
+    const double stick = std::clamp(0.06 * mean, 0.002 * view_radius_, 0.006 * view_radius_);
+    const double node = std::clamp(0.35 * mean, 0.006 * view_radius_, 0.04 * view_radius_);
     if (f.constraints)
       for (std::size_t c = 0; c < b.constraint_count(); ++c) {
         const SoftConstraint k = b.constraint(c);
@@ -202,13 +205,12 @@ class SceneFile final : public Sample {
         const Vec3 p = b.position(k.a), q = b.position(k.b);
         const double len = glm::length(q - p);
         if (!(len > 1e-9)) continue;
-        r.box(0.5 * (p + q), Vec3(stick, 0.5 * len, stick), glm::rotation(Vec3(0, 1, 0), (q - p) / len),
-              soft_colors::fabric);
+        r.box(0.5 * (p + q), Vec3(stick, 0.5 * len, stick), glm::rotation(Vec3(0, 1, 0), (q - p) / len), color);
       }
     if (f.particles)
       for (std::size_t i = 0; i < b.size(); ++i) {
         if (b.is_pinned(i)) r.box(b.position(i), Vec3(1.2 * node), Quat(1, 0, 0, 0), soft_colors::pole);
-        else r.sphere(b.position(i), node, soft_colors::fabric);
+        else r.sphere(b.position(i), node, color);
       }
   }
 

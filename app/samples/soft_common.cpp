@@ -378,12 +378,13 @@ void SoftReadout(const SoftBody& b) {
   const SoftProfile& p = b.profile();
   // the solve is what the step spent outside the per-step forces and the collisions
   const double solve = p.solve > 0 ? p.solve : std::max(0.0, p.total - p.forces - p.collide);
-  // XPBD times the collisions of its first substep only and counts them once per substep
-  if (b.settings().solver == SoftSolver::XPBD)
-    ImGui::Text("step %.3f ms (solve %.3f, collide about %.3f: first substep x substeps)", 1e3 * p.total, 1e3 * solve,
-                1e3 * p.collide);
+  // collisions: none without colliders; XPBD times those of its first substep only and
+  // counts them once per substep (an estimate, marked ~)
+  if (p.collide == 0)
+    ImGui::Text("step %.3f ms (solve %.3f, no colliders)", 1e3 * p.total, 1e3 * solve);
   else
-    ImGui::Text("step %.3f ms (solve %.3f, collide %.3f)", 1e3 * p.total, 1e3 * solve, 1e3 * p.collide);
+    ImGui::Text("step %.3f ms (solve %.3f, collide %s%.3f)", 1e3 * p.total, 1e3 * solve,
+                b.settings().solver == SoftSolver::XPBD ? "~" : "", 1e3 * p.collide);
   const StrainStats s = b.strain_stats();
   ImGui::Text("strain: mean %.3f %%, max %.2f %%", 100 * s.mean, 100 * s.max);
   ImGui::Text("energy: kinetic %.4f J, potential %.3f J", b.kinetic_energy(), b.potential_energy());
