@@ -35,6 +35,20 @@ void DrawParticles(Renderer& r, const ParticleSystem& ps, float point_px, double
   for (std::size_t i = 0; i < n; ++i) r.point(Vec3(xs[i], ys[i], zs[i]), point_px, ps.color(i));
 }
 
+void WorldPoints(const World& world, std::vector<Vec3>& out, std::size_t max_points) {
+  const ParticleSystem& ps = world.particles();
+  const auto* soft = dynamic_cast<const SoftSystem*>(world.find_system(SoftSystem::kName));
+  // one stride for all, so the thinning keeps the proportions
+  std::size_t total = ps.size();
+  if (soft)
+    for (std::size_t b = 0; b < soft->size(); ++b) total += soft->at(b).size();
+  const std::size_t step = std::max<std::size_t>(1, (total + max_points - 1) / std::max<std::size_t>(max_points, 1));
+  for (std::size_t k = 0; k < ps.size(); k += step) out.push_back(ps.position(k));
+  if (soft)
+    for (std::size_t b = 0; b < soft->size(); ++b)
+      for (std::size_t k = 0; k < soft->at(b).size(); k += step) out.push_back(soft->at(b).position(k));
+}
+
 void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving) {
   for (std::size_t i = 0; i < colliders.size(); ++i) {
     const Collider& c = colliders[i];

@@ -150,19 +150,7 @@ class SceneFile final : public Sample {
   }
 
   void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override {
-    if (!scene_) return;
-    // every live particle and every soft-body node, thinned evenly to about max_points
-    const World& w = scene_->world;
-    const ParticleSystem& ps = w.particles();
-    const SoftSystem* soft = Soft(w);
-    std::size_t total = ps.size();
-    if (soft)
-      for (std::size_t b = 0; b < soft->size(); ++b) total += soft->at(b).size();
-    const std::size_t step = std::max<std::size_t>(1, (total + max_points - 1) / std::max<std::size_t>(max_points, 1));
-    for (std::size_t k = 0; k < ps.size(); k += step) out.push_back(ps.position(k));
-    if (soft)
-      for (std::size_t b = 0; b < soft->size(); ++b)
-        for (std::size_t k = 0; k < soft->at(b).size(); k += step) out.push_back(soft->at(b).position(k));
+    if (scene_) WorldPoints(scene_->world, out, max_points);
   }
 
  private:
