@@ -12,16 +12,7 @@ app=$1
 work=$2
 guard=${PBA_KEYS_GUARD:-120}   # seconds per wait before giving up
 
-fail() {
-  echo "FAIL: $*"
-  [ -f "$work/app.log" ] && { echo "--- app output ---"; cat "$work/app.log"; }
-  exit 1
-}
-[ -n "${DISPLAY:-}" ] || fail "DISPLAY is not set (run under xvfb-run, as scripts/test does)"
-command -v xdotool >/dev/null || fail "xdotool is not installed (scripts/install-deps)"
-
-rm -rf "$work"
-mkdir -p "$work"
+. "$(dirname "$0")/xdo_lib.sh"   # fail, wait_until; checks the display, cleans $work
 cd "$work" || fail "cannot enter $work"
 
 # the default sample (Dynamics/Integrators, always moving) in a visible window
@@ -29,14 +20,6 @@ cd "$work" || fail "cannot enter $work"
 pid=$!
 trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null' EXIT
 
-wait_until() {
-  local what=$1 cond=$2 t0=$SECONDS
-  while ! eval "$cond"; do
-    kill -0 $pid 2>/dev/null || fail "the app exited while waiting for $what"
-    [ $((SECONDS - t0)) -lt "$guard" ] || fail "timed out after ${guard}s waiting for $what"
-    sleep 0.2
-  done
-}
 shots() { ls screenshots/*.png 2>/dev/null | wc -l; }
 # press KEY and wait for screenshot number N to be written
 shot() {
