@@ -11,6 +11,7 @@
 #include <GLFW/glfw3.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <imgui.h>
+#include <imgui_internal.h>
 
 #include "gl.h"
 #include "image_check.h"
@@ -118,7 +119,9 @@ void App::handle_input() {
   const bool menu_open = ImGui::IsPopupOpen("", ImGuiPopupFlags_AnyPopupId | ImGuiPopupFlags_AnyPopupLevel);
   for (const auto& [key, mods] : keys) {
     if (key != GLFW_KEY_ESCAPE) continue;
-    if (menu_open) ui_.close_menus = true;
+    // every open popup (menus, submenus, combo boxes) closes before this frame draws them
+    // (imgui_internal.h: Dear ImGui 1.86 has no public call that closes them all)
+    if (menu_open) ImGui::ClosePopupToLevel(0, true);
     else if (!io.WantTextInput) quit_ = true;
   }
   if (!io.WantCaptureKeyboard) {
@@ -417,7 +420,6 @@ bool App::frame() {
   // a screenshot asked for by key or menu: the finished frame, panels included
   if (act.screenshot) screenshot_ = true;
   if (screenshot_) save_screenshot();
-  ui_.close_menus = false;
 
   // capture and self-test read the finished frame back
   if (capture_ || options_.selftest) {

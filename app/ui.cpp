@@ -72,8 +72,6 @@ bool contains_ci(const std::string& hay, const char* needle) {
 // the samples menu: a search box, then the categories (or the matches when searching)
 void samples_menu(UiState& ui, const UiFrame& f, UiActions& act) {
   if (!ImGui::BeginMenu("Samples")) return;
-  // Esc closes the menu (and its submenus) before it quits the app
-  if (ui.close_menus) ImGui::CloseCurrentPopup();
   if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
   ImGui::SetNextItemWidth(220);
   ImGui::InputTextWithHint("##search", "search", ui.search, sizeof ui.search);
@@ -222,7 +220,6 @@ UiActions DrawUi(UiState& ui, SampleContext& ctx, const UiFrame& f) {
   if (ImGui::BeginMainMenuBar()) {
     samples_menu(ui, f, act);
     if (ImGui::BeginMenu("View")) {
-      if (ui.close_menus) ImGui::CloseCurrentPopup();
       ImGui::MenuItem("Panels", "F1", &s.show_ui);
       ImGui::MenuItem("Labels", nullptr, &s.show_labels);
       ImGui::MenuItem("Ground grid", nullptr, &s.show_grid);
@@ -296,7 +293,6 @@ UiActions DrawUi(UiState& ui, SampleContext& ctx, const UiFrame& f) {
   if (f.sample) f.sample->DrawUI();
   ImGui::PopTextWrapPos();
   ImGui::End();
-  ui.close_menus = false;
   return act;
 }
 

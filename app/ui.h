@@ -37,7 +37,6 @@ struct UiState {
   float left_width = 290;     ///< width of the left panel (px)
   float right_width = 370;    ///< width of the sample panel (px)
   float menu_height = 21;     ///< height of the main menu bar (px), measured when drawn
-  bool close_menus = false;   ///< close any open menu this frame (Esc), then clear
   std::string status;         ///< a short note in the menu bar (e.g. where a screenshot went)
   double status_until = 0;    ///< ImGui time (s) until which the note shows
 };
