@@ -39,6 +39,29 @@ inline Skeleton make_chain(int n, JointType type, bool limited) {
   return Skeleton(def);
 }
 
+/// A chain of n bones, total length 1 m, along +X, mixing joint kinds: every third bone
+/// (the root first) on a ball joint, the others on hinges about local Z and Y in turn
+/// (as in make_chain). The root's ball joint can aim the straight chain anywhere.
+inline Skeleton make_mixed_chain(int n, bool limited) {
+  SkeletonDef def;
+  def.bones.resize(n);
+  for (int i = 0; i < n; ++i) {
+    BoneDef& b = def.bones[i];
+    b.parent = i - 1;
+    b.length = 1.0 / n;
+    b.joint = i % 3 == 0 ? JointType::ball : JointType::hinge;
+    b.axis = (i % 2 == 0) ? Vec3(0, 0, 1) : Vec3(0, 1, 0);
+    if (limited) {
+      b.min_angle = -kHingeLimit;
+      b.max_angle = kHingeLimit;
+      b.swing_limit = kSwingLimit;
+      b.min_twist = -kTwistLimit;
+      b.max_twist = kTwistLimit;
+    }
+  }
+  return Skeleton(def);
+}
+
 /// The common start pose for cold solves: every joint bent a little about its first
 /// axis (a curve, away from the straight-chain singularity), inside any limits.
 inline void bent_pose(Skeleton& s) {
