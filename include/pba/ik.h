@@ -267,14 +267,32 @@ struct SolverSettings {
   void validate(std::string_view where = "SolverSettings") const;
 };
 
-/// What a solve did.
+/// Why a solve stopped (SolveResult::stop).
+enum class StopReason : std::uint8_t {
+  Converged,     ///< every effector within SolverSettings::tolerance (and orientation tolerance, where honoured)
+  Stalled,       ///< no step lowers the error any more: the pose is stationary (the closest reachable
+                 ///< pose of an unreachable target, or a local minimum pressed on joint limits), or the
+                 ///< analytic method's one step did not reach the target
+  IterationCap,  ///< the iteration budget (SolverSettings::max_iterations, or the method's default) is spent
+  OutOfTime,     ///< the time budget SolverSettings::max_seconds is spent
+};
+
+/// Short name of a stop reason ("converged", "stalled", "iteration_cap", "out_of_time").
+std::string_view to_string(StopReason r);
+
+/// What a solve did. A solve never returns a pose worse than the one it was given: its
+/// weighted squared position error (plus the orientation error, scaled by the effectors'
+/// reach, for the methods that honour orientation targets) is at most the starting one.
 struct SolveResult {
-  int iterations = 0;        ///< iterations performed (analytic solvers: 1)
+  int iterations = 0;        ///< iterations performed (analytic solvers: 1); rejected steps count
   double residual = 0;       ///< largest effector position error after the solve (m)
   double orientation_residual = 0;  ///< largest orientation error (rad), 0 without orientation targets
   bool converged = false;    ///< residual <= tolerance, and orientation residual <= its tolerance for
                              ///< the methods that honour orientation targets (FABRIK and the Jacobian family)
   bool out_of_time = false;  ///< the solve stopped because SolverSettings::max_seconds was spent
+  StopReason stop = StopReason::Converged;  ///< why the solve stopped
+  bool handed_over = false;  ///< CCD or FABRIK stopped making progress and damped least squares took
+                             ///< the remaining iterations (see docs/ik.md)
 };
 
 /// Default iteration cap of a method (used when SolverSettings::max_iterations is 0).

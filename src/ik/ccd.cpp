@@ -10,17 +10,32 @@ namespace pba::ik {
 // CCD, workbook Algorithm 1: visit joints from the effector toward the root, turning
 // each so the effector moves toward the target; repeat until within the threshold or
 // the iteration cap. One iteration is one sweep over the chain.
+//
+// A sweep that would raise the cost (the weighted squared position error: several
+// effectors pull a joint different ways, or a ball joint's projection into its cone moves
+// the effector away) is undone, so CCD never ends worse than it began. CCD's sweeps also
+// get stuck: the joints near the effector, visited first, take most of the turn, and on a
+// long chain with joint limits (333 limited hinges: 18% of reachable targets) the sweeps
+// then bend the chain against its limits for thousands of iterations without getting
+// closer (CCD reached 82% of reachable targets on 333 limited hinges within its cap, in up
+// to 100 ms). When a sweep is undone, or 16 sweeps have not halved the error, damped least
+// squares (monotone, limit-aware) solves from the given pose with the remaining iterations
+// of the cap (SolveResult::handed_over), as FABRIK hands over with limits.
 void Solver::Impl::ccd(SolveResult& r) {
   Skeleton& s = *sk;
   const int cap = max_iterations();
   const auto parents = s.parents();
   const auto types = s.joint_types();
   const double tol = set.tolerance;
-  double prev = r.residual;
+  double prev = r.residual, checkpoint = r.residual;
+  double prev_cost = cost(0);
+  bool handover = false;
   for (int k = 0; k < ne; ++k) eff_pos[k] = s.tips()[s.effector(k).bone];
-  Creep creep{r.residual, 64, 1e-3};
   for (int it = 0; it < cap && !r.converged && !out_of_time(it, r); ++it) {
     bool done = false;
+    // the pose before the sweep, to undo it
+    for (int j : active_rev) detail::put(saved_q[j], A::q(s)[j]), saved_angle[j] = A::angle(s)[j];
+    saved_root = A::root_position(s);
     for (int j : active_rev) {
       if (types[j] == JointType::fixed) continue;
       const Vec3 p = s.starts()[j];
@@ -94,9 +109,38 @@ void Solver::Impl::ccd(SolveResult& r) {
     s.forward_kinematics();
     for (int k = 0; k < ne; ++k) eff_pos[k] = s.tips()[s.effector(k).bone];
     r.iterations = it + 1;
+    const double c = cost(0);
+    if (c > prev_cost) {
+      // the sweep made things worse: undo it and hand over
+      for (int j : active_rev) A::q(s)[j] = saved_q[j], A::angle(s)[j] = saved_angle[j];
+      A::root_position(s) = saved_root;
+      s.forward_kinematics();
+      measure(r);
+      handover = true;
+      break;
+    }
+    prev_cost = c;
     measure(r);
-    if (!r.converged && (stalled(prev, r.residual) || creep(r.iterations, r.residual))) break;
+    if (r.converged) break;
+    if (stalled(prev, r.residual)) break;
     prev = r.residual;
+    // stuck: 16 sweeps that have not halved the error
+    if (r.iterations % 16 == 0) {
+      if (r.residual > 0.5 * checkpoint) {
+        handover = true;
+        break;
+      }
+      checkpoint = r.residual;
+    }
+  }
+  if (handover && !r.out_of_time && r.iterations < cap) {
+    // from the pose the solve was given: the stuck pose is a poor start (the chain's end
+    // curled onto its limits; DLS from there reached 84% of the targets above, from the
+    // given pose 100%)
+    r.handed_over = true;
+    restore_given_pose();
+    measure(r);
+    jacobian(r, Method::dls);
   }
 }
 

@@ -171,8 +171,10 @@ void Solver::Impl::drop_saturated_columns() {
     double* col = &J[static_cast<std::size_t>(col_of[j]) * m];
     double g = 0;
     for (int r = 0; r < m; ++r) g += col[r] * e[r];
-    if ((at_hi && g > 0) || (at_lo && g < 0))
+    if ((at_hi && g > 0) || (at_lo && g < 0)) {
       for (int r = 0; r < m; ++r) col[r] = 0;
+      limit_dropped = true;
+    }
   }
 }
 
@@ -212,7 +214,10 @@ void Solver::Impl::build_compact(double clamp) {
       // a hinge held at a limit that the error pushes further out takes no part
       if (limited[j]) {
         const double ang = A::angle(s)[j], gd = glm::dot(g, ew);
-        if ((ang >= A::hi(s)[j] - 1e-12 && gd > 0) || (ang <= A::lo(s)[j] + 1e-12 && gd < 0)) g = Vec3(0);
+        if ((ang >= A::hi(s)[j] - 1e-12 && gd > 0) || (ang <= A::lo(s)[j] + 1e-12 && gd < 0)) {
+          g = Vec3(0);
+          limit_dropped = true;
+        }
       }
       a00 += g.x * g.x, a01 += g.x * g.y, a02 += g.x * g.z;
       a11 += g.y * g.y, a12 += g.y * g.z, a22 += g.z * g.z;
@@ -306,14 +311,17 @@ void Solver::Impl::apply_dtheta(bool save) {
   auto& q = A::q(s);
   auto& angle = A::angle(s);
   saved_root = A::root_position(s);
+  step_clamped = false;
   if (s.root_free()) A::root_position(s) += Vec3(dtheta[0], dtheta[1], dtheta[2]);
   for (int j : active_rev) {
     const int c = col_of[j];
     if (c < 0) continue;
     if (save) detail::put(saved_q[j], q[j]), saved_angle[j] = angle[j];
     if (types[j] == JointType::hinge) {
-      angle[j] += dtheta[c];
+      const double want = angle[j] + dtheta[c];
+      angle[j] = want;
       A::clamp_joint(s, j);
+      if (limited[j] && angle[j] != want) step_clamped = true;
       continue;
     }
     // world rotation vector -> joint frame; q <- exp(w_local) q
@@ -323,6 +331,10 @@ void Solver::Impl::apply_dtheta(bool save) {
     if (limited[j]) {
       detail::put(q[j], qn);
       A::clamp_joint(s, j);
+      // projected back into the cone or twist range (beyond rounding)
+      const Quat& qc = q[j];
+      const double dq = std::abs(qn.w * qc.w + qn.x * qc.x + qn.y * qc.y + qn.z * qc.z);
+      if (dq * dq < (1 - 1e-12) * (qn.w * qn.w + qn.x * qn.x + qn.y * qn.y + qn.z * qn.z)) step_clamped = true;
     } else {
       // an unlimited ball joint only needs the normalisation
       detail::put(q[j], qn * (1 / std::sqrt(qn.w * qn.w + qn.x * qn.x + qn.y * qn.y + qn.z * qn.z)));
@@ -392,16 +404,30 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
   const double step_cap = set.max_step_angle > 0 ? set.max_step_angle
                           : meth == Method::sdls ? kPi / 4
                                                  : 0.5;
-  double prev = r.residual;
-  // dls and sdls only accept steps that lower the cost (Levenberg-Marquardt): a rejected
-  // step is undone and retried with more damping (dls) or a shorter cap (sdls), so an
-  // unreachable target or a singular pose cannot make the pose oscillate
-  const bool monotone = meth == Method::dls || meth == Method::sdls;
-  double gamma = step_cap;
-  double prev_cost = monotone ? cost(ori_scale) : 0.0;
+  // Every method accepts a step only when it does not raise the cost (the weighted squared
+  // error); a rejected step is undone and retried shorter, so no step can leave the pose
+  // worse (an unreachable target used to make the pseudo-inverse coil the chain up):
+  // damped least squares with 4 times the damping (Levenberg-Marquardt), SDLS with a quarter
+  // of its cap gamma, the transpose and the pseudo-inverse with a quarter of the step along
+  // the same direction (backtracking: J^T e is minus the gradient of |e|^2 / 2, and J^+ e a
+  // descent direction wherever J has full row rank, so a short enough step lowers the cost
+  // unless the pose is stationary). When a millionfold shortening still finds no lower
+  // cost, the pose is stationary to rounding and the solve stops there (StopReason::Stalled).
+  //
+  // The one stop on slow progress is for a pose pressed on joint limits: there each step
+  // is mostly projected back into the limits (or a hinge held at its limit is left out)
+  // and the error creeps down for thousands of iterations (a limited chain toward a target
+  // outside its cones). When every step of 16 iterations was cut by a limit and the error fell by less than 1% over them, the
+  // solve stops (StopReason::Stalled). Free joints never trigger it, so a free chain
+  // straightening slowly toward an unreachable target runs on to its stationary point.
+  double gamma = step_cap, scale = 1;
+  double prev_cost = cost(ori_scale);
   compact = m == 3 && meth != Method::sdls;
-  Creep creep{r.residual, 16, 1e-2, r.iterations + 16};
+  double checkpoint = r.residual;
+  bool window_clamped = true;
+  int window_end = r.iterations + 16;
   for (int it = r.iterations; it < cap && !r.converged && !out_of_time(it, r); ++it) {
+    limit_dropped = false;
     if (compact) {
       build_compact(clamp);
     } else {
@@ -450,27 +476,51 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
         break;
     }
     clamp_max_abs(dtheta.data(), ncols, meth == Method::sdls ? gamma : step_cap);
-    apply_dtheta(monotone);
+    if (scale < 1)
+      for (int c = 0; c < ncols; ++c) dtheta[c] *= scale;
+    apply_dtheta(true);
     s.forward_kinematics();
     r.iterations = it + 1;
-    if (monotone) {
-      const double c = cost(ori_scale);
-      if (c > prev_cost) {
-        // reject: undo, damp more, and stop once the damping has grown a millionfold
-        restore_pose();
-        s.forward_kinematics();
-        lambda *= 4;
-        gamma *= 0.25;
-        if (lambda > 1e6 * lambda0 || gamma < 1e-6 * step_cap || creep(r.iterations, r.residual)) break;
-        continue;
+    window_clamped = window_clamped && (step_clamped || limit_dropped);
+    if (r.iterations >= window_end) {
+      measure(r);
+      if (window_clamped && r.residual > 0.99 * checkpoint) {
+        // the window's last step is still to be judged: keep it only if it lowered the cost
+        if (cost(ori_scale) > prev_cost) {
+          restore_pose();
+          s.forward_kinematics();
+        }
+        break;
       }
-      prev_cost = c;
-      lambda = std::max(0.5 * lambda, lambda0);
-      gamma = std::min(2 * gamma, step_cap);
+      checkpoint = r.residual;
+      window_clamped = true;
+      window_end = r.iterations + 16;
     }
+    const double c = cost(ori_scale);
+    if (c > prev_cost) {
+      // reject: undo, shorten, and stop once the step has shrunk a millionfold
+      restore_pose();
+      s.forward_kinematics();
+      lambda *= 4;
+      gamma *= 0.25;
+      scale *= 0.25;
+      const bool exhausted = meth == Method::dls    ? lambda > 1e6 * lambda0
+                             : meth == Method::sdls ? gamma < 1e-6 * step_cap
+                                                    : scale < 1e-6;
+      if (exhausted) break;
+      continue;
+    }
+    // accept: relax the damping, the cap and the step back toward their defaults
+    const bool still = stalled(prev_cost, c);
+    prev_cost = c;
+    lambda = std::max(0.5 * lambda, lambda0);
+    gamma = std::min(2 * gamma, step_cap);
+    scale = std::min(2 * scale, 1.0);
+    // stop on a stationary pose: an accepted step that changes the cost by less than
+    // stall_ratio of it (not on slow progress: a chain straightening toward an unreachable
+    // target, or sliding along its limits, gains little per iteration for many iterations)
     measure(r);
-    if (!r.converged && (stalled(prev, r.residual) || creep(r.iterations, r.residual))) break;
-    prev = r.residual;
+    if (!r.converged && still) break;
   }
   measure(r);
 }
@@ -483,7 +533,7 @@ double Solver::Impl::cost(double ori_scale) const {
     const EffectorDef& ef = s.effector(k);
     const Vec3 d = s.tips()[ef.bone] - ef.target;
     c += ef.weight * ef.weight * glm::dot(d, d);
-    if (ef.orientation) {
+    if (ef.orientation && ori_scale > 0) {
       const Vec3 o = detail::quat_log(*ef.orientation * glm::conjugate(s.world_rotations()[ef.bone]));
       c += ef.weight * ef.weight * ori_scale * ori_scale * glm::dot(o, o);
     }

@@ -32,6 +32,16 @@ std::string_view method_name(Method m) {
   return "unknown";
 }
 
+std::string_view to_string(StopReason r) {
+  switch (r) {
+    case StopReason::Converged: return "converged";
+    case StopReason::Stalled: return "stalled";
+    case StopReason::IterationCap: return "iteration_cap";
+    case StopReason::OutOfTime: return "out_of_time";
+  }
+  return "unknown";
+}
+
 Method parse_solver(std::string_view text, std::string_view where) {
   std::string t(text);
   for (char& c : t) {
@@ -259,12 +269,39 @@ void Solver::Impl::prepare() {
   simple_chain = na == n;
   for (int i = 0; i < n; ++i)
     if (parents[i] != i - 1) simple_chain = false;
+  // the straight-chain test for paths mixing joints (straighten_mixed): the first moving
+  // joint a ball, every later one able to hold zero (fixed, a hinge whose range holds 0, a
+  // ball whose twist range holds 0), every later rest rotation the identity
+  straight_first = -1;
+  straight_reach = 0;
+  if (ne == 1) {
+    int first = -1;
+    bool ok = true;
+    for (int k = 0; k < na && ok; ++k) {
+      const int i = active_fwd[k];
+      const JointType jt = s.joint_types()[i];
+      if (first < 0) {
+        if (jt == JointType::fixed) continue;
+        first = k;
+        ok = jt == JointType::ball;
+        continue;
+      }
+      const bool zero_in = !A::limited(s)[i] || (A::lo(s)[i] <= 0 && A::hi(s)[i] >= 0);
+      ok = rest_identity[i] && (jt == JointType::fixed || zero_in);
+    }
+    if (ok && first >= 0) {
+      straight_first = first;
+      for (int k = first; k < na; ++k) straight_reach += cl[k];
+    }
+  }
   // FABRIK iterates on positions only when every active joint is an unlimited ball
   all_free_balls = true;
   for (int j : active_rev)
     if (s.joint_types()[j] != JointType::ball || A::limited(s)[j]) all_free_balls = false;
   saved_q.assign(n, Quat(1, 0, 0, 0));
   saved_angle.assign(n, 0.0);
+  given_q.assign(n, Quat(1, 0, 0, 0));
+  given_angle.assign(n, 0.0);
 }
 
 // -------------------------------------------------------------------------
@@ -326,10 +363,16 @@ SolveResult Solver::Impl::solve() {
   SolveResult r;
   measure(r);
   if (ne == 0 || r.converged) return r;
-  if (set.method == Method::ccd || set.method == Method::fabrik || set.method == Method::dls ||
-      set.method == Method::sdls || set.method == Method::pseudo_inverse ||
-      set.method == Method::jacobian_transpose)
-    if (straighten_if_unreachable(r)) return r;
+  // the pose given, to return it when the method ends farther away (see below)
+  const bool orients = honours_orientation(set.method);
+  const double ori_scale = orients ? std::max(largest_reach(), 1e-9) : 0.0;
+  const double given_cost = cost(ori_scale);
+  for (int j : active_fwd) given_q[j] = A::q(s)[j], given_angle[j] = A::angle(s)[j];
+  given_root = A::root_position(s);
+  if (honours_unreachable_shortcut(set.method) && straighten_if_unreachable(r)) {
+    r.stop = r.converged ? StopReason::Converged : StopReason::Stalled;
+    return r;
+  }
   switch (set.method) {
     case Method::analytic_1dof: analytic_1dof(r); break;
     case Method::analytic_3dof: analytic_3dof(r); break;
@@ -346,6 +389,22 @@ SolveResult Solver::Impl::solve() {
     case Method::fabrik: fabrik(r); break;
   }
   measure(r);
+  // No solver returns a pose worse than the one it was given. The Jacobian family accepts
+  // only steps that do not raise the cost and CCD only sweeps that do not (jacobian.cpp,
+  // ccd.cpp), so for them this never fires; FABRIK's reaching passes are not monotone
+  // (and the analytic methods' clamp to a limit may land anywhere), so the driver keeps
+  // the given pose when the method ended farther away. Costs are weighted squared errors
+  // (Impl::cost); the orientation part counts for the methods that honour it.
+  if (cost(ori_scale) > given_cost) {
+    restore_given_pose();
+    measure(r);
+  }
+  // why it stopped
+  if (r.converged) r.stop = StopReason::Converged;
+  else if (r.out_of_time) r.stop = StopReason::OutOfTime;
+  else if (r.stop != StopReason::Stalled && r.iterations >= max_iterations() && !is_analytic(set.method))
+    r.stop = StopReason::IterationCap;
+  else r.stop = StopReason::Stalled;
   return r;
 }
 

@@ -37,6 +37,9 @@ struct Solver::Impl {
   bool all_free_balls = false;           // every active joint is an unlimited ball (FABRIK on positions)
   bool simple_chain = false;             // bone i is bone i - 1's child, every bone active
   double path_reach = 0;                 // summed length of the active bones (m): one effector's reach
+  int straight_first = -1;               // one effector: index in active_fwd of the path's first moving
+                                         // joint when it is a ball and every later joint can be straight
+  double straight_reach = 0;             // summed length from that joint to the effector (m)
   std::vector<int> eff_off, eff_list;    // effectors on each bone
   std::vector<int> under_off, under;     // effectors in each bone's subtree
   std::vector<int> path_off, path;       // each effector's bones up to the root
@@ -51,6 +54,8 @@ struct Solver::Impl {
   std::vector<double> J, Amat, L, V, w, work, e, y, t, dtheta, v, rho;
   // one position effector (3 rows): J is never stored, only each joint's vector (see build_compact)
   bool compact = false;
+  bool limit_dropped = false;            // the last Jacobian left out a hinge held at its limit
+  bool step_clamped = false;             // the last apply_dtheta projected a limited joint back into its limits
   std::vector<Vec3> jd;
 
   // FABRIK and CCD workspace
@@ -61,6 +66,10 @@ struct Solver::Impl {
   std::vector<double> saved_angle;
   Vec3 saved_root{0};
   std::vector<double> accw;
+  // the pose a solve was given (active joints and the root), kept in case the method ends worse
+  std::vector<Quat> given_q;
+  std::vector<double> given_angle;
+  Vec3 given_root{0};
 
   explicit Impl(Skeleton& s, const SolverSettings& st) : sk(&s), set(st) { prepare(); }
 
@@ -91,6 +100,24 @@ struct Solver::Impl {
     return rest_identity[i] ? base : detail::qmul(base, A::rest(s)[i]);
   }
 
+  // back to the pose the solve was given (active joints and the root), with forward kinematics
+  void restore_given_pose() {
+    for (int j : active_fwd) A::q(*sk)[j] = given_q[j], A::angle(*sk)[j] = given_angle[j];
+    A::root_position(*sk) = given_root;
+    sk->forward_kinematics();
+  }
+
+  // whether a method honours orientation targets (FABRIK and the Jacobian family)
+  static bool honours_orientation(Method m) {
+    return m == Method::fabrik || m == Method::dls || m == Method::sdls || m == Method::pseudo_inverse ||
+           m == Method::jacobian_transpose;
+  }
+  // the iterative methods, which take the straight chain toward an unreachable target first
+  static bool honours_unreachable_shortcut(Method m) { return m == Method::ccd || honours_orientation(m); }
+  static bool is_analytic(Method m) {
+    return m == Method::analytic_1dof || m == Method::analytic_3dof || m == Method::two_bone;
+  }
+
   // residuals after forward kinematics
   void measure(SolveResult& r) const {
     const Skeleton& s = *sk;
@@ -105,9 +132,7 @@ struct Solver::Impl {
       }
     }
     // CCD and the analytic solvers handle positions only: orientation targets are reported, not required
-    const bool orients = set.method == Method::fabrik || set.method == Method::dls ||
-                         set.method == Method::sdls || set.method == Method::pseudo_inverse ||
-                         set.method == Method::jacobian_transpose;
+    const bool orients = honours_orientation(set.method);
     r.converged = r.residual <= set.tolerance &&
                   (!orients || r.orientation_residual <= set.orientation_tolerance);
   }
@@ -125,25 +150,6 @@ struct Solver::Impl {
     return true;
   }
 
-  // A solve that creeps (pressed against joint limits, or circling a target outside the
-  // reachable set in ever smaller steps) improves each iteration by more than stall_ratio
-  // yet gets nowhere: once per `window` iterations (rejected Levenberg-Marquardt steps
-  // included), it stops when the error fell by less than `ratio` since the last check.
-  // A converging DLS solve gains far more than 1% in 16 iterations (at least linearly);
-  // CCD, which can plateau for a while before it finds its way, gets 0.1% in 64.
-  struct Creep {
-    double checkpoint;
-    int window = 16;
-    double ratio = 1e-2;
-    int next = window;
-    bool operator()(int iterations, double residual) {
-      if (iterations < next) return false;
-      next = iterations + window;
-      if (residual > (1 - ratio) * checkpoint) return true;
-      checkpoint = residual;
-      return false;
-    }
-  };
 
   // -------------------------------------------------------------------------
   // analytic: one hinge aims the effector at the target (workbook 2.3) (solver.cpp)
@@ -210,6 +216,8 @@ struct Solver::Impl {
 
   // an unreachable target on a path of unlimited ball joints: straighten toward it
   bool straighten_if_unreachable(SolveResult& r);
+  // the same on a path mixing joints, aimed by its first moving joint, a ball joint
+  bool straighten_mixed(SolveResult& r);
 
   // residual from the tips only (positions-only FABRIK keeps world rotations stale)
   void measure_tips(SolveResult& r) const {
