@@ -37,11 +37,11 @@ void Solver::Impl::ccd(SolveResult& r) {
     for (int j : active_rev) detail::put(saved_q[j], A::q(s)[j]), saved_angle[j] = A::angle(s)[j];
     saved_root = A::root_position(s);
     for (int j : active_rev) {
-      if (types[j] == JointType::fixed) continue;
+      if (types[j] == JointType::Fixed) continue;
       const Vec3 p = s.starts()[j];
       const int u0 = under_off[j], u1 = under_off[j + 1];
       Quat dR(1, 0, 0, 0);
-      if (types[j] == JointType::hinge) {
+      if (types[j] == JointType::Hinge) {
         // best angle about the world hinge axis, summed over the effectors below
         const Quat F = frame(j);
         const Vec3 a = detail::rotate(F, A::axis(s)[j]);
@@ -140,7 +140,7 @@ void Solver::Impl::ccd(SolveResult& r) {
     r.handed_over = true;
     restore_given_pose();
     measure(r);
-    jacobian(r, Method::dls);
+    jacobian(r, Method::Dls);
   }
 }
 

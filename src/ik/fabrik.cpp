@@ -186,12 +186,12 @@ void Solver::Impl::fabrik(SolveResult& r) {
       Vec3 sp;
       if (orient) {
         sp = g - detail::rotate_x(*orient, lengths[j]);
-      } else if (types[j] == JointType::fixed) {
+      } else if (types[j] == JointType::Fixed) {
         // a welded bone keeps its current direction: translate it, do not turn it
         sp = g - (tip[j] - start[j]);
       } else {
         Vec3 d = start[j] - g;
-        if (types[j] == JointType::hinge || (types[j] == JointType::ball && limited[j])) {
+        if (types[j] == JointType::Hinge || (types[j] == JointType::Ball && limited[j])) {
           // constrain the bone direction in the joint's current frame: a hinge keeps the
           // bone in its plane (and its angle range), a limited ball inside its cone.
           // Aristidou and Lasenby 2011 sec. 4 apply constraints in both stages too.
@@ -200,7 +200,7 @@ void Solver::Impl::fabrik(SolveResult& r) {
           const Vec3 dl = detail::rotate_inv(F, -d);
           const double l2 = glm::dot(dl, dl);
           Vec3 c = dl;
-          if (types[j] == JointType::hinge) {
+          if (types[j] == JointType::Hinge) {
             const double x = glm::dot(hx[j], dl), yv = glm::dot(hy[j], dl);
             if (x * x + yv * yv > 1e-12 * l2) {
               if (limited[j]) {
@@ -260,7 +260,7 @@ void Solver::Impl::fabrik(SolveResult& r) {
       const Quat F = rest_identity[i] ? base : detail::qmul(base, A::rest(s)[i]);
       if (active[i]) {
         const JointType jt = types[i];
-        if (jt == JointType::hinge) {
+        if (jt == JointType::Hinge) {
           // angle of the goal direction in the hinge plane
           const Vec3 dl = detail::rotate_inv(F, goal[i] - st);
           const double x = glm::dot(hx[i], dl), yv = glm::dot(hy[i], dl);
@@ -271,7 +271,7 @@ void Solver::Impl::fabrik(SolveResult& r) {
             const double sh = std::sin(0.5 * a);
             q[i] = Quat(std::cos(0.5 * a), axis[i].x * sh, axis[i].y * sh, axis[i].z * sh);
           }
-        } else if (jt == JointType::ball) {
+        } else if (jt == JointType::Ball) {
           const Quat* orient = nullptr;
           for (int u = eff_off[i]; u < eff_off[i + 1]; ++u)
             if (s.effector(eff_list[u]).orientation) {
@@ -336,7 +336,7 @@ void Solver::Impl::fabrik(SolveResult& r) {
   if (positions_only) rebuild_rotations(chain_fast && simple_chain ? cp.data() : nullptr);
   if (handover && !r.out_of_time) {
     r.handed_over = true;
-    jacobian(r, Method::dls);
+    jacobian(r, Method::Dls);
   }
 }
 

@@ -131,7 +131,7 @@ void Solver::Impl::build_jacobian(double clamp, double ori_scale) {
       if (c < 0) continue;
       const Vec3 d = ep - s.starts()[j];
       double* col = &J[static_cast<std::size_t>(c) * m];
-      if (types[j] == JointType::hinge) {
+      if (types[j] == JointType::Hinge) {
         const Vec3 a = detail::rotate(frame(j), A::axis(s)[j]);
         const Vec3 g = glm::cross(a, d);
         col[r0] = wk * g.x, col[r0 + 1] = wk * g.y, col[r0 + 2] = wk * g.z;
@@ -164,7 +164,7 @@ void Solver::Impl::drop_saturated_columns() {
   Skeleton& s = *sk;
   const auto types = s.joint_types();
   for (int j : active_rev) {
-    if (types[j] != JointType::hinge || !A::limited(s)[j]) continue;
+    if (types[j] != JointType::Hinge || !A::limited(s)[j]) continue;
     const double ang = A::angle(s)[j];
     const bool at_lo = ang <= A::lo(s)[j] + 1e-12, at_hi = ang >= A::hi(s)[j] - 1e-12;
     if (!at_lo && !at_hi) continue;
@@ -204,7 +204,7 @@ void Solver::Impl::build_compact(double clamp) {
     const int j = path[pi];
     if (col_of[j] < 0) continue;
     const Vec3 D = wk * (ep - starts[j]);
-    if (types[j] == JointType::ball) {
+    if (types[j] == JointType::Ball) {
       const double xx = D.x * D.x, yy = D.y * D.y, zz = D.z * D.z;
       a00 += yy + zz, a11 += xx + zz, a22 += xx + yy;
       a01 -= D.x * D.y, a02 -= D.x * D.z, a12 -= D.y * D.z;
@@ -242,7 +242,7 @@ void Solver::Impl::jt_times_compact(const double* x) {
     const int j = path[pi];
     const int c = col_of[j];
     if (c < 0) continue;
-    if (types[j] == JointType::ball) {
+    if (types[j] == JointType::Ball) {
       const Vec3 r = glm::cross(jd[j], y3);
       dtheta[c] = r.x, dtheta[c + 1] = r.y, dtheta[c + 2] = r.z;
     } else {
@@ -317,7 +317,7 @@ void Solver::Impl::apply_dtheta(bool save) {
     const int c = col_of[j];
     if (c < 0) continue;
     if (save) detail::put(saved_q[j], q[j]), saved_angle[j] = angle[j];
-    if (types[j] == JointType::hinge) {
+    if (types[j] == JointType::Hinge) {
       const double want = angle[j] + dtheta[c];
       angle[j] = want;
       A::clamp_joint(s, j);
@@ -397,12 +397,12 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
   const int cap = max_iterations();
   const double reach = std::max(largest_reach(), 1e-9);
   // per-effector error clamp and orientation row scale (m per rad)
-  const double clamp = (meth == Method::jacobian_transpose ? 1.0 : 0.3) * reach;
+  const double clamp = (meth == Method::JacobianTranspose ? 1.0 : 0.3) * reach;
   const double ori_scale = reach;
   const double lambda0 = (set.damping > 0 ? set.damping : 0.02) * reach;
   double lambda = lambda0;
   const double step_cap = set.max_step_angle > 0 ? set.max_step_angle
-                          : meth == Method::sdls ? kPi / 4
+                          : meth == Method::Sdls ? kPi / 4
                                                  : 0.5;
   // Every method accepts a step only when it does not raise the cost (the weighted squared
   // error); a rejected step is undone and retried shorter, so no step can leave the pose
@@ -422,7 +422,7 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
   // straightening slowly toward an unreachable target runs on to its stationary point.
   double gamma = step_cap, scale = 1;
   double prev_cost = cost(ori_scale);
-  compact = m == 3 && meth != Method::sdls;
+  compact = m == 3 && meth != Method::Sdls;
   double checkpoint = r.residual;
   bool window_clamped = true;
   int window_end = r.iterations + 16;
@@ -436,7 +436,7 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
       gram();
     }
     switch (meth) {
-      case Method::jacobian_transpose: {
+      case Method::JacobianTranspose: {
         // Buss 2004 eq. 7: alpha = <e, J J^T e> / <J J^T e, J J^T e>
         double num = 0, den = 0;
         for (int i = 0; i < m; ++i) {
@@ -451,7 +451,7 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
         for (int c = 0; c < ncols; ++c) dtheta[c] *= alpha;
         break;
       }
-      case Method::pseudo_inverse: {
+      case Method::PseudoInverse: {
         // J^+ e = J^T (J J^T)^-1 e; a ridge of 1e-9 of the trace keeps the
         // factorisation defined at exact singularities
         double tr = 0;
@@ -462,20 +462,20 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
         jt_times(y.data());
         break;
       }
-      case Method::dls: {
+      case Method::Dls: {
         // J^T (J J^T + lambda^2 I)^-1 e (Buss 2004 eq. 11)
         if (!detail::cholesky_solve(Amat.data(), m, lambda * lambda, L.data(), e.data(), y.data()))
           std::fill(y.begin(), y.begin() + m, 0.0);
         jt_times(y.data());
         break;
       }
-      case Method::sdls:
+      case Method::Sdls:
         sdls_step(gamma);
         break;
       default:
         break;
     }
-    clamp_max_abs(dtheta.data(), ncols, meth == Method::sdls ? gamma : step_cap);
+    clamp_max_abs(dtheta.data(), ncols, meth == Method::Sdls ? gamma : step_cap);
     if (scale < 1)
       for (int c = 0; c < ncols; ++c) dtheta[c] *= scale;
     apply_dtheta(true);
@@ -504,8 +504,8 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
       lambda *= 4;
       gamma *= 0.25;
       scale *= 0.25;
-      const bool exhausted = meth == Method::dls    ? lambda > 1e6 * lambda0
-                             : meth == Method::sdls ? gamma < 1e-6 * step_cap
+      const bool exhausted = meth == Method::Dls    ? lambda > 1e6 * lambda0
+                             : meth == Method::Sdls ? gamma < 1e-6 * step_cap
                                                     : scale < 1e-6;
       if (exhausted) break;
       continue;

@@ -17,22 +17,31 @@ namespace pba::ik {
 // ---------------------------------------------------------------------------
 // names, settings, support checks
 
-std::string_view method_name(Method m) {
+std::string_view name(Method m) {
   switch (m) {
-    case Method::analytic_1dof: return "analytic_1dof";
-    case Method::analytic_3dof: return "analytic_3dof";
-    case Method::two_bone: return "two_bone";
-    case Method::ccd: return "ccd";
-    case Method::jacobian_transpose: return "jacobian_transpose";
-    case Method::pseudo_inverse: return "pseudo_inverse";
-    case Method::dls: return "dls";
-    case Method::sdls: return "sdls";
-    case Method::fabrik: return "fabrik";
+    case Method::Analytic1Dof: return "analytic_1dof";
+    case Method::Analytic3Dof: return "analytic_3dof";
+    case Method::TwoBone: return "two_bone";
+    case Method::Ccd: return "ccd";
+    case Method::JacobianTranspose: return "jacobian_transpose";
+    case Method::PseudoInverse: return "pseudo_inverse";
+    case Method::Dls: return "dls";
+    case Method::Sdls: return "sdls";
+    case Method::Fabrik: return "fabrik";
   }
   return "unknown";
 }
 
-std::string_view to_string(StopReason r) {
+std::string method_names() {
+  std::string list;
+  for (Method m : kAllMethods) {
+    if (!list.empty()) list += ", ";
+    list += name(m);
+  }
+  return list;
+}
+
+std::string_view name(StopReason r) {
   switch (r) {
     case StopReason::Converged: return "converged";
     case StopReason::Stalled: return "stalled";
@@ -42,40 +51,35 @@ std::string_view to_string(StopReason r) {
   return "unknown";
 }
 
-Method parse_solver(std::string_view text, std::string_view where) {
+Method parse_method(std::string_view text, std::string_view where) {
   std::string t(text);
   for (char& c : t) {
     c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (c == '-') c = '_';
   }
-  for (Method m : all_methods)
-    if (t == method_name(m)) return m;
-  if (t == "1dof") return Method::analytic_1dof;
-  if (t == "3dof") return Method::analytic_3dof;
-  if (t == "twobone" || t == "two_bone_ik") return Method::two_bone;
-  if (t == "jt" || t == "transpose") return Method::jacobian_transpose;
-  if (t == "pinv" || t == "pseudoinverse") return Method::pseudo_inverse;
-  if (t == "svd" || t == "svd_dls") return Method::sdls;
-  std::string list;
-  for (Method m : all_methods) {
-    if (!list.empty()) list += ", ";
-    list += method_name(m);
-  }
+  for (Method m : kAllMethods)
+    if (t == name(m)) return m;
+  if (t == "1dof") return Method::Analytic1Dof;
+  if (t == "3dof") return Method::Analytic3Dof;
+  if (t == "twobone" || t == "two_bone_ik") return Method::TwoBone;
+  if (t == "jt" || t == "transpose") return Method::JacobianTranspose;
+  if (t == "pinv" || t == "pseudoinverse") return Method::PseudoInverse;
+  if (t == "svd" || t == "svd_dls") return Method::Sdls;
   throw Error(std::string(where) + ": unknown IK solver '" + std::string(text) +
-              "' (expected one of " + list + ")");
+              "' (expected one of " + method_names() + ")");
 }
 
 int default_max_iterations(Method m) {
   switch (m) {
-    case Method::analytic_1dof:
-    case Method::analytic_3dof:
-    case Method::two_bone: return 1;
-    case Method::ccd: return 1000;
-    case Method::jacobian_transpose: return 2000;
-    case Method::pseudo_inverse: return 200;
-    case Method::dls: return 1000;  // reachable targets take ~5-10; a limited chain pressed on its limits creeps
-    case Method::sdls: return 300;
-    case Method::fabrik: return 1000;  // free ball chains take tens (76 at 1000 bones); limited chains hand over to DLS
+    case Method::Analytic1Dof:
+    case Method::Analytic3Dof:
+    case Method::TwoBone: return 1;
+    case Method::Ccd: return 1000;
+    case Method::JacobianTranspose: return 2000;
+    case Method::PseudoInverse: return 200;
+    case Method::Dls: return 1000;  // reachable targets take ~5-10; a limited chain pressed on its limits creeps
+    case Method::Sdls: return 300;
+    case Method::Fabrik: return 1000;  // free ball chains take tens (76 at 1000 bones); limited chains hand over to DLS
   }
   return 100;
 }
@@ -89,7 +93,7 @@ void SolverSettings::validate(std::string_view where) const {
   require_non_negative(max_step_angle, w + ".max_step_angle");
   require_in_range(stall_ratio, 0, 1, w + ".stall_ratio");
   require_non_negative(max_seconds, w + ".max_seconds");
-  if (static_cast<int>(method) > static_cast<int>(Method::fabrik))
+  if (static_cast<int>(method) > static_cast<int>(Method::Fabrik))
     throw Error(w + ".method: unknown value " + std::to_string(static_cast<int>(method)));
 }
 
@@ -99,7 +103,7 @@ namespace {
 int moving_joints_on_path(const Skeleton& s, int bone, int* first_moving, JointType* type) {
   int count = 0;
   for (int j = bone; j >= 0; j = s.parents()[j])
-    if (s.joint_types()[j] != JointType::fixed) {
+    if (s.joint_types()[j] != JointType::Fixed) {
       ++count;
       if (first_moving) *first_moving = j;
       if (type) *type = s.joint_types()[j];
@@ -111,27 +115,27 @@ int moving_joints_on_path(const Skeleton& s, int bone, int* first_moving, JointT
 
 bool supports(Method m, const Skeleton& s, std::string* why) {
   auto fail = [&](std::string msg) {
-    if (why) *why = std::string(method_name(m)) + ": " + msg;
+    if (why) *why = std::string(name(m)) + ": " + msg;
     return false;
   };
-  if (m != Method::analytic_1dof && m != Method::analytic_3dof && m != Method::two_bone) return true;
+  if (m != Method::Analytic1Dof && m != Method::Analytic3Dof && m != Method::TwoBone) return true;
   if (s.effector_count() != 1)
     return fail("needs exactly one effector, got " + std::to_string(s.effector_count()));
   if (s.root_free()) return fail("needs a fixed root");
   const int bone = s.effector(0).bone;
-  if (m == Method::two_bone) {
+  if (m == Method::TwoBone) {
     const int parent = s.parents()[bone];
-    if (s.joint_types()[bone] != JointType::hinge || parent < 0 ||
-        s.joint_types()[parent] != JointType::ball)
+    if (s.joint_types()[bone] != JointType::Hinge || parent < 0 ||
+        s.joint_types()[parent] != JointType::Ball)
       return fail("needs the effector's bone on a hinge (elbow) whose parent bone is on a ball joint (shoulder)");
     return true;
   }
-  JointType type = JointType::fixed;
+  JointType type = JointType::Fixed;
   const int count = moving_joints_on_path(s, bone, nullptr, &type);
-  const JointType want = m == Method::analytic_1dof ? JointType::hinge : JointType::ball;
+  const JointType want = m == Method::Analytic1Dof ? JointType::Hinge : JointType::Ball;
   if (count != 1 || type != want)
     return fail(std::string("needs exactly one moving joint, a ") +
-                (want == JointType::hinge ? "hinge" : "ball joint") +
+                (want == JointType::Hinge ? "hinge" : "ball joint") +
                 ", between the root and the effector; found " + std::to_string(count) +
                 " moving joints");
   return true;
@@ -187,7 +191,7 @@ void Solver::Impl::prepare() {
   for (int i = 0; i < n; ++i) {
     const Quat r = A::rest(s)[i];
     rest_identity[i] = r.w == 1 && r.x == 0 && r.y == 0 && r.z == 0;
-    if (s.joint_types()[i] == JointType::hinge) {
+    if (s.joint_types()[i] == JointType::Hinge) {
       const Vec3 a = A::axis(s)[i];
       Vec3 xp = Vec3(1, 0, 0) - a.x * a;
       const double l = glm::length(xp);
@@ -203,8 +207,8 @@ void Solver::Impl::prepare() {
     for (int i = 0; i < n; ++i)
       if (active[i] && parents[i] >= 0) active_children[parents[i]]++, last_child[parents[i]] = i;
     for (int i = 0; i < n; ++i)
-      if (active[i] && s.joint_types()[i] == JointType::ball && active_children[i] == 1 &&
-          s.joint_types()[last_child[i]] == JointType::hinge && glm::length(hx[last_child[i]]) > 0)
+      if (active[i] && s.joint_types()[i] == JointType::Ball && active_children[i] == 1 &&
+          s.joint_types()[last_child[i]] == JointType::Hinge && glm::length(hx[last_child[i]]) > 0)
         hinge_child[i] = last_child[i];
   }
 
@@ -227,8 +231,8 @@ void Solver::Impl::prepare() {
   for (int i = 0; i < n; ++i) {
     if (!active[i]) continue;
     const JointType jt = s.joint_types()[i];
-    if (jt == JointType::hinge) col_of[i] = ncols, ncols += 1;
-    else if (jt == JointType::ball) col_of[i] = ncols, ncols += 3;
+    if (jt == JointType::Hinge) col_of[i] = ncols, ncols += 1;
+    else if (jt == JointType::Ball) col_of[i] = ncols, ncols += 3;
   }
   // orientation targets can be added or removed without a version bump, so size for all
   int mmax = 6 * ne;
@@ -281,13 +285,13 @@ void Solver::Impl::prepare() {
       const int i = active_fwd[k];
       const JointType jt = s.joint_types()[i];
       if (first < 0) {
-        if (jt == JointType::fixed) continue;
+        if (jt == JointType::Fixed) continue;
         first = k;
-        ok = jt == JointType::ball;
+        ok = jt == JointType::Ball;
         continue;
       }
       const bool zero_in = !A::limited(s)[i] || (A::lo(s)[i] <= 0 && A::hi(s)[i] >= 0);
-      ok = rest_identity[i] && (jt == JointType::fixed || zero_in);
+      ok = rest_identity[i] && (jt == JointType::Fixed || zero_in);
     }
     if (ok && first >= 0) {
       straight_first = first;
@@ -297,7 +301,7 @@ void Solver::Impl::prepare() {
   // FABRIK iterates on positions only when every active joint is an unlimited ball
   all_free_balls = true;
   for (int j : active_rev)
-    if (s.joint_types()[j] != JointType::ball || A::limited(s)[j]) all_free_balls = false;
+    if (s.joint_types()[j] != JointType::Ball || A::limited(s)[j]) all_free_balls = false;
   saved_q.assign(n, Quat(1, 0, 0, 0));
   saved_angle.assign(n, 0.0);
   given_q.assign(n, Quat(1, 0, 0, 0));
@@ -374,19 +378,19 @@ SolveResult Solver::Impl::solve() {
     return r;
   }
   switch (set.method) {
-    case Method::analytic_1dof: analytic_1dof(r); break;
-    case Method::analytic_3dof: analytic_3dof(r); break;
-    case Method::two_bone: {
+    case Method::Analytic1Dof: analytic_1dof(r); break;
+    case Method::Analytic3Dof: analytic_3dof(r); break;
+    case Method::TwoBone: {
       const SolveResult t2 = detail::solve_two_bone(s, set);
       r.iterations = t2.iterations;
       break;
     }
-    case Method::ccd: ccd(r); break;
-    case Method::jacobian_transpose:
-    case Method::pseudo_inverse:
-    case Method::dls:
-    case Method::sdls: jacobian(r, set.method); break;
-    case Method::fabrik: fabrik(r); break;
+    case Method::Ccd: ccd(r); break;
+    case Method::JacobianTranspose:
+    case Method::PseudoInverse:
+    case Method::Dls:
+    case Method::Sdls: jacobian(r, set.method); break;
+    case Method::Fabrik: fabrik(r); break;
   }
   measure(r);
   // No solver returns a pose worse than the one it was given. The Jacobian family accepts
@@ -479,12 +483,12 @@ SolveResult SolveThenBlend::update(double dt) {
   for (int i = 0; i < vis.bone_count(); ++i) {
     Quat g = goal_q_[i];
     if (glm::dot(g, q[i]) < 0) g = -g;
-    if (vis.joint_types()[i] == JointType::hinge) {
+    if (vis.joint_types()[i] == JointType::Hinge) {
       const double target = goal_angle_[i];
       angle[i] += f * (target - angle[i]);
       remaining = std::max(remaining, std::abs(target - angle[i]));
     } else {
-      q[i] = blend_ == Blend::slerp ? glm::slerp(q[i], g, f) : glm::normalize(glm::lerp(q[i], g, f));
+      q[i] = blend_ == Blend::Slerp ? glm::slerp(q[i], g, f) : glm::normalize(glm::lerp(q[i], g, f));
       remaining = std::max(remaining, 2 * std::acos(std::min(1.0, std::abs(glm::dot(q[i], g)))));
     }
     A::clamp_joint(vis, i);

@@ -27,7 +27,7 @@ struct Solver::Impl {
   std::chrono::steady_clock::time_point deadline;  // ... and when it ends
   int active_count = 0;                  // active bones (sets how often the clock is read)
   std::uint64_t supported_version = ~std::uint64_t(0);  // effectors for which supports() held
-  Method supported_method = Method::fabrik;              // ... with this method
+  Method supported_method = Method::Fabrik;              // ... with this method
 
   // effector structure (rebuilt when effectors change)
   int n = 0, ne = 0;
@@ -109,13 +109,13 @@ struct Solver::Impl {
 
   // whether a method honours orientation targets (FABRIK and the Jacobian family)
   static bool honours_orientation(Method m) {
-    return m == Method::fabrik || m == Method::dls || m == Method::sdls || m == Method::pseudo_inverse ||
-           m == Method::jacobian_transpose;
+    return m == Method::Fabrik || m == Method::Dls || m == Method::Sdls || m == Method::PseudoInverse ||
+           m == Method::JacobianTranspose;
   }
   // the iterative methods, which take the straight chain toward an unreachable target first
-  static bool honours_unreachable_shortcut(Method m) { return m == Method::ccd || honours_orientation(m); }
+  static bool honours_unreachable_shortcut(Method m) { return m == Method::Ccd || honours_orientation(m); }
   static bool is_analytic(Method m) {
-    return m == Method::analytic_1dof || m == Method::analytic_3dof || m == Method::two_bone;
+    return m == Method::Analytic1Dof || m == Method::Analytic3Dof || m == Method::TwoBone;
   }
 
   // residuals after forward kinematics

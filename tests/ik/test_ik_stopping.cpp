@@ -20,8 +20,8 @@ using namespace pba::ik;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 // the iterative methods (the analytic ones need one or two joints)
-constexpr Method kIterative[] = {Method::ccd, Method::jacobian_transpose, Method::pseudo_inverse,
-                                 Method::dls, Method::sdls, Method::fabrik};
+constexpr Method kIterative[] = {Method::Ccd, Method::JacobianTranspose, Method::PseudoInverse,
+                                 Method::Dls, Method::Sdls, Method::Fabrik};
 
 // weighted squared position error over every effector (what "worse" means for the methods
 // that ignore orientation targets, and for position-only effectors everywhere)
@@ -74,7 +74,7 @@ TEST(IkNeverWorse, NoMethodEndsFartherThanItStarted) {
           ASSERT_NEAR(r.residual * r.residual, squared_error(s), 1e-12);
           ASSERT_TRUE(s.within_limits(1e-9));
           EXPECT_LE(squared_error(s), before)
-              << method_name(m) << ", " << n << (limited ? " limited" : " free") << " bones, case " << k
+              << name(m) << ", " << n << (limited ? " limited" : " free") << " bones, case " << k
               << ": " << std::sqrt(before) << " m before, " << r.residual << " m after";
         }
       }
@@ -102,7 +102,7 @@ TEST(IkNeverWorse, TreesWithSeveralEffectors) {
         Solver solver(s, m);
         solver.solve();
         ASSERT_TRUE(s.within_limits(1e-9));
-        EXPECT_LE(squared_error(s), before) << method_name(m) << (limited ? " limited" : " free") << ", case " << k;
+        EXPECT_LE(squared_error(s), before) << name(m) << (limited ? " limited" : " free") << ", case " << k;
       }
     }
   }
@@ -140,8 +140,8 @@ TEST(IkClosestPose, MixedChainsStraightenTowardUnreachableTargets) {
           Solver solver(s, m);
           const SolveResult r = solver.solve();
           EXPECT_NEAR(r.residual, glm::length(target) - L, tol)
-              << method_name(m) << ", " << n << (limited ? " limited" : " free") << " bones";
-          EXPECT_EQ(r.stop, StopReason::Stalled) << method_name(m);
+              << name(m) << ", " << n << (limited ? " limited" : " free") << " bones";
+          EXPECT_EQ(r.stop, StopReason::Stalled) << name(m);
           EXPECT_FALSE(r.converged);
           ASSERT_TRUE(s.within_limits(1e-9));
         }
@@ -159,13 +159,13 @@ TEST(IkClosestPose, MixedChainsStraightenTowardUnreachableTargets) {
 // against its limits and stop getting closer. Now a stuck CCD hands over to damped least
 // squares from the given pose: every target is reached and the result says how.
 TEST(IkCcd, LongLimitedChainsReachEveryReachableTarget) {
-  for (JointType jt : {JointType::hinge, JointType::ball}) {
+  for (JointType jt : {JointType::Hinge, JointType::Ball}) {
     const int n = 333;
     Skeleton s = scenes::make_chain(n, jt, true);
-    const auto targets = scenes::random_targets(s, n - 1, jt == JointType::hinge ? 100 : 30, 1);
+    const auto targets = scenes::random_targets(s, n - 1, jt == JointType::Hinge ? 100 : 30, 1);
     s.add_effector(n - 1, Vec3(0));
     SolverSettings st;
-    st.method = Method::ccd;
+    st.method = Method::Ccd;
     st.tolerance = 1e-4;
     Solver solver(s, st);
     int converged = 0, handed = 0;
@@ -178,9 +178,9 @@ TEST(IkCcd, LongLimitedChainsReachEveryReachableTarget) {
       handed += r.handed_over;
       EXPECT_EQ(r.stop, r.converged ? StopReason::Converged : StopReason::IterationCap);
     }
-    EXPECT_EQ(converged, static_cast<int>(targets.size())) << (jt == JointType::hinge ? "hinges" : "balls");
+    EXPECT_EQ(converged, static_cast<int>(targets.size())) << (jt == JointType::Hinge ? "hinges" : "balls");
     // the hand-over is what reaches the hard ones (18 of the 100 hinge targets before)
-    if (jt == JointType::hinge) {
+    if (jt == JointType::Hinge) {
       EXPECT_GT(handed, 0);
     }
   }
@@ -189,7 +189,7 @@ TEST(IkCcd, LongLimitedChainsReachEveryReachableTarget) {
 // The result says why a solve stopped: converged, the iteration budget, the time budget, or
 // stalled (a stationary pose: the closest reachable pose of an unreachable target).
 TEST(IkStop, TheResultSaysWhyTheSolveStopped) {
-  Skeleton s = scenes::make_chain(100, JointType::ball, true);
+  Skeleton s = scenes::make_chain(100, JointType::Ball, true);
   const auto targets = scenes::random_targets(s, 99, 1, 9);
   s.add_effector(99, targets[0].position);
   for (Method m : kIterative) {
@@ -198,25 +198,25 @@ TEST(IkStop, TheResultSaysWhyTheSolveStopped) {
     Solver solver(s, st);
     scenes::bent_pose(s);
     SolveResult r = solver.solve();
-    EXPECT_TRUE(r.converged) << method_name(m);
-    EXPECT_EQ(r.stop, StopReason::Converged) << method_name(m);
+    EXPECT_TRUE(r.converged) << name(m);
+    EXPECT_EQ(r.stop, StopReason::Converged) << name(m);
     // one iteration is not enough from the bent pose: the budget is reported
     st.max_iterations = 1;
     solver.set_settings(st);
     scenes::bent_pose(s);
     r = solver.solve();
-    EXPECT_FALSE(r.converged) << method_name(m);
-    EXPECT_EQ(r.stop, StopReason::IterationCap) << method_name(m);
-    EXPECT_EQ(r.iterations, 1) << method_name(m);
+    EXPECT_FALSE(r.converged) << name(m);
+    EXPECT_EQ(r.stop, StopReason::IterationCap) << name(m);
+    EXPECT_EQ(r.iterations, 1) << name(m);
   }
   // a free chain toward a far target ends stationary, on the straight chain
-  Skeleton f = scenes::make_chain(20, JointType::ball, false);
+  Skeleton f = scenes::make_chain(20, JointType::Ball, false);
   f.add_effector(19, Vec3(0, 3, 0));
-  Solver solver(f, Method::dls);
+  Solver solver(f, Method::Dls);
   const SolveResult r = solver.solve();
   EXPECT_EQ(r.stop, StopReason::Stalled);
   EXPECT_NEAR(r.residual, 2.0, 16 * 20 * kEps);
-  EXPECT_EQ(to_string(StopReason::IterationCap), "iteration_cap");
+  EXPECT_EQ(name(StopReason::IterationCap), "iteration_cap");
 }
 
 }  // namespace
