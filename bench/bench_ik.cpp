@@ -112,9 +112,16 @@ void print_row(const Row& r) {
 
 // --- pba ---
 
+// the chains: ball joints (scenes::make_chain), hinges, or hinges and ball joints mixed
+enum class Joints { Ball, Hinge, Mixed };
+Skeleton make_chain(int n, bool limited, Joints j) {
+  if (j == Joints::Mixed) return scenes::make_mixed_chain(n, limited);
+  return scenes::make_chain(n, j == Joints::Hinge ? JointType::Hinge : JointType::Ball, limited);
+}
+
 Row run_pba_cold(int n, bool limited, Method m, const std::vector<scenes::Target>& targets, double tol,
-                 double budget, bool orientation) {
-  Skeleton s = scenes::make_chain(n, JointType::Ball, limited);
+                 double budget, bool orientation, Joints joints = Joints::Ball) {
+  Skeleton s = make_chain(n, limited, joints);
   EffectorDef ef;
   ef.bone = n - 1;
   s.add_effector(ef);
@@ -122,8 +129,10 @@ Row run_pba_cold(int n, bool limited, Method m, const std::vector<scenes::Target
   st.method = m;
   st.tolerance = tol;
   Solver solver(s, st);
-  Row r{std::to_string(n), limited ? "yes" : "no", std::string(name(m)) + (orientation ? " 6D" : "")};
+  const char* kind = joints == Joints::Hinge ? " hinges" : joints == Joints::Mixed ? " mixed" : "";
+  Row r{std::to_string(n), limited ? "yes" : "no", std::string(name(m)) + (orientation ? " 6D" : "") + kind};
   long long allocs = 0;
+  int handed = 0;
   const auto t_begin = Clock::now();
   for (const auto& t : targets) {
     scenes::bent_pose(s);
@@ -135,10 +144,12 @@ Row run_pba_cold(int n, bool limited, Method m, const std::vector<scenes::Target
     const double t1 = cpu_now();
     allocs += g_allocations.load() - a0;
     r.add(t0, t1, res.iterations, res.converged, res.residual);
+    handed += res.handed_over;
     if (!s.within_limits(1e-9)) r.note = "LIMITS VIOLATED";
     if (seconds(t_begin, Clock::now()) > budget) break;
   }
   r.allocs = r.solves ? double(allocs) / r.solves : 0;
+  if (handed && r.note.empty()) r.note = "(" + std::to_string(handed) + " handed over to DLS)";
   return r;
 }
 
@@ -412,6 +423,15 @@ int main(int argc, char** argv) {
         print_row(run_kdl_nrjl(n, targets, tol, budget));
       }
     }
+  }
+  // long chains of other joints (issue 12: CCD reached 68% of a 333-bone chain's targets)
+  print_header("Cold solves on 333-bone chains of limited hinges, and of mixed hinges and ball joints");
+  for (Joints j : {Joints::Hinge, Joints::Mixed}) {
+    if (only_n && only_n != 333) break;
+    Skeleton s = make_chain(333, true, j);
+    const auto targets = scenes::random_targets(s, 332, std::min(ntargets, 300), 1);
+    for (Method m : {Method::Fabrik, Method::Ccd, Method::Dls})
+      if (want(m)) print_row(run_pba_cold(333, true, m, targets, tol, budget, false, j));
   }
   print_header("Unreachable targets (1.5 m from the root of a 1 m chain)");
   for (int n : sizes)
