@@ -17,16 +17,17 @@ inline constexpr double kHingeLimit = 1.0;    // hinges in [-1, 1]
 inline constexpr double kSwingLimit = 0.6;    // ball swing cone half-angle
 inline constexpr double kTwistLimit = 0.5;    // ball twist in [-0.5, 0.5]
 
-/// A chain of n bones, total length 1 m, along +X. Hinges alternate between local Z
-/// and Y axes so the chain reaches in 3D.
-inline Skeleton make_chain(int n, JointType type, bool limited) {
+/// The definition of a chain of n bones, total length 1 m, along +X, on joints of kind
+/// `joint_of(i)`; hinges alternate between local Z and Y axes so the chain reaches in 3D.
+template <class JointOf>
+inline SkeletonDef chain_def(int n, bool limited, JointOf joint_of) {
   SkeletonDef def;
   def.bones.resize(n);
   for (int i = 0; i < n; ++i) {
     BoneDef& b = def.bones[i];
     b.parent = i - 1;
     b.length = 1.0 / n;
-    b.joint = type;
+    b.joint = joint_of(i);
     b.axis = (i % 2 == 0) ? Vec3(0, 0, 1) : Vec3(0, 1, 0);
     if (limited) {
       b.min_angle = -kHingeLimit;
@@ -36,30 +37,20 @@ inline Skeleton make_chain(int n, JointType type, bool limited) {
       b.max_twist = kTwistLimit;
     }
   }
-  return Skeleton(def);
+  return def;
+}
+
+/// A chain of n bones, total length 1 m, along +X, all on `type` joints. Hinges alternate
+/// between local Z and Y axes so the chain reaches in 3D.
+inline Skeleton make_chain(int n, JointType type, bool limited) {
+  return Skeleton(chain_def(n, limited, [type](int) { return type; }));
 }
 
 /// A chain of n bones, total length 1 m, along +X, mixing joint kinds: every third bone
 /// (the root first) on a ball joint, the others on hinges about local Z and Y in turn
 /// (as in make_chain). The root's ball joint can aim the straight chain anywhere.
 inline Skeleton make_mixed_chain(int n, bool limited) {
-  SkeletonDef def;
-  def.bones.resize(n);
-  for (int i = 0; i < n; ++i) {
-    BoneDef& b = def.bones[i];
-    b.parent = i - 1;
-    b.length = 1.0 / n;
-    b.joint = i % 3 == 0 ? JointType::Ball : JointType::Hinge;
-    b.axis = (i % 2 == 0) ? Vec3(0, 0, 1) : Vec3(0, 1, 0);
-    if (limited) {
-      b.min_angle = -kHingeLimit;
-      b.max_angle = kHingeLimit;
-      b.swing_limit = kSwingLimit;
-      b.min_twist = -kTwistLimit;
-      b.max_twist = kTwistLimit;
-    }
-  }
-  return Skeleton(def);
+  return Skeleton(chain_def(n, limited, [](int i) { return i % 3 == 0 ? JointType::Ball : JointType::Hinge; }));
 }
 
 /// The common start pose for cold solves: every joint bent a little about its first

@@ -507,7 +507,18 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
       const bool exhausted = meth == Method::Dls    ? lambda > 1e6 * lambda0
                              : meth == Method::Sdls ? gamma < 1e-6 * step_cap
                                                     : scale < 1e-6;
-      if (exhausted) break;
+      if (exhausted) {
+        // no shorter step of this method lowers the error: stationary for DLS; for the
+        // others it can also be a joint limit (a ball joint's projection into its cone
+        // turns a short step off the descent direction), where damped least squares,
+        // whose growing damping turns its step toward the gradient, takes over
+        if (meth == Method::Dls) break;
+        meth = Method::Dls;
+        compact = m == 3;
+        lambda = lambda0;
+        scale = 1;
+        r.handed_over = true;
+      }
       continue;
     }
     // accept: relax the damping, the cap and the step back toward their defaults
