@@ -421,6 +421,7 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
   // solve stops (StopReason::Stalled). Free joints never trigger it, so a free chain
   // straightening slowly toward an unreachable target runs on to its stationary point.
   double gamma = step_cap, scale = 1;
+  bool line_search = meth == Method::JacobianTranspose || meth == Method::PseudoInverse;
   double prev_cost = cost(ori_scale);
   compact = m == 3 && meth != Method::Sdls;
   double checkpoint = r.residual;
@@ -503,7 +504,7 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
       s.forward_kinematics();
       lambda *= 4;
       gamma *= 0.25;
-      scale *= 0.25;
+      if (line_search) scale *= 0.25;
       const bool exhausted = meth == Method::Dls    ? lambda > 1e6 * lambda0
                              : meth == Method::Sdls ? gamma < 1e-6 * step_cap
                                                     : scale < 1e-6;
@@ -514,6 +515,7 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
         // whose growing damping turns its step toward the gradient, takes over
         if (meth == Method::Dls) break;
         meth = Method::Dls;
+        line_search = false;
         compact = m == 3;
         lambda = lambda0;
         scale = 1;
