@@ -367,16 +367,17 @@ SolveResult Solver::Impl::solve() {
   SolveResult r;
   measure(r);
   if (ne == 0 || r.converged) return r;
+  // the straight chain toward an unreachable target is the closest reachable pose: final
+  if (honours_unreachable_shortcut(set.method) && straighten_if_unreachable(r)) {
+    r.stop = r.converged ? StopReason::Converged : StopReason::Stalled;
+    return r;
+  }
   // the pose given, to return it when the method ends farther away (see below)
   const bool orients = honours_orientation(set.method);
   const double ori_scale = orients ? std::max(largest_reach(), 1e-9) : 0.0;
   const double given_cost = cost(ori_scale);
   for (int j : active_fwd) given_q[j] = A::q(s)[j], given_angle[j] = A::angle(s)[j];
   given_root = A::root_position(s);
-  if (honours_unreachable_shortcut(set.method) && straighten_if_unreachable(r)) {
-    r.stop = r.converged ? StopReason::Converged : StopReason::Stalled;
-    return r;
-  }
   switch (set.method) {
     case Method::Analytic1Dof: analytic_1dof(r); break;
     case Method::Analytic3Dof: analytic_3dof(r); break;
