@@ -18,9 +18,10 @@ namespace pba::ik {
 // long chain with joint limits (333 limited hinges: 18% of reachable targets) the sweeps
 // then bend the chain against its limits for thousands of iterations without getting
 // closer (CCD reached 82% of reachable targets on 333 limited hinges within its cap, in up
-// to 100 ms). When a sweep is undone, or 16 sweeps have not halved the error, damped least
-// squares (monotone, limit-aware) solves from the given pose with the remaining iterations
-// of the cap (SolveResult::handed_over), as FABRIK hands over with limits.
+// to 100 ms). When a sweep is undone or makes no progress, or 16 sweeps have not halved the
+// error, damped least squares (monotone, limit-aware) solves from the given pose with the
+// remaining iterations of the cap (SolveResult::handed_over), as FABRIK hands over with
+// limits.
 void Solver::Impl::ccd(SolveResult& r) {
   Skeleton& s = *sk;
   const int cap = max_iterations();
@@ -122,7 +123,11 @@ void Solver::Impl::ccd(SolveResult& r) {
     prev_cost = c;
     measure(r);
     if (r.converged) break;
-    if (stalled(prev, r.residual)) break;
+    // no progress at all: every joint is at its best alone, yet the target is not reached
+    if (stalled(prev, r.residual)) {
+      handover = true;
+      break;
+    }
     prev = r.residual;
     // stuck: 16 sweeps that have not halved the error
     if (r.iterations % 16 == 0) {
