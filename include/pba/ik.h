@@ -262,7 +262,10 @@ struct SolverSettings {
   double max_step_angle = 0.0;      ///< Jacobian methods' cap on any joint change per iteration (rad), >= 0;
                                     ///< 0 picks 0.5 (pi/4 for sdls, Buss and Kim's gamma_max)
   bool warm_start = true;           ///< start from the current pose; false starts from the rest pose
-  double stall_ratio = 1e-9;        ///< stop early when an iteration improves the error by less than this fraction (unreachable targets)
+  double stall_ratio = 1e-9;        ///< in [0, 1]: stop (StopReason::Stalled) when an accepted step changes the error
+                                    ///< by less than this fraction of it, a stationary pose (the closest reachable
+                                    ///< pose of an unreachable target); slow progress stops a solve only where every
+                                    ///< step is cut by joint limits (docs/ik.md, "Stopping")
   double max_seconds = 0.0;         ///< time budget per solve (s), >= 0; 0: none. The iterative methods stop
                                     ///< once it is spent (checked every iteration from 64 bones on, every 8
                                     ///< below; one check costs about 60 ns). With a budget, results depend

@@ -412,14 +412,16 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
   // the same direction (backtracking: J^T e is minus the gradient of |e|^2 / 2, and J^+ e a
   // descent direction wherever J has full row rank, so a short enough step lowers the cost
   // unless the pose is stationary). When a millionfold shortening still finds no lower
-  // cost, the pose is stationary to rounding and the solve stops there (StopReason::Stalled).
+  // cost, DLS's pose is stationary to rounding and the solve stops there
+  // (StopReason::Stalled); the other methods hand over to DLS (below).
   //
   // The one stop on slow progress is for a pose pressed on joint limits: there each step
   // is mostly projected back into the limits (or a hinge held at its limit is left out)
   // and the error creeps down for thousands of iterations (a limited chain toward a target
-  // outside its cones). When every step of 16 iterations was cut by a limit and the error fell by less than 1% over them, the
-  // solve stops (StopReason::Stalled). Free joints never trigger it, so a free chain
-  // straightening slowly toward an unreachable target runs on to its stationary point.
+  // outside its cones). When every step of 16 iterations was cut by a limit and the error
+  // fell by less than 1% over them, the solve stops (StopReason::Stalled). Free joints never
+  // trigger it, so a free chain straightening slowly toward an unreachable target runs on
+  // to its stationary point.
   double gamma = step_cap, scale = 1;
   bool line_search = meth == Method::JacobianTranspose || meth == Method::PseudoInverse;
   double prev_cost = cost(ori_scale);
