@@ -78,7 +78,7 @@ inline void DrawSkeleton(Renderer& r, const ik::Skeleton& s, const SkeletonStyle
     c.a = st.alpha;
     r.capsule(starts[i], tips[i], rad, c);
     if (!joints) continue;
-    Color j = types[i] == ik::JointType::hinge ? kHingeColor : types[i] == ik::JointType::ball ? kBallColor : kFixedColor;
+    Color j = types[i] == ik::JointType::Hinge ? kHingeColor : types[i] == ik::JointType::Ball ? kBallColor : kFixedColor;
     j.a = st.alpha;
     r.sphere(starts[i], 1.35 * rad, j);
   }
@@ -314,7 +314,7 @@ class IkSample : public Sample {
 /// The solver methods that can run `s` as set up, in the library's order.
 inline std::vector<ik::Method> UsableMethods(const ik::Skeleton& s) {
   std::vector<ik::Method> out;
-  for (ik::Method m : ik::all_methods)
+  for (ik::Method m : ik::kAllMethods)
     if (ik::supports(m, s)) out.push_back(m);
   return out;
 }
@@ -322,15 +322,15 @@ inline std::vector<ik::Method> UsableMethods(const ik::Skeleton& s) {
 /// Long names for the solver menu.
 inline const char* MethodLabel(ik::Method m) {
   switch (m) {
-    case ik::Method::analytic_1dof: return "analytic 1-DOF";
-    case ik::Method::analytic_3dof: return "analytic 3-DOF";
-    case ik::Method::two_bone: return "two-bone (law of cosines)";
-    case ik::Method::ccd: return "CCD";
-    case ik::Method::jacobian_transpose: return "Jacobian transpose";
-    case ik::Method::pseudo_inverse: return "pseudo-inverse";
-    case ik::Method::dls: return "damped least squares";
-    case ik::Method::sdls: return "SVD damped least squares";
-    case ik::Method::fabrik: return "FABRIK";
+    case ik::Method::Analytic1Dof: return "analytic 1-DOF";
+    case ik::Method::Analytic3Dof: return "analytic 3-DOF";
+    case ik::Method::TwoBone: return "two-bone (law of cosines)";
+    case ik::Method::Ccd: return "CCD";
+    case ik::Method::JacobianTranspose: return "Jacobian transpose";
+    case ik::Method::PseudoInverse: return "pseudo-inverse";
+    case ik::Method::Dls: return "damped least squares";
+    case ik::Method::Sdls: return "SVD damped least squares";
+    case ik::Method::Fabrik: return "FABRIK";
   }
   return "?";
 }
@@ -340,7 +340,7 @@ inline const char* MethodLabel(ik::Method m) {
 inline bool MethodCombo(const char* label, ik::Method* m, const ik::Skeleton& s) {
   bool changed = false;
   if (ImGui::BeginCombo(label, MethodLabel(*m))) {
-    for (ik::Method k : ik::all_methods) {
+    for (ik::Method k : ik::kAllMethods) {
       std::string why;
       const bool ok = ik::supports(k, s, &why);
       if (!ok) ImGui::BeginDisabled();
