@@ -133,6 +133,7 @@ class SceneFile final : public Sample {
   }
 
   std::vector<Color> ExpectedColors() const override { return {}; }
+  std::string LoadError() const override { return scene_ ? std::string() : error_; }
 
  private:
   static inline std::string g_file;          // survives a restart (R) and a sample switch
