@@ -165,7 +165,7 @@ void apply_method(pba::World& w, pba::Method m, const std::string& text, const s
       if (soft->at(b).settings().solver == pba::SoftSolver::XPBD)
         throw Usage{flag + ": scene " + scene + " has the soft body '" + body_name(w, *soft, b) +
                     "' solved by XPBD, which uses no integrator, so --method cannot apply to it; run it "
-                    "without --method (each soft body's solver and integrator are set in the file)"};
+                    "without --method (a soft body's solver and integrator are its own settings)"};
   }
   const pba::ParticleSystem& ps = w.particles();
   const bool particles = ps.size() > 0 || ps.emitter_count() > 0;
