@@ -15,6 +15,7 @@
 
 #include "gl.h"
 #include "image_check.h"
+#include "progress.h"
 
 namespace pba::app {
 
@@ -102,6 +103,7 @@ void App::load_sample(int index) {
   diverged_.clear();
   stop_expected_ = false;
   sample_index_ = index;
+  ctx_.option_keys.clear();
   sample_ = Samples()[index].create(ctx_);
   if (restart) camera_ = keep;
   else apply_options_to_settings();
@@ -463,7 +465,9 @@ int App::run_headless(int sample_index, const std::string& out_dir) {
   first_checked_.clear();
   frame_index_ = 0;
   ctx_.settings.paused = false;
-  load_sample(sample_index);
+  // run() created the first sample already (to check its options): not twice
+  if (!fresh_ || sample_index != sample_index_) load_sample(sample_index);
+  fresh_ = false;
 
   // capture set-up: PNGs and the MP4 go to out_dir
   Capture capture;
@@ -480,7 +484,13 @@ int App::run_headless(int sample_index, const std::string& out_dir) {
 
   // fixed number of frames of fixed virtual length
   const auto t0 = std::chrono::steady_clock::now();
-  for (frame_index_ = 0; frame_index_ < options_.frames; ++frame_index_) frame();
+  tools::Progress progress(e.full_name(), "frames", options_.frames,
+                           options_.quiet ? tools::ProgressMode::Quiet : tools::ProgressMode::Auto);
+  for (frame_index_ = 0; frame_index_ < options_.frames; ++frame_index_) {
+    frame();
+    progress.update(frame_index_ + 1);
+  }
+  progress.finish();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   capture_ = nullptr;
   const bool video_ok = capture.close();
@@ -500,6 +510,7 @@ int App::run_headless(int sample_index, const std::string& out_dir) {
   }
   std::fflush(stdout);
   if (!diverged_.empty() && !stop_expected_) failures_.push_back("simulation stopped: " + diverged_);
+  if (!sample_->LoadError().empty()) failures_.push_back(e.full_name() + ": nothing to show (the error is above)");
   if (options_.selftest) {
     for (const std::string& f : failures_) std::fprintf(stderr, "SELFTEST FAIL %s: %s\n", e.full_name().c_str(), f.c_str());
     if (failures_.empty()) std::printf("SELFTEST PASS %s\n", e.full_name().c_str());
@@ -532,6 +543,10 @@ int App::run() {
   // a sample rejects a bad --option in its constructor: a usage error
   try {
     load_sample(index);
+    fresh_ = true;
+    // a key the sample never asked for is a typo or belongs to another sample
+    const std::string unknown = options_.all ? std::string() : UnknownOptions(ctx_, all[index]);
+    if (!unknown.empty()) throw Error(unknown);
   } catch (const Error& e) {
     std::fprintf(stderr, "pba_samples: %s\n", e.what());
     return 2;

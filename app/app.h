@@ -60,6 +60,7 @@ class App {
   std::string diverged_;        // non-empty: the sample stopped with this message
   bool stop_expected_ = false;  // diverged_ is a stop the sample is designed to show
   bool quit_ = false;
+  bool fresh_ = false;          // the current sample was created and has not run a frame
   bool headless_ = false;
   double last_frame_dt_ = 1.0 / 60;
   std::chrono::steady_clock::time_point last_frame_start_;

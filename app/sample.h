@@ -10,6 +10,7 @@
 
 #include <map>
 #include <memory>
+#include <set>
 #include <span>
 #include <string>
 #include <string_view>
@@ -59,9 +60,13 @@ struct SampleContext {
   /// Sample-specific settings from --option KEY=VALUE. A sample reads the keys it knows
   /// in its constructor and throws pba::Error naming a bad value.
   std::map<std::string, std::string> options;
+  /// The keys the current sample asked for through option() (the app clears it before
+  /// creating a sample): a given key it never asked for is an unknown key (UnknownOptions).
+  mutable std::set<std::string> option_keys;
 
   /// The option `key`, or `fallback` when it was not given.
   std::string option(const std::string& key, const std::string& fallback) const {
+    option_keys.insert(key);
     const auto it = options.find(key);
     return it == options.end() ? fallback : it->second;
   }
@@ -106,6 +111,9 @@ class Sample {
   /// The app reports it like a divergence (printed to stderr, app paused) but keeps drawing
   /// the sample, and the self-test does not fail on it: it is an expected outcome.
   virtual std::string ExpectedStop() const { return {}; }
+  /// Why the sample cannot show its subject (e.g. its scene file did not load), already
+  /// reported by the sample; empty when it can. A headless run then exits with code 1.
+  virtual std::string LoadError() const { return {}; }
   /// Colours that must be visible in a rendered frame (the self-test looks for them).
   virtual std::vector<Color> ExpectedColors() const { return {}; }
   /// Appends to `out` world points (m) where the current state has simulated matter
@@ -147,6 +155,9 @@ std::span<const SampleEntry> Samples();
 /// (case-insensitive, exact), else a unique case-insensitive substring of the full name.
 /// Returns -1 and sets `error` (listing the valid names) when none or several match.
 int FindSample(std::string_view query, std::string* error);
+/// After sample `e` was created from `ctx`: a message naming every --option key it did not
+/// ask for and listing the keys it reads, or empty when every key was read.
+std::string UnknownOptions(const SampleContext& ctx, const SampleEntry& e);
 /// A file-system friendly name, e.g. "dynamics_integrators".
 std::string SampleSlug(const SampleEntry& e);
 

@@ -140,6 +140,7 @@ class SceneFile final : public Sample {
   }
 
   std::vector<Color> ExpectedColors() const override { return {}; }
+  std::string LoadError() const override { return scene_ ? std::string() : error_; }
 
   bool OpenFile(const std::string& path) override {
     // a scene file dropped on the window opens here; anything else is not ours
