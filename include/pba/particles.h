@@ -285,8 +285,11 @@ class HotColumns {
 /// give bit-identical results for semi-implicit Euler. Implicit Euler is solved particle
 /// by particle (the forces here do not couple particles, so the Jacobian is block
 /// diagonal and each 3x3 Newton solve is exact); its dense-size limit therefore never
-/// applies here. Position Verlet keeps velocity in x - x_prev, so after any collision
-/// or spawn its history is restarted from the corrected x and v (second order).
+/// applies here. Position Verlet keeps velocity in x - x_prev, so it runs on a double
+/// copy of the positions and velocities that persists between steps (a drift a h^2 below
+/// half a float step of x is kept, not rounded away; the columns get the rounded state);
+/// after any collision, spawn, removal or write its history is restarted from the
+/// columns' x and v (second order).
 ///
 /// Steps never allocate once the arrays have grown to the live count (reserve with
 /// `capacity`); the one exception is implicit Euler's fallback at a discontinuous force
@@ -436,6 +439,7 @@ class ParticleSystem {
                   float threshold);
   void step_generic(double t, double dt, std::span<const Collider> colliders,
                     std::span<const Forcer> forcers, float threshold);
+  void step_verlet(double t, double dt);
   void recycle();
   void report_non_finite(double t) const;
   std::size_t emitter_index(EmitterId id, std::string_view where) const;
@@ -453,6 +457,7 @@ class ParticleSystem {
 
   Integrator<Vec3f> integ_;
   Integrator<Vec3f> integ_one_;  // implicit Euler, one particle at a time
+  Integrator<Vec3> verlet_{Method::PositionVerlet};  // position Verlet on the double state
   Forces forces_;
   CollisionSettings collision_;
   // the particle columns: hot floats (x, y, z, vx, vy, vz, inverse mass, radius) ...
@@ -472,6 +477,10 @@ class ParticleSystem {
   std::vector<std::uint32_t> emitter_slot_;
   // scratch for the generic integrators (AoS), sized to the live count
   std::vector<Vec3f> gx_, gv_;
+  // position verlet's double positions and velocities, valid while its history is, and
+  // the float accelerations of its force callback
+  std::vector<Vec3> verlet_x_, verlet_v_;
+  std::vector<Vec3f> verlet_a_;
   std::size_t mortal_ = 0;  // particles with a finite lifetime
   double next_death_ = kForever;  // no particle dies before this time (s; a lower bound)
   // uniform inverse mass and radius: the values of the first particle of a non-empty
