@@ -155,12 +155,33 @@ using EmitterId = Handle<EmitterTag>;
 /// Lifetime that means "never dies".
 inline constexpr double kForever = std::numeric_limits<double>::infinity();
 
+// ---------------------------------------------------------------------------------------
+// memory limits
+
+/// Bytes one particle may take in a ParticleSystem, the figure every memory check counts:
+/// an upper bound over every method in steady state (the columns, 88 B: eight hot floats,
+/// birth and death times, two colours, owner and source, the generic path's gather
+/// arrays; a handle, 12 B; the integrator's scratch, at most 132 B for position Verlet's
+/// double state; 232 B in all).
+inline constexpr std::size_t kParticleBytes = 256;
+/// The default memory budget of one ParticleSystem (ParticleSystemDef::memory_budget):
+/// 4 GiB, room for 2^24 (16.8 million) particles of kParticleBytes.
+inline constexpr std::size_t kParticleMemoryBudget = std::size_t{4} << 30;
+
+/// Throws Error "<where>: <count> particles would take <memory> (<kParticleBytes> B each),
+/// over the particle system's memory budget of <budget> (ParticleSystemDef.memory_budget)"
+/// followed by `hint`, when count * kParticleBytes > budget. `count` is a double so that
+/// absurd counts (an emitter rate of 1e300) are reported, not wrapped.
+void require_particle_memory(double count, std::size_t budget, std::string_view where, std::string_view hint = {});
+
 /// Definition of one particle. Start from the defaults and change what you need.
+/// Positions, velocities and radii are stored as float and the mass as its float inverse,
+/// so each must also fit a float (|x| <= 3.4e38, mass in [2.9e-39, 8.5e37] kg).
 struct ParticleDef {
-  Vec3 position{0, 0, 0};  ///< initial position (m), finite
-  Vec3 velocity{0, 0, 0};  ///< initial velocity (m/s), finite
-  double mass = 1.0;       ///< mass (kg), finite and > 0
-  double radius = 0.05;    ///< radius (m), finite and > 0; collisions keep the sphere outside surfaces
+  Vec3 position{0, 0, 0};  ///< initial position (m), finite as a float
+  Vec3 velocity{0, 0, 0};  ///< initial velocity (m/s), finite as a float
+  double mass = 1.0;       ///< mass (kg), finite and > 0, 1 / mass a normal float
+  double radius = 0.05;    ///< radius (m), finite and > 0 (as a float too); collisions keep the sphere outside surfaces
   double lifetime = kForever;  ///< seconds until it dies (> 0; kForever for immortal)
   Color color = colors::white;  ///< colour at birth
   Color end_color = colors::white;  ///< colour at the end of its life (mortal particles)
@@ -188,16 +209,31 @@ struct EmitterDef {
   bool enabled = true;          ///< emits only when enabled
 
   /// Throws Error naming `where` and the bad field, e.g. "emitter.rate: must be finite
-  /// and >= 0, got -5".
+  /// and >= 0, got -5". The position, speed * (1 + speed_jitter), mass and radius must
+  /// fit the particles' float state (see ParticleDef).
   void validate(std::string_view where) const;
+  /// The most particles this emitter keeps alive at once: rate * lifetime * (1 +
+  /// lifetime_jitter), rounded up, or max_alive when that is set and smaller. A
+  /// ParticleSystem refuses an emitter (Error naming `rate` or `max_alive` and the
+  /// memory) whose count does not fit its memory budget, at add_emitter and at each step.
+  /// Emission costs time in proportion to the particles emitted: those due while the
+  /// emitter is at max_alive are skipped by arithmetic, without drawing from its stream.
+  double max_live() const;
 };
 
 /// Settings of a ParticleSystem.
 struct ParticleSystemDef {
-  std::size_t capacity = 1024;  ///< particles reserved up front; growth past it allocates once
+  /// Particles reserved up front; growth past it allocates once. At most
+  /// memory_budget / kParticleBytes (2^24 by default): a larger value is refused before
+  /// anything is allocated (Error naming the field and the memory it would take).
+  std::size_t capacity = 1024;
   Method method = Method::SemiImplicitEuler;  ///< integrator (any of pba::Method)
   Forces forces{};                ///< gravity, drag and wind
   CollisionSettings collision{};  ///< restitution threshold
+  /// Bytes the system may take (>= kParticleBytes), counted as kParticleBytes per
+  /// particle: the reserved capacity, an emitter's max_live() and growth are refused
+  /// beyond it (Error naming the field and the memory). Raise it on a larger machine.
+  std::size_t memory_budget = kParticleMemoryBudget;
 };
 
 /// Wall-clock seconds per phase of the last ParticleSystem::step (b2Profile style).
@@ -315,6 +351,9 @@ class ParticleSystem {
 
   // ---- particles ----
 
+  /// The most particles the memory budget allows: memory_budget / kParticleBytes. A
+  /// create(), spawn() or emission past it throws Error naming the budget.
+  std::size_t max_particles() const { return max_particles_; }
   /// Adds a tracked particle and returns its handle (validates `def`; the Error names
   /// `where` and the field). Tracked particles keep their handle while they live.
   ParticleId create(const ParticleDef& def, std::string_view where = "ParticleDef");
@@ -443,6 +482,7 @@ class ParticleSystem {
   void recycle();
   void report_non_finite(double t) const;
   std::size_t emitter_index(EmitterId id, std::string_view where) const;
+  void require_emitter_memory(const EmitterDef& def, std::string_view where) const;
 
   // the hot columns, in this order
   enum : int { kX, kY, kZ, kVX, kVY, kVZ, kInvMass, kRadius };
@@ -492,6 +532,8 @@ class ParticleSystem {
   double time_ = 0;         // simulated time of the state
   std::span<const Forcer> forcers_now_;  // the forcers of the step in progress
   bool history_dirty_ = true;
+  std::size_t memory_budget_ = kParticleMemoryBudget;  // bytes (ParticleSystemDef::memory_budget)
+  std::size_t max_particles_ = 0;                      // memory_budget_ / kParticleBytes
   long long steps_ = 0;
   long long newton_fallbacks_ = 0;
   std::size_t contacts_ = 0;

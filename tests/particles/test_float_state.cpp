@@ -84,4 +84,62 @@ TEST(VerletFloatState, WrittenVelocityIsHonoured) {
   EXPECT_NEAR(ps.velocity(0).y, 2.0, 0x1p-24 * 2 + 100 * 4 * 0x1p-53 * 5.2 / dt);
 }
 
+// ---------------------------------------------------------------------------------------
+// values that pass a double check but do not fit the float state
+
+TEST(FloatState, ParticleValuesThatOverflowAFloatAreRefusedByName) {
+  ParticleSystem ps;
+  auto message = [&](const pba::ParticleDef& d) { return error_of([&] { ps.create(d, "balls[3]"); }); };
+  // 1e39 is a finite double and an infinite float: the position would be inf at once
+  EXPECT_EQ(message({.position = {0, 1e39, 0}}),
+            "balls[3].position: must fit a float (|component| <= 3.4028234663852886e+38), got (0, 1e+39, 0)");
+  EXPECT_EQ(message({.velocity = {-4e38, 0, 0}}),
+            "balls[3].velocity: must fit a float (|component| <= 3.4028234663852886e+38), got (-4e+38, 0, 0)");
+  // the mass is stored as its float inverse: 1 / 1e-39 overflows (NaN at the first tick,
+  // inf * 0 in the drag), 1 / 1e38 is below the smallest normal float
+  const std::string tiny = message({.mass = 1e-39});
+  EXPECT_EQ(tiny.rfind("balls[3].mass: must be in [2.9387", 0), 0u) << tiny;
+  EXPECT_NE(tiny.find("8.507059173023462e+37] (its inverse is stored as a normal float), got 1e-39"), std::string::npos)
+      << tiny;
+  EXPECT_NE(message({.mass = 1e38}).find("balls[3].mass: must be in ["), std::string::npos);
+  EXPECT_EQ(message({.radius = 1e39}),
+            "balls[3].radius: must fit a float (|v| <= 3.4028234663852886e+38), got 1e+39");
+  EXPECT_EQ(ps.size(), 0u);
+  // the limits themselves are accepted, and step without turning non-finite
+  ps.create({.position = {0, 3e38, 0}, .mass = 8e37});
+  ps.create({.mass = 3e-39});
+  ps.step(0, 1e-3, {}, {});
+  EXPECT_TRUE(std::isfinite(ps.position(0).y));
+  EXPECT_TRUE(std::isfinite(ps.velocity(1).y));
+  // writes are checked the same way
+  EXPECT_NE(error_of([&] { ps.set_position(0, {1e39, 0, 0}); }).find("ParticleSystem::set_position: must fit a float"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { ps.set_velocity(0, {0, 0, -1e39}); }).find("ParticleSystem::set_velocity: must fit a float"),
+            std::string::npos);
+}
+
+TEST(FloatState, EmitterAndForceValuesThatOverflowAFloatAreRefusedByName) {
+  ParticleSystem ps;
+  auto emitter = [&](const pba::EmitterDef& d) { return error_of([&] { ps.add_emitter(d, "sparks"); }); };
+  EXPECT_NE(emitter({.pose = {.position = {2e39, 0, 0}}}).find("sparks.position: must fit a float"), std::string::npos);
+  EXPECT_NE(emitter({.mass = 1e-39}).find("sparks.mass: must be in ["), std::string::npos);
+  EXPECT_NE(emitter({.radius = 5e38}).find("sparks.radius: must fit a float"), std::string::npos);
+  // a speed that fits, but not once jittered up
+  EXPECT_NE(emitter({.speed = 3e38, .speed_jitter = 0.5}).find("sparks.speed: the fastest launch"), std::string::npos);
+  EXPECT_EQ(ps.emitter_count(), 0u);
+  // forces are read as floats by the kernels
+  auto system = [](const pba::Forces& f) { return error_of([&] { ParticleSystem s({.forces = f}); }); };
+  EXPECT_NE(system({.gravity = {0, -1e39, 0}}).find("ParticleSystemDef.forces.gravity: must fit a float"),
+            std::string::npos);
+  EXPECT_NE(system({.quadratic_drag = 1e39}).find("ParticleSystemDef.forces.quadratic_drag: must fit a float"),
+            std::string::npos);
+  EXPECT_NE(system({.wind = {.velocity = {3e38, 0, 0}, .gust = 1e38}}).find("wind.velocity + wind.gust: must fit"),
+            std::string::npos);
+  // changed between steps: refused at the step
+  ps.create({});
+  ps.forces().gravity = {0, 1e40, 0};
+  EXPECT_NE(error_of([&] { ps.step(0, 0.01, {}, {}); }).find("ParticleSystem.forces.gravity: must fit a float"),
+            std::string::npos);
+}
+
 }  // namespace
