@@ -174,6 +174,13 @@ inline constexpr std::size_t kParticleMemoryBudget = std::size_t{4} << 30;
 /// absurd counts (an emitter rate of 1e300) are reported, not wrapped.
 void require_particle_memory(double count, std::size_t budget, std::string_view where, std::string_view hint = {});
 
+struct EmitterDef;
+/// Throws Error, as require_particle_memory does, when the particles `def` keeps alive
+/// (EmitterDef::max_live()) do not fit `budget`: named `max_alive_field` when the cap
+/// sets the count, `rate_field` otherwise (with the rate and lifetime in the message).
+void require_emitter_memory(const EmitterDef& def, std::size_t budget, std::string_view rate_field,
+                            std::string_view max_alive_field);
+
 /// Definition of one particle. Start from the defaults and change what you need.
 /// Positions, velocities and radii are stored as float and the mass as its float inverse,
 /// so each must also fit a float (|x| <= 3.4e38, mass in [2.9e-39, 8.5e37] kg).
@@ -354,6 +361,8 @@ class ParticleSystem {
   /// The most particles the memory budget allows: memory_budget / kParticleBytes. A
   /// create(), spawn() or emission past it throws Error naming the budget.
   std::size_t max_particles() const { return max_particles_; }
+  /// The memory budget (bytes, ParticleSystemDef::memory_budget).
+  std::size_t memory_budget() const { return memory_budget_; }
   /// Adds a tracked particle and returns its handle (validates `def`; the Error names
   /// `where` and the field). Tracked particles keep their handle while they live.
   ParticleId create(const ParticleDef& def, std::string_view where = "ParticleDef");
@@ -482,7 +491,6 @@ class ParticleSystem {
   void recycle();
   void report_non_finite(double t) const;
   std::size_t emitter_index(EmitterId id, std::string_view where) const;
-  void require_emitter_memory(const EmitterDef& def, std::string_view where) const;
 
   // the hot columns, in this order
   enum : int { kX, kY, kZ, kVX, kVY, kVZ, kInvMass, kRadius };

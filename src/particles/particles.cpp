@@ -520,13 +520,14 @@ std::size_t ParticleSystem::emitter_index(EmitterId id, std::string_view where) 
   return emitter_slot_[id.index];
 }
 
-// an emitter's live particles must fit the budget: name the field that sets the count
-void ParticleSystem::require_emitter_memory(const EmitterDef& def, std::string_view where) const {
+void require_emitter_memory(const EmitterDef& def, std::size_t budget, std::string_view rate_field,
+                            std::string_view max_alive_field) {
+  // name the field that sets the count
   const double live = def.max_live();
-  if (live * static_cast<double>(kParticleBytes) <= static_cast<double>(memory_budget_)) return;
+  if (live * static_cast<double>(kParticleBytes) <= static_cast<double>(budget)) return;
   if (def.max_alive > 0 && live == static_cast<double>(def.max_alive))
-    require_particle_memory(live, memory_budget_, field_path(where, "max_alive"), "; lower max_alive");
-  require_particle_memory(live, memory_budget_, field_path(where, "rate"),
+    require_particle_memory(live, budget, max_alive_field, "; lower max_alive");
+  require_particle_memory(live, budget, rate_field,
                           "; it emits " + format_value(def.rate) + " particles/s that live up to " +
                               format_value(def.lifetime * (1 + def.lifetime_jitter)) +
                               " s: lower the rate or the lifetime, or set max_alive");
@@ -534,7 +535,7 @@ void ParticleSystem::require_emitter_memory(const EmitterDef& def, std::string_v
 
 EmitterId ParticleSystem::add_emitter(const EmitterDef& def, std::string_view where) {
   def.validate(where);
-  require_emitter_memory(def, where);
+  require_emitter_memory(def, memory_budget_, field_path(where, "rate"), field_path(where, "max_alive"));
   const EmitterId id = emitter_ids_.create();
   if (emitter_slot_.size() <= id.index) emitter_slot_.resize(id.index + 1, kNone);
   emitter_slot_[id.index] = static_cast<std::uint32_t>(emitters_.size());
@@ -583,7 +584,7 @@ long long ParticleSystem::emitted(EmitterId id) const {
 void ParticleSystem::emit(double t, double dt) {
   for (EmitterState& e : emitters_) {
     e.def.validate("emitter");
-    require_emitter_memory(e.def, "emitter");
+    require_emitter_memory(e.def, memory_budget_, "emitter.rate", "emitter.max_alive");
     // a new rate or a paused emitter restarts the schedule
     if (e.def.rate != e.rate || !e.def.enabled) {
       e.rate = e.def.rate;

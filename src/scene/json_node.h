@@ -8,6 +8,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <string>
+#include <string_view>
 #include <utility>
 
 #include <nlohmann/json.hpp>
@@ -116,6 +117,30 @@ class Node {
     if (glm::length(v) == 0) at(key).fail("must be a non-zero vector, got (0, 0, 0)");
     return v;
   }
+  // values stored as float: finite as a float too (Error names the path)
+  Vec3 float_vec(const char* key, const Vec3& def) const {
+    const Vec3 v = vec(key, def);
+    if (has(key)) require_float(v, at(key).where());
+    return v;
+  }
+  double float_positive(const char* key, double def) const {
+    const double v = positive(key, def);
+    if (has(key)) require_float(v, at(key).where());
+    return v;
+  }
+  double float_non_negative(const char* key, double def) const {
+    const double v = non_negative(key, def);
+    if (has(key)) require_float(v, at(key).where());
+    return v;
+  }
+  // a mass stored as its float inverse
+  double mass(const char* key, double def) const {
+    const double v = positive(key, def);
+    if (has(key)) require_float_inverse(v, at(key).where());
+    return v;
+  }
+  // the path of a field, given or not (for limits that several fields decide)
+  std::string where(const char* key) const { return where() + "/" + pointer_token(key); }
   bool flag(const char* key, bool def) const { return has(key) ? at(key).boolean() : def; }
   std::string str(const char* key, const std::string& def) const { return has(key) ? at(key).string() : def; }
   // one of a fixed set of names
@@ -136,6 +161,20 @@ class Node {
     return choice(key, options, options.begin()->second);
   }
 
+  /// A key as a JSON pointer token (RFC 6901): ~ becomes ~0, / becomes ~1.
+  static std::string pointer_token(std::string_view key) {
+    std::string k;
+    for (char c : key) {
+      if (c == '~')
+        k += "~0";
+      else if (c == '/')
+        k += "~1";
+      else
+        k += c;
+    }
+    return k;
+  }
+
   static std::string type_name(const json& j) {
     if (j.is_null()) return "null";
     if (j.is_boolean()) return j.get<bool>() ? "true" : "false";
@@ -146,19 +185,7 @@ class Node {
   }
 
  private:
-  // JSON pointer escaping: ~ -> ~0, / -> ~1
-  std::string child_path(const std::string& key) const {
-    std::string k;
-    for (char c : key) {
-      if (c == '~')
-        k += "~0";
-      else if (c == '/')
-        k += "~1";
-      else
-        k += c;
-    }
-    return path_ + "/" + k;
-  }
+  std::string child_path(const std::string& key) const { return path_ + "/" + pointer_token(key); }
 
   const json& j_;
   std::string path_;

@@ -10,9 +10,9 @@ void read_particle(const Node& n, World& w) {
   n.allow_only({"name", "position", "rotation", "rotation_deg", "velocity", "mass", "radius", "lifetime", "color",
                 "end_color", "kinematic"});
   ParticleDef d;
-  d.velocity = n.vec("velocity", d.velocity);
-  d.mass = n.positive("mass", d.mass);
-  d.radius = n.positive("radius", d.radius);
+  d.velocity = n.float_vec("velocity", d.velocity);
+  d.mass = n.mass("mass", d.mass);
+  d.radius = n.float_positive("radius", d.radius);
   d.lifetime = n.has("lifetime") ? n.positive("lifetime", 1) : kForever;
   d.color = read_color(n, "color", d.color);
   d.end_color = read_color(n, "end_color", d.color);
@@ -29,18 +29,20 @@ void read_emitter(const Node& n, World& w) {
   d.direction = n.nonzero_vec("direction", d.direction);
   if (n.has("spread") && n.has("spread_deg")) n.at("spread").fail("give either spread or spread_deg");
   d.spread = n.has("spread_deg") ? n.in_range("spread_deg", 0, 180, 0) * kPi / 180 : n.in_range("spread", 0, kPi, d.spread);
-  d.speed = n.non_negative("speed", d.speed);
+  d.speed = n.float_non_negative("speed", d.speed);
   d.speed_jitter = n.in_range("speed_jitter", 0, 1, d.speed_jitter);
   d.rate = n.non_negative("rate", d.rate);
   d.lifetime = n.positive("lifetime", d.lifetime);
   d.lifetime_jitter = n.in_range("lifetime_jitter", 0, 0.999, d.lifetime_jitter);
-  d.mass = n.positive("mass", d.mass);
-  d.radius = n.positive("radius", d.radius);
+  d.mass = n.mass("mass", d.mass);
+  d.radius = n.float_positive("radius", d.radius);
   d.start_color = read_color(n, "start_color", d.start_color);
   d.end_color = read_color(n, "end_color", d.end_color);
   if (n.has("max_alive")) d.max_alive = static_cast<std::size_t>(n.at("max_alive").integer(0, 1LL << 28));
   if (n.has("seed")) d.seed = static_cast<std::uint64_t>(n.at("seed").integer(0, 1LL << 62));
   d.enabled = n.flag("enabled", d.enabled);
+  // its live particles must fit the particle system's memory budget
+  require_emitter_memory(d, w.particles().memory_budget(), n.where("rate"), n.where("max_alive"));
   const EntityId e = make_entity(n, w);
   w.add_emitter(e, d);
   read_common(n, w, e);

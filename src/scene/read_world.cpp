@@ -26,7 +26,7 @@ Quat read_rotation(const Node& n) {
   return Quat(1, 0, 0, 0);
 }
 
-Pose read_pose(const Node& n) { return Pose{n.vec("position", Vec3(0)), read_rotation(n)}; }
+Pose read_pose(const Node& n) { return Pose{n.float_vec("position", Vec3(0)), read_rotation(n)}; }
 
 Color read_color(const Node& n, const char* key, Color def) {
   if (!n.has(key)) return def;
@@ -119,20 +119,25 @@ void read_settings(const Node& n, WorldDef& def) {
   }
   if (n.has("max_ticks_per_frame"))
     def.stepper.max_ticks_per_frame = static_cast<int>(n.at("max_ticks_per_frame").integer(1, 100000));
-  if (n.has("capacity")) def.particles.capacity = static_cast<std::size_t>(n.at("capacity").integer(0, 1LL << 28));
+  if (n.has("capacity")) {
+    // the reserve must fit the particle system's memory budget
+    def.particles.capacity = static_cast<std::size_t>(n.at("capacity").integer(0, 1LL << 28));
+    require_particle_memory(static_cast<double>(def.particles.capacity), def.particles.memory_budget,
+                            n.at("capacity").where());
+  }
   Forces& f = def.particles.forces;
-  f.gravity = n.vec("gravity", f.gravity);
+  f.gravity = n.float_vec("gravity", f.gravity);
   if (n.has("drag")) {
     const Node d = n.at("drag");
     d.allow_only({"linear", "quadratic"});
-    f.linear_drag = d.non_negative("linear", f.linear_drag);
-    f.quadratic_drag = d.non_negative("quadratic", f.quadratic_drag);
+    f.linear_drag = d.float_non_negative("linear", f.linear_drag);
+    f.quadratic_drag = d.float_non_negative("quadratic", f.quadratic_drag);
   }
   if (n.has("wind")) {
     const Node d = n.at("wind");
     d.allow_only({"velocity", "gust", "gust_period", "seed"});
-    f.wind.velocity = d.vec("velocity", f.wind.velocity);
-    f.wind.gust = d.non_negative("gust", f.wind.gust);
+    f.wind.velocity = d.float_vec("velocity", f.wind.velocity);
+    f.wind.gust = d.float_non_negative("gust", f.wind.gust);
     f.wind.gust_period = d.positive("gust_period", f.wind.gust_period);
     if (d.has("seed")) f.wind.seed = static_cast<std::uint32_t>(d.at("seed").integer(0, 0xffffffffLL));
   }

@@ -6,6 +6,9 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
 
 #include "json_node.h"
 
@@ -46,6 +49,64 @@ void line_col(std::string_view text, std::size_t byte, std::size_t& line, std::s
   }
 }
 
+// A key that occurs twice in one object of a syntactically valid JSON text: nlohmann
+// keeps the last silently, so the text is scanned for them (strings, nesting, keys with
+// their byte offsets and the JSON pointer of their object).
+struct DuplicateKey {
+  bool found = false;
+  std::string key, object;  // the key and the JSON pointer of the object holding it
+  std::size_t first = 0, second = 0;  // byte offsets of the two occurrences
+};
+
+DuplicateKey find_duplicate_key(std::string_view text) {
+  struct Frame {
+    bool object = false;
+    bool expect_key = false;
+    std::size_t index = 0;   // arrays: the current item
+    std::string path, key;   // the container's pointer; objects: the current member's key
+    std::vector<std::pair<std::string, std::size_t>> keys;  // objects: keys seen, with offsets
+  };
+  std::vector<Frame> stack;
+  // the pointer of the value that starts next, in the innermost container
+  auto child = [&]() -> std::string {
+    if (stack.empty()) return "";
+    const Frame& f = stack.back();
+    return f.path + "/" + (f.object ? Node::pointer_token(f.key) : std::to_string(f.index));
+  };
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '"') {
+      // a string: its raw content, decoded by the JSON parser only if it has escapes
+      const std::size_t start = i;
+      for (++i; i < text.size() && text[i] != '"'; ++i)
+        if (text[i] == '\\') ++i;
+      std::string s(text.substr(start + 1, i - start - 1));
+      if (stack.empty() || !stack.back().object || !stack.back().expect_key) continue;
+      if (s.find('\\') != std::string::npos) s = json::parse(text.substr(start, i - start + 1)).get<std::string>();
+      Frame& f = stack.back();
+      for (const auto& [k, at] : f.keys)
+        if (k == s) return {true, s, f.path.empty() ? "/" : f.path, at, start};
+      f.keys.emplace_back(s, start);
+      f.key = s;
+      f.expect_key = false;
+    } else if (c == '{' || c == '[') {
+      Frame f;
+      f.object = c == '{';
+      f.expect_key = f.object;
+      f.path = child();
+      stack.push_back(std::move(f));
+    } else if (c == '}' || c == ']') {
+      if (!stack.empty()) stack.pop_back();
+    } else if (c == ',' && !stack.empty()) {
+      if (stack.back().object)
+        stack.back().expect_key = true;
+      else
+        ++stack.back().index;
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 Scene parse_scene(std::string_view text, std::string_view source) {
@@ -76,6 +137,15 @@ Scene parse_scene(std::string_view text, std::string_view source) {
     }
     throw Error(ctx.source + ":" + std::to_string(line) + ":" + std::to_string(col) + ": JSON error: " + what +
                 " (numbers must be finite doubles)");
+  }
+  // a key given twice would be read as its last value: refuse it, naming both
+  if (const DuplicateKey d = find_duplicate_key(text); d.found) {
+    std::size_t line = 0, col = 0, line0 = 0, col0 = 0;
+    line_col(text, d.second, line, col);
+    line_col(text, d.first, line0, col0);
+    throw Error(ctx.source + ":" + std::to_string(line) + ":" + std::to_string(col) + ": duplicate key \"" + d.key +
+                "\" in " + d.object + " (first given at line " + std::to_string(line0) + ", column " +
+                std::to_string(col0) + ")");
   }
   const Node root(doc, "", ctx);
   root.require_object();
@@ -124,11 +194,16 @@ Scene parse_scene(std::string_view text, std::string_view source) {
 }
 
 Scene load_scene(const std::filesystem::path& file) {
-  // read the whole file; a missing file is an Error naming it
+  // a directory opens (and reads as empty) on some systems: say what it is
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    throw Error(file.string() + ": is a directory, not a scene file (give the path of a .json file)");
+  // read the whole file; a missing or unreadable file is an Error naming it
   std::ifstream in(file, std::ios::binary);
   if (!in) throw Error(file.string() + ": cannot open scene file");
   std::ostringstream ss;
   ss << in.rdbuf();
+  if (in.bad()) throw Error(file.string() + ": cannot read scene file");
   return parse_scene(ss.str(), file.string());
 }
 
