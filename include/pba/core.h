@@ -87,6 +87,17 @@ void require_in_range(double v, double lo, double hi, std::string_view where);
 /// Throws Error unless lo <= v <= hi for an integer count.
 void require_count(long long v, long long lo, long long hi, std::string_view where);
 
+/// Throws Error "<where>: must fit a float (|v| <= 3.4028235e+38), got <v>" unless v is
+/// finite as a float: for values that pass a double check but are stored as float.
+void require_float(double v, std::string_view where);
+/// Throws Error naming `where` unless every component of v is finite as a float.
+void require_float(const Vec3& v, std::string_view where);
+/// Throws Error unless v > 0 and 1 / v is a normal float (v in about [2.9e-39, 8.5e37]):
+/// for a mass stored as its float inverse.
+void require_float_inverse(double v, std::string_view where);
+/// Formats a byte count for error messages: "512 B", "6.4 GiB", "466 TiB" (3 significant digits).
+std::string format_bytes(double bytes);
+
 /// True when every component of v is finite.
 template <class V>
 bool is_finite(const V& v) {

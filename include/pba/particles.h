@@ -155,12 +155,40 @@ using EmitterId = Handle<EmitterTag>;
 /// Lifetime that means "never dies".
 inline constexpr double kForever = std::numeric_limits<double>::infinity();
 
+// ---------------------------------------------------------------------------------------
+// memory limits
+
+/// Bytes one particle may take in a ParticleSystem, the figure every memory check counts:
+/// an upper bound over every method in steady state (the columns, 88 B: eight hot floats,
+/// birth and death times, two colours, owner and source, the generic path's gather
+/// arrays; a handle, 12 B; the integrator's scratch, at most 132 B for position Verlet's
+/// double state; 232 B in all).
+inline constexpr std::size_t kParticleBytes = 256;
+/// The default memory budget of one ParticleSystem (ParticleSystemDef::memory_budget):
+/// 4 GiB, room for 2^24 (16.8 million) particles of kParticleBytes.
+inline constexpr std::size_t kParticleMemoryBudget = std::size_t{4} << 30;
+
+/// Throws Error "<where>: <count> particles would take <memory> (<kParticleBytes> B each),
+/// over the particle system's memory budget of <budget> (ParticleSystemDef.memory_budget)"
+/// followed by `hint`, when count * kParticleBytes > budget. `count` is a double so that
+/// absurd counts (an emitter rate of 1e300) are reported, not wrapped.
+void require_particle_memory(double count, std::size_t budget, std::string_view where, std::string_view hint = {});
+
+struct EmitterDef;
+/// Throws Error, as require_particle_memory does, when the particles `def` keeps alive
+/// (EmitterDef::max_live()) do not fit `budget`: named `max_alive_field` when the cap
+/// sets the count, `rate_field` otherwise (with the rate and lifetime in the message).
+void require_emitter_memory(const EmitterDef& def, std::size_t budget, std::string_view rate_field,
+                            std::string_view max_alive_field);
+
 /// Definition of one particle. Start from the defaults and change what you need.
+/// Positions, velocities and radii are stored as float and the mass as its float inverse,
+/// so each must also fit a float (|x| <= 3.4e38, mass in [2.9e-39, 8.5e37] kg).
 struct ParticleDef {
-  Vec3 position{0, 0, 0};  ///< initial position (m), finite
-  Vec3 velocity{0, 0, 0};  ///< initial velocity (m/s), finite
-  double mass = 1.0;       ///< mass (kg), finite and > 0
-  double radius = 0.05;    ///< radius (m), finite and > 0; collisions keep the sphere outside surfaces
+  Vec3 position{0, 0, 0};  ///< initial position (m), finite as a float
+  Vec3 velocity{0, 0, 0};  ///< initial velocity (m/s), finite as a float
+  double mass = 1.0;       ///< mass (kg), finite and > 0, 1 / mass a normal float
+  double radius = 0.05;    ///< radius (m), finite and > 0 (as a float too); collisions keep the sphere outside surfaces
   double lifetime = kForever;  ///< seconds until it dies (> 0; kForever for immortal)
   Color color = colors::white;  ///< colour at birth
   Color end_color = colors::white;  ///< colour at the end of its life (mortal particles)
@@ -188,16 +216,31 @@ struct EmitterDef {
   bool enabled = true;          ///< emits only when enabled
 
   /// Throws Error naming `where` and the bad field, e.g. "emitter.rate: must be finite
-  /// and >= 0, got -5".
+  /// and >= 0, got -5". The position, speed * (1 + speed_jitter), mass and radius must
+  /// fit the particles' float state (see ParticleDef).
   void validate(std::string_view where) const;
+  /// The most particles this emitter keeps alive at once: rate * lifetime * (1 +
+  /// lifetime_jitter), rounded up, or max_alive when that is set and smaller. A
+  /// ParticleSystem refuses an emitter (Error naming `rate` or `max_alive` and the
+  /// memory) whose count does not fit its memory budget, at add_emitter and at each step.
+  /// Emission costs time in proportion to the particles emitted: those due while the
+  /// emitter is at max_alive are skipped by arithmetic, without drawing from its stream.
+  double max_live() const;
 };
 
 /// Settings of a ParticleSystem.
 struct ParticleSystemDef {
-  std::size_t capacity = 1024;  ///< particles reserved up front; growth past it allocates once
+  /// Particles reserved up front; growth past it allocates once. At most
+  /// memory_budget / kParticleBytes (2^24 by default): a larger value is refused before
+  /// anything is allocated (Error naming the field and the memory it would take).
+  std::size_t capacity = 1024;
   Method method = Method::SemiImplicitEuler;  ///< integrator (any of pba::Method)
   Forces forces{};                ///< gravity, drag and wind
   CollisionSettings collision{};  ///< restitution threshold
+  /// Bytes the system may take (>= kParticleBytes), counted as kParticleBytes per
+  /// particle: the reserved capacity, an emitter's max_live() and growth are refused
+  /// beyond it (Error naming the field and the memory). Raise it on a larger machine.
+  std::size_t memory_budget = kParticleMemoryBudget;
 };
 
 /// Wall-clock seconds per phase of the last ParticleSystem::step (b2Profile style).
@@ -285,8 +328,11 @@ class HotColumns {
 /// give bit-identical results for semi-implicit Euler. Implicit Euler is solved particle
 /// by particle (the forces here do not couple particles, so the Jacobian is block
 /// diagonal and each 3x3 Newton solve is exact); its dense-size limit therefore never
-/// applies here. Position Verlet keeps velocity in x - x_prev, so after any collision
-/// or spawn its history is restarted from the corrected x and v (second order).
+/// applies here. Position Verlet keeps velocity in x - x_prev, so it runs on a double
+/// copy of the positions and velocities that persists between steps (a drift a h^2 below
+/// half a float step of x is kept, not rounded away; the columns get the rounded state);
+/// after any collision, spawn, removal or write its history is restarted from the
+/// columns' x and v (second order).
 ///
 /// Steps never allocate once the arrays have grown to the live count (reserve with
 /// `capacity`); the one exception is implicit Euler's fallback at a discontinuous force
@@ -312,6 +358,11 @@ class ParticleSystem {
 
   // ---- particles ----
 
+  /// The most particles the memory budget allows: memory_budget / kParticleBytes. A
+  /// create(), spawn() or emission past it throws Error naming the budget.
+  std::size_t max_particles() const { return max_particles_; }
+  /// The memory budget (bytes, ParticleSystemDef::memory_budget).
+  std::size_t memory_budget() const { return memory_budget_; }
   /// Adds a tracked particle and returns its handle (validates `def`; the Error names
   /// `where` and the field). Tracked particles keep their handle while they live.
   ParticleId create(const ParticleDef& def, std::string_view where = "ParticleDef");
@@ -436,6 +487,7 @@ class ParticleSystem {
                   float threshold);
   void step_generic(double t, double dt, std::span<const Collider> colliders,
                     std::span<const Forcer> forcers, float threshold);
+  void step_verlet(double t, double dt);
   void recycle();
   void report_non_finite(double t) const;
   std::size_t emitter_index(EmitterId id, std::string_view where) const;
@@ -453,6 +505,7 @@ class ParticleSystem {
 
   Integrator<Vec3f> integ_;
   Integrator<Vec3f> integ_one_;  // implicit Euler, one particle at a time
+  Integrator<Vec3> verlet_{Method::PositionVerlet};  // position Verlet on the double state
   Forces forces_;
   CollisionSettings collision_;
   // the particle columns: hot floats (x, y, z, vx, vy, vz, inverse mass, radius) ...
@@ -472,6 +525,10 @@ class ParticleSystem {
   std::vector<std::uint32_t> emitter_slot_;
   // scratch for the generic integrators (AoS), sized to the live count
   std::vector<Vec3f> gx_, gv_;
+  // position verlet's double positions and velocities, valid while its history is, and
+  // the float accelerations of its force callback
+  std::vector<Vec3> verlet_x_, verlet_v_;
+  std::vector<Vec3f> verlet_a_;
   std::size_t mortal_ = 0;  // particles with a finite lifetime
   double next_death_ = kForever;  // no particle dies before this time (s; a lower bound)
   // uniform inverse mass and radius: the values of the first particle of a non-empty
@@ -483,6 +540,8 @@ class ParticleSystem {
   double time_ = 0;         // simulated time of the state
   std::span<const Forcer> forcers_now_;  // the forcers of the step in progress
   bool history_dirty_ = true;
+  std::size_t memory_budget_ = kParticleMemoryBudget;  // bytes (ParticleSystemDef::memory_budget)
+  std::size_t max_particles_ = 0;                      // memory_budget_ / kParticleBytes
   long long steps_ = 0;
   long long newton_fallbacks_ = 0;
   std::size_t contacts_ = 0;

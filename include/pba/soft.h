@@ -164,6 +164,20 @@ struct SoftBodyDef {
 /// Index meaning "no particle" (returned by picking when nothing is near).
 inline constexpr std::uint32_t kNoParticle = std::numeric_limits<std::uint32_t>::max();
 
+/// The memory budget of one soft body (bytes): 4 GiB. The cloth builder counts what a
+/// grid would take, at most, while it is built and solved (kSoftParticleBytes per
+/// particle, kSoftConstraintBytes per constraint, kSoftTriangleBytes per triangle: upper
+/// bounds of the peak measured on 512^2 and 1024^2 cloths, 960 B per grid point, and on
+/// ropes) and refuses a grid beyond the budget before allocating, naming nx and the
+/// memory: a cloth of about 1850 x 1850 particles fits, 4096 x 4096 (21 GiB) does not.
+/// Ropes (at most 100000 segments, 48 MB) and jellies (at most 64^3 cells, 0.5 GiB, at
+/// kSoftTetBytes per tetrahedron) stay within it by their count limits.
+inline constexpr std::size_t kSoftBodyMemoryBudget = std::size_t{4} << 30;
+inline constexpr std::size_t kSoftParticleBytes = 160;    ///< per particle (see kSoftBodyMemoryBudget)
+inline constexpr std::size_t kSoftConstraintBytes = 160;  ///< per distance constraint
+inline constexpr std::size_t kSoftTriangleBytes = 64;     ///< per triangle
+inline constexpr std::size_t kSoftTetBytes = 128;         ///< per tetrahedron
+
 /// A distance constraint between particles a and b.
 struct SoftConstraint {
   std::uint32_t a = 0;  ///< first particle index
@@ -239,7 +253,7 @@ struct ClothDef {
   Vec3 origin{-0.5, 1.5, 0};  ///< corner particle (0, 0) (m), finite
   Vec3 edge_u{1, 0, 0};       ///< the row direction and length (m), finite, non-zero
   Vec3 edge_v{0, 0, 1};       ///< the column direction and length (m), finite, non-zero, not parallel to edge_u
-  int nx = 32;                ///< particles per row, in [2, 4096]
+  int nx = 32;                ///< particles per row, in [2, 4096], and nx x ny within kSoftBodyMemoryBudget
   int ny = 32;                ///< particles per column, in [2, 4096]
   double mass = 1;            ///< total mass (kg), finite and > 0, split evenly
   ClothPins pins = ClothPins::FirstRow;  ///< which particles start pinned

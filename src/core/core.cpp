@@ -2,7 +2,10 @@
 #include "pba/core.h"
 
 #include <charconv>
+#include <cstdio>
 #include <cstring>
+#include <iterator>
+#include <limits>
 
 namespace pba {
 
@@ -66,6 +69,40 @@ void require_count(long long v, long long lo, long long hi, std::string_view whe
   if (v < lo || v > hi)
     throw Error(std::string(where) + ": must be an integer in [" + std::to_string(lo) + ", " +
                 std::to_string(hi) + "], got " + std::to_string(v));
+}
+
+void require_float(double v, std::string_view where) {
+  if (!std::isfinite(static_cast<float>(v)))
+    fail(where, "must fit a float (|v| <= " + format_value(std::numeric_limits<float>::max()) + ")", v);
+}
+
+void require_float(const Vec3& v, std::string_view where) {
+  if (!is_finite(Vec3f(v)))
+    throw Error(std::string(where) + ": must fit a float (|component| <= " +
+                format_value(std::numeric_limits<float>::max()) + "), got " + format_vec3(v));
+}
+
+void require_float_inverse(double v, std::string_view where) {
+  // 1 / v rounded to float must be normal: neither infinite nor flushed toward zero
+  const float inv = static_cast<float>(1.0 / v);
+  if (!(v > 0 && std::isnormal(inv)))
+    fail(where,
+         "must be in [" + format_value(1.0 / std::numeric_limits<float>::max()) + ", " +
+             format_value(1.0 / std::numeric_limits<float>::min()) + "] (its inverse is stored as a normal float)",
+         v);
+}
+
+std::string format_bytes(double bytes) {
+  // binary units, three significant digits
+  static constexpr const char* kUnits[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+  int u = 0;
+  while (bytes >= 1024 && u + 1 < static_cast<int>(std::size(kUnits))) {
+    bytes /= 1024;
+    ++u;
+  }
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.3g %s", bytes, kUnits[u]);
+  return buf;
 }
 
 namespace {

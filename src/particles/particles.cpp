@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <new>
 #include <string>
 
@@ -213,6 +214,36 @@ std::size_t HotColumns::push() {
 // ---------------------------------------------------------------------------------------
 // definitions
 
+void require_particle_memory(double count, std::size_t budget, std::string_view where, std::string_view hint) {
+  const double bytes = count * static_cast<double>(kParticleBytes);
+  if (!(bytes > static_cast<double>(budget))) return;
+  // counts print exactly while a double holds them exactly
+  const double whole = std::ceil(count);
+  std::string msg(where);
+  msg.append(": ")
+      .append(whole < 0x1p53 ? std::to_string(static_cast<long long>(whole)) : format_value(whole))
+      .append(" particles would take ")
+      .append(format_bytes(bytes))
+      .append(" (")
+      .append(std::to_string(kParticleBytes))
+      .append(" B each), over the particle system's memory budget of ")
+      .append(format_bytes(static_cast<double>(budget)))
+      .append(" (ParticleSystemDef.memory_budget)");
+  throw Error(msg.append(hint));
+}
+
+namespace {
+
+// the float state's rules for one particle's values (checked only when the double
+// checks pass, so every message names the first rule broken)
+void require_float_particle(const Vec3& position, double mass, double radius, std::string_view where) {
+  if (!is_finite(Vec3f(position))) require_float(position, field_path(where, "position"));
+  if (!std::isnormal(static_cast<float>(1.0 / mass))) require_float_inverse(mass, field_path(where, "mass"));
+  if (!std::isfinite(static_cast<float>(radius))) require_float(radius, field_path(where, "radius"));
+}
+
+}  // namespace
+
 void ParticleDef::validate(std::string_view where) const {
   if (!is_finite(position)) require_finite(position, field_path(where, "position"));
   if (!is_finite(velocity)) require_finite(velocity, field_path(where, "velocity"));
@@ -220,6 +251,8 @@ void ParticleDef::validate(std::string_view where) const {
   if (!(std::isfinite(radius) && (radius) > 0)) require_positive(radius, field_path(where, "radius"));
   if (!(lifetime > 0))
     throw Error(field_path(where, "lifetime") + ": must be > 0 (infinity for immortal), got " + format_value(lifetime));
+  require_float_particle(position, mass, radius, where);
+  if (!is_finite(Vec3f(velocity))) require_float(velocity, field_path(where, "velocity"));
 }
 
 void EmitterDef::validate(std::string_view where) const {
@@ -234,6 +267,19 @@ void EmitterDef::validate(std::string_view where) const {
   if (!((lifetime_jitter) >= (0) && (lifetime_jitter) <= (0.999))) require_in_range(lifetime_jitter, 0, 0.999, field_path(where, "lifetime_jitter"));
   if (!(std::isfinite(mass) && (mass) > 0)) require_positive(mass, field_path(where, "mass"));
   if (!(std::isfinite(radius) && (radius) > 0)) require_positive(radius, field_path(where, "radius"));
+  // the particles' float state, the fastest launch included
+  require_float_particle(pose.position, mass, radius, where);
+  const double fastest = speed * (1 + speed_jitter);
+  if (!std::isfinite(static_cast<float>(fastest)))
+    throw Error(field_path(where, "speed") + ": the fastest launch, speed * (1 + speed_jitter) = " +
+                format_value(fastest) + " m/s, must fit a float (<= " +
+                format_value(std::numeric_limits<float>::max()) + "), got speed " + format_value(speed));
+}
+
+double EmitterDef::max_live() const {
+  // the steady state of a constant rate, or the cap when it is lower
+  const double by_rate = std::ceil(rate * lifetime * (1 + lifetime_jitter));
+  return max_alive > 0 ? std::min(by_rate, static_cast<double>(max_alive)) : by_rate;
 }
 
 void Forces::validate(std::string_view where) const {
@@ -243,6 +289,13 @@ void Forces::validate(std::string_view where) const {
   if (!is_finite(wind.velocity)) require_finite(wind.velocity, field_path(where, "wind.velocity"));
   if (!(std::isfinite(wind.gust) && (wind.gust) >= 0)) require_non_negative(wind.gust, field_path(where, "wind.gust"));
   if (!(std::isfinite(wind.gust_period) && (wind.gust_period) > 0)) require_positive(wind.gust_period, field_path(where, "wind.gust_period"));
+  // the kernels read these as floats
+  if (!is_finite(Vec3f(gravity))) require_float(gravity, field_path(where, "gravity"));
+  if (!std::isfinite(static_cast<float>(linear_drag))) require_float(linear_drag, field_path(where, "linear_drag"));
+  if (!std::isfinite(static_cast<float>(quadratic_drag)))
+    require_float(quadratic_drag, field_path(where, "quadratic_drag"));
+  const Vec3 strongest = glm::abs(wind.velocity) + Vec3(wind.gust);
+  if (!is_finite(Vec3f(strongest))) require_float(strongest, field_path(where, "wind.velocity + wind.gust"));
 }
 
 // value noise: hashed lattice values in [-1, 1], quintic (C2) interpolation
@@ -275,8 +328,14 @@ ParticleSystem::ParticleSystem(const ParticleSystemDef& def)
   // validate, then reserve every column
   forces_.validate("ParticleSystemDef.forces");
   require_finite(collision_.restitution_threshold, "ParticleSystemDef.collision.restitution_threshold");
-  require_count(static_cast<long long>(def.capacity), 0, 1LL << 31, "ParticleSystemDef.capacity");
-  reserve_rows(std::max<std::size_t>(def.capacity, 16));
+  if (def.memory_budget < kParticleBytes)
+    throw Error("ParticleSystemDef.memory_budget: must be at least " + std::to_string(kParticleBytes) +
+                " B (one particle), got " + std::to_string(def.memory_budget));
+  memory_budget_ = def.memory_budget;
+  max_particles_ = memory_budget_ / kParticleBytes;
+  // the reserve must fit the budget: refused before anything is allocated
+  require_particle_memory(static_cast<double>(def.capacity), memory_budget_, "ParticleSystemDef.capacity");
+  reserve_rows(std::min(std::max<std::size_t>(def.capacity, 16), max_particles_));
 }
 
 void ParticleSystem::reserve_rows(std::size_t rows) {
@@ -312,7 +371,12 @@ void ParticleSystem::set_method(Method m) {
 std::size_t ParticleSystem::push_particle(const ParticleDef& d, std::uint32_t owner, std::uint32_t source) {
   // append to every column (allocates only past the reserved capacity)
   const float inv_mass = static_cast<float>(1.0 / d.mass), radius = static_cast<float>(d.radius);
-  if (hot_.size() == hot_.capacity()) reserve_rows(2 * hot_.capacity());
+  if (hot_.size() == hot_.capacity()) {
+    // grow geometrically up to the budget, and no further
+    if (hot_.size() >= max_particles_)
+      require_particle_memory(static_cast<double>(hot_.size()) + 1, memory_budget_, "ParticleSystem: adding a particle");
+    reserve_rows(std::min(2 * hot_.capacity(), max_particles_));
+  }
   count_uniform(inv_mass, radius, +1);
   const std::size_t i = hot_.push();
   hot_[kX][i] = static_cast<float>(d.position.x);
@@ -423,6 +487,7 @@ Color ParticleSystem::color(std::size_t i) const {
 
 void ParticleSystem::set_position(std::size_t i, const Vec3& p) {
   require_finite(p, "ParticleSystem::set_position");
+  require_float(p, "ParticleSystem::set_position");
   require_index(i, size(), "ParticleSystem::set_position");
   hot_[kX][i] = static_cast<float>(p.x);
   hot_[kY][i] = static_cast<float>(p.y);
@@ -433,6 +498,7 @@ void ParticleSystem::set_position(std::size_t i, const Vec3& p) {
 
 void ParticleSystem::set_velocity(std::size_t i, const Vec3& v) {
   require_finite(v, "ParticleSystem::set_velocity");
+  require_float(v, "ParticleSystem::set_velocity");
   require_index(i, size(), "ParticleSystem::set_velocity");
   hot_[kVX][i] = static_cast<float>(v.x);
   hot_[kVY][i] = static_cast<float>(v.y);
@@ -454,8 +520,22 @@ std::size_t ParticleSystem::emitter_index(EmitterId id, std::string_view where) 
   return emitter_slot_[id.index];
 }
 
+void require_emitter_memory(const EmitterDef& def, std::size_t budget, std::string_view rate_field,
+                            std::string_view max_alive_field) {
+  // name the field that sets the count
+  const double live = def.max_live();
+  if (live * static_cast<double>(kParticleBytes) <= static_cast<double>(budget)) return;
+  if (def.max_alive > 0 && live == static_cast<double>(def.max_alive))
+    require_particle_memory(live, budget, max_alive_field, "; lower max_alive");
+  require_particle_memory(live, budget, rate_field,
+                          "; it emits " + format_value(def.rate) + " particles/s that live up to " +
+                              format_value(def.lifetime * (1 + def.lifetime_jitter)) +
+                              " s: lower the rate or the lifetime, or set max_alive");
+}
+
 EmitterId ParticleSystem::add_emitter(const EmitterDef& def, std::string_view where) {
   def.validate(where);
+  require_emitter_memory(def, memory_budget_, field_path(where, "rate"), field_path(where, "max_alive"));
   const EmitterId id = emitter_ids_.create();
   if (emitter_slot_.size() <= id.index) emitter_slot_.resize(id.index + 1, kNone);
   emitter_slot_[id.index] = static_cast<std::uint32_t>(emitters_.size());
@@ -498,10 +578,13 @@ long long ParticleSystem::emitted(EmitterId id) const {
 // Emission over (t, t + dt]: the i-th particle since the rate was last set is due at
 // i / rate seconds, so after T seconds exactly floor(rate T) have been emitted (up to a
 // relative 1e-9 of round-off), with no drift from summing fractions. Each particle is
-// born at its due time and advanced ballistically to t + dt.
+// born at its due time and advanced ballistically to t + dt. Particles due while the
+// emitter is at max_alive are skipped, as a count: the cost is that of the particles
+// emitted, whatever the rate.
 void ParticleSystem::emit(double t, double dt) {
   for (EmitterState& e : emitters_) {
     e.def.validate("emitter");
+    require_emitter_memory(e.def, memory_budget_, "emitter.rate", "emitter.max_alive");
     // a new rate or a paused emitter restarts the schedule
     if (e.def.rate != e.rate || !e.def.enabled) {
       e.rate = e.def.rate;
@@ -511,7 +594,23 @@ void ParticleSystem::emit(double t, double dt) {
     }
     e.elapsed += dt;
     const double due_real = e.rate * e.elapsed;
+    if (!(due_real < 0x1p62))
+      throw Error("emitter.rate: " + format_value(e.rate) + " particles/s over " + format_value(e.elapsed) +
+                  " s is more particles than an emitter can count (2^62)");
     const auto due = static_cast<long long>(std::floor(due_real + 1e-9 * std::max(1.0, due_real)));
+    // the last particle emitted: the cap leaves room for the first ones due (those after
+    // them would be skipped one by one, drawing nothing from the stream)
+    long long last = due;
+    if (e.def.max_alive) {
+      const std::size_t room = e.alive >= e.def.max_alive ? 0 : e.def.max_alive - e.alive;
+      last = std::min(due, e.emitted_phase + static_cast<long long>(std::min<std::size_t>(room, 1ULL << 62)));
+    } else if (static_cast<double>(due - e.emitted_phase) > static_cast<double>(max_particles_ - size())) {
+      // uncapped: a step longer than the lifetimes can still bring more than fit
+      require_particle_memory(static_cast<double>(size()) + static_cast<double>(due - e.emitted_phase),
+                              memory_budget_, "emitter.rate",
+                              "; " + format_value(e.rate) + " particles/s are due over a step of " +
+                                  format_value(dt) + " s");
+    }
     const Quat q = glm::normalize(e.def.pose.rotation);
     const Vec3 axis = q * glm::normalize(e.def.direction);
     // an orthonormal basis around the cone axis
@@ -519,12 +618,10 @@ void ParticleSystem::emit(double t, double dt) {
     const Vec3 u = glm::normalize(glm::cross(axis, helper));
     const Vec3 w = glm::cross(axis, u);
     const double cos_spread = std::cos(e.def.spread);
-    for (long long i = e.emitted_phase + 1; i <= due; ++i) {
+    for (long long i = e.emitted_phase + 1; i <= last; ++i) {
       // the particle's due time and how long it has lived by t + dt
       const double t_due = static_cast<double>(i) / e.rate;
       const double lived = std::clamp(e.elapsed - t_due, 0.0, dt);
-      e.emitted_phase = i;
-      if (e.def.max_alive && e.alive >= e.def.max_alive) continue;
       // direction uniform over the spherical cap, speed and lifetime jittered
       const double cz = 1 - uniform01(e.rng) * (1 - cos_spread);
       const double sz = std::sqrt(std::max(0.0, 1 - cz * cz));
@@ -546,6 +643,13 @@ void ParticleSystem::emit(double t, double dt) {
       next_death_ = std::min(next_death_, death_[idx]);
       ++e.alive;
       ++e.emitted_total;
+    }
+    e.emitted_phase = due;
+    // past 2^40 particles (only at absurd rates or after years) the schedule restarts
+    // from the last due time, so that due_real keeps its integer precision
+    if (e.emitted_phase >= (1LL << 40)) {
+      e.elapsed -= static_cast<double>(e.emitted_phase) / e.rate;
+      e.emitted_phase = 0;
     }
   }
 }
@@ -658,12 +762,17 @@ void ParticleSystem::step_generic(double t, double dt, std::span<const Collider>
   // gather into AoS vec3 (resizing allocates only when the count grows past capacity)
   gx_.resize(n);
   gv_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    gx_[i] = Vec3f(x[i], y[i], z[i]);
-    gv_[i] = Vec3f(vx[i], vy[i], vz[i]);
+  if (integ_.method() != Method::PositionVerlet) {
+    for (std::size_t i = 0; i < n; ++i) {
+      gx_[i] = Vec3f(x[i], y[i], z[i]);
+      gv_[i] = Vec3f(vx[i], vy[i], vz[i]);
+    }
   }
-  // integrate: implicit Euler one particle at a time, the others all at once
-  if (integ_.method() == Method::ImplicitEuler) {
+  // integrate: position verlet on its double state, implicit Euler one particle at a
+  // time, the others all at once
+  if (integ_.method() == Method::PositionVerlet) {
+    step_verlet(t, dt);
+  } else if (integ_.method() == Method::ImplicitEuler) {
     for (std::size_t i = 0; i < n; ++i) {
       const Vec3f x0 = gx_[i], v0 = gv_[i];
       auto accel = [this, i](double tt, std::span<const Vec3f> x, std::span<const Vec3f> v, std::span<Vec3f> a) {
@@ -684,8 +793,6 @@ void ParticleSystem::step_generic(double t, double dt, std::span<const Collider>
       }
     }
   } else {
-    if (history_dirty_) integ_.reset_history();
-    history_dirty_ = false;
     integ_.step(t, dt, std::span<Vec3f>(gx_), std::span<Vec3f>(gv_),
                 [this](double tt, std::span<const Vec3f> x, std::span<const Vec3f> v, std::span<Vec3f> a) {
                   accelerations(tt, 0, x, v, a);
@@ -718,6 +825,49 @@ void ParticleSystem::step_generic(double t, double dt, std::span<const Collider>
   if (contacts_) history_dirty_ = true;
   profile_.collide = sw.seconds();
   if (bad) report_non_finite(t + dt);
+}
+
+// Position Verlet keeps its velocity in x - x_prev, so a drift a h^2 under half a float
+// step of x, rounded away every step, is velocity lost (from y = 2.02 at h = 1e-4 s a
+// particle hung in the air). The recurrence therefore runs on double positions and
+// velocities (verlet_x_, verlet_v_) that persist between steps: they carry what the
+// float columns cannot hold (the residual x - float(x)), as the XPBD solver's velocity
+// column does (src/soft/xpbd.cpp, predict). The columns get the rounded state after each
+// step; the double state is reloaded from them whenever the history restarts (a contact,
+// a spawn or removal, a write, a change of method: history_dirty_). The forces read the
+// rounded state, as on every other path. On round-off in long integrations and the
+// compensated forms that avoid it: Hairer, Lubich & Wanner, "Geometric Numerical
+// Integration" (2nd ed. 2006), section VIII.5.
+void ParticleSystem::step_verlet(double t, double dt) {
+  const std::size_t n = size();
+  // (re)load the double state from the columns when the history restarts
+  if (history_dirty_ || verlet_x_.size() != n) {
+    verlet_x_.resize(n);
+    verlet_v_.resize(n);
+    const float *x = hot_[kX], *y = hot_[kY], *z = hot_[kZ], *vx = hot_[kVX], *vy = hot_[kVY], *vz = hot_[kVZ];
+    for (std::size_t i = 0; i < n; ++i) {
+      verlet_x_[i] = Vec3(x[i], y[i], z[i]);
+      verlet_v_[i] = Vec3(vx[i], vy[i], vz[i]);
+    }
+    verlet_.reset_history();
+    history_dirty_ = false;
+  }
+  // the recurrence in double; the forces see the state rounded to float
+  verlet_a_.resize(n);
+  verlet_.step(t, dt, std::span<Vec3>(verlet_x_), std::span<Vec3>(verlet_v_),
+               [this](double tt, std::span<const Vec3> xs, std::span<const Vec3> vs, std::span<Vec3> a) {
+                 for (std::size_t i = 0; i < xs.size(); ++i) {
+                   gx_[i] = Vec3f(xs[i]);
+                   gv_[i] = Vec3f(vs[i]);
+                 }
+                 accelerations(tt, 0, gx_, gv_, verlet_a_);
+                 for (std::size_t i = 0; i < xs.size(); ++i) a[i] = Vec3(verlet_a_[i]);
+               });
+  // the new state, rounded, for the collisions and the columns
+  for (std::size_t i = 0; i < n; ++i) {
+    gx_[i] = Vec3f(verlet_x_[i]);
+    gv_[i] = Vec3f(verlet_v_[i]);
+  }
 }
 
 // remove particles whose death time has passed (swap-remove; deterministic order). No

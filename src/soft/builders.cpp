@@ -5,7 +5,9 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <set>
+#include <string>
 #include <utility>
 
 #include "soft_impl.h"
@@ -29,6 +31,41 @@ int mirrored(int i, int n) {
   return (d > 0 ? 1 : 0) ^ ((std::abs(d) / 2) % 2);
 }
 
+// The float state: positions and velocities are stored as float, masses as float
+// inverses. Checked on the mesh a builder made, so the message names the particle and the
+// fields of the definition that placed it.
+void require_float_state(const SoftMesh& m, std::string_view where, std::string_view fields) {
+  for (std::size_t i = 0; i < m.positions.size(); ++i) {
+    if (!is_finite(Vec3f(m.positions[i])))
+      throw Error(std::string(where) + ": particle " + std::to_string(i) + " at " + format_vec3(m.positions[i]) +
+                  " does not fit a float (|coordinate| <= " + format_value(std::numeric_limits<float>::max()) +
+                  "); see " + std::string(fields));
+    if (!m.velocities.empty() && !is_finite(Vec3f(m.velocities[i])))
+      require_float(m.velocities[i], field_path(where, "velocity"));
+  }
+  // the masses a builder gives are equal (split evenly): the first one speaks for all
+  if (!m.masses.empty() && !std::isnormal(static_cast<float>(1.0 / m.masses[0])))
+    require_float_inverse(m.masses[0], std::string(where) + ".mass split among " + std::to_string(m.masses.size()) +
+                                           " particles (kg each)");
+}
+
+// A cloth grid's memory, counted before anything is allocated.
+void require_cloth_memory(const ClothDef& c) {
+  const double nx = c.nx, ny = c.ny;
+  const double particles = nx * ny;
+  const double constraints = (ny - 1) * nx + ny * (nx - 1) + (c.shear ? 2 * (nx - 1) * (ny - 1) : 0) +
+                             (c.bending ? (ny - 2) * nx + ny * (nx - 2) : 0);
+  const double triangles = 2 * (nx - 1) * (ny - 1);
+  const double bytes = particles * kSoftParticleBytes + constraints * kSoftConstraintBytes +
+                       triangles * kSoftTriangleBytes;
+  if (bytes <= static_cast<double>(kSoftBodyMemoryBudget)) return;
+  throw Error("ClothDef.nx: a " + std::to_string(c.nx) + " x " + std::to_string(c.ny) + " cloth (" +
+              format_value(particles) + " particles, " + format_value(constraints) + " constraints, " +
+              format_value(triangles) + " triangles) would take " + format_bytes(bytes) +
+              ", over a soft body's memory budget of " + format_bytes(static_cast<double>(kSoftBodyMemoryBudget)) +
+              " (kSoftBodyMemoryBudget); use fewer particles per side");
+}
+
 }  // namespace
 
 SoftBody SoftBody::spring(const SpringDef& sp, const SoftBodyDef& def) {
@@ -36,6 +73,7 @@ SoftBody SoftBody::spring(const SpringDef& sp, const SoftBodyDef& def) {
   require_finite(sp.a, "SpringDef.a");
   require_finite(sp.b, "SpringDef.b");
   require_finite(sp.velocity_b, "SpringDef.velocity_b");
+  require_float(sp.velocity_b, "SpringDef.velocity_b");
   positive(sp.mass, "SpringDef.mass");
   positive(sp.stiffness, "SpringDef.stiffness");
   if (!(std::isfinite(sp.damping) && sp.damping >= 0)) require_non_negative(sp.damping, "SpringDef.damping");
@@ -56,6 +94,7 @@ SoftBody SoftBody::spring(const SpringDef& sp, const SoftBodyDef& def) {
   m.masses = {sp.mass, sp.mass};
   m.constraints = {{.a = 0, .b = 1, .rest_length = sp.rest_length < 0 ? dist : sp.rest_length}};
   if (sp.fixed_a) m.pinned = {0};
+  require_float_state(m, "SpringDef", "a and b");
   return from_mesh(m, d, "SpringDef");
 }
 
@@ -85,6 +124,7 @@ SoftBody SoftBody::rope(const RopeDef& r, const SoftBodyDef& def) {
   }
   if (r.pin_start) m.pinned.push_back(0);
   if (r.pin_end) m.pinned.push_back(std::uint32_t(n - 1));
+  require_float_state(m, "RopeDef", "from and to");
   return from_mesh(m, def, "RopeDef");
 }
 
@@ -105,6 +145,7 @@ SoftBody SoftBody::cloth_grid(const ClothDef& c, const SoftBodyDef& def) {
   if (!(glm::length(glm::cross(c.edge_u, c.edge_v)) > 1e-12 * glm::length(c.edge_u) * glm::length(c.edge_v)))
     throw Error("ClothDef.edge_v: must not be parallel to edge_u " + format_vec3(c.edge_u) + ", got " +
                 format_vec3(c.edge_v));
+  require_cloth_memory(c);
   const int nx = c.nx, ny = c.ny;
   const std::size_t n = std::size_t(nx) * ny;
   SoftMesh m;
@@ -155,6 +196,7 @@ SoftBody SoftBody::cloth_grid(const ClothDef& c, const SoftBodyDef& def) {
       break;
     default: throw Error("ClothDef.pins: unknown value " + std::to_string(static_cast<int>(c.pins)));
   }
+  require_float_state(m, "ClothDef", "origin, edge_u and edge_v");
   return from_mesh(m, def, "ClothDef");
 }
 
@@ -277,6 +319,7 @@ SoftBody SoftBody::jelly_box(const JellyDef& jd, const SoftBodyDef& def) {
       quad(id(0, j, k), id(0, j, k + 1), id(0, j + 1, k + 1), id(0, j + 1, k));              // -x
       quad(id(jd.nx, j, k), id(jd.nx, j + 1, k), id(jd.nx, j + 1, k + 1), id(jd.nx, j, k + 1));  // +x
     }
+  require_float_state(m, "JellyDef", "center and size");
   return from_mesh(m, def, "JellyDef");
 }
 

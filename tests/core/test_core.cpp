@@ -50,4 +50,29 @@ TEST(Hash, SensitiveToEveryBitAndStable) {
   EXPECT_EQ(pba::hash_bytes(nullptr, 0), 0xcbf29ce484222325ULL);
 }
 
+// the float checks sit exactly at float's limits: FLT_MAX fits, the next double up rounds
+// to a finite float until halfway to the next power, beyond which it is inf
+TEST(Validation, FloatLimits) {
+  using pba::test_support::error_of;
+  const double fmax = std::numeric_limits<float>::max();
+  EXPECT_EQ(error_of([&] { pba::require_float(fmax, "x"); }), "");
+  EXPECT_EQ(error_of([&] { pba::require_float(-fmax, "x"); }), "");
+  EXPECT_EQ(error_of([] { pba::require_float(1e39, "p.x"); }), "p.x: must fit a float (|v| <= 3.4028234663852886e+38), got 1e+39");
+  EXPECT_NE(error_of([] { pba::require_float(pba::Vec3(0, -1e39, 0), "p"); }).find("got (0, -1e+39, 0)"), std::string::npos);
+  // a mass stored as its float inverse: 1 / m must be a normal float
+  EXPECT_EQ(error_of([] { pba::require_float_inverse(1.0, "m"); }), "");
+  EXPECT_EQ(error_of([&] { pba::require_float_inverse(1.0 / std::numeric_limits<float>::min(), "m"); }), "");
+  EXPECT_NE(error_of([] { pba::require_float_inverse(1e-39, "m"); }), "");   // 1e39 overflows
+  EXPECT_NE(error_of([] { pba::require_float_inverse(1e38, "m"); }), "");    // 1e-38 is subnormal
+  EXPECT_NE(error_of([] { pba::require_float_inverse(-1, "m"); }), "");
+}
+
+TEST(Format, Bytes) {
+  EXPECT_EQ(pba::format_bytes(512), "512 B");
+  EXPECT_EQ(pba::format_bytes(1024), "1 KiB");
+  EXPECT_EQ(pba::format_bytes(6.8e9), "6.33 GiB");
+  EXPECT_EQ(pba::format_bytes(double(std::size_t{64} << 30)), "64 GiB");
+  EXPECT_EQ(pba::format_bytes(5.12e14), "466 TiB");
+}
+
 }  // namespace

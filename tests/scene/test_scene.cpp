@@ -178,4 +178,77 @@ TEST(BadFiles, MissingFileIsNamed) {
   }
 }
 
+// a key given twice in one object was read as its last value without a word
+TEST(BadFiles, DuplicateKeysNameTheKeyAndBothPlaces) {
+  EXPECT_EQ(error_of("{\"version\": 1, \"version\": 1}"),
+            "scenes/x.json:1:16: duplicate key \"version\" in / (first given at line 1, column 2)");
+  EXPECT_EQ(error_of("{\"version\": 1,\n \"emitters\": [{}, {\"rate\": 5,\n   \"speed\": 2, \"rate\": 50}]}"),
+            "scenes/x.json:3:16: duplicate key \"rate\" in /emitters/1 (first given at line 2, column 20)");
+  // the same key as an escape: JSON keys compare after decoding
+  EXPECT_EQ(error_of(R"({"version": 1, "settings": {"dt": 0.01, "d\u0074": 0.02}})"),
+            "scenes/x.json:1:41: duplicate key \"dt\" in /settings (first given at line 1, column 29)");
+  // the same key in different objects, in strings and in nested values is no duplicate
+  EXPECT_EQ(error_of(R"({"version": 1, "name": "\"version\"", "particles": [{"mass": 1}, {"mass": 2}],
+                         "settings": {"wind": {"velocity": [1, 0, 0]}, "drag": {"linear": 0.1}}})"),
+            "no error");
+}
+
+TEST(BadFiles, ADirectoryIsNotAScene) {
+  // a directory opens and reads as an empty text on Linux: it was a "JSON syntax error"
+  const std::string m = [] {
+    try {
+      pba::load_scene(PBA_SCENES_DIR);
+    } catch (const pba::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  }();
+  EXPECT_EQ(m, std::string(PBA_SCENES_DIR) + ": is a directory, not a scene file (give the path of a .json file)");
+}
+
+// inputs that cannot fit are refused before allocating, with the JSON path and the memory
+TEST(BadFiles, InputsThatCannotFitNameTheFieldAndTheMemory) {
+  EXPECT_EQ(error_of(R"({"version": 1, "settings": {"capacity": 268435456}})"),
+            "scenes/x.json: /settings/capacity: 268435456 particles would take 64 GiB (256 B each), over the "
+            "particle system's memory budget of 4 GiB (ParticleSystemDef.memory_budget)");
+  const std::string rate = error_of(R"({"version": 1, "emitters": [{"rate": 1e12}]})");
+  EXPECT_EQ(rate.rfind("scenes/x.json: /emitters/0/rate: 2000000000000 particles would take 466 TiB", 0), 0u) << rate;
+  EXPECT_EQ(error_of(R"({"version": 1, "emitters": [{"rate": 1e12, "max_alive": 200000000}]})")
+                .rfind("scenes/x.json: /emitters/0/max_alive: 200000000 particles would take 47.7 GiB", 0),
+            0u);
+  EXPECT_EQ(error_of(R"({"version": 1, "soft_bodies": [{"type": "cloth", "nx": 4096, "ny": 4096}]})")
+                .rfind("scenes/x.json: /soft_bodies/0: ClothDef.nx: a 4096 x 4096 cloth (16777216 particles", 0),
+            0u);
+  // capped, it fits and runs: emission costs the particles emitted
+  pba::Scene s = pba::parse_scene(R"({"version": 1, "emitters": [{"rate": 1e12, "max_alive": 500}]})", "x.json");
+  for (int i = 0; i < 30; ++i) s.world.step();
+  EXPECT_EQ(s.world.particles().size(), 500u);
+}
+
+// values that pass a double check but overflow the float state
+TEST(BadFiles, ValuesThatOverflowAFloatNameTheField) {
+  EXPECT_EQ(error_of(R"({"version": 1, "particles": [{"position": [0, 1e39, 0]}]})"),
+            "scenes/x.json: /particles/0/position: must fit a float (|component| <= 3.4028234663852886e+38), got "
+            "(0, 1e+39, 0)");
+  EXPECT_EQ(error_of(R"({"version": 1, "particles": [{"velocity": [0, 0, -1e39]}]})")
+                .rfind("scenes/x.json: /particles/0/velocity: must fit a float", 0),
+            0u);
+  EXPECT_EQ(error_of(R"({"version": 1, "particles": [{"mass": 1e-39}]})").rfind("scenes/x.json: /particles/0/mass: must be in [", 0),
+            0u);
+  EXPECT_EQ(error_of(R"({"version": 1, "particles": [{"radius": 1e39}]})")
+                .rfind("scenes/x.json: /particles/0/radius: must fit a float", 0),
+            0u);
+  EXPECT_EQ(error_of(R"({"version": 1, "emitters": [{"mass": 1e-40}]})").rfind("scenes/x.json: /emitters/0/mass: must be in [", 0),
+            0u);
+  EXPECT_EQ(error_of(R"({"version": 1, "emitters": [{"speed": 1e39}]})")
+                .rfind("scenes/x.json: /emitters/0/speed: must fit a float", 0),
+            0u);
+  EXPECT_EQ(error_of(R"({"version": 1, "settings": {"gravity": [0, -1e39, 0]}})")
+                .rfind("scenes/x.json: /settings/gravity: must fit a float", 0),
+            0u);
+  EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "plane", "position": [1e39, 0, 0]}]})")
+                .rfind("scenes/x.json: /colliders/0/position: must fit a float", 0),
+            0u);
+}
+
 }  // namespace

@@ -1114,3 +1114,54 @@ TEST(Tethers, OnlyAlongTheBody) {
   for (std::size_t p = static_cast<std::size_t>(n * n); p < c.size(); ++p)
     EXPECT_NEAR(c.position(p).y, 1 - drop, N * 6e-8 + 4 * N * 0x1p-24 * drop) << "particle " << p;
 }
+
+// ---------------------------------------------------------------------------------------
+// inputs that cannot fit: memory and the float state (issue 12)
+
+// a 4096 x 4096 cloth grew to several GB silently; it is refused before allocating
+TEST(SoftLimits, AClothBeyondTheMemoryBudgetIsRefusedBeforeAllocating) {
+  const std::string msg = error_of([] { pba::SoftBody::cloth_grid({.nx = 4096, .ny = 4096}); });
+  // the count for nx = ny = n: 2 n (n - 1) stretch, 2 (n - 1)^2 shear, 2 n (n - 2) bend, 2 (n - 1)^2
+  // triangles; at 160 + 6 x 160 + 2 x 64 B per grid point, 19.5 GiB
+  EXPECT_EQ(msg.rfind("ClothDef.nx: a 4096 x 4096 cloth (16777216 particles, 100622338 constraints, 33538050 "
+                      "triangles) would take 19.5 GiB, over a soft body's memory budget of 4 GiB",
+                      0),
+            0u)
+      << msg;
+  // the same count on a grid small enough to build: (ny - 1) nx + ny (nx - 1) stretch,
+  // 2 (nx - 1)(ny - 1) shear, (ny - 2) nx + ny (nx - 2) bend
+  const pba::SoftBody small = pba::SoftBody::cloth_grid({.nx = 7, .ny = 5});
+  EXPECT_EQ(small.constraint_count(), std::size_t(4 * 7 + 5 * 6 + 2 * 6 * 4 + 3 * 7 + 5 * 5));  // 152
+  // without shear and bending the same grid is smaller, still over the budget
+  EXPECT_NE(error_of([] { pba::SoftBody::cloth_grid({.nx = 4096, .ny = 4096, .shear = false, .bending = false}); }),
+            "");
+  // a long thin grid of the same side fits
+  EXPECT_EQ(error_of([] { pba::SoftBody::cloth_grid({.nx = 4096, .ny = 2}); }), "");
+}
+
+// values that pass a double check but overflow the float state: the builder names them
+TEST(SoftLimits, ValuesThatOverflowAFloatAreRefusedByName) {
+  EXPECT_NE(error_of([] { pba::SoftBody::cloth_grid({.origin = {0, 1e39, 0}}); })
+                .find("ClothDef: particle 0 at (0, 1e+39, 0) does not fit a float"),
+            std::string::npos);
+  // the far corner of a cloth whose origin and edges each fit
+  const std::string corner = error_of([] {
+    pba::SoftBody::cloth_grid({.origin = {3e38, 0, 0}, .edge_u = {3e38, 0, 0}, .edge_v = {0, 0, 1}, .nx = 2, .ny = 2});
+  });
+  EXPECT_NE(corner.find("ClothDef: particle 1 at"), std::string::npos) << corner;
+  EXPECT_NE(corner.find("see origin, edge_u and edge_v"), std::string::npos) << corner;
+  // a mass whose per-particle inverse overflows a float (NaN at the first step)
+  EXPECT_NE(error_of([] { pba::SoftBody::cloth_grid({.mass = 1e-37}); })
+                .find("ClothDef.mass split among 1024 particles (kg each): must be in ["),
+            std::string::npos);
+  EXPECT_NE(error_of([] { pba::SoftBody::rope({.mass = 1e-40}); }).find("RopeDef.mass split among 21 particles"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { pba::SoftBody::jelly_box({.velocity = {0, -1e39, 0}}); })
+                .find("JellyDef.velocity: must fit a float"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { pba::SoftBody::spring({.a = {0, 1e39, 0}}); }).find("SpringDef: particle 0 at"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { pba::SoftBody::spring({.velocity_b = {1e39, 0, 0}}); })
+                .find("SpringDef.velocity_b: must fit a float"),
+            std::string::npos);
+}
