@@ -7,7 +7,7 @@
 #include <random>
 
 #include "error_of.h"
-#include "hull_check.h"
+#include "shape_checks.h"
 #include "pba/collide/shape.h"
 
 namespace {
@@ -15,13 +15,11 @@ namespace {
 using namespace pba;
 using pba::test_support::error_of;
 using pba::test_support::expect_valid_hull;
+using pba::test_support::expect_mat_near;
+using pba::test_support::random_rotation;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 const double kInf = std::numeric_limits<double>::infinity();
 
-Quat random_rotation(std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0, 1);
-  return glm::normalize(Quat(g(rng), g(rng), g(rng), g(rng)));
-}
 Vec3 random_unit(std::mt19937_64& rng) {
   std::normal_distribution<double> g(0, 1);
   return glm::normalize(Vec3(g(rng), g(rng), g(rng)));
@@ -174,13 +172,6 @@ namespace {
 using namespace pba;
 using pba::test_support::error_of;
 
-void expect_mat_near(const Mat3& a, const Mat3& b, double rel) {
-  double scale = 0;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) scale = std::max(scale, std::abs(b[i][j]));
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) EXPECT_NEAR(a[i][j], b[i][j], rel * scale) << "(" << i << ", " << j << ")";
-}
 
 // ---------------------------------------------------------------------------
 // mass properties (closed forms; 1e-12 relative is a few hundred roundings)

@@ -198,6 +198,31 @@ class TriangleMesh {
   std::vector<std::uint32_t> order_;
 };
 
+template <class F>
+void TriangleMesh::query(const Aabb& box, F&& visit) const {
+  // depth-first over the BVH with a fixed stack (the builder caps the depth at 60)
+  if (nodes_.empty()) return;
+  std::uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = nodes_[stack[--top]];
+    if (!n.box.overlaps(box)) continue;
+    if (n.count == 0) {
+      stack[top++] = n.first + 1;
+      stack[top++] = n.first;
+      continue;
+    }
+    // each triangle of the leaf by its own bounds
+    for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
+      const std::uint32_t t = order_[i];
+      const Vec3 &a = vertices_[triangles_[t][0]], &b = vertices_[triangles_[t][1]], &c = vertices_[triangles_[t][2]];
+      const Aabb tb{glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c))};
+      if (tb.overlaps(box)) visit(t);
+    }
+  }
+}
+
 struct CompoundShape;
 
 /// A collision shape in its own frame: the kind, its parameters, and for hulls, meshes and
