@@ -297,6 +297,25 @@ double core_radius(const ColliderShape& s);
 /// Mass properties at `density` (kg/m^3, finite and > 0). Planes and meshes have no volume:
 /// throws Error naming `where`.
 MassProperties mass_properties(const ColliderShape& s, double density, std::string_view where = "shape");
+/// The nearest surface point of a shape to a query point (world frame).
+struct PointDistance {
+  /// Signed distance (m): positive outside, negative inside a solid (its depth). Meshes
+  /// are two-sided surfaces: their distance is unsigned (>= 0).
+  double distance = 0;
+  Vec3 point{0, 0, 0};   ///< closest surface point (m)
+  Vec3 normal{0, 1, 0};  ///< outward unit normal there (for a mesh, towards the query point)
+  /// Box or hull: the face of the closest point (box faces in ConvexHull::box order
+  /// +x, -x, +y, -y, +z, -z); mesh: the triangle; compound: the child; else 0.
+  std::uint32_t feature = 0;
+};
+
+/// The signed distance from `world_point` to the surface of `s` at pose `p`, with the
+/// closest point and its normal (exact for every shape; a compound gives the nearest
+/// child's, which is exact outside and the deepest child's depth inside). A point at the
+/// centre of a sphere or on a capsule's core takes the local +Y normal; a point on a mesh
+/// takes the triangle's normal.
+PointDistance point_distance(const ColliderShape& s, const Pose& p, const Vec3& world_point);
+
 /// Casts a ray (world frame) against the shape at pose `p`. A ray starting inside a solid
 /// hits at distance 0 with the normal opposing the ray.
 RayHit ray_cast(const ColliderShape& s, const Pose& p, const Ray& ray);
