@@ -46,8 +46,9 @@ PointDistance box_distance(const Vec3& x, const Vec3& h) {
 }
 
 // Ericson 2005, "Real-Time Collision Detection" 5.1.5: the closest point of triangle abc
-// to p by its Voronoi regions
-Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+// to p by its Voronoi regions; `interior` tells whether it is inside the face
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, bool& interior) {
+  interior = false;
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
   const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
   if (d1 <= 0 && d2 <= 0) return a;
@@ -64,6 +65,7 @@ Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
   const double den = 1 / (va + vb + vc);
+  interior = true;
   return a + ab * (vb * den) + ac * (vc * den);
 }
 
@@ -132,6 +134,7 @@ PointDistance mesh_distance(const Vec3& x, const TriangleMesh& m) {
   double best = kInf;
   std::uint32_t tri = 0;
   Vec3 q(0.0);
+  bool on_face = false;
   std::uint32_t stack[64];
   int top = 0;
   stack[top++] = 0;
@@ -141,10 +144,11 @@ PointDistance mesh_distance(const Vec3& x, const TriangleMesh& m) {
     if (n.count > 0) {
       for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
         const std::uint32_t t = m.triangle_order()[i];
-        const Vec3 c = closest_on_triangle(x, v[tris[t][0]], v[tris[t][1]], v[tris[t][2]]);
+        bool interior;
+        const Vec3 c = closest_on_triangle(x, v[tris[t][0]], v[tris[t][1]], v[tris[t][2]], interior);
         const double d2 = glm::dot(x - c, x - c);
         // ties to the lower index: the answer does not depend on the tree
-        if (d2 < best || (d2 == best && t < tri)) best = d2, tri = t, q = c;
+        if (d2 < best || (d2 == best && t < tri)) best = d2, tri = t, q = c, on_face = interior;
       }
       continue;
     }
@@ -161,8 +165,11 @@ PointDistance mesh_distance(const Vec3& x, const TriangleMesh& m) {
   r.distance = std::sqrt(best);
   r.point = q;
   r.feature = tri;
+  // nearest inside the face: the face normal turned towards x (exact even at distance
+  // ~0); nearest on an edge or corner: the direction to x
   const Vec3 tn = m.normal(tri);
-  r.normal = r.distance > 0 ? (x - q) / r.distance : tn;
+  if (on_face || !(r.distance > 0)) r.normal = glm::dot(tn, x - q) < 0 ? -tn : tn;
+  else r.normal = (x - q) / r.distance;
   return r;
 }
 

@@ -74,4 +74,10 @@ inline Quat random_rotation(std::mt19937_64& rng) {
   return glm::normalize(Quat(g(rng), g(rng), g(rng), g(rng)));
 }
 
+/// A uniformly random unit vector.
+inline Vec3 random_unit(std::mt19937_64& rng) {
+  std::normal_distribution<double> g(0, 1);
+  return glm::normalize(Vec3(g(rng), g(rng), g(rng)));
+}
+
 }  // namespace pba::test_support

@@ -9,17 +9,14 @@
 #include <random>
 
 #include "error_of.h"
-#include "shape_checks.h"
 #include "pba/collide/shape.h"
+#include "shape_checks.h"
 #include "shape_gen.h"
 
 namespace {
 
 using namespace pba;
-using pba::test_support::error_of;
-using pba::test_support::expect_valid_hull;
-using pba::test_support::expect_mat_near;
-using pba::test_support::random_rotation;
+using namespace pba::test_support;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // the builder's tolerance is 1e-9 of the cloud's extent (x + y + z sizes); merging coplanar

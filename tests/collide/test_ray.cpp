@@ -15,7 +15,7 @@
 namespace {
 
 using namespace pba;
-using pba::test_support::random_rotation;
+using namespace pba::test_support;
 const double kInf = std::numeric_limits<double>::infinity();
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -24,10 +24,6 @@ constexpr int kBruteRays = 10000;  // the sanitizers run ~10x slower
 constexpr int kBruteRays = 100000;
 #endif
 
-Vec3 random_unit(std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0, 1);
-  return glm::normalize(Vec3(g(rng), g(rng), g(rng)));
-}
 
 // a random direction entering the surface at a point of outward normal n: d . n < -0.1
 Vec3 entering(std::mt19937_64& rng, const Vec3& n) {

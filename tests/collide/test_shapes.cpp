@@ -7,23 +7,16 @@
 #include <random>
 
 #include "error_of.h"
-#include "shape_checks.h"
 #include "pba/collide/shape.h"
+#include "shape_checks.h"
 
 namespace {
 
 using namespace pba;
-using pba::test_support::error_of;
-using pba::test_support::expect_valid_hull;
-using pba::test_support::expect_mat_near;
-using pba::test_support::random_rotation;
+using namespace pba::test_support;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 const double kInf = std::numeric_limits<double>::infinity();
 
-Vec3 random_unit(std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0, 1);
-  return glm::normalize(Vec3(g(rng), g(rng), g(rng)));
-}
 
 // ---------------------------------------------------------------------------
 // factories and bad input
@@ -170,7 +163,7 @@ TEST(CollideShapes, BoundsContainTheShapeAndTouchIt) {
 namespace {
 
 using namespace pba;
-using pba::test_support::error_of;
+using namespace pba::test_support;
 
 
 // ---------------------------------------------------------------------------

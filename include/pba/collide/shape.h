@@ -305,7 +305,8 @@ struct PointDistance {
   Vec3 point{0, 0, 0};   ///< closest surface point (m)
   Vec3 normal{0, 1, 0};  ///< outward unit normal there (for a mesh, towards the query point)
   /// Box or hull: the face of the closest point (box faces in ConvexHull::box order
-  /// +x, -x, +y, -y, +z, -z); mesh: the triangle; compound: the child; else 0.
+  /// +x, -x, +y, -y, +z, -z; nearest an edge or corner, one of its faces); mesh: the
+  /// triangle; compound: the child; else 0.
   std::uint32_t feature = 0;
 };
 
