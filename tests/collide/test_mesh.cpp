@@ -140,3 +140,14 @@ TEST(CollideMesh, SameInputSameTree) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(CollideMesh, HasNoMassProperties) {
+  const auto b = pba::test_support::box_mesh({1, 1, 1});
+  const auto s = pba::ColliderShape::triangles(pba::TriangleMesh::build(b.vertices, b.triangles));
+  EXPECT_EQ(pba::test_support::error_of([&] { pba::mass_properties(s, 1000, "floor"); }),
+            "floor: a mesh has no volume, so no mass properties (use it as a static shape)");
+}
+
+}  // namespace
