@@ -120,8 +120,11 @@ class ConvexHull {
 
   /// Builds the convex hull of a point cloud by quickhull (robust to duplicate and
   /// coplanar points: coplanar faces are merged, points within the tolerance of a face
-  /// are dropped). Throws Error naming `where` for non-finite points or fewer than four
-  /// points that are not coplanar (a flat or degenerate cloud has no volume).
+  /// are dropped). The tolerance is 1e-9 of the cloud's extent (sum of its bounding box's
+  /// sizes): every input point lies within twice that of the hull, and faces are planar to
+  /// it. Vertices are input points, in input order. Throws Error naming `where` for
+  /// non-finite points ("where[i]"), fewer than 4 points, more than 2^26, or a cloud
+  /// that is flat, collinear or a single point within the tolerance (no volume).
   static std::shared_ptr<const ConvexHull> build(std::span<const Vec3> points, std::string_view where = "hull");
   /// The hull of the box |x| <= half.x, |y| <= half.y, |z| <= half.z (6 faces, 8 vertices).
   static std::shared_ptr<const ConvexHull> box(const Vec3& half_extents);
@@ -148,6 +151,7 @@ class ConvexHull {
   std::vector<Vec3> vertices_;
   std::vector<HalfEdge> edges_;
   std::vector<Face> faces_;
+  std::vector<std::uint32_t> vertex_edge_;  // one half edge leaving each vertex (hill climbing)
   Vec3 centroid_{0, 0, 0};
   double volume_ = 0;
   Aabb bounds_{};
@@ -165,8 +169,10 @@ class TriangleMesh {
     std::uint32_t count = 0;  ///< leaf: triangles (> 0); inner: 0 (right child = first + 1)
   };
 
-  /// Builds the mesh. Throws Error naming `where` for non-finite vertices, an index out of
-  /// range, a degenerate (zero-area) triangle, or an empty mesh.
+  /// Builds the mesh (BVH by binned surface-area heuristic, Wald 2007; deterministic).
+  /// Throws Error naming `where` and the field for non-finite vertices, an index out of
+  /// range, a degenerate triangle (|ab x ac| <= 1e-12 times its longest edge squared:
+  /// repeated or collinear corners), no triangles, or more than 2^28 vertices or triangles.
   static std::shared_ptr<const TriangleMesh> build(std::span<const Vec3> vertices,
                                                    std::span<const std::array<std::uint32_t, 3>> triangles,
                                                    std::string_view where = "mesh");
@@ -178,6 +184,9 @@ class TriangleMesh {
   /// For each triangle, a bit per edge (ab = 1, bc = 2, ca = 4) set when the edge is
   /// convex or a boundary (contacts may use its normal); internal flat or concave edges
   /// are clear, so a contact on them takes the face normal instead (no ghost contacts).
+  /// "Flat" is a bend of sine below 1e-4 (so float-rounded flat meshes stay flat);
+  /// non-manifold edges (3+ triangles) and edges whose two triangles wind inconsistently
+  /// are set (their side is ambiguous).
   std::span<const std::uint8_t> edge_flags() const { return edge_flags_; }
   /// Unit normal of triangle t.
   Vec3 normal(std::uint32_t t) const { return normals_[t]; }
@@ -196,6 +205,31 @@ class TriangleMesh {
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> order_;
 };
+
+template <class F>
+void TriangleMesh::query(const Aabb& box, F&& visit) const {
+  // depth-first over the BVH with a fixed stack (the builder caps the depth at 60)
+  if (nodes_.empty()) return;
+  std::uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = nodes_[stack[--top]];
+    if (!n.box.overlaps(box)) continue;
+    if (n.count == 0) {
+      stack[top++] = n.first + 1;
+      stack[top++] = n.first;
+      continue;
+    }
+    // each triangle of the leaf by its own bounds
+    for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
+      const std::uint32_t t = order_[i];
+      const Vec3 &a = vertices_[triangles_[t][0]], &b = vertices_[triangles_[t][1]], &c = vertices_[triangles_[t][2]];
+      const Aabb tb{glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c))};
+      if (tb.overlaps(box)) visit(t);
+    }
+  }
+}
 
 struct CompoundShape;
 
@@ -220,7 +254,8 @@ struct ColliderShape {
   /// Compound: the children (non-null for ShapeType::Compound).
   std::shared_ptr<const CompoundShape> compound{};
 
-  /// A plane { p : n . p = offset } (n is normalised; throws for a zero normal).
+  /// A plane { p : n . p = offset } (n and offset are divided by |n|; throws for a zero
+  /// or non-finite normal or offset).
   static ColliderShape plane(const Vec3& n, double offset);
   /// A sphere of radius r.
   static ColliderShape sphere(double r);
@@ -239,7 +274,8 @@ struct ColliderShape {
            type == ShapeType::Hull;
   }
   /// Throws Error naming `where` and the bad field (zero normal, radius or half extent
-  /// <= 0, non-finite values, missing hull / mesh / compound body).
+  /// <= 0, non-finite values, missing hull / mesh / compound body). A plane's normal
+  /// may have any non-zero length (scene files store it as written); queries normalise it.
   void validate(std::string_view where) const;
 };
 
@@ -271,8 +307,31 @@ double core_radius(const ColliderShape& s);
 /// Mass properties at `density` (kg/m^3, finite and > 0). Planes and meshes have no volume:
 /// throws Error naming `where`.
 MassProperties mass_properties(const ColliderShape& s, double density, std::string_view where = "shape");
+/// The nearest surface point of a shape to a query point (world frame).
+struct PointDistance {
+  /// Signed distance (m): positive outside, negative inside a solid (its depth). Meshes
+  /// are two-sided surfaces: their distance is unsigned (>= 0).
+  double distance = 0;
+  Vec3 point{0, 0, 0};   ///< closest surface point (m)
+  Vec3 normal{0, 1, 0};  ///< outward unit normal there (for a mesh, towards the query point)
+  /// Box or hull: the face of the closest point (box faces in ConvexHull::box order
+  /// +x, -x, +y, -y, +z, -z; nearest an edge or corner, one of its faces); mesh: the
+  /// triangle; compound: the child; else 0.
+  std::uint32_t feature = 0;
+};
+
+/// The signed distance from `world_point` to the surface of `s` at pose `p`, with the
+/// closest point and its normal (exact for every shape; a compound gives the nearest
+/// child's, which is exact outside and the deepest child's depth inside). A point at the
+/// centre of a sphere or on a capsule's core takes the local +Y normal; a point on a mesh
+/// takes the triangle's normal.
+PointDistance point_distance(const ColliderShape& s, const Pose& p, const Vec3& world_point);
+
 /// Casts a ray (world frame) against the shape at pose `p`. A ray starting inside a solid
-/// hits at distance 0 with the normal opposing the ray.
+/// hits at distance 0 with the normal exactly -ray.direction. The feature is the face of
+/// a box (ConvexHull::box order) or hull, the triangle of a mesh (two-sided: the normal
+/// faces the ray; the closest hit, ties to the lower index), the child of a compound.
+/// Never allocates.
 RayHit ray_cast(const ColliderShape& s, const Pose& p, const Ray& ray);
 
 }  // namespace pba
