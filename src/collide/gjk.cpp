@@ -282,10 +282,11 @@ DistanceResult gjk_distance(const ConvexProxy& a, const ConvexProxy& b) {
     return r;
   }
   // the rounded shapes: radii along the core normal
-  const Vec3 d = cb - ca;
-  const double dist = glm::length(d);
+  // v = a - b is the simplex's closest point: its length is the distance estimate
+  const Vec3 v = g.closest();
+  const double dist = glm::length(v);
   r.core_distance = dist;
-  r.normal = dist > 0 ? d / dist : Vec3(0, 0, 1);
+  r.normal = dist > 0 ? -v / dist : Vec3(0, 0, 1);
   r.distance = std::max(0.0, dist - a.radius - b.radius);
   r.point_a = ca + a.radius * r.normal;
   r.point_b = cb - b.radius * r.normal;
