@@ -45,16 +45,10 @@ Vec3 ConvexProxy::support(const Vec3& d, std::uint32_t* vertex) const {
       local = Vec3(dl.x >= 0 ? half_extents.x : -half_extents.x, dl.y >= 0 ? half_extents.y : -half_extents.y,
                    dl.z >= 0 ? half_extents.z : -half_extents.z);
       break;
-    case ShapeType::Hull: {
-      const auto v = hull->vertices();
-      double best = glm::dot(v[0], dl);
-      for (std::uint32_t i = 1; i < v.size(); ++i) {
-        const double x = glm::dot(v[i], dl);
-        if (x > best) best = x, index = i;
-      }
-      local = v[index];
+    case ShapeType::Hull:
+      index = hull->support_index(dl);
+      local = hull->vertices()[index];
       break;
-    }
     default: break;  // sphere: the centre
   }
   if (vertex) *vertex = index;

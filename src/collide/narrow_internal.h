@@ -82,17 +82,12 @@ struct Poly {
   Poly(const Poly&) = delete;
   Poly& operator=(const Poly&) = delete;
 
-  /// The local vertex farthest along d (box: closed form; hull: first maximum).
+  /// The local vertex farthest along d (box: closed form; hull: its hill climb).
   std::uint32_t support_index(const Vec3& d) const {
     if (is_box) return (d.x >= 0 ? 1u : 0u) | (d.y >= 0 ? 2u : 0u) | (d.z >= 0 ? 4u : 0u);
-    std::uint32_t best = 0;
-    double bd = glm::dot(vertices[0], d);
-    for (std::uint32_t i = 1; i < vertex_count; ++i) {
-      const double v = glm::dot(vertices[i], d);
-      if (v > bd) bd = v, best = i;
-    }
-    return best;
+    return hull->support_index(d);
   }
+  const ConvexHull* hull = nullptr;
 };
 
 /// Fills `p` with the box of half extents h.
@@ -120,6 +115,7 @@ inline void make_box_poly(const Vec3& h, Poly& p) {
 /// Points `p` at hull `h`.
 inline void make_hull_poly(const ConvexHull& h, Poly& p) {
   p.is_box = false;
+  p.hull = &h;
   p.vertices = h.vertices().data();
   p.vertex_count = std::uint32_t(h.vertices().size());
   p.edges = h.edges().data();
