@@ -341,6 +341,8 @@ Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     default:
       if (B.type == ShapeType::Plane) {
         convex_plane(A, PA, B, PB, margin, m);
+      } else if (settings.method == ConvexMethod::Sat && A.type == ShapeType::Box && B.type == ShapeType::Box) {
+        collide_boxes_sat(A.half_extents, PA, B.half_extents, PB, margin, cache ? &cache->sat : nullptr, m);
       } else if (settings.method == ConvexMethod::Sat) {
         Poly pa, pb;
         poly_of(A, pa);

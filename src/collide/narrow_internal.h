@@ -229,6 +229,10 @@ PenetrationResult epa_from_gjk(const GjkStepper& g);
 /// Box/hull pair by separating axes and face clipping (sat.cpp).
 void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose& pb, double margin, SatCache* cache,
                        Manifold& m);
+/// Box-box by the fifteen axes in closed form, the same choices and ids as collide_polys_sat
+/// on two box polyhedra (sat_box.cpp).
+void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pose& pb, double margin, SatCache* cache,
+                       Manifold& m);
 /// A manifold from a contact normal n (A to B) and one fallback point pair: the support
 /// features of both bodies along n clipped against each other when one of them is a face
 /// within a few degrees of n, else the single point (manifold.cpp).
