@@ -1,7 +1,7 @@
 // Narrow-phase benchmark (issue 10): box-box and hull-hull contact manifolds per pair, pba
 // against Bullet in the same process on the same random overlapping poses.
 //
-//   bench_narrow [--pairs N] [--repeat R] [--rounds K]
+//   bench_narrow [--pairs N] [--repeat R] [--rounds K] [--scene box|hull|both]
 //
 // Defaults: 2000 pairs, each pass over them repeated 20 times, 9 rounds; the median of
 // the rounds' per-pair CPU times is reported. Run it on one core: taskset -c 1.
@@ -240,6 +240,7 @@ Timing run_bullet_hull(const Scene& s, int repeat, int rounds) {
 
 int main(int argc, char** argv) {
   int pairs = 2000, repeat = 20, rounds = 9;
+  std::string only = "both";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&] {
@@ -252,8 +253,9 @@ int main(int argc, char** argv) {
     if (a == "--pairs") pairs = next();
     else if (a == "--repeat") repeat = next();
     else if (a == "--rounds") rounds = next();
+    else if (a == "--scene" && i + 1 < argc) only = argv[++i];
     else {
-      std::fprintf(stderr, "usage: bench_narrow [--pairs N] [--repeat R] [--rounds K]\n");
+      std::fprintf(stderr, "usage: bench_narrow [--pairs N] [--repeat R] [--rounds K] [--scene box|hull|both]\n");
       return 2;
     }
   }
@@ -270,18 +272,23 @@ int main(int argc, char** argv) {
               rounds);
   std::printf("hulls: %.1f vertices, %.1f faces on average\n\n", nv, nf);
   std::printf("%-10s %-22s %12s %14s\n", "pair", "engine", "us/pair", "points/pair");
-  const Timing bs = run_pba(boxes, pba::ConvexMethod::Sat, repeat, rounds);
-  const Timing bg = run_pba(boxes, pba::ConvexMethod::GjkEpa, repeat, rounds);
-  const Timing bb = run_bullet_box(boxes, repeat, rounds);
+  Timing bs, bg, bb, hs, hg, hb;
+  if (only != "hull") {
+  bs = run_pba(boxes, pba::ConvexMethod::Sat, repeat, rounds);
+  bg = run_pba(boxes, pba::ConvexMethod::GjkEpa, repeat, rounds);
+  bb = run_bullet_box(boxes, repeat, rounds);
   std::printf("%-10s %-22s %12.3f %14.2f\n", "box-box", "pba SAT", bs.median_us, bs.points);
   std::printf("%-10s %-22s %12.3f %14.2f\n", "box-box", "pba GJK/EPA", bg.median_us, bg.points);
   std::printf("%-10s %-22s %12.3f %14.2f\n", "box-box", "Bullet btBoxBoxDetector", bb.median_us, bb.points);
-  const Timing hs = run_pba(hulls, pba::ConvexMethod::Sat, repeat, rounds);
-  const Timing hg = run_pba(hulls, pba::ConvexMethod::GjkEpa, repeat, rounds);
-  const Timing hb = run_bullet_hull(hulls, repeat, rounds);
+  }
+  if (only != "box") {
+  hs = run_pba(hulls, pba::ConvexMethod::Sat, repeat, rounds);
+  hg = run_pba(hulls, pba::ConvexMethod::GjkEpa, repeat, rounds);
+  hb = run_bullet_hull(hulls, repeat, rounds);
   std::printf("%-10s %-22s %12.3f %14.2f\n", "hull-hull", "pba SAT", hs.median_us, hs.points);
   std::printf("%-10s %-22s %12.3f %14.2f\n", "hull-hull", "pba GJK/EPA", hg.median_us, hg.points);
   std::printf("%-10s %-22s %12.3f %14.2f\n", "hull-hull", "Bullet GJK+clipping", hb.median_us, hb.points);
+  }
   std::printf("\nratios (Bullet / pba, goal >= 2):\n");
   std::printf("  box-box   SAT %.2fx, GJK/EPA %.2fx  %s\n", bb.median_us / bs.median_us, bb.median_us / bg.median_us,
               bb.median_us / bs.median_us >= 2 ? "met" : "NOT met");

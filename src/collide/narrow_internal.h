@@ -174,19 +174,22 @@ inline void closest_segments(const Vec3& p1, const Vec3& q1, const Vec3& p2, con
 
 inline constexpr int kMaxPolygon = 64;  // points of a clipped polygon we keep
 
+// the polygon types are left uninitialised on construction (no member initialisers): they
+// are scratch buffers of a few kilobytes filled per call, and zeroing them dominated the
+// cost of a box-box manifold
 struct ClipPoint {
-  Vec3 p{0, 0, 0};
-  std::uint32_t id = 0;     // feature id of the point
-  std::uint32_t label = 0;  // label of the polygon edge from this point to the next
+  Vec3 p;
+  std::uint32_t id;     // feature id of the point
+  std::uint32_t label;  // label of the polygon edge from this point to the next
 };
 
 /// A face of a polyhedron in world coordinates with its labels.
 struct WorldFace {
-  std::array<ClipPoint, kMaxPolygon> pts{};
+  std::array<ClipPoint, kMaxPolygon> pts;
   int count = 0;
   Vec3 normal{0, 0, 1};  // outward, world
   double offset = 0;     // normal . x = offset on the face
-  std::array<std::uint32_t, kMaxPolygon> half_edges{};  // half edge starting at pts[i]
+  std::array<std::uint32_t, kMaxPolygon> half_edges;  // half edge starting at pts[i]
 };
 
 /// Face `f` of `poly` at `pose` in world coordinates (at most kMaxPolygon vertices).
@@ -199,9 +202,9 @@ std::uint32_t most_aligned_face(const Poly& poly, const Quat& rotation, const Ve
 
 /// A contact candidate before reduction.
 struct Candidate {
-  Vec3 a{0, 0, 0}, b{0, 0, 0};
-  double depth = 0;
-  std::uint32_t id = 0;
+  Vec3 a, b;
+  double depth;
+  std::uint32_t id;
 };
 
 /// Clips `incident` (points with labels, on the incident surface) against the side planes

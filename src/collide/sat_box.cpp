@@ -65,16 +65,25 @@ double face_b_sep(const BoxPair& p, const Vec3& ha, const Vec3& hb, int j) {
   const double ra = glm::dot(ha, p.AR[j]);
   return std::abs(p.tb[j]) - hb[j] - ra;
 }
-// axis e_i x b_j; -inf for near-parallel edges (the face axes cover them)
+// axis e_i x b_j; -inf for near-parallel edges (the face axes cover them). With i1, i2 the
+// other two axes cyclically, L = (L[i1], L[i2]) = (-R[j][i2], R[j][i1]) and the radii are
+// sums of entries of |R| (Gottschalk 1996, table 1)
 double edge_sep(const BoxPair& p, const Vec3& ha, const Vec3& hb, int i, int j, Vec3* axis) {
-  const Vec3 L = glm::cross(Vec3(i == 0, i == 1, i == 2), p.R[j]);
-  const double len = glm::length(L);
-  if (len < 0.005) return -INFINITY;  // sin of ~0.3 degrees, as in sat.cpp
-  const double ra = glm::dot(ha, glm::abs(L));
-  const double rb = hb.x * std::abs(glm::dot(p.R[0], L)) + hb.y * std::abs(glm::dot(p.R[1], L)) +
-                    hb.z * std::abs(glm::dot(p.R[2], L));
-  const double d = glm::dot(p.t, L);
-  if (axis) *axis = (d >= 0 ? L : -L) / len;
+  static constexpr int next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
+  const int i1 = next[i], i2 = prev[i], j1 = next[j], j2 = prev[j];
+  const double l1 = -p.R[j][i2], l2 = p.R[j][i1];
+  const double len2 = l1 * l1 + l2 * l2;
+  if (len2 < 0.005 * 0.005) return -INFINITY;  // sin of ~0.3 degrees, as in sat.cpp
+  const double len = std::sqrt(len2);
+  const double ra = ha[i1] * p.AR[j][i2] + ha[i2] * p.AR[j][i1];
+  const double rb = hb[j1] * p.AR[j2][i] + hb[j2] * p.AR[j1][i];
+  const double d = p.t[i1] * l1 + p.t[i2] * l2;
+  if (axis) {
+    Vec3 L(0.0);
+    L[i1] = l1;
+    L[i2] = l2;
+    *axis = (d >= 0 ? L : -L) / len;
+  }
   return (std::abs(d) - ra - rb) / len;
 }
 
@@ -132,10 +141,10 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
   Vec3 edge_axis(0, 0, 1);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
-      Vec3 L;
-      const double s = edge_sep(p, ha, hb, i, j, &L);
-      if (s > ee) ee = s, ei = i, ej = j, edge_axis = L;
+      const double s = edge_sep(p, ha, hb, i, j, nullptr);
+      if (s > ee) ee = s, ei = i, ej = j;
     }
+  if (ee > -INFINITY) edge_sep(p, ha, hb, ei, ej, &edge_axis);
   // the supporting edges: A's along axis ei farthest along L, B's along ej farthest along -L
   std::uint32_t va = 0, vb = 0;
   if (ee > -INFINITY) {
