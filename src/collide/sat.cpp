@@ -127,7 +127,14 @@ double cached_separation(const Poly& a, const Poly& b, const Relative& r, const 
       const Vec3 p2 = r.R * b.vertices[e2.origin] + r.t;
       const Vec3 q2 = r.R * b.vertices[b.edges[c.index_b + 1].origin] + r.t;
       Vec3 n;
-      return edge_separation(p1, a.vertices[a.edges[c.index_a + 1].origin] - p1, p2, q2 - p2, a.center, n);
+      if (edge_separation(p1, a.vertices[a.edges[c.index_a + 1].origin] - p1, p2, q2 - p2, a.center, n) == -INFINITY)
+        return -INFINITY;
+      // the gap between the bodies' supports along the axis: a proof of separation
+      // whether or not the edges still form a Minkowski face
+      const Vec3 nb = r.RT * n;
+      const double b_min = glm::dot(nb, b.vertices[b.support_index(-nb)]) + glm::dot(n, r.t);
+      const double a_max = glm::dot(n, a.vertices[a.support_index(n)]);
+      return b_min - a_max;
     }
     default: return -INFINITY;
   }
