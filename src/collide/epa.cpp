@@ -17,16 +17,17 @@ constexpr int kMaxFaces = 256;
 constexpr int kMaxHorizon = 128;
 
 struct EpaFace {
-  int v[3] = {0, 0, 0};
-  Vec3 normal{0, 0, 1};
-  double dist = 0;
-  bool alive = false;
+  int v[3];
+  Vec3 normal;
+  double dist;
+  bool alive;
 };
 
 struct Polytope {
-  std::array<SimplexVertex, kMaxVertices> verts{};
+  // scratch storage, filled as the polytope grows (left uninitialised: no memset per call)
+  std::array<SimplexVertex, kMaxVertices> verts;
   int nv = 0;
-  std::array<EpaFace, kMaxFaces> faces{};
+  std::array<EpaFace, kMaxFaces> faces;
   int nf = 0;
 
   // a face i, j, k (counter-clockwise seen from outside); degenerate faces get an
@@ -50,10 +51,10 @@ struct Polytope {
   }
 };
 
-SimplexVertex support_point(const ConvexProxy& a, const ConvexProxy& b, const Vec3& d) {
-  SimplexVertex s;
-  s.a = a.support(d);
-  s.b = b.support(-d);
+SimplexVertex support_point(const ConvexProxy& a, const ConvexProxy& b, const Vec3& d, const SimplexVertex* near = nullptr) {
+  SimplexVertex s{};
+  s.a = a.support(d, &s.index_a, near ? near->index_a : 0);
+  s.b = b.support(-d, &s.index_b, near ? near->index_b : 0);
   s.w = s.a - s.b;
   return s;
 }
@@ -155,7 +156,7 @@ PenetrationResult narrow::epa_from_gjk(const GjkStepper& g) {
   P.add_face(0, 3, 2);
   P.add_face(1, 2, 3);
 
-  EpaFace nearest{};
+  EpaFace nearest{{0, 1, 2}, Vec3(0, 0, 1), 0, false};
   for (int it = 0;; ++it) {
     // nearest live face
     int best = -1;
@@ -169,11 +170,11 @@ PenetrationResult narrow::epa_from_gjk(const GjkStepper& g) {
     const EpaFace face = P.faces[std::size_t(best)];
     nearest = face;
     // support along its normal: on the face means the face is part of the boundary
-    const SimplexVertex w = support_point(a, b, face.normal);
+    const SimplexVertex w = support_point(a, b, face.normal, &P.verts[std::size_t(face.v[0])]);
     const double gain = glm::dot(face.normal, w.w) - face.dist;
     if (gain <= kEpaTolerance || P.nv >= kMaxVertices || it >= 200) break;
     // remove the faces w sees, keep their boundary (the horizon) as directed edges
-    std::array<std::array<int, 2>, kMaxHorizon> horizon{};
+    std::array<std::array<int, 2>, kMaxHorizon> horizon;
     int nh = 0;
     bool overflow = false;
     for (int f = 0; f < P.nf; ++f) {

@@ -30,7 +30,7 @@ ConvexProxy ConvexProxy::of(const ColliderShape& s, const Pose& pose) {
   return p;
 }
 
-Vec3 ConvexProxy::support(const Vec3& d, std::uint32_t* vertex) const {
+Vec3 ConvexProxy::support(const Vec3& d, std::uint32_t* vertex, std::uint32_t hint) const {
   // direction into the local frame, local support, back to the world
   const Vec3 dl = glm::conjugate(pose.rotation) * d;
   Vec3 local(0.0);
@@ -46,7 +46,7 @@ Vec3 ConvexProxy::support(const Vec3& d, std::uint32_t* vertex) const {
                    dl.z >= 0 ? half_extents.z : -half_extents.z);
       break;
     case ShapeType::Hull:
-      index = hull->support_index(dl);
+      index = narrow::hull_support(*hull, dl, hint);
       local = hull->vertices()[index];
       break;
     default: break;  // sphere: the centre
@@ -177,9 +177,9 @@ GjkStepper::GjkStepper(const ConvexProxy& a, const ConvexProxy& b) : a_(a), b_(b
   // first vertex: the support along the line between the centres
   Vec3 d = a_.pose.position - b_.pose.position;
   if (glm::dot(d, d) == 0) d = Vec3(1, 0, 0);
-  SimplexVertex s;
-  s.a = a_.support(-d);
-  s.b = b_.support(d);
+  SimplexVertex s{};
+  s.a = a_.support(-d, &s.index_a);
+  s.b = b_.support(d, &s.index_b);
   s.w = s.a - s.b;
   s.weight = 1;
   simplex_[0] = s;
@@ -205,9 +205,10 @@ bool GjkStepper::step() {
   }
   ++iterations_;
   // new support point of A - B along -v
-  SimplexVertex s;
-  s.a = a_.support(-v_);
-  s.b = b_.support(v_);
+  // (the last support vertices start the hill climbs)
+  SimplexVertex s{};
+  s.a = a_.support(-v_, &s.index_a, last_.index_a);
+  s.b = b_.support(v_, &s.index_b, last_.index_b);
   s.w = s.a - s.b;
   last_ = s;
   // van den Bergen's bounds: |v| >= distance >= v.w / |v|

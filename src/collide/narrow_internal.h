@@ -14,6 +14,21 @@ namespace pba::narrow {
 using HalfEdge = ConvexHull::HalfEdge;
 using HullFace = ConvexHull::Face;
 
+/// The hull vertex farthest along d: a plain scan up to 64 vertices (contiguous dot
+/// products beat the hill climb's dependent loads there), the hull's hill climb from
+/// `hint` beyond.
+inline std::uint32_t hull_support(const ConvexHull& h, const Vec3& d, std::uint32_t hint) {
+  const auto v = h.vertices();
+  if (v.size() > 64) return h.support_index(d, hint);
+  std::uint32_t best = 0;
+  double bd = glm::dot(v[0], d);
+  for (std::uint32_t i = 1; i < v.size(); ++i) {
+    const double s = glm::dot(v[i], d);
+    if (s > bd) bd = s, best = i;
+  }
+  return best;
+}
+
 // --- the box as a half-edge polyhedron ---------------------------------------------
 // vertex i is (+-hx, +-hy, +-hz) with bit 0, 1, 2 of i set for +x, +y, +z; faces are
 // -x, +x, -y, +y, -z, +z (face 2k + 1 is the + side of axis k); twins at 2i, 2i + 1.
@@ -83,9 +98,9 @@ struct Poly {
   Poly& operator=(const Poly&) = delete;
 
   /// The local vertex farthest along d (box: closed form; hull: its hill climb).
-  std::uint32_t support_index(const Vec3& d) const {
+  std::uint32_t support_index(const Vec3& d, std::uint32_t hint = 0) const {
     if (is_box) return (d.x >= 0 ? 1u : 0u) | (d.y >= 0 ? 2u : 0u) | (d.z >= 0 ? 4u : 0u);
-    return hull->support_index(d);
+    return hull_support(*hull, d, hint);
   }
   const ConvexHull* hull = nullptr;
 };

@@ -40,17 +40,20 @@ Relative relative(const Pose& pa, const Pose& pb) {
 }
 
 // separation of B from face f of A: plane distance of B's deepest vertex
-double face_separation(const Poly& a, std::uint32_t f, const Poly& b, const Relative& r) {
+// (`hint`: where B's hill climb starts; it returns the vertex found)
+double face_separation(const Poly& a, std::uint32_t f, const Poly& b, const Relative& r, std::uint32_t* hint = nullptr) {
   const HullFace& F = a.faces[f];
   const Vec3 nb = r.RT * F.normal;
-  const std::uint32_t j = b.support_index(-nb);
+  const std::uint32_t j = b.support_index(-nb, hint ? *hint : 0);
+  if (hint) *hint = j;
   return glm::dot(nb, b.vertices[j]) + glm::dot(F.normal, r.t) - F.offset;
 }
 
 FaceQuery query_faces_a(const Poly& a, const Poly& b, const Relative& r) {
   FaceQuery q;
+  std::uint32_t hint = 0;
   for (std::uint32_t f = 0; f < a.face_count; ++f) {
-    const double s = face_separation(a, f, b, r);
+    const double s = face_separation(a, f, b, r, &hint);
     if (s > q.separation) q.separation = s, q.index = f;
   }
   return q;

@@ -79,7 +79,9 @@ TEST(Gjk, CapsuleBoxAndSphereBoxDistancesEqualBruteForce) {
     EXPECT_NEAR(c.distance, std::max(0.0, core - r), kGjkTol);
     const DistanceResult s = gjk_distance(sphere_proxy(r, pa), box_proxy(hb, pb));
     const double ps = point_box_distance(pa.position, hb, pb);
-    if (ps > 0) EXPECT_NEAR(s.distance, std::max(0.0, ps - r), kGjkTol);
+    if (ps > 0) {
+      EXPECT_NEAR(s.distance, std::max(0.0, ps - r), kGjkTol);
+    }
   }
   EXPECT_GT(checked, 200);
 }
@@ -103,7 +105,9 @@ TEST(Gjk, StepperDescendsMonotonicallyAndMatchesTheSolver) {
     }
     const DistanceResult r = gjk_distance(a, b);
     EXPECT_EQ(r.cores_overlap, g.overlap());
-    if (!g.overlap()) EXPECT_EQ(glm::length(g.closest()), r.core_distance);
+    if (!g.overlap()) {
+      EXPECT_EQ(glm::length(g.closest()), r.core_distance);
+    }
   }
 }
 
@@ -120,7 +124,7 @@ TEST(Epa, BoxBoxDepthAndNormalEqualSeparatingAxes) {
   for (int trial = 0; trial < 500; ++trial) {
     const Vec3 ha(size(rng), size(rng), size(rng)), hb(size(rng), size(rng), size(rng));
     const Pose pa{random_vec(rng, 0.2), random_rotation(rng)}, pb{random_vec(rng, 1.2), random_rotation(rng)};
-    Vec3 n_sat;
+    Vec3 n_sat(0.0);
     double second = 0;
     const double depth = box_box_sat_depth(ha, pa, hb, pb, n_sat, second);
     if (depth <= 1e-6) continue;
@@ -129,7 +133,9 @@ TEST(Epa, BoxBoxDepthAndNormalEqualSeparatingAxes) {
     ++checked;
     EXPECT_NEAR(e.depth, depth, 1e-9) << "trial " << trial;
     // the normal is unique only when the best axis beats the next one
-    if (second - depth > 1e-6) EXPECT_NEAR(glm::length(e.normal - n_sat), 0.0, 1e-7) << "trial " << trial;
+    if (second - depth > 1e-6) {
+      EXPECT_NEAR(glm::length(e.normal - n_sat), 0.0, 1e-7) << "trial " << trial;
+    }
     // moving B by depth along the normal leaves the boxes touching: the points agree
     EXPECT_NEAR(glm::dot(e.point_a - e.point_b, e.normal), e.depth, 1e-9);
   }

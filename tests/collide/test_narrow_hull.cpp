@@ -131,7 +131,7 @@ TEST(HullPairs, EpaAndSatDepthEqualTheMinimumOverlap) {
     const auto ha = random_hull(rng), hb = random_hull(rng);
     const Pose pa{random_vec(rng, 0.2), random_rotation(rng)}, pb{random_vec(rng, 0.8), random_rotation(rng)};
     const WorldHull wa = world(*ha, pa), wb = world(*hb, pb);
-    Vec3 n;
+    Vec3 n(0.0);
     const double depth = hull_depth(wa, wb, n);
     if (depth <= 1e-6) continue;
     ++checked;

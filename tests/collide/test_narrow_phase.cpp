@@ -238,7 +238,7 @@ TEST(BoxBox, SatAndGjkEpaAgreeOnRandomOverlaps) {
   for (int trial = 0; trial < 300; ++trial) {
     const Vec3 ha(size(rng), size(rng), size(rng)), hb(size(rng), size(rng), size(rng));
     const Pose pa{random_vec(rng, 0.2), random_rotation(rng)}, pb{random_vec(rng, 1.2), random_rotation(rng)};
-    Vec3 n;
+    Vec3 n(0.0);
     double second = 0;
     const double depth = box_box_sat_depth(ha, pa, hb, pb, n, second);
     if (depth <= 1e-6 || second - depth < 1e-3) continue;

@@ -104,17 +104,21 @@ struct ConvexProxy {
   static ConvexProxy of(const ColliderShape& s, const Pose& pose);
   /// The world point of the core farthest along `d` (any non-zero direction), and the
   /// index of the vertex it is (box: corner bits xyz; hull: vertex; capsule: 0 bottom,
-  /// 1 top; sphere: 0).
-  Vec3 support(const Vec3& d, std::uint32_t* vertex = nullptr) const;
+  /// 1 top; sphere: 0). `hint`: a hull vertex to start the hill climb from (a previous
+  /// answer makes it a step or two).
+  Vec3 support(const Vec3& d, std::uint32_t* vertex = nullptr, std::uint32_t hint = 0) const;
 };
 
 /// One vertex of a GJK simplex: a point w = a - b of the Minkowski difference A - B of the
-/// cores, and the support points it came from.
+/// cores, and the support points it came from. Plain data without member initialisers (EPA
+/// keeps a hundred of them per call): value-initialise it (`SimplexVertex v{};`) for zeros.
 struct SimplexVertex {
-  Vec3 a{0, 0, 0};  ///< support point of A's core (world, m)
-  Vec3 b{0, 0, 0};  ///< support point of B's core (world, m)
-  Vec3 w{0, 0, 0};  ///< a - b (m)
-  double weight = 0;  ///< barycentric weight in the closest point v
+  Vec3 a;                 ///< support point of A's core (world, m)
+  Vec3 b;                 ///< support point of B's core (world, m)
+  Vec3 w;                 ///< a - b (m)
+  double weight;          ///< barycentric weight in the closest point v
+  std::uint32_t index_a;  ///< vertex of A's core that a is (see ConvexProxy::support)
+  std::uint32_t index_b;  ///< vertex of B's core that b is
 };
 
 /// Result of gjk_distance().
