@@ -88,9 +88,29 @@ double edge_separation(const Vec3& pa, const Vec3& ea, const Vec3& pb, const Vec
   return glm::dot(n, pb - pa);
 }
 
+// A's edges, gathered once per query: the Gauss-map arc (its two face normals and their
+// cross product) and the segment
+struct EdgeArc {
+  Vec3 u, v, bxa, p, e;
+};
+constexpr std::uint32_t kMaxGathered = 256;
+
 EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r) {
   EdgeQuery q;
-  // B's edges into A's frame once each (outer loop), A's in place
+  std::array<EdgeArc, kMaxGathered> arcs;
+  const std::uint32_t na = std::min(a.edge_count / 2, kMaxGathered);
+  const bool gathered = a.edge_count / 2 <= kMaxGathered;
+  for (std::uint32_t i = 0; i < na; ++i) {
+    const HalfEdge& e1 = a.edges[2 * i];
+    const HalfEdge& t1 = a.edges[2 * i + 1];
+    EdgeArc& g = arcs[i];
+    g.u = a.faces[e1.face].normal;
+    g.v = a.faces[t1.face].normal;
+    g.bxa = glm::cross(g.v, g.u);
+    g.p = a.vertices[e1.origin];
+    g.e = a.vertices[t1.origin] - g.p;
+  }
+  // B's edges into A's frame once each (outer loop), A's from the gathered arcs
   for (std::uint32_t j = 0; j < b.edge_count; j += 2) {
     const HalfEdge& e2 = b.edges[j];
     const HalfEdge& t2 = b.edges[j + 1];
@@ -100,16 +120,25 @@ EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r) {
     const Vec3 v2 = r.R * b.faces[t2.face].normal;
     const Vec3 e2d = q2 - p2;
     const Vec3 dxc = glm::cross(v2, u2);
-    for (std::uint32_t i = 0; i < a.edge_count; i += 2) {
-      const HalfEdge& e1 = a.edges[i];
-      const HalfEdge& t1 = a.edges[i + 1];
-      const Vec3 u1 = a.faces[e1.face].normal;
-      const Vec3 v1 = a.faces[t1.face].normal;
-      if (!is_minkowski_face(u1, v1, -u2, -v2, glm::cross(v1, u1), dxc)) continue;
-      const Vec3 p1 = a.vertices[e1.origin];
+    for (std::uint32_t i = 0; i < a.edge_count / 2; ++i) {
+      EdgeArc g;
+      if (gathered) {
+        g = arcs[i];
+      } else {
+        const HalfEdge& e1 = a.edges[2 * i];
+        const HalfEdge& t1 = a.edges[2 * i + 1];
+        g = {a.faces[e1.face].normal, a.faces[t1.face].normal, Vec3(0.0), a.vertices[e1.origin], Vec3(0.0)};
+        g.bxa = glm::cross(g.v, g.u);
+        g.e = a.vertices[t1.origin] - g.p;
+      }
+      // the arcs cross (Gregorius 2013) with C = -u2, D = -v2: the first test alone
+      // rejects most pairs
+      const double cba = -glm::dot(u2, g.bxa), dba = -glm::dot(v2, g.bxa);
+      if (!(cba * dba < 0)) continue;
+      if (!is_minkowski_face(g.u, g.v, -u2, -v2, g.bxa, dxc)) continue;
       Vec3 n;
-      const double s = edge_separation(p1, a.vertices[t1.origin] - p1, p2, e2d, a.center, n);
-      if (s > q.separation) q.separation = s, q.edge_a = i, q.edge_b = j, q.normal = n;
+      const double s = edge_separation(g.p, g.e, p2, e2d, a.center, n);
+      if (s > q.separation) q.separation = s, q.edge_a = 2 * i, q.edge_b = j, q.normal = n;
     }
   }
   return q;
