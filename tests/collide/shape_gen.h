@@ -52,4 +52,35 @@ inline IcoSphere icosphere(int level, double r = 1) {
   return s;
 }
 
+/// A terrain: an n x n grid of cells over [-size/2, size/2]^2 in x-z, height h(x, z), two
+/// triangles per cell wound so their normals point up (+y).
+template <class H>
+IcoSphere terrain(int n, double size, H height) {
+  IcoSphere m;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) {
+      const double x = size * (double(i) / n - 0.5), z = size * (double(j) / n - 0.5);
+      m.vertices.push_back(Vec3(x, height(x, z), z));
+    }
+  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(i * (n + 1) + j); };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      m.triangles.push_back({id(i, j), id(i, j + 1), id(i + 1, j)});
+      m.triangles.push_back({id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)});
+    }
+  return m;
+}
+
+/// The 12 outward-wound triangles of the box |x| <= h.
+inline IcoSphere box_mesh(const Vec3& h) {
+  IcoSphere m;
+  for (int i = 0; i < 8; ++i) m.vertices.push_back(Vec3(i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z));
+  const std::uint32_t quads[6][4] = {{1, 3, 7, 5}, {0, 4, 6, 2}, {2, 6, 7, 3}, {0, 1, 5, 4}, {4, 5, 7, 6}, {0, 2, 3, 1}};
+  for (const auto& q : quads) {
+    m.triangles.push_back({q[0], q[1], q[2]});
+    m.triangles.push_back({q[0], q[2], q[3]});
+  }
+  return m;
+}
+
 }  // namespace pba::test_support

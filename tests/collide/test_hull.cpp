@@ -9,15 +9,14 @@
 #include <random>
 
 #include "error_of.h"
-#include "hull_check.h"
 #include "pba/collide/shape.h"
+#include "shape_checks.h"
 #include "shape_gen.h"
 
 namespace {
 
 using namespace pba;
-using pba::test_support::error_of;
-using pba::test_support::expect_valid_hull;
+using namespace pba::test_support;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // the builder's tolerance is 1e-9 of the cloud's extent (x + y + z sizes); merging coplanar
@@ -37,10 +36,6 @@ void expect_contains(const ConvexHull& h, std::span<const Vec3> pts, double tol)
   }
 }
 
-Quat random_rotation(std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0, 1);
-  return glm::normalize(Quat(g(rng), g(rng), g(rng), g(rng)));
-}
 
 // box closed form: I = m/12 diag(b^2 + c^2, a^2 + c^2, a^2 + b^2) for edge lengths a, b, c
 Mat3 box_inertia(const Vec3& h, double density) {
@@ -53,13 +48,6 @@ Mat3 box_inertia(const Vec3& h, double density) {
   return i;
 }
 
-void expect_mat_near(const Mat3& a, const Mat3& b, double rel) {
-  double scale = 0;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) scale = std::max(scale, std::abs(b[i][j]));
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) EXPECT_NEAR(a[i][j], b[i][j], rel * scale) << "(" << i << ", " << j << ")";
-}
 
 // box corners (each three times), random points on its faces and edges and inside, shuffled
 std::vector<Vec3> messy_box_cloud(const Vec3& h, std::mt19937_64& rng) {
