@@ -49,6 +49,12 @@ Vec3 ConvexProxy::support(const Vec3& d, std::uint32_t* vertex, std::uint32_t hi
       index = narrow::hull_support(*hull, dl, hint);
       local = hull->vertices()[index];
       break;
+    case ShapeType::Mesh: {
+      const double d0 = glm::dot(triangle[0], dl), d1 = glm::dot(triangle[1], dl), d2 = glm::dot(triangle[2], dl);
+      index = d1 > d0 ? (d2 > d1 ? 2u : 1u) : (d2 > d0 ? 2u : 0u);
+      local = triangle[index];
+      break;
+    }
     default: break;  // sphere: the centre
   }
   if (vertex) *vertex = index;

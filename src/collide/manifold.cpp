@@ -7,18 +7,14 @@
 
 namespace pba {
 
-namespace {
-
 using namespace narrow;
 
-// a capsule's world axis and core end points
-struct Segment {
-  Vec3 p, q;  // bottom (-y) and top (+y) core ends
-};
-Segment capsule_core(const ColliderShape& s, const Pose& p) {
+narrow::Segment narrow::capsule_core(const ColliderShape& s, const Pose& p) {
   const Vec3 u = p.rotation * Vec3(0, s.half_height, 0);
   return {p.position - u, p.position + u};
 }
+
+namespace {
 
 // a unit vector perpendicular to u (deterministic)
 Vec3 perpendicular(const Vec3& u) {
@@ -165,11 +161,14 @@ void convex_plane(const ColliderShape& a, const Pose& pa, const ColliderShape& b
   reduce(cand.data(), n, -np, m);
 }
 
-// box or hull view of a shape
-void poly_of(const ColliderShape& s, Poly& p) {
+}  // namespace
+
+void narrow::poly_of(const ColliderShape& s, Poly& p) {
   if (s.type == ShapeType::Box) make_box_poly(s.half_extents, p);
   else make_hull_poly(*s.hull, p);
 }
+
+namespace {
 
 // GJK on the cores; EPA when they overlap; then a manifold along the normal
 void convex_gjk(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb, double margin,
@@ -199,13 +198,15 @@ void convex_gjk(const ColliderShape& a, const Pose& pa, const ColliderShape& b, 
   manifold_from_normal(a, pa, b, pb, n, point_a, point_b, margin, m);
 }
 
-void check_pose(const Pose& p, const char* where) {
+}  // namespace
+
+void narrow::check_pose(const Pose& p, const char* where) {
   const double qn = glm::length(p.rotation);
   if (!is_finite(p.position)) require_finite(p.position, std::string(where) + ".position");
   if (!(std::abs(qn - 1) <= 1e-6)) require_unit_quat(p.rotation, std::string(where) + ".rotation");
 }
 
-void check_shape(const ColliderShape& s, const char* where) {
+void narrow::check_shape(const ColliderShape& s, const char* where) {
   // the message strings are built only on failure (collide() must not allocate)
   auto w = [where] { return std::string(where); };
   switch (s.type) {
@@ -232,6 +233,8 @@ void check_shape(const ColliderShape& s, const char* where) {
     default: break;
   }
 }
+
+namespace {
 
 int rank(ShapeType t) {
   switch (t) {

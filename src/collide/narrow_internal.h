@@ -241,6 +241,18 @@ inline void flip(Manifold& m) {
   for (int i = 0; i < m.count; ++i) std::swap(m.points[std::size_t(i)].point_a, m.points[std::size_t(i)].point_b);
 }
 
+/// A capsule's core segment in the world: bottom (-y) and top (+y) ends.
+struct Segment {
+  Vec3 p, q;
+};
+Segment capsule_core(const ColliderShape& s, const Pose& p);
+/// The box or hull view of a box or hull shape.
+void poly_of(const ColliderShape& s, Poly& p);
+/// Throws Error naming `where` for a non-finite pose or a rotation that is not unit.
+void check_pose(const Pose& p, const char* where);
+/// Throws Error naming `where` and the field for bad shape parameters.
+void check_shape(const ColliderShape& s, const char* where);
+
 /// EPA seeded by a finished GJK run whose cores overlap (ok = false otherwise).
 PenetrationResult epa_from_gjk(const GjkStepper& g);
 

@@ -2,6 +2,7 @@
 // both box methods over random poses, counted by the replaced global operator new.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "alloc_count.h"
@@ -47,6 +48,34 @@ TEST(NarrowPhaseAlloc, CollideAllocatesNothing) {
   const long long after = g_allocations.load();
   EXPECT_EQ(after - before, 0);
   EXPECT_GT(contacts, 1000);  // the poses overlap often: the contact paths ran
+}
+
+TEST(NarrowPhaseAlloc, CollideMeshAllocatesNothing) {
+  // a bumpy 8 x 8 grid, every convex shape dropped on it at random poses
+  std::vector<Vec3> v;
+  std::vector<std::array<std::uint32_t, 3>> t;
+  for (int j = 0; j <= 8; ++j)
+    for (int i = 0; i <= 8; ++i) v.push_back({0.5 * i - 2, 0.05 * std::sin(1.3 * i + 0.7 * j), 0.5 * j - 2});
+  for (std::uint32_t j = 0; j < 8; ++j)
+    for (std::uint32_t i = 0; i < 8; ++i) {
+      t.push_back({j * 9 + i, (j + 1) * 9 + i, j * 9 + i + 1});
+      t.push_back({j * 9 + i + 1, (j + 1) * 9 + i, (j + 1) * 9 + i + 1});
+    }
+  const ColliderShape mesh = ColliderShape::triangles(TriangleMesh::build(v, t));
+  std::mt19937_64 rng(9);
+  std::vector<Vec3> cloud(30);
+  for (Vec3& p : cloud) p = test_support::random_vec(rng, 0.4);
+  const ColliderShape shapes[] = {ColliderShape::sphere(0.3), ColliderShape::capsule(0.3, 0.2),
+                                  ColliderShape::box(Vec3(0.4, 0.2, 0.3)), ColliderShape::convex(ConvexHull::build(cloud))};
+  std::vector<Pose> poses(500);
+  for (auto& p : poses) p = {test_support::random_vec(rng, 1.5) * Vec3(1, 0.15, 1), test_support::random_rotation(rng)};
+  std::array<Manifold, 32> out;
+  int manifolds = 0;
+  const long long before = g_allocations.load();
+  for (const Pose& p : poses)
+    for (const ColliderShape& s : shapes) manifolds += collide_mesh(s, p, mesh, {}, out);
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_GT(manifolds, 500);
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 
 #include "pba/collide/shape.h"
 #include "pba/core.h"
@@ -48,6 +49,7 @@ struct Manifold {
   Vec3 normal{0, 0, 1};                 ///< unit normal pointing from A to B
   std::array<ContactPoint, kMaxPoints> points{};  ///< the first `count` are valid
   int count = 0;                        ///< number of points, 0..4 (0: no contact)
+  std::uint32_t sub_shape_b = 0;        ///< B's part the manifold is against: the mesh triangle (0 otherwise)
 };
 
 /// How collide() treats box-box, box-hull and hull-hull pairs.
@@ -87,16 +89,30 @@ struct NarrowPhaseCache {
 Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
                  const NarrowPhaseSettings& settings = {}, NarrowPhaseCache* cache = nullptr);
 
+/// The contact manifolds of a convex shape `a` (sphere, capsule, box or hull) against a
+/// static triangle mesh `mesh`: one manifold per touching triangle (Manifold::sub_shape_b
+/// is the triangle), normals from `a` to the mesh, in the order the mesh's BVH visits the
+/// triangles (deterministic). Candidate triangles come from TriangleMesh::query with a's
+/// bounds grown by the margin; each triangle is a thin two-sided hull. A contact on an
+/// internal edge or vertex whose edge flags are clear (flat or concave, see
+/// TriangleMesh::edge_flags) takes the triangle's face normal, so a shape sliding over a
+/// flat mesh gets no ghost contacts from the edges between its triangles. Writes at most
+/// out.size() manifolds and returns how many; never allocates. Throws Error like collide().
+int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
+                 std::span<Manifold> out, const NarrowPhaseSettings& settings = {});
+
 // --- GJK and EPA --------------------------------------------------------------------
 
 /// A convex shape's core at a pose, as GJK sees it: the support function of a point,
 /// segment, box or hull, and the rounding radius added around it (sphere and capsule).
 struct ConvexProxy {
-  ShapeType type = ShapeType::Sphere;  ///< Sphere, Capsule, Box or Hull
+  ShapeType type = ShapeType::Sphere;  ///< Sphere, Capsule, Box, Hull, or Mesh for one triangle
   Vec3 half_extents{0, 0, 0};          ///< box half extents (m)
   double half_height = 0;              ///< capsule core half length (m)
   double radius = 0;                   ///< core radius (m): sphere and capsule radius, else 0
   const ConvexHull* hull = nullptr;    ///< hull body, not owned
+  /// ShapeType::Mesh: a single triangle, these three points (local frame, not owned).
+  const Vec3* triangle = nullptr;
   Pose pose{};                         ///< placement
 
   /// The proxy of a convex shape at `pose` (the shape's hull must outlive the proxy).
@@ -104,7 +120,7 @@ struct ConvexProxy {
   static ConvexProxy of(const ColliderShape& s, const Pose& pose);
   /// The world point of the core farthest along `d` (any non-zero direction), and the
   /// index of the vertex it is (box: corner bits xyz; hull: vertex; capsule: 0 bottom,
-  /// 1 top; sphere: 0). `hint`: a hull vertex to start the hill climb from (a previous
+  /// 1 top; triangle: 0, 1, 2; sphere: 0). `hint`: a hull vertex to start the hill climb from (a previous
   /// answer makes it a step or two).
   Vec3 support(const Vec3& d, std::uint32_t* vertex = nullptr, std::uint32_t hint = 0) const;
 };
