@@ -174,29 +174,40 @@ namespace {
 void convex_gjk(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb, double margin,
                 Manifold& m) {
   m.count = 0;
-  const ConvexProxy A = ConvexProxy::of(a, pa), B = ConvexProxy::of(b, pb);
+  Vec3 n, point_a, point_b;
+  if (!contact_normal(ConvexProxy::of(a, pa), ConvexProxy::of(b, pb), margin, n, point_a, point_b)) return;
+  manifold_from_normal(a, pa, b, pb, n, point_a, point_b, margin, m);
+}
+
+}  // namespace
+
+bool narrow::contact_normal(const ConvexProxy& A, const ConvexProxy& B, double margin, Vec3& n, Vec3& point_a,
+                            Vec3& point_b) {
   GjkStepper g(A, B);
   while (g.step()) {
   }
-  Vec3 n, point_a, point_b;
   if (!g.overlap()) {
+    // apart: the closest points, the radii along their direction
     Vec3 ca, cb;
     g.closest_points(ca, cb);
     const Vec3 v = g.closest();
     const double dist = glm::length(v);
-    if (dist - A.radius - B.radius > margin) return;
+    if (dist - A.radius - B.radius > margin) return false;
     n = -v / dist;
     point_a = ca + A.radius * n;
     point_b = cb - B.radius * n;
-  } else {
-    const PenetrationResult p = epa_from_gjk(g);
-    if (!p.ok) return;
-    n = p.normal;
-    point_a = p.point_a;
-    point_b = p.point_b;
+    return true;
   }
-  manifold_from_normal(a, pa, b, pb, n, point_a, point_b, margin, m);
+  // the cores overlap: EPA
+  const PenetrationResult p = epa_from_gjk(g);
+  if (!p.ok) return false;
+  n = p.normal;
+  point_a = p.point_a;
+  point_b = p.point_b;
+  return true;
 }
+
+namespace {
 
 }  // namespace
 

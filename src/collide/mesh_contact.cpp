@@ -39,26 +39,8 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
   ConvexProxy B;
   B.type = ShapeType::Mesh;
   B.triangle = tri;
-  GjkStepper g(A, B);
-  while (g.step()) {
-  }
   Vec3 n, point_a, point_b;
-  if (!g.overlap()) {
-    Vec3 ca, cb;
-    g.closest_points(ca, cb);
-    const Vec3 v = g.closest();
-    const double dist = glm::length(v);
-    if (dist - A.radius > margin) return false;
-    n = -v / dist;
-    point_a = ca + A.radius * n;
-    point_b = cb;
-  } else {
-    const PenetrationResult p = epa_from_gjk(g);
-    if (!p.ok) return false;
-    n = p.normal;
-    point_a = p.point_a;
-    point_b = p.point_b;
-  }
+  if (!contact_normal(A, B, margin, n, point_a, point_b)) return false;
   // an internal (flat or concave) edge or vertex takes the face normal, on the side of
   // the triangle where the shape's centre is
   const std::uint8_t on = feature_edges(tri, point_b);

@@ -256,6 +256,11 @@ void check_shape(const ColliderShape& s, const char* where);
 /// EPA seeded by a finished GJK run whose cores overlap (ok = false otherwise).
 PenetrationResult epa_from_gjk(const GjkStepper& g);
 
+/// GJK on the cores, EPA when they overlap: the normal (A to B) and the surface points.
+/// False when the shapes are farther apart than `margin` (or EPA finds no depth).
+bool contact_normal(const ConvexProxy& A, const ConvexProxy& B, double margin, Vec3& n, Vec3& point_a,
+                    Vec3& point_b);
+
 /// Box/hull pair by separating axes and face clipping (sat.cpp).
 void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose& pb, double margin, SatCache* cache,
                        Manifold& m);
