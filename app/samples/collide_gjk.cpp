@@ -4,7 +4,7 @@
 // origin v, and the newest support point w along -v. Step advances one iteration; when the
 // run ends inside, EPA's penetration vector is drawn from the origin.
 //
-// Options: a=sphere|capsule|box|hull, b=..., auto=0|1 (step by itself every 0.4 s).
+// Options: a=sphere|capsule|box|hull, b=..., auto=0|1 (step by itself every 0.25 s).
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -43,7 +43,7 @@ class CollideGjk final : public Sample {
     s.single_step = false;
     if (!s.paused || step_once) {
       clock_ += step_once ? 1.0 / 60 : std::clamp(frame_dt, 0.0, 0.1);
-      if (auto_ && clock_ >= 0.4) {
+      if (auto_ && clock_ >= 0.25) {
         clock_ = 0;
         // one iteration; after the end, a pause, then the next placement
         if (!stepper_->done()) do_step();
@@ -61,12 +61,18 @@ class CollideGjk final : public Sample {
     draw_shape(r, a_, pose_a_, Color::hex(0x6e7f99, 0.8f));
     draw_shape(r, b_, pose_b_, Color::hex(0xf76b15, 0.7f));
     // the Minkowski difference as points, the origin as a white cross
-    // (as edges only, so the simplex inside stays visible)
-    const auto dv = diff_->vertices();
-    const auto de = diff_->edges();
-    for (std::size_t i = 0; i < de.size(); i += 2)
-      r.line(kDiffOrigin + dv[de[i].origin], kDiffOrigin + dv[de[i + 1].origin], Color::hex(0x8a8f98));
-    for (const Vec3& w : diff_->vertices()) r.point(kDiffOrigin + w, 3.0f, Color::hex(0xb0b4ba));
+    // (a polytope as its edges, a rounded one as three great circles of support points, so
+    // the simplex inside stays visible)
+    if (rings_.empty()) {
+      const auto dv = diff_->vertices();
+      const auto de = diff_->edges();
+      for (std::size_t i = 0; i < de.size(); i += 2)
+        r.line(kDiffOrigin + dv[de[i].origin], kDiffOrigin + dv[de[i + 1].origin], Color::hex(0x8a8f98));
+      for (const Vec3& w : dv) r.point(kDiffOrigin + w, 3.0f, Color::hex(0xb0b4ba));
+    } else {
+      for (std::size_t i = 0; i < rings_.size(); ++i)
+        r.line(kDiffOrigin + rings_[i], kDiffOrigin + rings_[i % 64 == 63 ? i - 63 : i + 1], Color::hex(0x8a8f98));
+    }
     const double c = 0.06;
     r.line(kDiffOrigin - Vec3(c, 0, 0), kDiffOrigin + Vec3(c, 0, 0), colors::white);
     r.line(kDiffOrigin - Vec3(0, c, 0), kDiffOrigin + Vec3(0, c, 0), colors::white);
@@ -75,7 +81,7 @@ class CollideGjk final : public Sample {
     // the simplex: vertices, edges and (translucent) faces
     const auto s = stepper_->simplex();
     for (std::size_t i = 0; i < s.size(); ++i) {
-      r.point(kDiffOrigin + s[i].w, 10.0f, colors::yellow);
+      r.point(kDiffOrigin + s[i].w, 16.0f, colors::yellow);
       // the support points on the shapes that made this vertex
       r.point(s[i].a, 7.0f, colors::yellow);
       r.point(s[i].b, 7.0f, colors::yellow);
@@ -88,8 +94,13 @@ class CollideGjk final : public Sample {
             r.triangle(kDiffOrigin + s[i].w, kDiffOrigin + s[j].w, kDiffOrigin + s[k].w, Color::hex(0xffc53d, 0.25f));
     // v, the closest point so far, and the last support point w
     const Vec3 v = stepper_->closest();
-    if (glm::length(v) > 1e-9) r.arrow(kDiffOrigin, kDiffOrigin + v, 0.05, colors::green);
-    if (stepper_->iterations() > 0) r.point(kDiffOrigin + stepper_->last_support().w, 12.0f, colors::pink);
+    // (stopping short of v, whose simplex point stays visible)
+    const double lv = glm::length(v);
+    if (lv > 0.12) r.arrow(kDiffOrigin, kDiffOrigin + (1 - 0.08 / lv) * v, 0.04, colors::green);
+    // (not when it is already a simplex vertex: the run then stops without progress)
+    bool known = false;
+    for (const SimplexVertex& x : s) known = known || x.w == stepper_->last_support().w;
+    if (stepper_->iterations() > 0 && !known) r.point(kDiffOrigin + stepper_->last_support().w, 7.0f, colors::pink);
     if (stepper_->done() && !stepper_->overlap()) {
       // the closest points of the cores, and the text that says the run is over
       Vec3 pa, pb;
@@ -108,7 +119,7 @@ class CollideGjk final : public Sample {
                        "support points); yellow: the simplex; green arrow: v, its closest point; pink: the new "
                        "support point w along -v. The shapes overlap when the origin is inside A - B; "
                        "then EPA's penetration vector is red. Spheres and capsules: GJK runs on their cores "
-                       "(a point, a segment), so the simplex lies inside the cloud by the radii.");
+                       "(a point, a segment), so the simplex lies inside the drawn difference by the radii.");
     bool changed = ImGui::Combo("shape A", &shape_a_, kShapeNames.data(), int(kShapeNames.size()));
     changed |= ImGui::Combo("shape B", &shape_b_, kShapeNames.data(), int(kShapeNames.size()));
     if (ImGui::Button("Step") && !stepper_->done()) do_step();
@@ -155,6 +166,17 @@ class CollideGjk final : public Sample {
       cloud_.push_back(pa_.support(d) - pb_.support(-d) + core_radii_ * d);
     }
     diff_ = ConvexHull::build(cloud_, "Minkowski difference");
+    rings_.clear();
+    if (diff_->vertices().size() > 200) {
+      for (int axis = 0; axis < 3; ++axis)
+        for (int k = 0; k < 64; ++k) {
+          const double ang = 2 * kPi * k / 64;
+          Vec3 d(0.0);
+          d[(axis + 1) % 3] = std::cos(ang);
+          d[(axis + 2) % 3] = std::sin(ang);
+          rings_.push_back(pa_.support(d) - pb_.support(-d) + core_radii_ * d);
+        }
+    }
   }
   void do_step() {
     stepper_->step();
@@ -171,6 +193,7 @@ class CollideGjk final : public Sample {
   PenetrationResult epa_{};
   std::vector<Vec3> cloud_;
   std::shared_ptr<const ConvexHull> diff_;
+  std::vector<Vec3> rings_;  // great circles of a rounded difference (empty for polytopes)
   double clock_ = 0;
   int rest_ = 0, placement_ = 0;
   bool auto_ = true;
