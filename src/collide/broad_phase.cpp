@@ -349,6 +349,7 @@ void BroadPhase::set_method(BroadPhaseMethod m) {
     rebuild_tree();
   } else {
     tree_.clear();
+    tree_rebuilt_ratio_ = 0;
     std::fill(node_.begin(), node_.end(), DynamicTree::kNull);
     tree_keys_.clear();
     for (std::uint32_t p : move_buffer_) moved_[p] = 0;
@@ -374,6 +375,7 @@ void BroadPhase::rebuild_tree() {
     move_buffer_.push_back(p);
   }
   tree_.rebuild();
+  tree_rebuilt_ratio_ = tree_.area_ratio();
 }
 
 const Aabb& BroadPhase::box(ProxyId id) const {
@@ -440,6 +442,13 @@ void BroadPhase::update_tree_pairs() {
   }
   tree_keys_.resize(kept);
   stats_.box_tests = tests;
+
+  // keep the tree's quality: rebuild by the SAH when the inner nodes' area has grown half as
+  // much again as after the last rebuild (re-inserted leaves drift from the best layout)
+  if (tree_.proxy_count() > 2 && tree_.area_ratio() > 1.5 * tree_rebuilt_ratio_) {
+    tree_.rebuild();
+    tree_rebuilt_ratio_ = tree_.area_ratio();
+  }
   stats_.tree_height = tree_.height();
   stats_.tree_area_ratio = tree_.area_ratio();
 }

@@ -1,10 +1,11 @@
 // The dynamic AABB tree: a pool of nodes, SAH insertion with inherited cost (Catto 2019,
 // "Dynamic Bounding Volume Hierarchies", GDC; Bittner, Hapala and Havran 2015, "Incremental
 // BVH construction for ray tracing"), AVL rotations on the way back to the root (Adelson-
-// Velsky and Landis 1962, as Box2D's b2DynamicTree uses them), and a median-split rebuild.
+// Velsky and Landis 1962, as Box2D's b2DynamicTree uses them), and a binned-SAH rebuild.
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "pba/collide/broad_phase.h"
@@ -242,36 +243,92 @@ void DynamicTree::rebuild() {
     }
   }
   // build top-down
-  root_ = build_range(build_leaves_.data(), static_cast<std::int32_t>(build_leaves_.size()));
+  root_ = build_range(build_leaves_.data(), static_cast<std::int32_t>(build_leaves_.size()), 0);
   at(root_).parent = kNull;
 }
 
-std::int32_t DynamicTree::build_range(std::int32_t* leaves, std::int32_t count) {
+std::int32_t DynamicTree::build_range(std::int32_t* leaves, std::int32_t count, int depth) {
   if (count == 1) return leaves[0];
-  // the longest axis of the centres' bounds
-  Vec3 lo = at(leaves[0]).box.center(), hi = lo;
+  // the bounds of the centres (box lo + hi, twice the centre: no rounding) and the longest axis
+  auto centre2 = [&](std::int32_t x, int k) { return at(x).box.lo[k] + at(x).box.hi[k]; };
+  Vec3 lo = at(leaves[0]).box.lo + at(leaves[0]).box.hi, hi = lo;
   for (std::int32_t i = 1; i < count; ++i) {
-    const Vec3 c = at(leaves[i]).box.center();
+    const Vec3 c = at(leaves[i]).box.lo + at(leaves[i]).box.hi;
     lo = glm::min(lo, c);
     hi = glm::max(hi, c);
   }
   const Vec3 d = hi - lo;
   const int axis = d.x >= d.y && d.x >= d.z ? 0 : (d.y >= d.z ? 1 : 2);
-  // split at the median centre (ties by node index: a total order, so the result is
-  // deterministic); halves of floor and ceil of count / 2 keep the balance within 1
-  const std::int32_t half = count / 2;
-  std::nth_element(leaves, leaves + half, leaves + count, [&](std::int32_t x, std::int32_t y) {
-    const double cx = at(x).box.lo[axis] + at(x).box.hi[axis], cy = at(y).box.lo[axis] + at(y).box.hi[axis];
-    return cx < cy || (cx == cy && x < y);
-  });
-  const std::int32_t c1 = build_range(leaves, half);
-  const std::int32_t c2 = build_range(leaves + half, count - half);
+
+  // binned SAH (Wald 2007, "On fast construction of SAH-based bounding volume
+  // hierarchies"): sort the centres into bins along the axis and split at the plane of
+  // least area(left) n_left + area(right) n_right; below a depth limit, or when every
+  // centre falls in one bin, split at the median instead (balanced: the limit holds)
+  std::int32_t split = -1;
+  const int median_below = height_limit() - static_cast<int>(std::bit_width(static_cast<std::uint32_t>(count))) - 1;
+  if (count > 2 && depth < median_below && d[axis] > 0) {
+    constexpr int kBins = 16;
+    struct Bin {
+      Aabb box{Vec3(std::numeric_limits<double>::max()), Vec3(-std::numeric_limits<double>::max())};
+      std::int32_t count = 0;
+    };
+    Bin bins[kBins];
+    const double scale = kBins / d[axis];
+    auto bin_of = [&](std::int32_t x) {
+      return std::min(kBins - 1, static_cast<int>((centre2(x, axis) - lo[axis]) * scale));
+    };
+    for (std::int32_t i = 0; i < count; ++i) {
+      Bin& bin = bins[bin_of(leaves[i])];
+      bin.box = bin.box.merged(at(leaves[i]).box);
+      ++bin.count;
+    }
+    // sweep from the right for the suffix areas, then from the left for the costs
+    double right_area[kBins];
+    std::int32_t right_count[kBins];
+    Aabb acc = bins[kBins - 1].box;
+    std::int32_t n = 0;
+    for (int b = kBins - 1; b > 0; --b) {
+      if (b < kBins - 1) acc = acc.merged(bins[b].box);
+      n += bins[b].count;
+      right_area[b] = n > 0 ? acc.area() : 0;
+      right_count[b] = n;
+    }
+    double best = std::numeric_limits<double>::max();
+    int best_plane = -1;
+    Aabb left = bins[0].box;
+    std::int32_t nl = 0;
+    for (int b = 1; b < kBins; ++b) {
+      if (b > 1) left = left.merged(bins[b - 1].box);
+      nl += bins[b - 1].count;
+      if (nl == 0 || right_count[b] == 0) continue;
+      const double cost = left.area() * nl + right_area[b] * right_count[b];
+      if (cost < best) {
+        best = cost;
+        best_plane = b;
+      }
+    }
+    if (best_plane > 0) {
+      std::int32_t* mid = std::partition(leaves, leaves + count, [&](std::int32_t x) { return bin_of(x) < best_plane; });
+      split = static_cast<std::int32_t>(mid - leaves);
+    }
+  }
+  if (split <= 0 || split >= count) {
+    // the median centre (ties by node index: a total order, so the result is
+    // deterministic); halves of floor and ceil of count / 2 keep the balance within 1
+    split = count / 2;
+    std::nth_element(leaves, leaves + split, leaves + count, [&](std::int32_t x, std::int32_t y) {
+      const double cx = centre2(x, axis), cy = centre2(y, axis);
+      return cx < cy || (cx == cy && x < y);
+    });
+  }
+  const std::int32_t c1 = build_range(leaves, split, depth + 1);
+  const std::int32_t c2 = build_range(leaves + split, count - split, depth + 1);
   const std::int32_t p = allocate_node();
-  Node& n = at(p);
-  n.child1 = c1;
-  n.child2 = c2;
-  n.box = at(c1).box.merged(at(c2).box);
-  n.height = 1 + std::max(at(c1).height, at(c2).height);
+  Node& node = at(p);
+  node.child1 = c1;
+  node.child2 = c2;
+  node.box = at(c1).box.merged(at(c2).box);
+  node.height = 1 + std::max(at(c1).height, at(c2).height);
   at(c1).parent = at(c2).parent = p;
   return p;
 }

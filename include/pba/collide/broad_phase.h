@@ -95,9 +95,10 @@ class DynamicTree {
   bool move_proxy(std::int32_t node, const Aabb& box);
   /// Removes every node.
   void clear();
-  /// Rebuilds the whole tree top-down over the leaves' fat boxes, splitting each set at the
-  /// median centre along its longest axis: a perfectly balanced tree, for a batch of
-  /// insertions or a tree that degraded after many moves. Leaf node indices are kept.
+  /// Rebuilds the whole tree top-down over the leaves' fat boxes by the binned surface-area
+  /// heuristic (Wald 2007), falling back to median splits deep down so the height stays
+  /// within height_limit(): for a batch of insertions or a tree that degraded after many
+  /// moves. Leaf node indices are kept. Allocates only the first time (its scratch list).
   void rebuild();
 
   /// The fat box of leaf `node`.
@@ -143,7 +144,7 @@ class DynamicTree {
   std::int32_t balance(std::int32_t a);
   void refit_up(std::int32_t n);
   void keep_height();
-  std::int32_t build_range(std::int32_t* leaves, std::int32_t count);
+  std::int32_t build_range(std::int32_t* leaves, std::int32_t count, int depth);
   Node& at(std::int32_t n) { return nodes_[static_cast<std::size_t>(n)]; }
   const Node& at(std::int32_t n) const { return nodes_[static_cast<std::size_t>(n)]; }
 
@@ -180,14 +181,21 @@ void DynamicTree::ray_cast(const Ray& ray, F&& f) const {
   // 1/d per axis (infinite on axes the ray does not move along)
   const Vec3 inv(1.0 / ray.direction.x, 1.0 / ray.direction.y, 1.0 / ray.direction.z);
   Ray r = ray;
-  std::int32_t stack[kStack];
+  // the stack holds each node with the distance at which the ray enters its box
+  struct Item {
+    std::int32_t node;
+    double enter;
+  };
+  Item stack[kStack];
   int top = 0;
-  if (ray_enter_box(r, inv, at(root_).box) < 0) return;
-  stack[top++] = root_;
+  const double t_root = ray_enter_box(r, inv, at(root_).box);
+  if (t_root < 0) return;
+  stack[top++] = {root_, t_root};
   while (top > 0) {
-    const Node& n = at(stack[--top]);
+    const Item it = stack[--top];
     // the ray may have been clipped since this node was pushed
-    if (ray_enter_box(r, inv, n.box) < 0) continue;
+    if (it.enter > r.max_distance) continue;
+    const Node& n = at(it.node);
     if (n.is_leaf()) {
       const double clip = f(n.user, static_cast<const Ray&>(r));
       if (clip < 0) return;
@@ -199,16 +207,16 @@ void DynamicTree::ray_cast(const Ray& ray, F&& f) const {
     const double t2 = ray_enter_box(r, inv, at(n.child2).box);
     if (t1 >= 0 && t2 >= 0) {
       if (t1 <= t2) {
-        stack[top++] = n.child2;
-        stack[top++] = n.child1;
+        stack[top++] = {n.child2, t2};
+        stack[top++] = {n.child1, t1};
       } else {
-        stack[top++] = n.child1;
-        stack[top++] = n.child2;
+        stack[top++] = {n.child1, t1};
+        stack[top++] = {n.child2, t2};
       }
     } else if (t1 >= 0) {
-      stack[top++] = n.child1;
+      stack[top++] = {n.child1, t1};
     } else if (t2 >= 0) {
-      stack[top++] = n.child2;
+      stack[top++] = {n.child2, t2};
     }
   }
 }
@@ -356,6 +364,7 @@ class BroadPhase {
   DynamicTree tree_;
   std::vector<std::uint32_t> move_buffer_;
   std::vector<std::uint64_t> tree_keys_, new_keys_, merge_keys_;
+  double tree_rebuilt_ratio_ = 0;  // the tree's area ratio after its last rebuild
   // the other methods' state, and the output
   std::unique_ptr<detail::BroadPhaseMethods> methods_;
   std::vector<ProxyPair> pairs_;
