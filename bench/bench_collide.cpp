@@ -13,7 +13,8 @@
 // Per frame, CPU time of this thread (so other processes on the shared machine do not
 // count), averaged over F frames after one warm-up frame; R fresh runs per row, medians
 // reported, and ratios taken within each run then their median:
-//   pba <method>      world bounds of every body from its pose + move_proxy + update_pairs
+//   pba <method>      world bounds of every body from shape and pose (pba::bounds) +
+//                     move_proxy + update_pairs
 //                     (narrow phase: see narrow_phase() below, one line per pair)
 //   bullet broad      updateAabbs() + computeOverlappingPairs(): Bullet's broad phase only
 //   bullet full       performDiscreteCollisionDetection(): the above plus Bullet's narrow
@@ -21,9 +22,8 @@
 //   ode hash/sap      dSpaceCollide with a callback that only counts (broad phase only)
 //   ode hash+collide  dSpaceCollide whose callback calls dCollide (ODE's narrow phase)
 // Rays: 5 m rays from uniform random points in random directions (as Bullet's harness),
-// the closest hit; pba casts through the tree and tests each body's box (AABB level: the
-// exact shape test comes with the shapes' ray_cast), Bullet's rayTest includes its shape
-// tests.
+// the closest hit; pba casts through the tree and tests each body's box (AABB level) or its
+// shape (pba::ray_cast, the same work as Bullet's rayTest, which tests its shapes).
 #include <btBulletCollisionCommon.h>
 #include <ode/ode.h>
 
@@ -92,12 +92,17 @@ Scene make_scene(int n, int frames) {
   return s;
 }
 
-// world bounds of body i at position p: a sphere's is its centre +- r; a rotated box's half
-// extents are |R| h (Ericson 2005, 4.2.6)
-pba::Aabb body_bounds(const Scene& s, int i, const Vec3& p, const pba::Mat3& abs_rot) {
-  const Vec3 h = s.is_box(i) ? abs_rot * Vec3(0.5) : Vec3(0.5);
-  return {p - h, p + h};
-}
+// the bodies as pba shapes at their starting poses
+struct Bodies {
+  std::vector<pba::ColliderShape> shape;
+  std::vector<pba::Pose> pose;
+  explicit Bodies(const Scene& s) {
+    for (int i = 0; i < s.n; ++i) {
+      shape.push_back(s.is_box(i) ? pba::ColliderShape::box(Vec3(0.5)) : pba::ColliderShape::sphere(0.5));
+      pose.push_back({s.start[i], s.rotation[i]});
+    }
+  }
+};
 
 // --- the engines --------------------------------------------------------------------------
 
@@ -113,21 +118,16 @@ inline void narrow_phase(const pba::ProxyPair& p, long& sink) { sink += p.a.inde
 FrameResult run_pba(const Scene& s, pba::BroadPhaseMethod method) {
   pba::BroadPhase bp({.method = method});
   bp.reserve(std::size_t(s.n));
-  std::vector<Vec3> pos = s.start;
-  std::vector<pba::Mat3> abs_rot(std::size_t(s.n));
+  Bodies b(s);
   std::vector<pba::ProxyId> ids(std::size_t(s.n));
-  for (int i = 0; i < s.n; ++i) {
-    const pba::Mat3 r = glm::mat3_cast(s.rotation[i]);
-    for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k) abs_rot[i][c][k] = std::abs(r[c][k]);
-    ids[i] = bp.create_proxy(body_bounds(s, i, pos[i], abs_rot[i]), {}, std::uint64_t(i));
-  }
+  for (int i = 0; i < s.n; ++i) ids[i] = bp.create_proxy(pba::bounds(b.shape[i], b.pose[i]), {}, std::uint64_t(i));
   long sink = 0;
   auto frame = [&](int f) {
+    // move every body, update its world bounds from shape and pose, find the pairs
     const Vec3* d = &s.step[std::size_t(f) * std::size_t(s.n)];
     for (int i = 0; i < s.n; ++i) {
-      pos[i] += d[i];
-      bp.move_proxy(ids[i], body_bounds(s, i, pos[i], abs_rot[i]));
+      b.pose[i].position += d[i];
+      bp.move_proxy(ids[i], pba::bounds(b.shape[i], b.pose[i]));
     }
     for (const pba::ProxyPair& p : bp.update_pairs()) narrow_phase(p, sink);
   };
@@ -257,32 +257,31 @@ std::vector<pba::Ray> make_rays(const Scene& s, int count) {
   return rays;
 }
 
-RayResult rays_pba(const Scene& s, const std::vector<pba::Ray>& rays) {
+// closest hit through the tree; `exact` tests each body's shape (pba::ray_cast), otherwise
+// its box (AABB level)
+RayResult rays_pba(const Scene& s, const std::vector<pba::Ray>& rays, bool exact) {
   pba::BroadPhase bp;
+  Bodies b(s);
   std::vector<pba::Aabb> boxes;
   for (int i = 0; i < s.n; ++i) {
-    const pba::Mat3 r = glm::mat3_cast(s.rotation[i]);
-    pba::Mat3 a;
-    for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k) a[c][k] = std::abs(r[c][k]);
-    boxes.push_back(body_bounds(s, i, s.start[i], a));
+    boxes.push_back(pba::bounds(b.shape[i], b.pose[i]));
     bp.create_proxy(boxes.back());
   }
-  if (std::getenv("PBA_RAY_REBUILD")) {
-    bp.set_method(pba::BroadPhaseMethod::Grid);
-    bp.set_method(pba::BroadPhaseMethod::Tree);
-  }
   bp.update_pairs();
-  std::printf("  (tree: height %d, area ratio %.1f)\n", bp.tree().height(), bp.tree().area_ratio());
   const pba::DynamicTree& tree = bp.tree();
   int hits = 0;
   const double t0 = cpu_now();
   for (const pba::Ray& ray : rays) {
-    // closest fat box entered: the per-leaf test clips the ray
     const Vec3 inv = 1.0 / ray.direction;
     bool hit = false;
     tree.ray_cast(ray, [&](std::uint32_t u, const pba::Ray& r) {
-      // the body's own box (tight), entered within the clipped ray
+      // the body hit within the clipped ray clips it further
+      if (exact) {
+        const pba::RayHit h = pba::ray_cast(b.shape[u], b.pose[u], r);
+        if (!h.hit) return r.max_distance;
+        hit = true;
+        return h.distance;
+      }
       const double t = pba::ray_enter_box(r, inv, boxes[u]);
       if (t < 0) return r.max_distance;
       hit = true;
@@ -393,19 +392,23 @@ int main(int argc, char** argv) {
 
     // rays
     const std::vector<pba::Ray> rays = make_rays(s, nrays);
-    std::vector<double> pr, br, rr;
-    int ph = 0, bh = 0;
+    std::vector<double> pa, pe, br, ra, re;
+    int ha = 0, he = 0, bh = 0;
     for (int r = 0; r < repeat; ++r) {
-      const RayResult a = rays_pba(s, rays), b = rays_bullet(s, rays);
-      pr.push_back(a.us);
+      const RayResult a = rays_pba(s, rays, false), e = rays_pba(s, rays, true), b = rays_bullet(s, rays);
+      pa.push_back(a.us);
+      pe.push_back(e.us);
       br.push_back(b.us);
-      rr.push_back(b.us / a.us);
-      ph = a.hits;
-      bh = b.hits;
+      ra.push_back(b.us / a.us);
+      re.push_back(b.us / e.us);
+      ha = a.hits, he = e.hits, bh = b.hits;
     }
-    std::printf("  rays (5 m, closest, %d): pba tree (boxes) %.3f us, %.0f%% hit; bullet rayTest (shapes) %.3f us, "
-                "%.0f%% hit; bullet / pba %.2f\n\n",
-                nrays, median(pr), 100.0 * ph / nrays, median(br), 100.0 * bh / nrays, median(rr));
+    std::printf("  rays, 5 m, closest hit, %d rays:            us/ray   hit   bullet / pba\n", nrays);
+    std::printf("  %-34s %10.3f %4.0f%% %10.2f\n", "pba tree, boxes (AABB level)", median(pa), 100.0 * ha / nrays,
+                median(ra));
+    std::printf("  %-34s %10.3f %4.0f%% %10.2f\n", "pba tree + ray_cast(shape)", median(pe), 100.0 * he / nrays,
+                median(re));
+    std::printf("  %-34s %10.3f %4.0f%%\n\n", "bullet rayTest (shapes)", median(br), 100.0 * bh / nrays);
   }
   dCloseODE();
   return 0;
