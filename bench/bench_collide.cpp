@@ -1,0 +1,415 @@
+// Collision benchmark (issue 10): the per-frame broad phase of pba (each method) against
+// Bullet's collision world (btDbvtBroadphase) and ODE's spaces (dHashSpace and
+// dSweepAndPruneSpace), on the same scene, in the same process; and 5 m ray casts.
+//
+//   bench_collide [--quick] [--repeat R] [--frames F] [--counts 1000,10000] [--rays N]
+//
+// Scene (exactly as /work/shared/peers/bullet_collision.cpp builds it): N bodies, even ones
+// 1 m boxes, odd ones spheres of 0.5 m radius, at uniform random positions in the cube
+// [0, 1.6 cbrt(N)]^3 with random orientations (std::mt19937 seed 7, float draws); every
+// frame every body's position moves by a uniform random step in [-0.02, 0.02] m per axis.
+// Each engine replays the same poses (the draws are made once, up front).
+//
+// Per frame, CPU time of this thread (so other processes on the shared machine do not
+// count), averaged over F frames after one warm-up frame; R fresh runs per row, medians
+// reported, and ratios taken within each run then their median:
+//   pba <method>      world bounds of every body from shape and pose (pba::bounds) +
+//                     move_proxy + update_pairs
+//                     (narrow phase: see narrow_phase() below, one line per pair)
+//   bullet broad      updateAabbs() + computeOverlappingPairs(): Bullet's broad phase only
+//   bullet full       performDiscreteCollisionDetection(): the above plus Bullet's narrow
+//                     phase (contact manifolds for every overlapping pair)
+//   ode hash/sap      dSpaceCollide with a callback that only counts (broad phase only)
+//   ode hash+collide  dSpaceCollide whose callback calls dCollide (ODE's narrow phase)
+// Rays: 5 m rays from uniform random points in random directions (as Bullet's harness),
+// the closest hit; pba casts through the tree and tests each body's box (AABB level) or its
+// shape (pba::ray_cast, the same work as Bullet's rayTest, which tests its shapes).
+#include <btBulletCollisionCommon.h>
+#include <ode/ode.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "pba/collide/broad_phase.h"
+
+namespace {
+
+using pba::Vec3;
+
+double cpu_now() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n == 0 ? 0 : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
+}
+
+// --- the scene: poses drawn once, replayed by every engine ---------------------------------
+
+struct Scene {
+  int n = 0;
+  double side = 0;
+  std::vector<Vec3> start;          // initial positions (m)
+  std::vector<pba::Quat> rotation;  // fixed orientations
+  std::vector<Vec3> step;           // per frame, per body: the position step (m)
+  int frames = 0;
+  bool is_box(int i) const { return (i & 1) == 0; }
+};
+
+Scene make_scene(int n, int frames) {
+  // the same draws, in the same order, as bullet_collision.cpp
+  Scene s;
+  s.n = n;
+  s.frames = frames;
+  std::mt19937 rng(7);
+  s.side = std::cbrt(double(n)) * 1.6;
+  std::uniform_real_distribution<float> U(0, float(s.side)), J(-0.02f, 0.02f);
+  for (int i = 0; i < n; ++i) {
+    const float x = U(rng), y = U(rng), z = U(rng);
+    s.start.emplace_back(x, y, z);
+    // btQuaternion(axis, angle) with axis (U, U, U) normalised
+    const float ax = U(rng), ay = U(rng), az = U(rng), angle = U(rng);
+    const btQuaternion q(btVector3(ax, ay, az), angle);
+    s.rotation.emplace_back(double(q.w()), double(q.x()), double(q.y()), double(q.z()));
+  }
+  s.step.resize(std::size_t(n) * std::size_t(frames + 1));
+  for (auto& d : s.step) {
+    const float a = J(rng), b = J(rng), c = J(rng);
+    d = Vec3(a, b, c);
+  }
+  return s;
+}
+
+// the bodies as pba shapes at their starting poses
+struct Bodies {
+  std::vector<pba::ColliderShape> shape;
+  std::vector<pba::Pose> pose;
+  explicit Bodies(const Scene& s) {
+    for (int i = 0; i < s.n; ++i) {
+      shape.push_back(s.is_box(i) ? pba::ColliderShape::box(Vec3(0.5)) : pba::ColliderShape::sphere(0.5));
+      pose.push_back({s.start[i], s.rotation[i]});
+    }
+  }
+};
+
+// --- the engines --------------------------------------------------------------------------
+
+struct FrameResult {
+  double ms = 0;       // mean CPU ms per frame
+  long pairs = 0;      // pairs in the last frame
+};
+
+// the narrow phase per pair: empty until the narrow-phase module lands; then this is the
+// one line to change (e.g. manifold = collide(shape[a], pose[a], shape[b], pose[b]))
+inline void narrow_phase(const pba::ProxyPair& p, long& sink) { sink += p.a.index ^ p.b.index; }
+
+FrameResult run_pba(const Scene& s, pba::BroadPhaseMethod method) {
+  pba::BroadPhase bp({.method = method});
+  bp.reserve(std::size_t(s.n));
+  Bodies b(s);
+  std::vector<pba::ProxyId> ids(std::size_t(s.n));
+  for (int i = 0; i < s.n; ++i) ids[i] = bp.create_proxy(pba::bounds(b.shape[i], b.pose[i]), {}, std::uint64_t(i));
+  long sink = 0;
+  auto frame = [&](int f) {
+    // move every body, update its world bounds from shape and pose, find the pairs
+    const Vec3* d = &s.step[std::size_t(f) * std::size_t(s.n)];
+    for (int i = 0; i < s.n; ++i) {
+      b.pose[i].position += d[i];
+      bp.move_proxy(ids[i], pba::bounds(b.shape[i], b.pose[i]));
+    }
+    for (const pba::ProxyPair& p : bp.update_pairs()) narrow_phase(p, sink);
+  };
+  frame(0);  // warm-up: the first frame queries every proxy
+  const double t0 = cpu_now();
+  for (int f = 1; f <= s.frames; ++f) frame(f);
+  const double ms = (cpu_now() - t0) * 1e3 / s.frames;
+  if (sink == 42) std::printf(" ");
+  return {ms, long(bp.pairs().size())};
+}
+
+struct BulletWorld {
+  btDefaultCollisionConfiguration cfg;
+  btCollisionDispatcher disp{&cfg};
+  btDbvtBroadphase bp;
+  btCollisionWorld world{&disp, &bp, &cfg};
+  btBoxShape box{btVector3(0.5, 0.5, 0.5)};
+  btSphereShape sphere{0.5};
+  std::vector<btCollisionObject> objects;
+  explicit BulletWorld(const Scene& s) : objects(std::size_t(s.n)) {
+    for (int i = 0; i < s.n; ++i) {
+      btCollisionObject& o = objects[i];
+      o.setCollisionShape(s.is_box(i) ? static_cast<btCollisionShape*>(&box) : &sphere);
+      btTransform t;
+      t.setIdentity();
+      t.setOrigin(btVector3(btScalar(s.start[i].x), btScalar(s.start[i].y), btScalar(s.start[i].z)));
+      const pba::Quat& q = s.rotation[i];
+      t.setRotation(btQuaternion(btScalar(q.x), btScalar(q.y), btScalar(q.z), btScalar(q.w)));
+      o.setWorldTransform(t);
+      world.addCollisionObject(&o);
+    }
+  }
+  ~BulletWorld() {
+    for (auto& o : objects) world.removeCollisionObject(&o);
+  }
+  void move(const Scene& s, int f) {
+    const Vec3* d = &s.step[std::size_t(f) * std::size_t(s.n)];
+    for (int i = 0; i < s.n; ++i) {
+      btTransform t = objects[i].getWorldTransform();
+      t.setOrigin(t.getOrigin() + btVector3(btScalar(d[i].x), btScalar(d[i].y), btScalar(d[i].z)));
+      objects[i].setWorldTransform(t);
+    }
+  }
+};
+
+FrameResult run_bullet(const Scene& s, bool full) {
+  BulletWorld b(s);
+  auto frame = [&](int f) {
+    b.move(s, f);
+    if (full) {
+      b.world.performDiscreteCollisionDetection();
+    } else {
+      b.world.updateAabbs();
+      b.world.computeOverlappingPairs();
+    }
+  };
+  frame(0);
+  const double t0 = cpu_now();
+  for (int f = 1; f <= s.frames; ++f) frame(f);
+  const double ms = (cpu_now() - t0) * 1e3 / s.frames;
+  return {ms, long(b.bp.getOverlappingPairCache()->getNumOverlappingPairs())};
+}
+
+struct OdeCount {
+  long pairs = 0;
+  bool collide = false;
+  long contacts = 0;
+};
+
+void ode_near(void* data, dGeomID a, dGeomID b) {
+  auto* c = static_cast<OdeCount*>(data);
+  ++c->pairs;
+  if (c->collide) {
+    dContactGeom g[4];
+    c->contacts += dCollide(a, b, 4, g, sizeof(dContactGeom));
+  }
+}
+
+FrameResult run_ode(const Scene& s, bool sap, bool collide) {
+  dSpaceID space = sap ? dSweepAndPruneSpaceCreate(nullptr, dSAP_AXES_XYZ) : dHashSpaceCreate(nullptr);
+  std::vector<dGeomID> geoms(std::size_t(s.n));
+  for (int i = 0; i < s.n; ++i) {
+    geoms[i] = s.is_box(i) ? dCreateBox(space, 1, 1, 1) : dCreateSphere(space, 0.5);
+    dGeomSetPosition(geoms[i], s.start[i].x, s.start[i].y, s.start[i].z);
+    const pba::Quat& q = s.rotation[i];
+    const dQuaternion dq = {q.w, q.x, q.y, q.z};
+    dGeomSetQuaternion(geoms[i], dq);
+  }
+  std::vector<Vec3> pos = s.start;
+  OdeCount count;
+  count.collide = collide;
+  auto frame = [&](int f) {
+    const Vec3* d = &s.step[std::size_t(f) * std::size_t(s.n)];
+    for (int i = 0; i < s.n; ++i) {
+      pos[i] += d[i];
+      dGeomSetPosition(geoms[i], pos[i].x, pos[i].y, pos[i].z);
+    }
+    count.pairs = 0;
+    dSpaceCollide(space, &count, &ode_near);
+  };
+  frame(0);
+  const double t0 = cpu_now();
+  for (int f = 1; f <= s.frames; ++f) frame(f);
+  const double ms = (cpu_now() - t0) * 1e3 / s.frames;
+  dSpaceDestroy(space);  // destroys its geoms (cleanup mode on)
+  return {ms, count.pairs};
+}
+
+// --- rays ---------------------------------------------------------------------------------
+
+struct RayResult {
+  double us = 0;
+  int hits = 0;
+};
+
+// the rays of bullet_collision.cpp: origin uniform in the cube, direction from J draws
+std::vector<pba::Ray> make_rays(const Scene& s, int count) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> U(0, float(s.side)), J(-0.02f, 0.02f);
+  std::vector<pba::Ray> rays;
+  for (int i = 0; i < count; ++i) {
+    const Vec3 a(U(rng), U(rng), U(rng));
+    Vec3 d(J(rng), J(rng), J(rng));
+    if (glm::dot(d, d) < 1e-8) d = Vec3(0, 0, 1);
+    rays.push_back({a, glm::normalize(d), 5.0});
+  }
+  return rays;
+}
+
+// closest hit through the tree; `exact` tests each body's shape (pba::ray_cast), otherwise
+// its box (AABB level)
+RayResult rays_pba(const Scene& s, const std::vector<pba::Ray>& rays, bool exact) {
+  pba::BroadPhase bp;
+  Bodies b(s);
+  std::vector<pba::Aabb> boxes;
+  for (int i = 0; i < s.n; ++i) {
+    boxes.push_back(pba::bounds(b.shape[i], b.pose[i]));
+    bp.create_proxy(boxes.back());
+  }
+  bp.update_pairs();
+  const pba::DynamicTree& tree = bp.tree();
+  int hits = 0;
+  const double t0 = cpu_now();
+  for (const pba::Ray& ray : rays) {
+    const Vec3 inv = 1.0 / ray.direction;
+    bool hit = false;
+    tree.ray_cast(ray, [&](std::uint32_t u, const pba::Ray& r) {
+      // the body hit within the clipped ray clips it further
+      if (exact) {
+        const pba::RayHit h = pba::ray_cast(b.shape[u], b.pose[u], r);
+        if (!h.hit) return r.max_distance;
+        hit = true;
+        return h.distance;
+      }
+      const double t = pba::ray_enter_box(r, inv, boxes[u]);
+      if (t < 0) return r.max_distance;
+      hit = true;
+      return t;
+    });
+    hits += hit;
+  }
+  return {(cpu_now() - t0) * 1e6 / double(rays.size()), hits};
+}
+
+RayResult rays_bullet(const Scene& s, const std::vector<pba::Ray>& rays) {
+  BulletWorld b(s);
+  b.world.performDiscreteCollisionDetection();
+  int hits = 0;
+  const double t0 = cpu_now();
+  for (const pba::Ray& ray : rays) {
+    const btVector3 a(btScalar(ray.origin.x), btScalar(ray.origin.y), btScalar(ray.origin.z));
+    const Vec3 e = ray.origin + 5.0 * ray.direction;
+    const btVector3 c(btScalar(e.x), btScalar(e.y), btScalar(e.z));
+    btCollisionWorld::ClosestRayResultCallback cb(a, c);
+    b.world.rayTest(a, c, cb);
+    hits += cb.hasHit();
+  }
+  return {(cpu_now() - t0) * 1e6 / double(rays.size()), hits};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int repeat = 5, frames = 200, nrays = 20000;
+  std::vector<int> counts{1000, 10000};
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s: missing value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--quick") {
+      repeat = 1;
+      frames = 20;
+      nrays = 2000;
+    } else if (a == "--repeat") {
+      repeat = std::max(1, std::atoi(value().c_str()));
+    } else if (a == "--frames") {
+      frames = std::max(1, std::atoi(value().c_str()));
+    } else if (a == "--rays") {
+      nrays = std::max(1, std::atoi(value().c_str()));
+    } else if (a == "--counts") {
+      counts.clear();
+      const std::string v = value();
+      for (std::size_t p = 0; p < v.size();) {
+        const std::size_t q = v.find(',', p);
+        counts.push_back(std::atoi(v.substr(p, q - p).c_str()));
+        p = q == std::string::npos ? v.size() : q + 1;
+      }
+    } else {
+      std::fprintf(stderr, "unknown flag '%s'\nusage: bench_collide [--quick] [--repeat R] [--frames F] "
+                           "[--counts 1000,10000] [--rays N]\n", a.c_str());
+      return 2;
+    }
+  }
+  dInitODE2(0);
+
+  struct Lane {
+    const char* name;
+    std::function<FrameResult(const Scene&)> run;
+  };
+  const std::vector<Lane> lanes{
+      {"pba tree", [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::Tree); }},
+      {"pba grid", [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::Grid); }},
+      {"pba sap", [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::SweepAndPrune); }},
+      {"pba brute-force", [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::BruteForce); }},
+      {"bullet broad (dbvt)", [](const Scene& s) { return run_bullet(s, false); }},
+      {"bullet full (broad+narrow)", [](const Scene& s) { return run_bullet(s, true); }},
+      {"ode hash (broad)", [](const Scene& s) { return run_ode(s, false, false); }},
+      {"ode sap (broad)", [](const Scene& s) { return run_ode(s, true, false); }},
+      {"ode hash+dCollide (broad+narrow)", [](const Scene& s) { return run_ode(s, false, true); }},
+  };
+
+  for (int n : counts) {
+    const Scene s = make_scene(n, frames);
+    std::printf("N = %d bodies (half 1 m boxes, half 0.5 m spheres), cube side %.1f m, %d frames, %d runs\n", n,
+                s.side, frames, repeat);
+    // every lane once per run, in the same order; ratios within a run
+    std::vector<std::vector<double>> ms(lanes.size());
+    std::vector<long> pairs(lanes.size());
+    std::vector<std::vector<double>> ratio(lanes.size());  // lane / pba tree, per run
+    for (int r = 0; r < repeat; ++r) {
+      std::vector<double> run_ms(lanes.size());
+      for (std::size_t l = 0; l < lanes.size(); ++l) {
+        if (n > 2000 && std::strcmp(lanes[l].name, "pba brute-force") == 0 && r > 0) {
+          run_ms[l] = ms[l].back();  // O(n^2): measured once at large n
+        } else {
+          const FrameResult fr = lanes[l].run(s);
+          run_ms[l] = fr.ms;
+          pairs[l] = fr.pairs;
+        }
+        ms[l].push_back(run_ms[l]);
+      }
+      for (std::size_t l = 0; l < lanes.size(); ++l) ratio[l].push_back(run_ms[l] / run_ms[0]);
+    }
+    std::printf("  %-34s %10s %10s %14s\n", "engine", "ms/frame", "pairs", "x pba tree");
+    for (std::size_t l = 0; l < lanes.size(); ++l)
+      std::printf("  %-34s %10.3f %10ld %14.2f\n", lanes[l].name, median(ms[l]), pairs[l], median(ratio[l]));
+
+    // rays
+    const std::vector<pba::Ray> rays = make_rays(s, nrays);
+    std::vector<double> pa, pe, br, ra, re;
+    int ha = 0, he = 0, bh = 0;
+    for (int r = 0; r < repeat; ++r) {
+      const RayResult a = rays_pba(s, rays, false), e = rays_pba(s, rays, true), b = rays_bullet(s, rays);
+      pa.push_back(a.us);
+      pe.push_back(e.us);
+      br.push_back(b.us);
+      ra.push_back(b.us / a.us);
+      re.push_back(b.us / e.us);
+      ha = a.hits, he = e.hits, bh = b.hits;
+    }
+    std::printf("  rays, 5 m, closest hit, %d rays:            us/ray   hit   bullet / pba\n", nrays);
+    std::printf("  %-34s %10.3f %4.0f%% %10.2f\n", "pba tree, boxes (AABB level)", median(pa), 100.0 * ha / nrays,
+                median(ra));
+    std::printf("  %-34s %10.3f %4.0f%% %10.2f\n", "pba tree + ray_cast(shape)", median(pe), 100.0 * he / nrays,
+                median(re));
+    std::printf("  %-34s %10.3f %4.0f%%\n\n", "bullet rayTest (shapes)", median(br), 100.0 * bh / nrays);
+  }
+  dCloseODE();
+  return 0;
+}

@@ -1,0 +1,389 @@
+// The dynamic AABB tree: a pool of nodes, SAH insertion with inherited cost (Catto 2019,
+// "Dynamic Bounding Volume Hierarchies", GDC; Bittner, Hapala and Havran 2015, "Incremental
+// BVH construction for ray tracing"), AVL rotations on the way back to the root (Adelson-
+// Velsky and Landis 1962, as Box2D's b2DynamicTree uses them), and a binned-SAH rebuild.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "pba/collide/broad_phase.h"
+
+namespace pba {
+
+void require_valid_box(const Aabb& box, std::string_view where) {
+  // (the field paths are built only on failure: this runs for every moved proxy)
+  if (!is_finite(box.lo)) require_finite(box.lo, field_path(where, "lo"));
+  if (!is_finite(box.hi)) require_finite(box.hi, field_path(where, "hi"));
+  static const char* axis[3] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k)
+    if (box.lo[k] > box.hi[k])
+      throw Error(std::string(where) + ": inverted box, lo " + format_vec3(box.lo) + " > hi " +
+                  format_vec3(box.hi) + " on " + axis[k]);
+}
+
+DynamicTree::DynamicTree(double margin) : margin_(margin) {
+  require_non_negative(margin, "DynamicTree.margin");
+}
+
+std::int32_t DynamicTree::allocate_node() {
+  // reuse the free list, or grow the pool
+  if (free_ != kNull) {
+    const std::int32_t n = free_;
+    free_ = at(n).parent;
+    at(n) = Node{};
+    return n;
+  }
+  nodes_.push_back(Node{});
+  return static_cast<std::int32_t>(nodes_.size() - 1);
+}
+
+void DynamicTree::free_node(std::int32_t n) {
+  Node& node = at(n);
+  node.parent = free_;
+  node.child1 = node.child2 = kNull;
+  node.height = -1;
+  free_ = n;
+}
+
+void DynamicTree::clear() {
+  nodes_.clear();
+  root_ = free_ = kNull;
+  leaves_ = 0;
+}
+
+std::int32_t DynamicTree::create_proxy(const Aabb& box, std::uint32_t user) {
+  require_valid_box(box, "DynamicTree.create_proxy(box)");
+  const std::int32_t leaf = allocate_node();
+  Node& n = at(leaf);
+  n.box = box.grown(margin_);
+  n.user = user;
+  n.height = 0;
+  insert_leaf(leaf);
+  ++leaves_;
+  keep_height();
+  return leaf;
+}
+
+void DynamicTree::destroy_proxy(std::int32_t node) {
+  if (node < 0 || static_cast<std::size_t>(node) >= nodes_.size() || at(node).height != 0)
+    throw Error("DynamicTree.destroy_proxy: node " + std::to_string(node) + " is not a live leaf");
+  remove_leaf(node);
+  free_node(node);
+  --leaves_;
+}
+
+bool DynamicTree::move_proxy(std::int32_t node, const Aabb& box) {
+  // within the fat box: nothing to do (the common case)
+  if (at(node).box.contains(box)) return false;
+  // otherwise re-insert with a fresh fat box
+  remove_leaf(node);
+  at(node).box = box.grown(margin_);
+  insert_leaf(node);
+  keep_height();
+  return true;
+}
+
+void DynamicTree::insert_leaf(std::int32_t leaf) {
+  if (root_ == kNull) {
+    root_ = leaf;
+    at(leaf).parent = kNull;
+    return;
+  }
+  // descend to the sibling of least cost: making a new parent of a node costs the area of
+  // the union, and every ancestor's growth is inherited by the nodes below it
+  const Aabb box = at(leaf).box;
+  std::int32_t index = root_;
+  while (!at(index).is_leaf()) {
+    const Node& n = at(index);
+    const double area = n.box.area();
+    const double combined = n.box.merged(box).area();
+    const double cost_here = 2 * combined;
+    const double inherited = 2 * (combined - area);
+    auto child_cost = [&](std::int32_t c) {
+      const Node& cn = at(c);
+      const double grown = cn.box.merged(box).area();
+      return (cn.is_leaf() ? grown : grown - cn.box.area()) + inherited;
+    };
+    const double cost1 = child_cost(n.child1), cost2 = child_cost(n.child2);
+    if (cost_here < cost1 && cost_here < cost2) break;
+    index = cost1 <= cost2 ? n.child1 : n.child2;
+  }
+  const std::int32_t sibling = index;
+
+  // a new parent takes the sibling's place and holds sibling and leaf
+  const std::int32_t old_parent = at(sibling).parent;
+  const std::int32_t parent = allocate_node();
+  Node& p = at(parent);
+  p.parent = old_parent;
+  p.box = at(sibling).box.merged(box);
+  p.height = at(sibling).height + 1;
+  p.child1 = sibling;
+  p.child2 = leaf;
+  at(sibling).parent = parent;
+  at(leaf).parent = parent;
+  if (old_parent == kNull) {
+    root_ = parent;
+  } else if (at(old_parent).child1 == sibling) {
+    at(old_parent).child1 = parent;
+  } else {
+    at(old_parent).child2 = parent;
+  }
+
+  // walk back up, rotating and refitting
+  refit_up(parent);
+}
+
+void DynamicTree::remove_leaf(std::int32_t leaf) {
+  if (leaf == root_) {
+    root_ = kNull;
+    return;
+  }
+  // the sibling takes the parent's place; the parent is freed
+  const std::int32_t parent = at(leaf).parent;
+  const std::int32_t grand = at(parent).parent;
+  const std::int32_t sibling = at(parent).child1 == leaf ? at(parent).child2 : at(parent).child1;
+  if (grand == kNull) {
+    root_ = sibling;
+    at(sibling).parent = kNull;
+    free_node(parent);
+    return;
+  }
+  if (at(grand).child1 == parent) {
+    at(grand).child1 = sibling;
+  } else {
+    at(grand).child2 = sibling;
+  }
+  at(sibling).parent = grand;
+  free_node(parent);
+  refit_up(grand);
+}
+
+void DynamicTree::refit_up(std::int32_t n) {
+  // balance each ancestor, then recompute its box and height from its children
+  while (n != kNull) {
+    n = balance(n);
+    Node& node = at(n);
+    const Node& c1 = at(node.child1);
+    const Node& c2 = at(node.child2);
+    node.box = c1.box.merged(c2.box);
+    node.height = 1 + std::max(c1.height, c2.height);
+    n = node.parent;
+  }
+}
+
+std::int32_t DynamicTree::balance(std::int32_t ia) {
+  // an AVL rotation when one child is two levels taller than the other: the taller child
+  // C becomes the parent, A adopts the shorter of C's children (the same rotation as
+  // Box2D's b2DynamicTree::Balance)
+  Node& a = at(ia);
+  if (a.is_leaf() || a.height < 2) return ia;
+  const std::int32_t ib = a.child1, ic = a.child2;
+  const int bal = at(ic).height - at(ib).height;
+  if (bal >= -1 && bal <= 1) return ia;
+
+  // name the taller child `up` and the other `keep`; `second` says where `up` hangs
+  const bool c_taller = bal > 1;
+  const std::int32_t iu = c_taller ? ic : ib;
+  const std::int32_t ik = c_taller ? ib : ic;
+  Node& u = at(iu);
+  const std::int32_t f = u.child1, g = u.child2;
+
+  // `up` replaces `a` under a's parent
+  u.child1 = ia;
+  u.parent = a.parent;
+  a.parent = iu;
+  if (u.parent == kNull) {
+    root_ = iu;
+  } else if (at(u.parent).child1 == ia) {
+    at(u.parent).child1 = iu;
+  } else {
+    at(u.parent).child2 = iu;
+  }
+
+  // the taller grandchild stays with `up`, the shorter goes to `a` in up's old slot
+  const bool f_taller = at(f).height > at(g).height;
+  const std::int32_t stay = f_taller ? f : g;
+  const std::int32_t move = f_taller ? g : f;
+  u.child2 = stay;
+  if (c_taller) {
+    a.child2 = move;
+  } else {
+    a.child1 = move;
+  }
+  at(move).parent = ia;
+  a.box = at(ik).box.merged(at(move).box);
+  a.height = 1 + std::max(at(ik).height, at(move).height);
+  u.box = a.box.merged(at(stay).box);
+  u.height = 1 + std::max(a.height, at(stay).height);
+  return iu;
+}
+
+int DynamicTree::height_limit() const {
+  return 2 * static_cast<int>(std::bit_width(leaves_)) + 8;
+}
+
+void DynamicTree::keep_height() {
+  // single rotations do not bound the height the way full AVL balancing would (insertion
+  // follows the SAH, not the balance), so a tree that grew too tall is rebuilt
+  if (height() > height_limit()) rebuild();
+}
+
+void DynamicTree::rebuild() {
+  if (root_ == kNull) return;
+  // gather the leaves and free every inner node
+  build_leaves_.clear();
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    Node& n = nodes_[i];
+    if (n.height == 0) {
+      build_leaves_.push_back(static_cast<std::int32_t>(i));
+    } else if (n.height > 0) {
+      free_node(static_cast<std::int32_t>(i));
+    }
+  }
+  // build top-down
+  root_ = build_range(build_leaves_.data(), static_cast<std::int32_t>(build_leaves_.size()), 0);
+  at(root_).parent = kNull;
+}
+
+std::int32_t DynamicTree::build_range(std::int32_t* leaves, std::int32_t count, int depth) {
+  if (count == 1) return leaves[0];
+  // the bounds of the centres (box lo + hi, twice the centre: no rounding) and the longest axis
+  auto centre2 = [&](std::int32_t x, int k) { return at(x).box.lo[k] + at(x).box.hi[k]; };
+  Vec3 lo = at(leaves[0]).box.lo + at(leaves[0]).box.hi, hi = lo;
+  for (std::int32_t i = 1; i < count; ++i) {
+    const Vec3 c = at(leaves[i]).box.lo + at(leaves[i]).box.hi;
+    lo = glm::min(lo, c);
+    hi = glm::max(hi, c);
+  }
+  const Vec3 d = hi - lo;
+  const int axis = d.x >= d.y && d.x >= d.z ? 0 : (d.y >= d.z ? 1 : 2);
+
+  // binned SAH (Wald 2007, "On fast construction of SAH-based bounding volume
+  // hierarchies"): sort the centres into bins along the axis and split at the plane of
+  // least area(left) n_left + area(right) n_right; below a depth limit, or when every
+  // centre falls in one bin, split at the median instead (balanced: the limit holds)
+  std::int32_t split = -1;
+  const int median_below = height_limit() - static_cast<int>(std::bit_width(static_cast<std::uint32_t>(count))) - 1;
+  if (count > 2 && depth < median_below && d[axis] > 0) {
+    constexpr int kBins = 16;
+    struct Bin {
+      Aabb box{Vec3(std::numeric_limits<double>::max()), Vec3(-std::numeric_limits<double>::max())};
+      std::int32_t count = 0;
+    };
+    Bin bins[kBins];
+    const double scale = kBins / d[axis];
+    auto bin_of = [&](std::int32_t x) {
+      return std::min(kBins - 1, static_cast<int>((centre2(x, axis) - lo[axis]) * scale));
+    };
+    for (std::int32_t i = 0; i < count; ++i) {
+      Bin& bin = bins[bin_of(leaves[i])];
+      bin.box = bin.box.merged(at(leaves[i]).box);
+      ++bin.count;
+    }
+    // sweep from the right for the suffix areas, then from the left for the costs
+    double right_area[kBins];
+    std::int32_t right_count[kBins];
+    Aabb acc = bins[kBins - 1].box;
+    std::int32_t n = 0;
+    for (int b = kBins - 1; b > 0; --b) {
+      if (b < kBins - 1) acc = acc.merged(bins[b].box);
+      n += bins[b].count;
+      right_area[b] = n > 0 ? acc.area() : 0;
+      right_count[b] = n;
+    }
+    double best = std::numeric_limits<double>::max();
+    int best_plane = -1;
+    Aabb left = bins[0].box;
+    std::int32_t nl = 0;
+    for (int b = 1; b < kBins; ++b) {
+      if (b > 1) left = left.merged(bins[b - 1].box);
+      nl += bins[b - 1].count;
+      if (nl == 0 || right_count[b] == 0) continue;
+      const double cost = left.area() * nl + right_area[b] * right_count[b];
+      if (cost < best) {
+        best = cost;
+        best_plane = b;
+      }
+    }
+    if (best_plane > 0) {
+      std::int32_t* mid = std::partition(leaves, leaves + count, [&](std::int32_t x) { return bin_of(x) < best_plane; });
+      split = static_cast<std::int32_t>(mid - leaves);
+    }
+  }
+  if (split <= 0 || split >= count) {
+    // the median centre (ties by node index: a total order, so the result is
+    // deterministic); halves of floor and ceil of count / 2 keep the balance within 1
+    split = count / 2;
+    std::nth_element(leaves, leaves + split, leaves + count, [&](std::int32_t x, std::int32_t y) {
+      const double cx = centre2(x, axis), cy = centre2(y, axis);
+      return cx < cy || (cx == cy && x < y);
+    });
+  }
+  const std::int32_t c1 = build_range(leaves, split, depth + 1);
+  const std::int32_t c2 = build_range(leaves + split, count - split, depth + 1);
+  const std::int32_t p = allocate_node();
+  Node& node = at(p);
+  node.child1 = c1;
+  node.child2 = c2;
+  node.box = at(c1).box.merged(at(c2).box);
+  node.height = 1 + std::max(at(c1).height, at(c2).height);
+  at(c1).parent = at(c2).parent = p;
+  return p;
+}
+
+double DynamicTree::area_ratio() const {
+  if (root_ == kNull || at(root_).is_leaf()) return 0;
+  double inner = 0;
+  for (const Node& n : nodes_)
+    if (n.height > 0) inner += n.box.area();
+  const double root_area = at(root_).box.area();
+  return root_area > 0 ? inner / root_area : 0;
+}
+
+void DynamicTree::validate() const {
+  auto fail = [](std::int32_t n, const std::string& what) {
+    throw Error("DynamicTree.validate: node " + std::to_string(n) + ": " + what);
+  };
+  // free nodes
+  std::size_t free_count = 0;
+  for (std::int32_t f = free_; f != kNull; f = at(f).parent) {
+    if (at(f).height != -1) fail(f, "on the free list but height " + std::to_string(at(f).height));
+    if (++free_count > nodes_.size()) fail(f, "the free list has a cycle");
+  }
+  // every reachable node, depth first
+  if (root_ != kNull && at(root_).parent != kNull) fail(root_, "the root has a parent");
+  std::size_t leaves = 0, reached = 0;
+  std::vector<std::int32_t> stack;
+  if (root_ != kNull) stack.push_back(root_);
+  while (!stack.empty()) {
+    const std::int32_t i = stack.back();
+    stack.pop_back();
+    if (++reached > nodes_.size()) fail(i, "the tree has a cycle");
+    const Node& n = at(i);
+    if (n.is_leaf()) {
+      if (n.child2 != kNull) fail(i, "a leaf with a second child");
+      if (n.height != 0) fail(i, "a leaf of height " + std::to_string(n.height));
+      ++leaves;
+      continue;
+    }
+    const Node& c1 = at(n.child1);
+    const Node& c2 = at(n.child2);
+    if (c1.parent != i || c2.parent != i) fail(i, "a child does not name it as its parent");
+    if (n.height != 1 + std::max(c1.height, c2.height))
+      fail(i, "height " + std::to_string(n.height) + " but children of heights " + std::to_string(c1.height) +
+                  " and " + std::to_string(c2.height));
+    if (!n.box.contains(c1.box) || !n.box.contains(c2.box)) fail(i, "its box does not contain a child's box");
+    stack.push_back(n.child1);
+    stack.push_back(n.child2);
+  }
+  if (height() > height_limit())
+    fail(root_, "height " + std::to_string(height()) + " above the limit " + std::to_string(height_limit()));
+  if (leaves != leaves_) fail(root_, std::to_string(leaves) + " leaves reached, " + std::to_string(leaves_) + " expected");
+  if (reached + free_count != nodes_.size())
+    fail(root_, std::to_string(reached) + " nodes reached and " + std::to_string(free_count) + " free of " +
+                    std::to_string(nodes_.size()));
+}
+
+}  // namespace pba

@@ -1,0 +1,517 @@
+// Tests for pba/collide/broad_phase.h: every method's pair list equals the all-pairs box
+// test (the reference), in the same sorted order, on moving, appearing and vanishing boxes
+// and with filters; the dynamic tree keeps its invariants and its queries and ray casts
+// equal brute force; bad input is named. Every comparison is exact: the methods decide the
+// same predicate (closed boxes overlap) on the same doubles, so no tolerance applies.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <set>
+#include <vector>
+
+#include "error_of.h"
+#include "pba/collide/broad_phase.h"
+#include "pba/collide/moving_boxes.h"
+
+namespace {
+
+using pba::Aabb;
+using pba::BroadPhase;
+using pba::BroadPhaseDef;
+using pba::BroadPhaseMethod;
+using pba::CollisionFilter;
+using pba::DynamicTree;
+using pba::ProxyId;
+using pba::ProxyPair;
+using pba::Ray;
+using pba::Vec3;
+using pba::test_support::error_of;
+
+constexpr BroadPhaseMethod kMethods[] = {BroadPhaseMethod::Tree, BroadPhaseMethod::Grid,
+                                         BroadPhaseMethod::SweepAndPrune, BroadPhaseMethod::BruteForce};
+constexpr double kDt = 1.0 / 60.0;
+
+// splitmix64, for test-side randomness independent of the library's
+struct Rng {
+  std::uint64_t s;
+  std::uint64_t next() {
+    std::uint64_t z = (s += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  }
+  double uniform(double lo, double hi) { return lo + (hi - lo) * (double(next() >> 11) * 0x1.0p-53); }
+  std::uint32_t below(std::uint32_t n) { return static_cast<std::uint32_t>(next() % n); }
+};
+
+// The test's own record of the proxies, by slot index: what the reference sees.
+struct Mirror {
+  std::vector<ProxyId> id;
+  std::vector<Aabb> box;
+  std::vector<CollisionFilter> filter;
+  std::vector<bool> alive;
+  void set(ProxyId p, const Aabb& b, const CollisionFilter& f) {
+    if (p.index >= id.size()) {
+      id.resize(p.index + 1);
+      box.resize(p.index + 1);
+      filter.resize(p.index + 1);
+      alive.resize(p.index + 1, false);
+    }
+    id[p.index] = p;
+    box[p.index] = b;
+    filter[p.index] = f;
+    alive[p.index] = true;
+  }
+};
+
+// the reference: every pair of live slots, in index order (a < b, then by b), tested
+// directly (the six comparisons without branches, for speed: 5 10^7 pairs a frame at 10^4)
+std::vector<ProxyPair> all_pairs(const Mirror& m) {
+  std::vector<ProxyPair> out;
+  const std::size_t n = m.id.size();
+  for (std::size_t a = 0; a < n; ++a) {
+    if (!m.alive[a]) continue;
+    const Aabb& p = m.box[a];
+    for (std::size_t b = a + 1; b < n; ++b) {
+      const Aabb& q = m.box[b];
+      const bool overlap = (p.lo.x <= q.hi.x) & (q.lo.x <= p.hi.x) & (p.lo.y <= q.hi.y) & (q.lo.y <= p.hi.y) &
+                           (p.lo.z <= q.hi.z) & (q.lo.z <= p.hi.z);
+      if (overlap && m.alive[b] && pba::should_pair(m.filter[a], m.filter[b])) out.push_back({m.id[a], m.id[b]});
+    }
+  }
+  return out;
+}
+
+std::vector<ProxyPair> as_vector(std::span<const ProxyPair> s) { return {s.begin(), s.end()}; }
+
+// the first place two pair lists differ, for a readable failure
+std::string first_difference(const std::vector<ProxyPair>& got, const std::vector<ProxyPair>& want) {
+  const std::size_t n = std::min(got.size(), want.size());
+  for (std::size_t i = 0; i < n; ++i)
+    if (!(got[i] == want[i]))
+      return "at " + std::to_string(i) + ": got (" + std::to_string(got[i].a.index) + ", " +
+             std::to_string(got[i].b.index) + "), want (" + std::to_string(want[i].a.index) + ", " +
+             std::to_string(want[i].b.index) + ")";
+  return "sizes " + std::to_string(got.size()) + " and " + std::to_string(want.size());
+}
+
+// --- the pair list -----------------------------------------------------------------------
+
+// 10^4 boxes (10% of them fast enough to leave their fat box every frame) moving for 100
+// frames: every method's list equals the all-pairs test, element by element
+TEST(BroadPhase, EveryMethodEqualsAllPairsOnTenThousandMovingBoxes) {
+  pba::MovingBoxes scene({.count = 10000, .seed = 3});
+  std::vector<BroadPhase> bps;
+  for (BroadPhaseMethod m : kMethods) bps.emplace_back(BroadPhaseDef{.method = m});
+  Mirror mirror;
+  for (std::size_t i = 0; i < scene.size(); ++i)
+    for (BroadPhase& bp : bps) {
+      const ProxyId id = bp.create_proxy(scene.box(i), {}, i);
+      mirror.set(id, scene.box(i), {});
+    }
+  std::size_t total = 0, min_pairs = std::numeric_limits<std::size_t>::max();
+  for (int frame = 0; frame < 100; ++frame) {
+    scene.step(kDt);
+    for (std::size_t i = 0; i < scene.size(); ++i) {
+      for (BroadPhase& bp : bps) bp.move_proxy(mirror.id[i], scene.box(i));
+      mirror.box[i] = scene.box(i);
+    }
+    const std::vector<ProxyPair> want = all_pairs(mirror);
+    for (BroadPhase& bp : bps) {
+      // (the brute-force method is the reference's own algorithm and as slow: every 10th frame)
+      if (bp.method() == BroadPhaseMethod::BruteForce && frame % 10 != 9) continue;
+      const std::vector<ProxyPair> got = as_vector(bp.update_pairs());
+      ASSERT_EQ(got, want) << to_string(bp.method()) << ", frame " << frame << ": " << first_difference(got, want);
+      EXPECT_EQ(bp.stats().pairs, want.size());
+    }
+    total += want.size();
+    min_pairs = std::min(min_pairs, want.size());
+  }
+  // the scene is not trivial: boxes of mean edge 0.7 m at one per 1.6^3 m^3 touch often
+  EXPECT_GT(min_pairs, 500u);
+  bps[0].tree().validate();
+  EXPECT_GT(bps[0].stats().reinserted, 0u);
+  std::printf("[          ] %zu pairs per frame on average\n", total / 100);
+}
+
+// switching the method between frames (the lab's switch) keeps the same list
+TEST(BroadPhase, SwitchingMethodsLiveKeepsTheList) {
+  pba::MovingBoxes scene({.count = 3000, .seed = 5});
+  BroadPhase bp;
+  Mirror mirror;
+  for (std::size_t i = 0; i < scene.size(); ++i) mirror.set(bp.create_proxy(scene.box(i)), scene.box(i), {});
+  for (int frame = 0; frame < 40; ++frame) {
+    scene.step(kDt);
+    for (std::size_t i = 0; i < scene.size(); ++i) {
+      bp.move_proxy(mirror.id[i], scene.box(i));
+      mirror.box[i] = scene.box(i);
+    }
+    bp.set_method(kMethods[(frame / 3) % 4]);
+    const std::vector<ProxyPair> want = all_pairs(mirror);
+    ASSERT_EQ(as_vector(bp.update_pairs()), want) << to_string(bp.method()) << ", frame " << frame;
+  }
+}
+
+// filters: the rule on a hand-made trio, then random layers, masks and owners on moving boxes
+TEST(BroadPhase, FiltersByLayersMasksAndOwners) {
+  // a (layer 1, sees 2) and b (layer 2, sees 1 and 2) pair; c (layer 2, sees only 2) pairs
+  // with b but not with a (a's layer is not in c's mask); d (layer 2, sees 1 and 2) shares
+  // a's owner and so never pairs with a, though their layers accept each other
+  const CollisionFilter fa{.layer = 1, .mask = 2, .owner = 7}, fb{.layer = 2, .mask = 1 | 2},
+      fc{.layer = 2, .mask = 2}, fd{.layer = 2, .mask = 1 | 2, .owner = 7};
+  EXPECT_TRUE(pba::should_pair(fa, fb));
+  EXPECT_FALSE(pba::should_pair(fa, fc));
+  EXPECT_TRUE(pba::should_pair(fb, fc));
+  EXPECT_FALSE(pba::should_pair(fa, fd));
+  const Aabb unit{{0, 0, 0}, {1, 1, 1}};
+  for (BroadPhaseMethod m : kMethods) {
+    BroadPhase bp({.method = m});
+    const ProxyId a = bp.create_proxy(unit, fa), b = bp.create_proxy(unit, fb), c = bp.create_proxy(unit, fc),
+                  d = bp.create_proxy(unit, fd);
+    const std::vector<ProxyPair> want{{a, b}, {b, c}, {b, d}, {c, d}};
+    EXPECT_EQ(as_vector(bp.update_pairs()), want) << to_string(m);
+    // a filter changed mid-run takes effect at the next update, and back again
+    bp.set_filter(b, {.layer = 4, .mask = 4});
+    EXPECT_EQ(as_vector(bp.update_pairs()), (std::vector<ProxyPair>{{c, d}})) << to_string(m);
+    bp.set_filter(b, fb);
+    EXPECT_EQ(as_vector(bp.update_pairs()), want) << to_string(m);
+  }
+
+  // random filters on 2000 moving boxes
+  pba::MovingBoxes scene({.count = 2000, .seed = 11});
+  Rng rng{17};
+  std::vector<CollisionFilter> filters(scene.size());
+  for (CollisionFilter& f : filters)
+    f = {.layer = 1ull << rng.below(4), .mask = rng.next() & 0xf, .owner = rng.below(3) == 0 ? 1 + rng.below(50) : 0};
+  std::vector<BroadPhase> bps;
+  for (BroadPhaseMethod m : kMethods) bps.emplace_back(BroadPhaseDef{.method = m});
+  Mirror mirror;
+  for (std::size_t i = 0; i < scene.size(); ++i)
+    for (BroadPhase& bp : bps) mirror.set(bp.create_proxy(scene.box(i), filters[i]), scene.box(i), filters[i]);
+  std::size_t rejected = 0;
+  for (int frame = 0; frame < 30; ++frame) {
+    scene.step(kDt);
+    for (std::size_t i = 0; i < scene.size(); ++i) {
+      for (BroadPhase& bp : bps) bp.move_proxy(mirror.id[i], scene.box(i));
+      mirror.box[i] = scene.box(i);
+    }
+    const std::vector<ProxyPair> want = all_pairs(mirror);
+    for (BroadPhase& bp : bps) ASSERT_EQ(as_vector(bp.update_pairs()), want) << to_string(bp.method()) << ", frame " << frame;
+    // the filters did reject pairs whose boxes overlap (the test would pass vacuously otherwise)
+    Mirror open = mirror;
+    std::fill(open.filter.begin(), open.filter.end(), CollisionFilter{});
+    rejected += all_pairs(open).size() - want.size();
+  }
+  EXPECT_GT(rejected, 1000u);
+}
+
+// proxies created and destroyed every frame (slots reused with new generations), a huge
+// ground box (the grid's oversized path) and a grid with a tiny set cell
+TEST(BroadPhase, ProxiesCreatedAndDestroyedMidRun) {
+  pba::MovingBoxes scene({.count = 3000, .seed = 23});
+  const Aabb ground{{-100, -1, -100}, {100, 0.3, 100}};
+  std::vector<BroadPhase> bps;
+  for (BroadPhaseMethod m : kMethods) bps.emplace_back(BroadPhaseDef{.method = m});
+  bps.emplace_back(BroadPhaseDef{.method = BroadPhaseMethod::Grid, .grid_cell = 0.3});
+  Mirror mirror;
+  std::vector<std::vector<ProxyId>> ids(bps.size());  // per broad phase, per body (null when absent)
+  auto add = [&](std::size_t body) {
+    ProxyId first{};
+    for (std::size_t k = 0; k < bps.size(); ++k) {
+      ids[k][body] = bps[k].create_proxy(scene.box(body), {}, body);
+      if (k == 0) first = ids[k][body];
+      // every broad phase issues the same slots (LIFO reuse): the lists are comparable
+      ASSERT_EQ(ids[k][body], first);
+    }
+    mirror.set(first, scene.box(body), {});
+  };
+  for (auto& v : ids) v.resize(scene.size() + 1);
+  for (std::size_t i = 0; i < scene.size(); ++i) add(i);
+  // the ground is body `size()`
+  for (std::size_t k = 0; k < bps.size(); ++k) ids[k][scene.size()] = bps[k].create_proxy(ground);
+  mirror.set(ids[0][scene.size()], ground, {});
+
+  Rng rng{29};
+  for (int frame = 0; frame < 100; ++frame) {
+    scene.step(kDt);
+    // destroy 30 bodies and bring back 30 absent ones
+    for (int r = 0; r < 30; ++r) {
+      const std::uint32_t body = rng.below(static_cast<std::uint32_t>(scene.size()));
+      if (ids[0][body].is_null()) continue;
+      mirror.alive[ids[0][body].index] = false;
+      for (std::size_t k = 0; k < bps.size(); ++k) {
+        bps[k].destroy_proxy(ids[k][body]);
+        EXPECT_FALSE(bps[k].valid(ids[k][body]));
+        ids[k][body] = {};
+      }
+    }
+    for (int r = 0; r < 30; ++r) {
+      const std::uint32_t body = rng.below(static_cast<std::uint32_t>(scene.size()));
+      if (ids[0][body].is_null()) add(body);
+    }
+    // move the rest
+    for (std::size_t i = 0; i < scene.size(); ++i) {
+      if (ids[0][i].is_null()) continue;
+      for (std::size_t k = 0; k < bps.size(); ++k) bps[k].move_proxy(ids[k][i], scene.box(i));
+      mirror.box[ids[0][i].index] = scene.box(i);
+    }
+    const std::vector<ProxyPair> want = all_pairs(mirror);
+    for (BroadPhase& bp : bps) {
+      const std::vector<ProxyPair> got = as_vector(bp.update_pairs());
+      ASSERT_EQ(got, want) << to_string(bp.method()) << ", frame " << frame << ": " << first_difference(got, want);
+    }
+    // every reported id is live (the generation is current)
+    for (const ProxyPair& p : bps[0].pairs()) ASSERT_TRUE(bps[0].valid(p.a) && bps[0].valid(p.b));
+  }
+  bps[0].tree().validate();
+}
+
+// the same scene twice gives the same lists bit for bit; and the tree's list does not
+// depend on the path the boxes took to get where they are
+TEST(BroadPhase, DeterministicAndIndependentOfHistory) {
+  auto run = [](BroadPhaseMethod m) {
+    pba::MovingBoxes scene({.count = 2000, .seed = 31});
+    BroadPhase bp({.method = m});
+    std::vector<ProxyId> ids;
+    for (std::size_t i = 0; i < scene.size(); ++i) ids.push_back(bp.create_proxy(scene.box(i)));
+    std::uint64_t h = 0xcbf29ce484222325ULL;
+    for (int frame = 0; frame < 30; ++frame) {
+      scene.step(kDt);
+      for (std::size_t i = 0; i < scene.size(); ++i) bp.move_proxy(ids[i], scene.box(i));
+      const auto pairs = bp.update_pairs();
+      h = pba::hash_span(pairs, h);
+    }
+    return h;
+  };
+  for (BroadPhaseMethod m : kMethods) EXPECT_EQ(run(m), run(m)) << to_string(m);
+  EXPECT_EQ(run(BroadPhaseMethod::Tree), run(BroadPhaseMethod::BruteForce));
+
+  // history: one tree gets the final boxes at once, the other wanders there over 20 frames
+  pba::MovingBoxes scene({.count = 2000, .seed = 37});
+  BroadPhase direct, wandering;
+  std::vector<ProxyId> a, b;
+  Rng rng{41};
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    a.push_back(direct.create_proxy(scene.box(i)));
+    const Vec3 off(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-5, 5));
+    b.push_back(wandering.create_proxy({scene.box(i).lo + off, scene.box(i).hi + off}));
+  }
+  for (int frame = 20; frame >= 0; --frame) {
+    for (std::size_t i = 0; i < scene.size(); ++i) {
+      const Vec3 off = double(frame) / 20 * Vec3(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-5, 5));
+      wandering.move_proxy(b[i], {scene.box(i).lo + off, scene.box(i).hi + off});
+    }
+    wandering.update_pairs();
+  }
+  EXPECT_EQ(as_vector(wandering.update_pairs()), as_vector(direct.update_pairs()));
+  EXPECT_FALSE(direct.pairs().empty());
+}
+
+// --- the dynamic tree ------------------------------------------------------------------
+
+Aabb random_box(Rng& rng, double side) {
+  const Vec3 c(rng.uniform(0, side), rng.uniform(0, side), rng.uniform(0, side));
+  const Vec3 h(rng.uniform(0.05, 0.6), rng.uniform(0.05, 0.6), rng.uniform(0.05, 0.6));
+  return {c - h, c + h};
+}
+
+// after thousands of moves, teleports, removals and insertions: parents contain their
+// children, heights are consistent and within the limit (validate()), and fat boxes hold
+// their tight boxes
+TEST(DynamicTree, KeepsItsInvariantsAfterManyMoves) {
+  Rng rng{43};
+  const double side = 30;
+  DynamicTree tree(0.1);
+  std::vector<std::int32_t> node;
+  std::vector<Aabb> box;
+  for (int i = 0; i < 5000; ++i) {
+    box.push_back(random_box(rng, side));
+    node.push_back(tree.create_proxy(box.back(), static_cast<std::uint32_t>(i)));
+  }
+  tree.validate();
+  int reinserted = 0;
+  for (int round = 0; round < 200; ++round) {
+    for (std::size_t i = 0; i < box.size(); ++i) {
+      if (node[i] == DynamicTree::kNull) {
+        // bring back a removed leaf
+        if (rng.below(4) == 0) {
+          box[i] = random_box(rng, side);
+          node[i] = tree.create_proxy(box[i], static_cast<std::uint32_t>(i));
+        }
+        continue;
+      }
+      const std::uint32_t r = rng.below(100);
+      if (r < 2) {
+        tree.destroy_proxy(node[i]);
+        node[i] = DynamicTree::kNull;
+        continue;
+      }
+      // jitter most, teleport a few
+      const Vec3 d = r < 5 ? Vec3(rng.uniform(-side, side), rng.uniform(-side, side), rng.uniform(-side, side)) * 0.5
+                           : Vec3(rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05));
+      box[i] = {box[i].lo + d, box[i].hi + d};
+      reinserted += tree.move_proxy(node[i], box[i]);
+    }
+    if (round % 10 == 0) tree.validate();
+  }
+  tree.validate();
+  EXPECT_GT(reinserted, 10000);
+  std::size_t leaves = 0;
+  for (std::size_t i = 0; i < box.size(); ++i) {
+    if (node[i] == DynamicTree::kNull) continue;
+    ++leaves;
+    EXPECT_TRUE(tree.fat_box(node[i]).contains(box[i])) << i;
+    EXPECT_EQ(tree.user(node[i]), i);
+  }
+  EXPECT_EQ(tree.proxy_count(), leaves);
+  // the rotations alone keep the tree within twice the height of a perfect one
+  EXPECT_LE(tree.height(), 2 * static_cast<int>(std::ceil(std::log2(double(leaves)))));
+  const double incremental = tree.area_ratio();
+  // the SAH rebuild keeps the invariants and the height limit (validate) and lowers the
+  // SAH cost it greedily minimises: the inner nodes' total area
+  tree.rebuild();
+  tree.validate();
+  EXPECT_LT(tree.area_ratio(), incremental);
+  std::printf("[          ] %zu leaves: area ratio %.1f incremental, %.1f rebuilt; height %d\n", leaves, incremental,
+              tree.area_ratio(), tree.height());
+  // a tree of inner nodes the size of the root would have ratio ~ n: SAH insertion does far better
+  EXPECT_LT(incremental, 0.05 * double(leaves));
+}
+
+// query and ray cast visit exactly the leaves brute force finds
+TEST(DynamicTree, QueryAndRayCastEqualBruteForce) {
+  Rng rng{47};
+  const double side = 25;
+  DynamicTree tree(0.1);
+  std::vector<std::int32_t> node;
+  for (std::uint32_t i = 0; i < 4000; ++i) node.push_back(tree.create_proxy(random_box(rng, side), i));
+  // move them a little so the tree is not freshly built
+  for (std::uint32_t i = 0; i < node.size(); ++i) {
+    const Aabb f = tree.fat_box(node[i]);
+    const Vec3 d(rng.uniform(-0.5, 0.5), 0, 0);
+    tree.move_proxy(node[i], {f.lo + Vec3(0.1) + d, f.hi - Vec3(0.1) + d});
+  }
+  auto fat = [&](std::uint32_t u) { return tree.fat_box(node[u]); };
+
+  // box queries
+  for (int q = 0; q < 500; ++q) {
+    const Aabb b = random_box(rng, side);
+    std::set<std::uint32_t> got, want;
+    tree.query(b, [&](std::uint32_t u) { return got.insert(u).second; });
+    for (std::uint32_t u = 0; u < node.size(); ++u)
+      if (fat(u).overlaps(b)) want.insert(u);
+    ASSERT_EQ(got, want) << "query " << q;
+  }
+
+  // 5 m rays from random points: the nearest box entered and every box entered
+  int hits = 0;
+  for (int q = 0; q < 3000; ++q) {
+    Vec3 d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    if (q % 10 == 0) d = Vec3(0, 0, 1);  // axis-aligned rays: two slabs never crossed
+    const Ray ray{{rng.uniform(0, side), rng.uniform(0, side), rng.uniform(0, side)}, glm::normalize(d), 5.0};
+    const Vec3 inv = 1.0 / ray.direction;
+    double want_t = -1;
+    std::set<std::uint32_t> want_all;
+    for (std::uint32_t u = 0; u < node.size(); ++u) {
+      const double t = pba::ray_enter_box(ray, inv, fat(u));
+      if (t < 0) continue;
+      want_all.insert(u);
+      if (want_t < 0 || t < want_t) want_t = t;
+    }
+    // closest: clip the ray at each box entered
+    double got_t = -1;
+    tree.ray_cast(ray, [&](std::uint32_t u, const Ray& r) {
+      const double t = pba::ray_enter_box(r, inv, fat(u));
+      if (t < 0) return r.max_distance;
+      got_t = t;
+      return t;
+    });
+    ASSERT_EQ(got_t, want_t) << "ray " << q;
+    hits += want_t >= 0;
+    // all: never clip
+    std::set<std::uint32_t> got_all;
+    tree.ray_cast(ray, [&](std::uint32_t u, const Ray& r) {
+      got_all.insert(u);
+      return r.max_distance;
+    });
+    ASSERT_EQ(got_all, want_all) << "ray " << q;
+  }
+  EXPECT_GT(hits, 300);
+  EXPECT_LT(hits, 2900);
+  // a negative return stops the cast at the first leaf
+  int calls = 0;
+  tree.ray_cast({{0, 0, 0}, glm::normalize(Vec3(1, 1, 1)), 100}, [&](std::uint32_t, const Ray&) {
+    ++calls;
+    return -1.0;
+  });
+  EXPECT_EQ(calls, 1);
+}
+
+// the slab test against closed forms
+TEST(DynamicTree, SlabTestMatchesClosedForms) {
+  const Aabb unit{{0, 0, 0}, {1, 1, 1}};
+  auto enter = [&](const Vec3& o, const Vec3& d, double len) {
+    const Ray r{o, d, len};
+    return pba::ray_enter_box(r, 1.0 / d, unit);
+  };
+  EXPECT_EQ(enter({-2, 0.5, 0.5}, {1, 0, 0}, 5), 2.0);           // straight at a face
+  EXPECT_EQ(enter({0.5, 0.5, 0.5}, {0, 1, 0}, 5), 0.0);          // from inside
+  EXPECT_LT(enter({-2, 0.5, 0.5}, {1, 0, 0}, 1.5), 0.0);         // too short
+  EXPECT_LT(enter({-2, 1.5, 0.5}, {1, 0, 0}, 5), 0.0);           // parallel, outside the y slab
+  EXPECT_EQ(enter({-2, 1.0, 0.5}, {1, 0, 0}, 5), 2.0);           // grazing the top face counts
+  // along the diagonal from (-1,-1,-1): enters at the corner, distance sqrt(3)
+  const Vec3 diag = glm::normalize(Vec3(1, 1, 1));
+  EXPECT_NEAR(enter({-1, -1, -1}, diag, 5), std::sqrt(3.0), 1e-15);  // one rounding of 1/sqrt(3)
+}
+
+// --- bad input ---------------------------------------------------------------------------
+
+TEST(BroadPhase, BadInputIsNamed) {
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  BroadPhase bp;
+  EXPECT_EQ(error_of([&] { bp.create_proxy({{0, nan, 0}, {1, 1, 1}}); }),
+            "BroadPhase.create_proxy(box).lo: must be finite, got (0, nan, 0)");
+  EXPECT_EQ(error_of([&] { bp.create_proxy({{0, 0, 0}, {1, 1, inf}}); }),
+            "BroadPhase.create_proxy(box).hi: must be finite, got (1, 1, inf)");
+  EXPECT_EQ(error_of([&] { bp.create_proxy({{0, 2, 0}, {1, 1, 1}}); }),
+            "BroadPhase.create_proxy(box): inverted box, lo (0, 2, 0) > hi (1, 1, 1) on y");
+  EXPECT_EQ(bp.size(), 0u);  // nothing was created by the failed calls
+  const ProxyId id = bp.create_proxy({{0, 0, 0}, {1, 1, 1}});
+  EXPECT_EQ(error_of([&] { bp.move_proxy(id, {{0, 0, 0}, {-1, 1, 1}}); }),
+            "BroadPhase.move_proxy(box): inverted box, lo (0, 0, 0) > hi (-1, 1, 1) on x");
+  EXPECT_EQ(bp.box(id).hi, Vec3(1, 1, 1));  // a rejected move leaves the box
+  bp.destroy_proxy(id);
+  EXPECT_EQ(error_of([&] { bp.move_proxy(id, {{0, 0, 0}, {1, 1, 1}}); }),
+            "BroadPhase.move_proxy: stale handle (index 0, generation 1; the slot is now at generation 2 and free)");
+  EXPECT_NE(error_of([&] { bp.destroy_proxy(id); }).find("BroadPhase.destroy_proxy: stale handle"), std::string::npos);
+  EXPECT_EQ(error_of([&] { bp.set_filter(ProxyId{}, {}); }), "BroadPhase.set_filter: null handle");
+  EXPECT_EQ(error_of([&] { (void)bp.user_data(ProxyId{7, 1}); }),
+            "BroadPhase.user_data: invalid handle (index 7 was never issued)");
+  // a reused slot does not revive the old id
+  const ProxyId reused = bp.create_proxy({{0, 0, 0}, {1, 1, 1}});
+  EXPECT_EQ(reused.index, id.index);
+  EXPECT_FALSE(bp.valid(id));
+  EXPECT_NE(error_of([&] { (void)bp.box(id); }).find("stale handle"), std::string::npos);
+
+  EXPECT_EQ(error_of([] { BroadPhase b({.grid_cell = -1}); }), "BroadPhaseDef.grid_cell: must be finite and > 0, got -1");
+  EXPECT_EQ(error_of([] { BroadPhase b({.grid_max_cells_per_box = 0}); }),
+            "BroadPhaseDef.grid_max_cells_per_box: must be an integer in [1, 1000000], got 0");
+  EXPECT_EQ(error_of([&] { bp.set_grid_cell(nan); }), "BroadPhase.set_grid_cell(cell): must be finite and > 0, got nan");
+  EXPECT_EQ(error_of([] { pba::broad_phase_method_from_string("octree", "--option method"); }),
+            "--option method: unknown broad-phase method 'octree' (expected tree, grid, sap or brute-force)");
+  EXPECT_EQ(pba::broad_phase_method_from_string("sap", "x"), BroadPhaseMethod::SweepAndPrune);
+  EXPECT_EQ(error_of([] { DynamicTree t(-0.1); }), "DynamicTree.margin: must be finite and >= 0, got -0.1");
+  DynamicTree t;
+  const std::int32_t a = t.create_proxy({{0, 0, 0}, {1, 1, 1}}, 0);
+  t.create_proxy({{0, 0, 0}, {1, 1, 1}}, 1);
+  EXPECT_EQ(error_of([&] { t.destroy_proxy(t.root()); }),
+            "DynamicTree.destroy_proxy: node " + std::to_string(t.root()) + " is not a live leaf");
+  t.destroy_proxy(a);
+  EXPECT_EQ(error_of([&] { t.destroy_proxy(a); }), "DynamicTree.destroy_proxy: node " + std::to_string(a) + " is not a live leaf");
+  EXPECT_EQ(error_of([] { pba::MovingBoxes m({.count = 0}); }), "MovingBoxesDef.count: must be an integer in [1, 10000000], got 0");
+}
+
+}  // namespace
