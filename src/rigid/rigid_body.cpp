@@ -1,0 +1,405 @@
+// Rigid bodies: definitions, mass properties, storage and free motion.
+#include "pba/rigid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/Eigenvalues>
+
+namespace pba {
+
+namespace {
+
+// the rotation by `angle` (rad) about the unit `axis`
+Quat axis_angle(const Vec3& axis, double angle) {
+  const double s = std::sin(0.5 * angle);
+  return Quat(std::cos(0.5 * angle), axis.x * s, axis.y * s, axis.z * s);
+}
+
+// the principal moments of a symmetric inertia and the rotation whose columns are the
+// principal axes (a diagonal tensor keeps the identity, so simple bodies stay exact)
+void principal_axes(const Mat3& inertia, Vec3& moments, Quat& rotation) {
+  const bool diagonal = inertia[0][1] == 0 && inertia[0][2] == 0 && inertia[1][2] == 0 && inertia[1][0] == 0 &&
+                        inertia[2][0] == 0 && inertia[2][1] == 0;
+  if (diagonal) {
+    moments = {inertia[0][0], inertia[1][1], inertia[2][2]};
+    rotation = Quat(1, 0, 0, 0);
+    return;
+  }
+  Eigen::Matrix3d m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m(r, c) = 0.5 * (inertia[c][r] + inertia[r][c]);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m);
+  Eigen::Matrix3d axes = eig.eigenvectors();
+  // a proper rotation: flip the last axis of a reflection
+  if (axes.determinant() < 0) axes.col(2) = -axes.col(2);
+  Mat3 r;
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 3; ++k) r[c][k] = axes(k, c);
+  moments = {eig.eigenvalues()(0), eig.eigenvalues()(1), eig.eigenvalues()(2)};
+  rotation = glm::normalize(glm::quat_cast(r));
+}
+
+// the inertia of a point mass m at offset d about the origin (parallel-axis term)
+Mat3 parallel_axis(double m, const Vec3& d) {
+  Mat3 out(m * glm::dot(d, d));
+  out -= m * glm::outerProduct(d, d);
+  return out;
+}
+
+bool finite_quat(const Quat& q) {
+  return std::isfinite(q.w) && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z);
+}
+
+// require_unit_quat's test without building a message
+bool unit_quat(const Quat& q) { return finite_quat(q) && std::abs(glm::length(q) - 1.0) <= 1e-6; }
+
+}  // namespace
+
+std::string_view to_string(BodyType t) {
+  switch (t) {
+    case BodyType::Static: return "static";
+    case BodyType::Kinematic: return "kinematic";
+    case BodyType::Dynamic: return "dynamic";
+  }
+  return "unknown";
+}
+
+// ---------------------------------------------------------------------------------------
+// mass properties
+
+RigidMass RigidMass::box(double mass, const Vec3& h) {
+  const Vec3 d = 2.0 * h;
+  const double k = mass / 12;
+  Mat3 i(0.0);
+  i[0][0] = k * (d.y * d.y + d.z * d.z);
+  i[1][1] = k * (d.x * d.x + d.z * d.z);
+  i[2][2] = k * (d.x * d.x + d.y * d.y);
+  return {mass, {0, 0, 0}, i};
+}
+
+RigidMass RigidMass::sphere(double mass, double r) { return {mass, {0, 0, 0}, Mat3(0.4 * mass * r * r)}; }
+
+RigidMass RigidMass::operator+(const RigidMass& o) const {
+  const double m = mass + o.mass;
+  const Vec3 c = (mass * center + o.mass * o.center) / m;
+  return {m, c, inertia + parallel_axis(mass, center - c) + o.inertia + parallel_axis(o.mass, o.center - c)};
+}
+
+void RigidMass::validate(std::string_view where) const {
+  if (!(std::isfinite(mass) && mass > 0)) require_positive(mass, field_path(where, "mass"));
+  require_finite(center, field_path(where, "center"));
+  const std::string w = field_path(where, "inertia");
+  // finite and symmetric to rounding
+  double scale = 0;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) {
+      if (!std::isfinite(inertia[c][r]))
+        throw Error(w + ": must be finite, got " + format_value(inertia[c][r]) + " at row " + std::to_string(r) +
+                    ", column " + std::to_string(c));
+      scale = std::max(scale, std::abs(inertia[c][r]));
+    }
+  for (int c = 0; c < 3; ++c)
+    for (int r = c + 1; r < 3; ++r)
+      if (std::abs(inertia[c][r] - inertia[r][c]) > 1e-9 * scale)
+        throw Error(w + ": must be symmetric, got " + format_value(inertia[c][r]) + " and " +
+                    format_value(inertia[r][c]) + " at (" + std::to_string(r) + ", " + std::to_string(c) + ")");
+  // positive principal moments that a real mass distribution can have
+  Vec3 m;
+  Quat q;
+  principal_axes(inertia, m, q);
+  if (!(m.x > 0 && m.y > 0 && m.z > 0))
+    throw Error(w + ": must be positive definite, got principal moments " + format_vec3(m));
+  const double slack = 1e-9 * (m.x + m.y + m.z);
+  if (m.x > m.y + m.z + slack || m.y > m.x + m.z + slack || m.z > m.x + m.y + slack)
+    throw Error(w + ": principal moments " + format_vec3(m) +
+                " break the triangle inequality (each must be at most the sum of the other two)");
+}
+
+void RigidBodyDef::validate(std::string_view where) const {
+  require_finite(pose.position, field_path(where, "pose.position"));
+  require_unit_quat(pose.rotation, field_path(where, "pose.rotation"));
+  require_finite(linear_velocity, field_path(where, "linear_velocity"));
+  require_finite(angular_velocity, field_path(where, "angular_velocity"));
+  require_non_negative(linear_damping, field_path(where, "linear_damping"));
+  require_non_negative(angular_damping, field_path(where, "angular_damping"));
+  require_finite(gravity_scale, field_path(where, "gravity_scale"));
+  if (type == BodyType::Dynamic) mass.validate(field_path(where, "mass"));
+}
+
+// ---------------------------------------------------------------------------------------
+// storage
+
+RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) {
+  require_count(static_cast<long long>(def.capacity), 0, 1LL << 26, "RigidSystemDef.capacity");
+  set_substeps(def.substeps);
+  const std::size_t n = def.capacity;
+  ids_.reserve(n);
+  for (auto* v : {&slot_, &owner_}) v->reserve(n);
+  type_.reserve(n);
+  for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_}) v->reserve(n);
+  for (auto* v : {&q_, &principal_}) v->reserve(n);
+  for (auto* v : {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_}) v->reserve(n);
+  name_.reserve(n);
+  bullet_.reserve(n);
+}
+
+void RigidBodySystem::set_substeps(int n) { require_count(n, 1, 64, "RigidSystemDef.substeps"); substeps_ = n; }
+
+RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view where) {
+  const std::string w = def.name.empty() ? std::string(where) : std::string(where) + " '" + def.name + "'";
+  def.validate(w);
+  // the principal frame of a dynamic body; others have no inertia
+  Vec3 moments(0), inv(0);
+  Quat principal(1, 0, 0, 0);
+  Vec3 com_local(0);
+  double inv_mass = 0;
+  if (def.type == BodyType::Dynamic) {
+    principal_axes(def.mass.inertia, moments, principal);
+    inv = 1.0 / moments;
+    inv_mass = 1.0 / def.mass.mass;
+    com_local = def.mass.center;
+  }
+  const RigidBodyId id = ids_.create();
+  if (slot_.size() <= id.index) slot_.resize(id.index + 1);
+  slot_[id.index] = static_cast<std::uint32_t>(type_.size());
+  owner_.push_back(id.index);
+  type_.push_back(def.type);
+  com_.push_back(apply(def.pose, com_local));
+  q_.push_back(glm::normalize(def.pose.rotation * principal));
+  v_.push_back(def.type == BodyType::Static ? Vec3(0) : def.linear_velocity);
+  w_.push_back(def.type == BodyType::Static ? Vec3(0) : def.angular_velocity);
+  force_.push_back(Vec3(0));
+  torque_.push_back(Vec3(0));
+  inv_mass_.push_back(inv_mass);
+  inv_inertia_.push_back(inv);
+  inertia_.push_back(moments);
+  lin_damp_.push_back(def.linear_damping);
+  ang_damp_.push_back(def.angular_damping);
+  gravity_scale_.push_back(def.gravity_scale);
+  com_local_.push_back(com_local);
+  principal_.push_back(principal);
+  name_.push_back(def.name);
+  bullet_.push_back(def.bullet ? 1 : 0);
+  return id;
+}
+
+void RigidBodySystem::destroy(RigidBodyId id) {
+  const std::size_t i = index(id, "RigidBodySystem::destroy");
+  const std::size_t last = type_.size() - 1;
+  // move the last body into the hole (every array, then the handle maps)
+  auto fill = [&](auto& v) {
+    v[i] = std::move(v[last]);
+    v.pop_back();
+  };
+  fill(type_), fill(com_), fill(q_), fill(v_), fill(w_), fill(force_), fill(torque_), fill(inv_mass_);
+  fill(inv_inertia_), fill(inertia_), fill(lin_damp_), fill(ang_damp_), fill(gravity_scale_);
+  fill(com_local_), fill(principal_), fill(name_), fill(bullet_);
+  const std::uint32_t moved = owner_[last];
+  owner_[i] = moved;
+  owner_.pop_back();
+  slot_[moved] = static_cast<std::uint32_t>(i);
+  ids_.destroy(id, "RigidBodySystem::destroy");
+}
+
+std::size_t RigidBodySystem::index(RigidBodyId id, std::string_view where) const {
+  ids_.require(id, where);
+  return slot_[id.index];
+}
+
+std::string RigidBodySystem::describe(std::size_t i) const {
+  return "rigid body " + std::to_string(owner_[i]) + (name_[i].empty() ? "" : " '" + name_[i] + "'");
+}
+
+// ---------------------------------------------------------------------------------------
+// state
+
+Pose RigidBodySystem::pose(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::pose");
+  const Quat r = glm::normalize(q_[i] * glm::conjugate(principal_[i]));
+  return {com_[i] - r * com_local_[i], r};
+}
+
+Vec3 RigidBodySystem::center_of_mass(RigidBodyId id) const { return com_[index(id, "RigidBodySystem::center_of_mass")]; }
+Vec3 RigidBodySystem::linear_velocity(RigidBodyId id) const { return v_[index(id, "RigidBodySystem::linear_velocity")]; }
+Vec3 RigidBodySystem::angular_velocity(RigidBodyId id) const { return w_[index(id, "RigidBodySystem::angular_velocity")]; }
+BodyType RigidBodySystem::type(RigidBodyId id) const { return type_[index(id, "RigidBodySystem::type")]; }
+const std::string& RigidBodySystem::name(RigidBodyId id) const { return name_[index(id, "RigidBodySystem::name")]; }
+
+Vec3 RigidBodySystem::velocity_at(RigidBodyId id, const Vec3& p) const {
+  const std::size_t i = index(id, "RigidBodySystem::velocity_at");
+  return v_[i] + glm::cross(w_[i], p - com_[i]);
+}
+
+double RigidBodySystem::mass(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::mass");
+  return inv_mass_[i] > 0 ? 1.0 / inv_mass_[i] : INFINITY;
+}
+
+Mat3 RigidBodySystem::world_inertia(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::world_inertia");
+  const Mat3 r = glm::mat3_cast(q_[i]);
+  Mat3 d(0.0);
+  d[0][0] = inertia_[i].x, d[1][1] = inertia_[i].y, d[2][2] = inertia_[i].z;
+  return r * d * glm::transpose(r);
+}
+
+Vec3 RigidBodySystem::angular_momentum(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::angular_momentum");
+  // L = R diag(I) R^T w, in the principal frame
+  const Vec3 wb = glm::conjugate(q_[i]) * w_[i];
+  return q_[i] * (inertia_[i] * wb);
+}
+
+double RigidBodySystem::kinetic_energy(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::kinetic_energy");
+  if (inv_mass_[i] == 0) return 0;
+  const Vec3 wb = glm::conjugate(q_[i]) * w_[i];
+  return 0.5 * glm::dot(v_[i], v_[i]) / inv_mass_[i] + 0.5 * glm::dot(wb, inertia_[i] * wb);
+}
+
+void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
+  const std::size_t i = index(id, "RigidBodySystem::set_pose");
+  if (!is_finite(pose.position)) require_finite(pose.position, describe(i) + " set_pose position");
+  if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
+  com_[i] = apply(pose, com_local_[i]);
+  q_[i] = glm::normalize(pose.rotation * principal_[i]);
+}
+
+void RigidBodySystem::set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular) {
+  const std::size_t i = index(id, "RigidBodySystem::set_velocity");
+  if (!is_finite(linear)) require_finite(linear, describe(i) + " set_velocity linear");
+  if (!is_finite(angular)) require_finite(angular, describe(i) + " set_velocity angular");
+  if (type_[i] == BodyType::Static) return;  // a static body never moves
+  v_[i] = linear;
+  w_[i] = angular;
+}
+
+void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f, const Vec3& p) {
+  const std::size_t i = index(id, "RigidBodySystem::apply_force");
+  if (!is_finite(f)) require_finite(f, describe(i) + " apply_force force");
+  if (!is_finite(p)) require_finite(p, describe(i) + " apply_force point");
+  if (type_[i] != BodyType::Dynamic) return;
+  force_[i] += f;
+  torque_[i] += glm::cross(p - com_[i], f);
+}
+
+void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f) {
+  const std::size_t i = index(id, "RigidBodySystem::apply_force");
+  if (!is_finite(f)) require_finite(f, describe(i) + " apply_force force");
+  if (type_[i] == BodyType::Dynamic) force_[i] += f;
+}
+
+void RigidBodySystem::apply_torque(RigidBodyId id, const Vec3& t) {
+  const std::size_t i = index(id, "RigidBodySystem::apply_torque");
+  if (!is_finite(t)) require_finite(t, describe(i) + " apply_torque torque");
+  if (type_[i] == BodyType::Dynamic) torque_[i] += t;
+}
+
+void RigidBodySystem::apply_impulse(RigidBodyId id, const Vec3& j, const Vec3& p) {
+  const std::size_t i = index(id, "RigidBodySystem::apply_impulse");
+  if (!is_finite(j)) require_finite(j, describe(i) + " apply_impulse impulse");
+  if (!is_finite(p)) require_finite(p, describe(i) + " apply_impulse point");
+  if (type_[i] != BodyType::Dynamic) return;
+  v_[i] += inv_mass_[i] * j;
+  // dw = I^-1 (r x J) with I^-1 = R diag(1/I) R^T
+  const Vec3 l = glm::conjugate(q_[i]) * glm::cross(p - com_[i], j);
+  w_[i] += q_[i] * (inv_inertia_[i] * l);
+}
+
+void RigidBodySystem::apply_angular_impulse(RigidBodyId id, const Vec3& j) {
+  const std::size_t i = index(id, "RigidBodySystem::apply_angular_impulse");
+  if (!is_finite(j)) require_finite(j, describe(i) + " apply_angular_impulse");
+  if (type_[i] != BodyType::Dynamic) return;
+  w_[i] += q_[i] * (inv_inertia_[i] * (glm::conjugate(q_[i]) * j));
+}
+
+// ---------------------------------------------------------------------------------------
+// stepping
+
+// Torque-free rotation over h by the symmetric splitting of Dullweber, Leimkuhler and
+// McLachlan (1997, J. Chem. Phys. 107, eq. 3.7): the kinetic energy is a sum of three
+// terms pi_k^2 / (2 I_k), each of whose flows is an exact rotation about principal axis k.
+// Composing them as 1/2 1/2 1 1/2 1/2 (axes x, y, z, y, x) is symmetric, so second order;
+// every sub-flow keeps the world angular momentum exactly (each term is invariant under
+// rotations of space), so L drifts only by rounding and the energy error stays O(h^2).
+void RigidBodySystem::integrate_rotation(std::size_t i, double h) {
+  static constexpr int kAxis[5] = {0, 1, 2, 1, 0};
+  static constexpr double kFraction[5] = {0.5, 0.5, 1.0, 0.5, 0.5};
+  Quat q = q_[i];
+  const Vec3 inv = inv_inertia_[i];
+  // body-frame angular momentum pi = I w_body
+  Vec3 pi = inertia_[i] * (glm::conjugate(q) * w_[i]);
+  for (int s = 0; s < 5; ++s) {
+    const int k = kAxis[s];
+    const double angle = kFraction[s] * h * pi[k] * inv[k];
+    // the body turns by +angle about its axis k; its momentum, seen from the body, by -angle
+    const double c = std::cos(angle), sn = std::sin(angle);
+    const double hs = std::sin(0.5 * angle), hc = std::cos(0.5 * angle);
+    const Quat dq(hc, k == 0 ? hs : 0.0, k == 1 ? hs : 0.0, k == 2 ? hs : 0.0);
+    q = q * dq;
+    const int a = (k + 1) % 3, b = (k + 2) % 3;
+    const double pa = pi[a], pb = pi[b];
+    pi[a] = c * pa + sn * pb;
+    pi[b] = -sn * pa + c * pb;
+  }
+  q = glm::normalize(q);
+  q_[i] = q;
+  w_[i] = q * (pi * inv);
+}
+
+void RigidBodySystem::step(double dt, const Vec3& gravity) {
+  if (!failure_.empty()) throw Error(failure_);
+  if (!(std::isfinite(dt) && dt > 0)) require_positive(dt, "RigidBodySystem::step dt");
+  require_finite(gravity, "RigidBodySystem::step gravity");
+  const double h = dt / substeps_;
+  const std::size_t n = type_.size();
+  for (int s = 0; s < substeps_; ++s) {
+    for (std::size_t i = 0; i < n; ++i) {
+      switch (type_[i]) {
+        case BodyType::Static: break;
+        case BodyType::Kinematic: {
+          // constant velocities: exact translation and rotation
+          com_[i] += h * v_[i];
+          const double wl = glm::length(w_[i]);
+          if (wl > 0) q_[i] = glm::normalize(axis_angle(w_[i] / wl, wl * h) * q_[i]);
+          break;
+        }
+        case BodyType::Dynamic: {
+          // velocities: gravity, applied force and torque, then implicit damping
+          Vec3 v = v_[i] + h * (gravity_scale_[i] * gravity + inv_mass_[i] * force_[i]);
+          v_[i] = v / (1 + h * lin_damp_[i]);
+          const Vec3 tb = glm::conjugate(q_[i]) * torque_[i];
+          const Vec3 w = w_[i] + q_[i] * (h * inv_inertia_[i] * tb);
+          w_[i] = w / (1 + h * ang_damp_[i]);
+          // positions: symplectic Euler for the centre, the exact-flow splitting for rotation
+          com_[i] += h * v_[i];
+          integrate_rotation(i, h);
+          break;
+        }
+      }
+    }
+  }
+  time_ += dt;
+  // forces last one step; then look for a body whose state stopped being finite
+  for (std::size_t i = 0; i < n; ++i) {
+    force_[i] = Vec3(0);
+    torque_[i] = Vec3(0);
+    if (!(is_finite(com_[i]) && is_finite(v_[i]) && is_finite(w_[i]) && finite_quat(q_[i]))) {
+      failure_ = describe(i) + " became non-finite at t = " + format_value(time_) + " s: position " +
+                 format_vec3(com_[i]) + ", velocity " + format_vec3(v_[i]) + ", angular velocity " +
+                 format_vec3(w_[i]);
+      throw Error(failure_);
+    }
+  }
+}
+
+std::uint64_t RigidBodySystem::hash() const {
+  std::uint64_t h = hash_span(std::span<const Vec3>(com_));
+  h = hash_span(std::span<const Quat>(q_), h);
+  h = hash_span(std::span<const Vec3>(v_), h);
+  return hash_span(std::span<const Vec3>(w_), h);
+}
+
+}  // namespace pba
