@@ -1,16 +1,23 @@
 // pba rigid bodies (workbook chapter 6), part 1: the bodies and their free motion.
 //
 // A RigidBodySystem stores bodies as contiguous arrays (structure of arrays) and advances
-// them under gravity, applied forces and torques, damping and impulses. The free rotation
+// them under gravity, applied forces and torques, damping, impulses and contacts. The free rotation
 // of a body is integrated by the symmetric splitting of Dullweber, Leimkuhler and McLachlan
 // (1997): each substep is five exact rotations about the body's principal axes, so a
 // torque-free body keeps its world angular momentum to rounding and its kinetic energy to
 // O(h^2) without drift, and the gyroscopic precession (the intermediate-axis flip of a
-// tumbling T-handle) comes out right at game time steps. Contacts and the switchable
-// solvers build on this in the rigid-body issue; here there are none yet.
+// tumbling T-handle) comes out right at game time steps.
+//
+// Each body carries one or more shapes of the collide module. A step finds the pairs of
+// shapes whose bounds overlap, builds their manifolds with the narrow phase (speculative
+// points included), matches the points to last step's by feature id so the solver starts
+// from last step's impulses, and solves the contacts with the selected solver (the
+// soft-step default of Box2D v3: substeps, soft contacts, a relax pass and a restitution
+// pass; see docs/rigid-bodies.md).
 //
 //   pba::RigidBodySystem bodies;
-//   auto box = bodies.create({.pose = {{0, 5, 0}}, .mass = pba::RigidMass::box(1.0, {0.5, 0.5, 0.5})});
+//   bodies.create({.type = pba::BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+//   auto box = bodies.create({.pose = {{0, 5, 0}}, .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.5, 0.5})}}});
 //   bodies.apply_impulse(box, {0, 0, 1}, {0.5, 5, 0});   // N s at a world point
 //   bodies.step(1.0 / 60, {0, -9.81, 0});
 //
@@ -18,6 +25,8 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -62,6 +71,18 @@ struct RigidMass {
   void validate(std::string_view where) const;
 };
 
+/// A shape attached to a body, with its material.
+struct RigidShapeDef {
+  ColliderShape shape{};  ///< any shape; planes and meshes only on static bodies
+  Pose local{};           ///< placement in the body frame
+  double density = 1000;  ///< kg/m^3, finite and > 0: the body's mass comes from its shapes' densities
+  /// Friction and restitution (mixed between the two shapes of a contact, see ContactSettings).
+  SurfaceMaterial material{.restitution = 0, .friction = 0.6};
+  /// Rolling resistance, dimensionless, finite and >= 0: a rolling contact loses angular
+  /// impulse up to this times the normal impulse times the shape's radius.
+  double rolling_resistance = 0;
+};
+
 /// Definition of a rigid body. Start from the defaults and change what you need.
 struct RigidBodyDef {
   std::string name{};               ///< optional; used in error messages
@@ -69,7 +90,9 @@ struct RigidBodyDef {
   Pose pose{};                      ///< body frame in the world (finite position, unit rotation)
   Vec3 linear_velocity{0, 0, 0};    ///< velocity of the centre of mass (m/s), finite
   Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), finite
-  RigidMass mass{};                 ///< dynamic bodies: mass properties (see RigidMass::of_shape)
+  std::vector<RigidShapeDef> shapes{};  ///< at least one
+  /// Dynamic bodies: mass properties; unset means from the shapes' densities.
+  std::optional<RigidMass> mass{};
   double linear_damping = 0;        ///< 1/s, finite and >= 0: dv/dt = -c v
   double angular_damping = 0;       ///< 1/s, finite and >= 0: dw/dt = -c w
   double gravity_scale = 1;         ///< multiplies the system's gravity, finite
@@ -84,11 +107,75 @@ struct RigidBodyTag {};
 /// Generation-checked rigid-body handle.
 using RigidBodyId = Handle<RigidBodyTag>;
 
+/// The contact solvers, switchable between steps.
+enum class RigidSolverType : std::uint8_t {
+  SoftStep,           ///< Box2D v3 / Box3D: substeps, soft contacts, relax and restitution passes
+  SequentialImpulse,  ///< one step, iterations with warm starting, Baumgarte position correction
+};
+
+/// Lower-case name of a solver ("soft-step", "sequential-impulse").
+std::string_view to_string(RigidSolverType t);
+
+/// How two materials' coefficients combine at a contact.
+enum class MixRule : std::uint8_t {
+  GeometricMean,  ///< sqrt(a b) (Box2D's friction rule)
+  Minimum,        ///< min(a, b)
+  Maximum,        ///< max(a, b) (Box2D's restitution rule)
+  Average,        ///< (a + b) / 2
+  Product,        ///< a b
+};
+
+/// Contact and solver settings; change them between steps.
+struct ContactSettings {
+  RigidSolverType solver = RigidSolverType::SoftStep;  ///< which solver
+  int substeps = 4;  ///< soft step: substeps per step, in [1, 64]
+  int iterations = 10;  ///< sequential impulses: velocity iterations per step, in [1, 1000]
+  /// Soft step: contact stiffness (Hz), finite and > 0. Contacts are implicit springs of this
+  /// natural frequency, damped by `damping_ratio`, so a contact under a load W between
+  /// bodies of effective mass m settles W / (m (2 pi hertz)^2) deep: higher is stiffer.
+  double contact_hertz = 60;
+  double damping_ratio = 10;     ///< soft step: contact damping ratio, finite and >= 0
+  double push_out_speed = 3;     ///< largest speed (m/s) at which overlap is pushed apart, finite and > 0
+  double baumgarte = 0.2;        ///< sequential impulses: fraction of overlap removed per step, in [0, 1]
+  double linear_slop = 0.005;    ///< overlap (m) left uncorrected so contacts persist, finite and >= 0
+  double speculative_distance = 0.02;  ///< manifolds include points closer than this (m), finite and >= 0
+  /// Approach speeds (m/s) below this bounce with no restitution, so resting bodies stay put.
+  double restitution_threshold = 1;
+  MixRule friction_mix = MixRule::GeometricMean;   ///< how friction coefficients combine
+  MixRule restitution_mix = MixRule::Maximum;      ///< how restitutions combine
+  bool warm_starting = true;     ///< start from last step's impulses (matched by feature id)
+
+  /// Throws Error naming `where` and the bad field.
+  void validate(std::string_view where) const;
+};
+
 /// Settings of a RigidBodySystem.
 struct RigidSystemDef {
   std::size_t capacity = 256;  ///< bodies reserved up front; creating more allocates once per doubling
-  int substeps = 4;            ///< substeps per step, in [1, 64]
+  ContactSettings contacts{};  ///< solver and contact settings
 };
+
+/// One contact point after the last step, for drawing and tests.
+struct RigidContactPoint {
+  RigidBodyId a{}, b{};        ///< the two bodies (the normal points from a to b)
+  Vec3 position{0, 0, 0};      ///< world point (m)
+  Vec3 normal{0, 0, 1};        ///< unit normal from a to b
+  double depth = 0;            ///< overlap at the start of the step (m); < 0 speculative
+  double normal_impulse = 0;   ///< accumulated normal impulse of the step (N s)
+  double tangent_impulse = 0;  ///< magnitude of the accumulated friction impulse (N s)
+  std::uint32_t id = 0;        ///< feature id
+};
+
+/// Where the last step's time went (s).
+struct RigidProfile {
+  double collide = 0;  ///< pairs and manifolds
+  double solve = 0;    ///< contact solver and integration
+  double total = 0;    ///< the whole step
+};
+
+namespace detail {
+struct RigidContacts;
+}
 
 /// Rigid bodies in structure-of-arrays layout. Not thread-safe. Steps never allocate.
 class RigidBodySystem {
@@ -147,9 +234,11 @@ class RigidBodySystem {
 
   // ---- stepping ----
 
-  /// Substeps per step.
-  int substeps() const { return substeps_; }
-  /// Sets the substeps per step, in [1, 64].
+  /// Contact and solver settings (validated at each step).
+  ContactSettings& settings() { return settings_; }
+  /// Contact and solver settings.
+  const ContactSettings& settings() const { return settings_; }
+  /// Sets the soft step's substeps per step, in [1, 64].
   void set_substeps(int n);
   /// Advances every body from t to t + dt (s; finite and > 0) under `gravity` (m/s^2).
   /// Throws Error if a body's state becomes non-finite, naming the body and the time; the
@@ -159,13 +248,33 @@ class RigidBodySystem {
   double time() const { return time_; }
   /// 64-bit hash of every body's pose and velocities (bit patterns).
   std::uint64_t hash() const;
+  /// The contact points of the last step (copies; allocates, for drawing and tests).
+  std::vector<RigidContactPoint> contacts() const;
+  /// Contact manifolds (touching or speculative shape pairs) in the last step.
+  std::size_t manifold_count() const;
+  /// Timings of the last step.
+  const RigidProfile& profile() const { return profile_; }
+  /// The world bounds of every shape of body `id` at its pose now.
+  std::vector<Aabb> shape_bounds(RigidBodyId id) const;
+  /// The shapes of body `id` (in the body frame).
+  std::span<const RigidShapeDef> shapes(RigidBodyId id) const;
+
+  ~RigidBodySystem();
+  RigidBodySystem(RigidBodySystem&&) noexcept;
+  RigidBodySystem& operator=(RigidBodySystem&&) noexcept;
 
  private:
+  friend struct detail::RigidContacts;
   std::size_t index(RigidBodyId id, std::string_view where) const;
   std::string describe(std::size_t i) const;
   void integrate_rotation(std::size_t i, double h);
+  void integrate_velocities(double h, const Vec3& gravity);
+  void integrate_positions(double h);
+  void check_finite();
 
-  int substeps_ = 4;
+  ContactSettings settings_{};
+  RigidProfile profile_{};
+  std::unique_ptr<detail::RigidContacts> contacts_;
   double time_ = 0;
   std::string failure_;
   HandlePool<RigidBodyTag> ids_;
@@ -186,6 +295,10 @@ class RigidBodySystem {
   std::vector<Quat> principal_;       // principal frame in the body frame
   std::vector<std::string> name_;
   std::vector<std::uint8_t> bullet_;
+  std::vector<std::vector<RigidShapeDef>> shapes_;  // by dense index
+  // start of the step, for the contact solver's separation updates
+  std::vector<Vec3> com0_;
+  std::vector<Quat> q0_;
 };
 
 }  // namespace pba

@@ -1,6 +1,8 @@
 // Rigid bodies: definitions, mass properties, storage and free motion.
 #include "pba/rigid.h"
 
+#include "contacts.h"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -56,6 +58,28 @@ bool finite_quat(const Quat& q) {
 bool unit_quat(const Quat& q) { return finite_quat(q) && std::abs(glm::length(q) - 1.0) <= 1e-6; }
 
 }  // namespace
+
+std::string_view to_string(RigidSolverType t) {
+  switch (t) {
+    case RigidSolverType::SoftStep: return "soft-step";
+    case RigidSolverType::SequentialImpulse: return "sequential-impulse";
+  }
+  return "unknown";
+}
+
+void ContactSettings::validate(std::string_view where) const {
+  if (solver != RigidSolverType::SoftStep && solver != RigidSolverType::SequentialImpulse)
+    throw Error(field_path(where, "solver") + ": unknown solver " + std::to_string(static_cast<int>(solver)));
+  require_count(substeps, 1, 64, field_path(where, "substeps"));
+  require_count(iterations, 1, 1000, field_path(where, "iterations"));
+  require_positive(contact_hertz, field_path(where, "contact_hertz"));
+  require_non_negative(damping_ratio, field_path(where, "damping_ratio"));
+  require_positive(push_out_speed, field_path(where, "push_out_speed"));
+  require_in_range(baumgarte, 0, 1, field_path(where, "baumgarte"));
+  require_non_negative(linear_slop, field_path(where, "linear_slop"));
+  require_non_negative(speculative_distance, field_path(where, "speculative_distance"));
+  require_non_negative(restitution_threshold, field_path(where, "restitution_threshold"));
+}
 
 std::string_view to_string(BodyType t) {
   switch (t) {
@@ -125,41 +149,92 @@ void RigidBodyDef::validate(std::string_view where) const {
   require_non_negative(linear_damping, field_path(where, "linear_damping"));
   require_non_negative(angular_damping, field_path(where, "angular_damping"));
   require_finite(gravity_scale, field_path(where, "gravity_scale"));
-  if (type == BodyType::Dynamic) mass.validate(field_path(where, "mass"));
+  if (shapes.empty()) throw Error(field_path(where, "shapes") + ": a body needs at least one shape, got none");
+  for (std::size_t k = 0; k < shapes.size(); ++k) {
+    const RigidShapeDef& d = shapes[k];
+    const std::string w = field_path(where, "shapes[" + std::to_string(k) + "]");
+    d.shape.validate(field_path(w, "shape"));
+    require_finite(d.local.position, field_path(w, "local.position"));
+    require_unit_quat(d.local.rotation, field_path(w, "local.rotation"));
+    require_positive(d.density, field_path(w, "density"));
+    require_in_range(d.material.restitution, 0, 1, field_path(w, "material.restitution"));
+    require_non_negative(d.material.friction, field_path(w, "material.friction"));
+    require_non_negative(d.rolling_resistance, field_path(w, "rolling_resistance"));
+    const bool solid = d.shape.type != ShapeType::Plane && d.shape.type != ShapeType::Mesh;
+    if (type != BodyType::Static && !solid)
+      throw Error(field_path(w, "shape") + ": a " + std::string(to_string(d.shape.type)) +
+                  " has no volume, so only a static body can have one (this body is " + std::string(to_string(type)) +
+                  ")");
+  }
+  if (type == BodyType::Dynamic && mass) mass->validate(field_path(where, "mass"));
 }
 
 // ---------------------------------------------------------------------------------------
 // storage
 
-RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) {
+RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::make_unique<detail::RigidContacts>()) {
   require_count(static_cast<long long>(def.capacity), 0, 1LL << 26, "RigidSystemDef.capacity");
-  set_substeps(def.substeps);
+  def.contacts.validate("RigidSystemDef.contacts");
+  settings_ = def.contacts;
   const std::size_t n = def.capacity;
   ids_.reserve(n);
   for (auto* v : {&slot_, &owner_}) v->reserve(n);
   type_.reserve(n);
-  for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_}) v->reserve(n);
-  for (auto* v : {&q_, &principal_}) v->reserve(n);
+  for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_}) v->reserve(n);
+  for (auto* v : {&q_, &principal_, &q0_}) v->reserve(n);
   for (auto* v : {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_}) v->reserve(n);
   name_.reserve(n);
   bullet_.reserve(n);
+  shapes_.reserve(n);
 }
 
-void RigidBodySystem::set_substeps(int n) { require_count(n, 1, 64, "RigidSystemDef.substeps"); substeps_ = n; }
+RigidBodySystem::~RigidBodySystem() = default;
+RigidBodySystem::RigidBodySystem(RigidBodySystem&&) noexcept = default;
+RigidBodySystem& RigidBodySystem::operator=(RigidBodySystem&&) noexcept = default;
+
+void RigidBodySystem::set_substeps(int n) {
+  require_count(n, 1, 64, "ContactSettings.substeps");
+  settings_.substeps = n;
+}
 
 RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view where) {
   const std::string w = def.name.empty() ? std::string(where) : std::string(where) + " '" + def.name + "'";
   def.validate(w);
-  // the principal frame of a dynamic body; others have no inertia
+  // compounds become their children, so the narrow phase sees convex shapes and planes only
+  std::vector<RigidShapeDef> shapes;
+  for (const RigidShapeDef& d : def.shapes) {
+    if (d.shape.type != ShapeType::Compound) {
+      shapes.push_back(d);
+      continue;
+    }
+    for (const CompoundChild& c : d.shape.compound->children) {
+      RigidShapeDef child = d;
+      child.shape = c.shape;
+      child.local = compose(d.local, c.pose);
+      shapes.push_back(child);
+    }
+  }
+  // the principal frame of a dynamic body (mass given, or from the shapes); others have no inertia
   Vec3 moments(0), inv(0);
   Quat principal(1, 0, 0, 0);
   Vec3 com_local(0);
   double inv_mass = 0;
   if (def.type == BodyType::Dynamic) {
-    principal_axes(def.mass.inertia, moments, principal);
+    RigidMass m;
+    if (def.mass) {
+      m = *def.mass;
+    } else {
+      for (std::size_t k = 0; k < shapes.size(); ++k) {
+        const RigidMass part = RigidMass::of_shape(shapes[k].shape, shapes[k].density, shapes[k].local,
+                                                   field_path(w, "shapes[" + std::to_string(k) + "]"));
+        m = k == 0 ? part : m + part;
+      }
+      m.validate(field_path(w, "mass (from the shapes)"));
+    }
+    principal_axes(m.inertia, moments, principal);
     inv = 1.0 / moments;
-    inv_mass = 1.0 / def.mass.mass;
-    com_local = def.mass.center;
+    inv_mass = 1.0 / m.mass;
+    com_local = m.center;
   }
   const RigidBodyId id = ids_.create();
   if (slot_.size() <= id.index) slot_.resize(id.index + 1);
@@ -182,6 +257,9 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   principal_.push_back(principal);
   name_.push_back(def.name);
   bullet_.push_back(def.bullet ? 1 : 0);
+  shapes_.push_back(std::move(shapes));
+  com0_.push_back(com_.back());
+  q0_.push_back(q_.back());
   return id;
 }
 
@@ -195,11 +273,15 @@ void RigidBodySystem::destroy(RigidBodyId id) {
   };
   fill(type_), fill(com_), fill(q_), fill(v_), fill(w_), fill(force_), fill(torque_), fill(inv_mass_);
   fill(inv_inertia_), fill(inertia_), fill(lin_damp_), fill(ang_damp_), fill(gravity_scale_);
-  fill(com_local_), fill(principal_), fill(name_), fill(bullet_);
+  fill(com_local_), fill(principal_), fill(name_), fill(bullet_), fill(shapes_), fill(com0_), fill(q0_);
   const std::uint32_t moved = owner_[last];
   owner_[i] = moved;
   owner_.pop_back();
   slot_[moved] = static_cast<std::uint32_t>(i);
+  // the body's contacts go; the others follow the moved body to its new index
+  auto& pairs = contacts_->pairs;
+  std::erase_if(pairs, [&](const detail::ContactPair& c) { return c.slot_a == id.index || c.slot_b == id.index; });
+  for (detail::ContactPair& c : pairs) c.a = slot_[c.slot_a], c.b = slot_[c.slot_b];
   ids_.destroy(id, "RigidBodySystem::destroy");
 }
 
@@ -349,40 +431,83 @@ void RigidBodySystem::integrate_rotation(std::size_t i, double h) {
   w_[i] = q * (pi * inv);
 }
 
+void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity) {
+  const std::size_t n = type_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (type_[i] != BodyType::Dynamic) continue;
+    // gravity, applied force and torque, then implicit damping
+    const Vec3 v = v_[i] + h * (gravity_scale_[i] * gravity + inv_mass_[i] * force_[i]);
+    v_[i] = v / (1 + h * lin_damp_[i]);
+    const Vec3 tb = glm::conjugate(q_[i]) * torque_[i];
+    const Vec3 w = w_[i] + q_[i] * (h * inv_inertia_[i] * tb);
+    w_[i] = w / (1 + h * ang_damp_[i]);
+  }
+}
+
+void RigidBodySystem::integrate_positions(double h) {
+  const std::size_t n = type_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    switch (type_[i]) {
+      case BodyType::Static: break;
+      case BodyType::Kinematic: {
+        // constant velocities: exact translation and rotation
+        com_[i] += h * v_[i];
+        const double wl = glm::length(w_[i]);
+        if (wl > 0) q_[i] = glm::normalize(axis_angle(w_[i] / wl, wl * h) * q_[i]);
+        break;
+      }
+      case BodyType::Dynamic:
+        // symplectic Euler for the centre, the exact-flow splitting for the rotation
+        com_[i] += h * v_[i];
+        integrate_rotation(i, h);
+        break;
+    }
+  }
+}
+
 void RigidBodySystem::step(double dt, const Vec3& gravity) {
   if (!failure_.empty()) throw Error(failure_);
   if (!(std::isfinite(dt) && dt > 0)) require_positive(dt, "RigidBodySystem::step dt");
-  require_finite(gravity, "RigidBodySystem::step gravity");
-  const double h = dt / substeps_;
+  if (!is_finite(gravity)) require_finite(gravity, "RigidBodySystem::step gravity");
+  settings_.validate("RigidBodySystem.settings");
+  Stopwatch total;
   const std::size_t n = type_.size();
-  for (int s = 0; s < substeps_; ++s) {
-    for (std::size_t i = 0; i < n; ++i) {
-      switch (type_[i]) {
-        case BodyType::Static: break;
-        case BodyType::Kinematic: {
-          // constant velocities: exact translation and rotation
-          com_[i] += h * v_[i];
-          const double wl = glm::length(w_[i]);
-          if (wl > 0) q_[i] = glm::normalize(axis_angle(w_[i] / wl, wl * h) * q_[i]);
-          break;
-        }
-        case BodyType::Dynamic: {
-          // velocities: gravity, applied force and torque, then implicit damping
-          Vec3 v = v_[i] + h * (gravity_scale_[i] * gravity + inv_mass_[i] * force_[i]);
-          v_[i] = v / (1 + h * lin_damp_[i]);
-          const Vec3 tb = glm::conjugate(q_[i]) * torque_[i];
-          const Vec3 w = w_[i] + q_[i] * (h * inv_inertia_[i] * tb);
-          w_[i] = w / (1 + h * ang_damp_[i]);
-          // positions: symplectic Euler for the centre, the exact-flow splitting for rotation
-          com_[i] += h * v_[i];
-          integrate_rotation(i, h);
-          break;
-        }
-      }
+  // the start of the step, which the solver measures separations from
+  for (std::size_t i = 0; i < n; ++i) com0_[i] = com_[i], q0_[i] = q_[i];
+  // pairs and manifolds
+  contacts_->update(*this, dt);
+  profile_.collide = total.seconds();
+  contacts_->prepare(*this);
+  const bool soft = settings_.solver == RigidSolverType::SoftStep;
+  if (soft) {
+    // substeps: velocities, carried impulses, soft solve, positions, relax
+    const int substeps = settings_.substeps;
+    const double h = dt / substeps;
+    for (int s = 0; s < substeps; ++s) {
+      integrate_velocities(h, gravity);
+      if (settings_.warm_starting) contacts_->warm_start(*this);
+      contacts_->solve(*this, h, true, true);
+      integrate_positions(h);
+      contacts_->solve(*this, h, false, true);
     }
+  } else {
+    // one step: velocities, carried impulses, iterated rigid solve with Baumgarte, positions
+    integrate_velocities(dt, gravity);
+    if (settings_.warm_starting) contacts_->warm_start(*this);
+    for (int k = 0; k < settings_.iterations; ++k) contacts_->solve(*this, dt, true, false);
+    integrate_positions(dt);
   }
+  contacts_->restitution(*this);
+  contacts_->store();
   time_ += dt;
+  check_finite();
+  profile_.total = total.seconds();
+  profile_.solve = profile_.total - profile_.collide;
+}
+
+void RigidBodySystem::check_finite() {
   // forces last one step; then look for a body whose state stopped being finite
+  const std::size_t n = type_.size();
   for (std::size_t i = 0; i < n; ++i) {
     force_[i] = Vec3(0);
     torque_[i] = Vec3(0);
@@ -393,6 +518,39 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
       throw Error(failure_);
     }
   }
+}
+
+std::vector<RigidContactPoint> RigidBodySystem::contacts() const {
+  std::vector<RigidContactPoint> out;
+  for (const detail::ContactPair& c : contacts_->pairs)
+    for (int k = 0; k < c.count; ++k) {
+      const detail::SolverPoint& p = c.points[k];
+      RigidContactPoint r;
+      r.a = {c.slot_a, ids_.generation(c.slot_a)};
+      r.b = {c.slot_b, ids_.generation(c.slot_b)};
+      r.position = com0_[c.a] + p.ra;
+      r.normal = c.normal;
+      r.depth = p.depth;
+      r.normal_impulse = p.normal_impulse;
+      r.tangent_impulse = std::hypot(p.tangent_impulse[0], p.tangent_impulse[1]);
+      r.id = p.id;
+      out.push_back(r);
+    }
+  return out;
+}
+
+std::size_t RigidBodySystem::manifold_count() const { return contacts_->pairs.size(); }
+
+std::vector<Aabb> RigidBodySystem::shape_bounds(RigidBodyId id) const {
+  const Pose body = pose(id);
+  std::vector<Aabb> out;
+  for (const RigidShapeDef& d : shapes_[index(id, "RigidBodySystem::shape_bounds")])
+    out.push_back(bounds(d.shape, compose(body, d.local)));
+  return out;
+}
+
+std::span<const RigidShapeDef> RigidBodySystem::shapes(RigidBodyId id) const {
+  return shapes_[index(id, "RigidBodySystem::shapes")];
 }
 
 std::uint64_t RigidBodySystem::hash() const {
