@@ -1,5 +1,10 @@
-// Shapes: names, construction and validation (the geometry lives in its own files).
+// Shapes: names, construction, validation, bounds and support functions (hulls, meshes,
+// mass properties and ray casts live in their own files).
 #include "pba/collide/shape.h"
+
+#include <cmath>
+#include <limits>
+#include <string>
 
 namespace pba {
 
@@ -14,6 +19,206 @@ std::string_view to_string(ShapeType t) {
     case ShapeType::Compound: return "compound";
   }
   return "unknown";
+}
+
+ColliderShape ColliderShape::plane(const Vec3& n, double offset) {
+  ColliderShape s;
+  s.type = ShapeType::Plane;
+  // normalise (n . p = offset scales with n), refusing a zero or non-finite normal
+  require_finite(n, "ColliderShape::plane normal");
+  require_finite(offset, "ColliderShape::plane offset");
+  const double len = glm::length(n);
+  if (!(len > 0)) throw Error("ColliderShape::plane normal: must be non-zero, got " + format_vec3(n));
+  s.normal = n / len;
+  s.offset = offset / len;
+  return s;
+}
+
+ColliderShape ColliderShape::sphere(double r) {
+  ColliderShape s;
+  s.type = ShapeType::Sphere;
+  s.radius = r;
+  s.validate("ColliderShape::sphere");
+  return s;
+}
+
+ColliderShape ColliderShape::box(const Vec3& h) {
+  ColliderShape s;
+  s.type = ShapeType::Box;
+  s.half_extents = h;
+  s.validate("ColliderShape::box");
+  return s;
+}
+
+ColliderShape ColliderShape::capsule(double half_height, double r) {
+  ColliderShape s;
+  s.type = ShapeType::Capsule;
+  s.half_height = half_height;
+  s.radius = r;
+  s.validate("ColliderShape::capsule");
+  return s;
+}
+
+ColliderShape ColliderShape::convex(std::shared_ptr<const ConvexHull> h) {
+  ColliderShape s;
+  s.type = ShapeType::Hull;
+  s.hull = std::move(h);
+  s.validate("ColliderShape::convex");
+  return s;
+}
+
+ColliderShape ColliderShape::triangles(std::shared_ptr<const TriangleMesh> m) {
+  ColliderShape s;
+  s.type = ShapeType::Mesh;
+  s.mesh = std::move(m);
+  s.validate("ColliderShape::triangles");
+  return s;
+}
+
+void ColliderShape::validate(std::string_view where) const {
+  switch (type) {
+    case ShapeType::Plane: {
+      require_finite(normal, field_path(where, "normal"));
+      // zero is refused; any other length is accepted (queries normalise, as plane() does)
+      if (!(glm::length(normal) > 0)) throw Error(field_path(where, "normal") + ": must be non-zero, got " + format_vec3(normal));
+      require_finite(offset, field_path(where, "offset"));
+      return;
+    }
+    case ShapeType::Sphere: require_positive(radius, field_path(where, "radius")); return;
+    case ShapeType::Box:
+      require_positive(half_extents.x, field_path(where, "half_extents.x"));
+      require_positive(half_extents.y, field_path(where, "half_extents.y"));
+      require_positive(half_extents.z, field_path(where, "half_extents.z"));
+      return;
+    case ShapeType::Capsule:
+      require_non_negative(half_height, field_path(where, "half_height"));
+      require_positive(radius, field_path(where, "radius"));
+      return;
+    case ShapeType::Hull:
+      if (!hull) throw Error(field_path(where, "hull") + ": must not be null for a hull shape");
+      return;
+    case ShapeType::Mesh:
+      if (!mesh) throw Error(field_path(where, "mesh") + ": must not be null for a mesh shape");
+      return;
+    case ShapeType::Compound:
+      if (!compound) throw Error(field_path(where, "compound") + ": must not be null for a compound shape");
+      return;
+  }
+  throw Error(field_path(where, "type") + ": unknown shape type " + std::to_string(static_cast<int>(type)));
+}
+
+std::shared_ptr<const CompoundShape> CompoundShape::build(std::vector<CompoundChild> children, std::string_view where) {
+  if (children.empty()) throw Error(field_path(where, "children") + ": a compound needs at least one child, got 0");
+  auto c = std::make_shared<CompoundShape>();
+  // validate each child and its pose, then grow the bounds
+  for (std::size_t i = 0; i < children.size(); ++i) {
+    const std::string at = field_path(where, "children[" + std::to_string(i) + "]");
+    const CompoundChild& ch = children[i];
+    if (ch.shape.type == ShapeType::Plane || ch.shape.type == ShapeType::Mesh)
+      throw Error(field_path(at, "shape.type") + ": a compound child must be a sphere, box, capsule, hull or compound, got a " +
+                  std::string(to_string(ch.shape.type)));
+    ch.shape.validate(field_path(at, "shape"));
+    require_finite(ch.pose.position, field_path(at, "pose.position"));
+    require_unit_quat(ch.pose.rotation, field_path(at, "pose.rotation"));
+    const Aabb b = pba::bounds(ch.shape, ch.pose);
+    c->local_bounds = i == 0 ? b : c->local_bounds.merged(b);
+  }
+  c->children = std::move(children);
+  return c;
+}
+
+namespace {
+
+// world half-widths of a local box of half extents h under rotation q: |R| h
+Vec3 rotated_half(const Quat& q, const Vec3& h) {
+  const Mat3 r = glm::mat3_cast(q);
+  Vec3 out(0.0);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) out[i] += std::abs(r[j][i]) * h[j];
+  return out;
+}
+
+}  // namespace
+
+Aabb bounds(const ColliderShape& s, const Pose& p) {
+  switch (s.type) {
+    case ShapeType::Plane: {
+      // the half-space below the plane: infinite unless the normal is an axis
+      const double inf = std::numeric_limits<double>::infinity();
+      Aabb b{Vec3(-inf), Vec3(inf)};
+      const double len = glm::length(s.normal);
+      const Vec3 n = p.rotation * (s.normal / len);
+      const double d = s.offset / len + glm::dot(n, p.position);
+      for (int i = 0; i < 3; ++i) {
+        if (n[i] == 1 && n[(i + 1) % 3] == 0 && n[(i + 2) % 3] == 0) b.hi[i] = d;
+        if (n[i] == -1 && n[(i + 1) % 3] == 0 && n[(i + 2) % 3] == 0) b.lo[i] = -d;
+      }
+      return b;
+    }
+    case ShapeType::Sphere: return {p.position - Vec3(s.radius), p.position + Vec3(s.radius)};
+    case ShapeType::Box: {
+      const Vec3 h = rotated_half(p.rotation, s.half_extents);
+      return {p.position - h, p.position + h};
+    }
+    case ShapeType::Capsule: {
+      const Vec3 axis = p.rotation * Vec3(0, s.half_height, 0);
+      const Vec3 h = glm::abs(axis) + Vec3(s.radius);
+      return {p.position - h, p.position + h};
+    }
+    case ShapeType::Hull: {
+      // exact: the support point along each world axis, climbing from the last one
+      const Quat qi = glm::conjugate(p.rotation);
+      const ConvexHull& h = *s.hull;
+      Aabb b;
+      std::uint32_t hint = 0;
+      for (int i = 0; i < 3; ++i) {
+        Vec3 axis(0.0);
+        axis[i] = 1;
+        hint = h.support_index(qi * axis, hint);
+        b.hi[i] = apply(p, h.vertices()[hint])[i];
+        hint = h.support_index(qi * -axis, hint);
+        b.lo[i] = apply(p, h.vertices()[hint])[i];
+      }
+      return b;
+    }
+    case ShapeType::Mesh: {
+      const Aabb l = s.mesh->bounds();
+      const Vec3 c = apply(p, l.center());
+      const Vec3 h = rotated_half(p.rotation, 0.5 * (l.hi - l.lo));
+      return {c - h, c + h};
+    }
+    case ShapeType::Compound: {
+      const CompoundShape& c = *s.compound;
+      Aabb b = bounds(c.children[0].shape, compose(p, c.children[0].pose));
+      for (std::size_t i = 1; i < c.children.size(); ++i)
+        b = b.merged(bounds(c.children[i].shape, compose(p, c.children[i].pose)));
+      return b;
+    }
+  }
+  return {};
+}
+
+Vec3 support(const ColliderShape& s, const Vec3& d) {
+  switch (s.type) {
+    case ShapeType::Sphere: {
+      const double len = glm::length(d);
+      return len > 0 ? d * (s.radius / len) : Vec3(0.0);
+    }
+    case ShapeType::Box:
+      return {d.x < 0 ? -s.half_extents.x : s.half_extents.x, d.y < 0 ? -s.half_extents.y : s.half_extents.y,
+              d.z < 0 ? -s.half_extents.z : s.half_extents.z};
+    case ShapeType::Capsule: {
+      const double len = glm::length(d);
+      const Vec3 core(0, d.y < 0 ? -s.half_height : s.half_height, 0);
+      return len > 0 ? core + d * (s.radius / len) : core;
+    }
+    case ShapeType::Hull: return s.hull->support(d);
+    default: return Vec3(0.0);
+  }
+}
+
+double core_radius(const ColliderShape& s) {
+  return s.type == ShapeType::Sphere || s.type == ShapeType::Capsule ? s.radius : 0.0;
 }
 
 }  // namespace pba

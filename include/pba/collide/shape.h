@@ -148,6 +148,7 @@ class ConvexHull {
   std::vector<Vec3> vertices_;
   std::vector<HalfEdge> edges_;
   std::vector<Face> faces_;
+  std::vector<std::uint32_t> vertex_edge_;  // one half edge leaving each vertex (hill climbing)
   Vec3 centroid_{0, 0, 0};
   double volume_ = 0;
   Aabb bounds_{};

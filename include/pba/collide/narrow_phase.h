@@ -1,0 +1,201 @@
+// pba collide, narrow phase (workbook chapter 5): contact manifolds between two shapes.
+//
+// collide() takes two shapes at their poses and returns a Manifold: one unit normal from
+// A to B and up to four contact points, each with its points on both surfaces, a depth
+// (positive when the surfaces overlap, negative when they are apart but closer than the
+// speculative margin) and a feature id that stays the same while the same pair of
+// features touches, so a rigid solver can warm-start its impulses by id (Box2D's
+// b2ManifoldPoint.id, Jolt's SubShapeIDPair play this role).
+//
+// Pairs and their algorithms:
+//   sphere, capsule pairs and sphere-box    closed forms (closest points of points and segments)
+//   convex vs plane                         the support feature's vertices below the plane
+//   box-box, box-hull, hull-hull            separating axes (Gregorius 2013) and face clipping,
+//                                           or GJK/EPA and clipping of the normal's faces
+//   capsule vs box or hull, sphere-hull     GJK on the cores (van den Bergen 2003), EPA when
+//                                           the cores overlap, then feature clipping
+// GJK and EPA are also public for distance queries and for the student stepper sample.
+//
+// Conventions: metres, world frame. Nothing here allocates.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "pba/collide/shape.h"
+#include "pba/core.h"
+
+namespace pba {
+
+/// One contact point of a manifold.
+struct ContactPoint {
+  Vec3 point_a{0, 0, 0};   ///< point on A's surface (world, m)
+  Vec3 point_b{0, 0, 0};   ///< point on B's surface (world, m)
+  /// (point_a - point_b) . normal (m): > 0 penetrating, < 0 separated by -depth but within
+  /// the speculative margin.
+  double depth = 0;
+  /// Stable feature id: built from the pair of features (face, edge, vertex indices) that
+  /// made the point; equal ids in two frames mean the same contact.
+  std::uint32_t id = 0;
+
+  /// The midpoint of the two surface points (m), where a solver applies the impulse.
+  Vec3 position() const { return 0.5 * (point_a + point_b); }
+};
+
+/// A contact manifold: one normal and up to four points. Plain data.
+struct Manifold {
+  static constexpr int kMaxPoints = 4;  ///< points a manifold holds at most
+  Vec3 normal{0, 0, 1};                 ///< unit normal pointing from A to B
+  std::array<ContactPoint, kMaxPoints> points{};  ///< the first `count` are valid
+  int count = 0;                        ///< number of points, 0..4 (0: no contact)
+};
+
+/// How collide() treats box-box, box-hull and hull-hull pairs.
+enum class ConvexMethod : std::uint8_t {
+  Sat,     ///< separating axes (faces, then Gauss-map-pruned edge pairs) and face clipping
+  GjkEpa,  ///< GJK, EPA when overlapping, then clipping against the found normal's faces
+};
+
+/// Settings of collide().
+struct NarrowPhaseSettings {
+  /// Pairs closer than this (m, finite, >= 0) produce speculative points with negative depth.
+  double speculative_margin = 0.02;
+  /// Algorithm for box and hull pairs.
+  ConvexMethod method = ConvexMethod::Sat;
+};
+
+/// The separating (or least penetrating) feature of the last SAT run between a pair, tested
+/// first in the next frame: a separated pair usually exits after one axis test.
+struct SatCache {
+  /// Which feature pair the cached axis comes from.
+  enum class Kind : std::uint8_t { None, FaceA, FaceB, Edges };
+  Kind kind = Kind::None;     ///< None: nothing cached
+  std::uint32_t index_a = 0;  ///< FaceA: face of A; Edges: half edge of A
+  std::uint32_t index_b = 0;  ///< FaceB: face of B; Edges: half edge of B
+};
+
+/// Per-pair state kept between frames (owned by the caller, e.g. the contact pair).
+struct NarrowPhaseCache {
+  SatCache sat{};  ///< SAT's cached feature
+};
+
+/// The contact manifold of shapes `a` at `pose_a` and `b` at `pose_b`. Supported pairs:
+/// any two of sphere, capsule, box and hull, and any of these against a plane (either
+/// order). Poses must be finite with unit rotations; `settings.speculative_margin` finite
+/// and >= 0. Throws Error naming the bad value, or the pair for unsupported type pairs
+/// (meshes and compounds go through their own traversal). `cache` may be null.
+Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
+                 const NarrowPhaseSettings& settings = {}, NarrowPhaseCache* cache = nullptr);
+
+// --- GJK and EPA --------------------------------------------------------------------
+
+/// A convex shape's core at a pose, as GJK sees it: the support function of a point,
+/// segment, box or hull, and the rounding radius added around it (sphere and capsule).
+struct ConvexProxy {
+  ShapeType type = ShapeType::Sphere;  ///< Sphere, Capsule, Box or Hull
+  Vec3 half_extents{0, 0, 0};          ///< box half extents (m)
+  double half_height = 0;              ///< capsule core half length (m)
+  double radius = 0;                   ///< core radius (m): sphere and capsule radius, else 0
+  const ConvexHull* hull = nullptr;    ///< hull body, not owned
+  Pose pose{};                         ///< placement
+
+  /// The proxy of a convex shape at `pose` (the shape's hull must outlive the proxy).
+  /// Throws Error for a non-convex shape.
+  static ConvexProxy of(const ColliderShape& s, const Pose& pose);
+  /// The world point of the core farthest along `d` (any non-zero direction), and the
+  /// index of the vertex it is (box: corner bits xyz; hull: vertex; capsule: 0 bottom,
+  /// 1 top; sphere: 0).
+  Vec3 support(const Vec3& d, std::uint32_t* vertex = nullptr) const;
+};
+
+/// One vertex of a GJK simplex: a point w = a - b of the Minkowski difference A - B of the
+/// cores, and the support points it came from.
+struct SimplexVertex {
+  Vec3 a{0, 0, 0};  ///< support point of A's core (world, m)
+  Vec3 b{0, 0, 0};  ///< support point of B's core (world, m)
+  Vec3 w{0, 0, 0};  ///< a - b (m)
+  double weight = 0;  ///< barycentric weight in the closest point v
+};
+
+/// Result of gjk_distance().
+struct DistanceResult {
+  double distance = 0;      ///< distance between the full shapes (m), 0 when they overlap
+  double core_distance = 0; ///< distance between the cores (m), 0 when they overlap
+  Vec3 point_a{0, 0, 0};    ///< closest point on A's surface (world, m)
+  Vec3 point_b{0, 0, 0};    ///< closest point on B's surface (world, m)
+  Vec3 normal{0, 0, 1};     ///< unit direction from A to B (when core_distance > 0)
+  bool cores_overlap = false;  ///< true when the cores intersect (then EPA is needed)
+  int iterations = 0;       ///< GJK iterations used
+};
+
+/// GJK run one iteration at a time (for the student sample; gjk_distance() uses it too).
+/// Holds at most 4 simplex vertices; never allocates.
+class GjkStepper {
+ public:
+  /// Starts a run between the cores of `a` and `b` (the proxies are copied).
+  GjkStepper(const ConvexProxy& a, const ConvexProxy& b);
+  /// One iteration: a support point along -v, then the simplex reduced to the smallest
+  /// sub-simplex whose hull holds the point closest to the origin. Returns false once done.
+  bool step();
+  /// True when the run has stopped (converged, overlapping or out of iterations).
+  bool done() const { return done_; }
+  /// True when the origin lies inside the simplex (the cores overlap).
+  bool overlap() const { return overlap_; }
+  /// The current simplex (1..4 vertices).
+  std::span<const SimplexVertex> simplex() const { return {simplex_.data(), std::size_t(count_)}; }
+  /// The point of the simplex closest to the origin (m): the current distance estimate.
+  Vec3 closest() const { return v_; }
+  /// The last support point of A - B (along -closest()).
+  const SimplexVertex& last_support() const { return last_; }
+  /// Iterations taken.
+  int iterations() const { return iterations_; }
+  /// Upper minus lower bound of the distance (m) at the last step (van den Bergen 2003).
+  double gap() const { return gap_; }
+  /// Closest points on the two cores (world, m), from the simplex weights.
+  void closest_points(Vec3& a, Vec3& b) const;
+  /// The first proxy.
+  const ConvexProxy& proxy_a() const { return a_; }
+  /// The second proxy.
+  const ConvexProxy& proxy_b() const { return b_; }
+
+  /// Stop when the distance's upper and lower bounds are within this (m).
+  static constexpr double kTolerance = 1e-10;
+  /// Iteration cap (a polytope pair converges in far fewer; curved cores are points or segments).
+  static constexpr int kMaxIterations = 64;
+
+ private:
+  ConvexProxy a_, b_;
+  std::array<SimplexVertex, 4> simplex_{};
+  int count_ = 0;
+  Vec3 v_{0, 0, 0};
+  SimplexVertex last_{};
+  int iterations_ = 0;
+  double gap_ = 0;
+  bool done_ = false;
+  bool overlap_ = false;
+};
+
+/// Distance and closest points of two convex shapes by GJK on their cores (van den Bergen
+/// 2003), the core radii subtracted afterwards.
+DistanceResult gjk_distance(const ConvexProxy& a, const ConvexProxy& b);
+
+/// Result of epa_penetration().
+struct PenetrationResult {
+  bool ok = false;          ///< false when the cores do not overlap (use gjk_distance)
+  double depth = 0;         ///< penetration depth of the full shapes (m): the shortest translation of B along normal that separates them
+  Vec3 normal{0, 0, 1};     ///< unit direction from A to B
+  Vec3 point_a{0, 0, 0};    ///< deepest point of A inside B (world, m)
+  Vec3 point_b{0, 0, 0};    ///< deepest point of B inside A (world, m)
+  int iterations = 0;       ///< EPA expansions used
+};
+
+/// Penetration depth and normal of two convex shapes whose cores overlap, by the expanding
+/// polytope algorithm (van den Bergen 2001) seeded with GJK's simplex. The depth is exact
+/// for polytope cores up to the tolerance kEpaTolerance.
+PenetrationResult epa_penetration(const ConvexProxy& a, const ConvexProxy& b);
+
+/// EPA stops when the support distance along the nearest face's normal exceeds the face's
+/// distance by less than this (m): the depth is then within it of the exact one.
+inline constexpr double kEpaTolerance = 1e-10;
+
+}  // namespace pba

@@ -1,0 +1,371 @@
+// collide(): the pair dispatch, the closed forms (spheres, capsules, sphere-box, convex vs
+// plane) and the GJK/EPA path with feature clipping along the found normal (the way Jolt's
+// ManifoldBetweenTwoFaces builds a manifold from one penetration axis).
+#include <cmath>
+
+#include "narrow_internal.h"
+
+namespace pba {
+
+namespace {
+
+using namespace narrow;
+
+// a capsule's world axis and core end points
+struct Segment {
+  Vec3 p, q;  // bottom (-y) and top (+y) core ends
+};
+Segment capsule_core(const ColliderShape& s, const Pose& p) {
+  const Vec3 u = p.rotation * Vec3(0, s.half_height, 0);
+  return {p.position - u, p.position + u};
+}
+
+// a unit vector perpendicular to u (deterministic)
+Vec3 perpendicular(const Vec3& u) {
+  const Vec3 ref = std::abs(u.x) < 0.57 ? Vec3(1, 0, 0) : (std::abs(u.y) < 0.57 ? Vec3(0, 1, 0) : Vec3(0, 0, 1));
+  return glm::normalize(glm::cross(u, ref));
+}
+
+Vec3 closest_on_segment(const Segment& s, const Vec3& x) {
+  const Vec3 d = s.q - s.p;
+  const double dd = glm::dot(d, d);
+  const double t = dd > 0 ? std::clamp(glm::dot(x - s.p, d) / dd, 0.0, 1.0) : 0.0;
+  return s.p + t * d;
+}
+
+// one point between two core points with radii; `fallback` is the normal when they coincide
+void point_pair(const Vec3& ca, double ra, const Vec3& cb, double rb, const Vec3& fallback, double margin,
+                std::uint32_t id, Manifold& m) {
+  const Vec3 d = cb - ca;
+  const double dist = glm::length(d);
+  m.count = 0;
+  if (dist - ra - rb > margin) return;
+  m.normal = dist > 0 ? d / dist : fallback;
+  m.points[0] = {ca + ra * m.normal, cb - rb * m.normal, ra + rb - dist, id};
+  m.count = 1;
+}
+
+void sphere_sphere(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb, double margin,
+                   Manifold& m) {
+  point_pair(pa.position, a.radius, pb.position, b.radius, Vec3(0, 1, 0), margin, 0, m);
+}
+
+void sphere_capsule(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb, double margin,
+                    Manifold& m) {
+  // the sphere centre against the capsule's core segment
+  const Segment s = capsule_core(b, pb);
+  const Vec3 c = closest_on_segment(s, pa.position);
+  point_pair(pa.position, a.radius, c, b.radius, -perpendicular(pb.rotation * Vec3(0, 1, 0)), margin, 0, m);
+}
+
+void capsule_capsule(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb, double margin,
+                     Manifold& m) {
+  const Segment sa = capsule_core(a, pa), sb = capsule_core(b, pb);
+  const Vec3 ua = pa.rotation * Vec3(0, 1, 0), ub = pb.rotation * Vec3(0, 1, 0);
+  Vec3 c1, c2;
+  closest_segments(sa.p, sa.q, sb.p, sb.q, c1, c2);
+  const Vec3 cross = glm::cross(ua, ub);
+  Vec3 fallback = glm::dot(cross, cross) > 1e-24 ? glm::normalize(cross) : perpendicular(ua);
+  if (glm::dot(fallback, pb.position - pa.position) < 0) fallback = -fallback;
+  point_pair(c1, a.radius, c2, b.radius, fallback, margin, 0, m);
+  if (m.count == 0) return;
+  // parallel axes (within ~0.06 degrees): two points at the ends of the overlap of the
+  // segments, so a capsule lying on another does not roll on one point
+  constexpr double kParallelSin = 1e-3;
+  if (glm::length(cross) > kParallelSin) return;
+  const double s0 = glm::dot(sb.p - pa.position, ua), s1 = glm::dot(sb.q - pa.position, ua);
+  const double lo = std::max(-a.half_height, std::min(s0, s1)), hi = std::min(a.half_height, std::max(s0, s1));
+  if (hi - lo <= 1e-9 * std::max(1.0, a.half_height)) return;
+  const Vec3 n = m.normal;
+  m.count = 0;
+  for (const double s : {lo, hi}) {
+    const Vec3 qa = pa.position + s * ua;
+    const Vec3 qb = closest_on_segment(sb, qa);
+    const Vec3 point_a = qa + a.radius * n, point_b = qb - b.radius * n;
+    const double depth = glm::dot(point_a - point_b, n);
+    if (depth < -margin) continue;
+    const std::uint32_t id = std::uint32_t(m.count + 1);
+    m.points[std::size_t(m.count++)] = {point_a, point_b, depth, id};
+  }
+}
+
+void sphere_box(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb, double margin,
+                Manifold& m) {
+  // the sphere centre in the box frame, clamped to the box
+  m.count = 0;
+  const Vec3 h = b.half_extents;
+  const Vec3 c = apply_inverse(pb, pa.position);
+  const Vec3 q = glm::clamp(c, -h, h);
+  const double r = a.radius;
+  if (q != c) {
+    // outside: the clamped point is the closest
+    const Vec3 d = q - c;
+    const double dist = glm::length(d);
+    if (dist - r > margin) return;
+    const Vec3 nl = d / dist;
+    m.normal = pb.rotation * nl;
+    m.points[0] = {pa.position + r * m.normal, apply(pb, q), r - dist, 0};
+    m.count = 1;
+    return;
+  }
+  // inside: out through the nearest face
+  int axis = 0;
+  double best = h.x - std::abs(c.x);
+  for (int k = 1; k < 3; ++k) {
+    const double g = h[k] - std::abs(c[k]);
+    if (g < best) best = g, axis = k;
+  }
+  const double sign = c[axis] >= 0 ? 1.0 : -1.0;
+  Vec3 nl(0.0), face = c;
+  nl[axis] = -sign;
+  face[axis] = sign * h[axis];
+  m.normal = pb.rotation * nl;
+  m.points[0] = {pa.position + r * m.normal, apply(pb, face), r + best, 0};
+  m.count = 1;
+}
+
+// any convex shape (A) against a plane (B): the core's vertices below plane + margin
+void convex_plane(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb, double margin,
+                  Manifold& m) {
+  const Vec3 np = pb.rotation * b.normal;
+  const double off = b.offset + glm::dot(np, pb.position);
+  std::array<Candidate, kMaxPolygon> cand;
+  int n = 0;
+  double r = 0;
+  auto add = [&](const Vec3& core, std::uint32_t id) {
+    const Vec3 pa_s = core - r * np;
+    const double depth = off - glm::dot(np, pa_s);
+    if (depth < -margin || n >= kMaxPolygon) return;
+    cand[std::size_t(n++)] = {pa_s, pa_s + depth * np, depth, id};
+  };
+  switch (a.type) {
+    case ShapeType::Sphere:
+      r = a.radius;
+      add(pa.position, 0);
+      break;
+    case ShapeType::Capsule: {
+      r = a.radius;
+      const Segment s = capsule_core(a, pa);
+      add(s.p, 0);
+      add(s.q, 1);
+      break;
+    }
+    case ShapeType::Box:
+      for (std::uint32_t i = 0; i < 8; ++i) {
+        const Vec3 h = a.half_extents;
+        add(apply(pa, Vec3((i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z)), i);
+      }
+      break;
+    default: {
+      const auto v = a.hull->vertices();
+      for (std::uint32_t i = 0; i < v.size(); ++i) add(apply(pa, v[i]), i);
+      break;
+    }
+  }
+  reduce(cand.data(), n, -np, m);
+}
+
+// box or hull view of a shape
+void poly_of(const ColliderShape& s, Poly& p) {
+  if (s.type == ShapeType::Box) make_box_poly(s.half_extents, p);
+  else make_hull_poly(*s.hull, p);
+}
+
+// GJK on the cores; EPA when they overlap; then a manifold along the normal
+void convex_gjk(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb, double margin,
+                Manifold& m) {
+  m.count = 0;
+  const ConvexProxy A = ConvexProxy::of(a, pa), B = ConvexProxy::of(b, pb);
+  GjkStepper g(A, B);
+  while (g.step()) {
+  }
+  Vec3 n, point_a, point_b;
+  if (!g.overlap()) {
+    Vec3 ca, cb;
+    g.closest_points(ca, cb);
+    const Vec3 d = cb - ca;
+    const double dist = glm::length(d);
+    if (dist - A.radius - B.radius > margin) return;
+    n = d / dist;
+    point_a = ca + A.radius * n;
+    point_b = cb - B.radius * n;
+  } else {
+    const PenetrationResult p = epa_from_gjk(g);
+    if (!p.ok) return;
+    n = p.normal;
+    point_a = p.point_a;
+    point_b = p.point_b;
+  }
+  manifold_from_normal(a, pa, b, pb, n, point_a, point_b, margin, m);
+}
+
+void check_pose(const Pose& p, const char* where) {
+  const double qn = glm::length(p.rotation);
+  if (!is_finite(p.position)) require_finite(p.position, std::string(where) + ".position");
+  if (!(std::abs(qn - 1) <= 1e-6)) require_unit_quat(p.rotation, std::string(where) + ".rotation");
+}
+
+void check_shape(const ColliderShape& s, const char* where) {
+  const std::string w(where);
+  switch (s.type) {
+    case ShapeType::Sphere:
+      if (!(s.radius > 0 && std::isfinite(s.radius))) require_positive(s.radius, w + ".radius");
+      break;
+    case ShapeType::Capsule:
+      if (!(s.radius > 0 && std::isfinite(s.radius))) require_positive(s.radius, w + ".radius");
+      if (!(s.half_height >= 0 && std::isfinite(s.half_height))) require_non_negative(s.half_height, w + ".half_height");
+      break;
+    case ShapeType::Box:
+      for (int k = 0; k < 3; ++k)
+        if (!(s.half_extents[k] > 0 && std::isfinite(s.half_extents[k])))
+          require_positive(s.half_extents[k], w + ".half_extents[" + std::to_string(k) + "]");
+      break;
+    case ShapeType::Hull:
+      if (!s.hull || s.hull->vertices().empty()) throw Error(w + ".hull: missing hull body");
+      break;
+    case ShapeType::Plane:
+      if (!is_finite(s.normal) || !std::isfinite(s.offset) || std::abs(glm::length(s.normal) - 1) > 1e-6)
+        throw Error(w + ".normal/offset: plane must have a finite unit normal and offset, got normal " +
+                    format_vec3(s.normal) + ", offset " + format_value(s.offset));
+      break;
+    default: break;
+  }
+}
+
+int rank(ShapeType t) {
+  switch (t) {
+    case ShapeType::Sphere: return 0;
+    case ShapeType::Capsule: return 1;
+    case ShapeType::Box: return 2;
+    case ShapeType::Hull: return 3;
+    case ShapeType::Plane: return 4;
+    default: return 5;
+  }
+}
+
+}  // namespace
+
+void narrow::manifold_from_normal(const ColliderShape& sa, const Pose& pa, const ColliderShape& sb, const Pose& pb,
+                                  const Vec3& n, const Vec3& point_a, const Vec3& point_b, double margin,
+                                  Manifold& m) {
+  m.normal = n;
+  m.count = 0;
+  // a face within ~2.5 degrees of the normal is a contact face; a capsule axis within
+  // ~3 degrees of perpendicular is a contact segment
+  constexpr double kFaceCos = 0.999, kSegmentSin = 0.05;
+  const bool poly_a = sa.type == ShapeType::Box || sa.type == ShapeType::Hull;
+  const bool poly_b = sb.type == ShapeType::Box || sb.type == ShapeType::Hull;
+  Poly A, B;
+  double da = -1, db = -1;
+  std::uint32_t fa = 0, fb = 0;
+  if (poly_a) poly_of(sa, A), fa = most_aligned_face(A, pa.rotation, n, &da);
+  if (poly_b) poly_of(sb, B), fb = most_aligned_face(B, pb.rotation, -n, &db);
+  const bool seg_a = sa.type == ShapeType::Capsule && std::abs(glm::dot(pa.rotation * Vec3(0, 1, 0), n)) < kSegmentSin;
+  const bool seg_b = sb.type == ShapeType::Capsule && std::abs(glm::dot(pb.rotation * Vec3(0, 1, 0), n)) < kSegmentSin;
+
+  std::array<Candidate, kMaxPolygon> cand;
+  int count = -1;
+  bool ref_a = false;
+  WorldFace rf, inf;
+  if (poly_a && poly_b && std::max(da, db) >= kFaceCos) {
+    // two faces: the better aligned is the reference (A's on a tie)
+    ref_a = da >= db;
+    const Poly& inc = ref_a ? B : A;
+    const Pose& pinc = ref_a ? pb : pa;
+    world_face(ref_a ? A : B, ref_a ? pa : pb, ref_a ? fa : fb, rf);
+    world_face(inc, pinc, incident_face(inc, pinc.rotation, rf.normal), inf);
+    count = clip_faces(rf, inf.pts.data(), inf.count, false, ref_a ? n : -n, 0.0, margin, ref_a, cand.data());
+  } else if ((poly_a && seg_b && da >= kFaceCos) || (poly_b && seg_a && db >= kFaceCos)) {
+    // a face and a capsule's segment: clip the segment by the face's side planes
+    ref_a = poly_a;
+    const ColliderShape& cap = ref_a ? sb : sa;
+    const Segment s = capsule_core(cap, ref_a ? pb : pa);
+    world_face(ref_a ? A : B, ref_a ? pa : pb, ref_a ? fa : fb, rf);
+    std::array<ClipPoint, 2> seg{ClipPoint{s.p, 0, kLabelMask}, ClipPoint{s.q, 1, kLabelMask}};
+    count = clip_faces(rf, seg.data(), 2, true, ref_a ? n : -n, cap.radius, margin, ref_a, cand.data());
+  }
+  if (count <= 0) {
+    // one point: the pair the normal came from
+    m.points[0] = {point_a, point_b, glm::dot(point_a - point_b, n), 0};
+    m.count = m.points[0].depth >= -margin ? 1 : 0;
+    return;
+  }
+  if (!ref_a)
+    for (int i = 0; i < count; ++i) cand[std::size_t(i)].id |= kIdFlip;
+  reduce(cand.data(), count, n, m);
+}
+
+Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
+                 const NarrowPhaseSettings& settings, NarrowPhaseCache* cache) {
+  // bad input is reported before any geometry runs
+  check_pose(pose_a, "collide: pose_a");
+  check_pose(pose_b, "collide: pose_b");
+  check_shape(a, "collide: shape_a");
+  check_shape(b, "collide: shape_b");
+  const double margin = settings.speculative_margin;
+  if (!(margin >= 0 && std::isfinite(margin)))
+    require_non_negative(margin, "collide: NarrowPhaseSettings.speculative_margin");
+
+  // put the pair in canonical order (sphere < capsule < box < hull < plane)
+  const int ra = rank(a.type), rb = rank(b.type);
+  if (ra == 5 || rb == 5 || (ra == 4 && rb == 4))
+    throw Error("collide: no narrow phase for the pair " + std::string(to_string(a.type)) + "-" +
+                std::string(to_string(b.type)) + " (meshes and compounds are traversed by their callers)");
+  const bool swap = ra > rb;
+  const ColliderShape& A = swap ? b : a;
+  const ColliderShape& B = swap ? a : b;
+  const Pose& PA = swap ? pose_b : pose_a;
+  const Pose& PB = swap ? pose_a : pose_b;
+  Manifold m;
+  switch (A.type) {
+    case ShapeType::Sphere:
+      switch (B.type) {
+        case ShapeType::Sphere: sphere_sphere(A, PA, B, PB, margin, m); break;
+        case ShapeType::Capsule: sphere_capsule(A, PA, B, PB, margin, m); break;
+        case ShapeType::Box: sphere_box(A, PA, B, PB, margin, m); break;
+        case ShapeType::Hull: convex_gjk(A, PA, B, PB, margin, m); break;
+        default: convex_plane(A, PA, B, PB, margin, m); break;
+      }
+      break;
+    case ShapeType::Capsule:
+      switch (B.type) {
+        case ShapeType::Capsule: capsule_capsule(A, PA, B, PB, margin, m); break;
+        case ShapeType::Box:
+        case ShapeType::Hull: convex_gjk(A, PA, B, PB, margin, m); break;
+        default: convex_plane(A, PA, B, PB, margin, m); break;
+      }
+      break;
+    default:
+      if (B.type == ShapeType::Plane) {
+        convex_plane(A, PA, B, PB, margin, m);
+      } else if (settings.method == ConvexMethod::Sat) {
+        Poly pa, pb;
+        poly_of(A, pa);
+        poly_of(B, pb);
+        // the cache's A and B are the caller's: swap its roles with the pair
+        SatCache* c = cache ? &cache->sat : nullptr;
+        SatCache local{};
+        if (c && swap) {
+          local = *c;
+          if (local.kind == SatCache::Kind::FaceA) local.kind = SatCache::Kind::FaceB;
+          else if (local.kind == SatCache::Kind::FaceB) local.kind = SatCache::Kind::FaceA;
+          std::swap(local.index_a, local.index_b);
+          c = &local;
+        }
+        collide_polys_sat(pa, PA, pb, PB, margin, c, m);
+        if (cache && swap) {
+          if (local.kind == SatCache::Kind::FaceA) local.kind = SatCache::Kind::FaceB;
+          else if (local.kind == SatCache::Kind::FaceB) local.kind = SatCache::Kind::FaceA;
+          std::swap(local.index_a, local.index_b);
+          cache->sat = local;
+        }
+      } else {
+        convex_gjk(A, PA, B, PB, margin, m);
+      }
+      break;
+  }
+  if (swap) flip(m);
+  return m;
+}
+
+}  // namespace pba

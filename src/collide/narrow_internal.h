@@ -1,0 +1,242 @@
+// Narrow phase internals shared by sat.cpp, manifold.cpp and the GJK/EPA files: a
+// half-edge view of boxes and hulls, face clipping with feature ids, and the reduction
+// of a clipped polygon to four points. Not installed.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+
+#include "pba/collide/narrow_phase.h"
+
+namespace pba::narrow {
+
+using HalfEdge = ConvexHull::HalfEdge;
+using HullFace = ConvexHull::Face;
+
+// --- the box as a half-edge polyhedron ---------------------------------------------
+// vertex i is (+-hx, +-hy, +-hz) with bit 0, 1, 2 of i set for +x, +y, +z; faces are
+// -x, +x, -y, +y, -z, +z (face 2k + 1 is the + side of axis k); twins at 2i, 2i + 1.
+
+struct BoxTopology {
+  std::array<HalfEdge, 24> edges{};
+  std::array<std::uint32_t, 6> face_edge{};
+};
+
+constexpr BoxTopology make_box_topology() {
+  // face loops, counter-clockwise seen from outside
+  constexpr std::uint32_t loops[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                         {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  BoxTopology t{};
+  std::uint32_t pair_of[8][8] = {};
+  bool seen[8][8] = {};
+  std::uint32_t pairs = 0;
+  std::uint32_t he_of[6][4] = {};
+  // allocate twin pairs in the order edges are met
+  for (std::uint32_t f = 0; f < 6; ++f) {
+    for (std::uint32_t k = 0; k < 4; ++k) {
+      const std::uint32_t u = loops[f][k], v = loops[f][(k + 1) % 4];
+      std::uint32_t h = 0;
+      if (!seen[u][v]) {
+        seen[u][v] = seen[v][u] = true;
+        pair_of[u][v] = pair_of[v][u] = pairs;
+        h = 2 * pairs;
+        t.edges[h].origin = u;
+        t.edges[h + 1].origin = v;
+        t.edges[h].twin = h + 1;
+        t.edges[h + 1].twin = h;
+        ++pairs;
+      } else {
+        h = 2 * pair_of[u][v] + 1;
+      }
+      t.edges[h].face = f;
+      he_of[f][k] = h;
+    }
+  }
+  // next pointers around each face
+  for (std::uint32_t f = 0; f < 6; ++f) {
+    for (std::uint32_t k = 0; k < 4; ++k) t.edges[he_of[f][k]].next = he_of[f][(k + 1) % 4];
+    t.face_edge[f] = he_of[f][0];
+  }
+  return t;
+}
+
+inline constexpr BoxTopology kBoxTopology = make_box_topology();
+
+/// A convex polyhedron in its local frame: vertices, half edges, faces, and a centre.
+/// Boxes fill `storage` (no heap); hulls point at their ConvexHull.
+struct Poly {
+  const Vec3* vertices = nullptr;
+  std::uint32_t vertex_count = 0;
+  const HalfEdge* edges = nullptr;
+  std::uint32_t edge_count = 0;
+  const HullFace* faces = nullptr;
+  std::uint32_t face_count = 0;
+  Vec3 center{0, 0, 0};
+  bool is_box = false;
+  Vec3 half{0, 0, 0};
+  std::array<Vec3, 8> box_vertices{};
+  std::array<HullFace, 6> box_faces{};
+
+  Poly() = default;
+  Poly(const Poly&) = delete;
+  Poly& operator=(const Poly&) = delete;
+
+  /// The local vertex farthest along d (box: closed form; hull: first maximum).
+  std::uint32_t support_index(const Vec3& d) const {
+    if (is_box) return (d.x >= 0 ? 1u : 0u) | (d.y >= 0 ? 2u : 0u) | (d.z >= 0 ? 4u : 0u);
+    std::uint32_t best = 0;
+    double bd = glm::dot(vertices[0], d);
+    for (std::uint32_t i = 1; i < vertex_count; ++i) {
+      const double v = glm::dot(vertices[i], d);
+      if (v > bd) bd = v, best = i;
+    }
+    return best;
+  }
+};
+
+/// Fills `p` with the box of half extents h.
+inline void make_box_poly(const Vec3& h, Poly& p) {
+  p.is_box = true;
+  p.half = h;
+  for (std::uint32_t i = 0; i < 8; ++i)
+    p.box_vertices[i] = Vec3((i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z);
+  for (std::uint32_t f = 0; f < 6; ++f) {
+    const int axis = int(f / 2);
+    const double s = (f & 1) ? 1.0 : -1.0;
+    Vec3 n(0.0);
+    n[axis] = s;
+    p.box_faces[f] = HullFace{n, h[axis], kBoxTopology.face_edge[f]};
+  }
+  p.vertices = p.box_vertices.data();
+  p.vertex_count = 8;
+  p.edges = kBoxTopology.edges.data();
+  p.edge_count = 24;
+  p.faces = p.box_faces.data();
+  p.face_count = 6;
+  p.center = Vec3(0.0);
+}
+
+/// Points `p` at hull `h`.
+inline void make_hull_poly(const ConvexHull& h, Poly& p) {
+  p.is_box = false;
+  p.vertices = h.vertices().data();
+  p.vertex_count = std::uint32_t(h.vertices().size());
+  p.edges = h.edges().data();
+  p.edge_count = std::uint32_t(h.edges().size());
+  p.faces = h.faces().data();
+  p.face_count = std::uint32_t(h.faces().size());
+  p.center = h.centroid();
+}
+
+// --- feature ids ----------------------------------------------------------------------
+// A clipped point lies where two "lines" of the clipping meet: an edge of the incident
+// face (label = its half edge) or a side plane of the reference face (label = 0x4000 |
+// the reference half edge). An unclipped incident vertex is its vertex index. Bit 31
+// says the reference face was B's, bit 30 marks an intersection, bits 29..15 and 14..0
+// hold the two labels.
+
+inline constexpr std::uint32_t kSideLabel = 0x4000;
+inline constexpr std::uint32_t kLabelMask = 0x7fff;
+inline constexpr std::uint32_t kIdFlip = 0x80000000u;
+inline constexpr std::uint32_t kIdCross = 0x40000000u;
+/// Edge-edge contacts: both half edges, marked by bits 30 and 31 both set... kept apart
+/// from face ids by bit 29 of the first label (labels stay below 0x4000 | 0x3fff).
+inline std::uint32_t vertex_id(std::uint32_t v) { return v & kLabelMask; }
+inline std::uint32_t cross_id(std::uint32_t l1, std::uint32_t l2) {
+  return kIdCross | ((l1 & kLabelMask) << 15) | (l2 & kLabelMask);
+}
+inline std::uint32_t edge_pair_id(std::uint32_t ea, std::uint32_t eb) {
+  return kIdFlip | kIdCross | ((ea & 0x3fff) << 15) | (eb & 0x3fff) | (std::uint32_t(1) << 14);
+}
+
+// closest points of segments p1-q1 and p2-q2 (Ericson 2005, 5.1.9)
+inline void closest_segments(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2, Vec3& c1, Vec3& c2) {
+  const Vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+  const double a = glm::dot(d1, d1), e = glm::dot(d2, d2), f = glm::dot(d2, r);
+  double s = 0, t = 0;
+  if (a <= 1e-300 && e <= 1e-300) {
+  } else if (a <= 1e-300) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = glm::dot(d1, r);
+    if (e <= 1e-300) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = glm::dot(d1, d2), den = a * e - b * b;
+      s = den > 0 ? std::clamp((b * f - c * e) / den, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0) t = 0, s = std::clamp(-c / a, 0.0, 1.0);
+      else if (t > 1) t = 1, s = std::clamp((b - c) / a, 0.0, 1.0);
+    }
+  }
+  c1 = p1 + d1 * s;
+  c2 = p2 + d2 * t;
+}
+
+// --- polygons -------------------------------------------------------------------------
+
+inline constexpr int kMaxPolygon = 64;  // points of a clipped polygon we keep
+
+struct ClipPoint {
+  Vec3 p{0, 0, 0};
+  std::uint32_t id = 0;     // feature id of the point
+  std::uint32_t label = 0;  // label of the polygon edge from this point to the next
+};
+
+/// A face of a polyhedron in world coordinates with its labels.
+struct WorldFace {
+  std::array<ClipPoint, kMaxPolygon> pts{};
+  int count = 0;
+  Vec3 normal{0, 0, 1};  // outward, world
+  double offset = 0;     // normal . x = offset on the face
+  std::array<std::uint32_t, kMaxPolygon> half_edges{};  // half edge starting at pts[i]
+};
+
+/// Face `f` of `poly` at `pose` in world coordinates (at most kMaxPolygon vertices).
+void world_face(const Poly& poly, const Pose& pose, std::uint32_t f, WorldFace& out);
+
+/// The face of `poly` whose world normal is most anti-parallel to `n` (most negative dot).
+std::uint32_t incident_face(const Poly& poly, const Quat& rotation, const Vec3& n);
+/// The face of `poly` whose world normal is most parallel to `n`, and that dot.
+std::uint32_t most_aligned_face(const Poly& poly, const Quat& rotation, const Vec3& n, double* dot);
+
+/// A contact candidate before reduction.
+struct Candidate {
+  Vec3 a{0, 0, 0}, b{0, 0, 0};
+  double depth = 0;
+  std::uint32_t id = 0;
+};
+
+/// Clips `incident` (points with labels, on the incident surface) against the side planes
+/// of `ref`, then writes into `out` every point whose depth along `dir` (unit, pointing
+/// from the reference body into the incident one) is >= -margin; `ref_is_a` decides which
+/// of Candidate::a / b is the reference surface. `shift` moves each incident point by
+/// -shift dir first (the incident core's radius). Returns the candidate count.
+int clip_faces(const WorldFace& ref, const ClipPoint* incident, int incident_count, bool incident_is_segment,
+               const Vec3& dir, double shift, double margin, bool ref_is_a, Candidate* out);
+
+/// Reduces candidates to at most 4 (deepest, farthest from it, largest triangle, largest
+/// quadrilateral; Gregorius 2015 "Robust contact creation for physics simulations") and
+/// writes them into m with normal n.
+void reduce(const Candidate* c, int count, const Vec3& n, Manifold& m);
+
+/// The manifold with A and B exchanged (normal flipped, points swapped).
+inline void flip(Manifold& m) {
+  m.normal = -m.normal;
+  for (int i = 0; i < m.count; ++i) std::swap(m.points[std::size_t(i)].point_a, m.points[std::size_t(i)].point_b);
+}
+
+/// EPA seeded by a finished GJK run whose cores overlap (ok = false otherwise).
+PenetrationResult epa_from_gjk(const GjkStepper& g);
+
+/// Box/hull pair by separating axes and face clipping (sat.cpp).
+void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose& pb, double margin, SatCache* cache,
+                       Manifold& m);
+/// A manifold from a contact normal n (A to B) and one fallback point pair: the support
+/// features of both bodies along n clipped against each other when one of them is a face
+/// within a few degrees of n, else the single point (manifold.cpp).
+void manifold_from_normal(const ColliderShape& sa, const Pose& pa, const ColliderShape& sb, const Pose& pb,
+                          const Vec3& n, const Vec3& point_a, const Vec3& point_b, double margin, Manifold& m);
+
+}  // namespace pba::narrow

@@ -1,0 +1,198 @@
+// Separating axes between convex polyhedra (Gregorius 2013, GDC "The Separating Axis Test
+// between Convex Polyhedra"): the face normals of A, the face normals of B, and the cross
+// products of edge pairs that form a face of the Minkowski difference (the Gauss-map arcs
+// of the two edges cross), each measured by the support of the other body. The least
+// separated axis decides the contact: a face gives a reference face whose side planes
+// clip the other body's most anti-parallel face (Sutherland and Hodgman 1974), an edge
+// pair gives the closest points of the two edges.
+#include <cmath>
+
+#include "narrow_internal.h"
+
+namespace pba::narrow {
+
+namespace {
+
+struct FaceQuery {
+  double separation = -INFINITY;
+  std::uint32_t index = 0;
+};
+struct EdgeQuery {
+  double separation = -INFINITY;
+  std::uint32_t edge_a = 0, edge_b = 0;  // half edges (even), A's and B's
+  Vec3 normal{0, 0, 1};                  // in A's frame, from A to B
+};
+
+// relative placement of B in A's frame: x_A = R x_B + t
+struct Relative {
+  Mat3 R{1.0};
+  Mat3 RT{1.0};
+  Vec3 t{0, 0, 0};
+};
+
+Relative relative(const Pose& pa, const Pose& pb) {
+  Relative r;
+  const Quat q = glm::conjugate(pa.rotation) * pb.rotation;
+  r.R = glm::mat3_cast(q);
+  r.RT = glm::transpose(r.R);
+  r.t = glm::conjugate(pa.rotation) * (pb.position - pa.position);
+  return r;
+}
+
+// separation of B from face f of A: plane distance of B's deepest vertex
+double face_separation(const Poly& a, std::uint32_t f, const Poly& b, const Relative& r) {
+  const HullFace& F = a.faces[f];
+  const Vec3 nb = r.RT * F.normal;
+  const std::uint32_t j = b.support_index(-nb);
+  return glm::dot(nb, b.vertices[j]) + glm::dot(F.normal, r.t) - F.offset;
+}
+
+FaceQuery query_faces_a(const Poly& a, const Poly& b, const Relative& r) {
+  FaceQuery q;
+  for (std::uint32_t f = 0; f < a.face_count; ++f) {
+    const double s = face_separation(a, f, b, r);
+    if (s > q.separation) q.separation = s, q.index = f;
+  }
+  return q;
+}
+
+// the same with A and B exchanged: B's faces against A's vertices
+Relative swapped(const Relative& r) {
+  Relative s;
+  s.R = r.RT;
+  s.RT = r.R;
+  s.t = -(r.RT * r.t);
+  return s;
+}
+
+// Gregorius 2013: do arcs AB and CD of the Gauss map cross? (B x A and D x C are the arcs'
+// plane normals, the edge directions)
+bool is_minkowski_face(const Vec3& A, const Vec3& B, const Vec3& C, const Vec3& D, const Vec3& BxA, const Vec3& DxC) {
+  const double cba = glm::dot(C, BxA), dba = glm::dot(D, BxA);
+  const double adc = glm::dot(A, DxC), bdc = glm::dot(B, DxC);
+  return cba * dba < 0 && adc * bdc < 0 && cba * bdc > 0;
+}
+
+// separation along the cross product of two edges (A's frame), oriented away from A's centre
+double edge_separation(const Vec3& pa, const Vec3& ea, const Vec3& pb, const Vec3& eb, const Vec3& ca, Vec3& n) {
+  const Vec3 c = glm::cross(ea, eb);
+  const double len = glm::length(c);
+  // near-parallel edges: their cross product is noise, and the face axes cover them
+  constexpr double kParallel = 0.005;  // sin of ~0.3 degrees
+  if (len < kParallel * std::sqrt(glm::dot(ea, ea) * glm::dot(eb, eb))) return -INFINITY;
+  n = c / len;
+  if (glm::dot(n, pa - ca) < 0) n = -n;
+  return glm::dot(n, pb - pa);
+}
+
+EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r) {
+  EdgeQuery q;
+  // B's edges into A's frame once each (outer loop), A's in place
+  for (std::uint32_t j = 0; j < b.edge_count; j += 2) {
+    const HalfEdge& e2 = b.edges[j];
+    const HalfEdge& t2 = b.edges[j + 1];
+    const Vec3 p2 = r.R * b.vertices[e2.origin] + r.t;
+    const Vec3 q2 = r.R * b.vertices[t2.origin] + r.t;
+    const Vec3 u2 = r.R * b.faces[e2.face].normal;
+    const Vec3 v2 = r.R * b.faces[t2.face].normal;
+    const Vec3 e2d = q2 - p2;
+    const Vec3 dxc = glm::cross(v2, u2);
+    for (std::uint32_t i = 0; i < a.edge_count; i += 2) {
+      const HalfEdge& e1 = a.edges[i];
+      const HalfEdge& t1 = a.edges[i + 1];
+      const Vec3 u1 = a.faces[e1.face].normal;
+      const Vec3 v1 = a.faces[t1.face].normal;
+      if (!is_minkowski_face(u1, v1, -u2, -v2, glm::cross(v1, u1), dxc)) continue;
+      const Vec3 p1 = a.vertices[e1.origin];
+      Vec3 n;
+      const double s = edge_separation(p1, a.vertices[t1.origin] - p1, p2, e2d, a.center, n);
+      if (s > q.separation) q.separation = s, q.edge_a = i, q.edge_b = j, q.normal = n;
+    }
+  }
+  return q;
+}
+
+// the separation of the cached feature (-inf when it no longer applies)
+double cached_separation(const Poly& a, const Poly& b, const Relative& r, const SatCache& c) {
+  switch (c.kind) {
+    case SatCache::Kind::FaceA:
+      return c.index_a < a.face_count ? face_separation(a, c.index_a, b, r) : -INFINITY;
+    case SatCache::Kind::FaceB:
+      return c.index_b < b.face_count ? face_separation(b, c.index_b, a, swapped(r)) : -INFINITY;
+    case SatCache::Kind::Edges: {
+      if (c.index_a + 1 >= a.edge_count || c.index_b + 1 >= b.edge_count) return -INFINITY;
+      const HalfEdge& e1 = a.edges[c.index_a];
+      const HalfEdge& e2 = b.edges[c.index_b];
+      const Vec3 p1 = a.vertices[e1.origin];
+      const Vec3 p2 = r.R * b.vertices[e2.origin] + r.t;
+      const Vec3 q2 = r.R * b.vertices[b.edges[c.index_b + 1].origin] + r.t;
+      Vec3 n;
+      return edge_separation(p1, a.vertices[a.edges[c.index_a + 1].origin] - p1, p2, q2 - p2, a.center, n);
+    }
+    default: return -INFINITY;
+  }
+}
+
+}  // namespace
+
+void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose& pb, double margin, SatCache* cache,
+                       Manifold& m) {
+  m.count = 0;
+  const Relative r = relative(pa, pb);
+  // the cached feature first: still separating beyond the margin means no contact
+  if (cache && cache->kind != SatCache::Kind::None && cached_separation(a, b, r, *cache) > margin) return;
+
+  // faces of A, faces of B, edge pairs; any separation beyond the margin ends the test
+  const FaceQuery fa = query_faces_a(a, b, r);
+  if (fa.separation > margin) {
+    if (cache) *cache = {SatCache::Kind::FaceA, fa.index, 0};
+    return;
+  }
+  const FaceQuery fb = query_faces_a(b, a, swapped(r));
+  if (fb.separation > margin) {
+    if (cache) *cache = {SatCache::Kind::FaceB, 0, fb.index};
+    return;
+  }
+  const EdgeQuery ee = query_edges(a, b, r);
+  if (ee.separation > margin) {
+    if (cache) *cache = {SatCache::Kind::Edges, ee.edge_a, ee.edge_b};
+    return;
+  }
+
+  // prefer faces over edges and A's face over B's unless clearly worse (Gregorius 2013:
+  // relative and absolute tolerances keep the choice from flickering between frames)
+  constexpr double kRelEdge = 0.90, kRelFace = 0.98, kAbs = 0.5 * 0.005;
+  const double best_face = std::max(fa.separation, fb.separation);
+  if (ee.separation > kRelEdge * best_face + kAbs) {
+    if (cache) *cache = {SatCache::Kind::Edges, ee.edge_a, ee.edge_b};
+    // edge contact: the closest points of the two edges
+    const Vec3 p1 = apply(pa, a.vertices[a.edges[ee.edge_a].origin]);
+    const Vec3 q1 = apply(pa, a.vertices[a.edges[ee.edge_a + 1].origin]);
+    const Vec3 p2 = apply(pb, b.vertices[b.edges[ee.edge_b].origin]);
+    const Vec3 q2 = apply(pb, b.vertices[b.edges[ee.edge_b + 1].origin]);
+    Vec3 ca, cb;
+    closest_segments(p1, q1, p2, q2, ca, cb);
+    m.normal = pa.rotation * ee.normal;
+    m.count = 1;
+    m.points[0] = {ca, cb, glm::dot(ca - cb, m.normal), edge_pair_id(ee.edge_a, ee.edge_b)};
+    return;
+  }
+  const bool ref_a = !(fb.separation > kRelFace * fa.separation + kAbs);
+  if (cache) *cache = ref_a ? SatCache{SatCache::Kind::FaceA, fa.index, 0} : SatCache{SatCache::Kind::FaceB, 0, fb.index};
+
+  // reference face, incident face, clip
+  const Poly& ref = ref_a ? a : b;
+  const Poly& inc = ref_a ? b : a;
+  const Pose& pref = ref_a ? pa : pb;
+  const Pose& pinc = ref_a ? pb : pa;
+  WorldFace rf, inf;
+  world_face(ref, pref, ref_a ? fa.index : fb.index, rf);
+  world_face(inc, pinc, incident_face(inc, pinc.rotation, rf.normal), inf);
+  std::array<Candidate, kMaxPolygon> cand;
+  const int n = clip_faces(rf, inf.pts.data(), inf.count, false, rf.normal, 0.0, margin, ref_a, cand.data());
+  if (!ref_a)
+    for (int i = 0; i < n; ++i) cand[std::size_t(i)].id |= kIdFlip;
+  reduce(cand.data(), n, ref_a ? rf.normal : -rf.normal, m);
+}
+
+}  // namespace pba::narrow
