@@ -12,18 +12,28 @@ namespace pba::detail {
 /// One contact point as the solver sees it: anchors, effective masses and impulses.
 struct SolverPoint {
   Vec3 ra{0, 0, 0}, rb{0, 0, 0};  // anchors from the centres of mass at the start of the step (m)
-  double offset = 0;              // separation = dot(pb_now - pa_now, n) + offset (m)
+  // the separation now is dot(core_b_now - core_a_now, n) + offset, where core_x are the
+  // points of the shapes' cores (a sphere's centre, a capsule's segment, a box's surface) at
+  // sa, sb from the centres of mass, turned with the bodies: a rolling ball's surface point
+  // turns away from the contact, its centre does not
+  Vec3 sa{0, 0, 0}, sb{0, 0, 0};
+  double offset = 0;              // (m)
   double normal_mass = 0;         // 1 / (J M^-1 J^T) along the normal (kg)
-  double tangent_mass[2] = {0, 0};  // the same along the two tangents (kg)
-  double normal_impulse = 0;      // accumulated this step (N s)
-  double tangent_impulse[2] = {0, 0};
+  double normal_impulse = 0;      // accumulated (N s per substep)
   double max_normal_impulse = 0;  // largest single normal impulse of the step (N s)
   double approach = 0;            // normal relative velocity before the solve (m/s)
   double depth = 0;               // overlap at the start of the step (m)
+  Vec3 local{0, 0, 0};            // the point in body a's frame (m), for matching by position
   std::uint32_t id = 0;           // feature id (warm starting)
 };
 
-/// A touching or speculative pair of shapes of two bodies.
+/// A touching or speculative pair of shapes of two bodies. Friction acts on the manifold as
+/// a whole ("patch friction", as PhysX and Jolt do): two tangential constraints at the
+/// centroid of the points, limited together to the disc mu * (sum of normal impulses), and
+/// one twist constraint about the normal, limited to mu * sum * the points' mean distance
+/// from the centroid. Per-point friction clamped point by point lets opposing sideways
+/// impulses at different points survive (they cancel in the sum but use up the disc), which
+/// measurably weakens sliding friction.
 struct ContactPair {
   std::uint32_t slot_a = 0, slot_b = 0;    // body handle slots (stable across removals)
   std::uint32_t shape_a = 0, shape_b = 0;  // shape indices within the bodies
@@ -31,11 +41,17 @@ struct ContactPair {
   NarrowPhaseCache cache{};
   Vec3 normal{0, 0, 1}, t1{1, 0, 0}, t2{0, 0, 1};  // from a to b, and the friction basis
   double friction = 0, restitution = 0, rolling = 0;  // mixed coefficients (rolling: times radius, m)
+  Vec3 ca{0, 0, 0}, cb{0, 0, 0};  // friction anchor (the points' centroid) from each centre of mass (m)
+  double tangent_mass[2] = {0, 0};   // effective masses of the two tangential constraints (kg)
+  double tangent_impulse[2] = {0, 0};  // accumulated (N s per substep)
+  double twist_mass = 0;     // effective inertia about the normal (kg m^2)
+  double twist_impulse = 0;  // accumulated (N m s per substep)
+  double twist_radius = 0;   // mean distance of the points from the centroid (m)
+  Vec3 friction_old{0, 0, 0};  // the tangential impulse in world axes at the end of the step
   Mat3 rolling_mass{0.0};    // inverse of the relative angular inverse inertia (kg m^2)
   Vec3 rolling_impulse{0, 0, 0};  // accumulated rolling-resistance angular impulse (N m s)
   int count = 0;
   SolverPoint points[Manifold::kMaxPoints];
-  Vec3 friction_old[Manifold::kMaxPoints];  // world friction impulses at the end of the step
 
   // the ordering of pairs (by body slots, then shapes): deterministic, and binary-searchable
   bool operator<(const ContactPair& o) const {

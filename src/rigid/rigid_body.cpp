@@ -72,6 +72,7 @@ void ContactSettings::validate(std::string_view where) const {
     throw Error(field_path(where, "solver") + ": unknown solver " + std::to_string(static_cast<int>(solver)));
   require_count(substeps, 1, 64, field_path(where, "substeps"));
   require_count(iterations, 1, 1000, field_path(where, "iterations"));
+  require_count(manifold_iterations, 1, 16, field_path(where, "manifold_iterations"));
   require_positive(contact_hertz, field_path(where, "contact_hertz"));
   require_non_negative(damping_ratio, field_path(where, "damping_ratio"));
   require_positive(push_out_speed, field_path(where, "push_out_speed"));
@@ -441,6 +442,8 @@ void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity) {
     const Vec3 tb = glm::conjugate(q_[i]) * torque_[i];
     const Vec3 w = w_[i] + q_[i] * (h * inv_inertia_[i] * tb);
     w_[i] = w / (1 + h * ang_damp_[i]);
+    // a force too large for a double stops here, before contacts can spread it to others
+    if (!(is_finite(v_[i]) && is_finite(w_[i]))) fail(i);
   }
 }
 
@@ -470,6 +473,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   if (!(std::isfinite(dt) && dt > 0)) require_positive(dt, "RigidBodySystem::step dt");
   if (!is_finite(gravity)) require_finite(gravity, "RigidBodySystem::step gravity");
   settings_.validate("RigidBodySystem.settings");
+  last_dt_ = dt;
   Stopwatch total;
   const std::size_t n = type_.size();
   // the start of the step, which the solver measures separations from
@@ -499,8 +503,8 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   }
   contacts_->restitution(*this);
   contacts_->store();
-  time_ += dt;
   check_finite();
+  time_ += dt;
   profile_.total = total.seconds();
   profile_.solve = profile_.total - profile_.collide;
 }
@@ -511,13 +515,15 @@ void RigidBodySystem::check_finite() {
   for (std::size_t i = 0; i < n; ++i) {
     force_[i] = Vec3(0);
     torque_[i] = Vec3(0);
-    if (!(is_finite(com_[i]) && is_finite(v_[i]) && is_finite(w_[i]) && finite_quat(q_[i]))) {
-      failure_ = describe(i) + " became non-finite at t = " + format_value(time_) + " s: position " +
-                 format_vec3(com_[i]) + ", velocity " + format_vec3(v_[i]) + ", angular velocity " +
-                 format_vec3(w_[i]);
-      throw Error(failure_);
-    }
+    if (!(is_finite(com_[i]) && is_finite(v_[i]) && is_finite(w_[i]) && finite_quat(q_[i]))) fail(i);
   }
+}
+
+void RigidBodySystem::fail(std::size_t i) {
+  failure_ = describe(i) + " became non-finite in the step to t = " + format_value(time_ + last_dt_) +
+             " s: position " + format_vec3(com_[i]) + ", velocity " + format_vec3(v_[i]) + ", angular velocity " +
+             format_vec3(w_[i]);
+  throw Error(failure_);
 }
 
 std::vector<RigidContactPoint> RigidBodySystem::contacts() const {
@@ -532,7 +538,7 @@ std::vector<RigidContactPoint> RigidBodySystem::contacts() const {
       r.normal = c.normal;
       r.depth = p.depth;
       r.normal_impulse = p.normal_impulse;
-      r.tangent_impulse = std::hypot(p.tangent_impulse[0], p.tangent_impulse[1]);
+      r.tangent_impulse = std::hypot(c.tangent_impulse[0], c.tangent_impulse[1]) / c.count;
       r.id = p.id;
       out.push_back(r);
     }
