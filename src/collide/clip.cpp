@@ -71,12 +71,16 @@ int clip_faces(const WorldFace& ref, const ClipPoint* incident, int incident_cou
       else if (d1 > 0) in[1] = {in[0].p + (in[1].p - in[0].p) * (d0 / (d0 - d1)), cross_id(in[0].label, plane), in[0].label};
       continue;
     }
-    // Sutherland-Hodgman against this plane
+    // Sutherland-Hodgman against this plane (each point's side computed once)
+    std::array<double, kMaxPolygon> side;
+    const double sp = glm::dot(s, p);
+    for (int i = 0; i < n; ++i) side[std::size_t(i)] = glm::dot(s, in[i].p) - sp;
     int m = 0;
     for (int i = 0; i < n; ++i) {
+      const int i2 = i + 1 == n ? 0 : i + 1;
       const ClipPoint& c = in[i];
-      const ClipPoint& d = in[(i + 1) % n];
-      const double dc = glm::dot(s, c.p - p), dd = glm::dot(s, d.p - p);
+      const ClipPoint& d = in[i2];
+      const double dc = side[std::size_t(i)], dd = side[std::size_t(i2)];
       if (dc <= 0 && m < kMaxPolygon) next[m++] = c;
       if ((dc <= 0) != (dd <= 0) && m < kMaxPolygon) {
         // leaving: the new edge runs along the plane; entering: along c's edge

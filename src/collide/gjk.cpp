@@ -45,16 +45,10 @@ Vec3 ConvexProxy::support(const Vec3& d, std::uint32_t* vertex) const {
       local = Vec3(dl.x >= 0 ? half_extents.x : -half_extents.x, dl.y >= 0 ? half_extents.y : -half_extents.y,
                    dl.z >= 0 ? half_extents.z : -half_extents.z);
       break;
-    case ShapeType::Hull: {
-      const auto v = hull->vertices();
-      double best = glm::dot(v[0], dl);
-      for (std::uint32_t i = 1; i < v.size(); ++i) {
-        const double x = glm::dot(v[i], dl);
-        if (x > best) best = x, index = i;
-      }
-      local = v[index];
+    case ShapeType::Hull:
+      index = hull->support_index(dl);
+      local = hull->vertices()[index];
       break;
-    }
     default: break;  // sphere: the centre
   }
   if (vertex) *vertex = index;
@@ -282,10 +276,11 @@ DistanceResult gjk_distance(const ConvexProxy& a, const ConvexProxy& b) {
     return r;
   }
   // the rounded shapes: radii along the core normal
-  const Vec3 d = cb - ca;
-  const double dist = glm::length(d);
+  // v = a - b is the simplex's closest point: its length is the distance estimate
+  const Vec3 v = g.closest();
+  const double dist = glm::length(v);
   r.core_distance = dist;
-  r.normal = dist > 0 ? d / dist : Vec3(0, 0, 1);
+  r.normal = dist > 0 ? -v / dist : Vec3(0, 0, 1);
   r.distance = std::max(0.0, dist - a.radius - b.radius);
   r.point_a = ca + a.radius * r.normal;
   r.point_b = cb - b.radius * r.normal;

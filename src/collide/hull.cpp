@@ -189,8 +189,309 @@ MassProperties ConvexHull::mass_properties(double density) const {
   return mp;
 }
 
-std::shared_ptr<ConvexHull> HullBuilder::quickhull(std::span<const Vec3>, std::string_view where) {
-  throw Error(std::string(where) + ": quickhull is not implemented yet");
+namespace {
+
+// a triangle of the hull under construction; edge i runs v[i] -> v[(i + 1) % 3] and
+// nb[i] is the triangle across it
+struct QhFace {
+  std::uint32_t v[3] = {0, 0, 0};
+  std::uint32_t nb[3] = {0, 0, 0};
+  Vec3 n{0, 0, 1};
+  double d = 0;
+  bool alive = true;
+  std::uint32_t stamp = 0;            // last eye that tested it
+  bool visible = false;               // seen from the current eye
+  std::vector<std::uint32_t> conflict;  // points above it, each in exactly one list
+};
+
+// a horizon edge a -> b: the visible triangle `inner` has it, `outer` (not visible) has b -> a
+struct HorizonEdge {
+  std::uint32_t a, b, inner, outer;
+};
+
+int slot_of(const QhFace& f, std::uint32_t a, std::uint32_t b) {
+  for (int i = 0; i < 3; ++i)
+    if (f.v[i] == a && f.v[(i + 1) % 3] == b) return i;
+  return -1;
+}
+
+}  // namespace
+
+// Quickhull in 3D (Barber, Dobkin and Huhdanpaa 1996; Gregorius 2014, "Implementing
+// Quickhull"). Triangles are grown from a tetrahedron; a point joins when it is more than
+// `tol` above a triangle, and a triangle counts as visible from the eye unless the eye is
+// more than `tol` below it, so every new triangle rises at least `tol` from its outer
+// neighbour's plane (no slivers, no concave edges). Afterwards coplanar triangles merge
+// into polygons and vertices left on only two faces (on an edge) are dropped.
+std::shared_ptr<ConvexHull> HullBuilder::quickhull(std::span<const Vec3> points, std::string_view where) {
+  const std::string at(where);
+  // validate: a count the indices hold, finite points
+  if (points.size() < 4)
+    throw Error(at + ": a hull needs at least 4 points that are not coplanar, got " + std::to_string(points.size()) +
+                " points");
+  require_count(static_cast<long long>(points.size()), 4, 1ll << 26, field_path(where, "size"));
+  for (std::size_t i = 0; i < points.size(); ++i)
+    require_finite(points[i], at + "[" + std::to_string(i) + "]");
+  const std::uint32_t n = static_cast<std::uint32_t>(points.size());
+
+  // centre the cloud; the tolerance scales with its extent (relative 1e-9, far above the
+  // 1e-16 rounding of the plane tests and far below any intended feature)
+  Vec3 lo = points[0], hi = points[0];
+  for (const Vec3& p : points) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  const Vec3 mid = 0.5 * (lo + hi);
+  std::vector<Vec3> q(n);
+  for (std::uint32_t i = 0; i < n; ++i) q[i] = points[i] - mid;
+  const Vec3 ext = hi - lo;
+  const double tol = 1e-9 * (ext.x + ext.y + ext.z) + 8 * 2.220446049250313e-16 * glm::length(glm::abs(mid));
+
+  // initial tetrahedron: the farthest pair of axis extremes, the point farthest from their
+  // line, the point farthest from their plane
+  std::uint32_t ext_i[6];
+  for (int a = 0; a < 3; ++a) {
+    ext_i[2 * a] = ext_i[2 * a + 1] = 0;
+    for (std::uint32_t i = 1; i < n; ++i) {
+      if (q[i][a] < q[ext_i[2 * a]][a]) ext_i[2 * a] = i;
+      if (q[i][a] > q[ext_i[2 * a + 1]][a]) ext_i[2 * a + 1] = i;
+    }
+  }
+  std::uint32_t i0 = 0, i1 = 0;
+  double best = -1;
+  for (int a = 0; a < 6; ++a)
+    for (int b = a + 1; b < 6; ++b) {
+      const double dd = glm::length(q[ext_i[a]] - q[ext_i[b]]);
+      if (dd > best) best = dd, i0 = ext_i[a], i1 = ext_i[b];
+    }
+  const std::string flat = ": a hull needs at least 4 points that are not coplanar (a solid with volume); the " +
+                           std::to_string(n) + " points ";
+  if (!(best > tol)) throw Error(at + flat + "all coincide");
+  // the first point of greatest score(q - q[i0]), and that score in `best`
+  auto farthest = [&](auto score) {
+    std::uint32_t k = 0;
+    best = -1;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const double dd = score(q[i] - q[i0]);
+      if (dd > best) best = dd, k = i;
+    }
+    return k;
+  };
+  const Vec3 axis = (q[i1] - q[i0]) / best;
+  const std::uint32_t i2 = farthest([&](const Vec3& r) { return glm::length(glm::cross(r, axis)); });
+  if (!(best > tol)) throw Error(at + flat + "are collinear");
+  const Vec3 pn = glm::normalize(glm::cross(q[i1] - q[i0], q[i2] - q[i0]));
+  const std::uint32_t i3 = farthest([&](const Vec3& r) { return std::abs(glm::dot(r, pn)); });
+  if (!(best > tol)) throw Error(at + flat + "are coplanar (a flat cloud)");
+
+  std::vector<QhFace> faces;
+  faces.reserve(4 * 64);
+  auto make_plane = [&](QhFace& f, const Vec3& fallback) {
+    const Vec3 c = glm::cross(q[f.v[1]] - q[f.v[0]], q[f.v[2]] - q[f.v[0]]);
+    const double len = glm::length(c);
+    f.n = len > 0 ? c / len : fallback;
+    f.d = glm::dot(f.n, (q[f.v[0]] + q[f.v[1]] + q[f.v[2]]) / 3.0);
+  };
+  auto dist = [&](const QhFace& f, std::uint32_t i) { return glm::dot(f.n, q[i]) - f.d; };
+  // the tetrahedron's faces, each turned so that the fourth point is below it
+  {
+    const std::uint32_t t[4][4] = {{i0, i1, i2, i3}, {i0, i1, i3, i2}, {i0, i2, i3, i1}, {i1, i2, i3, i0}};
+    for (const auto& r : t) {
+      QhFace f;
+      f.v[0] = r[0], f.v[1] = r[1], f.v[2] = r[2];
+      make_plane(f, Vec3(0, 0, 1));
+      if (dist(f, r[3]) > 0) {
+        std::swap(f.v[1], f.v[2]);
+        make_plane(f, Vec3(0, 0, 1));
+      }
+      faces.push_back(std::move(f));
+    }
+    for (std::uint32_t a = 0; a < 4; ++a)
+      for (int i = 0; i < 3; ++i)
+        for (std::uint32_t b = 0; b < 4; ++b)
+          if (b != a && slot_of(faces[b], faces[a].v[(i + 1) % 3], faces[a].v[i]) >= 0) faces[a].nb[i] = b;
+  }
+  // every other point goes to the triangle it is farthest above, if more than tol
+  auto assign = [&](std::uint32_t i, std::size_t first_face) {
+    double bd = tol;
+    std::size_t bf = faces.size();
+    for (std::size_t f = first_face; f < faces.size(); ++f) {
+      if (!faces[f].alive) continue;
+      const double dd = dist(faces[f], i);
+      if (dd > bd) bd = dd, bf = f;
+    }
+    if (bf < faces.size()) faces[bf].conflict.push_back(i);
+  };
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (i != i0 && i != i1 && i != i2 && i != i3) assign(i, 0);
+
+  // grow: new triangles are appended, so one pass over the array sees every conflict list
+  std::vector<std::uint32_t> stack, visible, horizon_from(n, UINT32_MAX), gathered;
+  std::vector<HorizonEdge> horizon;
+  std::uint32_t stamp = 0;
+  for (std::size_t fi = 0; fi < faces.size(); ++fi) {
+    while (faces[fi].alive && !faces[fi].conflict.empty()) {
+      // the eye: the point farthest above this triangle
+      std::vector<std::uint32_t>& cl = faces[fi].conflict;
+      std::size_t ek = 0;
+      for (std::size_t k = 1; k < cl.size(); ++k)
+        if (dist(faces[fi], cl[k]) > dist(faces[fi], cl[ek])) ek = k;
+      const std::uint32_t eye = cl[ek];
+      // the visible region: triangles reached from this one that the eye is not clearly below
+      ++stamp;
+      visible.clear();
+      stack.assign(1, static_cast<std::uint32_t>(fi));
+      faces[fi].stamp = stamp;
+      faces[fi].visible = true;
+      while (!stack.empty()) {
+        const std::uint32_t f = stack.back();
+        stack.pop_back();
+        visible.push_back(f);
+        for (std::uint32_t g : faces[f].nb) {
+          if (faces[g].stamp == stamp) continue;
+          faces[g].stamp = stamp;
+          faces[g].visible = dist(faces[g], eye) > -tol;
+          if (faces[g].visible) stack.push_back(g);
+        }
+      }
+      // the horizon: edges between visible and hidden triangles, linked into one loop
+      horizon.clear();
+      bool simple = true;
+      for (std::uint32_t f : visible)
+        for (int i = 0; i < 3; ++i) {
+          const std::uint32_t g = faces[f].nb[i];
+          if (faces[g].visible && faces[g].stamp == stamp) continue;
+          const std::uint32_t a = faces[f].v[i], b = faces[f].v[(i + 1) % 3];
+          if (horizon_from[a] != UINT32_MAX) simple = false;
+          horizon_from[a] = static_cast<std::uint32_t>(horizon.size());
+          horizon.push_back({a, b, f, g});
+        }
+      std::vector<HorizonEdge> loop;
+      loop.reserve(horizon.size());
+      if (simple) {
+        for (std::uint32_t k = 0; loop.size() < horizon.size();) {
+          loop.push_back(horizon[k]);
+          k = horizon_from[horizon[k].b];
+          if (k == UINT32_MAX || k == 0) break;
+        }
+        if (loop.size() != horizon.size() || horizon_from[loop.back().b] != 0) simple = false;
+      }
+      for (const HorizonEdge& h : horizon) horizon_from[h.a] = UINT32_MAX;
+      for (std::uint32_t f : visible) faces[f].visible = false;
+      if (!simple) {
+        // a pinched horizon happens only at the rounding limit: leave this point out
+        cl.erase(cl.begin() + static_cast<std::ptrdiff_t>(ek));
+        continue;
+      }
+      // the cone of new triangles from the horizon to the eye
+      const std::uint32_t base = static_cast<std::uint32_t>(faces.size());
+      const std::uint32_t hn = static_cast<std::uint32_t>(loop.size());
+      for (std::uint32_t k = 0; k < hn; ++k) {
+        QhFace f;
+        f.v[0] = loop[k].a, f.v[1] = loop[k].b, f.v[2] = eye;
+        f.nb[0] = loop[k].outer;
+        f.nb[1] = base + (k + 1) % hn;
+        f.nb[2] = base + (k + hn - 1) % hn;
+        make_plane(f, faces[loop[k].inner].n);
+        QhFace& outer = faces[loop[k].outer];
+        outer.nb[slot_of(outer, loop[k].b, loop[k].a)] = base + k;
+        faces.push_back(std::move(f));
+      }
+      // retire the visible triangles and hand their points to the new ones
+      gathered.clear();
+      for (std::uint32_t f : visible) {
+        faces[f].alive = false;
+        for (std::uint32_t i : faces[f].conflict)
+          if (i != eye) gathered.push_back(i);
+        std::vector<std::uint32_t>().swap(faces[f].conflict);
+      }
+      for (std::uint32_t i : gathered) assign(i, base);
+    }
+  }
+
+  // merge coplanar triangles: grow a polygon from each largest unmerged triangle over
+  // neighbours whose corners all lie within tol of its plane
+  std::vector<std::uint32_t> alive;
+  for (std::uint32_t f = 0; f < faces.size(); ++f)
+    if (faces[f].alive) alive.push_back(f);
+  auto area = [&](std::uint32_t f) {
+    return glm::length(glm::cross(q[faces[f].v[1]] - q[faces[f].v[0]], q[faces[f].v[2]] - q[faces[f].v[0]]));
+  };
+  std::vector<double> areas(faces.size(), 0);
+  for (std::uint32_t f : alive) areas[f] = area(f);
+  std::vector<std::uint32_t> order = alive;
+  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return areas[a] > areas[b]; });
+  std::vector<std::uint32_t> group(faces.size(), UINT32_MAX);
+  std::vector<std::vector<std::uint32_t>> loops;
+  std::vector<std::uint32_t> members, edge_from(n, UINT32_MAX);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
+  for (std::uint32_t seed : order) {
+    if (group[seed] != UINT32_MAX) continue;
+    const std::uint32_t g = static_cast<std::uint32_t>(loops.size());
+    const QhFace& sf = faces[seed];
+    members.assign(1, seed);
+    group[seed] = g;
+    for (std::size_t k = 0; k < members.size(); ++k)
+      for (std::uint32_t h : faces[members[k]].nb) {
+        if (group[h] != UINT32_MAX || glm::dot(faces[h].n, sf.n) <= 0) continue;
+        bool flat = true;
+        for (std::uint32_t vi : faces[h].v) flat = flat && std::abs(dist(sf, vi)) <= tol;
+        if (flat) group[h] = g, members.push_back(h);
+      }
+    // the polygon's boundary as one loop; anything else keeps the triangles apart
+    boundary.clear();
+    bool ok = true;
+    for (std::uint32_t m : members)
+      for (int i = 0; i < 3; ++i)
+        if (group[faces[m].nb[i]] != g) {
+          const std::uint32_t a = faces[m].v[i];
+          if (edge_from[a] != UINT32_MAX) ok = false;
+          edge_from[a] = static_cast<std::uint32_t>(boundary.size());
+          boundary.push_back({a, faces[m].v[(i + 1) % 3]});
+        }
+    std::vector<std::uint32_t> lp;
+    if (ok) {
+      for (std::uint32_t k = 0; lp.size() < boundary.size();) {
+        lp.push_back(boundary[k].first);
+        k = edge_from[boundary[k].second];
+        if (k == UINT32_MAX || k == 0) break;
+      }
+      ok = lp.size() == boundary.size() && edge_from[boundary[edge_from[lp.back()]].second] == 0;
+    }
+    for (const auto& be : boundary) edge_from[be.first] = UINT32_MAX;
+    if (ok) {
+      loops.push_back(std::move(lp));
+    } else {
+      for (std::size_t k = 0; k < members.size(); ++k) {
+        group[members[k]] = static_cast<std::uint32_t>(loops.size());
+        loops.push_back({faces[members[k]].v[0], faces[members[k]].v[1], faces[members[k]].v[2]});
+      }
+    }
+  }
+
+  // drop vertices on only two polygons (they lie on an edge), when both keep 3 corners
+  std::vector<std::uint32_t> face_count(n, 0);
+  for (const auto& l : loops)
+    for (std::uint32_t vi : l) ++face_count[vi];
+  std::vector<std::vector<std::uint32_t>> where_in(n);
+  for (std::uint32_t li = 0; li < loops.size(); ++li)
+    for (std::uint32_t vi : loops[li])
+      if (face_count[vi] == 2) where_in[vi].push_back(li);
+  for (std::uint32_t vi = 0; vi < n; ++vi) {
+    if (face_count[vi] != 2) continue;
+    const auto& ls = where_in[vi];
+    if (loops[ls[0]].size() <= 3 || loops[ls[1]].size() <= 3) continue;
+    for (std::uint32_t li : ls) loops[li].erase(std::find(loops[li].begin(), loops[li].end(), vi));
+    face_count[vi] = 0;
+  }
+
+  // keep the used vertices in input order
+  std::vector<std::uint32_t> remap(n, UINT32_MAX);
+  for (const auto& l : loops)
+    for (std::uint32_t vi : l) remap[vi] = 0;
+  std::vector<Vec3> verts;
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (remap[i] == 0) remap[i] = static_cast<std::uint32_t>(verts.size()), verts.push_back(points[i]);
+  for (auto& l : loops)
+    for (std::uint32_t& vi : l) vi = remap[vi];
+  return from_faces(std::move(verts), loops, where);
 }
 
 std::shared_ptr<const ConvexHull> ConvexHull::build(std::span<const Vec3> points, std::string_view where) {

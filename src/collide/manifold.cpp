@@ -183,10 +183,10 @@ void convex_gjk(const ColliderShape& a, const Pose& pa, const ColliderShape& b, 
   if (!g.overlap()) {
     Vec3 ca, cb;
     g.closest_points(ca, cb);
-    const Vec3 d = cb - ca;
-    const double dist = glm::length(d);
+    const Vec3 v = g.closest();
+    const double dist = glm::length(v);
     if (dist - A.radius - B.radius > margin) return;
-    n = d / dist;
+    n = -v / dist;
     point_a = ca + A.radius * n;
     point_b = cb - B.radius * n;
   } else {
@@ -206,26 +206,27 @@ void check_pose(const Pose& p, const char* where) {
 }
 
 void check_shape(const ColliderShape& s, const char* where) {
-  const std::string w(where);
+  // the message strings are built only on failure (collide() must not allocate)
+  auto w = [where] { return std::string(where); };
   switch (s.type) {
     case ShapeType::Sphere:
-      if (!(s.radius > 0 && std::isfinite(s.radius))) require_positive(s.radius, w + ".radius");
+      if (!(s.radius > 0 && std::isfinite(s.radius))) require_positive(s.radius, w() + ".radius");
       break;
     case ShapeType::Capsule:
-      if (!(s.radius > 0 && std::isfinite(s.radius))) require_positive(s.radius, w + ".radius");
-      if (!(s.half_height >= 0 && std::isfinite(s.half_height))) require_non_negative(s.half_height, w + ".half_height");
+      if (!(s.radius > 0 && std::isfinite(s.radius))) require_positive(s.radius, w() + ".radius");
+      if (!(s.half_height >= 0 && std::isfinite(s.half_height))) require_non_negative(s.half_height, w() + ".half_height");
       break;
     case ShapeType::Box:
       for (int k = 0; k < 3; ++k)
         if (!(s.half_extents[k] > 0 && std::isfinite(s.half_extents[k])))
-          require_positive(s.half_extents[k], w + ".half_extents[" + std::to_string(k) + "]");
+          require_positive(s.half_extents[k], w() + ".half_extents[" + std::to_string(k) + "]");
       break;
     case ShapeType::Hull:
-      if (!s.hull || s.hull->vertices().empty()) throw Error(w + ".hull: missing hull body");
+      if (!s.hull || s.hull->vertices().empty()) throw Error(w() + ".hull: missing hull body");
       break;
     case ShapeType::Plane:
       if (!is_finite(s.normal) || !std::isfinite(s.offset) || std::abs(glm::length(s.normal) - 1) > 1e-6)
-        throw Error(w + ".normal/offset: plane must have a finite unit normal and offset, got normal " +
+        throw Error(w() + ".normal/offset: plane must have a finite unit normal and offset, got normal " +
                     format_vec3(s.normal) + ", offset " + format_value(s.offset));
       break;
     default: break;
@@ -250,9 +251,11 @@ void narrow::manifold_from_normal(const ColliderShape& sa, const Pose& pa, const
                                   Manifold& m) {
   m.normal = n;
   m.count = 0;
-  // a face within ~2.5 degrees of the normal is a contact face; a capsule axis within
-  // ~3 degrees of perpendicular is a contact segment
-  constexpr double kFaceCos = 0.999, kSegmentSin = 0.05;
+  // a face is a contact face when the normal is its normal (GJK and EPA return a face
+  // normal of A - B to rounding; an edge-pair normal a little off a face would make the
+  // face's clipped points deeper than the contact); a capsule axis within ~3 degrees of
+  // perpendicular is a contact segment
+  constexpr double kFaceCos = 1 - 1e-9, kSegmentSin = 0.05;
   const bool poly_a = sa.type == ShapeType::Box || sa.type == ShapeType::Hull;
   const bool poly_b = sb.type == ShapeType::Box || sb.type == ShapeType::Hull;
   Poly A, B;
@@ -338,6 +341,8 @@ Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     default:
       if (B.type == ShapeType::Plane) {
         convex_plane(A, PA, B, PB, margin, m);
+      } else if (settings.method == ConvexMethod::Sat && A.type == ShapeType::Box && B.type == ShapeType::Box) {
+        collide_boxes_sat(A.half_extents, PA, B.half_extents, PB, margin, cache ? &cache->sat : nullptr, m);
       } else if (settings.method == ConvexMethod::Sat) {
         Poly pa, pb;
         poly_of(A, pa);

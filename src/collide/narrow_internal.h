@@ -82,17 +82,12 @@ struct Poly {
   Poly(const Poly&) = delete;
   Poly& operator=(const Poly&) = delete;
 
-  /// The local vertex farthest along d (box: closed form; hull: first maximum).
+  /// The local vertex farthest along d (box: closed form; hull: its hill climb).
   std::uint32_t support_index(const Vec3& d) const {
     if (is_box) return (d.x >= 0 ? 1u : 0u) | (d.y >= 0 ? 2u : 0u) | (d.z >= 0 ? 4u : 0u);
-    std::uint32_t best = 0;
-    double bd = glm::dot(vertices[0], d);
-    for (std::uint32_t i = 1; i < vertex_count; ++i) {
-      const double v = glm::dot(vertices[i], d);
-      if (v > bd) bd = v, best = i;
-    }
-    return best;
+    return hull->support_index(d);
   }
+  const ConvexHull* hull = nullptr;
 };
 
 /// Fills `p` with the box of half extents h.
@@ -120,6 +115,7 @@ inline void make_box_poly(const Vec3& h, Poly& p) {
 /// Points `p` at hull `h`.
 inline void make_hull_poly(const ConvexHull& h, Poly& p) {
   p.is_box = false;
+  p.hull = &h;
   p.vertices = h.vertices().data();
   p.vertex_count = std::uint32_t(h.vertices().size());
   p.edges = h.edges().data();
@@ -178,19 +174,22 @@ inline void closest_segments(const Vec3& p1, const Vec3& q1, const Vec3& p2, con
 
 inline constexpr int kMaxPolygon = 64;  // points of a clipped polygon we keep
 
+// the polygon types are left uninitialised on construction (no member initialisers): they
+// are scratch buffers of a few kilobytes filled per call, and zeroing them dominated the
+// cost of a box-box manifold
 struct ClipPoint {
-  Vec3 p{0, 0, 0};
-  std::uint32_t id = 0;     // feature id of the point
-  std::uint32_t label = 0;  // label of the polygon edge from this point to the next
+  Vec3 p;
+  std::uint32_t id;     // feature id of the point
+  std::uint32_t label;  // label of the polygon edge from this point to the next
 };
 
 /// A face of a polyhedron in world coordinates with its labels.
 struct WorldFace {
-  std::array<ClipPoint, kMaxPolygon> pts{};
+  std::array<ClipPoint, kMaxPolygon> pts;
   int count = 0;
   Vec3 normal{0, 0, 1};  // outward, world
   double offset = 0;     // normal . x = offset on the face
-  std::array<std::uint32_t, kMaxPolygon> half_edges{};  // half edge starting at pts[i]
+  std::array<std::uint32_t, kMaxPolygon> half_edges;  // half edge starting at pts[i]
 };
 
 /// Face `f` of `poly` at `pose` in world coordinates (at most kMaxPolygon vertices).
@@ -203,9 +202,9 @@ std::uint32_t most_aligned_face(const Poly& poly, const Quat& rotation, const Ve
 
 /// A contact candidate before reduction.
 struct Candidate {
-  Vec3 a{0, 0, 0}, b{0, 0, 0};
-  double depth = 0;
-  std::uint32_t id = 0;
+  Vec3 a, b;
+  double depth;
+  std::uint32_t id;
 };
 
 /// Clips `incident` (points with labels, on the incident surface) against the side planes
@@ -232,6 +231,10 @@ PenetrationResult epa_from_gjk(const GjkStepper& g);
 
 /// Box/hull pair by separating axes and face clipping (sat.cpp).
 void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose& pb, double margin, SatCache* cache,
+                       Manifold& m);
+/// Box-box by the fifteen axes in closed form, the same choices and ids as collide_polys_sat
+/// on two box polyhedra (sat_box.cpp).
+void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pose& pb, double margin, SatCache* cache,
                        Manifold& m);
 /// A manifold from a contact normal n (A to B) and one fallback point pair: the support
 /// features of both bodies along n clipped against each other when one of them is a face

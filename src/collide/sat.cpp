@@ -189,7 +189,17 @@ void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose&
   world_face(ref, pref, ref_a ? fa.index : fb.index, rf);
   world_face(inc, pinc, incident_face(inc, pinc.rotation, rf.normal), inf);
   std::array<Candidate, kMaxPolygon> cand;
-  const int n = clip_faces(rf, inf.pts.data(), inf.count, false, rf.normal, 0.0, margin, ref_a, cand.data());
+  int n = clip_faces(rf, inf.pts.data(), inf.count, false, rf.normal, 0.0, margin, ref_a, cand.data());
+  if (n == 0) {
+    // the incident face lies outside the reference face's sides (deep overlaps of thin
+    // hulls): the deepest incident vertex, which set the face's separation, alone
+    const std::uint32_t v = inc.support_index(glm::conjugate(pinc.rotation) * -rf.normal);
+    const Vec3 q = apply(pinc, inc.vertices[v]);
+    const double depth = rf.offset - glm::dot(rf.normal, q);
+    const Vec3 on_ref = q + depth * rf.normal;
+    cand[0] = {ref_a ? on_ref : q, ref_a ? q : on_ref, depth, vertex_id(v)};
+    n = 1;
+  }
   if (!ref_a)
     for (int i = 0; i < n; ++i) cand[std::size_t(i)].id |= kIdFlip;
   reduce(cand.data(), n, ref_a ? rf.normal : -rf.normal, m);

@@ -59,20 +59,25 @@ ColliderShape ColliderShape::capsule(double half_height, double r) {
   return s;
 }
 
-ColliderShape ColliderShape::convex(std::shared_ptr<const ConvexHull> h) {
+namespace {
+// a hull, mesh or compound shape around its body, validated (a null body throws)
+template <class T>
+ColliderShape with_body(ShapeType t, std::shared_ptr<const T> ColliderShape::*field, std::shared_ptr<const T> body,
+                        std::string_view where) {
   ColliderShape s;
-  s.type = ShapeType::Hull;
-  s.hull = std::move(h);
-  s.validate("ColliderShape::convex");
+  s.type = t;
+  s.*field = std::move(body);
+  s.validate(where);
   return s;
+}
+}  // namespace
+
+ColliderShape ColliderShape::convex(std::shared_ptr<const ConvexHull> h) {
+  return with_body(ShapeType::Hull, &ColliderShape::hull, std::move(h), "ColliderShape::convex");
 }
 
 ColliderShape ColliderShape::triangles(std::shared_ptr<const TriangleMesh> m) {
-  ColliderShape s;
-  s.type = ShapeType::Mesh;
-  s.mesh = std::move(m);
-  s.validate("ColliderShape::triangles");
-  return s;
+  return with_body(ShapeType::Mesh, &ColliderShape::mesh, std::move(m), "ColliderShape::triangles");
 }
 
 void ColliderShape::validate(std::string_view where) const {

@@ -7,7 +7,7 @@
 #include <random>
 
 #include "error_of.h"
-#include "hull_check.h"
+#include "shape_checks.h"
 #include "pba/collide/shape.h"
 
 namespace {
@@ -15,13 +15,11 @@ namespace {
 using namespace pba;
 using pba::test_support::error_of;
 using pba::test_support::expect_valid_hull;
+using pba::test_support::expect_mat_near;
+using pba::test_support::random_rotation;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 const double kInf = std::numeric_limits<double>::infinity();
 
-Quat random_rotation(std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0, 1);
-  return glm::normalize(Quat(g(rng), g(rng), g(rng), g(rng)));
-}
 Vec3 random_unit(std::mt19937_64& rng) {
   std::normal_distribution<double> g(0, 1);
   return glm::normalize(Vec3(g(rng), g(rng), g(rng)));
@@ -165,6 +163,119 @@ TEST(CollideShapes, BoundsContainTheShapeAndTouchIt) {
                                           {ColliderShape::box({1, 2, 3}), Pose{{-2, 0, 0}, {1, 0, 0, 0}}}});
   EXPECT_EQ(comp->local_bounds.lo, Vec3(-3, -2, -3));
   EXPECT_EQ(comp->local_bounds.hi, Vec3(3, 2, 3));
+}
+
+}  // namespace
+
+namespace {
+
+using namespace pba;
+using pba::test_support::error_of;
+
+
+// ---------------------------------------------------------------------------
+// mass properties (closed forms; 1e-12 relative is a few hundred roundings)
+
+TEST(CollideMass, SphereAndBoxClosedForms) {
+  const MassProperties s = mass_properties(ColliderShape::sphere(0.3), 1000);
+  const double m = 1000 * 4.0 / 3.0 * kPi * 0.027;
+  EXPECT_NEAR(s.mass, m, 1e-12 * m);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(s.inertia[i][i], 0.4 * m * 0.09, 1e-12 * m * 0.09);
+  EXPECT_EQ(s.inertia[0][1], 0.0);
+  // box with edges a, b, c: I_xx = m (b^2 + c^2) / 12
+  const MassProperties b = mass_properties(ColliderShape::box({0.5, 1, 1.5}), 2);
+  const double mb = 2 * 1 * 2 * 3;
+  EXPECT_NEAR(b.mass, mb, 1e-12 * mb);
+  EXPECT_NEAR(b.inertia[0][0], mb * (4 + 9) / 12, 1e-12 * mb);
+  EXPECT_NEAR(b.inertia[1][1], mb * (1 + 9) / 12, 1e-12 * mb);
+  EXPECT_NEAR(b.inertia[2][2], mb * (1 + 4) / 12, 1e-12 * mb);
+  // the box hull agrees with the box
+  const MassProperties bh = mass_properties(ColliderShape::convex(ConvexHull::box({0.5, 1, 1.5})), 2);
+  EXPECT_NEAR(bh.mass, b.mass, 1e-12 * mb);
+  expect_mat_near(bh.inertia, b.inertia, 1e-12);
+}
+
+TEST(CollideMass, CapsuleEqualsItsSliceIntegral) {
+  // independent reference: integrate disc slices along the axis. A slice at height y of
+  // radius rho has area pi rho^2 and contributes pi rho^2 y^2 + pi rho^4 / 4 to I_xx and
+  // pi rho^4 / 2 to I_yy; rho^2 is constant on the cylinder and r^2 - (y - hh)^2 on a cap,
+  // so the integrands are polynomials of degree <= 4 and 3-point Gauss-Legendre is exact
+  for (const auto& [hh, r] : {std::pair{0.7, 0.2}, std::pair{0.0, 0.5}, std::pair{2.0, 1.5}}) {
+    double vol = 0, ixx = 0, iyy = 0;
+    auto integrate = [&](double a, double b, auto rho2) {
+      const double x[3] = {-std::sqrt(0.6), 0, std::sqrt(0.6)}, w[3] = {5.0 / 9, 8.0 / 9, 5.0 / 9};
+      for (int k = 0; k < 3; ++k) {
+        const double y = 0.5 * (a + b) + 0.5 * (b - a) * x[k], s = 0.5 * (b - a) * w[k], p = rho2(y);
+        vol += s * kPi * p;
+        ixx += s * (kPi * p * y * y + kPi * p * p / 4);
+        iyy += s * kPi * p * p / 2;
+      }
+    };
+    integrate(-hh - r, -hh, [&](double y) { return r * r - (y + hh) * (y + hh); });
+    if (hh > 0) integrate(-hh, hh, [&](double) { return r * r; });
+    integrate(hh, hh + r, [&](double y) { return r * r - (y - hh) * (y - hh); });
+    const MassProperties c = mass_properties(ColliderShape::capsule(hh, r), 3);
+    EXPECT_NEAR(c.volume, vol, 1e-12 * vol);
+    EXPECT_NEAR(c.mass, 3 * vol, 3e-12 * vol);
+    EXPECT_NEAR(c.inertia[0][0], 3 * ixx, 3e-12 * ixx);
+    EXPECT_NEAR(c.inertia[2][2], 3 * ixx, 3e-12 * ixx);
+    EXPECT_NEAR(c.inertia[1][1], 3 * iyy, 3e-12 * iyy);
+    EXPECT_EQ(c.center, Vec3(0.0));
+  }
+  // zero height is the sphere
+  const MassProperties c0 = mass_properties(ColliderShape::capsule(0, 0.5), 1);
+  const MassProperties s0 = mass_properties(ColliderShape::sphere(0.5), 1);
+  EXPECT_NEAR(c0.mass, s0.mass, 1e-15);
+  expect_mat_near(c0.inertia, s0.inertia, 1e-14);
+}
+
+TEST(CollideMass, CompoundOfTwoBoxesByTheParallelAxisTheorem) {
+  // two unit cubes (m = 1 each) at x = -1 and x = +2: centre at x = 0.5; about the common
+  // centre I_xx = 2 (1/6), I_yy = I_zz = 2 (1/6) + 1 (1.5^2) + 1 (1.5^2)
+  const ColliderShape cube = ColliderShape::box({0.5, 0.5, 0.5});
+  ColliderShape c;
+  c.type = ShapeType::Compound;
+  c.compound = CompoundShape::build({{cube, Pose{{-1, 0, 0}, {1, 0, 0, 0}}}, {cube, Pose{{2, 0, 0}, {1, 0, 0, 0}}}});
+  const MassProperties mp = mass_properties(c, 1);
+  EXPECT_NEAR(mp.mass, 2, 1e-15);
+  EXPECT_NEAR(mp.center.x, 0.5, 1e-15);
+  EXPECT_NEAR(mp.inertia[0][0], 2.0 / 6, 1e-14);
+  EXPECT_NEAR(mp.inertia[1][1], 2.0 / 6 + 4.5, 1e-14);
+  EXPECT_NEAR(mp.inertia[2][2], 2.0 / 6 + 4.5, 1e-14);
+  EXPECT_NEAR(mp.inertia[0][1], 0, 1e-14);
+}
+
+TEST(CollideMass, CompoundRotatesItsChildren) {
+  // one rotated, moved box as a compound equals the hull of its corners
+  std::mt19937_64 rng(41);
+  for (int k = 0; k < 10; ++k) {
+    const Vec3 h(0.2, 0.5, 0.9);
+    const Pose p{Vec3(1, -2, 0.5 * k), random_rotation(rng)};
+    ColliderShape c;
+    c.type = ShapeType::Compound;
+    c.compound = CompoundShape::build({{ColliderShape::box(h), p}});
+    std::vector<Vec3> corners;
+    for (int i = 0; i < 8; ++i) corners.push_back(apply(p, Vec3(i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z)));
+    const MassProperties a = mass_properties(c, 7), b = ConvexHull::build(corners)->mass_properties(7);
+    EXPECT_NEAR(a.mass, b.mass, 1e-12 * b.mass);
+    EXPECT_NEAR(glm::length(a.center - b.center), 0, 1e-12 * glm::length(b.center) + 1e-15);
+    expect_mat_near(a.inertia, b.inertia, 1e-12);
+  }
+}
+
+TEST(CollideMass, PlanesMeshesAndBadDensitiesThrow) {
+  EXPECT_EQ(error_of([] { mass_properties(ColliderShape::plane({0, 1, 0}, 0), 1, "ground"); }),
+            "ground: a plane has no volume, so no mass properties (use it as a static shape)");
+  EXPECT_EQ(error_of([] { mass_properties(ColliderShape::sphere(1), 0, "ball"); }),
+            "ball.density: must be finite and > 0, got 0");
+  EXPECT_EQ(error_of([] { mass_properties(ColliderShape::sphere(1), -3, "ball"); }),
+            "ball.density: must be finite and > 0, got -3");
+  EXPECT_EQ(error_of([] { mass_properties(ColliderShape::sphere(1), kNaN, "ball"); }),
+            "ball.density: must be finite and > 0, got nan");
+  ColliderShape bad;
+  bad.type = ShapeType::Sphere;
+  bad.radius = 0;
+  EXPECT_EQ(error_of([&] { mass_properties(bad, 1, "ball"); }), "ball.radius: must be finite and > 0, got 0");
 }
 
 }  // namespace

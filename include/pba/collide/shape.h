@@ -198,6 +198,31 @@ class TriangleMesh {
   std::vector<std::uint32_t> order_;
 };
 
+template <class F>
+void TriangleMesh::query(const Aabb& box, F&& visit) const {
+  // depth-first over the BVH with a fixed stack (the builder caps the depth at 60)
+  if (nodes_.empty()) return;
+  std::uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = nodes_[stack[--top]];
+    if (!n.box.overlaps(box)) continue;
+    if (n.count == 0) {
+      stack[top++] = n.first + 1;
+      stack[top++] = n.first;
+      continue;
+    }
+    // each triangle of the leaf by its own bounds
+    for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
+      const std::uint32_t t = order_[i];
+      const Vec3 &a = vertices_[triangles_[t][0]], &b = vertices_[triangles_[t][1]], &c = vertices_[triangles_[t][2]];
+      const Aabb tb{glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c))};
+      if (tb.overlaps(box)) visit(t);
+    }
+  }
+}
+
 struct CompoundShape;
 
 /// A collision shape in its own frame: the kind, its parameters, and for hulls, meshes and
@@ -272,6 +297,25 @@ double core_radius(const ColliderShape& s);
 /// Mass properties at `density` (kg/m^3, finite and > 0). Planes and meshes have no volume:
 /// throws Error naming `where`.
 MassProperties mass_properties(const ColliderShape& s, double density, std::string_view where = "shape");
+/// The nearest surface point of a shape to a query point (world frame).
+struct PointDistance {
+  /// Signed distance (m): positive outside, negative inside a solid (its depth). Meshes
+  /// are two-sided surfaces: their distance is unsigned (>= 0).
+  double distance = 0;
+  Vec3 point{0, 0, 0};   ///< closest surface point (m)
+  Vec3 normal{0, 1, 0};  ///< outward unit normal there (for a mesh, towards the query point)
+  /// Box or hull: the face of the closest point (box faces in ConvexHull::box order
+  /// +x, -x, +y, -y, +z, -z); mesh: the triangle; compound: the child; else 0.
+  std::uint32_t feature = 0;
+};
+
+/// The signed distance from `world_point` to the surface of `s` at pose `p`, with the
+/// closest point and its normal (exact for every shape; a compound gives the nearest
+/// child's, which is exact outside and the deepest child's depth inside). A point at the
+/// centre of a sphere or on a capsule's core takes the local +Y normal; a point on a mesh
+/// takes the triangle's normal.
+PointDistance point_distance(const ColliderShape& s, const Pose& p, const Vec3& world_point);
+
 /// Casts a ray (world frame) against the shape at pose `p`. A ray starting inside a solid
 /// hits at distance 0 with the normal opposing the ray.
 RayHit ray_cast(const ColliderShape& s, const Pose& p, const Ray& ray);

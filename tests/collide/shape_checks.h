@@ -1,9 +1,13 @@
-// Test helper: structural checks of a ConvexHull (half edges, Euler, planarity, convexity).
+// Test helpers: structural checks of a ConvexHull (half edges, Euler, planarity, convexity),
+// matrix comparison and random rotations.
 #pragma once
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include "pba/collide/shape.h"
@@ -53,6 +57,21 @@ inline void expect_valid_hull(const ConvexHull& h, double tol) {
   }
   for (std::uint32_t i = 0; i < e.size(); ++i) EXPECT_EQ(on_face[i], 1) << "edge " << i << " in no or two loops";
   for (std::uint32_t j = 0; j < v.size(); ++j) EXPECT_GE(vertex_used[j], 3) << "vertex " << j << " in fewer than 3 faces";
+}
+
+/// Expects a == b elementwise within rel times b's largest element.
+inline void expect_mat_near(const Mat3& a, const Mat3& b, double rel) {
+  double scale = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) scale = std::max(scale, std::abs(b[i][j]));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(a[i][j], b[i][j], rel * scale) << "(" << i << ", " << j << ")";
+}
+
+/// A uniformly random rotation (a normalised Gaussian quaternion).
+inline Quat random_rotation(std::mt19937_64& rng) {
+  std::normal_distribution<double> g(0, 1);
+  return glm::normalize(Quat(g(rng), g(rng), g(rng), g(rng)));
 }
 
 }  // namespace pba::test_support

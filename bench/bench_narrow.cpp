@@ -1,0 +1,300 @@
+// Narrow-phase benchmark (issue 10): box-box and hull-hull contact manifolds per pair, pba
+// against Bullet in the same process on the same random overlapping poses.
+//
+//   bench_narrow [--pairs N] [--repeat R] [--rounds K] [--scene box|hull|both]
+//
+// Defaults: 2000 pairs, each pass over them repeated 20 times, 9 rounds; the median of
+// the rounds' per-pair CPU times is reported. Run it on one core: taskset -c 1.
+//
+// Scenes. Box-box: 1 m cubes and boxes of half extents in [0.25, 0.75] m, A at a random
+// rotation near the origin, B at a random rotation and offset in [-0.8, 0.8]^3 m; only
+// pairs that overlap are kept. Hull-hull: hulls of 32 random points on an ellipsoid of
+// semi-axes in [0.3, 0.6] m (pba's quickhull; Bullet gets the same hull vertices and
+// builds its polyhedral features from them), the same placement rule.
+//
+// Engines:
+//   pba SAT      collide() with ConvexMethod::Sat (the default), margin 0.02 m
+//   pba GJK/EPA  collide() with ConvexMethod::GjkEpa, margin 0.02 m
+//   Bullet box   btBoxBoxDetector::getClosestPoints (what btBoxBoxCollisionAlgorithm runs)
+//   Bullet hull  btGjkPairDetector (btVoronoiSimplexSolver, btGjkEpaPenetrationDepthSolver)
+//                for the normal, then btPolyhedralContactClipping::clipHullAgainstHull with
+//                threshold 0.02 m: the path btConvexConvexAlgorithm takes for two
+//                polyhedral shapes (m_enableSatConvex off, its default). Collision
+//                margins are 0 so both engines see the same solids.
+// Bullet is Debian's single-precision build (btScalar = float); pba runs in double.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <BulletCollision/CollisionDispatch/btBoxBoxDetector.h>
+#include <BulletCollision/CollisionShapes/btBoxShape.h>
+#include <BulletCollision/CollisionShapes/btConvexHullShape.h>
+#include <BulletCollision/CollisionShapes/btConvexPolyhedron.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkPairDetector.h>
+#include <BulletCollision/NarrowPhaseCollision/btPolyhedralContactClipping.h>
+#include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
+
+#include "pba/collide/narrow_phase.h"
+
+namespace {
+
+using pba::Pose;
+using pba::Quat;
+using pba::Vec3;
+
+constexpr double kMargin = 0.02;  // m: pba's speculative margin and Bullet's clipping threshold
+
+double cpu_now() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+Quat random_rotation(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0, 1);
+  const double u1 = u(rng), u2 = u(rng), u3 = u(rng);
+  const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
+  return glm::normalize(Quat(a * std::sin(2 * pba::kPi * u2), a * std::cos(2 * pba::kPi * u2),
+                             b * std::sin(2 * pba::kPi * u3), b * std::cos(2 * pba::kPi * u3)));
+}
+Vec3 random_vec(std::mt19937_64& rng, double s) {
+  std::uniform_real_distribution<double> u(-s, s);
+  return Vec3(u(rng), u(rng), u(rng));
+}
+
+btTransform to_bt(const Pose& p) {
+  return btTransform(btQuaternion(btScalar(p.rotation.x), btScalar(p.rotation.y), btScalar(p.rotation.z),
+                                  btScalar(p.rotation.w)),
+                     btVector3(btScalar(p.position.x), btScalar(p.position.y), btScalar(p.position.z)));
+}
+
+// a Bullet result that only counts points and keeps the deepest (no allocation)
+struct CountResult : btDiscreteCollisionDetectorInterface::Result {
+  int points = 0;
+  btScalar deepest = 0;
+  void setShapeIdentifiersA(int, int) override {}
+  void setShapeIdentifiersB(int, int) override {}
+  void addContactPoint(const btVector3&, const btVector3&, btScalar depth) override {
+    ++points;
+    deepest = std::min(deepest, depth);
+  }
+};
+// the GJK result btConvexConvexAlgorithm keeps: the normal and distance of the closest pair
+struct NormalResult : btDiscreteCollisionDetectorInterface::Result {
+  bool found = false;
+  btVector3 normal{0, 0, 1};
+  btScalar distance = 0;
+  void setShapeIdentifiersA(int, int) override {}
+  void setShapeIdentifiersB(int, int) override {}
+  void addContactPoint(const btVector3& n, const btVector3&, btScalar depth) override {
+    found = true;
+    normal = n;
+    distance = depth;
+  }
+};
+
+struct Pair {
+  int a = 0, b = 0;  // shape indices
+  Pose pa{}, pb{};
+};
+
+struct Scene {
+  std::vector<pba::ColliderShape> shapes;
+  std::vector<btConvexShape*> bt_shapes;
+  std::vector<Pair> pairs;
+};
+
+// pairs whose solids overlap (pba's SAT with zero margin reports a point)
+void make_pairs(Scene& s, int n, std::mt19937_64& rng) {
+  std::uniform_int_distribution<int> pick(0, int(s.shapes.size()) - 1);
+  pba::NarrowPhaseSettings zero;
+  zero.speculative_margin = 0;
+  while (int(s.pairs.size()) < n) {
+    Pair p{pick(rng), pick(rng), {random_vec(rng, 0.1), random_rotation(rng)}, {random_vec(rng, 0.8), random_rotation(rng)}};
+    if (pba::collide(s.shapes[std::size_t(p.a)], p.pa, s.shapes[std::size_t(p.b)], p.pb, zero).count > 0)
+      s.pairs.push_back(p);
+  }
+}
+
+Scene box_scene(int n, std::mt19937_64& rng) {
+  Scene s;
+  std::uniform_real_distribution<double> h(0.25, 0.75);
+  for (int i = 0; i < 16; ++i) {
+    const Vec3 e = i == 0 ? Vec3(0.5) : Vec3(h(rng), h(rng), h(rng));
+    s.shapes.push_back(pba::ColliderShape::box(e));
+    auto* b = new btBoxShape(btVector3(btScalar(e.x), btScalar(e.y), btScalar(e.z)));
+    s.bt_shapes.push_back(b);
+  }
+  make_pairs(s, n, rng);
+  return s;
+}
+
+Scene hull_scene(int n, std::mt19937_64& rng, double* mean_vertices, double* mean_faces) {
+  Scene s;
+  std::uniform_real_distribution<double> ax(0.3, 0.6);
+  double nv = 0, nf = 0;
+  for (int i = 0; i < 16; ++i) {
+    const Vec3 axes(ax(rng), ax(rng), ax(rng));
+    std::vector<Vec3> pts(32);
+    for (Vec3& p : pts) {
+      Vec3 d = random_vec(rng, 1.0);
+      while (glm::length(d) < 1e-3) d = random_vec(rng, 1.0);
+      p = glm::normalize(d) * axes;
+    }
+    auto hull = pba::ConvexHull::build(pts, "bench hull");
+    nv += double(hull->vertices().size());
+    nf += double(hull->faces().size());
+    auto* bh = new btConvexHullShape();
+    for (const Vec3& v : hull->vertices()) bh->addPoint(btVector3(btScalar(v.x), btScalar(v.y), btScalar(v.z)), false);
+    bh->recalcLocalAabb();
+    bh->setMargin(0);
+    bh->initializePolyhedralFeatures();
+    s.bt_shapes.push_back(bh);
+    s.shapes.push_back(pba::ColliderShape::convex(hull));
+  }
+  *mean_vertices = nv / 16;
+  *mean_faces = nf / 16;
+  make_pairs(s, n, rng);
+  return s;
+}
+
+struct Timing {
+  double median_us = 0;
+  double points = 0;  // mean contact points per pair
+};
+
+template <class F>
+Timing time_it(const Scene& s, int repeat, int rounds, F&& one) {
+  std::vector<double> per_pair;
+  long long points = 0;
+  for (int r = 0; r < rounds; ++r) {
+    points = 0;
+    const double t0 = cpu_now();
+    for (int k = 0; k < repeat; ++k)
+      for (const Pair& p : s.pairs) points += one(p);
+    const double t1 = cpu_now();
+    per_pair.push_back((t1 - t0) / double(repeat) / double(s.pairs.size()) * 1e6);
+  }
+  std::sort(per_pair.begin(), per_pair.end());
+  return {per_pair[per_pair.size() / 2], double(points) / double(repeat) / double(s.pairs.size())};
+}
+
+Timing run_pba(const Scene& s, pba::ConvexMethod method, int repeat, int rounds) {
+  pba::NarrowPhaseSettings set;
+  set.speculative_margin = kMargin;
+  set.method = method;
+  return time_it(s, repeat, rounds, [&](const Pair& p) {
+    return pba::collide(s.shapes[std::size_t(p.a)], p.pa, s.shapes[std::size_t(p.b)], p.pb, set).count;
+  });
+}
+
+Timing run_bullet_box(const Scene& s, int repeat, int rounds) {
+  return time_it(s, repeat, rounds, [&](const Pair& p) {
+    btBoxBoxDetector det(static_cast<btBoxShape*>(s.bt_shapes[std::size_t(p.a)]),
+                         static_cast<btBoxShape*>(s.bt_shapes[std::size_t(p.b)]));
+    btDiscreteCollisionDetectorInterface::ClosestPointInput in;
+    in.m_transformA = to_bt(p.pa);
+    in.m_transformB = to_bt(p.pb);
+    CountResult out;
+    det.getClosestPoints(in, out, nullptr);
+    return out.points;
+  });
+}
+
+Timing run_bullet_hull(const Scene& s, int repeat, int rounds) {
+  btVoronoiSimplexSolver simplex;
+  btGjkEpaPenetrationDepthSolver epa;
+  btVertexArray verts1, verts2;
+  verts1.reserve(64);
+  verts2.reserve(64);
+  return time_it(s, repeat, rounds, [&](const Pair& p) {
+    auto* a = static_cast<btConvexHullShape*>(s.bt_shapes[std::size_t(p.a)]);
+    auto* b = static_cast<btConvexHullShape*>(s.bt_shapes[std::size_t(p.b)]);
+    btGjkPairDetector gjk(a, b, &simplex, &epa);
+    btDiscreteCollisionDetectorInterface::ClosestPointInput in;
+    in.m_transformA = to_bt(p.pa);
+    in.m_transformB = to_bt(p.pb);
+    in.m_maximumDistanceSquared = btScalar(kMargin * kMargin);
+    NormalResult normal;
+    gjk.getClosestPoints(in, normal, nullptr);
+    CountResult out;
+    if (normal.found && normal.distance < btScalar(kMargin)) {
+      verts1.resize(0);
+      btPolyhedralContactClipping::clipHullAgainstHull(normal.normal, *a->getConvexPolyhedron(), *b->getConvexPolyhedron(),
+                                                       in.m_transformA, in.m_transformB,
+                                                       normal.distance - btScalar(kMargin), btScalar(kMargin), verts1,
+                                                       verts2, out);
+    }
+    return out.points;
+  });
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int pairs = 2000, repeat = 20, rounds = 9;
+  std::string only = "both";
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&] {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "bench_narrow: %s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return std::atoi(argv[++i]);
+    };
+    if (a == "--pairs") pairs = next();
+    else if (a == "--repeat") repeat = next();
+    else if (a == "--rounds") rounds = next();
+    else if (a == "--scene" && i + 1 < argc) only = argv[++i];
+    else {
+      std::fprintf(stderr, "usage: bench_narrow [--pairs N] [--repeat R] [--rounds K] [--scene box|hull|both]\n");
+      return 2;
+    }
+  }
+  if (pairs < 1 || repeat < 1 || rounds < 1) {
+    std::fprintf(stderr, "bench_narrow: counts must be >= 1\n");
+    return 2;
+  }
+  std::mt19937_64 rng(2026);
+  const Scene boxes = box_scene(pairs, rng);
+  double nv = 0, nf = 0;
+  const Scene hulls = hull_scene(pairs, rng, &nv, &nf);
+
+  std::printf("narrow phase, %d overlapping pairs, %d passes x %d rounds (median), CPU time per pair\n", pairs, repeat,
+              rounds);
+  std::printf("hulls: %.1f vertices, %.1f faces on average\n\n", nv, nf);
+  std::printf("%-10s %-22s %12s %14s\n", "pair", "engine", "us/pair", "points/pair");
+  Timing bs, bg, bb, hs, hg, hb;
+  if (only != "hull") {
+  bs = run_pba(boxes, pba::ConvexMethod::Sat, repeat, rounds);
+  bg = run_pba(boxes, pba::ConvexMethod::GjkEpa, repeat, rounds);
+  bb = run_bullet_box(boxes, repeat, rounds);
+  std::printf("%-10s %-22s %12.3f %14.2f\n", "box-box", "pba SAT", bs.median_us, bs.points);
+  std::printf("%-10s %-22s %12.3f %14.2f\n", "box-box", "pba GJK/EPA", bg.median_us, bg.points);
+  std::printf("%-10s %-22s %12.3f %14.2f\n", "box-box", "Bullet btBoxBoxDetector", bb.median_us, bb.points);
+  }
+  if (only != "box") {
+  hs = run_pba(hulls, pba::ConvexMethod::Sat, repeat, rounds);
+  hg = run_pba(hulls, pba::ConvexMethod::GjkEpa, repeat, rounds);
+  hb = run_bullet_hull(hulls, repeat, rounds);
+  std::printf("%-10s %-22s %12.3f %14.2f\n", "hull-hull", "pba SAT", hs.median_us, hs.points);
+  std::printf("%-10s %-22s %12.3f %14.2f\n", "hull-hull", "pba GJK/EPA", hg.median_us, hg.points);
+  std::printf("%-10s %-22s %12.3f %14.2f\n", "hull-hull", "Bullet GJK+clipping", hb.median_us, hb.points);
+  }
+  std::printf("\nratios (Bullet / pba, goal >= 2):\n");
+  std::printf("  box-box   SAT %.2fx, GJK/EPA %.2fx  %s\n", bb.median_us / bs.median_us, bb.median_us / bg.median_us,
+              bb.median_us / bs.median_us >= 2 ? "met" : "NOT met");
+  std::printf("  hull-hull SAT %.2fx, GJK/EPA %.2fx  %s\n", hb.median_us / hs.median_us, hb.median_us / hg.median_us,
+              hb.median_us / hs.median_us >= 2 ? "met" : "NOT met");
+  for (auto* p : boxes.bt_shapes) delete p;
+  for (auto* p : hulls.bt_shapes) delete p;
+  return 0;
+}

@@ -1,0 +1,149 @@
+// GJK and EPA against brute force: distances of random separated convex pairs against
+// exact feature-pair enumeration, penetration of random overlapping box pairs against
+// the fifteen-axis separating-axis test, and the stepper's invariants.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "narrow_reference.h"
+#include "pba/collide/narrow_phase.h"
+
+namespace {
+
+using namespace pba;
+using namespace pba::test_support;
+
+ConvexProxy box_proxy(const Vec3& h, const Pose& p) {
+  ConvexProxy c;
+  c.type = ShapeType::Box;
+  c.half_extents = h;
+  c.pose = p;
+  return c;
+}
+ConvexProxy capsule_proxy(double hh, double r, const Pose& p) {
+  ConvexProxy c;
+  c.type = ShapeType::Capsule;
+  c.half_height = hh;
+  c.radius = r;
+  c.pose = p;
+  return c;
+}
+ConvexProxy sphere_proxy(double r, const Pose& p) {
+  ConvexProxy c;
+  c.type = ShapeType::Sphere;
+  c.radius = r;
+  c.pose = p;
+  return c;
+}
+
+// GJK stops when |v| - v.w/|v| <= 1e-10 m, so its distance is within 1e-10 m of the exact
+// one plus rounding (~1e-15 m at these sizes); 1e-6 m is the bound, 1e-9 what GJK gives.
+constexpr double kGjkTol = 1e-9;
+
+TEST(Gjk, BoxBoxDistanceEqualsFeatureEnumeration) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> size(0.1, 1.0);
+  int separated = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const Vec3 ha(size(rng), size(rng), size(rng)), hb(size(rng), size(rng), size(rng));
+    const Pose pa{random_vec(rng, 1.0), random_rotation(rng)}, pb{random_vec(rng, 3.0), random_rotation(rng)};
+    const DistanceResult r = gjk_distance(box_proxy(ha, pa), box_proxy(hb, pb));
+    if (r.cores_overlap) continue;
+    ++separated;
+    const double exact = box_box_distance(ha, pa, hb, pb);
+    EXPECT_NEAR(r.distance, exact, kGjkTol) << "trial " << trial;
+    // the closest points lie on the boxes and are the distance apart
+    EXPECT_NEAR(glm::length(r.point_b - r.point_a), r.distance, kGjkTol);
+    EXPECT_NEAR(point_box_distance(r.point_a, ha, pa), 0.0, 1e-9);
+    EXPECT_NEAR(point_box_distance(r.point_b, hb, pb), 0.0, 1e-9);
+    EXPECT_LT(r.iterations, GjkStepper::kMaxIterations);
+  }
+  EXPECT_GT(separated, 200);  // the sample mostly exercises separated pairs
+}
+
+TEST(Gjk, CapsuleBoxAndSphereBoxDistancesEqualBruteForce) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> size(0.1, 1.0);
+  int checked = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const Vec3 hb(size(rng), size(rng), size(rng));
+    const double hh = size(rng), r = 0.5 * size(rng);
+    const Pose pa{random_vec(rng, 3.0), random_rotation(rng)}, pb{random_vec(rng, 1.0), random_rotation(rng)};
+    const Vec3 u = pa.rotation * Vec3(0, hh, 0);
+    const double core = segment_box_distance(pa.position - u, pa.position + u, hb, pb);
+    if (core == 0) continue;
+    ++checked;
+    const DistanceResult c = gjk_distance(capsule_proxy(hh, r, pa), box_proxy(hb, pb));
+    ASSERT_FALSE(c.cores_overlap);
+    EXPECT_NEAR(c.core_distance, core, kGjkTol) << "trial " << trial;
+    EXPECT_NEAR(c.distance, std::max(0.0, core - r), kGjkTol);
+    const DistanceResult s = gjk_distance(sphere_proxy(r, pa), box_proxy(hb, pb));
+    const double ps = point_box_distance(pa.position, hb, pb);
+    if (ps > 0) EXPECT_NEAR(s.distance, std::max(0.0, ps - r), kGjkTol);
+  }
+  EXPECT_GT(checked, 200);
+}
+
+TEST(Gjk, StepperDescendsMonotonicallyAndMatchesTheSolver) {
+  std::mt19937_64 rng(3);
+  for (int trial = 0; trial < 100; ++trial) {
+    const Pose pa{random_vec(rng, 1.0), random_rotation(rng)}, pb{random_vec(rng, 4.0), random_rotation(rng)};
+    const ConvexProxy a = box_proxy(Vec3(0.5, 0.3, 0.2), pa), b = capsule_proxy(0.4, 0.1, pb);
+    GjkStepper g(a, b);
+    double last = glm::length(g.closest());
+    while (g.step()) {
+      // each iteration moves the estimate strictly closer to the origin (van den Bergen 2003)
+      const double now = glm::length(g.closest());
+      EXPECT_LT(now, last);
+      last = now;
+      ASSERT_GE(g.simplex().size(), 1u);
+      ASSERT_LE(g.simplex().size(), 4u);
+      // the simplex points are support points of A - B
+      for (const SimplexVertex& v : g.simplex()) EXPECT_EQ(v.w, v.a - v.b);
+    }
+    const DistanceResult r = gjk_distance(a, b);
+    EXPECT_EQ(r.cores_overlap, g.overlap());
+    if (!g.overlap()) EXPECT_EQ(glm::length(g.closest()), r.core_distance);
+  }
+}
+
+// EPA stops when the support distance along the nearest face's normal exceeds the face
+// distance by <= kEpaTolerance (1e-10 m): the face distance is a lower bound of the depth
+// (the polytope lies inside A - B) and the support distance an upper bound, so the depth
+// is within 1e-10 m; 1e-9 m adds room for rounding. The normal is the normal of the face
+// EPA stops on, which for boxes is a face of A - B, i.e. the SAT axis; rounding in its
+// cross product is ~1e-14, and 1e-7 covers nearly flat faces.
+TEST(Epa, BoxBoxDepthAndNormalEqualSeparatingAxes) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> size(0.2, 1.0);
+  int checked = 0;
+  for (int trial = 0; trial < 500; ++trial) {
+    const Vec3 ha(size(rng), size(rng), size(rng)), hb(size(rng), size(rng), size(rng));
+    const Pose pa{random_vec(rng, 0.2), random_rotation(rng)}, pb{random_vec(rng, 1.2), random_rotation(rng)};
+    Vec3 n_sat;
+    double second = 0;
+    const double depth = box_box_sat_depth(ha, pa, hb, pb, n_sat, second);
+    if (depth <= 1e-6) continue;
+    const PenetrationResult e = epa_penetration(box_proxy(ha, pa), box_proxy(hb, pb));
+    ASSERT_TRUE(e.ok) << "trial " << trial;
+    ++checked;
+    EXPECT_NEAR(e.depth, depth, 1e-9) << "trial " << trial;
+    // the normal is unique only when the best axis beats the next one
+    if (second - depth > 1e-6) EXPECT_NEAR(glm::length(e.normal - n_sat), 0.0, 1e-7) << "trial " << trial;
+    // moving B by depth along the normal leaves the boxes touching: the points agree
+    EXPECT_NEAR(glm::dot(e.point_a - e.point_b, e.normal), e.depth, 1e-9);
+  }
+  EXPECT_GT(checked, 200);
+}
+
+TEST(Epa, SphereAndCapsuleCoresAddTheirRadii) {
+  // a sphere whose centre is 0.1 m inside a box face: depth r + 0.1, normal the face's
+  const Pose pb{};
+  const Pose pa{Vec3(0, 0.4, 0), Quat(1, 0, 0, 0)};
+  const PenetrationResult e = epa_penetration(sphere_proxy(0.25, pa), box_proxy(Vec3(1, 0.5, 1), pb));
+  ASSERT_TRUE(e.ok);
+  EXPECT_NEAR(e.depth, 0.35, 1e-9);
+  EXPECT_NEAR(glm::length(e.normal - Vec3(0, -1, 0)), 0.0, 1e-9);
+}
+
+}  // namespace

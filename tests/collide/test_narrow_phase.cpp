@@ -1,0 +1,323 @@
+// collide(): closed forms for sphere and capsule pairs, box stacking manifolds and their
+// feature ids, the speculative margin, SAT against GJK/EPA, determinism and bad input.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+#include <random>
+#include <set>
+
+#include "error_of.h"
+#include "narrow_reference.h"
+#include "pba/collide/narrow_phase.h"
+
+namespace {
+
+using namespace pba;
+using namespace pba::test_support;
+
+ColliderShape sphere(double r) {
+  ColliderShape s;
+  s.type = ShapeType::Sphere;
+  s.radius = r;
+  return s;
+}
+ColliderShape capsule(double hh, double r) {
+  ColliderShape s;
+  s.type = ShapeType::Capsule;
+  s.half_height = hh;
+  s.radius = r;
+  return s;
+}
+ColliderShape box(const Vec3& h) {
+  ColliderShape s;
+  s.type = ShapeType::Box;
+  s.half_extents = h;
+  return s;
+}
+ColliderShape plane(const Vec3& n, double offset) {
+  ColliderShape s;
+  s.type = ShapeType::Plane;
+  s.normal = n;
+  s.offset = offset;
+  return s;
+}
+Pose at(const Vec3& p, const Quat& q = Quat(1, 0, 0, 0)) { return {p, q}; }
+Quat about(const Vec3& axis, double angle) { return glm::angleAxis(angle, glm::normalize(axis)); }
+
+// closed forms: the values are sums and differences of exactly representable lengths, so
+// 1e-12 m leaves ~1e4 ulps of room at metre scale
+constexpr double kClosed = 1e-12;
+
+TEST(ClosedForm, SphereSphere) {
+  const Manifold m = collide(sphere(0.5), at(Vec3(0, 0, 0)), sphere(0.25), at(Vec3(0.3, 0.4, 0)));
+  ASSERT_EQ(m.count, 1);
+  EXPECT_NEAR(glm::length(m.normal - Vec3(0.6, 0.8, 0)), 0.0, kClosed);
+  EXPECT_NEAR(m.points[0].depth, 0.75 - 0.5, kClosed);
+  EXPECT_NEAR(glm::length(m.points[0].point_a - Vec3(0.3, 0.4, 0)), 0.0, kClosed);       // 0.5 along n
+  EXPECT_NEAR(glm::length(m.points[0].point_b - Vec3(0.15, 0.2, 0)), 0.0, kClosed);      // 0.25 back
+  EXPECT_NEAR(glm::dot(m.points[0].point_a - m.points[0].point_b, m.normal), m.points[0].depth, kClosed);
+}
+
+TEST(ClosedForm, SphereCapsuleAndReversedOrder) {
+  // sphere beside the capsule's core at height 0.2: distance 0.6 to the axis
+  const Pose pc = at(Vec3(1, 0, 0), about(Vec3(0, 0, 1), kPi / 2));  // axis along -x ... +x
+  const Manifold m = collide(sphere(0.3), at(Vec3(1.2, 0.6, 0)), capsule(0.5, 0.4), pc);
+  ASSERT_EQ(m.count, 1);
+  EXPECT_NEAR(m.points[0].depth, 0.7 - 0.6, kClosed);
+  EXPECT_NEAR(glm::length(m.normal - Vec3(0, -1, 0)), 0.0, kClosed);
+  const Manifold r = collide(capsule(0.5, 0.4), pc, sphere(0.3), at(Vec3(1.2, 0.6, 0)));
+  ASSERT_EQ(r.count, 1);
+  EXPECT_NEAR(glm::length(r.normal - Vec3(0, 1, 0)), 0.0, kClosed);
+  EXPECT_NEAR(r.points[0].depth, 0.1, kClosed);
+  EXPECT_NEAR(glm::length(r.points[0].point_a - m.points[0].point_b), 0.0, kClosed);
+  // beyond the core's end the closest core point is the end cap's centre
+  const Manifold e = collide(sphere(0.3), at(Vec3(2.0, 0.0, 0)), capsule(0.5, 0.4), pc);
+  ASSERT_EQ(e.count, 1);
+  EXPECT_NEAR(e.points[0].depth, 0.7 - 0.5, kClosed);
+}
+
+TEST(ClosedForm, CapsuleCapsuleCrossedAndParallel) {
+  // crossed axes (x and z) 0.5 apart in y: one point, depth r1 + r2 - 0.5
+  const Pose px = at(Vec3(0, 0, 0), about(Vec3(0, 0, 1), kPi / 2));
+  const Pose pz = at(Vec3(0.1, 0.5, -0.2), about(Vec3(1, 0, 0), kPi / 2));
+  const Manifold c = collide(capsule(1, 0.3), px, capsule(1, 0.25), pz);
+  ASSERT_EQ(c.count, 1);
+  EXPECT_NEAR(c.points[0].depth, 0.05, kClosed);
+  EXPECT_NEAR(glm::length(c.normal - Vec3(0, 1, 0)), 0.0, kClosed);
+  // parallel axes 0.5 apart, overlapping over x in [0.4, 1]: two points at the overlap's ends
+  const Pose px2 = at(Vec3(1.4, 0.5, 0), about(Vec3(0, 0, 1), kPi / 2));
+  const Manifold p = collide(capsule(1, 0.3), px, capsule(1, 0.25), px2);
+  ASSERT_EQ(p.count, 2);
+  EXPECT_NEAR(glm::length(p.normal - Vec3(0, 1, 0)), 0.0, kClosed);
+  std::array<double, 2> xs{p.points[0].point_a.x, p.points[1].point_a.x};
+  std::sort(xs.begin(), xs.end());
+  EXPECT_NEAR(xs[0], 0.4, kClosed);
+  EXPECT_NEAR(xs[1], 1.0, kClosed);
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(p.points[std::size_t(i)].depth, 0.05, kClosed);
+  EXPECT_NE(p.points[0].id, p.points[1].id);
+}
+
+TEST(ClosedForm, SphereBoxFaceEdgeAndInside) {
+  const ColliderShape b = box(Vec3(1, 0.5, 2));
+  const Pose pb = at(Vec3(0, 0, 0), about(Vec3(0, 1, 0), 0.3));
+  // over the top face
+  Manifold m = collide(sphere(0.2), at(Vec3(0.1, 0.6, 0.1)), b, pb);
+  ASSERT_EQ(m.count, 1);
+  EXPECT_NEAR(m.points[0].depth, 0.1, kClosed);
+  EXPECT_NEAR(glm::length(m.normal - Vec3(0, -1, 0)), 0.0, kClosed);
+  // beside an edge: the local point (1.1, 0.6, 0) is sqrt(0.02) from the edge
+  const Vec3 c = apply(pb, Vec3(1.1, 0.6, 0));
+  m = collide(sphere(0.2), at(c), b, pb);
+  ASSERT_EQ(m.count, 1);
+  EXPECT_NEAR(m.points[0].depth, 0.2 - std::sqrt(0.02), kClosed);
+  // the centre inside, nearest the top face 0.1 m away: depth r + 0.1
+  m = collide(sphere(0.2), at(apply(pb, Vec3(0.2, 0.4, 0.3))), b, pb);
+  ASSERT_EQ(m.count, 1);
+  EXPECT_NEAR(m.points[0].depth, 0.3, kClosed);
+  EXPECT_NEAR(glm::length(m.normal - pb.rotation * Vec3(0, -1, 0)), 0.0, kClosed);
+}
+
+TEST(Plane, BoxOnPlaneGivesFourDeepestCornersAndSphereOne) {
+  const ColliderShape ground = plane(Vec3(0, 1, 0), 0);
+  // a box tilted about z: its two lowest corners at depths 0.01 + ..., all 4 bottom corners below margin
+  const Manifold m = collide(box(Vec3(0.5, 0.5, 0.5)), at(Vec3(0, 0.49, 0)), ground, at(Vec3(0, 0, 0)));
+  ASSERT_EQ(m.count, 4);
+  EXPECT_NEAR(glm::length(m.normal - Vec3(0, -1, 0)), 0.0, kClosed);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(m.points[std::size_t(i)].depth, 0.01, kClosed);
+  // the plane first: the normal flips, the depths stay
+  const Manifold r = collide(ground, at(Vec3(0, 0, 0)), capsule(0.5, 0.2), at(Vec3(0, 0.15, 0), about(Vec3(0, 0, 1), kPi / 2)));
+  ASSERT_EQ(r.count, 2);
+  EXPECT_NEAR(glm::length(r.normal - Vec3(0, 1, 0)), 0.0, kClosed);
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(r.points[std::size_t(i)].depth, 0.05, kClosed);
+}
+
+TEST(Margin, SeparatedBeyondTheMarginGivesNothingWithinItNegativeDepths) {
+  NarrowPhaseSettings s;
+  s.speculative_margin = 0.02;
+  for (const ConvexMethod method : {ConvexMethod::Sat, ConvexMethod::GjkEpa}) {
+    s.method = method;
+    const ColliderShape b = box(Vec3(0.5, 0.5, 0.5));
+    // 0.01 m apart: four speculative points at depth -0.01
+    Manifold m = collide(b, at(Vec3(0, 0, 0)), b, at(Vec3(0.3, 1.01, 0.1)), s);
+    ASSERT_EQ(m.count, 4) << int(method);
+    for (int i = 0; i < 4; ++i) EXPECT_NEAR(m.points[std::size_t(i)].depth, -0.01, 1e-9);
+    EXPECT_NEAR(glm::length(m.normal - Vec3(0, 1, 0)), 0.0, 1e-9);
+    // 0.03 m apart: nothing
+    m = collide(b, at(Vec3(0, 0, 0)), b, at(Vec3(0.3, 1.03, 0.1)), s);
+    EXPECT_EQ(m.count, 0);
+  }
+  Manifold m = collide(sphere(0.5), at(Vec3(0, 0, 0)), sphere(0.5), at(Vec3(1.01, 0, 0)), s);
+  ASSERT_EQ(m.count, 1);
+  EXPECT_NEAR(m.points[0].depth, -0.01, kClosed);
+  EXPECT_EQ(collide(sphere(0.5), at(Vec3(0, 0, 0)), sphere(0.5), at(Vec3(1.03, 0, 0)), s).count, 0);
+  m = collide(capsule(0.5, 0.2), at(Vec3(0, 0.21, 0), about(Vec3(1, 0, 0), kPi / 2)), plane(Vec3(0, 1, 0), 0),
+              at(Vec3(0, 0, 0)), s);
+  ASSERT_EQ(m.count, 2);
+  EXPECT_NEAR(m.points[0].depth, -0.01, kClosed);
+}
+
+// A 1 m box resting 1 cm deep on a 4 m slab, turned 0.3 rad about the vertical: its bottom
+// face lies inside the slab's top face, so the manifold is its four bottom corners.
+struct Resting {
+  ColliderShape ground = box(Vec3(2, 0.5, 2));
+  ColliderShape cube = box(Vec3(0.5, 0.5, 0.5));
+  Pose pg = at(Vec3(0, 0, 0));
+  Pose pc = at(Vec3(0.2, 0.99, -0.1), about(Vec3(0, 1, 0), 0.3));
+};
+
+TEST(BoxBox, RestingBoxHasFourPointsWhoseIdsPersistUnderJitter) {
+  const Resting s;
+  for (const ConvexMethod method : {ConvexMethod::Sat, ConvexMethod::GjkEpa}) {
+    NarrowPhaseSettings set;
+    set.method = method;
+    const Manifold m = collide(s.ground, s.pg, s.cube, s.pc, set);
+    ASSERT_EQ(m.count, 4);
+    EXPECT_NEAR(glm::length(m.normal - Vec3(0, 1, 0)), 0.0, 1e-12);
+    std::set<std::uint32_t> ids;
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_NEAR(m.points[std::size_t(i)].depth, 0.01, 1e-12);
+      ids.insert(m.points[std::size_t(i)].id);
+    }
+    ASSERT_EQ(ids.size(), 4u);
+    // jitter of 1e-4 m and 1e-3 rad: the same four features touch
+    std::mt19937_64 rng(1);
+    NarrowPhaseCache cache;
+    for (int k = 0; k < 200; ++k) {
+      const Vec3 axis = random_vec(rng, 1.0);
+      const Pose pj{s.pc.position + random_vec(rng, 1e-4),
+                    glm::normalize(about(axis, 1e-3 * std::uniform_real_distribution<double>(-1, 1)(rng)) * s.pc.rotation)};
+      const Manifold j = collide(s.ground, s.pg, s.cube, pj, set, &cache);
+      ASSERT_EQ(j.count, 4) << k;
+      std::set<std::uint32_t> jid;
+      for (int i = 0; i < 4; ++i) jid.insert(j.points[std::size_t(i)].id);
+      EXPECT_EQ(jid, ids) << "jitter " << k << " method " << int(method);
+    }
+  }
+}
+
+TEST(BoxBox, ClippedCornersOfOverlappingFacesHaveStableIds) {
+  // two equal boxes, one shifted by half a width and turned 0.2 rad: the contact polygon
+  // mixes incident corners, edge/side-plane crossings and reference corners
+  const ColliderShape b = box(Vec3(0.5, 0.5, 0.5));
+  const Pose pa = at(Vec3(0, 0, 0));
+  const Pose pb = at(Vec3(0.5, 0.995, 0.3), about(Vec3(0, 1, 0), 0.2));
+  const Manifold m = collide(b, pa, b, pb);
+  ASSERT_EQ(m.count, 4);
+  std::set<std::uint32_t> ids;
+  for (int i = 0; i < 4; ++i) ids.insert(m.points[std::size_t(i)].id);
+  ASSERT_EQ(ids.size(), 4u);
+  // every point is inside both boxes' footprints and at the common depth 0.005
+  for (int i = 0; i < 4; ++i) {
+    const ContactPoint& p = m.points[std::size_t(i)];
+    EXPECT_NEAR(p.depth, 0.005, 1e-12);
+    EXPECT_LE(point_box_distance(p.point_a, Vec3(0.5), pa), 1e-12);
+    EXPECT_LE(point_box_distance(p.point_b, Vec3(0.5), pb), 1e-12);
+  }
+  std::mt19937_64 rng(2);
+  for (int k = 0; k < 200; ++k) {
+    const Pose pj{pb.position + random_vec(rng, 1e-4),
+                  glm::normalize(about(random_vec(rng, 1.0), 1e-3 * std::uniform_real_distribution<double>(-1, 1)(rng)) *
+                                 pb.rotation)};
+    const Manifold j = collide(b, pa, b, pj);
+    ASSERT_EQ(j.count, 4);
+    std::set<std::uint32_t> jid;
+    for (int i = 0; i < 4; ++i) jid.insert(j.points[std::size_t(i)].id);
+    EXPECT_EQ(jid, ids) << k;
+  }
+}
+
+TEST(BoxBox, SatAndGjkEpaAgreeOnRandomOverlaps) {
+  // the deepest point's depth is the penetration depth in both methods; the normals agree
+  // where the best axis is unique
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> size(0.2, 1.0);
+  NarrowPhaseSettings sat, gjk;
+  gjk.method = ConvexMethod::GjkEpa;
+  int checked = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const Vec3 ha(size(rng), size(rng), size(rng)), hb(size(rng), size(rng), size(rng));
+    const Pose pa{random_vec(rng, 0.2), random_rotation(rng)}, pb{random_vec(rng, 1.2), random_rotation(rng)};
+    Vec3 n;
+    double second = 0;
+    const double depth = box_box_sat_depth(ha, pa, hb, pb, n, second);
+    if (depth <= 1e-6 || second - depth < 1e-3) continue;
+    ++checked;
+    const Manifold ms = collide(box(ha), pa, box(hb), pb, sat);
+    const Manifold mg = collide(box(ha), pa, box(hb), pb, gjk);
+    ASSERT_GE(ms.count, 1);
+    ASSERT_GE(mg.count, 1);
+    EXPECT_NEAR(glm::length(mg.normal - n), 0.0, 1e-7) << trial;
+    // SAT prefers a face within 2% + 2.5 mm of the best axis (Gregorius's hysteresis)
+    if (glm::length(ms.normal - n) < 1e-9) {
+      double deepest = -INFINITY;
+      for (int i = 0; i < ms.count; ++i) deepest = std::max(deepest, ms.points[std::size_t(i)].depth);
+      EXPECT_NEAR(deepest, depth, 1e-9) << trial;
+    }
+    double deepest = -INFINITY;
+    for (int i = 0; i < mg.count; ++i) deepest = std::max(deepest, mg.points[std::size_t(i)].depth);
+    EXPECT_NEAR(deepest, depth, 1e-8) << trial;
+  }
+  EXPECT_GT(checked, 100);
+}
+
+TEST(BoxBox, CachedFeatureGivesTheSameManifold) {
+  std::mt19937_64 rng(4);
+  NarrowPhaseCache cache;
+  const ColliderShape a = box(Vec3(0.5, 0.3, 0.4)), b = box(Vec3(0.2, 0.6, 0.3));
+  Pose pa = at(Vec3(0, 0, 0)), pb = at(Vec3(1.5, 0, 0));
+  for (int k = 0; k < 500; ++k) {
+    // a slow random walk through separated and touching poses
+    pb.position += random_vec(rng, 0.02);
+    pb.position = glm::clamp(pb.position, Vec3(-1.2), Vec3(1.2));
+    pb.rotation = glm::normalize(about(random_vec(rng, 1.0), 0.05) * pb.rotation);
+    const Manifold c = collide(a, pa, b, pb, {}, &cache);
+    const Manifold u = collide(a, pa, b, pb);
+    ASSERT_EQ(c.count, u.count) << k;
+    for (int i = 0; i < c.count; ++i) EXPECT_EQ(c.points[std::size_t(i)].id, u.points[std::size_t(i)].id);
+  }
+}
+
+TEST(Collide, DeterministicBits) {
+  auto run = [] {
+    std::mt19937_64 rng(12);
+    std::uint64_t h = 0xcbf29ce484222325ULL;
+    const ColliderShape shapes[] = {sphere(0.4), capsule(0.5, 0.2), box(Vec3(0.5, 0.3, 0.2))};
+    for (int k = 0; k < 300; ++k)
+      for (const auto& a : shapes)
+        for (const auto& b : shapes)
+          for (const ConvexMethod mth : {ConvexMethod::Sat, ConvexMethod::GjkEpa}) {
+            NarrowPhaseSettings s;
+            s.method = mth;
+            const Manifold m = collide(a, {random_vec(rng, 0.3), random_rotation(rng)}, b,
+                                       {random_vec(rng, 1.0), random_rotation(rng)}, s);
+            h = hash_bytes(&m.count, sizeof m.count, h);
+            for (int i = 0; i < m.count; ++i) h = hash_bytes(&m.points[std::size_t(i)], sizeof(ContactPoint), h);
+            h = hash_bytes(&m.normal, sizeof m.normal, h);
+          }
+    return h;
+  };
+  EXPECT_EQ(run(), run());
+}
+
+TEST(Collide, BadInputThrowsNamingTheValue) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const ColliderShape b = box(Vec3(0.5));
+  EXPECT_NE(error_of([&] { collide(b, at(Vec3(nan, 0, 0)), b, at(Vec3(0))); }).find("pose_a.position"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { collide(b, at(Vec3(0)), b, {Vec3(0), Quat(2, 0, 0, 0)}); }).find("pose_b.rotation"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { collide(b, at(Vec3(0)), b, {Vec3(0), Quat(nan, 0, 0, 0)}); }).find("pose_b.rotation"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { collide(sphere(-1), at(Vec3(0)), b, at(Vec3(0))); }).find("shape_a.radius"),
+            std::string::npos);
+  NarrowPhaseSettings s;
+  s.speculative_margin = -1;
+  EXPECT_NE(error_of([&] { collide(b, at(Vec3(0)), b, at(Vec3(0)), s); }).find("speculative_margin"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { collide(plane(Vec3(0, 1, 0), 0), at(Vec3(0)), plane(Vec3(0, 1, 0), 0), at(Vec3(0))); })
+                .find("plane-plane"),
+            std::string::npos);
+}
+
+}  // namespace
