@@ -152,6 +152,7 @@ struct ContactSettings {
 
   /// Throws Error naming `where` and the bad field.
   void validate(std::string_view where) const;
+  bool operator==(const ContactSettings&) const = default;
 };
 
 /// Settings of a RigidBodySystem.
@@ -279,6 +280,7 @@ class RigidBodySystem {
   [[noreturn]] void fail(std::size_t i);
 
   ContactSettings settings_{};
+  ContactSettings validated_{};  // the settings last validated (validation builds messages)
   RigidProfile profile_{};
   std::unique_ptr<detail::RigidContacts> contacts_;
   double time_ = 0;

@@ -176,7 +176,7 @@ void RigidBodyDef::validate(std::string_view where) const {
 RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::make_unique<detail::RigidContacts>()) {
   require_count(static_cast<long long>(def.capacity), 0, 1LL << 26, "RigidSystemDef.capacity");
   def.contacts.validate("RigidSystemDef.contacts");
-  settings_ = def.contacts;
+  settings_ = validated_ = def.contacts;
   const std::size_t n = def.capacity;
   ids_.reserve(n);
   for (auto* v : {&slot_, &owner_}) v->reserve(n);
@@ -472,7 +472,10 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   if (!failure_.empty()) throw Error(failure_);
   if (!(std::isfinite(dt) && dt > 0)) require_positive(dt, "RigidBodySystem::step dt");
   if (!is_finite(gravity)) require_finite(gravity, "RigidBodySystem::step gravity");
-  settings_.validate("RigidBodySystem.settings");
+  if (!(settings_ == validated_)) {
+    settings_.validate("RigidBodySystem.settings");
+    validated_ = settings_;
+  }
   last_dt_ = dt;
   Stopwatch total;
   const std::size_t n = type_.size();
