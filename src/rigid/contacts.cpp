@@ -261,12 +261,17 @@ void RigidContacts::solve(RigidBodySystem& s, double h, bool bias, bool soft) {
     // non-penetration, swept over the manifold's points `manifold_iterations` times: Gauss-
     // Seidel on the manifold's small problem, toward the block solution (one sweep leaves a
     // torque imbalance between the points that rocks tall stacks)
+    // the separations: positions do not move within a pass
+    double separation[Manifold::kMaxPoints];
+    for (int k = 0; k < c.count; ++k) {
+      const SolverPoint& p = c.points[k];
+      separation[k] = glm::dot((*b.com + turn_b * p.sb) - (*a.com + turn_a * p.sa), c.normal) + p.offset;
+    }
     for (int it = 0; it < cs.manifold_iterations; ++it) {
     total_normal = 0;
     for (int k = 0; k < c.count; ++k) {
       SolverPoint& p = c.points[k];
-      const Vec3 pa = *a.com + turn_a * p.sa, pb = *b.com + turn_b * p.sb;
-      const double sep = glm::dot(pb - pa, c.normal) + p.offset;
+      const double sep = separation[k];
       double velocity_bias = 0, mass_scale = 1, impulse_scale = 0;
       if (sep > 0) {
         // speculative: close the gap in this substep, no more. The relax pass leaves such
