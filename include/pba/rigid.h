@@ -199,6 +199,8 @@ class RigidBodySystem {
   bool valid(RigidBodyId id) const { return ids_.valid(id); }
   /// Live bodies.
   std::size_t size() const { return type_.size(); }
+  /// The handle of the i-th live body, i in [0, size()) (the order changes when bodies are destroyed).
+  RigidBodyId id_at(std::size_t i) const { return {owner_.at(i), ids_.generation(owner_.at(i))}; }
 
   /// The body frame's pose.
   Pose pose(RigidBodyId id) const;
