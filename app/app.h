@@ -39,7 +39,13 @@ class App {
   bool frame();                 // one frame; false when the app should stop
   double next_frame_dt();
   int run_headless(int sample_index, const std::string& out_dir);
-  void check_frame(int frame_index, const std::vector<std::uint8_t>& rgb);
+  void check_frame(int frame_index, const std::vector<std::uint8_t>& rgb, int w, int h);
+  // the sample's simulated points that fall in the free region must show drawn pixels in
+  // `rgb` (a w x h frame); returns the failure, empty when they do
+  std::string check_drawn(const std::vector<std::uint8_t>& rgb, int w, int h);
+  void update_view_region();                 // ctx_.view and the camera's framing region
+  void open_file(const std::string& path);   // a dropped file
+  void save_screenshot();                    // the finished frame to screenshots/
 
   Options options_;
   Window window_;
@@ -63,6 +69,10 @@ class App {
   std::vector<std::string> failures_;
   std::vector<std::uint8_t> first_checked_;
   std::vector<std::uint8_t> rgb_;
+  std::vector<std::uint8_t> empty_;  // the empty scene, for check_drawn
+  std::vector<Vec3> points_;         // simulated points, for check_drawn
+  std::vector<glm::vec2> pixels_;    // and those in view, projected
+  bool screenshot_ = false;          // save the next finished frame
 };
 
 }  // namespace pba::app

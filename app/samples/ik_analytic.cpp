@@ -124,9 +124,9 @@ class IkAnalytic final : public IkSample {
         theta_ = std::atan2(sin_, cos_);
       }
     }
-    const Stopwatch sw;
+    const pba::Stopwatch sw;
     last_ = solver_->solve();
-    last_us_ = sw.us();
+    last_us_ = 1e6 * sw.seconds();
   }
 
   bool ReportEffector(Vec3* e, double* res) const override {

@@ -181,9 +181,9 @@ class IkChain final : public IkSample {
 
   void Solve(double dt) override {
     skel_->set_target(0, handles_[0].pos);
-    const Stopwatch sw;
+    const pba::Stopwatch sw;
     last_ = blend_on_ ? blend_->update(dt) : solver_->solve();
-    last_us_ = sw.us();
+    last_us_ = 1e6 * sw.seconds();
     times_.push(static_cast<float>(last_us_));
     if (blend_on_) {
       // the readout is the visible chain's error, not the goal's

@@ -97,9 +97,9 @@ class IkLimb final : public IkSample {
   void Solve(double) override {
     skel_->set_target(0, handles_[0].pos);
     skel_->set_pole(0, handles_[1].pos);
-    const Stopwatch sw;
+    const pba::Stopwatch sw;
     last_ = solver_->solve();
-    last_us_ = sw.us();
+    last_us_ = 1e6 * sw.seconds();
   }
 
   bool ReportEffector(Vec3* e, double* res) const override {

@@ -128,7 +128,7 @@ class IkMulti final : public IkSample {
   }
   std::vector<Color> ExpectedColors() const override {
     std::vector<Color> c;
-    for (const Handle& h : handles_) c.push_back(h.color);
+    for (const DragTarget& h : handles_) c.push_back(h.color);
     return c;
   }
 
@@ -153,9 +153,9 @@ class IkMulti final : public IkSample {
 
   void Solve(double) override {
     for (int k = 0; k < skel_->effector_count(); ++k) skel_->set_target(k, handles_[k].pos);
-    const Stopwatch sw;
+    const pba::Stopwatch sw;
     last_ = solver_->solve();
-    last_us_ = sw.us();
+    last_us_ = 1e6 * sw.seconds();
   }
 
   bool ReportEffector(Vec3* e, double* res) const override {
