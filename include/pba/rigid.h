@@ -149,6 +149,14 @@ struct ContactSettings {
   MixRule friction_mix = MixRule::GeometricMean;   ///< how friction coefficients combine
   MixRule restitution_mix = MixRule::Maximum;      ///< how restitutions combine
   bool warm_starting = true;     ///< start from last step's impulses (matched by feature id)
+  /// Let resting islands (bodies linked by touching contacts) fall asleep: an island whose
+  /// every body has moved slower than the tolerances for `time_to_sleep` stops being
+  /// simulated until a contact with an awake body, a force, an impulse or a pose or velocity
+  /// change wakes it.
+  bool sleep = true;
+  double sleep_linear = 0.05;    ///< m/s, finite and >= 0 (Box2D's linear sleep tolerance)
+  double sleep_angular = 0.0349; ///< rad/s (2 degrees/s), finite and >= 0
+  double time_to_sleep = 0.5;    ///< s, finite and >= 0
 
   /// Throws Error naming `where` and the bad field.
   void validate(std::string_view where) const;
@@ -222,6 +230,12 @@ class RigidBodySystem {
   Mat3 world_inertia(RigidBodyId id) const;
   /// The body's type.
   BodyType type(RigidBodyId id) const;
+  /// False while the body sleeps (static bodies are never awake; kinematic ones always).
+  bool awake(RigidBodyId id) const;
+  /// Wakes the body and the island it slept in.
+  void wake(RigidBodyId id);
+  /// Dynamic bodies awake now.
+  std::size_t awake_count() const;
   /// The body's name.
   const std::string& name(RigidBodyId id) const;
 
@@ -280,6 +294,8 @@ class RigidBodySystem {
   void integrate_positions(double h);
   void check_finite();
   [[noreturn]] void fail(std::size_t i);
+  void update_sleep(double dt);
+  void wake_island(std::size_t i);
 
   ContactSettings settings_{};
   ContactSettings validated_{};  // the settings last validated (validation builds messages)
@@ -307,6 +323,12 @@ class RigidBodySystem {
   std::vector<std::string> name_;
   std::vector<std::uint8_t> bullet_;
   std::vector<std::vector<RigidShapeDef>> shapes_;  // by dense index
+  // sleeping: flags, time spent slow, and the island (a dense index) each body last belonged to
+  std::vector<std::uint8_t> asleep_;
+  std::vector<double> sleep_time_;
+  std::vector<std::uint32_t> island_;
+  std::vector<std::uint32_t> parent_;  // union-find scratch
+  std::vector<double> island_slow_;    // scratch: the island's shortest slow time
   // start of the step, for the contact solver's separation updates
   std::vector<Vec3> com0_;
   std::vector<Quat> q0_;

@@ -108,6 +108,24 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
     }
   }
   std::sort(pairs.begin(), pairs.end());
+  // a body moving faster than the sleep tolerances (or a moving kinematic one) whose bounds
+  // reach a sleeping body wakes its island; repeated while waking spreads. A slow awake body
+  // does not: it rests on the sleeper as on a static body (waking on any overlap let two
+  // slow neighbours wake each other forever)
+  auto awake_dynamic = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
+  const double lin2 = cs.sleep_linear * cs.sleep_linear, ang2 = cs.sleep_angular * cs.sleep_angular;
+  auto moving = [&](std::uint32_t i) {
+    const double v2 = glm::dot(s.v_[i], s.v_[i]), w2 = glm::dot(s.w_[i], s.w_[i]);
+    if (awake_dynamic(i)) return v2 > lin2 || w2 > ang2;
+    return s.type_[i] == BodyType::Kinematic && (v2 > 0 || w2 > 0);
+  };
+  for (bool woke = true; woke;) {
+    woke = false;
+    for (const ContactPair& c : pairs) {
+      if (s.asleep_[c.b] && moving(c.a)) s.wake_island(c.b), woke = true;
+      if (s.asleep_[c.a] && moving(c.b)) s.wake_island(c.a), woke = true;
+    }
+  }
   // manifolds, with last step's cache and impulses where the same pair touched
   std::size_t kept = 0;
   for (ContactPair& c : pairs) {
@@ -115,6 +133,7 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
     const NarrowPhaseSettings ns{.speculative_margin = cs.speculative_distance +
                                                        (glm::length(s.v_[c.a]) + glm::length(s.v_[c.b])) * dt};
     auto old = std::lower_bound(previous.begin(), previous.end(), c);
+    if (!awake_dynamic(c.a) && !awake_dynamic(c.b)) continue;  // asleep, or asleep on a still body
     const bool had = old != previous.end() && !(c < *old) && !(*old < c);
     if (had) c.cache = old->cache;
     const RigidShapeDef& sa = s.shapes_[c.a][c.shape_a];
@@ -145,6 +164,10 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
     c.twist_radius = 0;
     for (int k = 0; k < m.count; ++k) c.twist_radius += glm::length(m.points[k].position() - centroid);
     c.twist_radius /= m.count;
+    // a constraint that does not act this step carries nothing (a carried twist impulse on a
+    // one-point manifold, never clamped, spun a box on its corner up to 70 rad/s)
+    if (c.twist_radius == 0) c.twist_impulse = 0;
+    if (c.rolling == 0) c.rolling_impulse = Vec3(0);
     for (int k = 0; k < m.count; ++k) {
       SolverPoint& p = c.points[k];
       p = {};
@@ -189,10 +212,11 @@ void RigidContacts::prepare(RigidBodySystem& s) {
     const Mat3 r = glm::mat3_cast(s.q_[i]);
     Mat3 d(0.0);
     d[0][0] = s.inv_inertia_[i].x, d[1][1] = s.inv_inertia_[i].y, d[2][2] = s.inv_inertia_[i].z;
-    inv_inertia[i] = r * d * glm::transpose(r);
+    // a sleeping body holds still like a static one until something wakes it
+    inv_inertia[i] = s.asleep_[i] ? Mat3(0.0) : r * d * glm::transpose(r);
   }
   for (ContactPair& c : pairs) {
-    const double ma = s.inv_mass_[c.a], mb = s.inv_mass_[c.b];
+    const double ma = s.asleep_[c.a] ? 0 : s.inv_mass_[c.a], mb = s.asleep_[c.b] ? 0 : s.inv_mass_[c.b];
     const Mat3& ia = inv_inertia[c.a];
     const Mat3& ib = inv_inertia[c.b];
     for (int k = 0; k < c.count; ++k) {

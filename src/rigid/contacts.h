@@ -110,7 +110,7 @@ struct RigidContacts {
   void store();
   /// Body i's solver state.
   static BodyView view(RigidBodySystem& s, std::size_t i) {
-    return {&s.v_[i], &s.w_[i], &s.com_[i], &s.q_[i], s.inv_mass_[i]};
+    return {&s.v_[i], &s.w_[i], &s.com_[i], &s.q_[i], s.asleep_[i] ? 0.0 : s.inv_mass_[i]};
   }
 };
 

@@ -80,6 +80,9 @@ void ContactSettings::validate(std::string_view where) const {
   require_non_negative(linear_slop, field_path(where, "linear_slop"));
   require_non_negative(speculative_distance, field_path(where, "speculative_distance"));
   require_non_negative(restitution_threshold, field_path(where, "restitution_threshold"));
+  require_non_negative(sleep_linear, field_path(where, "sleep_linear"));
+  require_non_negative(sleep_angular, field_path(where, "sleep_angular"));
+  require_non_negative(time_to_sleep, field_path(where, "time_to_sleep"));
 }
 
 std::string_view to_string(BodyType t) {
@@ -183,7 +186,9 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
   type_.reserve(n);
   for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_}) v->reserve(n);
   for (auto* v : {&q_, &principal_, &q0_}) v->reserve(n);
-  for (auto* v : {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_}) v->reserve(n);
+  for (auto* v : {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_, &sleep_time_, &island_slow_}) v->reserve(n);
+  for (auto* v : {&island_, &parent_}) v->reserve(n);
+  asleep_.reserve(n);
   name_.reserve(n);
   bullet_.reserve(n);
   shapes_.reserve(n);
@@ -259,6 +264,11 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   name_.push_back(def.name);
   bullet_.push_back(def.bullet ? 1 : 0);
   shapes_.push_back(std::move(shapes));
+  asleep_.push_back(0);
+  sleep_time_.push_back(0);
+  island_.push_back(static_cast<std::uint32_t>(type_.size() - 1));
+  parent_.push_back(0);
+  island_slow_.push_back(0);
   com0_.push_back(com_.back());
   q0_.push_back(q_.back());
   return id;
@@ -275,6 +285,7 @@ void RigidBodySystem::destroy(RigidBodyId id) {
   fill(type_), fill(com_), fill(q_), fill(v_), fill(w_), fill(force_), fill(torque_), fill(inv_mass_);
   fill(inv_inertia_), fill(inertia_), fill(lin_damp_), fill(ang_damp_), fill(gravity_scale_);
   fill(com_local_), fill(principal_), fill(name_), fill(bullet_), fill(shapes_), fill(com0_), fill(q0_);
+  fill(asleep_), fill(sleep_time_), fill(island_), fill(parent_), fill(island_slow_);
   const std::uint32_t moved = owner_[last];
   owner_[i] = moved;
   owner_.pop_back();
@@ -284,6 +295,8 @@ void RigidBodySystem::destroy(RigidBodyId id) {
   std::erase_if(pairs, [&](const detail::ContactPair& c) { return c.slot_a == id.index || c.slot_b == id.index; });
   for (detail::ContactPair& c : pairs) c.a = slot_[c.slot_a], c.b = slot_[c.slot_b];
   ids_.destroy(id, "RigidBodySystem::destroy");
+  // the islands' indices moved: wake everyone (rare; the next step finds the islands again)
+  for (std::size_t k = 0; k < type_.size(); ++k) asleep_[k] = 0, sleep_time_[k] = 0, island_[k] = static_cast<std::uint32_t>(k);
 }
 
 std::size_t RigidBodySystem::index(RigidBodyId id, std::string_view where) const {
@@ -348,6 +361,7 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
   com_[i] = apply(pose, com_local_[i]);
   q_[i] = glm::normalize(pose.rotation * principal_[i]);
+  wake_island(i);
 }
 
 void RigidBodySystem::set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular) {
@@ -357,6 +371,7 @@ void RigidBodySystem::set_velocity(RigidBodyId id, const Vec3& linear, const Vec
   if (type_[i] == BodyType::Static) return;  // a static body never moves
   v_[i] = linear;
   w_[i] = angular;
+  wake_island(i);
 }
 
 void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f, const Vec3& p) {
@@ -366,18 +381,19 @@ void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f, const Vec3& p) 
   if (type_[i] != BodyType::Dynamic) return;
   force_[i] += f;
   torque_[i] += glm::cross(p - com_[i], f);
+  wake_island(i);
 }
 
 void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f) {
   const std::size_t i = index(id, "RigidBodySystem::apply_force");
   if (!is_finite(f)) require_finite(f, describe(i) + " apply_force force");
-  if (type_[i] == BodyType::Dynamic) force_[i] += f;
+  if (type_[i] == BodyType::Dynamic) force_[i] += f, wake_island(i);
 }
 
 void RigidBodySystem::apply_torque(RigidBodyId id, const Vec3& t) {
   const std::size_t i = index(id, "RigidBodySystem::apply_torque");
   if (!is_finite(t)) require_finite(t, describe(i) + " apply_torque torque");
-  if (type_[i] == BodyType::Dynamic) torque_[i] += t;
+  if (type_[i] == BodyType::Dynamic) torque_[i] += t, wake_island(i);
 }
 
 void RigidBodySystem::apply_impulse(RigidBodyId id, const Vec3& j, const Vec3& p) {
@@ -385,6 +401,7 @@ void RigidBodySystem::apply_impulse(RigidBodyId id, const Vec3& j, const Vec3& p
   if (!is_finite(j)) require_finite(j, describe(i) + " apply_impulse impulse");
   if (!is_finite(p)) require_finite(p, describe(i) + " apply_impulse point");
   if (type_[i] != BodyType::Dynamic) return;
+  wake_island(i);
   v_[i] += inv_mass_[i] * j;
   // dw = I^-1 (r x J) with I^-1 = R diag(1/I) R^T
   const Vec3 l = glm::conjugate(q_[i]) * glm::cross(p - com_[i], j);
@@ -395,6 +412,7 @@ void RigidBodySystem::apply_angular_impulse(RigidBodyId id, const Vec3& j) {
   const std::size_t i = index(id, "RigidBodySystem::apply_angular_impulse");
   if (!is_finite(j)) require_finite(j, describe(i) + " apply_angular_impulse");
   if (type_[i] != BodyType::Dynamic) return;
+  wake_island(i);
   w_[i] += q_[i] * (inv_inertia_[i] * (glm::conjugate(q_[i]) * j));
 }
 
@@ -435,7 +453,7 @@ void RigidBodySystem::integrate_rotation(std::size_t i, double h) {
 void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity) {
   const std::size_t n = type_.size();
   for (std::size_t i = 0; i < n; ++i) {
-    if (type_[i] != BodyType::Dynamic) continue;
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     // gravity, applied force and torque, then implicit damping
     const Vec3 v = v_[i] + h * (gravity_scale_[i] * gravity + inv_mass_[i] * force_[i]);
     v_[i] = v / (1 + h * lin_damp_[i]);
@@ -460,6 +478,7 @@ void RigidBodySystem::integrate_positions(double h) {
         break;
       }
       case BodyType::Dynamic:
+        if (asleep_[i]) break;
         // symplectic Euler for the centre, the exact-flow splitting for the rotation
         com_[i] += h * v_[i];
         integrate_rotation(i, h);
@@ -507,6 +526,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   contacts_->restitution(*this);
   contacts_->store();
   check_finite();
+  update_sleep(dt);
   time_ += dt;
   profile_.total = total.seconds();
   profile_.solve = profile_.total - profile_.collide;
@@ -527,6 +547,82 @@ void RigidBodySystem::fail(std::size_t i) {
              " s: position " + format_vec3(com_[i]) + ", velocity " + format_vec3(v_[i]) + ", angular velocity " +
              format_vec3(w_[i]);
   throw Error(failure_);
+}
+
+// Islands by union-find over the touching contacts between awake dynamic bodies (static and
+// kinematic bodies do not join islands: a floor holds many islands). An island sleeps when
+// each of its bodies has been slower than the tolerances for time_to_sleep; one touching a
+// moving kinematic body never does.
+void RigidBodySystem::update_sleep(double dt) {
+  const std::size_t n = type_.size();
+  const bool on = settings_.sleep;
+  const double lin2 = settings_.sleep_linear * settings_.sleep_linear;
+  const double ang2 = settings_.sleep_angular * settings_.sleep_angular;
+  for (std::size_t i = 0; i < n; ++i) {
+    parent_[i] = static_cast<std::uint32_t>(i);
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    const bool slow = glm::dot(v_[i], v_[i]) < lin2 && glm::dot(w_[i], w_[i]) < ang2;
+    sleep_time_[i] = on && slow ? sleep_time_[i] + dt : 0;
+  }
+  auto find = [&](std::uint32_t i) {
+    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
+    return i;
+  };
+  for (const detail::ContactPair& c : contacts_->pairs) {
+    const bool da = type_[c.a] == BodyType::Dynamic && !asleep_[c.a];
+    const bool db = type_[c.b] == BodyType::Dynamic && !asleep_[c.b];
+    if (da && db) {
+      // the smaller root wins, so the islands do not depend on the pair order
+      const std::uint32_t ra = find(c.a), rb = find(c.b);
+      if (ra != rb) parent_[std::max(ra, rb)] = std::min(ra, rb);
+    } else {
+      // a moving kinematic body keeps what it touches awake
+      const std::uint32_t other = da ? c.a : c.b, k = da ? c.b : c.a;
+      if ((da || db) && type_[k] == BodyType::Kinematic &&
+          (glm::dot(v_[k], v_[k]) > 0 || glm::dot(w_[k], w_[k]) > 0))
+        sleep_time_[other] = 0;
+    }
+  }
+  // the shortest slow time of each island, then put islands to sleep
+  for (std::size_t i = 0; i < n; ++i) island_slow_[i] = INFINITY;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    const std::uint32_t r = find(static_cast<std::uint32_t>(i));
+    island_[i] = r;
+    island_slow_[r] = std::min(island_slow_[r], sleep_time_[i]);
+  }
+  if (!on) return;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    if (island_slow_[island_[i]] >= settings_.time_to_sleep) {
+      asleep_[i] = 1;
+      v_[i] = Vec3(0);
+      w_[i] = Vec3(0);
+    }
+  }
+}
+
+void RigidBodySystem::wake_island(std::size_t i) {
+  if (!asleep_[i]) {
+    sleep_time_[i] = 0;
+    return;
+  }
+  const std::uint32_t island = island_[i];
+  for (std::size_t k = 0; k < type_.size(); ++k)
+    if (asleep_[k] && island_[k] == island) asleep_[k] = 0, sleep_time_[k] = 0;
+}
+
+bool RigidBodySystem::awake(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::awake");
+  return type_[i] == BodyType::Kinematic || (type_[i] == BodyType::Dynamic && !asleep_[i]);
+}
+
+void RigidBodySystem::wake(RigidBodyId id) { wake_island(index(id, "RigidBodySystem::wake")); }
+
+std::size_t RigidBodySystem::awake_count() const {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < type_.size(); ++i) n += type_[i] == BodyType::Dynamic && !asleep_[i];
+  return n;
 }
 
 std::vector<RigidContactPoint> RigidBodySystem::contacts() const {
