@@ -4,7 +4,8 @@
 // Prints ms per 60 Hz step (median of the steps), the top box's sag and drift, and the state
 // hash for pba. Bullet: btDiscreteDynamicsWorld, btDbvtBroadphase, sequential impulses with
 // 10 iterations, one step per frame (its default), boxes as btBoxShape, ground a 200 x 2 x 200
-// static box, exactly as the peer harnesses set them up.
+// static box, exactly as the peer harnesses set them up. Sleeping is off in both (the
+// issue's stacks and the first fall row) except in the "sleep" row.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -32,8 +33,9 @@ struct Result {
 // ---- pba ----
 enum class Scene { Stack, Pyramid, Fall };
 
-Result run_pba(Scene scene, int size, int steps, pba::RigidSolverType solver, std::uint64_t* hash) {
-  pba::RigidBodySystem s({.capacity = 4096, .contacts = {.solver = solver}});
+Result run_pba(Scene scene, int size, int steps, pba::RigidSolverType solver, bool sleep, std::uint64_t* hash,
+               double* asleep_at = nullptr) {
+  pba::RigidBodySystem s({.capacity = 4096, .contacts = {.solver = solver, .sleep = sleep}});
   std::vector<pba::RigidBodyId> b;
   switch (scene) {
     case Scene::Stack: b = pba::rigid_scenes::vertical_stack(s, size); break;
@@ -46,6 +48,7 @@ Result run_pba(Scene scene, int size, int steps, pba::RigidSolverType solver, st
     const auto t0 = Clock::now();
     s.step(1.0 / 60, {0, -9.81, 0});
     ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    if (asleep_at && *asleep_at < 0 && s.awake_count() == 0) *asleep_at = s.time();
   }
   const pba::Vec3 top = s.center_of_mass(b.back());
   if (hash) *hash = s.hash();
@@ -53,7 +56,7 @@ Result run_pba(Scene scene, int size, int steps, pba::RigidSolverType solver, st
 }
 
 // ---- Bullet ----
-Result run_bullet(Scene scene, int size, int steps) {
+Result run_bullet(Scene scene, int size, int steps, bool sleep) {
   btDefaultCollisionConfiguration config;
   btCollisionDispatcher dispatcher(&config);
   btDbvtBroadphase broadphase;
@@ -73,7 +76,7 @@ Result run_bullet(Scene scene, int size, int steps) {
     ci.m_startWorldTransform = t;
     auto* r = new btRigidBody(ci);
     r->setFriction(mu);
-    if (m > 0) r->setActivationState(DISABLE_DEACTIVATION);
+    if (m > 0 && !sleep) r->setActivationState(DISABLE_DEACTIVATION);
     world.addRigidBody(r);
     bodies.push_back(r);
     return r;
@@ -119,23 +122,30 @@ int main(int argc, char** argv) {
     const char* name;
     Scene scene;
     int size, steps;
+    bool sleep = false;
   };
   const std::vector<Case> cases = quick ? std::vector<Case>{{"stack 10", Scene::Stack, 10, 120}}
                                         : std::vector<Case>{{"stack 10", Scene::Stack, 10, 600},
                                                             {"stack 20", Scene::Stack, 20, 600},
                                                             {"stack 40", Scene::Stack, 40, 600},
                                                             {"fall 1000", Scene::Fall, 10, 600},
+                                                            {"fall 1000, sleep", Scene::Fall, 10, 600, true},
                                                             {"pyramid 20 (2870)", Scene::Pyramid, 20, 60}};
   std::printf("%-18s | %-28s | %-28s | %-28s | %s\n", "scene", "pba soft step ms/sag/drift", "pba SI ms/sag/drift",
               "Bullet ms/sag/drift", "Bullet / pba soft");
   for (const Case& c : cases) {
     std::uint64_t h = 0;
-    const Result soft = run_pba(c.scene, c.size, c.steps, pba::RigidSolverType::SoftStep, &h);
-    const Result si = run_pba(c.scene, c.size, c.steps, pba::RigidSolverType::SequentialImpulse, nullptr);
-    const Result bt = run_bullet(c.scene, c.size, c.steps);
-    std::printf("%-18s | %7.3f ms %7.4f %7.4f m | %7.3f ms %7.4f %7.4f m | %7.3f ms %7.4f %7.4f m | %.2fx  (hash %016llx)\n",
+    double asleep = -1;
+    const Result soft = run_pba(c.scene, c.size, c.steps, pba::RigidSolverType::SoftStep, c.sleep, &h, &asleep);
+    const Result si = run_pba(c.scene, c.size, c.steps, pba::RigidSolverType::SequentialImpulse, c.sleep, nullptr);
+    const Result bt = run_bullet(c.scene, c.size, c.steps, c.sleep);
+    std::printf("%-18s | %7.3f ms %7.4f %7.4f m | %7.3f ms %7.4f %7.4f m | %7.3f ms %7.4f %7.4f m | %.2fx  (hash %016llx)",
                 c.name, soft.ms, soft.sag, soft.drift, si.ms, si.sag, si.drift, bt.ms, bt.sag, bt.drift, bt.ms / soft.ms,
                 static_cast<unsigned long long>(h));
+    if (c.sleep && asleep < 0) std::printf("  pba: not all asleep after %d steps", c.steps);
+    if (c.sleep && asleep >= 0) std::printf("  pba: all asleep at %.2f s", asleep);
+    std::printf("\n");
+    std::fflush(stdout);
   }
   return 0;
 }
