@@ -1,0 +1,151 @@
+// pba rigid bodies against Bullet on the scenes of shared/peers/ (vertical stacks, the
+// 20-level square pyramid, 1000 falling boxes), both in this process, one core:
+//   taskset -c 1 build/release/bin/bench_rigid [--quick]
+// Prints ms per 60 Hz step (median of the steps), the top box's sag and drift, and the state
+// hash for pba. Bullet: btDiscreteDynamicsWorld, btDbvtBroadphase, sequential impulses with
+// 10 iterations, one step per frame (its default), boxes as btBoxShape, ground a 200 x 2 x 200
+// static box, exactly as the peer harnesses set them up. Sleeping is off in both (the
+// issue's stacks and the first fall row) except in the "sleep" row.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include <btBulletDynamicsCommon.h>
+
+#include "pba/rigid_scenes.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
+struct Result {
+  double ms = 0, sag = 0, drift = 0;
+};
+
+// ---- pba ----
+enum class Scene { Stack, Pyramid, Fall };
+
+Result run_pba(Scene scene, int size, int steps, pba::RigidSolverType solver, bool sleep, std::uint64_t* hash,
+               double* asleep_at = nullptr) {
+  pba::RigidBodySystem s({.capacity = 4096, .contacts = {.solver = solver, .sleep = sleep}});
+  std::vector<pba::RigidBodyId> b;
+  switch (scene) {
+    case Scene::Stack: b = pba::rigid_scenes::vertical_stack(s, size); break;
+    case Scene::Pyramid: b = pba::rigid_scenes::square_pyramid(s, size); break;
+    case Scene::Fall: b = pba::rigid_scenes::falling_boxes(s, size); break;
+  }
+  const pba::Vec3 top0 = s.center_of_mass(b.back());
+  std::vector<double> ms;
+  for (int i = 0; i < steps; ++i) {
+    const auto t0 = Clock::now();
+    s.step(1.0 / 60, {0, -9.81, 0});
+    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    if (asleep_at && *asleep_at < 0 && s.awake_count() == 0) *asleep_at = s.time();
+  }
+  const pba::Vec3 top = s.center_of_mass(b.back());
+  if (hash) *hash = s.hash();
+  return {median(ms), top0.y - top.y, std::hypot(top.x - top0.x, top.z - top0.z)};
+}
+
+// ---- Bullet ----
+Result run_bullet(Scene scene, int size, int steps, bool sleep) {
+  btDefaultCollisionConfiguration config;
+  btCollisionDispatcher dispatcher(&config);
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
+  world.setGravity({0, -9.81f, 0});
+  btBoxShape ground({200, 1, 200}), cube({0.5f, 0.5f, 0.5f});
+  std::vector<btRigidBody*> bodies;
+  const float mu = scene == Scene::Pyramid ? 0.6f : 0.5f;
+  auto add = [&](btCollisionShape* sh, float m, btVector3 p) {
+    btVector3 inertia(0, 0, 0);
+    if (m > 0) sh->calculateLocalInertia(m, inertia);
+    btTransform t;
+    t.setIdentity();
+    t.setOrigin(p);
+    btRigidBody::btRigidBodyConstructionInfo ci(m, nullptr, sh, inertia);
+    ci.m_startWorldTransform = t;
+    auto* r = new btRigidBody(ci);
+    r->setFriction(mu);
+    if (m > 0 && !sleep) r->setActivationState(DISABLE_DEACTIVATION);
+    world.addRigidBody(r);
+    bodies.push_back(r);
+    return r;
+  };
+  add(&ground, 0, {0, -1, 0});
+  switch (scene) {
+    case Scene::Stack:
+      for (int i = 0; i < size; ++i) add(&cube, 1, {0, 0.5f + i, 0});
+      break;
+    case Scene::Pyramid:
+      for (int i = 0; i < size; ++i) {
+        const int k = size - i;
+        for (int a = 0; a < k; ++a)
+          for (int c = 0; c < k; ++c) add(&cube, 1, {a - 0.5f * (k - 1), 0.5f + i, c - 0.5f * (k - 1)});
+      }
+      break;
+    case Scene::Fall:
+      for (int x = 0; x < size; ++x)
+        for (int y = 0; y < size; ++y)
+          for (int z = 0; z < size; ++z) add(&cube, 1, {x * 1.5f - 7, 2.0f + y * 1.5f, z * 1.5f - 7});
+      break;
+  }
+  const btVector3 top0 = bodies.back()->getWorldTransform().getOrigin();
+  std::vector<double> ms;
+  for (int i = 0; i < steps; ++i) {
+    const auto t0 = Clock::now();
+    world.stepSimulation(1.f / 60.f, 0);
+    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  }
+  const btVector3 top = bodies.back()->getWorldTransform().getOrigin();
+  for (btRigidBody* r : bodies) {
+    world.removeRigidBody(r);
+    delete r;
+  }
+  return {median(ms), top0.y() - top.y(), std::hypot(top.x() - top0.x(), top.z() - top0.z())};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  struct Case {
+    const char* name;
+    Scene scene;
+    int size, steps;
+    bool sleep = false;
+  };
+  const std::vector<Case> cases = quick ? std::vector<Case>{{"stack 10", Scene::Stack, 10, 120}}
+                                        : std::vector<Case>{{"stack 10", Scene::Stack, 10, 600},
+                                                            {"stack 20", Scene::Stack, 20, 600},
+                                                            {"stack 40", Scene::Stack, 40, 600},
+                                                            {"fall 1000", Scene::Fall, 10, 600},
+                                                            {"fall 1000, sleep", Scene::Fall, 10, 600, true},
+                                                            {"pyramid 20 (2870)", Scene::Pyramid, 20, 60}};
+  std::printf("%-18s | %-28s | %-28s | %-28s | %s\n", "scene", "pba soft step ms/sag/drift", "pba SI ms/sag/drift",
+              "Bullet ms/sag/drift", "Bullet / pba soft");
+  for (const Case& c : cases) {
+    std::uint64_t h = 0;
+    double asleep = -1;
+    const Result soft = run_pba(c.scene, c.size, c.steps, pba::RigidSolverType::SoftStep, c.sleep, &h, &asleep);
+    const Result si = run_pba(c.scene, c.size, c.steps, pba::RigidSolverType::SequentialImpulse, c.sleep, nullptr);
+    const Result bt = run_bullet(c.scene, c.size, c.steps, c.sleep);
+    std::printf("%-18s | %7.3f ms %7.4f %7.4f m | %7.3f ms %7.4f %7.4f m | %7.3f ms %7.4f %7.4f m | %.2fx  (hash %016llx)",
+                c.name, soft.ms, soft.sag, soft.drift, si.ms, si.sag, si.drift, bt.ms, bt.sag, bt.drift, bt.ms / soft.ms,
+                static_cast<unsigned long long>(h));
+    if (c.sleep && asleep < 0) std::printf("  pba: not all asleep after %d steps", c.steps);
+    if (c.sleep && asleep >= 0) std::printf("  pba: all asleep at %.2f s", asleep);
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  return 0;
+}

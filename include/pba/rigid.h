@@ -1,0 +1,337 @@
+// pba rigid bodies (workbook chapter 6), part 1: the bodies and their free motion.
+//
+// A RigidBodySystem stores bodies as contiguous arrays (structure of arrays) and advances
+// them under gravity, applied forces and torques, damping, impulses and contacts. The free rotation
+// of a body is integrated by the symmetric splitting of Dullweber, Leimkuhler and McLachlan
+// (1997): each substep is five exact rotations about the body's principal axes, so a
+// torque-free body keeps its world angular momentum to rounding and its kinetic energy to
+// O(h^2) without drift, and the gyroscopic precession (the intermediate-axis flip of a
+// tumbling T-handle) comes out right at game time steps.
+//
+// Each body carries one or more shapes of the collide module. A step finds the pairs of
+// shapes whose bounds overlap, builds their manifolds with the narrow phase (speculative
+// points included), matches the points to last step's by feature id so the solver starts
+// from last step's impulses, and solves the contacts with the selected solver (the
+// soft-step default of Box2D v3: substeps, soft contacts, a relax pass and a restitution
+// pass; see docs/rigid-bodies.md).
+//
+//   pba::RigidBodySystem bodies;
+//   bodies.create({.type = pba::BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+//   auto box = bodies.create({.pose = {{0, 5, 0}}, .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.5, 0.5})}}});
+//   bodies.apply_impulse(box, {0, 0, 1}, {0.5, 5, 0});   // N s at a world point
+//   bodies.step(1.0 / 60, {0, -9.81, 0});
+//
+// Units: metres, seconds, kilograms; forces in N, torques in N m, impulses in N s.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pba/collide/shape.h"
+#include "pba/core.h"
+#include "pba/handle.h"
+
+namespace pba {
+
+/// How a body moves.
+enum class BodyType : std::uint8_t {
+  Static,     ///< never moves; infinite mass
+  Kinematic,  ///< moves at its set velocity, ignoring forces; infinite mass (pushes dynamic bodies)
+  Dynamic,    ///< moves under forces, gravity and impulses
+};
+
+/// Lower-case name of a body type ("static", "kinematic", "dynamic").
+std::string_view to_string(BodyType t);
+
+/// Mass, centre of mass and inertia of a body, in the body's frame.
+struct RigidMass {
+  double mass = 1;          ///< kg, finite and > 0 for a dynamic body
+  Vec3 center{0, 0, 0};     ///< centre of mass in the body frame (m)
+  Mat3 inertia{1.0};        ///< inertia tensor about the centre of mass, body axes (kg m^2):
+                            ///< symmetric positive definite, satisfying the triangle inequality
+
+  /// The mass properties of a uniform solid shape at `density` (kg/m^3), placed at `local`
+  /// in the body frame (collide module's mass_properties, moved and rotated).
+  static RigidMass of_shape(const ColliderShape& s, double density, const Pose& local = {},
+                            std::string_view where = "shape");
+  /// A solid box of `mass` kg and half extents `half` (m) about the body origin.
+  static RigidMass box(double mass, const Vec3& half);
+  /// A solid sphere of `mass` kg and radius `r` (m) about the body origin.
+  static RigidMass sphere(double mass, double r);
+  /// The sum of two bodies rigidly joined (parallel-axis theorem).
+  RigidMass operator+(const RigidMass& o) const;
+  /// Throws Error naming `where` and the bad field: mass not finite and > 0, a non-finite
+  /// centre, or an inertia that is not symmetric positive definite and physical (each
+  /// principal moment at most the sum of the other two).
+  void validate(std::string_view where) const;
+};
+
+/// A shape attached to a body, with its material.
+struct RigidShapeDef {
+  ColliderShape shape{};  ///< any shape; planes and meshes only on static bodies
+  Pose local{};           ///< placement in the body frame
+  double density = 1000;  ///< kg/m^3, finite and > 0: the body's mass comes from its shapes' densities
+  /// Friction and restitution (mixed between the two shapes of a contact, see ContactSettings).
+  SurfaceMaterial material{.restitution = 0, .friction = 0.6};
+  /// Rolling resistance, dimensionless, finite and >= 0: a rolling contact loses angular
+  /// impulse up to this times the normal impulse times the shape's radius.
+  double rolling_resistance = 0;
+};
+
+/// Definition of a rigid body. Start from the defaults and change what you need.
+struct RigidBodyDef {
+  std::string name{};               ///< optional; used in error messages
+  BodyType type = BodyType::Dynamic;  ///< static, kinematic or dynamic
+  Pose pose{};                      ///< body frame in the world (finite position, unit rotation)
+  Vec3 linear_velocity{0, 0, 0};    ///< velocity of the centre of mass (m/s), finite
+  Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), finite
+  std::vector<RigidShapeDef> shapes{};  ///< at least one
+  /// Dynamic bodies: mass properties; unset means from the shapes' densities.
+  std::optional<RigidMass> mass{};
+  double linear_damping = 0;        ///< 1/s, finite and >= 0: dv/dt = -c v
+  double angular_damping = 0;       ///< 1/s, finite and >= 0: dw/dt = -c w
+  double gravity_scale = 1;         ///< multiplies the system's gravity, finite
+  bool bullet = false;              ///< fast body: continuous collision against static geometry
+
+  /// Throws Error naming `where` and the bad field.
+  void validate(std::string_view where) const;
+};
+
+/// Tag for rigid-body handles.
+struct RigidBodyTag {};
+/// Generation-checked rigid-body handle.
+using RigidBodyId = Handle<RigidBodyTag>;
+
+/// The contact solvers, switchable between steps.
+enum class RigidSolverType : std::uint8_t {
+  SoftStep,           ///< Box2D v3 / Box3D: substeps, soft contacts, relax and restitution passes
+  SequentialImpulse,  ///< one step, iterations with warm starting, Baumgarte position correction
+};
+
+/// Lower-case name of a solver ("soft-step", "sequential-impulse").
+std::string_view to_string(RigidSolverType t);
+
+/// How two materials' coefficients combine at a contact.
+enum class MixRule : std::uint8_t {
+  GeometricMean,  ///< sqrt(a b) (Box2D's friction rule)
+  Minimum,        ///< min(a, b)
+  Maximum,        ///< max(a, b) (Box2D's restitution rule)
+  Average,        ///< (a + b) / 2
+  Product,        ///< a b
+};
+
+/// Contact and solver settings; change them between steps.
+struct ContactSettings {
+  RigidSolverType solver = RigidSolverType::SoftStep;  ///< which solver
+  int substeps = 8;  ///< soft step: substeps per step, in [1, 64]
+  int iterations = 10;  ///< sequential impulses: velocity iterations per step, in [1, 1000]
+  /// Sweeps over a manifold's points per pass, in [1, 16]: more converge its points toward
+  /// their joint solution (4 keeps a 20-box stack from rocking; see docs/rigid-bodies.md).
+  int manifold_iterations = 4;
+  /// Soft step: contact stiffness (Hz), finite and > 0, used up to a quarter of the substep
+  /// rate. Contacts are implicit springs of this natural frequency, damped by `damping_ratio`,
+  /// so a contact under a load W between bodies of effective mass m settles
+  /// W / (m (2 pi hertz)^2) deep, and a stack of n boxes sags by about n^2 g / (2 pi hertz)^2:
+  /// 7 mm for 20 one-metre boxes at the default 120 Hz and 8 substeps of a 60 Hz step.
+  double contact_hertz = 120;
+  double damping_ratio = 10;     ///< soft step: contact damping ratio, finite and >= 0
+  double push_out_speed = 3;     ///< largest speed (m/s) at which overlap is pushed apart, finite and > 0
+  double baumgarte = 0.2;        ///< sequential impulses: fraction of overlap removed per step, in [0, 1]
+  double linear_slop = 0.005;    ///< overlap (m) left uncorrected so contacts persist, finite and >= 0
+  double speculative_distance = 0.02;  ///< manifolds include points closer than this (m), finite and >= 0
+  /// Approach speeds (m/s) below this bounce with no restitution, so resting bodies stay put.
+  double restitution_threshold = 1;
+  MixRule friction_mix = MixRule::GeometricMean;   ///< how friction coefficients combine
+  MixRule restitution_mix = MixRule::Maximum;      ///< how restitutions combine
+  bool warm_starting = true;     ///< start from last step's impulses (matched by feature id)
+  /// Let resting islands (bodies linked by touching contacts) fall asleep: an island whose
+  /// every body has moved slower than the tolerances for `time_to_sleep` stops being
+  /// simulated until a contact with an awake body, a force, an impulse or a pose or velocity
+  /// change wakes it.
+  bool sleep = true;
+  double sleep_linear = 0.05;    ///< m/s, finite and >= 0 (Box2D's linear sleep tolerance)
+  double sleep_angular = 0.0349; ///< rad/s (2 degrees/s), finite and >= 0
+  double time_to_sleep = 0.5;    ///< s, finite and >= 0
+
+  /// Throws Error naming `where` and the bad field.
+  void validate(std::string_view where) const;
+  bool operator==(const ContactSettings&) const = default;
+};
+
+/// Settings of a RigidBodySystem.
+struct RigidSystemDef {
+  std::size_t capacity = 256;  ///< bodies reserved up front; creating more allocates once per doubling
+  ContactSettings contacts{};  ///< solver and contact settings
+};
+
+/// One contact point after the last step, for drawing and tests.
+struct RigidContactPoint {
+  RigidBodyId a{}, b{};        ///< the two bodies (the normal points from a to b)
+  Vec3 position{0, 0, 0};      ///< world point (m)
+  Vec3 normal{0, 0, 1};        ///< unit normal from a to b
+  double depth = 0;            ///< overlap at the start of the step (m); < 0 speculative
+  double normal_impulse = 0;   ///< normal impulse of the last substep (N s)
+  double tangent_impulse = 0;  ///< the manifold's friction impulse (N s per substep) shared among its points
+  std::uint32_t id = 0;        ///< feature id
+};
+
+/// Where the last step's time went (s).
+struct RigidProfile {
+  double collide = 0;  ///< pairs and manifolds
+  double solve = 0;    ///< contact solver and integration
+  double total = 0;    ///< the whole step
+};
+
+namespace detail {
+struct RigidContacts;
+}
+
+/// Rigid bodies in structure-of-arrays layout. Not thread-safe. Steps never allocate.
+class RigidBodySystem {
+ public:
+  /// Validates `def` (throws Error naming the bad field).
+  explicit RigidBodySystem(const RigidSystemDef& def = {});
+
+  // ---- bodies ----
+
+  /// Creates a body (validates `def`; the Error names `where`, the body's name and the field).
+  RigidBodyId create(const RigidBodyDef& def, std::string_view where = "RigidBodyDef");
+  /// Removes a body (throws Error for a stale handle).
+  void destroy(RigidBodyId id);
+  /// True when `id` names a live body.
+  bool valid(RigidBodyId id) const { return ids_.valid(id); }
+  /// Live bodies.
+  std::size_t size() const { return type_.size(); }
+  /// The handle of the i-th live body, i in [0, size()) (the order changes when bodies are destroyed).
+  RigidBodyId id_at(std::size_t i) const { return {owner_.at(i), ids_.generation(owner_.at(i))}; }
+
+  /// The body frame's pose.
+  Pose pose(RigidBodyId id) const;
+  /// The world position of the centre of mass (m).
+  Vec3 center_of_mass(RigidBodyId id) const;
+  /// The velocity of the centre of mass (m/s).
+  Vec3 linear_velocity(RigidBodyId id) const;
+  /// The world angular velocity (rad/s).
+  Vec3 angular_velocity(RigidBodyId id) const;
+  /// The velocity of the body's material point now at world point `p` (m/s).
+  Vec3 velocity_at(RigidBodyId id, const Vec3& p) const;
+  /// The world angular momentum about the centre of mass (kg m^2/s).
+  Vec3 angular_momentum(RigidBodyId id) const;
+  /// Kinetic energy, translational plus rotational (J).
+  double kinetic_energy(RigidBodyId id) const;
+  /// Mass (kg; infinity for static and kinematic bodies).
+  double mass(RigidBodyId id) const;
+  /// The world inertia tensor about the centre of mass (kg m^2; zero for non-dynamic bodies).
+  Mat3 world_inertia(RigidBodyId id) const;
+  /// The body's type.
+  BodyType type(RigidBodyId id) const;
+  /// False while the body sleeps (static bodies are never awake; kinematic ones always).
+  bool awake(RigidBodyId id) const;
+  /// Wakes the body and the island it slept in.
+  void wake(RigidBodyId id);
+  /// Dynamic bodies awake now.
+  std::size_t awake_count() const;
+  /// The body's name.
+  const std::string& name(RigidBodyId id) const;
+
+  /// Moves a body (validated).
+  void set_pose(RigidBodyId id, const Pose& pose);
+  /// Sets the centre of mass velocity and the angular velocity (validated).
+  void set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular);
+  /// Adds a force (N) at world point `p` (m) for the next step (a torque (p - com) x F too).
+  void apply_force(RigidBodyId id, const Vec3& force, const Vec3& p);
+  /// Adds a force (N) at the centre of mass for the next step.
+  void apply_force(RigidBodyId id, const Vec3& force);
+  /// Adds a torque (N m) for the next step.
+  void apply_torque(RigidBodyId id, const Vec3& torque);
+  /// Applies an impulse (N s) at world point `p` now: dv = J / m, dw = I^-1 (p - com) x J.
+  void apply_impulse(RigidBodyId id, const Vec3& impulse, const Vec3& p);
+  /// Applies an angular impulse (N m s) now.
+  void apply_angular_impulse(RigidBodyId id, const Vec3& impulse);
+
+  // ---- stepping ----
+
+  /// Contact and solver settings (validated at each step).
+  ContactSettings& settings() { return settings_; }
+  /// Contact and solver settings.
+  const ContactSettings& settings() const { return settings_; }
+  /// Sets the soft step's substeps per step, in [1, 64].
+  void set_substeps(int n);
+  /// Advances every body from t to t + dt (s; finite and > 0) under `gravity` (m/s^2).
+  /// Throws Error if a body's state becomes non-finite, naming the body and the step's end
+  /// time; the system then refuses to step again.
+  void step(double dt, const Vec3& gravity);
+  /// Simulated time (s).
+  double time() const { return time_; }
+  /// 64-bit hash of every body's pose and velocities (bit patterns).
+  std::uint64_t hash() const;
+  /// The contact points of the last step (copies; allocates, for drawing and tests).
+  std::vector<RigidContactPoint> contacts() const;
+  /// Contact manifolds (touching or speculative shape pairs) in the last step.
+  std::size_t manifold_count() const;
+  /// Timings of the last step.
+  const RigidProfile& profile() const { return profile_; }
+  /// The world bounds of every shape of body `id` at its pose now.
+  std::vector<Aabb> shape_bounds(RigidBodyId id) const;
+  /// The shapes of body `id` (in the body frame).
+  std::span<const RigidShapeDef> shapes(RigidBodyId id) const;
+
+  ~RigidBodySystem();
+  RigidBodySystem(RigidBodySystem&&) noexcept;
+  RigidBodySystem& operator=(RigidBodySystem&&) noexcept;
+
+ private:
+  friend struct detail::RigidContacts;
+  std::size_t index(RigidBodyId id, std::string_view where) const;
+  std::string describe(std::size_t i) const;
+  void integrate_rotation(std::size_t i, double h);
+  void integrate_velocities(double h, const Vec3& gravity);
+  void integrate_positions(double h);
+  void check_finite();
+  [[noreturn]] void fail(std::size_t i);
+  void update_sleep(double dt);
+  void wake_island(std::size_t i);
+
+  ContactSettings settings_{};
+  ContactSettings validated_{};  // the settings last validated (validation builds messages)
+  RigidProfile profile_{};
+  std::unique_ptr<detail::RigidContacts> contacts_;
+  double time_ = 0;
+  double last_dt_ = 0;
+  std::string failure_;
+  HandlePool<RigidBodyTag> ids_;
+  std::vector<std::uint32_t> slot_;   // handle slot -> dense index
+  std::vector<std::uint32_t> owner_;  // dense index -> handle slot
+  // hot state, dense by body
+  std::vector<BodyType> type_;
+  std::vector<Vec3> com_;             // world centre of mass (m)
+  std::vector<Quat> q_;               // principal frame in the world
+  std::vector<Vec3> v_, w_;           // centre-of-mass velocity, world angular velocity
+  std::vector<Vec3> force_, torque_;  // accumulated for the next step
+  std::vector<double> inv_mass_;
+  std::vector<Vec3> inv_inertia_;     // principal inverse moments (1 / (kg m^2)); 0 for non-dynamic
+  std::vector<Vec3> inertia_;         // principal moments (kg m^2)
+  std::vector<double> lin_damp_, ang_damp_, gravity_scale_;
+  // cold: the body frame relative to the principal frame, names
+  std::vector<Vec3> com_local_;       // centre of mass in the body frame
+  std::vector<Quat> principal_;       // principal frame in the body frame
+  std::vector<std::string> name_;
+  std::vector<std::uint8_t> bullet_;
+  std::vector<std::vector<RigidShapeDef>> shapes_;  // by dense index
+  // sleeping: flags, time spent slow, and the island (a dense index) each body last belonged to
+  std::vector<std::uint8_t> asleep_;
+  std::vector<double> sleep_time_;
+  std::vector<std::uint32_t> island_;
+  std::vector<std::uint32_t> parent_;  // union-find scratch
+  std::vector<double> island_slow_;    // scratch: the island's shortest slow time
+  // start of the step, for the contact solver's separation updates
+  std::vector<Vec3> com0_;
+  std::vector<Quat> q0_;
+};
+
+}  // namespace pba

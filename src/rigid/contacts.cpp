@@ -1,0 +1,392 @@
+// Rigid bodies: contact pairs, manifolds with warm-start matching, and the contact solver
+// passes shared by the soft-step and sequential-impulse solvers.
+//
+// The soft step follows Catto's Solver2D / Box2D v3 (contact_solver.c) in 3D: per substep
+// the bodies' velocities are integrated, the carried impulses applied, the contacts solved
+// as soft constraints (implicit springs of contact_hertz, pushing out no faster than
+// push_out_speed), the positions integrated, and the contacts solved again without
+// position bias (the relax pass) so no push-out velocity survives into the next substep.
+// Restitution is one pass after the substeps. Sequential impulses (Catto 2005; Bullet and
+// Jolt's baseline) are the same passes at one substep, with rigid constraints and a
+// Baumgarte bias, iterated.
+#include "contacts.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pba::detail {
+
+namespace {
+
+// an orthonormal basis (t1, t2) perpendicular to the unit n, a continuous function of n
+// away from n = -z (Duff et al. 2017, "Building an orthonormal basis, revisited")
+void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
+  const double sign = std::copysign(1.0, n.z);
+  const double a = -1.0 / (sign + n.z), b = n.x * n.y * a;
+  t1 = Vec3(1 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+  t2 = Vec3(b, sign + n.y * n.y * a, -n.y);
+}
+
+double mix(MixRule r, double a, double b) {
+  switch (r) {
+    case MixRule::GeometricMean: return std::sqrt(a * b);
+    case MixRule::Minimum: return std::min(a, b);
+    case MixRule::Maximum: return std::max(a, b);
+    case MixRule::Average: return 0.5 * (a + b);
+    case MixRule::Product: return a * b;
+  }
+  return a;
+}
+
+// the radius that turns a rolling-resistance coefficient into a lever arm (m)
+double rolling_radius(const ColliderShape& s) {
+  switch (s.type) {
+    case ShapeType::Sphere:
+    case ShapeType::Capsule: return s.radius;
+    default: return 0;
+  }
+}
+
+// 1 / (J M^-1 J^T) for an impulse along unit `d` at anchors ra, rb
+double effective_mass(double ma, double mb, const Mat3& ia, const Mat3& ib, const Vec3& ra, const Vec3& rb,
+                      const Vec3& d) {
+  const Vec3 ca = glm::cross(ra, d), cb = glm::cross(rb, d);
+  const double k = ma + mb + glm::dot(ca, ia * ca) + glm::dot(cb, ib * cb);
+  return k > 0 ? 1 / k : 0;
+}
+
+}  // namespace
+
+Softness make_soft(double hertz, double zeta, double h) {
+  if (hertz == 0) return {0, 1, 0};
+  const double omega = 2 * kPi * hertz;
+  const double a1 = 2 * zeta + h * omega, a2 = h * omega * a1, a3 = 1 / (1 + a2);
+  return {omega / a1, a2 * a3, a3};
+}
+
+// ---------------------------------------------------------------------------------------
+// pairs and manifolds
+
+void RigidContacts::update(RigidBodySystem& s, double dt) {
+  const ContactSettings& cs = s.settings_;
+  const std::size_t n = s.type_.size();
+  // this step's pairs become last step's
+  std::swap(pairs, previous);
+  pairs.clear();
+  // every shape's bounds, grown by the speculative distance and by how far it can move
+  proxies.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Quat r = glm::normalize(s.q_[i] * glm::conjugate(s.principal_[i]));
+    const Pose body{s.com_[i] - r * s.com_local_[i], r};
+    const double reach = cs.speculative_distance + glm::length(s.v_[i]) * dt;
+    for (std::uint32_t k = 0; k < s.shapes_[i].size(); ++k)
+      proxies.push_back({bounds(s.shapes_[i][k].shape, compose(body, s.shapes_[i][k].local)).grown(reach),
+                         static_cast<std::uint32_t>(i), k});
+  }
+  // sweep and prune along x (ties broken by owner, so the order is deterministic)
+  std::sort(proxies.begin(), proxies.end(), [](const ShapeProxy& a, const ShapeProxy& b) {
+    if (a.box.lo.x != b.box.lo.x) return a.box.lo.x < b.box.lo.x;
+    if (a.body != b.body) return a.body < b.body;
+    return a.shape < b.shape;
+  });
+  for (std::size_t i = 0; i < proxies.size(); ++i) {
+    const ShapeProxy& p = proxies[i];
+    for (std::size_t j = i + 1; j < proxies.size() && proxies[j].box.lo.x <= p.box.hi.x; ++j) {
+      const ShapeProxy& q = proxies[j];
+      if (p.body == q.body || !p.box.overlaps(q.box)) continue;
+      // two bodies that cannot move each other make no contact
+      if (s.inv_mass_[p.body] == 0 && s.inv_mass_[q.body] == 0) continue;
+      // order the pair by body slot so the key (and the normal's direction) is stable
+      const bool swap = s.owner_[p.body] > s.owner_[q.body];
+      const ShapeProxy& a = swap ? q : p;
+      const ShapeProxy& b = swap ? p : q;
+      ContactPair c;
+      c.slot_a = s.owner_[a.body], c.slot_b = s.owner_[b.body];
+      c.shape_a = a.shape, c.shape_b = b.shape;
+      c.a = a.body, c.b = b.body;
+      pairs.push_back(c);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  // a body moving faster than the sleep tolerances (or a moving kinematic one) whose bounds
+  // reach a sleeping body wakes its island; repeated while waking spreads. A slow awake body
+  // does not: it rests on the sleeper as on a static body (waking on any overlap let two
+  // slow neighbours wake each other forever)
+  auto awake_dynamic = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
+  const double lin2 = cs.sleep_linear * cs.sleep_linear, ang2 = cs.sleep_angular * cs.sleep_angular;
+  auto moving = [&](std::uint32_t i) {
+    const double v2 = glm::dot(s.v_[i], s.v_[i]), w2 = glm::dot(s.w_[i], s.w_[i]);
+    if (awake_dynamic(i)) return v2 > lin2 || w2 > ang2;
+    return s.type_[i] == BodyType::Kinematic && (v2 > 0 || w2 > 0);
+  };
+  for (bool woke = true; woke;) {
+    woke = false;
+    for (const ContactPair& c : pairs) {
+      if (s.asleep_[c.b] && moving(c.a)) s.wake_island(c.b), woke = true;
+      if (s.asleep_[c.a] && moving(c.b)) s.wake_island(c.a), woke = true;
+    }
+  }
+  // manifolds, with last step's cache and impulses where the same pair touched
+  std::size_t kept = 0;
+  for (ContactPair& c : pairs) {
+    // points are made as far out as the two bodies can close in one step (speculative contacts)
+    const NarrowPhaseSettings ns{.speculative_margin = cs.speculative_distance +
+                                                       (glm::length(s.v_[c.a]) + glm::length(s.v_[c.b])) * dt};
+    auto old = std::lower_bound(previous.begin(), previous.end(), c);
+    if (!awake_dynamic(c.a) && !awake_dynamic(c.b)) continue;  // asleep, or asleep on a still body
+    const bool had = old != previous.end() && !(c < *old) && !(*old < c);
+    if (had) c.cache = old->cache;
+    const RigidShapeDef& sa = s.shapes_[c.a][c.shape_a];
+    const RigidShapeDef& sb = s.shapes_[c.b][c.shape_b];
+    auto pose_of = [&](std::uint32_t i, const RigidShapeDef& d) {
+      const Quat r = glm::normalize(s.q_[i] * glm::conjugate(s.principal_[i]));
+      return compose(Pose{s.com_[i] - r * s.com_local_[i], r}, d.local);
+    };
+    const Manifold m = collide(sa.shape, pose_of(c.a, sa), sb.shape, pose_of(c.b, sb), ns, &c.cache);
+    if (m.count == 0) continue;
+    c.normal = m.normal;
+    tangent_basis(c.normal, c.t1, c.t2);
+    c.friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
+    c.restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
+    c.rolling = std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
+    c.count = m.count;
+    const bool warm = had && cs.warm_starting;
+    c.rolling_impulse = warm ? old->rolling_impulse : Vec3(0);
+    // friction carried over, re-projected onto this step's tangents
+    c.tangent_impulse[0] = warm ? glm::dot(old->friction_old, c.t1) : 0;
+    c.tangent_impulse[1] = warm ? glm::dot(old->friction_old, c.t2) : 0;
+    c.twist_impulse = warm ? old->twist_impulse : 0;
+    Vec3 centroid(0);
+    for (int k = 0; k < m.count; ++k) centroid += m.points[k].position();
+    centroid /= static_cast<double>(m.count);
+    c.ca = centroid - s.com_[c.a];
+    c.cb = centroid - s.com_[c.b];
+    c.twist_radius = 0;
+    for (int k = 0; k < m.count; ++k) c.twist_radius += glm::length(m.points[k].position() - centroid);
+    c.twist_radius /= m.count;
+    // a constraint that does not act this step carries nothing (a carried twist impulse on a
+    // one-point manifold, never clamped, spun a box on its corner up to 70 rad/s)
+    if (c.twist_radius == 0) c.twist_impulse = 0;
+    if (c.rolling == 0) c.rolling_impulse = Vec3(0);
+    for (int k = 0; k < m.count; ++k) {
+      SolverPoint& p = c.points[k];
+      p = {};
+      const Vec3 at = m.points[k].position();
+      p.ra = at - s.com_[c.a];
+      p.rb = at - s.com_[c.b];
+      p.depth = m.points[k].depth;
+      p.id = m.points[k].id;
+      // the separation now is -depth; keep it relative to the anchors
+      p.sa = m.points[k].point_a - core_radius(sa.shape) * c.normal - s.com_[c.a];
+      p.sb = m.points[k].point_b + core_radius(sb.shape) * c.normal - s.com_[c.b];
+      p.offset = -p.depth - glm::dot((s.com_[c.b] + p.sb) - (s.com_[c.a] + p.sa), c.normal);
+      p.local = glm::conjugate(s.q_[c.a]) * (at - s.com_[c.a]);
+      // warm start from the point with the same feature id or, when the features changed
+      // (a face-on-face contact whose clipped corners sit on the edges flips their labels
+      // under jitter), from the nearest old point within the linear slop in a's frame
+      // (Jolt matches contact points by position the same way)
+      if (warm) {
+        int match = -1;
+        double best = cs.linear_slop * cs.linear_slop;
+        for (int o = 0; o < old->count && match < 0; ++o)
+          if (old->points[o].id == p.id) match = o;
+        for (int o = 0; o < old->count && match < 0; ++o) {
+          const Vec3 d = old->points[o].local - p.local;
+          if (glm::dot(d, d) <= best) best = glm::dot(d, d), match = o;
+        }
+        if (match >= 0) p.normal_impulse = old->points[match].normal_impulse;
+      }
+    }
+    pairs[kept++] = c;
+  }
+  pairs.resize(kept);
+}
+
+// ---------------------------------------------------------------------------------------
+// solver passes
+
+void RigidContacts::prepare(RigidBodySystem& s) {
+  const std::size_t n = s.type_.size();
+  inv_inertia.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Mat3 r = glm::mat3_cast(s.q_[i]);
+    Mat3 d(0.0);
+    d[0][0] = s.inv_inertia_[i].x, d[1][1] = s.inv_inertia_[i].y, d[2][2] = s.inv_inertia_[i].z;
+    // a sleeping body holds still like a static one until something wakes it
+    inv_inertia[i] = s.asleep_[i] ? Mat3(0.0) : r * d * glm::transpose(r);
+  }
+  for (ContactPair& c : pairs) {
+    const double ma = s.asleep_[c.a] ? 0 : s.inv_mass_[c.a], mb = s.asleep_[c.b] ? 0 : s.inv_mass_[c.b];
+    const Mat3& ia = inv_inertia[c.a];
+    const Mat3& ib = inv_inertia[c.b];
+    for (int k = 0; k < c.count; ++k) {
+      SolverPoint& p = c.points[k];
+      p.normal_mass = effective_mass(ma, mb, ia, ib, p.ra, p.rb, c.normal);
+      const Vec3 dv = s.v_[c.b] + glm::cross(s.w_[c.b], p.rb) - s.v_[c.a] - glm::cross(s.w_[c.a], p.ra);
+      p.approach = glm::dot(dv, c.normal);
+      p.max_normal_impulse = 0;
+    }
+    c.tangent_mass[0] = effective_mass(ma, mb, ia, ib, c.ca, c.cb, c.t1);
+    c.tangent_mass[1] = effective_mass(ma, mb, ia, ib, c.ca, c.cb, c.t2);
+    const double kt = glm::dot(c.normal, (ia + ib) * c.normal);
+    c.twist_mass = kt > 0 ? 1 / kt : 0;
+    // rolling resistance acts on the relative angular velocity
+    if (c.rolling > 0) {
+      const Mat3 k = ia + ib;
+      c.rolling_mass = glm::determinant(k) > 0 ? glm::inverse(k) : Mat3(0.0);
+    }
+  }
+}
+
+namespace {
+
+// applies the impulse `p` (N s) at anchors ra, rb: +p to b, -p to a
+inline void apply(BodyView& a, BodyView& b, const Mat3& ia, const Mat3& ib,
+                  const Vec3& ra, const Vec3& rb, const Vec3& p) {
+  *a.v -= a.inv_mass * p;
+  *a.w -= ia * glm::cross(ra, p);
+  *b.v += b.inv_mass * p;
+  *b.w += ib * glm::cross(rb, p);
+}
+
+}  // namespace
+
+void RigidContacts::warm_start(RigidBodySystem& s) {
+  for (ContactPair& c : pairs) {
+    auto a = view(s, c.a), b = view(s, c.b);
+    for (int k = 0; k < c.count; ++k) {
+      const SolverPoint& p = c.points[k];
+      apply(a, b, inv_inertia[c.a], inv_inertia[c.b], p.ra, p.rb, p.normal_impulse * c.normal);
+    }
+    apply(a, b, inv_inertia[c.a], inv_inertia[c.b], c.ca, c.cb, c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2);
+    const Vec3 spin = c.rolling_impulse + c.twist_impulse * c.normal;
+    *a.w -= inv_inertia[c.a] * spin;
+    *b.w += inv_inertia[c.b] * spin;
+  }
+}
+
+void RigidContacts::solve(RigidBodySystem& s, double h, bool bias, bool soft) {
+  const ContactSettings& cs = s.settings_;
+  // stiffness at most a quarter of the substep rate (stiffer contacts rock a stack: measured
+  // with 120 Hz at 240 Hz substeps); a contact with a body that cannot move gets twice the
+  // stiffness within the same limit (Box2D's static softness)
+  const double hertz = std::min(cs.contact_hertz, 0.25 / h);
+  const Softness dynamic_soft = make_soft(hertz, cs.damping_ratio, h);
+  const Softness static_soft = make_soft(std::min(2 * hertz, 0.25 / h), cs.damping_ratio, h);
+  for (ContactPair& c : pairs) {
+    auto a = view(s, c.a), b = view(s, c.b);
+    const Mat3& ia = inv_inertia[c.a];
+    const Mat3& ib = inv_inertia[c.b];
+    const Softness& sft = (a.inv_mass == 0 || b.inv_mass == 0) ? static_soft : dynamic_soft;
+    // how far each body has moved and turned since the start of the step
+    const Quat turn_a = *a.q * glm::conjugate(s.q0_[c.a]);
+    const Quat turn_b = *b.q * glm::conjugate(s.q0_[c.b]);
+    double total_normal = 0;
+    // non-penetration, swept over the manifold's points `manifold_iterations` times: Gauss-
+    // Seidel on the manifold's small problem, toward the block solution (one sweep leaves a
+    // torque imbalance between the points that rocks tall stacks)
+    // the separations: positions do not move within a pass
+    double separation[Manifold::kMaxPoints];
+    for (int k = 0; k < c.count; ++k) {
+      const SolverPoint& p = c.points[k];
+      separation[k] = glm::dot((*b.com + turn_b * p.sb) - (*a.com + turn_a * p.sa), c.normal) + p.offset;
+    }
+    for (int it = 0; it < cs.manifold_iterations; ++it) {
+    total_normal = 0;
+    for (int k = 0; k < c.count; ++k) {
+      SolverPoint& p = c.points[k];
+      const double sep = separation[k];
+      double velocity_bias = 0, mass_scale = 1, impulse_scale = 0;
+      if (sep > 0) {
+        // speculative: close the gap in this substep, no more. The relax pass leaves such
+        // points alone: the next substep's biased pass stops the approach before positions
+        // move, and a body slowed here would reach the contact slower than it falls, which
+        // the restitution pass would then bounce too weakly
+        if (!bias) {
+          total_normal += p.normal_impulse;
+          continue;
+        }
+        velocity_bias = sep / h;
+      } else if (bias) {
+        if (soft) {
+          velocity_bias = std::max(sft.bias_rate * sep, -cs.push_out_speed);
+          mass_scale = sft.mass_scale;
+          impulse_scale = sft.impulse_scale;
+        } else {
+          velocity_bias = std::max(cs.baumgarte / h * std::min(0.0, sep + cs.linear_slop), -cs.push_out_speed);
+        }
+      }
+      const Vec3 dv = *b.v + glm::cross(*b.w, p.rb) - *a.v - glm::cross(*a.w, p.ra);
+      const double vn = glm::dot(dv, c.normal);
+      // the fastest approach seen, gravity of the substeps before the impact included
+      if (bias) p.approach = std::min(p.approach, vn);
+      double impulse = -p.normal_mass * mass_scale * (vn + velocity_bias) - impulse_scale * p.normal_impulse;
+      const double total = std::max(p.normal_impulse + impulse, 0.0);
+      impulse = total - p.normal_impulse;
+      p.normal_impulse = total;
+      p.max_normal_impulse = std::max(p.max_normal_impulse, impulse);
+      total_normal += total;
+      apply(a, b, ia, ib, p.ra, p.rb, impulse * c.normal);
+    }
+    }
+    // Coulomb friction at the centroid: the tangential impulse stays inside the disc of
+    // radius mu * (total normal impulse)
+    {
+      const Vec3 dv = *b.v + glm::cross(*b.w, c.cb) - *a.v - glm::cross(*a.w, c.ca);
+      const double old0 = c.tangent_impulse[0], old1 = c.tangent_impulse[1];
+      double t0 = old0 - c.tangent_mass[0] * glm::dot(dv, c.t1);
+      double t1 = old1 - c.tangent_mass[1] * glm::dot(dv, c.t2);
+      const double limit = c.friction * total_normal, len = std::sqrt(t0 * t0 + t1 * t1);
+      if (len > limit) {
+        const double scale = len > 0 ? limit / len : 0;
+        t0 *= scale, t1 *= scale;
+      }
+      c.tangent_impulse[0] = t0, c.tangent_impulse[1] = t1;
+      apply(a, b, ia, ib, c.ca, c.cb, (t0 - old0) * c.t1 + (t1 - old1) * c.t2);
+    }
+    // twist friction about the normal, up to mu * total normal * mean lever arm
+    if (c.twist_radius > 0) {
+      const double old = c.twist_impulse, limit = c.friction * total_normal * c.twist_radius;
+      const double j = std::clamp(old - c.twist_mass * glm::dot(*b.w - *a.w, c.normal), -limit, limit);
+      c.twist_impulse = j;
+      *a.w -= ia * ((j - old) * c.normal);
+      *b.w += ib * ((j - old) * c.normal);
+    }
+    // rolling resistance: an angular impulse against the relative spin, up to rolling * normal
+    if (c.rolling > 0) {
+      const Vec3 old = c.rolling_impulse;
+      Vec3 j = old - c.rolling_mass * (*b.w - *a.w);
+      const double limit = c.rolling * total_normal, len = glm::length(j);
+      if (len > limit) j *= limit / len;
+      c.rolling_impulse = j;
+      *a.w -= ia * (j - old);
+      *b.w += ib * (j - old);
+    }
+  }
+}
+
+void RigidContacts::restitution(RigidBodySystem& s) {
+  const double threshold = s.settings_.restitution_threshold;
+  for (ContactPair& c : pairs) {
+    if (c.restitution == 0) continue;
+    auto a = view(s, c.a), b = view(s, c.b);
+    for (int k = 0; k < c.count; ++k) {
+      SolverPoint& p = c.points[k];
+      // only points that approached fast enough and actually pushed
+      if (p.approach > -threshold || p.max_normal_impulse == 0) continue;
+      const Vec3 dv = *b.v + glm::cross(*b.w, p.rb) - *a.v - glm::cross(*a.w, p.ra);
+      const double vn = glm::dot(dv, c.normal);
+      double impulse = -p.normal_mass * (vn + c.restitution * p.approach);
+      const double total = std::max(p.normal_impulse + impulse, 0.0);
+      impulse = total - p.normal_impulse;
+      p.normal_impulse = total;
+      apply(a, b, inv_inertia[c.a], inv_inertia[c.b], p.ra, p.rb, impulse * c.normal);
+    }
+  }
+}
+
+void RigidContacts::store() {
+  for (ContactPair& c : pairs) c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
+}
+
+}  // namespace pba::detail

@@ -1,0 +1,117 @@
+// Rigid bodies, private: the contact pairs, their manifolds and the solvers' per-point data.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "pba/collide/narrow_phase.h"
+#include "pba/rigid.h"
+
+namespace pba::detail {
+
+/// One contact point as the solver sees it: anchors, effective masses and impulses.
+struct SolverPoint {
+  Vec3 ra{0, 0, 0}, rb{0, 0, 0};  // anchors from the centres of mass at the start of the step (m)
+  // the separation now is dot(core_b_now - core_a_now, n) + offset, where core_x are the
+  // points of the shapes' cores (a sphere's centre, a capsule's segment, a box's surface) at
+  // sa, sb from the centres of mass, turned with the bodies: a rolling ball's surface point
+  // turns away from the contact, its centre does not
+  Vec3 sa{0, 0, 0}, sb{0, 0, 0};
+  double offset = 0;              // (m)
+  double normal_mass = 0;         // 1 / (J M^-1 J^T) along the normal (kg)
+  double normal_impulse = 0;      // accumulated (N s per substep)
+  double max_normal_impulse = 0;  // largest single normal impulse of the step (N s)
+  double approach = 0;            // normal relative velocity before the solve (m/s)
+  double depth = 0;               // overlap at the start of the step (m)
+  Vec3 local{0, 0, 0};            // the point in body a's frame (m), for matching by position
+  std::uint32_t id = 0;           // feature id (warm starting)
+};
+
+/// A touching or speculative pair of shapes of two bodies. Friction acts on the manifold as
+/// a whole ("patch friction", as PhysX and Jolt do): two tangential constraints at the
+/// centroid of the points, limited together to the disc mu * (sum of normal impulses), and
+/// one twist constraint about the normal, limited to mu * sum * the points' mean distance
+/// from the centroid. Per-point friction clamped point by point lets opposing sideways
+/// impulses at different points survive (they cancel in the sum but use up the disc), which
+/// measurably weakens sliding friction.
+struct ContactPair {
+  std::uint32_t slot_a = 0, slot_b = 0;    // body handle slots (stable across removals)
+  std::uint32_t shape_a = 0, shape_b = 0;  // shape indices within the bodies
+  std::uint32_t a = 0, b = 0;              // dense body indices this step
+  NarrowPhaseCache cache{};
+  Vec3 normal{0, 0, 1}, t1{1, 0, 0}, t2{0, 0, 1};  // from a to b, and the friction basis
+  double friction = 0, restitution = 0, rolling = 0;  // mixed coefficients (rolling: times radius, m)
+  Vec3 ca{0, 0, 0}, cb{0, 0, 0};  // friction anchor (the points' centroid) from each centre of mass (m)
+  double tangent_mass[2] = {0, 0};   // effective masses of the two tangential constraints (kg)
+  double tangent_impulse[2] = {0, 0};  // accumulated (N s per substep)
+  double twist_mass = 0;     // effective inertia about the normal (kg m^2)
+  double twist_impulse = 0;  // accumulated (N m s per substep)
+  double twist_radius = 0;   // mean distance of the points from the centroid (m)
+  Vec3 friction_old{0, 0, 0};  // the tangential impulse in world axes at the end of the step
+  Mat3 rolling_mass{0.0};    // inverse of the relative angular inverse inertia (kg m^2)
+  Vec3 rolling_impulse{0, 0, 0};  // accumulated rolling-resistance angular impulse (N m s)
+  int count = 0;
+  SolverPoint points[Manifold::kMaxPoints];
+
+  // the ordering of pairs (by body slots, then shapes): deterministic, and binary-searchable
+  bool operator<(const ContactPair& o) const {
+    if (slot_a != o.slot_a) return slot_a < o.slot_a;
+    if (slot_b != o.slot_b) return slot_b < o.slot_b;
+    if (shape_a != o.shape_a) return shape_a < o.shape_a;
+    return shape_b < o.shape_b;
+  }
+};
+
+/// Pointers to one body's solver state (velocities, centre and orientation) and its inverse mass.
+struct BodyView {
+  Vec3* v;
+  Vec3* w;
+  Vec3* com;
+  Quat* q;
+  double inv_mass;
+};
+
+/// A shape's entry in the sweep: its bounds this step and who owns it.
+struct ShapeProxy {
+  Aabb box{};
+  std::uint32_t body = 0;   // dense index
+  std::uint32_t shape = 0;  // index within the body
+};
+
+/// Softness of a contact: Catto's soft step coefficients for a spring of `hertz` and
+/// damping ratio `zeta` integrated implicitly over h (Box2D v3 b2MakeSoft).
+struct Softness {
+  double bias_rate = 0;      // 1/s
+  double mass_scale = 1;     // in (0, 1]
+  double impulse_scale = 0;  // in [0, 1)
+};
+Softness make_soft(double hertz, double zeta, double h);
+
+/// The contact state of a RigidBodySystem: pairs (this step's and last step's), scratch
+/// for the sweep, and the solver passes. Grown, never shrunk: steady state does not allocate.
+struct RigidContacts {
+  std::vector<ContactPair> pairs, previous;
+  std::vector<ShapeProxy> proxies;
+  std::vector<Mat3> inv_inertia;  // world inverse inertia by dense body, fixed over the step
+
+  /// Finds the overlapping shape pairs, builds their manifolds and carries last step's
+  /// impulses over by feature id.
+  void update(RigidBodySystem& s, double dt);
+  /// Anchors, effective masses and approach speeds at the start of the step.
+  void prepare(RigidBodySystem& s);
+  /// Applies the carried impulses.
+  void warm_start(RigidBodySystem& s);
+  /// One pass over the contacts. `soft` picks the soft-step constraint; `bias` asks for
+  /// position correction (false: the relax pass).
+  void solve(RigidBodySystem& s, double h, bool bias, bool soft);
+  /// Restitution for points that approached faster than the threshold.
+  void restitution(RigidBodySystem& s);
+  /// Keeps each point's friction impulse in world axes for next step's re-projection.
+  void store();
+  /// Body i's solver state.
+  static BodyView view(RigidBodySystem& s, std::size_t i) {
+    return {&s.v_[i], &s.w_[i], &s.com_[i], &s.q_[i], s.asleep_[i] ? 0.0 : s.inv_mass_[i]};
+  }
+};
+
+}  // namespace pba::detail

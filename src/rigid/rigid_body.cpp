@@ -1,0 +1,668 @@
+// Rigid bodies: definitions, mass properties, storage and free motion.
+#include "pba/rigid.h"
+
+#include "contacts.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/Eigenvalues>
+
+namespace pba {
+
+namespace {
+
+// the rotation by `angle` (rad) about the unit `axis`
+Quat axis_angle(const Vec3& axis, double angle) {
+  const double s = std::sin(0.5 * angle);
+  return Quat(std::cos(0.5 * angle), axis.x * s, axis.y * s, axis.z * s);
+}
+
+// the principal moments of a symmetric inertia and the rotation whose columns are the
+// principal axes (a diagonal tensor keeps the identity, so simple bodies stay exact)
+void principal_axes(const Mat3& inertia, Vec3& moments, Quat& rotation) {
+  const bool diagonal = inertia[0][1] == 0 && inertia[0][2] == 0 && inertia[1][2] == 0 && inertia[1][0] == 0 &&
+                        inertia[2][0] == 0 && inertia[2][1] == 0;
+  if (diagonal) {
+    moments = {inertia[0][0], inertia[1][1], inertia[2][2]};
+    rotation = Quat(1, 0, 0, 0);
+    return;
+  }
+  Eigen::Matrix3d m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m(r, c) = 0.5 * (inertia[c][r] + inertia[r][c]);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m);
+  Eigen::Matrix3d axes = eig.eigenvectors();
+  // a proper rotation: flip the last axis of a reflection
+  if (axes.determinant() < 0) axes.col(2) = -axes.col(2);
+  Mat3 r;
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 3; ++k) r[c][k] = axes(k, c);
+  moments = {eig.eigenvalues()(0), eig.eigenvalues()(1), eig.eigenvalues()(2)};
+  rotation = glm::normalize(glm::quat_cast(r));
+}
+
+// the inertia of a point mass m at offset d about the origin (parallel-axis term)
+Mat3 parallel_axis(double m, const Vec3& d) {
+  Mat3 out(m * glm::dot(d, d));
+  out -= m * glm::outerProduct(d, d);
+  return out;
+}
+
+bool finite_quat(const Quat& q) {
+  return std::isfinite(q.w) && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z);
+}
+
+// require_unit_quat's test without building a message
+bool unit_quat(const Quat& q) { return finite_quat(q) && std::abs(glm::length(q) - 1.0) <= 1e-6; }
+
+}  // namespace
+
+std::string_view to_string(RigidSolverType t) {
+  switch (t) {
+    case RigidSolverType::SoftStep: return "soft-step";
+    case RigidSolverType::SequentialImpulse: return "sequential-impulse";
+  }
+  return "unknown";
+}
+
+void ContactSettings::validate(std::string_view where) const {
+  if (solver != RigidSolverType::SoftStep && solver != RigidSolverType::SequentialImpulse)
+    throw Error(field_path(where, "solver") + ": unknown solver " + std::to_string(static_cast<int>(solver)));
+  require_count(substeps, 1, 64, field_path(where, "substeps"));
+  require_count(iterations, 1, 1000, field_path(where, "iterations"));
+  require_count(manifold_iterations, 1, 16, field_path(where, "manifold_iterations"));
+  require_positive(contact_hertz, field_path(where, "contact_hertz"));
+  require_non_negative(damping_ratio, field_path(where, "damping_ratio"));
+  require_positive(push_out_speed, field_path(where, "push_out_speed"));
+  require_in_range(baumgarte, 0, 1, field_path(where, "baumgarte"));
+  require_non_negative(linear_slop, field_path(where, "linear_slop"));
+  require_non_negative(speculative_distance, field_path(where, "speculative_distance"));
+  require_non_negative(restitution_threshold, field_path(where, "restitution_threshold"));
+  require_non_negative(sleep_linear, field_path(where, "sleep_linear"));
+  require_non_negative(sleep_angular, field_path(where, "sleep_angular"));
+  require_non_negative(time_to_sleep, field_path(where, "time_to_sleep"));
+}
+
+std::string_view to_string(BodyType t) {
+  switch (t) {
+    case BodyType::Static: return "static";
+    case BodyType::Kinematic: return "kinematic";
+    case BodyType::Dynamic: return "dynamic";
+  }
+  return "unknown";
+}
+
+// ---------------------------------------------------------------------------------------
+// mass properties
+
+RigidMass RigidMass::box(double mass, const Vec3& h) {
+  const Vec3 d = 2.0 * h;
+  const double k = mass / 12;
+  Mat3 i(0.0);
+  i[0][0] = k * (d.y * d.y + d.z * d.z);
+  i[1][1] = k * (d.x * d.x + d.z * d.z);
+  i[2][2] = k * (d.x * d.x + d.y * d.y);
+  return {mass, {0, 0, 0}, i};
+}
+
+RigidMass RigidMass::sphere(double mass, double r) { return {mass, {0, 0, 0}, Mat3(0.4 * mass * r * r)}; }
+
+RigidMass RigidMass::operator+(const RigidMass& o) const {
+  const double m = mass + o.mass;
+  const Vec3 c = (mass * center + o.mass * o.center) / m;
+  return {m, c, inertia + parallel_axis(mass, center - c) + o.inertia + parallel_axis(o.mass, o.center - c)};
+}
+
+void RigidMass::validate(std::string_view where) const {
+  if (!(std::isfinite(mass) && mass > 0)) require_positive(mass, field_path(where, "mass"));
+  require_finite(center, field_path(where, "center"));
+  const std::string w = field_path(where, "inertia");
+  // finite and symmetric to rounding
+  double scale = 0;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) {
+      if (!std::isfinite(inertia[c][r]))
+        throw Error(w + ": must be finite, got " + format_value(inertia[c][r]) + " at row " + std::to_string(r) +
+                    ", column " + std::to_string(c));
+      scale = std::max(scale, std::abs(inertia[c][r]));
+    }
+  for (int c = 0; c < 3; ++c)
+    for (int r = c + 1; r < 3; ++r)
+      if (std::abs(inertia[c][r] - inertia[r][c]) > 1e-9 * scale)
+        throw Error(w + ": must be symmetric, got " + format_value(inertia[c][r]) + " and " +
+                    format_value(inertia[r][c]) + " at (" + std::to_string(r) + ", " + std::to_string(c) + ")");
+  // positive principal moments that a real mass distribution can have
+  Vec3 m;
+  Quat q;
+  principal_axes(inertia, m, q);
+  if (!(m.x > 0 && m.y > 0 && m.z > 0))
+    throw Error(w + ": must be positive definite, got principal moments " + format_vec3(m));
+  const double slack = 1e-9 * (m.x + m.y + m.z);
+  if (m.x > m.y + m.z + slack || m.y > m.x + m.z + slack || m.z > m.x + m.y + slack)
+    throw Error(w + ": principal moments " + format_vec3(m) +
+                " break the triangle inequality (each must be at most the sum of the other two)");
+}
+
+void RigidBodyDef::validate(std::string_view where) const {
+  require_finite(pose.position, field_path(where, "pose.position"));
+  require_unit_quat(pose.rotation, field_path(where, "pose.rotation"));
+  require_finite(linear_velocity, field_path(where, "linear_velocity"));
+  require_finite(angular_velocity, field_path(where, "angular_velocity"));
+  require_non_negative(linear_damping, field_path(where, "linear_damping"));
+  require_non_negative(angular_damping, field_path(where, "angular_damping"));
+  require_finite(gravity_scale, field_path(where, "gravity_scale"));
+  if (shapes.empty()) throw Error(field_path(where, "shapes") + ": a body needs at least one shape, got none");
+  for (std::size_t k = 0; k < shapes.size(); ++k) {
+    const RigidShapeDef& d = shapes[k];
+    const std::string w = field_path(where, "shapes[" + std::to_string(k) + "]");
+    d.shape.validate(field_path(w, "shape"));
+    require_finite(d.local.position, field_path(w, "local.position"));
+    require_unit_quat(d.local.rotation, field_path(w, "local.rotation"));
+    require_positive(d.density, field_path(w, "density"));
+    require_in_range(d.material.restitution, 0, 1, field_path(w, "material.restitution"));
+    require_non_negative(d.material.friction, field_path(w, "material.friction"));
+    require_non_negative(d.rolling_resistance, field_path(w, "rolling_resistance"));
+    const bool solid = d.shape.type != ShapeType::Plane && d.shape.type != ShapeType::Mesh;
+    if (type != BodyType::Static && !solid)
+      throw Error(field_path(w, "shape") + ": a " + std::string(to_string(d.shape.type)) +
+                  " has no volume, so only a static body can have one (this body is " + std::string(to_string(type)) +
+                  ")");
+  }
+  if (type == BodyType::Dynamic && mass) mass->validate(field_path(where, "mass"));
+}
+
+// ---------------------------------------------------------------------------------------
+// storage
+
+RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::make_unique<detail::RigidContacts>()) {
+  require_count(static_cast<long long>(def.capacity), 0, 1LL << 26, "RigidSystemDef.capacity");
+  def.contacts.validate("RigidSystemDef.contacts");
+  settings_ = validated_ = def.contacts;
+  const std::size_t n = def.capacity;
+  ids_.reserve(n);
+  for (auto* v : {&slot_, &owner_}) v->reserve(n);
+  type_.reserve(n);
+  for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_}) v->reserve(n);
+  for (auto* v : {&q_, &principal_, &q0_}) v->reserve(n);
+  for (auto* v : {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_, &sleep_time_, &island_slow_}) v->reserve(n);
+  for (auto* v : {&island_, &parent_}) v->reserve(n);
+  asleep_.reserve(n);
+  name_.reserve(n);
+  bullet_.reserve(n);
+  shapes_.reserve(n);
+}
+
+RigidBodySystem::~RigidBodySystem() = default;
+RigidBodySystem::RigidBodySystem(RigidBodySystem&&) noexcept = default;
+RigidBodySystem& RigidBodySystem::operator=(RigidBodySystem&&) noexcept = default;
+
+void RigidBodySystem::set_substeps(int n) {
+  require_count(n, 1, 64, "ContactSettings.substeps");
+  settings_.substeps = n;
+}
+
+RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view where) {
+  const std::string w = def.name.empty() ? std::string(where) : std::string(where) + " '" + def.name + "'";
+  def.validate(w);
+  // compounds become their children, so the narrow phase sees convex shapes and planes only
+  std::vector<RigidShapeDef> shapes;
+  for (const RigidShapeDef& d : def.shapes) {
+    if (d.shape.type != ShapeType::Compound) {
+      shapes.push_back(d);
+      continue;
+    }
+    for (const CompoundChild& c : d.shape.compound->children) {
+      RigidShapeDef child = d;
+      child.shape = c.shape;
+      child.local = compose(d.local, c.pose);
+      shapes.push_back(child);
+    }
+  }
+  // the principal frame of a dynamic body (mass given, or from the shapes); others have no inertia
+  Vec3 moments(0), inv(0);
+  Quat principal(1, 0, 0, 0);
+  Vec3 com_local(0);
+  double inv_mass = 0;
+  if (def.type == BodyType::Dynamic) {
+    RigidMass m;
+    if (def.mass) {
+      m = *def.mass;
+    } else {
+      for (std::size_t k = 0; k < shapes.size(); ++k) {
+        const RigidMass part = RigidMass::of_shape(shapes[k].shape, shapes[k].density, shapes[k].local,
+                                                   field_path(w, "shapes[" + std::to_string(k) + "]"));
+        m = k == 0 ? part : m + part;
+      }
+      m.validate(field_path(w, "mass (from the shapes)"));
+    }
+    principal_axes(m.inertia, moments, principal);
+    inv = 1.0 / moments;
+    inv_mass = 1.0 / m.mass;
+    com_local = m.center;
+  }
+  const RigidBodyId id = ids_.create();
+  if (slot_.size() <= id.index) slot_.resize(id.index + 1);
+  slot_[id.index] = static_cast<std::uint32_t>(type_.size());
+  owner_.push_back(id.index);
+  type_.push_back(def.type);
+  com_.push_back(apply(def.pose, com_local));
+  q_.push_back(glm::normalize(def.pose.rotation * principal));
+  v_.push_back(def.type == BodyType::Static ? Vec3(0) : def.linear_velocity);
+  w_.push_back(def.type == BodyType::Static ? Vec3(0) : def.angular_velocity);
+  force_.push_back(Vec3(0));
+  torque_.push_back(Vec3(0));
+  inv_mass_.push_back(inv_mass);
+  inv_inertia_.push_back(inv);
+  inertia_.push_back(moments);
+  lin_damp_.push_back(def.linear_damping);
+  ang_damp_.push_back(def.angular_damping);
+  gravity_scale_.push_back(def.gravity_scale);
+  com_local_.push_back(com_local);
+  principal_.push_back(principal);
+  name_.push_back(def.name);
+  bullet_.push_back(def.bullet ? 1 : 0);
+  shapes_.push_back(std::move(shapes));
+  asleep_.push_back(0);
+  sleep_time_.push_back(0);
+  island_.push_back(static_cast<std::uint32_t>(type_.size() - 1));
+  parent_.push_back(0);
+  island_slow_.push_back(0);
+  com0_.push_back(com_.back());
+  q0_.push_back(q_.back());
+  return id;
+}
+
+void RigidBodySystem::destroy(RigidBodyId id) {
+  const std::size_t i = index(id, "RigidBodySystem::destroy");
+  const std::size_t last = type_.size() - 1;
+  // move the last body into the hole (every array, then the handle maps)
+  auto fill = [&](auto& v) {
+    v[i] = std::move(v[last]);
+    v.pop_back();
+  };
+  fill(type_), fill(com_), fill(q_), fill(v_), fill(w_), fill(force_), fill(torque_), fill(inv_mass_);
+  fill(inv_inertia_), fill(inertia_), fill(lin_damp_), fill(ang_damp_), fill(gravity_scale_);
+  fill(com_local_), fill(principal_), fill(name_), fill(bullet_), fill(shapes_), fill(com0_), fill(q0_);
+  fill(asleep_), fill(sleep_time_), fill(island_), fill(parent_), fill(island_slow_);
+  const std::uint32_t moved = owner_[last];
+  owner_[i] = moved;
+  owner_.pop_back();
+  slot_[moved] = static_cast<std::uint32_t>(i);
+  // the body's contacts go; the others follow the moved body to its new index
+  auto& pairs = contacts_->pairs;
+  std::erase_if(pairs, [&](const detail::ContactPair& c) { return c.slot_a == id.index || c.slot_b == id.index; });
+  for (detail::ContactPair& c : pairs) c.a = slot_[c.slot_a], c.b = slot_[c.slot_b];
+  ids_.destroy(id, "RigidBodySystem::destroy");
+  // the islands' indices moved: wake everyone (rare; the next step finds the islands again)
+  for (std::size_t k = 0; k < type_.size(); ++k) asleep_[k] = 0, sleep_time_[k] = 0, island_[k] = static_cast<std::uint32_t>(k);
+}
+
+std::size_t RigidBodySystem::index(RigidBodyId id, std::string_view where) const {
+  ids_.require(id, where);
+  return slot_[id.index];
+}
+
+std::string RigidBodySystem::describe(std::size_t i) const {
+  return "rigid body " + std::to_string(owner_[i]) + (name_[i].empty() ? "" : " '" + name_[i] + "'");
+}
+
+// ---------------------------------------------------------------------------------------
+// state
+
+Pose RigidBodySystem::pose(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::pose");
+  const Quat r = glm::normalize(q_[i] * glm::conjugate(principal_[i]));
+  return {com_[i] - r * com_local_[i], r};
+}
+
+Vec3 RigidBodySystem::center_of_mass(RigidBodyId id) const { return com_[index(id, "RigidBodySystem::center_of_mass")]; }
+Vec3 RigidBodySystem::linear_velocity(RigidBodyId id) const { return v_[index(id, "RigidBodySystem::linear_velocity")]; }
+Vec3 RigidBodySystem::angular_velocity(RigidBodyId id) const { return w_[index(id, "RigidBodySystem::angular_velocity")]; }
+BodyType RigidBodySystem::type(RigidBodyId id) const { return type_[index(id, "RigidBodySystem::type")]; }
+const std::string& RigidBodySystem::name(RigidBodyId id) const { return name_[index(id, "RigidBodySystem::name")]; }
+
+Vec3 RigidBodySystem::velocity_at(RigidBodyId id, const Vec3& p) const {
+  const std::size_t i = index(id, "RigidBodySystem::velocity_at");
+  return v_[i] + glm::cross(w_[i], p - com_[i]);
+}
+
+double RigidBodySystem::mass(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::mass");
+  return inv_mass_[i] > 0 ? 1.0 / inv_mass_[i] : INFINITY;
+}
+
+Mat3 RigidBodySystem::world_inertia(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::world_inertia");
+  const Mat3 r = glm::mat3_cast(q_[i]);
+  Mat3 d(0.0);
+  d[0][0] = inertia_[i].x, d[1][1] = inertia_[i].y, d[2][2] = inertia_[i].z;
+  return r * d * glm::transpose(r);
+}
+
+Vec3 RigidBodySystem::angular_momentum(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::angular_momentum");
+  // L = R diag(I) R^T w, in the principal frame
+  const Vec3 wb = glm::conjugate(q_[i]) * w_[i];
+  return q_[i] * (inertia_[i] * wb);
+}
+
+double RigidBodySystem::kinetic_energy(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::kinetic_energy");
+  if (inv_mass_[i] == 0) return 0;
+  const Vec3 wb = glm::conjugate(q_[i]) * w_[i];
+  return 0.5 * glm::dot(v_[i], v_[i]) / inv_mass_[i] + 0.5 * glm::dot(wb, inertia_[i] * wb);
+}
+
+void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
+  const std::size_t i = index(id, "RigidBodySystem::set_pose");
+  if (!is_finite(pose.position)) require_finite(pose.position, describe(i) + " set_pose position");
+  if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
+  com_[i] = apply(pose, com_local_[i]);
+  q_[i] = glm::normalize(pose.rotation * principal_[i]);
+  wake_island(i);
+}
+
+void RigidBodySystem::set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular) {
+  const std::size_t i = index(id, "RigidBodySystem::set_velocity");
+  if (!is_finite(linear)) require_finite(linear, describe(i) + " set_velocity linear");
+  if (!is_finite(angular)) require_finite(angular, describe(i) + " set_velocity angular");
+  if (type_[i] == BodyType::Static) return;  // a static body never moves
+  v_[i] = linear;
+  w_[i] = angular;
+  wake_island(i);
+}
+
+void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f, const Vec3& p) {
+  const std::size_t i = index(id, "RigidBodySystem::apply_force");
+  if (!is_finite(f)) require_finite(f, describe(i) + " apply_force force");
+  if (!is_finite(p)) require_finite(p, describe(i) + " apply_force point");
+  if (type_[i] != BodyType::Dynamic) return;
+  force_[i] += f;
+  torque_[i] += glm::cross(p - com_[i], f);
+  wake_island(i);
+}
+
+void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f) {
+  const std::size_t i = index(id, "RigidBodySystem::apply_force");
+  if (!is_finite(f)) require_finite(f, describe(i) + " apply_force force");
+  if (type_[i] == BodyType::Dynamic) force_[i] += f, wake_island(i);
+}
+
+void RigidBodySystem::apply_torque(RigidBodyId id, const Vec3& t) {
+  const std::size_t i = index(id, "RigidBodySystem::apply_torque");
+  if (!is_finite(t)) require_finite(t, describe(i) + " apply_torque torque");
+  if (type_[i] == BodyType::Dynamic) torque_[i] += t, wake_island(i);
+}
+
+void RigidBodySystem::apply_impulse(RigidBodyId id, const Vec3& j, const Vec3& p) {
+  const std::size_t i = index(id, "RigidBodySystem::apply_impulse");
+  if (!is_finite(j)) require_finite(j, describe(i) + " apply_impulse impulse");
+  if (!is_finite(p)) require_finite(p, describe(i) + " apply_impulse point");
+  if (type_[i] != BodyType::Dynamic) return;
+  wake_island(i);
+  v_[i] += inv_mass_[i] * j;
+  // dw = I^-1 (r x J) with I^-1 = R diag(1/I) R^T
+  const Vec3 l = glm::conjugate(q_[i]) * glm::cross(p - com_[i], j);
+  w_[i] += q_[i] * (inv_inertia_[i] * l);
+}
+
+void RigidBodySystem::apply_angular_impulse(RigidBodyId id, const Vec3& j) {
+  const std::size_t i = index(id, "RigidBodySystem::apply_angular_impulse");
+  if (!is_finite(j)) require_finite(j, describe(i) + " apply_angular_impulse");
+  if (type_[i] != BodyType::Dynamic) return;
+  wake_island(i);
+  w_[i] += q_[i] * (inv_inertia_[i] * (glm::conjugate(q_[i]) * j));
+}
+
+// ---------------------------------------------------------------------------------------
+// stepping
+
+// Torque-free rotation over h by the symmetric splitting of Dullweber, Leimkuhler and
+// McLachlan (1997, J. Chem. Phys. 107, eq. 3.7): the kinetic energy is a sum of three
+// terms pi_k^2 / (2 I_k), each of whose flows is an exact rotation about principal axis k.
+// Composing them as 1/2 1/2 1 1/2 1/2 (axes x, y, z, y, x) is symmetric, so second order;
+// every sub-flow keeps the world angular momentum exactly (each term is invariant under
+// rotations of space), so L drifts only by rounding and the energy error stays O(h^2).
+void RigidBodySystem::integrate_rotation(std::size_t i, double h) {
+  static constexpr int kAxis[5] = {0, 1, 2, 1, 0};
+  static constexpr double kFraction[5] = {0.5, 0.5, 1.0, 0.5, 0.5};
+  Quat q = q_[i];
+  const Vec3 inv = inv_inertia_[i];
+  // body-frame angular momentum pi = I w_body
+  Vec3 pi = inertia_[i] * (glm::conjugate(q) * w_[i]);
+  for (int s = 0; s < 5; ++s) {
+    const int k = kAxis[s];
+    const double angle = kFraction[s] * h * pi[k] * inv[k];
+    // the body turns by +angle about its axis k; its momentum, seen from the body, by -angle
+    const double c = std::cos(angle), sn = std::sin(angle);
+    const double hs = std::sin(0.5 * angle), hc = std::cos(0.5 * angle);
+    const Quat dq(hc, k == 0 ? hs : 0.0, k == 1 ? hs : 0.0, k == 2 ? hs : 0.0);
+    q = q * dq;
+    const int a = (k + 1) % 3, b = (k + 2) % 3;
+    const double pa = pi[a], pb = pi[b];
+    pi[a] = c * pa + sn * pb;
+    pi[b] = -sn * pa + c * pb;
+  }
+  q = glm::normalize(q);
+  q_[i] = q;
+  w_[i] = q * (pi * inv);
+}
+
+void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity) {
+  const std::size_t n = type_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    // gravity, applied force and torque, then implicit damping
+    const Vec3 v = v_[i] + h * (gravity_scale_[i] * gravity + inv_mass_[i] * force_[i]);
+    v_[i] = v / (1 + h * lin_damp_[i]);
+    const Vec3 tb = glm::conjugate(q_[i]) * torque_[i];
+    const Vec3 w = w_[i] + q_[i] * (h * inv_inertia_[i] * tb);
+    w_[i] = w / (1 + h * ang_damp_[i]);
+    // a force too large for a double stops here, before contacts can spread it to others
+    if (!(is_finite(v_[i]) && is_finite(w_[i]))) fail(i);
+  }
+}
+
+void RigidBodySystem::integrate_positions(double h) {
+  const std::size_t n = type_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    switch (type_[i]) {
+      case BodyType::Static: break;
+      case BodyType::Kinematic: {
+        // constant velocities: exact translation and rotation
+        com_[i] += h * v_[i];
+        const double wl = glm::length(w_[i]);
+        if (wl > 0) q_[i] = glm::normalize(axis_angle(w_[i] / wl, wl * h) * q_[i]);
+        break;
+      }
+      case BodyType::Dynamic:
+        if (asleep_[i]) break;
+        // symplectic Euler for the centre, the exact-flow splitting for the rotation
+        com_[i] += h * v_[i];
+        integrate_rotation(i, h);
+        break;
+    }
+  }
+}
+
+void RigidBodySystem::step(double dt, const Vec3& gravity) {
+  if (!failure_.empty()) throw Error(failure_);
+  if (!(std::isfinite(dt) && dt > 0)) require_positive(dt, "RigidBodySystem::step dt");
+  if (!is_finite(gravity)) require_finite(gravity, "RigidBodySystem::step gravity");
+  if (!(settings_ == validated_)) {
+    settings_.validate("RigidBodySystem.settings");
+    validated_ = settings_;
+  }
+  last_dt_ = dt;
+  Stopwatch total;
+  const std::size_t n = type_.size();
+  // the start of the step, which the solver measures separations from
+  for (std::size_t i = 0; i < n; ++i) com0_[i] = com_[i], q0_[i] = q_[i];
+  // pairs and manifolds
+  contacts_->update(*this, dt);
+  profile_.collide = total.seconds();
+  contacts_->prepare(*this);
+  const bool soft = settings_.solver == RigidSolverType::SoftStep;
+  if (soft) {
+    // substeps: velocities, carried impulses, soft solve, positions, relax
+    const int substeps = settings_.substeps;
+    const double h = dt / substeps;
+    for (int s = 0; s < substeps; ++s) {
+      integrate_velocities(h, gravity);
+      if (settings_.warm_starting) contacts_->warm_start(*this);
+      contacts_->solve(*this, h, true, true);
+      integrate_positions(h);
+      contacts_->solve(*this, h, false, true);
+    }
+  } else {
+    // one step: velocities, carried impulses, iterated rigid solve with Baumgarte, positions
+    integrate_velocities(dt, gravity);
+    if (settings_.warm_starting) contacts_->warm_start(*this);
+    for (int k = 0; k < settings_.iterations; ++k) contacts_->solve(*this, dt, true, false);
+    integrate_positions(dt);
+  }
+  contacts_->restitution(*this);
+  contacts_->store();
+  check_finite();
+  update_sleep(dt);
+  time_ += dt;
+  profile_.total = total.seconds();
+  profile_.solve = profile_.total - profile_.collide;
+}
+
+void RigidBodySystem::check_finite() {
+  // forces last one step; then look for a body whose state stopped being finite
+  const std::size_t n = type_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    force_[i] = Vec3(0);
+    torque_[i] = Vec3(0);
+    if (!(is_finite(com_[i]) && is_finite(v_[i]) && is_finite(w_[i]) && finite_quat(q_[i]))) fail(i);
+  }
+}
+
+void RigidBodySystem::fail(std::size_t i) {
+  failure_ = describe(i) + " became non-finite in the step to t = " + format_value(time_ + last_dt_) +
+             " s: position " + format_vec3(com_[i]) + ", velocity " + format_vec3(v_[i]) + ", angular velocity " +
+             format_vec3(w_[i]);
+  throw Error(failure_);
+}
+
+// Islands by union-find over the touching contacts between awake dynamic bodies (static and
+// kinematic bodies do not join islands: a floor holds many islands). An island sleeps when
+// each of its bodies has been slower than the tolerances for time_to_sleep; one touching a
+// moving kinematic body never does.
+void RigidBodySystem::update_sleep(double dt) {
+  const std::size_t n = type_.size();
+  const bool on = settings_.sleep;
+  const double lin2 = settings_.sleep_linear * settings_.sleep_linear;
+  const double ang2 = settings_.sleep_angular * settings_.sleep_angular;
+  for (std::size_t i = 0; i < n; ++i) {
+    parent_[i] = static_cast<std::uint32_t>(i);
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    const bool slow = glm::dot(v_[i], v_[i]) < lin2 && glm::dot(w_[i], w_[i]) < ang2;
+    sleep_time_[i] = on && slow ? sleep_time_[i] + dt : 0;
+  }
+  auto find = [&](std::uint32_t i) {
+    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
+    return i;
+  };
+  for (const detail::ContactPair& c : contacts_->pairs) {
+    const bool da = type_[c.a] == BodyType::Dynamic && !asleep_[c.a];
+    const bool db = type_[c.b] == BodyType::Dynamic && !asleep_[c.b];
+    if (da && db) {
+      // the smaller root wins, so the islands do not depend on the pair order
+      const std::uint32_t ra = find(c.a), rb = find(c.b);
+      if (ra != rb) parent_[std::max(ra, rb)] = std::min(ra, rb);
+    } else {
+      // a moving kinematic body keeps what it touches awake
+      const std::uint32_t other = da ? c.a : c.b, k = da ? c.b : c.a;
+      if ((da || db) && type_[k] == BodyType::Kinematic &&
+          (glm::dot(v_[k], v_[k]) > 0 || glm::dot(w_[k], w_[k]) > 0))
+        sleep_time_[other] = 0;
+    }
+  }
+  // the shortest slow time of each island, then put islands to sleep
+  for (std::size_t i = 0; i < n; ++i) island_slow_[i] = INFINITY;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    const std::uint32_t r = find(static_cast<std::uint32_t>(i));
+    island_[i] = r;
+    island_slow_[r] = std::min(island_slow_[r], sleep_time_[i]);
+  }
+  if (!on) return;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    if (island_slow_[island_[i]] >= settings_.time_to_sleep) {
+      asleep_[i] = 1;
+      v_[i] = Vec3(0);
+      w_[i] = Vec3(0);
+    }
+  }
+}
+
+void RigidBodySystem::wake_island(std::size_t i) {
+  if (!asleep_[i]) {
+    sleep_time_[i] = 0;
+    return;
+  }
+  const std::uint32_t island = island_[i];
+  for (std::size_t k = 0; k < type_.size(); ++k)
+    if (asleep_[k] && island_[k] == island) asleep_[k] = 0, sleep_time_[k] = 0;
+}
+
+bool RigidBodySystem::awake(RigidBodyId id) const {
+  const std::size_t i = index(id, "RigidBodySystem::awake");
+  return type_[i] == BodyType::Kinematic || (type_[i] == BodyType::Dynamic && !asleep_[i]);
+}
+
+void RigidBodySystem::wake(RigidBodyId id) { wake_island(index(id, "RigidBodySystem::wake")); }
+
+std::size_t RigidBodySystem::awake_count() const {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < type_.size(); ++i) n += type_[i] == BodyType::Dynamic && !asleep_[i];
+  return n;
+}
+
+std::vector<RigidContactPoint> RigidBodySystem::contacts() const {
+  std::vector<RigidContactPoint> out;
+  for (const detail::ContactPair& c : contacts_->pairs)
+    for (int k = 0; k < c.count; ++k) {
+      const detail::SolverPoint& p = c.points[k];
+      RigidContactPoint r;
+      r.a = {c.slot_a, ids_.generation(c.slot_a)};
+      r.b = {c.slot_b, ids_.generation(c.slot_b)};
+      r.position = com0_[c.a] + p.ra;
+      r.normal = c.normal;
+      r.depth = p.depth;
+      r.normal_impulse = p.normal_impulse;
+      r.tangent_impulse = std::hypot(c.tangent_impulse[0], c.tangent_impulse[1]) / c.count;
+      r.id = p.id;
+      out.push_back(r);
+    }
+  return out;
+}
+
+std::size_t RigidBodySystem::manifold_count() const { return contacts_->pairs.size(); }
+
+std::vector<Aabb> RigidBodySystem::shape_bounds(RigidBodyId id) const {
+  const Pose body = pose(id);
+  std::vector<Aabb> out;
+  for (const RigidShapeDef& d : shapes_[index(id, "RigidBodySystem::shape_bounds")])
+    out.push_back(bounds(d.shape, compose(body, d.local)));
+  return out;
+}
+
+std::span<const RigidShapeDef> RigidBodySystem::shapes(RigidBodyId id) const {
+  return shapes_[index(id, "RigidBodySystem::shapes")];
+}
+
+std::uint64_t RigidBodySystem::hash() const {
+  std::uint64_t h = hash_span(std::span<const Vec3>(com_));
+  h = hash_span(std::span<const Quat>(q_), h);
+  h = hash_span(std::span<const Vec3>(v_), h);
+  return hash_span(std::span<const Vec3>(w_), h);
+}
+
+}  // namespace pba

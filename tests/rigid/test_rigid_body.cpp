@@ -1,0 +1,373 @@
+// Rigid bodies, free motion: closed forms for gravity, damping, impulses and forces; the
+// torque-free tumbling T-handle against the conservation laws and an RK4 reference; bad
+// input by name; determinism.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "pba/rigid.h"
+
+#include "error_of.h"
+
+using pba::BodyType;
+using pba::Mat3;
+using pba::Quat;
+using pba::RigidBodyDef;
+using pba::RigidBodySystem;
+using pba::RigidMass;
+using pba::Vec3;
+using pba::test_support::error_of;
+
+namespace {
+
+const Vec3 kG{0, -9.81, 0};
+// a shape for bodies whose mass is given: far from everything else, it never collides
+const std::vector<pba::RigidShapeDef> kBall{{.shape = pba::ColliderShape::sphere(0.05)}};
+
+// relative difference of two vectors
+double rel(const Vec3& a, const Vec3& b) { return glm::length(a - b) / glm::length(b); }
+
+// ---------------------------------------------------------------------------------------
+// gravity, damping, kinematic bodies
+
+// Semi-implicit Euler with substep h has the closed form v_n = v0 + g n h,
+// x_n = x0 + v0 n h + g h^2 n (n + 1) / 2; its distance from the exact parabola is
+// g h t / 2, first order in h.
+TEST(RigidFreeFall, MatchesTheDiscreteSolutionAndConvergesToTheParabola) {
+  for (const double dt : {1.0 / 30, 1.0 / 60, 1.0 / 240}) {
+    for (const int substeps : {1, 4}) {
+      RigidBodySystem s({.contacts = {.substeps = substeps}});
+      const Vec3 x0{0, 100, 0}, v0{2, 5, -1};
+      auto b = s.create({.pose = {x0}, .linear_velocity = v0, .shapes = kBall, .mass = RigidMass::box(3, {0.5, 0.5, 0.5})});
+      const int steps = static_cast<int>(std::lround(2.0 / dt));
+      for (int i = 0; i < steps; ++i) s.step(dt, kG);
+      const double h = dt / substeps;
+      const double n = static_cast<double>(steps) * substeps, t = n * h;
+      const Vec3 x_discrete = x0 + v0 * t + kG * (h * h * n * (n + 1) / 2);
+      const Vec3 x_exact = x0 + v0 * t + 0.5 * kG * t * t;
+      EXPECT_LT(glm::length(s.center_of_mass(b) - x_discrete), 1e-10) << dt << " " << substeps;
+      EXPECT_LT(glm::length(s.linear_velocity(b) - (v0 + kG * t)), 1e-11);
+      // the error of the scheme is exactly g h t / 2 below the parabola
+      EXPECT_NEAR(glm::length(s.center_of_mass(b) - x_exact), 9.81 * h * t / 2, 1e-9);
+      EXPECT_EQ(s.angular_velocity(b), Vec3(0));
+    }
+  }
+}
+
+TEST(RigidFreeFall, GravityScaleAndStaticBodies) {
+  RigidBodySystem s;
+  auto floating = s.create({.pose = {{0, 1, 0}}, .shapes = kBall, .gravity_scale = 0});
+  auto half = s.create({.pose = {{1, 1, 0}}, .shapes = kBall, .gravity_scale = 0.5});
+  auto full = s.create({.pose = {{2, 1, 0}}, .shapes = kBall});
+  auto ground = s.create({.type = BodyType::Static, .pose = {{0, -1, 0}}, .linear_velocity = {1, 0, 0}, .shapes = kBall});
+  for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kG);
+  EXPECT_EQ(s.center_of_mass(floating), Vec3(0, 1, 0));
+  EXPECT_NEAR(s.linear_velocity(half).y, -9.81 / 2, 1e-12);
+  EXPECT_NEAR(s.linear_velocity(full).y, -9.81, 1e-12);
+  EXPECT_EQ(s.pose(ground).position, Vec3(0, -1, 0));  // static bodies never move
+  EXPECT_EQ(s.linear_velocity(ground), Vec3(0));
+  EXPECT_TRUE(std::isinf(s.mass(ground)));
+}
+
+// implicit damping: v_n = v0 / (1 + h c)^n, which tends to v0 exp(-c t) as h -> 0
+TEST(RigidDamping, FollowsItsDiscreteLawAndTheExponential) {
+  for (const int substeps : {1, 8, 64}) {
+    RigidBodySystem s({.contacts = {.substeps = substeps}});
+    auto b = s.create({.linear_velocity = {4, 0, 0}, .angular_velocity = {0, 0, 3},
+                       .shapes = kBall, .mass = RigidMass::sphere(1, 0.5), .linear_damping = 2, .angular_damping = 0.5});
+    for (int i = 0; i < 60; ++i) s.step(1.0 / 60, Vec3(0));
+    const double h = 1.0 / 60 / substeps, n = 60.0 * substeps;
+    EXPECT_NEAR(s.linear_velocity(b).x, 4 / std::pow(1 + 2 * h, n), 1e-12);
+    EXPECT_NEAR(s.angular_velocity(b).z, 3 / std::pow(1 + 0.5 * h, n), 1e-12);
+    // first order: |v_n - v0 e^{-ct}| <= v0 c^2 t h / 2 e^{-ct} (1 + O(h))
+    EXPECT_NEAR(s.linear_velocity(b).x, 4 * std::exp(-2.0), 4 * 4 * 1 * h / 2 * std::exp(-2.0) * 1.1);
+  }
+}
+
+TEST(RigidKinematic, MovesAtItsVelocityAndTurnsExactly) {
+  RigidBodySystem s;
+  auto k = s.create({.type = BodyType::Kinematic, .linear_velocity = {1, 2, 0}, .angular_velocity = {0, 0, pba::kPi}, .shapes = kBall});
+  for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kG);  // gravity ignored
+  const pba::Pose p = s.pose(k);
+  EXPECT_LT(glm::length(p.position - Vec3(1, 2, 0)), 1e-12);
+  // a half turn about z maps x to -x
+  EXPECT_LT(glm::length(p.rotation * Vec3(1, 0, 0) - Vec3(-1, 0, 0)), 1e-12);
+  EXPECT_TRUE(std::isinf(s.mass(k)));
+}
+
+// ---------------------------------------------------------------------------------------
+// impulses and forces
+
+TEST(RigidImpulse, ChangesMomentumAndAngularMomentumByTheImpulseAndItsMoment) {
+  RigidBodySystem s;
+  const RigidMass m = RigidMass::box(2, {0.5, 0.2, 0.1});
+  const Quat q = glm::angleAxis(0.7, glm::normalize(Vec3(1, 2, 3)));
+  auto b = s.create({.pose = {{1, 2, 3}, q}, .linear_velocity = {0.5, 0, 0}, .angular_velocity = {0.1, 0.2, 0.3},
+                     .shapes = kBall, .mass = m});
+  const Vec3 p0 = s.linear_velocity(b) * 2.0, l0 = s.angular_momentum(b);
+  const Vec3 j{0.3, -1.0, 2.0}, at = Vec3(1, 2, 3) + q * Vec3(0.5, 0.2, -0.1);
+  s.apply_impulse(b, j, at);
+  EXPECT_LT(glm::length(s.linear_velocity(b) * 2.0 - (p0 + j)), 1e-14);
+  EXPECT_LT(glm::length(s.angular_momentum(b) - (l0 + glm::cross(at - Vec3(1, 2, 3), j))), 1e-13);
+  // an angular impulse adds to L directly
+  s.apply_angular_impulse(b, {0, 0, 1});
+  EXPECT_LT(glm::length(s.angular_momentum(b) - (l0 + glm::cross(at - Vec3(1, 2, 3), j) + Vec3(0, 0, 1))), 1e-13);
+}
+
+// A sphere (isotropic inertia, no gyroscopic torque) under a constant force at an offset
+// point: dv = F t / m and dw = (r x F) t / I, with r fixed in the world only to first order
+// (the point turns with the body), so over a short step the moment is checked to O(w t).
+TEST(RigidForce, ForceAtAPointGivesLinearAndAngularAcceleration) {
+  RigidBodySystem s({.contacts = {.substeps = 1}});
+  auto b = s.create({.shapes = kBall, .mass = RigidMass::sphere(2, 0.5)});
+  const Vec3 f{0, 0, 4}, r{0.5, 0, 0};
+  s.apply_force(b, f, r);
+  s.step(0.01, Vec3(0));
+  EXPECT_LT(glm::length(s.linear_velocity(b) - f * 0.01 / 2.0), 1e-15);
+  const double inertia = 0.4 * 2 * 0.25;
+  EXPECT_LT(glm::length(s.angular_velocity(b) - glm::cross(r, f) * 0.01 / inertia), 1e-14);
+  // forces last one step
+  s.step(0.01, Vec3(0));
+  EXPECT_LT(glm::length(s.linear_velocity(b) - f * 0.01 / 2.0), 1e-15);
+  s.apply_torque(b, {0, 1, 0});
+  const Vec3 w0 = s.angular_velocity(b);
+  s.step(0.01, Vec3(0));
+  EXPECT_LT(glm::length(s.angular_velocity(b) - w0 - Vec3(0, 0.01 / inertia, 0)), 1e-13);
+}
+
+// ---------------------------------------------------------------------------------------
+// torque-free tumbling
+
+// A T-handle: a bar along x with a stem along -y. Its principal axes are the body axes.
+RigidMass t_handle() {
+  RigidMass bar = RigidMass::box(1.0, {0.5, 0.05, 0.05});
+  RigidMass stem = RigidMass::box(0.6, {0.05, 0.3, 0.05});
+  stem.center = {0, -0.35, 0};
+  return bar + stem;
+}
+
+// Euler's equations I w' = (I w) x w in the principal frame, by classical RK4.
+Vec3 euler_rhs(const Vec3& inertia, const Vec3& w) { return glm::cross(inertia * w, w) / inertia; }
+
+// times at which the body-frame component `axis` of w changes sign (the flips)
+std::vector<double> rk4_crossings(const Vec3& inertia, Vec3 w, int axis, double h, double t_end) {
+  std::vector<double> out;
+  for (double t = 0; t < t_end; t += h) {
+    const Vec3 k1 = euler_rhs(inertia, w), k2 = euler_rhs(inertia, w + 0.5 * h * k1);
+    const Vec3 k3 = euler_rhs(inertia, w + 0.5 * h * k2), k4 = euler_rhs(inertia, w + h * k3);
+    const Vec3 next = w + h / 6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    if ((w[axis] > 0) != (next[axis] > 0)) out.push_back(t + h * w[axis] / (w[axis] - next[axis]));
+    w = next;
+  }
+  return out;
+}
+
+TEST(RigidTumbling, TheTHandleKeepsAngularMomentumAndEnergyAndFlipsOnTime) {
+  const RigidMass m = t_handle();
+  // principal moments: x (bar axis) smallest, z largest, y intermediate
+  const Vec3 moments{m.inertia[0][0], m.inertia[1][1], m.inertia[2][2]};
+  ASSERT_LT(moments.x, moments.y);
+  ASSERT_LT(moments.y, moments.z);
+  const Vec3 w0{0.1, 10.0, 0.2};  // spin about the unstable intermediate axis, slightly off
+  // the reference flip times, converged (h = 1e-4 s; RK4's error is far below 1e-6 s here)
+  const std::vector<double> ref = rk4_crossings(moments, w0, 1, 1e-4, 10);
+  ASSERT_GE(ref.size(), 4u);
+  const double ref_period = 2 * (ref[3] - ref[0]) / 3;
+  for (const double dt : {1.0 / 60, 1.0 / 240}) {
+    for (const int substeps : {1, 4}) {
+      RigidBodySystem s({.contacts = {.substeps = substeps}});
+      const Quat q0 = glm::angleAxis(0.3, glm::normalize(Vec3(1, -1, 2)));
+      auto b = s.create({.pose = {{0, 0, 0}, q0}, .angular_velocity = q0 * w0, .shapes = kBall, .mass = m});
+      const Vec3 l0 = s.angular_momentum(b);
+      const double e0 = s.kinetic_energy(b);
+      double worst_l = 0, worst_e = 0;
+      std::vector<double> flips;
+      double prev = w0.y, t = 0;
+      const int steps = static_cast<int>(std::lround(10 / dt));
+      for (int i = 0; i < steps; ++i) {
+        s.step(dt, Vec3(0));
+        t += dt;
+        worst_l = std::max(worst_l, glm::length(s.angular_momentum(b) - l0) / glm::length(l0));
+        worst_e = std::max(worst_e, std::abs(s.kinetic_energy(b) - e0) / e0);
+        // the body-frame spin about the intermediate axis
+        const double wy = (glm::conjugate(s.pose(b).rotation) * s.angular_velocity(b)).y;
+        if ((prev > 0) != (wy > 0)) flips.push_back(t - dt * wy / (wy - prev));
+        prev = wy;
+      }
+      EXPECT_LT(worst_l, 1e-3) << dt << " x" << substeps;
+      EXPECT_LT(worst_e, 0.01) << dt << " x" << substeps;
+      // the flip period from the first four flips of each
+      ASSERT_GE(flips.size(), 4u) << dt << " x" << substeps;
+      const double period = 2 * (flips[3] - flips[0]) / 3;
+      EXPECT_NEAR(period, ref_period, 0.05 * ref_period) << dt << " x" << substeps;
+    }
+  }
+}
+
+// The splitting is second order: halving h quarters the energy error of a tumbling body.
+TEST(RigidTumbling, EnergyErrorIsSecondOrder) {
+  const RigidMass m = t_handle();
+  auto worst = [&](double dt) {
+    RigidBodySystem s({.contacts = {.substeps = 1}});
+    auto b = s.create({.angular_velocity = {3, 8, 1}, .shapes = kBall, .mass = m});
+    const double e0 = s.kinetic_energy(b);
+    double w = 0;
+    for (int i = 0; i < static_cast<int>(std::lround(4 / dt)); ++i) {
+      s.step(dt, Vec3(0));
+      w = std::max(w, std::abs(s.kinetic_energy(b) - e0) / e0);
+    }
+    return w;
+  };
+  const double e1 = worst(1.0 / 120), e2 = worst(1.0 / 240), e3 = worst(1.0 / 480);
+  EXPECT_NEAR(std::log2(e1 / e2), 2.0, 0.3);
+  EXPECT_NEAR(std::log2(e2 / e3), 2.0, 0.3);
+}
+
+// A body whose inertia is not diagonal in its frame: the principal frame is found, the
+// world inertia at the start is the one given, and L is kept while it tumbles.
+TEST(RigidTumbling, NonDiagonalInertiaIsDiagonalisedAndConserved) {
+  RigidMass m = RigidMass::box(2, {0.6, 0.3, 0.1});
+  const Mat3 r = glm::mat3_cast(glm::angleAxis(0.5, glm::normalize(Vec3(1, 1, 0))));
+  m.inertia = r * m.inertia * glm::transpose(r);
+  m.center = {0.1, 0.2, -0.1};
+  RigidBodySystem s;
+  auto b = s.create({.pose = {{1, 1, 1}}, .angular_velocity = {1, 5, 2}, .shapes = kBall, .mass = m});
+  const Mat3 wi = s.world_inertia(b);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(wi[c][k], m.inertia[c][k], 1e-13);
+  EXPECT_LT(glm::length(s.pose(b).position - Vec3(1, 1, 1)), 1e-14);
+  EXPECT_LT(glm::length(s.center_of_mass(b) - Vec3(1.1, 1.2, 0.9)), 1e-14);
+  const Vec3 l0 = s.angular_momentum(b);
+  for (int i = 0; i < 600; ++i) s.step(1.0 / 60, Vec3(0));
+  // only rounding: 600 steps x 8 substeps x 5 exact rotations, each ~1e-16 relative
+  EXPECT_LT(rel(s.angular_momentum(b), l0), 24000 * 1e-16);
+  // the centre of mass, not the body origin, moves with the (zero) momentum
+  EXPECT_LT(glm::length(s.center_of_mass(b) - Vec3(1.1, 1.2, 0.9)), 1e-12);
+}
+
+// ---------------------------------------------------------------------------------------
+// handles, bad input, divergence, determinism
+
+TEST(RigidHandles, DestroyKeepsTheOthersAndRejectsStaleHandles) {
+  RigidBodySystem s;
+  auto a = s.create({.name = "a", .pose = {{1, 0, 0}}, .shapes = kBall});
+  auto b = s.create({.name = "b", .pose = {{2, 0, 0}}, .shapes = kBall});
+  auto c = s.create({.name = "c", .pose = {{3, 0, 0}}, .shapes = kBall});
+  s.destroy(b);
+  EXPECT_EQ(s.size(), 2u);
+  EXPECT_EQ(s.pose(a).position.x, 1);
+  EXPECT_EQ(s.pose(c).position.x, 3);
+  EXPECT_EQ(s.name(c), "c");
+  EXPECT_NE(error_of([&] { s.pose(b); }).find("stale handle"), std::string::npos);
+  EXPECT_NE(error_of([&] { s.apply_impulse(b, {1, 0, 0}, {0, 0, 0}); }).find("stale handle"), std::string::npos);
+  auto d = s.create({.name = "d", .shapes = kBall});  // reuses b's slot at a new generation
+  EXPECT_EQ(d.index, b.index);
+  EXPECT_FALSE(s.valid(b));
+  EXPECT_NE(error_of([&] { s.pose(pba::RigidBodyId{}); }).find("null handle"), std::string::npos);
+}
+
+TEST(RigidBadInput, NamesTheFieldAndTheBody) {
+  RigidBodySystem s;
+  auto msg = [&](RigidBodyDef d) { return error_of([&] { s.create(d); }); };
+  const RigidBodyDef crate{.name = "crate", .shapes = kBall, .mass = RigidMass{}};
+  RigidBodyDef d = crate;
+  d.mass->mass = 0;
+  EXPECT_NE(msg(d).find("'crate'.mass.mass: must be finite and > 0, got 0"), std::string::npos) << msg(d);
+  d.mass->mass = -1;
+  EXPECT_NE(msg(d).find("mass.mass"), std::string::npos);
+  d.mass->mass = NAN;
+  EXPECT_NE(msg(d).find("got nan"), std::string::npos);
+  d = crate;
+  d.mass->inertia[0][0] = -1;
+  EXPECT_NE(msg(d).find("mass.inertia: must be positive definite"), std::string::npos) << msg(d);
+  d = crate;
+  d.mass->inertia[1][0] = 0.5;
+  EXPECT_NE(msg(d).find("mass.inertia: must be symmetric"), std::string::npos) << msg(d);
+  d = crate;
+  d.mass->inertia = Mat3(0.0);
+  d.mass->inertia[0][0] = 1, d.mass->inertia[1][1] = 1, d.mass->inertia[2][2] = 3;
+  EXPECT_NE(msg(d).find("triangle inequality"), std::string::npos) << msg(d);
+  d = crate;
+  d.mass->inertia[2][2] = INFINITY;
+  EXPECT_NE(msg(d).find("mass.inertia: must be finite, got inf"), std::string::npos) << msg(d);
+  // shapes: none, bad ones, densities, a plane on a moving body
+  EXPECT_NE(msg({.name = "empty"}).find("'empty'.shapes: a body needs at least one shape, got none"),
+            std::string::npos) << msg({.name = "empty"});
+  EXPECT_NE(msg({.shapes = {{.shape = pba::ColliderShape{.type = pba::ShapeType::Sphere, .radius = -1}}}})
+                .find("shapes[0].shape.radius"), std::string::npos);
+  EXPECT_NE(msg({.shapes = {{.shape = pba::ColliderShape::sphere(1), .density = 0}}}).find("shapes[0].density"),
+            std::string::npos);
+  EXPECT_NE(msg({.shapes = {{.shape = pba::ColliderShape::sphere(1), .material = {.restitution = 2}}}})
+                .find("shapes[0].material.restitution"), std::string::npos);
+  EXPECT_NE(msg({.shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}}).find("only a static body"),
+            std::string::npos);
+  EXPECT_NE(msg({.pose = {{NAN, 0, 0}}}).find("pose.position: must be finite"), std::string::npos);
+  EXPECT_NE(msg({.pose = {{0, 0, 0}, Quat(2, 0, 0, 0)}}).find("pose.rotation"), std::string::npos);
+  EXPECT_NE(msg({.linear_velocity = {0, INFINITY, 0}}).find("linear_velocity"), std::string::npos);
+  EXPECT_NE(msg({.angular_velocity = {0, NAN, 0}}).find("angular_velocity"), std::string::npos);
+  EXPECT_NE(msg({.linear_damping = -1}).find("linear_damping"), std::string::npos);
+  EXPECT_NE(msg({.gravity_scale = NAN}).find("gravity_scale"), std::string::npos);
+  // a static body needs no mass, and may be a plane
+  RigidBodyDef ground{.type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}},
+                      .mass = RigidMass{.mass = 0}};
+  EXPECT_EQ(msg(ground), "");
+  // runtime calls
+  auto b = s.create({.name = "ball", .shapes = kBall});
+  EXPECT_NE(error_of([&] { s.apply_force(b, {NAN, 0, 0}); }).find("'ball' apply_force force"), std::string::npos);
+  EXPECT_NE(error_of([&] { s.apply_impulse(b, {1, 0, 0}, {0, INFINITY, 0}); }).find("apply_impulse point"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { s.set_velocity(b, {0, 0, 0}, {NAN, 0, 0}); }).find("set_velocity angular"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { s.set_pose(b, {{0, 0, 0}, Quat(0, 0, 0, 0)}); }).find("set_pose rotation"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { s.step(0, kG); }).find("dt: must be finite and > 0, got 0"), std::string::npos);
+  EXPECT_NE(error_of([&] { s.step(0.01, {0, NAN, 0}); }).find("gravity"), std::string::npos);
+  EXPECT_NE(error_of([&] { s.set_substeps(0); }).find("substeps"), std::string::npos);
+  EXPECT_NE(error_of([&] { RigidBodySystem bad({.contacts = {.substeps = 65}}); }).find("contacts.substeps"),
+            std::string::npos);
+  s.settings().contact_hertz = -1;
+  EXPECT_NE(error_of([&] { s.step(0.01, kG); }).find("settings.contact_hertz"), std::string::npos);
+}
+
+TEST(RigidDivergence, ANonFiniteBodyStopsTheSystemWithItsNameAndTime) {
+  RigidBodySystem s({.contacts = {.substeps = 1}});
+  s.create({.name = "calm", .pose = {{0.5, 0, 0}}, .shapes = kBall});  // close: a speculative pair
+  auto wild = s.create({.name = "wild", .shapes = kBall});
+  s.step(0.5, kG);
+  s.apply_force(wild, {1e308, 0, 0});
+  s.apply_force(wild, {1e308, 0, 0});  // the sum overflows to infinity
+  const std::string m = error_of([&] { s.step(0.5, kG); });
+  EXPECT_NE(m.find("rigid body 1 'wild' became non-finite in the step to t = 1 s"), std::string::npos) << m;
+  EXPECT_EQ(error_of([&] { s.step(0.5, kG); }), m);  // and refuses to go on
+}
+
+// A pile of tumbling boxes and balls on the ground, and a free-flying T-handle: the same
+// inputs give the same bits, and each solver's hash is pinned (glibc's sin/cos,
+// -ffp-contract=off; a change of these numbers is a change of behaviour).
+std::uint64_t pile_hash(pba::RigidSolverType solver) {
+  RigidBodySystem s({.contacts = {.solver = solver}});
+  s.create({.type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+  for (int i = 0; i < 27; ++i) {
+    const Vec3 p{(i % 3) * 1.1, 0.6 + (i / 9) * 1.2, ((i / 3) % 3) * 1.1};
+    const pba::ColliderShape shape =
+        i % 2 ? pba::ColliderShape::sphere(0.45) : pba::ColliderShape::box({0.45, 0.3, 0.4});
+    s.create({.pose = {p, glm::angleAxis(0.3 * i, glm::normalize(Vec3(1, 2, 3)))},
+              .angular_velocity = {0.1 * i, 0, 0.2}, .shapes = {{.shape = shape, .material = {.restitution = 0.2}}}});
+  }
+  s.create({.pose = {{0, 10, 0}}, .angular_velocity = {0.1, 10, 0.2}, .shapes = kBall, .mass = t_handle()});
+  for (int i = 0; i < 240; ++i) s.step(1.0 / 60, kG);
+  return s.hash();
+}
+
+TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
+  const std::uint64_t soft = pile_hash(pba::RigidSolverType::SoftStep);
+  const std::uint64_t si = pile_hash(pba::RigidSolverType::SequentialImpulse);
+  EXPECT_EQ(soft, pile_hash(pba::RigidSolverType::SoftStep));
+  EXPECT_EQ(si, pile_hash(pba::RigidSolverType::SequentialImpulse));
+  EXPECT_NE(soft, si);
+  EXPECT_EQ(soft, 0x78e942fcf7a93e70ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x78bce1d217e480ecull) << std::hex << si;
+}
+
+}  // namespace

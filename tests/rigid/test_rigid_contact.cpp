@@ -1,0 +1,304 @@
+// Rigid contacts: restitution, elastic collisions, Coulomb friction on inclines, rolling,
+// tipping and stacking, each against its closed form; both solvers where it matters.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "pba/rigid.h"
+#include "pba/rigid_scenes.h"
+
+using pba::BodyType;
+using pba::ColliderShape;
+using pba::Quat;
+using pba::RigidBodySystem;
+using pba::RigidShapeDef;
+using pba::Vec3;
+
+namespace {
+
+constexpr double kG = 9.81;
+const Vec3 kGravity{0, -kG, 0};
+
+double deg(double d) { return d * pba::kPi / 180; }
+
+// a static ground plane y = 0 (or tilted by `angle` about z), with a material
+pba::RigidBodyId ground(RigidBodySystem& s, double friction = 0.5, double restitution = 0, double angle = 0) {
+  const Vec3 n{-std::sin(angle), std::cos(angle), 0};
+  return s.create({.name = "ground", .type = BodyType::Static,
+                   .shapes = {{.shape = ColliderShape::plane(n, 0),
+                               .material = {.restitution = restitution, .friction = friction}}}});
+}
+
+RigidShapeDef box_shape(const Vec3& half, double friction = 0.5, double density = 1000) {
+  return {.shape = ColliderShape::box(half), .density = density, .material = {.restitution = 0, .friction = friction}};
+}
+
+// ---------------------------------------------------------------------------------------
+// restitution
+
+// A sphere dropped from rest with its bottom h above the ground rebounds to e^2 h. The
+// ball's bottom height at the top of the bounce is measured as the largest height after the
+// first contact. Symplectic Euler's flight costs O(g h / v) of it: 1.6% for e = 1 and 2.5%
+// for e = 0.5 at 240 Hz (the soft step's 4 substeps of a 60 Hz step), and 4-8% at 60 Hz,
+// so the one-step sequential-impulse solver runs at 240 Hz here to compare like with like.
+TEST(RigidRestitution, ASphereReboundsToESquaredOfItsHeight) {
+  const double h = 1.0, r = 0.1;
+  for (const auto solver : {pba::RigidSolverType::SoftStep, pba::RigidSolverType::SequentialImpulse}) {
+    for (const double e : {0.0, 0.5, 0.9, 1.0}) {
+      RigidBodySystem s({.contacts = {.solver = solver}});
+      ground(s, 0.0, e);
+      auto ball = s.create({.name = "ball", .pose = {{0, h + r, 0}},
+                            .shapes = {{.shape = ColliderShape::sphere(r), .material = {.restitution = e}}}});
+      bool bounced = false;
+      double peak = 0;
+      const int per_frame = solver == pba::RigidSolverType::SoftStep ? 1 : 4;
+      for (int i = 0; i < 240 * per_frame; ++i) {
+        s.step(1.0 / 60 / per_frame, kGravity);
+        const double y = s.center_of_mass(ball).y - r, vy = s.linear_velocity(ball).y;
+        if (!bounced && vy > 0) bounced = true;
+        if (bounced) peak = std::max(peak, y);
+        if (bounced && vy < 0 && y < peak - 0.05) break;  // on the way down again
+      }
+      if (e == 0) {
+        EXPECT_LT(peak, 0.01) << to_string(solver);
+      } else {
+        EXPECT_NEAR(peak, e * e * h, 0.03 * e * e * h) << to_string(solver) << " e = " << e;
+      }
+    }
+  }
+}
+
+// Equal masses, e = 1, head on: the velocities swap and the momentum is kept.
+TEST(RigidRestitution, EqualMassesSwapVelocitiesInAnElasticHeadOnCollision) {
+  for (const auto solver : {pba::RigidSolverType::SoftStep, pba::RigidSolverType::SequentialImpulse}) {
+    RigidBodySystem s({.contacts = {.solver = solver}});
+    const std::vector<RigidShapeDef> ball{{.shape = ColliderShape::sphere(0.25), .material = {.restitution = 1}}};
+    auto a = s.create({.name = "a", .pose = {{-1, 0, 0}}, .linear_velocity = {2, 0, 0}, .shapes = ball});
+    auto b = s.create({.name = "b", .pose = {{1, 0, 0}}, .linear_velocity = {-1, 0, 0}, .shapes = ball});
+    const Vec3 p0 = s.mass(a) * s.linear_velocity(a) + s.mass(b) * s.linear_velocity(b);
+    for (int i = 0; i < 120; ++i) s.step(1.0 / 60, Vec3(0));
+    EXPECT_NEAR(s.linear_velocity(a).x, -1, 1e-3) << to_string(solver);
+    EXPECT_NEAR(s.linear_velocity(b).x, 2, 1e-3) << to_string(solver);
+    const Vec3 p1 = s.mass(a) * s.linear_velocity(a) + s.mass(b) * s.linear_velocity(b);
+    EXPECT_LT(glm::length(p1 - p0) / glm::length(p0), 1e-5);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// friction
+
+// A box resting on a plane tilted by theta, both mu = 0.5 (tan theta* = 0.5 at 26.57 deg).
+struct Incline {
+  RigidBodySystem s;
+  pba::RigidBodyId box;
+  Vec3 down;  // unit vector down the slope
+  Incline(double theta, double mu) {
+    ground(s, mu, 0, theta);
+    const Quat q = glm::angleAxis(theta, Vec3(0, 0, 1));
+    const Vec3 n{-std::sin(theta), std::cos(theta), 0};
+    down = Vec3(-std::cos(theta), -std::sin(theta), 0);
+    box = s.create({.name = "box", .pose = {0.25 * n, q}, .shapes = {box_shape({0.25, 0.25, 0.25}, mu)}});
+  }
+  double along() const { return glm::dot(s.center_of_mass(box), down); }
+};
+
+TEST(RigidFriction, ABoxStaysPutBelowTheFrictionAngle) {
+  Incline in(deg(25), 0.5);
+  const double x0 = in.along();
+  for (int i = 0; i < 300; ++i) in.s.step(1.0 / 60, kGravity);
+  EXPECT_LT(std::abs(in.along() - x0), 1e-3);
+}
+
+// Above it, the box slides with a = g (sin theta - mu cos theta); measured from the
+// velocity between 0.5 s and 2 s, after the contact has settled.
+TEST(RigidFriction, ABoxSlidesAboveTheFrictionAngleAtTheCoulombAcceleration) {
+  const double theta = deg(30), mu = 0.5;
+  Incline in(theta, mu);
+  auto speed = [&] { return glm::dot(in.s.linear_velocity(in.box), in.down); };
+  for (int i = 0; i < 30; ++i) in.s.step(1.0 / 60, kGravity);
+  const double v1 = speed();
+  for (int i = 0; i < 90; ++i) in.s.step(1.0 / 60, kGravity);
+  const double a = (speed() - v1) / 1.5;
+  const double expected = kG * (std::sin(theta) - mu * std::cos(theta));
+  EXPECT_NEAR(a, expected, 0.02 * expected);
+}
+
+// A box sliding at v on level ground stops after v^2 / (2 mu g), whatever the direction.
+TEST(RigidFriction, SlidingStopDistanceIsTheSameInTwelveDirections) {
+  const double v = 4, mu = 0.5, expected = v * v / (2 * mu * kG);
+  for (int k = 0; k < 12; ++k) {
+    const double a = 2 * pba::kPi * k / 12;
+    const Vec3 dir{std::cos(a), 0, std::sin(a)};
+    RigidBodySystem s;
+    ground(s, mu);
+    auto box = s.create({.pose = {{0, 0.25, 0}}, .linear_velocity = v * dir,
+                         .shapes = {box_shape({0.25, 0.25, 0.25}, mu)}});
+    for (int i = 0; i < 180; ++i) s.step(1.0 / 60, kGravity);
+    const Vec3 p = s.center_of_mass(box);
+    EXPECT_NEAR(glm::length(Vec3(p.x, 0, p.z)), expected, 0.02 * expected) << k;
+    EXPECT_LT(glm::length(glm::cross(Vec3(p.x, 0, p.z), dir)), 0.01) << k;  // straight
+  }
+}
+
+// A solid sphere that rolls without slipping accelerates at (5/7) g sin theta (mu large
+// enough: it needs mu >= (2/7) tan theta).
+TEST(RigidFriction, ASphereRollsAtFiveSeventhsOfGSinTheta) {
+  const double theta = deg(20);
+  RigidBodySystem s;
+  ground(s, 1.0, 0, theta);
+  const Vec3 n{-std::sin(theta), std::cos(theta), 0}, down{-std::cos(theta), -std::sin(theta), 0};
+  auto ball = s.create({.pose = {0.2 * n}, .shapes = {{.shape = ColliderShape::sphere(0.2), .material = {.friction = 1}}}});
+  for (int i = 0; i < 30; ++i) s.step(1.0 / 60, kGravity);
+  const double v1 = glm::dot(s.linear_velocity(ball), down);
+  for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kGravity);
+  const double a = (glm::dot(s.linear_velocity(ball), down) - v1) / 1.0;
+  const double expected = 5.0 / 7 * kG * std::sin(theta);
+  EXPECT_NEAR(a, expected, 0.02 * expected);
+  // rolling: the material point at the contact is at rest. The solver holds it at rest at
+  // the contact's midpoint, which the soft contact (a spring of contact_hertz) keeps
+  // delta = g cos(theta) / (2 pi f)^2 deep, so the surface point below the centre slips at
+  // |w| delta / 2
+  const double f = 120, delta = kG * std::cos(theta) / std::pow(2 * pba::kPi * f, 2);
+  const Vec3 slip = s.linear_velocity(ball) + glm::cross(s.angular_velocity(ball), -0.2 * n);
+  EXPECT_LT(glm::length(slip), glm::length(s.angular_velocity(ball)) * delta);
+}
+
+// A box of width w and height h on a high-friction incline tips over once tan theta > w / h.
+TEST(RigidFriction, ABoxTipsWhenTheSlopeExceedsItsAspectRatio) {
+  const double w = 0.5, h = 1.0, critical = std::atan(w / h);  // 26.57 deg
+  for (const double offset : {-deg(2), deg(2)}) {
+    const double theta = critical + offset;
+    RigidBodySystem s;
+    ground(s, 1.5, 0, theta);
+    const Quat q = glm::angleAxis(theta, Vec3(0, 0, 1));
+    const Vec3 n{-std::sin(theta), std::cos(theta), 0};
+    auto box = s.create({.pose = {0.5 * h * n, q}, .shapes = {box_shape({w / 2, h / 2, 0.25}, 1.5)}});
+    for (int i = 0; i < 180; ++i) s.step(1.0 / 60, kGravity);
+    // the angle between the box's up axis and the slope normal
+    const double tilt = std::acos(std::clamp(glm::dot(s.pose(box).rotation * Vec3(0, 1, 0), n), -1.0, 1.0));
+    if (offset < 0) {
+      EXPECT_LT(tilt, deg(1)) << "should stand at " << theta * 180 / pba::kPi;
+    } else {
+      EXPECT_GT(tilt, deg(45)) << "should tip at " << theta * 180 / pba::kPi;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// stacking
+
+struct Stack {
+  RigidBodySystem s;
+  std::vector<pba::RigidBodyId> boxes;
+  Stack(int n, double bottom_density_ratio = 1) {
+    ground(s, 0.5);
+    for (int i = 0; i < n; ++i) {
+      // the top box is heavy when a ratio is asked (a heavy box on light ones)
+      const double density = (i == n - 1 ? bottom_density_ratio : 1) * 1000;
+      boxes.push_back(s.create({.pose = {{0, 0.5 + i, 0}}, .shapes = {box_shape({0.5, 0.5, 0.5}, 0.5, density)}}));
+    }
+  }
+};
+
+// 20 one-metre cubes, mu = 0.5, 60 Hz, 60 s: the top box drifts and sags under 1 cm.
+TEST(RigidStacking, TwentyCubesStandForAMinute) {
+  Stack st(20);
+  for (int i = 0; i < 3600; ++i) st.s.step(1.0 / 60, kGravity);
+  const Vec3 top = st.s.center_of_mass(st.boxes.back());
+  EXPECT_LT(std::hypot(top.x, top.z), 0.01);
+  EXPECT_LT(19.5 - top.y, 0.01);
+}
+
+}  // namespace
+
+namespace {
+
+// ---------------------------------------------------------------------------------------
+// fast bodies
+
+// A 0.1 m sphere at 240 m/s (4 m per step) stops at a 10 cm wall: the pair is found by the
+// bounds grown by the step's motion and the speculative point stops it at the surface.
+TEST(RigidContinuous, AFastSphereStopsAtAThinWall) {
+  for (const auto solver : {pba::RigidSolverType::SoftStep, pba::RigidSolverType::SequentialImpulse}) {
+    RigidBodySystem s({.contacts = {.solver = solver}});
+    s.create({.name = "wall", .type = BodyType::Static, .pose = {{10, 0, 0}}, .shapes = {box_shape({0.05, 2, 2})}});
+    auto ball = s.create({.name = "bullet", .pose = {{0, 0, 0}}, .linear_velocity = {240, 0, 0},
+                          .shapes = {{.shape = ColliderShape::sphere(0.1)}}, .bullet = true});
+    double farthest = 0;
+    for (int i = 0; i < 60; ++i) {
+      s.step(1.0 / 60, Vec3(0));
+      farthest = std::max(farthest, s.center_of_mass(ball).x);
+    }
+    EXPECT_LT(farthest, 10 - 0.05 - 0.1 + 0.01) << to_string(solver);
+    EXPECT_LT(s.center_of_mass(ball).x, 10) << to_string(solver);
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// ---------------------------------------------------------------------------------------
+// sleeping
+
+// 25 boxes dropped from 2 m onto the ground, each by itself, are all asleep within 5 s,
+// and sleeping bodies do not move at all. (The 1000 boxes from a 10 x 10 x 10 grid
+// fall in columns that land on each other; such stacks keep rocking slowly above the
+// tolerances for longer: see docs/rigid-bodies.md, not met yet.)
+TEST(RigidSleep, DroppedBoxesFallAsleepAndStayPut) {
+  RigidBodySystem s({.capacity = 64});
+  pba::rigid_scenes::ground(s, 0.5);
+  std::vector<pba::RigidBodyId> boxes;
+  for (int i = 0; i < 25; ++i)
+    boxes.push_back(pba::rigid_scenes::box(s, {(i % 5) * 1.5, 2.0, (i / 5) * 1.5}, Vec3(0.5), 0.5, 1000,
+                                           glm::angleAxis(0.2 * i, glm::normalize(Vec3(1, 1, 0)))));
+  int steps = 0;
+  while (s.awake_count() > 0 && steps < 300) s.step(1.0 / 60, kGravity), ++steps;
+  EXPECT_EQ(s.awake_count(), 0u) << "after " << steps / 60.0 << " s";
+  const std::uint64_t h = s.hash();
+  for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kGravity);
+  EXPECT_EQ(s.hash(), h);  // not a bit moved
+  for (auto b : boxes) EXPECT_GT(s.center_of_mass(b).y, 0.45);
+}
+
+// A force, an impulse, a new velocity or pose, or an awake body landing on it wakes a
+// sleeping body and its island (the boxes it rests on), and nothing else.
+TEST(RigidSleep, ForcesImpulsesPosesAndContactsWakeIslands) {
+  RigidBodySystem s;
+  pba::rigid_scenes::ground(s, 0.5);
+  auto low = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+  auto high = pba::rigid_scenes::box(s, {0, 1.5, 0}, Vec3(0.5));
+  auto apart = pba::rigid_scenes::box(s, {5, 0.5, 0}, Vec3(0.5));
+  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+  ASSERT_FALSE(s.awake(low) || s.awake(high) || s.awake(apart));
+  // a force on the top box wakes the stack it stands on, not the box apart
+  s.apply_force(high, {0, 1, 0});
+  EXPECT_TRUE(s.awake(high));
+  EXPECT_TRUE(s.awake(low));
+  EXPECT_FALSE(s.awake(apart));
+  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+  ASSERT_FALSE(s.awake(high));
+  s.apply_impulse(apart, {0, 0, 1}, {5, 1, 0});
+  EXPECT_TRUE(s.awake(apart));
+  EXPECT_FALSE(s.awake(low));
+  for (int i = 0; i < 180; ++i) s.step(1.0 / 60, kGravity);
+  ASSERT_FALSE(s.awake(apart));
+  s.set_velocity(low, {0, 0, 0}, {0, 0.1, 0});
+  EXPECT_TRUE(s.awake(high));
+  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+  // a ball dropped on the sleeping box wakes it when they touch
+  ASSERT_FALSE(s.awake(apart));
+  auto ball = s.create({.pose = {{5, 3, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.2)}}});
+  bool woke = false;
+  for (int i = 0; i < 60 && !woke; ++i) s.step(1.0 / 60, kGravity), woke = s.awake(apart);
+  EXPECT_TRUE(woke);
+  EXPECT_GT(s.center_of_mass(ball).y, 1.0 + 0.15);  // it landed on the box, not in it
+  // with sleeping off nothing sleeps
+  RigidBodySystem t({.contacts = {.sleep = false}});
+  pba::rigid_scenes::vertical_stack(t, 3);
+  for (int i = 0; i < 120; ++i) t.step(1.0 / 60, kGravity);
+  EXPECT_EQ(t.awake_count(), 3u);
+}
+
+}  // namespace
