@@ -19,7 +19,7 @@
 //       {.origin = {-0.5, 1.5, 0}, .nx = 64, .ny = 64, .mass = 1},
 //       {.solver = pba::SoftSolver::XPBD, .substeps = 20});
 //   pba::Collider ball = pba::Collider::sphere({0, 0.5, 0}, 0.3);
-//   cloth.step(t, 1.0 / 60, std::span(&ball, 1));
+//   cloth.step(t, 1.0 / 60, std::span(&ball, 1));   // or a CollisionWorld
 //
 // Everything here is usable without a World; SoftSystem makes soft bodies components of
 // World entities, and scene files describe them in a "soft_bodies" array
@@ -28,6 +28,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <limits>
 #include <memory>
 #include <span>
@@ -382,7 +383,14 @@ class SoftBody {
   /// (their end-of-step poses, centres interpolated over the substeps). Throws Error if
   /// the state becomes non-finite, naming the particle and the time; the body then
   /// refuses to step again and repeats that message. Never allocates.
-  void step(double t, double dt, std::span<const Collider> colliders = {});
+  void step(double t, double dt, const CollisionWorld& colliders);
+  /// The same step with the colliders given as a span (validated, an Error names
+  /// colliders[i]; they fill a CollisionWorld the body keeps, so no allocation in steady state).
+  void step(double t, double dt, std::span<const Collider> colliders);
+  /// The same step with a braced list of colliders (none by default).
+  void step(double t, double dt, std::initializer_list<Collider> colliders = {}) {
+    step(t, dt, std::span<const Collider>(colliders.begin(), colliders.size()));
+  }
   /// Steps taken.
   long long steps() const;
   /// Simulated time (s) at the end of the last step.

@@ -29,6 +29,7 @@
 #include <string_view>
 #include <vector>
 
+#include "pba/collide.h"
 #include "pba/core.h"
 #include "pba/draw.h"
 #include "pba/handle.h"
@@ -199,6 +200,9 @@ class World {
   const ParticleSystem& particles() const { return particles_; }
   /// World-space colliders of the last tick (or of now, before the first).
   std::span<const Collider> colliders() const { return world_colliders_; }
+  /// The collision world of the last tick: its colliders with their owners (entity
+  /// indices) and flat forms, which particles and soft bodies query.
+  const CollisionWorld& collision() const { return collision_; }
   /// World-space forcers of the last tick.
   std::span<const Forcer> forcers() const { return world_forcers_; }
 
@@ -280,6 +284,7 @@ class World {
   std::vector<EntityRecord> records_;  // by handle slot
   std::vector<ColliderEntry> colliders_;
   std::vector<Collider> world_colliders_;  // parallel to colliders_
+  CollisionWorld collision_;               // world_colliders_ of this tick, for the clients
   std::vector<ForcerEntry> forcers_;
   std::vector<Forcer> world_forcers_;      // parallel to forcers_
   std::vector<KinematicEntry> kinematics_;

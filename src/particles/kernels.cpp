@@ -15,9 +15,6 @@ namespace {
 // the loops vectorised (one AVX2 register each) without reassociating a single operation
 constexpr int kLanes = 8;
 
-// colliders the broad phase handles (the system allows at most this many)
-constexpr std::size_t kMaxReach = 256;
-
 // Relative slack of every bound below. Each float operation rounds by at most 2^-24
 // (6e-8) relative; the longest chain behind a bound has about 20 of them, so 1e-5 covers
 // rounding with a factor of 8 to spare.
@@ -163,18 +160,6 @@ PBA_INLINE void measure_block(int n, const float* PBA_RESTRICT x, const float* P
 // ---------------------------------------------------------------------------------------
 // the broad phase
 
-/// A collider's reach over one step, in double, for the conservative far test.
-struct Reach {
-  ShapeType type;
-  double n[3], d;         // plane: at the end of the step (the exact test uses only that)
-  double n1;              // plane: |n_x| + |n_y| + |n_z|
-  double lo[3], hi[3];    // sphere, box: box around the centre's path (start and end)
-  double radius;          // sphere radius, or the box's circumradius |half extents|
-  double spin;            // box: ||R1 - R0|| (Frobenius), bounds the turn of its frame
-  double path;            // |c1 - c0|
-  double maxabs;          // largest |coordinate| of the centre's path
-};
-
 Reach make_reach(const ColliderParams& c) {
   Reach r{};
   r.type = c.type;
@@ -319,8 +304,8 @@ FusedResult fused_semi_implicit_euler(const FusedArgs& a) {
   std::fill(r_value, r_value + kBlock, a.radius_value);
   // the step's force bounds and the colliders' reach, for the broad phase
   const ForceBounds fb = force_bounds(a.forces, a.forcers, a.n_forcers);
-  Reach reach[kMaxReach];
-  const bool use_bounds = a.broad_phase && a.n_colliders <= kMaxReach;
+  Reach* reach = a.reach;
+  const bool use_bounds = a.broad_phase;
   if (use_bounds)
     for (std::size_t c = 0; c < a.n_colliders; ++c) reach[c] = make_reach(a.colliders[c]);
   alignas(64) float ax[kBlock], ay[kBlock], az[kBlock];

@@ -36,7 +36,7 @@ void SoftSystem::step(World& world, double t, double dt) {
   // every body with the world's colliders of this tick; failures name the entity
   for (std::size_t i = 0; i < bodies_.size(); ++i) {
     try {
-      bodies_[i].step(t, dt, world.colliders());
+      bodies_[i].step(t, dt, world.collision());
     } catch (const Error& err) {
       throw Error("soft body of entity '" + world.name(owners_[i]) + "': " + err.what());
     }

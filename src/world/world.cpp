@@ -389,6 +389,13 @@ void World::sync(double /*t*/, double /*dt*/) {
     c.velocity = r.velocity;
     c.angular_velocity = r.angular_velocity;
   }
+  // the collision world of the tick (validated and flattened once for every client)
+  collision_.clear();
+  for (std::size_t i = 0; i < world_colliders_.size(); ++i) {
+    const EntityId owner = colliders_[i].owner;
+    if (!world_colliders_[i].ok()) world_colliders_[i].validate("collider of " + describe(owner));
+    collision_.add(world_colliders_[i], owner.index);
+  }
   // forcers and emitters follow their entities
   for (std::size_t i = 0; i < forcers_.size(); ++i) {
     const EntityRecord& r = records_[forcers_[i].owner.index];
@@ -434,7 +441,7 @@ void World::tick(double t, double dt) {
   profile_.sync = sw.seconds();
   // 3. particles: emit, integrate, collide, recycle
   try {
-    particles_.step(t, dt, world_colliders_, world_forcers_);
+    particles_.step(t, dt, collision_, world_forcers_);
   } catch (const Error& err) {
     failure_ = err.what();
     throw;
