@@ -39,6 +39,9 @@ struct SampleContext {
   double virtual_charge = 0;
   /// Real time (s) of the frame being advanced, as handed to Sample::Update.
   double frame_dt = 0;
+  /// What the library's draw functions show (shapes, bounds, contacts, particles...);
+  /// the View menu toggles them and every sample passes them to the library's draw calls.
+  pba::DrawFlags draw_flags{};
   /// Sample-specific settings from --option KEY=VALUE. A sample reads the keys it knows
   /// in its constructor and throws pba::Error naming a bad value.
   std::map<std::string, std::string> options;

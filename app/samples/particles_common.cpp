@@ -33,7 +33,8 @@ void DrawParticles(Renderer& r, const ParticleSystem& ps, float point_px, double
   for (std::size_t i = 0; i < n; ++i) r.point(Vec3(xs[i], ys[i], zs[i]), point_px, ps.color(i));
 }
 
-void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving) {
+void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving,
+                   const DrawFlags& flags) {
   for (std::size_t i = 0; i < colliders.size(); ++i) {
     const Collider& c = colliders[i];
     // moving: as told, else whether the surface moved or moves
@@ -41,6 +42,10 @@ void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<c
                                        : (glm::length(c.velocity) > 0 || glm::length(c.angular_velocity) > 0 ||
                                           c.begin.position != c.end.position);
     const Color col = kin ? particle_colors::moving : particle_colors::solid;
+    // bounds through the library; solids through the library too, except planes: the
+    // ground is the app's grid and other planes get a smaller translucent patch
+    c.draw(r, col, DrawFlags{.shapes = false, .aabbs = flags.aabbs});
+    if (!flags.shapes) continue;
     switch (c.shape.type) {
       case ShapeType::Plane: {
         const Vec3 n = glm::normalize(c.end.rotation * c.shape.normal);
@@ -50,8 +55,7 @@ void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<c
         r.plane(n, off, 4.0, with_alpha(col, 0.45f));
         break;
       }
-      case ShapeType::Sphere: r.sphere(c.end.position, c.shape.radius, col); break;
-      case ShapeType::Box: r.box(c.end.position, c.shape.half_extents, c.end.rotation, col); break;
+      default: c.draw(r, col, DrawFlags{.shapes = true, .aabbs = false}); break;
     }
   }
 }

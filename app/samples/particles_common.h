@@ -36,7 +36,8 @@ void DrawParticles(Renderer& r, const ParticleSystem& ps, float point_px, double
 
 /// Draws the colliders as solids; `moving` tells which ones are kinematic (by index; when
 /// empty, a collider that moved or has a velocity is taken as moving). A horizontal plane at y = 0 is left to the app's ground grid.
-void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving = {});
+void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving = {},
+                   const DrawFlags& flags = {});
 
 /// The colour of a Forcer kind.
 Color ForcerColor(ForcerKind kind);

@@ -86,7 +86,7 @@ class SceneFile final : public Sample {
       return;
     }
     const World& w = scene_->world;
-    DrawColliders(r, w.colliders());
+    DrawColliders(r, w.colliders(), {}, ctx_.draw_flags);
     for (const Forcer& f : w.forcers()) DrawForcer(r, f, w.time());
     DrawParticles(r, w.particles(), 3.0f, 0.008 * view_radius_);
   }

@@ -73,8 +73,8 @@ struct Forcer {
   bool active(double t) const;
   /// The force (N) on a point p (m) at time t (s): zero outside the volume or when off.
   Vec3 force_at(const Vec3& p, double t) const;
-  /// Draws the volume outline and its push direction.
-  void draw(DebugDraw& draw, Color c) const;
+  /// Draws the volume outline and its push direction (when flags.forcers).
+  void draw(DebugDraw& draw, Color c, const DrawFlags& flags = {}) const;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -404,8 +404,13 @@ class ParticleSystem {
   const ParticleProfile& profile() const { return profile_; }
   /// 64-bit hash of positions and velocities (bit patterns), for determinism checks.
   std::uint64_t hash() const;
-  /// Draws every particle as a point (or sphere when `spheres`), at most `max_points`.
-  void draw(DebugDraw& draw, bool spheres = false, std::size_t max_points = 200000) const;
+  /// Draws every particle as a point (or sphere when `spheres`), at most `max_points`,
+  /// when flags.particles.
+  void draw(DebugDraw& draw, const DrawFlags& flags, bool spheres = false, std::size_t max_points = 200000) const;
+  /// The same with the default flags.
+  void draw(DebugDraw& draw, bool spheres = false, std::size_t max_points = 200000) const {
+    this->draw(draw, DrawFlags{}, spheres, max_points);
+  }
 
   /// Internal: the acceleration of particles [begin, begin + n) at time t given AoS
   /// positions and velocities (the callback the integrator calls). Public for tests.

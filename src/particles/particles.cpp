@@ -723,7 +723,8 @@ std::uint64_t ParticleSystem::hash() const {
   return h;
 }
 
-void ParticleSystem::draw(DebugDraw& draw, bool spheres, std::size_t max_points) const {
+void ParticleSystem::draw(DebugDraw& draw, const DrawFlags& flags, bool spheres, std::size_t max_points) const {
+  if (!flags.particles) return;
   const std::size_t n = std::min(max_points, size());
   for (std::size_t i = 0; i < n; ++i) {
     if (spheres)

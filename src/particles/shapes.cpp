@@ -68,7 +68,8 @@ Vec3 Forcer::force_at(const Vec3& p, double t) const {
   return Vec3(0);
 }
 
-void Forcer::draw(DebugDraw& draw, Color c) const {
+void Forcer::draw(DebugDraw& draw, Color c, const DrawFlags& flags) const {
+  if (!flags.forcers) return;
   const Quat q = glm::normalize(pose.rotation);
   const Vec3 o = pose.position;
   // the volume's outline

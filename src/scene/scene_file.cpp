@@ -289,7 +289,8 @@ void read_settings(const Node& n, WorldDef& def) {
     def.stepper.max_ticks_per_frame = static_cast<int>(n.at("max_ticks_per_frame").integer(1, 100000));
   if (n.has("capacity")) def.particles.capacity = static_cast<std::size_t>(n.at("capacity").integer(0, 1LL << 28));
   Forces& f = def.particles.forces;
-  f.gravity = n.vec("gravity", f.gravity);
+  def.gravity = n.vec("gravity", def.gravity);  // the world's, read by every system
+  f.gravity = def.gravity;
   if (n.has("drag")) {
     const Node d = n.at("drag");
     d.allow_only({"linear", "quadratic"});
@@ -482,7 +483,7 @@ void read_soft_body(const Node& n, World& w) {
   SoftBodyDef d = type == Type::Jelly
                       ? jelly_settings(j, read_jelly_material(n), w.stepper().settings().fixed_dt)
                       : SoftBodyDef{};
-  d.forces.gravity = w.particles().forces().gravity;
+  d.forces.gravity = w.gravity();
   d.forces.wind = w.particles().forces().wind;
   d.solver = n.choice<SoftSolver>("solver", {{"xpbd", SoftSolver::XPBD}, {"mass-spring", SoftSolver::MassSpring}},
                                   d.solver);

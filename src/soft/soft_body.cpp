@@ -816,7 +816,7 @@ std::uint64_t SoftBody::hash(std::uint64_t seed) const {
   return hash_span(std::span<const std::uint8_t>(s.broken), h);
 }
 
-void SoftBody::draw(DebugDraw& dd, const SoftDrawOptions& o) const {
+void SoftBody::draw(DebugDraw& dd, const DrawFlags& flags, const SoftDrawOptions& o) const {
   const Impl& s = *impl_;
   auto P = [&](std::uint32_t i) { return Vec3(s.x[i], s.y[i], s.z[i]); };
   // triangles, shaded by how much they face a fixed light
@@ -831,7 +831,7 @@ void SoftBody::draw(DebugDraw& dd, const SoftDrawOptions& o) const {
     }
   }
   // edges, coloured by strain
-  if (o.edges) {
+  if (o.edges && flags.constraints) {
     const double scale = o.strain_scale > 0 ? o.strain_scale : 0.1;
     for (std::size_t c = 0; c < s.ca.size(); ++c) {
       if (s.broken[c]) continue;
@@ -847,9 +847,9 @@ void SoftBody::draw(DebugDraw& dd, const SoftDrawOptions& o) const {
     }
   }
   // particles, pins and the grabbed particle
-  if (o.particles)
+  if (o.particles && flags.particles)
     for (std::size_t i = 0; i < size(); ++i) dd.point(P(static_cast<std::uint32_t>(i)), 3.f, o.color);
-  if (o.pins) {
+  if (o.pins && flags.particles) {
     for (std::uint32_t p : s.pins) dd.point(P(p), 7.f, p == s.grab ? colors::yellow : colors::orange);
   }
 }
