@@ -61,6 +61,7 @@ bool Collider::ok() const {
       return good && is_finite(s.half_extents) && s.half_extents.x > 0 && s.half_extents.y > 0 &&
              s.half_extents.z > 0;
     case ShapeType::Capsule:
+      return good && std::isfinite(s.radius) && s.radius > 0 && std::isfinite(s.half_height) && s.half_height >= 0;
     case ShapeType::Hull:
     case ShapeType::Mesh:
     case ShapeType::Compound: return false;
@@ -83,10 +84,13 @@ void Collider::validate(std::string_view where) const {
       if (!(std::isfinite(shape.half_extents.z) && (shape.half_extents.z) > 0)) require_positive(shape.half_extents.z, field_path(where, "half_extents.z"));
       break;
     case ShapeType::Capsule:
+      if (!(std::isfinite(shape.radius) && (shape.radius) > 0)) require_positive(shape.radius, field_path(where, "radius"));
+      if (!(std::isfinite(shape.half_height) && shape.half_height >= 0)) require_non_negative(shape.half_height, field_path(where, "half_height"));
+      break;
     case ShapeType::Hull:
     case ShapeType::Mesh:
     case ShapeType::Compound:
-      throw Error(field_path(where, "type") + ": particle and soft-body collisions take a plane, sphere or box, got a " +
+      throw Error(field_path(where, "type") + ": particle and soft-body collisions take a plane, sphere, box or capsule, got a " +
                   std::string(to_string(shape.type)));
   }
   // material and motion

@@ -60,6 +60,7 @@ FlatShape<T> flatten(const Collider& c) {
   p.c1y = static_cast<T>(c.end.position.y);
   p.c1z = static_cast<T>(c.end.position.z);
   p.radius = static_cast<T>(c.shape.radius);
+  p.hh = static_cast<T>(c.shape.half_height);
   p.hx = static_cast<T>(c.shape.half_extents.x);
   p.hy = static_cast<T>(c.shape.half_extents.y);
   p.hz = static_cast<T>(c.shape.half_extents.z);
@@ -92,6 +93,10 @@ void CollisionWorld::clear() {
 std::size_t CollisionWorld::add(const Collider& c, std::uint32_t owner, std::string_view where) {
   // validate (the message is built only for a bad collider), then flatten once
   if (!c.ok()) c.validate(where);
+  return push(c, owner);
+}
+
+std::size_t CollisionWorld::push(const Collider& c, std::uint32_t owner) {
   colliders_.push_back(c);
   owners_.push_back(owner);
   flat_f_.push_back(detail::flatten<float>(c));
@@ -103,7 +108,7 @@ void CollisionWorld::assign(std::span<const Collider> colliders, std::string_vie
   clear();
   for (std::size_t i = 0; i < colliders.size(); ++i) {
     if (!colliders[i].ok()) colliders[i].validate(std::string(where) + "[" + std::to_string(i) + "]");
-    add(colliders[i], kNoOwner, where);
+    push(colliders[i], kNoOwner);
   }
 }
 

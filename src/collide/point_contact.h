@@ -16,8 +16,8 @@
 // particle kernel, double for soft bodies), scalar per point and written so that GCC
 // if-converts and vectorises the loops that call it; each keeps the exact order of
 // operations the particle and soft-body code had when each kept its own copy, so the
-// results are the same bits. Plane, sphere and box; the other shape types are refused
-// when a collider enters a CollisionWorld (Collider::ok).
+// results are the same bits. Plane, sphere, box and capsule; the other shape types are
+// refused when a collider enters a CollisionWorld (Collider::ok).
 #pragma once
 
 #include <cmath>
@@ -200,6 +200,100 @@ PBA_CONTACT_INLINE bool swept_box(const FlatShape<T>& c, T ox, T oy, T oz, T x, 
   return true;
 }
 
+/// The earliest s in [0, 1] at which q0 + s d enters the ball of radius R about c (the
+/// first root of |q0 - c + s d|^2 = R^2), or 2 when it does not; q0 outside the ball.
+template <class T>
+PBA_CONTACT_INLINE T ball_entry(const T* q0, const T* d, T cy, T R) {
+  const T px = q0[0], py = q0[1] - cy, pz = q0[2];
+  const T a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  const T b = px * d[0] + py * d[1] + pz * d[2];
+  const T c = px * px + py * py + pz * pz - R * R;
+  const T disc = b * b - a * c;
+  if (!(a > T(0)) || b >= T(0) || disc < T(0)) return T(2);
+  const T s = (-b - std::sqrt(disc)) / a;
+  return s >= T(0) && s <= T(1) ? s : T(2);
+}
+
+/// Capsules, swept: in the capsule's frame (start pose for the start point, end pose for
+/// the end point; its core the segment y in [-hh, hh] on the local Y axis) the segment
+/// from l0 to l1 against the capsule grown by the point's radius, in closed form: the
+/// first entry into the union of the side cylinder (the root of x^2 + z^2 = R^2 with y
+/// on the core) and the two end balls (Ericson 2005, 5.3.7 and 5.3.2). The contact
+/// normal points from the nearest core point to the point where the path enters; a point
+/// that starts inside is pushed out from the core along its end offset.
+template <class T>
+PBA_CONTACT_INLINE bool swept_capsule(const FlatShape<T>& c, T ox, T oy, T oz, T x, T y, T z, T r,
+                                      SweptContact<T>& out) {
+  const T R = c.radius + r, hh = c.hh;
+  T l0[3], l1[3];
+  to_local(c.r0, c.c0x, c.c0y, c.c0z, ox, oy, oz, l0[0], l0[1], l0[2]);
+  to_local(c.r1, c.c1x, c.c1y, c.c1z, x, y, z, l1[0], l1[1], l1[2]);
+  // squared distances from the core at both ends
+  auto core_dist2 = [hh](const T* l) {
+    const T cy = l[1] < -hh ? -hh : (l[1] > hh ? hh : l[1]);
+    const T dy = l[1] - cy;
+    return l[0] * l[0] + dy * dy + l[2] * l[2];
+  };
+  const T e0 = core_dist2(l0) - R * R, e1 = core_dist2(l1) - R * R;
+  const T d[3] = {l1[0] - l0[0], l1[1] - l0[1], l1[2] - l0[2]};
+  T p[3];  // where the contact is, in the local frame
+  bool crossed = false;
+  if (e0 >= T(0)) {
+    // entering: the earliest entry into the side or either end ball
+    T s = T(2);
+    const T a = d[0] * d[0] + d[2] * d[2];
+    const T b = l0[0] * d[0] + l0[2] * d[2];
+    const T cc = l0[0] * l0[0] + l0[2] * l0[2] - R * R;
+    const T disc = b * b - a * cc;
+    if (a > T(0) && b < T(0) && disc >= T(0)) {
+      const T sc = (-b - std::sqrt(disc)) / a;
+      const T yc = l0[1] + sc * d[1];
+      if (sc >= T(0) && sc <= T(1) && yc >= -hh && yc <= hh) s = sc;
+    }
+    const T s_lo = ball_entry(l0, d, -hh, R), s_hi = ball_entry(l0, d, hh, R);
+    s = s_lo < s ? s_lo : s;
+    s = s_hi < s ? s_hi : s;
+    if (s > T(1)) {
+      // the path never enters; a point that ends inside (rounding at a grazing entry)
+      // is pushed out from where it ended
+      if (!(e1 < T(0))) return false;
+      p[0] = l1[0], p[1] = l1[1], p[2] = l1[2];
+    } else {
+      p[0] = l0[0] + s * d[0], p[1] = l0[1] + s * d[1], p[2] = l0[2] + s * d[2];
+      crossed = true;
+    }
+  } else {
+    // started inside: push out along the end offset
+    if (!(e1 < T(0))) return false;  // already leaving
+    p[0] = l1[0], p[1] = l1[1], p[2] = l1[2];
+  }
+  // the normal from the nearest core point, in the local frame
+  const T cy = p[1] < -hh ? -hh : (p[1] > hh ? hh : p[1]);
+  T nl[3] = {p[0], p[1] - cy, p[2]};
+  const T len = std::sqrt(nl[0] * nl[0] + nl[1] * nl[1] + nl[2] * nl[2]);
+  if (len > T(1e-12f)) {
+    nl[0] /= len, nl[1] /= len, nl[2] /= len;
+  } else {
+    nl[0] = T(1), nl[1] = T(0), nl[2] = T(0);
+  }
+  // the tangent plane there: signed distances at the start (start pose) and the end
+  const T s1 = nl[0] * l1[0] + nl[1] * (l1[1] - cy) + nl[2] * l1[2] - R;
+  if (!(s1 < T(0))) return false;
+  const T s0 = crossed ? nl[0] * l0[0] + nl[1] * (l0[1] - cy) + nl[2] * l0[2] - R : T(-1);
+  // to world at the end pose: n = R1 nl, the core point c1 + R1 (0, cy, 0)
+  const T* m = c.r1;
+  out.nx = m[0] * nl[0] + m[3] * nl[1] + m[6] * nl[2];
+  out.ny = m[1] * nl[0] + m[4] * nl[1] + m[7] * nl[2];
+  out.nz = m[2] * nl[0] + m[5] * nl[1] + m[8] * nl[2];
+  const T qx = c.c1x + m[3] * cy, qy = c.c1y + m[4] * cy, qz = c.c1z + m[5] * cy;
+  out.s0 = s0 > T(0) ? s0 : T(0);
+  out.s1 = s1;
+  out.d1 = out.nx * qx + out.ny * qy + out.nz * qz + c.radius;
+  surface_velocity(c, c.c1x, c.c1y, c.c1z, qx + out.nx * c.radius, qy + out.ny * c.radius, qz + out.nz * c.radius,
+                   out.ux, out.uy, out.uz);
+  return true;
+}
+
 /// Where a point is in contact with a surface now: the outward unit normal, the depth
 /// (> 0) and the surface velocity at the point.
 template <class T>
@@ -213,7 +307,8 @@ struct PointContact {
 /// origin and a plane's offset interpolated linearly between the start and the end of
 /// the step, its rotation and normal taken at the end), the surface grown by the
 /// thickness th >= 0: a plane's signed distance, a sphere's radial offset, a box's
-/// closest point (outside) or nearest face (inside). Returns false when the point is
+/// closest point (outside) or nearest face (inside), a capsule's offset from the nearest
+/// point of its core segment. Returns false when the point is
 /// farther than th from the surface.
 template <class T>
 PBA_CONTACT_INLINE bool point_contact(const FlatShape<T>& c, T px, T py, T pz, T th, T f, PointContact<T>& out) {
@@ -275,7 +370,27 @@ PBA_CONTACT_INLINE bool point_contact(const FlatShape<T>& c, T px, T py, T pz, T
       out.nz = m[2] * u[0] + m[5] * u[1] + m[8] * u[2];
       break;
     }
-    case ShapeType::Capsule:
+    case ShapeType::Capsule: {
+      // local coordinates, the nearest point of the core segment
+      const T* m = c.r1;
+      T q[3];
+      to_local(m, cx, cy, cz, px, py, pz, q[0], q[1], q[2]);
+      const T ay = q[1] < -c.hh ? -c.hh : (q[1] > c.hh ? c.hh : q[1]);
+      T u[3] = {q[0], q[1] - ay, q[2]};
+      const T d2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], R = c.radius + th;
+      if (d2 >= R * R) return false;
+      const T d = std::sqrt(d2);
+      if (d > T(0)) {
+        u[0] /= d, u[1] /= d, u[2] /= d;
+      } else {
+        u[0] = T(1), u[1] = T(0), u[2] = T(0);  // on the axis: out along local x
+      }
+      out.depth = R - d;
+      out.nx = m[0] * u[0] + m[3] * u[1] + m[6] * u[2];
+      out.ny = m[1] * u[0] + m[4] * u[1] + m[7] * u[2];
+      out.nz = m[2] * u[0] + m[5] * u[1] + m[8] * u[2];
+      break;
+    }
     case ShapeType::Hull:
     case ShapeType::Mesh:
     case ShapeType::Compound: return false;  // refused by Collider::ok before any step

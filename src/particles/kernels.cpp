@@ -175,8 +175,10 @@ Reach make_reach(const ColliderParams& c) {
   }
   r.path = std::sqrt(path2);
   if (c.type == ShapeType::Sphere) r.radius = c.radius;
-  if (c.type == ShapeType::Box) {
-    r.radius = std::sqrt(double(c.hx) * c.hx + double(c.hy) * c.hy + double(c.hz) * c.hz);
+  if (c.type == ShapeType::Box || c.type == ShapeType::Capsule) {
+    // the circumradius about the frame origin: the box's corners, the capsule's end caps
+    r.radius = c.type == ShapeType::Box ? std::sqrt(double(c.hx) * c.hx + double(c.hy) * c.hy + double(c.hz) * c.hz)
+                                        : double(c.hh) + double(c.radius);
     double s2 = 0;
     for (int i = 0; i < 9; ++i) s2 += (double(c.r1[i]) - c.r0[i]) * (double(c.r1[i]) - c.r0[i]);
     r.spin = std::sqrt(s2);
@@ -200,7 +202,9 @@ using Swept = BlockBounds;
 //     end), over s in [-1e-3, 1] against the box grown by r, which lies inside the ball
 //     of radius |h| + sqrt(3) r. In the frame, |l(s)| >= |(1 - s) a + s b| - ||R1 - R0|| |b|
 //     with a = p0 - c0, b = p1 - c1, and |(1 - s) a + s b| >= dist(P, C) less 1e-3 of
-//     the two boxes' diameters for the stretch before s = 0.
+//     the two boxes' diameters for the stretch before s = 0;
+//   capsule: the same argument as the box, with the capsule grown by r inside the ball of
+//     radius hh + R + r <= hh + R + sqrt(3) r about its origin (and s only in [0, 1]).
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif

@@ -339,6 +339,9 @@ PBA_INLINE int collide_block(int n, const float* ox, const float* oy, const floa
                                                  threshold, h, bad);
         break;
       case ShapeType::Capsule:
+        count += collide_swept<swept_capsule<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c,
+                                                     threshold, h, bad);
+        break;
       case ShapeType::Hull:
       case ShapeType::Mesh:
       case ShapeType::Compound: break;  // refused when the collider entered the CollisionWorld

@@ -36,7 +36,7 @@ std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double) {
   const std::size_t n = s.n;
   for (const FlatShape<double>& c : s.colliders) {
     // a float bound that rejects most particles cheaply: the plane's signed distance, or
-    // the bounding sphere of the sphere or box (enlarged by the thickness and a margin
+    // the bounding sphere of the sphere, box or capsule (enlarged by the thickness and a margin
     // for float rounding; the exact test follows in double)
     const double mu = std::max(s.def.friction, c.mu);
     const Vec3 c0(c.c0x, c.c0y, c.c0z), c1(c.c1x, c.c1y, c.c1z);
@@ -44,7 +44,9 @@ std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double) {
     const float cx = static_cast<float>(center.x), cy = static_cast<float>(center.y), cz = static_cast<float>(center.z);
     const float nx = static_cast<float>(c.n1x), ny = static_cast<float>(c.n1y), nz = static_cast<float>(c.n1z);
     const Vec3 half(c.hx, c.hy, c.hz);
-    const double reach = c.type == ShapeType::Sphere ? c.radius : glm::length(half);
+    const double reach = c.type == ShapeType::Sphere    ? c.radius
+                         : c.type == ShapeType::Capsule ? c.hh + c.radius
+                                                        : glm::length(half);
     const float bound = static_cast<float>((reach + th) * (1 + 1e-5) + 1e-6);
     const float bound2 = bound * bound;
     // boxes: the local axes (the columns of R, rows of R^T) and the enlarged half

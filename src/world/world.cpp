@@ -345,21 +345,24 @@ ConstraintId World::add_constraint(EntityId e, const ConstraintDef& def) {
   return constraints_.back().id;
 }
 
+namespace {
+// the handle of an entity's component at dense index i, or the null handle (i is
+// World::kNone, 0xffffffff, when the entity has none)
+template <class Entry>
+auto component_id(const std::vector<Entry>& v, std::uint32_t i) {
+  return i == 0xffffffffu ? decltype(v[0].id){} : v[i].id;
+}
+}  // namespace
+
 ColliderId World::collider_id(EntityId e) const {
-  const EntityRecord& r = record(e, "World::collider_id");
-  return r.collider == kNone ? ColliderId{} : colliders_[r.collider].id;
+  return component_id(colliders_, record(e, "World::collider_id").collider);
 }
-ForcerId World::forcer_id(EntityId e) const {
-  const EntityRecord& r = record(e, "World::forcer_id");
-  return r.forcer == kNone ? ForcerId{} : forcers_[r.forcer].id;
-}
+ForcerId World::forcer_id(EntityId e) const { return component_id(forcers_, record(e, "World::forcer_id").forcer); }
 KinematicId World::kinematic_id(EntityId e) const {
-  const EntityRecord& r = record(e, "World::kinematic_id");
-  return r.kinematic == kNone ? KinematicId{} : kinematics_[r.kinematic].id;
+  return component_id(kinematics_, record(e, "World::kinematic_id").kinematic);
 }
 ConstraintId World::constraint_id(EntityId e) const {
-  const EntityRecord& r = record(e, "World::constraint_id");
-  return r.constraint == kNone ? ConstraintId{} : constraints_[r.constraint].id;
+  return component_id(constraints_, record(e, "World::constraint_id").constraint);
 }
 EntityId World::owner(ColliderId id) const { return collider_ids_.owner_of(id, "World::owner(ColliderId)"); }
 EntityId World::owner(ForcerId id) const { return forcer_ids_.owner_of(id, "World::owner(ForcerId)"); }

@@ -124,26 +124,29 @@ TEST(CollisionWorld, FlatFormsFollowTheColliders) {
 // names the collider, at the collision world, at the particle and soft-body steps and
 // at World::add_collider.
 TEST(CollisionWorld, RefusesWhatItCannotCollide) {
-  Collider capsule;
-  capsule.shape.type = pba::ShapeType::Capsule;
-  capsule.shape.radius = 0.1;
+  // a hull (its point contact waits for the shapes module)
+  Collider hull;
+  hull.shape.type = pba::ShapeType::Hull;
   CollisionWorld cw;
-  EXPECT_NE(error_of([&] { cw.add(capsule, 0, "the rope's capsule"); }).find("the rope's capsule.type"),
-            std::string::npos);
+  EXPECT_NE(error_of([&] { cw.add(hull, 0, "the rock"); }).find("the rock.type"), std::string::npos);
   EXPECT_TRUE(cw.empty());
   pba::ParticleSystem ps;
   ps.spawn({.position = {0, 1, 0}});
-  const std::string particle_error = error_of([&] { ps.step(0, 0.01, std::span<const Collider>(&capsule, 1), {}); });
+  const std::string particle_error = error_of([&] { ps.step(0, 0.01, std::span<const Collider>(&hull, 1), {}); });
   EXPECT_NE(particle_error.find("colliders[0].type"), std::string::npos) << particle_error;
-  EXPECT_NE(particle_error.find("capsule"), std::string::npos) << particle_error;
+  EXPECT_NE(particle_error.find("hull"), std::string::npos) << particle_error;
   pba::SoftBody rope = pba::SoftBody::rope({});
-  EXPECT_NE(error_of([&] { rope.step(0, 0.01, std::span<const Collider>(&capsule, 1)); }).find("colliders[0].type"),
+  EXPECT_NE(error_of([&] { rope.step(0, 0.01, std::span<const Collider>(&hull, 1)); }).find("colliders[0].type"),
             std::string::npos);
   Collider bad = Collider::sphere({0, 0, 0}, -1.0);
   EXPECT_NE(error_of([&] { cw.add(bad, 0, "ball"); }).find("ball.radius"), std::string::npos);
+  Collider pill;
+  pill.shape.type = pba::ShapeType::Capsule;
+  pill.shape.half_height = -0.5;
+  EXPECT_NE(error_of([&] { cw.add(pill, 0, "pill"); }).find("pill.half_height"), std::string::npos);
   pba::World w;
   auto e = w.create_entity({.name = "post"});
   const std::string world_error =
-      error_of([&] { w.add_collider(e, {.shape = {.type = pba::ShapeType::Capsule, .radius = 0.1}}); });
+      error_of([&] { w.add_collider(e, {.shape = {.type = pba::ShapeType::Mesh}}); });
   EXPECT_NE(world_error.find("'post'"), std::string::npos) << world_error;
 }

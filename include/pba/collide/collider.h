@@ -21,8 +21,8 @@ namespace pba {
 /// One collision surface as its clients see it during one tick: its shape, its
 /// material, and its pose at the start and the end of the tick (equal for a static
 /// surface). The motion in between is taken as linear, so moving surfaces are swept too.
-/// Particles and soft bodies collide with planes, spheres and boxes; the other shape
-/// types are rejected with an Error naming the collider until their point contacts exist.
+/// Particles and soft bodies collide with planes, spheres, boxes and capsules; the other
+/// shape types are rejected with an Error naming the collider until their point contacts exist.
 struct Collider {
   ColliderShape shape{};           ///< shape in the surface's frame
   SurfaceMaterial material{};      ///< restitution and friction

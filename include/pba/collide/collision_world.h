@@ -37,7 +37,8 @@ struct FlatShape {
   T n1x = 0, n1y = 1, n1z = 0, d1 = 0;       ///< plane at the end
   T c0x = 0, c0y = 0, c0z = 0;               ///< frame origin (sphere or box centre) at the start
   T c1x = 0, c1y = 0, c1z = 0;               ///< and at the end (m)
-  T radius = 0;                              ///< sphere radius (m)
+  T radius = 0;                              ///< sphere and capsule radius (m)
+  T hh = 0;                                  ///< capsule: half the core segment's length along local +Y (m)
   T hx = 0, hy = 0, hz = 0;                  ///< box half extents (m)
   T r0[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};     ///< rotation at the start, column-major (column j = local axis j)
   T r1[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};     ///< rotation at the end
@@ -46,7 +47,7 @@ struct FlatShape {
   bool is_static = true;                     ///< same pose at start and end, no velocity
 };
 
-/// The flat form of a valid collider (planes, spheres and boxes).
+/// The flat form of a valid collider (planes, spheres, boxes and capsules).
 template <class T>
 FlatShape<T> flatten(const Collider& c);
 
@@ -87,6 +88,7 @@ class CollisionWorld {
   void draw(DebugDraw& draw, Color c, const DrawFlags& flags = {}) const;
 
  private:
+  std::size_t push(const Collider& c, std::uint32_t owner);  // add() after validation
   std::vector<Collider> colliders_;
   std::vector<std::uint32_t> owners_;
   std::vector<detail::FlatShape<float>> flat_f_;
