@@ -51,7 +51,7 @@ class BouncingBalls final : public Sample {
   }
 
   void Draw(Renderer& r, double) override {
-    DrawColliders(r, world_.colliders());
+    DrawColliders(r, world_.colliders(), {}, ctx_.draw);
     const ParticleSystem& ps = world_.particles();
     const std::size_t tracked = ps.index_of(tracked_);
     // short trails, then the balls

@@ -49,7 +49,8 @@ void WorldPoints(const World& world, std::vector<Vec3>& out, std::size_t max_poi
       for (std::size_t k = 0; k < soft->at(b).size(); k += step) out.push_back(soft->at(b).position(k));
 }
 
-void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving) {
+void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving,
+                   const DrawFlags& flags) {
   for (std::size_t i = 0; i < colliders.size(); ++i) {
     const Collider& c = colliders[i];
     // moving: as told, else whether the surface moved or moves
@@ -57,6 +58,10 @@ void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<c
                                        : (glm::length(c.velocity) > 0 || glm::length(c.angular_velocity) > 0 ||
                                           c.begin.position != c.end.position);
     const Color col = kin ? particle_colors::moving : particle_colors::solid;
+    // bounds through the library; solids through the library too, except planes: the
+    // ground is the app's grid and other planes get a smaller translucent patch
+    c.draw(r, col, DrawFlags{.shapes = false, .aabbs = flags.aabbs});
+    if (!flags.shapes) continue;
     switch (c.shape.type) {
       case ShapeType::Plane: {
         const Vec3 n = glm::normalize(c.end.rotation * c.shape.normal);
@@ -66,8 +71,7 @@ void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<c
         r.plane(n, off, 4.0, with_alpha(col, 0.45f));
         break;
       }
-      case ShapeType::Sphere: r.sphere(c.end.position, c.shape.radius, col); break;
-      case ShapeType::Box: r.box(c.end.position, c.shape.half_extents, c.end.rotation, col); break;
+      default: c.draw(r, col, DrawFlags{.shapes = true, .aabbs = false}); break;
     }
   }
 }

@@ -89,7 +89,7 @@ class SceneFile final : public Sample {
     }
     const World& w = scene_->world;
     const DrawFlags& f = ctx_.draw;
-    if (f.shapes) DrawColliders(r, w.colliders());
+    DrawColliders(r, w.colliders(), {}, f);
     if (f.forcers)
       for (const Forcer& fc : w.forcers()) DrawForcer(r, fc, w.time());
     if (f.particles) DrawParticles(r, w.particles(), 3.0f, 0.008 * view_radius_);

@@ -60,7 +60,7 @@ void SoftPainter::DrawSurface(Renderer& r, std::span<const Vec3f> pos, std::span
 }
 
 void SoftPainter::Draw(Renderer& r, const SoftBody& body, const SoftView& view, Color color,
-                       std::span<const Color> particle_colors) {
+                       std::span<const Color> particle_colors, const DrawFlags& flags) {
   // the surface, from a copy of the positions
   if (view.surface && !body.triangles().empty()) {
     pos_.resize(body.size());
@@ -78,7 +78,7 @@ void SoftPainter::Draw(Renderer& r, const SoftBody& body, const SoftView& view, 
   o.strain_scale = view.strain_scale;
   o.pins = view.pins;
   o.color = view.surface ? Color{0.08f, 0.09f, 0.11f, 0.55f} : color;
-  if (o.edges || o.pins) body.draw(r, o);
+  if (o.edges || o.pins) body.draw(r, flags, o);
 }
 
 // ---------------------------------------------------------------------------------------

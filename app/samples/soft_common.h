@@ -44,9 +44,9 @@ struct SoftView {
 class SoftPainter {
  public:
   /// Draws `body` in `color`, or per particle from `particle_colors` (size() entries) when
-  /// given, as `view` says.
+  /// given, as `view` says, within what `flags` allow (the library draws the edges and pins).
   void Draw(Renderer& r, const SoftBody& body, const SoftView& view, Color color,
-            std::span<const Color> particle_colors = {});
+            std::span<const Color> particle_colors = {}, const DrawFlags& flags = {});
   /// Draws a surface of `positions` (a copy of a body's, e.g. its last finite state) over
   /// `triangles`, smooth-shaded, tinted by `strain` per particle (same size, or empty).
   void DrawSurface(Renderer& r, std::span<const Vec3f> positions, std::span<const SoftTriangle> triangles,

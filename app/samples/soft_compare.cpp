@@ -100,7 +100,7 @@ class CompareSample final : public SoftSample {
       // the bar the edge hangs from
       r.capsule(o + Vec3(-0.03, 0.02, 0), o + Vec3(1.03, 0.02, 0), 0.02, soft_colors::pole);
       // the cloth: live, or reddened in its last good shape once it stopped
-      if (l.status.empty()) painter_.Draw(r, l.body, view_, soft_colors::cloth);
+      if (l.status.empty()) painter_.Draw(r, l.body, view_, soft_colors::cloth, {}, ctx_.draw);
       else if (!l.last.empty())
         painter_.DrawSurface(r, l.last, l.body.triangles(), Color::hex(0x9b3b4a), {}, {}, view_.strain_scale);
       if (ctx_.settings.show_labels) {

@@ -47,8 +47,8 @@ class DrapeSample final : public OneBodySample {
 
   void Draw(Renderer& r, double) override {
     // the sphere (slightly smaller than the contact radius, so the cloth shows over it)
-    DrawColliders(r, colliders_);
-    painter_.Draw(r, body_, view_, soft_colors::cloth);
+    DrawColliders(r, colliders_, {}, ctx_.draw);
+    painter_.Draw(r, body_, view_, soft_colors::cloth, {}, ctx_.draw);
     // a blob shadow under the cloth's centre of mass
     const Vec3 c = body_.center_of_mass();
     r.shadow(Vec3(c.x, std::max(c.y, 0.0), c.z), 0.45);

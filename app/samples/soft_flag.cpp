@@ -61,7 +61,7 @@ class FlagSample final : public OneBodySample {
     r.capsule(Vec3(0, 0, 0), Vec3(0, kPoleTop + 0.05, 0), 0.03, soft_colors::pole);
     r.sphere(Vec3(0, kPoleTop + 0.1, 0), 0.05, Color::hex(0xffc53d));
     // the flag, striped per particle row
-    painter_.Draw(r, body_, view_, soft_colors::cloth, stripes_);
+    painter_.Draw(r, body_, view_, soft_colors::cloth, stripes_, ctx_.draw);
     // the air's velocity now, on a lattice behind the flag
     const Vec3 w = body_.settings().forces.wind.at(t_);
     DrawWindField(r, w, Vec3(-1.2, 1.4, -1.4), Vec3(3.2, 4.0, -1.4), 5, 4);

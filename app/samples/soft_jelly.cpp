@@ -56,7 +56,7 @@ class JellySample final : public OneBodySample {
   }
 
   void Draw(Renderer& r, double) override {
-    painter_.Draw(r, body_, view_, soft_colors::jelly);
+    painter_.Draw(r, body_, view_, soft_colors::jelly, {}, ctx_.draw);
     const Vec3 c = body_.center_of_mass();
     r.shadow(Vec3(c.x, std::max(c.y, 0.0), c.z), 0.35);
     grab_.Draw(r, Bodies());

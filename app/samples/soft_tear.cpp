@@ -73,7 +73,7 @@ class TearSample final : public OneBodySample {
     // the rail, the curtain (red where it is about to tear) and the pull
     r.capsule(Vec3(-0.55 * kSide, kTop + 0.02, 0), Vec3(0.55 * kSide, kTop + 0.02, 0), 0.025, soft_colors::pole);
     view_.strain_scale = def_.tear_strain;
-    painter_.Draw(r, body_, view_, soft_colors::fabric);
+    painter_.Draw(r, body_, view_, soft_colors::fabric, {}, ctx_.draw);
     grab_.Draw(r, Bodies());
     // the hands: a yellow ball at each held patch
     if (demo_started_) {

@@ -9,8 +9,9 @@
 //   pba::ParticleSystem ps({.capacity = 4096});
 //   ps.forces().quadratic_drag = 0.01;
 //   auto ball = ps.create({.position = {0, 1, 0}, .mass = 0.1, .radius = 0.05});
-//   pba::Collider ground = pba::Collider::plane({0, 1, 0}, 0.0, {.restitution = 0.8});
-//   ps.step(t, dt, std::span(&ground, 1), {});
+//   pba::CollisionWorld colliders;
+//   colliders.add(pba::Collider::plane({0, 1, 0}, 0.0, {.restitution = 0.8}));
+//   ps.step(t, dt, colliders, {});
 //
 // Everything here is usable without a World (the benchmark and many tests do that); the
 // World (pba/world.h) wires entities, kinematic paths and poses to it. See docs/particles.md.
@@ -18,47 +19,20 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <limits>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
-#include "pba/collide/shape.h"
+#include "pba/collide.h"
 #include "pba/core.h"
 #include "pba/draw.h"
 #include "pba/handle.h"
 #include "pba/integrate.h"
 
 namespace pba {
-
-// ---------------------------------------------------------------------------------------
-// poses and surfaces
-
-/// One collision surface as the particle system sees it during one step: its shape, its
-/// material, and its pose at the start and the end of the step (equal for a static
-/// surface). The motion in between is taken as linear, so moving surfaces are swept too.
-struct Collider {
-  ColliderShape shape{};           ///< shape in the surface's frame
-  SurfaceMaterial material{};      ///< restitution and friction
-  Pose begin{};                    ///< pose at the start of the step
-  Pose end{};                      ///< pose at the end of the step
-  Vec3 velocity{0, 0, 0};        ///< linear velocity of the frame origin (m/s), for friction and bounces
-  Vec3 angular_velocity{0, 0, 0};  ///< angular velocity (rad/s) about the frame origin
-
-  /// A static world plane { p : normal . p = offset } (normal need not be unit).
-  static Collider plane(const Vec3& normal, double offset, SurfaceMaterial m = {});
-  /// A static sphere.
-  static Collider sphere(const Vec3& center, double radius, SurfaceMaterial m = {});
-  /// A static axis-aligned (or rotated) box.
-  static Collider box(const Vec3& center, const Vec3& half_extents, SurfaceMaterial m = {},
-                      const Quat& rotation = Quat(1, 0, 0, 0));
-  /// Throws Error naming `where` and the bad field (non-finite pose, zero normal, radius
-  /// or half extent <= 0, restitution outside [0, 1], negative friction).
-  void validate(std::string_view where) const;
-  /// Draws the surface at its end pose.
-  void draw(DebugDraw& draw, Color c) const;
-};
 
 // ---------------------------------------------------------------------------------------
 // forcer volumes
@@ -99,8 +73,8 @@ struct Forcer {
   bool active(double t) const;
   /// The force (N) on a point p (m) at time t (s): zero outside the volume or when off.
   Vec3 force_at(const Vec3& p, double t) const;
-  /// Draws the volume outline and its push direction.
-  void draw(DebugDraw& draw, Color c) const;
+  /// Draws the volume outline and its push direction (when flags.forcers).
+  void draw(DebugDraw& draw, Color c, const DrawFlags& flags = {}) const;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -277,6 +251,18 @@ struct BlockBounds {
   bool measured = false;     ///< the box and speed were measured (not grown by a sweep)
 };
 
+/// A collider's reach over one step, in double, for the fused kernel's conservative far
+/// test (kernels.cpp); the system keeps one per collider as scratch.
+struct Reach {
+  ShapeType type;
+  double n[3], d;         // plane: at the end of the step (the exact test uses only that)
+  double n1;              // plane: |n_x| + |n_y| + |n_z|
+  double lo[3], hi[3];    // sphere, box: box around the centre's path (start and end)
+  double radius;          // sphere radius, or the circumradius: |half extents| (box), hh + R (capsule)
+  double spin;            // box, capsule: ||R1 - R0|| (Frobenius), bounds the turn of its frame
+  double path;            // |c1 - c0|
+  double maxabs;          // largest |coordinate| of the centre's path
+};
 /// The hot float columns of a ParticleSystem (x, y, z, vx, vy, vz, inverse mass,
 /// radius) in one 64-byte aligned allocation. Consecutive columns are staggered (by 320 B
 /// modulo 4 KB, and by 32 KB more when they are large; see column_stride in particles.cpp):
@@ -438,7 +424,15 @@ class ParticleSystem {
   /// integration, collisions with `colliders`, ageing and recycling. `forcers` push the
   /// particles inside them. Throws Error if the state becomes non-finite, naming the
   /// particle, the time and the step; the state is left as it was computed.
+  void step(double t, double dt, const CollisionWorld& colliders, std::span<const Forcer> forcers);
+  /// The same step with the colliders given as a span (validated each step, an Error
+  /// names colliders[i]; they fill a CollisionWorld kept by the system, so this does not
+  /// allocate in steady state either).
   void step(double t, double dt, std::span<const Collider> colliders, std::span<const Forcer> forcers);
+  /// The same step with a braced list of colliders (`{}` for none).
+  void step(double t, double dt, std::initializer_list<Collider> colliders, std::span<const Forcer> forcers) {
+    step(t, dt, std::span<const Collider>(colliders.begin(), colliders.size()), forcers);
+  }
 
   /// Steps taken.
   long long steps() const { return steps_; }
@@ -461,8 +455,13 @@ class ParticleSystem {
   const ParticleProfile& profile() const { return profile_; }
   /// 64-bit hash of positions and velocities (bit patterns), for determinism checks.
   std::uint64_t hash() const;
-  /// Draws every particle as a point (or sphere when `spheres`), at most `max_points`.
-  void draw(DebugDraw& draw, bool spheres = false, std::size_t max_points = 200000) const;
+  /// Draws every particle as a point (or sphere when `spheres`), at most `max_points`,
+  /// when flags.particles.
+  void draw(DebugDraw& draw, const DrawFlags& flags, bool spheres = false, std::size_t max_points = 200000) const;
+  /// The same with the default flags.
+  void draw(DebugDraw& draw, bool spheres = false, std::size_t max_points = 200000) const {
+    this->draw(draw, DrawFlags{}, spheres, max_points);
+  }
 
   /// Internal: the acceleration of particles [begin, begin + n) at time t given AoS
   /// positions and velocities (the callback the integrator calls). Public for tests.
@@ -483,10 +482,10 @@ class ParticleSystem {
   std::size_t push_particle(const ParticleDef& def, std::uint32_t owner, std::uint32_t source);
   void remove_at(std::size_t i);
   void emit(double t, double dt);
-  void step_fused(double t, double dt, std::span<const Collider> colliders, std::span<const Forcer> forcers,
+  void step_fused(double t, double dt, const CollisionWorld& colliders, std::span<const Forcer> forcers,
                   float threshold);
-  void step_generic(double t, double dt, std::span<const Collider> colliders,
-                    std::span<const Forcer> forcers, float threshold);
+  void step_generic(double t, double dt, const CollisionWorld& colliders, std::span<const Forcer> forcers,
+                    float threshold);
   void step_verlet(double t, double dt);
   void recycle();
   void report_non_finite(double t) const;
@@ -511,6 +510,8 @@ class ParticleSystem {
   // the particle columns: hot floats (x, y, z, vx, vy, vz, inverse mass, radius) ...
   detail::HotColumns hot_;
   std::vector<detail::BlockBounds> bounds_;  // one per block of hot_'s capacity
+  std::vector<detail::Reach> reach_;         // the broad phase's scratch, one per collider
+  CollisionWorld span_world_;                // the colliders of the span overload of step()
   // ... and cold ones
   std::vector<double> birth_, death_;  // birth and death times (s); death = inf for immortal
   std::vector<std::uint32_t> color0_, color1_;  // packed RGBA8 birth and death colours

@@ -19,7 +19,7 @@
 //       {.origin = {-0.5, 1.5, 0}, .nx = 64, .ny = 64, .mass = 1},
 //       {.solver = pba::SoftSolver::XPBD, .substeps = 20});
 //   pba::Collider ball = pba::Collider::sphere({0, 0.5, 0}, 0.3);
-//   cloth.step(t, 1.0 / 60, std::span(&ball, 1));
+//   cloth.step(t, 1.0 / 60, std::span(&ball, 1));   // or a CollisionWorld
 //
 // Everything here is usable without a World; SoftSystem makes soft bodies components of
 // World entities, and scene files describe them in a "soft_bodies" array
@@ -28,6 +28,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <limits>
 #include <memory>
 #include <span>
@@ -396,7 +397,14 @@ class SoftBody {
   /// (their end-of-step poses, centres interpolated over the substeps). Throws Error if
   /// the state becomes non-finite, naming the particle and the time; the body then
   /// refuses to step again and repeats that message. Never allocates.
-  void step(double t, double dt, std::span<const Collider> colliders = {});
+  void step(double t, double dt, const CollisionWorld& colliders);
+  /// The same step with the colliders given as a span (validated, an Error names
+  /// colliders[i]; they fill a CollisionWorld the body keeps, so no allocation in steady state).
+  void step(double t, double dt, std::span<const Collider> colliders);
+  /// The same step with a braced list of colliders (none by default).
+  void step(double t, double dt, std::initializer_list<Collider> colliders = {}) {
+    step(t, dt, std::span<const Collider>(colliders.begin(), colliders.size()));
+  }
   /// Steps taken.
   long long steps() const;
   /// Simulated time (s) at the end of the last step.
@@ -497,7 +505,10 @@ class SoftBody {
   /// 64-bit hash of positions, velocities and broken flags (bit patterns).
   std::uint64_t hash(std::uint64_t seed = 0xcbf29ce484222325ULL) const;
   /// Draws the body.
-  void draw(DebugDraw& draw, const SoftDrawOptions& options = {}) const;
+  void draw(DebugDraw& draw, const SoftDrawOptions& options = {}) const { this->draw(draw, DrawFlags{}, options); }
+  /// Draws the body as `options` say, within what `flags` allow: edges only with
+  /// flags.constraints, particles and pins only with flags.particles.
+  void draw(DebugDraw& draw, const DrawFlags& flags, const SoftDrawOptions& options = {}) const;
 
   /// Internal state (defined in src/soft).
   struct Impl;
@@ -512,7 +523,7 @@ class SoftBody {
 // world integration
 
 /// Soft bodies as components of World entities: add one with add(), and the system steps
-/// every body each world tick (after the particles and constraints) with the world's
+/// every body each world tick (at WorldStage::Soft, after the particles) with the world's
 /// colliders, draws and hashes them. Bodies live in world coordinates (the entity pose is
 /// not applied). Get the world's system with soft_system(world).
 class SoftSystem final : public WorldSystem {
@@ -521,6 +532,8 @@ class SoftSystem final : public WorldSystem {
   static constexpr std::string_view kName = "soft";
 
   std::string_view name() const override { return kName; }
+  /// Soft bodies run at WorldStage::Soft.
+  WorldStage stage() const override { return WorldStage::Soft; }
   /// Makes `body` the soft-body component of entity e (throws Error for a stale handle or
   /// an entity that already has one). Returns the body's index (stable until a removal).
   std::size_t add(const World& world, EntityId e, SoftBody body);
@@ -541,13 +554,14 @@ class SoftSystem final : public WorldSystem {
   /// Draw options for every body.
   SoftDrawOptions& draw_options() { return options_; }
 
-  /// Steps every body from t to t + dt with world.colliders(); a body that becomes
-  /// non-finite throws Error naming its entity, the particle and the time.
+  /// Steps every body from t to t + dt against world.collision(), under world.gravity()
+  /// (each body's forces.gravity follows it); a body that becomes non-finite throws
+  /// Error naming its entity, the particle and the time.
   void step(World& world, double t, double dt) override;
   /// Removes the entity's body.
   void on_destroy(EntityId e) override;
   /// Draws every body.
-  void draw(const World& world, DebugDraw& draw) const override;
+  void draw(const World& world, DebugDraw& draw, const DrawFlags& flags) const override;
   /// Mixes every body's hash.
   std::uint64_t hash(std::uint64_t seed) const override;
 

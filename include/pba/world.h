@@ -7,12 +7,21 @@
 // in the ParticleSystem's arrays, colliders and forcers in the World's dense arrays); the
 // World wires entities to systems and never dispatches per entity.
 //
-// Each tick runs the phases in a fixed order and times each (Box2D's b2Profile):
-//   1. kinematic    scripted paths, motors and thrusters move their entities
-//   2. sync         collider, forcer and emitter poses follow their entities
-//   3. particles    emit, forces + integration, swept collisions, recycling
-//   4. constraints  distance constraints between particle entities
-//   5. systems      the extension systems, in the order they were added
+// Each tick runs named stages in this documented order and times each (Box2D's
+// b2Profile; WorldProfile::stages). A stage runs the World's own work for it, then the
+// systems registered at it (WorldSystem::stage()), in the order they were added:
+//   1. kinematic    scripted paths, motors and thrusters move their entities (and write
+//                   their poses)
+//   2. collide      collider, forcer and emitter poses follow their entities; the
+//                   collision world of the tick is built (validated and flattened once)
+//   3. rigid        rigid-body systems (none yet; systems may register here)
+//   4. particles    emit, forces + integration, swept collisions, recycling; particle
+//                   entities without a kinematic get their particle's position as pose
+//   5. soft         soft bodies (SoftSystem), against the tick's collision world
+//   6. constraints  distance constraints between particle entities
+//   7. post         everything else (the default stage of a WorldSystem)
+// Gravity is the World's (WorldDef::gravity): every system reads World::gravity() each
+// tick, so the particles' and every soft body's gravity follow it.
 //
 //   pba::World world({.stepper = {.fixed_dt = 1.0 / 120}});
 //   auto ground = world.create_entity({.name = "ground"});
@@ -29,6 +38,7 @@
 #include <string_view>
 #include <vector>
 
+#include "pba/collide.h"
 #include "pba/core.h"
 #include "pba/draw.h"
 #include "pba/handle.h"
@@ -95,35 +105,70 @@ struct ConstraintDef {
   double stiffness = 1;    ///< fraction of the error removed per tick, in [0, 1]
 };
 
+/// The stages of a World tick, in the order they run (see the top of this header).
+enum class WorldStage : std::uint8_t {
+  Kinematic,    ///< scripted paths, motors, thrusters
+  Collide,      ///< poses of colliders, forcers, emitters; the collision world of the tick
+  Rigid,        ///< rigid bodies (systems only)
+  Particles,    ///< the particle system
+  Soft,         ///< soft bodies
+  Constraints,  ///< distance constraints
+  Post,         ///< anything after the physics (the default)
+};
+/// Number of stages.
+inline constexpr std::size_t kWorldStageCount = 7;
+/// Lower-case name of a stage ("kinematic", "collide", ...), for profiles and messages.
+std::string_view to_string(WorldStage s);
+
+/// Tag for collider component handles.
+struct ColliderTag {};
+/// Generation-checked handle to a Collider component (World::add_collider).
+using ColliderId = Handle<ColliderTag>;
+/// Tag for forcer component handles.
+struct ForcerTag {};
+/// Generation-checked handle to a Forcer component (World::add_forcer).
+using ForcerId = Handle<ForcerTag>;
+/// Tag for kinematic component handles.
+struct KinematicTag {};
+/// Generation-checked handle to a Kinematic component (World::add_kinematic).
+using KinematicId = Handle<KinematicTag>;
+/// Tag for constraint component handles.
+struct ConstraintTag {};
+/// Generation-checked handle to a Constraint component (World::add_constraint).
+using ConstraintId = Handle<ConstraintTag>;
+
 /// Wall-clock seconds per phase of the last tick (b2Profile style).
 struct WorldProfile {
+  double stages[kWorldStageCount] = {};  ///< each stage, its systems included, indexed by WorldStage
   double kinematic = 0;    ///< scripted paths
-  double sync = 0;         ///< collider, forcer and emitter poses
+  double sync = 0;         ///< collider, forcer and emitter poses and the collision world
   double emit = 0;         ///< particle emission
   double integrate = 0;    ///< forces and integration (fused with collisions for semi-implicit Euler)
   double collide = 0;      ///< collisions (generic integrator path only)
   double recycle = 0;      ///< removing dead particles
   double constraints = 0;  ///< constraint projection
-  double systems = 0;      ///< extension systems
+  double systems = 0;      ///< extension systems (all stages)
   double total = 0;        ///< the whole tick
 };
 
 class World;
 
-/// Extension point for later modules (rigid bodies, IK, cloth): a system with its own
-/// contiguous component storage, stepped once per tick after the constraints. One
-/// virtual call per system per tick, never per entity.
+/// Extension point for the modules (soft bodies, rigid bodies, IK): a system with its own
+/// contiguous component storage, stepped once per tick at its stage. One virtual call
+/// per system per tick, never per entity.
 class WorldSystem {
  public:
   virtual ~WorldSystem() = default;
   /// A short name for profiles and errors.
   virtual std::string_view name() const = 0;
+  /// The stage the system runs at (after the World's own work for that stage).
+  virtual WorldStage stage() const { return WorldStage::Post; }
   /// Advances the system from t to t + dt (s).
   virtual void step(World& world, double t, double dt) = 0;
   /// Removes whatever the system keeps for an entity that is being destroyed.
   virtual void on_destroy(EntityId) {}
   /// Draws the system.
-  virtual void draw(const World&, DebugDraw&) const {}
+  virtual void draw(const World&, DebugDraw&, const DrawFlags&) const {}
   /// Mixes the system's state into a hash.
   virtual std::uint64_t hash(std::uint64_t seed) const { return seed; }
 };
@@ -131,7 +176,10 @@ class WorldSystem {
 /// Settings of a World.
 struct WorldDef {
   StepperSettings stepper{};      ///< time stepping (fixed_dt is the tick)
-  ParticleSystemDef particles{};  ///< integrator, forces, capacity
+  /// Gravitational acceleration (m/s^2), finite: the World's, read by every system each
+  /// tick (it replaces particles.forces.gravity and each soft body's forces.gravity).
+  Vec3 gravity{0, -9.81, 0};
+  ParticleSystemDef particles{};  ///< integrator, drag, wind, capacity (forces.gravity: see gravity)
 };
 
 /// The entity-component world. Movable, not copyable. Not thread-safe.
@@ -172,15 +220,34 @@ class World {
   /// Gives the entity a particle; `def.position` is taken relative to the entity pose.
   ParticleId add_particle(EntityId e, const ParticleDef& def);
   /// Makes the entity a collision surface.
-  void add_collider(EntityId e, const ColliderDef& def);
+  ColliderId add_collider(EntityId e, const ColliderDef& def);
   /// Makes the entity a Forcer volume; `def.pose` is relative to the entity pose.
-  void add_forcer(EntityId e, const Forcer& def);
+  ForcerId add_forcer(EntityId e, const Forcer& def);
   /// Makes the entity an emitter; `def.pose` is relative to the entity pose.
   EmitterId add_emitter(EntityId e, const EmitterDef& def);
   /// Drives the entity by a path, motor or thruster, from the current time.
-  void add_kinematic(EntityId e, const KinematicDef& def);
+  KinematicId add_kinematic(EntityId e, const KinematicDef& def);
   /// Constrains the entity's particle to another particle entity.
-  void add_constraint(EntityId e, const ConstraintDef& def);
+  ConstraintId add_constraint(EntityId e, const ConstraintDef& def);
+
+  /// True when the handle names a live component (false once its entity is destroyed).
+  bool valid(ColliderId id) const { return collider_ids_.valid(id); }
+  bool valid(ForcerId id) const { return forcer_ids_.valid(id); }          ///< see valid(ColliderId)
+  bool valid(KinematicId id) const { return kinematic_ids_.valid(id); }    ///< see valid(ColliderId)
+  bool valid(ConstraintId id) const { return constraint_ids_.valid(id); }  ///< see valid(ColliderId)
+  /// The entity's collider handle, or the null handle.
+  ColliderId collider_id(EntityId e) const;
+  /// The entity's forcer handle, or the null handle.
+  ForcerId forcer_id(EntityId e) const;
+  /// The entity's kinematic handle, or the null handle.
+  KinematicId kinematic_id(EntityId e) const;
+  /// The entity's constraint handle, or the null handle.
+  ConstraintId constraint_id(EntityId e) const;
+  /// The entity a component belongs to (throws Error for a stale handle).
+  EntityId owner(ColliderId id) const;
+  EntityId owner(ForcerId id) const;       ///< see owner(ColliderId)
+  EntityId owner(KinematicId id) const;    ///< see owner(ColliderId)
+  EntityId owner(ConstraintId id) const;   ///< see owner(ColliderId)
 
   /// The entity's particle handle, or the null handle.
   ParticleId particle(EntityId e) const;
@@ -193,16 +260,24 @@ class World {
   /// The entity's kinematic definition, changeable between ticks (throws if it has none).
   KinematicDef& kinematic(EntityId e);
 
+  /// Gravity (m/s^2), read by every system each tick.
+  const Vec3& gravity() const { return gravity_; }
+  /// Changes gravity from the next tick on (finite; throws Error naming the value).
+  void set_gravity(const Vec3& g);
+
   /// The particle system (particles, emitters, forces, integrator).
   ParticleSystem& particles() { return particles_; }
   /// The particle system.
   const ParticleSystem& particles() const { return particles_; }
   /// World-space colliders of the last tick (or of now, before the first).
   std::span<const Collider> colliders() const { return world_colliders_; }
+  /// The collision world of the last tick: its colliders with their owners (entity
+  /// indices) and flat forms, which particles and soft bodies query.
+  const CollisionWorld& collision() const { return collision_; }
   /// World-space forcers of the last tick.
   std::span<const Forcer> forcers() const { return world_forcers_; }
 
-  /// Adds an extension system (stepped after the constraints, in the order added).
+  /// Adds an extension system (stepped at its stage(), after the systems added before it).
   void add_system(std::unique_ptr<WorldSystem> system);
   /// The first extension system whose name() is `name`, or nullptr.
   WorldSystem* find_system(std::string_view name);
@@ -217,7 +292,7 @@ class World {
   FrameStats advance(double frame_seconds);
   /// Exactly one tick of fixed_dt (TimeStepper::single_step with the fixed strategy).
   void step();
-  /// One tick from t to t + dt: the fixed phase order. advance() and step() call it.
+  /// One tick from t to t + dt: the stages in their order. advance() and step() call it.
   /// Throws Error if the state becomes non-finite (which particle, when); the world then
   /// refuses to tick again and repeats that message.
   void tick(double t, double dt);
@@ -229,8 +304,9 @@ class World {
   const WorldProfile& profile() const { return profile_; }
   /// Hash of the particle state, the entity poses and every extension system.
   std::uint64_t hash() const;
-  /// Draws colliders, forcers and particles.
-  void draw(DebugDraw& draw) const;
+  /// Draws what `flags` select: colliders (shapes, aabbs), forcers, particles, every
+  /// system (soft bodies: particles, constraints) and the entities' constraints.
+  void draw(DebugDraw& draw, const DrawFlags& flags = {}) const;
 
  private:
   struct EntityRecord {
@@ -246,13 +322,16 @@ class World {
   struct ColliderEntry {
     EntityId owner;
     ColliderDef def;
+    ColliderId id;
   };
   struct ForcerEntry {
     EntityId owner;
     Forcer def;  // pose relative to the entity
+    ForcerId id;
   };
   struct KinematicEntry {
     EntityId owner;
+    KinematicId id;
     KinematicDef def;
     double start = 0;  // time it was added (s)
     Pose start_pose;
@@ -261,6 +340,7 @@ class World {
   struct ConstraintEntry {
     EntityId owner;
     ConstraintDef def;
+    ConstraintId id;
   };
   static constexpr std::uint32_t kNone = 0xffffffffu;
 
@@ -270,21 +350,47 @@ class World {
   void run_kinematics(double t, double dt);
   void sync(double t, double dt);
   void solve_constraints(double dt);
+  void write_particle_poses();
+  void run_systems(WorldStage stage, double t, double dt);
   template <class Entry>
   void remove_dense(std::vector<Entry>& v, std::uint32_t EntityRecord::*member, std::uint32_t i);
 
   StepperSettings settings_;
+  Vec3 gravity_{0, -9.81, 0};
   TimeStepper stepper_;
   ParticleSystem particles_;
   HandlePool<EntityTag> entities_;
   std::vector<EntityRecord> records_;  // by handle slot
   std::vector<ColliderEntry> colliders_;
   std::vector<Collider> world_colliders_;  // parallel to colliders_
+  CollisionWorld collision_;               // world_colliders_ of this tick, for the clients
   std::vector<ForcerEntry> forcers_;
   std::vector<Forcer> world_forcers_;      // parallel to forcers_
   std::vector<KinematicEntry> kinematics_;
   std::vector<ConstraintEntry> constraints_;
   std::vector<std::unique_ptr<WorldSystem>> systems_;
+  // component handles: a pool per kind and the owning entity of each handle slot (the
+  // entity record holds the component's dense index)
+  template <class Tag>
+  struct ComponentIds {
+    HandlePool<Tag> pool;
+    std::vector<EntityId> owner;  // by handle slot
+    bool valid(Handle<Tag> id) const { return pool.valid(id); }
+    Handle<Tag> create(EntityId e) {
+      const Handle<Tag> id = pool.create();
+      if (owner.size() <= id.index) owner.resize(id.index + 1);
+      owner[id.index] = e;
+      return id;
+    }
+    EntityId owner_of(Handle<Tag> id, std::string_view where) const {
+      pool.require(id, where);
+      return owner[id.index];
+    }
+  };
+  ComponentIds<ColliderTag> collider_ids_;
+  ComponentIds<ForcerTag> forcer_ids_;
+  ComponentIds<KinematicTag> kinematic_ids_;
+  ComponentIds<ConstraintTag> constraint_ids_;
   double time_ = 0;
   long long ticks_ = 0;
   WorldProfile profile_;

@@ -15,9 +15,6 @@ namespace {
 // the loops vectorised (one AVX2 register each) without reassociating a single operation
 constexpr int kLanes = 8;
 
-// colliders the broad phase handles (the system allows at most this many)
-constexpr std::size_t kMaxReach = 256;
-
 // Relative slack of every bound below. Each float operation rounds by at most 2^-24
 // (6e-8) relative; the longest chain behind a bound has about 20 of them, so 1e-5 covers
 // rounding with a factor of 8 to spare.
@@ -163,18 +160,6 @@ PBA_INLINE void measure_block(int n, const float* PBA_RESTRICT x, const float* P
 // ---------------------------------------------------------------------------------------
 // the broad phase
 
-/// A collider's reach over one step, in double, for the conservative far test.
-struct Reach {
-  ShapeType type;
-  double n[3], d;         // plane: at the end of the step (the exact test uses only that)
-  double n1;              // plane: |n_x| + |n_y| + |n_z|
-  double lo[3], hi[3];    // sphere, box: box around the centre's path (start and end)
-  double radius;          // sphere radius, or the box's circumradius |half extents|
-  double spin;            // box: ||R1 - R0|| (Frobenius), bounds the turn of its frame
-  double path;            // |c1 - c0|
-  double maxabs;          // largest |coordinate| of the centre's path
-};
-
 Reach make_reach(const ColliderParams& c) {
   Reach r{};
   r.type = c.type;
@@ -190,8 +175,10 @@ Reach make_reach(const ColliderParams& c) {
   }
   r.path = std::sqrt(path2);
   if (c.type == ShapeType::Sphere) r.radius = c.radius;
-  if (c.type == ShapeType::Box) {
-    r.radius = std::sqrt(double(c.hx) * c.hx + double(c.hy) * c.hy + double(c.hz) * c.hz);
+  if (c.type == ShapeType::Box || c.type == ShapeType::Capsule) {
+    // the circumradius about the frame origin: the box's corners, the capsule's end caps
+    r.radius = c.type == ShapeType::Box ? std::sqrt(double(c.hx) * c.hx + double(c.hy) * c.hy + double(c.hz) * c.hz)
+                                        : double(c.hh) + double(c.radius);
     double s2 = 0;
     for (int i = 0; i < 9; ++i) s2 += (double(c.r1[i]) - c.r0[i]) * (double(c.r1[i]) - c.r0[i]);
     r.spin = std::sqrt(s2);
@@ -215,7 +202,9 @@ using Swept = BlockBounds;
 //     end), over s in [-1e-3, 1] against the box grown by r, which lies inside the ball
 //     of radius |h| + sqrt(3) r. In the frame, |l(s)| >= |(1 - s) a + s b| - ||R1 - R0|| |b|
 //     with a = p0 - c0, b = p1 - c1, and |(1 - s) a + s b| >= dist(P, C) less 1e-3 of
-//     the two boxes' diameters for the stretch before s = 0.
+//     the two boxes' diameters for the stretch before s = 0;
+//   capsule: the same argument as the box, with the capsule grown by r inside the ball of
+//     radius hh + R + r <= hh + R + sqrt(3) r about its origin (and s only in [0, 1]).
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
@@ -319,8 +308,8 @@ FusedResult fused_semi_implicit_euler(const FusedArgs& a) {
   std::fill(r_value, r_value + kBlock, a.radius_value);
   // the step's force bounds and the colliders' reach, for the broad phase
   const ForceBounds fb = force_bounds(a.forces, a.forcers, a.n_forcers);
-  Reach reach[kMaxReach];
-  const bool use_bounds = a.broad_phase && a.n_colliders <= kMaxReach;
+  Reach* reach = a.reach;
+  const bool use_bounds = a.broad_phase;
   if (use_bounds)
     for (std::size_t c = 0; c < a.n_colliders; ++c) reach[c] = make_reach(a.colliders[c]);
   alignas(64) float ax[kBlock], ay[kBlock], az[kBlock];

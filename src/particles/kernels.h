@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "collide/point_contact.h"
 #include "pba/particles.h"
 
 #if defined(__GNUC__)
@@ -43,20 +44,10 @@ struct ForcerParams {
   float strength, pull, softening;
 };
 
-/// A collider flattened for the kernel over one step.
-struct ColliderParams {
-  ShapeType type;
-  float e, mu;                       // restitution and friction
-  float n0x, n0y, n0z, d0;           // plane at the start of the step
-  float n1x, n1y, n1z, d1;           // plane at the end
-  float c0x, c0y, c0z, c1x, c1y, c1z;  // sphere/box centre at start and end
-  float radius;                      // sphere radius
-  float hx, hy, hz;                  // box half extents
-  float r0[9], r1[9];                // box rotation at start and end (column-major)
-  float vx, vy, vz;                  // linear velocity of the frame origin
-  float wx, wy, wz;                  // angular velocity
-  bool is_static;                    // same pose at start and end, no velocity
-};
+/// A collider flattened for the kernel over one tick: the collide module's flat form in
+/// float, computed once per tick by the CollisionWorld.
+using ColliderParams = FlatShape<float>;
+
 
 // Gravity and drag on one particle: a = g - (1/m) (b + c |u|) u with u = v - wind
 // (linear and quadratic drag). Returns |u| (m/s). Every path computes the force with this
@@ -254,7 +245,7 @@ PBA_INLINE int collide_plane_t(int n, const float* PBA_RESTRICT ox, const float*
   alignas(64) std::uint8_t hits[kBlock];
   int count = 0;
   for (int k = 0; k < n; ++k) {
-    const bool hit = (nx * x[k] + ny * y[k] + nz * z[k] - d1 - radius[k]) < 0.0f;
+    const bool hit = plane_gap(nx, ny, nz, d1, x[k], y[k], z[k], radius[k]) < 0.0f;
     hits[k] = hit ? 1 : 0;
     count += hit ? 1 : 0;
   }
@@ -265,8 +256,8 @@ PBA_INLINE int collide_plane_t(int n, const float* PBA_RESTRICT ox, const float*
     for (int k = 0; k < n; ++k) {
       if (!hits[k]) continue;
       const float r = radius[k];
-      const float s0 = n0x * ox[k] + n0y * oy[k] + n0z * oz[k] - d0 - r;
-      const float s1 = nx * x[k] + ny * y[k] + nz * z[k] - d1 - r;
+      const float s0 = plane_gap(n0x, n0y, n0z, d0, ox[k], oy[k], oz[k], r);
+      const float s1 = plane_gap(nx, ny, nz, d1, x[k], y[k], z[k], r);
       respond(true, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k], ovz[k], nx, ny, nz,
               s0, s1, d1, r, usx, usy, usz, c.e, c.mu, threshold, h, inv_h);
       bad |= non_finite6(x[k], y[k], z[k], vx[k], vy[k], vz[k]);
@@ -278,8 +269,8 @@ PBA_INLINE int collide_plane_t(int n, const float* PBA_RESTRICT ox, const float*
   for (int k = 0; k < n; ++k) {
     // signed distances of the particle's surface from the plane, start and end
     const float r = radius[k];
-    const float s0 = n0x * ox[k] + n0y * oy[k] + n0z * oz[k] - d0 - r;
-    const float s1 = nx * x[k] + ny * y[k] + nz * z[k] - d1 - r;
+    const float s0 = plane_gap(n0x, n0y, n0z, d0, ox[k], oy[k], oz[k], r);
+    const float s1 = plane_gap(nx, ny, nz, d1, x[k], y[k], z[k], r);
     const bool hit = s1 < 0.0f;
     // respond on copies, then store unconditionally (keeps the loop free of branches)
     float px = x[k], py = y[k], pz = z[k], qx = vx[k], qy = vy[k], qz = vz[k];
@@ -306,160 +297,21 @@ PBA_INLINE int collide_plane(int n, const float* ox, const float* oy, const floa
   return collide_plane_t<false>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
 }
 
-// p -> R^T (p - c) for a column-major rotation
-PBA_INLINE void to_local(const float* r, float cx, float cy, float cz, float px, float py, float pz, float& lx,
-                         float& ly, float& lz) {
-  const float dx = px - cx, dy = py - cy, dz = pz - cz;
-  lx = r[0] * dx + r[1] * dy + r[2] * dz;
-  ly = r[3] * dx + r[4] * dy + r[5] * dz;
-  lz = r[6] * dx + r[7] * dy + r[8] * dz;
-}
-
-// the surface velocity at a point: v + w x (p - c)
-PBA_INLINE void surface_velocity(const ColliderParams& c, float px, float py, float pz, float& ux, float& uy,
-                                 float& uz) {
-  const float dx = px - c.c1x, dy = py - c.c1y, dz = pz - c.c1z;
-  ux = c.vx + (c.wy * dz - c.wz * dy);
-  uy = c.vy + (c.wz * dx - c.wx * dz);
-  uz = c.vz + (c.wx * dy - c.wy * dx);
-}
-
-// spheres: the segment from the start to the end of the step, relative to the moving
-// centre, against the sphere of radius R + r: the first root of |q0 + s d|^2 = (R + r)^2
-// in [0, 1] (Ericson, "Real-Time Collision Detection", 2005, 5.3.2). A particle whose
-// path enters the sphere is caught at any speed.
-PBA_INLINE int collide_sphere(int n, const float* ox, const float* oy, const float* oz, const float* ovx,
-                              const float* ovy, const float* ovz, float* x, float* y, float* z, float* vx, float* vy,
-                              float* vz, const float* radius, const ColliderParams& c, float threshold, float h,
-                              int& bad) {
+// spheres and boxes: the collide module's swept point contact (collide/point_contact.h)
+// finds the contact plane of each particle's path, then the shared response handles it.
+// A particle whose path enters the shape is caught at any speed.
+template <bool (*Contact)(const ColliderParams&, float, float, float, float, float, float, float,
+                          SweptContact<float>&)>
+PBA_INLINE int collide_swept(int n, const float* ox, const float* oy, const float* oz, const float* ovx,
+                             const float* ovy, const float* ovz, float* x, float* y, float* z, float* vx, float* vy,
+                             float* vz, const float* radius, const ColliderParams& c, float threshold, float h,
+                             int& bad) {
   int count = 0;
   for (int k = 0; k < n; ++k) {
-    const float R = c.radius + radius[k];
-    // relative positions at the start and end
-    const float q0x = ox[k] - c.c0x, q0y = oy[k] - c.c0y, q0z = oz[k] - c.c0z;
-    const float q1x = x[k] - c.c1x, q1y = y[k] - c.c1y, q1z = z[k] - c.c1z;
-    const float dx = q1x - q0x, dy = q1y - q0y, dz = q1z - q0z;
-    const float c0 = q0x * q0x + q0y * q0y + q0z * q0z - R * R;
-    const float c1 = q1x * q1x + q1y * q1y + q1z * q1z - R * R;
-    // quick reject: outside at both ends and the segment's closest approach is outside
-    const float a = dx * dx + dy * dy + dz * dz;
-    const float b = q0x * dx + q0y * dy + q0z * dz;  // half of the linear coefficient
-    if (c1 >= 0.0f && (c0 < 0.0f || b >= 0.0f || a <= 0.0f || b * b - a * c0 < 0.0f)) continue;
-    float nx, ny, nz;
-    bool crossed = false;
-    if (c0 >= 0.0f) {
-      // entering: first root of a s^2 + 2 b s + c0 = 0
-      const float disc = b * b - a * c0;
-      const float s = (-b - std::sqrt(disc > 0.0f ? disc : 0.0f)) / a;
-      if (!(s <= 1.0f) && c1 >= 0.0f) continue;
-      const float sc = s < 0.0f ? 0.0f : (s > 1.0f ? 1.0f : s);
-      nx = q0x + sc * dx;
-      ny = q0y + sc * dy;
-      nz = q0z + sc * dz;
-      crossed = true;
-    } else {
-      // started inside: push out along the end offset
-      nx = q1x;
-      ny = q1y;
-      nz = q1z;
-    }
-    const float len = std::sqrt(nx * nx + ny * ny + nz * nz);
-    if (len > 1e-12f) {
-      nx /= len;
-      ny /= len;
-      nz /= len;
-    } else {
-      nx = 0;
-      ny = 1;
-      nz = 0;
-    }
-    // the tangent plane at the contact point: distances at the start (start pose) and end
-    const float s1 = nx * q1x + ny * q1y + nz * q1z - R;
-    if (!(s1 < 0.0f)) continue;
-    const float s0 = crossed ? nx * q0x + ny * q0y + nz * q0z - R : -1.0f;
-    const float d1 = nx * c.c1x + ny * c.c1y + nz * c.c1z + c.radius;
-    float ux, uy, uz;
-    surface_velocity(c, c.c1x + nx * c.radius, c.c1y + ny * c.radius, c.c1z + nz * c.radius, ux, uy, uz);
-    respond(true, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k], ovz[k], nx, ny, nz,
-            s0 > 0.0f ? s0 : 0.0f, s1, d1, radius[k], ux, uy, uz, c.e, c.mu, threshold, h, 1.0f / h);
-    bad |= non_finite6(x[k], y[k], z[k], vx[k], vy[k], vz[k]);
-    ++count;
-  }
-  return count;
-}
-
-// boxes: in the box's frame (start pose for the start point, end pose for the end point)
-// the segment is clipped against the box grown by the particle radius with the slab test
-// (Ericson 2005, 5.3.3): the entry face gives the normal. The grown box has square edges
-// where the exact Minkowski sum is rounded, so near edges and corners the contact is up to
-// r (sqrt(3) - 1) early. A particle that starts inside is pushed out of the nearest face.
-PBA_INLINE int collide_box(int n, const float* ox, const float* oy, const float* oz, const float* ovx,
-                           const float* ovy, const float* ovz, float* x, float* y, float* z, float* vx, float* vy,
-                           float* vz, const float* radius, const ColliderParams& c, float threshold, float step_h,
-                           int& bad) {
-  int count = 0;
-  for (int k = 0; k < n; ++k) {
-    const float r = radius[k];
-    const float h[3] = {c.hx + r, c.hy + r, c.hz + r};
-    const float dt = step_h;
-    float l0[3], l1[3];
-    to_local(c.r0, c.c0x, c.c0y, c.c0z, ox[k], oy[k], oz[k], l0[0], l0[1], l0[2]);
-    to_local(c.r1, c.c1x, c.c1y, c.c1z, x[k], y[k], z[k], l1[0], l1[1], l1[2]);
-    const bool in1 = std::fabs(l1[0]) < h[0] && std::fabs(l1[1]) < h[1] && std::fabs(l1[2]) < h[2];
-    const bool in0 = std::fabs(l0[0]) < h[0] && std::fabs(l0[1]) < h[1] && std::fabs(l0[2]) < h[2];
-    int axis = -1;
-    float sign = 1.0f;
-    bool crossed = false;
-    if (!in0) {
-      // slab test of the segment l0 -> l1: latest entry, earliest exit
-      float t_enter = -3.4e38f, t_exit = 1.0f;
-      int enter_axis = -1;
-      float enter_sign = 1.0f;
-      bool miss = false;
-      for (int j = 0; j < 3 && !miss; ++j) {
-        const float d = l1[j] - l0[j];
-        if (std::fabs(d) < 1e-12f) {
-          if (std::fabs(l0[j]) >= h[j]) miss = true;
-          continue;
-        }
-        // moving toward +: enters through the -h face (normal -1), and vice versa
-        float ta = (-h[j] - l0[j]) / d, tb = (h[j] - l0[j]) / d;
-        float sg = -1.0f;
-        if (ta > tb) {
-          const float tmp = ta;
-          ta = tb;
-          tb = tmp;
-          sg = 1.0f;
-        }
-        if (ta > t_enter) t_enter = ta, enter_axis = j, enter_sign = sg;
-        if (tb < t_exit) t_exit = tb;
-        if (t_enter > t_exit) miss = true;
-      }
-      if (miss || enter_axis < 0 || t_enter > 1.0f || t_enter < -1e-3f) continue;
-      axis = enter_axis;
-      sign = enter_sign;
-      crossed = true;
-    } else if (in1) {
-      // started and ended inside: the face of least penetration at the end
-      float best = 3.4e38f;
-      for (int j = 0; j < 3; ++j) {
-        const float pen = h[j] - std::fabs(l1[j]);
-        if (pen < best) best = pen, axis = j, sign = l1[j] >= 0.0f ? 1.0f : -1.0f;
-      }
-    } else {
-      continue;  // started inside, ended outside: already leaving
-    }
-    // contact plane: local face normal, signed distance of the end point past it
-    const float s1 = sign * l1[axis] - h[axis];
-    if (!(s1 < 0.0f)) continue;
-    const float nx = c.r1[axis * 3 + 0] * sign, ny = c.r1[axis * 3 + 1] * sign, nz = c.r1[axis * 3 + 2] * sign;
-    const float s0 = crossed ? sign * l0[axis] - h[axis] : -1.0f;
-    const float hs[3] = {c.hx, c.hy, c.hz};
-    const float d1 = nx * c.c1x + ny * c.c1y + nz * c.c1z + hs[axis];
-    float ux, uy, uz;
-    surface_velocity(c, x[k], y[k], z[k], ux, uy, uz);
-    respond(true, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k], ovz[k], nx, ny, nz,
-            s0 > 0.0f ? s0 : 0.0f, s1, d1, r, ux, uy, uz, c.e, c.mu, threshold, dt, 1.0f / dt);
+    SweptContact<float> q;
+    if (!Contact(c, ox[k], oy[k], oz[k], x[k], y[k], z[k], radius[k], q)) continue;
+    respond(true, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k], ovz[k], q.nx, q.ny, q.nz,
+            q.s0, q.s1, q.d1, radius[k], q.ux, q.uy, q.uz, c.e, c.mu, threshold, h, 1.0f / h);
     bad |= non_finite6(x[k], y[k], z[k], vx[k], vy[k], vz[k]);
     ++count;
   }
@@ -479,11 +331,20 @@ PBA_INLINE int collide_block(int n, const float* ox, const float* oy, const floa
         count += collide_plane(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
         break;
       case ShapeType::Sphere:
-        count += collide_sphere(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
+        count += collide_swept<swept_sphere<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c,
+                                                    threshold, h, bad);
         break;
       case ShapeType::Box:
-        count += collide_box(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
+        count += collide_swept<swept_box<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c,
+                                                 threshold, h, bad);
         break;
+      case ShapeType::Capsule:
+        count += collide_swept<swept_capsule<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c,
+                                                     threshold, h, bad);
+        break;
+      case ShapeType::Hull:
+      case ShapeType::Mesh:
+      case ShapeType::Compound: break;  // refused when the collider entered the CollisionWorld
     }
   }
   return count;
@@ -518,6 +379,7 @@ struct FusedArgs {
   std::size_t n_forcers;
   const ColliderParams* colliders;
   std::size_t n_colliders;
+  Reach* reach;  // scratch for the broad phase: n_colliders of them (any count)
   float threshold;
 };
 

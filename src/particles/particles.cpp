@@ -63,7 +63,6 @@ void rotation_columns(const Quat& q, float* r) {
 
 // flatten forcers that are on at time t (at most kMaxForcers)
 constexpr std::size_t kMaxForcers = 64;
-constexpr std::size_t kMaxColliders = 256;
 
 std::size_t forcer_params(std::span<const Forcer> forcers, double t, detail::ForcerParams* out) {
   std::size_t n = 0;
@@ -99,44 +98,6 @@ std::size_t forcer_params(std::span<const Forcer> forcers, double t, detail::For
     p.softening = static_cast<float>(f.softening);
   }
   return n;
-}
-
-detail::ColliderParams collider_params(const Collider& c) {
-  detail::ColliderParams p{};
-  p.type = c.shape.type;
-  p.e = static_cast<float>(c.material.restitution);
-  p.mu = static_cast<float>(c.material.friction);
-  // planes in world: n = R n_local, d = offset + n . origin
-  auto plane = [&](const Pose& pose, float& nx, float& ny, float& nz, float& d) {
-    const Vec3 n = glm::normalize(glm::normalize(pose.rotation) * c.shape.normal);
-    nx = static_cast<float>(n.x);
-    ny = static_cast<float>(n.y);
-    nz = static_cast<float>(n.z);
-    d = static_cast<float>(c.shape.offset + glm::dot(n, pose.position));
-  };
-  plane(c.begin, p.n0x, p.n0y, p.n0z, p.d0);
-  plane(c.end, p.n1x, p.n1y, p.n1z, p.d1);
-  p.c0x = static_cast<float>(c.begin.position.x);
-  p.c0y = static_cast<float>(c.begin.position.y);
-  p.c0z = static_cast<float>(c.begin.position.z);
-  p.c1x = static_cast<float>(c.end.position.x);
-  p.c1y = static_cast<float>(c.end.position.y);
-  p.c1z = static_cast<float>(c.end.position.z);
-  p.radius = static_cast<float>(c.shape.radius);
-  p.hx = static_cast<float>(c.shape.half_extents.x);
-  p.hy = static_cast<float>(c.shape.half_extents.y);
-  p.hz = static_cast<float>(c.shape.half_extents.z);
-  rotation_columns(c.begin.rotation, p.r0);
-  rotation_columns(c.end.rotation, p.r1);
-  p.vx = static_cast<float>(c.velocity.x);
-  p.vy = static_cast<float>(c.velocity.y);
-  p.vz = static_cast<float>(c.velocity.z);
-  p.wx = static_cast<float>(c.angular_velocity.x);
-  p.wy = static_cast<float>(c.angular_velocity.y);
-  p.wz = static_cast<float>(c.angular_velocity.z);
-  p.is_static = p.n0x == p.n1x && p.n0y == p.n1y && p.n0z == p.n1z && p.d0 == p.d1 && p.c0x == p.c1x &&
-                p.c0y == p.c1y && p.c0z == p.c1z && c.velocity == Vec3(0) && c.angular_velocity == Vec3(0);
-  return p;
 }
 
 }  // namespace
@@ -682,14 +643,16 @@ void ParticleSystem::accelerations(double t, std::size_t begin, std::span<const 
 
 void ParticleSystem::step(double t, double dt, std::span<const Collider> colliders,
                           std::span<const Forcer> forcers) {
+  span_world_.assign(colliders, "ParticleSystem::step colliders");
+  step(t, dt, span_world_, forcers);
+}
+
+void ParticleSystem::step(double t, double dt, const CollisionWorld& colliders, std::span<const Forcer> forcers) {
   Stopwatch total;
   // validate the step and the settings once
   require_positive(dt, "ParticleSystem::step(dt)");
   require_finite(t, "ParticleSystem::step(t)");
   forces_.validate("ParticleSystem.forces");
-  if (colliders.size() > kMaxColliders)
-    throw Error("ParticleSystem::step: at most " + std::to_string(kMaxColliders) + " colliders, got " +
-                std::to_string(colliders.size()));
   if (forcers.size() > kMaxForcers)
     throw Error("ParticleSystem::step: at most " + std::to_string(kMaxForcers) + " forcers, got " +
                 std::to_string(forcers.size()));
@@ -720,13 +683,14 @@ void ParticleSystem::step(double t, double dt, std::span<const Collider> collide
   forcers_now_ = {};
 }
 
-void ParticleSystem::step_fused(double t, double dt, std::span<const Collider> colliders,
+void ParticleSystem::step_fused(double t, double dt, const CollisionWorld& colliders,
                                 std::span<const Forcer> forcers, float threshold) {
-  // flatten forcers and colliders for the kernel (stack arrays, no allocation)
+  // flatten the forcers for the kernel (a stack array, no allocation); the colliders come
+  // flat from the collision world, with the broad phase's scratch beside them (it grows
+  // only when the count of colliders does)
   detail::ForcerParams fp[kMaxForcers];
-  detail::ColliderParams cp[kMaxColliders];
   const std::size_t nf = forcer_params(forcers, t, fp);
-  for (std::size_t i = 0; i < colliders.size(); ++i) cp[i] = collider_params(colliders[i]);
+  if (reach_.size() < colliders.size()) reach_.resize(colliders.size());
   // a column whose values are all equal is not read (the kernel uses the value)
   detail::FusedArgs a{};
   a.x = hot_[kX], a.y = hot_[kY], a.z = hot_[kZ];
@@ -742,8 +706,9 @@ void ParticleSystem::step_fused(double t, double dt, std::span<const Collider> c
   a.forces = force_params(forces_, t);
   a.forcers = fp;
   a.n_forcers = nf;
-  a.colliders = cp;
+  a.colliders = colliders.flat_float().data();
   a.n_colliders = colliders.size();
+  a.reach = reach_.data();
   a.threshold = threshold;
   const detail::FusedResult r = detail::fused_semi_implicit_euler(a);
   contacts_ = r.contacts;
@@ -751,7 +716,7 @@ void ParticleSystem::step_fused(double t, double dt, std::span<const Collider> c
   if (r.non_finite) report_non_finite(t + dt);
 }
 
-void ParticleSystem::step_generic(double t, double dt, std::span<const Collider> colliders,
+void ParticleSystem::step_generic(double t, double dt, const CollisionWorld& colliders,
                                   std::span<const Forcer> /*forcers*/, float threshold) {
   const std::size_t n = size();
   // the broad phase's bounds are not kept up to date here
@@ -800,8 +765,7 @@ void ParticleSystem::step_generic(double t, double dt, std::span<const Collider>
   }
   // collide block by block: old positions from the columns, new ones from the integrator
   Stopwatch sw;
-  detail::ColliderParams cp[kMaxColliders];
-  for (std::size_t i = 0; i < colliders.size(); ++i) cp[i] = collider_params(colliders[i]);
+  const detail::ColliderParams* cp = colliders.flat_float().data();
   alignas(64) float bx[detail::kBlock], by[detail::kBlock], bz[detail::kBlock];
   alignas(64) float bvx[detail::kBlock], bvy[detail::kBlock], bvz[detail::kBlock];
   int bad = 0;
@@ -909,7 +873,8 @@ std::uint64_t ParticleSystem::hash() const {
   return h;
 }
 
-void ParticleSystem::draw(DebugDraw& draw, bool spheres, std::size_t max_points) const {
+void ParticleSystem::draw(DebugDraw& draw, const DrawFlags& flags, bool spheres, std::size_t max_points) const {
+  if (!flags.particles) return;
   const std::size_t n = std::min(max_points, size());
   for (std::size_t i = 0; i < n; ++i) {
     if (spheres)

@@ -1,85 +1,11 @@
-// Collision surfaces and Forcer volumes: construction, validation, drawing, and the
-// double-precision reference of the forcer force (the kernels use a float copy).
+// Forcer volumes: validation, drawing, and the double-precision reference of the forcer
+// force (the kernels use a float copy). Colliders live in the collide module.
 #include <cmath>
 #include <string>
 
 #include "pba/particles.h"
 
 namespace pba {
-
-namespace {
-Pose static_pose(const Vec3& p, const Quat& q = Quat(1, 0, 0, 0)) { return Pose{p, q}; }
-}  // namespace
-
-Collider Collider::plane(const Vec3& normal, double offset, SurfaceMaterial m) {
-  Collider c;
-  c.shape.type = ShapeType::Plane;
-  const double len = glm::length(normal);
-  c.shape.normal = len > 0 ? normal / len : normal;
-  c.shape.offset = len > 0 ? offset / len : offset;
-  c.material = m;
-  return c;
-}
-
-Collider Collider::sphere(const Vec3& center, double radius, SurfaceMaterial m) {
-  Collider c;
-  c.shape.type = ShapeType::Sphere;
-  c.shape.radius = radius;
-  c.material = m;
-  c.begin = c.end = static_pose(center);
-  return c;
-}
-
-Collider Collider::box(const Vec3& center, const Vec3& half_extents, SurfaceMaterial m, const Quat& rotation) {
-  Collider c;
-  c.shape.type = ShapeType::Box;
-  c.shape.half_extents = half_extents;
-  c.material = m;
-  c.begin = c.end = static_pose(center, rotation);
-  return c;
-}
-
-void Collider::validate(std::string_view where) const {
-  // shape
-  switch (shape.type) {
-    case ShapeType::Plane:
-      if (!is_finite(shape.normal)) require_finite(shape.normal, field_path(where, "normal"));
-      if (glm::length(shape.normal) == 0) throw Error(field_path(where, "normal") + ": must be non-zero, got (0, 0, 0)");
-      if (!std::isfinite(shape.offset)) require_finite(shape.offset, field_path(where, "offset"));
-      break;
-    case ShapeType::Sphere: if (!(std::isfinite(shape.radius) && (shape.radius) > 0)) require_positive(shape.radius, field_path(where, "radius")); break;
-    case ShapeType::Box:
-      if (!(std::isfinite(shape.half_extents.x) && (shape.half_extents.x) > 0)) require_positive(shape.half_extents.x, field_path(where, "half_extents.x"));
-      if (!(std::isfinite(shape.half_extents.y) && (shape.half_extents.y) > 0)) require_positive(shape.half_extents.y, field_path(where, "half_extents.y"));
-      if (!(std::isfinite(shape.half_extents.z) && (shape.half_extents.z) > 0)) require_positive(shape.half_extents.z, field_path(where, "half_extents.z"));
-      break;
-    default:
-      throw Error(field_path(where, "type") + ": particle and soft-body collisions take a plane, sphere or box, got a " +
-                  std::string(to_string(shape.type)));
-  }
-  // material and motion
-  if (!((material.restitution) >= (0) && (material.restitution) <= (1))) require_in_range(material.restitution, 0, 1, field_path(where, "restitution"));
-  if (!(std::isfinite(material.friction) && (material.friction) >= 0)) require_non_negative(material.friction, field_path(where, "friction"));
-  if (!is_finite(begin.position)) require_finite(begin.position, field_path(where, "position"));
-  if (!is_finite(end.position)) require_finite(end.position, field_path(where, "position"));
-  require_unit_quat(begin.rotation, field_path(where, "rotation"));
-  require_unit_quat(end.rotation, field_path(where, "rotation"));
-  if (!is_finite(velocity)) require_finite(velocity, field_path(where, "velocity"));
-  if (!is_finite(angular_velocity)) require_finite(angular_velocity, field_path(where, "angular_velocity"));
-}
-
-void Collider::draw(DebugDraw& draw, Color c) const {
-  switch (shape.type) {
-    case ShapeType::Plane: {
-      const Vec3 n = glm::normalize(end.rotation * shape.normal);
-      draw.plane(n, shape.offset + glm::dot(n, end.position), 10.0, c);
-      break;
-    }
-    case ShapeType::Sphere: draw.sphere(end.position, shape.radius, c); break;
-    case ShapeType::Box: draw.box(end.position, shape.half_extents, end.rotation, c); break;
-    default: break;
-  }
-}
 
 void Forcer::validate(std::string_view where) const {
   if (!is_finite(pose.position)) require_finite(pose.position, field_path(where, "position"));
@@ -142,7 +68,8 @@ Vec3 Forcer::force_at(const Vec3& p, double t) const {
   return Vec3(0);
 }
 
-void Forcer::draw(DebugDraw& draw, Color c) const {
+void Forcer::draw(DebugDraw& draw, Color c, const DrawFlags& flags) const {
+  if (!flags.forcers) return;
   const Quat q = glm::normalize(pose.rotation);
   const Vec3 o = pose.position;
   // the volume's outline

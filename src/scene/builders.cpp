@@ -162,7 +162,7 @@ namespace {
 // whose kg/s would be far too strong for cloth particles of a few grams)
 SoftBodyDef soft_def(const World& w) {
   SoftBodyDef d;
-  d.forces.gravity = w.particles().forces().gravity;
+  d.forces.gravity = w.gravity();
   d.forces.wind = w.particles().forces().wind;
   return d;
 }

@@ -87,7 +87,7 @@ void read_soft_body(const Node& n, World& w) {
   SoftBodyDef d = type == Type::Jelly
                       ? jelly_settings(j, read_jelly_material(n), w.stepper().settings().fixed_dt)
                       : SoftBodyDef{};
-  d.forces.gravity = w.particles().forces().gravity;
+  d.forces.gravity = w.gravity();
   d.forces.wind = w.particles().forces().wind;
   d.solver = n.choice<SoftSolver>("solver", {{"xpbd", SoftSolver::XPBD}, {"mass-spring", SoftSolver::MassSpring}},
                                   d.solver);

@@ -126,7 +126,8 @@ void read_settings(const Node& n, WorldDef& def) {
                             n.at("capacity").where());
   }
   Forces& f = def.particles.forces;
-  f.gravity = n.float_vec("gravity", f.gravity);
+  def.gravity = n.float_vec("gravity", def.gravity);  // the world's, read by every system
+  f.gravity = def.gravity;
   if (n.has("drag")) {
     const Node d = n.at("drag");
     d.allow_only({"linear", "quadratic"});

@@ -24,27 +24,6 @@ void non_negative(double v, std::string_view where, std::string_view name) {
 
 // Collider::validate's checks without building any message (it runs every step and must
 // not allocate); when this fails, validate() reports the failure by name.
-bool collider_ok(const Collider& c) {
-  auto unit = [](const Quat& q) {
-    return std::isfinite(q.w) && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) &&
-           std::abs(glm::length(q) - 1.0) <= 1e-6;
-  };
-  const ColliderShape& s = c.shape;
-  bool ok = is_finite(c.begin.position) && is_finite(c.end.position) && unit(c.begin.rotation) &&
-            unit(c.end.rotation) && is_finite(c.velocity) && is_finite(c.angular_velocity) &&
-            c.material.restitution >= 0 && c.material.restitution <= 1 && std::isfinite(c.material.friction) &&
-            c.material.friction >= 0;
-  switch (s.type) {
-    case ShapeType::Plane: ok = ok && is_finite(s.normal) && glm::length(s.normal) > 0 && std::isfinite(s.offset); break;
-    case ShapeType::Sphere: ok = ok && std::isfinite(s.radius) && s.radius > 0; break;
-    case ShapeType::Box:
-      ok = ok && is_finite(s.half_extents) && s.half_extents.x > 0 && s.half_extents.y > 0 && s.half_extents.z > 0;
-      break;
-    default: ok = false;
-  }
-  return ok;
-}
-
 double tet_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   return glm::dot(glm::cross(b - a, c - a), d - a) / 6.0;
 }
@@ -390,7 +369,6 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
     if (!body.is_pinned(p)) body.pin(p);
   Impl& b = *body.impl_;
   b.pin_from.reserve(n), b.pin_to.reserve(n), b.pins.reserve(n);
-  b.colliders.reserve(16);
   b.integ.set_method(def.method);
   return body;
 }
@@ -406,6 +384,13 @@ bool SoftBody::failed() const { return !impl_->failure.empty(); }
 const SoftProfile& SoftBody::profile() const { return impl_->profile; }
 
 void SoftBody::step(double t, double dt, std::span<const Collider> colliders) {
+  // a failed body repeats its failure before looking at its inputs
+  if (!impl_->failure.empty()) throw Error(impl_->failure);
+  impl_->span_world.assign(colliders, "SoftBody::step colliders");
+  step(t, dt, impl_->span_world);
+}
+
+void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
   Impl& s = *impl_;
   Stopwatch total;
   // a failed body repeats its failure
@@ -413,8 +398,6 @@ void SoftBody::step(double t, double dt, std::span<const Collider> colliders) {
   require_finite(t, "SoftBody::step(t)");
   require_positive(dt, "SoftBody::step(dt)");
   s.def.validate("SoftBodyDef");
-  for (std::size_t i = 0; i < colliders.size(); ++i)
-    if (!collider_ok(colliders[i])) colliders[i].validate("SoftBody::step colliders[" + std::to_string(i) + "]");
   if (s.x.empty()) {
     s.time = t + dt;
     ++s.steps;
@@ -422,7 +405,7 @@ void SoftBody::step(double t, double dt, std::span<const Collider> colliders) {
   }
   // per-step inputs: colliders, wind and aerodynamics
   Stopwatch sw;
-  s.prepare_colliders(colliders, dt);
+  s.colliders = colliders.flat_double();
   s.external_accelerations(t);
   s.profile.forces = sw.seconds();
   s.profile.collide = 0;
@@ -444,37 +427,6 @@ void SoftBody::step(double t, double dt, std::span<const Collider> colliders) {
   ++s.steps;
   s.check_finite(t + dt);
   s.profile.total = total.seconds();
-}
-
-void SoftBody::Impl::prepare_colliders(std::span<const Collider> in, double) {
-  colliders.clear();
-  for (const Collider& c : in) {
-    detail::SoftCollider o;
-    o.type = c.shape.type;
-    o.mu = std::max(def.friction, c.material.friction);
-    o.v = c.velocity;
-    o.w = c.angular_velocity;
-    o.c0 = c.begin.position;
-    o.c1 = c.end.position;
-    switch (c.shape.type) {
-      case ShapeType::Plane: {
-        // world normal from the end pose; offsets at both ends of the step
-        const double len = glm::length(c.shape.normal);
-        const Vec3 nl = c.shape.normal / len;
-        o.n = glm::normalize(c.end.rotation * nl);
-        const Vec3 n0 = glm::normalize(c.begin.rotation * nl);
-        o.d0 = c.shape.offset / len + glm::dot(n0, c.begin.position);
-        o.d1 = c.shape.offset / len + glm::dot(o.n, c.end.position);
-        break;
-      }
-      case ShapeType::Sphere: o.radius = c.shape.radius; break;
-      case ShapeType::Box:
-        o.half = c.shape.half_extents;
-        o.rot = glm::mat3_cast(c.end.rotation);
-        break;
-    }
-    colliders.push_back(o);  // capacity reserved at build; grows once for many colliders
-  }
 }
 
 // Per-triangle aerodynamic drag and lift (Keckeisen, Kimmerle, Thomaszewski & Wacker 2004,
@@ -561,157 +513,6 @@ void SoftBody::Impl::check_finite(double t) {
   }
 }
 
-namespace detail {
-
-namespace {
-
-// The contact of a point p with a collider at step fraction f: the outward normal n, the
-// depth (> 0 when the point is closer than `th` to the surface or inside) and the
-// surface velocity there. Returns false when there is no contact.
-bool contact(const SoftCollider& c, const Vec3& p, double th, double f, Vec3& n, double& depth, Vec3& vs) {
-  const Vec3 center = c.c0 + (c.c1 - c.c0) * f;
-  switch (c.type) {
-    case ShapeType::Plane: {
-      const double d = c.d0 + (c.d1 - c.d0) * f;
-      const double phi = glm::dot(c.n, p) - d - th;
-      if (phi >= 0) return false;
-      n = c.n;
-      depth = -phi;
-      break;
-    }
-    case ShapeType::Sphere: {
-      const Vec3 r = p - center;
-      const double r2 = glm::dot(r, r), R = c.radius + th;
-      if (r2 >= R * R) return false;
-      const double len = std::sqrt(r2);
-      n = len > 0 ? r / len : Vec3(0, 1, 0);
-      depth = R - len;
-      break;
-    }
-    case ShapeType::Box: {
-      // local coordinates, the closest point on the box
-      const Vec3 q = glm::transpose(c.rot) * (p - center);
-      const Vec3 cl = glm::clamp(q, -c.half, c.half);
-      const Vec3 dq = q - cl;
-      const double d2 = glm::dot(dq, dq);
-      if (d2 >= th * th) return false;
-      if (d2 > 0) {
-        // outside, within the thickness: push along the offset from the surface
-        const double d = std::sqrt(d2);
-        n = c.rot * (dq / d);
-        depth = th - d;
-      } else {
-        // inside: out through the nearest face
-        const Vec3 gap = c.half - glm::abs(q);
-        int axis = 0;
-        if (gap.y < gap[axis]) axis = 1;
-        if (gap.z < gap[axis]) axis = 2;
-        Vec3 nl(0, 0, 0);
-        nl[axis] = q[axis] < 0 ? -1 : 1;
-        n = c.rot * nl;
-        depth = gap[axis] + th;
-      }
-      break;
-    }
-  }
-  vs = c.v + glm::cross(c.w, p - center);
-  return true;
-}
-
-}  // namespace
-
-// Position-based contacts with Coulomb friction (Macklin, Mueller, Chentanez & Kim 2014,
-// "Unified particle physics for real-time applications", section 6.1, eqs. 23-24): the
-// particle is projected out along the normal by the depth d, then its tangential
-// displacement over the substep relative to the surface, dx_t, is removed entirely when
-// |dx_t| < mu d (static friction) and shortened by mu d otherwise (kinetic friction).
-std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double) {
-  if (s.colliders.empty()) return 0;
-  std::size_t contacts = 0;
-  const double th = s.def.thickness;
-  const std::size_t n = s.n;
-  for (const SoftCollider& c : s.colliders) {
-    // a float bound that rejects most particles cheaply: the plane's signed distance, or
-    // the bounding sphere of the sphere or box (enlarged by the thickness and a margin
-    // for float rounding; the exact test follows in double)
-    const Vec3 center = c.c0 + (c.c1 - c.c0) * f;
-    const float cx = static_cast<float>(center.x), cy = static_cast<float>(center.y), cz = static_cast<float>(center.z);
-    const float nx = static_cast<float>(c.n.x), ny = static_cast<float>(c.n.y), nz = static_cast<float>(c.n.z);
-    const double reach = c.type == ShapeType::Sphere ? c.radius : glm::length(c.half);
-    const float bound = static_cast<float>((reach + th) * (1 + 1e-5) + 1e-6);
-    const float bound2 = bound * bound;
-    // boxes: the local axes (rows of R^T) and the enlarged half extents, in float
-    const Mat3 rt = glm::transpose(c.rot);
-    const float r00 = static_cast<float>(rt[0][0]), r01 = static_cast<float>(rt[1][0]), r02 = static_cast<float>(rt[2][0]);
-    const float r10 = static_cast<float>(rt[0][1]), r11 = static_cast<float>(rt[1][1]), r12 = static_cast<float>(rt[2][1]);
-    const float r20 = static_cast<float>(rt[0][2]), r21 = static_cast<float>(rt[1][2]), r22 = static_cast<float>(rt[2][2]);
-    const float margin = static_cast<float>(th + 1e-5 * (1 + reach));
-    const float hx = static_cast<float>(c.half.x) + margin, hy = static_cast<float>(c.half.y) + margin,
-                hz = static_cast<float>(c.half.z) + margin;
-    const float plane_d = static_cast<float>(c.d0 + (c.d1 - c.d0) * f + th + 1e-6 * (1 + std::abs(c.d1)));
-    for (std::size_t i = 0; i < n; ++i) {
-      if (s.w[i] == 0.f) continue;
-      if (c.type == ShapeType::Plane) {
-        if (nx * s.x[i] + ny * s.y[i] + nz * s.z[i] > plane_d + 1e-5f * (std::abs(s.x[i]) + std::abs(s.y[i]) + std::abs(s.z[i])))
-          continue;
-      } else {
-        const float dx = s.x[i] - cx, dy = s.y[i] - cy, dz = s.z[i] - cz;
-        if (dx * dx + dy * dy + dz * dz > bound2) continue;
-        if (c.type == ShapeType::Box &&
-            (std::abs(r00 * dx + r01 * dy + r02 * dz) > hx || std::abs(r10 * dx + r11 * dy + r12 * dz) > hy ||
-             std::abs(r20 * dx + r21 * dy + r22 * dz) > hz))
-          continue;
-      }
-      Vec3 p(s.x[i], s.y[i], s.z[i]), nrm, vs;
-      double depth;
-      if (!contact(c, p, th, f, nrm, depth, vs)) continue;
-      ++contacts;
-      // push out along the normal
-      p += nrm * depth;
-      // friction on the tangential displacement relative to the surface
-      if (c.mu > 0) {
-        const Vec3 prev(s.px[i], s.py[i], s.pz[i]);
-        Vec3 dx = (p - prev) - vs * h;
-        dx -= glm::dot(dx, nrm) * nrm;
-        const double lt = glm::length(dx), lim = c.mu * depth;
-        p -= lt <= lim ? dx : dx * (lim / lt);
-      }
-      s.x[i] = static_cast<float>(p.x), s.y[i] = static_cast<float>(p.y), s.z[i] = static_cast<float>(p.z);
-    }
-  }
-  return contacts;
-}
-
-// Velocity-level contacts for the mass-spring solver: project out, remove the approaching
-// normal velocity relative to the surface (inelastic) and apply Coulomb friction to the
-// tangential part: it loses at most mu times the normal velocity change.
-std::size_t collide_velocities(SoftBody::Impl& s, std::span<Vec3> xs, std::span<Vec3> vs, double f) {
-  if (s.colliders.empty()) return 0;
-  std::size_t contacts = 0;
-  const double th = s.def.thickness;
-  for (const SoftCollider& c : s.colliders) {
-    for (std::size_t i = 0; i < xs.size(); ++i) {
-      if (s.w[i] == 0.f) continue;
-      Vec3 nrm, vsurf;
-      double depth;
-      if (!contact(c, xs[i], th, f, nrm, depth, vsurf)) continue;
-      ++contacts;
-      xs[i] += nrm * depth;
-      // relative velocity: normal part removed if approaching, friction on the rest
-      Vec3 vr = vs[i] - vsurf;
-      const double vn = glm::dot(vr, nrm);
-      if (vn < 0) {
-        vr -= vn * nrm;
-        const double lt = glm::length(vr), lim = c.mu * -vn;
-        vr -= lt <= lim ? vr : vr * (lim / lt);
-        vs[i] = vr + vsurf;
-      }
-    }
-  }
-  return contacts;
-}
-
-}  // namespace detail
 
 // ---------------------------------------------------------------------------------------
 // particles
@@ -1015,7 +816,7 @@ std::uint64_t SoftBody::hash(std::uint64_t seed) const {
   return hash_span(std::span<const std::uint8_t>(s.broken), h);
 }
 
-void SoftBody::draw(DebugDraw& dd, const SoftDrawOptions& o) const {
+void SoftBody::draw(DebugDraw& dd, const DrawFlags& flags, const SoftDrawOptions& o) const {
   const Impl& s = *impl_;
   auto P = [&](std::uint32_t i) { return Vec3(s.x[i], s.y[i], s.z[i]); };
   // triangles, shaded by how much they face a fixed light
@@ -1030,7 +831,7 @@ void SoftBody::draw(DebugDraw& dd, const SoftDrawOptions& o) const {
     }
   }
   // edges, coloured by strain
-  if (o.edges) {
+  if (o.edges && flags.constraints) {
     const double scale = o.strain_scale > 0 ? o.strain_scale : 0.1;
     for (std::size_t c = 0; c < s.ca.size(); ++c) {
       if (s.broken[c]) continue;
@@ -1046,9 +847,9 @@ void SoftBody::draw(DebugDraw& dd, const SoftDrawOptions& o) const {
     }
   }
   // particles, pins and the grabbed particle
-  if (o.particles)
+  if (o.particles && flags.particles)
     for (std::size_t i = 0; i < size(); ++i) dd.point(P(static_cast<std::uint32_t>(i)), 3.f, o.color);
-  if (o.pins) {
+  if (o.pins && flags.particles) {
     for (std::uint32_t p : s.pins) dd.point(P(p), 7.f, p == s.grab ? colors::yellow : colors::orange);
   }
 }

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "pba/collide.h"
 #include "pba/integrate.h"
 #include "pba/soft.h"
 
@@ -45,19 +46,6 @@ struct Run {
   /// The rest length shared by every constraint of the run (m, > 0), or -1 when they
   /// differ or one has torn: then the kernel reads Impl::rest.
   float rest = -1;
-};
-
-/// A collider flattened for one step: shape, friction and its motion.
-struct SoftCollider {
-  ShapeType type = ShapeType::Plane;
-  double mu = 0;                       // friction coefficient used (max of body and surface)
-  Vec3 n{0, 1, 0};                     // plane: unit normal (world, end pose)
-  double d0 = 0, d1 = 0;               // plane offset at the start and end of the step
-  Vec3 c0{0, 0, 0}, c1{0, 0, 0};       // sphere/box centre at the start and end of the step
-  double radius = 0;                   // sphere
-  Vec3 half{0, 0, 0};                  // box half extents
-  Mat3 rot{1.0};                       // box rotation (end pose); columns are the local axes
-  Vec3 v{0, 0, 0}, w{0, 0, 0};         // linear and angular velocity (surface motion for friction)
 };
 
 /// Padding (elements) after the particle columns x, y, z, px, py, pz, w and the
@@ -140,8 +128,9 @@ struct SoftBody::Impl {
   // ---- solver options ----
   bool simd = true;  // use the explicit AVX2 kernels when the CPU has them (same bits either way)
 
-  // ---- per-step scratch ----
-  std::vector<detail::SoftCollider> colliders;
+  // ---- the colliders of the step in progress (flat, from the collision world) ----
+  std::span<const detail::FlatShape<double>> colliders;
+  CollisionWorld span_world;  // filled by the span overload of SoftBody::step
 
   // ---- bookkeeping ----
   bool has_aext = false;  // ax/ay/az hold something this step
@@ -156,7 +145,6 @@ struct SoftBody::Impl {
   void update_tethers();  // xpbd.cpp: each particle's nearest pin in the rest shape
   void init_tethers();    // xpbd.cpp, at build: straight or path lengths, and the graph
   // shared pieces (soft_body.cpp)
-  void prepare_colliders(std::span<const Collider> colliders, double dt);
   void external_accelerations(double t);
   void tear();
   void rebuild_triangles();

@@ -1,4 +1,5 @@
-// Soft bodies as World components: stepped each tick with the world's colliders.
+// Soft bodies as World components: stepped each tick at WorldStage::Soft with the world's
+// collision world and gravity.
 #include <string>
 
 #include "pba/soft.h"
@@ -33,10 +34,12 @@ SoftBody& SoftSystem::body(EntityId e) { return bodies_[index_of(e, "SoftSystem:
 const SoftBody& SoftSystem::body(EntityId e) const { return bodies_[index_of(e, "SoftSystem::body")]; }
 
 void SoftSystem::step(World& world, double t, double dt) {
-  // every body with the world's colliders of this tick; failures name the entity
+  // every body under the world's gravity, against the collision world of this tick;
+  // failures name the entity
   for (std::size_t i = 0; i < bodies_.size(); ++i) {
     try {
-      bodies_[i].step(t, dt, world.colliders());
+      bodies_[i].settings().forces.gravity = world.gravity();
+      bodies_[i].step(t, dt, world.collision());
     } catch (const Error& err) {
       throw Error("soft body of entity '" + world.name(owners_[i]) + "': " + err.what());
     }
@@ -57,8 +60,8 @@ void SoftSystem::on_destroy(EntityId e) {
   }
 }
 
-void SoftSystem::draw(const World&, DebugDraw& draw) const {
-  for (const SoftBody& b : bodies_) b.draw(draw, options_);
+void SoftSystem::draw(const World&, DebugDraw& draw, const DrawFlags& flags) const {
+  for (const SoftBody& b : bodies_) b.draw(draw, flags, options_);
 }
 
 std::uint64_t SoftSystem::hash(std::uint64_t seed) const {

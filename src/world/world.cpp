@@ -118,8 +118,30 @@ Pose kinematic_pose(const KinematicDef& d, const Pose& start, double t, Vec3* ve
 // ---------------------------------------------------------------------------------------
 
 World::World(const WorldDef& def)
-    : settings_(def.stepper), stepper_((def.stepper.validate("WorldDef.stepper"), def.stepper)),
-      particles_(def.particles) {}
+    : settings_(def.stepper),
+      gravity_((require_finite(def.gravity, "WorldDef.gravity"), def.gravity)),
+      stepper_((def.stepper.validate("WorldDef.stepper"), def.stepper)),
+      particles_(def.particles) {
+  particles_.forces().gravity = gravity_;
+}
+
+std::string_view to_string(WorldStage s) {
+  switch (s) {
+    case WorldStage::Kinematic: return "kinematic";
+    case WorldStage::Collide: return "collide";
+    case WorldStage::Rigid: return "rigid";
+    case WorldStage::Particles: return "particles";
+    case WorldStage::Soft: return "soft";
+    case WorldStage::Constraints: return "constraints";
+    case WorldStage::Post: return "post";
+  }
+  return "unknown";
+}
+
+void World::set_gravity(const Vec3& g) {
+  require_finite(g, "World::set_gravity(g)");
+  gravity_ = g;
+}
 
 World::~World() = default;
 World::World(World&&) noexcept = default;
@@ -168,22 +190,31 @@ void World::destroy_entity(EntityId e) {
   if (!r.emitter.is_null()) particles_.remove_emitter(r.emitter);
   if (r.collider != kNone) {
     const std::uint32_t i = r.collider;
+    collider_ids_.pool.destroy(colliders_[i].id, "World::destroy_entity collider");
     remove_dense(colliders_, &EntityRecord::collider, i);
     if (i + 1 != world_colliders_.size()) world_colliders_[i] = world_colliders_.back();
     world_colliders_.pop_back();
   }
   if (r.forcer != kNone) {
     const std::uint32_t i = r.forcer;
+    forcer_ids_.pool.destroy(forcers_[i].id, "World::destroy_entity forcer");
     remove_dense(forcers_, &EntityRecord::forcer, i);
     if (i + 1 != world_forcers_.size()) world_forcers_[i] = world_forcers_.back();
     world_forcers_.pop_back();
   }
-  if (r.kinematic != kNone) remove_dense(kinematics_, &EntityRecord::kinematic, r.kinematic);
-  if (r.constraint != kNone) remove_dense(constraints_, &EntityRecord::constraint, r.constraint);
+  if (r.kinematic != kNone) {
+    kinematic_ids_.pool.destroy(kinematics_[r.kinematic].id, "World::destroy_entity kinematic");
+    remove_dense(kinematics_, &EntityRecord::kinematic, r.kinematic);
+  }
+  if (r.constraint != kNone) {
+    constraint_ids_.pool.destroy(constraints_[r.constraint].id, "World::destroy_entity constraint");
+    remove_dense(constraints_, &EntityRecord::constraint, r.constraint);
+  }
   // constraints that point at this entity go too
   for (std::size_t i = 0; i < constraints_.size();) {
     if (constraints_[i].def.other == e) {
       records_[constraints_[i].owner.index].constraint = kNone;
+      constraint_ids_.pool.destroy(constraints_[i].id, "World::destroy_entity constraint");
       remove_dense(constraints_, &EntityRecord::constraint, static_cast<std::uint32_t>(i));
     } else {
       ++i;
@@ -239,7 +270,7 @@ ParticleId World::add_particle(EntityId e, const ParticleDef& def) {
   return r.particle;
 }
 
-void World::add_collider(EntityId e, const ColliderDef& def) {
+ColliderId World::add_collider(EntityId e, const ColliderDef& def) {
   EntityRecord& r = record(e, "World::add_collider");
   if (r.collider != kNone) throw Error("World::add_collider: " + describe(e) + " already has a collider");
   // validate as a world collider at the entity's pose
@@ -250,20 +281,22 @@ void World::add_collider(EntityId e, const ColliderDef& def) {
   c.validate("collider of " + describe(e));
   if (def.shape.type == ShapeType::Plane) c.shape.normal = glm::normalize(def.shape.normal);
   r.collider = static_cast<std::uint32_t>(colliders_.size());
-  colliders_.push_back({e, def});
+  colliders_.push_back({e, def, collider_ids_.create(e)});
   colliders_.back().def.shape.normal = c.shape.normal;
   world_colliders_.push_back(c);
+  return colliders_.back().id;
 }
 
-void World::add_forcer(EntityId e, const Forcer& def) {
+ForcerId World::add_forcer(EntityId e, const Forcer& def) {
   EntityRecord& r = record(e, "World::add_forcer");
   if (r.forcer != kNone) throw Error("World::add_forcer: " + describe(e) + " already has a forcer");
   def.validate("forcer of " + describe(e));
   r.forcer = static_cast<std::uint32_t>(forcers_.size());
-  forcers_.push_back({e, def});
+  forcers_.push_back({e, def, forcer_ids_.create(e)});
   Forcer w = def;
   w.pose = compose(r.pose, def.pose);
   world_forcers_.push_back(w);
+  return forcers_.back().id;
 }
 
 EmitterId World::add_emitter(EntityId e, const EmitterDef& def) {
@@ -276,12 +309,12 @@ EmitterId World::add_emitter(EntityId e, const EmitterDef& def) {
   return r.emitter;
 }
 
-void World::add_kinematic(EntityId e, const KinematicDef& def) {
+KinematicId World::add_kinematic(EntityId e, const KinematicDef& def) {
   EntityRecord& r = record(e, "World::add_kinematic");
   if (r.kinematic != kNone) throw Error("World::add_kinematic: " + describe(e) + " already has a kinematic");
   def.validate("kinematic of " + describe(e));
   r.kinematic = static_cast<std::uint32_t>(kinematics_.size());
-  KinematicEntry k{e, def, time_, r.pose, def.path == PathType::Waypoints ? waypoint_length(def) : 0.0};
+  KinematicEntry k{e, kinematic_ids_.create(e), def, time_, r.pose, def.path == PathType::Waypoints ? waypoint_length(def) : 0.0};
   // waypoint and circular paths start on the path
   Vec3 v;
   const Pose p = kinematic_pose(def, r.pose, 0, &v, k.length);
@@ -291,9 +324,10 @@ void World::add_kinematic(EntityId e, const KinematicDef& def) {
   // a collider jumps to the path's start instead of sweeping there
   if (r.collider != kNone) world_colliders_[r.collider].begin = world_colliders_[r.collider].end = r.pose;
   kinematics_.push_back(std::move(k));
+  return kinematics_.back().id;
 }
 
-void World::add_constraint(EntityId e, const ConstraintDef& def) {
+ConstraintId World::add_constraint(EntityId e, const ConstraintDef& def) {
   EntityRecord& r = record(e, "World::add_constraint");
   if (r.constraint != kNone) throw Error("World::add_constraint: " + describe(e) + " already has a constraint");
   const std::string where = "constraint of " + describe(e);
@@ -307,7 +341,34 @@ void World::add_constraint(EntityId e, const ConstraintDef& def) {
     d.rest_length = glm::length(particles_.position(r.particle) - particles_.position(o.particle));
   require_finite(d.rest_length, where + ".rest_length");
   r.constraint = static_cast<std::uint32_t>(constraints_.size());
-  constraints_.push_back({e, d});
+  constraints_.push_back({e, d, constraint_ids_.create(e)});
+  return constraints_.back().id;
+}
+
+namespace {
+// the handle of an entity's component at dense index i, or the null handle (i is
+// World::kNone, 0xffffffff, when the entity has none)
+template <class Entry>
+auto component_id(const std::vector<Entry>& v, std::uint32_t i) {
+  return i == 0xffffffffu ? decltype(v[0].id){} : v[i].id;
+}
+}  // namespace
+
+ColliderId World::collider_id(EntityId e) const {
+  return component_id(colliders_, record(e, "World::collider_id").collider);
+}
+ForcerId World::forcer_id(EntityId e) const { return component_id(forcers_, record(e, "World::forcer_id").forcer); }
+KinematicId World::kinematic_id(EntityId e) const {
+  return component_id(kinematics_, record(e, "World::kinematic_id").kinematic);
+}
+ConstraintId World::constraint_id(EntityId e) const {
+  return component_id(constraints_, record(e, "World::constraint_id").constraint);
+}
+EntityId World::owner(ColliderId id) const { return collider_ids_.owner_of(id, "World::owner(ColliderId)"); }
+EntityId World::owner(ForcerId id) const { return forcer_ids_.owner_of(id, "World::owner(ForcerId)"); }
+EntityId World::owner(KinematicId id) const { return kinematic_ids_.owner_of(id, "World::owner(KinematicId)"); }
+EntityId World::owner(ConstraintId id) const {
+  return constraint_ids_.owner_of(id, "World::owner(ConstraintId)");
 }
 
 ParticleId World::particle(EntityId e) const { return record(e, "World::particle").particle; }
@@ -389,6 +450,13 @@ void World::sync(double /*t*/, double /*dt*/) {
     c.velocity = r.velocity;
     c.angular_velocity = r.angular_velocity;
   }
+  // the collision world of the tick (validated and flattened once for every client)
+  collision_.clear();
+  for (std::size_t i = 0; i < world_colliders_.size(); ++i) {
+    const EntityId owner = colliders_[i].owner;
+    if (!world_colliders_[i].ok()) world_colliders_[i].validate("collider of " + describe(owner));
+    collision_.add(world_colliders_[i], owner.index);
+  }
   // forcers and emitters follow their entities
   for (std::size_t i = 0; i < forcers_.size(); ++i) {
     const EntityRecord& r = records_[forcers_[i].owner.index];
@@ -421,22 +489,51 @@ void World::solve_constraints(double dt) {
   }
 }
 
+// every system registered at `stage`, in the order added
+void World::run_systems(WorldStage stage, double t, double dt) {
+  if (systems_.empty()) return;
+  Stopwatch sw;
+  for (auto& s : systems_)
+    if (s->stage() == stage) s->step(*this, t, dt);
+  profile_.systems += sw.seconds();
+}
+
+// whichever system simulates an entity writes its pose: the particle system for
+// particle entities that no kinematic path drives
+void World::write_particle_poses() {
+  for (EntityRecord& r : records_) {
+    if (r.particle.is_null() || r.kinematic != kNone || !particles_.valid(r.particle)) continue;
+    r.pose.position = particles_.position(r.particle);
+  }
+}
+
 void World::tick(double t, double dt) {
   if (!failure_.empty()) throw Error("World::tick: the simulation stopped: " + failure_);
   Stopwatch total, sw;
   profile_ = {};
-  // 1. kinematic paths
+  auto stage_done = [&](WorldStage s) {
+    profile_.stages[static_cast<std::size_t>(s)] = sw.seconds();
+    sw.reset();
+  };
+  // 1. kinematic: paths, motors and thrusters
   run_kinematics(t, dt);
   profile_.kinematic = sw.seconds();
-  // 2. poses of colliders, forcers and emitters
-  sw.reset();
+  run_systems(WorldStage::Kinematic, t, dt);
+  stage_done(WorldStage::Kinematic);
+  // 2. collide: poses of colliders, forcers and emitters; the tick's collision world
   sync(t, dt);
   profile_.sync = sw.seconds();
-  // 3. particles: emit, integrate, collide, recycle
+  run_systems(WorldStage::Collide, t, dt);
+  stage_done(WorldStage::Collide);
+  // 3. rigid: systems only, for now
+  run_systems(WorldStage::Rigid, t, dt);
+  stage_done(WorldStage::Rigid);
+  // 4. particles: emit, integrate, collide, recycle, under the world's gravity
+  particles_.forces().gravity = gravity_;
   try {
-    particles_.step(t, dt, world_colliders_, world_forcers_);
+    particles_.step(t, dt, collision_, world_forcers_);
   } catch (const Error& err) {
-    failure_ = err.what();
+    failure_ = err.what();  // the world refuses to tick again and repeats this
     throw;
   }
   const ParticleProfile& pp = particles_.profile();
@@ -444,14 +541,20 @@ void World::tick(double t, double dt) {
   profile_.integrate = pp.integrate;
   profile_.collide = pp.collide;
   profile_.recycle = pp.recycle;
-  // 4. constraints
-  sw.reset();
+  write_particle_poses();
+  run_systems(WorldStage::Particles, t, dt);
+  stage_done(WorldStage::Particles);
+  // 5. soft bodies
+  run_systems(WorldStage::Soft, t, dt);
+  stage_done(WorldStage::Soft);
+  // 6. constraints
   solve_constraints(dt);
   profile_.constraints = sw.seconds();
-  // 5. extension systems
-  sw.reset();
-  for (auto& s : systems_) s->step(*this, t, dt);
-  profile_.systems = sw.seconds();
+  run_systems(WorldStage::Constraints, t, dt);
+  stage_done(WorldStage::Constraints);
+  // 7. post
+  run_systems(WorldStage::Post, t, dt);
+  stage_done(WorldStage::Post);
   time_ = t + dt;
   ++ticks_;
   profile_.total = total.seconds();
@@ -467,11 +570,18 @@ std::uint64_t World::hash() const {
   return h;
 }
 
-void World::draw(DebugDraw& draw) const {
-  for (const Collider& c : world_colliders_) c.draw(draw, colors::grey);
-  for (const Forcer& f : world_forcers_) f.draw(draw, colors::cyan);
-  particles_.draw(draw, particles_.size() <= 2000);
-  for (const auto& s : systems_) s->draw(*this, draw);
+void World::draw(DebugDraw& draw, const DrawFlags& flags) const {
+  // colliders (shapes, bounds), forcers, particles, then every system
+  for (const Collider& c : world_colliders_) c.draw(draw, colors::grey, flags);
+  for (const Forcer& f : world_forcers_) f.draw(draw, colors::cyan, flags);
+  particles_.draw(draw, flags, particles_.size() <= 2000);
+  // the entities' distance constraints
+  if (flags.constraints)
+    for (const ConstraintEntry& c : constraints_) {
+      const ParticleId pa = records_[c.owner.index].particle, pb = records_[c.def.other.index].particle;
+      if (particles_.valid(pa) && particles_.valid(pb)) draw.line(particles_.position(pa), particles_.position(pb), colors::yellow);
+    }
+  for (const auto& s : systems_) s->draw(*this, draw, flags);
 }
 
 }  // namespace pba

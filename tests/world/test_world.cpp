@@ -160,7 +160,7 @@ TEST(Kinematic, MovingColliderLiftsAParticle) {
 
 TEST(Forcers, FanEntityPushesParticlesInsideIt) {
   World w;
-  w.particles().forces().gravity = Vec3(0);
+  w.set_gravity(Vec3(0));
   const EntityId fan = w.create_entity({.pose = {.position = {0, 1, 0}}});
   w.add_forcer(fan, {.kind = pba::ForcerKind::Fan, .half_extents = {1, 1, 1}, .direction = {1, 0, 0}, .strength = 1});
   const EntityId in = w.create_entity({.pose = {.position = {0, 1, 0}}});
@@ -176,7 +176,7 @@ TEST(Constraints, DistanceIsKept) {
   World w({.stepper = {.fixed_dt = 1.0 / 120}});
   const EntityId anchor = w.create_entity({.pose = {.position = {0, 2, 0}}});
   w.add_particle(anchor, {.mass = 1e6});
-  w.particles().forces().gravity = Vec3(0, -9.81, 0);
+  w.set_gravity(Vec3(0, -9.81, 0));
   const EntityId bob = w.create_entity({.pose = {.position = {1, 2, 0}}});
   w.add_particle(bob, {.mass = 1});
   w.add_constraint(bob, {.other = anchor});

@@ -1,0 +1,156 @@
+// Colliders: construction, validation and drawing of the flat world-space shape.
+#include <cmath>
+#include <string>
+
+#include "pba/collide/collider.h"
+
+namespace pba {
+
+namespace {
+
+Pose static_pose(const Vec3& p, const Quat& q = Quat(1, 0, 0, 0)) { return Pose{p, q}; }
+
+// finite, unit to 1e-6 (the tolerance of require_unit_quat)
+bool unit_quat(const Quat& q) {
+  return std::isfinite(q.w) && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) &&
+         std::abs(glm::length(q) - 1.0) <= 1e-6;
+}
+
+}  // namespace
+
+Collider Collider::plane(const Vec3& normal, double offset, SurfaceMaterial m) {
+  Collider c;
+  c.shape.type = ShapeType::Plane;
+  const double len = glm::length(normal);
+  c.shape.normal = len > 0 ? normal / len : normal;
+  c.shape.offset = len > 0 ? offset / len : offset;
+  c.material = m;
+  return c;
+}
+
+Collider Collider::sphere(const Vec3& center, double radius, SurfaceMaterial m) {
+  Collider c;
+  c.shape.type = ShapeType::Sphere;
+  c.shape.radius = radius;
+  c.material = m;
+  c.begin = c.end = static_pose(center);
+  return c;
+}
+
+Collider Collider::box(const Vec3& center, const Vec3& half_extents, SurfaceMaterial m, const Quat& rotation) {
+  Collider c;
+  c.shape.type = ShapeType::Box;
+  c.shape.half_extents = half_extents;
+  c.material = m;
+  c.begin = c.end = static_pose(center, rotation);
+  return c;
+}
+
+bool Collider::ok() const {
+  // motion and material
+  const ColliderShape& s = shape;
+  bool good = is_finite(begin.position) && is_finite(end.position) && unit_quat(begin.rotation) &&
+              unit_quat(end.rotation) && is_finite(velocity) && is_finite(angular_velocity) &&
+              material.restitution >= 0 && material.restitution <= 1 && std::isfinite(material.friction) &&
+              material.friction >= 0;
+  // the shape's parameters; the types without a point contact yet are not ok
+  switch (s.type) {
+    case ShapeType::Plane: return good && is_finite(s.normal) && glm::length(s.normal) > 0 && std::isfinite(s.offset);
+    case ShapeType::Sphere: return good && std::isfinite(s.radius) && s.radius > 0;
+    case ShapeType::Box:
+      return good && is_finite(s.half_extents) && s.half_extents.x > 0 && s.half_extents.y > 0 &&
+             s.half_extents.z > 0;
+    case ShapeType::Capsule:
+      return good && std::isfinite(s.radius) && s.radius > 0 && std::isfinite(s.half_height) && s.half_height >= 0;
+    case ShapeType::Hull:
+    case ShapeType::Mesh:
+    case ShapeType::Compound: return false;
+  }
+  return false;
+}
+
+void Collider::validate(std::string_view where) const {
+  // shape
+  switch (shape.type) {
+    case ShapeType::Plane:
+      if (!is_finite(shape.normal)) require_finite(shape.normal, field_path(where, "normal"));
+      if (glm::length(shape.normal) == 0) throw Error(field_path(where, "normal") + ": must be non-zero, got (0, 0, 0)");
+      if (!std::isfinite(shape.offset)) require_finite(shape.offset, field_path(where, "offset"));
+      break;
+    case ShapeType::Sphere: if (!(std::isfinite(shape.radius) && (shape.radius) > 0)) require_positive(shape.radius, field_path(where, "radius")); break;
+    case ShapeType::Box:
+      if (!(std::isfinite(shape.half_extents.x) && (shape.half_extents.x) > 0)) require_positive(shape.half_extents.x, field_path(where, "half_extents.x"));
+      if (!(std::isfinite(shape.half_extents.y) && (shape.half_extents.y) > 0)) require_positive(shape.half_extents.y, field_path(where, "half_extents.y"));
+      if (!(std::isfinite(shape.half_extents.z) && (shape.half_extents.z) > 0)) require_positive(shape.half_extents.z, field_path(where, "half_extents.z"));
+      break;
+    case ShapeType::Capsule:
+      if (!(std::isfinite(shape.radius) && (shape.radius) > 0)) require_positive(shape.radius, field_path(where, "radius"));
+      if (!(std::isfinite(shape.half_height) && shape.half_height >= 0)) require_non_negative(shape.half_height, field_path(where, "half_height"));
+      break;
+    case ShapeType::Hull:
+    case ShapeType::Mesh:
+    case ShapeType::Compound:
+      throw Error(field_path(where, "type") + ": particle and soft-body collisions take a plane, sphere, box or capsule, got a " +
+                  std::string(to_string(shape.type)));
+  }
+  // material and motion
+  if (!((material.restitution) >= (0) && (material.restitution) <= (1))) require_in_range(material.restitution, 0, 1, field_path(where, "restitution"));
+  if (!(std::isfinite(material.friction) && (material.friction) >= 0)) require_non_negative(material.friction, field_path(where, "friction"));
+  if (!is_finite(begin.position)) require_finite(begin.position, field_path(where, "position"));
+  if (!is_finite(end.position)) require_finite(end.position, field_path(where, "position"));
+  require_unit_quat(begin.rotation, field_path(where, "rotation"));
+  require_unit_quat(end.rotation, field_path(where, "rotation"));
+  if (!is_finite(velocity)) require_finite(velocity, field_path(where, "velocity"));
+  if (!is_finite(angular_velocity)) require_finite(angular_velocity, field_path(where, "angular_velocity"));
+}
+
+void Collider::draw(DebugDraw& draw, Color c, const DrawFlags& flags) const {
+  // the shape at its end pose
+  if (flags.shapes) {
+    switch (shape.type) {
+      case ShapeType::Plane: {
+        const Vec3 n = glm::normalize(end.rotation * shape.normal);
+        draw.plane(n, shape.offset + glm::dot(n, end.position), 10.0, c);
+        break;
+      }
+      case ShapeType::Sphere: draw.sphere(end.position, shape.radius, c); break;
+      case ShapeType::Box: draw.box(end.position, shape.half_extents, end.rotation, c); break;
+      case ShapeType::Capsule: {
+        const Vec3 axis = end.rotation * Vec3(0, shape.half_height, 0);
+        draw.capsule(end.position - axis, end.position + axis, shape.radius, c);
+        break;
+      }
+      case ShapeType::Hull:
+      case ShapeType::Mesh:
+      case ShapeType::Compound: break;  // drawn by the shapes module once it lands
+    }
+  }
+  // world bounds of the solids (a plane's are unbounded)
+  if (flags.aabbs && (shape.type == ShapeType::Sphere || shape.type == ShapeType::Box ||
+                      shape.type == ShapeType::Capsule)) {
+    Vec3 half(shape.radius);
+    if (shape.type == ShapeType::Box) {
+      // |R| h: the extent of the rotated box along each world axis
+      const Mat3 r = glm::mat3_cast(glm::normalize(end.rotation));
+      for (int i = 0; i < 3; ++i)
+        half[i] = std::abs(r[0][i]) * shape.half_extents.x + std::abs(r[1][i]) * shape.half_extents.y +
+                  std::abs(r[2][i]) * shape.half_extents.z;
+    } else if (shape.type == ShapeType::Capsule) {
+      const Vec3 axis = end.rotation * Vec3(0, shape.half_height, 0);
+      half = glm::abs(axis) + Vec3(shape.radius);
+    }
+    const Vec3 lo = end.position - half, hi = end.position + half;
+    for (int a = 0; a < 3; ++a)
+      for (int s1 = 0; s1 < 2; ++s1)
+        for (int s2 = 0; s2 < 2; ++s2) {
+          Vec3 p0 = lo, p1 = lo;
+          const int b = (a + 1) % 3, cc = (a + 2) % 3;
+          p1[a] = hi[a];
+          p0[b] = p1[b] = s1 ? hi[b] : lo[b];
+          p0[cc] = p1[cc] = s2 ? hi[cc] : lo[cc];
+          draw.line(p0, p1, c);
+        }
+  }
+}
+
+}  // namespace pba
