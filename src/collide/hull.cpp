@@ -417,7 +417,9 @@ std::shared_ptr<ConvexHull> HullBuilder::quickhull(std::span<const Vec3> points,
   std::vector<double> areas(faces.size(), 0);
   for (std::uint32_t f : alive) areas[f] = area(f);
   std::vector<std::uint32_t> order = alive;
-  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return areas[a] > areas[b]; });
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return areas[a] > areas[b] || (areas[a] == areas[b] && a < b);
+  });
   std::vector<std::uint32_t> group(faces.size(), UINT32_MAX);
   std::vector<std::vector<std::uint32_t>> loops;
   std::vector<std::uint32_t> members, edge_from(n, UINT32_MAX);

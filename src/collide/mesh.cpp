@@ -41,6 +41,7 @@ struct MeshBuilder {
     m.order_.resize(nt);
     for (std::uint32_t t = 0; t < nt; ++t) m.order_[t] = t;
     m.nodes_.reserve(2 * nt);
+    std::vector<std::uint32_t> scratch(nt);
     m.nodes_.push_back({});
     struct Task {
       std::uint32_t node, begin, end;
@@ -98,11 +99,16 @@ struct MeshBuilder {
       std::uint32_t mid;
       if (best_axis >= 0) {
         const double lo = cbox.lo[best_axis], ext = cbox.hi[best_axis] - lo;
-        auto* first = m.order_.data() + task.begin;
-        auto* split = std::stable_partition(first, m.order_.data() + task.end, [&](std::uint32_t t) {
-          return std::min(kBins - 1, static_cast<int>(kBins * (centers[t][best_axis] - lo) / ext)) < best_split;
-        });
-        mid = static_cast<std::uint32_t>(split - m.order_.data());
+        // a stable partition through the scratch array (left bins first, order kept)
+        std::uint32_t nl = 0, nr = 0;
+        for (std::uint32_t i = task.begin; i < task.end; ++i) {
+          const std::uint32_t t = m.order_[i];
+          const bool left = std::min(kBins - 1, static_cast<int>(kBins * (centers[t][best_axis] - lo) / ext)) < best_split;
+          if (left) m.order_[task.begin + nl++] = t;
+          else scratch[nr++] = t;
+        }
+        std::copy(scratch.begin(), scratch.begin() + nr, m.order_.begin() + task.begin + nl);
+        mid = task.begin + nl;
       } else if (count <= 4 * kLeafSize) {
         leaf();  // splitting costs more than it saves
         continue;
