@@ -11,9 +11,11 @@
 #include <GLFW/glfw3.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <imgui.h>
+#include <imgui_internal.h>
 
 #include "gl.h"
 #include "image_check.h"
+#include "progress.h"
 
 namespace pba::app {
 
@@ -93,12 +95,15 @@ void App::load_sample(int index) {
     apply_options_to_settings();
     camera_ = Camera{};
   }
+  // samples frame the camera in their constructor: tell it the region the panels leave
+  update_view_region();
   renderer_->style = SceneStyle{};
   ctx_.settings.single_step = false;
   ctx_.virtual_charge = 0;
   diverged_.clear();
   stop_expected_ = false;
   sample_index_ = index;
+  ctx_.option_keys.clear();
   sample_ = Samples()[index].create(ctx_);
   if (restart) camera_ = keep;
   else apply_options_to_settings();
@@ -111,14 +116,26 @@ void App::handle_input() {
   const int n = static_cast<int>(Samples().size());
   // key presses the UI does not want (queued, so short taps at low frame rates count)
   const auto keys = window_.take_key_presses();
+  // Esc closes an open menu first (also while its search box has the keyboard), leaves a
+  // text field to ImGui, and quits otherwise
+  const bool menu_open = ImGui::IsPopupOpen("", ImGuiPopupFlags_AnyPopupId | ImGuiPopupFlags_AnyPopupLevel);
+  for (const auto& [key, mods] : keys) {
+    if (key != GLFW_KEY_ESCAPE) continue;
+    // every open popup (menus, submenus, combo boxes) closes before this frame draws them
+    // (imgui_internal.h: Dear ImGui 1.86 has no public call that closes them all)
+    if (menu_open) ImGui::ClosePopupToLevel(0, true);
+    else if (!io.WantTextInput) quit_ = true;
+  }
   if (!io.WantCaptureKeyboard) {
     for (const auto& [key, mods] : keys) {
       switch (key) {
-        case GLFW_KEY_P: s.paused = !s.paused; break;
+        case GLFW_KEY_P:
+        case GLFW_KEY_SPACE: s.paused = !s.paused; break;
         case GLFW_KEY_O: s.paused = true, s.single_step = true; break;
         case GLFW_KEY_R: s.restart = true; break;
         case GLFW_KEY_F1: s.show_ui = !s.show_ui; break;
-        case GLFW_KEY_ESCAPE: quit_ = true; break;
+        case GLFW_KEY_F12: screenshot_ = true; break;
+        case GLFW_KEY_ESCAPE: break;
         case GLFW_KEY_LEFT_BRACKET:
         case GLFW_KEY_PAGE_UP: load_sample((sample_index_ + n - 1) % n); break;
         case GLFW_KEY_RIGHT_BRACKET:
@@ -131,6 +148,9 @@ void App::handle_input() {
       }
     }
   }
+  // a file dropped on the window: the sample may take it, else a scene file opens in the
+  // "Scene file" sample
+  for (const std::string& path : window_.take_dropped_files()) open_file(path);
   // the world-space ray under the cursor
   const float w = std::max(io.DisplaySize.x, 1.0f), h = std::max(io.DisplaySize.y, 1.0f);
   const glm::mat4 inv = glm::inverse(camera_.projection(w / h) * camera_.view());
@@ -178,7 +198,121 @@ double App::next_frame_dt() {
   return std::clamp(dt, 0.0, 10.0);
 }
 
-void App::check_frame(int frame_index, const std::vector<std::uint8_t>& rgb) {
+void App::update_view_region() {
+  // ImGui's display size, or the window's before the first frame
+  const ImGuiIO& io = ImGui::GetIO();
+  float w = io.DisplaySize.x, h = io.DisplaySize.y;
+  if (w < 1 || h < 1) {
+    int fw = 0, fh = 0;
+    window_.framebuffer_size(&fw, &fh);
+    w = static_cast<float>(std::max(fw, 1)), h = static_cast<float>(std::max(fh, 1));
+  }
+  ctx_.view = ViewRegion(ui_, ctx_.settings, w, h);
+  // the view's centre moves to the region's (in normalised device units), and framing fits
+  // the region's width at the window's vertical field of view
+  camera_.shift_x = (ctx_.view.x0 + ctx_.view.x1 - w) / w;
+  camera_.view_aspect = ctx_.view.width() / h;
+}
+
+void App::open_file(const std::string& path) {
+  // the current sample first (the "Scene file" sample opens it in place)
+  {
+    auto lock = physics_->lock_state();
+    if (sample_->OpenFile(path)) return;
+  }
+  if (fs::path(path).extension() != ".json") {
+    std::fprintf(stderr, "pba_samples: %s: drop a scene file (.json) to open it\n", path.c_str());
+    return;
+  }
+  std::string error;
+  const int index = FindSample("Particles/Scene file", &error);
+  if (index < 0) return;
+  load_sample(index);
+  auto lock = physics_->lock_state();
+  sample_->OpenFile(path);
+}
+
+void App::save_screenshot() {
+  screenshot_ = false;
+  // screenshots/<sample>_NNN.png in the working directory, numbered after the last one
+  std::error_code ec;
+  fs::create_directories("screenshots", ec);
+  const std::string slug = SampleSlug(Samples()[sample_index_]);
+  std::string path;
+  for (int k = 0; k < 10000; ++k) {
+    char name[160];
+    std::snprintf(name, sizeof name, "%s_%03d.png", slug.c_str(), k);
+    path = (fs::path("screenshots") / name).string();
+    if (!fs::exists(path, ec)) break;
+  }
+  std::vector<std::uint8_t> rgb;
+  target_->read_rgb(&rgb);
+  if (write_png_file(path, target_->width(), target_->height(), rgb)) {
+    ui_.status = "saved " + path;
+    std::printf("pba_samples: screenshot %s\n", fs::absolute(path).lexically_normal().c_str());
+    std::fflush(stdout);
+  } else {
+    ui_.status = "could not write " + path;
+    std::fprintf(stderr, "pba_samples: could not write %s\n", path.c_str());
+  }
+  ui_.status_until = ImGui::GetTime() + 4.0;
+}
+
+std::string App::check_drawn(const std::vector<std::uint8_t>& rgb, int w, int h) {
+  // the simulated points, projected with this frame's camera
+  points_.clear();
+  {
+    auto lock = physics_->lock_state();
+    sample_->SimulatedPoints(points_, 4000);
+  }
+  if (points_.empty()) return {};
+  pixels_.clear();
+  for (const Vec3& p : points_) {
+    glm::vec2 px;
+    if (renderer_->project(p, &px) && px.x >= 1 && px.y >= 1 && px.x < w - 1 && px.y < h - 1 &&
+        ctx_.view.contains(px.x, px.y))
+      pixels_.push_back(px);
+  }
+  // the empty scene (background and ground only) through the same camera
+  renderer_->begin_frame();
+  const bool ground = renderer_->style.ground;
+  renderer_->style.ground = ground && ctx_.settings.show_grid;
+  target_->bind_scene();
+  renderer_->render(camera_, w, h);
+  renderer_->style.ground = ground;
+  target_->resolve();
+  target_->read_rgb(&empty_);
+  // a point is drawn when a pixel of its 3x3 neighbourhood differs from the empty scene by
+  // more than 12/255 in a channel (MSAA edges and dithering stay below that; a drawn
+  // surface or particle is far above it on every background of the app)
+  int drawn = 0;
+  for (const glm::vec2& px : pixels_) {
+    const int cx = static_cast<int>(px.x), cy = static_cast<int>(px.y);
+    bool hit = false;
+    for (int dy = -1; dy <= 1 && !hit; ++dy)
+      for (int dx = -1; dx <= 1 && !hit; ++dx) {
+        const std::size_t i = (static_cast<std::size_t>(cy + dy) * w + (cx + dx)) * 3;
+        for (int c = 0; c < 3; ++c) hit = hit || std::abs(int(rgb[i + c]) - int(empty_[i + c])) > 12;
+      }
+    drawn += hit;
+  }
+  // most of what is simulated is in view, and nearly all of that is drawn
+  const std::size_t n = points_.size(), inside = pixels_.size();
+  char msg[200];
+  if (2 * inside < n) {
+    std::snprintf(msg, sizeof msg, "only %zu of %zu simulated points are inside the region the panels leave visible",
+                  inside, n);
+    return msg;
+  }
+  if (10 * drawn < 9 * static_cast<int>(inside)) {
+    std::snprintf(msg, sizeof msg, "%d of the %zu simulated points in view are drawn (at least 90%% must be)", drawn,
+                  inside);
+    return msg;
+  }
+  return {};
+}
+
+void App::check_frame(int frame_index, const std::vector<std::uint8_t>& rgb, int w, int h) {
   // the first frames may still show an empty scene; then check every 4th and the last
   const bool last = frame_index + 1 >= options_.frames;
   if (frame_index < 2 || (frame_index % 4 != 0 && !last)) return;
@@ -189,6 +323,9 @@ void App::check_frame(int frame_index, const std::vector<std::uint8_t>& rgb) {
       rules.color_tolerance);
   const std::string err = CheckImage(st, rules, expected);
   if (!err.empty()) failures_.push_back("frame " + std::to_string(frame_index) + ": " + err);
+  // what the sample simulates is drawn (checked last: it renders the empty scene over the frame)
+  const std::string drawn = check_drawn(rgb, w, h);
+  if (!drawn.empty()) failures_.push_back("frame " + std::to_string(frame_index) + ": " + drawn);
   if (first_checked_.empty()) first_checked_ = rgb;
   else if (last && ImageDifference(first_checked_, rgb) < 0.002)
     failures_.push_back("frames do not change over time (frame 2 and frame " + std::to_string(frame_index) +
@@ -213,10 +350,7 @@ bool App::frame() {
   // keep the orbit target centred in the part of the window the panels leave free
   int w = 0, h = 0;
   window_.framebuffer_size(&w, &h);
-  float left = 0, right = 0;
-  const float display_w = std::max(ImGui::GetIO().DisplaySize.x, 1.0f);
-  PanelWidths(ui_, s, display_w, &left, &right);
-  camera_.shift_x = (left - right) / display_w;
+  update_view_region();
 
   // physics: the sample advances one frame (through the app's time stepper by default)
   ctx_.frame_dt = frame_dt;
@@ -276,7 +410,7 @@ bool App::frame() {
     act = DrawUi(ui_, ctx_, uf);
   }
   if (!diverged_.empty() && !stop_expected_) {
-    const UiActions d = DrawDiverged(diverged_, headless_);
+    const UiActions d = DrawDiverged(diverged_, headless_, ctx_.view);
     act.restart = act.restart || d.restart;
   }
   window_.end_ui_frame();
@@ -284,6 +418,10 @@ bool App::frame() {
   // the workbook's doWork(): an artificial render cost
   if (!headless_ && s.render_delay_ms > 0)
     std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(s.render_delay_ms));
+
+  // a screenshot asked for by key or menu: the finished frame, panels included
+  if (act.screenshot) screenshot_ = true;
+  if (screenshot_) save_screenshot();
 
   // capture and self-test read the finished frame back
   if (capture_ || options_.selftest) {
@@ -297,7 +435,7 @@ bool App::frame() {
         if (!capture_->write_png(frame_index_, rgb_, &error)) failures_.push_back(error);
       }
     }
-    if (options_.selftest) check_frame(frame_index_, rgb_);
+    if (options_.selftest) check_frame(frame_index_, rgb_, w, h);
   }
 
   // show it
@@ -327,7 +465,9 @@ int App::run_headless(int sample_index, const std::string& out_dir) {
   first_checked_.clear();
   frame_index_ = 0;
   ctx_.settings.paused = false;
-  load_sample(sample_index);
+  // run() created the first sample already (to check its options): not twice
+  if (!fresh_ || sample_index != sample_index_) load_sample(sample_index);
+  fresh_ = false;
 
   // capture set-up: PNGs and the MP4 go to out_dir
   Capture capture;
@@ -344,7 +484,13 @@ int App::run_headless(int sample_index, const std::string& out_dir) {
 
   // fixed number of frames of fixed virtual length
   const auto t0 = std::chrono::steady_clock::now();
-  for (frame_index_ = 0; frame_index_ < options_.frames; ++frame_index_) frame();
+  tools::Progress progress(e.full_name(), "frames", options_.frames,
+                           options_.quiet ? tools::ProgressMode::Quiet : tools::ProgressMode::Auto);
+  for (frame_index_ = 0; frame_index_ < options_.frames; ++frame_index_) {
+    frame();
+    progress.update(frame_index_ + 1);
+  }
+  progress.finish();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   capture_ = nullptr;
   const bool video_ok = capture.close();
@@ -364,6 +510,7 @@ int App::run_headless(int sample_index, const std::string& out_dir) {
   }
   std::fflush(stdout);
   if (!diverged_.empty() && !stop_expected_) failures_.push_back("simulation stopped: " + diverged_);
+  if (!sample_->LoadError().empty()) failures_.push_back(e.full_name() + ": nothing to show (the error is above)");
   if (options_.selftest) {
     for (const std::string& f : failures_) std::fprintf(stderr, "SELFTEST FAIL %s: %s\n", e.full_name().c_str(), f.c_str());
     if (failures_.empty()) std::printf("SELFTEST PASS %s\n", e.full_name().c_str());
@@ -396,6 +543,10 @@ int App::run() {
   // a sample rejects a bad --option in its constructor: a usage error
   try {
     load_sample(index);
+    fresh_ = true;
+    // a key the sample never asked for is a typo or belongs to another sample
+    const std::string unknown = options_.all ? std::string() : UnknownOptions(ctx_, all[index]);
+    if (!unknown.empty()) throw Error(unknown);
   } catch (const Error& e) {
     std::fprintf(stderr, "pba_samples: %s\n", e.what());
     return 2;

@@ -39,7 +39,13 @@ class App {
   bool frame();                 // one frame; false when the app should stop
   double next_frame_dt();
   int run_headless(int sample_index, const std::string& out_dir);
-  void check_frame(int frame_index, const std::vector<std::uint8_t>& rgb);
+  void check_frame(int frame_index, const std::vector<std::uint8_t>& rgb, int w, int h);
+  // the sample's simulated points that fall in the free region must show drawn pixels in
+  // `rgb` (a w x h frame); returns the failure, empty when they do
+  std::string check_drawn(const std::vector<std::uint8_t>& rgb, int w, int h);
+  void update_view_region();                 // ctx_.view and the camera's framing region
+  void open_file(const std::string& path);   // a dropped file
+  void save_screenshot();                    // the finished frame to screenshots/
 
   Options options_;
   Window window_;
@@ -54,6 +60,7 @@ class App {
   std::string diverged_;        // non-empty: the sample stopped with this message
   bool stop_expected_ = false;  // diverged_ is a stop the sample is designed to show
   bool quit_ = false;
+  bool fresh_ = false;          // the current sample was created and has not run a frame
   bool headless_ = false;
   double last_frame_dt_ = 1.0 / 60;
   std::chrono::steady_clock::time_point last_frame_start_;
@@ -63,6 +70,10 @@ class App {
   std::vector<std::string> failures_;
   std::vector<std::uint8_t> first_checked_;
   std::vector<std::uint8_t> rgb_;
+  std::vector<std::uint8_t> empty_;  // the empty scene, for check_drawn
+  std::vector<Vec3> points_;         // simulated points, for check_drawn
+  std::vector<glm::vec2> pixels_;    // and those in view, projected
+  bool screenshot_ = false;          // save the next finished frame
 };
 
 }  // namespace pba::app

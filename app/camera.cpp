@@ -12,8 +12,12 @@ void Camera::frame(const glm::vec3& center, float radius, float yaw_rad, float p
   target = center;
   yaw = yaw_rad;
   pitch = pitch_rad;
-  // distance at which a sphere of `radius` fits the vertical field of view, with a margin
-  distance = std::max(0.5f, 1.1f * radius / std::sin(0.5f * fov_y));
+  // distance at which a sphere of `radius` fits the narrower of the vertical field of view
+  // and the horizontal one of the free region (tan of half of it = aspect tan(fov_y / 2)),
+  // with a margin
+  const float half_y = 0.5f * fov_y;
+  const float half_x = std::atan(std::max(view_aspect, 0.05f) * std::tan(half_y));
+  distance = std::max(0.5f, 1.1f * radius / std::sin(std::min(half_y, half_x)));
 }
 
 glm::vec3 Camera::eye() const {

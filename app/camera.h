@@ -18,8 +18,12 @@ struct Camera {
   /// Horizontal shift of the view centre in normalised device units (-1..1), so the target
   /// sits in the middle of the part of the window that panels leave free.
   float shift_x = 0.0f;
+  /// Width / height of the part of the window that panels leave free (set by the app):
+  /// frame() fits its sphere into that region, not into the whole window.
+  float view_aspect = 16.0f / 9.0f;
 
-  /// Puts the camera back at a framing that shows `center` with about `radius` metres around it.
+  /// Puts the camera back at a framing that shows `center` with about `radius` metres around
+  /// it, within the vertical field of view and the horizontal one of the free region.
   void frame(const glm::vec3& center, float radius, float yaw_rad = 0.0f, float pitch_rad = 0.25f);
   /// Eye position in world space.
   glm::vec3 eye() const;

@@ -66,11 +66,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pba_samples: %s\n", parsed.error.c_str());
     return 2;
   }
+  if (parsed.done) return 0;  // --help or --version, printed by the parser
   pba::app::Options& o = parsed.options;
-  if (o.help) {
-    std::printf("%s", pba::app::Usage().c_str());
-    return 0;
-  }
   if (o.list) {
     for (const auto& e : pba::app::Samples()) std::printf("%s\n", e.full_name().c_str());
     return 0;

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "cli.h"
+
 namespace pba::app {
 
 namespace {
@@ -34,183 +36,171 @@ std::string bad(const std::string& flag, const std::string& value, const std::st
 
 }  // namespace
 
+namespace {
+
+constexpr const char* kAbout =
+    "Interactive samples for pba (physics-based animation). With no display, renders the\n"
+    "default sample headless under xvfb-run and writes PNG frames and an MP4 to ./captures/.\n"
+    "Headless runs show progress on stderr (a live line on a terminal, a line every 5 s\n"
+    "otherwise); --quiet turns it off.";
+
+constexpr const char* kFooter =
+    "--option KEY=VALUE sets a sample's own setting (repeatable); a key the sample does not\n"
+    "read is an error that lists its keys. E.g. Dynamics/Integrators:\n"
+    "scenario=ballistic|spring|orbit, drag=0|1, nan_at=SECONDS (poisons one object: shows\n"
+    "the divergence handling); Dynamics/Time stepping: delay=MS, cost=MS, fps=HZ.\n"
+    "--scene FILE is --sample \"scene file\" --option file=FILE, so it does not go with\n"
+    "--sample. --screenshot-every 0 with --no-video would write nothing: refused (use\n"
+    "--selftest to check frames without writing them). A headless run whose sample cannot\n"
+    "show its subject (a scene file that does not load) exits with code 1.\n"
+    "\n"
+    "keys: P pause, O single step, R restart, [ / ] or PageUp / PageDown previous / next\n"
+    "      sample, F1 toggle panels, Esc quit.\n"
+    "mouse: left-drag orbit, right- or middle-drag (or shift + left) pan, wheel zoom.";
+
+// the words of the options that take a value, checked after parsing
+struct Raw {
+  std::string sample, scene, out, frames, screenshot_every, msaa, substeps, size, fps, dt, strategy, method;
+  std::vector<std::string> options;
+};
+
+// every option of pba_samples, in the order of the help
+void describe(CLI::App& app, Options& o, Raw& r) {
+  tools::configure_app(app);
+  app.footer(kFooter);
+  app.add_flag("--list", o.list, "list the samples (\"Category/Name\") and exit");
+  app.add_option("--sample", r.sample,
+                 "start with this sample: \"Category/Name\", or a unique part of it (any case)")
+      ->type_name("NAME");
+  app.add_option("--scene", r.scene, "open a scene file (docs/scene-format.md) in \"Particles/Scene file\"")
+      ->type_name("FILE.json");
+  app.add_flag("--headless", o.headless, "render in a hidden window with a fixed frame time and capture");
+  app.add_option("--frames", r.frames, "frames to render headless (default 300)")->type_name("N");
+  app.add_option("--out", r.out, "where PNGs and the MP4 go (default ./captures/<sample>)")->type_name("DIR");
+  app.add_option("--size", r.size, "image / window size in pixels (default 1280x720)")->type_name("WxH");
+  app.add_option("--screenshot-every", r.screenshot_every,
+                 "write every K-th frame as PNG, plus the last (default 30; 0 = none)")
+      ->type_name("K");
+  app.add_flag("--no-video")->description("do not write the MP4");
+  app.add_option("--fps", r.fps, "frames per second of virtual time when headless (default 60)")->type_name("F");
+  app.add_option("--dt", r.dt, "physics step, 1 / step rate (default 1/60)")->type_name("SECONDS");
+  app.add_option("--strategy", r.strategy, "time stepping: per-frame, max-step, fixed, threaded")->type_name("NAME");
+  app.add_option("--integrator,--method", r.method,
+                 "euler, semi-implicit-euler, verlet, velocity-verlet, rk4, implicit-euler")
+      ->type_name("NAME");
+  app.add_option("--substeps", r.substeps, "integration substeps per physics step (default 1)")->type_name("N");
+  app.add_option("--msaa", r.msaa, "multisample anti-aliasing samples, 1 = off (default 4; 1 live on llvmpipe)")
+      ->type_name("N");
+  app.add_flag("--hide-ui", o.hide_ui, "draw only the 3D view (no panels)");
+  app.add_option("--option", r.options, "a sample's own setting (repeatable, see below)")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  app.add_flag("--selftest", o.selftest,
+               "headless check that every frame shows the scene; exit code 1 on failure");
+  app.add_flag("--all", o.all, "with --headless/--selftest: every sample in turn");
+  app.add_flag("--quiet", o.quiet, "no progress lines in headless runs");
+}
+
+}  // namespace
+
 std::string Usage() {
-  return R"(usage: pba_samples [options]
-
-Interactive samples for pba (physics-based animation). With no display, renders the
-default sample headless under xvfb-run and writes PNG frames and an MP4 to ./captures/.
-
-options:
-  --help                 show this help and exit
-  --list                 list the samples ("Category/Name") and exit
-  --sample NAME          start with this sample: "Category/Name", its name, or a unique
-                         part of it (case-insensitive), e.g. --sample stepping
-  --scene FILE.json      open a scene file (docs/scene-format.md) in the "Particles/Scene
-                         file" sample; the same as --sample "scene file" --option file=FILE
-  --headless             render in a hidden window with a fixed frame time and capture
-  --frames N             frames to render headless (default 300)
-  --out DIR              where PNGs and the MP4 go (default ./captures/<sample>)
-  --size WxH             image / window size in pixels (default 1280x720)
-  --screenshot-every K   write every K-th frame as PNG, plus the last (default 30; 0 = none)
-  --no-video             do not write the MP4
-  --fps F                frames per second of virtual time when headless (default 60)
-  --dt SECONDS           physics step, 1 / step rate (default 1/60)
-  --strategy NAME        time stepping: per-frame, max-step, fixed, threaded
-  --integrator NAME      euler, semi-implicit-euler, verlet, velocity-verlet, rk4,
-                         implicit-euler
-  --substeps N           integration substeps per physics step (default 1)
-  --msaa N               multisample anti-aliasing samples, 1 = off (default 4; 1 for
-                         interactive use on a software rasteriser such as llvmpipe)
-  --hide-ui              draw only the 3D view (no panels)
-  --option KEY=VALUE     a sample's own setting (repeatable); Dynamics/Integrators:
-                         scenario=ballistic|spring|orbit, drag=0|1, nan_at=SECONDS
-                         (poisons one object: shows the divergence handling);
-                         Dynamics/Time stepping: delay=MS, cost=MS, fps=HZ
-  --selftest             headless check: each frame must show the scene (not blank,
-                         background visible, the sample's colours present, changing);
-                         exit code 1 on failure
-  --all                  with --headless/--selftest: every sample in turn
-
-keys: P pause, O single step, R restart, [ / ] or PageUp / PageDown previous / next
-      sample, F1 toggle panels, Esc quit.
-mouse: left-drag orbit, right- or middle-drag (or shift + left) pan, wheel zoom.
-)";
+  Options o;
+  Raw r;
+  CLI::App app{kAbout, "pba_samples"};
+  describe(app, o, r);
+  return app.help();
 }
 
 ParseResult ParseOptions(const std::vector<std::string>& args) {
-  ParseResult r;
-  Options& o = r.options;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    std::string flag = args[i];
-    std::string value;
-    bool has_value = false;
-    // --flag=value form
-    if (flag.rfind("--", 0) == 0) {
-      const auto eq = flag.find('=');
-      if (eq != std::string::npos) {
-        value = flag.substr(eq + 1);
-        flag = flag.substr(0, eq);
-        has_value = true;
-      }
-    }
-    // flags without a value
-    auto no_value = [&](bool* target) {
-      if (has_value) {
-        r.error = flag + ": takes no value, got '" + value + "'";
-        return false;
-      }
-      *target = true;
-      return true;
-    };
-    // flags with a value: from "=value" or the next argument
-    auto take = [&]() {
-      if (has_value) return true;
-      if (i + 1 >= args.size()) {
-        r.error = flag + ": missing value (see --help)";
-        return false;
-      }
-      value = args[++i];
-      return true;
-    };
-    if (flag == "--help" || flag == "-h") {
-      if (!no_value(&o.help)) return r;
-    } else if (flag == "--list") {
-      if (!no_value(&o.list)) return r;
-    } else if (flag == "--headless") {
-      if (!no_value(&o.headless)) return r;
-    } else if (flag == "--selftest") {
-      if (!no_value(&o.selftest)) return r;
-    } else if (flag == "--all") {
-      if (!no_value(&o.all)) return r;
-    } else if (flag == "--hide-ui") {
-      if (!no_value(&o.hide_ui)) return r;
-    } else if (flag == "--no-video") {
-      bool b = false;
-      if (!no_value(&b)) return r;
-      o.video = false;
-    } else if (flag == "--sample") {
-      if (!take()) return r;
-      if (value.empty()) return r.error = bad(flag, value, "expected a sample name (see --list)"), r;
-      o.sample = value;
-    } else if (flag == "--scene") {
-      // shorthand for the scene-file sample with its file option
-      if (!take()) return r;
-      if (value.empty()) return r.error = bad(flag, value, "expected a scene file (.json)"), r;
-      o.sample = "Particles/Scene file";
-      o.sample_options["file"] = value;
-    } else if (flag == "--out") {
-      if (!take()) return r;
-      if (value.empty()) return r.error = bad(flag, value, "expected a directory"), r;
-      o.out = value;
-    } else if (flag == "--frames") {
-      if (!take()) return r;
-      if (!parse_number(value, &o.frames) || o.frames < 1 || o.frames > 1000000)
-        return r.error = bad(flag, value, "expected an integer in [1, 1000000]"), r;
-    } else if (flag == "--screenshot-every") {
-      if (!take()) return r;
-      if (!parse_number(value, &o.screenshot_every) || o.screenshot_every < 0 || o.screenshot_every > 1000000)
-        return r.error = bad(flag, value, "expected an integer in [0, 1000000]"), r;
-    } else if (flag == "--msaa") {
-      if (!take()) return r;
-      if (!parse_number(value, &o.msaa) || o.msaa < 1 || o.msaa > 16)
-        return r.error = bad(flag, value, "expected an integer in [1, 16]"), r;
-    } else if (flag == "--substeps") {
-      if (!take()) return r;
-      int n = 0;
-      if (!parse_number(value, &n) || n < 1 || n > 1000)
-        return r.error = bad(flag, value, "expected an integer in [1, 1000]"), r;
-      o.substeps = n;
-    } else if (flag == "--size") {
-      if (!take()) return r;
-      const auto x = value.find('x');
-      int w = 0, h = 0;
-      if (x == std::string::npos || !parse_number(value.substr(0, x), &w) ||
-          !parse_number(value.substr(x + 1), &h) || w < 64 || h < 64 || w > 7680 || h > 4320)
-        return r.error = bad(flag, value, "expected WIDTHxHEIGHT, each from 64 up to 7680x4320, e.g. 1280x720"), r;
-      o.width = w, o.height = h;
-    } else if (flag == "--fps") {
-      if (!take()) return r;
-      double v = 0;
-      if (!parse_number(value, &v) || !std::isfinite(v) || v < 1 || v > 1000)
-        return r.error = bad(flag, value, "expected a number of frames per second in [1, 1000]"), r;
-      o.fps = v;
-    } else if (flag == "--dt") {
-      if (!take()) return r;
-      double v = 0;
-      if (!parse_number(value, &v))
-        return r.error = bad(flag, value, "expected a number of seconds, e.g. 0.01"), r;
-      if (!std::isfinite(v) || v < 1e-6 || v > 10)
-        return r.error = bad(flag, value, "must be finite and in [1e-06, 10] seconds"), r;
-      o.dt = v;
-    } else if (flag == "--option") {
-      if (!take()) return r;
-      const auto eq = value.find('=');
-      if (eq == std::string::npos || eq == 0)
-        return r.error = bad(flag, value, "expected KEY=VALUE, e.g. scenario=orbit"), r;
-      o.sample_options[value.substr(0, eq)] = value.substr(eq + 1);
-    } else if (flag == "--strategy") {
-      if (!take()) return r;
-      try {
-        o.strategy = parse_strategy(value, "--strategy");
-      } catch (const Error& e) {
-        return r.error = e.what(), r;
-      }
-    } else if (flag == "--integrator" || flag == "--method") {
-      if (!take()) return r;
-      try {
-        o.method = parse_method(value, flag);
-      } catch (const Error& e) {
-        return r.error = e.what(), r;
-      }
-    } else if (flag.rfind("-", 0) == 0) {
-      r.error = "unknown flag '" + flag + "' (see --help)";
-      return r;
-    } else {
-      r.error = "unexpected argument '" + flag + "' (flags start with --, see --help)";
-      return r;
-    }
+  ParseResult result;
+  Options& o = result.options;
+  Raw r;
+  CLI::App app{kAbout, "pba_samples"};
+  describe(app, o, r);
+  const tools::ParseOutcome parsed = tools::parse_command_line(app, args);
+  if (parsed.exit) {
+    if (parsed.error.empty()) o.help = true, result.done = true;  // help or version printed
+    result.error = parsed.error;
+    if (result.error.rfind("unknown flag", 0) == 0) result.error += " (see --help)";
+    if (result.error.rfind("unexpected argument", 0) == 0) result.error += " (flags start with --, see --help)";
+    return result;
   }
-  return r;
+  auto given = [&](const char* flag) { return app.count(flag) > 0; };
+  auto fail = [&](const std::string& message) {
+    result.error = message;
+    return result;
+  };
+  // each value, with a message naming the flag and the value
+  if (given("--no-video")) o.video = false;
+  if (given("--sample")) {
+    if (r.sample.empty()) return fail(bad("--sample", r.sample, "expected a sample name (see --list)"));
+    o.sample = r.sample;
+  }
+  if (given("--out")) {
+    if (r.out.empty()) return fail(bad("--out", r.out, "expected a directory"));
+    o.out = r.out;
+  }
+  if (given("--frames") && (!parse_number(r.frames, &o.frames) || o.frames < 1 || o.frames > 1000000))
+    return fail(bad("--frames", r.frames, "expected an integer in [1, 1000000]"));
+  if (given("--screenshot-every") && (!parse_number(r.screenshot_every, &o.screenshot_every) ||
+                                      o.screenshot_every < 0 || o.screenshot_every > 1000000))
+    return fail(bad("--screenshot-every", r.screenshot_every, "expected an integer in [0, 1000000]"));
+  if (given("--msaa") && (!parse_number(r.msaa, &o.msaa) || o.msaa < 1 || o.msaa > 16))
+    return fail(bad("--msaa", r.msaa, "expected an integer in [1, 16]"));
+  if (given("--substeps")) {
+    int n = 0;
+    if (!parse_number(r.substeps, &n) || n < 1 || n > 1000)
+      return fail(bad("--substeps", r.substeps, "expected an integer in [1, 1000]"));
+    o.substeps = n;
+  }
+  if (given("--size")) {
+    const auto x = r.size.find('x');
+    int w = 0, h = 0;
+    if (x == std::string::npos || !parse_number(r.size.substr(0, x), &w) || !parse_number(r.size.substr(x + 1), &h) ||
+        w < 64 || h < 64 || w > 7680 || h > 4320)
+      return fail(bad("--size", r.size, "expected WIDTHxHEIGHT, each from 64 up to 7680x4320, e.g. 1280x720"));
+    o.width = w, o.height = h;
+  }
+  if (given("--fps")) {
+    double v = 0;
+    if (!parse_number(r.fps, &v) || !std::isfinite(v) || v < 1 || v > 1000)
+      return fail(bad("--fps", r.fps, "expected a number of frames per second in [1, 1000]"));
+    o.fps = v;
+  }
+  if (given("--dt")) {
+    double v = 0;
+    if (!parse_number(r.dt, &v)) return fail(bad("--dt", r.dt, "expected a number of seconds, e.g. 0.01"));
+    if (!std::isfinite(v) || v < 1e-6 || v > 10) return fail(bad("--dt", r.dt, "must be finite and in [1e-06, 10] seconds"));
+    o.dt = v;
+  }
+  for (const std::string& kv : r.options) {
+    const auto eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0) return fail(bad("--option", kv, "expected KEY=VALUE, e.g. scenario=orbit"));
+    o.sample_options[kv.substr(0, eq)] = kv.substr(eq + 1);
+  }
+  try {
+    if (given("--strategy")) o.strategy = parse_strategy(r.strategy, "--strategy");
+    if (given("--integrator")) o.method = parse_method(r.method, "--integrator");
+  } catch (const Error& e) {
+    return fail(e.what());
+  }
+  // combinations that cannot be honoured
+  if (given("--scene")) {
+    if (r.scene.empty()) return fail(bad("--scene", r.scene, "expected a scene file (.json)"));
+    if (given("--sample"))
+      return fail("--sample '" + r.sample + "' and --scene '" + r.scene +
+                  "': give one of them (--scene opens its file in the \"Particles/Scene file\" sample)");
+    if (o.sample_options.count("file"))
+      return fail("--scene '" + r.scene + "' and --option file=" + o.sample_options["file"] +
+                  ": both name the scene file; give one of them");
+    o.sample = "Particles/Scene file";
+    o.sample_options["file"] = r.scene;
+  }
+  if (given("--screenshot-every") && o.screenshot_every == 0 && !o.video && !o.selftest)
+    return fail("--screenshot-every 0 with --no-video: the run would write no image and no video; drop one of "
+                "them (or use --selftest to check the frames without writing them)");
+  return result;
 }
 
 }  // namespace pba::app

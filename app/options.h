@@ -31,6 +31,7 @@ struct Options {
   std::optional<Strategy> strategy;  ///< --strategy NAME
   std::optional<Method> method;      ///< --integrator NAME
   std::optional<int> substeps;       ///< --substeps N
+  bool quiet = false;           ///< --quiet: no progress lines in headless runs
   /// --option KEY=VALUE (repeatable): sample-specific settings, e.g. scenario=orbit.
   std::map<std::string, std::string> sample_options;
 };
@@ -39,9 +40,12 @@ struct Options {
 struct ParseResult {
   Options options;
   std::string error;  ///< empty on success
+  bool done = false;  ///< --help or --version was printed: exit 0
 };
 
-/// Parses argv (without argv[0]). Accepts "--flag value" and "--flag=value".
+/// Parses argv (without argv[0]) with CLI11: "--flag value" and "--flag=value" alike;
+/// --help and --version are printed here (then `done`). Refuses combinations that cannot
+/// be honoured (--sample with --scene, --screenshot-every 0 with --no-video).
 ParseResult ParseOptions(const std::vector<std::string>& args);
 
 /// The --help text.

@@ -77,3 +77,19 @@ std::string SampleSlug(const SampleEntry& e) {
 }
 
 }  // namespace pba::app
+
+namespace pba::app {
+
+std::string UnknownOptions(const SampleContext& ctx, const SampleEntry& e) {
+  // the given keys the sample never asked for, with the ones it reads
+  std::string unknown;
+  for (const auto& [key, value] : ctx.options)
+    if (!ctx.option_keys.count(key)) unknown += (unknown.empty() ? "" : ", ") + key + "=" + value;
+  if (unknown.empty()) return {};
+  std::string keys;
+  for (const std::string& k : ctx.option_keys) keys += (keys.empty() ? "" : ", ") + k;
+  return "--option " + unknown + ": " + e.full_name() + " has no such option" +
+         (keys.empty() ? std::string("; it takes no --option keys") : "; its keys: " + keys);
+}
+
+}  // namespace pba::app

@@ -49,6 +49,17 @@ void PanelWidths(const UiState& ui, const Settings& s, float width, float* left,
   *right = ui.right_width * k;
 }
 
+ScreenRect ViewRegion(const UiState& ui, const Settings& s, float width, float height) {
+  float left = 0, right = 0;
+  PanelWidths(ui, s, width, &left, &right);
+  ScreenRect r;
+  r.x0 = left;
+  r.x1 = std::max(left + 1, width - right);
+  r.y0 = s.show_ui ? ui.menu_height : 0;
+  r.y1 = std::max(r.y0 + 1, height);
+  return r;
+}
+
 namespace {
 
 bool contains_ci(const std::string& hay, const char* needle) {
@@ -93,9 +104,11 @@ void samples_menu(UiState& ui, const UiFrame& f, UiActions& act) {
 void simulation_panel(SampleContext& ctx, const UiFrame& f, UiActions& act) {
   Settings& s = ctx.settings;
   // run controls
-  if (ImGui::Button(s.paused ? "Run (P)" : "Pause (P)", ImVec2(90, 0))) s.paused = !s.paused;
+  // three buttons sharing the panel's width
+  const float bw = (ImGui::GetContentRegionAvail().x - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
+  if (ImGui::Button(s.paused ? "Run (P)" : "Pause (P)", ImVec2(bw, 0))) s.paused = !s.paused;
   ImGui::SameLine();
-  if (ImGui::Button("Step (O)", ImVec2(80, 0))) s.paused = true, s.single_step = true;
+  if (ImGui::Button("Step (O)", ImVec2(bw, 0))) s.paused = true, s.single_step = true;
   ImGui::SameLine();
   if (ImGui::Button("Restart (R)", ImVec2(-1, 0))) act.restart = true;
 
@@ -189,8 +202,8 @@ void profiler_panel(UiState& ui, const UiFrame& f) {
   ImGui::Text("sim time %.2f s, dropped %.3f s", p.sim_time, p.dropped_total);
   if (p.lag > 0) ImGui::Text("thread lag %.1f ms", p.lag * 1000);
   if (f.draw)
-    ImGui::TextDisabled("%d solids, %d lines, %d points, %d labels", f.draw->solids, f.draw->lines, f.draw->points,
-                        f.draw->labels);
+    ImGui::TextDisabled("%d solids, %d triangles, %d lines, %d points, %d labels", f.draw->solids,
+                        f.draw->triangles, f.draw->lines, f.draw->points, f.draw->labels);
 }
 
 }  // namespace
@@ -211,6 +224,19 @@ UiActions DrawUi(UiState& ui, SampleContext& ctx, const UiFrame& f) {
       ImGui::MenuItem("Labels", nullptr, &s.show_labels);
       ImGui::MenuItem("Ground grid", nullptr, &s.show_grid);
       ImGui::MenuItem("Profiler", nullptr, &s.show_profiler);
+      if (ImGui::MenuItem("Screenshot", "F12")) act.screenshot = true;
+      // the debug-draw toggles every sample reads (pba::DrawFlags)
+      ImGui::Separator();
+      ImGui::TextDisabled("debug draw");
+      DrawFlags& d = ctx.draw;
+      ImGui::MenuItem("Shapes", nullptr, &d.shapes);
+      ImGui::MenuItem("Bounding boxes", nullptr, &d.aabbs);
+      ImGui::MenuItem("Broad-phase tree", nullptr, &d.tree);
+      ImGui::MenuItem("Contact points", nullptr, &d.contacts);
+      ImGui::MenuItem("Contact normals", nullptr, &d.normals);
+      ImGui::MenuItem("Particles", nullptr, &d.particles);
+      ImGui::MenuItem("Forcers and emitters", nullptr, &d.forcers);
+      ImGui::MenuItem("Constraints", nullptr, &d.constraints);
       ImGui::EndMenu();
     }
     if (ImGui::MenuItem("Quit", "Esc")) act.quit = true;
@@ -224,7 +250,12 @@ UiActions DrawUi(UiState& ui, SampleContext& ctx, const UiFrame& f) {
       ImGui::SameLine();
       ImGui::TextColored(ImVec4(1.0f, 0.77f, 0.24f, 1.0f), "  PAUSED");
     }
+    if (!ui.status.empty() && ImGui::GetTime() < ui.status_until) {
+      ImGui::SameLine();
+      ImGui::TextDisabled("  %s", ui.status.c_str());
+    }
     menu_h = ImGui::GetWindowSize().y;
+    ui.menu_height = menu_h;
     ImGui::EndMainMenuBar();
   }
 
@@ -239,12 +270,17 @@ UiActions DrawUi(UiState& ui, SampleContext& ctx, const UiFrame& f) {
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                    ImGuiWindowFlags_NoTitleBar);
   ImGui::PushItemWidth(-1);
+  // text wraps at the panel's edge instead of being cut off
+  ImGui::PushTextWrapPos(0.0f);
   if (ImGui::CollapsingHeader("Simulation", ImGuiTreeNodeFlags_DefaultOpen)) simulation_panel(ctx, f, act);
   if (s.show_profiler && ImGui::CollapsingHeader("Profiler", ImGuiTreeNodeFlags_DefaultOpen)) profiler_panel(ui, f);
   if (!f.headless && ImGui::CollapsingHeader("Controls")) {
-    ImGui::TextWrapped("P pause, O step, R restart, [ ] or PgUp/PgDn previous/next sample, F1 panels, Esc quit.");
+    ImGui::TextWrapped("P or Space pause, O step, R restart, [ ] or PgUp/PgDn previous/next sample, F1 panels, "
+                       "F12 screenshot, Esc close the menu or quit.");
     ImGui::TextWrapped("Left-drag orbit, right/middle-drag or shift+left pan, wheel zoom.");
+    ImGui::TextWrapped("Drop a scene file (.json) on the window to open it.");
   }
+  ImGui::PopTextWrapPos();
   ImGui::PopItemWidth();
   ImGui::End();
 
@@ -253,17 +289,19 @@ UiActions DrawUi(UiState& ui, SampleContext& ctx, const UiFrame& f) {
   ImGui::SetNextWindowSize(ImVec2(right - pad, io.DisplaySize.y - menu_h - 2 * pad), ImGuiCond_Always);
   ImGui::Begin(all[f.sample_index].name.c_str(), nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::PushTextWrapPos(0.0f);
   if (f.sample) f.sample->DrawUI();
+  ImGui::PopTextWrapPos();
   ImGui::End();
   return act;
 }
 
-UiActions DrawDiverged(const std::string& message, bool headless) {
+UiActions DrawDiverged(const std::string& message, bool headless, const ScreenRect& view) {
   UiActions act;
-  const ImGuiIO& io = ImGui::GetIO();
-  ImGui::SetNextWindowPos(ImVec2(0.5f * io.DisplaySize.x, 0.4f * io.DisplaySize.y), ImGuiCond_Always,
+  // centred in the free region and no wider than it
+  ImGui::SetNextWindowPos(ImVec2(view.center_x(), view.y0 + 0.4f * view.height()), ImGuiCond_Always,
                           ImVec2(0.5f, 0.5f));
-  ImGui::SetNextWindowSize(ImVec2(std::min(560.0f, io.DisplaySize.x - 40), 0), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(std::clamp(view.width() - 24, 160.0f, 560.0f), 0), ImGuiCond_Always);
   ImGui::PushStyleColor(ImGuiCol_WindowBg, ImVec4(0.35f, 0.08f, 0.09f, 0.95f));
   ImGui::Begin("Simulation stopped", nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);

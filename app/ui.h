@@ -36,6 +36,9 @@ struct UiState {
   History dropped_ms;         ///< time dropped per frame (ms)
   float left_width = 290;     ///< width of the left panel (px)
   float right_width = 370;    ///< width of the sample panel (px)
+  float menu_height = 21;     ///< height of the main menu bar (px), measured when drawn
+  std::string status;         ///< a short note in the menu bar (e.g. where a screenshot went)
+  double status_until = 0;    ///< ImGui time (s) until which the note shows
 };
 
 /// What the user asked for through the UI this frame.
@@ -43,6 +46,7 @@ struct UiActions {
   int select = -1;       ///< index into Samples() to switch to, -1 for none
   bool restart = false;  ///< recreate the current sample
   bool quit = false;     ///< leave the app
+  bool screenshot = false;  ///< save the finished frame as a PNG
 };
 
 /// Everything the panels show about the frame.
@@ -59,10 +63,15 @@ struct UiFrame {
 /// Draws the menu bar and the panels for one frame.
 UiActions DrawUi(UiState& ui, SampleContext& ctx, const UiFrame& frame);
 
-/// Draws the divergence message in the middle of the view (also when panels are hidden).
-UiActions DrawDiverged(const std::string& message, bool headless);
+/// Draws the divergence message in the middle of `view`, the region the panels leave free
+/// (also when panels are hidden), wrapped to fit inside it.
+UiActions DrawDiverged(const std::string& message, bool headless, const ScreenRect& view);
 
 /// Width of the left and right panels for a window `width` pixels wide (0 when hidden).
 void PanelWidths(const UiState& ui, const Settings& s, float width, float* left, float* right);
+
+/// The part of a `width` x `height` pixel window that the panels and the menu bar leave for
+/// the 3D view (the whole window when the panels are hidden).
+ScreenRect ViewRegion(const UiState& ui, const Settings& s, float width, float height);
 
 }  // namespace pba::app

@@ -73,6 +73,7 @@ bool Window::open(const WindowConfig& config, std::string* error) {
   // our key callback first: the imgui backend chains to it
   glfwSetWindowUserPointer(window_, this);
   glfwSetKeyCallback(window_, &Window::on_key);
+  glfwSetDropCallback(window_, &Window::on_drop);
 
   // dear imgui with its glfw and opengl3 backends (from libimgui.a)
   IMGUI_CHECKVERSION();
@@ -88,6 +89,19 @@ bool Window::open(const WindowConfig& config, std::string* error) {
 void Window::on_key(GLFWwindow* w, int key, int, int action, int mods) {
   auto* self = static_cast<Window*>(glfwGetWindowUserPointer(w));
   if (self && action == GLFW_PRESS) self->keys_.emplace_back(key, mods);
+}
+
+void Window::on_drop(GLFWwindow* w, int count, const char** paths) {
+  auto* self = static_cast<Window*>(glfwGetWindowUserPointer(w));
+  if (!self) return;
+  for (int i = 0; i < count; ++i)
+    if (paths[i]) self->dropped_.emplace_back(paths[i]);
+}
+
+std::vector<std::string> Window::take_dropped_files() {
+  std::vector<std::string> d;
+  d.swap(dropped_);
+  return d;
 }
 
 std::vector<std::pair<int, int>> Window::take_key_presses() {

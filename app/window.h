@@ -45,6 +45,8 @@ class Window {
   /// Key presses (GLFW key, modifier bits) since the last call, in order. Queued from the
   /// event callback, so a tap shorter than a frame is not lost.
   std::vector<std::pair<int, int>> take_key_presses();
+  /// Paths of files dropped on the window since the last call, in order.
+  std::vector<std::string> take_dropped_files();
   /// The GLFW handle, for input queries.
   GLFWwindow* handle() const { return window_; }
   /// Whether the window is shown on screen.
@@ -55,8 +57,10 @@ class Window {
   WindowConfig config_;
   bool imgui_ready_ = false;
   std::vector<std::pair<int, int>> keys_;
+  std::vector<std::string> dropped_;
 
   static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods);
+  static void on_drop(GLFWwindow* w, int count, const char** paths);
 };
 
 }  // namespace pba::app

@@ -112,9 +112,16 @@ void print_row(const Row& r) {
 
 // --- pba ---
 
+// the chains: ball joints (scenes::make_chain), hinges, or hinges and ball joints mixed
+enum class Joints { Ball, Hinge, Mixed };
+Skeleton make_chain(int n, bool limited, Joints j) {
+  if (j == Joints::Mixed) return scenes::make_mixed_chain(n, limited);
+  return scenes::make_chain(n, j == Joints::Hinge ? JointType::Hinge : JointType::Ball, limited);
+}
+
 Row run_pba_cold(int n, bool limited, Method m, const std::vector<scenes::Target>& targets, double tol,
-                 double budget, bool orientation) {
-  Skeleton s = scenes::make_chain(n, JointType::ball, limited);
+                 double budget, bool orientation, Joints joints = Joints::Ball) {
+  Skeleton s = make_chain(n, limited, joints);
   EffectorDef ef;
   ef.bone = n - 1;
   s.add_effector(ef);
@@ -122,8 +129,10 @@ Row run_pba_cold(int n, bool limited, Method m, const std::vector<scenes::Target
   st.method = m;
   st.tolerance = tol;
   Solver solver(s, st);
-  Row r{std::to_string(n), limited ? "yes" : "no", std::string(method_name(m)) + (orientation ? " 6D" : "")};
+  const char* kind = joints == Joints::Hinge ? " hinges" : joints == Joints::Mixed ? " mixed" : "";
+  Row r{std::to_string(n), limited ? "yes" : "no", std::string(name(m)) + (orientation ? " 6D" : "") + kind};
   long long allocs = 0;
+  int handed = 0;
   const auto t_begin = Clock::now();
   for (const auto& t : targets) {
     scenes::bent_pose(s);
@@ -135,17 +144,19 @@ Row run_pba_cold(int n, bool limited, Method m, const std::vector<scenes::Target
     const double t1 = cpu_now();
     allocs += g_allocations.load() - a0;
     r.add(t0, t1, res.iterations, res.converged, res.residual);
+    handed += res.handed_over;
     if (!s.within_limits(1e-9)) r.note = "LIMITS VIOLATED";
     if (seconds(t_begin, Clock::now()) > budget) break;
   }
   r.allocs = r.solves ? double(allocs) / r.solves : 0;
+  if (handed && r.note.empty()) r.note = "(" + std::to_string(handed) + " handed over to DLS)";
   return r;
 }
 
 // unreachable: targets at 1.5 m (chain length 1 m) in random directions; the error
 // reported is the excess over the closest reachable distance, 0.5 m
 Row run_pba_unreachable(int n, Method m, double tol, int count) {
-  Skeleton s = scenes::make_chain(n, JointType::ball, false);
+  Skeleton s = scenes::make_chain(n, JointType::Ball, false);
   EffectorDef ef;
   ef.bone = n - 1;
   s.add_effector(ef);
@@ -153,7 +164,7 @@ Row run_pba_unreachable(int n, Method m, double tol, int count) {
   st.method = m;
   st.tolerance = tol;
   Solver solver(s, st);
-  Row r{std::to_string(n), "no", std::string(method_name(m)) + " unreachable"};
+  Row r{std::to_string(n), "no", std::string(name(m)) + " unreachable"};
   std::mt19937_64 rng(99);
   std::normal_distribution<double> g;
   long long allocs = 0;
@@ -178,8 +189,8 @@ Row run_pba_unreachable(int n, Method m, double tol, int count) {
 // tracking: a target that moves smoothly through reachable space (the tip of a pose
 // whose joint angles vary sinusoidally), 600 frames at 60 Hz, warm start
 Row run_pba_tracking(int n, bool limited, Method m, double tol) {
-  Skeleton s = scenes::make_chain(n, JointType::ball, limited);
-  Skeleton driver = scenes::make_chain(n, JointType::ball, limited);
+  Skeleton s = scenes::make_chain(n, JointType::Ball, limited);
+  Skeleton driver = scenes::make_chain(n, JointType::Ball, limited);
   EffectorDef ef;
   ef.bone = n - 1;
   s.add_effector(ef);
@@ -187,7 +198,7 @@ Row run_pba_tracking(int n, bool limited, Method m, double tol) {
   st.method = m;
   st.tolerance = tol;
   Solver solver(s, st);
-  Row r{std::to_string(n), limited ? "yes" : "no", std::string(method_name(m)) + " tracking"};
+  Row r{std::to_string(n), limited ? "yes" : "no", std::string(name(m)) + " tracking"};
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(0, 6.283185307179586);
   std::vector<double> phase(n);
@@ -303,14 +314,14 @@ Row run_two_bone(int count) {
   def.bones[0].length = 0.3;
   def.bones[1].parent = 0;
   def.bones[1].length = 0.25;
-  def.bones[1].joint = JointType::hinge;
+  def.bones[1].joint = JointType::Hinge;
   Skeleton s(def);
   EffectorDef ef;
   ef.bone = 1;
   ef.pole = Vec3(0, 1, 0);
   s.add_effector(ef);
   SolverSettings st;
-  st.method = Method::two_bone;
+  st.method = Method::TwoBone;
   Solver solver(s, st);
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-0.4, 0.4);
@@ -343,7 +354,7 @@ Row run_two_bone(int count) {
   }
   r.allocs = double(allocs) / r.solves;
   // the bare job, timed in batches (one call is shorter than the clock's resolution)
-  Row j{"2", "no", "TwoBoneJob::Run (batch of 1000)"};
+  Row j{"2", "no", "TwoBoneJob::run (batch of 1000)"};
   TwoBoneJob job;
   job.start = Vec3(0);
   job.mid = Vec3(0.3, 0, 0);
@@ -354,7 +365,7 @@ Row run_two_bone(int count) {
     double sink = 0;
     for (int k = 0; k < 1000; ++k) {
       job.target = Vec3(0.2 + 1e-4 * k, 0.1, 0.05);
-      job.Run();
+      job.run();
       sink += job.start_correction.w;
     }
     const double t1 = cpu_now();
@@ -391,36 +402,45 @@ int main(int argc, char** argv) {
               "each row stops after %.0f s of solving and reports the solves done. Times are thread CPU "
               "time (clock read cost %.0f ns removed).\n",
               tol, ntargets, budget, 1e9 * g_clock_cost);
-  std::vector<Method> iterative = {Method::fabrik, Method::ccd, Method::dls, Method::sdls,
-                                   Method::pseudo_inverse, Method::jacobian_transpose};
+  std::vector<Method> iterative = {Method::Fabrik, Method::Ccd, Method::Dls, Method::Sdls,
+                                   Method::PseudoInverse, Method::JacobianTranspose};
   std::vector<int> sizes = {10, 100, 1000};
   if (only_n) sizes = {only_n};
-  if (!only_method.empty()) iterative = {parse_solver(only_method, "--method")};
+  if (!only_method.empty()) iterative = {parse_method(only_method, "--method")};
   auto want = [&](Method m) {
     return std::find(iterative.begin(), iterative.end(), m) != iterative.end();
   };
   print_header("Cold solves, random reachable targets");
   for (int n : sizes) {
     for (bool limited : {false, true}) {
-      Skeleton s = scenes::make_chain(n, JointType::ball, limited);
+      Skeleton s = scenes::make_chain(n, JointType::Ball, limited);
       const auto targets = scenes::random_targets(s, n - 1, ntargets, 1);
       for (Method m : iterative) print_row(run_pba_cold(n, limited, m, targets, tol, budget, false));
       if (!limited && kdl) {
         print_row(run_kdl_lma(n, targets, tol, budget));
-        print_row(run_pba_cold(n, false, Method::dls, targets, tol, budget, true));
-        print_row(run_pba_cold(n, false, Method::fabrik, targets, tol, budget, true));
+        print_row(run_pba_cold(n, false, Method::Dls, targets, tol, budget, true));
+        print_row(run_pba_cold(n, false, Method::Fabrik, targets, tol, budget, true));
         print_row(run_kdl_nrjl(n, targets, tol, budget));
       }
     }
   }
+  // long chains of other joints (issue 12: CCD reached 68% of a 333-bone chain's targets)
+  print_header("Cold solves on 333-bone chains of limited hinges, and of mixed hinges and ball joints");
+  for (Joints j : {Joints::Hinge, Joints::Mixed}) {
+    if (only_n && only_n != 333) break;
+    Skeleton s = make_chain(333, true, j);
+    const auto targets = scenes::random_targets(s, 332, std::min(ntargets, 300), 1);
+    for (Method m : {Method::Fabrik, Method::Ccd, Method::Dls})
+      if (want(m)) print_row(run_pba_cold(333, true, m, targets, tol, budget, false, j));
+  }
   print_header("Unreachable targets (1.5 m from the root of a 1 m chain)");
   for (int n : sizes)
-    for (Method m : {Method::fabrik, Method::ccd, Method::dls, Method::sdls})
+    for (Method m : {Method::Fabrik, Method::Ccd, Method::Dls, Method::Sdls})
       if (want(m)) print_row(run_pba_unreachable(n, m, tol, quick ? 20 : 100));
   print_header("Tracking a moving target, 600 frames, warm start");
   for (int n : sizes)
     for (bool limited : {false, true})
-      for (Method m : {Method::fabrik, Method::ccd, Method::dls})
+      for (Method m : {Method::Fabrik, Method::Ccd, Method::Dls})
         if (want(m)) print_row(run_pba_tracking(n, limited, m, tol));
   print_header("Analytic two-bone");
   print_row(run_two_bone(quick ? 2000 : 20000));

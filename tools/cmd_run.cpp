@@ -6,32 +6,34 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
+#include "cli.h"
 #include "commands_run.h"
 #include "pba/scene.h"
+#include "pba/soft.h"
+#include "progress.h"
 
 namespace {
 
-constexpr const char* kRunHelp =
-    "usage: pba run SCENE.json [--steps N] [--csv FILE] [--every K] [--method NAME] [--quiet]\n"
-    "       pba run --builder NAME [...]\n"
-    "\n"
+constexpr const char* kRunAbout =
     "Runs a scene file (docs/scene-format.md) headless for N fixed steps of the scene's dt\n"
     "and prints a summary: particles, simulated time, the final state hash, wall time per\n"
     "step and where it went (per-phase profile). Stops with an error naming the particle and\n"
-    "the time if the state becomes non-finite.\n"
-    "\n"
-    "  --steps N        steps to run, 1..1000000000 (default: 1000)\n"
-    "  --csv FILE       write the state every K steps (and at step 0): one row per particle,\n"
-    "                   columns step,time,particle,x,y,z,vx,vy,vz (SI units)\n"
-    "  --every K        CSV interval in steps, 1..1000000000 (default: 1)\n"
-    "  --method NAME    override the scene's integrator (" 
-    "euler, semi-implicit-euler, verlet, velocity-verlet, rk4, implicit-euler)\n"
-    "  --builder NAME   run a built-in scene builder instead of a file (see --list)\n"
-    "  --list           list the built-in scene builders\n"
-    "  --quiet          print only the final hash\n"
-    "\n"
-    "Exit codes: 0 success, 1 bad scene file or failed simulation, 2 bad command line.\n";
+    "the time if the state becomes non-finite. Shows progress on stderr: a live line on a\n"
+    "terminal, a line every 5 s otherwise (PBA_PROGRESS_INTERVAL=SECONDS), none with --quiet.";
+
+constexpr const char* kRunFooter =
+    "--csv writes one row per particle and step: step,time,particle,x,y,z,vx,vy,vz,body (SI\n"
+    "units). body is 'particles' for the particle system, else the soft body's name, and\n"
+    "particle the index within its body.\n"
+    "--method NAME replaces the integrator of everything the scene integrates, its particles\n"
+    "and mass-spring soft bodies: euler, semi-implicit-euler, verlet, velocity-verlet, rk4,\n"
+    "implicit-euler.\n"
+    "An option the scene cannot honour is refused (exit code 2): --method on a scene whose\n"
+    "soft bodies are solved by XPBD, or with nothing for an integrator to step; --every\n"
+    "without --csv.\n"
+    "Exit codes: 0 success, 1 bad scene file or failed simulation, 2 bad command line.";
 
 struct Usage {
   std::string message;
@@ -50,12 +52,46 @@ long long parse_count(const std::string& text, const char* flag, long long lo, l
   return v;
 }
 
-// one CSV block: every particle at this step
-void write_rows(std::FILE* f, long long step, double t, const pba::ParticleSystem& ps) {
+// a CSV field: quoted when it holds a comma, a quote or a line break
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+// the world's soft bodies, or nullptr (never adds the system: that would change the hash)
+const pba::SoftSystem* soft_bodies(const pba::World& w) {
+  return dynamic_cast<const pba::SoftSystem*>(w.find_system(pba::SoftSystem::kName));
+}
+
+// the body column of a soft body: its entity's name, else its index
+std::string body_name(const pba::World& w, const pba::SoftSystem& soft, std::size_t i) {
+  const std::string& n = w.name(soft.owner(i));
+  return n.empty() ? "soft body " + std::to_string(i) : n;
+}
+
+// one CSV block at this step: the particle system's particles (body "particles"), then
+// every soft body's particles (body: the entity's name), each numbered within its body
+void write_rows(std::FILE* f, long long step, const pba::World& w) {
+  const double t = w.time();
+  const pba::ParticleSystem& ps = w.particles();
   const auto x = ps.xs(), y = ps.ys(), z = ps.zs(), vx = ps.vxs(), vy = ps.vys(), vz = ps.vzs();
   for (std::size_t i = 0; i < ps.size(); ++i)
-    std::fprintf(f, "%lld,%.17g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", step, t, i, x[i], y[i], z[i], vx[i], vy[i],
-                 vz[i]);
+    std::fprintf(f, "%lld,%.17g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,particles\n", step, t, i, x[i], y[i], z[i], vx[i],
+                 vy[i], vz[i]);
+  const pba::SoftSystem* soft = soft_bodies(w);
+  if (!soft) return;
+  for (std::size_t b = 0; b < soft->size(); ++b) {
+    const pba::SoftBody& body = soft->at(b);
+    const std::string name = csv_field(body_name(w, *soft, b));
+    const auto bx = body.xs(), by = body.ys(), bz = body.zs();
+    for (std::size_t i = 0; i < body.size(); ++i) {
+      const pba::Vec3 v = body.velocity(i);
+      std::fprintf(f, "%lld,%.17g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%s\n", step, t, i, bx[i], by[i], bz[i],
+                   static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z), name.c_str());
+    }
+  }
 }
 
 struct Options {
@@ -63,56 +99,108 @@ struct Options {
   std::string builder;
   long long steps = 1000;
   long long every = 1;
+  bool every_given = false;
   std::string csv;
   std::optional<pba::Method> method;
+  std::string method_text;
   bool quiet = false;
   bool list = false;
-  bool help = false;
 };
 
-Options parse(int argc, char** argv) {
-  Options o;
-  // words after the subcommand name
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&](const char* flag) -> std::string {
-      if (i + 1 >= argc) throw Usage{std::string(flag) + ": missing value"};
-      return argv[++i];
-    };
-    if (a == "--help" || a == "-h") {
-      o.help = true;
-    } else if (a == "--steps") {
-      o.steps = parse_count(value("--steps"), "--steps", 1, 1000000000LL);
-    } else if (a == "--every") {
-      o.every = parse_count(value("--every"), "--every", 1, 1000000000LL);
-    } else if (a == "--csv") {
-      o.csv = value("--csv");
-      if (o.csv.empty()) throw Usage{"--csv: must not be empty"};
-    } else if (a == "--method") {
-      const std::string m = value("--method");
-      try {
-        o.method = pba::parse_method(m, "--method");
-      } catch (const pba::Error& e) {
-        throw Usage{e.what()};
-      }
-    } else if (a == "--builder") {
-      o.builder = value("--builder");
-    } else if (a == "--list") {
-      o.list = true;
-    } else if (a == "--quiet") {
-      o.quiet = true;
-    } else if (!a.empty() && a[0] == '-') {
-      throw Usage{"unknown flag '" + a + "' for 'pba run'"};
-    } else if (o.scene.empty()) {
-      o.scene = a;
-    } else {
-      throw Usage{"unexpected argument '" + a + "' (one scene file per run)"};
-    }
+// the command line; returns the exit code when the command should stop here
+std::optional<int> parse(int argc, char** argv, Options& o) {
+  CLI::App app{kRunAbout, "pba run"};
+  pba::tools::configure_app(app);
+  std::string steps, every, csv, method;
+  app.add_option("scene", o.scene, "the scene file to run")->type_name("SCENE.json");
+  app.add_option("--steps", steps, "steps to run, 1..1000000000 (default: 1000)")->type_name("N");
+  app.add_option("--csv", csv, "write the state every K steps and at step 0 (columns below)")->type_name("FILE");
+  app.add_option("--every", every, "CSV interval in steps, 1..1000000000 (default: 1); needs --csv")
+      ->type_name("K");
+  app.add_option("--method", method, "replace the scene's integrators (see below)")->type_name("NAME");
+  app.add_option("--builder", o.builder, "run a built-in scene builder instead of a file (see --list)")
+      ->type_name("NAME");
+  app.add_flag("--list", o.list, "list the built-in scene builders");
+  app.add_flag("--quiet", o.quiet, "print only the final hash, and no progress");
+  app.footer(kRunFooter);
+  std::vector<std::string> args(argv + 1, argv + argc);
+  const pba::tools::ParseOutcome p = pba::tools::parse_command_line(app, args);
+  if (p.exit && p.error.empty()) return p.code;
+  if (p.exit) {
+    std::string m = p.error;
+    if (m.rfind("unexpected argument", 0) == 0) m += " (one scene file per run)";
+    throw Usage{m};
   }
-  if (o.help || o.list) return o;
+  // values, checked with messages that name the flag and the value
+  if (app.count("--steps")) o.steps = parse_count(steps, "--steps", 1, 1000000000LL);
+  if (app.count("--every")) o.every = parse_count(every, "--every", 1, 1000000000LL), o.every_given = true;
+  if (app.count("--csv")) {
+    if (csv.empty()) throw Usage{"--csv: must not be empty"};
+    o.csv = csv;
+  }
+  if (app.count("--method")) {
+    try {
+      o.method = pba::parse_method(method, "--method");
+    } catch (const pba::Error& e) {
+      throw Usage{e.what()};
+    }
+    o.method_text = method;
+  }
+  if (o.list) return std::nullopt;
   if (o.scene.empty() && o.builder.empty()) throw Usage{"missing scene file (or --builder NAME)"};
   if (!o.scene.empty() && !o.builder.empty()) throw Usage{"give a scene file or --builder, not both"};
-  return o;
+  if (o.every_given && o.csv.empty())
+    throw Usage{"--every " + std::to_string(o.every) + ": sets the CSV interval, so it needs --csv FILE"};
+  return std::nullopt;
+}
+
+// --method on this world: applied to the particles and every mass-spring soft body, or
+// refused (Usage) when some part of the scene is not stepped by an integrator, or nothing is
+void apply_method(pba::World& w, pba::Method m, const std::string& text, const std::string& scene) {
+  const std::string flag = "--method " + text;
+  auto* soft = dynamic_cast<pba::SoftSystem*>(w.find_system(pba::SoftSystem::kName));
+  // soft bodies solved by XPBD have no integrator to replace
+  if (soft) {
+    for (std::size_t b = 0; b < soft->size(); ++b)
+      if (soft->at(b).settings().solver == pba::SoftSolver::XPBD)
+        throw Usage{flag + ": scene " + scene + " has the soft body '" + body_name(w, *soft, b) +
+                    "' solved by XPBD, which uses no integrator, so --method cannot apply to it; run it "
+                    "without --method (a soft body's solver and integrator are its own settings)"};
+  }
+  const pba::ParticleSystem& ps = w.particles();
+  const bool particles = ps.size() > 0 || ps.emitter_count() > 0;
+  const bool springs = soft && soft->size() > 0;
+  if (!particles && !springs)
+    throw Usage{flag + ": scene " + scene + " has no particles, emitters or soft bodies for an integrator to step"};
+  w.particles().set_method(m);
+  if (soft)
+    for (std::size_t b = 0; b < soft->size(); ++b) soft->at(b).settings().method = m;
+}
+
+// what integrates the scene, for the summary: the particle system's method (when it has
+// particles or emitters) and each soft body's solver
+std::string integrators(const pba::World& w) {
+  std::string s;
+  const pba::ParticleSystem& ps = w.particles();
+  if (ps.size() > 0 || ps.emitter_count() > 0) s = "particles " + std::string(pba::name(ps.method()));
+  if (const pba::SoftSystem* soft = soft_bodies(w)) {
+    for (std::size_t b = 0; b < soft->size(); ++b) {
+      const pba::SoftBodyDef& d = soft->at(b).settings();
+      if (!s.empty()) s += ", ";
+      s += "'" + body_name(w, *soft, b) + "' " +
+           (d.solver == pba::SoftSolver::XPBD ? std::string("xpbd")
+                                              : "mass-spring " + std::string(pba::name(d.method)));
+    }
+  }
+  return s.empty() ? "none (nothing to integrate)" : s;
+}
+
+// soft-body particles in the world
+std::size_t soft_particles(const pba::World& w) {
+  std::size_t n = 0;
+  if (const pba::SoftSystem* soft = soft_bodies(w))
+    for (std::size_t b = 0; b < soft->size(); ++b) n += soft->at(b).size();
+  return n;
 }
 
 }  // namespace
@@ -120,20 +208,17 @@ Options parse(int argc, char** argv) {
 int pba_run_command(int argc, char** argv) {
   Options o;
   try {
-    o = parse(argc, argv);
+    if (const auto code = parse(argc, argv, o)) return *code;
   } catch (const Usage& u) {
     std::fprintf(stderr, "pba run: %s\n(see 'pba run --help')\n", u.message.c_str());
     return 2;
-  }
-  if (o.help) {
-    std::fputs(kRunHelp, stdout);
-    return 0;
   }
   if (o.list) {
     for (const auto& b : pba::scenes::builders())
       std::printf("%-16s %s\n", std::string(b.name).c_str(), std::string(b.description).c_str());
     return 0;
   }
+  const std::string source = o.scene.empty() ? "--builder " + o.builder : o.scene;
   try {
     // the scene: a file, or a builder with its defaults
     std::unique_ptr<pba::Scene> scene;
@@ -151,7 +236,14 @@ int pba_run_command(int argc, char** argv) {
       scene = std::make_unique<pba::Scene>(pba::load_scene(o.scene));
     }
     pba::World& w = scene->world;
-    if (o.method) w.particles().set_method(*o.method);
+    if (o.method) {
+      try {
+        apply_method(w, *o.method, o.method_text, source);
+      } catch (const Usage& u) {
+        std::fprintf(stderr, "pba run: %s\n", u.message.c_str());
+        return 2;
+      }
+    }
     // the CSV file, with its header and the initial state
     std::FILE* csv = nullptr;
     if (!o.csv.empty()) {
@@ -160,13 +252,15 @@ int pba_run_command(int argc, char** argv) {
         std::fprintf(stderr, "pba run: --csv: cannot write '%s'\n", o.csv.c_str());
         return 1;
       }
-      std::fputs("step,time,particle,x,y,z,vx,vy,vz\n", csv);
-      write_rows(csv, 0, w.time(), w.particles());
+      std::fputs("step,time,particle,x,y,z,vx,vy,vz,body\n", csv);
+      write_rows(csv, 0, w);
     }
-    // step, accumulating the per-phase profile
+    // step, accumulating the per-phase profile, with progress on stderr
     pba::WorldProfile sum;
     pba::Stopwatch wall;
     std::size_t contacts = 0;
+    pba::tools::Progress progress("pba run", "steps", o.steps,
+                                  o.quiet ? pba::tools::ProgressMode::Quiet : pba::tools::ProgressMode::Auto);
     try {
       for (long long s = 1; s <= o.steps; ++s) {
         w.step();
@@ -175,13 +269,16 @@ int pba_run_command(int argc, char** argv) {
         sum.collide += p.collide, sum.recycle += p.recycle, sum.constraints += p.constraints;
         sum.systems += p.systems, sum.total += p.total;
         contacts += w.particles().contacts();
-        if (csv && s % o.every == 0) write_rows(csv, s, w.time(), w.particles());
+        if (csv && s % o.every == 0) write_rows(csv, s, w);
+        progress.update(s);
       }
     } catch (const pba::Error& e) {
+      progress.finish();
       if (csv) std::fclose(csv);
-      std::fprintf(stderr, "pba run: %s: %s\n", o.scene.empty() ? o.builder.c_str() : o.scene.c_str(), e.what());
+      std::fprintf(stderr, "pba run: %s: %s\n", source.c_str(), e.what());
       return 1;
     }
+    progress.finish();
     const double seconds = wall.seconds();
     if (csv && std::fclose(csv) != 0) {
       std::fprintf(stderr, "pba run: --csv: error writing '%s'\n", o.csv.c_str());
@@ -194,10 +291,10 @@ int pba_run_command(int argc, char** argv) {
       return 0;
     }
     std::printf("scene        %s\n", scene->name.c_str());
-    std::printf("steps        %lld x %.9g s = %.6g s simulated (%s)\n", o.steps, w.stepper().settings().fixed_dt,
-                w.time(), std::string(pba::name(w.particles().method())).c_str());
-    std::printf("entities     %zu, particles alive %zu, contacts %.3g per step\n", w.entity_count(),
-                w.particles().size(), static_cast<double>(contacts) / n);
+    std::printf("steps        %lld x %.9g s = %.6g s simulated\n", o.steps, w.stepper().settings().fixed_dt, w.time());
+    std::printf("integrators  %s%s\n", integrators(w).c_str(), o.method ? " (from --method)" : "");
+    std::printf("entities     %zu, particles alive %zu, soft-body particles %zu, contacts %.3g per step\n",
+                w.entity_count(), w.particles().size(), soft_particles(w), static_cast<double>(contacts) / n);
     std::printf("final hash   %016llx\n", static_cast<unsigned long long>(w.hash()));
     std::printf("wall time    %.6g s, %.4g ms per step (including CSV output)\n", seconds, seconds / n * 1e3);
     std::printf("profile      ms per step: kinematic %.4g, sync %.4g, emit %.4g, integrate %.4g, collide %.4g, "

@@ -1,6 +1,6 @@
-// `pba`: the headless multi-tool. Subcommands live in a table; add one by writing a
-// function `int cmd_x(Args&)` and a row in kCommands. Larger subcommands live in their
-// own tools/cmd_<name>.cpp with a classic (argc, argv) entry point (pba run).
+// `pba`: the headless multi-tool. The command word picks a subcommand, which parses the
+// words after it with CLI11 (tools/support/cli.h): `pba lab` here, `pba run` in
+// tools/cmd_run.cpp (a classic (argc, argv) entry point the tests call in-process).
 //
 // Exit codes: 0 success, 1 a failure while running, 2 bad command line.
 #include <algorithm>
@@ -13,28 +13,17 @@
 #include <string_view>
 #include <vector>
 
+#include "cli.h"
+#include "commands_run.h"
 #include "pba/integrate.h"
 #include "pba/lab.h"
-#include "commands_run.h"
+#include "progress.h"
 
 namespace {
 
 /// A usage error: reported with the command's help hint, exit code 2.
 struct UsageError {
   std::string message;
-};
-
-/// The remaining command-line words, consumed left to right.
-struct Args {
-  std::vector<std::string_view> words;
-  std::size_t next = 0;
-  bool done() const { return next >= words.size(); }
-  std::string_view take() { return words[next++]; }
-  // the value after a flag, or a usage error naming the flag
-  std::string_view value(std::string_view flag) {
-    if (done()) throw UsageError{std::string(flag) + ": missing value"};
-    return take();
-  }
 };
 
 long long parse_count(std::string_view text, std::string_view flag, long long lo, long long hi) {
@@ -53,20 +42,13 @@ long long parse_count(std::string_view text, std::string_view flag, long long lo
 
 // ---- pba lab ----------------------------------------------------------------------
 
-constexpr const char* kLabHelp =
-    "usage: pba lab [--out DIR] [--problem NAME|all] [--method NAME|all] [--steps N] [--no-plot]\n"
-    "\n"
+constexpr const char* kLabAbout =
     "The integrator accuracy lab (workbook 3.2.4). For each problem and method it measures\n"
     "the global error against dt and the observed order of convergence, the energy error\n"
     "over a long run, and each method's stability limit on the undamped oscillator. Writes\n"
     "CSV files, then PNG plots with tools/plot_lab.py (python3 + matplotlib), and prints a\n"
-    "summary table.\n"
-    "\n"
-    "  --out DIR        output directory (default: out/lab)\n"
-    "  --problem NAME   one problem, repeatable, or 'all' (default: all)\n"
-    "  --method NAME    one method, repeatable, or 'all' (default: all)\n"
-    "  --steps N        steps of the long energy runs, 1..1000000000 (default: 1000000)\n"
-    "  --no-plot        write CSVs only\n";
+    "summary table. Shows progress on stderr: a live line on a terminal, a line every 5 s\n"
+    "otherwise (PBA_PROGRESS_INTERVAL=SECONDS), none with --quiet.";
 
 int run_plot(const std::string& out) {
   // the plotting script: beside this source tree, located via PBA_TOOLS_DIR
@@ -102,46 +84,101 @@ int run_plot(const std::string& out) {
   return 0;
 }
 
-int cmd_lab(Args& args) {
-  pba::lab::LabOptions opt;
-  std::string out = "out/lab";
-  bool plot = true;
-  const auto problems = pba::lab::standard_problems();
-  // flags
-  while (!args.done()) {
-    const std::string_view flag = args.take();
-    if (flag == "--help" || flag == "-h") {
-      std::fputs(kLabHelp, stdout);
-      return 0;
-    } else if (flag == "--out") {
-      out = std::string(args.value(flag));
-      if (out.empty()) throw UsageError{"--out: must not be empty"};
-    } else if (flag == "--problem") {
-      const std::string_view v = args.value(flag);
-      if (v != "all") {
-        try {
-          opt.problems.push_back(pba::lab::find_problem(problems, v, "--problem").name);
-        } catch (const pba::Error& e) {
-          throw UsageError{e.what()};
-        }
+// the lab's measurements, one by one, with progress (pba::lab::run_lab's order)
+pba::lab::LabReport measure(const std::vector<pba::lab::Problem>& problems, const pba::lab::LabOptions& o,
+                            bool quiet) {
+  namespace lab = pba::lab;
+  pba::Stopwatch watch;
+  lab::LabReport rep;
+  std::vector<const lab::Problem*> chosen;
+  if (o.problems.empty())
+    for (const auto& p : problems) chosen.push_back(&p);
+  else
+    for (const auto& n : o.problems) chosen.push_back(&lab::find_problem(problems, n, "--problem"));
+  const std::vector<pba::Method> methods =
+      o.methods.empty() ? std::vector<pba::Method>(pba::kAllMethods.begin(), pba::kAllMethods.end()) : o.methods;
+  // the work: a convergence study per problem and method, an energy run where the
+  // problem has an energy, a stability scan per method
+  long long total = static_cast<long long>(methods.size());
+  for (const lab::Problem* p : chosen) total += static_cast<long long>(methods.size()) * (p->energy ? 2 : 1);
+  pba::tools::Progress progress("pba lab", "measurements", total,
+                                quiet ? pba::tools::ProgressMode::Quiet : pba::tools::ProgressMode::Auto);
+  long long done = 0;
+  auto say = [&](const std::string& line) {
+    if (quiet) return;
+    progress.clear();
+    std::printf("  %s\n", line.c_str());
+    std::fflush(stdout);
+  };
+  for (const lab::Problem* p : chosen) {
+    p->validate();
+    say("problem " + p->name + ": " + p->description);
+    for (pba::Method m : methods) {
+      rep.convergence.push_back(lab::measure_convergence(*p, m, o.convergence));
+      progress.update(++done);
+      if (p->energy) {
+        rep.energy.push_back(lab::measure_energy(*p, m, o.energy));
+        progress.update(++done);
       }
-    } else if (flag == "--method") {
-      const std::string_view v = args.value(flag);
-      if (v != "all") {
-        try {
-          opt.methods.push_back(pba::parse_method(v, "--method"));
-        } catch (const pba::Error& e) {
-          throw UsageError{e.what()};
-        }
-      }
-    } else if (flag == "--steps") {
-      opt.energy.steps = parse_count(args.value(flag), flag, 1, 1000000000LL);
-    } else if (flag == "--no-plot") {
-      plot = false;
-    } else {
-      throw UsageError{"unknown flag '" + std::string(flag) + "' for 'pba lab'"};
     }
   }
+  say("stability on the undamped oscillator");
+  for (pba::Method m : methods) {
+    rep.stability.push_back(lab::measure_stability(m, o.stability));
+    progress.update(++done);
+  }
+  progress.finish();
+  rep.seconds = watch.seconds();
+  return rep;
+}
+
+int cmd_lab(int argc, char** argv) {
+  pba::lab::LabOptions opt;
+  std::string out = "out/lab";
+  bool no_plot = false, quiet = false;
+  std::vector<std::string> problem_names, method_names;
+  std::string steps;
+  const auto problems = pba::lab::standard_problems();
+  // the command line
+  CLI::App app{kLabAbout, "pba lab"};
+  pba::tools::configure_app(app);
+  app.add_option("--out", out, "output directory (default: out/lab)")->type_name("DIR");
+  app.add_option("--problem", problem_names, "one problem, repeatable, or 'all' (default: all)")
+      ->type_name("NAME")
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  app.add_option("--method", method_names, "one method, repeatable, or 'all' (default: all)")
+      ->type_name("NAME")
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  app.add_option("--steps", steps, "steps of the long energy runs, 1..1000000000 (default: 1000000)")
+      ->type_name("N");
+  app.add_flag("--no-plot", no_plot, "write CSVs only");
+  app.add_flag("--quiet", quiet, "no progress and no per-problem lines");
+  app.footer("Exit codes: 0 success, 1 a failure while running, 2 bad command line.");
+  const pba::tools::ParseOutcome parsed =
+      pba::tools::parse_command_line(app, std::vector<std::string>(argv + 1, argv + argc));
+  if (parsed.exit && parsed.error.empty()) return parsed.code;
+  if (parsed.exit) throw UsageError{parsed.error};
+  // values
+  if (app.count("--out") && out.empty()) throw UsageError{"--out: must not be empty"};
+  for (const std::string& v : problem_names) {
+    if (v == "all") continue;
+    try {
+      opt.problems.push_back(pba::lab::find_problem(problems, v, "--problem").name);
+    } catch (const pba::Error& e) {
+      throw UsageError{e.what()};
+    }
+  }
+  for (const std::string& v : method_names) {
+    if (v == "all") continue;
+    try {
+      opt.methods.push_back(pba::parse_method(v, "--method"));
+    } catch (const pba::Error& e) {
+      throw UsageError{e.what()};
+    }
+  }
+  if (app.count("--steps")) opt.energy.steps = parse_count(steps, "--steps", 1, 1000000000LL);
   // fail fast on an unusable output directory, before minutes of measuring
   {
     std::error_code ec;
@@ -150,25 +187,12 @@ int cmd_lab(Args& args) {
       throw UsageError{"--out: cannot create directory '" + out + "'" + (ec ? ": " + ec.message() : "")};
   }
   // measure, write, plot, summarise
-  const auto report = pba::lab::run_lab(problems, opt, [](std::string_view line) {
-    std::printf("  %.*s\n", static_cast<int>(line.size()), line.data());
-    std::fflush(stdout);
-  });
+  const auto report = measure(problems, opt, quiet);
   pba::lab::write_csv(report, out);
   std::printf("\n%s\n", pba::lab::summary_table(report).c_str());
   std::printf("lab ran in %.1f s; CSVs in %s\n", report.seconds, out.c_str());
   std::fflush(stdout);  // before the plotting child writes to the same stream
-  return plot ? run_plot(out) : 0;
-}
-
-// `pba run`: hands the command word and what follows to tools/cmd_run.cpp
-int cmd_run(Args& a) {
-  std::vector<std::string> words{"run"};
-  while (!a.done()) words.emplace_back(a.take());
-  std::vector<char*> argv;
-  for (auto& w : words) argv.push_back(w.data());
-  argv.push_back(nullptr);
-  return pba_run_command(static_cast<int>(words.size()), argv.data());
+  return no_plot ? 0 : run_plot(out);
 }
 
 // ---- the command table --------------------------------------------------------------
@@ -176,48 +200,50 @@ int cmd_run(Args& a) {
 struct Command {
   const char* name;
   const char* summary;
-  int (*run)(Args&);
+  int (*run)(int argc, char** argv);
 };
 
 constexpr Command kCommands[] = {
     {"lab", "integrator accuracy lab: convergence, energy and stability of every method", cmd_lab},
-    {"run", "run a scene file headless for N steps; per-step state as CSV", cmd_run},
+    {"run", "run a scene file headless for N steps; per-step state as CSV", pba_run_command},
 };
-
-void print_help() {
-  std::printf("usage: pba <command> [options]     (pba <command> --help for details)\n\ncommands:\n");
-  for (const auto& c : kCommands) std::printf("  %-8s %s\n", c.name, c.summary);
-}
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  Args args;
-  for (int i = 1; i < argc; ++i) args.words.emplace_back(argv[i]);
-  std::string_view cmd_name;
+  std::string who = "pba";
   try {
-    // the command word, or help
-    if (args.done()) throw UsageError{"missing command"};
-    cmd_name = args.take();
-    if (cmd_name == "--help" || cmd_name == "-h" || cmd_name == "help") {
-      print_help();
-      return 0;
+    // a command word: its own command line
+    if (argc >= 2) {
+      for (const auto& c : kCommands)
+        if (std::string_view(argv[1]) == c.name) {
+          who = std::string("pba ") + c.name;
+          return c.run(argc - 1, argv + 1);
+        }
     }
-    for (const auto& c : kCommands)
-      if (cmd_name == c.name) return c.run(args);
-    throw UsageError{"unknown command '" + std::string(cmd_name) + "'"};
+    // else the top level: help, version, or a usage error
+    CLI::App app{"pba: the headless multi-tool of pba (physics-based animation).", "pba"};
+    pba::tools::configure_app(app);
+    for (const auto& c : kCommands) app.add_subcommand(c.name, c.summary);
+    app.footer("Run 'pba <command> --help' for a command's options.\n"
+               "Exit codes: 0 success, 1 a failure while running, 2 bad command line.");
+    const pba::tools::ParseOutcome parsed =
+        pba::tools::parse_command_line(app, std::vector<std::string>(argv + 1, argv + argc));
+    if (parsed.exit && parsed.error.empty()) return parsed.code;
+    if (parsed.exit) {
+      const std::string& e = parsed.error;
+      if (e.rfind("unexpected argument ", 0) == 0) throw UsageError{"unknown command " + e.substr(20)};
+      throw UsageError{e};
+    }
+    throw UsageError{"missing command"};
   } catch (const UsageError& e) {
-    const bool known = std::any_of(std::begin(kCommands), std::end(kCommands),
-                                   [&](const Command& c) { return cmd_name == c.name; });
-    const std::string who = known ? "pba " + std::string(cmd_name) : std::string("pba");
     std::fprintf(stderr, "%s: %s\nrun '%s --help' for usage\n", who.c_str(), e.message.c_str(), who.c_str());
     return 2;
   } catch (const pba::Error& e) {
-    std::fprintf(stderr, "pba %.*s: error: %s\n", static_cast<int>(cmd_name.size()), cmd_name.data(), e.what());
+    std::fprintf(stderr, "%s: error: %s\n", who.c_str(), e.what());
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "pba %.*s: unexpected error: %s\n", static_cast<int>(cmd_name.size()),
-                 cmd_name.data(), e.what());
+    std::fprintf(stderr, "%s: unexpected error: %s\n", who.c_str(), e.what());
     return 1;
   }
 }

@@ -23,6 +23,11 @@ COLORS = {  # one colour per method, shared by every plot
     "implicit-euler": "#9467bd",
 }
 STYLES = {"verlet": "--", "velocity-verlet": ":"}
+# Resolution and the smallest text: legends and notes are SMALLEST_PT points, so
+# SMALLEST_PT * DPI / 72 pixels tall (7 pt at 160 dpi: 15.6 px, readable; 5.5 pt at the
+# old 72 dpi was 5.5 px). The test tests/lab/test_plots.py holds the PNGs to this.
+DPI = 160
+SMALLEST_PT = 7
 
 
 def read(path):
@@ -72,21 +77,21 @@ def plot_convergence(plt, d):
                 xs = [lo_dt, hi_dt]
                 ys = [hi_e * (x / hi_dt) ** p_ref for x in xs]
                 ax.loglog(xs, ys, color="grey", lw=0.6, alpha=0.6)
-                ax.text(lo_dt, max(ys[0], lo_e), f" slope {p_ref}", fontsize=6, color="grey",
+                ax.text(lo_dt, max(ys[0], lo_e), f" slope {p_ref}", fontsize=SMALLEST_PT, color="grey",
                         va="bottom")
             ax.set_ylim(max(lo_e / 3, 1e-17), hi_e * 3)
         ax.set_title(prob, fontsize=9)
         ax.set_xlabel("dt (s)", fontsize=8)
         ax.set_ylabel("error at t_end", fontsize=8)
         ax.tick_params(labelsize=7)
-        ax.legend(fontsize=5.5, loc="lower right")
+        ax.legend(fontsize=SMALLEST_PT, loc="lower right")
         ax.grid(True, which="major", lw=0.3)
     for ax in list(axes.flat)[len(problems):]:
         ax.axis("off")
     fig.suptitle("Global error against step size (observed order in brackets)", fontsize=10)
     fig.tight_layout()
     out = os.path.join(d, "lab_convergence.png")
-    fig.savefig(out, dpi=72)
+    fig.savefig(out, dpi=DPI)
     plt.close(fig)
     return out
 
@@ -111,20 +116,20 @@ def plot_energy(plt, d):
         lo, hi = ax.get_ylim()
         if hi > 1e3:
             ax.set_ylim(lo, 1e3)
-            ax.text(0.02, 0.97, "clipped at 1e3", transform=ax.transAxes, fontsize=6, va="top",
+            ax.text(0.02, 0.97, "clipped at 1e3", transform=ax.transAxes, fontsize=SMALLEST_PT, va="top",
                     color="grey")
         ax.set_title(f"{prob} (dt = {float(dt):.3g} s)" if dt else prob, fontsize=9)
         ax.set_xlabel("t (s)", fontsize=8)
         ax.set_ylabel("|E - E_ref| / |E0|", fontsize=8)
         ax.tick_params(labelsize=7)
-        ax.legend(fontsize=5.5, loc="best")
+        ax.legend(fontsize=SMALLEST_PT, loc="best")
         ax.grid(True, which="major", lw=0.3)
     for ax in list(axes.flat)[len(problems):]:
         ax.axis("off")
     fig.suptitle("Energy error over the long runs", fontsize=10)
     fig.tight_layout()
     out = os.path.join(d, "lab_energy.png")
-    fig.savefig(out, dpi=72)
+    fig.savefig(out, dpi=DPI)
     plt.close(fig)
     return out
 
@@ -144,11 +149,11 @@ def plot_stability(plt, d):
     ax.set_ylabel("spectral radius of one step", fontsize=8)
     ax.set_title("Stability on x'' = -omega^2 x: unstable where the curve is above 1", fontsize=9)
     ax.tick_params(labelsize=7)
-    ax.legend(fontsize=6.5, loc="upper left")
+    ax.legend(fontsize=SMALLEST_PT, loc="upper left")
     ax.grid(True, lw=0.3)
     fig.tight_layout()
     out = os.path.join(d, "lab_stability.png")
-    fig.savefig(out, dpi=80)
+    fig.savefig(out, dpi=DPI)
     plt.close(fig)
     return out
 

@@ -124,9 +124,9 @@ class IkAnalytic final : public IkSample {
         theta_ = std::atan2(sin_, cos_);
       }
     }
-    const Stopwatch sw;
+    const pba::Stopwatch sw;
     last_ = solver_->solve();
-    last_us_ = sw.us();
+    last_us_ = 1e6 * sw.seconds();
   }
 
   bool ReportEffector(Vec3* e, double* res) const override {
@@ -146,10 +146,10 @@ class IkAnalytic final : public IkSample {
       // one hinge about z, the bone along +X at zero
       ik::BoneDef b;
       b.length = 0.4;
-      b.joint = ik::JointType::hinge;
+      b.joint = ik::JointType::Hinge;
       b.axis = Vec3(0, 0, 1);
       def.bones.push_back(b);
-      method_ = ik::Method::analytic_1dof;
+      method_ = ik::Method::Analytic1Dof;
     } else {
       // links of ball joints, 0.6 m in all, standing up
       def.root_rotation = glm::angleAxis(0.5 * kPi, Vec3(0, 0, 1));
@@ -157,10 +157,10 @@ class IkAnalytic final : public IkSample {
         ik::BoneDef b;
         b.parent = i - 1;
         b.length = 0.6 / links_;
-        b.joint = ik::JointType::ball;
+        b.joint = ik::JointType::Ball;
         def.bones.push_back(b);
       }
-      method_ = links_ == 1 ? ik::Method::analytic_3dof : ik::Method::ccd;
+      method_ = links_ == 1 ? ik::Method::Analytic3Dof : ik::Method::Ccd;
     }
     skel_ = std::make_unique<ik::Skeleton>(def);
     if (kind_ == Kind::ThreeDof && links_ > 1) ik::scenes::bent_pose(*skel_);
@@ -218,7 +218,7 @@ class IkAnalytic final : public IkSample {
   static inline int g_links = 3;
   Kind kind_;
   int links_ = 3;
-  ik::Method method_ = ik::Method::ccd;
+  ik::Method method_ = ik::Method::Ccd;
   std::unique_ptr<ik::Skeleton> skel_;
   std::unique_ptr<ik::Solver> solver_;
   ik::SolveResult last_;

@@ -32,8 +32,8 @@ class IkChain final : public IkSample {
     bones_ = static_cast<int>(n);
     const std::string sv = ctx.option("solver", "");
     if (!sv.empty()) {
-      method_ = ik::parse_solver(sv, "--option solver");
-      if (method_ == ik::Method::analytic_1dof || method_ == ik::Method::analytic_3dof || method_ == ik::Method::two_bone)
+      method_ = ik::parse_method(sv, "--option solver");
+      if (method_ == ik::Method::Analytic1Dof || method_ == ik::Method::Analytic3Dof || method_ == ik::Method::TwoBone)
         throw Error("--option solver=" + sv + ": the chain sample needs an iterative solver (ccd, jt, pinv, dls, sdls, fabrik)");
     } else {
       method_ = g_method;
@@ -105,7 +105,7 @@ class IkChain final : public IkSample {
       settings_.tolerance = std::max(tol_mm, 0.001f) / 1000.0;
       rebuild_solver();
     }
-    if (method_ == ik::Method::dls || method_ == ik::Method::sdls) {
+    if (method_ == ik::Method::Dls || method_ == ik::Method::Sdls) {
       float damp = static_cast<float>(settings_.damping > 0 ? settings_.damping : 0.02);
       ImGui::SetNextItemWidth(-90);
       if (ImGui::SliderFloat("damping", &damp, 0.001f, 0.5f, "%.3f", ImGuiSliderFlags_Logarithmic)) {
@@ -181,9 +181,9 @@ class IkChain final : public IkSample {
 
   void Solve(double dt) override {
     skel_->set_target(0, handles_[0].pos);
-    const Stopwatch sw;
+    const pba::Stopwatch sw;
     last_ = blend_on_ ? blend_->update(dt) : solver_->solve();
-    last_us_ = sw.us();
+    last_us_ = 1e6 * sw.seconds();
     times_.push(static_cast<float>(last_us_));
     if (blend_on_) {
       // the readout is the visible chain's error, not the goal's
@@ -201,7 +201,7 @@ class IkChain final : public IkSample {
  private:
   // the chain from the shared scenes (1 m, along +X), stood up on a pedestal
   void build() {
-    const ik::Skeleton flat = ik::scenes::make_chain(bones_, hinge_ ? ik::JointType::hinge : ik::JointType::ball, false);
+    const ik::Skeleton flat = ik::scenes::make_chain(bones_, hinge_ ? ik::JointType::Hinge : ik::JointType::Ball, false);
     ik::SkeletonDef def = DefOf(flat);
     def.root_position = Vec3(0, 0.12, 0);
     def.root_rotation = glm::angleAxis(0.5 * kPi, Vec3(0, 0, 1));
@@ -229,28 +229,28 @@ class IkChain final : public IkSample {
     set.max_iterations = effective_cap();
     solver_ = std::make_unique<ik::Solver>(*skel_, set);
     if (blend_on_)
-      blend_ = std::make_unique<ik::SolveThenBlend>(*skel_, set, slerp_ ? ik::Blend::slerp : ik::Blend::lerp,
+      blend_ = std::make_unique<ik::SolveThenBlend>(*skel_, set, slerp_ ? ik::Blend::Slerp : ik::Blend::Lerp,
                                                    blend_rate_);
   }
 
   const char* explanation() const {
     switch (method_) {
-      case ik::Method::ccd:
+      case ik::Method::Ccd:
         return "CCD turns one joint at a time, from the tip to the root, to aim the effector at the target. "
                "Cheap per step, but the tip bones do most of the work, so long chains curl.";
-      case ik::Method::jacobian_transpose:
+      case ik::Method::JacobianTranspose:
         return "Jacobian transpose: dtheta = alpha J^T e. No inversion, so each iteration is cheap, but it "
                "needs many of them near the target.";
-      case ik::Method::pseudo_inverse:
+      case ik::Method::PseudoInverse:
         return "Pseudo-inverse: dtheta = J^T (J J^T)^-1 e, the smallest joint change that moves the effector "
                "by e. Fast to converge, unstable near singular (straight) poses.";
-      case ik::Method::dls:
+      case ik::Method::Dls:
         return "Damped least squares: J^T (J J^T + lambda^2 I)^-1 e. The damping keeps it stable near "
                "singularities and for unreachable targets, at the cost of slower convergence.";
-      case ik::Method::sdls:
+      case ik::Method::Sdls:
         return "Selectively damped least squares (Buss and Kim): damps each singular direction of J by how "
                "much it would move the joints.";
-      case ik::Method::fabrik:
+      case ik::Method::Fabrik:
         return "FABRIK works on positions: drag the tip to the target and the chain behind it, then pin the "
                "root and drag forward again; joint rotations are read back at the end.";
       default: return "";
@@ -259,12 +259,12 @@ class IkChain final : public IkSample {
 
   // the user's choices survive a restart (R) and a sample switch
   static inline int g_bones = 10;
-  static inline ik::Method g_method = ik::Method::fabrik;
+  static inline ik::Method g_method = ik::Method::Fabrik;
   static inline bool g_hinge = false;
 
   int bones_ = 10;
   bool hinge_ = false;
-  ik::Method method_ = ik::Method::fabrik;
+  ik::Method method_ = ik::Method::Fabrik;
   ik::SolverSettings settings_;
   bool blend_on_ = false, slerp_ = true;
   float blend_rate_ = 8.0f;

@@ -5,7 +5,6 @@
 #pragma once
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -34,8 +33,9 @@ inline constexpr Color kTargetColors[] = {Color::hex(0xe5484d), Color::hex(0xffc
                                           Color::hex(0x3e63dd)};
 inline constexpr Color kPoleColor = Color::hex(0x8e4ec6);
 
-/// A point the user can drag: an IK target or a pole.
-struct Handle {
+/// A point the user can drag: an IK target or a pole (not a pba::Handle, the library's
+/// generation-checked id).
+struct DragTarget {
   Vec3 pos{0};
   Color color = kTargetColors[0];
   std::string name;      // shown next to it
@@ -78,7 +78,7 @@ inline void DrawSkeleton(Renderer& r, const ik::Skeleton& s, const SkeletonStyle
     c.a = st.alpha;
     r.capsule(starts[i], tips[i], rad, c);
     if (!joints) continue;
-    Color j = types[i] == ik::JointType::hinge ? kHingeColor : types[i] == ik::JointType::ball ? kBallColor : kFixedColor;
+    Color j = types[i] == ik::JointType::Hinge ? kHingeColor : types[i] == ik::JointType::Ball ? kBallColor : kFixedColor;
     j.a = st.alpha;
     r.sphere(starts[i], 1.35 * rad, j);
   }
@@ -98,12 +98,6 @@ inline Vec3 Lissajous(const Vec3& center, const Vec3& amp, double t, double spee
   const double w = 0.55 * speed;
   return center + Vec3(amp.x * std::sin(w * t), amp.y * std::sin(1.7 * w * t + 0.6), amp.z * std::sin(0.8 * w * t + 1.3));
 }
-
-/// A wall-clock stopwatch (microseconds).
-struct Stopwatch {
-  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
-  double us() const { return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count(); }
-};
 
 /// Base of the IK samples: owns the draggable handles, the scripted motion, the depth keys,
 /// the status line and the report file. Subclasses set the handles, Animate() them along a
@@ -201,7 +195,7 @@ class IkSample : public Sample {
   /// Draws every handle as a coloured sphere with its name; the active one has a ring.
   void DrawHandles(Renderer& r) {
     for (int i = 0; i < static_cast<int>(handles_.size()); ++i) {
-      const Handle& h = handles_[i];
+      const DragTarget& h = handles_[i];
       const double grow = i == grabbed_ ? 1.25 : 1.0;
       r.sphere(h.pos, h.radius * grow, h.color);
       if (i == active_ && handles_.size() > 1) {
@@ -264,7 +258,7 @@ class IkSample : public Sample {
     return 2.0 * depth * std::tan(0.5 * c.fov_y) / h;
   }
 
-  std::vector<Handle> handles_;
+  std::vector<DragTarget> handles_;
   int grabbed_ = -1;              // handle held by the mouse, -1 for none
   int active_ = 0;                // handle moved by W/S
   bool animate_ = true;           // scripted motion when no one drags
@@ -320,7 +314,7 @@ class IkSample : public Sample {
 /// The solver methods that can run `s` as set up, in the library's order.
 inline std::vector<ik::Method> UsableMethods(const ik::Skeleton& s) {
   std::vector<ik::Method> out;
-  for (ik::Method m : ik::all_methods)
+  for (ik::Method m : ik::kAllMethods)
     if (ik::supports(m, s)) out.push_back(m);
   return out;
 }
@@ -328,15 +322,15 @@ inline std::vector<ik::Method> UsableMethods(const ik::Skeleton& s) {
 /// Long names for the solver menu.
 inline const char* MethodLabel(ik::Method m) {
   switch (m) {
-    case ik::Method::analytic_1dof: return "analytic 1-DOF";
-    case ik::Method::analytic_3dof: return "analytic 3-DOF";
-    case ik::Method::two_bone: return "two-bone (law of cosines)";
-    case ik::Method::ccd: return "CCD";
-    case ik::Method::jacobian_transpose: return "Jacobian transpose";
-    case ik::Method::pseudo_inverse: return "pseudo-inverse";
-    case ik::Method::dls: return "damped least squares";
-    case ik::Method::sdls: return "SVD damped least squares";
-    case ik::Method::fabrik: return "FABRIK";
+    case ik::Method::Analytic1Dof: return "analytic 1-DOF";
+    case ik::Method::Analytic3Dof: return "analytic 3-DOF";
+    case ik::Method::TwoBone: return "two-bone (law of cosines)";
+    case ik::Method::Ccd: return "CCD";
+    case ik::Method::JacobianTranspose: return "Jacobian transpose";
+    case ik::Method::PseudoInverse: return "pseudo-inverse";
+    case ik::Method::Dls: return "damped least squares";
+    case ik::Method::Sdls: return "SVD damped least squares";
+    case ik::Method::Fabrik: return "FABRIK";
   }
   return "?";
 }
@@ -346,7 +340,7 @@ inline const char* MethodLabel(ik::Method m) {
 inline bool MethodCombo(const char* label, ik::Method* m, const ik::Skeleton& s) {
   bool changed = false;
   if (ImGui::BeginCombo(label, MethodLabel(*m))) {
-    for (ik::Method k : ik::all_methods) {
+    for (ik::Method k : ik::kAllMethods) {
       std::string why;
       const bool ok = ik::supports(k, s, &why);
       if (!ok) ImGui::BeginDisabled();

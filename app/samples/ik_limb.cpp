@@ -32,7 +32,7 @@ class IkLimb final : public IkSample {
     skel_->add_effector(e);
     handles_.push_back({e.target, kTargetColors[0], "hand target", 0.03});
     handles_.push_back({*e.pole, kPoleColor, "pole", 0.025});
-    solver_ = std::make_unique<ik::Solver>(*skel_, ik::Method::two_bone);
+    solver_ = std::make_unique<ik::Solver>(*skel_, ik::Method::TwoBone);
     ctx.camera->frame({0.1f, 1.02f, 0.0f}, 0.5f, 0.6f, 0.2f);
     Animate(0);
     Solve(0);
@@ -71,7 +71,7 @@ class IkLimb final : public IkSample {
                        "points toward the pole. One step, no iteration.");
     ImGui::SetNextItemWidth(-90);
     if (MethodCombo("solver", &method_, *skel_)) solver_->set_method(method_);
-    if (method_ != ik::Method::two_bone) ImGui::TextDisabled("(iterative solvers ignore the pole)");
+    if (method_ != ik::Method::TwoBone) ImGui::TextDisabled("(iterative solvers ignore the pole)");
     AnimationUI();
     ImGui::Separator();
     const Vec3 sh = skel_->starts()[0];
@@ -97,9 +97,9 @@ class IkLimb final : public IkSample {
   void Solve(double) override {
     skel_->set_target(0, handles_[0].pos);
     skel_->set_pole(0, handles_[1].pos);
-    const Stopwatch sw;
+    const pba::Stopwatch sw;
     last_ = solver_->solve();
-    last_us_ = sw.us();
+    last_us_ = 1e6 * sw.seconds();
   }
 
   bool ReportEffector(Vec3* e, double* res) const override {
@@ -112,7 +112,7 @@ class IkLimb final : public IkSample {
   static constexpr Vec3 kShoulder{0.0, 1.15, 0.0};
   std::unique_ptr<ik::Skeleton> skel_;
   std::unique_ptr<ik::Solver> solver_;
-  ik::Method method_ = ik::Method::two_bone;
+  ik::Method method_ = ik::Method::TwoBone;
   ik::SolveResult last_;
   double last_us_ = 0;
 };

@@ -27,7 +27,7 @@ class IkLimits final : public IkSample {
     if (jt != "ball" && jt != "hinge") throw Error("--option joint=" + jt + ": expected ball or hinge");
     ball_ = jt == "ball";
     const std::string sv = ctx.option("solver", "");
-    method_ = sv.empty() ? g_method : ik::parse_solver(sv, "--option solver");
+    method_ = sv.empty() ? g_method : ik::parse_method(sv, "--option solver");
     handles_.push_back({Vec3(0.3, 0.7, 0.2), kTargetColors[0], "target", 0.03});
     ctx.camera->frame({0.0f, 0.55f, 0.0f}, 0.62f, 0.3f, 0.22f);
     build();
@@ -131,7 +131,7 @@ class IkLimits final : public IkSample {
 
   std::unique_ptr<ik::Skeleton> make(bool limited) const {
     ik::SkeletonDef def =
-        DefOf(ik::scenes::make_chain(bones_, ball_ ? ik::JointType::ball : ik::JointType::hinge, limited));
+        DefOf(ik::scenes::make_chain(bones_, ball_ ? ik::JointType::Ball : ik::JointType::Hinge, limited));
     def.root_position = kRoot;
     def.root_rotation = glm::angleAxis(0.5 * kPi, Vec3(0, 0, 1));
     auto s = std::make_unique<ik::Skeleton>(def);
@@ -151,9 +151,9 @@ class IkLimits final : public IkSample {
 
   // how far joint i of `s` is outside the limits of the shared limited chain (rad)
   double excess(const ik::Skeleton& s, int i) const {
-    if (s.joint_types()[i] == ik::JointType::hinge)
+    if (s.joint_types()[i] == ik::JointType::Hinge)
       return std::max(0.0, std::abs(s.hinge_angles()[i]) - ik::scenes::kHingeLimit);
-    if (s.joint_types()[i] == ik::JointType::ball) {
+    if (s.joint_types()[i] == ik::JointType::Ball) {
       const Vec3 d = s.joint_rotations()[i] * Vec3(1, 0, 0);
       const double swing = std::acos(std::clamp(d.x, -1.0, 1.0));
       return std::max(0.0, swing - ik::scenes::kSwingLimit);
@@ -162,11 +162,11 @@ class IkLimits final : public IkSample {
   }
 
   static inline bool g_ball = false;
-  static inline ik::Method g_method = ik::Method::fabrik;
+  static inline ik::Method g_method = ik::Method::Fabrik;
 
   int bones_ = 6;
   bool ball_ = false, limited_ = true, compare_ = true;
-  ik::Method method_ = ik::Method::fabrik;
+  ik::Method method_ = ik::Method::Fabrik;
   std::unique_ptr<ik::Skeleton> skel_, free_;
   std::unique_ptr<ik::Solver> solver_, free_solver_;
   ik::SolveResult last_, free_last_;

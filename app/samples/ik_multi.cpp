@@ -24,7 +24,7 @@ class IkMulti final : public IkSample {
  public:
   IkMulti(SampleContext& ctx, Figure fig) : IkSample(ctx), fig_(fig) {
     const std::string sv = ctx.option("solver", "");
-    if (!sv.empty()) method_ = ik::parse_solver(sv, "--option solver");
+    if (!sv.empty()) method_ = ik::parse_method(sv, "--option solver");
     if (fig == Figure::YTree) {
       // the shared Y, on a short post
       ik::SkeletonDef def = DefOf(ik::scenes::make_y_tree(false));
@@ -48,9 +48,9 @@ class IkMulti final : public IkSample {
       ik::SkeletonDef def = DefOf(ik::scenes::make_humanoid(Vec3(0, 0.95, 0)));
       if (!spine_)
         for (ik::BoneDef& b : def.bones)
-          if (b.name.rfind("spine", 0) == 0 || b.name == "neck") b.joint = ik::JointType::fixed;
+          if (b.name.rfind("spine", 0) == 0 || b.name == "neck") b.joint = ik::JointType::Fixed;
       skel_ = std::make_unique<ik::Skeleton>(def);
-      if (sv.empty()) method_ = ik::Method::dls;
+      if (sv.empty()) method_ = ik::Method::Dls;
       skel_->forward_kinematics();
       const char* bones[4] = {"hand_l", "hand_r", "shin_l", "shin_r"};
       const char* names[4] = {"left hand", "right hand", "left foot", "right foot"};
@@ -128,7 +128,7 @@ class IkMulti final : public IkSample {
   }
   std::vector<Color> ExpectedColors() const override {
     std::vector<Color> c;
-    for (const Handle& h : handles_) c.push_back(h.color);
+    for (const DragTarget& h : handles_) c.push_back(h.color);
     return c;
   }
 
@@ -153,9 +153,9 @@ class IkMulti final : public IkSample {
 
   void Solve(double) override {
     for (int k = 0; k < skel_->effector_count(); ++k) skel_->set_target(k, handles_[k].pos);
-    const Stopwatch sw;
+    const pba::Stopwatch sw;
     last_ = solver_->solve();
-    last_us_ = sw.us();
+    last_us_ = 1e6 * sw.seconds();
   }
 
   bool ReportEffector(Vec3* e, double* res) const override {
@@ -168,7 +168,7 @@ class IkMulti final : public IkSample {
   static inline bool g_spine = false;
   Figure fig_;
   bool spine_ = false;
-  ik::Method method_ = ik::Method::fabrik;
+  ik::Method method_ = ik::Method::Fabrik;
   std::unique_ptr<ik::Skeleton> skel_;
   std::unique_ptr<ik::Solver> solver_;
   std::vector<Vec3> home_;   // effector tips at the rest pose

@@ -129,12 +129,15 @@ class Integrators final : public Sample {
     }
     // --option scenario=... and drag=... override the last choice
     const std::string sc = ctx.option("scenario", "");
+    const std::string d = ctx.option("drag", "");
     if (!sc.empty() && !options_read_) {
       if (sc == "ballistic") g_scenario = Scenario::Ballistic;
       else if (sc == "spring") g_scenario = Scenario::Spring;
       else if (sc == "orbit") g_scenario = Scenario::Orbit;
       else throw Error("--option scenario=" + sc + ": expected ballistic, spring or orbit");
-      const std::string d = ctx.option("drag", "0");
+      g_drag = false;
+    }
+    if (!d.empty() && !options_read_) {
       if (d != "0" && d != "1") throw Error("--option drag=" + d + ": expected 0 or 1");
       g_drag = d == "1";
     }

@@ -205,6 +205,10 @@ class Ballistic final : public Sample {
   }
   std::vector<Color> ExpectedColors() const override { return {kSim}; }
 
+  void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override {
+    WorldPoints(world_, out, max_points);
+  }
+
  private:
   scenes::BallisticParams params_with_drag() const {
     scenes::BallisticParams p = params_;

@@ -132,6 +132,10 @@ class BouncingBalls final : public Sample {
 
   std::vector<Color> ExpectedColors() const override { return {kBall, kTracked}; }
 
+  void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override {
+    WorldPoints(world_, out, max_points);
+  }
+
  private:
   void drop() {
     world_ = World(WorldDef{.particles = {.capacity = 128}});

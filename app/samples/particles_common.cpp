@@ -8,6 +8,8 @@
 
 #include <imgui.h>
 
+#include "pba/soft.h"
+
 namespace pba::app {
 
 namespace {
@@ -31,6 +33,20 @@ void DrawParticles(Renderer& r, const ParticleSystem& ps, float point_px, double
   // many: one screen-space point each, straight from the columns
   const auto xs = ps.xs(), ys = ps.ys(), zs = ps.zs();
   for (std::size_t i = 0; i < n; ++i) r.point(Vec3(xs[i], ys[i], zs[i]), point_px, ps.color(i));
+}
+
+void WorldPoints(const World& world, std::vector<Vec3>& out, std::size_t max_points) {
+  const ParticleSystem& ps = world.particles();
+  const auto* soft = dynamic_cast<const SoftSystem*>(world.find_system(SoftSystem::kName));
+  // one stride for all, so the thinning keeps the proportions
+  std::size_t total = ps.size();
+  if (soft)
+    for (std::size_t b = 0; b < soft->size(); ++b) total += soft->at(b).size();
+  const std::size_t step = std::max<std::size_t>(1, (total + max_points - 1) / std::max<std::size_t>(max_points, 1));
+  for (std::size_t k = 0; k < ps.size(); k += step) out.push_back(ps.position(k));
+  if (soft)
+    for (std::size_t b = 0; b < soft->size(); ++b)
+      for (std::size_t k = 0; k < soft->at(b).size(); k += step) out.push_back(soft->at(b).position(k));
 }
 
 void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving) {
@@ -200,8 +216,17 @@ std::string Thousands(long long n) {
 
 void ProfileReadout(const World& world) {
   const WorldProfile& p = world.profile();
-  ImGui::Text("step %.2f ms  (integrate %.2f, emit %.2f, recycle %.2f)", 1e3 * p.total, 1e3 * (p.integrate + p.collide),
-              1e3 * p.emit, 1e3 * p.recycle);
+  const ParticleSystem& ps = world.particles();
+  ImGui::Text("step %.2f ms: emit %.2f, recycle %.2f", 1e3 * p.total, 1e3 * p.emit, 1e3 * p.recycle);
+  // semi-implicit Euler runs the fused kernel, whose collisions are timed with the
+  // integration (ParticleProfile::integrate); the other integrators time them apart
+  if (ps.method() == Method::SemiImplicitEuler)
+    ImGui::Text("integrate + collide %.2f ms (fused), %zu contacts", 1e3 * (p.integrate + p.collide), ps.contacts());
+  else
+    ImGui::Text("integrate %.2f, collide %.2f ms, %zu contacts", 1e3 * p.integrate, 1e3 * p.collide, ps.contacts());
+  // the other stages, when the world has them (a constraint pass costs microseconds)
+  if (p.constraints > 1e-5 || world.find_system(SoftSystem::kName))
+    ImGui::Text("constraints %.2f, soft bodies %.2f ms", 1e3 * p.constraints, 1e3 * p.systems);
 }
 
 }  // namespace pba::app

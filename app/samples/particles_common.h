@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "pba/particles.h"
 #include "pba/world.h"
@@ -37,6 +38,10 @@ void DrawParticles(Renderer& r, const ParticleSystem& ps, float point_px, double
 /// Draws the colliders as solids; `moving` tells which ones are kinematic (by index; when
 /// empty, a collider that moved or has a velocity is taken as moving). A horizontal plane at y = 0 is left to the app's ground grid.
 void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving = {});
+
+/// Appends the world's live particles and soft-body nodes, thinned evenly to about
+/// `max_points`, to `out` (Sample::SimulatedPoints of the samples built on a World).
+void WorldPoints(const World& world, std::vector<Vec3>& out, std::size_t max_points);
 
 /// The colour of a Forcer kind.
 Color ForcerColor(ForcerKind kind);

@@ -78,6 +78,10 @@ class Forcers final : public Sample {
     return {particle_colors::fan, particle_colors::vortex, particle_colors::attractor, colors::cyan};
   }
 
+  void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override {
+    WorldPoints(world_, out, max_points);
+  }
+
  private:
   void slider(const char* name, double* v, ForcerKind k) {
     const Color c = ForcerColor(k);

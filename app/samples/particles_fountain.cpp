@@ -126,6 +126,10 @@ class Fountain final : public Sample {
     return {params_.sparks ? Color::hex(0xfff2b0) : Color::hex(0x9fd4ff)};
   }
 
+  void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override {
+    WorldPoints(world_, out, max_points);
+  }
+
  private:
   // defaults per mode: about 100k live either way
   void preset(bool sparks) {

@@ -11,13 +11,17 @@
 #include <string>
 #include <vector>
 
+#include <glm/gtx/quaternion.hpp>
+
 #include <unistd.h>
 
 #include <imgui.h>
 
 #include "camera.h"
 #include "particles_common.h"
+#include "soft_common.h"
 #include "pba/scene.h"
+#include "pba/soft.h"
 #include "renderer.h"
 #include "sample.h"
 
@@ -79,16 +83,19 @@ class SceneFile final : public Sample {
 
   void Draw(Renderer& r, double) override {
     if (!scene_) {
-      // the error, in the view too
-      const Vec3 at(ctx_.camera->target);
-      r.text(at + Vec3(0, 0.3, 0), "could not open the scene file:", colors::red, 1.2f, 0.5f);
-      r.text(at, error_, colors::red, 1.0f, 0.5f);
+      // the error, in the view too: wrapped inside the region the panels leave free
+      DrawMessage("could not open the scene file:", error_);
       return;
     }
     const World& w = scene_->world;
-    DrawColliders(r, w.colliders());
-    for (const Forcer& f : w.forcers()) DrawForcer(r, f, w.time());
-    DrawParticles(r, w.particles(), 3.0f, 0.008 * view_radius_);
+    const DrawFlags& f = ctx_.draw;
+    if (f.shapes) DrawColliders(r, w.colliders());
+    if (f.forcers)
+      for (const Forcer& fc : w.forcers()) DrawForcer(r, fc, w.time());
+    if (f.particles) DrawParticles(r, w.particles(), 3.0f, 0.008 * view_radius_);
+    // the soft bodies: cloth and jelly as shaded surfaces, ropes and springs as links and nodes
+    if (const SoftSystem* soft = Soft(w))
+      for (std::size_t b = 0; b < soft->size(); ++b) DrawSoftBody(r, soft->at(b), b, f);
   }
 
   void DrawUI() override {
@@ -133,10 +140,83 @@ class SceneFile final : public Sample {
   }
 
   std::vector<Color> ExpectedColors() const override { return {}; }
+  std::string LoadError() const override { return scene_ ? std::string() : error_; }
+
+  bool OpenFile(const std::string& path) override {
+    // a scene file dropped on the window opens here; anything else is not ours
+    if (fs::path(path).extension() != ".json") return false;
+    std::snprintf(path_, sizeof path_, "%s", path.c_str());
+    load(path, true);
+    return true;
+  }
+
+  void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override {
+    if (scene_) WorldPoints(scene_->world, out, max_points);
+  }
 
  private:
   static inline std::string g_file;          // survives a restart (R) and a sample switch
   static inline bool options_read_ = false;  // --option file applies to the first load only
+
+  // the world's soft bodies, if it has any
+  static const SoftSystem* Soft(const World& w) {
+    return dynamic_cast<const SoftSystem*>(w.find_system(SoftSystem::kName));
+  }
+
+  // soft body `index` as the flags say: a surface when it has triangles (jelly green with
+  // tets, cloth blue without), else its stretch links as thin lit sticks (constraints) and its
+  // nodes as spheres (particles), sized from its mean link length
+  void DrawSoftBody(Renderer& r, const SoftBody& b, std::size_t index, const DrawFlags& f) {
+    if (b.size() == 0) return;
+    // ropes and springs: one colour per body, so side-by-side bodies tell apart
+    static constexpr Color kLinkColors[] = {soft_colors::fabric, colors::cyan, colors::green, colors::purple};
+    const Color color = kLinkColors[index % 4];
+    if (!b.triangles().empty()) {
+      SoftView v;
+      v.edges = false;
+      v.strain = false;
+      painter_.Draw(r, b, v, b.tets().empty() ? soft_colors::cloth : soft_colors::jelly);
+      return;
+    }
+    double mean = 0;
+    std::size_t links = 0;
+    for (std::size_t c = 0; c < b.constraint_count(); ++c) {
+      const SoftConstraint k = b.constraint(c);
+      if (k.kind == SoftConstraintKind::Stretch) mean += k.rest_length, ++links;
+    }
+    mean = links ? mean / links : 0.1 * view_radius_;
+    const double stick = std::clamp(0.06 * mean, 0.002 * view_radius_, 0.006 * view_radius_);
+    const double node = std::clamp(0.35 * mean, 0.006 * view_radius_, 0.04 * view_radius_);
+    if (f.constraints)
+      for (std::size_t c = 0; c < b.constraint_count(); ++c) {
+        const SoftConstraint k = b.constraint(c);
+        if (k.broken || k.kind != SoftConstraintKind::Stretch) continue;
+        const Vec3 p = b.position(k.a), q = b.position(k.b);
+        const double len = glm::length(q - p);
+        if (!(len > 1e-9)) continue;
+        r.box(0.5 * (p + q), Vec3(stick, 0.5 * len, stick), glm::rotation(Vec3(0, 1, 0), (q - p) / len), color);
+      }
+    if (f.particles)
+      for (std::size_t i = 0; i < b.size(); ++i) {
+        if (b.is_pinned(i)) r.box(b.position(i), Vec3(1.2 * node), Quat(1, 0, 0, 0), soft_colors::pole);
+        else r.sphere(b.position(i), node, color);
+      }
+  }
+
+  // a message (title and wrapped text) centred in the region the panels leave free
+  void DrawMessage(const char* title, const std::string& text) const {
+    if (!ImGui::GetCurrentContext()) return;
+    ImDrawList* dl = ImGui::GetBackgroundDrawList();
+    const ScreenRect& v = ctx_.view;
+    const float wrap = std::max(120.0f, v.width() - 48);
+    const ImVec2 ts = ImGui::CalcTextSize(title), tm = ImGui::CalcTextSize(text.c_str(), nullptr, false, wrap);
+    const float wbox = std::max(ts.x, tm.x), hbox = ts.y + 6 + tm.y;
+    const ImVec2 p(v.center_x() - 0.5f * wbox, v.y0 + 0.45f * v.height() - 0.5f * hbox);
+    dl->AddRectFilled(ImVec2(p.x - 10, p.y - 8), ImVec2(p.x + wbox + 10, p.y + hbox + 8), IM_COL32(20, 22, 26, 215), 4);
+    const ImU32 red = ImGui::ColorConvertFloat4ToU32(ImVec4(colors::red.r, colors::red.g, colors::red.b, 1));
+    dl->AddText(p, red, title);
+    dl->AddText(ImGui::GetFont(), ImGui::GetFontSize(), ImVec2(p.x, p.y + ts.y + 6), red, text.c_str(), nullptr, wrap);
+  }
 
   void load(const std::string& file, bool adopt_settings) {
     g_file = file;
@@ -172,7 +252,15 @@ class SceneFile final : public Sample {
         for (const Collider& c : w.colliders())
           if (c.shape.type != ShapeType::Plane) grow(c.end.position);
         for (const Forcer& f : w.forcers()) grow(f.pose.position);
-        if (i % 20 == 0 && ps.size() == 0 && w.colliders().empty()) break;
+        std::size_t soft_nodes = 0;
+        if (const SoftSystem* soft = Soft(w))
+          for (std::size_t b = 0; b < soft->size(); ++b) {
+            const SoftBody& body = soft->at(b);
+            soft_nodes += body.size();
+            for (std::size_t k = 0; k < body.size(); k += std::max<std::size_t>(1, body.size() / 500))
+              grow(body.position(k));
+          }
+        if (i % 20 == 0 && ps.size() == 0 && soft_nodes == 0 && w.colliders().empty()) break;
         w.tick(w.time(), dt);
       }
     } catch (const std::exception&) {
@@ -191,6 +279,7 @@ class SceneFile final : public Sample {
   std::unique_ptr<Scene> scene_;
   std::string error_;
   double view_radius_ = 3;
+  SoftPainter painter_;
 };
 
 static int reg = RegisterSample("Particles", "Scene file", SceneFile::Create);

@@ -151,6 +151,10 @@ class WindDrag final : public Sample {
 
   std::vector<Color> ExpectedColors() const override { return {colors::green, colors::yellow}; }
 
+  void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override {
+    WorldPoints(world_, out, max_points);
+  }
+
  private:
   static Color mass_color(double m) {
     const int k = std::clamp(static_cast<int>(std::lround(m / 0.005)) - 1, 0, 3);

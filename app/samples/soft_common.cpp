@@ -378,7 +378,13 @@ void SoftReadout(const SoftBody& b) {
   const SoftProfile& p = b.profile();
   // the solve is what the step spent outside the per-step forces and the collisions
   const double solve = p.solve > 0 ? p.solve : std::max(0.0, p.total - p.forces - p.collide);
-  ImGui::Text("step %.3f ms (solve %.3f, collide %.3f)", 1e3 * p.total, 1e3 * solve, 1e3 * p.collide);
+  // collisions: none without colliders; XPBD times those of its first substep only and
+  // counts them once per substep (an estimate, marked ~)
+  if (p.collide == 0)
+    ImGui::Text("step %.3f ms (solve %.3f, no colliders)", 1e3 * p.total, 1e3 * solve);
+  else
+    ImGui::Text("step %.3f ms (solve %.3f, collide %s%.3f)", 1e3 * p.total, 1e3 * solve,
+                b.settings().solver == SoftSolver::XPBD ? "~" : "", 1e3 * p.collide);
   const StrainStats s = b.strain_stats();
   ImGui::Text("strain: mean %.3f %%, max %.2f %%", 100 * s.mean, 100 * s.max);
   ImGui::Text("energy: kinetic %.4f J, potential %.3f J", b.kinetic_energy(), b.potential_energy());
@@ -387,12 +393,11 @@ void SoftReadout(const SoftBody& b) {
 void DrawBanner(const SampleContext& ctx, const std::string& text, Color color) {
   if (!ctx.settings.show_labels || text.empty()) return;
   ImDrawList* dl = ImGui::GetBackgroundDrawList();
-  const ImVec2 size = ImGui::GetIO().DisplaySize;
-  const float cx = 0.5f * (1.0f + ctx.camera->shift_x) * size.x;
-  // wrapped to fit between the panels (which leave about half the window)
-  const float wrap = std::max(200.0f, (ctx.settings.show_ui ? 0.45f : 0.9f) * size.x);
+  // centred at the bottom of the region the panels leave free, wrapped to fit inside it
+  const ScreenRect& v = ctx.view;
+  const float wrap = std::max(120.0f, v.width() - 40);
   const ImVec2 ts = ImGui::CalcTextSize(text.c_str(), nullptr, false, wrap);
-  const ImVec2 p(cx - 0.5f * ts.x, size.y - ts.y - 14);
+  const ImVec2 p(v.center_x() - 0.5f * ts.x, v.y1 - ts.y - 14);
   dl->AddRectFilled(ImVec2(p.x - 8, p.y - 4), ImVec2(p.x + ts.x + 8, p.y + ts.y + 4), IM_COL32(20, 22, 26, 200), 4);
   dl->AddText(ImGui::GetFont(), ImGui::GetFontSize(), p,
               ImGui::ColorConvertFloat4ToU32(ImVec4(color.r, color.g, color.b, 1.0f)), text.c_str(), nullptr, wrap);

@@ -4,6 +4,7 @@
 // readouts) and the stability estimate of a mass-spring network.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -198,6 +199,12 @@ class OneBodySample : public SoftSample {
   void ViewRows(bool scale_slider = true) {
     ViewControls(view_, scale_slider);
     SoftReadout(body_);
+  }
+
+  /// The body's nodes, for the self-test's check that what is simulated is drawn.
+  void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override {
+    const std::size_t step = std::max<std::size_t>(1, body_.size() / std::max<std::size_t>(max_points, 1));
+    for (std::size_t k = 0; k < body_.size(); k += step) out.push_back(body_.position(k));
   }
 
   SoftBodyDef def_;     ///< the settings the panel edits (the body takes them each step)

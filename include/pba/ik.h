@@ -30,9 +30,9 @@ namespace pba::ik {
 
 /// Kind of joint at the start of a bone.
 enum class JointType : std::uint8_t {
-  fixed,  ///< no degree of freedom: the bone is welded to its parent at `rest`
-  hinge,  ///< 1 DOF: rotation by an angle (rad) about `axis`, within [min_angle, max_angle]
-  ball,   ///< 3 DOF: swing inside a cone about the bone axis (+X) and twist about it
+  Fixed,  ///< no degree of freedom: the bone is welded to its parent at `rest`
+  Hinge,  ///< 1 DOF: rotation by an angle (rad) about `axis`, within [min_angle, max_angle]
+  Ball,   ///< 3 DOF: swing inside a cone about the bone axis (+X) and twist about it
 };
 
 /// Definition of one bone and the joint at its start. Defaults make a free ball joint.
@@ -41,7 +41,7 @@ struct BoneDef {
   int parent = -1;                  ///< index of the parent in SkeletonDef::bones, -1 for the root
   double length = 1.0;              ///< bone length (m), finite and > 0
   Quat rest{1, 0, 0, 0};            ///< rotation of the joint frame relative to the parent bone's frame (unit)
-  JointType joint = JointType::ball;  ///< joint kind
+  JointType joint = JointType::Ball;  ///< joint kind
   Vec3 axis{0, 0, 1};               ///< hinge axis in the joint frame (unit); should not be parallel to +X
   double min_angle = -kPi;  ///< hinge lower limit (rad), in [-pi, pi]
   double max_angle = kPi;   ///< hinge upper limit (rad), in [min_angle, pi]; a 2 pi range is unlimited
@@ -94,7 +94,7 @@ class Skeleton {
 
   /// A chain of `n` bones of `length` metres along +X from the origin, all with
   /// `joint` joints (hinges about local Z by default). A convenience for samples and tests.
-  static Skeleton chain(int n, double length, JointType joint = JointType::ball,
+  static Skeleton chain(int n, double length, JointType joint = JointType::Ball,
                         const BoneDef& joint_template = {});
 
   /// Number of bones (>= 1).
@@ -222,35 +222,39 @@ class Skeleton {
   std::uint64_t effector_version_ = 0;
 };
 
-/// Solver methods, all usable on the same skeleton through ik::Solver.
+/// Solver methods, all usable on the same skeleton through ik::Solver. Enumerators are
+/// PascalCase like pba::Method's (the integrators); the names users type (scene files,
+/// --option solver=...) are name()'s: "analytic_1dof", ..., "fabrik".
 enum class Method : std::uint8_t {
-  analytic_1dof,    ///< one hinge aims its bone at the target with a dot and a cross product (workbook 2.3)
-  analytic_3dof,    ///< one ball joint aims its bone at the target (shortest-arc rotation)
-  two_bone,         ///< law of cosines on a ball + hinge limb, with a pole vector (TwoBoneJob)
-  ccd,              ///< cyclic coordinate descent, workbook Algorithm 1
-  jacobian_transpose,  ///< dtheta = alpha J^T e, alpha from Buss (2004) eq. 7
-  pseudo_inverse,   ///< dtheta = J^T (J J^T)^-1 e (workbook 2.5)
-  dls,              ///< damped least squares: J^T (J J^T + lambda^2 I)^-1 e
-  sdls,             ///< SVD-based selectively damped least squares (Buss and Kim 2005)
-  fabrik,           ///< forward and backward reaching IK (Aristidou and Lasenby 2011)
+  Analytic1Dof,       ///< "analytic_1dof": one hinge aims its bone at the target with a dot and a cross product (workbook 2.3)
+  Analytic3Dof,       ///< "analytic_3dof": one ball joint aims its bone at the target (shortest-arc rotation)
+  TwoBone,            ///< "two_bone": law of cosines on a ball + hinge limb, with a pole vector (TwoBoneJob)
+  Ccd,                ///< "ccd": cyclic coordinate descent, workbook Algorithm 1
+  JacobianTranspose,  ///< "jacobian_transpose": dtheta = alpha J^T e, alpha from Buss (2004) eq. 7
+  PseudoInverse,      ///< "pseudo_inverse": dtheta = J^T (J J^T)^-1 e (workbook 2.5)
+  Dls,                ///< "dls": damped least squares, J^T (J J^T + lambda^2 I)^-1 e
+  Sdls,               ///< "sdls": SVD-based selectively damped least squares (Buss and Kim 2005)
+  Fabrik,             ///< "fabrik": forward and backward reaching IK (Aristidou and Lasenby 2011)
 };
 
 /// Every method, in declaration order (for UI lists and benchmarks).
-inline constexpr Method all_methods[] = {Method::analytic_1dof, Method::analytic_3dof,
-                                         Method::two_bone,      Method::ccd,
-                                         Method::jacobian_transpose, Method::pseudo_inverse,
-                                         Method::dls,           Method::sdls,
-                                         Method::fabrik};
+inline constexpr Method kAllMethods[] = {Method::Analytic1Dof,  Method::Analytic3Dof,      Method::TwoBone,
+                                         Method::Ccd,           Method::JacobianTranspose, Method::PseudoInverse,
+                                         Method::Dls,           Method::Sdls,              Method::Fabrik};
 
-/// Short lowercase name of a method ("ccd", "dls", "fabrik", ...).
-std::string_view method_name(Method m);
-/// Parses a method name as printed by method_name (also "jt", "pinv", "two-bone").
-/// Throws pba::Error "<where>: unknown IK solver 'x' (expected one of ...)".
-Method parse_solver(std::string_view text, std::string_view where = "ik solver");
+/// The method's name as users type it ("ccd", "dls", "fabrik", ...; see Method). The helpers
+/// are named as the integrators' (pba::Method): name(), method_names(), parse_method().
+std::string_view name(Method m);
+/// All method names joined by ", " (for help texts and error messages).
+std::string method_names();
+/// Parses a method name as printed by name(), case-insensitive, '-' for '_' (also "jt",
+/// "pinv", "two-bone", "svd"). Throws pba::Error "<where>: unknown IK solver 'x' (expected
+/// one of ...)".
+Method parse_method(std::string_view text, std::string_view where = "ik solver");
 
 /// Solver settings. All lengths in metres, angles in radians.
 struct SolverSettings {
-  Method method = Method::fabrik;   ///< the algorithm
+  Method method = Method::Fabrik;   ///< the algorithm
   int max_iterations = 0;           ///< iteration cap, >= 0; 0 picks the method's default
   double tolerance = 1e-4;          ///< converged when every effector is within this distance (m), > 0
   double orientation_tolerance = 1e-3;  ///< converged when orientation errors are below this (rad), > 0
@@ -258,7 +262,10 @@ struct SolverSettings {
   double max_step_angle = 0.0;      ///< Jacobian methods' cap on any joint change per iteration (rad), >= 0;
                                     ///< 0 picks 0.5 (pi/4 for sdls, Buss and Kim's gamma_max)
   bool warm_start = true;           ///< start from the current pose; false starts from the rest pose
-  double stall_ratio = 1e-9;        ///< stop early when an iteration improves the error by less than this fraction (unreachable targets)
+  double stall_ratio = 1e-9;        ///< in [0, 1]: stop (StopReason::Stalled) when an accepted step changes the error
+                                    ///< by less than this fraction of it, a stationary pose (the closest reachable
+                                    ///< pose of an unreachable target); slow progress stops a solve only where every
+                                    ///< step is cut by joint limits (docs/ik.md, "Stopping")
   double max_seconds = 0.0;         ///< time budget per solve (s), >= 0; 0: none. The iterative methods stop
                                     ///< once it is spent (checked every iteration from 64 bones on, every 8
                                     ///< below; one check costs about 60 ns). With a budget, results depend
@@ -267,14 +274,32 @@ struct SolverSettings {
   void validate(std::string_view where = "SolverSettings") const;
 };
 
-/// What a solve did.
+/// Why a solve stopped (SolveResult::stop).
+enum class StopReason : std::uint8_t {
+  Converged,     ///< every effector within SolverSettings::tolerance (and orientation tolerance, where honoured)
+  Stalled,       ///< no step lowers the error any more: the pose is stationary (the closest reachable
+                 ///< pose of an unreachable target, or a local minimum pressed on joint limits), or the
+                 ///< analytic method's one step did not reach the target
+  IterationCap,  ///< the iteration budget (SolverSettings::max_iterations, or the method's default) is spent
+  OutOfTime,     ///< the time budget SolverSettings::max_seconds is spent
+};
+
+/// Short name of a stop reason ("converged", "stalled", "iteration_cap", "out_of_time").
+std::string_view name(StopReason r);
+
+/// What a solve did. A solve never returns a pose worse than the one it was given: its
+/// weighted squared position error (plus the orientation error, scaled by the effectors'
+/// reach, for the methods that honour orientation targets) is at most the starting one.
 struct SolveResult {
-  int iterations = 0;        ///< iterations performed (analytic solvers: 1)
+  int iterations = 0;        ///< iterations performed (analytic solvers: 1); rejected steps count
   double residual = 0;       ///< largest effector position error after the solve (m)
   double orientation_residual = 0;  ///< largest orientation error (rad), 0 without orientation targets
   bool converged = false;    ///< residual <= tolerance, and orientation residual <= its tolerance for
                              ///< the methods that honour orientation targets (FABRIK and the Jacobian family)
   bool out_of_time = false;  ///< the solve stopped because SolverSettings::max_seconds was spent
+  StopReason stop = StopReason::Converged;  ///< why the solve stopped
+  bool handed_over = false;  ///< CCD or FABRIK stopped making progress and damped least squares took
+                             ///< the remaining iterations (see docs/ik.md)
 };
 
 /// Default iteration cap of a method (used when SolverSettings::max_iterations is 0).
@@ -318,8 +343,8 @@ class Solver {
 
 /// Blend mode between two poses.
 enum class Blend : std::uint8_t {
-  lerp,   ///< normalised linear interpolation of joint quaternions (nlerp)
-  slerp,  ///< spherical linear interpolation (constant angular speed)
+  Lerp,   ///< normalised linear interpolation of joint quaternions (nlerp)
+  Slerp,  ///< spherical linear interpolation (constant angular speed)
 };
 
 /// The workbook's "move the arm only once a solution is found" option: a solver runs on
@@ -329,7 +354,7 @@ enum class Blend : std::uint8_t {
 class SolveThenBlend {
  public:
   /// `visible` is the skeleton that is drawn; the solver works on an internal copy.
-  SolveThenBlend(Skeleton& visible, const SolverSettings& settings, Blend blend = Blend::slerp,
+  SolveThenBlend(Skeleton& visible, const SolverSettings& settings, Blend blend = Blend::Slerp,
                  double blend_rate = 8.0, int max_attempts = 4);
   /// Not copyable or movable: its solver is bound to its own internal skeleton (hold it by
   /// std::unique_ptr to move it around).
@@ -360,7 +385,7 @@ class SolveThenBlend {
 };
 
 /// Two-bone limb IK as a stateless job (after ozz-animation's IKTwoBoneJob): fill the
-/// inputs, call Validate(), then Run(). Computes the rotation corrections that bring the
+/// inputs, call validate(), then run(). Computes the rotation corrections that bring the
 /// end of a start-mid-end limb to `target`, bending the mid joint about `mid_axis` and
 /// turning the limb's plane toward `pole`. Uses the law of cosines; no iteration, no
 /// allocation, no trigonometric call (square roots only). All inputs are world space;
@@ -377,16 +402,16 @@ struct TwoBoneJob {
   double weight = 1.0;      ///< blend from no correction (0) to full (1), in [0, 1]
   double min_mid_angle = 0;    ///< smallest interior elbow angle allowed (rad), in [0, pi)
   double max_mid_angle = kPi; ///< largest interior elbow angle (rad), in (min, pi]
-  // outputs (written by Run)
+  // outputs (written by run)
   Quat start_correction{1, 0, 0, 0};  ///< world rotation to pre-multiply onto the start bone
   Quat mid_correction{1, 0, 0, 0};    ///< world rotation about mid_axis to pre-multiply onto the mid bone (applied before start_correction)
   bool reached = false;               ///< true when the target is within reach (to 1e-9 of the limb)
 
   /// True when all inputs are finite (and below about 1e150 m, so that their squares are),
   /// mid_axis is unit length, bones have non-zero lengths and weight and angles are in range.
-  bool Validate() const;
-  /// Computes the corrections; returns false (outputs untouched) when Validate() fails.
-  bool Run();
+  bool validate() const;
+  /// Computes the corrections; returns false (outputs untouched) when validate() fails.
+  bool run();
 };
 
 }  // namespace pba::ik

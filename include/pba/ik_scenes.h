@@ -17,16 +17,17 @@ inline constexpr double kHingeLimit = 1.0;    // hinges in [-1, 1]
 inline constexpr double kSwingLimit = 0.6;    // ball swing cone half-angle
 inline constexpr double kTwistLimit = 0.5;    // ball twist in [-0.5, 0.5]
 
-/// A chain of n bones, total length 1 m, along +X. Hinges alternate between local Z
-/// and Y axes so the chain reaches in 3D.
-inline Skeleton make_chain(int n, JointType type, bool limited) {
+/// The definition of a chain of n bones, total length 1 m, along +X, on joints of kind
+/// `joint_of(i)`; hinges alternate between local Z and Y axes so the chain reaches in 3D.
+template <class JointOf>
+inline SkeletonDef chain_def(int n, bool limited, JointOf joint_of) {
   SkeletonDef def;
   def.bones.resize(n);
   for (int i = 0; i < n; ++i) {
     BoneDef& b = def.bones[i];
     b.parent = i - 1;
     b.length = 1.0 / n;
-    b.joint = type;
+    b.joint = joint_of(i);
     b.axis = (i % 2 == 0) ? Vec3(0, 0, 1) : Vec3(0, 1, 0);
     if (limited) {
       b.min_angle = -kHingeLimit;
@@ -36,7 +37,20 @@ inline Skeleton make_chain(int n, JointType type, bool limited) {
       b.max_twist = kTwistLimit;
     }
   }
-  return Skeleton(def);
+  return def;
+}
+
+/// A chain of n bones, total length 1 m, along +X, all on `type` joints. Hinges alternate
+/// between local Z and Y axes so the chain reaches in 3D.
+inline Skeleton make_chain(int n, JointType type, bool limited) {
+  return Skeleton(chain_def(n, limited, [type](int) { return type; }));
+}
+
+/// A chain of n bones, total length 1 m, along +X, mixing joint kinds: every third bone
+/// (the root first) on a ball joint, the others on hinges about local Z and Y in turn
+/// (as in make_chain). The root's ball joint can aim the straight chain anywhere.
+inline Skeleton make_mixed_chain(int n, bool limited) {
+  return Skeleton(chain_def(n, limited, [](int i) { return i % 3 == 0 ? JointType::Ball : JointType::Hinge; }));
 }
 
 /// The common start pose for cold solves: every joint bent a little about its first
@@ -45,9 +59,9 @@ inline void bent_pose(Skeleton& s) {
   s.reset_pose();
   const double a = std::min(0.3, 3.0 / s.bone_count());
   for (int i = 0; i < s.bone_count(); ++i) {
-    if (s.joint_types()[i] == JointType::hinge)
+    if (s.joint_types()[i] == JointType::Hinge)
       s.set_hinge_angle(i, (i % 2 == 0) ? a : 0.0);
-    else if (s.joint_types()[i] == JointType::ball)
+    else if (s.joint_types()[i] == JointType::Ball)
       s.set_joint_rotation(i, glm::angleAxis(a, Vec3(0, 0, 1)));
   }
   s.forward_kinematics();
@@ -61,10 +75,10 @@ inline void random_pose(Skeleton& s, std::mt19937_64& rng) {
   const double half_pi = 1.5707963267948966;
   for (int i = 0; i < s.bone_count(); ++i) {
     const BoneDef& b = s.bone_def(i);
-    if (b.joint == JointType::hinge) {
+    if (b.joint == JointType::Hinge) {
       const double lo = std::max(b.min_angle, -half_pi), hi = std::min(b.max_angle, half_pi);
       s.set_hinge_angle(i, lo + (hi - lo) * u01(rng));
-    } else if (b.joint == JointType::ball) {
+    } else if (b.joint == JointType::Ball) {
       const double sw = std::min(b.swing_limit, half_pi) * u01(rng);
       const double phi = 2 * kPi * u01(rng);
       const double tlo = std::max(b.min_twist, -half_pi), thi = std::min(b.max_twist, half_pi);
@@ -122,7 +136,7 @@ inline Skeleton make_y_tree(bool limited) {
 
 /// A two-bone limb: a 0.3 m upper bone on a ball joint (the shoulder, at the origin) and a
 /// 0.25 m lower bone on a hinge about local Z (the elbow, interior bend in [0, 2.8] rad),
-/// the effector's bone for Method::two_bone being bone 1.
+/// the effector's bone for Method::TwoBone being bone 1.
 inline Skeleton make_limb() {
   SkeletonDef def;
   def.bones.resize(2);
@@ -131,7 +145,7 @@ inline Skeleton make_limb() {
   def.bones[1].name = "lower";
   def.bones[1].parent = 0;
   def.bones[1].length = 0.25;
-  def.bones[1].joint = JointType::hinge;
+  def.bones[1].joint = JointType::Hinge;
   def.bones[1].min_angle = 0;
   def.bones[1].max_angle = 2.8;
   return Skeleton(def);
@@ -163,29 +177,29 @@ inline Skeleton make_humanoid(const Vec3& pelvis = Vec3(0, 0.95, 0), bool root_f
     return static_cast<int>(def.bones.size()) - 1;
   };
   // the root points up; every frame's +X is its bone direction
-  const int root = add("pelvis", -1, 0.05, JointType::fixed, half_pi);
-  int spine = add("spine0", root, 0.15, JointType::ball, 0, 0.35);
-  spine = add("spine1", spine, 0.15, JointType::ball, 0, 0.35);
-  const int chest = add("spine2", spine, 0.15, JointType::ball, 0, 0.35);
-  const int neck = add("neck", chest, 0.1, JointType::ball, 0, 0.5);
-  add("head", neck, 0.15, JointType::fixed, 0);
+  const int root = add("pelvis", -1, 0.05, JointType::Fixed, half_pi);
+  int spine = add("spine0", root, 0.15, JointType::Ball, 0, 0.35);
+  spine = add("spine1", spine, 0.15, JointType::Ball, 0, 0.35);
+  const int chest = add("spine2", spine, 0.15, JointType::Ball, 0, 0.35);
+  const int neck = add("neck", chest, 0.1, JointType::Ball, 0, 0.5);
+  add("head", neck, 0.15, JointType::Fixed, 0);
   for (int side = 0; side < 2; ++side) {
     const bool left = side == 0;
     const double s = left ? 1.0 : -1.0;  // left is world -X, right +X
     // clavicle sideways from the chest top, upper arm hanging down
-    const int clav = add(left ? "clavicle_l" : "clavicle_r", chest, 0.18, JointType::fixed, s * half_pi);
-    const int upper = add(left ? "upper_arm_l" : "upper_arm_r", clav, 0.3, JointType::ball, s * half_pi, 2.0);
+    const int clav = add(left ? "clavicle_l" : "clavicle_r", chest, 0.18, JointType::Fixed, s * half_pi);
+    const int upper = add(left ? "upper_arm_l" : "upper_arm_r", clav, 0.3, JointType::Ball, s * half_pi, 2.0);
     // elbows and knees rest slightly bent (0.2 rad), inside their ranges, so a solver
     // starting from the rest pose is not pinned at a limit on the straight limb
-    const int fore = add(left ? "forearm_l" : "forearm_r", upper, 0.27, JointType::hinge, -s * 0.2);
+    const int fore = add(left ? "forearm_l" : "forearm_r", upper, 0.27, JointType::Hinge, -s * 0.2);
     def.bones[fore].axis = Vec3(0, 0, 1);
     def.bones[fore].min_angle = left ? -2.4 : -0.2;
     def.bones[fore].max_angle = left ? 0.2 : 2.4;
-    add(left ? "hand_l" : "hand_r", fore, 0.08, JointType::ball, 0, 0.9);
+    add(left ? "hand_l" : "hand_r", fore, 0.08, JointType::Ball, 0, 0.9);
     // hip sideways-down from the pelvis, thigh and shin down
-    const int hip = add(left ? "hip_l" : "hip_r", root, 0.1, JointType::fixed, s * 2.3);
-    const int thigh = add(left ? "thigh_l" : "thigh_r", hip, 0.42, JointType::ball, s * (kPi - 2.3), 1.6);
-    const int shin = add(left ? "shin_l" : "shin_r", thigh, 0.4, JointType::hinge, s * 0.2);
+    const int hip = add(left ? "hip_l" : "hip_r", root, 0.1, JointType::Fixed, s * 2.3);
+    const int thigh = add(left ? "thigh_l" : "thigh_r", hip, 0.42, JointType::Ball, s * (kPi - 2.3), 1.6);
+    const int shin = add(left ? "shin_l" : "shin_r", thigh, 0.4, JointType::Hinge, s * 0.2);
     def.bones[shin].axis = Vec3(0, 0, 1);
     def.bones[shin].min_angle = left ? -0.2 : -2.2;
     def.bones[shin].max_angle = left ? 2.2 : 0.2;

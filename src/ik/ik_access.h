@@ -80,11 +80,11 @@ struct RebuildArgs {
 /// conj(frame) world, and forward kinematics of the bone runs in the same pass.
 void rebuild_rotations(const RebuildArgs& args);
 
-/// TwoBoneJob::Run (validates, then solves; false when the inputs are invalid).
+/// TwoBoneJob::run (validates, then solves; false when the inputs are invalid).
 bool run_two_bone(TwoBoneJob& job);
 
 /// Two-bone analytic solve on a skeleton (the effector's bone is the hinge "mid" bone,
-/// its parent the ball "start" bone). Used by Solver for Method::two_bone.
+/// its parent the ball "start" bone). Used by Solver for Method::TwoBone.
 SolveResult solve_two_bone(Skeleton& s, const SolverSettings& settings);
 
 }  // namespace detail

@@ -51,7 +51,7 @@ Skeleton::Skeleton(const SkeletonDef& def) {
     require_positive(b.length, bone_where(i, b, "length"));
     require_unit_quat(b.rest, bone_where(i, b, "rest"));
     require_non_negative(b.radius, bone_where(i, b, "radius"));
-    if (b.joint == JointType::hinge) {
+    if (b.joint == JointType::Hinge) {
       const std::string w = bone_where(i, b, "axis");
       for (int c = 0; c < 3; ++c) require_finite(b.axis[c], w);
       const double len = glm::length(b.axis);
@@ -62,7 +62,7 @@ Skeleton::Skeleton(const SkeletonDef& def) {
       if (b.min_angle > b.max_angle)
         throw Error(bone_where(i, b, "min_angle") + ": must be <= max_angle (" +
                     format_value(b.max_angle) + "), got " + format_value(b.min_angle));
-    } else if (b.joint == JointType::ball) {
+    } else if (b.joint == JointType::Ball) {
       require_in_range(b.swing_limit, 0, kPi, bone_where(i, b, "swing_limit"));
       require_in_range(b.min_twist, -kPi, kPi, bone_where(i, b, "min_twist"));
       require_in_range(b.max_twist, -kPi, kPi, bone_where(i, b, "max_twist"));
@@ -124,13 +124,13 @@ Skeleton::Skeleton(const SkeletonDef& def) {
     dof_offset_[k] = dof;
     total_length_ += b.length;
     reach_[k] = b.length + (parent_[k] >= 0 ? reach_[parent_[k]] : 0.0);
-    if (b.joint == JointType::hinge) {
+    if (b.joint == JointType::Hinge) {
       lo_[k] = b.min_angle;
       hi_[k] = b.max_angle;
       swing_[k] = 0;
       limited_[k] = (b.max_angle - b.min_angle) < 2 * kPi - 1e-9;
       dof += 1;
-    } else if (b.joint == JointType::ball) {
+    } else if (b.joint == JointType::Ball) {
       lo_[k] = b.min_twist;
       hi_[k] = b.max_twist;
       swing_[k] = b.swing_limit;
@@ -187,11 +187,11 @@ double Skeleton::reach(int bone) const {
 void Skeleton::clamp_joint(int i) {
   // project the joint rotation into its limits; hinges also wrap to (-pi, pi]
   switch (type_[i]) {
-    case JointType::fixed:
+    case JointType::Fixed:
       q_[i] = Quat(1, 0, 0, 0);
       angle_[i] = 0;
       break;
-    case JointType::hinge: {
+    case JointType::Hinge: {
       double a = detail::wrap_angle(angle_[i]);
       if (limited_[i]) a = std::clamp(a, lo_[i], hi_[i]);
       angle_[i] = a;
@@ -199,7 +199,7 @@ void Skeleton::clamp_joint(int i) {
       detail::put(q_[i], Quat(std::cos(0.5 * a), axis_[i].x * s, axis_[i].y * s, axis_[i].z * s));
       break;
     }
-    case JointType::ball:
+    case JointType::Ball:
       if (limited_[i])
         detail::put(q_[i], detail::clamp_ball(q_[i], swing_[i], lo_[i], hi_[i]));
       else
@@ -215,7 +215,7 @@ void Skeleton::set_joint_rotation(int i, const Quat& q) {
   const double n = glm::length(q);
   if (n < 1e-12) throw Error("Skeleton::set_joint_rotation q: must be non-zero, got norm 0");
   const Quat u = q / n;
-  if (type_[i] == JointType::hinge) {
+  if (type_[i] == JointType::Hinge) {
     // the angle of the rotation's component about the hinge axis
     const double s = u.x * axis_[i].x + u.y * axis_[i].y + u.z * axis_[i].z;
     angle_[i] = 2 * std::atan2(s, u.w);
@@ -229,7 +229,7 @@ void Skeleton::set_hinge_angle(int i, double angle) {
   fk_dirty_ = true;
   require_count(i, 0, bone_count() - 1, "Skeleton::set_hinge_angle bone");
   require_finite(angle, "Skeleton::set_hinge_angle angle");
-  if (type_[i] != JointType::hinge)
+  if (type_[i] != JointType::Hinge)
     throw Error("Skeleton::set_hinge_angle: bone " + std::to_string(i) + " is not a hinge");
   angle_[i] = angle;
   clamp_joint(i);
@@ -254,13 +254,13 @@ bool Skeleton::within_limits(double tol, int* bad) const {
     bool ok = true;
     if (!is_finite(q_[i].w) || !is_finite(q_[i].x) || !is_finite(q_[i].y) || !is_finite(q_[i].z))
       ok = false;
-    else if (type_[i] == JointType::hinge) {
+    else if (type_[i] == JointType::Hinge) {
       if (limited_[i]) ok = angle_[i] >= lo_[i] - tol && angle_[i] <= hi_[i] + tol;
       // the quaternion must agree with the angle
       const double s = std::sin(0.5 * angle_[i]);
       const Quat e(std::cos(0.5 * angle_[i]), axis_[i].x * s, axis_[i].y * s, axis_[i].z * s);
       ok = ok && std::abs(std::abs(glm::dot(e, q_[i])) - 1) < 1e-9;
-    } else if (type_[i] == JointType::ball) {
+    } else if (type_[i] == JointType::Ball) {
       if (limited_[i]) {
         double swing, twist;
         detail::swing_twist_angles(q_[i], swing, twist);
@@ -398,8 +398,8 @@ void Skeleton::draw(DebugDraw& dd, const SkeletonDrawOptions& o) const {
     if (o.bones) dd.capsule(start_[i], tip_[i], r, o.bone_color);
     // the joint, coloured by type
     if (o.joints) {
-      const Color c = type_[i] == JointType::hinge  ? colors::orange
-                      : type_[i] == JointType::ball ? colors::cyan
+      const Color c = type_[i] == JointType::Hinge  ? colors::orange
+                      : type_[i] == JointType::Ball ? colors::cyan
                                                     : colors::white;
       dd.sphere(start_[i], 1.3 * r, c);
     }
@@ -414,7 +414,7 @@ void Skeleton::draw(DebugDraw& dd, const SkeletonDrawOptions& o) const {
       const Quat frame = (p >= 0 ? world_[p] : root_rotation_) * rest_[i];
       const double len = 0.5 * length_[i];
       constexpr int kSeg = 16;
-      if (type_[i] == JointType::hinge) {
+      if (type_[i] == JointType::Hinge) {
         Vec3 prev{};
         for (int s = 0; s <= kSeg; ++s) {
           const double a = lo_[i] + (hi_[i] - lo_[i]) * s / kSeg;
@@ -423,7 +423,7 @@ void Skeleton::draw(DebugDraw& dd, const SkeletonDrawOptions& o) const {
           if (s > 0) dd.line(prev, pt, colors::yellow);
           prev = pt;
         }
-      } else if (type_[i] == JointType::ball && swing_[i] < kPi - 1e-9) {
+      } else if (type_[i] == JointType::Ball && swing_[i] < kPi - 1e-9) {
         const double c = std::cos(swing_[i]) * len, s = std::sin(swing_[i]) * len;
         Vec3 prev{};
         for (int k = 0; k <= kSeg; ++k) {

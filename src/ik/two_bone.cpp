@@ -2,9 +2,9 @@
 // angle, a shortest-arc turn about the shoulder aims the limb at the target, and a
 // turn about the shoulder-target axis puts the elbow on the pole's side.
 // A stateless job (TwoBoneJob, after ozz-animation's IKTwoBoneJob) and the
-// Method::two_bone adapter for skeletons.
+// Method::TwoBone adapter for skeletons.
 //
-// TwoBoneJob::Run is written for latency: no trigonometric call (but the cosines of elbow
+// TwoBoneJob::run is written for latency: no trigonometric call (but the cosines of elbow
 // limits, when there are any), every normalisation as sqrt(x) (1 / x) (the
 // division beside the root rather than after it), sines from cross products rather than
 // sqrt(1 - cos^2), and the intermediate shortest-arc quaternions left unnormalised (a
@@ -144,13 +144,13 @@ struct Limb {
 
 }  // namespace
 
-bool TwoBoneJob::Validate() const { return Limb(*this).valid(*this); }
+bool TwoBoneJob::validate() const { return Limb(*this).valid(*this); }
 
-bool TwoBoneJob::Run() { return detail::run_two_bone(*this); }
+bool TwoBoneJob::run() { return detail::run_two_bone(*this); }
 
 namespace detail {
 
-// TwoBoneJob::Run, compiled for AVX2 and for the baseline (GCC function multi-versioning:
+// TwoBoneJob::run, compiled for AVX2 and for the baseline (GCC function multi-versioning:
 // the three-operand encoding spares the register copies of the two-operand one); both give
 // the same bits (-ffp-contract=off: no fused multiply-adds)
 PBA_CLONES bool run_two_bone(TwoBoneJob& job) {

@@ -11,17 +11,7 @@ app=$1
 work=$2
 guard=${PBA_IK_MOUSE_GUARD:-120}   # seconds per wait before giving up
 
-fail() {
-  echo "FAIL: $*"
-  [ -f "$work/report.txt" ] && echo "last report: $(cat "$work/report.txt")"
-  [ -f "$work/app.log" ] && { echo "--- app output ---"; cat "$work/app.log"; }
-  exit 1
-}
-[ -n "${DISPLAY:-}" ] || fail "DISPLAY is not set (run under xvfb-run, as scripts/test does)"
-command -v xdotool >/dev/null || fail "xdotool is not installed (scripts/install-deps)"
-
-rm -rf "$work"
-mkdir -p "$work"
+. "$(dirname "$0")/xdo_lib.sh"   # fail, wait_until; checks the display, cleans $work
 report=$work/report.txt
 
 # the chain, still until dragged, in a visible window
@@ -32,15 +22,6 @@ trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null' EXIT
 
 # field NAME [K]: the K-th value (default 1) after NAME in the report
 field() { awk -v n="$1" -v k="${2:-1}" '{for (i = 1; i <= NF; ++i) if ($i == n) {print $(i + k); exit}}' "$report" 2>/dev/null; }
-# waits until the shell condition "$1" holds, re-reading the report; fails after the guard
-wait_until() {
-  local what=$1 cond=$2 t0=$SECONDS
-  while ! eval "$cond"; do
-    kill -0 $pid 2>/dev/null || fail "the app exited while waiting for $what"
-    [ $((SECONDS - t0)) -lt "$guard" ] || fail "timed out after ${guard}s waiting for $what"
-    sleep 0.2
-  done
-}
 ge() { awk -v a="$1" -v b="$2" 'BEGIN {exit !(a + 0 >= b + 0)}'; }
 
 # the window is up and the sample has drawn some frames

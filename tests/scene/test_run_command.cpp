@@ -8,8 +8,12 @@
 #include <string>
 #include <vector>
 
+#include <cstdlib>
+#include <sstream>
+
 #include "commands_run.h"
 #include "pba/scene.h"
+#include "pba/soft.h"
 
 namespace {
 
@@ -42,6 +46,146 @@ TEST(RunCommand, BadFlagsExitTwo) {
   EXPECT_NE(err.find("missing scene file"), std::string::npos) << err;
 }
 
+// a scene file in the temporary directory
+std::string write_scene(const std::string& name, const std::string& json) {
+  const auto path = std::filesystem::temp_directory_path() / name;
+  std::ofstream(path) << json;
+  return path.string();
+}
+
+std::string hash_of(const pba::World& w) {
+  char hash[32];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(w.hash()));
+  return hash;
+}
+
+// the hash `pba run ... --quiet` prints (without the newline)
+std::string quiet_hash(std::vector<std::string> words) {
+  words.push_back("--quiet");
+  testing::internal::CaptureStdout();
+  const int rc = run(words);
+  std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_EQ(rc, 0);
+  if (!out.empty() && out.back() == '\n') out.pop_back();
+  return out;
+}
+
+TEST(RunCommand, FlagEqualsValueIsTheSameAsFlagValue) {
+  EXPECT_EQ(quiet_hash({kScene, "--steps=37"}), quiet_hash({kScene, "--steps", "37"}));
+  EXPECT_NE(quiet_hash({kScene, "--steps=37"}), quiet_hash({kScene, "--steps=38"}));
+}
+
+// every soft-body particle is written, numbered within its body and named by it; the
+// values are the body's own state after that many steps (the same World stepped here)
+TEST(RunCommand, CsvHasSoftBodyParticlesWithTheirBody) {
+  const std::string flag = std::string(PBA_SCENES_DIR) + "/soft_flag.json";
+  const auto csv = std::filesystem::temp_directory_path() / "pba_run_soft.csv";
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({flag, "--steps", "30", "--every", "10", "--csv", csv.string()}), 0);
+  const std::string out = testing::internal::GetCapturedStdout();
+  pba::Scene s = pba::load_scene(flag);
+  const auto* soft = dynamic_cast<const pba::SoftSystem*>(s.world.find_system(pba::SoftSystem::kName));
+  ASSERT_NE(soft, nullptr);
+  ASSERT_EQ(soft->size(), 1u);
+  const std::size_t n = soft->at(0).size();
+  ASSERT_GT(n, 0u);
+  EXPECT_EQ(s.world.particles().size(), 0u) << "the flag is all soft body";
+  EXPECT_NE(out.find("soft-body particles " + std::to_string(n)), std::string::npos) << out;
+  for (int i = 0; i < 30; ++i) s.world.step();
+  // header, then 4 snapshots (steps 0, 10, 20, 30) of n particles, all of body "flag"
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "step,time,particle,x,y,z,vx,vy,vz,body");
+  std::size_t rows = 0;
+  std::string last;
+  while (std::getline(in, line)) {
+    ++rows, last = line;
+    EXPECT_EQ(line.substr(line.rfind(',') + 1), "flag") << line;
+  }
+  EXPECT_EQ(rows, 4 * n);
+  // the last row is particle n - 1 at step 30, as the World here has it (%.9g of floats
+  // round-trips them exactly)
+  const pba::SoftBody& b = soft->at(0);
+  const pba::Vec3 v = b.velocity(n - 1);
+  char want[256];
+  std::snprintf(want, sizeof want, "30,%.17g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,flag", s.world.time(), n - 1,
+                b.xs()[n - 1], b.ys()[n - 1], b.zs()[n - 1], static_cast<float>(v.x), static_cast<float>(v.y),
+                static_cast<float>(v.z));
+  EXPECT_EQ(last, want);
+}
+
+// --method is applied to what an integrator steps (the particles, mass-spring bodies)
+// and refused, naming the reason, where the scene cannot honour it: never reported as
+// applied while the state is the same
+TEST(RunCommand, MethodRefusedWhereTheSceneCannotHonourIt) {
+  const std::string springs = std::string(PBA_SCENES_DIR) + "/soft_spring.json";
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({springs, "--method", "euler", "--steps", "10"}), 2);
+  const std::string empty = write_scene("pba_run_empty.json", R"({"version": 1})");
+  EXPECT_EQ(run({empty, "--method", "rk4", "--steps", "10"}), 2);
+  EXPECT_EQ(run({kScene, "--every", "5"}), 2);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("--method euler: scene " + springs + " has the soft body 'XPBD' solved by XPBD"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("--method rk4: scene " + empty + " has no particles, emitters or soft bodies"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("--every 5: sets the CSV interval, so it needs --csv FILE"), std::string::npos) << err;
+}
+
+TEST(RunCommand, MethodAppliesToMassSpringBodies) {
+  // two mass-spring springs; --method replaces both integrators: the hash is that of the
+  // same World with the bodies' methods set here, and differs between methods
+  const std::string file = write_scene("pba_run_springs.json", R"({"version": 1,
+    "settings": {"dt": 0.01},
+    "soft_bodies": [
+      {"type": "spring", "name": "one", "solver": "mass-spring", "integrator": "semi-implicit-euler",
+       "a": [0, 2, 0], "b": [0, 1, 0], "rest_length": 0.8, "mass": 0.5, "stiffness": 40},
+      {"type": "spring", "name": "two", "solver": "mass-spring", "integrator": "velocity-verlet",
+       "a": [1, 2, 0], "b": [1, 1, 0], "rest_length": 0.8, "mass": 0.5, "stiffness": 40}]})");
+  for (pba::Method m : {pba::Method::ExplicitEuler, pba::Method::RK4}) {
+    pba::Scene s = pba::load_scene(file);
+    auto* soft = dynamic_cast<pba::SoftSystem*>(s.world.find_system(pba::SoftSystem::kName));
+    ASSERT_NE(soft, nullptr);
+    for (std::size_t b = 0; b < soft->size(); ++b) soft->at(b).settings().method = m;
+    for (int i = 0; i < 50; ++i) s.world.step();
+    EXPECT_EQ(quiet_hash({file, "--steps", "50", "--method", std::string(pba::name(m))}), hash_of(s.world))
+        << pba::name(m);
+  }
+  EXPECT_NE(quiet_hash({file, "--steps", "50", "--method", "euler"}),
+            quiet_hash({file, "--steps", "50", "--method", "rk4"}));
+  EXPECT_NE(quiet_hash({file, "--steps", "50", "--method", "euler"}), quiet_hash({file, "--steps", "50"}));
+  // the summary says what integrated what
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(run({file, "--steps", "5", "--method", "rk4"}), 0);
+  const std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("integrators  'one' mass-spring rk4, 'two' mass-spring rk4 (from --method)"), std::string::npos)
+      << out;
+}
+
+// progress goes to stderr as lines when it is not a terminal (here a file), at the
+// PBA_PROGRESS_INTERVAL period; --quiet prints none
+TEST(RunCommand, ProgressLinesUnlessQuiet) {
+  ::setenv("PBA_PROGRESS_INTERVAL", "1e-9", 1);
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({kScene, "--steps", "200"}), 0);
+  const std::string err = testing::internal::GetCapturedStderr();
+  testing::internal::GetCapturedStdout();
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({kScene, "--steps", "200", "--quiet"}), 0);
+  const std::string quiet_err = testing::internal::GetCapturedStderr();
+  testing::internal::GetCapturedStdout();
+  ::unsetenv("PBA_PROGRESS_INTERVAL");
+  EXPECT_NE(err.find("pba run: 200/200 steps (100%), "), std::string::npos) << err;
+  EXPECT_NE(err.find(" steps/s, 0.0 s left\n"), std::string::npos) << err;
+  EXPECT_EQ(err.find('\r'), std::string::npos) << "no live line in a file";
+  EXPECT_EQ(quiet_err, "");
+}
+
 TEST(RunCommand, BadSceneExitsOneNamingTheFile) {
   const auto dir = std::filesystem::temp_directory_path() / "pba_run_test";
   std::filesystem::create_directories(dir);
@@ -69,12 +213,13 @@ TEST(RunCommand, WritesCsvAndPrintsTheWorldsHash) {
   std::ifstream in(csv);
   std::string line;
   std::getline(in, line);
-  EXPECT_EQ(line, "step,time,particle,x,y,z,vx,vy,vz");
+  EXPECT_EQ(line, "step,time,particle,x,y,z,vx,vy,vz,body");
   int rows = 0;
   std::string last;
   while (std::getline(in, line)) ++rows, last = line;
   EXPECT_EQ(rows, 13 * 8);
   EXPECT_EQ(last.rfind("120,1,7,", 0), 0u) << last;
+  EXPECT_EQ(last.substr(last.rfind(',') + 1), "particles") << last;
   // --quiet prints only the hash; builders run too
   testing::internal::CaptureStdout();
   EXPECT_EQ(run({kScene, "--steps", "120", "--quiet"}), 0);
