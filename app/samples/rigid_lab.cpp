@@ -85,6 +85,8 @@ class RigidLab final : public Sample {
         for (const Aabb& b : bodies_.shape_bounds(id))
           if (std::isfinite(b.lo.x) && std::isfinite(b.hi.x)) r.box(b.center(), 0.5 * (b.hi - b.lo), Quat(1, 0, 0, 0), Color{1, 1, 1, 0.15f});
     }
+    // the measured body's centre as an unlit dot (its lit faces vary in shade with the view)
+    if (bodies_.valid(top_)) r.point(bodies_.center_of_mass(top_), 9.0f, kTop);
     // contact points (red: overlapping, green: speculative) and normals
     if (ctx_.draw.contacts || ctx_.draw.normals)
       for (const RigidContactPoint& c : bodies_.contacts()) {
@@ -153,7 +155,7 @@ class RigidLab final : public Sample {
   }
 
   std::vector<Color> ExpectedColors() const override {
-    // the measured body is yellow; among a thousand falling boxes it may be hidden
+    // the measured body's yellow dot; among a thousand falling boxes it may be hidden
     return {scene_ == LabScene::Falling ? kBox : kTop};
   }
 
