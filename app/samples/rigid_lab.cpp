@@ -85,8 +85,9 @@ class RigidLab final : public Sample {
         for (const Aabb& b : bodies_.shape_bounds(id))
           if (std::isfinite(b.lo.x) && std::isfinite(b.hi.x)) r.box(b.center(), 0.5 * (b.hi - b.lo), Quat(1, 0, 0, 0), Color{1, 1, 1, 0.15f});
     }
-    // the measured body's centre as an unlit dot (its lit faces vary in shade with the view)
-    if (bodies_.valid(top_)) r.point(bodies_.center_of_mass(top_), 9.0f, kTop);
+    // a marker ball above the measured body (its flat faces take one shade each, which may
+    // never be the colour itself; a lit ball always shows it somewhere)
+    if (bodies_.valid(top_)) r.sphere(bodies_.center_of_mass(top_) + Vec3(0, 0.8, 0), 0.15, kTop);
     // contact points (red: overlapping, green: speculative) and normals
     if (ctx_.draw.contacts || ctx_.draw.normals)
       for (const RigidContactPoint& c : bodies_.contacts()) {
@@ -155,7 +156,7 @@ class RigidLab final : public Sample {
   }
 
   std::vector<Color> ExpectedColors() const override {
-    // the measured body's yellow dot; among a thousand falling boxes it may be hidden
+    // the measured body's yellow marker; among a thousand falling boxes it may be hidden
     return {scene_ == LabScene::Falling ? kBox : kTop};
   }
 
