@@ -87,7 +87,7 @@ class RigidLab final : public Sample {
     }
     // a marker ball above the measured body (its flat faces take one shade each, which may
     // never be the colour itself; a lit ball always shows it somewhere)
-    if (bodies_.valid(top_)) r.sphere(bodies_.center_of_mass(top_) + Vec3(0, 0.8, 0), 0.15, kTop);
+    if (bodies_.valid(top_)) r.sphere(bodies_.center_of_mass(top_) + Vec3(0, 0.9, 0), 0.3, kTop);
     // contact points (red: overlapping, green: speculative) and normals
     if (ctx_.draw.contacts || ctx_.draw.normals)
       for (const RigidContactPoint& c : bodies_.contacts()) {
