@@ -704,6 +704,26 @@ TEST(SoftBadInput, ClothGridSmallerThan2x2) {
   EXPECT_NE(error_of([] { pba::SoftBody::cloth_grid({.nx = 4, .ny = 0}); }).find("ClothDef.ny"), std::string::npos);
 }
 
+// values that are finite doubles but do not fit the float state are refused by field
+TEST(SoftBadInput, MeshValuesThatOverflowTheFloatState) {
+  pba::SoftMesh m;
+  m.positions = {{0, 0, 0}, {1e39, 0, 0}};
+  m.masses = {1, 1};
+  std::string msg = error_of([&] { pba::SoftBody::from_mesh(m); });
+  EXPECT_NE(msg.find("SoftMesh.positions[1]"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("float"), std::string::npos) << msg;
+  m.positions[1] = {1, 0, 0};
+  m.masses[0] = 1e-39;  // its inverse, 1e39, is no float
+  msg = error_of([&] { pba::SoftBody::from_mesh(m); });
+  EXPECT_NE(msg.find("SoftMesh.masses[0]"), std::string::npos) << msg;
+  m.masses[0] = 1;
+  m.velocities = {{0, 0, 0}, {0, -1e40, 0}};
+  msg = error_of([&] { pba::SoftBody::from_mesh(m); });
+  EXPECT_NE(msg.find("SoftMesh.velocities[1]"), std::string::npos) << msg;
+  m.velocities = {};
+  EXPECT_EQ(error_of([&] { pba::SoftBody::from_mesh(m); }), "");
+}
+
 TEST(SoftBadInput, ConstraintsNamingMissingParticles) {
   pba::SoftMesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
