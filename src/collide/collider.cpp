@@ -1,5 +1,6 @@
 // Colliders: construction, validation and drawing of the flat world-space shape.
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "pba/collide/collider.h"
@@ -15,6 +16,10 @@ bool unit_quat(const Quat& q) {
   return std::isfinite(q.w) && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) &&
          std::abs(glm::length(q) - 1.0) <= 1e-6;
 }
+
+// finite and within a float's range: the particle kernel flattens colliders to floats
+bool fits(double v) { return std::abs(v) <= std::numeric_limits<float>::max(); }
+bool fits(const Vec3& v) { return fits(v.x) && fits(v.y) && fits(v.z); }
 
 }  // namespace
 
@@ -49,19 +54,19 @@ Collider Collider::box(const Vec3& center, const Vec3& half_extents, SurfaceMate
 bool Collider::ok() const {
   // motion and material
   const ColliderShape& s = shape;
-  bool good = is_finite(begin.position) && is_finite(end.position) && unit_quat(begin.rotation) &&
-              unit_quat(end.rotation) && is_finite(velocity) && is_finite(angular_velocity) &&
+  bool good = fits(begin.position) && fits(end.position) && unit_quat(begin.rotation) &&
+              unit_quat(end.rotation) && fits(velocity) && fits(angular_velocity) &&
               material.restitution >= 0 && material.restitution <= 1 && std::isfinite(material.friction) &&
               material.friction >= 0;
   // the shape's parameters; the types without a point contact yet are not ok
   switch (s.type) {
-    case ShapeType::Plane: return good && is_finite(s.normal) && glm::length(s.normal) > 0 && std::isfinite(s.offset);
-    case ShapeType::Sphere: return good && std::isfinite(s.radius) && s.radius > 0;
+    case ShapeType::Plane: return good && fits(s.normal) && glm::length(s.normal) > 0 && fits(s.offset);
+    case ShapeType::Sphere: return good && fits(s.radius) && s.radius > 0;
     case ShapeType::Box:
-      return good && is_finite(s.half_extents) && s.half_extents.x > 0 && s.half_extents.y > 0 &&
+      return good && fits(s.half_extents) && s.half_extents.x > 0 && s.half_extents.y > 0 &&
              s.half_extents.z > 0;
     case ShapeType::Capsule:
-      return good && std::isfinite(s.radius) && s.radius > 0 && std::isfinite(s.half_height) && s.half_height >= 0;
+      return good && fits(s.radius) && s.radius > 0 && fits(s.half_height) && s.half_height >= 0;
     case ShapeType::Hull:
     case ShapeType::Mesh:
     case ShapeType::Compound: return false;
@@ -102,6 +107,16 @@ void Collider::validate(std::string_view where) const {
   require_unit_quat(end.rotation, field_path(where, "rotation"));
   if (!is_finite(velocity)) require_finite(velocity, field_path(where, "velocity"));
   if (!is_finite(angular_velocity)) require_finite(angular_velocity, field_path(where, "angular_velocity"));
+  // finite doubles that a float cannot hold
+  if (!fits(begin.position)) require_float(begin.position, field_path(where, "position"));
+  if (!fits(end.position)) require_float(end.position, field_path(where, "position"));
+  if (!fits(velocity)) require_float(velocity, field_path(where, "velocity"));
+  if (!fits(angular_velocity)) require_float(angular_velocity, field_path(where, "angular_velocity"));
+  if (!fits(shape.normal)) require_float(shape.normal, field_path(where, "normal"));
+  if (!fits(shape.offset)) require_float(shape.offset, field_path(where, "offset"));
+  if (!fits(shape.radius)) require_float(shape.radius, field_path(where, "radius"));
+  if (!fits(shape.half_extents)) require_float(shape.half_extents, field_path(where, "half_extents"));
+  if (!fits(shape.half_height)) require_float(shape.half_height, field_path(where, "half_height"));
 }
 
 void Collider::draw(DebugDraw& draw, Color c, const DrawFlags& flags) const {

@@ -26,6 +26,15 @@ void Forcer::validate(std::string_view where) const {
   if (!(std::isfinite(softening) && (softening) > 0)) require_positive(softening, field_path(where, "softening"));
   if (!(std::isfinite(pulse_period) && (pulse_period) >= 0)) require_non_negative(pulse_period, field_path(where, "pulse_period"));
   if (!((pulse_duration) >= (0) && (pulse_duration) <= (pulse_period > 0 ? pulse_period : 1e300))) require_in_range(pulse_duration, 0, pulse_period > 0 ? pulse_period : 1e300, field_path(where, "pulse_duration"));
+  // the forcer kernels work in floats: finite doubles a float cannot hold are refused too
+  require_float(pose.position, field_path(where, "position"));
+  require_float(half_extents, field_path(where, "half_extents"));
+  require_float(radius, field_path(where, "radius"));
+  require_float(half_height, field_path(where, "half_height"));
+  require_float(direction, field_path(where, "direction"));
+  require_float(strength, field_path(where, "strength"));
+  require_float(pull, field_path(where, "pull"));
+  require_float(softening, field_path(where, "softening"));
 }
 
 bool Forcer::active(double t) const {

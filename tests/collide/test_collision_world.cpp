@@ -123,6 +123,22 @@ TEST(CollisionWorld, FlatFormsFollowTheColliders) {
 // Shapes without a point contact yet, and bad values, are refused with an Error that
 // names the collider, at the collision world, at the particle and soft-body steps and
 // at World::add_collider.
+// finite doubles that the particle kernel's float form cannot hold are refused by field
+TEST(CollisionWorld, RefusesCollidersThatOverflowTheFloatForm) {
+  CollisionWorld cw;
+  const Collider far = Collider::sphere({1e39, 0, 0}, 1.0);
+  std::string msg = error_of([&] { cw.add(far, 0, "moon"); });
+  EXPECT_NE(msg.find("moon.position"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("float"), std::string::npos) << msg;
+  const Collider huge = Collider::box({0, 0, 0}, {1, 1e40, 1});
+  EXPECT_NE(error_of([&] { cw.add(huge, 0, "wall"); }).find("wall.half_extents"), std::string::npos);
+  pba::ParticleSystem ps;
+  ps.spawn({.position = {0, 1, 0}});
+  msg = error_of([&] { ps.step(0, 0.01, std::span<const Collider>(&far, 1), {}); });
+  EXPECT_NE(msg.find("colliders[0].position"), std::string::npos) << msg;
+  EXPECT_EQ(error_of([&] { cw.add(Collider::sphere({3e38, 0, 0}, 1.0), 0, "edge"); }), "");  // still a float
+}
+
 TEST(CollisionWorld, RefusesWhatItCannotCollide) {
   // a hull (its point contact waits for the shapes module)
   Collider hull;

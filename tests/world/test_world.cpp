@@ -172,6 +172,30 @@ TEST(Forcers, FanEntityPushesParticlesInsideIt) {
   EXPECT_EQ(w.velocity(out).x, 0.0);
 }
 
+// a forcer's numbers go to float kernels: finite doubles that no float holds are refused
+TEST(Forcers, ValuesThatOverflowAFloatAreRefusedByField) {
+  World w;
+  const EntityId far = w.create_entity({.name = "far fan"});
+  std::string msg;
+  try {
+    w.add_forcer(far, {.pose = {.position = {1e39, 0, 0}}});
+  } catch (const pba::Error& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("far fan"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("position"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("float"), std::string::npos) << msg;
+  const EntityId strong = w.create_entity({.name = "strong fan"});
+  msg.clear();
+  try {
+    w.add_forcer(strong, {.strength = 1e40});
+  } catch (const pba::Error& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("strength"), std::string::npos) << msg;
+  w.add_forcer(strong, {.strength = 1e30});  // large, but a float
+}
+
 TEST(Constraints, DistanceIsKept) {
   World w({.stepper = {.fixed_dt = 1.0 / 120}});
   const EntityId anchor = w.create_entity({.pose = {.position = {0, 2, 0}}});
