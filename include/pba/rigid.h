@@ -288,6 +288,11 @@ class RigidBodySystem {
  private:
   friend struct detail::RigidContacts;
   std::size_t index(RigidBodyId id, std::string_view where) const;
+  // the body frame of dense body i, from its principal frame and centre of mass
+  Pose body_pose(std::size_t i) const {
+    const Quat r = glm::normalize(q_[i] * glm::conjugate(principal_[i]));
+    return {com_[i] - r * com_local_[i], r};
+  }
   std::string describe(std::size_t i) const;
   void integrate_rotation(std::size_t i, double h);
   void integrate_velocities(double h, const Vec3& gravity);

@@ -76,8 +76,7 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   // every shape's bounds, grown by the speculative distance and by how far it can move
   proxies.clear();
   for (std::size_t i = 0; i < n; ++i) {
-    const Quat r = glm::normalize(s.q_[i] * glm::conjugate(s.principal_[i]));
-    const Pose body{s.com_[i] - r * s.com_local_[i], r};
+    const Pose body = s.body_pose(i);
     const double reach = cs.speculative_distance + glm::length(s.v_[i]) * dt;
     for (std::uint32_t k = 0; k < s.shapes_[i].size(); ++k)
       proxies.push_back({bounds(s.shapes_[i][k].shape, compose(body, s.shapes_[i][k].local)).grown(reach),
@@ -138,11 +137,8 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
     if (had) c.cache = old->cache;
     const RigidShapeDef& sa = s.shapes_[c.a][c.shape_a];
     const RigidShapeDef& sb = s.shapes_[c.b][c.shape_b];
-    auto pose_of = [&](std::uint32_t i, const RigidShapeDef& d) {
-      const Quat r = glm::normalize(s.q_[i] * glm::conjugate(s.principal_[i]));
-      return compose(Pose{s.com_[i] - r * s.com_local_[i], r}, d.local);
-    };
-    const Manifold m = collide(sa.shape, pose_of(c.a, sa), sb.shape, pose_of(c.b, sb), ns, &c.cache);
+    const Manifold m = collide(sa.shape, compose(s.body_pose(c.a), sa.local), sb.shape,
+                               compose(s.body_pose(c.b), sb.local), ns, &c.cache);
     if (m.count == 0) continue;
     c.normal = m.normal;
     tangent_basis(c.normal, c.t1, c.t2);

@@ -312,9 +312,7 @@ std::string RigidBodySystem::describe(std::size_t i) const {
 // state
 
 Pose RigidBodySystem::pose(RigidBodyId id) const {
-  const std::size_t i = index(id, "RigidBodySystem::pose");
-  const Quat r = glm::normalize(q_[i] * glm::conjugate(principal_[i]));
-  return {com_[i] - r * com_local_[i], r};
+  return body_pose(index(id, "RigidBodySystem::pose"));
 }
 
 Vec3 RigidBodySystem::center_of_mass(RigidBodyId id) const { return com_[index(id, "RigidBodySystem::center_of_mass")]; }
