@@ -327,6 +327,8 @@ class RigidBodySystem {
   std::vector<Quat> principal_;       // principal frame in the body frame
   std::vector<std::string> name_;
   std::vector<std::uint8_t> bullet_;
+  std::vector<double> extent_;      // bounding radius of the shapes about the centre of mass (m)
+  std::vector<double> min_extent_;  // smallest half size of a shape (m): faster than half of it per step is fast
   std::vector<std::vector<RigidShapeDef>> shapes_;  // by dense index
   // sleeping: flags, time spent slow, and the island (a dense index) each body last belonged to
   std::vector<std::uint8_t> asleep_;

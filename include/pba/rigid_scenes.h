@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "pba/rigid.h"
@@ -83,6 +84,44 @@ inline std::vector<RigidBodyId> friction_ramp(RigidBodySystem& s, double angle =
     const Vec3 p = 0.25 * normal + Vec3(std::cos(angle), std::sin(angle), 0) * 3.0 + Vec3(0, 0, (i - 0.5 * (n - 1)) * 0.9);
     out.push_back(s.create({.pose = {p, q}, .shapes = {{.shape = ColliderShape::box(Vec3(0.25)),
                                                          .material = {.restitution = 0, .friction = mu * mu}}}}));
+  }
+  return out;
+}
+
+/// A closed box of six static walls of thickness `wall` (m) around the cube |x|, |y|, |z| < `inner`
+/// (m), with `n` bodies inside (alternately boxes of half size 0.25 m and spheres of radius
+/// 0.25 m, mu 0.5, e 0.5) on a grid of spacing 1.1 m, each moving at `speed` (m/s) in a
+/// direction of a fixed pseudo-random sequence (the tunnelling test: none may get out).
+/// Returns the bodies inside. Throws Error when they do not fit the grid.
+inline std::vector<RigidBodyId> closed_box(RigidBodySystem& s, int n, double speed, double inner = 10,
+                                           double wall = 0.2) {
+  const SurfaceMaterial m{.restitution = 0.5, .friction = 0.5};
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = -1; side <= 1; side += 2) {
+      Vec3 p(0), h(inner + wall);
+      p[axis] = side * (inner + 0.5 * wall);
+      h[axis] = 0.5 * wall;
+      s.create({.name = "wall", .type = BodyType::Static, .pose = {p},
+                .shapes = {{.shape = ColliderShape::box(h), .material = m}}});
+    }
+  const int per = static_cast<int>(std::floor((2 * inner - 1.1) / 1.1)) + 1;
+  if (n > per * per * per) throw Error("closed_box: " + std::to_string(n) + " bodies do not fit a grid of " +
+                                       std::to_string(per) + "^3 in a box of half size " + std::to_string(inner));
+  std::vector<RigidBodyId> out;
+  std::uint64_t x = 0x9e3779b97f4a7c15ull;
+  auto uniform = [&x] {  // xorshift64*, in [-1, 1)
+    x ^= x >> 12, x ^= x << 25, x ^= x >> 27;
+    return static_cast<double>((x * 0x2545f4914f6cdd1dull) >> 11) * 0x1.0p-52 - 1;
+  };
+  for (int i = 0; i < n; ++i) {
+    const Vec3 p{-inner + 0.55 + 1.1 * (i % per), -inner + 0.55 + 1.1 * ((i / per) % per),
+                 -inner + 0.55 + 1.1 * (i / (per * per))};
+    Vec3 d;
+    do d = {uniform(), uniform(), uniform()};
+    while (glm::dot(d, d) > 1 || glm::dot(d, d) < 1e-4);
+    const ColliderShape shape = i % 2 ? ColliderShape::sphere(0.25) : ColliderShape::box(Vec3(0.25));
+    out.push_back(s.create({.pose = {p}, .linear_velocity = speed * glm::normalize(d),
+                            .shapes = {{.shape = shape, .material = m}}}));
   }
   return out;
 }

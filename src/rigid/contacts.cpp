@@ -77,7 +77,7 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   proxies.clear();
   for (std::size_t i = 0; i < n; ++i) {
     const Pose body = s.body_pose(i);
-    const double reach = cs.speculative_distance + glm::length(s.v_[i]) * dt;
+    const double reach = cs.speculative_distance + std::min(glm::length(s.v_[i]) * dt, s.extent_[i]);
     for (std::uint32_t k = 0; k < s.shapes_[i].size(); ++k)
       proxies.push_back({bounds(s.shapes_[i][k].shape, compose(body, s.shapes_[i][k].local)).grown(reach),
                          static_cast<std::uint32_t>(i), k});
@@ -88,6 +88,9 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
     if (a.body != b.body) return a.body < b.body;
     return a.shape < b.shape;
   });
+  statics.clear();
+  for (std::size_t i = 0; i < proxies.size(); ++i)
+    if (s.type_[proxies[i].body] == BodyType::Static) statics.push_back(static_cast<std::uint32_t>(i));
   for (std::size_t i = 0; i < proxies.size(); ++i) {
     const ShapeProxy& p = proxies[i];
     for (std::size_t j = i + 1; j < proxies.size() && proxies[j].box.lo.x <= p.box.hi.x; ++j) {
@@ -129,8 +132,10 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   std::size_t kept = 0;
   for (ContactPair& c : pairs) {
     // points are made as far out as the two bodies can close in one step (speculative contacts)
+    // (up to each body's size: faster ones are caught by the continuous pass)
     const NarrowPhaseSettings ns{.speculative_margin = cs.speculative_distance +
-                                                       (glm::length(s.v_[c.a]) + glm::length(s.v_[c.b])) * dt};
+                                                       std::min(glm::length(s.v_[c.a]) * dt, s.extent_[c.a]) +
+                                                       std::min(glm::length(s.v_[c.b]) * dt, s.extent_[c.b])};
     auto old = std::lower_bound(previous.begin(), previous.end(), c);
     if (!awake_dynamic(c.a) && !awake_dynamic(c.b)) continue;  // asleep, or asleep on a still body
     const bool had = old != previous.end() && !(c < *old) && !(*old < c);

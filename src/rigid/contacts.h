@@ -93,6 +93,8 @@ struct RigidContacts {
   std::vector<ContactPair> pairs, previous;
   std::vector<ShapeProxy> proxies;
   std::vector<Mat3> inv_inertia;  // world inverse inertia by dense body, fixed over the step
+  std::vector<std::uint32_t> statics;  // proxies of static bodies (indices into proxies)
+  std::size_t continuous_hits = 0;     // bodies put back to a time of impact, all steps
 
   /// Finds the overlapping shape pairs, builds their manifolds and carries last step's
   /// impulses over by feature id.
@@ -106,6 +108,9 @@ struct RigidContacts {
   void solve(RigidBodySystem& s, double h, bool bias, bool soft);
   /// Restitution for points that approached faster than the threshold.
   void restitution(RigidBodySystem& s);
+  /// Sweeps fast bodies (and bullets) against static shapes and puts each back at its first
+  /// time of impact (continuous.cpp).
+  void continuous(RigidBodySystem& s);
   /// Keeps each point's friction impulse in world axes for next step's re-projection.
   void store();
   /// Body i's solver state.

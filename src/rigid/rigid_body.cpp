@@ -186,7 +186,8 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
   type_.reserve(n);
   for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_}) v->reserve(n);
   for (auto* v : {&q_, &principal_, &q0_}) v->reserve(n);
-  for (auto* v : {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_, &sleep_time_, &island_slow_}) v->reserve(n);
+  for (auto* v : {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_, &sleep_time_, &island_slow_, &extent_, &min_extent_})
+    v->reserve(n);
   for (auto* v : {&island_, &parent_}) v->reserve(n);
   asleep_.reserve(n);
   name_.reserve(n);
@@ -263,6 +264,22 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   principal_.push_back(principal);
   name_.push_back(def.name);
   bullet_.push_back(def.bullet ? 1 : 0);
+  // the reach of the shapes about the centre of mass, and their thinnest part (planes and
+  // meshes have no finite reach; only dynamic bodies use these)
+  double reach = 0, thin = INFINITY;
+  for (const RigidShapeDef& d : shapes) {
+    if (d.shape.type == ShapeType::Plane || d.shape.type == ShapeType::Mesh) {
+      reach = INFINITY;
+      continue;
+    }
+    const Aabb b = bounds(d.shape, compose(Pose{-com_local}, d.local));
+    reach = std::max(reach, glm::length(glm::max(glm::abs(b.lo), glm::abs(b.hi))));
+    const Aabb own = bounds(d.shape, Pose{});
+    const Vec3 half = 0.5 * (own.hi - own.lo);
+    thin = std::min(thin, std::min(half.x, std::min(half.y, half.z)));
+  }
+  extent_.push_back(reach);
+  min_extent_.push_back(thin);
   shapes_.push_back(std::move(shapes));
   asleep_.push_back(0);
   sleep_time_.push_back(0);
@@ -284,7 +301,7 @@ void RigidBodySystem::destroy(RigidBodyId id) {
   };
   fill(type_), fill(com_), fill(q_), fill(v_), fill(w_), fill(force_), fill(torque_), fill(inv_mass_);
   fill(inv_inertia_), fill(inertia_), fill(lin_damp_), fill(ang_damp_), fill(gravity_scale_);
-  fill(com_local_), fill(principal_), fill(name_), fill(bullet_), fill(shapes_), fill(com0_), fill(q0_);
+  fill(com_local_), fill(principal_), fill(name_), fill(bullet_), fill(extent_), fill(min_extent_), fill(shapes_), fill(com0_), fill(q0_);
   fill(asleep_), fill(sleep_time_), fill(island_), fill(parent_), fill(island_slow_);
   const std::uint32_t moved = owner_[last];
   owner_[i] = moved;
@@ -522,6 +539,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
     integrate_positions(dt);
   }
   contacts_->restitution(*this);
+  contacts_->continuous(*this);
   contacts_->store();
   check_finite();
   update_sleep(dt);
