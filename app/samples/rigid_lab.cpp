@@ -24,6 +24,7 @@ namespace {
 constexpr Color kBox = colors::blue;
 constexpr Color kTop = colors::yellow;
 constexpr Color kStatic = colors::grey;
+constexpr Color kPalette[] = {colors::blue, colors::cyan, colors::purple, colors::pink, colors::green};
 
 enum class LabScene : int { Stack, Pyramid, Falling, Restitution, Ramp };
 constexpr const char* kSceneNames[] = {"vertical stack", "square pyramid", "falling boxes", "restitution row",
@@ -57,43 +58,17 @@ class RigidLab final : public Sample {
   }
 
   void Draw(Renderer& r, double) override {
-    for (std::size_t i = 0; i < bodies_.size(); ++i) {
-      const RigidBodyId id = bodies_.id_at(i);
-      const Pose body = bodies_.pose(id);
-      const bool fixed = bodies_.type(id) != BodyType::Dynamic;
-      const Color c = fixed ? kStatic : (id == top_ ? kTop : body_color(i));
-      if (!ctx_.draw.shapes && !fixed) continue;
-      for (const RigidShapeDef& d : bodies_.shapes(id)) {
-        const Pose p = compose(body, d.local);
-        switch (d.shape.type) {
-          case ShapeType::Sphere: r.sphere(p.position, d.shape.radius, c); break;
-          case ShapeType::Box: r.box(p.position, d.shape.half_extents, p.rotation, c); break;
-          case ShapeType::Capsule: {
-            const Vec3 axis = p.rotation * Vec3(0, d.shape.half_height, 0);
-            r.capsule(p.position - axis, p.position + axis, d.shape.radius, c);
-            break;
-          }
-          case ShapeType::Plane: {
-            const Vec3 n = glm::normalize(p.rotation * d.shape.normal);
-            if (std::abs(n.y) < 0.999) r.plane(n, d.shape.offset + glm::dot(n, p.position), 8.0, c);
-            break;
-          }
-          default: break;
-        }
-      }
-      if (ctx_.draw.aabbs)
-        for (const Aabb& b : bodies_.shape_bounds(id))
-          if (std::isfinite(b.lo.x) && std::isfinite(b.hi.x)) r.box(b.center(), 0.5 * (b.hi - b.lo), Quat(1, 0, 0, 0), Color{1, 1, 1, 0.15f});
-    }
+    // the bodies through the library (View menu: shapes, bounds, contacts, normals)
+    RigidDrawOptions o;
+    o.palette = kPalette;
+    o.fixed = kStatic;
+    o.highlight = top_;
+    o.highlight_color = kTop;
+    o.horizontal_planes = false;  // the app's ground grid
+    bodies_.draw(r, ctx_.draw, o);
     // a marker ball above the measured body (its flat faces take one shade each, which may
     // never be the colour itself; a lit ball always shows it somewhere)
     if (bodies_.valid(top_)) r.sphere(bodies_.center_of_mass(top_) + Vec3(0, 0.9, 0), 0.3, kTop);
-    // contact points (red: overlapping, green: speculative) and normals
-    if (ctx_.draw.contacts || ctx_.draw.normals)
-      for (const RigidContactPoint& c : bodies_.contacts()) {
-        if (ctx_.draw.contacts) r.point(c.position, 6.0f, c.depth > 0 ? colors::red : colors::green);
-        if (ctx_.draw.normals) r.arrow(c.position, c.position + 0.3 * c.normal, 0.06, colors::orange);
-      }
   }
 
   void DrawUI() override {
@@ -176,11 +151,6 @@ class RigidLab final : public Sample {
   }
 
  private:
-  static Color body_color(std::size_t i) {
-    static constexpr Color palette[] = {colors::blue, colors::cyan, colors::purple, colors::pink, colors::green};
-    return palette[i % 5];
-  }
-
   void build() {
     bodies_ = RigidBodySystem({.capacity = 4096, .contacts = settings_});
     std::vector<RigidBodyId> dyn;

@@ -34,6 +34,7 @@
 
 #include "pba/collide/shape.h"
 #include "pba/core.h"
+#include "pba/draw.h"
 #include "pba/handle.h"
 
 namespace pba {
@@ -191,6 +192,24 @@ namespace detail {
 struct RigidContacts;
 }
 
+
+/// How RigidBodySystem::draw colours the bodies.
+struct RigidDrawOptions {
+  /// Dynamic bodies cycle through these by dense index (one colour when it holds one).
+  std::span<const Color> palette{};
+  Color dynamic = colors::blue;     ///< dynamic bodies when the palette is empty
+  Color fixed = colors::grey;       ///< static bodies
+  Color kinematic = colors::orange; ///< kinematic bodies
+  /// Sleeping bodies are drawn this far (0..1) from their colour toward grey, so the sleep
+  /// state shows (0: no difference).
+  float sleep_fade = 0.6f;
+  RigidBodyId highlight{};          ///< a body drawn in `highlight_color` (none when null)
+  Color highlight_color = colors::yellow;  ///< see highlight
+  double plane_half_size = 10;      ///< drawn extent of planes (m)
+  /// Draw planes facing +Y too (false leaves a ground at y = 0 to the app's own grid).
+  bool horizontal_planes = true;
+};
+
 /// Rigid bodies in structure-of-arrays layout. Not thread-safe. Steps never allocate.
 class RigidBodySystem {
  public:
@@ -270,6 +289,9 @@ class RigidBodySystem {
   double time() const { return time_; }
   /// 64-bit hash of every body's pose and velocities (bit patterns).
   std::uint64_t hash() const;
+  /// Draws what `flags` select: each body's shapes (sleeping bodies faded), their world
+  /// bounds, and the contact points (red overlapping, green speculative) and normals.
+  void draw(DebugDraw& draw, const DrawFlags& flags = {}, const RigidDrawOptions& options = {}) const;
   /// The contact points of the last step (copies; allocates, for drawing and tests).
   std::vector<RigidContactPoint> contacts() const;
   /// Contact manifolds (touching or speculative shape pairs) in the last step.

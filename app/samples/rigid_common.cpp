@@ -1,0 +1,126 @@
+// The rigid-body samples' shared base (see rigid_common.h).
+#include "rigid_common.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <imgui.h>
+
+#include "renderer.h"
+
+namespace pba::app {
+
+RigidSolverType RigidSolverOption(const SampleContext& ctx) {
+  const std::string solver = ctx.option("solver", "soft");
+  if (solver == "soft") return RigidSolverType::SoftStep;
+  if (solver == "si") return RigidSolverType::SequentialImpulse;
+  throw Error("--option solver: expected soft or si, got '" + solver + "'");
+}
+
+RigidSample::RigidSample(SampleContext& ctx) : Sample(ctx) {
+  settings_.solver = RigidSolverOption(ctx);
+  palette_ = {colors::blue, colors::cyan, colors::purple, colors::pink, colors::green};
+  draw_options_.horizontal_planes = false;  // the app draws its own ground grid
+  ctx.settings.stepper.fixed_dt = 1.0 / 60.0;
+}
+
+void RigidSample::Restart() {
+  grab_ = {};
+  bodies_ = RigidBodySystem({.capacity = 1024, .contacts = settings_});
+  Build();
+}
+
+void RigidSample::Step(double t, double dt) {
+  bodies_.settings() = settings_;
+  // the mouse spring (Box2D's mouse joint as a force): a 3 Hz critically damped spring on
+  // the grabbed point, scaled by the body's mass and capped at 50 times its weight
+  if (bodies_.valid(grab_.body)) {
+    const Pose pose = bodies_.pose(grab_.body);
+    const Vec3 at = apply(pose, grab_.local);
+    const double m = bodies_.mass(grab_.body), w = 2 * kPi * 3.0;
+    Vec3 f = m * (w * w * (grab_.target - at) - 2 * w * bodies_.velocity_at(grab_.body, at));
+    const double cap = 50 * m * 9.81, len = glm::length(f);
+    if (len > cap) f *= cap / len;
+    bodies_.apply_force(grab_.body, f, at);
+  }
+  bodies_.step(dt, gravity_);
+  AfterStep(t, dt);
+}
+
+void RigidSample::Draw(Renderer& r, double) {
+  draw_options_.palette = palette_;
+  bodies_.draw(r, ctx_.draw, draw_options_);
+  if (bodies_.valid(grab_.body)) {
+    const Vec3 at = apply(bodies_.pose(grab_.body), grab_.local);
+    r.line(at, grab_.target, colors::yellow);
+    r.point(grab_.target, 8.0f, colors::yellow);
+  }
+}
+
+void RigidSample::Mouse(int button, bool down, const Vec3& o, const Vec3& d) {
+  if (button != 0) return;
+  if (!down) {
+    grab_ = {};  // the body keeps the velocity the spring gave it: thrown
+    return;
+  }
+  // the nearest dynamic body's shape under the cursor
+  const Ray ray{o, glm::normalize(d), 1000.0};
+  double best = ray.max_distance;
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    const RigidBodyId id = bodies_.id_at(i);
+    if (bodies_.type(id) != BodyType::Dynamic) continue;
+    const Pose body = bodies_.pose(id);
+    for (const RigidShapeDef& s : bodies_.shapes(id)) {
+      const RayHit hit = ray_cast(s.shape, compose(body, s.local), ray);
+      if (hit.hit && hit.distance < best) {
+        best = hit.distance;
+        grab_ = {id, apply_inverse(body, hit.point), hit.point, hit.distance};
+      }
+    }
+  }
+  if (bodies_.valid(grab_.body)) bodies_.wake(grab_.body);
+}
+
+void RigidSample::MouseMove(const Vec3& o, const Vec3& d) {
+  if (bodies_.valid(grab_.body)) grab_.target = o + grab_.depth * glm::normalize(d);
+}
+
+FiniteCheck RigidSample::CheckFinite() const {
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    const RigidBodyId id = bodies_.id_at(i);
+    if (bodies_.type(id) == BodyType::Dynamic && !is_finite(bodies_.center_of_mass(id)))
+      return {false, id.index, "rigid body " + std::to_string(id.index) + " '" + bodies_.name(id) + "' is not finite"};
+  }
+  return {};
+}
+
+void RigidSample::SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const {
+  for (std::size_t i = 0; i < bodies_.size() && out.size() < max_points; ++i)
+    if (bodies_.type(bodies_.id_at(i)) == BodyType::Dynamic) out.push_back(bodies_.center_of_mass(bodies_.id_at(i)));
+}
+
+bool RigidSample::SolverControls() {
+  static constexpr const char* kSolvers[] = {"soft step", "sequential impulses"};
+  int solver = static_cast<int>(settings_.solver);
+  ImGui::SetNextItemWidth(-110);
+  if (ImGui::Combo("solver", &solver, kSolvers, 2)) settings_.solver = static_cast<RigidSolverType>(solver);
+  ImGui::SetNextItemWidth(-110);
+  if (settings_.solver == RigidSolverType::SoftStep)
+    ImGui::SliderInt("substeps", &settings_.substeps, 1, 16);
+  else
+    ImGui::SliderInt("iterations", &settings_.iterations, 1, 100);
+  ImGui::Checkbox("sleep", &settings_.sleep);
+  ImGui::SameLine();
+  const bool restart = ImGui::Button("Restart");
+  if (restart) Restart();
+  return restart;
+}
+
+void RigidSample::Readout() const {
+  const RigidProfile& p = bodies_.profile();
+  ImGui::Text("%zu bodies, %zu awake, %zu manifolds", bodies_.size(), bodies_.awake_count(), bodies_.manifold_count());
+  ImGui::Text("step %.2f ms: pairs+manifolds %.2f, solve %.2f", 1e3 * p.total, 1e3 * p.collide, 1e3 * p.solve);
+  ImGui::TextDisabled("drag a body with the left mouse button; release to throw it");
+}
+
+}  // namespace pba::app

@@ -1,0 +1,65 @@
+// The rigid-body samples' shared base: a RigidBodySystem stepped once per tick, drawn through
+// the library (sleeping bodies faded, View menu flags), the mouse grab (press on a body and
+// drag it; release throws it), the solver controls and the profile readout.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "pba/rigid.h"
+#include "sample.h"
+
+namespace pba::app {
+
+/// The solver named by --option solver=soft|si (the default: soft); throws Error for
+/// another value.
+RigidSolverType RigidSolverOption(const SampleContext& ctx);
+
+/// Base of the rigid-body samples: override Build() to fill bodies_ (Restart calls it again).
+class RigidSample : public Sample {
+ public:
+  explicit RigidSample(SampleContext& ctx);
+
+  /// The mouse spring, then one step of the bodies, then AfterStep().
+  void Step(double t, double dt) override;
+  /// The bodies (library drawing) and the mouse spring.
+  void Draw(Renderer& r, double alpha) override;
+  /// Left press: grabs the dynamic body under the cursor; release: lets it go (thrown).
+  void Mouse(int button, bool down, const Vec3& ray_origin, const Vec3& ray_dir) override;
+  /// Moves the grab target along the view ray, at the grabbed depth.
+  void MouseMove(const Vec3& ray_origin, const Vec3& ray_dir) override;
+  /// True while a body is held.
+  bool MouseCaptured() const override { return bodies_.valid(grab_.body); }
+  /// A dynamic body whose centre is not finite.
+  FiniteCheck CheckFinite() const override;
+  /// The dynamic bodies' centres.
+  void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override;
+
+ protected:
+  /// Fills bodies_ (already reset, with settings_) and frames the camera.
+  virtual void Build() = 0;
+  /// Called after each step (measurements, spawning).
+  virtual void AfterStep(double t, double dt) { (void)t, (void)dt; }
+  /// Clears the bodies and calls Build().
+  void Restart();
+  /// Solver, substeps or iterations, sleeping and a Restart button; true when Restart was pressed.
+  bool SolverControls();
+  /// Bodies, awake, manifolds and the step's time split.
+  void Readout() const;
+
+  RigidBodySystem bodies_;
+  ContactSettings settings_{};       ///< applied before every step (the controls edit it)
+  Vec3 gravity_{0, -9.81, 0};        ///< m/s^2
+  RigidDrawOptions draw_options_{};  ///< colours (palette_ is attached each frame)
+  std::vector<Color> palette_;       ///< dynamic bodies' colours, cycled by index
+
+ private:
+  struct Grab {
+    RigidBodyId body{};
+    Vec3 local{0, 0, 0};   // anchor in the body frame (m)
+    Vec3 target{0, 0, 0};  // where the cursor holds it (m)
+    double depth = 0;      // distance along the view ray (m)
+  } grab_;
+};
+
+}  // namespace pba::app
