@@ -91,6 +91,7 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   statics.clear();
   for (std::size_t i = 0; i < proxies.size(); ++i)
     if (s.type_[proxies[i].body] == BodyType::Static) statics.push_back(static_cast<std::uint32_t>(i));
+  candidates.clear();
   for (std::size_t i = 0; i < proxies.size(); ++i) {
     const ShapeProxy& p = proxies[i];
     for (std::size_t j = i + 1; j < proxies.size() && proxies[j].box.lo.x <= p.box.hi.x; ++j) {
@@ -102,14 +103,10 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
       const bool swap = s.owner_[p.body] > s.owner_[q.body];
       const ShapeProxy& a = swap ? q : p;
       const ShapeProxy& b = swap ? p : q;
-      ContactPair c;
-      c.slot_a = s.owner_[a.body], c.slot_b = s.owner_[b.body];
-      c.shape_a = a.shape, c.shape_b = b.shape;
-      c.a = a.body, c.b = b.body;
-      pairs.push_back(c);
+      candidates.push_back({s.owner_[a.body], s.owner_[b.body], a.shape, b.shape, a.body, b.body});
     }
   }
-  std::sort(pairs.begin(), pairs.end());
+  std::sort(candidates.begin(), candidates.end());
   // a body moving faster than the sleep tolerances (or a moving kinematic one) whose bounds
   // reach a sleeping body wakes its island; repeated while waking spreads. A slow awake body
   // does not: it rests on the sleeper as on a static body (waking on any overlap let two
@@ -123,28 +120,33 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   };
   for (bool woke = true; woke;) {
     woke = false;
-    for (const ContactPair& c : pairs) {
+    for (const PairKey& c : candidates) {
       if (s.asleep_[c.b] && moving(c.a)) s.wake_island(c.b), woke = true;
       if (s.asleep_[c.a] && moving(c.b)) s.wake_island(c.a), woke = true;
     }
   }
   // manifolds, with last step's cache and impulses where the same pair touched
-  std::size_t kept = 0;
-  for (ContactPair& c : pairs) {
+  for (const PairKey& k : candidates) {
     // points are made as far out as the two bodies can close in one step (speculative contacts)
     // (up to each body's size: faster ones are caught by the continuous pass)
     const NarrowPhaseSettings ns{.speculative_margin = cs.speculative_distance +
-                                                       std::min(glm::length(s.v_[c.a]) * dt, s.extent_[c.a]) +
-                                                       std::min(glm::length(s.v_[c.b]) * dt, s.extent_[c.b])};
+                                                       std::min(glm::length(s.v_[k.a]) * dt, s.extent_[k.a]) +
+                                                       std::min(glm::length(s.v_[k.b]) * dt, s.extent_[k.b])};
+    if (!awake_dynamic(k.a) && !awake_dynamic(k.b)) continue;  // asleep, or asleep on a still body
+    // the pair's entry, kept only when the manifold has points
+    ContactPair& c = pairs.emplace_back();
+    c.slot_a = k.slot_a, c.slot_b = k.slot_b, c.shape_a = k.shape_a, c.shape_b = k.shape_b, c.a = k.a, c.b = k.b;
     auto old = std::lower_bound(previous.begin(), previous.end(), c);
-    if (!awake_dynamic(c.a) && !awake_dynamic(c.b)) continue;  // asleep, or asleep on a still body
     const bool had = old != previous.end() && !(c < *old) && !(*old < c);
     if (had) c.cache = old->cache;
     const RigidShapeDef& sa = s.shapes_[c.a][c.shape_a];
     const RigidShapeDef& sb = s.shapes_[c.b][c.shape_b];
     const Manifold m = collide(sa.shape, compose(s.body_pose(c.a), sa.local), sb.shape,
                                compose(s.body_pose(c.b), sb.local), ns, &c.cache);
-    if (m.count == 0) continue;
+    if (m.count == 0) {
+      pairs.pop_back();
+      continue;
+    }
     c.normal = m.normal;
     tangent_basis(c.normal, c.t1, c.t2);
     c.friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
@@ -198,9 +200,7 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
         if (match >= 0) p.normal_impulse = old->points[match].normal_impulse;
       }
     }
-    pairs[kept++] = c;
   }
-  pairs.resize(kept);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -223,6 +223,8 @@ void RigidContacts::prepare(RigidBodySystem& s) {
     for (int k = 0; k < c.count; ++k) {
       SolverPoint& p = c.points[k];
       p.normal_mass = effective_mass(ma, mb, ia, ib, p.ra, p.rb, c.normal);
+      p.rna = glm::cross(p.ra, c.normal), p.rnb = glm::cross(p.rb, c.normal);
+      p.ina = ia * p.rna, p.inb = ib * p.rnb;
       const Vec3 dv = s.v_[c.b] + glm::cross(s.w_[c.b], p.rb) - s.v_[c.a] - glm::cross(s.w_[c.a], p.ra);
       p.approach = glm::dot(dv, c.normal);
       p.max_normal_impulse = 0;
@@ -255,9 +257,14 @@ inline void apply(BodyView& a, BodyView& b, const Mat3& ia, const Mat3& ib,
 void RigidContacts::warm_start(RigidBodySystem& s) {
   for (ContactPair& c : pairs) {
     auto a = view(s, c.a), b = view(s, c.b);
+    // the normal impulses through their precomputed angular parts (as solve() applies them)
     for (int k = 0; k < c.count; ++k) {
       const SolverPoint& p = c.points[k];
-      apply(a, b, inv_inertia[c.a], inv_inertia[c.b], p.ra, p.rb, p.normal_impulse * c.normal);
+      const double j = p.normal_impulse;
+      *a.v -= (a.inv_mass * j) * c.normal;
+      *a.w -= j * p.ina;
+      *b.v += (b.inv_mass * j) * c.normal;
+      *b.w += j * p.inb;
     }
     apply(a, b, inv_inertia[c.a], inv_inertia[c.b], c.ca, c.cb, c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2);
     const Vec3 spin = c.rolling_impulse + c.twist_impulse * c.normal;
@@ -317,8 +324,8 @@ void RigidContacts::solve(RigidBodySystem& s, double h, bool bias, bool soft) {
           velocity_bias = std::max(cs.baumgarte / h * std::min(0.0, sep + cs.linear_slop), -cs.push_out_speed);
         }
       }
-      const Vec3 dv = *b.v + glm::cross(*b.w, p.rb) - *a.v - glm::cross(*a.w, p.ra);
-      const double vn = glm::dot(dv, c.normal);
+      // normal relative velocity: (vb + wb x rb - va - wa x ra) . n, with (w x r) . n = w . (r x n)
+      const double vn = glm::dot(*b.v - *a.v, c.normal) + glm::dot(*b.w, p.rnb) - glm::dot(*a.w, p.rna);
       // the fastest approach seen, gravity of the substeps before the impact included
       if (bias) p.approach = std::min(p.approach, vn);
       double impulse = -p.normal_mass * mass_scale * (vn + velocity_bias) - impulse_scale * p.normal_impulse;
@@ -327,7 +334,10 @@ void RigidContacts::solve(RigidBodySystem& s, double h, bool bias, bool soft) {
       p.normal_impulse = total;
       p.max_normal_impulse = std::max(p.max_normal_impulse, impulse);
       total_normal += total;
-      apply(a, b, ia, ib, p.ra, p.rb, impulse * c.normal);
+      *a.v -= (a.inv_mass * impulse) * c.normal;
+      *a.w -= impulse * p.ina;
+      *b.v += (b.inv_mass * impulse) * c.normal;
+      *b.w += impulse * p.inb;
     }
     }
     // Coulomb friction at the centroid: the tangential impulse stays inside the disc of

@@ -18,6 +18,10 @@ struct SolverPoint {
   // turns away from the contact, its centre does not
   Vec3 sa{0, 0, 0}, sb{0, 0, 0};
   double offset = 0;              // (m)
+  // the normal's angular parts, fixed over the step: ra x n and rb x n (m), and the angular
+  // velocity changes per unit normal impulse I_a^-1 (ra x n), I_b^-1 (rb x n) (1/(kg m))
+  Vec3 rna{0, 0, 0}, rnb{0, 0, 0};
+  Vec3 ina{0, 0, 0}, inb{0, 0, 0};
   double normal_mass = 0;         // 1 / (J M^-1 J^T) along the normal (kg)
   double normal_impulse = 0;      // accumulated (N s per substep)
   double max_normal_impulse = 0;  // largest single normal impulse of the step (N s)
@@ -62,6 +66,19 @@ struct ContactPair {
   }
 };
 
+/// A candidate pair of shapes from the sweep (sorted before the manifolds are made: sorting
+/// these, not the kilobyte-sized ContactPairs, keeps the sort cheap).
+struct PairKey {
+  std::uint32_t slot_a = 0, slot_b = 0, shape_a = 0, shape_b = 0;  // as in ContactPair
+  std::uint32_t a = 0, b = 0;                                      // dense body indices
+  bool operator<(const PairKey& o) const {
+    if (slot_a != o.slot_a) return slot_a < o.slot_a;
+    if (slot_b != o.slot_b) return slot_b < o.slot_b;
+    if (shape_a != o.shape_a) return shape_a < o.shape_a;
+    return shape_b < o.shape_b;
+  }
+};
+
 /// Pointers to one body's solver state (velocities, centre and orientation) and its inverse mass.
 struct BodyView {
   Vec3* v;
@@ -92,6 +109,7 @@ Softness make_soft(double hertz, double zeta, double h);
 struct RigidContacts {
   std::vector<ContactPair> pairs, previous;
   std::vector<ShapeProxy> proxies;
+  std::vector<PairKey> candidates;  // the sweep's pairs this step, sorted
   std::vector<Mat3> inv_inertia;  // world inverse inertia by dense body, fixed over the step
   std::vector<std::uint32_t> statics;  // proxies of static bodies (indices into proxies)
   std::size_t continuous_hits = 0;     // bodies put back to a time of impact, all steps
