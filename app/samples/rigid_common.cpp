@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include <imgui.h>
 
@@ -22,6 +23,7 @@ RigidSample::RigidSample(SampleContext& ctx) : Sample(ctx) {
   palette_ = {colors::blue, colors::cyan, colors::purple, colors::pink, colors::green};
   draw_options_.horizontal_planes = false;  // the app draws its own ground grid
   ctx.settings.stepper.fixed_dt = 1.0 / 60.0;
+  report_path_ = ctx.option("report", "");
 }
 
 void RigidSample::Restart() {
@@ -55,6 +57,29 @@ void RigidSample::Draw(Renderer& r, double) {
     r.line(at, grab_.target, colors::yellow);
     r.point(grab_.target, 8.0f, colors::yellow);
   }
+  if (++frames_ % 5 == 0) write_report();
+}
+
+RigidBodyId RigidSample::ReportBody() const {
+  for (std::size_t i = 0; i < bodies_.size(); ++i)
+    if (bodies_.type(bodies_.id_at(i)) == BodyType::Dynamic) return bodies_.id_at(i);
+  return {};
+}
+
+void RigidSample::write_report() {
+  const RigidBodyId id = ReportBody();
+  if (report_path_.empty() || !bodies_.valid(id)) return;
+  const Vec3 c = bodies_.center_of_mass(id), v = bodies_.linear_velocity(id);
+  glm::vec2 px(-1, -1);
+  if (!ctx_.renderer->project(c, &px)) px = glm::vec2(-1, -1);
+  // written whole, then renamed, so a reader never sees half a line
+  const std::string tmp = report_path_ + ".tmp";
+  FILE* f = std::fopen(tmp.c_str(), "w");
+  if (!f) return;
+  std::fprintf(f, "frame %lld grabs %d held %d body %.6f %.6f %.6f pixel %.1f %.1f velocity %.6f %.6f %.6f\n", frames_,
+               grabs_, bodies_.valid(grab_.body) ? 1 : 0, c.x, c.y, c.z, px.x, px.y, v.x, v.y, v.z);
+  std::fclose(f);
+  std::rename(tmp.c_str(), report_path_.c_str());
 }
 
 void RigidSample::Mouse(int button, bool down, const Vec3& o, const Vec3& d) {
@@ -78,7 +103,7 @@ void RigidSample::Mouse(int button, bool down, const Vec3& o, const Vec3& d) {
       }
     }
   }
-  if (bodies_.valid(grab_.body)) bodies_.wake(grab_.body);
+  if (bodies_.valid(grab_.body)) bodies_.wake(grab_.body), ++grabs_;
 }
 
 void RigidSample::MouseMove(const Vec3& o, const Vec3& d) {

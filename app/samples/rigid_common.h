@@ -46,6 +46,8 @@ class RigidSample : public Sample {
   bool SolverControls();
   /// Bodies, awake, manifolds and the step's time split.
   void Readout() const;
+  /// The body --option report=FILE describes (default: the first dynamic body).
+  virtual RigidBodyId ReportBody() const;
 
   RigidBodySystem bodies_;
   ContactSettings settings_{};       ///< applied before every step (the controls edit it)
@@ -60,6 +62,12 @@ class RigidSample : public Sample {
     Vec3 target{0, 0, 0};  // where the cursor holds it (m)
     double depth = 0;      // distance along the view ray (m)
   } grab_;
+  // the test hook (--option report=FILE): every 5 frames the frame, the grabs so far, and the
+  // report body's centre (world and pixels) and velocity
+  void write_report();
+  std::string report_path_;
+  long long frames_ = 0;
+  int grabs_ = 0;
 };
 
 }  // namespace pba::app
