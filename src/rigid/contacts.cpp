@@ -47,14 +47,6 @@ double rolling_radius(const ColliderShape& s) {
   }
 }
 
-// 1 / (J M^-1 J^T) for an impulse along unit `d` at anchors ra, rb
-double effective_mass(double ma, double mb, const Mat3& ia, const Mat3& ib, const Vec3& ra, const Vec3& rb,
-                      const Vec3& d) {
-  const Vec3 ca = glm::cross(ra, d), cb = glm::cross(rb, d);
-  const double k = ma + mb + glm::dot(ca, ia * ca) + glm::dot(cb, ib * cb);
-  return k > 0 ? 1 / k : 0;
-}
-
 }  // namespace
 
 Softness make_soft(double hertz, double zeta, double h) {
@@ -233,19 +225,6 @@ void RigidContacts::prepare(RigidBodySystem& s) {
     }
   }
 }
-
-namespace {
-
-// applies the impulse `p` (N s) at anchors ra, rb: +p to b, -p to a
-inline void apply(BodyView& a, BodyView& b, const Mat3& ia, const Mat3& ib,
-                  const Vec3& ra, const Vec3& rb, const Vec3& p) {
-  *a.v -= a.inv_mass * p;
-  *a.w -= ia * glm::cross(ra, p);
-  *b.v += b.inv_mass * p;
-  *b.w += ib * glm::cross(rb, p);
-}
-
-}  // namespace
 
 void RigidContacts::warm_start(RigidBodySystem& s) {
   for (ContactPair& c : pairs) {
