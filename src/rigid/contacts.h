@@ -142,7 +142,6 @@ struct RigidContacts {
     double normal[Manifold::kMaxPoints];    // normal multipliers of the points
     double approach[Manifold::kMaxPoints];  // normal velocities before the position solve (m/s)
     Vec3 friction;                          // the static friction's positional impulse on b (kg m)
-    bool sliding, spinning;                 // static friction, static twist gave way this substep
     double twist;                           // the static twist multiplier about the normal
   };
   std::vector<XpbdPair> xpbd;

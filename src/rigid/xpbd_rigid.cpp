@@ -9,7 +9,8 @@
 //   2. projects the contacts as positional constraints with the generalised inverse masses
 //      w = 1/m + (r x n)^T I^-1 (r x n) and compliance (eqs. 2-9), then static friction as a
 //      positional constraint on the tangential motion of the contact since the substep began,
-//      applied only while its multiplier stays within mu times the normal one (section 3.5),
+//      applied only while its multiplier stays within mu times the normal one (section 3.5);
+//      no warm starting: the multipliers start from zero each substep,
 //   3. sets the velocities from the position change (eqs. 12-13),
 //   4. and runs the velocity pass: dynamic friction, restitution with a threshold speed
 //      (eqs. 30-34).
@@ -21,7 +22,7 @@
 // limited by mu times the sum of the points' normal multipliers. The paper's per-point static
 // friction under Gauss-Seidel lets the first point of a face contact take the whole
 // tangential correction against only its share of the normal load, so a box resting below the
-// friction angle would slip.
+// friction angle would slip. Rolling resistance acts in the velocity pass, as in the others.
 //
 // Step 3 in the paper is v = (x - x_prev) / h and w = 2 vec(q q_prev^-1) / h. Here the
 // velocities of the free motion are kept and only the correction is added: v += (x - x_free) / h
@@ -39,6 +40,7 @@ namespace {
 
 // q turned by the small rotation vector `theta` (rad): q + 1/2 [theta, 0] q, normalised
 // (Mueller et al. 2020, eqs. 8-9)
+const Mat3 kNoTurn(0.0);
 void turn(Quat& q, const Vec3& theta) {
   const Quat dq(0, theta.x, theta.y, theta.z);
   q = glm::normalize(q + 0.5 * (dq * q));
@@ -112,7 +114,6 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       for (double& l : x.normal) l = 0;
       x.twist = 0;
       x.friction = Vec3(0);
-      x.sliding = x.spinning = false;
     }
     // 2. positional contacts and static friction, Gauss-Seidel over the manifolds
     for (int it = 0; it < cs.substep_iterations; ++it)
@@ -124,10 +125,9 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
         const Mat3& ib = inv_inertia[c.b];
         // the manifold's small problem, swept `manifold_iterations` times as in the other
         // solvers: its points' non-penetration, then static friction and twist. One sweep does
-        // not do: the first point of a face corrected turns the body a little, and the
-        // friction correction at the centroid turns it too, which the points then undo; swept
-        // together they converge to the joint correction (a box on a 25 degree slope, mu 0.5,
-        // crept at 1.3 cm/s with one sweep of each)
+        // not do: the first point of a face corrected turns the body a little, which the
+        // friction at the centroid sees as slip (a box on a 25 degree slope, mu 0.5, crept at
+        // 1.3 cm/s), and the normal multipliers are not all in before the last sweeps
         for (int sweep = 0; sweep < cs.manifold_iterations; ++sweep) {
           // non-penetration: dlambda = (-C - alpha lambda) / (w + alpha), C the separation (eq. 4)
           double total = 0;
@@ -149,32 +149,41 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
           }
           if (total == 0 || c.friction == 0) continue;
           // static friction: undo the tangential motion since the substep began of the
-          // material points at the centroid, while the multiplier stays within mu times the
-          // normal ones (section 3.5); once it would not, the contact slides this substep
+          // material points at the centroid, when the multiplier that takes stays within mu
+          // times the normal ones (section 3.5); a sweep that would need more skips it, and
+          // the velocity pass's dynamic friction gets what is left of mu times the normal.
+          // On a face (three or more points) the correction translates only: the points block
+          // the turn a lever at the centroid would give, and with the turn in, the corrections
+          // and the points undoing them left a residual turn that h turned into a rocking
+          // velocity (0.02 rad/s on two stacked boxes, and a 10-stack fell). The price: static
+          // friction on a face carries no moment, so a box held on a slope does not tip where
+          // tan(theta) > width / height (a known limit, docs/rigid-bodies.md)
           ca /= static_cast<double>(c.count), cb /= static_cast<double>(c.count);
           const Vec3 moved = material_motion(*b.com, *b.q, x_start[c.b], q_start[c.b], cb) -
                              material_motion(*a.com, *a.q, x_start[c.a], q_start[c.a], ca);
+          const bool face = c.count >= 3;
           const Vec3 slip = moved - glm::dot(moved, c.normal) * c.normal;
           const double len = glm::length(slip);
-          if (!x.sliding && len > 0) {
+          if (len > 0) {
             const Vec3 t = slip / len;
-            const double dl = len * effective_mass(a.inv_mass, b.inv_mass, ia, ib, ca, cb, t);
-            x.sliding = glm::length(x.friction - dl * t) > c.friction * total;
-            if (!x.sliding) {
+            const Mat3& fa = face ? kNoTurn : ia;
+            const Mat3& fb = face ? kNoTurn : ib;
+            const double dl = len * effective_mass(a.inv_mass, b.inv_mass, fa, fb, ca, cb, t);
+            const bool sliding = glm::length(x.friction - dl * t) > c.friction * total;
+            if (!sliding) {
               x.friction -= dl * t;
-              apply_position(a, b, ia, ib, ca, cb, -dl * t);
+              apply_position(a, b, fa, fb, ca, cb, -dl * t);
             }
           }
           // static twist friction: undo the relative turn about the normal, up to mu times the
           // normal multipliers times the points' mean distance from the centroid
-          if (!x.spinning && c.twist_radius > 0) {
+          if (c.twist_radius > 0) {
             const double angle = glm::dot(rotation_vector(*b.q * glm::conjugate(q_start[c.b])) -
                                               rotation_vector(*a.q * glm::conjugate(q_start[c.a])),
                                           c.normal);
             const double k = glm::dot(c.normal, (ia + ib) * c.normal);
             const double dl = k > 0 ? angle / k : 0;
-            x.spinning = std::abs(x.twist - dl) > c.friction * total * c.twist_radius;
-            if (!x.spinning) {
+            if (std::abs(x.twist - dl) <= c.friction * total * c.twist_radius) {
               x.twist -= dl;
               turn(*a.q, ia * (dl * c.normal));
               turn(*b.q, -(ib * (dl * c.normal)));
@@ -210,6 +219,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       // restitution at each point that pushed: the normal velocity becomes e times the
       // approach before the position solve, or 0 below the threshold (eqs. 33-34); this also
       // takes back the push-out velocity of step 3, as a relax pass would
+      for (int sweep = 0; sweep < cs.manifold_iterations; ++sweep)
       for (int j = 0; j < c.count; ++j) {
         if (x.normal[j] == 0) continue;
         Vec3 ra, rb;
