@@ -360,6 +360,20 @@ void RigidContacts::restitution(RigidBodySystem& s) {
   }
 }
 
+void RigidContacts::carry_impulses(double h) {
+  // an impulse per step of impulse_h is a force times impulse_h: the same force over h
+  if (impulse_h > 0 && impulse_h != h) {
+    const double k = h / impulse_h;
+    for (ContactPair& c : pairs) {
+      for (int j = 0; j < c.count; ++j) c.points[j].normal_impulse *= k;
+      c.tangent_impulse[0] *= k, c.tangent_impulse[1] *= k;
+      c.twist_impulse *= k;
+      c.rolling_impulse *= k;
+    }
+  }
+  impulse_h = h;
+}
+
 void RigidContacts::store() {
   for (ContactPair& c : pairs) c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
 }

@@ -112,6 +112,7 @@ struct RigidContacts {
   std::vector<ContactPair> pairs, previous;
   std::vector<ShapeProxy> proxies;
   std::vector<Mat3> inv_inertia;  // world inverse inertia by dense body, fixed over the step
+  double impulse_h = 0;  // the time step (s) the carried impulses were accumulated over; 0: none yet
 
   /// Finds the overlapping shape pairs, builds their manifolds and carries last step's
   /// impulses over by feature id.
@@ -120,6 +121,12 @@ struct RigidContacts {
   void prepare(RigidBodySystem& s);
   /// Applies the carried impulses.
   void warm_start(RigidBodySystem& s);
+  /// Rescales the carried impulses to the solver's time step h (s): they were accumulated
+  /// over steps of `impulse_h` (N s per substep of the soft step, TGS and XPBD, per step of
+  /// sequential impulses), so a switch of solver, of substeps or of dt would otherwise start
+  /// from impulses too large or too small by their ratio (a 5-stack switched from sequential
+  /// impulses to TGS was kicked to 0.14 m/s).
+  void carry_impulses(double h);
   /// One pass over the contacts. `soft` picks the soft-step constraint; `bias` asks for
   /// position correction (false: the relax pass).
   void solve(RigidBodySystem& s, double h, bool bias, bool soft);

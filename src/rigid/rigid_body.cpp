@@ -518,6 +518,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   profile_.collide = total.seconds();
   contacts_->prepare(*this);
   const bool soft = settings_.solver == RigidSolverType::SoftStep;
+  contacts_->carry_impulses(settings_.solver == RigidSolverType::SequentialImpulse ? dt : dt / settings_.substeps);
   if (settings_.solver == RigidSolverType::Tgs) {
     contacts_->step_tgs(*this, dt, gravity);  // src/rigid/tgs.cpp
   } else if (settings_.solver == RigidSolverType::Xpbd) {
