@@ -139,7 +139,8 @@ class RigidLab final : public Sample {
     }
     ImGui::SetNextItemWidth(-110);
     ImGui::SliderInt("manifold sweeps", &settings_.manifold_iterations, 1, 16);
-    ImGui::Checkbox("warm starting", &settings_.warm_starting);
+    // XPBD's multipliers start at zero each substep: nothing to warm-start
+    if (settings_.solver != RigidSolverType::Xpbd) ImGui::Checkbox("warm starting", &settings_.warm_starting);
     if (ImGui::Button("Restart") || rebuild) {
       scene_ = static_cast<LabScene>(scene);
       build();
