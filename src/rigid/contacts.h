@@ -152,6 +152,8 @@ struct RigidContacts {
     double twist;                           // the static twist multiplier about the normal
   };
   std::vector<XpbdPair> xpbd;
+  /// XPBD: one manifold's positional contacts and static friction, solved as a block.
+  void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double alpha);
   /// Body i's solver state.
   static BodyView view(RigidBodySystem& s, std::size_t i) {
     return {&s.v_[i], &s.w_[i], &s.com_[i], &s.q_[i], s.asleep_[i] ? 0.0 : s.inv_mass_[i]};

@@ -58,7 +58,7 @@ TEST(RigidSolvers, NewSettingsAreValidatedByName) {
 // A 10-stack of one-metre cubes (mu 0.5, no sleep, 60 Hz) stands for 10 s under each
 // substepping solver at its defaults, within the 1 cm of sag and drift. The soft
 // step's sag is the static deflection n^2 g / (2 pi f)^2 = 1.7 mm; TGS and XPBD have rigid
-// contacts and sag by what their iterations leave (measured 1.0 and 1.8 mm).
+// contacts and sag by what their iterations leave (measured 1.0 and 2.3 mm).
 TEST(RigidSolvers, ATenStackStandsTenSecondsUnderEachSubsteppingSolver) {
   for (const auto solver : {RigidSolverType::SoftStep, RigidSolverType::Tgs, RigidSolverType::Xpbd}) {
     RigidBodySystem s({.contacts = {.solver = solver, .sleep = false}});
@@ -73,16 +73,20 @@ TEST(RigidSolvers, ATenStackStandsTenSecondsUnderEachSubsteppingSolver) {
 }
 
 // Macklin et al. (2019): many small steps beat many iterations. TGS's 8 substeps of one
-// biased and one relax iteration hold 20 cubes for a minute within the 1 cm, where
-// sequential impulses at the same 16 passes per step let them fall (docs/rigid-bodies.md).
-TEST(RigidSolvers, TgsHoldsTwentyCubesForAMinute) {
-  RigidBodySystem s({.contacts = {.solver = RigidSolverType::Tgs, .sleep = false}});
-  const auto boxes = pba::rigid_scenes::vertical_stack(s, 20);
-  const Vec3 top0 = s.center_of_mass(boxes.back());
-  for (int i = 0; i < 3600; ++i) s.step(1.0 / 60, kGravity);
-  const Vec3 top = s.center_of_mass(boxes.back());
-  EXPECT_LT(std::hypot(top.x - top0.x, top.z - top0.z), 0.01);
-  EXPECT_LT(top0.y - top.y, 0.01);
+// biased and one relax iteration, and XPBD's 8 substeps of one projection, hold 20 cubes
+// (no sleep, 60 Hz) for a minute within the 1 cm, where sequential impulses at the same
+// 16 passes per step let them fall (docs/rigid-bodies.md; measured sag and drift: TGS 4.1 and
+// 0.2 mm, XPBD 8.9 and 6.2 mm).
+TEST(RigidSolvers, TgsAndXpbdHoldTwentyCubesForAMinute) {
+  for (const auto solver : {RigidSolverType::Tgs, RigidSolverType::Xpbd}) {
+    RigidBodySystem s({.contacts = {.solver = solver, .sleep = false}});
+    const auto boxes = pba::rigid_scenes::vertical_stack(s, 20);
+    const Vec3 top0 = s.center_of_mass(boxes.back());
+    for (int i = 0; i < 3600; ++i) s.step(1.0 / 60, kGravity);
+    const Vec3 top = s.center_of_mass(boxes.back());
+    EXPECT_LT(std::hypot(top.x - top0.x, top.z - top0.z), 0.01) << to_string(solver);
+    EXPECT_LT(top0.y - top.y, 0.01) << to_string(solver);
+  }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -90,7 +94,7 @@ TEST(RigidSolvers, TgsHoldsTwentyCubesForAMinute) {
 
 // A 5-stack and a bouncing ball, the solver switched every 20 steps through all four for
 // 10 s: the state stays finite, the stack stands, and no switch kicks it: the stack's bodies
-// stay slower than one step of free fall gives (g dt = 0.16 m/s; measured under 0.08). The
+// stay slower than one step of free fall gives (g dt = 0.16 m/s; measured 0.06). The
 // carried impulses are rescaled to each solver's time step (per substep or per step).
 TEST(RigidSolvers, SwitchingSolversLiveKeepsTheStateValid) {
   RigidBodySystem s({.contacts = {.sleep = false}});
