@@ -121,9 +121,9 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
     la[n + d] = lb[n + d] = tangent[d];
     // on a face (three or more points) static friction translates only: the points block
     // the turn its lever would give, and with the turn in, what the sweep over the manifolds
-    // left of it in the next manifold became a rocking velocity (two stacked boxes at 0.013
-    // rad/s; the 20-stack fell at 15 s even at 32 substeps). The price: static friction on a
-    // face carries no moment, so a box held on a slope does not tip (docs/rigid-bodies.md)
+    // left of it became a rocking velocity (the 20-stack fell at 15 s, and even at 32
+    // substeps). The price: static friction on a face carries no moment, so a box held on a
+    // slope does not tip (docs/rigid-bodies.md)
     const bool face = n >= 3;
     aa[n + d] = face ? Vec3(0) : glm::cross(ca, tangent[d]);
     ab[n + d] = face ? Vec3(0) : glm::cross(cb, tangent[d]);
