@@ -261,8 +261,7 @@ namespace {
 // sleeping
 
 // 25 boxes dropped from 2 m onto the ground, each by itself, are all asleep within 5 s under
-// each substepping solver,
-// and sleeping bodies do not move at all. (The 1000 boxes from a 10 x 10 x 10 grid
+// each substepping solver, and sleeping bodies do not move at all. (The 1000 boxes from a 10 x 10 x 10 grid
 // fall in columns that land on each other; such stacks keep rocking slowly above the
 // tolerances for longer: see docs/rigid-bodies.md, not met yet.)
 TEST(RigidSleep, DroppedBoxesFallAsleepAndStayPut) {
