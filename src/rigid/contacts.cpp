@@ -1,5 +1,6 @@
 // Rigid bodies: contact pairs, manifolds with warm-start matching, and the contact solver
-// passes shared by the soft-step and sequential-impulse solvers.
+// passes shared by the soft-step, sequential-impulse and TGS solvers (src/rigid/tgs.cpp; XPBD
+// has its own passes, src/rigid/xpbd_rigid.cpp).
 //
 // The soft step follows Catto's Solver2D / Box2D v3 (contact_solver.c) in 3D: per substep
 // the bodies' velocities are integrated, the carried impulses applied, the contacts solved

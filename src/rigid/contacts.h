@@ -125,7 +125,7 @@ struct RigidContacts {
   /// over steps of `impulse_h` (N s per substep of the soft step, TGS and XPBD, per step of
   /// sequential impulses), so a switch of solver, of substeps or of dt would otherwise start
   /// from impulses too large or too small by their ratio (a 5-stack switched from sequential
-  /// impulses to TGS was kicked to 0.14 m/s).
+  /// impulses to TGS was kicked to 0.19 m/s).
   void carry_impulses(double h);
   /// One pass over the contacts. `soft` picks the soft-step constraint; `bias` asks for
   /// position correction (false: the relax pass).
