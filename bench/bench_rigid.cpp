@@ -1,8 +1,10 @@
-// pba rigid bodies against Bullet on the scenes of shared/peers/ (vertical stacks, the
-// 20-level square pyramid, 1000 falling boxes), both in this process, one core:
-//   taskset -c 1 build/release/bin/bench_rigid [--quick]
+// pba rigid bodies, under each of its four contact solvers, against Bullet on the scenes of
+// shared/peers/ (vertical stacks, the 20-level square pyramid, 1000 falling boxes), all in
+// this process, one core:
+//   taskset -c 1 build/release/bin/bench_rigid [--quick | --budget]
 // Prints ms per 60 Hz step (median of the steps), the top box's sag and drift, and the state
-// hash for pba. Bullet: btDiscreteDynamicsWorld, btDbvtBroadphase, sequential impulses with
+// hash for each pba solver. --budget instead runs the stacks and a small pyramid under the four
+// solvers at equal budgets of contact passes per step (docs/rigid-bodies.md). Bullet: btDiscreteDynamicsWorld, btDbvtBroadphase, sequential impulses with
 // 10 iterations, one step per frame (its default), boxes as btBoxShape, ground a 200 x 2 x 200
 // static box, exactly as the peer harnesses set them up. Sleeping is off in both (the
 // issue's stacks and the first fall row) except in the "sleep" row.
@@ -11,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include <btBulletDynamicsCommon.h>
@@ -33,9 +36,9 @@ struct Result {
 // ---- pba ----
 enum class Scene { Stack, Pyramid, Fall };
 
-Result run_pba(Scene scene, int size, int steps, pba::RigidSolverType solver, bool sleep, std::uint64_t* hash,
+Result run_pba(Scene scene, int size, int steps, const pba::ContactSettings& settings, std::uint64_t* hash,
                double* asleep_at = nullptr) {
-  pba::RigidBodySystem s({.capacity = 4096, .contacts = {.solver = solver, .sleep = sleep}});
+  pba::RigidBodySystem s({.capacity = 4096, .contacts = settings});
   std::vector<pba::RigidBodyId> b;
   switch (scene) {
     case Scene::Stack: b = pba::rigid_scenes::vertical_stack(s, size); break;
@@ -114,10 +117,50 @@ Result run_bullet(Scene scene, int size, int steps, bool sleep) {
   return {median(ms), top0.y() - top.y(), std::hypot(top.x() - top0.x(), top.z() - top0.z())};
 }
 
+// the settings of `solver` at a budget of `passes` contact passes per step: the soft step and
+// TGS take passes / 2 substeps of a biased and a relax pass (TGS: one iteration of each), XPBD
+// passes / 2 substeps of one position iteration and its velocity pass, sequential impulses
+// `passes` iterations
+pba::ContactSettings at_budget(pba::RigidSolverType solver, int passes, bool sleep) {
+  pba::ContactSettings c{.solver = solver, .sleep = sleep};
+  if (passes > 0) {
+    c.substeps = std::max(1, passes / 2);
+    c.iterations = passes;
+  }
+  return c;
+}
+
+// the four solvers on the equal-budget scenes
+int run_budget() {
+  struct Case {
+    const char* name;
+    Scene scene;
+    int size, steps;
+  };
+  const Case cases[] = {{"stack 10", Scene::Stack, 10, 600},
+                        {"stack 20", Scene::Stack, 20, 3600},
+                        {"stack 40", Scene::Stack, 40, 1200},
+                        {"pyramid 10 (385)", Scene::Pyramid, 10, 300}};
+  std::printf("%-18s | %-6s | %-28s | %-28s | %-28s | %-28s\n", "scene (steps)", "passes", "soft step ms/sag/drift",
+              "SI", "TGS", "XPBD");
+  for (const Case& c : cases)
+    for (const int passes : {16, 64}) {
+      std::printf("%-12s (%4d) | %6d", c.name, c.steps, passes);
+      for (const pba::RigidSolverType t : pba::kRigidSolvers) {
+        const Result r = run_pba(c.scene, c.size, c.steps, at_budget(t, passes, false), nullptr);
+        std::printf(" | %7.3f ms %8.4f %8.4f m", r.ms, r.sag, r.drift);
+      }
+      std::printf("\n");
+      std::fflush(stdout);
+    }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  if (argc > 1 && std::strcmp(argv[1], "--budget") == 0) return run_budget();
   struct Case {
     const char* name;
     Scene scene;
@@ -131,19 +174,28 @@ int main(int argc, char** argv) {
                                                             {"fall 1000", Scene::Fall, 10, 600},
                                                             {"fall 1000, sleep", Scene::Fall, 10, 600, true},
                                                             {"pyramid 20 (2870)", Scene::Pyramid, 20, 60}};
-  std::printf("%-18s | %-28s | %-28s | %-28s | %s\n", "scene", "pba soft step ms/sag/drift", "pba SI ms/sag/drift",
-              "Bullet ms/sag/drift", "Bullet / pba soft");
+  // pba's four solvers at their defaults, then Bullet
+  std::printf("%-18s", "scene");
+  for (const pba::RigidSolverType t : pba::kRigidSolvers) std::printf(" | %-28s", std::string(pba::to_string(t)).c_str());
+  std::printf(" | %-28s | %s\n", "Bullet ms/sag/drift", "Bullet / pba soft");
   for (const Case& c : cases) {
-    std::uint64_t h = 0;
+    std::printf("%-18s", c.name);
+    Result soft{};
+    std::uint64_t hashes[pba::kRigidSolvers.size()] = {};
     double asleep = -1;
-    const Result soft = run_pba(c.scene, c.size, c.steps, pba::RigidSolverType::SoftStep, c.sleep, &h, &asleep);
-    const Result si = run_pba(c.scene, c.size, c.steps, pba::RigidSolverType::SequentialImpulse, c.sleep, nullptr);
+    for (std::size_t k = 0; k < pba::kRigidSolvers.size(); ++k) {
+      const Result r = run_pba(c.scene, c.size, c.steps, at_budget(pba::kRigidSolvers[k], 0, c.sleep), &hashes[k],
+                               k == 0 ? &asleep : nullptr);
+      if (k == 0) soft = r;
+      std::printf(" | %7.3f ms %8.4f %8.4f m", r.ms, r.sag, r.drift);
+      std::fflush(stdout);
+    }
     const Result bt = run_bullet(c.scene, c.size, c.steps, c.sleep);
-    std::printf("%-18s | %7.3f ms %7.4f %7.4f m | %7.3f ms %7.4f %7.4f m | %7.3f ms %7.4f %7.4f m | %.2fx  (hash %016llx)",
-                c.name, soft.ms, soft.sag, soft.drift, si.ms, si.sag, si.drift, bt.ms, bt.sag, bt.drift, bt.ms / soft.ms,
-                static_cast<unsigned long long>(h));
-    if (c.sleep && asleep < 0) std::printf("  pba: not all asleep after %d steps", c.steps);
-    if (c.sleep && asleep >= 0) std::printf("  pba: all asleep at %.2f s", asleep);
+    std::printf(" | %7.3f ms %8.4f %8.4f m | %.2fx  (hashes", bt.ms, bt.sag, bt.drift, bt.ms / soft.ms);
+    for (const std::uint64_t h : hashes) std::printf(" %016llx", static_cast<unsigned long long>(h));
+    std::printf(")");
+    if (c.sleep && asleep < 0) std::printf("  pba soft: not all asleep after %d steps", c.steps);
+    if (c.sleep && asleep >= 0) std::printf("  pba soft: all asleep at %.2f s", asleep);
     std::printf("\n");
     std::fflush(stdout);
   }

@@ -1,8 +1,9 @@
 // "Rigid bodies/Solver lab" (workbook chapter 6): the shared rigid scenes (vertical stack,
-// square pyramid, falling boxes, restitution row, friction ramp) under either contact
-// solver, switched live: the soft step (Box2D v3's substeps, soft contacts, relax and
-// restitution passes) or sequential impulses. The panel plots the top box's sag and drift,
-// the deepest overlap and the kinetic energy, and shows where the step's time went.
+// square pyramid, falling boxes, restitution row, friction ramp) under any of the four contact
+// solvers, switched live: the soft step (Box2D v3's substeps, soft contacts, relax and
+// restitution passes), sequential impulses, TGS (substeps of rigid contacts, Macklin et al.
+// 2019) or XPBD (positional contacts, Mueller et al. 2020). The panel plots the top box's sag
+// and drift, the deepest overlap and the kinetic energy, and shows where the step's time went.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -29,12 +30,15 @@ constexpr Color kPalette[] = {colors::blue, colors::cyan, colors::purple, colors
 enum class LabScene : int { Stack, Pyramid, Falling, Restitution, Ramp };
 constexpr const char* kSceneNames[] = {"vertical stack", "square pyramid", "falling boxes", "restitution row",
                                        "friction ramp"};
-constexpr const char* kSolverNames[] = {"soft step", "sequential impulses"};
+constexpr const char* kSolverNames[] = {"soft step", "sequential impulses", "TGS", "XPBD"};
+// the --option solver values, in RigidSolverType's order
+constexpr const char* kSolverKeys[] = {"soft", "si", "tgs", "xpbd"};
 
 class RigidLab final : public Sample {
  public:
   explicit RigidLab(SampleContext& ctx) : Sample(ctx) {
-    // --option scene=stack|pyramid|falling|restitution|ramp size=N solver=soft|si
+    // --option scene=stack|pyramid|falling|restitution|ramp size=N solver=soft|si|tgs|xpbd
+    // (or the solvers' library names: soft-step, sequential-impulse)
     const std::string scene = ctx.option("scene", "stack");
     const char* keys[] = {"stack", "pyramid", "falling", "restitution", "ramp"};
     scene_ = LabScene::Stack;
@@ -43,8 +47,10 @@ class RigidLab final : public Sample {
       if (scene == keys[i]) scene_ = static_cast<LabScene>(i), found = true;
     if (!found) throw Error("--option scene: expected stack, pyramid, falling, restitution or ramp, got '" + scene + "'");
     const std::string solver = ctx.option("solver", "soft");
-    if (solver != "soft" && solver != "si") throw Error("--option solver: expected soft or si, got '" + solver + "'");
-    settings_.solver = solver == "si" ? RigidSolverType::SequentialImpulse : RigidSolverType::SoftStep;
+    found = false;
+    for (std::size_t i = 0; i < kRigidSolvers.size(); ++i)
+      if (solver == kSolverKeys[i] || solver == to_string(kRigidSolvers[i])) settings_.solver = kRigidSolvers[i], found = true;
+    if (!found) throw Error("--option solver: expected soft, si, tgs or xpbd, got '" + solver + "'");
     size_ = static_cast<int>(OptionNumber(ctx, "size", 10, 1, 40));
     ctx.settings.stepper.fixed_dt = 1.0 / 60.0;
     build();
@@ -78,20 +84,38 @@ class RigidLab final : public Sample {
     ImGui::SetNextItemWidth(-110);
     rebuild |= ImGui::SliderInt("size", &size_, 1, 40);
     ImGui::SetNextItemWidth(-110);
-    if (ImGui::Combo("solver", &solver, kSolverNames, 2)) settings_.solver = static_cast<RigidSolverType>(solver);
-    if (settings_.solver == RigidSolverType::SoftStep) {
+    if (ImGui::Combo("solver", &solver, kSolverNames, 4)) settings_.solver = static_cast<RigidSolverType>(solver);
+    // each solver's own knobs (the substeps are shared by the three that substep)
+    if (settings_.solver != RigidSolverType::SequentialImpulse) {
       ImGui::SetNextItemWidth(-110);
-      ImGui::SliderInt("substeps", &settings_.substeps, 1, 16);
+      ImGui::SliderInt("substeps", &settings_.substeps, 1, 64);
+    }
+    if (settings_.solver == RigidSolverType::SoftStep) {
       float hz = static_cast<float>(settings_.contact_hertz);
       ImGui::SetNextItemWidth(-110);
       if (ImGui::SliderFloat("contact Hz", &hz, 5, 240, "%.0f Hz")) settings_.contact_hertz = hz;
-    } else {
+    } else if (settings_.solver == RigidSolverType::SequentialImpulse) {
       ImGui::SetNextItemWidth(-110);
       ImGui::SliderInt("iterations", &settings_.iterations, 1, 100);
+    } else {
+      ImGui::SetNextItemWidth(-110);
+      ImGui::SliderInt("iterations / substep", &settings_.substep_iterations, 1, 16);
+    }
+    if (settings_.solver == RigidSolverType::Tgs) {
+      ImGui::SetNextItemWidth(-110);
+      ImGui::SliderInt("relax / substep", &settings_.relax_iterations, 0, 16);
+    }
+    if (settings_.solver == RigidSolverType::Xpbd) {
+      // compliance on a log slider, 0 (rigid) to 1e-4 m/N
+      float c = static_cast<float>(settings_.contact_compliance);
+      ImGui::SetNextItemWidth(-110);
+      if (ImGui::SliderFloat("compliance", &c, 0.0f, 1e-4f, "%.1e m/N", ImGuiSliderFlags_Logarithmic))
+        settings_.contact_compliance = c;
     }
     ImGui::SetNextItemWidth(-110);
     ImGui::SliderInt("manifold sweeps", &settings_.manifold_iterations, 1, 16);
-    ImGui::Checkbox("warm starting", &settings_.warm_starting);
+    // XPBD's multipliers start at zero each substep: nothing to warm-start
+    if (settings_.solver != RigidSolverType::Xpbd) ImGui::Checkbox("warm starting", &settings_.warm_starting);
     if (ImGui::Button("Restart") || rebuild) {
       scene_ = static_cast<LabScene>(scene);
       build();
@@ -126,8 +150,11 @@ class RigidLab final : public Sample {
         "The yellow body is the one the sag and drift are measured on (the top of a stack or pyramid). Soft step: "
         "contacts are implicit springs of 'contact Hz', solved once with position bias and once without (relax) "
         "per substep; a stack sags about n^2 g / (2 pi f)^2. Sequential impulses: one step, rigid contacts "
-        "iterated, overlap removed by Baumgarte bias: tall stacks fall. View > contacts and normals show the "
-        "manifolds (red overlapping, green speculative).");
+        "iterated, overlap removed by Baumgarte bias: tall stacks fall. TGS: the soft step's substeps with rigid "
+        "contacts, biased by the separation at each substep's poses. XPBD: per substep, free motion, then "
+        "contacts and static friction as position constraints, velocities from the positions, and a velocity "
+        "pass for dynamic friction and restitution. View > contacts and normals show the manifolds (red "
+        "overlapping, green speculative).");
   }
 
   std::vector<Color> ExpectedColors() const override {

@@ -24,6 +24,7 @@
 // Units: metres, seconds, kilograms; forces in N, torques in N m, impulses in N s.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -108,14 +109,29 @@ struct RigidBodyTag {};
 /// Generation-checked rigid-body handle.
 using RigidBodyId = Handle<RigidBodyTag>;
 
-/// The contact solvers, switchable between steps.
+/// The contact solvers, switchable between steps. Names for the command line and the UI are
+/// "soft-step", "sequential-impulse", "tgs" and "xpbd" (to_string / parse_rigid_solver).
 enum class RigidSolverType : std::uint8_t {
   SoftStep,           ///< Box2D v3 / Box3D: substeps, soft contacts, relax and restitution passes
   SequentialImpulse,  ///< one step, iterations with warm starting, Baumgarte position correction
+  /// temporal Gauss-Seidel (Macklin et al. 2019; PhysX TGS): substeps of few iterations of
+  /// rigid contacts biased by the separation at the bodies' current poses, relax, restitution
+  Tgs,
+  /// extended position-based dynamics for rigid bodies (Mueller et al. 2020): substeps of
+  /// positional contact and static friction constraints, then a velocity pass
+  Xpbd,
 };
 
-/// Lower-case name of a solver ("soft-step", "sequential-impulse").
+/// Every rigid solver, in the order the UI lists them.
+inline constexpr std::array<RigidSolverType, 4> kRigidSolvers = {
+    RigidSolverType::SoftStep, RigidSolverType::SequentialImpulse, RigidSolverType::Tgs, RigidSolverType::Xpbd};
+
+/// Lower-case name of a solver ("soft-step", "sequential-impulse", "tgs", "xpbd").
 std::string_view to_string(RigidSolverType t);
+
+/// Parses a solver's name (exact, lowercase, as to_string gives it). Throws Error naming the
+/// text, `where` it came from (e.g. "--solver") and the valid names.
+RigidSolverType parse_rigid_solver(std::string_view text, std::string_view where);
 
 /// How two materials' coefficients combine at a contact.
 enum class MixRule : std::uint8_t {
@@ -129,8 +145,14 @@ enum class MixRule : std::uint8_t {
 /// Contact and solver settings; change them between steps.
 struct ContactSettings {
   RigidSolverType solver = RigidSolverType::SoftStep;  ///< which solver
-  int substeps = 8;  ///< soft step: substeps per step, in [1, 64]
+  int substeps = 8;  ///< soft step, TGS and XPBD: substeps per step, in [1, 64]
   int iterations = 10;  ///< sequential impulses: velocity iterations per step, in [1, 1000]
+  /// TGS: biased contact iterations per substep; XPBD: position iterations per substep; in
+  /// [1, 100]. TGS and XPBD take many substeps of few iterations (Macklin et al. 2019).
+  int substep_iterations = 1;
+  /// TGS: relax iterations per substep (contacts solved without position bias after the
+  /// positions move, so no push-out velocity survives), in [0, 100]
+  int relax_iterations = 1;
   /// Sweeps over a manifold's points per pass, in [1, 16]: more converge its points toward
   /// their joint solution (4 keeps a 20-box stack from rocking; see docs/rigid-bodies.md).
   int manifold_iterations = 4;
@@ -142,10 +164,15 @@ struct ContactSettings {
   double contact_hertz = 120;
   double damping_ratio = 10;     ///< soft step: contact damping ratio, finite and >= 0
   double push_out_speed = 3;     ///< largest speed (m/s) at which overlap is pushed apart, finite and > 0
-  double baumgarte = 0.2;        ///< sequential impulses: fraction of overlap removed per step, in [0, 1]
+  /// Sequential impulses: fraction of overlap removed per step; TGS: per substep, measured
+  /// from the bodies' poses at that substep; in [0, 1]
+  double baumgarte = 0.2;
+  /// XPBD: compliance of a contact (m/N, the inverse stiffness), finite and >= 0; 0 is rigid
+  double contact_compliance = 0;
   double linear_slop = 0.005;    ///< overlap (m) left uncorrected so contacts persist, finite and >= 0
   double speculative_distance = 0.02;  ///< manifolds include points closer than this (m), finite and >= 0
-  /// Approach speeds (m/s) below this bounce with no restitution, so resting bodies stay put.
+  /// Approach speeds (m/s) below this bounce with no restitution, so resting bodies stay put
+  /// (finite and >= 0; XPBD also at speeds below 2 |g| h, Mueller et al. 2020).
   double restitution_threshold = 1;
   MixRule friction_mix = MixRule::GeometricMean;   ///< how friction coefficients combine
   MixRule restitution_mix = MixRule::Maximum;      ///< how restitutions combine

@@ -1,5 +1,6 @@
 // Rigid bodies: contact pairs, manifolds with warm-start matching, and the contact solver
-// passes shared by the soft-step and sequential-impulse solvers.
+// passes shared by the soft-step, sequential-impulse and TGS solvers (src/rigid/tgs.cpp; XPBD
+// has its own passes, src/rigid/xpbd_rigid.cpp).
 //
 // The soft step follows Catto's Solver2D / Box2D v3 (contact_solver.c) in 3D: per substep
 // the bodies' velocities are integrated, the carried impulses applied, the contacts solved
@@ -45,14 +46,6 @@ double rolling_radius(const ColliderShape& s) {
     case ShapeType::Capsule: return s.radius;
     default: return 0;
   }
-}
-
-// 1 / (J M^-1 J^T) for an impulse along unit `d` at anchors ra, rb
-double effective_mass(double ma, double mb, const Mat3& ia, const Mat3& ib, const Vec3& ra, const Vec3& rb,
-                      const Vec3& d) {
-  const Vec3 ca = glm::cross(ra, d), cb = glm::cross(rb, d);
-  const double k = ma + mb + glm::dot(ca, ia * ca) + glm::dot(cb, ib * cb);
-  return k > 0 ? 1 / k : 0;
 }
 
 }  // namespace
@@ -241,19 +234,6 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   }
 }
 
-namespace {
-
-// applies the impulse `p` (N s) at anchors ra, rb: +p to b, -p to a
-inline void apply(BodyView& a, BodyView& b, const Mat3& ia, const Mat3& ib,
-                  const Vec3& ra, const Vec3& rb, const Vec3& p) {
-  *a.v -= a.inv_mass * p;
-  *a.w -= ia * glm::cross(ra, p);
-  *b.v += b.inv_mass * p;
-  *b.w += ib * glm::cross(rb, p);
-}
-
-}  // namespace
-
 void RigidContacts::warm_start(RigidBodySystem& s) {
   for (ContactPair& c : pairs) {
     auto a = view(s, c.a), b = view(s, c.b);
@@ -394,6 +374,20 @@ void RigidContacts::restitution(RigidBodySystem& s) {
       apply(a, b, inv_inertia[c.a], inv_inertia[c.b], p.ra, p.rb, impulse * c.normal);
     }
   }
+}
+
+void RigidContacts::carry_impulses(double h) {
+  // an impulse per step of impulse_h is a force times impulse_h: the same force over h
+  if (impulse_h > 0 && impulse_h != h) {
+    const double k = h / impulse_h;
+    for (ContactPair& c : pairs) {
+      for (int j = 0; j < c.count; ++j) c.points[j].normal_impulse *= k;
+      c.tangent_impulse[0] *= k, c.tangent_impulse[1] *= k;
+      c.twist_impulse *= k;
+      c.rolling_impulse *= k;
+    }
+  }
+  impulse_h = h;
 }
 
 void RigidContacts::store() {

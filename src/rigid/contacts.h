@@ -88,6 +88,25 @@ struct BodyView {
   double inv_mass;
 };
 
+/// 1 / (J M^-1 J^T) for an impulse along unit `d` at anchors ra, rb (kg): the inverse of the
+/// generalised inverse mass w = 1/ma + 1/mb + (ra x d)^T Ia^-1 (ra x d) + (rb x d)^T Ib^-1 (rb x d)
+/// (ma, mb inverse masses); 0 when neither body can move.
+inline double effective_mass(double ma, double mb, const Mat3& ia, const Mat3& ib, const Vec3& ra, const Vec3& rb,
+                             const Vec3& d) {
+  const Vec3 ca = glm::cross(ra, d), cb = glm::cross(rb, d);
+  const double k = ma + mb + glm::dot(ca, ia * ca) + glm::dot(cb, ib * cb);
+  return k > 0 ? 1 / k : 0;
+}
+
+/// Applies the impulse `p` (N s) at anchors ra, rb to the velocities: +p to b, -p to a.
+inline void apply(BodyView& a, BodyView& b, const Mat3& ia, const Mat3& ib, const Vec3& ra, const Vec3& rb,
+                  const Vec3& p) {
+  *a.v -= a.inv_mass * p;
+  *a.w -= ia * glm::cross(ra, p);
+  *b.v += b.inv_mass * p;
+  *b.w += ib * glm::cross(rb, p);
+}
+
 /// A shape's entry in the sweep: its bounds this step and who owns it.
 struct ShapeProxy {
   Aabb box{};
@@ -113,6 +132,7 @@ struct RigidContacts {
   std::vector<Mat3> inv_inertia;  // world inverse inertia by dense body, fixed over the step
   std::vector<std::uint32_t> statics;  // proxies of static bodies (indices into proxies)
   std::size_t continuous_hits = 0;     // bodies put back to a time of impact, all steps
+  double impulse_h = 0;  // the time step (s) the carried impulses were accumulated over; 0: none yet
 
   /// Finds the overlapping shape pairs, builds their manifolds and carries last step's
   /// impulses over by feature id.
@@ -121,6 +141,12 @@ struct RigidContacts {
   void prepare(RigidBodySystem& s);
   /// Applies the carried impulses.
   void warm_start(RigidBodySystem& s);
+  /// Rescales the carried impulses to the solver's time step h (s): they were accumulated
+  /// over steps of `impulse_h` (N s per substep of the soft step, TGS and XPBD, per step of
+  /// sequential impulses), so a switch of solver, of substeps or of dt would otherwise start
+  /// from impulses too large or too small by their ratio (a 5-stack switched from sequential
+  /// impulses to TGS was kicked to 0.19 m/s).
+  void carry_impulses(double h);
   /// One pass over the contacts. `soft` picks the soft-step constraint; `bias` asks for
   /// position correction (false: the relax pass).
   void solve(RigidBodySystem& s, double h, bool bias, bool soft);
@@ -131,6 +157,26 @@ struct RigidContacts {
   void continuous(RigidBodySystem& s);
   /// Keeps each point's friction impulse in world axes for next step's re-projection.
   void store();
+  /// The TGS solver's step after prepare(): substeps of biased rigid iterations, positions,
+  /// relax iterations (src/rigid/tgs.cpp); step() then runs the restitution pass.
+  void step_tgs(RigidBodySystem& s, double dt, const Vec3& gravity);
+  /// The XPBD solver's step after prepare(): substeps of positions, positional contacts and
+  /// static friction, velocities from the positions, the velocity pass (src/rigid/xpbd_rigid.cpp).
+  void step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity);
+
+  // XPBD scratch: the poses at the start of the substep and after its free motion, by dense
+  // body; each point's and manifold's multipliers (N s^2) and approach speeds, by pair
+  std::vector<Vec3> x_start, x_free;
+  std::vector<Quat> q_start, q_free;
+  struct XpbdPair {
+    double normal[Manifold::kMaxPoints];    // normal multipliers of the points
+    double approach[Manifold::kMaxPoints];  // normal velocities before the position solve (m/s)
+    Vec3 friction;                          // the static friction's positional impulse on b (kg m)
+    double twist;                           // the static twist multiplier about the normal
+  };
+  std::vector<XpbdPair> xpbd;
+  /// XPBD: one manifold's positional contacts and static friction, solved as a block.
+  void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double alpha);
   /// Body i's solver state.
   static BodyView view(RigidBodySystem& s, std::size_t i) {
     return {&s.v_[i], &s.w_[i], &s.com_[i], &s.q_[i], s.asleep_[i] ? 0.0 : s.inv_mass_[i]};

@@ -63,20 +63,35 @@ std::string_view to_string(RigidSolverType t) {
   switch (t) {
     case RigidSolverType::SoftStep: return "soft-step";
     case RigidSolverType::SequentialImpulse: return "sequential-impulse";
+    case RigidSolverType::Tgs: return "tgs";
+    case RigidSolverType::Xpbd: return "xpbd";
   }
   return "unknown";
 }
 
+RigidSolverType parse_rigid_solver(std::string_view text, std::string_view where) {
+  // exact match against the names; the error lists them all
+  std::string names;
+  for (const RigidSolverType t : kRigidSolvers) {
+    if (text == to_string(t)) return t;
+    names += (names.empty() ? "" : ", ") + std::string(to_string(t));
+  }
+  throw Error(std::string(where) + ": unknown rigid solver \"" + std::string(text) + "\"; valid: " + names);
+}
+
 void ContactSettings::validate(std::string_view where) const {
-  if (solver != RigidSolverType::SoftStep && solver != RigidSolverType::SequentialImpulse)
+  if (static_cast<std::size_t>(solver) >= kRigidSolvers.size())
     throw Error(field_path(where, "solver") + ": unknown solver " + std::to_string(static_cast<int>(solver)));
   require_count(substeps, 1, 64, field_path(where, "substeps"));
   require_count(iterations, 1, 1000, field_path(where, "iterations"));
+  require_count(substep_iterations, 1, 100, field_path(where, "substep_iterations"));
+  require_count(relax_iterations, 0, 100, field_path(where, "relax_iterations"));
   require_count(manifold_iterations, 1, 16, field_path(where, "manifold_iterations"));
   require_positive(contact_hertz, field_path(where, "contact_hertz"));
   require_non_negative(damping_ratio, field_path(where, "damping_ratio"));
   require_positive(push_out_speed, field_path(where, "push_out_speed"));
   require_in_range(baumgarte, 0, 1, field_path(where, "baumgarte"));
+  require_non_negative(contact_compliance, field_path(where, "contact_compliance"));
   require_non_negative(linear_slop, field_path(where, "linear_slop"));
   require_non_negative(speculative_distance, field_path(where, "speculative_distance"));
   require_non_negative(restitution_threshold, field_path(where, "restitution_threshold"));
@@ -520,7 +535,12 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   profile_.collide = total.seconds();
   contacts_->prepare(*this);
   const bool soft = settings_.solver == RigidSolverType::SoftStep;
-  if (soft) {
+  contacts_->carry_impulses(settings_.solver == RigidSolverType::SequentialImpulse ? dt : dt / settings_.substeps);
+  if (settings_.solver == RigidSolverType::Tgs) {
+    contacts_->step_tgs(*this, dt, gravity);  // src/rigid/tgs.cpp
+  } else if (settings_.solver == RigidSolverType::Xpbd) {
+    contacts_->step_xpbd(*this, dt, gravity);  // src/rigid/xpbd_rigid.cpp, restitution included
+  } else if (soft) {
     // substeps: velocities, carried impulses, soft solve, positions, relax
     const int substeps = settings_.substeps;
     const double h = dt / substeps;
@@ -538,7 +558,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
     for (int k = 0; k < settings_.iterations; ++k) contacts_->solve(*this, dt, true, false);
     integrate_positions(dt);
   }
-  contacts_->restitution(*this);
+  if (settings_.solver != RigidSolverType::Xpbd) contacts_->restitution(*this);
   contacts_->continuous(*this);
   contacts_->store();
   check_finite();

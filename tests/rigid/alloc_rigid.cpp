@@ -11,10 +11,10 @@ using pba::test_support::g_allocations;
 
 // 100 bodies resting in contact (boxes on the ground, balls on the boxes, a kinematic
 // paddle sliding under none of them), under forces and impulses: once the contact pairs
-// have been seen, stepping allocates nothing, for both solvers, with and without sleeping
+// have been seen, stepping allocates nothing, for every solver, with and without sleeping
 TEST(RigidAlloc, StepsWithContactsNeverAllocate) {
   for (const bool sleep : {false, true})
-  for (const auto solver : {pba::RigidSolverType::SoftStep, pba::RigidSolverType::SequentialImpulse}) {
+  for (const auto solver : pba::kRigidSolvers) {
     pba::RigidBodySystem s({.capacity = 128, .contacts = {.solver = solver, .sleep = sleep}});
     s.create({.type = pba::BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
     std::vector<pba::RigidBodyId> ids;

@@ -33,20 +33,24 @@ double rel(const Vec3& a, const Vec3& b) { return glm::length(a - b) / glm::leng
 
 // Semi-implicit Euler with substep h has the closed form v_n = v0 + g n h,
 // x_n = x0 + v0 n h + g h^2 n (n + 1) / 2; its distance from the exact parabola is
-// g h t / 2, first order in h.
+// g h t / 2, first order in h. Every solver: the substepping ones at h = dt / substeps (XPBD's
+// velocity from the position change is exactly v when nothing corrects the position),
+// sequential impulses at h = dt.
 TEST(RigidFreeFall, MatchesTheDiscreteSolutionAndConvergesToTheParabola) {
+  for (const auto solver : pba::kRigidSolvers)
   for (const double dt : {1.0 / 30, 1.0 / 60, 1.0 / 240}) {
     for (const int substeps : {1, 4}) {
-      RigidBodySystem s({.contacts = {.substeps = substeps}});
+      RigidBodySystem s({.contacts = {.solver = solver, .substeps = substeps}});
       const Vec3 x0{0, 100, 0}, v0{2, 5, -1};
       auto b = s.create({.pose = {x0}, .linear_velocity = v0, .shapes = kBall, .mass = RigidMass::box(3, {0.5, 0.5, 0.5})});
       const int steps = static_cast<int>(std::lround(2.0 / dt));
       for (int i = 0; i < steps; ++i) s.step(dt, kG);
-      const double h = dt / substeps;
-      const double n = static_cast<double>(steps) * substeps, t = n * h;
+      const int per_step = solver == pba::RigidSolverType::SequentialImpulse ? 1 : substeps;
+      const double h = dt / per_step;
+      const double n = static_cast<double>(steps) * per_step, t = n * h;
       const Vec3 x_discrete = x0 + v0 * t + kG * (h * h * n * (n + 1) / 2);
       const Vec3 x_exact = x0 + v0 * t + 0.5 * kG * t * t;
-      EXPECT_LT(glm::length(s.center_of_mass(b) - x_discrete), 1e-10) << dt << " " << substeps;
+      EXPECT_LT(glm::length(s.center_of_mass(b) - x_discrete), 1e-10) << to_string(solver) << " " << dt << " " << substeps;
       EXPECT_LT(glm::length(s.linear_velocity(b) - (v0 + kG * t)), 1e-11);
       // the error of the scheme is exactly g h t / 2 below the parabola
       EXPECT_NEAR(glm::length(s.center_of_mass(b) - x_exact), 9.81 * h * t / 2, 1e-9);
@@ -163,6 +167,8 @@ std::vector<double> rk4_crossings(const Vec3& inertia, Vec3 w, int axis, double 
   return out;
 }
 
+// Under every solver: with no contact they all run the same free motion (XPBD keeps the
+// splitting's velocities and adds only the contacts' corrections, src/rigid/xpbd_rigid.cpp).
 TEST(RigidTumbling, TheTHandleKeepsAngularMomentumAndEnergyAndFlipsOnTime) {
   const RigidMass m = t_handle();
   // principal moments: x (bar axis) smallest, z largest, y intermediate
@@ -174,9 +180,10 @@ TEST(RigidTumbling, TheTHandleKeepsAngularMomentumAndEnergyAndFlipsOnTime) {
   const std::vector<double> ref = rk4_crossings(moments, w0, 1, 1e-4, 10);
   ASSERT_GE(ref.size(), 4u);
   const double ref_period = 2 * (ref[3] - ref[0]) / 3;
+  for (const auto solver : pba::kRigidSolvers)
   for (const double dt : {1.0 / 60, 1.0 / 240}) {
     for (const int substeps : {1, 4}) {
-      RigidBodySystem s({.contacts = {.substeps = substeps}});
+      RigidBodySystem s({.contacts = {.solver = solver, .substeps = substeps}});
       const Quat q0 = glm::angleAxis(0.3, glm::normalize(Vec3(1, -1, 2)));
       auto b = s.create({.pose = {{0, 0, 0}, q0}, .angular_velocity = q0 * w0, .shapes = kBall, .mass = m});
       const Vec3 l0 = s.angular_momentum(b);
@@ -195,12 +202,12 @@ TEST(RigidTumbling, TheTHandleKeepsAngularMomentumAndEnergyAndFlipsOnTime) {
         if ((prev > 0) != (wy > 0)) flips.push_back(t - dt * wy / (wy - prev));
         prev = wy;
       }
-      EXPECT_LT(worst_l, 1e-3) << dt << " x" << substeps;
-      EXPECT_LT(worst_e, 0.01) << dt << " x" << substeps;
+      EXPECT_LT(worst_l, 1e-3) << to_string(solver) << " " << dt << " x" << substeps;
+      EXPECT_LT(worst_e, 0.01) << to_string(solver) << " " << dt << " x" << substeps;
       // the flip period from the first four flips of each
-      ASSERT_GE(flips.size(), 4u) << dt << " x" << substeps;
+      ASSERT_GE(flips.size(), 4u) << to_string(solver) << " " << dt << " x" << substeps;
       const double period = 2 * (flips[3] - flips[0]) / 3;
-      EXPECT_NEAR(period, ref_period, 0.05 * ref_period) << dt << " x" << substeps;
+      EXPECT_NEAR(period, ref_period, 0.05 * ref_period) << to_string(solver) << " " << dt << " x" << substeps;
     }
   }
 }
@@ -363,11 +370,20 @@ std::uint64_t pile_hash(pba::RigidSolverType solver) {
 TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   const std::uint64_t soft = pile_hash(pba::RigidSolverType::SoftStep);
   const std::uint64_t si = pile_hash(pba::RigidSolverType::SequentialImpulse);
+  const std::uint64_t tgs = pile_hash(pba::RigidSolverType::Tgs);
+  const std::uint64_t xpbd = pile_hash(pba::RigidSolverType::Xpbd);
   EXPECT_EQ(soft, pile_hash(pba::RigidSolverType::SoftStep));
   EXPECT_EQ(si, pile_hash(pba::RigidSolverType::SequentialImpulse));
+  EXPECT_EQ(tgs, pile_hash(pba::RigidSolverType::Tgs));
+  EXPECT_EQ(xpbd, pile_hash(pba::RigidSolverType::Xpbd));
   EXPECT_NE(soft, si);
-  EXPECT_EQ(soft, 0xee2871f42f2f36e5ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x7fc5a56c4d835f67ull) << std::hex << si;
+  EXPECT_NE(soft, tgs);
+  EXPECT_NE(soft, xpbd);
+  EXPECT_NE(tgs, xpbd);
+  EXPECT_EQ(soft, 0x78e942fcf7a93e70ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x78bce1d217e480ecull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x131c720c8340a09full) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x47b010f0d8a61883ull) << std::hex << xpbd;
 }
 
 }  // namespace

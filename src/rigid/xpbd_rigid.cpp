@@ -1,0 +1,332 @@
+// Rigid bodies: the XPBD contact solver.
+//
+// Mueller, Macklin, Chentanez, Jeschke and Kim (2020), "Detailed rigid body simulation with
+// extended position based dynamics", Algorithm 2. The contact pairs and manifolds are found
+// once per step (src/rigid/contacts.cpp); each substep then
+//   1. saves the poses and integrates velocities and positions freely (gravity, forces,
+//      damping; the rotation by the exact-flow splitting of Dullweber et al. 1997, which keeps
+//      a tumbling body's angular momentum where the paper's explicit gyroscopic term does not),
+//   2. projects the contacts as positional constraints with the generalised inverse masses
+//      w = 1/m + (r x n)^T I^-1 (r x n) and compliance (eqs. 2-9), and static friction as a
+//      positional constraint on the tangential motion of the contact since the substep began
+//      (section 3.5); no warm starting: the multipliers start from zero each substep,
+//   3. sets the velocities from the position change (eqs. 12-13),
+//   4. and runs the velocity pass: dynamic friction, restitution with a threshold speed
+//      (eqs. 30-34).
+// The separation of a point is measured as in the other solvers, from points on the shapes'
+// cores turned with the bodies, along the manifold's normal.
+//
+// Where this departs from the paper (each measured; docs/rigid-bodies.md):
+// - Friction acts on the manifold as a whole ("patch friction", as in the other solvers): one
+//   tangential constraint at the points' centroid and one twist constraint about the normal,
+//   within mu times the sum of the points' normal multipliers. The paper's per-point static
+//   friction under Gauss-Seidel lets the first point of a face contact take the whole
+//   tangential correction against only its share of the load, so a box resting below the
+//   friction angle slips.
+// - A manifold's points and friction are solved together as a block (project() below), and
+//   the sweep over the manifolds alternates its direction.
+// - Static friction is kept inside the Coulomb disc rather than dropped when it would leave
+//   it: a sliding contact gets mu times the normal multiplier as positional friction, and the
+//   velocity pass's dynamic friction what is left of mu times the normal impulse.
+// - Step 3 in the paper is v = (x - x_prev) / h and w = 2 vec(q q_prev^-1) / h. Here the
+//   velocities of the free motion are kept and only the correction is added: v += (x - x_free)
+//   / h and w += 2 vec(q q_free^-1) / h. For the translation this is the same (x_free = x_prev +
+//   h v); for the rotation it keeps the splitting's end-of-substep angular velocity, so a body
+//   that no contact touches moves exactly as under the other solvers.
+// - Dynamic friction is limited as an impulse, mu lambda_n / h (eq. 30 limits a velocity
+//   change by h mu f_n, which holds its units only for a unit mass). Rolling resistance acts
+//   in the velocity pass, as in the others.
+#include "contacts.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pba::detail {
+
+namespace {
+
+// q turned by the small rotation vector `theta` (rad): q + 1/2 [theta, 0] q, normalised
+// (Mueller et al. 2020, eqs. 8-9)
+void turn(Quat& q, const Vec3& theta) {
+  const Quat dq(0, theta.x, theta.y, theta.z);
+  q = glm::normalize(q + 0.5 * (dq * q));
+}
+
+// the rotation vector of the small rotation q (rad): 2 vec(q), the sign making w >= 0
+Vec3 rotation_vector(const Quat& q) {
+  const Vec3 v(q.x, q.y, q.z);
+  return q.w >= 0 ? 2.0 * v : -2.0 * v;
+}
+
+// the turn of a body since the start of the step, to carry its anchors along
+Quat turned(const Quat& now, const Quat& start) { return now * glm::conjugate(start); }
+
+// the lever arms of point p when the bodies have turned by ta, tb since the start of the step:
+// the anchors on the shapes' cores turn with the bodies, the step from the core to the contact
+// stays along the normal (a rolling ball's contact stays below its centre, a box's corner
+// turns with the box; the paper's fixed material points, r = q r_local, let a ball rolling
+// at 12 rad/s push 11 degrees off its contact by the end of a 60 Hz step)
+void levers(const SolverPoint& p, const Quat& ta, const Quat& tb, Vec3& ra, Vec3& rb) {
+  ra = ta * p.sa + (p.ra - p.sa);
+  rb = tb * p.sb + (p.rb - p.sb);
+}
+
+// how far the body's material point now at lever r from the centre has moved since the pose
+// (x0, q0) (m)
+Vec3 material_motion(const Vec3& x, const Quat& q, const Vec3& x0, const Quat& q0, const Vec3& r) {
+  return x - x0 + r - (q0 * glm::conjugate(q)) * r;
+}
+
+}  // namespace
+
+// One manifold's positional constraints (Mueller et al. 2020, eqs. 2-9 and section 3.5),
+// linearised at the poses now and solved together: the points' non-penetration (lambda >= 0,
+// compliance alpha~), two tangential static friction rows at the points' centroid and one
+// twist row about the normal, both kept within mu times the normal multipliers. Projected
+// Gauss-Seidel over these at most seven rows, 4 x manifold_iterations sweeps of the small
+// matrix K = J M^-1 J^T (cheap: no poses move), then the impulses applied to the poses once.
+// Sweeping the constraints on the poses one at a time instead (as eq. 4 reads) converges
+// slowly on a face: the first point corrected turns the body, the friction at the centroid
+// sees the turn as slip, and what is left, divided by h into a velocity, rocks a stack (a box
+// on a 25 degree slope, mu 0.5, crept at 1.3 cm/s with one sweep of each).
+void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double alpha) {
+  constexpr int kRows = Manifold::kMaxPoints + 3;
+  const ContactSettings& cs = s.settings_;
+  auto a = view(s, c.a), b = view(s, c.b);
+  const Mat3& ia = inv_inertia[c.a];
+  const Mat3& ib = inv_inertia[c.b];
+  if (a.inv_mass == 0 && b.inv_mass == 0) return;
+  // the rows: a change of constraint lb.dxb + ab.dthb - la.dxa - aa.dtha, and its error now
+  Vec3 la[kRows], aa[kRows], lb[kRows], ab[kRows];
+  double error[kRows], lambda[kRows] = {};
+  const Quat ta = turned(*a.q, s.q0_[c.a]), tb = turned(*b.q, s.q0_[c.b]);
+  Vec3 ca(0), cb(0);
+  const int n = c.count;
+  for (int j = 0; j < n; ++j) {
+    const SolverPoint& p = c.points[j];
+    Vec3 ra, rb;
+    levers(p, ta, tb, ra, rb);
+    ca += ra, cb += rb;
+    la[j] = lb[j] = c.normal;
+    aa[j] = glm::cross(ra, c.normal), ab[j] = glm::cross(rb, c.normal);
+    error[j] = glm::dot((*b.com + tb * p.sb) - (*a.com + ta * p.sa), c.normal) + p.offset;
+  }
+  ca /= static_cast<double>(n), cb /= static_cast<double>(n);
+  // static friction: the tangential motion since the substep began of the material points at
+  // the centroid; twist: the relative turn about the normal since then
+  const Vec3 moved = material_motion(*b.com, *b.q, x_start[c.b], q_start[c.b], cb) -
+                     material_motion(*a.com, *a.q, x_start[c.a], q_start[c.a], ca);
+  const Vec3 tangent[2] = {c.t1, c.t2};
+  for (int d = 0; d < 2; ++d) {
+    la[n + d] = lb[n + d] = tangent[d];
+    // on a face (three or more points) static friction translates only: the points block
+    // the turn its lever would give, and with the turn in, what the sweep over the manifolds
+    // left of it became a rocking velocity (the 20-stack fell at 15 s, and even at 32
+    // substeps). The price: static friction on a face carries no moment, so a box held on a
+    // slope does not tip (docs/rigid-bodies.md)
+    const bool face = n >= 3;
+    aa[n + d] = face ? Vec3(0) : glm::cross(ca, tangent[d]);
+    ab[n + d] = face ? Vec3(0) : glm::cross(cb, tangent[d]);
+    error[n + d] = glm::dot(moved, tangent[d]);
+  }
+  la[n + 2] = lb[n + 2] = Vec3(0);
+  aa[n + 2] = ab[n + 2] = c.normal;
+  error[n + 2] = glm::dot(rotation_vector(*b.q * glm::conjugate(q_start[c.b])) -
+                              rotation_vector(*a.q * glm::conjugate(q_start[c.a])),
+                          c.normal);
+  const bool friction = c.friction > 0;
+  const bool twist = friction && c.twist_radius > 0;
+  const int rows = n + 3;
+  // K = J M^-1 J^T
+  double k[kRows][kRows];
+  for (int r = 0; r < rows; ++r)
+    for (int q = 0; q < rows; ++q)
+      k[r][q] = a.inv_mass * glm::dot(la[r], la[q]) + b.inv_mass * glm::dot(lb[r], lb[q]) +
+                glm::dot(aa[r], ia * aa[q]) + glm::dot(ab[r], ib * ab[q]);
+  // projected Gauss-Seidel on (K + alpha~) dlambda = -C - alpha~ lambda (eq. 4), lambda >= 0
+  // for the points, the friction rows inside mu times the points' total
+  auto residual = [&](int r) {
+    double v = error[r];
+    for (int q = 0; q < rows; ++q) v += k[r][q] * lambda[q];
+    return v;
+  };
+  const Vec3 carried = x.friction;
+  for (int sweep = 0; sweep < 4 * cs.manifold_iterations; ++sweep) {
+    double total = 0;
+    for (int j = 0; j < n; ++j) {
+      // a point apart (C > 0) stays at its lower bound unless the others would push it in
+      const double kk = k[j][j] + alpha;
+      if (kk > 0) lambda[j] = std::max(lambda[j] - (residual(j) + alpha * (x.normal[j] + lambda[j])) / kk, -x.normal[j]);
+      total += x.normal[j] + lambda[j];
+    }
+    if (!friction || total == 0) continue;
+    // static friction: the tangential rows together, inside the disc mu * total
+    for (int d = 0; d < 2; ++d)
+      if (k[n + d][n + d] > 0) lambda[n + d] -= residual(n + d) / k[n + d][n + d];
+    const Vec3 t = carried + lambda[n] * c.t1 + lambda[n + 1] * c.t2;
+    const double limit = c.friction * total, len = glm::length(t);
+    if (len > limit) {
+      const Vec3 clamped = t * (limit / len) - carried;
+      lambda[n] = glm::dot(clamped, c.t1), lambda[n + 1] = glm::dot(clamped, c.t2);
+    }
+    // twist, inside mu * total * the points' mean distance from the centroid
+    if (twist && k[n + 2][n + 2] > 0) {
+      const double tl = c.friction * total * c.twist_radius;
+      lambda[n + 2] = std::clamp(x.twist + lambda[n + 2] - residual(n + 2) / k[n + 2][n + 2], -tl, tl) - x.twist;
+    }
+  }
+  // apply the impulses to the poses
+  Vec3 dxa(0), dxb(0), dta(0), dtb(0);
+  for (int r = 0; r < rows; ++r) {
+    dxa -= (a.inv_mass * lambda[r]) * la[r], dta -= lambda[r] * aa[r];
+    dxb += (b.inv_mass * lambda[r]) * lb[r], dtb += lambda[r] * ab[r];
+  }
+  *a.com += dxa, *b.com += dxb;
+  turn(*a.q, ia * dta);
+  turn(*b.q, ib * dtb);
+  for (int j = 0; j < n; ++j) x.normal[j] += lambda[j];
+  x.friction += lambda[n] * c.t1 + lambda[n + 1] * c.t2;
+  x.twist += lambda[n + 2];
+}
+
+void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity) {
+  const ContactSettings& cs = s.settings_;
+  const std::size_t n = s.type_.size();
+  const int substeps = cs.substeps;
+  const double h = dt / substeps;
+  // compliance per substep (alpha / h^2, eq. 4) and the restitution threshold: the setting or
+  // the speed gravity gives in two substeps, whichever is larger (eq. 34)
+  const double alpha = cs.contact_compliance / (h * h);
+  const double threshold = std::max(cs.restitution_threshold, 2 * glm::length(gravity) * h);
+  x_start.resize(n), x_free.resize(n), q_start.resize(n), q_free.resize(n);
+  xpbd.resize(pairs.size());
+  for (int sub = 0; sub < substeps; ++sub) {
+    // 1. free motion from the saved poses
+    for (std::size_t i = 0; i < n; ++i) x_start[i] = s.com_[i], q_start[i] = s.q_[i];
+    s.integrate_velocities(h, gravity);
+    // the normal velocities before the position solve, for restitution
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      const ContactPair& c = pairs[k];
+      const Quat ta = turned(s.q_[c.a], s.q0_[c.a]), tb = turned(s.q_[c.b], s.q0_[c.b]);
+      for (int j = 0; j < c.count; ++j) {
+        Vec3 ra, rb;
+        levers(c.points[j], ta, tb, ra, rb);
+        const Vec3 dv = s.v_[c.b] + glm::cross(s.w_[c.b], rb) - s.v_[c.a] - glm::cross(s.w_[c.a], ra);
+        xpbd[k].approach[j] = glm::dot(dv, c.normal);
+      }
+    }
+    s.integrate_positions(h);
+    for (std::size_t i = 0; i < n; ++i) x_free[i] = s.com_[i], q_free[i] = s.q_[i];
+    for (XpbdPair& x : xpbd) {
+      for (double& l : x.normal) l = 0;
+      x.twist = 0;
+      x.friction = Vec3(0);
+    }
+    // 2. positional contacts and static friction, Gauss-Seidel over the manifolds, each
+    // manifold's small problem solved as a block; the sweep runs forward and backward in
+    // turn (symmetric Gauss-Seidel): always forward, what one manifold's correction left in
+    // the next one down the stack became a velocity at the end of every substep, the same
+    // way each time, and a 10-stack fell within 10 s
+    for (int it = 0; it < cs.substep_iterations; ++it)
+      for (std::size_t k = 0; k < pairs.size(); ++k) {
+        const std::size_t m = (sub + it) % 2 ? pairs.size() - 1 - k : k;
+        project(s, pairs[m], xpbd[m], alpha);
+      }
+    // 3. velocities from the corrections of the poses
+    for (std::size_t i = 0; i < n; ++i) {
+      if (s.type_[i] != BodyType::Dynamic || s.asleep_[i]) continue;
+      s.v_[i] += (s.com_[i] - x_free[i]) / h;
+      s.w_[i] += rotation_vector(s.q_[i] * glm::conjugate(q_free[i])) / h;
+    }
+    // 4. the velocity pass over the manifolds that pushed in this substep
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      ContactPair& c = pairs[k];
+      const XpbdPair& x = xpbd[k];
+      double total = 0;
+      for (int j = 0; j < c.count; ++j) total += x.normal[j];
+      if (total == 0) {
+        // apart this substep: nothing pushed
+        for (int j = 0; j < c.count; ++j) c.points[j].normal_impulse = 0;
+        c.tangent_impulse[0] = c.tangent_impulse[1] = c.twist_impulse = 0;
+        c.rolling_impulse = Vec3(0);
+        continue;
+      }
+      auto a = view(s, c.a), b = view(s, c.b);
+      const Mat3& ia = inv_inertia[c.a];
+      const Mat3& ib = inv_inertia[c.b];
+      const Quat ta = turned(*a.q, s.q0_[c.a]), tb = turned(*b.q, s.q0_[c.b]);
+      // the normal force of the substep as an impulse (N s): lambda / h (eq. 30's h f_n)
+      const double normal_impulse = total / h;
+      // restitution at each point that pushed: the normal velocity becomes e times the
+      // approach before the position solve, or 0 below the threshold (eqs. 33-34); this also
+      // takes back the push-out velocity of step 3, as a relax pass would. A point of the
+      // manifold that did not push (on a face the block's multipliers are not unique, and
+      // some corners get none) only has its approach stopped: left alone, such corners kept
+      // approaching, tilted boxes landing on each other, and a falling column of ten fell
+      // over. Swept `manifold_iterations` times, as the points are coupled
+      for (int sweep = 0; sweep < cs.manifold_iterations; ++sweep)
+      for (int j = 0; j < c.count; ++j) {
+        Vec3 ra, rb;
+        levers(c.points[j], ta, tb, ra, rb);
+        const Vec3 dv = *b.v + glm::cross(*b.w, rb) - *a.v - glm::cross(*a.w, ra);
+        const double approach = x.approach[j];
+        const double e = approach < -threshold ? c.restitution : 0;
+        const double target = std::max(-e * approach, 0.0);
+        const double m = effective_mass(a.inv_mass, b.inv_mass, ia, ib, ra, rb, c.normal);
+        double dvn = target - glm::dot(dv, c.normal);
+        if (x.normal[j] == 0) dvn = std::max(dvn, 0.0);
+        apply(a, b, ia, ib, ra, rb, dvn * m * c.normal);
+      }
+      // dynamic friction at the centroid: a tangential impulse against the sliding, up to mu
+      // times the normal impulse less what static friction took (eq. 30 limits the velocity
+      // change by h mu f_n, which only holds units for a unit mass; as an impulse it is
+      // Coulomb's law)
+      Vec3 friction = x.friction / h;
+      {
+        Vec3 ca(0), cb(0);
+        for (int j = 0; j < c.count; ++j) {
+          Vec3 ra, rb;
+          levers(c.points[j], ta, tb, ra, rb);
+          ca += ra, cb += rb;
+        }
+        ca /= static_cast<double>(c.count), cb /= static_cast<double>(c.count);
+        const Vec3 dv = *b.v + glm::cross(*b.w, cb) - *a.v - glm::cross(*a.w, ca);
+        const Vec3 vt = dv - glm::dot(dv, c.normal) * c.normal;
+        const double speed = glm::length(vt);
+        if (speed > 0) {
+          const Vec3 t = vt / speed;
+          const double j = std::min(speed * effective_mass(a.inv_mass, b.inv_mass, ia, ib, ca, cb, t),
+                                    std::max(c.friction * normal_impulse - glm::length(friction), 0.0));
+          apply(a, b, ia, ib, ca, cb, -j * t);
+          friction -= j * t;
+        }
+      }
+      // dynamic twist friction and rolling resistance on the relative spin
+      double twist = x.twist / h;
+      if (c.twist_radius > 0) {
+        const double k = glm::dot(c.normal, (ia + ib) * c.normal);
+        const double spin = glm::dot(*b.w - *a.w, c.normal);
+        const double limit = std::max(c.friction * normal_impulse * c.twist_radius - std::abs(twist), 0.0);
+        const double j = k > 0 ? std::clamp(-spin / k, -limit, limit) : 0;
+        *a.w -= ia * (j * c.normal);
+        *b.w += ib * (j * c.normal);
+        twist += j;
+      }
+      if (c.rolling > 0) {
+        Vec3 j = -(c.rolling_mass * (*b.w - *a.w));
+        const double limit = c.rolling * normal_impulse, len = glm::length(j);
+        if (len > limit) j *= limit / len;
+        *a.w -= ia * j;
+        *b.w += ib * j;
+        c.rolling_impulse = j;
+      }
+      // the substep's impulses, for contacts(), islands and warm starting after a switch
+      for (int j = 0; j < c.count; ++j) c.points[j].normal_impulse = x.normal[j] / h;
+      c.tangent_impulse[0] = glm::dot(friction, c.t1);
+      c.tangent_impulse[1] = glm::dot(friction, c.t2);
+      c.twist_impulse = twist;
+    }
+  }
+}
+
+}  // namespace pba::detail

@@ -1,0 +1,176 @@
+// Rigid contact solvers: names and settings by name, stacks under each solver, switching
+// solvers live, free motion shared by the substepping solvers, and XPBD's compliance against
+// the static deflection of a spring.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "pba/rigid.h"
+#include "pba/rigid_scenes.h"
+
+#include "error_of.h"
+
+using pba::RigidBodySystem;
+using pba::RigidSolverType;
+using pba::Vec3;
+using pba::test_support::error_of;
+
+namespace {
+
+constexpr double kG = 9.81;
+const Vec3 kGravity{0, -kG, 0};
+
+// ---------------------------------------------------------------------------------------
+// names and settings
+
+TEST(RigidSolvers, NamesRoundTripAndUnknownNamesAreRefused) {
+  for (const RigidSolverType t : pba::kRigidSolvers)
+    EXPECT_EQ(pba::parse_rigid_solver(pba::to_string(t), "test"), t) << pba::to_string(t);
+  EXPECT_EQ(pba::to_string(RigidSolverType::Tgs), "tgs");
+  EXPECT_EQ(pba::to_string(RigidSolverType::Xpbd), "xpbd");
+  const std::string m = error_of([] { pba::parse_rigid_solver("tgz", "--solver"); });
+  EXPECT_EQ(m, "--solver: unknown rigid solver \"tgz\"; valid: soft-step, sequential-impulse, tgs, xpbd");
+}
+
+TEST(RigidSolvers, NewSettingsAreValidatedByName) {
+  auto msg = [](pba::ContactSettings c) { return error_of([&] { RigidBodySystem s({.contacts = c}); }); };
+  EXPECT_NE(msg({.substep_iterations = 0}).find("contacts.substep_iterations"), std::string::npos);
+  EXPECT_NE(msg({.substep_iterations = 101}).find("contacts.substep_iterations"), std::string::npos);
+  EXPECT_NE(msg({.relax_iterations = -1}).find("contacts.relax_iterations"), std::string::npos);
+  EXPECT_EQ(msg({.relax_iterations = 0}), "");  // TGS without relax is allowed
+  EXPECT_NE(msg({.contact_compliance = -1e-6}).find("contacts.contact_compliance: must be finite and >= 0"),
+            std::string::npos) << msg({.contact_compliance = -1e-6});
+  EXPECT_NE(msg({.contact_compliance = NAN}).find("contact_compliance"), std::string::npos);
+  EXPECT_NE(msg({.solver = static_cast<RigidSolverType>(9)}).find("contacts.solver: unknown solver 9"),
+            std::string::npos);
+  // and between steps, by the settings' name
+  RigidBodySystem s;
+  s.settings().solver = RigidSolverType::Xpbd;
+  s.settings().contact_compliance = INFINITY;
+  EXPECT_NE(error_of([&] { s.step(1.0 / 60, kGravity); }).find("settings.contact_compliance"), std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------
+// stacks
+
+// the top box's sag and horizontal drift (m) after `steps` 60 Hz steps of an n-stack of
+// one-metre cubes (mu 0.5, no sleep) under `solver` at its defaults
+struct SagDrift {
+  double sag, drift;
+};
+SagDrift stack_after(RigidSolverType solver, int n, int steps) {
+  RigidBodySystem s({.contacts = {.solver = solver, .sleep = false}});
+  const auto boxes = pba::rigid_scenes::vertical_stack(s, n);
+  const Vec3 top0 = s.center_of_mass(boxes.back());
+  for (int i = 0; i < steps; ++i) s.step(1.0 / 60, kGravity);
+  const Vec3 top = s.center_of_mass(boxes.back());
+  return {top0.y - top.y, std::hypot(top.x - top0.x, top.z - top0.z)};
+}
+
+// A 10-stack stands for 10 s under each substepping solver at its defaults, within the
+// issue's 1 cm of sag and drift. The soft step's sag is the static deflection
+// n^2 g / (2 pi f)^2 = 1.7 mm; TGS and XPBD have rigid contacts and sag by what their
+// iterations leave (measured 1.0 and 2.3 mm).
+TEST(RigidSolvers, ATenStackStandsTenSecondsUnderEachSubsteppingSolver) {
+  for (const auto solver : {RigidSolverType::SoftStep, RigidSolverType::Tgs, RigidSolverType::Xpbd}) {
+    const SagDrift r = stack_after(solver, 10, 600);
+    EXPECT_LT(r.drift, 0.01) << to_string(solver);
+    EXPECT_LT(r.sag, 0.01) << to_string(solver);
+    EXPECT_GT(r.sag, -0.001) << to_string(solver);  // not pushed up either
+  }
+}
+
+// Macklin et al. (2019): many small steps beat many iterations. TGS's 8 substeps of one
+// biased and one relax iteration, and XPBD's 8 substeps of one projection, hold 20 cubes
+// for a minute within the 1 cm, where sequential impulses at the same 16 passes per
+// step let them fall (docs/rigid-bodies.md; measured sag and drift: TGS 4.1 and 0.2 mm, XPBD
+// 8.9 and 4.5 mm).
+TEST(RigidSolvers, TgsAndXpbdHoldTwentyCubesForAMinute) {
+  for (const auto solver : {RigidSolverType::Tgs, RigidSolverType::Xpbd}) {
+    const SagDrift r = stack_after(solver, 20, 3600);
+    EXPECT_LT(r.drift, 0.01) << to_string(solver);
+    EXPECT_LT(r.sag, 0.01) << to_string(solver);
+  }
+}
+
+// Ten cubes dropped 1.5 m apart onto each other (a column of the falling-boxes
+// scene) land one on another and end standing as a 10-stack: the top box within 1 cm of 9.5 m.
+// (Where the column ends sideways depends on rounding through ten impacts: 5-12 cm.)
+TEST(RigidSolvers, AFallingColumnOfTenLandsAsAStack) {
+  for (const auto solver : {RigidSolverType::SoftStep, RigidSolverType::Tgs, RigidSolverType::Xpbd}) {
+    RigidBodySystem s({.contacts = {.solver = solver, .sleep = false}});
+    pba::rigid_scenes::ground(s);
+    std::vector<pba::RigidBodyId> boxes;
+    for (int y = 0; y < 10; ++y) boxes.push_back(pba::rigid_scenes::box(s, {0, 2.0 + y * 1.5, 0}, Vec3(0.5)));
+    for (int i = 0; i < 600; ++i) s.step(1.0 / 60, kGravity);
+    EXPECT_NEAR(s.center_of_mass(boxes.back()).y, 9.5, 0.01) << to_string(solver);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// switching live
+
+// A 5-stack and a bouncing ball, the solver switched every 20 steps through all four for
+// 10 s: the state stays finite, the stack stands, and no switch kicks it: the stack's bodies
+// stay slower than one step of free fall gives (g dt = 0.16 m/s; measured 0.05). The
+// carried impulses are rescaled to each solver's time step (per substep or per step).
+TEST(RigidSolvers, SwitchingSolversLiveKeepsTheStateValid) {
+  RigidBodySystem s({.contacts = {.sleep = false}});
+  const auto boxes = pba::rigid_scenes::vertical_stack(s, 5);
+  auto ball = s.create({.pose = {{3, 1, 0}},
+                        .shapes = {{.shape = pba::ColliderShape::sphere(0.2), .material = {.restitution = 0.5}}}});
+  const Vec3 top0 = s.center_of_mass(boxes.back());
+  double fastest = 0;
+  for (int i = 0; i < 600; ++i) {
+    s.settings().solver = pba::kRigidSolvers[(i / 20) % 4];
+    s.step(1.0 / 60, kGravity);
+    for (const auto b : boxes) {
+      ASSERT_TRUE(pba::is_finite(s.center_of_mass(b)) && pba::is_finite(s.linear_velocity(b))) << i;
+      fastest = std::max(fastest, glm::length(s.linear_velocity(b)) + 0.5 * glm::length(s.angular_velocity(b)));
+    }
+  }
+  EXPECT_LT(fastest, kG / 60);
+  const Vec3 top = s.center_of_mass(boxes.back());
+  EXPECT_LT(std::hypot(top.x - top0.x, top.z - top0.z), 0.01);
+  EXPECT_LT(std::abs(top0.y - top.y), 0.01);
+  // the ball came to rest on the ground, not in it
+  EXPECT_NEAR(s.center_of_mass(ball).y, 0.2, 0.01);
+}
+
+// ---------------------------------------------------------------------------------------
+// free motion and compliance
+
+// Without contacts the soft step, TGS and XPBD run the same substeps of free motion, bit for
+// bit (XPBD adds only the contacts' corrections to the velocities).
+TEST(RigidSolvers, FreeMotionIsTheSameBitsUnderTheSubsteppingSolvers) {
+  auto run = [](RigidSolverType solver) {
+    RigidBodySystem s({.contacts = {.solver = solver}});
+    pba::RigidMass m = pba::RigidMass::box(2, {0.5, 0.1, 0.2});
+    s.create({.pose = {{0, 5, 0}}, .linear_velocity = {1, 2, 3}, .angular_velocity = {0.3, 8, 0.1},
+              .shapes = {{.shape = pba::ColliderShape::sphere(0.05)}}, .mass = m, .linear_damping = 0.1});
+    s.create({.pose = {{10, 5, 0}}, .angular_velocity = {4, 0, 1}, .shapes = {{.shape = pba::ColliderShape::box({0.2, 0.3, 0.4})}}});
+    for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+    return s.hash();
+  };
+  const std::uint64_t soft = run(RigidSolverType::SoftStep);
+  EXPECT_EQ(run(RigidSolverType::Tgs), soft);
+  EXPECT_EQ(run(RigidSolverType::Xpbd), soft);
+}
+
+// XPBD with contact compliance alpha: a contact is a spring of stiffness 1 / alpha, so a box
+// of mass m on its four corner points sinks m g alpha / 4 (one XPBD iteration per substep
+// reaches it: the multiplier update -alpha~ lambda makes the fixed point the compliant one).
+TEST(RigidSolvers, XpbdComplianceGivesTheStaticDeflection) {
+  for (const double alpha : {1e-7, 1e-6}) {
+    RigidBodySystem s({.contacts = {.solver = RigidSolverType::Xpbd, .contact_compliance = alpha, .sleep = false}});
+    pba::rigid_scenes::ground(s);
+    auto box = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+    for (int i = 0; i < 300; ++i) s.step(1.0 / 60, kGravity);
+    const double expected = s.mass(box) * kG * alpha / 4;
+    EXPECT_NEAR(0.5 - s.center_of_mass(box).y, expected, 0.01 * expected) << alpha;
+  }
+}
+
+}  // namespace
