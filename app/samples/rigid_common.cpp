@@ -12,10 +12,50 @@
 namespace pba::app {
 
 RigidSolverType RigidSolverOption(const SampleContext& ctx) {
+  // the short keys, in RigidSolverType's order, or the library's names
+  static constexpr const char* kKeys[] = {"soft", "si", "tgs", "xpbd"};
   const std::string solver = ctx.option("solver", "soft");
-  if (solver == "soft") return RigidSolverType::SoftStep;
-  if (solver == "si") return RigidSolverType::SequentialImpulse;
-  throw Error("--option solver: expected soft or si, got '" + solver + "'");
+  for (std::size_t i = 0; i < kRigidSolvers.size(); ++i)
+    if (solver == kKeys[i] || solver == to_string(kRigidSolvers[i])) return kRigidSolvers[i];
+  throw Error("--option solver: expected soft, si, tgs or xpbd, got '" + solver + "'");
+}
+
+void RigidSolverKnobs(ContactSettings& s) {
+  static constexpr const char* kNames[] = {"soft step", "sequential impulses", "TGS", "XPBD"};
+  int solver = static_cast<int>(s.solver);
+  ImGui::SetNextItemWidth(-110);
+  if (ImGui::Combo("solver", &solver, kNames, 4)) s.solver = static_cast<RigidSolverType>(solver);
+  // each solver's own knobs (the substeps are shared by the three that substep)
+  if (s.solver != RigidSolverType::SequentialImpulse) {
+    ImGui::SetNextItemWidth(-110);
+    ImGui::SliderInt("substeps", &s.substeps, 1, 64);
+  }
+  if (s.solver == RigidSolverType::SoftStep) {
+    float hz = static_cast<float>(s.contact_hertz);
+    ImGui::SetNextItemWidth(-110);
+    if (ImGui::SliderFloat("contact Hz", &hz, 5, 240, "%.0f Hz")) s.contact_hertz = hz;
+  } else if (s.solver == RigidSolverType::SequentialImpulse) {
+    ImGui::SetNextItemWidth(-110);
+    ImGui::SliderInt("iterations", &s.iterations, 1, 100);
+  } else {
+    ImGui::SetNextItemWidth(-110);
+    ImGui::SliderInt("iterations / substep", &s.substep_iterations, 1, 16);
+  }
+  if (s.solver == RigidSolverType::Tgs) {
+    ImGui::SetNextItemWidth(-110);
+    ImGui::SliderInt("relax / substep", &s.relax_iterations, 0, 16);
+  }
+  if (s.solver == RigidSolverType::Xpbd) {
+    // compliance on a log slider, 0 (rigid) to 1e-4 m/N
+    float c = static_cast<float>(s.contact_compliance);
+    ImGui::SetNextItemWidth(-110);
+    if (ImGui::SliderFloat("compliance", &c, 0.0f, 1e-4f, "%.1e m/N", ImGuiSliderFlags_Logarithmic))
+      s.contact_compliance = c;
+  }
+  ImGui::SetNextItemWidth(-110);
+  ImGui::SliderInt("manifold sweeps", &s.manifold_iterations, 1, 16);
+  // XPBD's multipliers start at zero each substep: nothing to warm-start
+  if (s.solver != RigidSolverType::Xpbd) ImGui::Checkbox("warm starting", &s.warm_starting);
 }
 
 RigidSample::RigidSample(SampleContext& ctx) : Sample(ctx) {
@@ -125,15 +165,7 @@ void RigidSample::SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points
 }
 
 bool RigidSample::SolverControls() {
-  static constexpr const char* kSolvers[] = {"soft step", "sequential impulses"};
-  int solver = static_cast<int>(settings_.solver);
-  ImGui::SetNextItemWidth(-110);
-  if (ImGui::Combo("solver", &solver, kSolvers, 2)) settings_.solver = static_cast<RigidSolverType>(solver);
-  ImGui::SetNextItemWidth(-110);
-  if (settings_.solver == RigidSolverType::SoftStep)
-    ImGui::SliderInt("substeps", &settings_.substeps, 1, 16);
-  else
-    ImGui::SliderInt("iterations", &settings_.iterations, 1, 100);
+  RigidSolverKnobs(settings_);
   ImGui::Checkbox("sleep", &settings_.sleep);
   ImGui::SameLine();
   const bool restart = ImGui::Button("Restart");

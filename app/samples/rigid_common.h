@@ -11,9 +11,13 @@
 
 namespace pba::app {
 
-/// The solver named by --option solver=soft|si (the default: soft); throws Error for
-/// another value.
+/// The solver named by --option solver=soft|si|tgs|xpbd, or by its library name
+/// (soft-step, sequential-impulse...); the default: soft. Throws Error for another value.
 RigidSolverType RigidSolverOption(const SampleContext& ctx);
+
+/// The solver combo and the chosen solver's own knobs (substeps, contact Hz, iterations,
+/// relax, compliance, manifold sweeps, warm starting), editing `s` live.
+void RigidSolverKnobs(ContactSettings& s);
 
 /// Base of the rigid-body samples: override Build() to fill bodies_ (Restart calls it again).
 class RigidSample : public Sample {

@@ -17,6 +17,7 @@
 #include "pba/rigid_scenes.h"
 #include "plot.h"
 #include "renderer.h"
+#include "rigid_common.h"
 #include "sample.h"
 
 namespace pba::app {
@@ -30,9 +31,6 @@ constexpr Color kPalette[] = {colors::blue, colors::cyan, colors::purple, colors
 enum class LabScene : int { Stack, Pyramid, Falling, Restitution, Ramp };
 constexpr const char* kSceneNames[] = {"vertical stack", "square pyramid", "falling boxes", "restitution row",
                                        "friction ramp"};
-constexpr const char* kSolverNames[] = {"soft step", "sequential impulses", "TGS", "XPBD"};
-// the --option solver values, in RigidSolverType's order
-constexpr const char* kSolverKeys[] = {"soft", "si", "tgs", "xpbd"};
 
 class RigidLab final : public Sample {
  public:
@@ -46,11 +44,7 @@ class RigidLab final : public Sample {
     for (int i = 0; i < 5; ++i)
       if (scene == keys[i]) scene_ = static_cast<LabScene>(i), found = true;
     if (!found) throw Error("--option scene: expected stack, pyramid, falling, restitution or ramp, got '" + scene + "'");
-    const std::string solver = ctx.option("solver", "soft");
-    found = false;
-    for (std::size_t i = 0; i < kRigidSolvers.size(); ++i)
-      if (solver == kSolverKeys[i] || solver == to_string(kRigidSolvers[i])) settings_.solver = kRigidSolvers[i], found = true;
-    if (!found) throw Error("--option solver: expected soft, si, tgs or xpbd, got '" + solver + "'");
+    settings_.solver = RigidSolverOption(ctx);
     size_ = static_cast<int>(OptionNumber(ctx, "size", 10, 1, 40));
     ctx.settings.stepper.fixed_dt = 1.0 / 60.0;
     build();
@@ -78,44 +72,12 @@ class RigidLab final : public Sample {
   }
 
   void DrawUI() override {
-    int scene = static_cast<int>(scene_), solver = static_cast<int>(settings_.solver);
+    int scene = static_cast<int>(scene_);
     ImGui::SetNextItemWidth(-110);
     bool rebuild = ImGui::Combo("scene", &scene, kSceneNames, 5);
     ImGui::SetNextItemWidth(-110);
     rebuild |= ImGui::SliderInt("size", &size_, 1, 40);
-    ImGui::SetNextItemWidth(-110);
-    if (ImGui::Combo("solver", &solver, kSolverNames, 4)) settings_.solver = static_cast<RigidSolverType>(solver);
-    // each solver's own knobs (the substeps are shared by the three that substep)
-    if (settings_.solver != RigidSolverType::SequentialImpulse) {
-      ImGui::SetNextItemWidth(-110);
-      ImGui::SliderInt("substeps", &settings_.substeps, 1, 64);
-    }
-    if (settings_.solver == RigidSolverType::SoftStep) {
-      float hz = static_cast<float>(settings_.contact_hertz);
-      ImGui::SetNextItemWidth(-110);
-      if (ImGui::SliderFloat("contact Hz", &hz, 5, 240, "%.0f Hz")) settings_.contact_hertz = hz;
-    } else if (settings_.solver == RigidSolverType::SequentialImpulse) {
-      ImGui::SetNextItemWidth(-110);
-      ImGui::SliderInt("iterations", &settings_.iterations, 1, 100);
-    } else {
-      ImGui::SetNextItemWidth(-110);
-      ImGui::SliderInt("iterations / substep", &settings_.substep_iterations, 1, 16);
-    }
-    if (settings_.solver == RigidSolverType::Tgs) {
-      ImGui::SetNextItemWidth(-110);
-      ImGui::SliderInt("relax / substep", &settings_.relax_iterations, 0, 16);
-    }
-    if (settings_.solver == RigidSolverType::Xpbd) {
-      // compliance on a log slider, 0 (rigid) to 1e-4 m/N
-      float c = static_cast<float>(settings_.contact_compliance);
-      ImGui::SetNextItemWidth(-110);
-      if (ImGui::SliderFloat("compliance", &c, 0.0f, 1e-4f, "%.1e m/N", ImGuiSliderFlags_Logarithmic))
-        settings_.contact_compliance = c;
-    }
-    ImGui::SetNextItemWidth(-110);
-    ImGui::SliderInt("manifold sweeps", &settings_.manifold_iterations, 1, 16);
-    // XPBD's multipliers start at zero each substep: nothing to warm-start
-    if (settings_.solver != RigidSolverType::Xpbd) ImGui::Checkbox("warm starting", &settings_.warm_starting);
+    RigidSolverKnobs(settings_);
     if (ImGui::Button("Restart") || rebuild) {
       scene_ = static_cast<LabScene>(scene);
       build();
