@@ -10,8 +10,23 @@ namespace pba {
 
 namespace {
 
+// the rigid settings, validated with the WorldDef's field names
+RigidSystemDef validated_rigid(const RigidSystemDef& d) {
+  require_count(static_cast<long long>(d.capacity), 0, 1LL << 26, "WorldDef.rigid.capacity");
+  d.contacts.validate("WorldDef.rigid.contacts");
+  return d;
+}
 
+// true when two collider definitions make the same body (shape fields and material)
+bool same_collider(const ColliderDef& a, const ColliderDef& b) {
+  const ColliderShape &x = a.shape, &y = b.shape;
+  return x.type == y.type && x.normal == y.normal && x.offset == y.offset && x.radius == y.radius &&
+         x.half_extents == y.half_extents && x.half_height == y.half_height && x.hull == y.hull && x.mesh == y.mesh &&
+         x.compound == y.compound && a.material.restitution == b.material.restitution &&
+         a.material.friction == b.material.friction;
+}
 
+bool same_pose(const Pose& a, const Pose& b) { return a.position == b.position && a.rotation == b.rotation; }
 
 void require_pose(const Pose& p, std::string_view where) {
   if (!is_finite(p.position)) require_finite(p.position, field_path(where, "position"));
@@ -121,7 +136,8 @@ World::World(const WorldDef& def)
     : settings_(def.stepper),
       gravity_((require_finite(def.gravity, "WorldDef.gravity"), def.gravity)),
       stepper_((def.stepper.validate("WorldDef.stepper"), def.stepper)),
-      particles_(def.particles) {
+      particles_(def.particles),
+      rigid_(validated_rigid(def.rigid)) {
   particles_.forces().gravity = gravity_;
 }
 
@@ -188,8 +204,15 @@ void World::destroy_entity(EntityId e) {
   for (auto& s : systems_) s->on_destroy(e);
   if (particles_.valid(r.particle)) particles_.destroy(r.particle);
   if (!r.emitter.is_null()) particles_.remove_emitter(r.emitter);
+  if (rigid_.valid(r.body)) {
+    rigid_.destroy(r.body);
+    body_owner_[r.body.index] = EntityId{};
+    --entity_bodies_;
+    refresh_body_colliders(false);
+  }
   if (r.collider != kNone) {
     const std::uint32_t i = r.collider;
+    destroy_mirror(colliders_[i]);
     collider_ids_.pool.destroy(colliders_[i].id, "World::destroy_entity collider");
     remove_dense(colliders_, &EntityRecord::collider, i);
     if (i + 1 != world_colliders_.size()) world_colliders_[i] = world_colliders_.back();
@@ -237,12 +260,14 @@ const std::string& World::name(EntityId e) const { return record(e, "World::name
 Pose World::pose(EntityId e) const {
   const EntityRecord& r = record(e, "World::pose");
   if (particles_.valid(r.particle)) return Pose{particles_.position(r.particle), r.pose.rotation};
+  if (rigid_.valid(r.body) && r.kinematic == kNone) return rigid_.pose(r.body);
   return r.pose;
 }
 
 Vec3 World::velocity(EntityId e) const {
   const EntityRecord& r = record(e, "World::velocity");
   if (particles_.valid(r.particle)) return particles_.velocity(r.particle);
+  if (rigid_.valid(r.body) && r.kinematic == kNone) return rigid_.velocity_at(r.body, rigid_.pose(r.body).position);
   return r.velocity;
 }
 
@@ -251,6 +276,11 @@ void World::set_pose(EntityId e, const Pose& pose) {
   EntityRecord& r = record(e, "World::set_pose");
   r.pose = pose;
   if (particles_.valid(r.particle)) particles_.set_position(particles_.index_of(r.particle), pose.position);
+  // a body jumps there (and wakes with its island)
+  if (rigid_.valid(r.body)) {
+    rigid_.set_pose(r.body, pose);
+    refresh_body_colliders(false);
+  }
   // a teleported collider does not sweep
   if (r.collider != kNone) world_colliders_[r.collider].begin = world_colliders_[r.collider].end = pose;
   if (r.kinematic != kNone) {
@@ -312,6 +342,9 @@ EmitterId World::add_emitter(EntityId e, const EmitterDef& def) {
 KinematicId World::add_kinematic(EntityId e, const KinematicDef& def) {
   EntityRecord& r = record(e, "World::add_kinematic");
   if (r.kinematic != kNone) throw Error("World::add_kinematic: " + describe(e) + " already has a kinematic");
+  if (rigid_.valid(r.body) && rigid_.type(r.body) != BodyType::Kinematic)
+    throw Error("World::add_kinematic: " + describe(e) + " has a " + std::string(to_string(rigid_.type(r.body))) +
+                " rigid body, which a Kinematic cannot drive (only a kinematic body follows a path)");
   def.validate("kinematic of " + describe(e));
   r.kinematic = static_cast<std::uint32_t>(kinematics_.size());
   KinematicEntry k{e, kinematic_ids_.create(e), def, time_, r.pose, def.path == PathType::Waypoints ? waypoint_length(def) : 0.0};
@@ -324,6 +357,11 @@ KinematicId World::add_kinematic(EntityId e, const KinematicDef& def) {
   // a collider jumps to the path's start instead of sweeping there
   if (r.collider != kNone) world_colliders_[r.collider].begin = world_colliders_[r.collider].end = r.pose;
   kinematics_.push_back(std::move(k));
+  // a kinematic body starts on the path too
+  if (rigid_.valid(r.body)) {
+    rigid_.set_pose(r.body, r.pose);
+    refresh_body_colliders(false);
+  }
   return kinematics_.back().id;
 }
 
@@ -343,6 +381,49 @@ ConstraintId World::add_constraint(EntityId e, const ConstraintDef& def) {
   r.constraint = static_cast<std::uint32_t>(constraints_.size());
   constraints_.push_back({e, d, constraint_ids_.create(e)});
   return constraints_.back().id;
+}
+
+RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
+  EntityRecord& r = record(e, "World::add_rigid_body");
+  if (rigid_.valid(r.body)) throw Error("World::add_rigid_body: " + describe(e) + " already has a rigid body");
+  const std::string where = "rigid body of " + describe(e);
+  // the definition as given (its pose is relative to the entity), then in the world
+  def.validate(where);
+  if (r.kinematic != kNone && def.type != BodyType::Kinematic)
+    throw Error(field_path(where, "type") + ": the entity has a Kinematic, which drives only a kinematic body, got " +
+                std::string(to_string(def.type)));
+  RigidBodyDef d = def;
+  d.pose = compose(r.pose, def.pose);
+  d.pose.rotation = glm::normalize(d.pose.rotation);
+  if (d.name.empty()) d.name = r.name;
+  const RigidBodyId id = rigid_.create(d, where);
+  if (body_owner_.size() <= id.index) body_owner_.resize(id.index + 1);
+  body_owner_[id.index] = e;
+  r.body = id;
+  ++entity_bodies_;
+  // from now on the entity is where its body is (a path's entity stays on its path)
+  if (r.kinematic == kNone) r.pose = rigid_.pose(id);
+  refresh_body_colliders(false);
+  return id;
+}
+
+bool World::valid(RigidBodyId id) const {
+  return rigid_.valid(id) && id.index < body_owner_.size() && !body_owner_[id.index].is_null();
+}
+
+RigidBodyId World::rigid_body_id(EntityId e) const {
+  const RigidBodyId id = record(e, "World::rigid_body_id").body;
+  return rigid_.valid(id) ? id : RigidBodyId{};
+}
+
+EntityId World::owner(RigidBodyId id) const {
+  if (!rigid_.valid(id))
+    throw Error("World::owner(RigidBodyId): " + std::string(id.is_null() ? "null" : "stale") +
+                " rigid-body handle (index " + std::to_string(id.index) + ", generation " +
+                std::to_string(id.generation) + ")");
+  if (!valid(id)) throw Error("World::owner(RigidBodyId): rigid body " + std::to_string(id.index) +
+                              " belongs to no entity (it stands for a collider, or was made in rigid() directly)");
+  return body_owner_[id.index];
 }
 
 namespace {
@@ -438,7 +519,7 @@ void World::run_kinematics(double t, double dt) {
   }
 }
 
-void World::sync(double /*t*/, double /*dt*/) {
+void World::sync(double /*t*/, double dt) {
   // colliders sweep from last tick's end pose to this tick's
   for (std::size_t i = 0; i < colliders_.size(); ++i) {
     const EntityRecord& r = records_[colliders_[i].owner.index];
@@ -450,6 +531,8 @@ void World::sync(double /*t*/, double /*dt*/) {
     c.velocity = r.velocity;
     c.angular_velocity = r.angular_velocity;
   }
+  // the colliders' stand-ins among the rigid bodies follow them
+  sync_mirrors(dt);
   // the collision world of the tick (validated and flattened once for every client)
   collision_.clear();
   for (std::size_t i = 0; i < world_colliders_.size(); ++i) {
@@ -465,6 +548,155 @@ void World::sync(double /*t*/, double /*dt*/) {
   }
   for (const EntityRecord& r : records_)
     if (!r.emitter.is_null()) particles_.set_emitter_pose(r.emitter, compose(r.pose, r.emitter_local));
+}
+
+// ---------------------------------------------------------------------------------------
+// rigid bodies
+
+void World::destroy_mirror(ColliderEntry& c) {
+  if (rigid_.valid(c.mirror)) rigid_.destroy(c.mirror);
+  c.mirror = RigidBodyId{};
+}
+
+// the velocities that take kinematic body `id` from its pose now to `target` in dt: the
+// translation over dt, and the rotation q1 q0^-1 as an angle about a fixed axis over dt (a
+// kinematic body's frame is its centre of mass, and it moves at constant velocities, so it
+// ends the step at `target` to rounding)
+void World::drive_body(RigidBodyId id, const Pose& target, double dt) {
+  const Pose now = rigid_.pose(id);
+  const Vec3 v = (target.position - now.position) / dt;
+  Quat dq = glm::normalize(target.rotation * glm::conjugate(now.rotation));
+  if (dq.w < 0) dq = -dq;
+  const Vec3 axis(dq.x, dq.y, dq.z);
+  const double s = glm::length(axis);
+  const Vec3 w = s > 0 ? axis / s * (2 * std::atan2(s, static_cast<double>(dq.w)) / dt) : Vec3(0);
+  rigid_.set_velocity(id, v, w);
+}
+
+// The World's static colliders are the rigid bodies' static geometry: each collider of an
+// entity without a body has a stand-in body with its shape and material, static, or
+// kinematic when a Kinematic drives the entity (planes stay static: a kinematic body needs
+// a volume), remade when the collider's definition changes and moved with its entity. Only
+// once an entity has a body: a world of particles pays nothing.
+void World::sync_mirrors(double dt) {
+  if (entity_bodies_ == 0) return;
+  for (std::size_t i = 0; i < colliders_.size(); ++i) {
+    ColliderEntry& c = colliders_[i];
+    const EntityRecord& r = records_[c.owner.index];
+    const Collider& wc = world_colliders_[i];
+    // what the stand-in should be: none for an entity with a body
+    const bool wanted = !rigid_.valid(r.body);
+    const BodyType type =
+        r.kinematic != kNone && c.def.shape.type != ShapeType::Plane ? BodyType::Kinematic : BodyType::Static;
+    if (rigid_.valid(c.mirror) && (!wanted || c.mirror_type != type || !same_collider(c.mirrored, c.def)))
+      destroy_mirror(c);
+    if (!wanted) continue;
+    if (!rigid_.valid(c.mirror)) {
+      // a new stand-in at the start of the tick's sweep
+      RigidBodyDef d;
+      d.name = r.name;
+      d.type = type;
+      d.pose = wc.begin;
+      d.shapes = {{.shape = c.def.shape, .material = c.def.material}};
+      c.mirror = rigid_.create(d, "collider of " + describe(c.owner));
+      c.mirror_type = type;
+      c.mirrored = c.def;
+      c.mirrored_pose = wc.begin;
+    }
+    // static stand-ins jump to their entity's pose; kinematic ones move there over the tick
+    if (type == BodyType::Kinematic) {
+      drive_body(c.mirror, wc.end, dt);
+    } else if (!same_pose(c.mirrored_pose, wc.end)) {
+      rigid_.set_pose(c.mirror, wc.end);
+    }
+    c.mirrored_pose = wc.end;
+  }
+}
+
+// The bodies' shapes as world colliders (planes, spheres, boxes, capsules; hulls and meshes
+// have no point contact yet): at the end pose, from the begin pose of the tick (`tick`) or
+// without a sweep, with the velocity of the body's material point at each shape's origin.
+void World::refresh_body_colliders(bool tick) {
+  body_colliders_.clear();
+  body_collider_owner_.clear();
+  const std::size_t n = rigid_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const RigidBodyId id = rigid_.id_at(i);
+    const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
+    if (owner.is_null()) continue;  // a collider's stand-in: the collider is there already
+    const Pose end = rigid_.pose(id);
+    const Pose begin = tick && i < body_begin_.size() ? body_begin_[i] : end;
+    const Vec3 w = rigid_.angular_velocity(id);
+    for (const RigidShapeDef& sd : rigid_.shapes(id)) {
+      const ShapeType t = sd.shape.type;
+      if (t != ShapeType::Plane && t != ShapeType::Sphere && t != ShapeType::Box && t != ShapeType::Capsule) continue;
+      Collider c;
+      c.shape = sd.shape;
+      c.material = sd.material;
+      c.begin = compose(begin, sd.local);
+      c.end = compose(end, sd.local);
+      c.velocity = rigid_.velocity_at(id, c.end.position);
+      c.angular_velocity = w;
+      body_colliders_.push_back(c);
+      body_collider_owner_.push_back(owner.index);
+    }
+  }
+}
+
+// The rigid stage: kinematic bodies driven to their paths' poses, one step of every body
+// under the World's gravity, the simulated entities' poses from their bodies, and the
+// bodies' shapes added to the tick's collision world (so particles and soft bodies meet this
+// tick's bodies).
+void World::step_rigid(double t, double dt) {
+  if (rigid_.size() == 0) return;
+  // a kinematic body on a path reaches the path's pose at the end of the tick
+  for (const KinematicEntry& k : kinematics_) {
+    const EntityRecord& r = records_[k.owner.index];
+    if (rigid_.valid(r.body)) drive_body(r.body, r.pose, dt);
+  }
+  // where every body starts, for the sweeps
+  const std::size_t n = rigid_.size();
+  if (body_begin_.size() < n) body_begin_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) body_begin_[i] = rigid_.pose(rigid_.id_at(i));
+  try {
+    rigid_.step(dt, gravity_);
+  } catch (const Error& err) {
+    // a body whose state stopped being finite stops the world, naming its entity and the time
+    for (std::size_t i = 0; i < n; ++i) {
+      const RigidBodyId id = rigid_.id_at(i);
+      const Pose p = rigid_.pose(id);
+      const bool finite = is_finite(p.position) && is_finite(rigid_.linear_velocity(id)) &&
+                          is_finite(rigid_.angular_velocity(id)) && std::isfinite(p.rotation.w) &&
+                          std::isfinite(p.rotation.x) && std::isfinite(p.rotation.y) && std::isfinite(p.rotation.z);
+      if (finite) continue;
+      const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
+      failure_ = (owner.is_null() ? std::string("a rigid body") : "the rigid body of " + describe(owner)) +
+                 " became non-finite in the tick to t = " + format_value(t + dt) + " s (" + err.what() + ")";
+      throw Error("World::tick: " + failure_);
+    }
+    throw;
+  }
+  // whichever system simulates an entity writes its pose: the body, unless a path drives it
+  for (std::size_t i = 0; i < n; ++i) {
+    const RigidBodyId id = rigid_.id_at(i);
+    const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
+    if (owner.is_null()) continue;
+    EntityRecord& r = records_[owner.index];
+    if (r.kinematic != kNone || rigid_.type(id) == BodyType::Static) continue;
+    r.pose = rigid_.pose(id);
+    r.velocity = rigid_.velocity_at(id, r.pose.position);
+    r.angular_velocity = rigid_.angular_velocity(id);
+  }
+  // this tick's bodies join the collision world
+  refresh_body_colliders(true);
+  for (std::size_t k = 0; k < body_colliders_.size(); ++k) {
+    if (!body_colliders_[k].ok()) {
+      const std::uint32_t e = body_collider_owner_[k];
+      body_colliders_[k].validate("rigid body shape of entity " + std::to_string(e) +
+                                  (records_[e].name.empty() ? "" : " '" + records_[e].name + "'"));
+    }
+    collision_.add(body_colliders_[k], body_collider_owner_[k]);
+  }
 }
 
 // mass-weighted projection of each distance constraint (Jakobsen, "Advanced character
@@ -525,7 +757,8 @@ void World::tick(double t, double dt) {
   profile_.sync = sw.seconds();
   run_systems(WorldStage::Collide, t, dt);
   stage_done(WorldStage::Collide);
-  // 3. rigid: systems only, for now
+  // 3. rigid: the bodies, then their shapes join the collision world
+  step_rigid(t, dt);
   run_systems(WorldStage::Rigid, t, dt);
   stage_done(WorldStage::Rigid);
   // 4. particles: emit, integrate, collide, recycle, under the world's gravity
@@ -566,6 +799,7 @@ std::uint64_t World::hash() const {
     const Pose& p = records_[k.owner.index].pose;
     h = hash_bytes(&p.position, sizeof(p.position), h);
   }
+  if (entity_bodies_ > 0) h = rigid_.hash() ^ (h * 0x9e3779b97f4a7c15ull);
   for (const auto& s : systems_) h = s->hash(h);
   return h;
 }
@@ -573,6 +807,20 @@ std::uint64_t World::hash() const {
 void World::draw(DebugDraw& draw, const DrawFlags& flags) const {
   // colliders (shapes, bounds), forcers, particles, then every system
   for (const Collider& c : world_colliders_) c.draw(draw, colors::grey, flags);
+  // the entities' bodies at their poses now: dynamic orange (darker asleep), others grey
+  for (std::size_t i = 0; i < rigid_.size(); ++i) {
+    const RigidBodyId id = rigid_.id_at(i);
+    if (id.index >= body_owner_.size() || body_owner_[id.index].is_null()) continue;
+    const BodyType type = rigid_.type(id);
+    const Color col = type != BodyType::Dynamic ? colors::grey : rigid_.awake(id) ? colors::orange : Color::hex(0x8c3d0b);
+    const Pose p = rigid_.pose(id);
+    for (const RigidShapeDef& sd : rigid_.shapes(id)) {
+      Collider c;
+      c.shape = sd.shape;
+      c.begin = c.end = compose(p, sd.local);
+      c.draw(draw, col, flags);
+    }
+  }
   for (const Forcer& f : world_forcers_) f.draw(draw, colors::cyan, flags);
   particles_.draw(draw, flags, particles_.size() <= 2000);
   // the entities' distance constraints
