@@ -47,6 +47,29 @@ void WorldPoints(const World& world, std::vector<Vec3>& out, std::size_t max_poi
   if (soft)
     for (std::size_t b = 0; b < soft->size(); ++b)
       for (std::size_t k = 0; k < soft->at(b).size(); k += step) out.push_back(soft->at(b).position(k));
+  // the rigid bodies' shapes (their centres; planes are unbounded)
+  for (const Collider& c : world.body_colliders())
+    if (c.shape.type != ShapeType::Plane) out.push_back(c.end.position);
+}
+
+void DrawRigidBodies(Renderer& r, const World& world, const DrawFlags& flags) {
+  const RigidBodySystem& rb = world.rigid();
+  for (std::size_t i = 0; i < rb.size(); ++i) {
+    const RigidBodyId id = rb.id_at(i);
+    if (!world.valid(id)) continue;  // a collider's stand-in: drawn as the collider
+    const BodyType type = rb.type(id);
+    const Color col = type == BodyType::Static      ? particle_colors::solid
+                      : type == BodyType::Kinematic ? particle_colors::moving
+                      : rb.awake(id)                ? particle_colors::body
+                                                    : particle_colors::asleep;
+    const Pose p = rb.pose(id);
+    for (const RigidShapeDef& s : rb.shapes(id)) {
+      Collider c;
+      c.shape = s.shape;
+      c.begin = c.end = compose(p, s.local);
+      c.draw(r, col, flags);
+    }
+  }
 }
 
 void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving,

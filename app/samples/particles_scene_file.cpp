@@ -90,6 +90,7 @@ class SceneFile final : public Sample {
     const World& w = scene_->world;
     const DrawFlags& f = ctx_.draw;
     DrawColliders(r, w.colliders(), {}, f);
+    DrawRigidBodies(r, w, f);
     if (f.forcers)
       for (const Forcer& fc : w.forcers()) DrawForcer(r, fc, w.time());
     if (f.particles) DrawParticles(r, w.particles(), 3.0f, 0.008 * view_radius_);
@@ -133,6 +134,9 @@ class SceneFile final : public Sample {
     ImGui::Text("entities %zu, colliders %zu, forcers %zu, emitters %zu", w.entity_count(), w.colliders().size(),
                 w.forcers().size(), w.particles().emitter_count());
     ImGui::Text("live particles: %s", Thousands(static_cast<long long>(w.particles().size())).c_str());
+    if (!w.body_colliders().empty())
+      ImGui::Text("rigid bodies: %zu awake of %zu bodies (%s)", w.rigid().awake_count(), w.rigid().size(),
+                  std::string(to_string(w.rigid().settings().solver)).c_str());
     ImGui::Text("t = %.2f s, %lld ticks", w.time(), w.ticks());
     ProfileReadout(w);
     ImGui::TextWrapped("The file's dt and integrator were copied to the Simulation panel when it was opened; change "
@@ -252,6 +256,8 @@ class SceneFile final : public Sample {
         for (const Collider& c : w.colliders())
           if (c.shape.type != ShapeType::Plane) grow(c.end.position);
         for (const Forcer& f : w.forcers()) grow(f.pose.position);
+        for (const Collider& c : w.body_colliders())
+          if (c.shape.type != ShapeType::Plane) grow(c.end.position);
         std::size_t soft_nodes = 0;
         if (const SoftSystem* soft = Soft(w))
           for (std::size_t b = 0; b < soft->size(); ++b) {
