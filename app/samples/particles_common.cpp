@@ -53,23 +53,9 @@ void WorldPoints(const World& world, std::vector<Vec3>& out, std::size_t max_poi
 }
 
 void DrawRigidBodies(Renderer& r, const World& world, const DrawFlags& flags) {
-  const RigidBodySystem& rb = world.rigid();
-  for (std::size_t i = 0; i < rb.size(); ++i) {
-    const RigidBodyId id = rb.id_at(i);
-    if (!world.valid(id)) continue;  // a collider's stand-in: drawn as the collider
-    const BodyType type = rb.type(id);
-    const Color col = type == BodyType::Static      ? particle_colors::solid
-                      : type == BodyType::Kinematic ? particle_colors::moving
-                      : rb.awake(id)                ? particle_colors::body
-                                                    : particle_colors::asleep;
-    const Pose p = rb.pose(id);
-    for (const RigidShapeDef& s : rb.shapes(id)) {
-      Collider c;
-      c.shape = s.shape;
-      c.begin = c.end = compose(p, s.local);
-      c.draw(r, col, flags);
-    }
-  }
+  world.draw_rigid_bodies(r, flags,
+                          {.awake = particle_colors::body, .asleep = particle_colors::asleep,
+                           .kinematic = particle_colors::moving, .fixed = particle_colors::solid});
 }
 
 void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving,

@@ -190,6 +190,14 @@ struct WorldDef {
   RigidSystemDef rigid{};
 };
 
+/// Colours of the rigid bodies in World::draw_rigid_bodies().
+struct RigidBodyColors {
+  Color awake = colors::orange;         ///< dynamic, awake
+  Color asleep = Color::hex(0x8c3d0b);  ///< dynamic, asleep
+  Color kinematic = colors::grey;       ///< kinematic
+  Color fixed = colors::grey;           ///< static
+};
+
 /// The entity-component world. Movable, not copyable. Not thread-safe.
 class World {
  public:
@@ -341,6 +349,9 @@ class World {
   /// (dynamic orange, asleep darker, kinematic and static grey), forcers, particles, every
   /// system (soft bodies: particles, constraints) and the entities' constraints.
   void draw(DebugDraw& draw, const DrawFlags& flags = {}) const;
+  /// Draws the entities' rigid bodies (not the colliders' stand-ins) at their poses now:
+  /// each shape as the flags select (shapes, aabbs), coloured by type and sleep.
+  void draw_rigid_bodies(DebugDraw& draw, const DrawFlags& flags = {}, const RigidBodyColors& colors = {}) const;
 
  private:
   struct EntityRecord {

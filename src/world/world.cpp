@@ -396,7 +396,9 @@ RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
   d.pose = compose(r.pose, def.pose);
   d.pose.rotation = glm::normalize(d.pose.rotation);
   if (d.name.empty()) d.name = r.name;
-  const RigidBodyId id = rigid_.create(d, where);
+  // (the system appends the body's name to `where`: the entity's, unless the body has its own)
+  const RigidBodyId id =
+      rigid_.create(d, d.name == r.name && !r.name.empty() ? "rigid body of entity " + std::to_string(e.index) : where);
   if (body_owner_.size() <= id.index) body_owner_.resize(id.index + 1);
   body_owner_[id.index] = e;
   r.body = id;
@@ -807,20 +809,7 @@ std::uint64_t World::hash() const {
 void World::draw(DebugDraw& draw, const DrawFlags& flags) const {
   // colliders (shapes, bounds), forcers, particles, then every system
   for (const Collider& c : world_colliders_) c.draw(draw, colors::grey, flags);
-  // the entities' bodies at their poses now: dynamic orange (darker asleep), others grey
-  for (std::size_t i = 0; i < rigid_.size(); ++i) {
-    const RigidBodyId id = rigid_.id_at(i);
-    if (id.index >= body_owner_.size() || body_owner_[id.index].is_null()) continue;
-    const BodyType type = rigid_.type(id);
-    const Color col = type != BodyType::Dynamic ? colors::grey : rigid_.awake(id) ? colors::orange : Color::hex(0x8c3d0b);
-    const Pose p = rigid_.pose(id);
-    for (const RigidShapeDef& sd : rigid_.shapes(id)) {
-      Collider c;
-      c.shape = sd.shape;
-      c.begin = c.end = compose(p, sd.local);
-      c.draw(draw, col, flags);
-    }
-  }
+  draw_rigid_bodies(draw, flags);
   for (const Forcer& f : world_forcers_) f.draw(draw, colors::cyan, flags);
   particles_.draw(draw, flags, particles_.size() <= 2000);
   // the entities' distance constraints
@@ -830,6 +819,26 @@ void World::draw(DebugDraw& draw, const DrawFlags& flags) const {
       if (particles_.valid(pa) && particles_.valid(pb)) draw.line(particles_.position(pa), particles_.position(pb), colors::yellow);
     }
   for (const auto& s : systems_) s->draw(*this, draw, flags);
+}
+
+void World::draw_rigid_bodies(DebugDraw& draw, const DrawFlags& flags, const RigidBodyColors& colors) const {
+  // each shape of each entity's body, at the body's pose now
+  for (std::size_t i = 0; i < rigid_.size(); ++i) {
+    const RigidBodyId id = rigid_.id_at(i);
+    if (!valid(id)) continue;  // a collider's stand-in: drawn as its collider
+    const BodyType type = rigid_.type(id);
+    const Color col = type == BodyType::Static      ? colors.fixed
+                      : type == BodyType::Kinematic ? colors.kinematic
+                      : rigid_.awake(id)            ? colors.awake
+                                                    : colors.asleep;
+    const Pose p = rigid_.pose(id);
+    for (const RigidShapeDef& sd : rigid_.shapes(id)) {
+      Collider c;
+      c.shape = sd.shape;
+      c.begin = c.end = compose(p, sd.local);
+      c.draw(draw, col, flags);
+    }
+  }
 }
 
 }  // namespace pba

@@ -10,19 +10,16 @@
 #include <vector>
 
 #include "commands_run.h"
+#include "error_of.h"
 #include "pba/scene.h"
 
 namespace {
 
 const std::filesystem::path kDir = PBA_SCENES_DIR;
 
+// the message of parsing `text` as scenes/x.json ("" when it parses)
 std::string error_of(const std::string& text) {
-  try {
-    pba::parse_scene(text, "scenes/x.json");
-  } catch (const pba::Error& e) {
-    return e.what();
-  }
-  return "no error";
+  return pba::test_support::error_of([&] { pba::parse_scene(text, "scenes/x.json"); });
 }
 
 std::string hex(std::uint64_t h) {

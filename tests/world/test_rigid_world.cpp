@@ -5,7 +5,10 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "error_of.h"
 #include "pba/world.h"
 
 namespace {
@@ -32,14 +35,7 @@ EntityId ground(World& w, double friction = 0.6) {
   return g;
 }
 
-std::string error_of(auto&& f) {
-  try {
-    f();
-  } catch (const pba::Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using pba::test_support::error_of;
 
 TEST(RigidComponent, HandlesPosesAndLifetime) {
   World w;
@@ -249,6 +245,38 @@ TEST(RigidStage, ANonFiniteBodyStopsTheWorld) {
   const std::string again = error_of([&] { w.step(); });
   EXPECT_NE(again.find("the simulation stopped"), std::string::npos) << again;
   EXPECT_NE(again.find("'rocket'"), std::string::npos) << again;
+}
+
+// World::draw draws each entity body's shapes through the library draw, at the body's pose,
+// coloured by type and sleep, and not the colliders' stand-ins (drawn as colliders)
+TEST(RigidStage, DrawDrawsTheBodiesShapes) {
+  struct Recorder final : pba::DebugDraw {
+    std::vector<std::pair<Vec3, pba::Color>> boxes, spheres;
+    int planes = 0;
+    void point(const Vec3&, float, pba::Color) override {}
+    void line(const Vec3&, const Vec3&, pba::Color) override {}
+    void sphere(const Vec3& c, double, pba::Color col) override { spheres.emplace_back(c, col); }
+    void box(const Vec3& c, const Vec3&, const pba::Quat&, pba::Color col) override { boxes.emplace_back(c, col); }
+    void capsule(const Vec3&, const Vec3&, double, pba::Color) override {}
+    void plane(const Vec3&, double, double, pba::Color) override { ++planes; }
+    void arrow(const Vec3&, const Vec3&, double, pba::Color) override {}
+    void text(const Vec3&, std::string_view, pba::Color) override {}
+  };
+  World w;
+  ground(w);
+  const EntityId e = w.create_entity({.name = "box", .pose = {{0, 2, 0}, pba::Quat(1, 0, 0, 0)}});
+  RigidBodyDef d = box_def({0.5, 0.5, 0.5});
+  d.shapes.push_back({.shape = ColliderShape::sphere(0.25), .local = {{0, 1, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_rigid_body(e, d);
+  for (int i = 0; i < 10; ++i) w.step();
+  Recorder r;
+  w.draw(r);
+  ASSERT_EQ(r.boxes.size(), 1u);
+  ASSERT_EQ(r.spheres.size(), 1u);
+  EXPECT_EQ(r.planes, 1);  // the ground collider, once
+  EXPECT_EQ(r.boxes[0].first, w.pose(e).position);
+  EXPECT_EQ(r.spheres[0].first, pba::apply(w.pose(e), Vec3(0, 1, 0)));
+  EXPECT_EQ(r.boxes[0].second.r, pba::colors::orange.r);  // dynamic and awake
 }
 
 TEST(RigidStage, HashIncludesTheBodiesAndIsDeterministic) {
