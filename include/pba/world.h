@@ -69,6 +69,27 @@ struct EntityDef {
 struct ColliderDef {
   ColliderShape shape{};       ///< shape in the entity frame
   SurfaceMaterial material{};  ///< restitution and friction
+  /// A sensor pushes nothing (particles, soft and rigid bodies pass through it) and reports
+  /// the entities whose rigid bodies enter and leave it (World::sensor_events()).
+  bool sensor = false;
+};
+
+/// Two entities began touching in the last tick: a contact of their rigid bodies (or of a
+/// body and a collider) that the solver pushed. `a` has the smaller entity index.
+struct TouchBeginEvent {
+  EntityId a{}, b{};
+  Vec3 normal{0, 1, 0};       ///< unit contact normal from a to b
+  Vec3 point{0, 0, 0};        ///< the deepest contact point (world, m)
+  double approach_speed = 0;  ///< how fast they closed along the normal before the contact (m/s, >= 0)
+};
+/// Two entities stopped touching in the last tick (`a` has the smaller entity index).
+struct TouchEndEvent {
+  EntityId a{}, b{};
+};
+/// A rigid body's entity (`visitor`) entered or left a sensor collider's entity (`sensor`)
+/// in the last tick: some shape of the body overlaps the sensor's shape.
+struct SensorEvent {
+  EntityId sensor{}, visitor{};
 };
 
 /// How a Kinematic component moves its entity. Paths are closed-form functions of the
@@ -342,6 +363,16 @@ class World {
   long long ticks() const { return ticks_; }
   /// Timings of the last tick.
   const WorldProfile& profile() const { return profile_; }
+  /// Entity pairs that began touching in the last tick (rigid contacts the solver pushed,
+  /// between bodies or a body and a collider), in entity-index order.
+  std::span<const TouchBeginEvent> touch_begin_events() const { return touch_begin_; }
+  /// Entity pairs that stopped touching in the last tick (a pair stays touching while its
+  /// bodies sleep; a destroyed entity's pairs end silently).
+  std::span<const TouchEndEvent> touch_end_events() const { return touch_end_; }
+  /// Rigid bodies' entities that entered a sensor collider in the last tick.
+  std::span<const SensorEvent> sensor_enter_events() const { return sensor_enter_; }
+  /// Rigid bodies' entities that left a sensor collider in the last tick.
+  std::span<const SensorEvent> sensor_leave_events() const { return sensor_leave_; }
   /// Hash of the particle state, the kinematic entity poses, the rigid bodies (once an
   /// entity has one) and every extension system.
   std::uint64_t hash() const;
@@ -407,6 +438,10 @@ class World {
   void drive_body(RigidBodyId id, const Pose& target, double dt);
   void step_rigid(double t, double dt);
   void refresh_body_colliders(bool tick);
+  void update_touch_events();
+  void update_sensor_events();
+  void forget_pairs(EntityId e);
+  EntityId body_entity(RigidBodyId id) const;
   void write_particle_poses();
   void run_systems(WorldStage stage, double t, double dt);
   template <class Entry>
@@ -432,6 +467,19 @@ class World {
   std::vector<Pose> body_begin_;            // by dense body index: the pose at the start of the tick
   std::vector<Collider> body_colliders_;    // the entities' body shapes this tick
   std::vector<std::uint32_t> body_collider_owner_;  // parallel: entity index (or CollisionWorld::kNoOwner)
+  std::vector<EntityId> mirror_owner_;      // by rigid-body handle slot: the collider's entity of a stand-in
+  // touching entity pairs and sensor overlaps, as sorted keys (smaller index << 32 | larger,
+  // sensor << 32 | visitor), this tick's and last tick's, and the events between them
+  struct TouchRecord {
+    std::uint64_t key;
+    Vec3 normal, point;
+    double approach;
+  };
+  std::vector<TouchRecord> touching_, touching_prev_;
+  std::vector<std::uint64_t> sensing_, sensing_prev_;
+  std::vector<TouchBeginEvent> touch_begin_;
+  std::vector<TouchEndEvent> touch_end_;
+  std::vector<SensorEvent> sensor_enter_, sensor_leave_;
   // component handles: a pool per kind and the owning entity of each handle slot (the
   // entity record holds the component's dense index)
   template <class Tag>

@@ -187,9 +187,10 @@ ColliderShape read_shape(const Node& n, bool capsule) {
 
 void read_collider(const Node& n, World& w) {
   n.allow_only({"name", "type", "position", "rotation", "rotation_deg", "normal", "offset", "radius",
-                "half_extents", "restitution", "friction", "kinematic"});
+                "half_extents", "restitution", "friction", "sensor", "kinematic"});
   ColliderDef c;
   c.shape = read_shape(n, false);
+  c.sensor = n.flag("sensor", c.sensor);
   c.material.restitution = n.in_range("restitution", 0, 1, c.material.restitution);
   c.material.friction = n.non_negative("friction", c.material.friction);
   const EntityId e = make_entity(n, w);

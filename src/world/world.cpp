@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "pba/collide/narrow_phase.h"
 #include "pba/world.h"
 
 namespace pba {
@@ -20,7 +21,7 @@ RigidSystemDef validated_rigid(const RigidSystemDef& d) {
 // true when two collider definitions make the same body (shape fields and material)
 bool same_collider(const ColliderDef& a, const ColliderDef& b) {
   const ColliderShape &x = a.shape, &y = b.shape;
-  return x.type == y.type && x.normal == y.normal && x.offset == y.offset && x.radius == y.radius &&
+  return a.sensor == b.sensor && x.type == y.type && x.normal == y.normal && x.offset == y.offset && x.radius == y.radius &&
          x.half_extents == y.half_extents && x.half_height == y.half_height && x.hull == y.hull && x.mesh == y.mesh &&
          x.compound == y.compound && a.material.restitution == b.material.restitution &&
          a.material.friction == b.material.friction;
@@ -243,6 +244,7 @@ void World::destroy_entity(EntityId e) {
       ++i;
     }
   }
+  forget_pairs(e);
   records_[e.index] = EntityRecord{};
   entities_.destroy(e, "World::destroy_entity");
 }
@@ -539,6 +541,7 @@ void World::sync(double /*t*/, double dt) {
   collision_.clear();
   for (std::size_t i = 0; i < world_colliders_.size(); ++i) {
     const EntityId owner = colliders_[i].owner;
+    if (colliders_[i].def.sensor) continue;  // a sensor pushes nothing
     if (!world_colliders_[i].ok()) world_colliders_[i].validate("collider of " + describe(owner));
     collision_.add(world_colliders_[i], owner.index);
   }
@@ -556,8 +559,18 @@ void World::sync(double /*t*/, double dt) {
 // rigid bodies
 
 void World::destroy_mirror(ColliderEntry& c) {
-  if (rigid_.valid(c.mirror)) rigid_.destroy(c.mirror);
+  if (rigid_.valid(c.mirror)) {
+    mirror_owner_[c.mirror.index] = EntityId{};
+    rigid_.destroy(c.mirror);
+  }
   c.mirror = RigidBodyId{};
+}
+
+// the entity a body stands for: its own, or the collider's of a stand-in (null for none)
+EntityId World::body_entity(RigidBodyId id) const {
+  if (id.index < body_owner_.size() && !body_owner_[id.index].is_null()) return body_owner_[id.index];
+  if (id.index < mirror_owner_.size()) return mirror_owner_[id.index];
+  return EntityId{};
 }
 
 // the velocities that take kinematic body `id` from its pose now to `target` in dt: the
@@ -586,8 +599,8 @@ void World::sync_mirrors(double dt) {
     ColliderEntry& c = colliders_[i];
     const EntityRecord& r = records_[c.owner.index];
     const Collider& wc = world_colliders_[i];
-    // what the stand-in should be: none for an entity with a body
-    const bool wanted = !rigid_.valid(r.body);
+    // what the stand-in should be: none for an entity with a body, or for a sensor
+    const bool wanted = !rigid_.valid(r.body) && !c.def.sensor;
     const BodyType type =
         r.kinematic != kNone && c.def.shape.type != ShapeType::Plane ? BodyType::Kinematic : BodyType::Static;
     if (rigid_.valid(c.mirror) && (!wanted || c.mirror_type != type || !same_collider(c.mirrored, c.def)))
@@ -601,6 +614,8 @@ void World::sync_mirrors(double dt) {
       d.pose = wc.begin;
       d.shapes = {{.shape = c.def.shape, .material = c.def.material}};
       c.mirror = rigid_.create(d, "collider of " + describe(c.owner));
+      if (mirror_owner_.size() <= c.mirror.index) mirror_owner_.resize(c.mirror.index + 1);
+      mirror_owner_[c.mirror.index] = c.owner;
       c.mirror_type = type;
       c.mirrored = c.def;
       c.mirrored_pose = wc.begin;
@@ -609,7 +624,11 @@ void World::sync_mirrors(double dt) {
     if (type == BodyType::Kinematic) {
       drive_body(c.mirror, wc.end, dt);
     } else if (!same_pose(c.mirrored_pose, wc.end)) {
+      // a jump moves what rested on it: wake every sleeping body (rare: a user's set_pose)
       rigid_.set_pose(c.mirror, wc.end);
+      for (std::size_t k = 0; k < rigid_.size(); ++k)
+        if (rigid_.type(rigid_.id_at(k)) == BodyType::Dynamic && !rigid_.awake(rigid_.id_at(k)))
+          rigid_.wake(rigid_.id_at(k));
     }
     c.mirrored_pose = wc.end;
   }
@@ -650,6 +669,7 @@ void World::refresh_body_colliders(bool tick) {
 // bodies' shapes added to the tick's collision world (so particles and soft bodies meet this
 // tick's bodies).
 void World::step_rigid(double t, double dt) {
+  touch_begin_.clear(), touch_end_.clear(), sensor_enter_.clear(), sensor_leave_.clear();
   if (rigid_.size() == 0) return;
   // a kinematic body on a path reaches the path's pose at the end of the tick
   for (const KinematicEntry& k : kinematics_) {
@@ -699,6 +719,115 @@ void World::step_rigid(double t, double dt) {
     }
     collision_.add(body_colliders_[k], body_collider_owner_[k]);
   }
+  // what began and stopped touching, and what entered and left the sensors
+  update_touch_events();
+  update_sensor_events();
+}
+
+namespace {
+std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; }
+}  // namespace
+
+// Touch events in the manner of Box2D v3's contact begin/end events: an entity pair touches
+// in a tick when a manifold between their bodies (or a body and a collider's stand-in) was
+// pushed by the solver; pairs whose bodies sleep are not stepped and stay touching. This
+// tick's pairs against last tick's give the begin and end events (sorted keys, merged).
+void World::update_touch_events() {
+  std::swap(touching_, touching_prev_);
+  touching_.clear();
+  for (std::size_t k = 0; k < rigid_.manifold_count(); ++k) {
+    const RigidManifoldInfo m = rigid_.manifold(k);
+    if (!(m.max_normal_impulse > 0)) continue;  // speculative: no contact yet
+    EntityId a = body_entity(m.a), b = body_entity(m.b);
+    if (a.is_null() || b.is_null() || a == b) continue;
+    Vec3 n = m.normal;
+    if (a.index > b.index) std::swap(a, b), n = -n;
+    touching_.push_back({pair_key(a.index, b.index), n, m.point, m.approach_speed});
+  }
+  // one record per pair: the fastest approach (ties by manifold order, kept by stable sort)
+  auto by_key = [](const TouchRecord& x, const TouchRecord& y) {
+    return x.key != y.key ? x.key < y.key : x.approach > y.approach;
+  };
+  std::sort(touching_.begin(), touching_.end(), by_key);
+  touching_.erase(std::unique(touching_.begin(), touching_.end(),
+                              [](const TouchRecord& x, const TouchRecord& y) { return x.key == y.key; }),
+                  touching_.end());
+  // a pair of last tick that a sleeping body is in goes on touching
+  auto sleeping = [&](std::uint32_t e) {
+    const RigidBodyId id = records_[e].body;
+    return rigid_.valid(id) && rigid_.type(id) == BodyType::Dynamic && !rigid_.awake(id);
+  };
+  const std::size_t fresh = touching_.size();
+  for (const TouchRecord& r : touching_prev_) {
+    const auto at = std::lower_bound(touching_.begin(), touching_.begin() + static_cast<std::ptrdiff_t>(fresh), r,
+                                     [](const TouchRecord& x, const TouchRecord& y) { return x.key < y.key; });
+    const bool present = at != touching_.begin() + static_cast<std::ptrdiff_t>(fresh) && at->key == r.key;
+    if (!present && (sleeping(static_cast<std::uint32_t>(r.key >> 32)) || sleeping(static_cast<std::uint32_t>(r.key))))
+      touching_.push_back(r);
+  }
+  std::sort(touching_.begin(), touching_.end(), by_key);
+  // begin: now and not before; end: before and not now
+  auto entity = [&](std::uint32_t i) { return EntityId{i, entities_.generation(i)}; };
+  std::size_t i = 0, j = 0;
+  while (i < touching_.size() || j < touching_prev_.size()) {
+    if (j == touching_prev_.size() || (i < touching_.size() && touching_[i].key < touching_prev_[j].key)) {
+      const TouchRecord& r = touching_[i++];
+      touch_begin_.push_back({entity(static_cast<std::uint32_t>(r.key >> 32)), entity(static_cast<std::uint32_t>(r.key)),
+                              r.normal, r.point, r.approach});
+    } else if (i == touching_.size() || touching_prev_[j].key < touching_[i].key) {
+      const std::uint64_t k = touching_prev_[j++].key;
+      touch_end_.push_back({entity(static_cast<std::uint32_t>(k >> 32)), entity(static_cast<std::uint32_t>(k))});
+    } else {
+      ++i, ++j;
+    }
+  }
+}
+
+// Sensor events: a body's entity is in a sensor while one of its shapes overlaps the
+// sensor's shape at the end of the tick (bounds first, then the narrow phase with no
+// speculative margin); this tick's set against last tick's gives enter and leave.
+void World::update_sensor_events() {
+  std::swap(sensing_, sensing_prev_);
+  sensing_.clear();
+  for (std::size_t i = 0; i < colliders_.size(); ++i) {
+    if (!colliders_[i].def.sensor) continue;
+    const Collider& sc = world_colliders_[i];
+    const std::uint32_t sensor = colliders_[i].owner.index;
+    const Aabb sb = bounds(sc.shape, sc.end);
+    for (std::size_t k = 0; k < body_colliders_.size(); ++k) {
+      const Collider& bc = body_colliders_[k];
+      const std::uint32_t visitor = body_collider_owner_[k];
+      if (visitor == sensor || (sc.shape.type == ShapeType::Plane && bc.shape.type == ShapeType::Plane)) continue;
+      if (!bounds(bc.shape, bc.end).overlaps(sb)) continue;
+      const Manifold m = collide(sc.shape, sc.end, bc.shape, bc.end, {.speculative_margin = 0});
+      bool overlap = false;
+      for (int p = 0; p < m.count; ++p) overlap |= m.points[p].depth >= 0;
+      if (overlap) sensing_.push_back(pair_key(sensor, visitor));
+    }
+  }
+  std::sort(sensing_.begin(), sensing_.end());
+  sensing_.erase(std::unique(sensing_.begin(), sensing_.end()), sensing_.end());
+  // enter: now and not before; leave: before and not now
+  auto event = [&](std::uint64_t k) {
+    const auto a = static_cast<std::uint32_t>(k >> 32), b = static_cast<std::uint32_t>(k);
+    return SensorEvent{{a, entities_.generation(a)}, {b, entities_.generation(b)}};
+  };
+  std::size_t i = 0, j = 0;
+  while (i < sensing_.size() || j < sensing_prev_.size()) {
+    if (j == sensing_prev_.size() || (i < sensing_.size() && sensing_[i] < sensing_prev_[j]))
+      sensor_enter_.push_back(event(sensing_[i++]));
+    else if (i == sensing_.size() || sensing_prev_[j] < sensing_[i])
+      sensor_leave_.push_back(event(sensing_prev_[j++]));
+    else
+      ++i, ++j;
+  }
+}
+
+// a destroyed entity's pairs end without an event
+void World::forget_pairs(EntityId e) {
+  auto involves = [&](std::uint64_t k) { return (k >> 32) == e.index || (k & 0xffffffffu) == e.index; };
+  std::erase_if(touching_, [&](const TouchRecord& r) { return involves(r.key); });
+  std::erase_if(sensing_, involves);
 }
 
 // mass-weighted projection of each distance constraint (Jakobsen, "Advanced character

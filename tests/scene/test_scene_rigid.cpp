@@ -153,6 +153,23 @@ TEST(RigidScenes, SettingsReachTheWorld) {
   EXPECT_EQ(c.contact_hertz, 60);
 }
 
+// a "sensor" collider reaches the World: the ball falls through it (1 m drop to its top
+// face takes sqrt(2 / g) = 0.45 s) and is reported entering
+TEST(RigidScenes, SensorCollidersReportTheirVisitors) {
+  pba::Scene s = pba::parse_scene(
+      R"({"version": 1, "colliders": [{"name": "gate", "type": "box", "sensor": true, "half_extents": [1, 0.1, 1]}],
+          "rigid_bodies": [{"name": "ball", "position": [0, 1.2, 0], "shapes": [{"type": "sphere", "radius": 0.1}]}]})",
+      "x.json");
+  EXPECT_TRUE(s.world.collider(s.world.find("gate")).sensor);
+  int enters = 0;
+  for (int i = 0; i < 60; ++i) {
+    s.world.step();
+    enters += static_cast<int>(s.world.sensor_enter_events().size());
+  }
+  EXPECT_EQ(enters, 1);
+  EXPECT_LT(s.world.pose(s.world.find("ball")).position.y, -1);  // it pushed nothing
+}
+
 int run(std::vector<std::string> words) {
   words.insert(words.begin(), "run");
   std::vector<char*> argv;

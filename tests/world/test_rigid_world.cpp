@@ -279,6 +279,116 @@ TEST(RigidStage, DrawDrawsTheBodiesShapes) {
   EXPECT_EQ(r.boxes[0].second.r, pba::colors::orange.r);  // dynamic and awake
 }
 
+// A ball dropped through a sensor box reports one enter and one leave, at the ticks where the
+// free fall y(t) = y0 - g t^2 / 2 brings its bottom to the box's top and its top to the box's
+// bottom (t = sqrt(2 d / g)); the discrete fall (symplectic Euler substeps) lags the closed
+// form by under a millisecond here, so each event falls in the tick that contains its time
+// (to one tick). The sensor pushes nothing: the ball keeps falling freely through it.
+TEST(Events, ASensorReportsOneEnterAndOneLeaveAtTheClosedFormTimes) {
+  World w({.stepper = {.fixed_dt = 1.0 / 60}});
+  const EntityId sensor = w.create_entity({.name = "gate", .pose = {{0, 2, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_collider(sensor, {.shape = ColliderShape::box({1, 0.5, 1}), .sensor = true});
+  const EntityId ball = w.create_entity({.name = "ball", .pose = {{0, 5, 0}, pba::Quat(1, 0, 0, 0)}});
+  RigidBodyDef d;
+  d.shapes = {{.shape = ColliderShape::sphere(0.25)}};
+  w.add_rigid_body(ball, d);
+  const double g = 9.81, dt = 1.0 / 60;
+  const double t_enter = std::sqrt(2 * (5 - 0.25 - 2.5) / g), t_leave = std::sqrt(2 * (5 + 0.25 - 1.5) / g);
+  int enters = 0, leaves = 0;
+  for (int i = 0; i < 90; ++i) {
+    w.step();
+    for (const pba::SensorEvent& ev : w.sensor_enter_events()) {
+      ++enters;
+      EXPECT_EQ(ev.sensor, sensor);
+      EXPECT_EQ(ev.visitor, ball);
+      EXPECT_NEAR(w.time(), t_enter, dt);
+      EXPECT_GE(w.time(), t_enter - 1e-3);  // not before it can touch
+    }
+    for (const pba::SensorEvent& ev : w.sensor_leave_events()) {
+      ++leaves;
+      EXPECT_EQ(ev.visitor, ball);
+      EXPECT_NEAR(w.time(), t_leave, dt);
+      EXPECT_GE(w.time(), t_leave - 1e-3);
+    }
+    EXPECT_TRUE(w.touch_begin_events().empty());
+  }
+  EXPECT_EQ(enters, 1);
+  EXPECT_EQ(leaves, 1);
+  EXPECT_NEAR(w.velocity(ball).y, -g * w.time(), 0.02 * g * w.time());  // unhindered
+}
+
+// A ball bouncing on the ground (e = 0.8) gives one touch begin and one touch end per bounce:
+// the k-th impact at t_1 + sum of the flights 2 e^j v_1 / g (j = 1..k-1) with v_1 = sqrt(2 g h),
+// approach speed e^(k-1) v_1; bounces faster than the restitution threshold (1 m/s) leave
+// again, so 7 bounces end (4.43 ... 1.16 m/s) and the 8th (0.93 m/s) stays: 8 begins, 7 ends.
+// Times to two ticks (below); speeds within 3% (the rebound tests' e^2 h tolerance) plus the
+// g dt the last tick before the impact adds.
+TEST(Events, ABouncingBallBeginsAndEndsOneTouchPerBounce) {
+  World w({.stepper = {.fixed_dt = 1.0 / 120}});
+  const EntityId g = w.create_entity({.name = "ground"});
+  w.add_collider(g, {.shape = ColliderShape::plane({0, 1, 0}, 0), .material = {.restitution = 0.8, .friction = 0}});
+  const double h = 1, r = 0.1, e = 0.8, grav = 9.81, dt = 1.0 / 120;
+  const EntityId ball = w.create_entity({.name = "ball", .pose = {{0, h + r, 0}, pba::Quat(1, 0, 0, 0)}});
+  RigidBodyDef d;
+  d.shapes = {{.shape = ColliderShape::sphere(r), .material = {.restitution = e, .friction = 0}}};
+  w.add_rigid_body(ball, d);
+  const double v1 = std::sqrt(2 * grav * h);
+  std::vector<double> begins, ends, speeds;
+  for (int i = 0; i < 5 * 120; ++i) {
+    w.step();
+    for (const pba::TouchBeginEvent& ev : w.touch_begin_events()) {
+      EXPECT_EQ(ev.a, g);
+      EXPECT_EQ(ev.b, ball);
+      EXPECT_NEAR(ev.normal.y, 1, 1e-9);  // from the ground to the ball
+      begins.push_back(w.time());
+      speeds.push_back(ev.approach_speed);
+    }
+    for (const pba::TouchEndEvent& ev : w.touch_end_events()) {
+      EXPECT_EQ(ev.b, ball);
+      ends.push_back(w.time());
+    }
+  }
+  ASSERT_EQ(begins.size(), 8u);
+  ASSERT_EQ(ends.size(), 7u);
+  double t = std::sqrt(2 * h / grav), v = v1;
+  for (std::size_t k = 0; k < begins.size(); ++k) {
+    SCOPED_TRACE(k);
+    // reported at the end of the tick that holds the impact (up to a tick late), and the
+    // discrete rebounds (within 3% of e^k v_1) shift the later impacts by under a tick more
+    EXPECT_NEAR(begins[k], t, 2 * dt);
+    EXPECT_NEAR(speeds[k], v, 0.03 * v + grav * dt);
+    if (k < ends.size()) {
+      EXPECT_GT(ends[k], begins[k]);
+      if (k + 1 < begins.size()) EXPECT_LT(ends[k], begins[k + 1]);
+    }
+    v *= e;
+    t += 2 * v / grav;
+  }
+}
+
+// Touching survives sleep: a box that comes to rest begins touching once and, asleep, does
+// not end
+TEST(Events, RestingContactStaysTouchingWhileAsleep) {
+  World w;
+  const EntityId g = ground(w);
+  const EntityId box = w.create_entity({.name = "box", .pose = {{0, 0.52, 0}, pba::Quat(1, 0, 0, 0)}});
+  const RigidBodyId b = w.add_rigid_body(box, box_def({0.5, 0.5, 0.5}));
+  int begins = 0, ends = 0;
+  for (int i = 0; i < 180; ++i) {
+    w.step();
+    begins += static_cast<int>(w.touch_begin_events().size());
+    ends += static_cast<int>(w.touch_end_events().size());
+  }
+  EXPECT_FALSE(w.rigid().awake(b));
+  EXPECT_EQ(begins, 1);
+  EXPECT_EQ(ends, 0);
+  // lifting it away ends the touch
+  w.set_pose(box, {{0, 3, 0}, pba::Quat(1, 0, 0, 0)});
+  w.step();
+  ASSERT_EQ(w.touch_end_events().size(), 1u);
+  EXPECT_EQ(w.touch_end_events()[0].a, g);
+}
+
 TEST(RigidStage, HashIncludesTheBodiesAndIsDeterministic) {
   auto run = [](double vx) {
     World w;
