@@ -622,6 +622,8 @@ void World::sync_mirrors(double dt) {
     }
     // static stand-ins jump to their entity's pose; kinematic ones move there over the tick
     if (type == BodyType::Kinematic) {
+      // a teleported collider (set_pose) jumps there instead of sweeping
+      if (!same_pose(c.mirrored_pose, wc.begin)) rigid_.set_pose(c.mirror, wc.begin);
       drive_body(c.mirror, wc.end, dt);
     } else if (!same_pose(c.mirrored_pose, wc.end)) {
       // a jump moves what rested on it: wake every sleeping body (rare: a user's set_pose)

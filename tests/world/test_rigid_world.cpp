@@ -232,6 +232,29 @@ TEST(RigidStage, KinematicPathsDriveKinematicBodies) {
   }
 }
 
+// a kinematic collider that set_pose teleports: its stand-in jumps there too and goes on at
+// the path's speed, instead of sweeping across the world in one tick
+TEST(RigidStage, ATeleportedKinematicColliderJumps) {
+  World w;
+  ground(w);
+  const EntityId crate = w.create_entity({.pose = {{5, 0.5, 5}, pba::Quat(1, 0, 0, 0)}});
+  w.add_rigid_body(crate, box_def({0.5, 0.5, 0.5}));
+  const EntityId p = w.create_entity({.name = "pusher"});
+  w.add_collider(p, {.shape = ColliderShape::box({0.2, 0.2, 0.2})});
+  w.add_kinematic(p, {.path = pba::PathType::Linear, .velocity = {1, 0, 0}});
+  for (int i = 0; i < 10; ++i) w.step();
+  w.set_pose(p, {{-10, 2, 0}, pba::Quat(1, 0, 0, 0)});
+  w.step();
+  // the stand-in: the kinematic body that is no entity's
+  RigidBodyId mirror;
+  for (std::size_t i = 0; i < w.rigid().size(); ++i)
+    if (!w.valid(w.rigid().id_at(i)) && w.rigid().type(w.rigid().id_at(i)) == BodyType::Kinematic)
+      mirror = w.rigid().id_at(i);
+  ASSERT_FALSE(mirror.is_null());
+  EXPECT_NEAR(w.rigid().linear_velocity(mirror).x, 1, 1e-9);
+  EXPECT_NEAR(w.rigid().pose(mirror).position.x, -10 + 1.0 / 60, 1e-9);
+}
+
 TEST(RigidStage, ANonFiniteBodyStopsTheWorld) {
   World w;
   const EntityId e = w.create_entity({.name = "rocket"});
