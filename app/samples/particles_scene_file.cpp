@@ -134,8 +134,11 @@ class SceneFile final : public Sample {
     ImGui::Text("entities %zu, colliders %zu, forcers %zu, emitters %zu", w.entity_count(), w.colliders().size(),
                 w.forcers().size(), w.particles().emitter_count());
     ImGui::Text("live particles: %s", Thousands(static_cast<long long>(w.particles().size())).c_str());
-    if (!w.body_colliders().empty())
-      ImGui::Text("rigid bodies: %zu awake of %zu bodies (%s)", w.rigid().awake_count(), w.rigid().size(),
+    // the entities' rigid bodies (the colliders' stand-ins are static or kinematic, never awake)
+    std::size_t bodies = 0;
+    for (std::size_t i = 0; i < w.rigid().size(); ++i) bodies += w.valid(w.rigid().id_at(i));
+    if (bodies > 0)
+      ImGui::Text("rigid bodies: %zu, %zu awake (%s)", bodies, w.rigid().awake_count(),
                   std::string(to_string(w.rigid().settings().solver)).c_str());
     ImGui::Text("t = %.2f s, %lld ticks", w.time(), w.ticks());
     ProfileReadout(w);

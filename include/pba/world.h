@@ -70,26 +70,27 @@ struct ColliderDef {
   ColliderShape shape{};       ///< shape in the entity frame
   SurfaceMaterial material{};  ///< restitution and friction
   /// A sensor pushes nothing (particles, soft and rigid bodies pass through it) and reports
-  /// the entities whose rigid bodies enter and leave it (World::sensor_events()).
+  /// the entities whose rigid bodies enter and leave it (World::sensor_enter_events(),
+  /// World::sensor_leave_events()).
   bool sensor = false;
 };
 
 /// Two entities began touching in the last tick: a contact of their rigid bodies (or of a
 /// body and a collider) that the solver pushed. `a` has the smaller entity index.
 struct TouchBeginEvent {
-  EntityId a{}, b{};
+  EntityId a{}, b{};          ///< the two entities (a.index < b.index)
   Vec3 normal{0, 1, 0};       ///< unit contact normal from a to b
   Vec3 point{0, 0, 0};        ///< the deepest contact point (world, m)
   double approach_speed = 0;  ///< how fast they closed along the normal before the contact (m/s, >= 0)
 };
 /// Two entities stopped touching in the last tick (`a` has the smaller entity index).
 struct TouchEndEvent {
-  EntityId a{}, b{};
+  EntityId a{}, b{};  ///< the two entities (a.index < b.index)
 };
 /// A rigid body's entity (`visitor`) entered or left a sensor collider's entity (`sensor`)
 /// in the last tick: some shape of the body overlaps the sensor's shape.
 struct SensorEvent {
-  EntityId sensor{}, visitor{};
+  EntityId sensor{}, visitor{};  ///< the sensor collider's entity and the body's entity
 };
 
 /// How a Kinematic component moves its entity. Paths are closed-form functions of the
@@ -466,7 +467,7 @@ class World {
   std::size_t entity_bodies_ = 0;           // bodies that belong to entities
   std::vector<Pose> body_begin_;            // by dense body index: the pose at the start of the tick
   std::vector<Collider> body_colliders_;    // the entities' body shapes this tick
-  std::vector<std::uint32_t> body_collider_owner_;  // parallel: entity index (or CollisionWorld::kNoOwner)
+  std::vector<std::uint32_t> body_collider_owner_;  // parallel: the entity index
   std::vector<EntityId> mirror_owner_;      // by rigid-body handle slot: the collider's entity of a stand-in
   // touching entity pairs and sensor overlaps, as sorted keys (smaller index << 32 | larger,
   // sensor << 32 | visitor), this tick's and last tick's, and the events between them
