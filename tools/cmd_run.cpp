@@ -26,7 +26,10 @@ constexpr const char* kRunAbout =
 constexpr const char* kRunFooter =
     "--csv writes one row per particle and step: step,time,particle,x,y,z,vx,vy,vz,body (SI\n"
     "units). body is 'particles' for the particle system, else the soft body's name, and\n"
-    "particle the index within its body.\n"
+    "particle the index within its body. A scene with rigid bodies adds the columns\n"
+    "qw,qx,qy,qz and one row per rigid body and step: x,y,z the body frame's origin, vx,vy,vz\n"
+    "its velocity, qw..qz its orientation (unit quaternion), particle 0 and body the body's\n"
+    "entity name (empty for the particles' and soft bodies' rows).\n"
     "--method NAME replaces the integrator of everything the scene integrates, its particles\n"
     "and mass-spring soft bodies: euler, semi-implicit-euler, verlet, velocity-verlet, rk4,\n"
     "implicit-euler.\n"
@@ -71,15 +74,40 @@ std::string body_name(const pba::World& w, const pba::SoftSystem& soft, std::siz
   return n.empty() ? "soft body " + std::to_string(i) : n;
 }
 
+// the entities' rigid bodies, in the RigidBodySystem's order (the colliders' stand-ins are
+// not the entities' bodies)
+std::vector<pba::RigidBodyId> entity_bodies(const pba::World& w) {
+  std::vector<pba::RigidBodyId> out;
+  for (std::size_t i = 0; i < w.rigid().size(); ++i)
+    if (w.valid(w.rigid().id_at(i))) out.push_back(w.rigid().id_at(i));
+  return out;
+}
+
+// the body column of a rigid body: its entity's name, else "rigid body N"
+std::string rigid_name(const pba::World& w, pba::RigidBodyId id) {
+  const std::string& n = w.name(w.owner(id));
+  return n.empty() ? "rigid body " + std::to_string(id.index) : n;
+}
+
 // one CSV block at this step: the particle system's particles (body "particles"), then
-// every soft body's particles (body: the entity's name), each numbered within its body
-void write_rows(std::FILE* f, long long step, const pba::World& w) {
+// every soft body's particles (body: the entity's name), each numbered within its body,
+// then (`rigid`) every rigid body's pose and velocity with the quaternion columns
+void write_rows(std::FILE* f, long long step, const pba::World& w, bool rigid) {
   const double t = w.time();
+  const char* tail = rigid ? ",,,,\n" : "\n";  // particle rows leave the quaternion columns empty
   const pba::ParticleSystem& ps = w.particles();
   const auto x = ps.xs(), y = ps.ys(), z = ps.zs(), vx = ps.vxs(), vy = ps.vys(), vz = ps.vzs();
   for (std::size_t i = 0; i < ps.size(); ++i)
-    std::fprintf(f, "%lld,%.17g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,particles\n", step, t, i, x[i], y[i], z[i], vx[i],
-                 vy[i], vz[i]);
+    std::fprintf(f, "%lld,%.17g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,particles%s", step, t, i, x[i], y[i], z[i], vx[i],
+                 vy[i], vz[i], tail);
+  if (rigid)
+    for (const pba::RigidBodyId id : entity_bodies(w)) {
+      const pba::Pose p = w.rigid().pose(id);
+      const pba::Vec3 v = w.rigid().velocity_at(id, p.position);
+      std::fprintf(f, "%lld,%.17g,0,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%.17g,%.17g,%.17g,%.17g\n", step, t,
+                   p.position.x, p.position.y, p.position.z, v.x, v.y, v.z, csv_field(rigid_name(w, id)).c_str(),
+                   p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z);
+    }
   const pba::SoftSystem* soft = soft_bodies(w);
   if (!soft) return;
   for (std::size_t b = 0; b < soft->size(); ++b) {
@@ -88,8 +116,8 @@ void write_rows(std::FILE* f, long long step, const pba::World& w) {
     const auto bx = body.xs(), by = body.ys(), bz = body.zs();
     for (std::size_t i = 0; i < body.size(); ++i) {
       const pba::Vec3 v = body.velocity(i);
-      std::fprintf(f, "%lld,%.17g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%s\n", step, t, i, bx[i], by[i], bz[i],
-                   static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z), name.c_str());
+      std::fprintf(f, "%lld,%.17g,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%s%s", step, t, i, bx[i], by[i], bz[i],
+                   static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z), name.c_str(), tail);
     }
   }
 }
@@ -192,6 +220,13 @@ std::string integrators(const pba::World& w) {
                                               : "mass-spring " + std::string(pba::name(d.method)));
     }
   }
+  if (!entity_bodies(w).empty()) {
+    const pba::ContactSettings& c = w.rigid().settings();
+    if (!s.empty()) s += ", ";
+    s += "rigid bodies " + std::string(pba::to_string(c.solver)) +
+         (c.solver == pba::RigidSolverType::SoftStep ? " x" + std::to_string(c.substeps) + " substeps"
+                                                     : " x" + std::to_string(c.iterations) + " iterations");
+  }
   return s.empty() ? "none (nothing to integrate)" : s;
 }
 
@@ -244,7 +279,9 @@ int pba_run_command(int argc, char** argv) {
         return 2;
       }
     }
-    // the CSV file, with its header and the initial state
+    // the CSV file, with its header and the initial state (the quaternion columns when the
+    // scene has rigid bodies)
+    const bool rigid = !entity_bodies(w).empty();
     std::FILE* csv = nullptr;
     if (!o.csv.empty()) {
       csv = std::fopen(o.csv.c_str(), "w");
@@ -252,13 +289,14 @@ int pba_run_command(int argc, char** argv) {
         std::fprintf(stderr, "pba run: --csv: cannot write '%s'\n", o.csv.c_str());
         return 1;
       }
-      std::fputs("step,time,particle,x,y,z,vx,vy,vz,body\n", csv);
-      write_rows(csv, 0, w);
+      std::fputs(rigid ? "step,time,particle,x,y,z,vx,vy,vz,body,qw,qx,qy,qz\n" : "step,time,particle,x,y,z,vx,vy,vz,body\n",
+                 csv);
+      write_rows(csv, 0, w, rigid);
     }
     // step, accumulating the per-phase profile, with progress on stderr
     pba::WorldProfile sum;
     pba::Stopwatch wall;
-    std::size_t contacts = 0;
+    std::size_t contacts = 0, rigid_contacts = 0;
     pba::tools::Progress progress("pba run", "steps", o.steps,
                                   o.quiet ? pba::tools::ProgressMode::Quiet : pba::tools::ProgressMode::Auto);
     try {
@@ -268,8 +306,10 @@ int pba_run_command(int argc, char** argv) {
         sum.kinematic += p.kinematic, sum.sync += p.sync, sum.emit += p.emit, sum.integrate += p.integrate;
         sum.collide += p.collide, sum.recycle += p.recycle, sum.constraints += p.constraints;
         sum.systems += p.systems, sum.total += p.total;
+        sum.stages[static_cast<std::size_t>(pba::WorldStage::Rigid)] += p.stages[static_cast<std::size_t>(pba::WorldStage::Rigid)];
+        rigid_contacts += w.rigid().manifold_count();
         contacts += w.particles().contacts();
-        if (csv && s % o.every == 0) write_rows(csv, s, w);
+        if (csv && s % o.every == 0) write_rows(csv, s, w, rigid);
         progress.update(s);
       }
     } catch (const pba::Error& e) {
@@ -295,12 +335,20 @@ int pba_run_command(int argc, char** argv) {
     std::printf("integrators  %s%s\n", integrators(w).c_str(), o.method ? " (from --method)" : "");
     std::printf("entities     %zu, particles alive %zu, soft-body particles %zu, contacts %.3g per step\n",
                 w.entity_count(), w.particles().size(), soft_particles(w), static_cast<double>(contacts) / n);
+    if (rigid) {
+      const std::vector<pba::RigidBodyId> bodies = entity_bodies(w);
+      std::size_t awake = 0;
+      for (const pba::RigidBodyId id : bodies) awake += w.rigid().type(id) == pba::BodyType::Dynamic && w.rigid().awake(id);
+      std::printf("rigid bodies %zu (%zu dynamic awake at the end), %.3g manifolds per step\n", bodies.size(), awake,
+                  static_cast<double>(rigid_contacts) / n);
+    }
     std::printf("final hash   %016llx\n", static_cast<unsigned long long>(w.hash()));
     std::printf("wall time    %.6g s, %.4g ms per step (including CSV output)\n", seconds, seconds / n * 1e3);
     std::printf("profile      ms per step: kinematic %.4g, sync %.4g, emit %.4g, integrate %.4g, collide %.4g, "
-                "recycle %.4g, constraints %.4g, systems %.4g, total %.4g\n",
+                "recycle %.4g, constraints %.4g, rigid %.4g, systems %.4g, total %.4g\n",
                 sum.kinematic / n * 1e3, sum.sync / n * 1e3, sum.emit / n * 1e3, sum.integrate / n * 1e3,
-                sum.collide / n * 1e3, sum.recycle / n * 1e3, sum.constraints / n * 1e3, sum.systems / n * 1e3,
+                sum.collide / n * 1e3, sum.recycle / n * 1e3, sum.constraints / n * 1e3,
+                sum.stages[static_cast<std::size_t>(pba::WorldStage::Rigid)] / n * 1e3, sum.systems / n * 1e3,
                 sum.total / n * 1e3);
     if (!o.csv.empty()) std::printf("csv          %s (every %lld steps)\n", o.csv.c_str(), o.every);
     return 0;

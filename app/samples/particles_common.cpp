@@ -47,6 +47,15 @@ void WorldPoints(const World& world, std::vector<Vec3>& out, std::size_t max_poi
   if (soft)
     for (std::size_t b = 0; b < soft->size(); ++b)
       for (std::size_t k = 0; k < soft->at(b).size(); k += step) out.push_back(soft->at(b).position(k));
+  // the rigid bodies' shapes (their centres; planes are unbounded)
+  for (const Collider& c : world.body_colliders())
+    if (c.shape.type != ShapeType::Plane) out.push_back(c.end.position);
+}
+
+void DrawRigidBodies(Renderer& r, const World& world, const DrawFlags& flags) {
+  world.draw_rigid_bodies(r, flags,
+                          {.awake = particle_colors::body, .asleep = particle_colors::asleep,
+                           .kinematic = particle_colors::moving, .fixed = particle_colors::solid});
 }
 
 void DrawColliders(Renderer& r, std::span<const Collider> colliders, std::span<const bool> moving,

@@ -25,6 +25,8 @@ inline constexpr Color fan = Color::hex(0x46a758);       ///< fan / air cannon v
 inline constexpr Color vortex = Color::hex(0xffc53d);    ///< vortex volumes
 inline constexpr Color attractor = Color::hex(0xd6409f); ///< attractor volumes
 inline constexpr Color wind = Color::hex(0xa5d8ff);      ///< wind arrows
+inline constexpr Color body = Color::hex(0xf76b15);      ///< dynamic rigid bodies, awake
+inline constexpr Color asleep = Color::hex(0x8c3d0b);    ///< dynamic rigid bodies, asleep
 }  // namespace particle_colors
 
 /// One tick of `world` from its own time by `dt`, with the integrator chosen in the app.
@@ -34,6 +36,11 @@ void TickWorld(World& world, const Settings& settings, double dt);
 /// visible) when there are at most `sphere_limit`, else screen-space points of `point_px`.
 void DrawParticles(Renderer& r, const ParticleSystem& ps, float point_px, double min_radius = 0,
                    std::size_t sphere_limit = 2000);
+
+/// Draws the world's rigid bodies (the entities' bodies, not the colliders' stand-ins) as
+/// solids at their poses now: dynamic orange (darker asleep), kinematic as moving colliders,
+/// static as solid ones.
+void DrawRigidBodies(Renderer& r, const World& world, const DrawFlags& flags);
 
 /// Draws the colliders as solids; `moving` tells which ones are kinematic (by index; when
 /// empty, a collider that moved or has a velocity is taken as moving). A horizontal plane at y = 0 is left to the app's ground grid.

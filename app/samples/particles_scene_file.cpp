@@ -90,6 +90,7 @@ class SceneFile final : public Sample {
     const World& w = scene_->world;
     const DrawFlags& f = ctx_.draw;
     DrawColliders(r, w.colliders(), {}, f);
+    DrawRigidBodies(r, w, f);
     if (f.forcers)
       for (const Forcer& fc : w.forcers()) DrawForcer(r, fc, w.time());
     if (f.particles) DrawParticles(r, w.particles(), 3.0f, 0.008 * view_radius_);
@@ -133,6 +134,12 @@ class SceneFile final : public Sample {
     ImGui::Text("entities %zu, colliders %zu, forcers %zu, emitters %zu", w.entity_count(), w.colliders().size(),
                 w.forcers().size(), w.particles().emitter_count());
     ImGui::Text("live particles: %s", Thousands(static_cast<long long>(w.particles().size())).c_str());
+    // the entities' rigid bodies (the colliders' stand-ins are static or kinematic, never awake)
+    std::size_t bodies = 0;
+    for (std::size_t i = 0; i < w.rigid().size(); ++i) bodies += w.valid(w.rigid().id_at(i));
+    if (bodies > 0)
+      ImGui::Text("rigid bodies: %zu, %zu awake (%s)", bodies, w.rigid().awake_count(),
+                  std::string(to_string(w.rigid().settings().solver)).c_str());
     ImGui::Text("t = %.2f s, %lld ticks", w.time(), w.ticks());
     ProfileReadout(w);
     ImGui::TextWrapped("The file's dt and integrator were copied to the Simulation panel when it was opened; change "
@@ -252,6 +259,8 @@ class SceneFile final : public Sample {
         for (const Collider& c : w.colliders())
           if (c.shape.type != ShapeType::Plane) grow(c.end.position);
         for (const Forcer& f : w.forcers()) grow(f.pose.position);
+        for (const Collider& c : w.body_colliders())
+          if (c.shape.type != ShapeType::Plane) grow(c.end.position);
         std::size_t soft_nodes = 0;
         if (const SoftSystem* soft = Soft(w))
           for (std::size_t b = 0; b < soft->size(); ++b) {

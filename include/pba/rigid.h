@@ -208,6 +208,17 @@ struct RigidContactPoint {
   std::uint32_t id = 0;        ///< feature id
 };
 
+/// One contact manifold of the last step in brief (RigidBodySystem::manifold), for events.
+struct RigidManifoldInfo {
+  RigidBodyId a{}, b{};           ///< the two bodies (the normal points from a to b)
+  Vec3 normal{0, 0, 1};           ///< unit normal from a to b
+  Vec3 point{0, 0, 0};            ///< its deepest point at the start of the step (world, m)
+  double depth = 0;               ///< that point's overlap at the start of the step (m); < 0 speculative
+  double approach_speed = 0;      ///< fastest normal closing speed of its points before the solve (m/s, >= 0)
+  double max_normal_impulse = 0;  ///< largest single normal impulse of the step (N s); > 0: the solver pushed
+  int points = 0;                 ///< contact points, 1 to 4
+};
+
 /// Where the last step's time went (s).
 struct RigidProfile {
   double collide = 0;  ///< pairs and manifolds
@@ -323,6 +334,10 @@ class RigidBodySystem {
   std::vector<RigidContactPoint> contacts() const;
   /// Contact manifolds (touching or speculative shape pairs) in the last step.
   std::size_t manifold_count() const;
+  /// Manifold k of the last step in brief, k in [0, manifold_count()) (no allocation; the
+  /// order is the solver's, deterministic). Pairs whose bodies all sleep are not stepped,
+  /// so they have no manifold.
+  RigidManifoldInfo manifold(std::size_t k) const;
   /// Timings of the last step.
   const RigidProfile& profile() const { return profile_; }
   /// The world bounds of every shape of body `id` at its pose now.

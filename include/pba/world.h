@@ -1,8 +1,8 @@
 // pba world (workbook 4.1): the entity-component model that ties the physics together.
 //
 // An entity is a generation-checked handle (EntityId) with a name and a pose. Components
-// attach behaviour to it: Particle, Collider, Forcer, Emitter, Kinematic and Constraint
-// now; RigidBody and IK arrive with their own issues as WorldSystems (see add_system).
+// attach behaviour to it: Particle, RigidBody, Collider, Forcer, Emitter, Kinematic and
+// Constraint; soft bodies and IK are WorldSystems (see add_system).
 // Components are plain data stored contiguously by the system that steps them (particles
 // in the ParticleSystem's arrays, colliders and forcers in the World's dense arrays); the
 // World wires entities to systems and never dispatches per entity.
@@ -14,7 +14,11 @@
 //                   their poses)
 //   2. collide      collider, forcer and emitter poses follow their entities; the
 //                   collision world of the tick is built (validated and flattened once)
-//   3. rigid        rigid-body systems (none yet; systems may register here)
+//   3. rigid        kinematic bodies get the velocities that take them to their entity's
+//                   pose, the World's RigidBodySystem steps under gravity() (the static
+//                   colliders of entities without a body are its static geometry), each
+//                   body's entity gets its pose, and the bodies' shapes join the tick's
+//                   collision world with their begin and end poses
 //   4. particles    emit, forces + integration, swept collisions, recycling; particle
 //                   entities without a kinematic get their particle's position as pose
 //   5. soft         soft bodies (SoftSystem), against the tick's collision world
@@ -43,6 +47,7 @@
 #include "pba/draw.h"
 #include "pba/handle.h"
 #include "pba/particles.h"
+#include "pba/rigid.h"
 #include "pba/time.h"
 
 namespace pba {
@@ -64,6 +69,28 @@ struct EntityDef {
 struct ColliderDef {
   ColliderShape shape{};       ///< shape in the entity frame
   SurfaceMaterial material{};  ///< restitution and friction
+  /// A sensor pushes nothing (particles, soft and rigid bodies pass through it) and reports
+  /// the entities whose rigid bodies enter and leave it (World::sensor_enter_events(),
+  /// World::sensor_leave_events()).
+  bool sensor = false;
+};
+
+/// Two entities began touching in the last tick: a contact of their rigid bodies (or of a
+/// body and a collider) that the solver pushed. `a` has the smaller entity index.
+struct TouchBeginEvent {
+  EntityId a{}, b{};          ///< the two entities (a.index < b.index)
+  Vec3 normal{0, 1, 0};       ///< unit contact normal from a to b
+  Vec3 point{0, 0, 0};        ///< the deepest contact point (world, m)
+  double approach_speed = 0;  ///< how fast they closed along the normal before the contact (m/s, >= 0)
+};
+/// Two entities stopped touching in the last tick (`a` has the smaller entity index).
+struct TouchEndEvent {
+  EntityId a{}, b{};  ///< the two entities (a.index < b.index)
+};
+/// A rigid body's entity (`visitor`) entered or left a sensor collider's entity (`sensor`)
+/// in the last tick: some shape of the body overlaps the sensor's shape.
+struct SensorEvent {
+  EntityId sensor{}, visitor{};  ///< the sensor collider's entity and the body's entity
 };
 
 /// How a Kinematic component moves its entity. Paths are closed-form functions of the
@@ -109,7 +136,7 @@ struct ConstraintDef {
 enum class WorldStage : std::uint8_t {
   Kinematic,    ///< scripted paths, motors, thrusters
   Collide,      ///< poses of colliders, forcers, emitters; the collision world of the tick
-  Rigid,        ///< rigid bodies (systems only)
+  Rigid,        ///< rigid bodies, then their shapes join the tick's collision world
   Particles,    ///< the particle system
   Soft,         ///< soft bodies
   Constraints,  ///< distance constraints
@@ -180,6 +207,17 @@ struct WorldDef {
   /// tick (it replaces particles.forces.gravity and each soft body's forces.gravity).
   Vec3 gravity{0, -9.81, 0};
   ParticleSystemDef particles{};  ///< integrator, drag, wind, capacity (forces.gravity: see gravity)
+  /// The rigid bodies: solver, substeps, iterations, sleep and the other contact settings,
+  /// and the bodies reserved up front (the World's gravity replaces any other).
+  RigidSystemDef rigid{};
+};
+
+/// Colours of the rigid bodies in World::draw_rigid_bodies().
+struct RigidBodyColors {
+  Color awake = colors::orange;         ///< dynamic, awake
+  Color asleep = Color::hex(0x8c3d0b);  ///< dynamic, asleep
+  Color kinematic = colors::grey;       ///< kinematic
+  Color fixed = colors::grey;           ///< static
 };
 
 /// The entity-component world. Movable, not copyable. Not thread-safe.
@@ -229,12 +267,20 @@ class World {
   KinematicId add_kinematic(EntityId e, const KinematicDef& def);
   /// Constrains the entity's particle to another particle entity.
   ConstraintId add_constraint(EntityId e, const ConstraintDef& def);
+  /// Gives the entity a rigid body in the World's RigidBodySystem; `def.pose` is relative
+  /// to the entity pose (the body starts at entity pose * def.pose; from then on the
+  /// entity's pose is the body's). An unnamed body takes the entity's name. A Kinematic
+  /// component drives only a kinematic body, so a static or dynamic body on an entity with
+  /// one is refused. Errors name the entity and the field.
+  RigidBodyId add_rigid_body(EntityId e, const RigidBodyDef& def);
 
   /// True when the handle names a live component (false once its entity is destroyed).
   bool valid(ColliderId id) const { return collider_ids_.valid(id); }
   bool valid(ForcerId id) const { return forcer_ids_.valid(id); }          ///< see valid(ColliderId)
   bool valid(KinematicId id) const { return kinematic_ids_.valid(id); }    ///< see valid(ColliderId)
   bool valid(ConstraintId id) const { return constraint_ids_.valid(id); }  ///< see valid(ColliderId)
+  /// True when the handle names a live rigid body that belongs to an entity of this World.
+  bool valid(RigidBodyId id) const;
   /// The entity's collider handle, or the null handle.
   ColliderId collider_id(EntityId e) const;
   /// The entity's forcer handle, or the null handle.
@@ -243,11 +289,14 @@ class World {
   KinematicId kinematic_id(EntityId e) const;
   /// The entity's constraint handle, or the null handle.
   ConstraintId constraint_id(EntityId e) const;
+  /// The entity's rigid body handle, or the null handle.
+  RigidBodyId rigid_body_id(EntityId e) const;
   /// The entity a component belongs to (throws Error for a stale handle).
   EntityId owner(ColliderId id) const;
   EntityId owner(ForcerId id) const;       ///< see owner(ColliderId)
   EntityId owner(KinematicId id) const;    ///< see owner(ColliderId)
   EntityId owner(ConstraintId id) const;   ///< see owner(ColliderId)
+  EntityId owner(RigidBodyId id) const;    ///< see owner(ColliderId)
 
   /// The entity's particle handle, or the null handle.
   ParticleId particle(EntityId e) const;
@@ -269,10 +318,23 @@ class World {
   ParticleSystem& particles() { return particles_; }
   /// The particle system.
   const ParticleSystem& particles() const { return particles_; }
+  /// The rigid bodies: the entities' bodies and the static (or kinematic) bodies that
+  /// mirror the colliders of entities without a body. Read anything, apply forces and
+  /// impulses, change settings(); create and destroy bodies through the World
+  /// (add_rigid_body, destroy_entity), which keeps the entities in step.
+  RigidBodySystem& rigid() { return rigid_; }
+  /// The rigid bodies.
+  const RigidBodySystem& rigid() const { return rigid_; }
+  /// The entities' rigid-body shapes as world-space colliders (begin and end poses of the
+  /// last tick, velocities at the shape origins; planes, spheres, boxes and capsules), as
+  /// they joined the tick's collision world after the rigid stage. Refreshed when a body is
+  /// added or moved between ticks (then begin = end).
+  std::span<const Collider> body_colliders() const { return body_colliders_; }
   /// World-space colliders of the last tick (or of now, before the first).
   std::span<const Collider> colliders() const { return world_colliders_; }
-  /// The collision world of the last tick: its colliders with their owners (entity
-  /// indices) and flat forms, which particles and soft bodies query.
+  /// The collision world of the last tick: its colliders, then the bodies' shapes
+  /// (body_colliders()), with their owners (entity indices) and flat forms, which
+  /// particles and soft bodies query.
   const CollisionWorld& collision() const { return collision_; }
   /// World-space forcers of the last tick.
   std::span<const Forcer> forcers() const { return world_forcers_; }
@@ -293,8 +355,8 @@ class World {
   /// Exactly one tick of fixed_dt (TimeStepper::single_step with the fixed strategy).
   void step();
   /// One tick from t to t + dt: the stages in their order. advance() and step() call it.
-  /// Throws Error if the state becomes non-finite (which particle, when); the world then
-  /// refuses to tick again and repeats that message.
+  /// Throws Error if the state becomes non-finite (which particle or which body's entity,
+  /// when); the world then refuses to tick again and repeats that message.
   void tick(double t, double dt);
   /// Simulated time (s) of the state.
   double time() const { return time_; }
@@ -302,11 +364,26 @@ class World {
   long long ticks() const { return ticks_; }
   /// Timings of the last tick.
   const WorldProfile& profile() const { return profile_; }
-  /// Hash of the particle state, the entity poses and every extension system.
+  /// Entity pairs that began touching in the last tick (rigid contacts the solver pushed,
+  /// between bodies or a body and a collider), in entity-index order.
+  std::span<const TouchBeginEvent> touch_begin_events() const { return touch_begin_; }
+  /// Entity pairs that stopped touching in the last tick (a pair stays touching while its
+  /// bodies sleep; a destroyed entity's pairs end silently).
+  std::span<const TouchEndEvent> touch_end_events() const { return touch_end_; }
+  /// Rigid bodies' entities that entered a sensor collider in the last tick.
+  std::span<const SensorEvent> sensor_enter_events() const { return sensor_enter_; }
+  /// Rigid bodies' entities that left a sensor collider in the last tick.
+  std::span<const SensorEvent> sensor_leave_events() const { return sensor_leave_; }
+  /// Hash of the particle state, the kinematic entity poses, the rigid bodies (once an
+  /// entity has one) and every extension system.
   std::uint64_t hash() const;
-  /// Draws what `flags` select: colliders (shapes, aabbs), forcers, particles, every
+  /// Draws what `flags` select: colliders (shapes, aabbs), the rigid bodies' shapes
+  /// (dynamic orange, asleep darker, kinematic and static grey), forcers, particles, every
   /// system (soft bodies: particles, constraints) and the entities' constraints.
   void draw(DebugDraw& draw, const DrawFlags& flags = {}) const;
+  /// Draws the entities' rigid bodies (not the colliders' stand-ins) at their poses now:
+  /// each shape as the flags select (shapes, aabbs), coloured by type and sleep.
+  void draw_rigid_bodies(DebugDraw& draw, const DrawFlags& flags = {}, const RigidBodyColors& colors = {}) const;
 
  private:
   struct EntityRecord {
@@ -315,6 +392,7 @@ class World {
     Vec3 velocity{0, 0, 0};
     Vec3 angular_velocity{0, 0, 0};
     ParticleId particle;
+    RigidBodyId body;
     EmitterId emitter;
     Pose emitter_local;
     std::uint32_t collider = kNone, forcer = kNone, kinematic = kNone, constraint = kNone;
@@ -323,6 +401,12 @@ class World {
     EntityId owner;
     ColliderDef def;
     ColliderId id;
+    // the body that stands for the collider in the RigidBodySystem (entities without a
+    // body), and what it was made from
+    RigidBodyId mirror{};
+    BodyType mirror_type = BodyType::Static;
+    ColliderDef mirrored{};
+    Pose mirrored_pose{};
   };
   struct ForcerEntry {
     EntityId owner;
@@ -350,6 +434,15 @@ class World {
   void run_kinematics(double t, double dt);
   void sync(double t, double dt);
   void solve_constraints(double dt);
+  void sync_mirrors(double dt);
+  void destroy_mirror(ColliderEntry& c);
+  void drive_body(RigidBodyId id, const Pose& target, double dt);
+  void step_rigid(double t, double dt);
+  void refresh_body_colliders(bool tick);
+  void update_touch_events();
+  void update_sensor_events();
+  void forget_pairs(EntityId e);
+  EntityId body_entity(RigidBodyId id) const;
   void write_particle_poses();
   void run_systems(WorldStage stage, double t, double dt);
   template <class Entry>
@@ -369,6 +462,25 @@ class World {
   std::vector<KinematicEntry> kinematics_;
   std::vector<ConstraintEntry> constraints_;
   std::vector<std::unique_ptr<WorldSystem>> systems_;
+  RigidBodySystem rigid_;
+  std::vector<EntityId> body_owner_;        // by rigid-body handle slot: the entity (null for mirrors)
+  std::size_t entity_bodies_ = 0;           // bodies that belong to entities
+  std::vector<Pose> body_begin_;            // by dense body index: the pose at the start of the tick
+  std::vector<Collider> body_colliders_;    // the entities' body shapes this tick
+  std::vector<std::uint32_t> body_collider_owner_;  // parallel: the entity index
+  std::vector<EntityId> mirror_owner_;      // by rigid-body handle slot: the collider's entity of a stand-in
+  // touching entity pairs and sensor overlaps, as sorted keys (smaller index << 32 | larger,
+  // sensor << 32 | visitor), this tick's and last tick's, and the events between them
+  struct TouchRecord {
+    std::uint64_t key;
+    Vec3 normal, point;
+    double approach;
+  };
+  std::vector<TouchRecord> touching_, touching_prev_;
+  std::vector<std::uint64_t> sensing_, sensing_prev_;
+  std::vector<TouchBeginEvent> touch_begin_;
+  std::vector<TouchEndEvent> touch_end_;
+  std::vector<SensorEvent> sensor_enter_, sensor_leave_;
   // component handles: a pool per kind and the owning entity of each handle slot (the
   // entity record holds the component's dense index)
   template <class Tag>

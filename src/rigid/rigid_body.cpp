@@ -682,6 +682,27 @@ std::vector<RigidContactPoint> RigidBodySystem::contacts() const {
 
 std::size_t RigidBodySystem::manifold_count() const { return contacts_->pairs.size(); }
 
+RigidManifoldInfo RigidBodySystem::manifold(std::size_t k) const {
+  if (k >= contacts_->pairs.size())
+    throw Error("RigidBodySystem::manifold: index " + std::to_string(k) + " out of range [0, " +
+                std::to_string(contacts_->pairs.size()) + ")");
+  const detail::ContactPair& c = contacts_->pairs[k];
+  RigidManifoldInfo m;
+  m.a = {c.slot_a, ids_.generation(c.slot_a)};
+  m.b = {c.slot_b, ids_.generation(c.slot_b)};
+  m.normal = c.normal;
+  m.points = c.count;
+  m.depth = -INFINITY;
+  // the deepest point, the fastest approach (approach < 0 closes) and the largest push
+  for (int i = 0; i < c.count; ++i) {
+    const detail::SolverPoint& p = c.points[i];
+    if (p.depth > m.depth) m.depth = p.depth, m.point = com0_[c.a] + p.ra;
+    m.approach_speed = std::max(m.approach_speed, -p.approach);
+    m.max_normal_impulse = std::max(m.max_normal_impulse, p.max_normal_impulse);
+  }
+  return m;
+}
+
 std::vector<Aabb> RigidBodySystem::shape_bounds(RigidBodyId id) const {
   const Pose body = pose(id);
   std::vector<Aabb> out;

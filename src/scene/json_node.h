@@ -207,6 +207,9 @@ Method read_method(const Node& m);
 EntityId make_entity(const Node& n, World& w);
 /// The fields every entity-like item may have (a "kinematic" path).
 void read_common(const Node& n, World& w, EntityId e);
+/// A shape's "type" and its fields: plane (normal, offset), sphere (radius), box
+/// (half_extents) and, with `capsule`, capsule (radius, half_height).
+ColliderShape read_shape(const Node& n, bool capsule);
 
 // ---- one reader per module: the settings, and one item of each top-level array ----
 
@@ -222,5 +225,9 @@ void read_emitter(const Node& n, World& w);
 void read_forcer(const Node& n, World& w);
 /// One item of "soft_bodies" (read_soft.cpp).
 void read_soft_body(const Node& n, World& w);
+/// "settings.rigid": the rigid bodies' solver and contact settings (read_rigid.cpp).
+void read_rigid_settings(const Node& n, RigidSystemDef& def);
+/// One item of "rigid_bodies" (read_rigid.cpp).
+void read_rigid_body(const Node& n, World& w);
 
 }  // namespace pba::scene_detail

@@ -1,5 +1,5 @@
 // The scene reader's world-level fields (docs/scene-format.md): rotations, poses and
-// colours shared by every module, kinematic paths, the settings, and colliders.
+// colours shared by every module, kinematic paths, the settings, shapes and colliders.
 #include <cmath>
 #include <string>
 
@@ -103,7 +103,8 @@ Method read_method(const Node& m) {
 
 void read_settings(const Node& n, WorldDef& def) {
   n.allow_only({"dt", "integrator", "strategy", "max_ticks_per_frame", "capacity", "gravity", "drag", "wind",
-                "restitution_threshold"});
+                "restitution_threshold", "rigid"});
+  if (n.has("rigid")) read_rigid_settings(n.at("rigid"), def.rigid);
   def.stepper.fixed_dt = n.in_range("dt", 1e-6, 10, def.stepper.fixed_dt);
   if (n.has("integrator")) def.particles.method = read_method(n.at("integrator"));
   if (n.has("strategy")) {
@@ -146,29 +147,50 @@ void read_settings(const Node& n, WorldDef& def) {
       n.num("restitution_threshold", def.particles.collision.restitution_threshold);
 }
 
+ColliderShape read_shape(const Node& n, bool capsule) {
+  ColliderShape shape;
+  if (capsule)
+    shape.type = n.required_choice<ShapeType>("type", {{"plane", ShapeType::Plane},
+                                                       {"sphere", ShapeType::Sphere},
+                                                       {"box", ShapeType::Box},
+                                                       {"capsule", ShapeType::Capsule}});
+  else
+    shape.type = n.required_choice<ShapeType>(
+        "type", {{"plane", ShapeType::Plane}, {"sphere", ShapeType::Sphere}, {"box", ShapeType::Box}});
+  // shape fields belong to one type each
+  auto only_for = [&](const char* key, std::initializer_list<ShapeType> types, const char* type_names) {
+    bool ok = false;
+    for (ShapeType t : types) ok |= shape.type == t;
+    if (n.has(key) && !ok) n.at(key).fail(std::string("only for \"type\": ") + type_names);
+  };
+  only_for("normal", {ShapeType::Plane}, "\"plane\"");
+  only_for("offset", {ShapeType::Plane}, "\"plane\"");
+  if (capsule) {
+    only_for("radius", {ShapeType::Sphere, ShapeType::Capsule}, "\"sphere\" or \"capsule\"");
+    only_for("half_height", {ShapeType::Capsule}, "\"capsule\"");
+  } else {
+    only_for("radius", {ShapeType::Sphere}, "\"sphere\"");
+  }
+  only_for("half_extents", {ShapeType::Box}, "\"box\"");
+  shape.normal = n.nonzero_vec("normal", shape.normal);
+  shape.offset = n.num("offset", shape.offset);
+  if (shape.type == ShapeType::Sphere || shape.type == ShapeType::Capsule) shape.radius = n.positive("radius", shape.radius);
+  if (shape.type == ShapeType::Capsule) shape.half_height = n.non_negative("half_height", shape.half_height);
+  if (n.has("half_extents")) {
+    shape.half_extents = n.at("half_extents").vec3();
+    for (int i = 0; i < 3; ++i)
+      if (!(shape.half_extents[i] > 0))
+        n.at("half_extents").item(i).fail("must be > 0, got " + format_value(shape.half_extents[i]));
+  }
+  return shape;
+}
+
 void read_collider(const Node& n, World& w) {
   n.allow_only({"name", "type", "position", "rotation", "rotation_deg", "normal", "offset", "radius",
-                "half_extents", "restitution", "friction", "kinematic"});
+                "half_extents", "restitution", "friction", "sensor", "kinematic"});
   ColliderDef c;
-  c.shape.type = n.required_choice<ShapeType>(
-      "type", {{"plane", ShapeType::Plane}, {"sphere", ShapeType::Sphere}, {"box", ShapeType::Box}});
-  // shape fields belong to one type each
-  auto only_for = [&](const char* key, ShapeType t, const char* type_name) {
-    if (n.has(key) && c.shape.type != t) n.at(key).fail(std::string("only for \"type\": \"") + type_name + "\"");
-  };
-  only_for("normal", ShapeType::Plane, "plane");
-  only_for("offset", ShapeType::Plane, "plane");
-  only_for("radius", ShapeType::Sphere, "sphere");
-  only_for("half_extents", ShapeType::Box, "box");
-  c.shape.normal = n.nonzero_vec("normal", c.shape.normal);
-  c.shape.offset = n.num("offset", c.shape.offset);
-  if (c.shape.type == ShapeType::Sphere) c.shape.radius = n.positive("radius", c.shape.radius);
-  if (n.has("half_extents")) {
-    c.shape.half_extents = n.at("half_extents").vec3();
-    for (int i = 0; i < 3; ++i)
-      if (!(c.shape.half_extents[i] > 0))
-        n.at("half_extents").item(i).fail("must be > 0, got " + format_value(c.shape.half_extents[i]));
-  }
+  c.shape = read_shape(n, false);
+  c.sensor = n.flag("sensor", c.sensor);
   c.material.restitution = n.in_range("restitution", 0, 1, c.material.restitution);
   c.material.friction = n.non_negative("friction", c.material.friction);
   const EntityId e = make_entity(n, w);

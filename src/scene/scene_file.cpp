@@ -1,6 +1,7 @@
 // The JSON scene-file reader (docs/scene-format.md): the file, its syntax, the version
 // and the top-level arrays, each read one item at a time by its module's reader
-// (read_world.cpp, read_particles.cpp, read_soft.cpp; the Node helper in json_node.h).
+// (read_world.cpp, read_particles.cpp, read_soft.cpp, read_rigid.cpp; the Node helper in
+// json_node.h).
 // A later module adds its array by adding a row to kSections below and a reader file.
 #include <filesystem>
 #include <fstream>
@@ -32,8 +33,9 @@ constexpr Section kSections[] = {
     {"forcers", scene_detail::read_forcer},
     {"colliders", scene_detail::read_collider},
     {"soft_bodies", scene_detail::read_soft_body},
+    {"rigid_bodies", scene_detail::read_rigid_body},
 };
-constexpr const char* kReserved[] = {"rigid_bodies", "skeletons"};
+constexpr const char* kReserved[] = {"skeletons"};
 
 // 1-based line and column of a byte offset
 void line_col(std::string_view text, std::size_t byte, std::size_t& line, std::size_t& col) {

@@ -4,14 +4,30 @@
 #include <cmath>
 #include <string>
 
+#include "pba/collide/narrow_phase.h"
 #include "pba/world.h"
 
 namespace pba {
 
 namespace {
 
+// the rigid settings, validated with the WorldDef's field names
+RigidSystemDef validated_rigid(const RigidSystemDef& d) {
+  require_count(static_cast<long long>(d.capacity), 0, 1LL << 26, "WorldDef.rigid.capacity");
+  d.contacts.validate("WorldDef.rigid.contacts");
+  return d;
+}
 
+// true when two collider definitions make the same body (shape fields and material)
+bool same_collider(const ColliderDef& a, const ColliderDef& b) {
+  const ColliderShape &x = a.shape, &y = b.shape;
+  return a.sensor == b.sensor && x.type == y.type && x.normal == y.normal && x.offset == y.offset && x.radius == y.radius &&
+         x.half_extents == y.half_extents && x.half_height == y.half_height && x.hull == y.hull && x.mesh == y.mesh &&
+         x.compound == y.compound && a.material.restitution == b.material.restitution &&
+         a.material.friction == b.material.friction;
+}
 
+bool same_pose(const Pose& a, const Pose& b) { return a.position == b.position && a.rotation == b.rotation; }
 
 void require_pose(const Pose& p, std::string_view where) {
   if (!is_finite(p.position)) require_finite(p.position, field_path(where, "position"));
@@ -121,7 +137,8 @@ World::World(const WorldDef& def)
     : settings_(def.stepper),
       gravity_((require_finite(def.gravity, "WorldDef.gravity"), def.gravity)),
       stepper_((def.stepper.validate("WorldDef.stepper"), def.stepper)),
-      particles_(def.particles) {
+      particles_(def.particles),
+      rigid_(validated_rigid(def.rigid)) {
   particles_.forces().gravity = gravity_;
 }
 
@@ -188,8 +205,15 @@ void World::destroy_entity(EntityId e) {
   for (auto& s : systems_) s->on_destroy(e);
   if (particles_.valid(r.particle)) particles_.destroy(r.particle);
   if (!r.emitter.is_null()) particles_.remove_emitter(r.emitter);
+  if (rigid_.valid(r.body)) {
+    rigid_.destroy(r.body);
+    body_owner_[r.body.index] = EntityId{};
+    --entity_bodies_;
+    refresh_body_colliders(false);
+  }
   if (r.collider != kNone) {
     const std::uint32_t i = r.collider;
+    destroy_mirror(colliders_[i]);
     collider_ids_.pool.destroy(colliders_[i].id, "World::destroy_entity collider");
     remove_dense(colliders_, &EntityRecord::collider, i);
     if (i + 1 != world_colliders_.size()) world_colliders_[i] = world_colliders_.back();
@@ -220,6 +244,7 @@ void World::destroy_entity(EntityId e) {
       ++i;
     }
   }
+  forget_pairs(e);
   records_[e.index] = EntityRecord{};
   entities_.destroy(e, "World::destroy_entity");
 }
@@ -237,12 +262,14 @@ const std::string& World::name(EntityId e) const { return record(e, "World::name
 Pose World::pose(EntityId e) const {
   const EntityRecord& r = record(e, "World::pose");
   if (particles_.valid(r.particle)) return Pose{particles_.position(r.particle), r.pose.rotation};
+  if (rigid_.valid(r.body) && r.kinematic == kNone) return rigid_.pose(r.body);
   return r.pose;
 }
 
 Vec3 World::velocity(EntityId e) const {
   const EntityRecord& r = record(e, "World::velocity");
   if (particles_.valid(r.particle)) return particles_.velocity(r.particle);
+  if (rigid_.valid(r.body) && r.kinematic == kNone) return rigid_.velocity_at(r.body, rigid_.pose(r.body).position);
   return r.velocity;
 }
 
@@ -251,6 +278,11 @@ void World::set_pose(EntityId e, const Pose& pose) {
   EntityRecord& r = record(e, "World::set_pose");
   r.pose = pose;
   if (particles_.valid(r.particle)) particles_.set_position(particles_.index_of(r.particle), pose.position);
+  // a body jumps there (and wakes with its island)
+  if (rigid_.valid(r.body)) {
+    rigid_.set_pose(r.body, pose);
+    refresh_body_colliders(false);
+  }
   // a teleported collider does not sweep
   if (r.collider != kNone) world_colliders_[r.collider].begin = world_colliders_[r.collider].end = pose;
   if (r.kinematic != kNone) {
@@ -312,6 +344,9 @@ EmitterId World::add_emitter(EntityId e, const EmitterDef& def) {
 KinematicId World::add_kinematic(EntityId e, const KinematicDef& def) {
   EntityRecord& r = record(e, "World::add_kinematic");
   if (r.kinematic != kNone) throw Error("World::add_kinematic: " + describe(e) + " already has a kinematic");
+  if (rigid_.valid(r.body) && rigid_.type(r.body) != BodyType::Kinematic)
+    throw Error("World::add_kinematic: " + describe(e) + " has a " + std::string(to_string(rigid_.type(r.body))) +
+                " rigid body, which a Kinematic cannot drive (only a kinematic body follows a path)");
   def.validate("kinematic of " + describe(e));
   r.kinematic = static_cast<std::uint32_t>(kinematics_.size());
   KinematicEntry k{e, kinematic_ids_.create(e), def, time_, r.pose, def.path == PathType::Waypoints ? waypoint_length(def) : 0.0};
@@ -324,6 +359,11 @@ KinematicId World::add_kinematic(EntityId e, const KinematicDef& def) {
   // a collider jumps to the path's start instead of sweeping there
   if (r.collider != kNone) world_colliders_[r.collider].begin = world_colliders_[r.collider].end = r.pose;
   kinematics_.push_back(std::move(k));
+  // a kinematic body starts on the path too
+  if (rigid_.valid(r.body)) {
+    rigid_.set_pose(r.body, r.pose);
+    refresh_body_colliders(false);
+  }
   return kinematics_.back().id;
 }
 
@@ -343,6 +383,51 @@ ConstraintId World::add_constraint(EntityId e, const ConstraintDef& def) {
   r.constraint = static_cast<std::uint32_t>(constraints_.size());
   constraints_.push_back({e, d, constraint_ids_.create(e)});
   return constraints_.back().id;
+}
+
+RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
+  EntityRecord& r = record(e, "World::add_rigid_body");
+  if (rigid_.valid(r.body)) throw Error("World::add_rigid_body: " + describe(e) + " already has a rigid body");
+  const std::string where = "rigid body of " + describe(e);
+  // the definition as given (its pose is relative to the entity), then in the world
+  def.validate(where);
+  if (r.kinematic != kNone && def.type != BodyType::Kinematic)
+    throw Error(field_path(where, "type") + ": the entity has a Kinematic, which drives only a kinematic body, got " +
+                std::string(to_string(def.type)));
+  RigidBodyDef d = def;
+  d.pose = compose(r.pose, def.pose);
+  d.pose.rotation = glm::normalize(d.pose.rotation);
+  if (d.name.empty()) d.name = r.name;
+  // (the system appends the body's name to `where`: the entity's, unless the body has its own)
+  const RigidBodyId id =
+      rigid_.create(d, d.name == r.name && !r.name.empty() ? "rigid body of entity " + std::to_string(e.index) : where);
+  if (body_owner_.size() <= id.index) body_owner_.resize(id.index + 1);
+  body_owner_[id.index] = e;
+  r.body = id;
+  ++entity_bodies_;
+  // from now on the entity is where its body is (a path's entity stays on its path)
+  if (r.kinematic == kNone) r.pose = rigid_.pose(id);
+  refresh_body_colliders(false);
+  return id;
+}
+
+bool World::valid(RigidBodyId id) const {
+  return rigid_.valid(id) && id.index < body_owner_.size() && !body_owner_[id.index].is_null();
+}
+
+RigidBodyId World::rigid_body_id(EntityId e) const {
+  const RigidBodyId id = record(e, "World::rigid_body_id").body;
+  return rigid_.valid(id) ? id : RigidBodyId{};
+}
+
+EntityId World::owner(RigidBodyId id) const {
+  if (!rigid_.valid(id))
+    throw Error("World::owner(RigidBodyId): " + std::string(id.is_null() ? "null" : "stale") +
+                " rigid-body handle (index " + std::to_string(id.index) + ", generation " +
+                std::to_string(id.generation) + ")");
+  if (!valid(id)) throw Error("World::owner(RigidBodyId): rigid body " + std::to_string(id.index) +
+                              " belongs to no entity (it stands for a collider, or was made in rigid() directly)");
+  return body_owner_[id.index];
 }
 
 namespace {
@@ -438,7 +523,7 @@ void World::run_kinematics(double t, double dt) {
   }
 }
 
-void World::sync(double /*t*/, double /*dt*/) {
+void World::sync(double /*t*/, double dt) {
   // colliders sweep from last tick's end pose to this tick's
   for (std::size_t i = 0; i < colliders_.size(); ++i) {
     const EntityRecord& r = records_[colliders_[i].owner.index];
@@ -450,10 +535,13 @@ void World::sync(double /*t*/, double /*dt*/) {
     c.velocity = r.velocity;
     c.angular_velocity = r.angular_velocity;
   }
+  // the colliders' stand-ins among the rigid bodies follow them
+  sync_mirrors(dt);
   // the collision world of the tick (validated and flattened once for every client)
   collision_.clear();
   for (std::size_t i = 0; i < world_colliders_.size(); ++i) {
     const EntityId owner = colliders_[i].owner;
+    if (colliders_[i].def.sensor) continue;  // a sensor pushes nothing
     if (!world_colliders_[i].ok()) world_colliders_[i].validate("collider of " + describe(owner));
     collision_.add(world_colliders_[i], owner.index);
   }
@@ -465,6 +553,283 @@ void World::sync(double /*t*/, double /*dt*/) {
   }
   for (const EntityRecord& r : records_)
     if (!r.emitter.is_null()) particles_.set_emitter_pose(r.emitter, compose(r.pose, r.emitter_local));
+}
+
+// ---------------------------------------------------------------------------------------
+// rigid bodies
+
+void World::destroy_mirror(ColliderEntry& c) {
+  if (rigid_.valid(c.mirror)) {
+    mirror_owner_[c.mirror.index] = EntityId{};
+    rigid_.destroy(c.mirror);
+  }
+  c.mirror = RigidBodyId{};
+}
+
+// the entity a body stands for: its own, or the collider's of a stand-in (null for none)
+EntityId World::body_entity(RigidBodyId id) const {
+  if (id.index < body_owner_.size() && !body_owner_[id.index].is_null()) return body_owner_[id.index];
+  if (id.index < mirror_owner_.size()) return mirror_owner_[id.index];
+  return EntityId{};
+}
+
+// the velocities that take kinematic body `id` from its pose now to `target` in dt: the
+// translation over dt, and the rotation q1 q0^-1 as an angle about a fixed axis over dt (a
+// kinematic body's frame is its centre of mass, and it moves at constant velocities, so it
+// ends the step at `target` to rounding)
+void World::drive_body(RigidBodyId id, const Pose& target, double dt) {
+  const Pose now = rigid_.pose(id);
+  const Vec3 v = (target.position - now.position) / dt;
+  Quat dq = glm::normalize(target.rotation * glm::conjugate(now.rotation));
+  if (dq.w < 0) dq = -dq;
+  const Vec3 axis(dq.x, dq.y, dq.z);
+  const double s = glm::length(axis);
+  const Vec3 w = s > 0 ? axis / s * (2 * std::atan2(s, static_cast<double>(dq.w)) / dt) : Vec3(0);
+  rigid_.set_velocity(id, v, w);
+}
+
+// The World's static colliders are the rigid bodies' static geometry: each collider of an
+// entity without a body has a stand-in body with its shape and material, static, or
+// kinematic when a Kinematic drives the entity (planes stay static: a kinematic body needs
+// a volume), remade when the collider's definition changes and moved with its entity. Only
+// once an entity has a body: a world of particles pays nothing.
+void World::sync_mirrors(double dt) {
+  if (entity_bodies_ == 0) return;
+  for (std::size_t i = 0; i < colliders_.size(); ++i) {
+    ColliderEntry& c = colliders_[i];
+    const EntityRecord& r = records_[c.owner.index];
+    const Collider& wc = world_colliders_[i];
+    // what the stand-in should be: none for an entity with a body, or for a sensor
+    const bool wanted = !rigid_.valid(r.body) && !c.def.sensor;
+    const BodyType type =
+        r.kinematic != kNone && c.def.shape.type != ShapeType::Plane ? BodyType::Kinematic : BodyType::Static;
+    if (rigid_.valid(c.mirror) && (!wanted || c.mirror_type != type || !same_collider(c.mirrored, c.def)))
+      destroy_mirror(c);
+    if (!wanted) continue;
+    if (!rigid_.valid(c.mirror)) {
+      // a new stand-in at the start of the tick's sweep
+      RigidBodyDef d;
+      d.name = r.name;
+      d.type = type;
+      d.pose = wc.begin;
+      d.shapes = {{.shape = c.def.shape, .material = c.def.material}};
+      c.mirror = rigid_.create(d, "collider of " + describe(c.owner));
+      if (mirror_owner_.size() <= c.mirror.index) mirror_owner_.resize(c.mirror.index + 1);
+      mirror_owner_[c.mirror.index] = c.owner;
+      c.mirror_type = type;
+      c.mirrored = c.def;
+      c.mirrored_pose = wc.begin;
+    }
+    // static stand-ins jump to their entity's pose; kinematic ones move there over the tick
+    if (type == BodyType::Kinematic) {
+      // a teleported collider (set_pose) jumps there instead of sweeping
+      if (!same_pose(c.mirrored_pose, wc.begin)) rigid_.set_pose(c.mirror, wc.begin);
+      drive_body(c.mirror, wc.end, dt);
+    } else if (!same_pose(c.mirrored_pose, wc.end)) {
+      // a jump moves what rested on it: wake every sleeping body (rare: a user's set_pose)
+      rigid_.set_pose(c.mirror, wc.end);
+      for (std::size_t k = 0; k < rigid_.size(); ++k)
+        if (rigid_.type(rigid_.id_at(k)) == BodyType::Dynamic && !rigid_.awake(rigid_.id_at(k)))
+          rigid_.wake(rigid_.id_at(k));
+    }
+    c.mirrored_pose = wc.end;
+  }
+}
+
+// The bodies' shapes as world colliders (planes, spheres, boxes, capsules; hulls and meshes
+// have no point contact yet): at the end pose, from the begin pose of the tick (`tick`) or
+// without a sweep, with the velocity of the body's material point at each shape's origin.
+void World::refresh_body_colliders(bool tick) {
+  body_colliders_.clear();
+  body_collider_owner_.clear();
+  const std::size_t n = rigid_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const RigidBodyId id = rigid_.id_at(i);
+    const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
+    if (owner.is_null()) continue;  // a collider's stand-in: the collider is there already
+    const Pose end = rigid_.pose(id);
+    const Pose begin = tick && i < body_begin_.size() ? body_begin_[i] : end;
+    const Vec3 w = rigid_.angular_velocity(id);
+    for (const RigidShapeDef& sd : rigid_.shapes(id)) {
+      const ShapeType t = sd.shape.type;
+      if (t != ShapeType::Plane && t != ShapeType::Sphere && t != ShapeType::Box && t != ShapeType::Capsule) continue;
+      Collider c;
+      c.shape = sd.shape;
+      c.material = sd.material;
+      c.begin = compose(begin, sd.local);
+      c.end = compose(end, sd.local);
+      c.velocity = rigid_.velocity_at(id, c.end.position);
+      c.angular_velocity = w;
+      body_colliders_.push_back(c);
+      body_collider_owner_.push_back(owner.index);
+    }
+  }
+}
+
+// The rigid stage: kinematic bodies driven to their paths' poses, one step of every body
+// under the World's gravity, the simulated entities' poses from their bodies, and the
+// bodies' shapes added to the tick's collision world (so particles and soft bodies meet this
+// tick's bodies).
+void World::step_rigid(double t, double dt) {
+  touch_begin_.clear(), touch_end_.clear(), sensor_enter_.clear(), sensor_leave_.clear();
+  if (rigid_.size() == 0) return;
+  // a kinematic body on a path reaches the path's pose at the end of the tick
+  for (const KinematicEntry& k : kinematics_) {
+    const EntityRecord& r = records_[k.owner.index];
+    if (rigid_.valid(r.body)) drive_body(r.body, r.pose, dt);
+  }
+  // where every body starts, for the sweeps
+  const std::size_t n = rigid_.size();
+  if (body_begin_.size() < n) body_begin_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) body_begin_[i] = rigid_.pose(rigid_.id_at(i));
+  try {
+    rigid_.step(dt, gravity_);
+  } catch (const Error& err) {
+    // a body whose state stopped being finite stops the world, naming its entity and the time
+    for (std::size_t i = 0; i < n; ++i) {
+      const RigidBodyId id = rigid_.id_at(i);
+      const Pose p = rigid_.pose(id);
+      const bool finite = is_finite(p.position) && is_finite(rigid_.linear_velocity(id)) &&
+                          is_finite(rigid_.angular_velocity(id)) && std::isfinite(p.rotation.w) &&
+                          std::isfinite(p.rotation.x) && std::isfinite(p.rotation.y) && std::isfinite(p.rotation.z);
+      if (finite) continue;
+      const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
+      failure_ = (owner.is_null() ? std::string("a rigid body") : "the rigid body of " + describe(owner)) +
+                 " became non-finite in the tick to t = " + format_value(t + dt) + " s (" + err.what() + ")";
+      throw Error("World::tick: " + failure_);
+    }
+    throw;
+  }
+  // whichever system simulates an entity writes its pose: the body, unless a path drives it
+  for (std::size_t i = 0; i < n; ++i) {
+    const RigidBodyId id = rigid_.id_at(i);
+    const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
+    if (owner.is_null()) continue;
+    EntityRecord& r = records_[owner.index];
+    if (r.kinematic != kNone || rigid_.type(id) == BodyType::Static) continue;
+    r.pose = rigid_.pose(id);
+    r.velocity = rigid_.velocity_at(id, r.pose.position);
+    r.angular_velocity = rigid_.angular_velocity(id);
+  }
+  // this tick's bodies join the collision world
+  refresh_body_colliders(true);
+  for (std::size_t k = 0; k < body_colliders_.size(); ++k) {
+    if (!body_colliders_[k].ok()) {
+      const std::uint32_t e = body_collider_owner_[k];
+      body_colliders_[k].validate("rigid body shape of entity " + std::to_string(e) +
+                                  (records_[e].name.empty() ? "" : " '" + records_[e].name + "'"));
+    }
+    collision_.add(body_colliders_[k], body_collider_owner_[k]);
+  }
+  // what began and stopped touching, and what entered and left the sensors
+  update_touch_events();
+  update_sensor_events();
+}
+
+namespace {
+std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; }
+}  // namespace
+
+// Touch events in the manner of Box2D v3's contact begin/end events: an entity pair touches
+// in a tick when a manifold between their bodies (or a body and a collider's stand-in) was
+// pushed by the solver; pairs whose bodies sleep are not stepped and stay touching. This
+// tick's pairs against last tick's give the begin and end events (sorted keys, merged).
+void World::update_touch_events() {
+  std::swap(touching_, touching_prev_);
+  touching_.clear();
+  for (std::size_t k = 0; k < rigid_.manifold_count(); ++k) {
+    const RigidManifoldInfo m = rigid_.manifold(k);
+    if (!(m.max_normal_impulse > 0)) continue;  // speculative: no contact yet
+    EntityId a = body_entity(m.a), b = body_entity(m.b);
+    if (a.is_null() || b.is_null() || a == b) continue;
+    Vec3 n = m.normal;
+    if (a.index > b.index) std::swap(a, b), n = -n;
+    touching_.push_back({pair_key(a.index, b.index), n, m.point, m.approach_speed});
+  }
+  // one record per pair: the fastest approach (ties by manifold order, kept by stable sort)
+  auto by_key = [](const TouchRecord& x, const TouchRecord& y) {
+    return x.key != y.key ? x.key < y.key : x.approach > y.approach;
+  };
+  std::sort(touching_.begin(), touching_.end(), by_key);
+  touching_.erase(std::unique(touching_.begin(), touching_.end(),
+                              [](const TouchRecord& x, const TouchRecord& y) { return x.key == y.key; }),
+                  touching_.end());
+  // a pair of last tick that a sleeping body is in goes on touching
+  auto sleeping = [&](std::uint32_t e) {
+    const RigidBodyId id = records_[e].body;
+    return rigid_.valid(id) && rigid_.type(id) == BodyType::Dynamic && !rigid_.awake(id);
+  };
+  const std::size_t fresh = touching_.size();
+  for (const TouchRecord& r : touching_prev_) {
+    const auto at = std::lower_bound(touching_.begin(), touching_.begin() + static_cast<std::ptrdiff_t>(fresh), r,
+                                     [](const TouchRecord& x, const TouchRecord& y) { return x.key < y.key; });
+    const bool present = at != touching_.begin() + static_cast<std::ptrdiff_t>(fresh) && at->key == r.key;
+    if (!present && (sleeping(static_cast<std::uint32_t>(r.key >> 32)) || sleeping(static_cast<std::uint32_t>(r.key))))
+      touching_.push_back(r);
+  }
+  std::sort(touching_.begin(), touching_.end(), by_key);
+  // begin: now and not before; end: before and not now
+  auto entity = [&](std::uint32_t i) { return EntityId{i, entities_.generation(i)}; };
+  std::size_t i = 0, j = 0;
+  while (i < touching_.size() || j < touching_prev_.size()) {
+    if (j == touching_prev_.size() || (i < touching_.size() && touching_[i].key < touching_prev_[j].key)) {
+      const TouchRecord& r = touching_[i++];
+      touch_begin_.push_back({entity(static_cast<std::uint32_t>(r.key >> 32)), entity(static_cast<std::uint32_t>(r.key)),
+                              r.normal, r.point, r.approach});
+    } else if (i == touching_.size() || touching_prev_[j].key < touching_[i].key) {
+      const std::uint64_t k = touching_prev_[j++].key;
+      touch_end_.push_back({entity(static_cast<std::uint32_t>(k >> 32)), entity(static_cast<std::uint32_t>(k))});
+    } else {
+      ++i, ++j;
+    }
+  }
+}
+
+// Sensor events: a body's entity is in a sensor while one of its shapes overlaps the
+// sensor's shape at the end of the tick (bounds first, then the narrow phase with no
+// speculative margin); this tick's set against last tick's gives enter and leave.
+void World::update_sensor_events() {
+  std::swap(sensing_, sensing_prev_);
+  sensing_.clear();
+  for (std::size_t i = 0; i < colliders_.size(); ++i) {
+    if (!colliders_[i].def.sensor) continue;
+    const Collider& sc = world_colliders_[i];
+    const std::uint32_t sensor = colliders_[i].owner.index;
+    const Aabb sb = bounds(sc.shape, sc.end);
+    for (std::size_t k = 0; k < body_colliders_.size(); ++k) {
+      const Collider& bc = body_colliders_[k];
+      const std::uint32_t visitor = body_collider_owner_[k];
+      if (visitor == sensor || (sc.shape.type == ShapeType::Plane && bc.shape.type == ShapeType::Plane)) continue;
+      if (!bounds(bc.shape, bc.end).overlaps(sb)) continue;
+      const Manifold m = collide(sc.shape, sc.end, bc.shape, bc.end, {.speculative_margin = 0});
+      bool overlap = false;
+      for (int p = 0; p < m.count; ++p) overlap |= m.points[p].depth >= 0;
+      if (overlap) sensing_.push_back(pair_key(sensor, visitor));
+    }
+  }
+  std::sort(sensing_.begin(), sensing_.end());
+  sensing_.erase(std::unique(sensing_.begin(), sensing_.end()), sensing_.end());
+  // enter: now and not before; leave: before and not now
+  auto event = [&](std::uint64_t k) {
+    const auto a = static_cast<std::uint32_t>(k >> 32), b = static_cast<std::uint32_t>(k);
+    return SensorEvent{{a, entities_.generation(a)}, {b, entities_.generation(b)}};
+  };
+  std::size_t i = 0, j = 0;
+  while (i < sensing_.size() || j < sensing_prev_.size()) {
+    if (j == sensing_prev_.size() || (i < sensing_.size() && sensing_[i] < sensing_prev_[j]))
+      sensor_enter_.push_back(event(sensing_[i++]));
+    else if (i == sensing_.size() || sensing_prev_[j] < sensing_[i])
+      sensor_leave_.push_back(event(sensing_prev_[j++]));
+    else
+      ++i, ++j;
+  }
+}
+
+// a destroyed entity's pairs end without an event
+void World::forget_pairs(EntityId e) {
+  auto involves = [&](std::uint64_t k) { return (k >> 32) == e.index || (k & 0xffffffffu) == e.index; };
+  std::erase_if(touching_, [&](const TouchRecord& r) { return involves(r.key); });
+  std::erase_if(sensing_, involves);
 }
 
 // mass-weighted projection of each distance constraint (Jakobsen, "Advanced character
@@ -525,7 +890,8 @@ void World::tick(double t, double dt) {
   profile_.sync = sw.seconds();
   run_systems(WorldStage::Collide, t, dt);
   stage_done(WorldStage::Collide);
-  // 3. rigid: systems only, for now
+  // 3. rigid: the bodies, then their shapes join the collision world
+  step_rigid(t, dt);
   run_systems(WorldStage::Rigid, t, dt);
   stage_done(WorldStage::Rigid);
   // 4. particles: emit, integrate, collide, recycle, under the world's gravity
@@ -566,6 +932,7 @@ std::uint64_t World::hash() const {
     const Pose& p = records_[k.owner.index].pose;
     h = hash_bytes(&p.position, sizeof(p.position), h);
   }
+  if (entity_bodies_ > 0) h = rigid_.hash() ^ (h * 0x9e3779b97f4a7c15ull);
   for (const auto& s : systems_) h = s->hash(h);
   return h;
 }
@@ -573,6 +940,7 @@ std::uint64_t World::hash() const {
 void World::draw(DebugDraw& draw, const DrawFlags& flags) const {
   // colliders (shapes, bounds), forcers, particles, then every system
   for (const Collider& c : world_colliders_) c.draw(draw, colors::grey, flags);
+  draw_rigid_bodies(draw, flags);
   for (const Forcer& f : world_forcers_) f.draw(draw, colors::cyan, flags);
   particles_.draw(draw, flags, particles_.size() <= 2000);
   // the entities' distance constraints
@@ -582,6 +950,26 @@ void World::draw(DebugDraw& draw, const DrawFlags& flags) const {
       if (particles_.valid(pa) && particles_.valid(pb)) draw.line(particles_.position(pa), particles_.position(pb), colors::yellow);
     }
   for (const auto& s : systems_) s->draw(*this, draw, flags);
+}
+
+void World::draw_rigid_bodies(DebugDraw& draw, const DrawFlags& flags, const RigidBodyColors& colors) const {
+  // each shape of each entity's body, at the body's pose now
+  for (std::size_t i = 0; i < rigid_.size(); ++i) {
+    const RigidBodyId id = rigid_.id_at(i);
+    if (!valid(id)) continue;  // a collider's stand-in: drawn as its collider
+    const BodyType type = rigid_.type(id);
+    const Color col = type == BodyType::Static      ? colors.fixed
+                      : type == BodyType::Kinematic ? colors.kinematic
+                      : rigid_.awake(id)            ? colors.awake
+                                                    : colors.asleep;
+    const Pose p = rigid_.pose(id);
+    for (const RigidShapeDef& sd : rigid_.shapes(id)) {
+      Collider c;
+      c.shape = sd.shape;
+      c.begin = c.end = compose(p, sd.local);
+      c.draw(draw, col, flags);
+    }
+  }
 }
 
 }  // namespace pba

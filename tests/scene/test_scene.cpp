@@ -159,8 +159,8 @@ TEST(BadFiles, UnknownFieldsAndVersions) {
   EXPECT_EQ(m.rfind("scenes/x.json: /colliders/0/restitutoin: unknown field (allowed here: ", 0), 0u) << m;
   EXPECT_EQ(error_of(R"({"version": 2})"),
             "scenes/x.json: /version: this build reads scene format version 1, the file is version 2");
-  EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": []})"),
-            "scenes/x.json: /rigid_bodies: not supported yet by this build (reserved for a later module)");
+  EXPECT_EQ(error_of(R"({"version": 1, "skeletons": []})"),
+            "scenes/x.json: /skeletons: not supported yet by this build (reserved for a later module)");
   EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "sphere", "normal": [0, 1, 0]}]})"),
             "scenes/x.json: /colliders/0/normal: only for \"type\": \"plane\"");
   EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "box", "half_extents": [1, -1, 1]}]})"),

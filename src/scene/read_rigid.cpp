@@ -1,0 +1,108 @@
+// The scene reader's rigid-body module (docs/scene-format.md): "settings.rigid" (solver and
+// contact settings) and one item of "rigid_bodies" (a RigidBody component of a new entity).
+#include <string>
+
+#include "json_node.h"
+
+namespace pba::scene_detail {
+
+void read_rigid_settings(const Node& n, RigidSystemDef& def) {
+  n.allow_only({"solver", "substeps", "iterations", "manifold_iterations", "contact_hertz", "damping_ratio",
+                "push_out_speed", "baumgarte", "linear_slop", "speculative_distance", "restitution_threshold",
+                "friction_mix", "restitution_mix", "warm_starting", "sleep", "sleep_linear", "sleep_angular",
+                "time_to_sleep", "capacity"});
+  ContactSettings& c = def.contacts;
+  c.solver = n.choice<RigidSolverType>(
+      "solver", {{"soft-step", RigidSolverType::SoftStep}, {"sequential-impulse", RigidSolverType::SequentialImpulse}},
+      c.solver);
+  if (n.has("substeps")) c.substeps = static_cast<int>(n.at("substeps").integer(1, 64));
+  if (n.has("iterations")) c.iterations = static_cast<int>(n.at("iterations").integer(1, 1000));
+  if (n.has("manifold_iterations")) c.manifold_iterations = static_cast<int>(n.at("manifold_iterations").integer(1, 16));
+  c.contact_hertz = n.positive("contact_hertz", c.contact_hertz);
+  c.damping_ratio = n.non_negative("damping_ratio", c.damping_ratio);
+  c.push_out_speed = n.positive("push_out_speed", c.push_out_speed);
+  c.baumgarte = n.in_range("baumgarte", 0, 1, c.baumgarte);
+  c.linear_slop = n.non_negative("linear_slop", c.linear_slop);
+  c.speculative_distance = n.non_negative("speculative_distance", c.speculative_distance);
+  c.restitution_threshold = n.non_negative("restitution_threshold", c.restitution_threshold);
+  const std::initializer_list<std::pair<const char*, MixRule>> rules = {{"geometric-mean", MixRule::GeometricMean},
+                                                                        {"minimum", MixRule::Minimum},
+                                                                        {"maximum", MixRule::Maximum},
+                                                                        {"average", MixRule::Average},
+                                                                        {"product", MixRule::Product}};
+  c.friction_mix = n.choice<MixRule>("friction_mix", rules, c.friction_mix);
+  c.restitution_mix = n.choice<MixRule>("restitution_mix", rules, c.restitution_mix);
+  c.warm_starting = n.flag("warm_starting", c.warm_starting);
+  c.sleep = n.flag("sleep", c.sleep);
+  c.sleep_linear = n.non_negative("sleep_linear", c.sleep_linear);
+  c.sleep_angular = n.non_negative("sleep_angular", c.sleep_angular);
+  c.time_to_sleep = n.non_negative("time_to_sleep", c.time_to_sleep);
+  if (n.has("capacity")) def.capacity = static_cast<std::size_t>(n.at("capacity").integer(0, 1LL << 26));
+}
+
+namespace {
+
+// one item of a body's "shapes": the shape (the collider reader's, capsules too), its
+// placement in the body frame, density and material
+RigidShapeDef read_rigid_shape(const Node& n) {
+  n.allow_only({"type", "normal", "offset", "radius", "half_extents", "half_height", "position", "rotation",
+                "rotation_deg", "density", "restitution", "friction", "rolling_resistance"});
+  RigidShapeDef s;
+  s.shape = read_shape(n, true);
+  s.local = read_pose(n);
+  s.density = n.positive("density", s.density);
+  s.material.restitution = n.in_range("restitution", 0, 1, s.material.restitution);
+  s.material.friction = n.non_negative("friction", s.material.friction);
+  s.rolling_resistance = n.non_negative("rolling_resistance", s.rolling_resistance);
+  return s;
+}
+
+}  // namespace
+
+void read_rigid_body(const Node& n, World& w) {
+  n.allow_only({"name", "type", "position", "rotation", "rotation_deg", "linear_velocity", "angular_velocity",
+                "shapes", "mass", "linear_damping", "angular_damping", "gravity_scale", "bullet", "kinematic"});
+  RigidBodyDef d;
+  d.type = n.choice<BodyType>(
+      "type", {{"dynamic", BodyType::Dynamic}, {"kinematic", BodyType::Kinematic}, {"static", BodyType::Static}},
+      d.type);
+  d.linear_velocity = n.vec("linear_velocity", d.linear_velocity);
+  d.angular_velocity = n.vec("angular_velocity", d.angular_velocity);
+  // the shapes: at least one; planes only on static bodies
+  const Node shapes = n.at("shapes");
+  shapes.require_array();
+  if (shapes.size() == 0) shapes.fail("a body needs at least one shape, got none");
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    const Node s = shapes.item(i);
+    s.require_object();
+    d.shapes.push_back(read_rigid_shape(s));
+    if (d.type != BodyType::Static && d.shapes.back().shape.type == ShapeType::Plane)
+      s.at("type").fail("a plane has no volume, so only a \"static\" body can have one");
+  }
+  // a given mass scales the shapes' mass properties (density ratios kept): m I / M about the same centre
+  if (n.has("mass")) {
+    if (d.type != BodyType::Dynamic) n.at("mass").fail("only for a \"dynamic\" body");
+    const double m = n.positive("mass", 1);
+    RigidMass total;
+    for (std::size_t k = 0; k < d.shapes.size(); ++k) {
+      const RigidMass part = RigidMass::of_shape(d.shapes[k].shape, d.shapes[k].density, d.shapes[k].local,
+                                                 shapes.item(k).where());
+      total = k == 0 ? part : total + part;
+    }
+    const double f = m / total.mass;
+    d.mass = RigidMass{m, total.center, total.inertia * f};
+  }
+  d.linear_damping = n.non_negative("linear_damping", d.linear_damping);
+  d.angular_damping = n.non_negative("angular_damping", d.angular_damping);
+  d.gravity_scale = n.num("gravity_scale", d.gravity_scale);
+  d.bullet = n.flag("bullet", d.bullet);
+  // the entity at the item's pose, its kinematic path first (a path drives a kinematic body)
+  const EntityId e = make_entity(n, w);
+  if (n.has("kinematic") && d.type != BodyType::Kinematic)
+    n.at("kinematic").fail("a path drives only a \"kinematic\" body (this one is \"" +
+                           std::string(to_string(d.type)) + "\")");
+  read_common(n, w, e);
+  w.add_rigid_body(e, d);
+}
+
+}  // namespace pba::scene_detail

@@ -1,0 +1,36 @@
+// Zero allocations per World tick with rigid bodies in steady state: the rigid stage (paths
+// driving kinematic bodies, the colliders' stand-ins, the step, the entities' poses, the
+// bodies' shapes in the collision world) and particles landing on the bodies, counted by a
+// replaced operator new.
+#include <gtest/gtest.h>
+
+#include "pba/world.h"
+
+#include "alloc_count.h"
+
+using pba::test_support::g_allocations;
+
+TEST(WorldRigidAlloc, TicksWithBodiesNeverAllocate) {
+  pba::World w;
+  const pba::EntityId ground = w.create_entity({.name = "ground"});
+  w.add_collider(ground, {.shape = pba::ColliderShape::plane({0, 1, 0}, 0)});
+  // a kinematic collider (its stand-in is a kinematic body) and a kinematic body on paths
+  const pba::EntityId sweeper = w.create_entity({.name = "sweeper", .pose = {{-6, 0.2, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_collider(sweeper, {.shape = pba::ColliderShape::box({0.1, 0.2, 3})});
+  w.add_kinematic(sweeper, {.path = pba::PathType::Circular, .center = {0, 0.2, 0}, .radius = 6, .angular_speed = 0.3});
+  const pba::EntityId paddle = w.create_entity({.name = "paddle", .pose = {{0, 3, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_kinematic(paddle, {.path = pba::PathType::Motor, .spin = {0, 1, 0}});
+  w.add_rigid_body(paddle, {.type = pba::BodyType::Kinematic, .shapes = {{.shape = pba::ColliderShape::box({1, 0.1, 0.2})}}});
+  // boxes and balls, and particles over them
+  for (int i = 0; i < 20; ++i) {
+    const pba::EntityId e = w.create_entity({.pose = {{(i % 5) * 1.2 - 2.4, 0.5 + (i / 5) * 1.1, 0}, pba::Quat(1, 0, 0, 0)}});
+    w.add_rigid_body(e, {.shapes = {{.shape = i % 2 ? pba::ColliderShape::sphere(0.4) : pba::ColliderShape::box({0.4, 0.4, 0.4})}}});
+    const pba::EntityId p = w.create_entity({});
+    w.add_particle(p, {.position = {(i % 5) * 1.2 - 2.4, 6, 0.1}, .radius = 0.03});
+  }
+  for (int k = 0; k < 120; ++k) w.step();
+  const long long before = g_allocations.load();
+  for (int k = 0; k < 240; ++k) w.step();
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_GT(w.body_colliders().size(), 20u);
+}
