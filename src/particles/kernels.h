@@ -297,9 +297,10 @@ PBA_INLINE int collide_plane(int n, const float* ox, const float* oy, const floa
   return collide_plane_t<false>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
 }
 
-// spheres and boxes: the collide module's swept point contact (collide/point_contact.h)
-// finds the contact plane of each particle's path, then the shared response handles it.
-// A particle whose path enters the shape is caught at any speed.
+// spheres, boxes, capsules, hulls, meshes and compounds: the collide module's swept point
+// contact (collide/point_contact.h) finds the contact plane of each particle's path, then
+// the shared response handles it. A particle whose path enters the shape is caught at
+// any speed.
 template <bool (*Contact)(const ColliderParams&, float, float, float, float, float, float, float,
                           SweptContact<float>&)>
 PBA_INLINE int collide_swept(int n, const float* ox, const float* oy, const float* oz, const float* ovx,
@@ -344,7 +345,11 @@ PBA_INLINE int collide_block(int n, const float* ox, const float* oy, const floa
         break;
       case ShapeType::Hull:
       case ShapeType::Mesh:
-      case ShapeType::Compound: break;  // refused when the collider entered the CollisionWorld
+      case ShapeType::Compound:
+        // the generic path: out of line, in double (collide/point_contact_shapes.cpp)
+        count += collide_swept<swept_generic<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c,
+                                                     threshold, h, bad);
+        break;
     }
   }
   return count;
