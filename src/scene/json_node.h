@@ -214,6 +214,9 @@ void read_common(const Node& n, World& w, EntityId e);
 void read_settings(const Node& n, WorldDef& def);
 /// One item of "colliders" (read_world.cpp).
 void read_collider(const Node& n, World& w);
+/// A collider's shape: its "type" and that type's fields (read_shapes.cpp). A compound's
+/// child (`child`) is a sphere, box, capsule, hull or compound, nested `depth` deep.
+ColliderShape read_shape(const Node& n, bool child, int depth);
 /// One item of "particles" (read_particles.cpp).
 void read_particle(const Node& n, World& w);
 /// One item of "emitters" (read_particles.cpp).

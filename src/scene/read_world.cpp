@@ -148,27 +148,10 @@ void read_settings(const Node& n, WorldDef& def) {
 
 void read_collider(const Node& n, World& w) {
   n.allow_only({"name", "type", "position", "rotation", "rotation_deg", "normal", "offset", "radius",
-                "half_extents", "restitution", "friction", "kinematic"});
+                "half_extents", "half_height", "points", "vertices", "triangles", "children", "restitution",
+                "friction", "kinematic"});
   ColliderDef c;
-  c.shape.type = n.required_choice<ShapeType>(
-      "type", {{"plane", ShapeType::Plane}, {"sphere", ShapeType::Sphere}, {"box", ShapeType::Box}});
-  // shape fields belong to one type each
-  auto only_for = [&](const char* key, ShapeType t, const char* type_name) {
-    if (n.has(key) && c.shape.type != t) n.at(key).fail(std::string("only for \"type\": \"") + type_name + "\"");
-  };
-  only_for("normal", ShapeType::Plane, "plane");
-  only_for("offset", ShapeType::Plane, "plane");
-  only_for("radius", ShapeType::Sphere, "sphere");
-  only_for("half_extents", ShapeType::Box, "box");
-  c.shape.normal = n.nonzero_vec("normal", c.shape.normal);
-  c.shape.offset = n.num("offset", c.shape.offset);
-  if (c.shape.type == ShapeType::Sphere) c.shape.radius = n.positive("radius", c.shape.radius);
-  if (n.has("half_extents")) {
-    c.shape.half_extents = n.at("half_extents").vec3();
-    for (int i = 0; i < 3; ++i)
-      if (!(c.shape.half_extents[i] > 0))
-        n.at("half_extents").item(i).fail("must be > 0, got " + format_value(c.shape.half_extents[i]));
-  }
+  c.shape = read_shape(n, false, 0);  // read_shapes.cpp
   c.material.restitution = n.in_range("restitution", 0, 1, c.material.restitution);
   c.material.friction = n.non_negative("friction", c.material.friction);
   const EntityId e = make_entity(n, w);
