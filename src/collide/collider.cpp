@@ -3,6 +3,7 @@
 #include <limits>
 #include <string>
 
+#include "pba/collide/broad_phase.h"
 #include "pba/collide/collider.h"
 
 namespace pba {
@@ -170,47 +171,11 @@ void Collider::draw(DebugDraw& draw, Color c, const DrawFlags& flags) const {
         draw.plane(n, shape.offset + glm::dot(n, end.position), 10.0, c);
         break;
       }
-      case ShapeType::Sphere: draw.sphere(end.position, shape.radius, c); break;
-      case ShapeType::Box: draw.box(end.position, shape.half_extents, end.rotation, c); break;
-      case ShapeType::Capsule: {
-        const Vec3 axis = end.rotation * Vec3(0, shape.half_height, 0);
-        draw.capsule(end.position - axis, end.position + axis, shape.radius, c);
-        break;
-      }
-      case ShapeType::Hull:
-      case ShapeType::Mesh:
-      case ShapeType::Compound: draw_body(draw, shape, end, c); break;
+      default: draw_body(draw, shape, end, c); break;  // the solids
     }
   }
   // world bounds of the solids (a plane's are unbounded)
-  if (flags.aabbs && shape.type != ShapeType::Plane) {
-    Vec3 half(shape.radius);
-    if (shape.type == ShapeType::Box) {
-      // |R| h: the extent of the rotated box along each world axis
-      const Mat3 r = glm::mat3_cast(glm::normalize(end.rotation));
-      for (int i = 0; i < 3; ++i)
-        half[i] = std::abs(r[0][i]) * shape.half_extents.x + std::abs(r[1][i]) * shape.half_extents.y +
-                  std::abs(r[2][i]) * shape.half_extents.z;
-    } else if (shape.type == ShapeType::Capsule) {
-      const Vec3 axis = end.rotation * Vec3(0, shape.half_height, 0);
-      half = glm::abs(axis) + Vec3(shape.radius);
-    }
-    Vec3 lo = end.position - half, hi = end.position + half;
-    if (shape.type == ShapeType::Hull || shape.type == ShapeType::Mesh || shape.type == ShapeType::Compound) {
-      const Aabb b = bounds(shape, end);
-      lo = b.lo, hi = b.hi;
-    }
-    for (int a = 0; a < 3; ++a)
-      for (int s1 = 0; s1 < 2; ++s1)
-        for (int s2 = 0; s2 < 2; ++s2) {
-          Vec3 p0 = lo, p1 = lo;
-          const int b = (a + 1) % 3, cc = (a + 2) % 3;
-          p1[a] = hi[a];
-          p0[b] = p1[b] = s1 ? hi[b] : lo[b];
-          p0[cc] = p1[cc] = s2 ? hi[cc] : lo[cc];
-          draw.line(p0, p1, c);
-        }
-  }
+  if (flags.aabbs && shape.type != ShapeType::Plane) draw_box_edges(draw, bounds(shape, end), c);
 }
 
 }  // namespace pba
