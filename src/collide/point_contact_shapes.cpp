@@ -279,10 +279,42 @@ void set_point(const Collider& c, const Pose& p, const Vec3& n, double depth, co
   frame_velocity(c, p.position, x, out.ux, out.uy, out.uz);
 }
 
-// Hulls, now: the exact signed distance (the deepest face inside, the closest point
-// outside: point_distance), the contact when it is under the thickness
+// Hulls, now: the exact signed distance, the contact when it is under the thickness. The
+// most separating face plane first: at or beyond the thickness, no contact (the distance
+// is at least that); inside, that face; outside with the foot of the point inside that
+// face, the foot is the closest point of the convex hull. Only the rest (near an edge or a
+// corner) takes point_distance's search over the faces.
 bool hull_contact(const Collider& c, const Vec3& x, double th, double f, PointContact<double>& out) {
+  const ConvexHull& h = *c.shape.hull;
+  const auto faces = h.faces();
   const Pose p = pose_at(c, f);
+  const Vec3 q = apply_inverse(p, x);
+  std::size_t best = 0;
+  double sep = -kInf;
+  for (std::size_t k = 0; k < faces.size(); ++k) {
+    const double s = glm::dot(faces[k].normal, q) - faces[k].offset;
+    if (s > sep) sep = s, best = k;
+  }
+  if (!(sep < th)) return false;
+  // the foot on that face, inside its loop (counter-clockwise seen from outside)
+  const Vec3 n = faces[best].normal;
+  bool on_face = sep <= 0;
+  if (!on_face) {
+    const auto v = h.vertices();
+    const auto e = h.edges();
+    const Vec3 foot = q - sep * n;
+    on_face = true;
+    std::uint32_t k = faces[best].edge;
+    do {
+      const Vec3 a = v[e[k].origin], b = v[e[e[k].next].origin];
+      if (glm::dot(glm::cross(b - a, foot - a), n) < 0) on_face = false;
+      k = e[k].next;
+    } while (k != faces[best].edge && on_face);
+  }
+  if (on_face) {
+    set_point(c, p, p.rotation * n, th - sep, x, out);
+    return true;
+  }
   const PointDistance d = point_distance(c.shape, p, x);
   if (!(d.distance < th)) return false;
   set_point(c, p, d.normal, th - d.distance, x, out);
