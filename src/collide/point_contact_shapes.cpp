@@ -191,22 +191,31 @@ bool in_triangle(const TriangleMesh& mesh, std::uint32_t t, const Vec3& x) {
 
 // Meshes, swept: in the mesh's frame, every triangle near the path (the BVH query with
 // the path's bounds grown by r) is tried on the side of its plane where the path starts.
-// A path that crosses the plane moved out by r with its foot inside the triangle, or whose
-// centre crosses the triangle itself, hits its face at that time (the earliest over the
-// triangles; nothing passes through a triangle at any speed, Ericson 2005, 5.3.6 for the
-// ray and triangle). Otherwise the end point's nearest feature within r gives the contact
-// (the deepest over the triangles), with the face normal on internal edges (no ghost
-// normals; TriangleMesh::edge_flags). Ties go to the lower triangle index.
+// First, a particle that starts within r of a triangle (touching it already, or pushed
+// into it by another collider) leaves the deepest of those, so a particle wedged between
+// the mesh and another shape cannot be walked through the mesh step by step. Else a path
+// that crosses a triangle's plane moved out by r with its foot inside the triangle, or
+// whose centre crosses the triangle itself, hits that face (the earliest over the
+// triangles: nothing passes through a triangle at any speed; Ericson 2005, 5.3.6 for the
+// ray and triangle). Else the end point's nearest feature within r gives the contact (the
+// deepest). Inside a face, and on edges that the mesh marks flat or concave, the normal
+// is the face's (no ghost normals on internal edges; TriangleMesh::edge_flags). Ties go
+// to the lower triangle index.
 bool mesh_swept(const Collider& c, const Vec3& p0, const Vec3& p1, double r, SweptContact<double>& out) {
   const TriangleMesh& mesh = *c.shape.mesh;
   const Vec3 l0 = apply_inverse(c.begin, p0), l1 = apply_inverse(c.end, p1), dl = l1 - l0;
   const Aabb box = Aabb{glm::min(l0, l1), glm::max(l0, l1)}.grown(r * (1 + 1e-9) + 1e-12);
   const auto v = mesh.vertices();
-  // the earliest face hit, and the deepest end contact
-  double t_hit = kInf, best_gap = kInf;
-  std::uint32_t t_tri = 0, g_tri = 0;
-  Vec3 t_m(0.0), t_foot(0.0), g_m(0.0), g_foot(0.0);
-  double t_g0 = 0, t_g1 = 0;
+  // the deepest end contact of those touched at the start (0) and of the others (1), and
+  // the earliest face hit
+  struct Near {
+    double gap = kInf;
+    std::uint32_t tri = 0;
+    Vec3 m{0.0}, foot{0.0};
+  } near[2];
+  double t_hit = kInf, t_g0 = 0, t_g1 = 0;
+  std::uint32_t t_tri = 0;
+  Vec3 t_m(0.0), t_foot(0.0);
   mesh.query(box, [&](std::uint32_t t) {
     // the side the path comes from (on the plane: the side it moves away from)
     const Vec3 n = mesh.normal(t), a = v[mesh.triangles()[t][0]];
@@ -229,14 +238,19 @@ bool mesh_swept(const Collider& c, const Vec3& p0, const Vec3& p1, double r, Swe
     Vec3 gm, foot;
     double gap;
     if (!triangle_near(mesh, t, l1, side, r, gm, foot, gap)) return;
-    if (gap < best_gap || (gap == best_gap && t < g_tri)) best_gap = gap, g_tri = t, g_m = gm, g_foot = foot;
+    Near& k = near[g0 < r ? 0 : 1];
+    if (gap < k.gap || (gap == k.gap && t < k.tri)) k.gap = gap, k.tri = t, k.m = gm, k.foot = foot;
   });
+  if (near[0].gap < r) {
+    set_swept(c, near[0].m, near[0].foot, -1.0, near[0].gap - r, p1, out);
+    return true;
+  }
   if (t_hit <= 1) {
     set_swept(c, t_m, t_foot, t_g0 - r, t_g1 - r, p1, out);
     return true;
   }
-  if (!(best_gap < r)) return false;
-  set_swept(c, g_m, g_foot, -1.0, best_gap - r, p1, out);
+  if (!(near[1].gap < r)) return false;
+  set_swept(c, near[1].m, near[1].foot, -1.0, near[1].gap - r, p1, out);
   return true;
 }
 

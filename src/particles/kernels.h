@@ -319,14 +319,23 @@ PBA_INLINE int collide_swept(int n, const float* ox, const float* oy, const floa
   return count;
 }
 
-// every collider against one block, in the order given
+// every collider against one block, in the order given, the triangle meshes last. A mesh
+// is a two-sided surface with no inside: a particle that another surface pushed into it
+// (wedged between the two) is pushed out of it at the end of each step, so the other
+// surface's response, which replays the step from its start, cannot walk it through the
+// mesh step by step
 PBA_INLINE int collide_block(int n, const float* ox, const float* oy, const float* oz, const float* ovx,
                              const float* ovy, const float* ovz, float* x, float* y, float* z, float* vx, float* vy,
                              float* vz, const float* radius, const ColliderParams* colliders,
                              std::size_t n_colliders, float threshold, float h, int& bad) {
   int count = 0;
+  bool meshes = false;
   for (std::size_t ci = 0; ci < n_colliders; ++ci) {
     const ColliderParams& c = colliders[ci];
+    if (c.type == ShapeType::Mesh) {
+      meshes = true;
+      continue;
+    }
     switch (c.type) {
       case ShapeType::Plane:
         count += collide_plane(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
@@ -352,6 +361,10 @@ PBA_INLINE int collide_block(int n, const float* ox, const float* oy, const floa
         break;
     }
   }
+  for (std::size_t ci = 0; meshes && ci < n_colliders; ++ci)
+    if (colliders[ci].type == ShapeType::Mesh)
+      count += collide_swept<swept_generic<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius,
+                                                   colliders[ci], threshold, h, bad);
   return count;
 }
 

@@ -143,6 +143,40 @@ TEST(UsersSliding, AcrossInternalMeshEdgesWithoutABump) {
   }
 }
 
+// Wedged: a particle slides down a 20-degree mesh slope into a capsule lying across it
+// and rests in the wedge for 30 s. The capsule's response replays the step from its start,
+// which lies inside the mesh's thickness when the two push against each other; the mesh,
+// resolved last, pushes it out at the end of every step, so it never works its way
+// through the two-sided mesh (its signed height above the slope stays >= r less float
+// rounding), for the particles and for a rope.
+TEST(UsersSliding, WedgedBetweenAMeshAndACapsuleStaysOnTheMesh) {
+  const double h = 1.0 / 120, r = 0.05, tilt = 20 * std::numbers::pi / 180;
+  const Quat q = glm::angleAxis(tilt, Vec3(0, 0, 1));  // the slope falls towards -x
+  const Vec3 n = q * Vec3(0, 1, 0);
+  // the mesh first: the order given would have the capsule respond after it
+  const std::vector<Collider> shapes = {
+      tu::place(ColliderShape::triangles(tu::grid_mesh(16, 0.125)), {0, 0, 0}, {.friction = 0.2}, q),
+      tu::place(ColliderShape::capsule(1.0, 0.1), q * Vec3(-0.8, 0.1, 0), {.friction = 0.2},
+                glm::angleAxis(std::numbers::pi / 2, Vec3(1, 0, 0))),
+  };
+  ParticleSystem ps = make_system(Method::SemiImplicitEuler);
+  ps.create({.position = q * Vec3(0.5, r, 0.01), .mass = 0.1, .radius = r});
+  pba::SoftBody rope = pba::SoftBody::rope(
+      {.from = q * Vec3(0.2, 0.06, -0.4), .to = q * Vec3(0.2, 0.06, 0.4), .segments = 8, .pin_start = false});
+  double lowest = 1e9, rope_lowest = 1e9;
+  for (int i = 0; i < 3600; ++i) {
+    ps.step(i * h, h, shapes, {});
+    rope.step(i * h, h, shapes);
+    lowest = std::min(lowest, glm::dot(n, ps.position(0)));
+    for (std::size_t k = 0; k < rope.size(); ++k) rope_lowest = std::min(rope_lowest, glm::dot(n, rope.position(k)));
+  }
+  EXPECT_GE(lowest, r - 1e-5);  // float rounding of positions near 1 m, with margin
+  EXPECT_GE(rope_lowest, rope.settings().thickness - 1e-5);
+  // it did reach the capsule: held against it, up the slope from its axis by R + r
+  const Vec3 local = glm::inverse(q) * ps.position(0);
+  EXPECT_NEAR(std::hypot(local.x + 0.8, local.y - 0.1), 0.1 + r, 1e-3);
+}
+
 // a particle rolling into a mesh bowl stays in it and settles at the bottom (friction)
 TEST(UsersSliding, ParticleSettlesInAMeshBowl) {
   const double h = 1.0 / 120, r = 0.03;
@@ -290,6 +324,19 @@ TEST(UsersWorld, TakesEveryShapeAndCopiesKeepTheirLinks) {
   ps.create({.position = {-3, 0.5, 0}, .mass = 0.1, .radius = 0.05});
   for (int i = 0; i < 120; ++i) ps.step(i / 60.0, 1.0 / 60, copy, {});
   EXPECT_NEAR(ps.position(0).y, 0.05, 1e-5);
+  // replacing a compound in place: by one with as many leaves (its parts rewritten) and by
+  // one with fewer (appended); the links follow either way
+  pba::CollisionWorld one;
+  one.add(tu::place(tu::compound_shape(tu::table_compound()), {0, 0, 0}));
+  one.set(0, tu::place(tu::compound_shape(tu::table_compound()), {5, 0, 0}));
+  EXPECT_EQ(one.flat_double()[0].first_part, 0u);
+  EXPECT_EQ(one.flat_double()[0].parts[0].c1x, 5.0);
+  const std::vector<pba::CompoundChild> ball = {{ColliderShape::sphere(0.5), Pose{{0, 1, 0}}}};
+  one.set(0, tu::place(tu::compound_shape(pba::CompoundShape::build(ball)), {-5, 0, 0}));
+  ASSERT_EQ(one.flat_double()[0].n_parts, 1u);
+  EXPECT_EQ(one.flat_float()[0].parts[0].type, pba::ShapeType::Sphere);
+  EXPECT_EQ(one.flat_float()[0].parts[0].c1y, 1.0);
+  EXPECT_EQ(one.flat_float()[0].parts[0].c1x, -5.0);
   // a collider without its body names the field
   Collider bad;
   bad.shape.type = pba::ShapeType::Hull;

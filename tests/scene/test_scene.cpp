@@ -278,6 +278,31 @@ TEST(ShapeColliders, CapsuleHullMeshAndCompoundAreRead) {
   EXPECT_EQ(c[3].shape.compound->children[1].pose.position, pba::Vec3(0, -0.5, 0));
 }
 
+// The shipped mesh bowl through the World: after 10 s every ball is inside the bowl (within
+// its rim, never below its surface by more than the chords' sag: the mesh is the paraboloid
+// y = 0.3 (x^2 + z^2) sampled on 0.25 m cells, so it lies at most k (0.25 / 2)^2 x 2 below
+// it mid-cell) and at rest
+TEST(ShapeColliders, MeshBowlSceneKeepsItsBallsInTheBowl) {
+  pba::Scene s = pba::load_scene(std::filesystem::path(PBA_SCENES_DIR) / "mesh_bowl.json");
+  const double sag = 0.3 * 2 * 0.125 * 0.125;
+  double lowest = 1e9;
+  for (int i = 0; i < 1200; ++i) {
+    s.world.step();
+    const pba::ParticleSystem& ps = s.world.particles();
+    for (std::size_t k = 0; k < ps.size(); ++k) {
+      const pba::Vec3 p = ps.position(k);
+      if (std::abs(p.x) < 1.5 && std::abs(p.z) < 1.5) lowest = std::min(lowest, p.y - 0.3 * (p.x * p.x + p.z * p.z));
+    }
+  }
+  const pba::ParticleSystem& ps = s.world.particles();
+  ASSERT_EQ(ps.size(), 36u);
+  EXPECT_GE(lowest, 0.05 - sag);  // the balls' radius above the surface, less the sag
+  for (std::size_t k = 0; k < ps.size(); ++k) {
+    EXPECT_LT(std::max(std::abs(ps.position(k).x), std::abs(ps.position(k).z)), 1.5) << "ball " << k;
+    EXPECT_LT(glm::length(ps.velocity(k)), 0.1) << "ball " << k;
+  }
+}
+
 TEST(ShapeColliders, BadShapesNameTheirJsonPath) {
   auto col = [](const std::string& body) { return error_of(R"({"version": 1, "colliders": [)" + body + "]}"); };
   // capsule
