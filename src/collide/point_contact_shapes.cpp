@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "hull_face.h"
 #include "point_contact.h"
 
 namespace pba::detail {
@@ -310,22 +311,9 @@ bool hull_contact(const Collider& c, const Vec3& x, double th, double f, PointCo
     if (s > sep) sep = s, best = k;
   }
   if (!(sep < th)) return false;
-  // the foot on that face, inside its loop (counter-clockwise seen from outside)
+  // inside, or the foot on that face inside its loop
   const Vec3 n = faces[best].normal;
-  bool on_face = sep <= 0;
-  if (!on_face) {
-    const auto v = h.vertices();
-    const auto e = h.edges();
-    const Vec3 foot = q - sep * n;
-    on_face = true;
-    std::uint32_t k = faces[best].edge;
-    do {
-      const Vec3 a = v[e[k].origin], b = v[e[e[k].next].origin];
-      if (glm::dot(glm::cross(b - a, foot - a), n) < 0) on_face = false;
-      k = e[k].next;
-    } while (k != faces[best].edge && on_face);
-  }
-  if (on_face) {
+  if (sep <= 0 || on_hull_face(h, static_cast<std::uint32_t>(best), q - sep * n)) {
     set_point(c, p, p.rotation * n, th - sep, x, out);
     return true;
   }
