@@ -206,21 +206,22 @@ std::size_t CollisionWorld::push(const Collider& c, std::uint32_t owner) {
   // the buffers the links point into, before they may grow
   const Collider* shapes_at = colliders_.data();
   const Collider* parts_at = parts_.data();
+  const detail::FlatShape<double>* flats_at = part_flat_.data();
+  const std::size_t first = parts_.size();
   colliders_.push_back(c);
   owners_.push_back(owner);
   flat_f_.push_back(detail::flatten<float>(c));
   flat_d_.push_back(detail::flatten<double>(c));
   if (c.shape.type == ShapeType::Compound) {
-    const std::size_t first = parts_.size();
     add_parts(c.shape, c, c.begin, c.end);
     flat_f_.back().first_part = flat_d_.back().first_part = static_cast<std::uint32_t>(first);
     flat_f_.back().n_parts = flat_d_.back().n_parts = static_cast<std::uint32_t>(parts_.size() - first);
   }
   // links: all of them when a buffer moved (geometric growth: rarely), else the new ones
-  if (colliders_.data() != shapes_at || parts_.data() != parts_at) {
+  if (colliders_.data() != shapes_at || parts_.data() != parts_at || part_flat_.data() != flats_at) {
     relink();
   } else {
-    for (std::size_t j = flat_d_.back().first_part; j < parts_.size(); ++j) part_flat_[j].source = &parts_[j];
+    for (std::size_t j = first; j < parts_.size(); ++j) part_flat_[j].source = &parts_[j];
     link(colliders_.size() - 1);
   }
   return colliders_.size() - 1;

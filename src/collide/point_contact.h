@@ -306,8 +306,8 @@ struct PointContact {
 
 /// Hulls, meshes and compounds, swept, in double (point_contact_shapes.cpp): the contact
 /// plane where the path from p0 (start pose) to p1 (end pose) of a point of radius r first
-/// meets the shape, as the swept_* functions above. `c` is the shape's flat form with its
-/// links (FlatShape::source, parts) set by the CollisionWorld.
+/// meets the shape, as the swept_* functions above. `source`, `parts` and `n_parts` are
+/// the flat form's links, set by the CollisionWorld (FlatShape::source, parts).
 bool swept_generic_d(ShapeType type, const Collider* source, const FlatShape<double>* parts, std::uint32_t n_parts,
                      const Vec3& p0, const Vec3& p1, double r, SweptContact<double>& out);
 /// Hulls, meshes and compounds, now (point_contact_shapes.cpp): as point_contact below.
