@@ -2,9 +2,9 @@
 // and never rotate. A ParticleSystem stores its particles as a structure of arrays of
 // floats (x, y, z, vx, vy, vz, inverse mass, radius; birth and death times), steps them with any
 // of the foundation's integrators under gravity, linear and quadratic drag, steady and
-// gusting wind and Forcer volumes, collides them continuously with planes, spheres and
-// boxes (static or moving), emits them from emitters, and recycles the dead without
-// allocating.
+// gusting wind and Forcer volumes, collides them continuously with every collider shape
+// (planes, spheres, boxes, capsules, convex hulls, triangle meshes and compounds; static
+// or moving), emits them from emitters, and recycles the dead without allocating.
 //
 //   pba::ParticleSystem ps({.capacity = 4096});
 //   ps.forces().quadratic_drag = 0.01;

@@ -76,6 +76,31 @@ TEST(UsersTunnelling, FastParticlesAreCaughtByHullsMeshesAndCompounds) {
   }
 }
 
+// Moving surfaces: a hull, a mesh and a compound rising at 0.5 m/s (begin and end poses
+// each step, like a kinematic entity's) carry a particle resting on their tops: it is
+// never below the top at the end of a step (less float rounding, 1e-5 m at 1 m), and
+// after 1 s it is 0.5 m up, moving with the surface.
+TEST(UsersMoving, RisingHullMeshAndCompoundCarryAParticle) {
+  const double h = 1.0 / 120, r = 0.05, speed = 0.5;
+  const std::vector<ColliderShape> shapes = {ColliderShape::convex(tu::frustum_hull()),
+                                             ColliderShape::triangles(tu::grid_mesh(8, 0.25)),
+                                             tu::compound_shape(tu::table_compound())};
+  for (std::size_t k = 0; k < shapes.size(); ++k) {
+    ParticleSystem ps = make_system(Method::SemiImplicitEuler);
+    ps.create({.position = {0.05, r, 0.1}, .mass = 1, .radius = r});
+    double t = 0;
+    for (int i = 0; i < 120; ++i, t += h) {
+      Collider lift = tu::place(shapes[k], {0, speed * t, 0}, {.restitution = 0});
+      lift.end.position = Vec3(0, speed * (t + h), 0);
+      lift.velocity = Vec3(0, speed, 0);
+      ps.step(t, h, std::span(&lift, 1), {});
+      ASSERT_GE(ps.position(0).y, speed * (t + h) + r - 1e-5) << "shape " << k << " step " << i;
+    }
+    EXPECT_NEAR(ps.position(0).y, speed * 1.0 + r, 1e-3) << "shape " << k;
+    EXPECT_NEAR(ps.velocity(0).y, speed, 1e-4) << "shape " << k;
+  }
+}
+
 // ---------------------------------------------------------------------------------------
 // restitution: dropped from H onto a hull's top face, a flat mesh (onto one of its
 // internal vertices, where six triangles meet) and a compound's top, the rebound reaches
