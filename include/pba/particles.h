@@ -2,9 +2,9 @@
 // and never rotate. A ParticleSystem stores its particles as a structure of arrays of
 // floats (x, y, z, vx, vy, vz, inverse mass, radius; birth and death times), steps them with any
 // of the foundation's integrators under gravity, linear and quadratic drag, steady and
-// gusting wind and Forcer volumes, collides them continuously with planes, spheres and
-// boxes (static or moving), emits them from emitters, and recycles the dead without
-// allocating.
+// gusting wind and Forcer volumes, collides them continuously with every collider shape
+// (planes, spheres, boxes, capsules, convex hulls, triangle meshes and compounds; static
+// or moving), emits them from emitters, and recycles the dead without allocating.
 //
 //   pba::ParticleSystem ps({.capacity = 4096});
 //   ps.forces().quadratic_drag = 0.01;
@@ -258,8 +258,8 @@ struct Reach {
   double n[3], d;         // plane: at the end of the step (the exact test uses only that)
   double n1;              // plane: |n_x| + |n_y| + |n_z|
   double lo[3], hi[3];    // sphere, box: box around the centre's path (start and end)
-  double radius;          // sphere radius, or the circumradius: |half extents| (box), hh + R (capsule)
-  double spin;            // box, capsule: ||R1 - R0|| (Frobenius), bounds the turn of its frame
+  double radius;          // sphere radius, or the circumradius: |half extents| (box), hh + R (capsule), FlatShape::reach (hull, mesh, compound)
+  double spin;            // all but spheres and planes: ||R1 - R0|| (Frobenius), bounds the turn of its frame
   double path;            // |c1 - c0|
   double maxabs;          // largest |coordinate| of the centre's path
 };

@@ -3,6 +3,7 @@
 #include <limits>
 #include <string>
 
+#include "pba/collide/broad_phase.h"
 #include "pba/collide/collider.h"
 
 namespace pba {
@@ -58,7 +59,7 @@ bool Collider::ok() const {
               unit_quat(end.rotation) && fits(velocity) && fits(angular_velocity) &&
               material.restitution >= 0 && material.restitution <= 1 && std::isfinite(material.friction) &&
               material.friction >= 0;
-  // the shape's parameters; the types without a point contact yet are not ok
+  // the shape's parameters (a hull, mesh or compound was validated when it was built)
   switch (s.type) {
     case ShapeType::Plane: return good && fits(s.normal) && glm::length(s.normal) > 0 && fits(s.offset);
     case ShapeType::Sphere: return good && fits(s.radius) && s.radius > 0;
@@ -67,9 +68,9 @@ bool Collider::ok() const {
              s.half_extents.z > 0;
     case ShapeType::Capsule:
       return good && fits(s.radius) && s.radius > 0 && fits(s.half_height) && s.half_height >= 0;
-    case ShapeType::Hull:
-    case ShapeType::Mesh:
-    case ShapeType::Compound: return false;
+    case ShapeType::Hull: return good && s.hull != nullptr;
+    case ShapeType::Mesh: return good && s.mesh != nullptr;
+    case ShapeType::Compound: return good && s.compound != nullptr;
   }
   return false;
 }
@@ -94,9 +95,7 @@ void Collider::validate(std::string_view where) const {
       break;
     case ShapeType::Hull:
     case ShapeType::Mesh:
-    case ShapeType::Compound:
-      throw Error(field_path(where, "type") + ": particle and soft-body collisions take a plane, sphere, box or capsule, got a " +
-                  std::string(to_string(shape.type)));
+    case ShapeType::Compound: shape.validate(where); break;  // the body is there
   }
   // material and motion
   if (!((material.restitution) >= (0) && (material.restitution) <= (1))) require_in_range(material.restitution, 0, 1, field_path(where, "restitution"));
@@ -119,6 +118,50 @@ void Collider::validate(std::string_view where) const {
   if (!fits(shape.half_height)) require_float(shape.half_height, field_path(where, "half_height"));
 }
 
+namespace {
+
+// a hull's faces as triangle fans, its edges darker on top; a mesh's triangles; a
+// compound's children at their poses
+void draw_body(DebugDraw& draw, const ColliderShape& s, const Pose& p, Color c) {
+  const Color edge = Color::rgb(c.r * 0.5f, c.g * 0.5f, c.b * 0.5f, c.a);
+  switch (s.type) {
+    case ShapeType::Sphere: draw.sphere(p.position, s.radius, c); break;
+    case ShapeType::Box: draw.box(p.position, s.half_extents, p.rotation, c); break;
+    case ShapeType::Capsule: {
+      const Vec3 axis = p.rotation * Vec3(0, s.half_height, 0);
+      draw.capsule(p.position - axis, p.position + axis, s.radius, c);
+      break;
+    }
+    case ShapeType::Hull: {
+      const auto v = s.hull->vertices();
+      const auto e = s.hull->edges();
+      for (const ConvexHull::Face& f : s.hull->faces()) {
+        const Vec3 a = apply(p, v[e[f.edge].origin]);
+        for (std::uint32_t k = e[f.edge].next; e[k].next != f.edge; k = e[k].next)
+          draw.triangle(a, apply(p, v[e[k].origin]), apply(p, v[e[e[k].next].origin]), c);
+      }
+      for (std::size_t i = 0; i < e.size(); i += 2) draw.line(apply(p, v[e[i].origin]), apply(p, v[e[i + 1].origin]), edge);
+      break;
+    }
+    case ShapeType::Mesh: {
+      const auto v = s.mesh->vertices();
+      for (const auto& t : s.mesh->triangles()) {
+        const Vec3 a = apply(p, v[t[0]]), b = apply(p, v[t[1]]), cc = apply(p, v[t[2]]);
+        // two-sided: both windings, so a renderer that culls back faces shows it from either side
+        draw.triangle(a, b, cc, c);
+        draw.triangle(a, cc, b, c);
+      }
+      break;
+    }
+    case ShapeType::Compound:
+      for (const CompoundChild& ch : s.compound->children) draw_body(draw, ch.shape, compose(p, ch.pose), c);
+      break;
+    case ShapeType::Plane: break;  // drawn by the caller (a patch about the origin)
+  }
+}
+
+}  // namespace
+
 void Collider::draw(DebugDraw& draw, Color c, const DrawFlags& flags) const {
   // the shape at its end pose
   if (flags.shapes) {
@@ -128,44 +171,11 @@ void Collider::draw(DebugDraw& draw, Color c, const DrawFlags& flags) const {
         draw.plane(n, shape.offset + glm::dot(n, end.position), 10.0, c);
         break;
       }
-      case ShapeType::Sphere: draw.sphere(end.position, shape.radius, c); break;
-      case ShapeType::Box: draw.box(end.position, shape.half_extents, end.rotation, c); break;
-      case ShapeType::Capsule: {
-        const Vec3 axis = end.rotation * Vec3(0, shape.half_height, 0);
-        draw.capsule(end.position - axis, end.position + axis, shape.radius, c);
-        break;
-      }
-      case ShapeType::Hull:
-      case ShapeType::Mesh:
-      case ShapeType::Compound: break;  // drawn by the shapes module once it lands
+      default: draw_body(draw, shape, end, c); break;  // the solids
     }
   }
   // world bounds of the solids (a plane's are unbounded)
-  if (flags.aabbs && (shape.type == ShapeType::Sphere || shape.type == ShapeType::Box ||
-                      shape.type == ShapeType::Capsule)) {
-    Vec3 half(shape.radius);
-    if (shape.type == ShapeType::Box) {
-      // |R| h: the extent of the rotated box along each world axis
-      const Mat3 r = glm::mat3_cast(glm::normalize(end.rotation));
-      for (int i = 0; i < 3; ++i)
-        half[i] = std::abs(r[0][i]) * shape.half_extents.x + std::abs(r[1][i]) * shape.half_extents.y +
-                  std::abs(r[2][i]) * shape.half_extents.z;
-    } else if (shape.type == ShapeType::Capsule) {
-      const Vec3 axis = end.rotation * Vec3(0, shape.half_height, 0);
-      half = glm::abs(axis) + Vec3(shape.radius);
-    }
-    const Vec3 lo = end.position - half, hi = end.position + half;
-    for (int a = 0; a < 3; ++a)
-      for (int s1 = 0; s1 < 2; ++s1)
-        for (int s2 = 0; s2 < 2; ++s2) {
-          Vec3 p0 = lo, p1 = lo;
-          const int b = (a + 1) % 3, cc = (a + 2) % 3;
-          p1[a] = hi[a];
-          p0[b] = p1[b] = s1 ? hi[b] : lo[b];
-          p0[cc] = p1[cc] = s2 ? hi[cc] : lo[cc];
-          draw.line(p0, p1, c);
-        }
-  }
+  if (flags.aabbs && shape.type != ShapeType::Plane) draw_box_edges(draw, bounds(shape, end), c);
 }
 
 }  // namespace pba

@@ -33,6 +33,31 @@ void rotation_columns(const Quat& q, T* r) {
     for (int k = 0; k < 3; ++k) r[c * 3 + k] = static_cast<T>(m[c][k]);
 }
 
+// the radius about the frame origin of the ball that holds what the swept point contact
+// clips against, less the point's radius: a sphere's radius, a box's corner, a capsule's
+// cap, the farthest corner of a hull's or mesh's local bounds (the hull's clip box), a
+// compound's farthest leaf (its offset plus its own reach)
+double shape_reach(const ColliderShape& s) {
+  switch (s.type) {
+    case ShapeType::Sphere: return s.radius;
+    case ShapeType::Box: return glm::length(s.half_extents);
+    case ShapeType::Capsule: return s.half_height + s.radius;
+    case ShapeType::Hull:
+    case ShapeType::Mesh: {
+      const Aabb b = s.type == ShapeType::Hull ? s.hull->bounds() : s.mesh->bounds();
+      return glm::length(glm::max(glm::abs(b.lo), glm::abs(b.hi)));
+    }
+    case ShapeType::Compound: {
+      double r = 0;
+      for (const CompoundChild& ch : s.compound->children)
+        r = std::max(r, glm::length(ch.pose.position) + shape_reach(ch.shape));
+      return r;
+    }
+    case ShapeType::Plane: break;
+  }
+  return 0;
+}
+
 }  // namespace
 
 template <class T>
@@ -77,6 +102,11 @@ FlatShape<T> flatten(const Collider& c) {
   p.wz = static_cast<T>(c.angular_velocity.z);
   p.is_static = p.n0x == p.n1x && p.n0y == p.n1y && p.n0z == p.n1z && p.d0 == p.d1 && p.c0x == p.c1x &&
                 p.c0y == p.c1y && p.c0z == p.c1z && c.velocity == Vec3(0) && c.angular_velocity == Vec3(0);
+  // hulls, meshes and compounds: how far the shape reaches from the origin, rounded up (a
+  // float rounds by 6e-8 relative; 1e-6 covers it)
+  const ShapeType t = c.shape.type;
+  if (t == ShapeType::Hull || t == ShapeType::Mesh || t == ShapeType::Compound)
+    p.reach = static_cast<T>(shape_reach(c.shape) * (1 + 1e-6));
   return p;
 }
 
@@ -105,11 +135,65 @@ bool same_bits(const Collider& a, const Collider& b) {
 
 }  // namespace
 
+CollisionWorld::CollisionWorld(const CollisionWorld& o)
+    : colliders_(o.colliders_), parts_(o.parts_), part_flat_(o.part_flat_), owners_(o.owners_), flat_f_(o.flat_f_),
+      flat_d_(o.flat_d_) {
+  relink();
+}
+
+CollisionWorld& CollisionWorld::operator=(const CollisionWorld& o) {
+  if (this == &o) return *this;
+  colliders_ = o.colliders_;
+  parts_ = o.parts_;
+  part_flat_ = o.part_flat_;
+  owners_ = o.owners_;
+  flat_f_ = o.flat_f_;
+  flat_d_ = o.flat_d_;
+  relink();
+  return *this;
+}
+
 void CollisionWorld::clear() {
   colliders_.clear();
+  parts_.clear();
+  part_flat_.clear();
   owners_.clear();
   flat_f_.clear();
   flat_d_.clear();
+}
+
+// a compound's leaves, depth first, each at its pose composed with the compound's; the
+// velocity of a leaf's origin is that of the compound's frame at it (v + w x r)
+void CollisionWorld::add_parts(const ColliderShape& s, const Collider& parent, const Pose& begin, const Pose& end) {
+  for (const CompoundChild& ch : s.compound->children) {
+    const Pose b = compose(begin, ch.pose), e = compose(end, ch.pose);
+    if (ch.shape.type == ShapeType::Compound) {
+      add_parts(ch.shape, parent, b, e);
+      continue;
+    }
+    Collider leaf;
+    leaf.shape = ch.shape;
+    leaf.material = parent.material;
+    leaf.begin = b;
+    leaf.end = e;
+    leaf.velocity = parent.velocity + glm::cross(parent.angular_velocity, e.position - parent.end.position);
+    leaf.angular_velocity = parent.angular_velocity;
+    parts_.push_back(leaf);
+    part_flat_.push_back(detail::flatten<double>(leaf));
+  }
+}
+
+void CollisionWorld::link(std::size_t i) {
+  const ShapeType t = colliders_[i].shape.type;
+  if (t != ShapeType::Hull && t != ShapeType::Mesh && t != ShapeType::Compound) return;
+  flat_f_[i].source = flat_d_[i].source = &colliders_[i];
+  if (t == ShapeType::Compound)
+    flat_f_[i].parts = flat_d_[i].parts = part_flat_.data() + flat_d_[i].first_part;
+}
+
+void CollisionWorld::relink() {
+  for (std::size_t j = 0; j < parts_.size(); ++j) part_flat_[j].source = &parts_[j];
+  for (std::size_t i = 0; i < colliders_.size(); ++i) link(i);
 }
 
 std::size_t CollisionWorld::add(const Collider& c, std::uint32_t owner, std::string_view where) {
@@ -119,10 +203,27 @@ std::size_t CollisionWorld::add(const Collider& c, std::uint32_t owner, std::str
 }
 
 std::size_t CollisionWorld::push(const Collider& c, std::uint32_t owner) {
+  // the buffers the links point into, before they may grow
+  const Collider* shapes_at = colliders_.data();
+  const Collider* parts_at = parts_.data();
+  const detail::FlatShape<double>* flats_at = part_flat_.data();
+  const std::size_t first = parts_.size();
   colliders_.push_back(c);
   owners_.push_back(owner);
   flat_f_.push_back(detail::flatten<float>(c));
   flat_d_.push_back(detail::flatten<double>(c));
+  if (c.shape.type == ShapeType::Compound) {
+    add_parts(c.shape, c, c.begin, c.end);
+    flat_f_.back().first_part = flat_d_.back().first_part = static_cast<std::uint32_t>(first);
+    flat_f_.back().n_parts = flat_d_.back().n_parts = static_cast<std::uint32_t>(parts_.size() - first);
+  }
+  // links: all of them when a buffer moved (geometric growth: rarely), else the new ones
+  if (colliders_.data() != shapes_at || parts_.data() != parts_at || part_flat_.data() != flats_at) {
+    relink();
+  } else {
+    for (std::size_t j = first; j < parts_.size(); ++j) part_flat_[j].source = &parts_[j];
+    link(colliders_.size() - 1);
+  }
   return colliders_.size() - 1;
 }
 
@@ -145,9 +246,30 @@ void CollisionWorld::set(std::size_t i, const Collider& c, std::string_view wher
     throw Error(std::string(where) + ": collider " + std::to_string(i) + " does not exist (the world has " +
                 std::to_string(colliders_.size()) + ")");
   if (!c.ok()) c.validate(where);
+  // a compound's parts: in place when it has as many leaves as the old one, else appended
+  // (the old ones stay unused until clear())
+  const detail::FlatShape<double> old = flat_d_[i];
   colliders_[i] = c;
   flat_f_[i] = detail::flatten<float>(c);
   flat_d_[i] = detail::flatten<double>(c);
+  if (c.shape.type == ShapeType::Compound) {
+    const std::size_t first = parts_.size();
+    add_parts(c.shape, c, c.begin, c.end);
+    const std::size_t n = parts_.size() - first;
+    std::size_t at = first;
+    if (old.type == ShapeType::Compound && old.n_parts == n) {
+      std::copy(parts_.begin() + static_cast<std::ptrdiff_t>(first), parts_.end(),
+                parts_.begin() + old.first_part);
+      std::copy(part_flat_.begin() + static_cast<std::ptrdiff_t>(first), part_flat_.end(),
+                part_flat_.begin() + old.first_part);
+      parts_.resize(first);
+      part_flat_.resize(first);
+      at = old.first_part;
+    }
+    flat_f_[i].first_part = flat_d_[i].first_part = static_cast<std::uint32_t>(at);
+    flat_f_[i].n_parts = flat_d_[i].n_parts = static_cast<std::uint32_t>(n);
+  }
+  relink();
 }
 
 void CollisionWorld::draw(DebugDraw& draw, Color c, const DrawFlags& flags) const {

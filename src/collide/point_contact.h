@@ -16,8 +16,9 @@
 // particle kernel, double for soft bodies), scalar per point and written so that GCC
 // if-converts and vectorises the loops that call it; each keeps the exact order of
 // operations the particle and soft-body code had when each kept its own copy, so the
-// results are the same bits. Plane, sphere, box and capsule; the other shape types are
-// refused when a collider enters a CollisionWorld (Collider::ok).
+// results are the same bits. Plane, sphere, box and capsule inline; convex hulls,
+// triangle meshes and compounds out of line, in double (point_contact_shapes.cpp): the
+// generic path, which the float kernel reaches by the same dispatch on the shape type.
 #pragma once
 
 #include <cmath>
@@ -303,13 +304,36 @@ struct PointContact {
   T ux, uy, uz;  ///< surface velocity at the point (m/s)
 };
 
+/// Hulls, meshes and compounds, swept, in double (point_contact_shapes.cpp): the contact
+/// plane where the path from p0 (start pose) to p1 (end pose) of a point of radius r first
+/// meets the shape, as the swept_* functions above. `source`, `parts` and `n_parts` are
+/// the flat form's links, set by the CollisionWorld (FlatShape::source, parts).
+bool swept_generic_d(ShapeType type, const Collider* source, const FlatShape<double>* parts, std::uint32_t n_parts,
+                     const Vec3& p0, const Vec3& p1, double r, SweptContact<double>& out);
+/// Hulls, meshes and compounds, now (point_contact_shapes.cpp): as point_contact below.
+bool point_contact_generic_d(ShapeType type, const Collider* source, const FlatShape<double>* parts,
+                             std::uint32_t n_parts, const Vec3& p, double th, double f, PointContact<double>& out);
+
+/// The swept contact of a hull, mesh or compound in T: computed in double, rounded once.
+template <class T>
+inline bool swept_generic(const FlatShape<T>& c, T ox, T oy, T oz, T x, T y, T z, T r, SweptContact<T>& out) {
+  SweptContact<double> q;
+  if (!swept_generic_d(c.type, c.source, c.parts, c.n_parts, Vec3(ox, oy, oz), Vec3(x, y, z), r, q)) return false;
+  out.nx = T(q.nx), out.ny = T(q.ny), out.nz = T(q.nz);
+  out.s0 = T(q.s0), out.s1 = T(q.s1), out.d1 = T(q.d1);
+  out.ux = T(q.ux), out.uy = T(q.uy), out.uz = T(q.uz);
+  return true;
+}
+
 /// The contact of a point p with a collider at step fraction f in [0, 1] (the frame's
 /// origin and a plane's offset interpolated linearly between the start and the end of
 /// the step, its rotation and normal taken at the end), the surface grown by the
 /// thickness th >= 0: a plane's signed distance, a sphere's radial offset, a box's
 /// closest point (outside) or nearest face (inside), a capsule's offset from the nearest
-/// point of its core segment. Returns false when the point is
-/// farther than th from the surface.
+/// point of its core segment; hulls, meshes and compounds on the generic path (a hull's
+/// exact closest point or deepest face, a mesh's nearest triangle without ghost normals,
+/// a compound's deepest child). Returns false when the point is farther than th from the
+/// surface.
 template <class T>
 PBA_CONTACT_INLINE bool point_contact(const FlatShape<T>& c, T px, T py, T pz, T th, T f, PointContact<T>& out) {
   const T cx = c.c0x + (c.c1x - c.c0x) * f, cy = c.c0y + (c.c1y - c.c0y) * f, cz = c.c0z + (c.c1z - c.c0z) * f;
@@ -393,7 +417,14 @@ PBA_CONTACT_INLINE bool point_contact(const FlatShape<T>& c, T px, T py, T pz, T
     }
     case ShapeType::Hull:
     case ShapeType::Mesh:
-    case ShapeType::Compound: return false;  // refused by Collider::ok before any step
+    case ShapeType::Compound: {
+      // the generic path, in double
+      PointContact<double> q;
+      if (!point_contact_generic_d(c.type, c.source, c.parts, c.n_parts, Vec3(px, py, pz), th, f, q)) return false;
+      out.nx = T(q.nx), out.ny = T(q.ny), out.nz = T(q.nz), out.depth = T(q.depth);
+      out.ux = T(q.ux), out.uy = T(q.uy), out.uz = T(q.uz);
+      return true;
+    }
   }
   surface_velocity(c, cx, cy, cz, px, py, pz, out.ux, out.uy, out.uz);
   return true;

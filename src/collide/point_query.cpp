@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "hull_face.h"
 #include "pba/collide/shape.h"
 
 namespace pba {
@@ -96,17 +97,10 @@ PointDistance hull_distance(const Vec3& x, const ConvexHull& h) {
     const double s = glm::dot(n, x) - faces[f].offset;
     if (s <= 0) continue;
     const Vec3 proj = x - s * n;
-    bool inside = true;
-    std::uint32_t k = faces[f].edge;
-    do {
-      const Vec3 a = v[e[k].origin], b = v[e[e[k].next].origin];
-      if (glm::dot(glm::cross(b - a, proj - a), n) < 0) inside = false;
-      k = e[k].next;
-    } while (k != faces[f].edge && inside);
     Vec3 q = proj;
-    if (!inside) {
+    if (!detail::on_hull_face(h, f, proj)) {
       double bd = kInf;
-      k = faces[f].edge;
+      std::uint32_t k = faces[f].edge;
       do {
         const Vec3 c = closest_on_segment(x, v[e[k].origin], v[e[e[k].next].origin]);
         if (glm::dot(x - c, x - c) < bd) bd = glm::dot(x - c, x - c), q = c;

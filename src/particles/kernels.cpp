@@ -175,10 +175,12 @@ Reach make_reach(const ColliderParams& c) {
   }
   r.path = std::sqrt(path2);
   if (c.type == ShapeType::Sphere) r.radius = c.radius;
-  if (c.type == ShapeType::Box || c.type == ShapeType::Capsule) {
-    // the circumradius about the frame origin: the box's corners, the capsule's end caps
-    r.radius = c.type == ShapeType::Box ? std::sqrt(double(c.hx) * c.hx + double(c.hy) * c.hy + double(c.hz) * c.hz)
-                                        : double(c.hh) + double(c.radius);
+  if (c.type != ShapeType::Plane && c.type != ShapeType::Sphere) {
+    // the circumradius about the frame origin: the box's corners, the capsule's end caps,
+    // the farthest corner of a hull's, mesh's or compound's local bounds
+    r.radius = c.type == ShapeType::Box       ? std::sqrt(double(c.hx) * c.hx + double(c.hy) * c.hy + double(c.hz) * c.hz)
+               : c.type == ShapeType::Capsule ? double(c.hh) + double(c.radius)
+                                              : double(c.reach);
     double s2 = 0;
     for (int i = 0; i < 9; ++i) s2 += (double(c.r1[i]) - c.r0[i]) * (double(c.r1[i]) - c.r0[i]);
     r.spin = std::sqrt(s2);
@@ -204,7 +206,12 @@ using Swept = BlockBounds;
 //     with a = p0 - c0, b = p1 - c1, and |(1 - s) a + s b| >= dist(P, C) less 1e-3 of
 //     the two boxes' diameters for the stretch before s = 0;
 //   capsule: the same argument as the box, with the capsule grown by r inside the ball of
-//     radius hh + R + r <= hh + R + sqrt(3) r about its origin (and s only in [0, 1]).
+//     radius hh + R + r <= hh + R + sqrt(3) r about its origin (and s only in [0, 1]);
+//   hull: the same as the box: its planes moved out by r are clipped by its local bounds
+//     grown by r, inside the ball of radius reach + sqrt(3) r (reach: the bounds' farthest
+//     corner); mesh: within r of a triangle, inside the ball of radius reach + r;
+//   compound: each leaf as above in its own frame, a fixed placement in the compound's,
+//     so inside the ball of radius reach + sqrt(3) r about the compound's origin.
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif

@@ -297,9 +297,10 @@ PBA_INLINE int collide_plane(int n, const float* ox, const float* oy, const floa
   return collide_plane_t<false>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
 }
 
-// spheres and boxes: the collide module's swept point contact (collide/point_contact.h)
-// finds the contact plane of each particle's path, then the shared response handles it.
-// A particle whose path enters the shape is caught at any speed.
+// spheres, boxes, capsules, hulls, meshes and compounds: the collide module's swept point
+// contact (collide/point_contact.h) finds the contact plane of each particle's path, then
+// the shared response handles it. A particle whose path enters the shape is caught at
+// any speed.
 template <bool (*Contact)(const ColliderParams&, float, float, float, float, float, float, float,
                           SweptContact<float>&)>
 PBA_INLINE int collide_swept(int n, const float* ox, const float* oy, const float* oz, const float* ovx,
@@ -318,14 +319,23 @@ PBA_INLINE int collide_swept(int n, const float* ox, const float* oy, const floa
   return count;
 }
 
-// every collider against one block, in the order given
+// every collider against one block, in the order given, the triangle meshes last. A mesh
+// is a two-sided surface with no inside: a particle that another surface pushed into it
+// (wedged between the two) is pushed out of it at the end of each step, so the other
+// surface's response, which replays the step from its start, cannot walk it through the
+// mesh step by step
 PBA_INLINE int collide_block(int n, const float* ox, const float* oy, const float* oz, const float* ovx,
                              const float* ovy, const float* ovz, float* x, float* y, float* z, float* vx, float* vy,
                              float* vz, const float* radius, const ColliderParams* colliders,
                              std::size_t n_colliders, float threshold, float h, int& bad) {
   int count = 0;
+  bool meshes = false;
   for (std::size_t ci = 0; ci < n_colliders; ++ci) {
     const ColliderParams& c = colliders[ci];
+    if (c.type == ShapeType::Mesh) {
+      meshes = true;
+      continue;
+    }
     switch (c.type) {
       case ShapeType::Plane:
         count += collide_plane(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
@@ -344,9 +354,17 @@ PBA_INLINE int collide_block(int n, const float* ox, const float* oy, const floa
         break;
       case ShapeType::Hull:
       case ShapeType::Mesh:
-      case ShapeType::Compound: break;  // refused when the collider entered the CollisionWorld
+      case ShapeType::Compound:
+        // the generic path: out of line, in double (collide/point_contact_shapes.cpp)
+        count += collide_swept<swept_generic<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c,
+                                                     threshold, h, bad);
+        break;
     }
   }
+  for (std::size_t ci = 0; meshes && ci < n_colliders; ++ci)
+    if (colliders[ci].type == ShapeType::Mesh)
+      count += collide_swept<swept_generic<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius,
+                                                   colliders[ci], threshold, h, bad);
   return count;
 }
 

@@ -207,9 +207,6 @@ Method read_method(const Node& m);
 EntityId make_entity(const Node& n, World& w);
 /// The fields every entity-like item may have (a "kinematic" path).
 void read_common(const Node& n, World& w, EntityId e);
-/// A shape's "type" and its fields: plane (normal, offset), sphere (radius), box
-/// (half_extents) and, with `capsule`, capsule (radius, half_height).
-ColliderShape read_shape(const Node& n, bool capsule);
 
 // ---- one reader per module: the settings, and one item of each top-level array ----
 
@@ -217,6 +214,9 @@ ColliderShape read_shape(const Node& n, bool capsule);
 void read_settings(const Node& n, WorldDef& def);
 /// One item of "colliders" (read_world.cpp).
 void read_collider(const Node& n, World& w);
+/// A collider's shape: its "type" and that type's fields (read_shapes.cpp). A compound's
+/// child (`child`) is a sphere, box, capsule, hull or compound, nested `depth` deep.
+ColliderShape read_shape(const Node& n, bool child, int depth);
 /// One item of "particles" (read_particles.cpp).
 void read_particle(const Node& n, World& w);
 /// One item of "emitters" (read_particles.cpp).

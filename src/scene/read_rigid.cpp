@@ -42,13 +42,14 @@ void read_rigid_settings(const Node& n, RigidSystemDef& def) {
 
 namespace {
 
-// one item of a body's "shapes": the shape (the collider reader's, capsules too), its
+// one item of a body's "shapes": the shape (the collider reader's: every shape type), its
 // placement in the body frame, density and material
 RigidShapeDef read_rigid_shape(const Node& n) {
-  n.allow_only({"type", "normal", "offset", "radius", "half_extents", "half_height", "position", "rotation",
-                "rotation_deg", "density", "restitution", "friction", "rolling_resistance"});
+  n.allow_only({"type", "normal", "offset", "radius", "half_extents", "half_height", "points", "vertices",
+                "triangles", "children", "position", "rotation", "rotation_deg", "density", "restitution",
+                "friction", "rolling_resistance"});
   RigidShapeDef s;
-  s.shape = read_shape(n, true);
+  s.shape = read_shape(n, false, 0);  // read_shapes.cpp: every collider shape
   s.local = read_pose(n);
   s.density = n.positive("density", s.density);
   s.material.restitution = n.in_range("restitution", 0, 1, s.material.restitution);

@@ -147,49 +147,12 @@ void read_settings(const Node& n, WorldDef& def) {
       n.num("restitution_threshold", def.particles.collision.restitution_threshold);
 }
 
-ColliderShape read_shape(const Node& n, bool capsule) {
-  ColliderShape shape;
-  if (capsule)
-    shape.type = n.required_choice<ShapeType>("type", {{"plane", ShapeType::Plane},
-                                                       {"sphere", ShapeType::Sphere},
-                                                       {"box", ShapeType::Box},
-                                                       {"capsule", ShapeType::Capsule}});
-  else
-    shape.type = n.required_choice<ShapeType>(
-        "type", {{"plane", ShapeType::Plane}, {"sphere", ShapeType::Sphere}, {"box", ShapeType::Box}});
-  // shape fields belong to one type each
-  auto only_for = [&](const char* key, std::initializer_list<ShapeType> types, const char* type_names) {
-    bool ok = false;
-    for (ShapeType t : types) ok |= shape.type == t;
-    if (n.has(key) && !ok) n.at(key).fail(std::string("only for \"type\": ") + type_names);
-  };
-  only_for("normal", {ShapeType::Plane}, "\"plane\"");
-  only_for("offset", {ShapeType::Plane}, "\"plane\"");
-  if (capsule) {
-    only_for("radius", {ShapeType::Sphere, ShapeType::Capsule}, "\"sphere\" or \"capsule\"");
-    only_for("half_height", {ShapeType::Capsule}, "\"capsule\"");
-  } else {
-    only_for("radius", {ShapeType::Sphere}, "\"sphere\"");
-  }
-  only_for("half_extents", {ShapeType::Box}, "\"box\"");
-  shape.normal = n.nonzero_vec("normal", shape.normal);
-  shape.offset = n.num("offset", shape.offset);
-  if (shape.type == ShapeType::Sphere || shape.type == ShapeType::Capsule) shape.radius = n.positive("radius", shape.radius);
-  if (shape.type == ShapeType::Capsule) shape.half_height = n.non_negative("half_height", shape.half_height);
-  if (n.has("half_extents")) {
-    shape.half_extents = n.at("half_extents").vec3();
-    for (int i = 0; i < 3; ++i)
-      if (!(shape.half_extents[i] > 0))
-        n.at("half_extents").item(i).fail("must be > 0, got " + format_value(shape.half_extents[i]));
-  }
-  return shape;
-}
-
 void read_collider(const Node& n, World& w) {
   n.allow_only({"name", "type", "position", "rotation", "rotation_deg", "normal", "offset", "radius",
-                "half_extents", "restitution", "friction", "sensor", "kinematic"});
+                "half_extents", "half_height", "points", "vertices", "triangles", "children", "restitution",
+                "friction", "sensor", "kinematic"});
   ColliderDef c;
-  c.shape = read_shape(n, false);
+  c.shape = read_shape(n, false, 0);  // read_shapes.cpp
   c.sensor = n.flag("sensor", c.sensor);
   c.material.restitution = n.in_range("restitution", 0, 1, c.material.restitution);
   c.material.friction = n.non_negative("friction", c.material.friction);

@@ -34,9 +34,13 @@ std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double) {
   std::size_t contacts = 0;
   const double th = s.def.thickness;
   const std::size_t n = s.n;
+  // the colliders in order, the triangle meshes last (two-sided, with no inside: a node
+  // another surface pushed into one leaves it at the end)
+  for (int pass = 0; pass < 2; ++pass)
   for (const FlatShape<double>& c : s.colliders) {
+    if ((c.type == ShapeType::Mesh) != (pass == 1)) continue;
     // a float bound that rejects most particles cheaply: the plane's signed distance, or
-    // the bounding sphere of the sphere, box or capsule (enlarged by the thickness and a margin
+    // the bounding sphere of the solid (enlarged by the thickness and a margin
     // for float rounding; the exact test follows in double)
     const double mu = std::max(s.def.friction, c.mu);
     const Vec3 c0(c.c0x, c.c0y, c.c0z), c1(c.c1x, c.c1y, c.c1z);
@@ -46,7 +50,8 @@ std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double) {
     const Vec3 half(c.hx, c.hy, c.hz);
     const double reach = c.type == ShapeType::Sphere    ? c.radius
                          : c.type == ShapeType::Capsule ? c.hh + c.radius
-                                                        : glm::length(half);
+                         : c.type == ShapeType::Box     ? glm::length(half)
+                                                        : c.reach;  // hull, mesh, compound
     const float bound = static_cast<float>((reach + th) * (1 + 1e-5) + 1e-6);
     const float bound2 = bound * bound;
     // boxes: the local axes (the columns of R, rows of R^T) and the enlarged half
@@ -99,7 +104,11 @@ std::size_t collide_velocities(SoftBody::Impl& s, std::span<Vec3> xs, std::span<
   if (s.colliders.empty()) return 0;
   std::size_t contacts = 0;
   const double th = s.def.thickness;
+  // the colliders in order, the triangle meshes last (two-sided, with no inside: a node
+  // another surface pushed into one leaves it at the end)
+  for (int pass = 0; pass < 2; ++pass)
   for (const FlatShape<double>& c : s.colliders) {
+    if ((c.type == ShapeType::Mesh) != (pass == 1)) continue;
     const double mu = std::max(s.def.friction, c.mu);
     for (std::size_t i = 0; i < xs.size(); ++i) {
       if (s.w[i] == 0.f) continue;

@@ -1,7 +1,7 @@
 // The collision world and its point contact, through its clients: no cap on the number of
 // shapes, the same bits from a world of many shapes as from each shape alone, flat forms
-// that follow the colliders, and an Error naming the collider for shapes particles and
-// soft bodies cannot collide with yet.
+// that follow the colliders, and an Error naming the collider for a hull, mesh or
+// compound without its body.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -139,20 +139,19 @@ TEST(CollisionWorld, RefusesCollidersThatOverflowTheFloatForm) {
   EXPECT_EQ(error_of([&] { cw.add(Collider::sphere({3e38, 0, 0}, 1.0), 0, "edge"); }), "");  // still a float
 }
 
-TEST(CollisionWorld, RefusesWhatItCannotCollide) {
-  // a hull (its point contact waits for the shapes module)
+TEST(CollisionWorld, RefusesShapesWithoutTheirBodies) {
+  // a hull with no polyhedron (every shape type collides; a hull needs its body)
   Collider hull;
   hull.shape.type = pba::ShapeType::Hull;
   CollisionWorld cw;
-  EXPECT_NE(error_of([&] { cw.add(hull, 0, "the rock"); }).find("the rock.type"), std::string::npos);
+  EXPECT_NE(error_of([&] { cw.add(hull, 0, "the rock"); }).find("the rock.hull"), std::string::npos);
   EXPECT_TRUE(cw.empty());
   pba::ParticleSystem ps;
   ps.spawn({.position = {0, 1, 0}});
   const std::string particle_error = error_of([&] { ps.step(0, 0.01, std::span<const Collider>(&hull, 1), {}); });
-  EXPECT_NE(particle_error.find("colliders[0].type"), std::string::npos) << particle_error;
-  EXPECT_NE(particle_error.find("hull"), std::string::npos) << particle_error;
+  EXPECT_NE(particle_error.find("colliders[0].hull"), std::string::npos) << particle_error;
   pba::SoftBody rope = pba::SoftBody::rope({});
-  EXPECT_NE(error_of([&] { rope.step(0, 0.01, std::span<const Collider>(&hull, 1)); }).find("colliders[0].type"),
+  EXPECT_NE(error_of([&] { rope.step(0, 0.01, std::span<const Collider>(&hull, 1)); }).find("colliders[0].hull"),
             std::string::npos);
   Collider bad = Collider::sphere({0, 0, 0}, -1.0);
   EXPECT_NE(error_of([&] { cw.add(bad, 0, "ball"); }).find("ball.radius"), std::string::npos);

@@ -135,7 +135,7 @@ TEST(BadFiles, NegativeOrZeroMassAndRadius) {
 TEST(BadFiles, UnknownColliderType) {
   EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "torus"}]})"),
             "scenes/x.json: /colliders/0/type: unknown value \"torus\" (expected one of \"plane\", \"sphere\", "
-            "\"box\")");
+            "\"box\", \"capsule\", \"hull\", \"mesh\", \"compound\")");
 }
 
 TEST(BadFiles, UnknownIntegratorName) {
@@ -248,6 +248,110 @@ TEST(BadFiles, ValuesThatOverflowAFloatNameTheField) {
             0u);
   EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "plane", "position": [1e39, 0, 0]}]})")
                 .rfind("scenes/x.json: /colliders/0/position: must fit a float", 0),
+            0u);
+}
+
+// ---------------------------------------------------------------------------------------
+// capsules, hulls, meshes and compounds: read as written, bad ones refused by JSON path
+
+TEST(ShapeColliders, CapsuleHullMeshAndCompoundAreRead) {
+  const pba::Scene s = pba::parse_scene(R"({"version": 1, "colliders": [
+      {"name": "bar", "type": "capsule", "radius": 0.2, "half_height": 0.7},
+      {"name": "rock", "type": "hull", "points": [[0,0,0],[1,0,0],[0,1,0],[0,0,1],[0.1,0.1,0.1]]},
+      {"name": "floor", "type": "mesh", "vertices": [[0,0,0],[1,0,0],[1,0,1],[0,0,1]], "triangles": [[0,2,1],[0,3,2]]},
+      {"name": "table", "type": "compound", "position": [2, 1, 0], "children": [
+         {"type": "box", "half_extents": [0.5, 0.05, 0.5]},
+         {"type": "compound", "position": [0, -0.5, 0], "children": [{"type": "sphere", "radius": 0.1}]}]}]})",
+                                        "scenes/x.json");
+  const auto c = s.world.colliders();
+  ASSERT_EQ(c.size(), 4u);
+  EXPECT_EQ(c[0].shape.type, pba::ShapeType::Capsule);
+  EXPECT_EQ(c[0].shape.radius, 0.2);
+  EXPECT_EQ(c[0].shape.half_height, 0.7);
+  ASSERT_EQ(c[1].shape.type, pba::ShapeType::Hull);
+  EXPECT_EQ(c[1].shape.hull->vertices().size(), 4u);  // the interior point is not a vertex
+  EXPECT_NEAR(c[1].shape.hull->volume(), 1.0 / 6, 1e-15);
+  ASSERT_EQ(c[2].shape.type, pba::ShapeType::Mesh);
+  EXPECT_EQ(c[2].shape.mesh->triangles().size(), 2u);
+  ASSERT_EQ(c[3].shape.type, pba::ShapeType::Compound);
+  ASSERT_EQ(c[3].shape.compound->children.size(), 2u);
+  EXPECT_EQ(c[3].shape.compound->children[1].pose.position, pba::Vec3(0, -0.5, 0));
+}
+
+// The shipped mesh bowl through the World: after 10 s every ball is inside the bowl (within
+// its rim, never below its surface by more than the chords' sag: the mesh is the paraboloid
+// y = 0.3 (x^2 + z^2) sampled on 0.25 m cells, so it lies at most k (0.25 / 2)^2 x 2 below
+// it mid-cell) and at rest
+TEST(ShapeColliders, MeshBowlSceneKeepsItsBallsInTheBowl) {
+  pba::Scene s = pba::load_scene(std::filesystem::path(PBA_SCENES_DIR) / "mesh_bowl.json");
+  const double sag = 0.3 * 2 * 0.125 * 0.125;
+  double lowest = 1e9;
+  for (int i = 0; i < 1200; ++i) {
+    s.world.step();
+    const pba::ParticleSystem& ps = s.world.particles();
+    for (std::size_t k = 0; k < ps.size(); ++k) {
+      const pba::Vec3 p = ps.position(k);
+      if (std::abs(p.x) < 1.5 && std::abs(p.z) < 1.5) lowest = std::min(lowest, p.y - 0.3 * (p.x * p.x + p.z * p.z));
+    }
+  }
+  const pba::ParticleSystem& ps = s.world.particles();
+  ASSERT_EQ(ps.size(), 36u);
+  EXPECT_GE(lowest, 0.05 - sag);  // the balls' radius above the surface, less the sag
+  for (std::size_t k = 0; k < ps.size(); ++k) {
+    EXPECT_LT(std::max(std::abs(ps.position(k).x), std::abs(ps.position(k).z)), 1.5) << "ball " << k;
+    EXPECT_LT(glm::length(ps.velocity(k)), 0.1) << "ball " << k;
+  }
+}
+
+TEST(ShapeColliders, BadShapesNameTheirJsonPath) {
+  auto col = [](const std::string& body) { return error_of(R"({"version": 1, "colliders": [)" + body + "]}"); };
+  // capsule
+  EXPECT_EQ(col(R"({"type": "capsule", "radius": -1})"), "scenes/x.json: /colliders/0/radius: must be > 0, got -1");
+  EXPECT_EQ(col(R"({"type": "capsule", "half_height": -0.5})"),
+            "scenes/x.json: /colliders/0/half_height: must be >= 0, got -0.5");
+  EXPECT_EQ(col(R"({"type": "box", "half_height": 1})"),
+            "scenes/x.json: /colliders/0/half_height: only for \"type\": \"capsule\"");
+  // hull: too few points, a bad point, a flat cloud, points on another type
+  EXPECT_EQ(col(R"({"type": "hull", "points": [[0,0,0],[1,0,0],[0,1,0]]})"),
+            "scenes/x.json: /colliders/0/points: needs at least 4 points, got 3");
+  EXPECT_EQ(col(R"({"type": "hull", "points": [[0,0,0],[1,0,0],[0,1,0],[0,0,"x"]]})"),
+            "scenes/x.json: /colliders/0/points/3/2: must be a number, got the string \"x\"");
+  EXPECT_EQ(col(R"({"type": "hull", "points": [[0,0,0],[1,0,0],[0,1,0],[0,0,1e39]]})")
+                .rfind("scenes/x.json: /colliders/0/points/3: must fit a float", 0),
+            0u);
+  const std::string flat = col(R"({"type": "hull", "points": [[0,0,0],[1,0,0],[0,1,0],[1,1,0],[0.5,0.5,0]]})");
+  EXPECT_EQ(flat.rfind("scenes/x.json: /colliders/0/points: a hull needs at least 4 points that are not coplanar", 0),
+            0u)
+      << flat;
+  EXPECT_NE(flat.find("coplanar (a flat cloud)"), std::string::npos) << flat;
+  EXPECT_EQ(col(R"({"type": "hull"})"), "scenes/x.json: /colliders/0: missing required field \"points\"");
+  EXPECT_EQ(col(R"({"type": "sphere", "points": []})"),
+            "scenes/x.json: /colliders/0/points: only for \"type\": \"hull\"");
+  // mesh: an index out of range, a triangle of two indices, a degenerate triangle, no triangles
+  const std::string verts = R"("vertices": [[0,0,0],[1,0,0],[1,0,1],[0,0,1],[2,0,0]])";
+  EXPECT_EQ(col(R"({"type": "mesh", )" + verts + R"(, "triangles": [[0,2,1],[0,3,7]]})"),
+            "scenes/x.json: /colliders/0/triangles/1/2: must be an integer in [0, 4], got 7");
+  EXPECT_EQ(col(R"({"type": "mesh", )" + verts + R"(, "triangles": [[0,2]]})"),
+            "scenes/x.json: /colliders/0/triangles/0: must be an array of 3 vertex indices, got an array of 2");
+  EXPECT_EQ(col(R"({"type": "mesh", )" + verts + R"(, "triangles": [[0,2,1],[0,1,4]]})"),
+            "scenes/x.json: /colliders/0/triangles/1: degenerate triangle (zero area), vertices 0, 1, 4");
+  EXPECT_EQ(col(R"({"type": "mesh", )" + verts + R"(, "triangles": []})"),
+            "scenes/x.json: /colliders/0/triangles: a mesh needs at least one triangle, got 0");
+  EXPECT_EQ(col(R"({"type": "mesh", "vertices": [[0,0,0],[1,0,"nan"]], "triangles": [[0,1,1]]})"),
+            "scenes/x.json: /colliders/0/vertices: needs at least 3 points, got 2");
+  // compound: no children, a plane or mesh child, a bad child field, a bad child pose
+  EXPECT_EQ(col(R"({"type": "compound", "children": []})"),
+            "scenes/x.json: /colliders/0/children: a compound needs at least one child, got 0");
+  EXPECT_EQ(col(R"({"type": "compound", "children": [{"type": "plane"}]})"),
+            "scenes/x.json: /colliders/0/children/0/type: unknown value \"plane\" (expected one of \"sphere\", "
+            "\"box\", \"capsule\", \"hull\", \"compound\")");
+  EXPECT_EQ(col(R"({"type": "compound", "children": [{"type": "sphere"}, {"type": "box", "half_extents": [1, 0, 1]}]})"),
+            "scenes/x.json: /colliders/0/children/1/half_extents/1: must be > 0, got 0");
+  EXPECT_EQ(col(R"({"type": "compound", "children": [{"type": "sphere", "restitution": 1}]})")
+                .rfind("scenes/x.json: /colliders/0/children/0/restitution: unknown field", 0),
+            0u);
+  EXPECT_EQ(col(R"({"type": "compound", "children": [{"type": "hull", "points": [[0,0,0],[1,0,0],[0,1,0],[2,2,0]]}]})")
+                .rfind("scenes/x.json: /colliders/0/children/0/points: a hull needs", 0),
             0u);
 }
 

@@ -21,8 +21,9 @@ namespace pba {
 /// One collision surface as its clients see it during one tick: its shape, its
 /// material, and its pose at the start and the end of the tick (equal for a static
 /// surface). The motion in between is taken as linear, so moving surfaces are swept too.
-/// Particles and soft bodies collide with planes, spheres, boxes and capsules; the other
-/// shape types are rejected with an Error naming the collider until their point contacts exist.
+/// Particles and soft bodies collide with every shape type: planes, spheres, boxes and
+/// capsules in closed form, convex hulls, triangle meshes and compounds on the generic
+/// point contact (collide/point_contact.h).
 struct Collider {
   ColliderShape shape{};           ///< shape in the surface's frame
   SurfaceMaterial material{};      ///< restitution and friction
@@ -39,14 +40,14 @@ struct Collider {
   static Collider box(const Vec3& center, const Vec3& half_extents, SurfaceMaterial m = {},
                       const Quat& rotation = Quat(1, 0, 0, 0));
   /// Throws Error naming `where` and the bad field (non-finite pose, zero normal, radius
-  /// or half extent <= 0, restitution outside [0, 1], negative friction, a shape type
-  /// that has no point contact yet).
+  /// or half extent <= 0, restitution outside [0, 1], negative friction, a hull, mesh or
+  /// compound without its body).
   void validate(std::string_view where) const;
   /// True when validate() would not throw (no allocation: the hot paths check this first
   /// and build the message only for a bad collider).
   bool ok() const;
-  /// Draws the surface at its end pose: the shape when `flags.shapes`, its world bounds
-  /// when `flags.aabbs`.
+  /// Draws the surface at its end pose: the shape when `flags.shapes` (hull faces and
+  /// edges, mesh triangles, compound children too), its world bounds when `flags.aabbs`.
   void draw(DebugDraw& draw, Color c, const DrawFlags& flags = {}) const;
 };
 

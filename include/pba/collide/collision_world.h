@@ -45,9 +45,21 @@ struct FlatShape {
   T vx = 0, vy = 0, vz = 0;                  ///< linear velocity of the frame origin (m/s)
   T wx = 0, wy = 0, wz = 0;                  ///< angular velocity (rad/s)
   bool is_static = true;                     ///< same pose at start and end, no velocity
+  /// Hull, mesh, compound: the largest distance from the frame origin to a corner of the
+  /// shape's local bounds (m), for the clients' broad phases.
+  T reach = 0;
+  /// Hull, mesh, compound: the collider itself (held by the CollisionWorld), whose double
+  /// poses and shape body the generic point contact reads (collide/point_contact.h).
+  const Collider* source = nullptr;
+  /// Compound: its leaf children (spheres, boxes, capsules, hulls; nested compounds
+  /// flattened), each flattened in double at its composed pose, held by the CollisionWorld.
+  const FlatShape<double>* parts = nullptr;
+  std::uint32_t first_part = 0;  ///< compound: index of parts[0] in the world's part list
+  std::uint32_t n_parts = 0;     ///< compound: number of leaf children
 };
 
-/// The flat form of a valid collider (planes, spheres, boxes and capsules).
+/// The flat form of a valid collider. For a hull, mesh or compound the links (source,
+/// parts) are left null: the CollisionWorld that holds the collider sets them.
 template <class T>
 FlatShape<T> flatten(const Collider& c);
 
@@ -55,16 +67,27 @@ FlatShape<T> flatten(const Collider& c);
 
 /// The world-space shapes of one tick. Fill it (clear() then add(), or assign()), then
 /// hand it to the clients. Not thread-safe to fill; const access may be shared.
+/// Hulls, meshes and compounds are held by their shared bodies; a compound's children are
+/// flattened into a part list kept beside the shapes (reused on refill, like the shapes).
 class CollisionWorld {
  public:
+  CollisionWorld() = default;
+  /// A copy links its flat forms to its own colliders and parts.
+  CollisionWorld(const CollisionWorld& o);
+  /// A copy links its flat forms to its own colliders and parts.
+  CollisionWorld& operator=(const CollisionWorld& o);
+  CollisionWorld(CollisionWorld&&) noexcept = default;             ///< the buffers (and links) move along
+  CollisionWorld& operator=(CollisionWorld&&) noexcept = default;  ///< the buffers (and links) move along
+
   /// Owner id of a shape that belongs to no entity.
   static constexpr std::uint32_t kNoOwner = 0xffffffffu;
 
   /// Removes every shape; keeps the capacity (no allocation on refill).
   void clear();
   /// Adds a collider for this tick and returns its index. Validates it: an Error names
-  /// `where` and the bad field, or the shape type that particles and soft bodies cannot
-  /// collide with yet. `owner` is the client's id (the World passes the entity index).
+  /// `where` and the bad field. Every shape type is taken (planes, spheres, boxes,
+  /// capsules, hulls, meshes, compounds). `owner` is the client's id (the World passes
+  /// the entity index).
   std::size_t add(const Collider& c, std::uint32_t owner = kNoOwner, std::string_view where = "collider");
   /// Replaces every shape by `colliders` (no owners); an Error names `where`[i].
   void assign(std::span<const Collider> colliders, std::string_view where = "colliders");
@@ -89,7 +112,12 @@ class CollisionWorld {
 
  private:
   std::size_t push(const Collider& c, std::uint32_t owner);  // add() after validation
+  void add_parts(const ColliderShape& s, const Collider& parent, const Pose& begin, const Pose& end);
+  void link(std::size_t i);  // points flat form i at its collider and parts
+  void relink();             // every flat form (after a buffer moved)
   std::vector<Collider> colliders_;
+  std::vector<Collider> parts_;                       // compounds' leaf children, world poses
+  std::vector<detail::FlatShape<double>> part_flat_;  // and their flat forms
   std::vector<std::uint32_t> owners_;
   std::vector<detail::FlatShape<float>> flat_f_;
   std::vector<detail::FlatShape<double>> flat_d_;
