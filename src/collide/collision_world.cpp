@@ -110,6 +110,7 @@ void CollisionWorld::clear() {
   owners_.clear();
   flat_f_.clear();
   flat_d_.clear();
+  ++revision_;
 }
 
 std::size_t CollisionWorld::add(const Collider& c, std::uint32_t owner, std::string_view where) {
@@ -123,6 +124,7 @@ std::size_t CollisionWorld::push(const Collider& c, std::uint32_t owner) {
   owners_.push_back(owner);
   flat_f_.push_back(detail::flatten<float>(c));
   flat_d_.push_back(detail::flatten<double>(c));
+  ++revision_;
   return colliders_.size() - 1;
 }
 
@@ -148,6 +150,7 @@ void CollisionWorld::set(std::size_t i, const Collider& c, std::string_view wher
   colliders_[i] = c;
   flat_f_[i] = detail::flatten<float>(c);
   flat_d_[i] = detail::flatten<double>(c);
+  ++revision_;
 }
 
 void CollisionWorld::draw(DebugDraw& draw, Color c, const DrawFlags& flags) const {
