@@ -135,6 +135,7 @@ void QueryWorld::refit() {
     // the same colliders: move each leaf (free while it stays in its fat box)
     for (std::size_t i = 0; i < n; ++i)
       if (leaf_[i] != DynamicTree::kNull) tree_.move_proxy(leaf_[i], bounds_[i]);
+    flatten();
     return;
   }
   // otherwise a fresh tree, built top-down by the surface-area heuristic
@@ -148,6 +149,66 @@ void QueryWorld::refit() {
       unbounded_.push_back(static_cast<std::uint32_t>(i));
   }
   tree_.rebuild();
+  flatten();
+}
+
+void QueryWorld::flatten() {
+  // depth-first from the root: a node's first child is the next node, which keeps the
+  // nearer half of most traversals in the same few cache lines
+  flat_.clear();
+  const auto nodes = tree_.nodes();
+  const std::int32_t top = tree_.root();
+  if (top == DynamicTree::kNull) {
+    root_ = kEmpty;
+    return;
+  }
+  auto ref = [&](std::int32_t n) {
+    const DynamicTree::Node& d = nodes[static_cast<std::size_t>(n)];
+    return d.is_leaf() ? ~static_cast<std::int32_t>(d.user) : n;
+  };
+  if (nodes[static_cast<std::size_t>(top)].is_leaf()) {
+    root_ = ref(top);
+    return;
+  }
+  // the stack holds (tree node, flat slot of its parent, which child it is)
+  struct Item {
+    std::int32_t node, parent, side;
+  };
+  Item stack[query::kStack];
+  int depth = 0;
+  stack[depth++] = {top, -1, 0};
+  root_ = 0;
+  while (depth > 0) {
+    const Item it = stack[--depth];
+    const DynamicTree::Node& d = nodes[static_cast<std::size_t>(it.node)];
+    const auto slot = static_cast<std::int32_t>(flat_.size());
+    if (it.parent >= 0) flat_[static_cast<std::size_t>(it.parent)].child[it.side] = slot;
+    Node out;
+    const std::int32_t c[2] = {d.child1, d.child2};
+    for (int k = 0; k < 2; ++k) {
+      out.box[k] = nodes[static_cast<std::size_t>(c[k])].box;
+      out.child[k] = ref(c[k]);
+    }
+    flat_.push_back(out);
+    // the second child is pushed first so the first is flattened next
+    for (int k = 1; k >= 0; --k)
+      if (out.child[k] >= 0) stack[depth++] = {c[k], slot, k};
+  }
+  // the boxes tight again: the tree's leaves are fat (cheap refits), the traversals want
+  // the colliders' own bounds; children come after their parents, so a backward pass
+  // merges each node's boxes before its parent reads them
+  for (std::size_t k = flat_.size(); k-- > 0;) {
+    Node& n = flat_[k];
+    for (int side = 0; side < 2; ++side) {
+      const std::int32_t c = n.child[side];
+      if (c < 0) {
+        n.box[side] = bounds_[static_cast<std::size_t>(~c)];
+      } else {
+        const Node& m = flat_[static_cast<std::size_t>(c)];
+        n.box[side] = m.box[0].merged(m.box[1]);
+      }
+    }
+  }
 }
 
 void QueryWorld::set_filter(std::size_t i, const CollisionFilter& filter) {
@@ -191,7 +252,7 @@ QueryRayHit QueryWorld::ray_cast(const Ray& ray_in, const QueryFilter& filter) c
   };
   double max_t = ray.max_distance;
   for (std::uint32_t i : unbounded_) max_t = test(i, max_t);
-  query::sweep(tree_, ray.origin, ray.direction, max_t, Vec3(0.0), Vec3(0.0), test);
+  query::sweep(flat_, root_, ray.origin, ray.direction, max_t, Vec3(0.0), Vec3(0.0), test);
   return best;
 }
 
@@ -208,7 +269,7 @@ QueryRayHit QueryWorld::ray_cast_any(const Ray& ray_in, const QueryFilter& filte
   };
   for (std::uint32_t i : unbounded_)
     if (test(i, ray.max_distance) < 0) return found;
-  query::sweep(tree_, ray.origin, ray.direction, ray.max_distance, Vec3(0.0), Vec3(0.0), test);
+  query::sweep(flat_, root_, ray.origin, ray.direction, ray.max_distance, Vec3(0.0), Vec3(0.0), test);
   return found;
 }
 
@@ -226,7 +287,7 @@ std::size_t QueryWorld::ray_cast_all(const Ray& ray_in, std::span<QueryRayHit> o
     return max_t;
   };
   for (std::uint32_t i : unbounded_) test(i, ray.max_distance);
-  query::sweep(tree_, ray.origin, ray.direction, ray.max_distance, Vec3(0.0), Vec3(0.0), test);
+  query::sweep(flat_, root_, ray.origin, ray.direction, ray.max_distance, Vec3(0.0), Vec3(0.0), test);
   return total;
 }
 

@@ -317,7 +317,7 @@ ShapeCastHit QueryWorld::sphere_cast(const Ray& path_in, double radius, const Qu
   };
   double max_t = path.max_distance;
   for (std::uint32_t i : unbounded_) max_t = test(i, max_t);
-  query::sweep(tree_, path.origin, path.direction, max_t, Vec3(-radius), Vec3(radius), test);
+  query::sweep(flat_, root_, path.origin, path.direction, max_t, Vec3(-radius), Vec3(radius), test);
   if (best.hit) best.fraction = path.max_distance > 0 ? best.distance / path.max_distance : 0;
   return best;
 }
@@ -342,7 +342,7 @@ ShapeCastHit QueryWorld::shape_cast(const ColliderShape& shape, const Pose& star
   };
   double max_t = max_distance;
   for (std::uint32_t i : unbounded_) max_t = test(i, max_t);
-  query::sweep(tree_, start.position, d, max_t, b0.lo - start.position, b0.hi - start.position, test);
+  query::sweep(flat_, root_, start.position, d, max_t, b0.lo - start.position, b0.hi - start.position, test);
   if (best.hit) best.fraction = max_distance > 0 ? best.distance / max_distance : 0;
   return best;
 }
@@ -362,7 +362,7 @@ std::size_t QueryWorld::overlap(const ColliderShape& shape, const Pose& pose, st
     return true;
   };
   for (std::uint32_t i : unbounded_) test(i);
-  tree_.query(box, test);
+  query::overlapping(flat_, root_, box, test);
   return total;
 }
 
@@ -376,7 +376,7 @@ std::size_t QueryWorld::overlap_bounds(const Aabb& box, std::span<std::uint32_t>
     return true;
   };
   for (std::uint32_t i : unbounded_) test(i);
-  tree_.query(box, test);
+  query::overlapping(flat_, root_, box, test);
   return total;
 }
 
@@ -400,7 +400,7 @@ QueryDistance QueryWorld::closest_point(const Vec3& point, double max_distance, 
       best = {true, pd.distance, pd.point, point, pd.normal, i, owners_[i]};
   };
   for (std::uint32_t i : unbounded_) test(i);
-  query::nearest(tree_, at, bound2, test);
+  query::nearest(flat_, root_, at, bound2, test);
   return best;
 }
 
@@ -420,7 +420,7 @@ QueryDistance QueryWorld::closest_shape(const ColliderShape& shape, const Pose& 
       best = {true, r.distance, r.point_b, r.point_a, -r.normal, i, owners_[i]};
   };
   for (std::uint32_t i : unbounded_) test(i);
-  query::nearest(tree_, box, bound2, test);
+  query::nearest(flat_, root_, box, bound2, test);
   return best;
 }
 

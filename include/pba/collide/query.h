@@ -23,6 +23,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -133,6 +134,19 @@ class QueryWorld {
   const Aabb& bounds(std::size_t i) const { return bounds_[i]; }
   /// The tree over the bounded colliders (leaf user values are collider indices).
   const DynamicTree& tree() const { return tree_; }
+  /// A node of the flat copy of the tree that the queries traverse (made at every build, in
+  /// depth-first order): both children's boxes side by side, so a step reads one node. The
+  /// boxes are tight (the colliders' bounds and their unions), not the tree's fat ones.
+  struct Node {
+    Aabb box[2];              ///< the children's boxes
+    std::int32_t child[2]{};  ///< >= 0: a node index; < 0: the leaf of collider ~child
+  };
+  /// The flat tree's nodes (empty when it has fewer than two leaves).
+  std::span<const Node> nodes() const { return flat_; }
+  /// The flat tree's root: a node index, ~collider for a single leaf, or kEmpty.
+  std::int32_t root() const { return root_; }
+  /// root() of a tree without leaves.
+  static constexpr std::int32_t kEmpty = std::numeric_limits<std::int32_t>::max();
   /// True when `filter` accepts collider i.
   bool accepts(const QueryFilter& filter, std::uint32_t i) const;
 
@@ -196,6 +210,7 @@ class QueryWorld {
  private:
   void push(const Collider& c, std::uint32_t owner);
   void refit();
+  void flatten();
   std::vector<ColliderShape> shapes_;
   std::vector<Pose> poses_;
   std::vector<std::uint32_t> owners_;
@@ -204,6 +219,8 @@ class QueryWorld {
   std::vector<std::int32_t> leaf_;        // tree leaf of each collider, kNull for planes
   std::vector<std::uint32_t> unbounded_;  // colliders outside the tree (planes), increasing
   DynamicTree tree_{kTreeMargin};
+  std::vector<Node> flat_;                // the tree, flattened for the traversals
+  std::int32_t root_ = kEmpty;
 };
 
 }  // namespace pba
