@@ -405,6 +405,18 @@ RayResult sweeps_query(const Scene& s, const std::vector<Sweep>& sweeps) {
   return {(cpu_now() - t0) * 1e6 / double(sweeps.size()), hits};
 }
 
+// one Bullet sweep of `probe` from w.from to w.to, closest hit
+btCollisionWorld::ClosestConvexResultCallback bullet_sweep(BulletWorld& b, const btSphereShape& probe, const Sweep& w) {
+  btTransform ta, tb;
+  ta.setIdentity();
+  tb.setIdentity();
+  ta.setOrigin(btVector3(btScalar(w.from.x), btScalar(w.from.y), btScalar(w.from.z)));
+  tb.setOrigin(btVector3(btScalar(w.to.x), btScalar(w.to.y), btScalar(w.to.z)));
+  btCollisionWorld::ClosestConvexResultCallback cb(ta.getOrigin(), tb.getOrigin());
+  b.world.convexSweepTest(&probe, ta, tb, cb);
+  return cb;
+}
+
 RayResult sweeps_bullet(const Scene& s, const std::vector<Sweep>& sweeps) {
   BulletWorld b(s);
   b.world.performDiscreteCollisionDetection();
@@ -412,13 +424,7 @@ RayResult sweeps_bullet(const Scene& s, const std::vector<Sweep>& sweeps) {
   int hits = 0;
   const double t0 = cpu_now();
   for (const Sweep& w : sweeps) {
-    btTransform ta, tb;
-    ta.setIdentity();
-    tb.setIdentity();
-    ta.setOrigin(btVector3(btScalar(w.from.x), btScalar(w.from.y), btScalar(w.from.z)));
-    tb.setOrigin(btVector3(btScalar(w.to.x), btScalar(w.to.y), btScalar(w.to.z)));
-    btCollisionWorld::ClosestConvexResultCallback cb(ta.getOrigin(), tb.getOrigin());
-    b.world.convexSweepTest(&probe, ta, tb, cb);
+    const btCollisionWorld::ClosestConvexResultCallback cb = bullet_sweep(b, probe, w);
     hits += cb.hasHit();
   }
   return {(cpu_now() - t0) * 1e6 / double(sweeps.size()), hits};
@@ -441,13 +447,7 @@ void sweep_agreement(const Scene& s, const std::vector<Sweep>& sweeps) {
     const Vec3 d = w.to - w.from;
     const double len = glm::length(d);
     const pba::ShapeCastHit h = q.sphere_cast({w.from, d / len, len}, kProbe);
-    btTransform ta, tb;
-    ta.setIdentity();
-    tb.setIdentity();
-    ta.setOrigin(btVector3(btScalar(w.from.x), btScalar(w.from.y), btScalar(w.from.z)));
-    tb.setOrigin(btVector3(btScalar(w.to.x), btScalar(w.to.y), btScalar(w.to.z)));
-    btCollisionWorld::ClosestConvexResultCallback cb(ta.getOrigin(), tb.getOrigin());
-    b.world.convexSweepTest(&probe, ta, tb, cb);
+    const btCollisionWorld::ClosestConvexResultCallback cb = bullet_sweep(b, probe, w);
     if (!h.hit || !cb.hasHit()) continue;
     const Vec3 c = w.from + h.distance * (d / len);
     if (h.distance > 0)  // (0: overlapping at the start)
