@@ -27,6 +27,12 @@ namespace {
 using namespace pba;
 using namespace pba::test_support;
 
+#if defined(__SANITIZE_ADDRESS__)
+constexpr int kScale = 10;  // the sanitizers run ~10x slower: a tenth of the cases
+#else
+constexpr int kScale = 1;
+#endif
+
 // --- references ---------------------------------------------------------------------------
 
 struct Toi {
@@ -122,7 +128,7 @@ TEST(QueryCast, SphereCastEqualsClosedForms) {
   std::mt19937_64 rng(21);
   std::uniform_real_distribution<double> size(0.2, 1.5), off(-3, 3);
   int hits[4] = {0, 0, 0, 0}, skipped = 0, total = 0;
-  for (int k = 0; k < 20000; ++k) {
+  for (int k = 0; k < 20000 / kScale; ++k) {
     const int kind = k % 4;
     const Pose p{Vec3(off(rng), off(rng), off(rng)), random_rotation(rng)};
     ColliderShape s;
@@ -180,7 +186,7 @@ TEST(QueryCast, SphereCastEqualsClosedForms) {
     EXPECT_NEAR(glm::length(centre - r * h.normal - h.point), 0, 1e-9);
     EXPECT_LE(glm::dot(h.normal, path.direction), 1e-12);
   }
-  for (int kind = 0; kind < 4; ++kind) EXPECT_GT(hits[kind], 1000) << kind;
+  for (int kind = 0; kind < 4; ++kind) EXPECT_GT(hits[kind], 1000 / kScale) << kind;
   EXPECT_LT(skipped, total / 100);
 }
 
@@ -223,7 +229,7 @@ TEST(QueryCast, ConvexCastsEqualBisectionOnGjkDistance) {
   const IcoSphere ico = icosphere(1, 1.0);
   const auto mesh = TriangleMesh::build(ico.vertices, ico.triangles);
   int hits = 0, skipped = 0, total = 0, steps_hit[3] = {0, 0, 0};
-  for (int k = 0; k < 6000; ++k) {
+  for (int k = 0; k < 6000 / kScale; ++k) {
     // a target of each kind
     Collider c;
     switch (k % 6) {
@@ -263,7 +269,7 @@ TEST(QueryCast, ConvexCastsEqualBisectionOnGjkDistance) {
     EXPECT_NEAR(glm::length(h.normal), 1, 1e-12);
   }
   EXPECT_GT(hits, total / 4);
-  for (int n : steps_hit) EXPECT_GT(n, 300);
+  for (int n : steps_hit) EXPECT_GT(n, 300 / kScale);
   EXPECT_LT(skipped, total / 20);
 }
 
@@ -275,7 +281,7 @@ TEST(QueryCast, WorldCastsEqualBruteForce) {
   std::uniform_real_distribution<double> pos(-1, s.side + 1), size(0.1, 0.6), len(0, 10);
   const QueryFilter filters[3] = {{}, {.layer = 1, .mask = 5}, {.ignore_owner = 3}};
   int hits = 0, skipped = 0, total = 0, filtered = 0;
-  for (int k = 0; k < 1200; ++k) {
+  for (int k = 0; k < 1200 / kScale; ++k) {
     ColliderShape m;
     switch (k % 4) {
       case 0: m = ColliderShape::sphere(size(rng)); break;
@@ -323,7 +329,7 @@ TEST(QueryCast, WorldCastsEqualBruteForce) {
     EXPECT_EQ(h.owner, s.owners[h.collider]);
   }
   EXPECT_GT(hits, total / 4);
-  EXPECT_GT(filtered, 100);
+  EXPECT_GT(filtered, 100 / kScale);
   EXPECT_LT(skipped, total / 20);
 }
 
