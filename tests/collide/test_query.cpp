@@ -152,6 +152,29 @@ TEST(Query, TiesGoToTheLowerIndex) {
   EXPECT_EQ(all[0].collider, 1u);
 }
 
+TEST(Query, EmptyAndPlaneOnlyWorlds) {
+  // no colliders: nothing is hit, found or overlapped
+  QueryWorld q;
+  const Ray down{Vec3(0, 5, 0), Vec3(0, -1, 0), 10};
+  std::uint32_t ids[2];
+  EXPECT_FALSE(q.ray_cast(down).hit);
+  EXPECT_FALSE(q.sphere_cast(down, 0.5).hit);
+  EXPECT_EQ(q.overlap(ColliderShape::sphere(1), {}, ids), 0u);
+  EXPECT_FALSE(q.closest_point(Vec3(0.0), 100).found);
+  // a ground plane alone (outside the tree): ray 5 m, sphere of 0.5 m 4.5 m, a box resting
+  // on it overlaps, a point 2 m above is 2 m away
+  q.build(std::vector<Collider>{Collider::plane(Vec3(0, 1, 0), 0)});
+  EXPECT_DOUBLE_EQ(q.ray_cast(down).distance, 5.0);
+  EXPECT_DOUBLE_EQ(q.sphere_cast(down, 0.5).distance, 4.5);
+  EXPECT_EQ(q.overlap(ColliderShape::box(Vec3(0.5)), {Vec3(0, 0.5, 0), Quat(1, 0, 0, 0)}, ids), 1u);
+  EXPECT_EQ(q.overlap(ColliderShape::box(Vec3(0.5)), {Vec3(0, 0.51, 0), Quat(1, 0, 0, 0)}, ids), 0u);
+  EXPECT_DOUBLE_EQ(q.closest_point(Vec3(0, 2, 0), 100).distance, 2.0);
+  const QueryDistance d = q.closest_shape(ColliderShape::sphere(0.5), {Vec3(0, 2, 0), Quat(1, 0, 0, 0)}, 100);
+  EXPECT_DOUBLE_EQ(d.distance, 1.5);
+  EXPECT_NEAR(glm::length(d.point - Vec3(0, 0, 0)), 0, 1e-15);
+  EXPECT_NEAR(glm::length(d.normal - Vec3(0, 1, 0)), 0, 1e-15);
+}
+
 TEST(Query, UnnormalisedDirectionsAreNormalised) {
   QueryWorld q;
   q.build(std::vector<Collider>{Collider::sphere(Vec3(0, 0, 10), 1)});

@@ -96,7 +96,9 @@ struct QueryDistance {
   double distance = 0;
   Vec3 point{0, 0, 0};        ///< closest point on the collider's surface (m)
   Vec3 query_point{0, 0, 0};  ///< closest point on the query shape (m); the query point itself for points
-  Vec3 normal{0, 1, 0};       ///< unit normal of the collider at `point` (outward; towards the query)
+  /// Unit normal of the collider at `point` (outward, towards the query); for a shape that
+  /// overlaps the collider (distance 0) it is not a contact normal (use the narrow phase).
+  Vec3 normal{0, 1, 0};
   std::uint32_t collider = 0;                      ///< index of the collider in the world
   std::uint32_t owner = CollisionWorld::kNoOwner;  ///< its owner id
 };
