@@ -2,7 +2,7 @@
 // Bullet's collision world (btDbvtBroadphase) and ODE's spaces (dHashSpace and
 // dSweepAndPruneSpace), on the same scene, in the same process; and 5 m ray casts.
 //
-//   bench_collide [--quick] [--repeat R] [--frames F] [--counts 1000,10000] [--rays N]
+//   bench_collide [--quick] [--repeat R] [--frames F] [--counts 1000,10000] [--rays N] [--sweeps N]
 //
 // Scene (exactly as /work/shared/peers/bullet_collision.cpp builds it): N bodies, even ones
 // 1 m boxes, odd ones spheres of 0.5 m radius, at uniform random positions in the cube
@@ -24,6 +24,12 @@
 // Rays: 5 m rays from uniform random points in random directions (as Bullet's harness),
 // the closest hit; pba casts through the tree and tests each body's box (AABB level) or its
 // shape (pba::ray_cast, the same work as Bullet's rayTest, which tests its shapes).
+// Queries (pba::QueryWorld, collide/query.h) on the same scene, per query:
+//   rays          QueryWorld::ray_cast (closest hit, shapes) against Bullet's rayTest and
+//                 ODE's dSpaceCollide2 of a dRay (closest hit) with the hash space
+//   sphere casts  QueryWorld::sphere_cast of a 0.25 m sphere from (U, U, -1) to
+//                 (U, U, side + 1) (the sweeps of bullet_collision.cpp) against Bullet's
+//                 convexSweepTest with a ClosestConvexResultCallback
 #include <btBulletCollisionCommon.h>
 #include <ode/ode.h>
 
@@ -39,6 +45,7 @@
 #include <vector>
 
 #include "pba/collide/broad_phase.h"
+#include "pba/collide/query.h"
 
 namespace {
 
@@ -308,10 +315,187 @@ RayResult rays_bullet(const Scene& s, const std::vector<pba::Ray>& rays) {
   return {(cpu_now() - t0) * 1e6 / double(rays.size()), hits};
 }
 
+// --- world queries ---------------------------------------------------------------------------
+
+// the bodies as colliders; the rotations (float quaternions, |q| - 1 up to about 1e-7)
+// normalised in double so that a rotated shape keeps its size to the last bits
+pba::QueryWorld query_world(const Scene& s) {
+  Bodies b(s);
+  std::vector<pba::Collider> cs(std::size_t(s.n));
+  for (int i = 0; i < s.n; ++i) {
+    cs[i].shape = b.shape[i];
+    cs[i].begin = cs[i].end = {b.pose[i].position, glm::normalize(b.pose[i].rotation)};
+  }
+  pba::QueryWorld q;
+  q.build(cs);
+  return q;
+}
+
+RayResult rays_query(const Scene& s, const std::vector<pba::Ray>& rays) {
+  const pba::QueryWorld q = query_world(s);
+  int hits = 0;
+  const double t0 = cpu_now();
+  for (const pba::Ray& ray : rays) hits += q.ray_cast(ray).hit;
+  return {(cpu_now() - t0) * 1e6 / double(rays.size()), hits};
+}
+
+// ODE: a dRay outside the space, closest hit, against the hash space by dSpaceCollide2
+struct OdeRay {
+  bool hit = false;
+  double depth = 0;
+};
+
+void ode_ray_near(void* data, dGeomID a, dGeomID b) {
+  auto* r = static_cast<OdeRay*>(data);
+  dContactGeom g;
+  if (dCollide(a, b, 1, &g, sizeof(dContactGeom)) > 0 && (!r->hit || g.depth < r->depth)) r->hit = true, r->depth = g.depth;
+}
+
+RayResult rays_ode(const Scene& s, const std::vector<pba::Ray>& rays) {
+  dSpaceID space = dHashSpaceCreate(nullptr);
+  for (int i = 0; i < s.n; ++i) {
+    const dGeomID g = s.is_box(i) ? dCreateBox(space, 1, 1, 1) : dCreateSphere(space, 0.5);
+    dGeomSetPosition(g, s.start[i].x, s.start[i].y, s.start[i].z);
+    const pba::Quat& q = s.rotation[i];
+    const dQuaternion dq = {q.w, q.x, q.y, q.z};
+    dGeomSetQuaternion(g, dq);
+  }
+  const dGeomID ray = dCreateRay(nullptr, 5.0);
+  dGeomRaySetClosestHit(ray, 1);
+  int hits = 0;
+  const double t0 = cpu_now();
+  for (const pba::Ray& r : rays) {
+    dGeomRaySet(ray, r.origin.x, r.origin.y, r.origin.z, r.direction.x, r.direction.y, r.direction.z);
+    OdeRay out;
+    dSpaceCollide2(ray, reinterpret_cast<dGeomID>(space), &out, &ode_ray_near);
+    hits += out.hit;
+  }
+  const double us = (cpu_now() - t0) * 1e6 / double(rays.size());
+  dGeomDestroy(ray);
+  dSpaceDestroy(space);
+  return {us, hits};
+}
+
+// the sweeps of bullet_collision.cpp: from (U, U, -1) to (U, U, side + 1)
+struct Sweep {
+  Vec3 from, to;
+};
+
+std::vector<Sweep> make_sweeps(const Scene& s, int count) {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> U(0, float(s.side));
+  std::vector<Sweep> out;
+  for (int i = 0; i < count; ++i) {
+    const float ax = U(rng), ay = U(rng), bx = U(rng), by = U(rng);
+    out.push_back({Vec3(ax, ay, -1.0), Vec3(bx, by, s.side + 1)});
+  }
+  return out;
+}
+
+constexpr double kProbe = 0.25;  // the swept sphere's radius (m)
+
+RayResult sweeps_query(const Scene& s, const std::vector<Sweep>& sweeps) {
+  const pba::QueryWorld q = query_world(s);
+  int hits = 0;
+  const double t0 = cpu_now();
+  for (const Sweep& w : sweeps) {
+    const Vec3 d = w.to - w.from;
+    hits += q.sphere_cast({w.from, d / glm::length(d), glm::length(d)}, kProbe).hit;
+  }
+  return {(cpu_now() - t0) * 1e6 / double(sweeps.size()), hits};
+}
+
+// one Bullet sweep of `probe` from w.from to w.to, closest hit
+btCollisionWorld::ClosestConvexResultCallback bullet_sweep(BulletWorld& b, const btSphereShape& probe, const Sweep& w) {
+  btTransform ta, tb;
+  ta.setIdentity();
+  tb.setIdentity();
+  ta.setOrigin(btVector3(btScalar(w.from.x), btScalar(w.from.y), btScalar(w.from.z)));
+  tb.setOrigin(btVector3(btScalar(w.to.x), btScalar(w.to.y), btScalar(w.to.z)));
+  btCollisionWorld::ClosestConvexResultCallback cb(ta.getOrigin(), tb.getOrigin());
+  b.world.convexSweepTest(&probe, ta, tb, cb);
+  return cb;
+}
+
+RayResult sweeps_bullet(const Scene& s, const std::vector<Sweep>& sweeps) {
+  BulletWorld b(s);
+  b.world.performDiscreteCollisionDetection();
+  btSphereShape probe{btScalar(kProbe)};
+  int hits = 0;
+  const double t0 = cpu_now();
+  for (const Sweep& w : sweeps) {
+    const btCollisionWorld::ClosestConvexResultCallback cb = bullet_sweep(b, probe, w);
+    hits += cb.hasHit();
+  }
+  return {(cpu_now() - t0) * 1e6 / double(sweeps.size()), hits};
+}
+
+// the same sweeps untimed, pba against Bullet: on the sweeps where both hit the same body,
+// the median and largest difference of the distance to the first contact (Bullet works in
+// float and lets a cast penetrate by its allowed CCD penetration); the sweeps where they hit
+// different bodies, and how many of those pba's hit comes first; and pba's largest gap
+// |point distance - r| at its own contacts (0 for an exact time of impact)
+void sweep_agreement(const Scene& s, const std::vector<Sweep>& sweeps) {
+  const pba::QueryWorld q = query_world(s);
+  BulletWorld b(s);
+  b.world.performDiscreteCollisionDetection();
+  btSphereShape probe{btScalar(kProbe)};
+  std::vector<double> same;
+  int other = 0, pba_first = 0;
+  double gap = 0;
+  for (const Sweep& w : sweeps) {
+    const Vec3 d = w.to - w.from;
+    const double len = glm::length(d);
+    const pba::ShapeCastHit h = q.sphere_cast({w.from, d / len, len}, kProbe);
+    const btCollisionWorld::ClosestConvexResultCallback cb = bullet_sweep(b, probe, w);
+    if (!h.hit || !cb.hasHit()) continue;
+    const Vec3 c = w.from + h.distance * (d / len);
+    if (h.distance > 0)  // (0: overlapping at the start)
+      gap = std::max(gap, std::abs(pba::point_distance(q.shape(h.collider), q.pose(h.collider), c).distance - kProbe));
+    const auto body = std::size_t(static_cast<const btCollisionObject*>(cb.m_hitCollisionObject) - b.objects.data());
+    const double bd = double(cb.m_closestHitFraction) * len;
+    if (body == h.collider) {
+      same.push_back(std::abs(h.distance - bd));
+    } else {
+      ++other;
+      pba_first += h.distance < bd;
+    }
+  }
+  std::printf("  against bullet: same body in %zu sweeps, |distance difference| median %.1e m, max %.1e m;\n"
+              "  another body in %d (pba's first in %d); pba's largest gap at its contacts %.1e m\n\n",
+              same.size(), median(same), same.empty() ? 0.0 : *std::max_element(same.begin(), same.end()), other,
+              pba_first, gap);
+}
+
+// the query rows: medians of `repeat` runs, ratios within each run
+void query_rows(const Scene& s, const std::vector<pba::Ray>& rays, int nsweeps, int repeat) {
+  const std::vector<Sweep> sweeps = make_sweeps(s, nsweeps);
+  std::vector<double> q, b, o, rb, ro, sq, sb, rs;
+  RayResult lq, lb, lo, lsq, lsb;
+  for (int r = 0; r < repeat; ++r) {
+    lq = rays_query(s, rays), lb = rays_bullet(s, rays), lo = rays_ode(s, rays);
+    lsq = sweeps_query(s, sweeps), lsb = sweeps_bullet(s, sweeps);
+    q.push_back(lq.us), b.push_back(lb.us), o.push_back(lo.us);
+    rb.push_back(lb.us / lq.us), ro.push_back(lo.us / lq.us);
+    sq.push_back(lsq.us), sb.push_back(lsb.us), rs.push_back(lsb.us / lsq.us);
+  }
+  const double nr = double(rays.size()), ns = double(sweeps.size());
+  std::printf("  queries, %zu rays of 5 m (closest hit):    us/ray   hit   peer / pba\n", rays.size());
+  std::printf("  %-34s %10.3f %4.0f%%\n", "pba QueryWorld::ray_cast", median(q), 100.0 * lq.hits / nr);
+  std::printf("  %-34s %10.3f %4.0f%% %10.2f\n", "bullet rayTest", median(b), 100.0 * lb.hits / nr, median(rb));
+  std::printf("  %-34s %10.3f %4.0f%% %10.2f\n", "ode dSpaceCollide2(dRay), hash", median(o), 100.0 * lo.hits / nr,
+              median(ro));
+  std::printf("  sphere casts r = %.2f m, %d, z = -1 to side + 1: us/cast  hit   peer / pba\n", kProbe, nsweeps);
+  std::printf("  %-34s %10.3f %4.0f%%\n", "pba QueryWorld::sphere_cast", median(sq), 100.0 * lsq.hits / ns);
+  std::printf("  %-34s %10.3f %4.0f%% %10.2f\n", "bullet convexSweepTest", median(sb), 100.0 * lsb.hits / ns,
+              median(rs));
+  sweep_agreement(s, sweeps);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  int repeat = 5, frames = 200, nrays = 20000;
+  int repeat = 5, frames = 200, nrays = 20000, nsweeps = 2000;
   std::vector<int> counts{1000, 10000};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -326,6 +510,9 @@ int main(int argc, char** argv) {
       repeat = 1;
       frames = 20;
       nrays = 2000;
+      nsweeps = 200;
+    } else if (a == "--sweeps") {
+      nsweeps = std::max(1, std::atoi(value().c_str()));
     } else if (a == "--repeat") {
       repeat = std::max(1, std::atoi(value().c_str()));
     } else if (a == "--frames") {
@@ -342,7 +529,7 @@ int main(int argc, char** argv) {
       }
     } else {
       std::fprintf(stderr, "unknown flag '%s'\nusage: bench_collide [--quick] [--repeat R] [--frames F] "
-                           "[--counts 1000,10000] [--rays N]\n", a.c_str());
+                           "[--counts 1000,10000] [--rays N] [--sweeps N]\n", a.c_str());
       return 2;
     }
   }
@@ -409,6 +596,7 @@ int main(int argc, char** argv) {
     std::printf("  %-34s %10.3f %4.0f%% %10.2f\n", "pba tree + ray_cast(shape)", median(pe), 100.0 * he / nrays,
                 median(re));
     std::printf("  %-34s %10.3f %4.0f%%\n\n", "bullet rayTest (shapes)", median(br), 100.0 * bh / nrays);
+    query_rows(s, rays, nsweeps, repeat);
   }
   dCloseODE();
   return 0;

@@ -1,14 +1,18 @@
 // "Collision/Ray casts": a fan of rays swept over a gallery of every collider shape
 // (sphere, box, capsule, convex hull, triangle mesh, compound, ground plane); each ray is
 // cast against every shape with pba::ray_cast and stops at the closest hit, whose point
-// and surface normal are drawn. Click to cast a ray of your own from the camera.
+// and surface normal are drawn. Click to cast a ray of your own from the camera. The
+// "cast" option switches to the world queries (pba::QueryWorld over the same shapes): world
+// ray casts, or sphere casts that draw the sphere where it first touches a shape.
 #include <cmath>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
 #include <imgui.h>
 
 #include "camera.h"
+#include "pba/collide/query.h"
 #include "pba/collide/shape.h"
 #include "renderer.h"
 #include "sample.h"
@@ -33,6 +37,20 @@ class CollideRays final : public Sample {
  public:
   explicit CollideRays(SampleContext& ctx) : Sample(ctx) {
     ctx.camera->frame({0.2f, 0.45f, 0.2f}, 4.4f, 0.0f, 0.5f);
+    const std::string cast = ctx.option("cast", "shapes");
+    if (cast == "shapes") mode_ = kShapeByShape;
+    else if (cast == "rays") mode_ = kWorldRays;
+    else if (cast == "spheres") mode_ = kSphereCasts;
+    else throw Error("--option cast=" + cast + ": expected shapes, rays or spheres");
+    const std::string rays = ctx.option("rays", "40");
+    rays_ = std::atoi(rays.c_str());
+    if (rays_ < 1 || rays_ > 100 || rays.find_first_not_of("0123456789") != std::string::npos)
+      throw Error("--option rays=" + rays + ": expected a count in [1, 100]");
+    const std::string radius = ctx.option("radius", "0.12");
+    char* end = nullptr;
+    radius_ = std::strtof(radius.c_str(), &end);
+    if (end == radius.c_str() || *end != 0 || !(radius_ >= 0.02f && radius_ <= 0.4f))
+      throw Error("--option radius=" + radius + ": expected a sphere radius in [0.02, 0.4] m");
     build_gallery();
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<CollideRays>(ctx); }
@@ -65,12 +83,22 @@ class CollideRays final : public Sample {
   }
 
   void DrawUI() override {
-    ImGui::TextWrapped("Each ray is cast against every shape (pba::ray_cast) and stops at the "
-                       "closest hit: the yellow point, with the surface normal in cyan. Click "
-                       "anywhere to cast a ray from the camera (pink).");
+    if (mode_ == kShapeByShape)
+      ImGui::TextWrapped("Each ray is cast against every shape (pba::ray_cast) and stops at the "
+                         "closest hit: the yellow point, with the surface normal in cyan. Click "
+                         "anywhere to cast a ray from the camera (pink).");
+    else if (mode_ == kWorldRays)
+      ImGui::TextWrapped("Each ray is one QueryWorld::ray_cast over all the shapes (a tree of their "
+                         "bounds): the closest hit in yellow, its normal in cyan. Click to cast one.");
+    else
+      ImGui::TextWrapped("Each ray is the path of a sphere's centre (QueryWorld::sphere_cast): the "
+                         "sphere is drawn where it first touches a shape, the contact point in "
+                         "yellow and the surface normal in cyan. Click to cast one.");
     ImGui::SliderInt("rays per row", &rays_, 1, 100);
     ImGui::SliderFloat("spread (m)", &spread_, 0.5f, 9.0f);
     ImGui::Checkbox("sweep", &spin_);
+    ImGui::Combo("cast", &mode_, "shape by shape (ray_cast)\0world rays (QueryWorld)\0sphere casts (QueryWorld)\0");
+    if (mode_ == kSphereCasts) ImGui::SliderFloat("sphere radius (m)", &radius_, 0.02f, 0.4f);
     ImGui::Text("hits this frame: %d of %d", hits_, 3 * rays_);
     if (clicked_ && click_hit_.hit)
       ImGui::Text("click: %s at %.3f m, feature %u", click_name_.c_str(), click_hit_.distance, click_hit_.feature);
@@ -121,15 +149,36 @@ class CollideRays final : public Sample {
         {ColliderShape::triangles(TriangleMesh::build(v, tris, "bowl")), Pose{{1.9, 0.05, 0}, {1, 0, 0, 0}}, "mesh"},
         {compound, Pose{{3.2, 0.3, 0}, glm::angleAxis(0.4, Vec3(0, 1, 0))}, "compound"},
     };
+    // the same shapes as a query world
+    std::vector<Collider> colliders;
+    for (const Placed& p : shapes_) {
+      Collider c;
+      c.shape = p.shape;
+      c.begin = c.end = p.pose;
+      colliders.push_back(c);
+    }
+    queries_.build(colliders);
   }
 
-  // the closest hit over the gallery; draws the ray, and the hit point and normal
+  // the closest hit over the gallery, shape by shape or through the query world; draws the
+  // ray, and the hit point and normal (a sphere cast: the sphere at its first contact)
   void cast_and_draw(Renderer& r, const Ray& ray, Color ray_color, Color miss_color) {
     RayHit best;
     std::size_t which = 0;
-    for (std::size_t i = 0; i < shapes_.size(); ++i) {
-      const RayHit h = ray_cast(shapes_[i].shape, shapes_[i].pose, ray);
-      if (h.hit && (!best.hit || h.distance < best.distance)) best = h, which = i;
+    if (mode_ == kShapeByShape) {
+      for (std::size_t i = 0; i < shapes_.size(); ++i) {
+        const RayHit h = ray_cast(shapes_[i].shape, shapes_[i].pose, ray);
+        if (h.hit && (!best.hit || h.distance < best.distance)) best = h, which = i;
+      }
+    } else if (mode_ == kWorldRays) {
+      const QueryRayHit h = queries_.ray_cast(ray);
+      best = {h.hit, h.distance, h.point, h.normal, h.feature};
+      which = h.collider;
+    } else {
+      const ShapeCastHit h = queries_.sphere_cast(ray, radius_);
+      best = {h.hit, h.distance, h.point, h.normal, 0};
+      which = h.collider;
+      if (h.hit) r.sphere(ray.origin + h.distance * ray.direction, radius_, Color::hex(0xffc53d, 0.35f));
     }
     if (&ray == &click_) click_hit_ = best, click_name_ = best.hit ? shapes_[which].name : "";
     else hits_ += best.hit;
@@ -179,7 +228,11 @@ class CollideRays final : public Sample {
     }
   }
 
+  enum Mode { kShapeByShape, kWorldRays, kSphereCasts };
   std::vector<Placed> shapes_;
+  QueryWorld queries_;
+  int mode_ = kShapeByShape;
+  float radius_ = 0.12f;
   double angle_ = 0;
   int rays_ = 40;
   float spread_ = 7.6f;

@@ -385,7 +385,23 @@ class World {
   /// each shape as the flags select (shapes, aabbs), coloured by type and sleep.
   void draw_rigid_bodies(DebugDraw& draw, const DrawFlags& flags = {}, const RigidBodyColors& colors = {}) const;
 
+  // ---- queries ----
+
+  /// Ray casts, shape casts, overlap and distance queries (collide/query.h) over the
+  /// colliders of the last tick, collision(); a hit's owner is the entity's index. Built on
+  /// the first call after the collision world changed (the same collider count refits the
+  /// tree and does not allocate); not thread-safe, the queries on the result are.
+  const QueryWorld& queries() {
+    if (queries_revision_ != collision_.revision()) {
+      queries_.build(collision_);
+      queries_revision_ = collision_.revision();
+    }
+    return queries_;
+  }
+
  private:
+  QueryWorld queries_;                     // queries(), built from collision_ when stale
+  std::uint64_t queries_revision_ = ~0ull;  // collision_.revision() it was built from
   struct EntityRecord {
     std::string name;
     Pose pose;

@@ -160,6 +160,7 @@ void CollisionWorld::clear() {
   owners_.clear();
   flat_f_.clear();
   flat_d_.clear();
+  ++revision_;
 }
 
 // a compound's leaves, depth first, each at its pose composed with the compound's; the
@@ -224,6 +225,7 @@ std::size_t CollisionWorld::push(const Collider& c, std::uint32_t owner) {
     for (std::size_t j = first; j < parts_.size(); ++j) part_flat_[j].source = &parts_[j];
     link(colliders_.size() - 1);
   }
+  ++revision_;
   return colliders_.size() - 1;
 }
 
@@ -270,6 +272,7 @@ void CollisionWorld::set(std::size_t i, const Collider& c, std::string_view wher
     flat_f_[i].n_parts = flat_d_[i].n_parts = static_cast<std::uint32_t>(n);
   }
   relink();
+  ++revision_;
 }
 
 void CollisionWorld::draw(DebugDraw& draw, Color c, const DrawFlags& flags) const {

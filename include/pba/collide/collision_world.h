@@ -107,6 +107,10 @@ class CollisionWorld {
   /// The flat forms in double (parallel to colliders()), for the soft bodies.
   std::span<const detail::FlatShape<double>> flat_double() const { return flat_d_; }
 
+  /// A counter bumped by every change (clear, add, assign, set): a client caching something
+  /// built from the world (a QueryWorld) rebuilds when it differs from the one it saw.
+  std::uint64_t revision() const { return revision_; }
+
   /// Draws every shape at its end pose (DrawFlags::shapes, DrawFlags::aabbs).
   void draw(DebugDraw& draw, Color c, const DrawFlags& flags = {}) const;
 
@@ -121,6 +125,7 @@ class CollisionWorld {
   std::vector<std::uint32_t> owners_;
   std::vector<detail::FlatShape<float>> flat_f_;
   std::vector<detail::FlatShape<double>> flat_d_;
+  std::uint64_t revision_ = 0;
 };
 
 }  // namespace pba
