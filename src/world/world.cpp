@@ -650,9 +650,8 @@ void World::refresh_body_colliders(bool tick) {
     const Pose end = rigid_.pose(id);
     const Pose begin = tick && i < body_begin_.size() ? body_begin_[i] : end;
     const Vec3 w = rigid_.angular_velocity(id);
+    // every shape type: particles and soft bodies collide with hulls, meshes and compounds too
     for (const RigidShapeDef& sd : rigid_.shapes(id)) {
-      const ShapeType t = sd.shape.type;
-      if (t != ShapeType::Plane && t != ShapeType::Sphere && t != ShapeType::Box && t != ShapeType::Capsule) continue;
       Collider c;
       c.shape = sd.shape;
       c.material = sd.material;

@@ -380,10 +380,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x78e942fcf7a93e70ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x78bce1d217e480ecull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x131c720c8340a09full) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x47b010f0d8a61883ull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0xee2871f42f2f36e5ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x7fc5a56c4d835f67ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0xd7d40ae0a54c773eull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x803d2e285fd0cc4dull) << std::hex << xpbd;
 }
 
 }  // namespace
