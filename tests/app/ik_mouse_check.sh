@@ -20,14 +20,8 @@ report=$work/report.txt
 pid=$!
 trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null' EXIT
 
-# field NAME [K]: the K-th value (default 1) after NAME in the report
-field() { awk -v n="$1" -v k="${2:-1}" '{for (i = 1; i <= NF; ++i) if ($i == n) {print $(i + k); exit}}' "$report" 2>/dev/null; }
-ge() { awk -v a="$1" -v b="$2" 'BEGIN {exit !(a + 0 >= b + 0)}'; }
-
 # the window is up and the sample has drawn some frames
-wait_until "the first frames" '[ -s "$report" ] && ge "$(field frame)" 10'
-wid=$(xdotool search --onlyvisible --name '^pba samples$' 2>/dev/null | head -n 1)
-[ -n "$wid" ] || fail "no visible window named 'pba samples'"
+find_window
 f0=$(field frame)
 wait_until "a newer report" 'ge "$(field frame)" $((f0 + 5))'
 tx0=$(field target 1); ty0=$(field target 2); tz0=$(field target 3)
@@ -43,10 +37,7 @@ wait_until "the grab" 'ge "$(field grabs)" 1'
 
 # drag it in small steps to the left and down
 x1=$((x0 - 110)); y1=$((y0 + 45))
-for k in 1 2 3 4 5 6 7 8 9 10; do
-  xdotool mousemove --window "$wid" $((x0 + (x1 - x0) * k / 10)) $((y0 + (y1 - y0) * k / 10))
-  sleep 0.15
-done
+drag "$x0" "$y0" "$x1" "$y1"
 # the target follows the cursor (its pixel within 4 px of the mouse)
 near_mouse='awk -v x="$(field pixel 1)" -v y="$(field pixel 2)" -v mx='$x1' -v my='$y1' "BEGIN {exit !((x - mx)^2 + (y - my)^2 < 16)}"'
 wait_until "the target under the mouse at ($x1, $y1)" "$near_mouse"
@@ -57,10 +48,8 @@ wait_until "the chain to reach the target" 'r=$(field residual); [ -n "$r" ] && 
 tx=$(field target 1); ty=$(field target 2); tz=$(field target 3)
 ex=$(field effector 1); ey=$(field effector 2); ez=$(field effector 3)
 echo "after the drag: target ($tx, $ty, $tz), effector ($ex, $ey, $ez), residual $(field residual) m"
-moved=$(awk -v a="$tx" -v b="$ty" -v c="$tz" -v d="$tx0" -v e="$ty0" -v f="$tz0" \
-  'BEGIN {printf "%.4f", sqrt((a - d)^2 + (b - e)^2 + (c - f)^2)}')
-gap=$(awk -v a="$tx" -v b="$ty" -v c="$tz" -v d="$ex" -v e="$ey" -v f="$ez" \
-  'BEGIN {printf "%.6f", sqrt((a - d)^2 + (b - e)^2 + (c - f)^2)}')
+moved=$(dist3 "$tx" "$ty" "$tz" "$tx0" "$ty0" "$tz0")
+gap=$(dist3 "$tx" "$ty" "$tz" "$ex" "$ey" "$ez")
 echo "target moved $moved m; effector to target $gap m"
 ge "$moved" 0.05 || fail "the target moved only $moved m"
 ge 0.001 "$gap" || fail "the effector is $gap m from the target"

@@ -21,12 +21,8 @@ report=$work/report.txt
 pid=$!
 trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null' EXIT
 
-field() { awk -v n="$1" -v k="${2:-1}" '{for (i = 1; i <= NF; ++i) if ($i == n) {print $(i + k); exit}}' "$report" 2>/dev/null; }
-ge() { awk -v a="$1" -v b="$2" 'BEGIN {exit !(a + 0 >= b + 0)}'; }
-
-wait_until "the first frames" '[ -s "$report" ] && ge "$(field frame)" 30'
-wid=$(xdotool search --onlyvisible --name '^pba samples$' 2>/dev/null | head -n 1)
-[ -n "$wid" ] || fail "no visible window named 'pba samples'"
+find_window
+wait_until "a settled column" 'ge "$(field frame)" 30'
 bx0=$(field body 1); by0=$(field body 2); bz0=$(field body 3)
 px=$(field pixel 1); py=$(field pixel 2)
 echo "box at ($bx0, $by0, $bz0), pixel ($px, $py)"
@@ -40,15 +36,11 @@ wait_until "the grab" 'ge "$(field grabs)" 1 && ge "$(field held)" 1'
 
 # drag it up and to the left in small steps, then hold until the box is near the cursor
 x1=$((x0 - 120)); y1=$((y0 - 90))
-for k in 1 2 3 4 5 6 7 8 9 10; do
-  xdotool mousemove --window "$wid" $((x0 + (x1 - x0) * k / 10)) $((y0 + (y1 - y0) * k / 10))
-  sleep 0.15
-done
+drag "$x0" "$y0" "$x1" "$y1"
 near='awk -v x="$(field pixel 1)" -v y="$(field pixel 2)" -v mx='$x1' -v my='$y1' "BEGIN {exit !((x - mx)^2 + (y - my)^2 < 40^2)}"'
 wait_until "the box near the cursor at ($x1, $y1)" "$near"
 bx=$(field body 1); by=$(field body 2); bz=$(field body 3)
-moved=$(awk -v a="$bx" -v b="$by" -v c="$bz" -v d="$bx0" -v e="$by0" -v f="$bz0" \
-  'BEGIN {printf "%.4f", sqrt((a - d)^2 + (b - e)^2 + (c - f)^2)}')
+moved=$(dist3 "$bx" "$by" "$bz" "$bx0" "$by0" "$bz0")
 echo "held at ($bx, $by, $bz): moved $moved m, up by $(awk -v a="$by" -v b="$by0" 'BEGIN {print a - b}') m"
 ge "$moved" 0.3 || fail "the box moved only $moved m"
 ge "$by" "$(awk -v b="$by0" 'BEGIN {print b + 0.2}')" || fail "the box was not lifted (y $by from $by0)"
@@ -59,7 +51,7 @@ sleep 0.1
 xdotool mouseup 1
 wait_until "the release" '[ "$(field held)" = 0 ]'
 vx=$(field velocity 1); vy=$(field velocity 2); vz=$(field velocity 3)
-speed=$(awk -v a="$vx" -v b="$vy" -v c="$vz" 'BEGIN {printf "%.4f", sqrt(a * a + b * b + c * c)}')
+speed=$(dist3 "$vx" "$vy" "$vz" 0 0 0)
 echo "released at $speed m/s"
 ge "$speed" 0.05 || fail "the released box is not moving ($speed m/s)"
 echo "PASS: the mouse grabbed, carried and threw the box"
