@@ -326,7 +326,7 @@ class World {
   /// The rigid bodies.
   const RigidBodySystem& rigid() const { return rigid_; }
   /// The entities' rigid-body shapes as world-space colliders (begin and end poses of the
-  /// last tick, velocities at the shape origins; planes, spheres, boxes and capsules), as
+  /// last tick, velocities at the shape origins; every shape type), as
   /// they joined the tick's collision world after the rigid stage. Refreshed when a body is
   /// added or moved between ticks (then begin = end).
   std::span<const Collider> body_colliders() const { return body_colliders_; }
