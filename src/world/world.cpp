@@ -323,10 +323,13 @@ ForcerId World::add_forcer(EntityId e, const Forcer& def) {
   EntityRecord& r = record(e, "World::add_forcer");
   if (r.forcer != kNone) throw Error("World::add_forcer: " + describe(e) + " already has a forcer");
   def.validate("forcer of " + describe(e));
-  r.forcer = static_cast<std::uint32_t>(forcers_.size());
-  forcers_.push_back({e, def, forcer_ids_.create(e)});
+  // and as the world forcer it becomes at the entity's pose (an entity far out can put a
+  // forcer beyond what the float kernels hold)
   Forcer w = def;
   w.pose = compose(r.pose, def.pose);
+  w.validate("forcer of " + describe(e) + " at the entity's pose");
+  r.forcer = static_cast<std::uint32_t>(forcers_.size());
+  forcers_.push_back({e, def, forcer_ids_.create(e)});
   world_forcers_.push_back(w);
   return forcers_.back().id;
 }
@@ -550,6 +553,9 @@ void World::sync(double /*t*/, double dt) {
     const EntityRecord& r = records_[forcers_[i].owner.index];
     world_forcers_[i] = forcers_[i].def;
     world_forcers_[i].pose = compose(r.pose, forcers_[i].def.pose);
+    // an entity moved out of the floats' range takes its forcer with it: refused by name
+    if (!is_finite(Vec3f(world_forcers_[i].pose.position)))
+      world_forcers_[i].validate("forcer of " + describe(forcers_[i].owner) + " at the entity's pose");
   }
   for (const EntityRecord& r : records_)
     if (!r.emitter.is_null()) particles_.set_emitter_pose(r.emitter, compose(r.pose, r.emitter_local));

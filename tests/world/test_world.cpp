@@ -196,6 +196,35 @@ TEST(Forcers, ValuesThatOverflowAFloatAreRefusedByField) {
   w.add_forcer(strong, {.strength = 1e30});  // large, but a float
 }
 
+// An entity whose pose is a finite double beyond a float's range, with a forcer at a zero
+// offset: the world forcer would not fit the float kernels. Refused at add_forcer, and when
+// a forcer's entity is moved out there later, at the next tick, naming the entity.
+TEST(Forcers, AnEntityBeyondTheFloatsTakesItsForcerThereAndIsRefused) {
+  World w;
+  const EntityId far = w.create_entity({.name = "far fan", .pose = {.position = {1e39, 0, 0}}});
+  std::string msg;
+  try {
+    w.add_forcer(far, {});
+  } catch (const pba::Error& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("far fan"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("position"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("float"), std::string::npos) << msg;
+  const EntityId fan = w.create_entity({.name = "moved fan"});
+  w.add_forcer(fan, {});
+  w.step();
+  w.set_pose(fan, {.position = {0, -1e39, 0}});
+  msg.clear();
+  try {
+    w.step();
+  } catch (const pba::Error& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("moved fan"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("float"), std::string::npos) << msg;
+}
+
 TEST(Constraints, DistanceIsKept) {
   World w({.stepper = {.fixed_dt = 1.0 / 120}});
   const EntityId anchor = w.create_entity({.pose = {.position = {0, 2, 0}}});
