@@ -339,6 +339,9 @@ EmitterId World::add_emitter(EntityId e, const EmitterDef& def) {
   if (!r.emitter.is_null()) throw Error("World::add_emitter: " + describe(e) + " already has an emitter");
   EmitterDef d = def;
   d.pose = compose(r.pose, def.pose);
+  // the particles it emits are floats: its pose in the world must fit one
+  if (!is_finite(Vec3f(d.pose.position)))
+    require_float(d.pose.position, "emitter of " + describe(e) + " at the entity's pose: position");
   r.emitter = particles_.add_emitter(d, "emitter of " + describe(e));
   r.emitter_local = def.pose;
   return r.emitter;
@@ -557,8 +560,16 @@ void World::sync(double /*t*/, double dt) {
     if (!is_finite(Vec3f(world_forcers_[i].pose.position)))
       world_forcers_[i].validate("forcer of " + describe(forcers_[i].owner) + " at the entity's pose");
   }
-  for (const EntityRecord& r : records_)
-    if (!r.emitter.is_null()) particles_.set_emitter_pose(r.emitter, compose(r.pose, r.emitter_local));
+  for (std::size_t i = 0; i < records_.size(); ++i) {
+    const EntityRecord& r = records_[i];
+    if (r.emitter.is_null()) continue;
+    const Pose p = compose(r.pose, r.emitter_local);
+    // an entity moved beyond a float's range would emit non-finite particles: refused by name
+    if (!is_finite(Vec3f(p.position)))
+      require_float(p.position, "emitter of entity " + std::to_string(i) + (r.name.empty() ? "" : " '" + r.name + "'") +
+                                    " at the entity's pose: position");
+    particles_.set_emitter_pose(r.emitter, p);
+  }
 }
 
 // ---------------------------------------------------------------------------------------

@@ -225,6 +225,33 @@ TEST(Forcers, AnEntityBeyondTheFloatsTakesItsForcerThereAndIsRefused) {
   EXPECT_NE(msg.find("float"), std::string::npos) << msg;
 }
 
+// The same for an emitter: its particles are floats, so an emitter whose entity lies beyond
+// a float's range is refused at add_emitter, and one moved there later at the next tick.
+TEST(Emitters, AnEntityBeyondTheFloatsTakesItsEmitterThereAndIsRefused) {
+  World w;
+  const EntityId far = w.create_entity({.name = "far hose", .pose = {.position = {0, 0, 1e39}}});
+  std::string msg;
+  try {
+    w.add_emitter(far, {.rate = 10});
+  } catch (const pba::Error& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("far hose"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("float"), std::string::npos) << msg;
+  const EntityId hose = w.create_entity({.name = "moved hose"});
+  w.add_emitter(hose, {.rate = 10});
+  w.step();
+  w.set_pose(hose, {.position = {-1e39, 0, 0}});
+  msg.clear();
+  try {
+    w.step();
+  } catch (const pba::Error& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("moved hose"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("float"), std::string::npos) << msg;
+}
+
 TEST(Constraints, DistanceIsKept) {
   World w({.stepper = {.fixed_dt = 1.0 / 120}});
   const EntityId anchor = w.create_entity({.pose = {.position = {0, 2, 0}}});
