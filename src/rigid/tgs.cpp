@@ -9,7 +9,7 @@
 // comes from the separation measured at the bodies' poses of that substep, integrates the
 // positions and, optionally, runs relax iterations without bias. One restitution pass follows.
 //
-// Differences to the soft step (same passes, src/rigid/contacts.cpp): the contacts are rigid
+// Differences to the soft step (same passes, src/rigid/contact_solver.cpp): the contacts are rigid
 // (full effective mass, no impulse scale), and overlap beyond the linear slop is removed at
 // `baumgarte` of it per substep (capped by push_out_speed) instead of by an implicit spring of
 // contact_hertz; the iterations per substep are a setting (substep_iterations,

@@ -2,7 +2,7 @@
 //
 // Mueller, Macklin, Chentanez, Jeschke and Kim (2020), "Detailed rigid body simulation with
 // extended position based dynamics", Algorithm 2. The contact pairs and manifolds are found
-// once per step (src/rigid/contacts.cpp); each substep then
+// once per step (src/rigid/contact_pairs.cpp); each substep then
 //   1. saves the poses and integrates velocities and positions freely (gravity, forces,
 //      damping; the rotation by the exact-flow splitting of Dullweber et al. 1997, which keeps
 //      a tumbling body's angular momentum where the paper's explicit gyroscopic term does not),
