@@ -236,6 +236,9 @@ class SceneFile final : public Sample {
       std::fprintf(stderr, "pba_samples: Particles/Scene file: %s\n", error_.c_str());
       return;
     }
+    // say what opened (a dropped file has no other echo)
+    std::printf("pba_samples: Particles/Scene file: opened %s\n", fs::absolute(file).lexically_normal().c_str());
+    std::fflush(stdout);
     // the file's step and integrator become the app's (the panel can change them)
     if (adopt_settings) {
       ctx_.settings.stepper.fixed_dt = scene_->world.stepper().settings().fixed_dt;
