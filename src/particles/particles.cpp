@@ -222,7 +222,7 @@ void ParticleDef::validate(std::string_view where) const {
     throw Error(field_path(where, "lifetime") + ": must be > 0 (infinity for immortal), got " + format_value(lifetime));
   require_float_particle(position, mass, radius, where);
   if (!is_finite(Vec3f(velocity))) require_float(velocity, field_path(where, "velocity"));
-  require_particle_speed(glm::length(velocity), field_path(where, "velocity"));
+  if (glm::length(velocity) > kMaxParticleSpeed) require_particle_speed(glm::length(velocity), field_path(where, "velocity"));
 }
 
 void EmitterDef::validate(std::string_view where) const {
@@ -266,7 +266,9 @@ void Forces::validate(std::string_view where) const {
     require_float(quadratic_drag, field_path(where, "quadratic_drag"));
   const Vec3 strongest = glm::abs(wind.velocity) + Vec3(wind.gust);
   if (!is_finite(Vec3f(strongest))) require_float(strongest, field_path(where, "wind.velocity + wind.gust"));
-  require_particle_speed(glm::length(strongest), field_path(where, "wind.velocity + wind.gust"));
+  // (the path is built only on failure: this runs every step, which allocates nothing)
+  if (glm::length(strongest) > kMaxParticleSpeed)
+    require_particle_speed(glm::length(strongest), field_path(where, "wind.velocity + wind.gust"));
 }
 
 // value noise: hashed lattice values in [-1, 1], quintic (C2) interpolation
