@@ -427,6 +427,10 @@ class ParticleSystem {
   long long emitted(EmitterId id) const;
   /// Live emitters.
   std::size_t emitter_count() const { return emitters_.size(); }
+  /// The emitter at slot `slot` (0 .. emitter_count() - 1; slots shift when one is removed).
+  EmitterId emitter_at(std::size_t slot) const { return emitters_[slot].id; }
+  /// Where particle i came from: its emitter's slot + 1, or 0 for a particle created by itself.
+  std::uint32_t source(std::size_t i) const { return source_[i]; }
 
   // ---- stepping ----
 
