@@ -38,6 +38,14 @@ double squared_error(const Skeleton& s) {
   return c;
 }
 
+// one cold solve by method m from the bent pose toward `target` (the first effector's)
+SolveResult solve_from_bent_pose(Skeleton& s, Method m, const Vec3& target) {
+  scenes::bent_pose(s);
+  s.set_target(0, target);
+  Solver solver(s, m);
+  return solver.solve();
+}
+
 // random unit direction
 Vec3 direction(std::mt19937_64& rng) {
   std::normal_distribution<double> g;
@@ -138,10 +146,7 @@ TEST(IkClosestPose, MixedChainsStraightenTowardUnreachableTargets) {
         ++cases;
         const Vec3 target = (1.2 + 0.1 * cases) * L * u;
         for (Method m : kIterative) {
-          scenes::bent_pose(s);
-          s.set_target(0, target);
-          Solver solver(s, m);
-          const SolveResult r = solver.solve();
+          const SolveResult r = solve_from_bent_pose(s, m, target);
           EXPECT_NEAR(r.residual, glm::length(target) - L, tol)
               << name(m) << ", " << n << (limited ? " limited" : " free") << " bones";
           EXPECT_EQ(r.stop, StopReason::Stalled) << name(m);
@@ -177,10 +182,7 @@ TEST(IkClosestPose, ChainsWithAHingeAtTheRootStraightenTowardUnreachableTargets)
       const Vec3 p = l0 * glm::normalize(Vec3(target.x, target.y, 0));
       const double closest = glm::length(target - p) - (L - l0);
       for (Method m : kIterative) {
-        scenes::bent_pose(s);
-        s.set_target(0, target);
-        Solver solver(s, m);
-        const SolveResult r = solver.solve();
+        const SolveResult r = solve_from_bent_pose(s, m, target);
         EXPECT_NEAR(r.residual, closest, tol) << name(m) << ", " << n << " bones, case " << k;
         EXPECT_EQ(r.stop, StopReason::Stalled) << name(m);
       }
@@ -365,10 +367,7 @@ TEST(IkClosestPose, LimitedMixedChainsEndAtAStationaryPose) {
         ++cases;
         const Vec3 target = (1.2 + 0.1 * cases) * L * u;
         for (Method m : kIterative) {
-          scenes::bent_pose(s);
-          s.set_target(0, target);
-          Solver solver(s, m);
-          const SolveResult r = solver.solve();
+          const SolveResult r = solve_from_bent_pose(s, m, target);
           ASSERT_TRUE(s.within_limits(1e-9));
           ClosestPoseReference ref(s, n - 1, target);
           ASSERT_LT(ref.minimise(1e-10, 100000), 1e-10) << "the reference did not converge";
