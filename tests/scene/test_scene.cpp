@@ -249,6 +249,17 @@ TEST(BadFiles, ValuesThatOverflowAFloatNameTheField) {
   EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "plane", "position": [1e39, 0, 0]}]})")
                 .rfind("scenes/x.json: /colliders/0/position: must fit a float", 0),
             0u);
+  // speeds that fit a float but whose square (the drag's, in float) does not: NaN at the
+  // first tick before (kMaxParticleSpeed)
+  EXPECT_EQ(error_of(R"({"version": 1, "particles": [{"velocity": [1e20, 0, 0]}]})")
+                .rfind("scenes/x.json: /particles/0/velocity: a speed of 1e+20 m/s is above the particles' limit", 0),
+            0u);
+  EXPECT_EQ(error_of(R"({"version": 1, "emitters": [{"speed": 8e18, "speed_jitter": 0.5}]})")
+                .rfind("scenes/x.json: /emitters/0/speed (with its jitter): a speed of 1.2e+19 m/s", 0),
+            0u);
+  EXPECT_EQ(error_of(R"({"version": 1, "settings": {"wind": {"velocity": [0, 0, 2e19]}}})")
+                .rfind("scenes/x.json: /settings/wind (velocity + gust): a speed of 2e+19 m/s", 0),
+            0u);
 }
 
 // ---------------------------------------------------------------------------------------
