@@ -136,7 +136,9 @@ int main(int argc, char** argv) {
   for (int i = 4; i < argc; ++i) append_uri(&uri_list, &len, &cap, argv[i]);
   uri_list[len] = 0;
 
-  dpy = XOpenDisplay(NULL);
+  /* an X server now and then refuses a connection the next attempt gets (Xvfb in sandboxed
+     VMs): a few tries before giving up */
+  for (int attempt = 0; attempt < 5 && !(dpy = XOpenDisplay(NULL)); ++attempt) usleep(100000u << attempt);
   if (!dpy) return fail("cannot open the display");
   a_aware = XInternAtom(dpy, "XdndAware", False);
   a_enter = XInternAtom(dpy, "XdndEnter", False);
@@ -182,7 +184,10 @@ int main(int argc, char** argv) {
   }
   send_xdnd(a_drop, 0, CurrentTime, 0, 0);
   if (wait_for(a_finished, &msg, 10)) return fail("no XdndFinished from the target after XdndDrop");
-  if (version >= 5 && !(msg.data.l[1] & 1)) return fail("the target finished without accepting the drop");
+  /* the spec's accept flag is bit 0 of l[1]; GLFW 3.3 puts there the byte count of the data
+     it read (0 when it read none), whose bit 0 is the path's length parity: any nonzero value
+     is an accepted drop */
+  if (version >= 5 && msg.data.l[1] == 0) return fail("the target finished without accepting the drop");
   printf("xdnd_drop: dropped %s", uri_list);
   XDestroyWindow(dpy, source);
   XCloseDisplay(dpy);

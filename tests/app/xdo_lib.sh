@@ -44,6 +44,23 @@ drag() {
   done
 }
 
+# xdotool, retried when the X server refused its connection (an Xvfb in a sandboxed VM now
+# and then refuses one connection in ten under load; the next attempt gets through); any
+# other failure (a search that finds nothing) returns at once
+xdotool() {
+  local k rc errf
+  errf=$(mktemp)
+  for k in 1 2 3 4 5; do
+    command xdotool "$@" 2>"$errf"
+    rc=$?
+    if [ $rc -eq 0 ] || ! grep -q "open display" "$errf"; then break; fi
+    sleep 0.2
+  done
+  cat "$errf" >&2
+  rm -f "$errf"
+  return $rc
+}
+
 # a display and xdotool, then a clean working directory
 [ -n "${DISPLAY:-}" ] || fail "DISPLAY is not set (run under xvfb-run, as scripts/test does)"
 command -v xdotool >/dev/null || fail "xdotool is not installed (scripts/install-deps)"
