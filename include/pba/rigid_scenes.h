@@ -96,27 +96,29 @@ struct SceneRandom {
 };
 
 /// A rain of `n` mixed bodies over the ground plane (mu 0.5): alternately boxes (half extents
-/// each uniform in 0.2 ... 0.5 m, random orientation) and spheres (radius 0.2 ... 0.5 m, rolling
-/// resistance 0.1), density 1000 kg/m^3, restitution 0, released at rest in layers of
+/// each uniform in 0.15 ... 0.4 m, random orientation) and spheres (radius 0.15 ... 0.4 m,
+/// rolling resistance 0.1), density 1000 kg/m^3, restitution 0, released at rest in layers of
 /// c x c columns 2 m apart (c = ceil(sqrt(n / 4)), 50 for 10,000 bodies: a 100 m square), the
-/// layers 2 m apart from 10 m up, each body jittered by up to 0.4 m. They land within two
-/// seconds, pile up to four high where they meet and fall asleep. Returns the bodies.
+/// layers 2 m apart from 10 m up, each body moved by up to 0.25 m along each axis (so no two
+/// start closer than 1.5 m, more than the two largest bounding radii, 2 x 0.4 sqrt(3) m).
+/// They land within two seconds, in heaps where a column's bodies meet, and fall asleep.
+/// Returns the bodies.
 inline std::vector<RigidBodyId> rain(RigidBodySystem& s, int n = 10000) {
   ground(s, 0.5);
   const int c = static_cast<int>(std::ceil(std::sqrt(n / 4.0)));
   SceneRandom r{0x853c49e6748fea9bull};
-  auto jitter = [&r] { return 0.8 * r.next() - 0.4; };
+  auto jitter = [&r] { return 0.5 * r.next() - 0.25; };
   std::vector<RigidBodyId> out;
   for (int i = 0; i < n; ++i) {
     const int layer = i / (c * c), column = i % (c * c);
     const Vec3 p{2.0 * (column % c - 0.5 * (c - 1)) + jitter(), 10 + 2.0 * layer + jitter(),
                  2.0 * (column / c - 0.5 * (c - 1)) + jitter()};
     if (i % 2 == 0) {
-      const Vec3 h{0.2 + 0.3 * r.next(), 0.2 + 0.3 * r.next(), 0.2 + 0.3 * r.next()};
+      const Vec3 h{0.15 + 0.25 * r.next(), 0.15 + 0.25 * r.next(), 0.15 + 0.25 * r.next()};
       const Quat q = glm::normalize(Quat(r.next() - 0.5, r.next() - 0.5, r.next() - 0.5, r.next() - 0.5) + Quat(0.05, 0, 0, 0));
       out.push_back(box(s, p, h, 0.5, 1000, q));
     } else {
-      out.push_back(s.create({.pose = {p}, .shapes = {{.shape = ColliderShape::sphere(0.2 + 0.3 * r.next()),
+      out.push_back(s.create({.pose = {p}, .shapes = {{.shape = ColliderShape::sphere(0.15 + 0.25 * r.next()),
                                                       .material = {.restitution = 0, .friction = 0.5},
                                                       .rolling_resistance = 0.1}}}));
     }
