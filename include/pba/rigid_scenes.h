@@ -85,6 +85,55 @@ inline Vec3 jolt_pyramid_rest(int levels = 15) {
   return {x, 1 + 2.0 * i, x};
 }
 
+/// The cards of a card house (m): length (the long side), width and thickness.
+struct CardSize {
+  double length = 1.0;     ///< along the card's local y (m)
+  double width = 0.7;      ///< along its local z (m)
+  double thickness = 0.02; ///< along its local x (m)
+};
+
+/// A card tower: `levels` - 1 storeys of two A-frames (two cards leaning `lean` rad from the
+/// vertical, their top edges 1 mm apart) side by side in x with a flat card across their two
+/// ridges, each storey standing on the flat card below it, crowned by one A-frame on the top
+/// flat card (5 levels - 3 cards; 17 at 4 levels), on the ground plane; mu `mu` on every
+/// card and the ground. The A-frames of a storey are centred 0.48 m apart (their feet
+/// 9 cm apart, their outer feet within the flat card above), so each flat card rests on two
+/// ridges and carries the two A-frames above straight over the two below. Flat cards start
+/// 1 mm above the ridges. Needs lean small enough that two A-frames fit on a card: throws
+/// Error otherwise. Returns the cards from the bottom storey up, the crown's two last.
+/// (Each card rests on its inner bottom edge; its outer top edge is its highest point.)
+inline std::vector<RigidBodyId> card_house(RigidBodySystem& s, int levels = 4, const CardSize& card = {},
+                                           double lean = 0.1745, double mu = 0.7) {
+  const double L = card.length, t = card.thickness, c = std::cos(lean), sn = std::sin(lean);
+  const double gap = 0.001, spacing = 0.48 * L;
+  // an A-frame's feet reach this far from its ridge (outer bottom corners)
+  const double half_base = L * sn + t * c + 0.5 * gap;
+  if (!(levels >= 1 && 2 * half_base < spacing && 0.5 * spacing + half_base < 0.5 * L))
+    throw Error("card_house: levels " + std::to_string(levels) + " and lean " + std::to_string(lean) +
+                " rad: need levels >= 1 and two A-frames side by side on a card");
+  ground(s, mu);
+  const Vec3 half{0.5 * t, 0.5 * L, 0.5 * card.width};
+  std::vector<RigidBodyId> out;
+  // an A-frame with its ridge above x at the height y: its cards rest on their inner bottom edges
+  auto frame = [&](double x, double y) {
+    const double dx = 0.5 * t * c + 0.5 * L * sn + 0.5 * gap, cy = y + 0.5 * t * sn + 0.5 * L * c;
+    out.push_back(box(s, {x - dx, cy, 0}, half, mu, 1000, glm::angleAxis(-lean, Vec3(0, 0, 1))));
+    out.push_back(box(s, {x + dx, cy, 0}, half, mu, 1000, glm::angleAxis(lean, Vec3(0, 0, 1))));
+  };
+  double y = 0;
+  for (int k = 0; k + 1 < levels; ++k) {
+    frame(-0.5 * spacing, y);
+    frame(0.5 * spacing, y);
+    // the flat card across the two ridges: the top faces of an A-frame's cards slope down
+    // to the ridge, so it rests on their outer top edges, t sin(lean) above the ridge
+    const double ridge = y + L * c + t * sn;
+    out.push_back(box(s, {0, ridge + gap + 0.5 * t, 0}, half, mu, 1000, glm::angleAxis(0.5 * kPi, Vec3(0, 0, 1))));
+    y = ridge + gap + t;
+  }
+  frame(0, y);
+  return out;
+}
+
 /// A deterministic uniform generator for the scenes (xorshift64*, Vigna 2016), in [0, 1).
 struct SceneRandom {
   std::uint64_t x;  ///< state, never 0
