@@ -11,12 +11,10 @@ app=$1
 work=$2
 guard=${PBA_CARD_HOUSE_GUARD:-120}   # seconds per wait before giving up
 
-. "$(dirname "$0")/xdo_lib.sh"   # fail, wait_until, field, ge, find_window, drag; cleans $work
+. "$(dirname "$0")/xdo_lib.sh"   # fail, wait_until, start_app, field, ge, find_window, drag
 report=$work/report.txt
 
-"$app" --sample "Rigid bodies/Card house" --size 960x600 --option "report=$report" >"$work/app.log" 2>&1 &
-pid=$!
-trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null' EXIT
+start_app --sample "Rigid bodies/Card house" --size 960x600 --option "report=$report"
 
 find_window
 xdotool windowfocus --sync "$wid" 2>/dev/null || xdotool windowfocus "$wid"

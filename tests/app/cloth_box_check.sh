@@ -12,12 +12,10 @@ app=$1
 work=$2
 guard=${PBA_CLOTH_BOX_GUARD:-120}   # seconds per wait before giving up
 
-. "$(dirname "$0")/xdo_lib.sh"   # fail, wait_until, field, ge, find_window, drag; cleans $work
+. "$(dirname "$0")/xdo_lib.sh"   # fail, wait_until, start_app, field, ge, find_window, drag
 report=$work/report.txt
 
-"$app" --sample "Rigid bodies/Cloth on a falling box" --size 960x600 --option "report=$report" >"$work/app.log" 2>&1 &
-pid=$!
-trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null' EXIT
+start_app --sample "Rigid bodies/Cloth on a falling box" --size 960x600 --option "report=$report"
 
 find_window
 # landed and draped: the box rests on the ground (centre 0.5 m up) and the cloth over it
