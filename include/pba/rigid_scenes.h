@@ -151,8 +151,9 @@ struct SceneRandom {
 /// layers 2 m apart from 10 m up, each body moved by up to 0.25 m along each axis (so no two
 /// start closer than 1.5 m, more than the two largest bounding radii, 2 x 0.4 sqrt(3) m).
 /// They land within two seconds, in heaps where a column's bodies meet, and fall asleep.
-/// Returns the bodies.
+/// Returns the bodies; throws Error for n < 0.
 inline std::vector<RigidBodyId> rain(RigidBodySystem& s, int n = 10000) {
+  if (n < 0) throw Error("rain: n = " + std::to_string(n) + ": the number of bodies must be >= 0");
   ground(s, 0.5);
   const int c = static_cast<int>(std::ceil(std::sqrt(n / 4.0)));
   SceneRandom r{0x853c49e6748fea9bull};

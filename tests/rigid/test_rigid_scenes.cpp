@@ -103,6 +103,7 @@ TEST(RigidScenes, TheRainStartsApartAndLands) {
     EXPECT_EQ(touching, 0);
   }
   RigidBodySystem s;
+  EXPECT_THROW(pba::rigid_scenes::rain(s, -1), pba::Error);
   const auto bodies = pba::rigid_scenes::rain(s, 400);
   for (int k = 0; k < 240; ++k) s.step(1.0 / 60, kGravity);
   for (const auto id : bodies) {
