@@ -21,6 +21,14 @@ wait_until() {
   done
 }
 
+# start_app ARGS...   starts "$app" ARGS in the background (output to $work/app.log), sets
+#                     pid, and kills it when the script exits
+start_app() {
+  "$app" "$@" >"$work/app.log" 2>&1 &
+  pid=$!
+  trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null' EXIT
+}
+
 # For the tests that read a sample's --option report=FILE ($report):
 #   field NAME [K]     the K-th value (default 1) after NAME in the report
 #   ge A B             true when A >= B (numbers)
