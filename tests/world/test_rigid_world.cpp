@@ -213,10 +213,10 @@ TEST(RigidStage, ClothLandsOnAFallingBox) {
       EXPECT_FALSE(inside) << "tick " << i << ", particle " << k;
       if (std::abs(p.x) >= 0.25 || std::abs(p.z) >= 0.25) continue;
       ++middle;
-      if (i == 60) EXPECT_NEAR(p.y, top + sd.thickness, 2e-3) << k;
-      if (i == 240) EXPECT_GE(p.y, top + sd.thickness - 2e-3) << k;
+      if (i == 60) { EXPECT_NEAR(p.y, top + sd.thickness, 2e-3) << k; }
+      if (i == 240) { EXPECT_GE(p.y, top + sd.thickness - 2e-3) << k; }
     }
-    if (i == 240) EXPECT_GE(middle, 16);
+    if (i == 240) { EXPECT_GE(middle, 16); }
   }
   EXPECT_NEAR(w.pose(e).position.y, 0.5, w.rigid().settings().linear_slop + 1e-4);
 }
@@ -415,7 +415,7 @@ TEST(Events, ABouncingBallBeginsAndEndsOneTouchPerBounce) {
     EXPECT_NEAR(speeds[k], v, 0.03 * v + grav * dt);
     if (k < ends.size()) {
       EXPECT_GT(ends[k], begins[k]);
-      if (k + 1 < begins.size()) EXPECT_LT(ends[k], begins[k + 1]);
+      if (k + 1 < begins.size()) { EXPECT_LT(ends[k], begins[k + 1]); }
     }
     v *= e;
     t += 2 * v / grav;
