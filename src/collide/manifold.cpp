@@ -9,6 +9,10 @@ namespace pba {
 
 using namespace narrow;
 
+namespace {
+constexpr double kHuge = 1.7976931348623157e308;  // the largest finite double
+}  // namespace
+
 narrow::Segment narrow::capsule_core(const ColliderShape& s, const Pose& p) {
   const Vec3 u = p.rotation * Vec3(0, s.half_height, 0);
   return {p.position - u, p.position + u};
@@ -247,6 +251,28 @@ void narrow::check_shape(const ColliderShape& s, const char* where) {
 
 namespace {
 
+// quick checks of collide()'s input: true means check_pose and check_shape would pass (for a
+// pose, |q| within 1e-6 of 1 tested on |q|^2 a little inside those bounds; a false answer
+// sends the input through the full checks, which decide)
+inline bool pose_looks_valid(const Pose& p) {
+  const Quat& q = p.rotation;
+  const double q2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+  constexpr double kLo = (1 - 0.9e-6) * (1 - 0.9e-6), kHi = (1 + 0.9e-6) * (1 + 0.9e-6);
+  const Vec3& x = p.position;
+  return q2 >= kLo && q2 <= kHi && std::abs(x.x) <= kHuge && std::abs(x.y) <= kHuge && std::abs(x.z) <= kHuge;
+}
+inline bool positive_finite(double x) { return x > 0 && x <= kHuge; }
+inline bool shape_looks_valid(const ColliderShape& s) {
+  switch (s.type) {
+    case ShapeType::Sphere: return positive_finite(s.radius);
+    case ShapeType::Capsule: return positive_finite(s.radius) && s.half_height >= 0 && s.half_height <= kHuge;
+    case ShapeType::Box:
+      return positive_finite(s.half_extents.x) && positive_finite(s.half_extents.y) && positive_finite(s.half_extents.z);
+    case ShapeType::Hull: return s.hull && !s.hull->vertices().empty();
+    default: return false;
+  }
+}
+
 int rank(ShapeType t) {
   switch (t) {
     case ShapeType::Sphere: return 0;
@@ -314,11 +340,14 @@ void narrow::manifold_from_normal(const ColliderShape& sa, const Pose& pa, const
 
 Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
                  const NarrowPhaseSettings& settings, NarrowPhaseCache* cache) {
-  // bad input is reported before any geometry runs
-  check_pose(pose_a, "collide: pose_a");
-  check_pose(pose_b, "collide: pose_b");
-  check_shape(a, "collide: shape_a");
-  check_shape(b, "collide: shape_b");
+  // bad input is reported before any geometry runs (the checks run in full only when the
+  // quick tests fail: this is every pair's fixed cost)
+  if (!(pose_looks_valid(pose_a) && pose_looks_valid(pose_b))) {
+    check_pose(pose_a, "collide: pose_a");
+    check_pose(pose_b, "collide: pose_b");
+  }
+  if (!shape_looks_valid(a)) check_shape(a, "collide: shape_a");
+  if (!shape_looks_valid(b)) check_shape(b, "collide: shape_b");
   const double margin = settings.speculative_margin;
   if (!(margin >= 0 && std::isfinite(margin)))
     require_non_negative(margin, "collide: NarrowPhaseSettings.speculative_margin");
