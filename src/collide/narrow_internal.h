@@ -153,8 +153,8 @@ inline constexpr std::uint32_t kIdFlip = 0x80000000u;
 inline constexpr std::uint32_t kIdCross = 0x40000000u;
 /// Edge-edge contacts: both half edges, marked by bits 30 and 31 both set... kept apart
 /// from face ids by bit 29 of the first label (labels stay below 0x4000 | 0x3fff).
-inline std::uint32_t vertex_id(std::uint32_t v) { return v & kLabelMask; }
-inline std::uint32_t cross_id(std::uint32_t l1, std::uint32_t l2) {
+constexpr std::uint32_t vertex_id(std::uint32_t v) { return v & kLabelMask; }
+constexpr std::uint32_t cross_id(std::uint32_t l1, std::uint32_t l2) {
   return kIdCross | ((l1 & kLabelMask) << 15) | (l2 & kLabelMask);
 }
 inline std::uint32_t edge_pair_id(std::uint32_t ea, std::uint32_t eb) {

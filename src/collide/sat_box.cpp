@@ -38,6 +38,8 @@ constexpr BoxEdgeTable kEdgeTable = make_edge_table();
 struct FaceSides {
   std::uint32_t edge[4] = {};
   int order[4] = {};
+  std::uint32_t side_label[4] = {};    // the side plane's label (kSideLabel | edge), masked
+  std::uint32_t corner_id[2][2] = {};  // [u side][v side]: the id of the rectangle's corner
 };
 struct FaceSideTable {
   FaceSides face[6] = {};
@@ -56,8 +58,17 @@ constexpr FaceSideTable make_face_sides() {
       const int c = (on_u ? 0 : 2) + ((a & bit) ? 0 : 1);
       t.face[f].edge[c] = e;
       t.face[f].order[c] = i;
+      t.face[f].side_label[c] = (kSideLabel | e) & kLabelMask;
       e = kBoxTopology.edges[e].next;
     }
+    // a corner is met where the later side (in loop order) clips the edge the earlier one made
+    for (int ku = 0; ku < 2; ++ku)
+      for (int kv = 0; kv < 2; ++kv) {
+        const FaceSides& s = t.face[f];
+        const bool u_first = s.order[ku] < s.order[2 + kv];
+        const std::uint32_t first = s.edge[u_first ? ku : 2 + kv], second = s.edge[u_first ? 2 + kv : ku];
+        t.face[f].corner_id[ku][kv] = cross_id(kSideLabel | first, kSideLabel | second);
+      }
   }
   return t;
 }
@@ -89,6 +100,14 @@ constexpr FaceLoopTable make_face_loops() {
 }
 constexpr FaceLoopTable kFaceLoops = make_face_loops();
 
+// best = max(best, x), index = i when x > best: without a branch (the winner is as random
+// as the poses), the first maximum kept as a chain of ifs would keep it
+inline void keep_max(double x, int i, double& best, int& index) {
+  const int better = x > best;
+  index = better * i + (1 - better) * index;
+  best = std::max(best, x);
+}
+
 // a point of the incident polygon in the reference face's coordinates (u, v in the face, w
 // along its axis), with its feature id and the label of the polygon edge from it to the next
 // point (as ClipPoint)
@@ -107,60 +126,72 @@ struct FacePoint {
 // (1974) by the sides in loop order would give it (clip.cpp): an incident corner its vertex,
 // a crossing (edge, side), a rectangle corner (earlier side, later side). The polygon's
 // order is not kept (the reduction does not need it). Writes the points whose depth below
-// the face, h_face - s0 w, is at least -margin into `out` (room for 16) and their depths into
+// the face, h_face - s0 w, is at least -margin into `out` (room for 24, the candidates) and their depths into
 // `depth`; returns the count.
 int clip_face_rect(const FacePoint* quad, const double* c, const double* a1, const double* a2, std::uint32_t f,
                    double hu, double hv, double h_face, double s0, double margin, FacePoint* out, double* depth) {
   const FaceSides& side = kFaceSides.face[f];
-  // how far each corner lies outside each side (> 0: outside), and the outcodes
-  double sv[4][4];
+  // the outcodes: bit k set when the corner lies outside side k
   unsigned code[4];
   for (int i = 0; i < 4; ++i) {
     const double u = quad[i].u, v = quad[i].v;
-    sv[i][0] = u - hu, sv[i][1] = -u - hu, sv[i][2] = v - hv, sv[i][3] = -v - hv;
-    code[i] = (sv[i][0] > 0 ? 1u : 0u) | (sv[i][1] > 0 ? 2u : 0u) | (sv[i][2] > 0 ? 4u : 0u) | (sv[i][3] > 0 ? 8u : 0u);
+    code[i] = unsigned(u > hu) | unsigned(-u > hu) << 1 | unsigned(v > hv) << 2 | unsigned(-v > hv) << 3;
   }
   // every corner on the outer side of one line: nothing overlaps
   if (code[0] & code[1] & code[2] & code[3]) return 0;
+  // every candidate is written in place and kept (the count advanced) by its test, without a
+  // branch: the outcomes are as random as the poses
   int n = 0;
   auto emit = [&](double u, double v, double w, std::uint32_t id, bool keep) {
-    const double d = h_face - s0 * w;
-    if (!keep || d < -margin) return;
     out[n] = {u, v, w, id, 0};
-    depth[n++] = d;
+    n += keep;
   };
   for (int i = 0; i < 4; ++i) emit(quad[i].u, quad[i].v, quad[i].w, quad[i].id, code[i] == 0);
-  if ((code[0] | code[1] | code[2] | code[3]) == 0) return n;
-  // edge i from corner i to corner i + 1 crosses side k where their outcodes differ in bit k
-  const double lim[4] = {hu, -hu, hv, -hv};
-  for (int i = 0; i < 4; ++i) {
-    const int i2 = (i + 1) & 3;
-    for (unsigned cross = code[i] ^ code[i2]; cross != 0; cross &= cross - 1) {
-      const int k = __builtin_ctz(cross);
-      const double r = sv[i][k] / (sv[i][k] - sv[i2][k]);
+  if ((code[0] | code[1] | code[2] | code[3]) != 0) {
+    // edge i from corner i to corner i + 1 crosses side k where their outcodes differ in bit
+    // k: all sixteen (edge, side) candidates are computed and kept by that bit (a loop over
+    // the crossings alone mispredicts its count); the sides u = +-hu share the edge's 1 / du,
+    // the sides v = +-hv its 1 / dv
+    for (int i = 0; i < 4; ++i) {
       const FacePoint& p = quad[i];
-      const FacePoint& q = quad[i2];
-      double u = p.u + (q.u - p.u) * r, v = p.v + (q.v - p.v) * r;
-      if (k < 2) u = lim[k];
-      else v = lim[k];
-      emit(u, v, p.w + (q.w - p.w) * r, cross_id(p.label, kSideLabel | side.edge[k]), std::abs(u) <= hu && std::abs(v) <= hv);
+      const FacePoint& q = quad[(i + 1) & 3];
+      const unsigned cross = code[i] ^ code[(i + 1) & 3];
+      const double du = q.u - p.u, dv = q.v - p.v, dw = q.w - p.w;
+      const double iu = 1 / du, iv = 1 / dv;
+      const std::uint32_t edge_id = kIdCross | ((p.label & kLabelMask) << 15);
+      for (int k = 0; k < 2; ++k) {
+        const double x = k == 0 ? hu : -hu;
+        const double r = (x - p.u) * iu, v = p.v + dv * r;
+        emit(x, v, p.w + dw * r, edge_id | side.side_label[k], ((cross >> k) & 1) & (std::abs(v) <= hv));
+      }
+      for (int k = 2; k < 4; ++k) {
+        const double y = k == 2 ? hv : -hv;
+        const double r = (y - p.v) * iv, u = p.u + du * r;
+        emit(u, y, p.w + dw * r, edge_id | side.side_label[k], ((cross >> k) & 1) & (std::abs(u) <= hu));
+      }
     }
+    // the rectangle's corners inside the parallelogram: c + alpha a1 + beta a2, |alpha|,
+    // |beta| <= 1 (none when the parallelogram is flat)
+    const double det = a1[0] * a2[1] - a1[1] * a2[0];
+    const double inv = 1 / det;
+    for (int ku = 0; ku < 2; ++ku)
+      for (int kv = 0; kv < 2; ++kv) {
+        const double u = ku == 0 ? hu : -hu, v = kv == 0 ? hv : -hv;
+        const double du = u - c[0], dv = v - c[1];
+        const double alpha = (du * a2[1] - dv * a2[0]) * inv, beta = (a1[0] * dv - a1[1] * du) * inv;
+        emit(u, v, c[2] + alpha * a1[2] + beta * a2[2], side.corner_id[ku][kv],
+             (det != 0) & (std::abs(alpha) <= 1) & (std::abs(beta) <= 1));
+      }
   }
-  // the rectangle's corners inside the parallelogram: c + alpha a1 + beta a2, |alpha|, |beta| <= 1
-  const double det = a1[0] * a2[1] - a1[1] * a2[0];
-  if (det == 0) return n;
-  const double inv = 1 / det;
-  for (int ku = 0; ku < 2; ++ku)
-    for (int kv = 2; kv < 4; ++kv) {
-      const double u = lim[ku], v = lim[kv];
-      const double du = u - c[0], dv = v - c[1];
-      const double alpha = (du * a2[1] - dv * a2[0]) * inv, beta = (a1[0] * dv - a1[1] * du) * inv;
-      const bool u_first = side.order[ku] < side.order[kv];
-      const std::uint32_t first = side.edge[u_first ? ku : kv], second = side.edge[u_first ? kv : ku];
-      emit(u, v, c[2] + alpha * a1[2] + beta * a2[2], cross_id(kSideLabel | first, kSideLabel | second),
-           std::abs(alpha) <= 1 && std::abs(beta) <= 1);
-    }
-  return n;
+  // the points at most `margin` above the face
+  int kept = 0;
+  for (int i = 0; i < n; ++i) {
+    const double d = h_face - s0 * out[i].w;
+    out[kept] = out[i];
+    depth[kept] = d;
+    kept += d >= -margin;
+  }
+  return kept;
 }
 
 // reduces candidate points (face coordinates of the point on B, depth, id) to at most four
@@ -171,15 +202,17 @@ int reduce_face_points(const FacePoint* b, const double* depth, int count, int* 
     for (int i = 0; i < count; ++i) pick[i] = i;
     return count;
   }
+  // without branches: a point already chosen enters each search with a value no candidate
+  // loses to (-1 for the squared distance and the area, 0 for the added area)
   int i1 = 0;
-  for (int i = 1; i < count; ++i)
-    if (depth[i] > depth[i1]) i1 = i;
+  double best = depth[0];
+  for (int i = 1; i < count; ++i) keep_max(depth[i], i, best, i1);
   int i2 = -1;
-  double best = -1;
+  best = -1;
   for (int i = 0; i < count; ++i) {
     const double du = b[i].u - b[i1].u, dv = b[i].v - b[i1].v, dw = b[i].w - b[i1].w;
-    const double d = du * du + dv * dv + dw * dw;
-    if (i != i1 && d > best) best = d, i2 = i;
+    const double free = i != i1;
+    keep_max((du * du + dv * dv + dw * dw) * free + (free - 1), i, best, i2);
   }
   auto area = [&](int x, int y, int z) {
     return (b[y].u - b[x].u) * (b[z].v - b[x].v) - (b[y].v - b[x].v) * (b[z].u - b[x].u);
@@ -187,16 +220,16 @@ int reduce_face_points(const FacePoint* b, const double* depth, int count, int* 
   int i3 = -1;
   best = -1;
   for (int i = 0; i < count; ++i) {
-    const double a = std::abs(area(i1, i2, i));
-    if (i != i1 && i != i2 && a > best) best = a, i3 = i;
+    const double free = (i != i1) & (i != i2);
+    keep_max(std::abs(area(i1, i2, i)) * free + (free - 1), i, best, i3);
   }
   const double orient = area(i1, i2, i3) >= 0 ? 1.0 : -1.0;
   int i4 = -1;
   best = 0;
   for (int i = 0; i < count; ++i) {
-    if (i == i1 || i == i2 || i == i3) continue;
+    const double free = (i != i1) & (i != i2) & (i != i3);
     const double out = std::max({-orient * area(i1, i2, i), -orient * area(i2, i3, i), -orient * area(i3, i1, i)});
-    if (out > best) best = out, i4 = i;
+    keep_max(out * free, i, best, i4);
   }
   pick[0] = i1, pick[1] = i2, pick[2] = i3;
   if (i4 < 0) return 3;
@@ -266,6 +299,14 @@ Vec3 column(const double (&R)[3][3], int j) { return Vec3(R[j][0], R[j][1], R[j]
 void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pose& pb, double margin, SatCache* cache,
                        Manifold& m) {
   m.count = 0;
+  // the bounding spheres first: each box lies within |h| of its centre, so centres farther
+  // apart than |ha| + |hb| + margin (with room for rounding) leave the boxes farther apart
+  // than the margin (the broad phase's box pairs are often this far apart)
+  {
+    const Vec3 d = pb.position - pa.position;
+    const double r = std::sqrt(glm::dot(ha, ha)) + std::sqrt(glm::dot(hb, hb)) + margin;
+    if (glm::dot(d, d) > r * r * (1 + 1e-12)) return;
+  }
   BoxPair p;
   {
     const Quat qa_inv = glm::conjugate(pa.rotation);
@@ -298,7 +339,7 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
   int ia = 0, ib = 0;
   for (int i = 0; i < 3; ++i) {
     const double s = face_a_sep(p, i);
-    if (s > fa) fa = s, ia = i;
+    keep_max(s, i, fa, ia);
   }
   const std::uint32_t face_a = std::uint32_t(2 * ia + (p.t[ia] > 0 ? 1 : 0));
   if (fa > margin) {
@@ -307,7 +348,7 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
   }
   for (int j = 0; j < 3; ++j) {
     const double s = face_b_sep(p, j);
-    if (s > fb) fb = s, ib = j;
+    keep_max(s, j, fb, ib);
   }
   // B's face that looks at A: its outward normal points along -t
   const std::uint32_t face_b = std::uint32_t(2 * ib + (p.tb[ib] < 0 ? 1 : 0));
@@ -329,8 +370,9 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
     std::array<double, 9> num, len2, sep;
     edge_terms(p, num.data(), len2.data(), std::make_integer_sequence<int, 9>{});
     for (std::size_t k = 0; k < 9; ++k) sep[k] = len2[k] < kParallel2 ? -INFINITY : num[k] / std::sqrt(len2[k]);
-    for (int k = 0; k < 9; ++k)
-      if (sep[std::size_t(k)] > ee) ee = sep[std::size_t(k)], ek = k;
+    for (int k = 0; k < 9; ++k) {
+      keep_max(sep[std::size_t(k)], k, ee, ek);
+    }
   }
   const int ei = ek / 3, ej = ek % 3;
   if (ee > relevant) {
@@ -381,7 +423,7 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
   const double* hi = ref_a ? p.hb : p.ha;
   const std::uint32_t fr = ref_a ? face_a : face_b;
   const int k0 = int(fr / 2), k1 = kNext[k0], k2 = kPrev[k0];
-  const double s0 = (fr & 1) ? 1.0 : -1.0;
+  const double s0 = double(int(fr & 1) * 2 - 1);
   // the incident face: the incident axis most parallel to the normal, its side facing back
   int k = 0;
   double best = -1;
@@ -393,12 +435,12 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
   // its corners in loop order, each labelled by the half edge leaving it, in face coordinates
   // (u, v, w) = (x[k1], x[k2], x[k0]): centre c, half axes a1, a2
   std::array<FacePoint, 4> quad;
-  std::array<FacePoint, 16> pts;
-  std::array<double, 16> depth;
+  std::array<FacePoint, 24> pts;
+  std::array<double, 24> depth;
   int kept = 0;
   {
     const int j1 = kNext[k], j2 = kPrev[k];
-    const double hk = (fi & 1) ? hi[k] : -hi[k];
+    const double hk = hi[k] * double(int(fi & 1) * 2 - 1);
     const int perm[3] = {k1, k2, k0};
     double c[3], a1[3], a2[3];
     for (int r = 0; r < 3; ++r) {
@@ -437,8 +479,8 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
     kept = 1;
   }
   // B's points: the incident points when A holds the reference face, else their feet on it
-  if (!ref_a)
-    for (int i = 0; i < kept; ++i) in[i].w = w_ref;
+  const double incident = ref_a ? 1.0 : 0.0;
+  for (int i = 0; i < kept; ++i) in[i].w = in[i].w * incident + w_ref * (1 - incident);
   int pick[4];
   const int count = reduce_face_points(in, depth.data(), kept, pick);
 

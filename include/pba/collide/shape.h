@@ -40,8 +40,10 @@ struct Aabb {
 
   /// True when the two boxes overlap or touch.
   bool overlaps(const Aabb& o) const {
-    return lo.x <= o.hi.x && o.lo.x <= hi.x && lo.y <= o.hi.y && o.lo.y <= hi.y && lo.z <= o.hi.z &&
-           o.lo.z <= hi.z;
+    // all six comparisons, combined without branches (trees and pair lists test boxes whose
+    // outcome no branch predictor can guess)
+    return (lo.x <= o.hi.x) & (o.lo.x <= hi.x) & (lo.y <= o.hi.y) & (o.lo.y <= hi.y) & (lo.z <= o.hi.z) &
+           (o.lo.z <= hi.z);
   }
   /// True when `o` lies inside this box (touching counts).
   bool contains(const Aabb& o) const {
