@@ -100,14 +100,6 @@ constexpr FaceLoopTable make_face_loops() {
 }
 constexpr FaceLoopTable kFaceLoops = make_face_loops();
 
-// best = max(best, x), index = i when x > best: without a branch (the winner is as random
-// as the poses), the first maximum kept as a chain of ifs would keep it
-inline void keep_max(double x, int i, double& best, int& index) {
-  const int better = x > best;
-  index = better * i + (1 - better) * index;
-  best = std::max(best, x);
-}
-
 // a point of the incident polygon in the reference face's coordinates (u, v in the face, w
 // along its axis), with its feature id and the label of the polygon edge from it to the next
 // point (as ClipPoint)
