@@ -320,8 +320,16 @@ void BroadPhase::destroy_proxy(ProxyId id) {
 }
 
 void BroadPhase::move_proxy(ProxyId id, const Aabb& box) {
-  check(id, "BroadPhase.move_proxy");
-  require_valid_box(box, "BroadPhase.move_proxy(box)");
+  // the full checks (which build messages) only when the quick ones fail: this runs for
+  // every proxy every frame
+  constexpr double kHuge = 1.7976931348623157e308;  // the largest finite double
+  const bool box_ok = (box.lo.x <= box.hi.x) & (box.lo.y <= box.hi.y) & (box.lo.z <= box.hi.z) &
+                      (std::abs(box.lo.x) <= kHuge) & (std::abs(box.lo.y) <= kHuge) & (std::abs(box.lo.z) <= kHuge) &
+                      (std::abs(box.hi.x) <= kHuge) & (std::abs(box.hi.y) <= kHuge) & (std::abs(box.hi.z) <= kHuge);
+  if (!(pool_.valid(id) & box_ok)) {
+    check(id, "BroadPhase.move_proxy");
+    require_valid_box(box, "BroadPhase.move_proxy(box)");
+  }
   const std::uint32_t i = id.index;
   boxes_[i] = box;
   // a proxy that left its fat box joins the move buffer
@@ -386,10 +394,6 @@ const CollisionFilter& BroadPhase::filter(ProxyId id) const {
   check(id, "BroadPhase.filter");
   return filters_[id.index];
 }
-std::uint64_t BroadPhase::user_data(ProxyId id) const {
-  check(id, "BroadPhase.user_data");
-  return user_[id.index];
-}
 ProxyId BroadPhase::id_at(std::uint32_t index) const {
   if (index >= alive_.size() || !alive_[index]) return {};
   return {index, pool_.generation(index)};
@@ -430,16 +434,22 @@ void BroadPhase::update_tree_pairs() {
   // Every pair of overlapping fat boxes is in the set: a proxy whose fat box changed was
   // queried above, and two unchanged fat boxes overlap as before. Tight boxes lie in the
   // fat ones, so no tight overlap is missed.
-  std::size_t kept = 0, tests = 0;
+  // Each pair is written at the end of the list, which grows by it only when the tight boxes
+  // overlap: no branch on that test, which goes either way (a third of the pairs of fat
+  // boxes are apart)
+  ensure_capacity(pairs_, tree_keys_.size());
+  pairs_.resize(tree_keys_.size());
+  std::size_t kept = 0, tests = 0, touching = 0;
   for (const std::uint64_t key : tree_keys_) {
     const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key);
     if (!alive_[a] || !alive_[b]) continue;
     ++tests;
     if (!tree_.fat_box(node_[a]).overlaps(tree_.fat_box(node_[b]))) continue;
     tree_keys_[kept++] = key;
-    if (boxes_[a].overlaps(boxes_[b]) && should_pair(filters_[a], filters_[b]))
-      pairs_.push_back({{a, pool_.generation(a)}, {b, pool_.generation(b)}});
+    pairs_[touching] = {{a, pool_.generation(a)}, {b, pool_.generation(b)}};
+    touching += boxes_[a].overlaps(boxes_[b]) & should_pair(filters_[a], filters_[b]);
   }
+  pairs_.resize(touching);
   tree_keys_.resize(kept);
   stats_.box_tests = tests;
 
