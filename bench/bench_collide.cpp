@@ -637,6 +637,17 @@ int main(int argc, char** argv) {
     std::printf("  %-34s %10s %10s %14s\n", "engine", "ms/frame", "pairs", "x pba tree");
     for (std::size_t l = 0; l < lanes.size(); ++l)
       std::printf("  %-34s %10.3f %10ld %14.2f\n", lanes[l].name, median(ms[l]), pairs[l], median(ratio[l]));
+    // the per-frame goal: each peer's full frame over each pba broad + narrow lane,
+    // the median of the per-run ratios
+    for (std::size_t l = 0; l < lanes.size(); ++l) {
+      if (!std::strstr(lanes[l].name, "+ collide")) continue;
+      for (std::size_t k = 0; k < lanes.size(); ++k) {
+        if (!std::strstr(lanes[k].name, "full") && !std::strstr(lanes[k].name, "dCollide")) continue;
+        std::vector<double> r;
+        for (int run = 0; run < repeat; ++run) r.push_back(ms[k][std::size_t(run)] / ms[l][std::size_t(run)]);
+        std::printf("  %s / %s: %.2f\n", lanes[k].name, lanes[l].name, median(r));
+      }
+    }
 
     if (!queries) continue;
     // rays
