@@ -418,49 +418,53 @@ void BroadPhase::update_tree_pairs() {
   move_buffer_.clear();
   stats_.reinserted = queried;
 
-  // merge them into the persistent set of fat-box pairs (both sorted, without duplicates)
-  if (!new_keys_.empty()) {
-    std::sort(new_keys_.begin(), new_keys_.end());
-    new_keys_.erase(std::unique(new_keys_.begin(), new_keys_.end()), new_keys_.end());
-    ensure_capacity(merge_keys_, tree_keys_.size() + new_keys_.size());
-    merge_keys_.resize(tree_keys_.size() + new_keys_.size());
-    const auto end = std::set_union(tree_keys_.begin(), tree_keys_.end(), new_keys_.begin(), new_keys_.end(),
-                                    merge_keys_.begin());
-    merge_keys_.resize(static_cast<std::size_t>(end - merge_keys_.begin()));
-    tree_keys_.swap(merge_keys_);
-  }
+  // the new candidates sorted, without duplicates
+  std::sort(new_keys_.begin(), new_keys_.end());
+  new_keys_.erase(std::unique(new_keys_.begin(), new_keys_.end()), new_keys_.end());
 
-  // keep the pairs whose fat boxes still overlap; report those whose tight boxes do.
-  // Every pair of overlapping fat boxes is in the set: a proxy whose fat box changed was
-  // queried above, and two unchanged fat boxes overlap as before. Tight boxes lie in the
-  // fat ones, so no tight overlap is missed.
-  // Each pair is written at the end of the list, which grows by it only when the tight boxes
-  // overlap: no branch on that test, which goes either way (a third of the pairs of fat
-  // boxes are apart)
-  ensure_capacity(pairs_, tree_keys_.size());
-  pairs_.resize(tree_keys_.size());
-  std::size_t kept = 0, tests = 0, touching = 0;
-  for (const std::uint64_t key : tree_keys_) {
+  // one pass over the persistent set of fat-box pairs merged with the new candidates (both
+  // sorted): keep the pairs whose fat boxes still overlap, report those whose tight boxes
+  // do. Every pair of overlapping fat boxes is in the merge: a proxy whose fat box changed
+  // was queried above, and two unchanged fat boxes overlap as before. Tight boxes lie in the
+  // fat ones, so no tight overlap is missed. Each pair is written at the end of the list,
+  // which grows by it only when the tight boxes overlap: no branch on that test, which goes
+  // either way (a third of the pairs of fat boxes are apart)
+  const std::size_t nt = tree_keys_.size(), nn = new_keys_.size();
+  ensure_capacity(merge_keys_, nt + nn);
+  merge_keys_.clear();
+  ensure_capacity(pairs_, nt + nn);
+  pairs_.resize(nt + nn);
+  std::size_t tests = 0, touching = 0;
+  for (std::size_t i = 0, j = 0; i < nt || j < nn;) {
+    // the next key of the union (a key in both lists is taken once)
+    std::uint64_t key;
+    if (j == nn || (i < nt && tree_keys_[i] < new_keys_[j])) {
+      key = tree_keys_[i++];
+    } else {
+      key = new_keys_[j++];
+      if (i < nt && tree_keys_[i] == key) ++i;
+    }
     const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key);
     if (!alive_[a] || !alive_[b]) continue;
     ++tests;
     if (!tree_.fat_box(node_[a]).overlaps(tree_.fat_box(node_[b]))) continue;
-    tree_keys_[kept++] = key;
-    pairs_[touching] = {{a, pool_.generation(a)}, {b, pool_.generation(b)}};
+    merge_keys_.push_back(key);
+    pairs_[touching] = {{a, pool_.generation_unchecked(a)}, {b, pool_.generation_unchecked(b)}};
     touching += boxes_[a].overlaps(boxes_[b]) & should_pair(filters_[a], filters_[b]);
   }
   pairs_.resize(touching);
-  tree_keys_.resize(kept);
+  tree_keys_.swap(merge_keys_);
   stats_.box_tests = tests;
 
   // keep the tree's quality: rebuild by the SAH when the inner nodes' area has grown half as
   // much again as after the last rebuild (re-inserted leaves drift from the best layout)
-  if (tree_.proxy_count() > 2 && tree_.area_ratio() > 1.5 * tree_rebuilt_ratio_) {
+  double ratio = tree_.area_ratio();
+  if (tree_.proxy_count() > 2 && ratio > 1.5 * tree_rebuilt_ratio_) {
     tree_.rebuild();
-    tree_rebuilt_ratio_ = tree_.area_ratio();
+    ratio = tree_rebuilt_ratio_ = tree_.area_ratio();
   }
   stats_.tree_height = tree_.height();
-  stats_.tree_area_ratio = tree_.area_ratio();
+  stats_.tree_area_ratio = ratio;
 }
 
 std::span<const ProxyPair> BroadPhase::update_pairs() {
