@@ -273,6 +273,7 @@ void BroadPhase::reserve(std::size_t n) {
   filters_.reserve(n);
   user_.reserve(n);
   node_.reserve(n);
+  fat_.reserve(n);
   alive_.reserve(n);
   moved_.reserve(n);
   move_buffer_.reserve(n);
@@ -288,6 +289,7 @@ ProxyId BroadPhase::create_proxy(const Aabb& box, const CollisionFilter& filter,
     filters_.resize(i + 1);
     user_.resize(i + 1, 0);
     node_.resize(i + 1, DynamicTree::kNull);
+    fat_.resize(i + 1);
     alive_.resize(i + 1, 0);
     moved_.resize(i + 1, 0);
   }
@@ -298,6 +300,7 @@ ProxyId BroadPhase::create_proxy(const Aabb& box, const CollisionFilter& filter,
   // the tree inserts at once and queries the new proxy at the next update
   if (method_ == BroadPhaseMethod::Tree) {
     node_[i] = tree_.create_proxy(box, i);
+    fat_[i] = tree_.fat_box(node_[i]);
     if (!moved_[i]) {
       moved_[i] = 1;
       move_buffer_.push_back(i);
@@ -333,9 +336,12 @@ void BroadPhase::move_proxy(ProxyId id, const Aabb& box) {
   const std::uint32_t i = id.index;
   boxes_[i] = box;
   // a proxy that left its fat box joins the move buffer
-  if (method_ == BroadPhaseMethod::Tree && tree_.move_proxy(node_[i], box) && !moved_[i]) {
-    moved_[i] = 1;
-    move_buffer_.push_back(i);
+  if (method_ == BroadPhaseMethod::Tree && tree_.move_proxy(node_[i], box)) {
+    fat_[i] = tree_.fat_box(node_[i]);
+    if (!moved_[i]) {
+      moved_[i] = 1;
+      move_buffer_.push_back(i);
+    }
   }
 }
 
@@ -379,6 +385,7 @@ void BroadPhase::rebuild_tree() {
   for (std::uint32_t p = 0; p < boxes_.size(); ++p) {
     if (!alive_[p]) continue;
     node_[p] = tree_.create_proxy(boxes_[p], p);
+    fat_[p] = tree_.fat_box(node_[p]);
     moved_[p] = 1;
     move_buffer_.push_back(p);
   }
@@ -406,16 +413,14 @@ void BroadPhase::update_tree_pairs() {
   new_keys_.clear();
   std::size_t queried = 0;
   for (std::uint32_t p : move_buffer_) {
-    moved_[p] = 0;
     if (!alive_[p]) continue;
     ++queried;
     const CollisionFilter& fp = filters_[p];
-    tree_.query(tree_.fat_box(node_[p]), [&](std::uint32_t q) {
+    tree_.query(fat_[p], [&](std::uint32_t q) {
       if (q != p && should_pair(fp, filters_[q])) new_keys_.push_back(pair_key(p, q));
       return true;
     });
   }
-  move_buffer_.clear();
   stats_.reinserted = queried;
 
   // the new candidates sorted, without duplicates
@@ -425,8 +430,9 @@ void BroadPhase::update_tree_pairs() {
   // one pass over the persistent set of fat-box pairs merged with the new candidates (both
   // sorted): keep the pairs whose fat boxes still overlap, report those whose tight boxes
   // do. Every pair of overlapping fat boxes is in the merge: a proxy whose fat box changed
-  // was queried above, and two unchanged fat boxes overlap as before. Tight boxes lie in the
-  // fat ones, so no tight overlap is missed. Each pair is written at the end of the list,
+  // was queried above, and two unchanged fat boxes overlap as before (so only the pairs of a
+  // proxy in the move buffer test their fat boxes again). Tight boxes lie in the fat ones,
+  // so no tight overlap is missed. Each pair is written at the end of the list,
   // which grows by it only when the tight boxes overlap: no branch on that test, which goes
   // either way (a third of the pairs of fat boxes are apart)
   const std::size_t nt = tree_keys_.size(), nn = new_keys_.size();
@@ -447,7 +453,7 @@ void BroadPhase::update_tree_pairs() {
     const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key);
     if (!alive_[a] || !alive_[b]) continue;
     ++tests;
-    if (!tree_.fat_box(node_[a]).overlaps(tree_.fat_box(node_[b]))) continue;
+    if ((moved_[a] | moved_[b]) && !fat_[a].overlaps(fat_[b])) continue;
     merge_keys_.push_back(key);
     pairs_[touching] = {{a, pool_.generation_unchecked(a)}, {b, pool_.generation_unchecked(b)}};
     touching += boxes_[a].overlaps(boxes_[b]) & should_pair(filters_[a], filters_[b]);
@@ -455,6 +461,8 @@ void BroadPhase::update_tree_pairs() {
   pairs_.resize(touching);
   tree_keys_.swap(merge_keys_);
   stats_.box_tests = tests;
+  for (std::uint32_t p : move_buffer_) moved_[p] = 0;
+  move_buffer_.clear();
 
   // keep the tree's quality: rebuild by the SAH when the inner nodes' area has grown half as
   // much again as after the last rebuild (re-inserted leaves drift from the best layout)

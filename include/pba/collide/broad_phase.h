@@ -361,6 +361,7 @@ class BroadPhase {
   std::vector<CollisionFilter> filters_;
   std::vector<std::uint64_t> user_;
   std::vector<std::int32_t> node_;    // tree leaf, kNull unless the method is Tree
+  std::vector<Aabb> fat_;             // the tree leaf's fat box (a copy, read without the indirection)
   std::vector<std::uint8_t> alive_;
   std::vector<std::uint8_t> moved_;   // in the move buffer this frame
   // the tree, its move buffer and its persistent pair set (keys a << 32 | b)
