@@ -68,14 +68,6 @@ Relative swapped(const Relative& r) {
   return s;
 }
 
-// Gregorius 2013: do arcs AB and CD of the Gauss map cross? (B x A and D x C are the arcs'
-// plane normals, the edge directions)
-bool is_minkowski_face(const Vec3& A, const Vec3& B, const Vec3& C, const Vec3& D, const Vec3& BxA, const Vec3& DxC) {
-  const double cba = glm::dot(C, BxA), dba = glm::dot(D, BxA);
-  const double adc = glm::dot(A, DxC), bdc = glm::dot(B, DxC);
-  return cba * dba < 0 && adc * bdc < 0 && cba * bdc > 0;
-}
-
 // separation along the cross product of two edges (A's frame), oriented away from A's centre
 double edge_separation(const Vec3& pa, const Vec3& ea, const Vec3& pb, const Vec3& eb, const Vec3& ca, Vec3& n) {
   const Vec3 c = glm::cross(ea, eb);
@@ -131,11 +123,15 @@ EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r) {
         g.bxa = glm::cross(g.v, g.u);
         g.e = a.vertices[t1.origin] - g.p;
       }
-      // the arcs cross (Gregorius 2013) with C = -u2, D = -v2: the first test alone
-      // rejects most pairs
+      // Gregorius 2013: the edges form a face of the Minkowski difference when the Gauss-map
+      // arcs A B = (u, v) and C D = (-u2, -v2) cross: C and D on opposite sides of A B's
+      // plane (normal B x A), A and B on opposite sides of C D's (D x C), and C, B on the
+      // same hemisphere. The three sign tests are combined without branches (each alone goes
+      // either way as randomly as the poses; all three hold for few pairs, a branch the
+      // predictor learns)
       const double cba = -glm::dot(u2, g.bxa), dba = -glm::dot(v2, g.bxa);
-      if (!(cba * dba < 0)) continue;
-      if (!is_minkowski_face(g.u, g.v, -u2, -v2, g.bxa, dxc)) continue;
+      const double adc = glm::dot(g.u, dxc), bdc = glm::dot(g.v, dxc);
+      if (!((cba * dba < 0) & (adc * bdc < 0) & (cba * bdc > 0))) continue;
       Vec3 n;
       const double s = edge_separation(g.p, g.e, p2, e2d, a.center, n);
       if (s > q.separation) q.separation = s, q.edge_a = 2 * i, q.edge_b = j, q.normal = n;
