@@ -432,7 +432,9 @@ void BroadPhase::update_tree_pairs() {
   // do. Every pair of overlapping fat boxes is in the merge: a proxy whose fat box changed
   // was queried above, and two unchanged fat boxes overlap as before (so only the pairs of a
   // proxy in the move buffer test their fat boxes again). Tight boxes lie in the fat ones,
-  // so no tight overlap is missed. Each pair is written at the end of the list,
+  // so no tight overlap is missed. The set holds only pairs the filters allow: a pair enters
+  // it from a query, which tests them, and set_filter puts its proxy in the move buffer, so
+  // only those pairs test the filters again. Each pair is written at the end of the list,
   // which grows by it only when the tight boxes overlap: no branch on that test, which goes
   // either way (a third of the pairs of fat boxes are apart)
   const std::size_t nt = tree_keys_.size(), nn = new_keys_.size();
@@ -453,10 +455,10 @@ void BroadPhase::update_tree_pairs() {
     const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key);
     if (!alive_[a] || !alive_[b]) continue;
     ++tests;
-    if ((moved_[a] | moved_[b]) && !fat_[a].overlaps(fat_[b])) continue;
+    if ((moved_[a] | moved_[b]) && !(fat_[a].overlaps(fat_[b]) & should_pair(filters_[a], filters_[b]))) continue;
     merge_keys_.push_back(key);
     pairs_[touching] = {{a, pool_.generation_unchecked(a)}, {b, pool_.generation_unchecked(b)}};
-    touching += boxes_[a].overlaps(boxes_[b]) & should_pair(filters_[a], filters_[b]);
+    touching += boxes_[a].overlaps(boxes_[b]);
   }
   pairs_.resize(touching);
   tree_keys_.swap(merge_keys_);
