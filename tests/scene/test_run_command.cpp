@@ -148,7 +148,9 @@ TEST(RunCommand, CsvHasEverySimulatedPointOfEveryShippedScene) {
     while (std::getline(in, line)) ++rows[std::stoll(line.substr(0, line.find(',')))];
     pba::Scene s = pba::load_scene(file);
     for (int step = 0; step <= 20; ++step) {
-      if (step % 10 == 0) EXPECT_EQ(rows[step], simulated_points(s.world)) << file << " at step " << step;
+      if (step % 10 == 0) {
+        EXPECT_EQ(rows[step], simulated_points(s.world)) << file << " at step " << step;
+      }
       if (step < 20) s.world.step();
     }
     EXPECT_GT(rows[20], 0u) << file << ": simulates nothing";
@@ -204,7 +206,7 @@ TEST(RunCommand, MethodAppliesToMassSpringBodies) {
        "a": [0, 2, 0], "b": [0, 1, 0], "rest_length": 0.8, "mass": 0.5, "stiffness": 40},
       {"type": "spring", "name": "two", "solver": "mass-spring", "integrator": "velocity-verlet",
        "a": [1, 2, 0], "b": [1, 1, 0], "rest_length": 0.8, "mass": 0.5, "stiffness": 40}]})");
-  for (pba::Method m : {pba::Method::ExplicitEuler, pba::Method::RK4}) {
+  for (pba::Method m : {pba::Method::ExplicitEuler, pba::Method::Rk4}) {
     pba::Scene s = pba::load_scene(file);
     auto* soft = dynamic_cast<pba::SoftSystem*>(s.world.find_system(pba::SoftSystem::kName));
     ASSERT_NE(soft, nullptr);
