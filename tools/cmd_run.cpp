@@ -190,7 +190,7 @@ void apply_method(pba::World& w, pba::Method m, const std::string& text, const s
   // soft bodies solved by XPBD have no integrator to replace
   if (soft) {
     for (std::size_t b = 0; b < soft->size(); ++b)
-      if (soft->at(b).settings().solver == pba::SoftSolver::XPBD)
+      if (soft->at(b).settings().solver == pba::SoftSolver::Xpbd)
         throw Usage{flag + ": scene " + scene + " has the soft body '" + body_name(w, *soft, b) +
                     "' solved by XPBD, which uses no integrator, so --method cannot apply to it; run it "
                     "without --method (a soft body's solver and integrator are its own settings)"};
@@ -216,7 +216,7 @@ std::string integrators(const pba::World& w) {
       const pba::SoftBodyDef& d = soft->at(b).settings();
       if (!s.empty()) s += ", ";
       s += "'" + body_name(w, *soft, b) + "' " +
-           (d.solver == pba::SoftSolver::XPBD ? std::string("xpbd")
+           (d.solver == pba::SoftSolver::Xpbd ? std::string("xpbd")
                                               : "mass-spring " + std::string(pba::name(d.method)));
     }
   }
