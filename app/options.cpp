@@ -54,9 +54,11 @@ constexpr const char* kFooter =
     "--selftest to check frames without writing them). A headless run whose sample cannot\n"
     "show its subject (a scene file that does not load) exits with code 1.\n"
     "\n"
-    "keys: P pause, O single step, R restart, [ / ] or PageUp / PageDown previous / next\n"
-    "      sample, F1 toggle panels, Esc quit.\n"
-    "mouse: left-drag orbit, right- or middle-drag (or shift + left) pan, wheel zoom.";
+    "keys: P or Space pause, O single step, R restart, [ / ] or PageUp / PageDown previous /\n"
+    "      next sample, F1 toggle panels, F12 screenshot (./screenshots/), Esc close an open\n"
+    "      menu, else quit.\n"
+    "mouse: left-drag orbit, right- or middle-drag (or shift + left) pan, wheel zoom; drop a\n"
+    "scene file (.json) on the window to open it.";
 
 // the words of the options that take a value, checked after parsing
 struct Raw {

@@ -391,7 +391,7 @@ class PbaCloth final : public Engine {
     cloth.bending = true;
     // the solver: no damping, drag or aerodynamics
     pba::SoftBodyDef def;
-    def.solver = pba::SoftSolver::XPBD;
+    def.solver = pba::SoftSolver::Xpbd;
     def.substeps = c.substeps;
     def.iterations = c.iterations;
     def.stretch_compliance = kStretchCompliance;

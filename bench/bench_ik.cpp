@@ -394,6 +394,14 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--n") && i + 1 < argc) only_n = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--method") && i + 1 < argc) only_method = argv[++i];
     else if (!std::strcmp(argv[i], "--no-kdl")) kdl = false;
+    else {
+      // an unknown flag (or --help) is not a request for the full 10-minute run
+      std::fprintf(stderr,
+                   "bench_ik: unknown argument '%s'\n"
+                   "usage: bench_ik [--quick] [--targets N] [--budget SECONDS] [--n BONES] [--method NAME] [--no-kdl]\n",
+                   argv[i]);
+      return 2;
+    }
   }
   const double tol = 1e-4;  // chains are 1 m long: 1e-4 of the chain length
   calibrate_clock();

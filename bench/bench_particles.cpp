@@ -129,7 +129,7 @@ BENCHMARK(BM_ParticleStep)
     ->ArgNames({"n", "method", "regime", "uniform", "broad"})
     ->Args({4096, static_cast<int>(pba::Method::ExplicitEuler), kResting, 0, 1})
     ->Args({4096, static_cast<int>(pba::Method::VelocityVerlet), kResting, 0, 1})
-    ->Args({4096, static_cast<int>(pba::Method::RK4), kResting, 0, 1})
+    ->Args({4096, static_cast<int>(pba::Method::Rk4), kResting, 0, 1})
     ->Unit(benchmark::kMicrosecond);
 
 // six columns read-modified-written in place and one read, as the step does, with a

@@ -1,6 +1,8 @@
 // "Basics/Debug draw": every pba::DebugDraw primitive, and a stress grid of hundreds
 // of lit solids to check the renderer keeps its frame rate.
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <imgui.h>
 
@@ -14,7 +16,9 @@ namespace {
 class DebugDrawSample final : public Sample {
  public:
   explicit DebugDrawSample(SampleContext& ctx) : Sample(ctx) {
-    ctx.camera->frame({0.0f, 1.2f, 0.0f}, 5.0f, 0.5f, 0.38f);
+    // the row of primitives (x in [-4.6, 4.8], z = 0) and the grid behind it (x within
+    // +-4.4, z from -3.5 to -11.7 at 300 solids)
+    ctx.camera->frame({0.0f, 0.6f, -4.5f}, 7.5f, 0.5f, 0.38f);
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<DebugDrawSample>(ctx); }
 
@@ -41,8 +45,8 @@ class DebugDrawSample final : public Sample {
     const int n = count_;
     const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
     for (int k = 0; k < n; ++k) {
-      const double x = ((k % side) - 0.5 * (side - 1)) * 0.5, z = -3.5 - (k / side) * 0.5;
-      const double y = 0.25 + 0.15 * std::sin(angle_ * 2 + k * 0.37);
+      const Vec3 p = grid_position(k, side);
+      const double x = p.x, y = p.y, z = p.z;
       const Color c = Color::rgb(0.35f + 0.5f * float(k % 7) / 7, 0.45f, 0.75f - 0.4f * float(k % 5) / 5);
       if (k % 3 == 0) r.sphere({x, y, z}, 0.18, c);
       else if (k % 3 == 1) r.box({x, y, z}, {0.15, 0.15, 0.15}, spin, c);
@@ -58,7 +62,21 @@ class DebugDrawSample final : public Sample {
 
   std::vector<Color> ExpectedColors() const override { return {colors::yellow}; }
 
+  // the primitives and the grid's solids, so the self-test checks that they are drawn where
+  // the panels leave them visible
+  void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override {
+    for (double x : {-4.0, -2.0, 0.0, 2.0, 4.0}) out.push_back({x, 0.6, 0});
+    const int n = count_, side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
+    const int step = std::max(1, n / std::max(1, static_cast<int>(max_points)));
+    for (int k = 0; k < n; k += step) out.push_back(grid_position(k, side));
+  }
+
  private:
+  // solid k of the stress grid (`side` solids a row), bobbing with the spin
+  Vec3 grid_position(int k, int side) const {
+    return {((k % side) - 0.5 * (side - 1)) * 0.5, 0.25 + 0.15 * std::sin(angle_ * 2 + k * 0.37), -3.5 - (k / side) * 0.5};
+  }
+
   double angle_ = 0;
   int count_ = 300;
 };

@@ -45,7 +45,7 @@ constexpr double kFloor = 1e-16;
 long long StepCost(Method m) {
   switch (m) {
     case Method::VelocityVerlet: return 2;
-    case Method::RK4: return 4;
+    case Method::Rk4: return 4;
     case Method::ImplicitEuler: return 6;
     default: return 1;
   }
@@ -62,7 +62,7 @@ const char* ShortName(Method m) {
     case Method::SemiImplicitEuler: return "Semi-impl.";
     case Method::PositionVerlet: return "Verlet";
     case Method::VelocityVerlet: return "Vel. Verlet";
-    case Method::RK4: return "RK4";
+    case Method::Rk4: return "RK4";
     case Method::ImplicitEuler: return "Implicit";
   }
   return "";
@@ -359,7 +359,7 @@ class IntegratorLab final : public Sample {
     v_ref_.assign(p.x0.size(), 0);
     need_ref_ = !p.exact;
     if (p.exact) p.exact(p.t_end, x_ref_, v_ref_);
-    else ref_run_.start(p, Method::RK4, p.t_end / (8.0 * conv_[0].pts.back().steps), 8 * conv_[0].pts.back().steps);
+    else ref_run_.start(p, Method::Rk4, p.t_end / (8.0 * conv_[0].pts.back().steps), 8 * conv_[0].pts.back().steps);
     ref_path_.clear();
     job_level_ = job_method_ = 0;
     job_active_ = false;

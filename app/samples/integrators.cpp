@@ -27,7 +27,7 @@ enum class Scenario { Ballistic, Spring, Orbit };
 constexpr const char* kScenarioNames[] = {"Ballistic shot", "Spring", "Orbit"};
 
 // the problems, each with its acceleration, exact solution and energy (per unit mass)
-struct Problem {
+struct ScenarioModel {
   Scenario kind = Scenario::Spring;
   bool drag = false;  // ballistic: linear air drag
   // ballistic
@@ -572,7 +572,7 @@ class Integrators final : public Sample {
     return "";
   }
 
-  Problem problem_;
+  ScenarioModel problem_;
   std::vector<Lane> lanes_;
   double t_ = 0, t_prev_ = 0, e0_ = 1, landed_at_ = -1, range_ = 0;
   long long steps_ = 0;

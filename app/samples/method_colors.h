@@ -13,7 +13,7 @@ inline Color MethodColor(Method m) {
     case Method::SemiImplicitEuler: return Color::hex(0xffc53d);  // yellow
     case Method::PositionVerlet: return Color::hex(0x46a758);     // green
     case Method::VelocityVerlet: return Color::hex(0x00b8d9);     // cyan
-    case Method::RK4: return Color::hex(0x7c9cff);                // light blue
+    case Method::Rk4: return Color::hex(0x7c9cff);                // light blue
     case Method::ImplicitEuler: return Color::hex(0xd6409f);      // pink: loses energy
   }
   return colors::white;

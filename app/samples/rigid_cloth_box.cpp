@@ -24,9 +24,9 @@ namespace {
 
 constexpr Color kMarker = colors::yellow;  // the cloth's middle: the self-test finds the colour
 
-class ClothOnBox final : public Sample {
+class ClothOnBoxSample final : public Sample {
  public:
-  explicit ClothOnBox(SampleContext& ctx) : Sample(ctx) {
+  explicit ClothOnBoxSample(SampleContext& ctx) : Sample(ctx) {
     settings_.solver = RigidSolverOption(ctx);
     n_ = static_cast<int>(OptionNumber(ctx, "n", 31, 2, 101));
     report_path_ = ctx.option("report", "");
@@ -36,7 +36,7 @@ class ClothOnBox final : public Sample {
     ctx.camera->frame({0.0f, 0.75f, 0.0f}, 1.9f, 0.5f, 0.38f);
     Restart();
   }
-  static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<ClothOnBox>(ctx); }
+  static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<ClothOnBoxSample>(ctx); }
 
   void Step(double, double dt) override {
     world_.rigid().settings() = settings_;
@@ -184,7 +184,7 @@ class ClothOnBox final : public Sample {
   bool reported_ = false;
 };
 
-static int reg = RegisterSample("Rigid bodies", "Cloth on a falling box", ClothOnBox::Create);
+static int reg = RegisterSample("Rigid bodies", "Cloth on a falling box", ClothOnBoxSample::Create);
 
 }  // namespace
 }  // namespace pba::app

@@ -165,16 +165,16 @@ void SolverPanel::refresh(const SoftBodyDef& def, const SoftBody& body) {
 bool SolverPanel::Draw(SoftBodyDef& def, const SoftBody& body, double dt) {
   bool changed = false;
   // the solver
-  int solver = def.solver == SoftSolver::XPBD ? 0 : 1;
+  int solver = def.solver == SoftSolver::Xpbd ? 0 : 1;
   ImGui::SetNextItemWidth(-110);
   if (ImGui::Combo("solver", &solver, "XPBD\0mass-spring\0")) {
     changed = true;
     // a mass-spring network gets enough substeps to be stable with its integrator
     if (solver == 1) UseMassSpring(def, body, dt);
-    else def.solver = SoftSolver::XPBD;
+    else def.solver = SoftSolver::Xpbd;
   }
   const bool has_tets = !body.tets().empty();
-  if (def.solver == SoftSolver::XPBD) {
+  if (def.solver == SoftSolver::Xpbd) {
     // substeps, iterations, tethers, compliances
     changed |= SubstepControls(def);
     if (body.pins().size() > 0) {
@@ -262,14 +262,14 @@ void UseMassSpring(SoftBodyDef& def, const SoftBody& body, double dt) {
 SoftSolver SolverOption(const SampleContext& ctx, SoftSolver fallback) {
   const std::string v = ctx.option("solver", "");
   if (v.empty()) return fallback;
-  if (v == "xpbd") return SoftSolver::XPBD;
+  if (v == "xpbd") return SoftSolver::Xpbd;
   if (v == "mass-spring") return SoftSolver::MassSpring;
   throw Error("--option solver=" + v + ": expected xpbd or mass-spring");
 }
 
 SoftBodyDef XpbdCloth(int substeps, double damping) {
   SoftBodyDef d;
-  d.solver = SoftSolver::XPBD;
+  d.solver = SoftSolver::Xpbd;
   d.substeps = substeps;
   d.iterations = 1;
   d.bend_compliance = 1e-3;
@@ -315,7 +315,7 @@ void SoftSample::Mouse(int button, bool down, const Vec3& o, const Vec3& d) {
 }
 
 void OneBodySample::SolverFromOption() {
-  if (SolverOption(ctx_, SoftSolver::XPBD) != SoftSolver::MassSpring) return;
+  if (SolverOption(ctx_, SoftSolver::Xpbd) != SoftSolver::MassSpring) return;
   UseMassSpring(def_, body_, ctx_.settings.stepper.fixed_dt);
   body_.settings() = def_;
 }
@@ -384,7 +384,7 @@ void SoftReadout(const SoftBody& b) {
     ImGui::Text("step %.3f ms (solve %.3f, no colliders)", 1e3 * p.total, 1e3 * solve);
   else
     ImGui::Text("step %.3f ms (solve %.3f, collide %s%.3f)", 1e3 * p.total, 1e3 * solve,
-                b.settings().solver == SoftSolver::XPBD ? "~" : "", 1e3 * p.collide);
+                b.settings().solver == SoftSolver::Xpbd ? "~" : "", 1e3 * p.collide);
   const StrainStats s = b.strain_stats();
   ImGui::Text("strain: mean %.3f %%, max %.2f %%", 100 * s.mean, 100 * s.max);
   ImGui::Text("energy: kinetic %.4f J, potential %.3f J", b.kinetic_energy(), b.potential_energy());

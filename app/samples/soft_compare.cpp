@@ -26,7 +26,7 @@ namespace {
 constexpr double kTop = 2.3;       // height of the pinned edge (m)
 constexpr double kExplode = 3.0;   // a lane whose largest strain passes this (300 %) exploded
 constexpr std::array<Method, 5> kExplicit = {Method::ExplicitEuler, Method::SemiImplicitEuler, Method::PositionVerlet,
-                                             Method::VelocityVerlet, Method::RK4};
+                                             Method::VelocityVerlet, Method::Rk4};
 
 // one cloth: its body, the last finite shape, and why it stopped (if it did)
 struct Lane {
@@ -227,7 +227,7 @@ class CompareSample final : public SoftSample {
         d.stretch_stiffness = d.shear_stiffness = k_;
         d.bend_stiffness = 0.1 * k_;
       } else {
-        d.solver = SoftSolver::XPBD;
+        d.solver = SoftSolver::Xpbd;
         d.substeps = xpbd_substeps_;
         d.iterations = xpbd_iterations_;
         d.stretch_compliance = d.shear_compliance = compliance_;

@@ -41,7 +41,7 @@ class JellySample final : public OneBodySample {
     ctx.renderer->style.grid_spacing = 0.25f;
     ctx.camera->frame({0.0f, 0.5f, -0.2f}, 1.6f, 0.6f, 0.25f);
     rebuild();
-    if (SolverOption(ctx, SoftSolver::XPBD) == SoftSolver::MassSpring) mass_spring();
+    if (SolverOption(ctx, SoftSolver::Xpbd) == SoftSolver::MassSpring) mass_spring();
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<JellySample>(ctx); }
 

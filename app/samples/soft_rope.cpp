@@ -205,7 +205,7 @@ class RopeSample final : public SoftSample {
       }
       m.pinned.push_back(0);
       SoftBodyDef d;
-      d.solver = SoftSolver::XPBD;
+      d.solver = SoftSolver::Xpbd;
       d.substeps = splits[k][0];
       d.iterations = splits[k][1];
       d.stretch_compliance = compliance_;

@@ -36,14 +36,14 @@ enum class Method {
   SemiImplicitEuler,  ///< "semi-implicit-euler": v += a dt, then x += v dt. Order 1, symplectic.
   PositionVerlet,     ///< "verlet": x' = 2x - x_prev + a dt^2 (workbook form). Order 2, symplectic.
   VelocityVerlet,     ///< "velocity-verlet": kick-drift-kick form of Verlet. Order 2, symplectic.
-  RK4,                ///< "rk4": classical Runge-Kutta, workbook listing 3.1. Order 4.
+  Rk4,                ///< "rk4": classical Runge-Kutta, workbook listing 3.1. Order 4.
   ImplicitEuler,      ///< "implicit-euler": backward Euler by Newton's method. Order 1, damps.
 };
 
 /// Every method, in declaration order (for loops, menus and the lab).
 inline constexpr std::array<Method, 6> kAllMethods = {
     Method::ExplicitEuler,  Method::SemiImplicitEuler, Method::PositionVerlet,
-    Method::VelocityVerlet, Method::RK4,               Method::ImplicitEuler};
+    Method::VelocityVerlet, Method::Rk4,               Method::ImplicitEuler};
 
 /// The method's command-line name: "euler", "semi-implicit-euler", "verlet",
 /// "velocity-verlet", "rk4" or "implicit-euler".
@@ -263,7 +263,7 @@ void Integrator<V>::step(double t, double dt, std::span<V> x, std::span<V> v, Ac
     case Method::SemiImplicitEuler: step_semi_implicit_euler(t, h, x, v, accel); break;
     case Method::PositionVerlet: step_position_verlet(t, dt, x, v, accel); break;
     case Method::VelocityVerlet: step_velocity_verlet(t, h, x, v, accel); break;
-    case Method::RK4: step_rk4(t, h, x, v, accel); break;
+    case Method::Rk4: step_rk4(t, h, x, v, accel); break;
     case Method::ImplicitEuler: step_implicit_euler(t, dt, x, v, accel); break;
   }
 }

@@ -17,7 +17,7 @@
 //
 //   pba::SoftBody cloth = pba::SoftBody::cloth_grid(
 //       {.origin = {-0.5, 1.5, 0}, .nx = 64, .ny = 64, .mass = 1},
-//       {.solver = pba::SoftSolver::XPBD, .substeps = 20});
+//       {.solver = pba::SoftSolver::Xpbd, .substeps = 20});
 //   pba::Collider ball = pba::Collider::sphere({0, 0.5, 0}, 0.3);
 //   cloth.step(t, 1.0 / 60, std::span(&ball, 1));   // or a CollisionWorld
 //
@@ -55,7 +55,7 @@ struct SoftAccess;  // internal: the tests' access to a body's solver state
 /// How a soft body is solved.
 enum class SoftSolver : std::uint8_t {
   MassSpring,  ///< "mass-spring": Hooke springs + damping, integrated by SoftBodyDef::method
-  XPBD,        ///< "xpbd": compliant distance and volume constraints, substepped
+  Xpbd,        ///< "xpbd": compliant distance and volume constraints, substepped
 };
 
 /// The role of a distance constraint (each kind has its own compliance or stiffness).
@@ -81,7 +81,7 @@ struct SoftAero {
 /// field is validated when the body is built and again at each step (fields may be
 /// changed between steps through SoftBody::settings()).
 struct SoftBodyDef {
-  SoftSolver solver = SoftSolver::XPBD;       ///< which solver
+  SoftSolver solver = SoftSolver::Xpbd;       ///< which solver
   /// MassSpring only: the integrator (any pba::Method). Implicit Euler is a dense Newton
   /// solve limited to 1536 unknowns (512 particles); larger bodies get an Error.
   Method method = Method::SemiImplicitEuler;

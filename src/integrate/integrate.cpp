@@ -20,7 +20,7 @@ constexpr std::array<MethodInfo, 6> kInfo = {{
     {Method::SemiImplicitEuler, "semi-implicit-euler", "Semi-implicit Euler", 1, true, 1},
     {Method::PositionVerlet, "verlet", "Position Verlet", 2, true, 1},
     {Method::VelocityVerlet, "velocity-verlet", "Velocity Verlet", 2, true, 2},
-    {Method::RK4, "rk4", "RK4", 4, false, 4},
+    {Method::Rk4, "rk4", "RK4", 4, false, 4},
     {Method::ImplicitEuler, "implicit-euler", "Implicit Euler", 1, false, -1},
 }};
 
@@ -163,10 +163,10 @@ void Integrator<V>::resize(std::size_t n) {
     detail::throw_too_many_unknowns(n, kDim, newton_.max_unknowns);
   fit(a0_, true);
   fit(a1_, m == Method::VelocityVerlet || implicit);
-  fit(xs_, m == Method::RK4 || implicit);
-  fit(vs_, m == Method::RK4 || m == Method::VelocityVerlet || m == Method::PositionVerlet);
-  fit(sum_x_, m == Method::RK4);
-  fit(sum_v_, m == Method::RK4);
+  fit(xs_, m == Method::Rk4 || implicit);
+  fit(vs_, m == Method::Rk4 || m == Method::VelocityVerlet || m == Method::PositionVerlet);
+  fit(sum_x_, m == Method::Rk4);
+  fit(sum_v_, m == Method::Rk4);
   fit(x_prev_, m == Method::PositionVerlet);
   fit(u_, implicit);
   // implicit euler: dense solver and optional analytic jacobian blocks

@@ -120,7 +120,7 @@ ConvergenceResult measure_convergence(const Problem& p, Method m, const Converge
     p.exact(p.t_end, x_ref, v_ref);
   } else {
     const long long ref_steps = counts.back() * 8;
-    simulate(p, Method::RK4, p.t_end / static_cast<double>(ref_steps), ref_steps, x_ref, v_ref);
+    simulate(p, Method::Rk4, p.t_end / static_cast<double>(ref_steps), ref_steps, x_ref, v_ref);
   }
   double scale = 1;
   for (double xr : x_ref) scale = std::max(scale, std::abs(xr));
@@ -230,7 +230,7 @@ double theory_stability_limit(Method m) {
     case Method::SemiImplicitEuler:
     case Method::PositionVerlet:
     case Method::VelocityVerlet: return 2;
-    case Method::RK4: return 2 * std::numbers::sqrt2;
+    case Method::Rk4: return 2 * std::numbers::sqrt2;
     case Method::ImplicitEuler: return kInf;
   }
   return kNaN;

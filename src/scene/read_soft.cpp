@@ -89,7 +89,7 @@ void read_soft_body(const Node& n, World& w) {
                       : SoftBodyDef{};
   d.forces.gravity = w.gravity();
   d.forces.wind = w.particles().forces().wind;
-  d.solver = n.choice<SoftSolver>("solver", {{"xpbd", SoftSolver::XPBD}, {"mass-spring", SoftSolver::MassSpring}},
+  d.solver = n.choice<SoftSolver>("solver", {{"xpbd", SoftSolver::Xpbd}, {"mass-spring", SoftSolver::MassSpring}},
                                   d.solver);
   if (n.has("integrator")) d.method = read_method(n.at("integrator"));
   if (type == Type::Spring) d.substeps = 1;  // one integrator step per tick unless asked

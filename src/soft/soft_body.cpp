@@ -36,7 +36,7 @@ double tet_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 
 void SoftBodyDef::validate(std::string_view where) const {
   // solver and counts
-  if (solver != SoftSolver::MassSpring && solver != SoftSolver::XPBD)
+  if (solver != SoftSolver::MassSpring && solver != SoftSolver::Xpbd)
     throw Error(field_path(where, "solver") + ": unknown solver " + std::to_string(static_cast<int>(solver)));
   if (static_cast<int>(method) < 0 || static_cast<int>(method) > static_cast<int>(Method::ImplicitEuler))
     throw Error(field_path(where, "method") + ": unknown method " + std::to_string(static_cast<int>(method)));
@@ -418,7 +418,7 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
   s.profile.collide = 0;
   // the solver
   sw.reset();
-  if (s.def.solver == SoftSolver::XPBD) {
+  if (s.def.solver == SoftSolver::Xpbd) {
     s.ms_valid = false;
     s.step_xpbd(t, dt);
   } else {
@@ -747,7 +747,7 @@ double SoftBody::potential_energy() const {
     e -= s.mass[i] * glm::dot(d.forces.gravity, Vec3(s.x[i], s.y[i], s.z[i]));
   }
   // elastic energy of the distance constraints: k C^2 / 2 with k = 1/alpha for XPBD
-  const bool xpbd = d.solver == SoftSolver::XPBD;
+  const bool xpbd = d.solver == SoftSolver::Xpbd;
   for (std::size_t c = 0; c < s.ca.size(); ++c) {
     if (s.broken[c]) continue;
     const auto kd = static_cast<SoftConstraintKind>(s.kind[c]);

@@ -25,7 +25,7 @@ TEST(UsersAlloc, HullsMeshesAndCompoundsNeverAllocatePerTick) {
   };
   pba::CollisionWorld cw;
   pba::ParticleSystem fused({.capacity = 600});
-  pba::ParticleSystem generic({.capacity = 600, .method = pba::Method::RK4});
+  pba::ParticleSystem generic({.capacity = 600, .method = pba::Method::Rk4});
   for (int i = 0; i < 600; ++i) {
     const pba::ParticleDef p{.position = {0.005 * i - 1.5, 0.3 + 0.002 * i, 0.1}, .radius = 0.01};
     fused.spawn(p);

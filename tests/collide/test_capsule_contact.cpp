@@ -97,7 +97,7 @@ TEST(Capsule, ClothRestsOnACapsule) {
   const Quat lying = glm::angleAxis(pba::kPi / 2, Vec3(0, 0, 1));
   const Collider cap = capsule({0, 0.5, 0}, lying, 0.6, R);
   pba::SoftBodyDef d;
-  d.solver = pba::SoftSolver::XPBD;
+  d.solver = pba::SoftSolver::Xpbd;
   d.thickness = th;
   d.friction = 0.5;
   d.substeps = 20;

@@ -49,7 +49,7 @@ TEST(UsersTunnelling, FastParticlesAreCaughtByHullsMeshesAndCompounds) {
       tu::place(ColliderShape::triangles(tu::sheet_mesh()), {0, 0, 0}, {.restitution = 0}),
       tu::place(tu::compound_shape(pba::CompoundShape::build(thin)), {-0.5, 0, 0}, {.restitution = 0}),
   };
-  for (Method m : {Method::SemiImplicitEuler, Method::RK4}) {
+  for (Method m : {Method::SemiImplicitEuler, Method::Rk4}) {
     for (std::size_t k = 0; k < shapes.size(); ++k) {
       ParticleSystem ps = make_system(m);
       ps.forces().gravity = Vec3(0);
@@ -150,7 +150,7 @@ TEST(UsersMoving, RisingHullMeshAndCompoundCarryAParticle) {
 
 TEST(UsersBounce, ReboundsToESquaredHeight) {
   const double H = 1.0, r = 0.05;
-  for (Method m : {Method::SemiImplicitEuler, Method::RK4}) {
+  for (Method m : {Method::SemiImplicitEuler, Method::Rk4}) {
     const double h = pba::order(m) == 1 ? 1.0 / 960 : 1.0 / 120;
     for (double e : {0.5, 0.9}) {
       const pba::SurfaceMaterial mat{.restitution = e};
@@ -189,7 +189,7 @@ TEST(UsersSliding, AcrossInternalMeshEdgesWithoutABump) {
   const double h = 1.0 / 120, r = 0.02;
   const Collider floor = tu::place(ColliderShape::triangles(tu::grid_mesh(40, 0.05)), {0, 0, 0},
                                    {.restitution = 0.5, .friction = 0});
-  for (Method m : {Method::SemiImplicitEuler, Method::RK4}) {
+  for (Method m : {Method::SemiImplicitEuler, Method::Rk4}) {
     ParticleSystem ps = make_system(m);
     const Vec3 v0(1.5, 0, 0.4);
     ps.create({.position = {-0.9, r, 0.013}, .velocity = v0, .mass = 0.1, .radius = r});
@@ -280,7 +280,7 @@ TEST(UsersCloth, RestsOnAHullAndAMesh) {
                 glm::angleAxis(0.3, Vec3(0, 1, 0))),
       tu::place(tu::compound_shape(tu::table_compound()), {0, 0.5, 0}, {.friction = 0.4}),
   };
-  for (pba::SoftSolver solver : {pba::SoftSolver::XPBD, pba::SoftSolver::MassSpring}) {
+  for (pba::SoftSolver solver : {pba::SoftSolver::Xpbd, pba::SoftSolver::MassSpring}) {
     for (std::size_t k = 0; k < shapes.size(); ++k) {
       pba::SoftBodyDef d;
       d.solver = solver;
@@ -302,7 +302,7 @@ TEST(UsersCloth, RestsOnAHullAndAMesh) {
         c.step(i / 60.0, 1.0 / 60, std::span(&shapes[k], 1));
         for (std::size_t p = 0; p < c.size(); ++p) min_gap = std::min(min_gap, gap(shapes[k], c.position(p)) - th);
       }
-      const char* name = solver == pba::SoftSolver::XPBD ? "xpbd" : "mass-spring";
+      const char* name = solver == pba::SoftSolver::Xpbd ? "xpbd" : "mass-spring";
       EXPECT_GE(min_gap, -1e-6) << name << " shape " << k;
       // it lies on the top (y = 0.5): the centre particle at the thickness above it
       EXPECT_NEAR(c.position(6 * 12 + 6).y, 0.5 + th, 0.01) << name << " shape " << k;
@@ -320,7 +320,7 @@ TEST(UsersRope, ComesToRestOverACapsule) {
   const double R = 0.2, th = 0.01, hh = 0.5;
   const Quat along_z = glm::angleAxis(std::numbers::pi / 2, Vec3(1, 0, 0));
   const Collider cap = tu::place(ColliderShape::capsule(hh, R), {0, 0.5, 0}, {.friction = 0.5}, along_z);
-  for (pba::SoftSolver solver : {pba::SoftSolver::XPBD, pba::SoftSolver::MassSpring}) {
+  for (pba::SoftSolver solver : {pba::SoftSolver::Xpbd, pba::SoftSolver::MassSpring}) {
     pba::SoftBodyDef d;
     d.solver = solver;
     d.substeps = 20;
@@ -340,7 +340,7 @@ TEST(UsersRope, ComesToRestOverACapsule) {
       rope.step(i / 60.0, 1.0 / 60, std::span(&cap, 1));
       for (std::size_t p = 0; p < rope.size(); ++p) worst = std::min(worst, gap(cap, rope.position(p)) - th);
     }
-    const char* name = solver == pba::SoftSolver::XPBD ? "xpbd" : "mass-spring";
+    const char* name = solver == pba::SoftSolver::Xpbd ? "xpbd" : "mass-spring";
     EXPECT_GE(worst, -1e-6) << name;
     EXPECT_NEAR(rope.position(15).y, 0.5 + R + th, 0.01) << name;
     EXPECT_LT(rope.kinetic_energy(), 1e-4) << name;

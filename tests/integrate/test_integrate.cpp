@@ -39,7 +39,7 @@ TEST(Methods, NamesOrdersAndParsing) {
     EXPECT_EQ(pba::parse_method(names[i], "test"), m);
   }
   EXPECT_TRUE(pba::is_symplectic(Method::PositionVerlet));
-  EXPECT_FALSE(pba::is_symplectic(Method::RK4));
+  EXPECT_FALSE(pba::is_symplectic(Method::Rk4));
 }
 
 TEST(Methods, UnknownNameListsValidNames) {
@@ -71,7 +71,7 @@ TEST(BadInput, StepRejectsBadDtNamingValueAndArgument) {
 }
 
 TEST(BadInput, MismatchedSizesAndSettings) {
-  pba::Integrator<pba::Vec3> integ(Method::RK4);
+  pba::Integrator<pba::Vec3> integ(Method::Rk4);
   std::vector<pba::Vec3> x(3), v(2);
   auto f = [](double, std::span<const pba::Vec3>, std::span<const pba::Vec3>, std::span<pba::Vec3>) {};
   EXPECT_EQ(error_of([&] { integ.step(0, 0.01, std::span<pba::Vec3>(x), std::span<pba::Vec3>(v), f); }),
@@ -176,7 +176,7 @@ TEST(Energy, VerletsStayInTheirOrderZSquaredBand) {
 
 TEST(Energy, RK4DecaysSlowlyAtItsAmplificationFactor) {
   // |R(iz)|^2 = 1 - z^6/72 + z^8/576 for classical RK4: a monotonic, tiny decay
-  const EnergyRun r = run_energy(Method::RK4);
+  const EnergyRun r = run_energy(Method::Rk4);
   EXPECT_TRUE(r.monotonic_down);
   const double z2 = kZ * kZ;
   const double per_step = 1 - z2 * z2 * z2 / 72 + z2 * z2 * z2 * z2 / 576;
@@ -205,7 +205,7 @@ TEST(Projectile, SecondOrderMethodsAndRK4AreExactUnderConstantAcceleration) {
   const double dt = 0.01;
   const int n = 200;
   auto accel = [g](double, const pba::Vec3&, const pba::Vec3&) { return g; };
-  for (Method m : {Method::PositionVerlet, Method::VelocityVerlet, Method::RK4}) {
+  for (Method m : {Method::PositionVerlet, Method::VelocityVerlet, Method::Rk4}) {
     SCOPED_TRACE(std::string(pba::name(m)));
     pba::Integrator<pba::Vec3> integ(m);
     pba::Vec3 x = x0, v = v0;
@@ -278,7 +278,7 @@ TEST(Orbit, SymplecticMethodsConserveAngularMomentumToRoundOff) {
     EXPECT_LE(r.max_dl, bound);
   }
   // RK4 is not symplectic: its angular momentum error is truncation, far above round-off
-  EXPECT_GT(run_orbit(Method::RK4, dt, steps).max_dl, 20 * bound);
+  EXPECT_GT(run_orbit(Method::Rk4, dt, steps).max_dl, 20 * bound);
 }
 
 TEST(Orbit, SymplecticEnergyErrorIsBoundedAndScalesWithOrder) {
@@ -438,8 +438,8 @@ TEST(Types, FloatAndTypeErasedAccelAgreeWithDouble) {
   // glm::vec3 (float) state tracks the double result to float precision; a std::function
   // accel gives the same bits as a lambda
   pba::AccelFn<pba::Vec3f> erased = SpringDragGravity{};
-  pba::Integrator<pba::Vec3f> f1(Method::RK4), f2(Method::RK4);
-  pba::Integrator<pba::Vec3> d(Method::RK4);
+  pba::Integrator<pba::Vec3f> f1(Method::Rk4), f2(Method::Rk4);
+  pba::Integrator<pba::Vec3> d(Method::Rk4);
   std::vector<pba::Vec3f> x1{{0.3f, 1.2f, -0.4f}}, v1{{1, 0.5f, 0.25f}}, x2 = x1, v2 = v1;
   std::vector<pba::Vec3> xd{{0.3, 1.2, -0.4}}, vd{{1, 0.5, 0.25}};
   for (int k = 0; k < 100; ++k) {

@@ -49,7 +49,7 @@ TEST(Convergence, EveryStandardProblemMatchesTheory) {
       SCOPED_TRACE(p.name + " / " + std::string(pba::name(m)));
       const auto r = lab::measure_convergence(p, m);
       const bool exact = p.name == "projectile" && pba::order(m) >= 2;
-      const bool model_limited = p.name == "pendulum-small" && m == Method::RK4;
+      const bool model_limited = p.name == "pendulum-small" && m == Method::Rk4;
       if (exact || model_limited) {
         EXPECT_TRUE(std::isnan(r.observed_order)) << r.observed_order;
         EXPECT_FALSE(r.note.empty());
@@ -86,7 +86,7 @@ TEST(ClosedForms, LargePendulumExactSolutionMatchesAFineRK4Run) {
   const lab::Problem p = lab::pendulum(2.5, false);
   std::vector<double> x, v, xe(1), ve(1);
   const long long steps = 30000;
-  lab::simulate(p, Method::RK4, p.t_end / steps, steps, x, v);
+  lab::simulate(p, Method::Rk4, p.t_end / steps, steps, x, v);
   p.exact(p.t_end, xe, ve);
   EXPECT_NEAR(x[0], xe[0], 1e-11);
   EXPECT_NEAR(v[0], ve[0], 1e-10);
@@ -98,7 +98,7 @@ TEST(ClosedForms, LargePendulumExactSolutionMatchesAFineRK4Run) {
   EXPECT_NEAR(ve[0], 0.0, 1e-6);
   lab::Problem q = p;
   q.t_end = T;
-  lab::simulate(q, Method::RK4, T / 40000, 40000, x, v);
+  lab::simulate(q, Method::Rk4, T / 40000, 40000, x, v);
   EXPECT_NEAR(x[0], 2.5, 1e-10);
   EXPECT_NEAR(v[0], 0.0, 1e-9);
 }
@@ -175,7 +175,7 @@ TEST(UserProblems, OwnAccelerationWithoutClosedFormUsesAnRK4Reference) {
   p.accel = [](double, std::span<const double> x, std::span<const double>, std::span<double> a) {
     a[0] = -x[0] - x[0] * x[0] * x[0];
   };
-  for (Method m : {Method::SemiImplicitEuler, Method::VelocityVerlet, Method::RK4}) {
+  for (Method m : {Method::SemiImplicitEuler, Method::VelocityVerlet, Method::Rk4}) {
     SCOPED_TRACE(std::string(pba::name(m)));
     EXPECT_NEAR(lab::measure_convergence(p, m).observed_order, pba::order(m), 0.1);
   }
@@ -184,7 +184,7 @@ TEST(UserProblems, OwnAccelerationWithoutClosedFormUsesAnRK4Reference) {
   problems.push_back(p);
   lab::LabOptions o;
   o.problems = {"duffing"};
-  o.methods = {Method::RK4};
+  o.methods = {Method::Rk4};
   const auto rep = lab::run_lab(problems, o);
   ASSERT_EQ(rep.convergence.size(), 1u);
   EXPECT_TRUE(rep.energy.empty());  // no energy function: no energy run
@@ -203,13 +203,13 @@ TEST(BadInput, ProblemsAndSettingsNameTheField) {
   EXPECT_EQ(error_of([&] { p.validate(); }), "Problem 'oscillator'.v0: has 2 values but x0 has 1");
   lab::ConvergenceSettings cs;
   cs.levels = 1;
-  EXPECT_EQ(error_of([&] { lab::measure_convergence(lab::oscillator(), Method::RK4, cs); }),
+  EXPECT_EQ(error_of([&] { lab::measure_convergence(lab::oscillator(), Method::Rk4, cs); }),
             "ConvergenceSettings.levels: must be an integer in [2, 20], got 1");
   const auto probs = lab::standard_problems();
   EXPECT_EQ(error_of([&] { lab::find_problem(probs, "pendulum", "--problem"); }),
             "--problem: unknown problem 'pendulum'; valid names: projectile, projectile-drag, oscillator, "
             "damped-oscillator, pendulum-small, pendulum-large, orbit, orbit-circular");
-  EXPECT_NE(error_of([&] { lab::measure_energy(lab::Problem{}, Method::RK4); }).find("Problem.name"),
+  EXPECT_NE(error_of([&] { lab::measure_energy(lab::Problem{}, Method::Rk4); }).find("Problem.name"),
             std::string::npos);
 }
 

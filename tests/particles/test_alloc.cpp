@@ -50,7 +50,7 @@ pba::World busy_world(pba::Method m) {
 }
 
 TEST(Allocations, NonePerStepInSteadyState) {
-  for (pba::Method m : {pba::Method::SemiImplicitEuler, pba::Method::RK4, pba::Method::PositionVerlet,
+  for (pba::Method m : {pba::Method::SemiImplicitEuler, pba::Method::Rk4, pba::Method::PositionVerlet,
                         pba::Method::ImplicitEuler}) {
     pba::World w = busy_world(m);
     // warm up past the longest lifetime so births and deaths balance

@@ -156,7 +156,7 @@ TEST_P(Bounce, ReboundsToESquaredHeight) {
 
 // the same on the top face of a box and the top of a sphere (their contact planes)
 TEST(Bounce, OnBoxesAndSpheresToo) {
-  for (Method m : {Method::SemiImplicitEuler, Method::RK4}) {
+  for (Method m : {Method::SemiImplicitEuler, Method::Rk4}) {
     for (int shape = 0; shape < 2; ++shape) {
       const double e = 0.7, H = 1.0, r = 0.05, top = 0.5;
       const double h = pba::order(m) == 1 ? 1.0 / 960 : 1.0 / 120;
@@ -298,7 +298,7 @@ TEST(Wind, GustsAreDeterministicAndBounded) {
 
 TEST(Wind, LinearDragRelaxesToTheWind) {
   // tau = m / b = 0.5 s; after 10 tau the particle moves with the air
-  ParticleSystem ps = make_system(Method::RK4);
+  ParticleSystem ps = make_system(Method::Rk4);
   ps.forces().gravity = Vec3(0);
   ps.forces().linear_drag = 0.2;
   ps.forces().wind.velocity = Vec3(3, 0, -1);

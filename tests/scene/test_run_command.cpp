@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -115,6 +116,66 @@ TEST(RunCommand, CsvHasSoftBodyParticlesWithTheirBody) {
   EXPECT_EQ(last, want);
 }
 
+// what the World simulates at a step: the particle system's particles, every soft body's
+// particles and every entity's rigid body (the colliders' stand-ins are not simulated)
+std::size_t simulated_points(const pba::World& w) {
+  std::size_t n = w.particles().size();
+  if (const auto* soft = dynamic_cast<const pba::SoftSystem*>(w.find_system(pba::SoftSystem::kName)))
+    for (std::size_t b = 0; b < soft->size(); ++b) n += soft->at(b).size();
+  for (std::size_t i = 0; i < w.rigid().size(); ++i) n += w.valid(w.rigid().id_at(i));
+  return n;
+}
+
+// every shipped scene: the CSV has a row for every simulated point at every snapshot, as
+// many as the same World stepped here holds then (emitters change the count); before, the
+// soft bodies wrote none (soft_flag's CSV was its header line)
+TEST(RunCommand, CsvHasEverySimulatedPointOfEveryShippedScene) {
+  const auto csv = std::filesystem::temp_directory_path() / "pba_run_every_point.csv";
+  int scenes = 0;
+  for (const auto& e : std::filesystem::directory_iterator(PBA_SCENES_DIR)) {
+    if (e.path().extension() != ".json") continue;
+    ++scenes;
+    const std::string file = e.path().string();
+    testing::internal::CaptureStdout();
+    const int rc = run({file, "--steps", "20", "--every", "10", "--csv", csv.string()});
+    testing::internal::GetCapturedStdout();
+    ASSERT_EQ(rc, 0) << file;
+    // rows per step (the first column)
+    std::map<long long, std::size_t> rows;
+    std::ifstream in(csv);
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) ++rows[std::stoll(line.substr(0, line.find(',')))];
+    pba::Scene s = pba::load_scene(file);
+    for (int step = 0; step <= 20; ++step) {
+      if (step % 10 == 0) {
+        EXPECT_EQ(rows[step], simulated_points(s.world)) << file << " at step " << step;
+      }
+      if (step < 20) s.world.step();
+    }
+    EXPECT_GT(rows[20], 0u) << file << ": simulates nothing";
+  }
+  EXPECT_GE(scenes, 15);
+}
+
+// the profile says where the collisions' time goes: semi-implicit Euler's fused kernel
+// times them with the integration, so its line says so instead of "collide 0" beside
+// contacts (the balls bounce: contacts every step); the other integrators time them apart
+TEST(RunCommand, ProfileSaysWhenCollisionsAreFusedWithIntegration) {
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({kScene, "--steps", "300"}), 0);
+  std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_EQ(out.find("contacts 0 per step"), std::string::npos) << out;
+  EXPECT_NE(out.find(", integrate + collide "), std::string::npos) << out;
+  EXPECT_NE(out.find(" (fused), recycle "), std::string::npos) << out;
+  EXPECT_EQ(out.find("collide 0,"), std::string::npos) << out;
+  testing::internal::CaptureStdout();
+  ASSERT_EQ(run({kScene, "--steps", "300", "--method", "rk4"}), 0);
+  out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find(", collide "), std::string::npos) << out;
+  EXPECT_EQ(out.find("(fused)"), std::string::npos) << out;
+}
+
 // --method is applied to what an integrator steps (the particles, mass-spring bodies)
 // and refused, naming the reason, where the scene cannot honour it: never reported as
 // applied while the state is the same
@@ -145,7 +206,7 @@ TEST(RunCommand, MethodAppliesToMassSpringBodies) {
        "a": [0, 2, 0], "b": [0, 1, 0], "rest_length": 0.8, "mass": 0.5, "stiffness": 40},
       {"type": "spring", "name": "two", "solver": "mass-spring", "integrator": "velocity-verlet",
        "a": [1, 2, 0], "b": [1, 1, 0], "rest_length": 0.8, "mass": 0.5, "stiffness": 40}]})");
-  for (pba::Method m : {pba::Method::ExplicitEuler, pba::Method::RK4}) {
+  for (pba::Method m : {pba::Method::ExplicitEuler, pba::Method::Rk4}) {
     pba::Scene s = pba::load_scene(file);
     auto* soft = dynamic_cast<pba::SoftSystem*>(s.world.find_system(pba::SoftSystem::kName));
     ASSERT_NE(soft, nullptr);

@@ -55,7 +55,7 @@ TEST(ExampleScenes, ContentIsWhatTheFileSays) {
   EXPECT_NEAR(glm::angle(s.world.pose(ramp).rotation), 20 * 3.141592653589793 / 180, 1e-12);
   EXPECT_EQ(s.world.stepper().settings().fixed_dt, 1.0 / 120);
   pba::Scene w = pba::load_scene(std::filesystem::path(PBA_SCENES_DIR) / "wind_drag.json");
-  EXPECT_EQ(w.world.particles().method(), pba::Method::RK4);
+  EXPECT_EQ(w.world.particles().method(), pba::Method::Rk4);
   EXPECT_EQ(w.world.particles().forces().wind.gust, 2.0);
 }
 

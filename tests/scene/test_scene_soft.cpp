@@ -108,7 +108,7 @@ TEST(SoftScenes, FilesHoldWhatTheySay) {
   ASSERT_EQ(ss.size(), 3u);
   EXPECT_EQ(ss.at(0).settings().solver, pba::SoftSolver::MassSpring);
   EXPECT_EQ(ss.at(1).settings().method, pba::Method::VelocityVerlet);
-  EXPECT_EQ(ss.at(2).settings().solver, pba::SoftSolver::XPBD);
+  EXPECT_EQ(ss.at(2).settings().solver, pba::SoftSolver::Xpbd);
   EXPECT_DOUBLE_EQ(ss.at(2).settings().stretch_compliance, 1.0 / 40);
   EXPECT_EQ(ss.at(0).settings().substeps, 1);
 
@@ -211,7 +211,7 @@ TEST(SoftBuilders, BuildWhatTheySay) {
   pba::SoftSystem& soft = pba::soft_system(w);
   ASSERT_EQ(soft.size(), 2u);
   EXPECT_EQ(soft.body(w.find("mass-spring cloth")).settings().solver, pba::SoftSolver::MassSpring);
-  EXPECT_EQ(soft.body(w.find("xpbd cloth")).settings().solver, pba::SoftSolver::XPBD);
+  EXPECT_EQ(soft.body(w.find("xpbd cloth")).settings().solver, pba::SoftSolver::Xpbd);
   for (int i = 0; i < 120; ++i) w.step();
   // both hang from their pinned rows and are stretched by at most 5%
   EXPECT_LT(soft.body(w.find("xpbd cloth")).strain_stats().mean, 0.01);
@@ -219,7 +219,7 @@ TEST(SoftBuilders, BuildWhatTheySay) {
 
   // the spring builder with XPBD is the same spring (compliance 1/k)
   pba::World ws;
-  const pba::EntityId s = pba::scenes::spring(ws, {.solver = pba::SoftSolver::XPBD, .stiffness = 25});
+  const pba::EntityId s = pba::scenes::spring(ws, {.solver = pba::SoftSolver::Xpbd, .stiffness = 25});
   EXPECT_DOUBLE_EQ(pba::soft_system(ws).body(s).settings().stretch_compliance, 0.04);
 
   // the jelly builder's settings are its material's at the world's step

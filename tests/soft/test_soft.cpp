@@ -133,7 +133,7 @@ TEST(Spring, XpbdComplianceIsInverseStiffness) {
   const double k = 100, m = 1, omega = 10, T = 2 * kPi / omega;
   const int substeps = 20;
   const double dt = 1.0 / 60, h = dt / substeps;
-  pba::SoftBody s = make_spring(pba::SoftSolver::XPBD, pba::Method::SemiImplicitEuler, k, m, 0.1, substeps);
+  pba::SoftBody s = make_spring(pba::SoftSolver::Xpbd, pba::Method::SemiImplicitEuler, k, m, 0.1, substeps);
   EXPECT_DOUBLE_EQ(s.settings().stretch_compliance, 1.0 / k);
   PeriodMeter pm;
   for (int i = 0; i * dt < 10 * T; ++i) {
@@ -186,7 +186,7 @@ TEST(Rope, HangingRopeStretchIsSecondOrderInTheSubstep) {
 // cloth
 
 namespace {
-pba::SoftBody hanging_cloth(int n, int substeps, pba::SoftSolver solver = pba::SoftSolver::XPBD) {
+pba::SoftBody hanging_cloth(int n, int substeps, pba::SoftSolver solver = pba::SoftSolver::Xpbd) {
   pba::SoftBodyDef d;
   d.solver = solver;
   d.substeps = substeps;
@@ -464,7 +464,7 @@ TEST(MassSpring, ClothUnderStableIntegratorsHangs) {
   const int nx = 6, ny = 6;
   const double k = 500, l0 = 1.0 / (ny - 1), M = 1, g = 9.81;
   for (pba::Method m : {pba::Method::SemiImplicitEuler, pba::Method::VelocityVerlet, pba::Method::PositionVerlet,
-                        pba::Method::RK4, pba::Method::ImplicitEuler}) {
+                        pba::Method::Rk4, pba::Method::ImplicitEuler}) {
     pba::SoftBodyDef d;
     d.solver = pba::SoftSolver::MassSpring;
     d.method = m;

@@ -52,7 +52,7 @@ TEST(SoftAllocations, NonePerXpbdStep) {
 
 TEST(SoftAllocations, NonePerMassSpringStep) {
   for (pba::Method m : {pba::Method::ExplicitEuler, pba::Method::SemiImplicitEuler, pba::Method::PositionVerlet,
-                        pba::Method::VelocityVerlet, pba::Method::RK4, pba::Method::ImplicitEuler}) {
+                        pba::Method::VelocityVerlet, pba::Method::Rk4, pba::Method::ImplicitEuler}) {
     pba::SoftBodyDef d;
     d.solver = pba::SoftSolver::MassSpring;
     d.method = m;
