@@ -221,9 +221,14 @@ struct RigidManifoldInfo {
 
 /// Where the last step's time went (s).
 struct RigidProfile {
-  double collide = 0;  ///< pairs and manifolds
-  double solve = 0;    ///< contact solver and integration
-  double total = 0;    ///< the whole step
+  double collide = 0;    ///< pairs and manifolds
+  double solve = 0;      ///< contact solver and integration (everything after collide)
+  double total = 0;      ///< the whole step
+  // the parts of `solve`:
+  double prepare = 0;    ///< the solver's constraint arrays (anchors, masses, colours)
+  double integrate = 0;  ///< velocities and positions (all substeps)
+  double contacts = 0;   ///< the contact passes: warm start, solve, relax, restitution
+  double finish = 0;     ///< continuous collision, storing the impulses, islands and sleep
 };
 
 namespace detail {

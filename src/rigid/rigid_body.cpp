@@ -481,6 +481,7 @@ void RigidBodySystem::integrate_rotation(std::size_t i, double h) {
 }
 
 void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity) {
+  const Stopwatch clock;
   const std::size_t n = type_.size();
   for (std::size_t i = 0; i < n; ++i) {
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
@@ -493,9 +494,11 @@ void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity) {
     // a force too large for a double stops here, before contacts can spread it to others
     if (!(is_finite(v_[i]) && is_finite(w_[i]))) fail(i);
   }
+  profile_.integrate += clock.seconds();
 }
 
 void RigidBodySystem::integrate_positions(double h) {
+  const Stopwatch clock;
   const std::size_t n = type_.size();
   for (std::size_t i = 0; i < n; ++i) {
     switch (type_[i]) {
@@ -515,6 +518,7 @@ void RigidBodySystem::integrate_positions(double h) {
         break;
     }
   }
+  profile_.integrate += clock.seconds();
 }
 
 void RigidBodySystem::step(double dt, const Vec3& gravity) {
@@ -533,7 +537,10 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   // pairs and manifolds
   contacts_->update(*this, dt);
   profile_.collide = total.seconds();
+  profile_.integrate = 0;  // integrate_velocities and integrate_positions add to it
   contacts_->prepare(*this);
+  profile_.prepare = total.seconds() - profile_.collide;
+  const double solver_start = total.seconds();
   const bool soft = settings_.solver == RigidSolverType::SoftStep;
   contacts_->carry_impulses(settings_.solver == RigidSolverType::SequentialImpulse ? dt : dt / settings_.substeps);
   if (settings_.solver == RigidSolverType::Tgs) {
@@ -559,6 +566,8 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
     integrate_positions(dt);
   }
   if (settings_.solver != RigidSolverType::Xpbd) contacts_->restitution(*this);
+  const double solver_end = total.seconds();
+  profile_.contacts = solver_end - solver_start - profile_.integrate;
   contacts_->continuous(*this);
   contacts_->store();
   check_finite();
@@ -566,6 +575,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   time_ += dt;
   profile_.total = total.seconds();
   profile_.solve = profile_.total - profile_.collide;
+  profile_.finish = profile_.total - solver_end;
 }
 
 void RigidBodySystem::check_finite() {
