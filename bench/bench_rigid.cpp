@@ -1,7 +1,7 @@
 // pba rigid bodies, under each of its four contact solvers, against Bullet on the scenes of
 // shared/peers/ (vertical stacks, the 20-level square pyramid, 1000 falling boxes), all in
 // this process, one core:
-//   taskset -c 1 build/release/bin/bench_rigid [--quick | --budget] [--scene S] [--solver S] [--steps N] [--profile]
+//   taskset -c 1 build/release/bin/bench_rigid [--quick | --budget] [--scene S] [--solver S] [--steps N] [--profile] [--no-peer]
 // Prints ms per 60 Hz step (median of the steps), the top box's sag and drift, and the state
 // hash for each pba solver. --budget instead runs the stacks and a small pyramid under the four
 // solvers at equal budgets of contact passes per step (docs/rigid-bodies.md). Bullet: btDiscreteDynamicsWorld, btDbvtBroadphase, sequential impulses with
@@ -178,9 +178,10 @@ int run_budget() {
 }
 
 // the options: --quick, --budget, --scene NAME (one scene), --solver NAME (one pba solver, with
-// Bullet), --steps N (instead of the scene's), --profile (a line of per-phase medians per solver)
+// Bullet), --steps N (instead of the scene's), --profile (a line of per-phase medians per solver),
+// --no-peer (pba only, for profiling)
 struct Options {
-  bool quick = false, budget = false, profile = false;
+  bool quick = false, budget = false, profile = false, peer = true;
   std::string scene, solver;
   int steps = 0;
 };
@@ -188,7 +189,7 @@ struct Options {
 int usage(const char* why) {
   std::fprintf(stderr,
                "bench_rigid: %s\nusage: bench_rigid [--quick | --budget] [--scene stack10|stack20|stack40|fall|"
-               "fall-sleep|pyramid] [--solver soft-step|sequential-impulse|tgs|xpbd] [--steps N] [--profile]\n",
+               "fall-sleep|pyramid|pyramid10] [--solver soft-step|sequential-impulse|tgs|xpbd] [--steps N] [--profile] [--no-peer]\n",
                why);
   return 2;
 }
@@ -203,6 +204,7 @@ int main(int argc, char** argv) {
     if (a == "--quick") o.quick = true;
     else if (a == "--budget") o.budget = true;
     else if (a == "--profile") o.profile = true;
+    else if (a == "--no-peer") o.peer = false;
     else if (a == "--scene") o.scene = value();
     else if (a == "--solver") o.solver = value();
     else if (a == "--steps") o.steps = std::atoi(value().c_str());
@@ -231,6 +233,8 @@ int main(int argc, char** argv) {
                                                         {"fall 1000", "fall", Scene::Fall, 10, 600},
                                                         {"fall 1000, sleep", "fall-sleep", Scene::Fall, 10, 600, true},
                                                         {"pyramid 20 (2870)", "pyramid", Scene::Pyramid, 20, 60}};
+  // a scene by itself, not in the full run
+  if (o.scene == "pyramid10") cases.push_back({"pyramid 10 (385)", "pyramid10", Scene::Pyramid, 10, 300});
   if (!o.scene.empty()) {
     std::erase_if(cases, [&](const Case& c) { return o.scene != c.key; });
     if (cases.empty()) return usage(("unknown scene " + o.scene).c_str());
@@ -255,7 +259,7 @@ int main(int argc, char** argv) {
       std::printf(" | %7.3f ms %8.4f %8.4f m", r.ms, r.sag, r.drift);
       std::fflush(stdout);
     }
-    const Result bt = run_bullet(c.scene, c.size, c.steps, c.sleep);
+    const Result bt = o.peer ? run_bullet(c.scene, c.size, c.steps, c.sleep) : Result{};
     std::printf(" | %7.3f ms %8.4f %8.4f m | %.2fx  (hashes", bt.ms, bt.sag, bt.drift, bt.ms / first.ms);
     for (const std::uint64_t h : hashes) std::printf(" %016llx", static_cast<unsigned long long>(h));
     std::printf(")");

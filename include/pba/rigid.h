@@ -191,6 +191,18 @@ struct ContactSettings {
   bool operator==(const ContactSettings&) const = default;
 };
 
+/// The instructions that run the contact solver's blocks (src/rigid/solver.h). Every path
+/// does the same arithmetic in every lane, so all give the same bits; they differ in speed.
+enum class RigidSimd : std::uint8_t {
+  Best,    ///< the widest this CPU runs (AVX-512, else AVX2, else scalar)
+  Scalar,  ///< one manifold at a time
+  Avx2,    ///< 4 manifolds at a time (x86-64 with AVX2)
+  Avx512,  ///< 8 manifolds at a time (x86-64 with AVX-512F)
+};
+
+/// Lower-case name of a SIMD path ("best", "scalar", "avx2", "avx512").
+std::string_view to_string(RigidSimd s);
+
 /// Settings of a RigidBodySystem.
 struct RigidSystemDef {
   std::size_t capacity = 256;  ///< bodies reserved up front; creating more allocates once per doubling
@@ -217,6 +229,10 @@ struct RigidManifoldInfo {
   double approach_speed = 0;      ///< fastest normal closing speed of its points before the solve (m/s, >= 0)
   double max_normal_impulse = 0;  ///< largest single normal impulse of the step (N s); > 0: the solver pushed
   int points = 0;                 ///< contact points, 1 to 4
+  /// The constraint-graph colour the solver put it in (the passes run the colours in order;
+  /// no two manifolds of a colour share a dynamic body, so a colour is solved several at a
+  /// time); -1 when it was solved one at a time (rolling resistance, or no colour free) or by XPBD.
+  int color = -1;
 };
 
 /// Where the last step's time went (s).
@@ -233,6 +249,8 @@ struct RigidProfile {
 
 namespace detail {
 struct RigidContacts;
+struct SolverBody;
+struct FreeMotionArrays;
 }
 
 
@@ -324,6 +342,11 @@ class RigidBodySystem {
   const ContactSettings& settings() const { return settings_; }
   /// Sets the soft step's substeps per step, in [1, 64].
   void set_substeps(int n);
+  /// Picks the contact solver's SIMD path (for tests and benchmarks; results do not depend on
+  /// it). Throws Error naming the path when this CPU cannot run it.
+  void set_simd(RigidSimd path);
+  /// The SIMD path in use (never Best).
+  RigidSimd simd() const;
   /// Advances every body from t to t + dt (s; finite and > 0) under `gravity` (m/s^2).
   /// Throws Error if a body's state becomes non-finite, naming the body and the step's end
   /// time; the system then refuses to step again.
@@ -363,9 +386,14 @@ class RigidBodySystem {
     return {com_[i] - r * com_local_[i], r};
   }
   std::string describe(std::size_t i) const;
-  void integrate_rotation(std::size_t i, double h);
-  void integrate_velocities(double h, const Vec3& gravity);
-  void integrate_positions(double h);
+  // the free motion's arrays (velocities in `rows` when given, else in v_ and w_)
+  detail::FreeMotionArrays free_motion(detail::SolverBody* rows, detail::SolverBody* warm, double* motion);
+  // rows (optional): the contact solver's velocity rows, used instead of v_ and w_; warm
+  // (optional, by body): velocity changes added after the forces and zeroed
+  void integrate_velocities(double h, const Vec3& gravity, detail::SolverBody* rows = nullptr,
+                            detail::SolverBody* warm = nullptr);
+  // motion (optional, 8 doubles by body): each moving body's dp and turn since the start of the step
+  void integrate_positions(double h, detail::SolverBody* rows = nullptr, double* motion = nullptr);
   void check_finite();
   [[noreturn]] void fail(std::size_t i);
   void update_sleep(double dt);

@@ -2,10 +2,12 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "pba/collide/narrow_phase.h"
 #include "pba/rigid.h"
+#include "solver.h"
 
 namespace pba::detail {
 
@@ -18,11 +20,6 @@ struct SolverPoint {
   // turns away from the contact, its centre does not
   Vec3 sa{0, 0, 0}, sb{0, 0, 0};
   double offset = 0;              // (m)
-  // the normal's angular parts, fixed over the step: ra x n and rb x n (m), and the angular
-  // velocity changes per unit normal impulse I_a^-1 (ra x n), I_b^-1 (rb x n) (1/(kg m))
-  Vec3 rna{0, 0, 0}, rnb{0, 0, 0};
-  Vec3 ina{0, 0, 0}, inb{0, 0, 0};
-  double normal_mass = 0;         // 1 / (J M^-1 J^T) along the normal (kg)
   double normal_impulse = 0;      // accumulated (N s per substep)
   double max_normal_impulse = 0;  // largest single normal impulse of the step (N s)
   double approach = 0;            // normal relative velocity before the solve (m/s)
@@ -43,12 +40,12 @@ struct ContactPair {
   std::uint32_t shape_a = 0, shape_b = 0;  // shape indices within the bodies
   std::uint32_t a = 0, b = 0;              // dense body indices this step
   NarrowPhaseCache cache{};
-  Vec3 normal{0, 0, 1}, t1{1, 0, 0}, t2{0, 0, 1};  // from a to b, and the friction basis
+  // from a to b, and the friction basis; (t1, t2, normal) is right-handed (t1 x t2 = normal),
+  // which the solver's contact frame relies on (src/rigid/solver.h)
+  Vec3 normal{0, 0, 1}, t1{1, 0, 0}, t2{0, 0, 1};
   double friction = 0, restitution = 0, rolling = 0;  // mixed coefficients (rolling: times radius, m)
   Vec3 ca{0, 0, 0}, cb{0, 0, 0};  // friction anchor (the points' centroid) from each centre of mass (m)
-  double tangent_mass[2] = {0, 0};   // effective masses of the two tangential constraints (kg)
   double tangent_impulse[2] = {0, 0};  // accumulated (N s per substep)
-  double twist_mass = 0;     // effective inertia about the normal (kg m^2)
   double twist_impulse = 0;  // accumulated (N m s per substep)
   double twist_radius = 0;   // mean distance of the points from the centroid (m)
   Vec3 friction_old{0, 0, 0};  // the tangential impulse in world axes at the end of the step
@@ -134,28 +131,83 @@ struct RigidContacts {
   std::size_t continuous_hits = 0;     // bodies put back to a time of impact, all steps
   double impulse_h = 0;  // the time step (s) the carried impulses were accumulated over; 0: none yet
 
+  // the velocity solvers' constraints (src/rigid/solver.h): blocks by colour, then the overflow's
+  std::vector<ContactBlock> blocks;
+  std::size_t block_count = 0;     // blocks in use
+  std::size_t colored_blocks = 0;  // blocks [0, colored_blocks) are coloured, the rest overflow
+  static constexpr std::uint32_t kOverflow = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> color_of;     // by pair: its colour (kOverflow: solved one at a time)
+  std::vector<std::uint32_t> color_count;  // manifolds of each colour
+  std::uint32_t overflow_count = 0;        // manifolds in the overflow
+  std::vector<std::size_t> color_block;    // colour c's blocks from color_block[c]; then the overflow's
+  // colouring scratch: contact-graph levels by body, the dynamic pairs' adjacency, bands by pair
+  std::vector<std::uint32_t> level, adjacency_start, adjacency, queue, cursor, band_of, band_start, by_band;
+  std::vector<std::uint32_t> mask_band;    // by body: the band its mask is for
+  std::vector<std::uint64_t> mask;         // by body: the colours of that band it has manifolds in
+  std::vector<std::uint32_t> by_color;     // the pairs by colour, in pair order within each
+  std::vector<std::size_t> offset;         // scratch: each colour's start in by_color
+  std::vector<std::uint32_t> band_colors;  // each band's first colour, then the number of colours
+  bool backward = true;  // this step runs each band's colours last to first (alternating by step)
+  struct LaneRef {
+    std::uint32_t block, lane;
+  };
+  std::vector<LaneRef> restitution_lanes;  // the lanes with restitution, in pass order
+  // by body, and a last spare row for empty lanes: the velocities while the solver runs, the
+  // motion since the start of the step (dp, then the turn w, x, y, z), and the warm-start
+  // velocity changes for the next integration
+  std::vector<SolverBody> rows;
+  std::vector<double> motion;
+  std::vector<SolverBody> warm;
+  SimdPath simd = best_simd_path();        // the path of the coloured blocks and the free motion
+  std::vector<std::uint32_t> moving;       // the awake dynamic bodies this step (dense indices)
+  bool built = false;       // the blocks hold this step's manifolds (cleared by store())
+  bool has_colors = false;  // color_of holds the last step's colours
+
   /// Finds the overlapping shape pairs, builds their manifolds and carries last step's
   /// impulses over by feature id.
   void update(RigidBodySystem& s, double dt);
-  /// Anchors, effective masses and approach speeds at the start of the step.
+  /// World inverse inertias; for the velocity solvers, the colours, the blocks and the
+  /// carried impulses in the warm-start accumulators.
   void prepare(RigidBodySystem& s);
-  /// Applies the carried impulses.
-  void warm_start(RigidBodySystem& s);
+  /// The pairs' colours by contact-graph level (color_of, color_count, overflow_count).
+  void color(RigidBodySystem& s);
+  /// The blocks from the pairs and their colours.
+  void build(RigidBodySystem& s);
+  /// Pair `index` into lane l of block k.
+  void fill(RigidBodySystem& s, ContactBlock& k, int l, std::uint32_t index);
+  /// The bodies' arrays as the kernels see them.
+  BodyArrays arrays(RigidBodySystem& s);
+  /// The velocities back from the solver's rows to the system's arrays.
+  void finish_velocities(RigidBodySystem& s);
+  /// Adds every manifold's carried impulses to the warm-start accumulators.
+  void accumulate_warm(RigidBodySystem& s);
+  /// The same for the rolling resistance of overflow lane l of block k.
+  void warm_rolling(RigidBodySystem& s, const ContactBlock& k, int l);
+  /// Rolling resistance of overflow lane l of block k.
+  void roll(RigidBodySystem& s, const ContactBlock& k, int l);
+  /// One pass over the contacts: `bias` asks for position correction (false: the relax pass),
+  /// `soft` for the soft-step constraint; `update_sep` first measures the separations at the
+  /// poses now, `warm_next` then adds the impulses to the warm-start accumulators. The
+  /// colours run first to last (the ground contacts last), then the overflow in pair order.
+  void pass(RigidBodySystem& s, double h, bool bias, bool soft, bool update_sep, bool warm_next);
+  /// Measures the separations at the poses now (after positions moved without a relax pass).
+  void update_separations(RigidBodySystem& s);
+  /// The colour of pair k in the last step (the number of colours for the overflow), -1 when
+  /// not coloured.
+  long color_of_pair(std::size_t k) const;
   /// Rescales the carried impulses to the solver's time step h (s): they were accumulated
   /// over steps of `impulse_h` (N s per substep of the soft step, TGS and XPBD, per step of
   /// sequential impulses), so a switch of solver, of substeps or of dt would otherwise start
   /// from impulses too large or too small by their ratio (a 5-stack switched from sequential
   /// impulses to TGS was kicked to 0.19 m/s).
   void carry_impulses(double h);
-  /// One pass over the contacts. `soft` picks the soft-step constraint; `bias` asks for
-  /// position correction (false: the relax pass).
-  void solve(RigidBodySystem& s, double h, bool bias, bool soft);
   /// Restitution for points that approached faster than the threshold.
   void restitution(RigidBodySystem& s);
   /// Sweeps fast bodies (and bullets) against static shapes and puts each back at its first
   /// time of impact (continuous.cpp).
   void continuous(RigidBodySystem& s);
-  /// Keeps each point's friction impulse in world axes for next step's re-projection.
+  /// Writes the blocks' impulses back to the pairs and keeps each manifold's friction impulse
+  /// in world axes for next step's re-projection.
   void store();
   /// The TGS solver's step after prepare(): substeps of biased rigid iterations, positions,
   /// relax iterations (src/rigid/tgs.cpp); step() then runs the restitution pass.

@@ -205,6 +205,7 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
     v->reserve(n);
   for (auto* v : {&island_, &parent_}) v->reserve(n);
   asleep_.reserve(n);
+  contacts_->moving.reserve(n);
   name_.reserve(n);
   bullet_.reserve(n);
   shapes_.reserve(n);
@@ -213,6 +214,43 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
 RigidBodySystem::~RigidBodySystem() = default;
 RigidBodySystem::RigidBodySystem(RigidBodySystem&&) noexcept = default;
 RigidBodySystem& RigidBodySystem::operator=(RigidBodySystem&&) noexcept = default;
+
+std::string_view to_string(RigidSimd s) {
+  switch (s) {
+    case RigidSimd::Best: return "best";
+    case RigidSimd::Scalar: return "scalar";
+    case RigidSimd::Avx2: return "avx2";
+    case RigidSimd::Avx512: return "avx512";
+  }
+  return "unknown";
+}
+
+void RigidBodySystem::set_simd(RigidSimd path) {
+  using detail::SimdPath;
+  const SimdPath best = detail::best_simd_path();
+  SimdPath want = best;
+  switch (path) {
+    case RigidSimd::Best: break;
+    case RigidSimd::Scalar: want = SimdPath::Scalar; break;
+    case RigidSimd::Avx2: want = SimdPath::Avx2; break;
+    case RigidSimd::Avx512: want = SimdPath::Avx512; break;
+    default: throw Error("RigidBodySystem::set_simd: unknown path " + std::to_string(static_cast<int>(path)));
+  }
+  if (static_cast<int>(want) > static_cast<int>(best))
+    throw Error("RigidBodySystem::set_simd: this CPU cannot run the " + std::string(to_string(path)) +
+                " path (the widest it runs is " +
+                std::string(best == SimdPath::Avx2 ? "avx2" : "scalar") + ")");
+  contacts_->simd = want;
+}
+
+RigidSimd RigidBodySystem::simd() const {
+  switch (contacts_->simd) {
+    case detail::SimdPath::Scalar: return RigidSimd::Scalar;
+    case detail::SimdPath::Avx2: return RigidSimd::Avx2;
+    case detail::SimdPath::Avx512: return RigidSimd::Avx512;
+  }
+  return RigidSimd::Scalar;
+}
 
 void RigidBodySystem::set_substeps(int n) {
   require_count(n, 1, 64, "ContactSettings.substeps");
@@ -326,6 +364,7 @@ void RigidBodySystem::destroy(RigidBodyId id) {
   auto& pairs = contacts_->pairs;
   std::erase_if(pairs, [&](const detail::ContactPair& c) { return c.slot_a == id.index || c.slot_b == id.index; });
   for (detail::ContactPair& c : pairs) c.a = slot_[c.slot_a], c.b = slot_[c.slot_b];
+  contacts_->has_colors = false;
   ids_.destroy(id, "RigidBodySystem::destroy");
   // the islands' indices moved: wake everyone (rare; the next step finds the islands again)
   for (std::size_t k = 0; k < type_.size(); ++k) asleep_[k] = 0, sleep_time_[k] = 0, island_[k] = static_cast<std::uint32_t>(k);
@@ -449,73 +488,59 @@ void RigidBodySystem::apply_angular_impulse(RigidBodyId id, const Vec3& j) {
 // ---------------------------------------------------------------------------------------
 // stepping
 
-// Torque-free rotation over h by the symmetric splitting of Dullweber, Leimkuhler and
-// McLachlan (1997, J. Chem. Phys. 107, eq. 3.7): the kinetic energy is a sum of three
-// terms pi_k^2 / (2 I_k), each of whose flows is an exact rotation about principal axis k.
-// Composing them as 1/2 1/2 1 1/2 1/2 (axes x, y, z, y, x) is symmetric, so second order;
-// every sub-flow keeps the world angular momentum exactly (each term is invariant under
-// rotations of space), so L drifts only by rounding and the energy error stays O(h^2).
-void RigidBodySystem::integrate_rotation(std::size_t i, double h) {
-  static constexpr int kAxis[5] = {0, 1, 2, 1, 0};
-  static constexpr double kFraction[5] = {0.5, 0.5, 1.0, 0.5, 0.5};
-  Quat q = q_[i];
-  const Vec3 inv = inv_inertia_[i];
-  // body-frame angular momentum pi = I w_body
-  Vec3 pi = inertia_[i] * (glm::conjugate(q) * w_[i]);
-  for (int s = 0; s < 5; ++s) {
-    const int k = kAxis[s];
-    const double angle = kFraction[s] * h * pi[k] * inv[k];
-    // the body turns by +angle about its axis k; its momentum, seen from the body, by -angle
-    const double c = std::cos(angle), sn = std::sin(angle);
-    const double hs = std::sin(0.5 * angle), hc = std::cos(0.5 * angle);
-    const Quat dq(hc, k == 0 ? hs : 0.0, k == 1 ? hs : 0.0, k == 2 ? hs : 0.0);
-    q = q * dq;
-    const int a = (k + 1) % 3, b = (k + 2) % 3;
-    const double pa = pi[a], pb = pi[b];
-    pi[a] = c * pa + sn * pb;
-    pi[b] = -sn * pa + c * pb;
-  }
-  q = glm::normalize(q);
-  q_[i] = q;
-  w_[i] = q * (pi * inv);
+namespace {
+
+Vec3 get3(const double* p) { return {p[0], p[1], p[2]}; }
+
+}  // namespace
+
+// The arrays of the free motion (src/rigid/integrate_wide.cpp): the velocities in the contact
+// solver's rows when it runs, else in the system's arrays.
+detail::FreeMotionArrays RigidBodySystem::free_motion(detail::SolverBody* rows, detail::SolverBody* warm,
+                                                      double* motion) {
+  detail::FreeMotionArrays f;
+  if (rows) f.v = rows[0].v, f.w = rows[0].w, f.stride = 8;
+  else f.v = &v_[0].x, f.w = &w_[0].x, f.stride = 3;
+  f.warm = warm, f.motion = motion;
+  f.com = com_.data(), f.com0 = com0_.data(), f.q = q_.data(), f.q0 = q0_.data();
+  f.inertia = inertia_.data(), f.inv_inertia = inv_inertia_.data();
+  f.force = force_.data(), f.torque = torque_.data();
+  f.inv_mass = inv_mass_.data(), f.gravity_scale = gravity_scale_.data();
+  f.lin_damp = lin_damp_.data(), f.ang_damp = ang_damp_.data();
+  return f;
 }
 
-void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity) {
+void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity, detail::SolverBody* rows,
+                                           detail::SolverBody* warm) {
   const Stopwatch clock;
-  const std::size_t n = type_.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
-    // gravity, applied force and torque, then implicit damping
-    const Vec3 v = v_[i] + h * (gravity_scale_[i] * gravity + inv_mass_[i] * force_[i]);
-    v_[i] = v / (1 + h * lin_damp_[i]);
-    const Vec3 tb = glm::conjugate(q_[i]) * torque_[i];
-    const Vec3 w = w_[i] + q_[i] * (h * inv_inertia_[i] * tb);
-    w_[i] = w / (1 + h * ang_damp_[i]);
-    // a force too large for a double stops here, before contacts can spread it to others
-    if (!(is_finite(v_[i]) && is_finite(w_[i]))) fail(i);
+  const std::vector<std::uint32_t>& moving = contacts_->moving;
+  std::uint32_t bad = 0;
+  if (!detail::integrate_velocities_wide(contacts_->simd, moving.data(), moving.size(),
+                                         free_motion(rows, warm, nullptr), h, gravity, &bad)) {
+    if (rows) v_[bad] = get3(rows[bad].v), w_[bad] = get3(rows[bad].w);
+    fail(bad);
   }
   profile_.integrate += clock.seconds();
 }
 
-void RigidBodySystem::integrate_positions(double h) {
+void RigidBodySystem::integrate_positions(double h, detail::SolverBody* rows, double* motion) {
   const Stopwatch clock;
+  // dynamic bodies: symplectic Euler for the centre, the exact-flow splitting for the rotation
+  const std::vector<std::uint32_t>& moving = contacts_->moving;
+  detail::integrate_positions_wide(contacts_->simd, moving.data(), moving.size(), free_motion(rows, nullptr, motion), h);
+  // kinematic bodies: constant velocities, exact translation and rotation
   const std::size_t n = type_.size();
   for (std::size_t i = 0; i < n; ++i) {
-    switch (type_[i]) {
-      case BodyType::Static: break;
-      case BodyType::Kinematic: {
-        // constant velocities: exact translation and rotation
-        com_[i] += h * v_[i];
-        const double wl = glm::length(w_[i]);
-        if (wl > 0) q_[i] = glm::normalize(axis_angle(w_[i] / wl, wl * h) * q_[i]);
-        break;
-      }
-      case BodyType::Dynamic:
-        if (asleep_[i]) break;
-        // symplectic Euler for the centre, the exact-flow splitting for the rotation
-        com_[i] += h * v_[i];
-        integrate_rotation(i, h);
-        break;
+    if (type_[i] != BodyType::Kinematic) continue;
+    const Vec3 v = rows ? get3(rows[i].v) : v_[i], w = rows ? get3(rows[i].w) : w_[i];
+    com_[i] += h * v;
+    const double wl = glm::length(w);
+    if (wl > 0) q_[i] = glm::normalize(axis_angle(w / wl, wl * h) * q_[i]);
+    if (motion) {
+      const Vec3 dp = com_[i] - com0_[i];
+      const Quat turn = q_[i] * glm::conjugate(q0_[i]);
+      double* m = motion + 8 * i;
+      m[0] = dp.x, m[1] = dp.y, m[2] = dp.z, m[3] = turn.w, m[4] = turn.x, m[5] = turn.y, m[6] = turn.z;
     }
   }
   profile_.integrate += clock.seconds();
@@ -534,38 +559,46 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   const std::size_t n = type_.size();
   // the start of the step, which the solver measures separations from
   for (std::size_t i = 0; i < n; ++i) com0_[i] = com_[i], q0_[i] = q_[i];
-  // pairs and manifolds
+  // pairs and manifolds, then the bodies that move freely this step
   contacts_->update(*this, dt);
+  contacts_->moving.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    if (type_[i] == BodyType::Dynamic && !asleep_[i]) contacts_->moving.push_back(static_cast<std::uint32_t>(i));
   profile_.collide = total.seconds();
   profile_.integrate = 0;  // integrate_velocities and integrate_positions add to it
+  // the carried impulses at this solver's time step, then the solver's arrays
+  const bool soft = settings_.solver == RigidSolverType::SoftStep;
+  contacts_->carry_impulses(settings_.solver == RigidSolverType::SequentialImpulse ? dt : dt / settings_.substeps);
   contacts_->prepare(*this);
   profile_.prepare = total.seconds() - profile_.collide;
   const double solver_start = total.seconds();
-  const bool soft = settings_.solver == RigidSolverType::SoftStep;
-  contacts_->carry_impulses(settings_.solver == RigidSolverType::SequentialImpulse ? dt : dt / settings_.substeps);
+  detail::RigidContacts& c = *contacts_;
+  const bool warm = settings_.warm_starting;
   if (settings_.solver == RigidSolverType::Tgs) {
-    contacts_->step_tgs(*this, dt, gravity);  // src/rigid/tgs.cpp
+    c.step_tgs(*this, dt, gravity);  // src/rigid/tgs.cpp
   } else if (settings_.solver == RigidSolverType::Xpbd) {
-    contacts_->step_xpbd(*this, dt, gravity);  // src/rigid/xpbd_rigid.cpp, restitution included
+    c.step_xpbd(*this, dt, gravity);  // src/rigid/xpbd_rigid.cpp, restitution included
   } else if (soft) {
-    // substeps: velocities, carried impulses, soft solve, positions, relax
+    // substeps: velocities with the carried impulses, soft solve, positions, relax (which
+    // measures the separations at the new poses and carries the impulses to the next substep)
     const int substeps = settings_.substeps;
     const double h = dt / substeps;
     for (int s = 0; s < substeps; ++s) {
-      integrate_velocities(h, gravity);
-      if (settings_.warm_starting) contacts_->warm_start(*this);
-      contacts_->solve(*this, h, true, true);
-      integrate_positions(h);
-      contacts_->solve(*this, h, false, true);
+      integrate_velocities(h, gravity, c.rows.data(), c.warm.data());
+      c.pass(*this, h, true, true, false, false);
+      integrate_positions(h, c.rows.data(), c.motion.data());
+      c.pass(*this, h, false, true, true, warm && s + 1 < substeps);
     }
   } else {
-    // one step: velocities, carried impulses, iterated rigid solve with Baumgarte, positions
-    integrate_velocities(dt, gravity);
-    if (settings_.warm_starting) contacts_->warm_start(*this);
-    for (int k = 0; k < settings_.iterations; ++k) contacts_->solve(*this, dt, true, false);
-    integrate_positions(dt);
+    // one step: velocities with the carried impulses, iterated rigid solve with Baumgarte, positions
+    integrate_velocities(dt, gravity, c.rows.data(), c.warm.data());
+    for (int k = 0; k < settings_.iterations; ++k) c.pass(*this, dt, true, false, false, false);
+    integrate_positions(dt, c.rows.data(), c.motion.data());
   }
-  if (settings_.solver != RigidSolverType::Xpbd) contacts_->restitution(*this);
+  if (settings_.solver != RigidSolverType::Xpbd) {
+    c.restitution(*this);
+    c.finish_velocities(*this);  // the solver's rows back to the system's arrays
+  }
   const double solver_end = total.seconds();
   profile_.contacts = solver_end - solver_start - profile_.integrate;
   contacts_->continuous(*this);
@@ -702,6 +735,8 @@ RigidManifoldInfo RigidBodySystem::manifold(std::size_t k) const {
   m.b = {c.slot_b, ids_.generation(c.slot_b)};
   m.normal = c.normal;
   m.points = c.count;
+  const long color = contacts_->color_of_pair(k);
+  m.color = color >= 0 && color < static_cast<long>(contacts_->color_count.size()) ? static_cast<int>(color) : -1;
   m.depth = -INFINITY;
   // the deepest point, the fastest approach (approach < 0 closes) and the largest push
   for (int i = 0; i < c.count; ++i) {
