@@ -380,10 +380,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0xee2871f42f2f36e5ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x7fc5a56c4d835f67ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0xd7d40ae0a54c773eull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x803d2e285fd0cc4dull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x1fb99c6841933a01ull) << std::hex << soft;
+  EXPECT_EQ(si, 0xfbad0f76bfda3358ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x3f886c0926dc6b5eull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x23bbd5acc3617209ull) << std::hex << xpbd;
 }
 
 }  // namespace
