@@ -498,10 +498,17 @@ PBA_LANES void pass_blocks(ContactBlock* blocks, std::size_t first, std::size_t 
                            const BodyArrays& r) {
   for (std::size_t i = first; i < last; ++i) {
     if (i + 1 < last) prefetch(blocks + i + 1);
+    // a block of one lane (a colour of one manifold: a stack's) by the scalar lane, one of
+    // up to four by the 4-wide lanes (the same arithmetic in every lane, so the same bits)
+    const int lanes = blocks[i].lanes;
     if constexpr (std::is_same_v<V, double>) {
-      for (int l = 0; l < blocks[i].lanes; ++l) pass<double, kMode>(blocks[i], l, p, r);
+      for (int l = 0; l < lanes; ++l) pass<double, kMode>(blocks[i], l, p, r);
+    } else if (lanes == 1) {
+      pass<double, kMode>(blocks[i], 0, p, r);
+    } else if (kWidth<V> == 8 && lanes <= 4) {
+      pass<v4d, kMode>(blocks[i], 0, p, r);
     } else {
-      for (int l = 0; l < blocks[i].lanes; l += kWidth<V>) pass<V, kMode>(blocks[i], l, p, r);
+      for (int l = 0; l < lanes; l += kWidth<V>) pass<V, kMode>(blocks[i], l, p, r);
     }
   }
 }
