@@ -16,65 +16,14 @@
 #include "solver.h"
 
 #include <cmath>
-#include <cstring>
-#include <type_traits>
 
-// vector arguments of inline helpers: the ABI note does not apply (everything is inlined)
-#pragma GCC diagnostic ignored "-Wpsabi"
-// GCC 12 takes the lane-by-lane gathers into zeroed vectors for uses of uninitialised ones
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "lanes.h"
 
 namespace pba::detail {
 
 namespace {
 
-typedef double v4d __attribute__((vector_size(32)));
-typedef double v8d __attribute__((vector_size(64)));
-typedef long v4l __attribute__((vector_size(32)));
-typedef long v8l __attribute__((vector_size(64)));
-
-template <class V>
-constexpr int kWidth = sizeof(V) / sizeof(double);
-
-#define PBA_LANES [[gnu::always_inline]] inline
-
-// ---------------------------------------------------------------------------------------
-// lane arithmetic
-
-template <class V>
-PBA_LANES V splat(double x) {
-  if constexpr (std::is_same_v<V, double>) return x;
-  else return V{} + x;
-}
-
-template <class V>
-PBA_LANES V load(const double* p) {
-  if constexpr (std::is_same_v<V, double>) {
-    return *p;
-  } else {
-    V v;
-    std::memcpy(&v, p, sizeof v);
-    return v;
-  }
-}
-
-template <class V>
-PBA_LANES void store(double* p, const V& v) {
-  if constexpr (std::is_same_v<V, double>) *p = v;
-  else std::memcpy(p, &v, sizeof v);
-}
-
-template <class V>
-PBA_LANES double get(const V& v, int i) {
-  if constexpr (std::is_same_v<V, double>) return (void)i, v;
-  else return v[i];
-}
-
-template <class V>
-PBA_LANES void set(V& v, int i, double x) {
-  if constexpr (std::is_same_v<V, double>) (void)i, v = x;
-  else v[i] = x;
-}
+using namespace lanes;
 
 // std::max and std::min's comparisons, lane by lane
 template <class V>

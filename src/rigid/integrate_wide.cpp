@@ -16,41 +16,14 @@
 #include "solver.h"
 
 #include <cmath>
-#include <cstring>
-#include <type_traits>
 
-#pragma GCC diagnostic ignored "-Wpsabi"
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "lanes.h"
 
 namespace pba::detail {
 
 namespace {
 
-typedef double v4d __attribute__((vector_size(32)));
-typedef double v8d __attribute__((vector_size(64)));
-
-template <class V>
-constexpr int kWidth = sizeof(V) / sizeof(double);
-
-#define PBA_LANES [[gnu::always_inline]] inline
-
-template <class V>
-PBA_LANES V splat(double x) {
-  if constexpr (std::is_same_v<V, double>) return x;
-  else return V{} + x;
-}
-
-template <class V>
-PBA_LANES double get(const V& v, int i) {
-  if constexpr (std::is_same_v<V, double>) return (void)i, v;
-  else return v[i];
-}
-
-template <class V>
-PBA_LANES void set(V& v, int i, double x) {
-  if constexpr (std::is_same_v<V, double>) (void)i, v = x;
-  else v[i] = x;
-}
+using namespace lanes;
 
 // the half angles beyond which the library computes the sine and cosine (rad)
 constexpr double kSmall = 0.39269908169872414;  // pi / 8
