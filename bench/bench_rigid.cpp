@@ -1,10 +1,12 @@
 // pba rigid bodies, under each of its four contact solvers, against Bullet on the scenes of
 // shared/peers/ (vertical stacks, the 20-level square pyramid, 1000 falling boxes), all in
 // this process, one core:
-//   taskset -c 1 build/release/bin/bench_rigid [--quick | --budget]
+//   taskset -c 1 build/release/bin/bench_rigid [--quick | --budget | --pipeline]
 // Prints ms per 60 Hz step (median of the steps), the top box's sag and drift, and the state
 // hash for each pba solver. --budget instead runs the stacks and a small pyramid under the four
-// solvers at equal budgets of contact passes per step (docs/rigid-bodies.md). Bullet: btDiscreteDynamicsWorld, btDbvtBroadphase, sequential impulses with
+// solvers at equal budgets of contact passes per step (docs/rigid-bodies.md); --pipeline the
+// soft step's phases before the solver (pairs, manifolds) and its islands on the pyramid and the
+// falling boxes. Bullet: btDiscreteDynamicsWorld, btDbvtBroadphase, sequential impulses with
 // 10 iterations, one step per frame (its default), boxes as btBoxShape, ground a 200 x 2 x 200
 // static box, exactly as the peer harnesses set them up. Sleeping is off in both (the
 // issue's stacks and the first fall row) except in the "sleep" row.
@@ -156,11 +158,68 @@ int run_budget() {
   return 0;
 }
 
+// ---- the step before the solver (--pipeline): pairs, manifolds, islands and sleep ----
+
+// medians over the steps of one pba run of `scene` under the soft step: the whole step and its
+// pre-solver phases (RigidProfile), and the manifolds built and reused in the last step
+struct Phases {
+  double total = 0, pairs = 0, manifolds = 0, islands = 0;
+  std::size_t built = 0, reused = 0, manifold_count = 0;
+  double asleep_at = -1;
+};
+
+Phases run_pba_phases(Scene scene, int size, int steps, bool sleep) {
+  pba::RigidBodySystem s({.capacity = 4096, .contacts = {.sleep = sleep}});
+  switch (scene) {
+    case Scene::Stack: pba::rigid_scenes::vertical_stack(s, size); break;
+    case Scene::Pyramid: pba::rigid_scenes::square_pyramid(s, size); break;
+    case Scene::Fall: pba::rigid_scenes::falling_boxes(s, size); break;
+  }
+  std::vector<double> total, pairs, manifolds, islands;
+  Phases out;
+  for (int i = 0; i < steps; ++i) {
+    const auto t0 = Clock::now();
+    s.step(1.0 / 60, {0, -9.81, 0});
+    total.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    const pba::RigidProfile& p = s.profile();
+    pairs.push_back(1e3 * p.pairs), manifolds.push_back(1e3 * p.manifolds), islands.push_back(1e3 * p.islands);
+    if (out.asleep_at < 0 && s.awake_count() == 0) out.asleep_at = s.time();
+  }
+  out.total = median(total), out.pairs = median(pairs), out.manifolds = median(manifolds), out.islands = median(islands);
+  out.built = s.profile().built, out.reused = s.profile().reused, out.manifold_count = s.manifold_count();
+  return out;
+}
+
+int run_pipeline() {
+  struct Case {
+    const char* name;
+    Scene scene;
+    int size, steps;
+    bool sleep;
+  };
+  const Case cases[] = {{"pyramid 20 (2870)", Scene::Pyramid, 20, 120, false},
+                        {"fall 1000", Scene::Fall, 10, 600, false},
+                        {"fall 1000, sleep", Scene::Fall, 10, 600, true}};
+  std::printf("%-18s | %-9s | %-9s | %-9s | %-9s | %-21s | %-9s | %s\n", "scene (steps)", "step ms", "pairs",
+              "manifolds", "islands", "built / reused / all", "Bullet ms", "Bullet / pba");
+  for (const Case& c : cases) {
+    const Phases p = run_pba_phases(c.scene, c.size, c.steps, c.sleep);
+    const Result bt = run_bullet(c.scene, c.size, c.steps, c.sleep);
+    std::printf("%-12s (%3d) | %9.3f | %9.3f | %9.3f | %9.3f | %6zu %6zu %7zu | %9.3f | %.2fx", c.name, c.steps, p.total,
+                p.pairs, p.manifolds, p.islands, p.built, p.reused, p.manifold_count, bt.ms, bt.ms / p.total);
+    if (c.sleep) std::printf("  (all asleep at %.2f s)", p.asleep_at);
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
   if (argc > 1 && std::strcmp(argv[1], "--budget") == 0) return run_budget();
+  if (argc > 1 && std::strcmp(argv[1], "--pipeline") == 0) return run_pipeline();
   struct Case {
     const char* name;
     Scene scene;

@@ -94,6 +94,8 @@ void ContactSettings::validate(std::string_view where) const {
   require_non_negative(contact_compliance, field_path(where, "contact_compliance"));
   require_non_negative(linear_slop, field_path(where, "linear_slop"));
   require_non_negative(speculative_distance, field_path(where, "speculative_distance"));
+  require_non_negative(reuse_distance, field_path(where, "reuse_distance"));
+  require_non_negative(reuse_angle, field_path(where, "reuse_angle"));
   require_non_negative(restitution_threshold, field_path(where, "restitution_threshold"));
   require_non_negative(sleep_linear, field_path(where, "sleep_linear"));
   require_non_negative(sleep_angular, field_path(where, "sleep_angular"));
@@ -322,10 +324,8 @@ void RigidBodySystem::destroy(RigidBodyId id) {
   owner_[i] = moved;
   owner_.pop_back();
   slot_[moved] = static_cast<std::uint32_t>(i);
-  // the body's contacts go; the others follow the moved body to its new index
-  auto& pairs = contacts_->pairs;
-  std::erase_if(pairs, [&](const detail::ContactPair& c) { return c.slot_a == id.index || c.slot_b == id.index; });
-  for (detail::ContactPair& c : pairs) c.a = slot_[c.slot_a], c.b = slot_[c.slot_b];
+  // the body's shapes, pairs and contacts go; the others follow the moved body to its new index
+  contacts_->remove_body(*this, id.index, i);
   ids_.destroy(id, "RigidBodySystem::destroy");
   // the islands' indices moved: wake everyone (rare; the next step finds the islands again)
   for (std::size_t k = 0; k < type_.size(); ++k) asleep_[k] = 0, sleep_time_[k] = 0, island_[k] = static_cast<std::uint32_t>(k);
@@ -585,11 +585,14 @@ void RigidBodySystem::fail(std::size_t i) {
   throw Error(failure_);
 }
 
-// Islands by union-find over the touching contacts between awake dynamic bodies (static and
-// kinematic bodies do not join islands: a floor holds many islands). An island sleeps when
-// each of its bodies has been slower than the tolerances for time_to_sleep; one touching a
-// moving kinematic body never does.
+// Islands by union-find over the contacts between awake dynamic bodies (static and kinematic
+// bodies do not join islands: a floor holds many islands). An island sleeps when each of its
+// bodies has been slower than the tolerances for time_to_sleep; one touching a moving
+// kinematic body never does. A sleeping island keeps its members in a ring (island_), so
+// waking it costs its size, and it costs nothing per step: the pairs of sleeping bodies are
+// not stepped (contact_pairs.cpp) and the union-find runs over the awake ones.
 void RigidBodySystem::update_sleep(double dt) {
+  const Stopwatch clock;
   const std::size_t n = type_.size();
   const bool on = settings_.sleep;
   const double lin2 = settings_.sleep_linear * settings_.sleep_linear;
@@ -619,23 +622,31 @@ void RigidBodySystem::update_sleep(double dt) {
         sleep_time_[other] = 0;
     }
   }
-  // the shortest slow time of each island, then put islands to sleep
+  // the shortest slow time of each island (its root: the island's smallest index)
   for (std::size_t i = 0; i < n; ++i) island_slow_[i] = INFINITY;
   for (std::size_t i = 0; i < n; ++i) {
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     const std::uint32_t r = find(static_cast<std::uint32_t>(i));
-    island_[i] = r;
+    parent_[i] = r;
     island_slow_[r] = std::min(island_slow_[r], sleep_time_[i]);
   }
-  if (!on) return;
-  for (std::size_t i = 0; i < n; ++i) {
+  // islands slow for long enough fall asleep, their members linked in a ring from the root
+  // (which comes first in index order)
+  for (std::size_t i = 0; on && i < n; ++i) {
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
-    if (island_slow_[island_[i]] >= settings_.time_to_sleep) {
-      asleep_[i] = 1;
-      v_[i] = Vec3(0);
-      w_[i] = Vec3(0);
+    const std::uint32_t r = parent_[i];
+    if (island_slow_[r] < settings_.time_to_sleep) continue;
+    asleep_[i] = 1;
+    v_[i] = Vec3(0);
+    w_[i] = Vec3(0);
+    if (r == i) {
+      island_[i] = r;
+    } else {
+      island_[i] = island_[r];
+      island_[r] = static_cast<std::uint32_t>(i);
     }
   }
+  profile_.islands = clock.seconds();
 }
 
 void RigidBodySystem::wake_island(std::size_t i) {
@@ -643,9 +654,13 @@ void RigidBodySystem::wake_island(std::size_t i) {
     sleep_time_[i] = 0;
     return;
   }
-  const std::uint32_t island = island_[i];
-  for (std::size_t k = 0; k < type_.size(); ++k)
-    if (asleep_[k] && island_[k] == island) asleep_[k] = 0, sleep_time_[k] = 0;
+  // around the ring
+  std::size_t k = i;
+  do {
+    const std::size_t next = island_[k];
+    asleep_[k] = 0, sleep_time_[k] = 0, island_[k] = static_cast<std::uint32_t>(k);
+    k = next;
+  } while (k != i);
 }
 
 bool RigidBodySystem::awake(RigidBodyId id) const {
