@@ -412,6 +412,9 @@ class RigidBodySystem {
   // (a ring of dense indices; an awake body points to itself)
   std::vector<std::uint8_t> asleep_;
   std::vector<double> sleep_time_;
+  // where the body's current rest window began: its centre of mass and principal frame then
+  std::vector<Vec3> rest_com_;
+  std::vector<Quat> rest_q_;
   std::vector<std::uint32_t> island_;
   std::vector<std::uint32_t> parent_;  // union-find scratch
   std::vector<double> island_slow_;    // scratch: the island's shortest slow time

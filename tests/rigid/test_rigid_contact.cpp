@@ -282,6 +282,29 @@ TEST(RigidSleep, DroppedBoxesFallAsleepAndStayPut) {
   }
 }
 
+// The rest test looks at how far a body moved over the rest window, not at its speed of the
+// moment: a steady motion is held to the tolerances exactly (a free body at 0.9 times the
+// linear or angular tolerance falls asleep after time_to_sleep, one at 1.1 times never does).
+TEST(RigidSleep, SteadyMotionIsHeldToTheTolerances) {
+  const pba::ContactSettings c{};
+  for (const double f : {0.9, 1.1})
+    for (const bool turning : {false, true}) {
+      RigidBodySystem s;
+      const Vec3 v = turning ? Vec3(0) : Vec3(f * c.sleep_linear, 0, 0);
+      const Vec3 w = turning ? Vec3(0, f * c.sleep_angular, 0) : Vec3(0);
+      const auto b = s.create({.linear_velocity = v, .angular_velocity = w, .shapes = {{.shape = ColliderShape::sphere(0.5)}}});
+      int steps = 0;
+      while (s.awake(b) && steps < 600) s.step(1.0 / 60, Vec3(0)), ++steps;
+      if (f < 1) {
+        EXPECT_FALSE(s.awake(b)) << f << (turning ? " turning" : " moving");
+        // the window's time and a step
+        EXPECT_LE(steps / 60.0, c.time_to_sleep + 2.0 / 60) << f << (turning ? " turning" : " moving");
+      } else {
+        EXPECT_TRUE(s.awake(b)) << f << (turning ? " turning" : " moving");
+      }
+    }
+}
+
 // A force, an impulse, a new velocity or pose, or an awake body landing on it wakes a
 // sleeping body and its island (the boxes it rests on), and nothing else.
 TEST(RigidSleep, ForcesImpulsesPosesAndContactsWakeIslands) {
