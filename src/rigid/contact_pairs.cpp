@@ -21,6 +21,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "collide/narrow_internal.h"
+
 namespace pba::detail {
 
 namespace {
@@ -58,6 +60,12 @@ double rolling_radius(const ColliderShape& s) {
 Aabb stretched(const Aabb& box, const Vec3& ahead) {
   return {box.lo + glm::min(ahead, Vec3(0)), box.hi + glm::max(ahead, Vec3(0))};
 }
+
+// the manifolds of a mesh pair whose normals are closer than this (cosine; the sine of the
+// angle below 1e-4, the mesh's own "flat" for an edge) are merged into one
+constexpr double kMergeCos = 1 - 5e-9;
+// merged points closer than this (m) are one point
+constexpr double kSamePoint = 1e-6;
 
 bool same_key(const ShapePair& x, const ShapePair& y) {
   return x.slot_a == y.slot_a && x.slot_b == y.slot_b && x.shape_a == y.shape_a && x.shape_b == y.shape_b;
@@ -372,6 +380,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
   const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;
   const Quat qa_inv = glm::conjugate(s.q_[a]), qb_inv = glm::conjugate(s.q_[b]);
   const Quat q_ref_inv = in_b ? qb_inv : qa_inv;
+  const bool mesh_pair = sa.shape.type == ShapeType::Mesh || sb.shape.type == ShapeType::Mesh;
   const std::uint32_t old = c.first;
   for (std::uint32_t o = old; o != kNoIndex; o = manifolds[o].next) settle(o);
   std::uint32_t tail = kNoIndex;
@@ -386,10 +395,15 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     r.count = m.count;
     r.normal_in_b = in_b;
     r.normal = q_ref_inv * n;
-    // the old manifold of the same triangle, for its impulses
+    // the old manifold, for its impulses: a convex pair's only one, or of a mesh pair the one
+    // whose normal is closest to this one's (within the merge angle)
     const CachedManifold* was = nullptr;
-    for (std::uint32_t o = old; o != kNoIndex; o = manifolds[o].next)
-      if (manifolds[o].sub == r.sub) was = &manifolds[o];
+    double closest = kMergeCos;
+    for (std::uint32_t o = old; o != kNoIndex; o = manifolds[o].next) {
+      const CachedManifold& om = manifolds[o];
+      const double along = glm::dot((om.normal_in_b ? s.q_[b] : s.q_[a]) * om.normal, n);
+      if (!mesh_pair || along >= closest) was = &om, closest = along;
+    }
     r.friction = was ? was->friction : Vec3(0);
     r.twist = was ? was->twist : 0;
     r.rolling = was ? was->rolling : Vec3(0);
@@ -417,9 +431,9 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       manifolds[tail].next = idx;
     tail = idx;
   };
-  if (sa.shape.type == ShapeType::Mesh || sb.shape.type == ShapeType::Mesh) {
+  if (mesh_pair) {
     // a convex shape on a static mesh: a manifold per touching triangle, in the mesh tree's
-    // order; the scratch grows until it holds them all
+    // order (the scratch grows until it holds them all)
     const bool mesh_a = sa.shape.type == ShapeType::Mesh;
     const ColliderShape& convex = mesh_a ? sb.shape : sa.shape;
     const ColliderShape& mesh = mesh_a ? sa.shape : sb.shape;
@@ -430,7 +444,56 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       if (count < static_cast<int>(mesh_scratch.size())) break;
       mesh_scratch.resize(2 * mesh_scratch.size());
     }
-    for (int j = 0; j < count; ++j) keep(mesh_scratch[static_cast<std::size_t>(j)], mesh_a);
+    // the triangles' manifolds of one normal (a face over a flat stretch of the mesh) become
+    // one, reduced to four points as the narrow phase reduces a face's: a box on a flat mesh
+    // gets the manifold it gets on a plane, whatever the triangles under it (Jolt merges a
+    // body pair's manifolds of nearly equal normals the same way). Feature ids are per
+    // triangle, so the triangle is mixed into them
+    group_of.resize(static_cast<std::size_t>(count));
+    int groups = 0;
+    for (int j = 0; j < count; ++j) {
+      const Vec3& nj = mesh_scratch[static_cast<std::size_t>(j)].normal;
+      int g = 0;
+      while (g < groups) {
+        const Vec3& ng = mesh_scratch[static_cast<std::size_t>(group_first[static_cast<std::size_t>(g)])].normal;
+        if (glm::dot(ng, nj) >= kMergeCos) break;
+        ++g;
+      }
+      if (g == groups) {
+        if (group_first.size() <= static_cast<std::size_t>(groups)) group_first.resize(groups + 1);
+        group_first[static_cast<std::size_t>(groups++)] = j;
+      }
+      group_of[static_cast<std::size_t>(j)] = g;
+    }
+    for (int g = 0; g < groups; ++g) {
+      const Manifold& first = mesh_scratch[static_cast<std::size_t>(group_first[static_cast<std::size_t>(g)])];
+      merge_scratch.clear();
+      std::uint32_t deepest_triangle = first.sub_shape_b;
+      double deepest = -INFINITY;
+      for (int j = 0; j < count; ++j) {
+        if (group_of[static_cast<std::size_t>(j)] != g) continue;
+        const Manifold& m = mesh_scratch[static_cast<std::size_t>(j)];
+        for (int k = 0; k < m.count; ++k) {
+          const ContactPoint& cp = m.points[k];
+          const double depth = glm::dot(cp.point_a - cp.point_b, first.normal);
+          if (depth > deepest) deepest = depth, deepest_triangle = m.sub_shape_b;
+          // a point that two triangles both give (a ball over their common edge, a box's
+          // corner on it) is kept once, the deeper
+          auto same = std::find_if(merge_scratch.begin(), merge_scratch.end(), [&](const narrow::Candidate& o) {
+            const Vec3 d = o.b - cp.point_b;
+            return glm::dot(d, d) <= kSamePoint * kSamePoint;
+          });
+          if (same == merge_scratch.end())
+            merge_scratch.push_back({cp.point_a, cp.point_b, depth, cp.id ^ (m.sub_shape_b * 0x9e3779b1u)});
+          else if (depth > same->depth)
+            *same = {cp.point_a, cp.point_b, depth, cp.id ^ (m.sub_shape_b * 0x9e3779b1u)};
+        }
+      }
+      Manifold merged;
+      narrow::reduce(merge_scratch.data(), static_cast<int>(merge_scratch.size()), first.normal, merged);
+      merged.sub_shape_b = deepest_triangle;
+      if (merged.count > 0) keep(merged, mesh_a);
+    }
   } else {
     const Manifold m = collide(sa.shape, pose_a, sb.shape, pose_b, ns, &c.narrow);
     if (m.count > 0) keep(m, false);

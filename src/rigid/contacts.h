@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "collide/narrow_internal.h"
 #include "pba/collide/broad_phase.h"
 #include "pba/collide/narrow_phase.h"
 #include "pba/rigid.h"
@@ -199,6 +200,8 @@ struct RigidContacts {
   std::vector<PairCache> caches;              // pool
   std::vector<CachedManifold> manifolds;      // pool
   std::vector<Manifold> mesh_scratch;         // collide_mesh output
+  std::vector<int> group_of, group_first;     // scratch: the mesh manifolds' groups of one normal
+  std::vector<narrow::Candidate> merge_scratch;  // scratch: a group's points
   std::uint32_t free_proxy = kNoIndex, free_cache = kNoIndex, free_manifold = kNoIndex;
   std::size_t reinserted_since_check = 0;     // tree moves since its quality was last checked
   double tree_ratio = 0;                      // the tree's area ratio after its last rebuild
