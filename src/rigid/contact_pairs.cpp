@@ -67,11 +67,71 @@ constexpr double kMergeCos = 1 - 5e-9;
 // merged points closer than this (m) are one point
 constexpr double kSamePoint = 1e-6;
 
-bool same_key(const ShapePair& x, const ShapePair& y) {
-  return x.slot_a == y.slot_a && x.slot_b == y.slot_b && x.shape_a == y.shape_a && x.shape_b == y.shape_b;
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// the pair set
+
+namespace {
+// a 64-bit mix (splitmix64's finaliser) so that neighbouring keys spread over the table
+std::uint64_t spread(std::uint64_t k) {
+  k ^= k >> 30, k *= 0xbf58476d1ce4e5b9ull;
+  k ^= k >> 27, k *= 0x94d049bb133111ebull;
+  return k ^ (k >> 31);
+}
+}  // namespace
+
+bool PairSet::contains(std::uint64_t key) const {
+  if (slots.empty()) return false;
+  const std::size_t mask = slots.size() - 1;
+  for (std::size_t i = spread(key) & mask;; i = (i + 1) & mask) {
+    if (slots[i] == key) return true;
+    if (slots[i] == 0) return false;
+  }
 }
 
-}  // namespace
+bool PairSet::insert(std::uint64_t key) {
+  // at most half full: grow by doubling (and rehash)
+  if (2 * (count + 1) > slots.size()) {
+    std::vector<std::uint64_t> old(std::max<std::size_t>(64, 2 * slots.size()), 0);
+    old.swap(slots);
+    count = 0;
+    for (const std::uint64_t k : old)
+      if (k != 0) insert(k);
+  }
+  const std::size_t mask = slots.size() - 1;
+  for (std::size_t i = spread(key) & mask;; i = (i + 1) & mask) {
+    if (slots[i] == key) return false;
+    if (slots[i] == 0) {
+      slots[i] = key;
+      ++count;
+      return true;
+    }
+  }
+}
+
+void PairSet::erase(std::uint64_t key) {
+  if (slots.empty()) return;
+  const std::size_t mask = slots.size() - 1;
+  std::size_t i = spread(key) & mask;
+  while (slots[i] != key) {
+    if (slots[i] == 0) return;
+    i = (i + 1) & mask;
+  }
+  // shift the run after the hole back over it, each key no farther than its home allows
+  for (std::size_t j = (i + 1) & mask; slots[j] != 0; j = (j + 1) & mask) {
+    const std::size_t home = spread(slots[j]) & mask;
+    // j's key may move to i when its home is not cyclically within (i, j]
+    if (((j - home) & mask) >= ((j - i) & mask)) slots[i] = slots[j], i = j;
+  }
+  slots[i] = 0;
+  --count;
+}
+
+void PairSet::clear() {
+  std::fill(slots.begin(), slots.end(), 0);
+  count = 0;
+}
 
 // ---------------------------------------------------------------------------------------
 // pools
@@ -130,6 +190,7 @@ void RigidContacts::free_manifolds(PairCache& c) {
 }
 
 void RigidContacts::free_pair(ShapePair& p) {
+  pair_set.erase(pair_key(p.proxy_a, p.proxy_b));
   if (p.cache == kNoIndex) return;
   free_manifolds(caches[p.cache]);
   caches[p.cache].first = free_cache;
@@ -159,10 +220,13 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
       if (!fresh && was.position == body.position && was.rotation == body.rotation) continue;
       static_pose[slot] = body;
     }
-    // the tight bounds reach as far as the body can move in the step (up to its own size: the
-    // continuous pass catches faster ones); the fat ones two steps' travel ahead
-    const double reach = cs.speculative_distance + std::min(glm::length(s.v_[i]) * dt, s.extent_[i]);
-    const Vec3 ahead = type == BodyType::Static ? Vec3(0) : 2 * dt * s.v_[i];
+    // the tight bounds reach as far as the body can move in the step, and the fat ones two
+    // steps' travel ahead, both up to the body's own size (the continuous pass catches faster
+    // bodies; fat boxes stretched further fill the pair list)
+    const double speed = glm::length(s.v_[i]);
+    const double reach = cs.speculative_distance + std::min(speed * dt, s.extent_[i]);
+    const Vec3 ahead = type == BodyType::Static || speed == 0 ? Vec3(0)
+                                                                : std::min(2 * speed * dt, s.extent_[i]) / speed * s.v_[i];
     for (std::uint32_t k = 0; k < s.shapes_[i].size(); ++k) {
       if (fresh) {
         std::uint32_t q = free_proxy;
@@ -227,16 +291,22 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
 
 void RigidContacts::find_new_pairs(RigidBodySystem& s) {
   found.clear();
+  if (was_moved.size() < proxies.size()) was_moved.resize(proxies.size(), 0);
+  for (const std::uint32_t p : moved) was_moved[p] = 1;
   for (const std::uint32_t p : moved) {
     const ShapeProxy& P = proxies[p];
     auto consider = [&](std::uint32_t q) {
       const ShapeProxy& Q = proxies[q];
-      // not with itself, and not two bodies that cannot move each other
+      // not with itself, not two bodies that cannot move each other, and two moved shapes
+      // once (from the lower proxy)
       if (Q.slot == P.slot || (s.inv_mass_[P.body] == 0 && s.inv_mass_[Q.body] == 0)) return;
+      if (was_moved[q] && q < p) return;
       const bool swap = P.slot > Q.slot;
       const ShapeProxy& A = swap ? Q : P;
       const ShapeProxy& B = swap ? P : Q;
-      found.push_back({A.slot, B.slot, A.shape, B.shape, swap ? q : p, swap ? p : q, kNoIndex});
+      // only pairs the list does not hold yet (each found once)
+      if (pair_set.insert(pair_key(swap ? q : p, swap ? p : q)))
+        found.push_back({A.slot, B.slot, A.shape, B.shape, swap ? q : p, swap ? p : q, kNoIndex});
     };
     tree.query(P.fat, [&](std::uint32_t q) {
       consider(q);
@@ -245,15 +315,10 @@ void RigidContacts::find_new_pairs(RigidBodySystem& s) {
     for (const std::uint32_t u : unbounded)
       if (proxies[u].fat.overlaps(P.fat)) consider(u);
   }
+  for (const std::uint32_t p : moved) was_moved[p] = 0;
   if (found.empty()) return;
-  // the new ones, sorted and without duplicates, merged into the list
+  // the new ones, sorted, merged into the list
   std::sort(found.begin(), found.end());
-  found.erase(std::unique(found.begin(), found.end(), same_key), found.end());
-  std::size_t fresh = 0;
-  for (const ShapePair& f : found)
-    if (!std::binary_search(shape_pairs.begin(), shape_pairs.end(), f)) found[fresh++] = f;
-  found.resize(fresh);
-  if (fresh == 0) return;
   merged.clear();
   std::merge(shape_pairs.begin(), shape_pairs.end(), found.begin(), found.end(), std::back_inserter(merged));
   shape_pairs.swap(merged);
@@ -395,6 +460,11 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     r.count = m.count;
     r.normal_in_b = in_b;
     r.normal = q_ref_inv * n;
+    r.radius_a = radius_a, r.radius_b = radius_b;
+    r.friction_mix = cs.friction_mix, r.restitution_mix = cs.restitution_mix;
+    r.mixed_friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
+    r.mixed_restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
+    r.mixed_rolling = std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
     // the old manifold, for its impulses: a convex pair's only one, or of a mesh pair the one
     // whose normal is closest to this one's (within the merge angle)
     const CachedManifold* was = nullptr;
@@ -512,8 +582,6 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
                          std::uint32_t b) {
   const ContactSettings& cs = s.settings_;
   const CachedManifold& r = manifolds[record];
-  const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
-  const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
   // in place: last step's entries are overwritten (their impulses saved first when they are
   // another manifold's), new ones appended
   const std::size_t at_index = emitted++;
@@ -541,13 +609,21 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const Vec3 n = (r.normal_in_b ? qb : qa) * r.normal;
   c.normal = n;
   tangent_basis(n, c.t1, c.t2);
-  c.friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
-  c.restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
-  c.rolling = std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
+  // the material, mixed again if the rules changed since
+  if (own.friction_mix != cs.friction_mix || own.restitution_mix != cs.restitution_mix) {
+    const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
+    const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
+    own.friction_mix = cs.friction_mix, own.restitution_mix = cs.restitution_mix;
+    own.mixed_friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
+    own.mixed_restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
+  }
+  c.friction = r.mixed_friction;
+  c.restitution = r.mixed_restitution;
+  c.rolling = r.mixed_rolling;
   c.count = r.count;
   const bool warm = cs.warm_starting;
-  const double radius_a = core_radius(sa.shape), radius_b = core_radius(sb.shape);
-  Vec3 centroid(0);
+  const double radius_a = r.radius_a, radius_b = r.radius_b;
+  Vec3 centroid(0), at[Manifold::kMaxPoints];
   for (int k = 0; k < r.count; ++k) {
     const CachedPoint& q = r.points[k];
     SolverPoint& pt = c.points[k];
@@ -557,10 +633,10 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     const Vec3 core_a = com_a + pt.sa, core_b = com_b + pt.sb;
     const Vec3 on_a = core_a + radius_a * n, on_b = core_b - radius_b * n;
     pt.depth = glm::dot(on_a - on_b, n);
-    const Vec3 at = 0.5 * (on_a + on_b);
-    centroid += at;
-    pt.ra = at - com_a;
-    pt.rb = at - com_b;
+    at[k] = 0.5 * (on_a + on_b);
+    centroid += at[k];
+    pt.ra = at[k] - com_a;
+    pt.rb = at[k] - com_b;
     // the separation now is -depth; keep it relative to the cores
     pt.offset = -pt.depth - glm::dot(core_b - core_a, n);
     pt.id = q.id;
@@ -570,7 +646,7 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   c.ca = centroid - com_a;
   c.cb = centroid - com_b;
   c.twist_radius = 0;
-  for (int k = 0; k < r.count; ++k) c.twist_radius += glm::length(com_a + c.points[k].ra - centroid);
+  for (int k = 0; k < r.count; ++k) c.twist_radius += glm::length(at[k] - centroid);
   c.twist_radius /= r.count;
   // friction carried over, re-projected onto this step's tangents
   c.tangent_impulse[0] = warm ? glm::dot(friction, c.t1) : 0;

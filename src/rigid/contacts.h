@@ -129,6 +129,25 @@ struct ShapePair {
   }
 };
 
+/// A set of 64-bit keys (open addressing, linear probing, deletion by backward shift; grown,
+/// never shrunk): which shape pairs the list holds, so the pairs that moved shapes find are
+/// told from new ones in O(1) instead of by sorting them all (Box2D v3 keeps its pair set
+/// the same way). Key 0 is reserved (never a pair: a pair's two proxies differ).
+struct PairSet {
+  std::vector<std::uint64_t> slots;  // 0: empty
+  std::size_t count = 0;
+  bool contains(std::uint64_t key) const;
+  /// Adds `key`; false when it was there already.
+  bool insert(std::uint64_t key);
+  void erase(std::uint64_t key);
+  void clear();
+};
+
+/// The PairSet key of a shape pair: its two proxies.
+inline std::uint64_t pair_key(std::uint32_t proxy_a, std::uint32_t proxy_b) {
+  return (std::uint64_t{proxy_a} << 32 | proxy_b) + 1;
+}
+
 /// What the narrow phase last found for a shape pair, kept between steps: the relative pose
 /// of the bodies then (body b's centre of mass and principal frame in body a's principal
 /// frame), the speculative margin used, the SAT cache, and the manifolds (one, or one per
@@ -165,6 +184,11 @@ struct CachedManifold {
   Vec3 friction{0, 0, 0};  // the tangential impulse in world axes at the end of its last step
   double twist = 0;
   Vec3 rolling{0, 0, 0};
+  // what does not change while the pair lasts: the shapes' core radii (m), and the mixed
+  // material with the mix rules it was mixed by
+  double radius_a = 0, radius_b = 0;
+  double mixed_friction = 0, mixed_restitution = 0, mixed_rolling = 0;
+  MixRule friction_mix = MixRule::GeometricMean, restitution_mix = MixRule::Maximum;
 };
 
 /// Softness of a contact: Catto's soft step coefficients for a spring of `hertz` and
@@ -195,8 +219,10 @@ struct RigidContacts {
   std::vector<Pose> static_pose;              // by body slot: a static body's pose at its last update
   DynamicTree tree{0.1};                      // the bounded proxies' fat boxes
   std::vector<ShapePair> shape_pairs, merged; // the persistent pair list (and merge scratch)
+  PairSet pair_set;                           // the pairs in shape_pairs, by proxies
   std::vector<ShapePair> found;               // scratch: pairs of the moved proxies this step
   std::vector<std::uint32_t> moved;           // scratch: proxies re-inserted this step
+  std::vector<std::uint8_t> was_moved;        // scratch: 1 for the proxies in `moved`
   std::vector<PairCache> caches;              // pool
   std::vector<CachedManifold> manifolds;      // pool
   std::vector<Manifold> mesh_scratch;         // collide_mesh output
