@@ -64,6 +64,7 @@ bool App::init() {
   ctx_.virtual_time = headless_;
   ctx_.settings.show_ui = !options_.hide_ui;
   ctx_.options = options_.sample_options;
+  ctx_.draw = options_.view;
   last_frame_start_ = std::chrono::steady_clock::now();
   return true;
 }
@@ -498,6 +499,9 @@ int App::run_headless(int sample_index, const std::string& out_dir) {
   // report where things went
   std::printf("%s: rendered %d frames (%dx%d) in %.1f s\n", e.full_name().c_str(), options_.frames, options_.width,
               options_.height, secs);
+  const DrawStats& drawn = renderer_->stats();
+  std::printf("  last frame: %d solids, %d triangles, %d lines, %d points, %d labels\n", drawn.solids, drawn.triangles,
+              drawn.lines, drawn.points, drawn.labels);
   if (!out_dir.empty()) {
     const auto& pngs = capture.pngs();
     const std::string where = fs::absolute(out_dir).lexically_normal().string();

@@ -61,7 +61,7 @@ constexpr const char* kFooter =
 // the words of the options that take a value, checked after parsing
 struct Raw {
   std::string sample, scene, out, frames, screenshot_every, msaa, substeps, size, fps, dt, strategy, method;
-  std::vector<std::string> options;
+  std::vector<std::string> options, view;
 };
 
 // every option of pba_samples, in the order of the help
@@ -94,6 +94,12 @@ void describe(CLI::App& app, Options& o, Raw& r) {
   app.add_flag("--hide-ui", o.hide_ui, "draw only the 3D view (no panels)");
   app.add_option("--option", r.options, "a sample's own setting (repeatable, see below)")
       ->type_name("KEY=VALUE")
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  app.add_option("--view", r.view,
+                 "a View menu draw flag at start (repeatable): shapes, aabbs, tree, contacts, normals, "
+                 "particles, forcers, constraints, each =on or =off")
+      ->type_name("FLAG=on|off")
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   app.add_flag("--selftest", o.selftest,
@@ -178,6 +184,25 @@ ParseResult ParseOptions(const std::vector<std::string>& args) {
     const auto eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) return fail(bad("--option", kv, "expected KEY=VALUE, e.g. scenario=orbit"));
     o.sample_options[kv.substr(0, eq)] = kv.substr(eq + 1);
+  }
+  for (const std::string& kv : r.view) {
+    const auto eq = kv.find('=');
+    const std::string key = kv.substr(0, eq), value = eq == std::string::npos ? "" : kv.substr(eq + 1);
+    bool* flag = key == "shapes"        ? &o.view.shapes
+                 : key == "aabbs"       ? &o.view.aabbs
+                 : key == "tree"        ? &o.view.tree
+                 : key == "contacts"    ? &o.view.contacts
+                 : key == "normals"     ? &o.view.normals
+                 : key == "particles"   ? &o.view.particles
+                 : key == "forcers"     ? &o.view.forcers
+                 : key == "constraints" ? &o.view.constraints
+                                        : nullptr;
+    if (!flag)
+      return fail(bad("--view", kv, "expected FLAG=on or FLAG=off, FLAG one of shapes, aabbs, tree, contacts, normals, "
+                                    "particles, forcers, constraints"));
+    if (value == "on" || value == "1" || value == "true") *flag = true;
+    else if (value == "off" || value == "0" || value == "false") *flag = false;
+    else return fail(bad("--view", kv, "expected " + key + "=on or " + key + "=off"));
   }
   try {
     if (given("--strategy")) o.strategy = parse_strategy(r.strategy, "--strategy");

@@ -2,10 +2,12 @@
 #pragma once
 
 #include <map>
+
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "pba/draw.h"
 #include "pba/integrate.h"
 #include "pba/time.h"
 
@@ -34,6 +36,8 @@ struct Options {
   bool quiet = false;           ///< --quiet: no progress lines in headless runs
   /// --option KEY=VALUE (repeatable): sample-specific settings, e.g. scenario=orbit.
   std::map<std::string, std::string> sample_options;
+  /// --view KEY=on|off (repeatable): the View menu's draw flags at start (pba::DrawFlags).
+  DrawFlags view{};
 };
 
 /// Result of parsing: options, or an error message naming the flag and value.

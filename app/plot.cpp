@@ -104,8 +104,17 @@ void LinePlot(const char* id, const std::vector<PlotSeries>& series, const PlotA
     y_lo -= pad, y_hi += pad;
   }
 
-  // frame: room on the left for tick labels, below for the x label (and log x's decades)
-  const float left = 52.0f;
+  // frame: room on the left for the widest tick label, below for the x label (and log x's
+  // decades)
+  char buf[32];
+  float left = 36.0f;
+  if (!axes.y_log)
+    for (int k = 0; k <= 4; ++k) {
+      std::snprintf(buf, sizeof buf, axes.y_format, y_lo + (y_hi - y_lo) * k / 4.0f);
+      left = std::max(left, ImGui::CalcTextSize(buf).x + 8.0f);
+    }
+  else
+    left = std::max(left, ImGui::CalcTextSize("1e-10").x + 8.0f);
   float bottom = axes.x_label.empty() ? 4.0f : 16.0f;
   if (axes.x_log) bottom = axes.x_label.empty() ? 16.0f : 16.0f + line_h;
   const ImVec2 p0(origin.x + left, origin.y + 4.0f);
@@ -115,7 +124,6 @@ void LinePlot(const char* id, const std::vector<PlotSeries>& series, const PlotA
   auto sy = [&](float y) { return p1.y - (y - y_lo) / (y_hi - y_lo) * (p1.y - p0.y); };
   const ImU32 tick_col = IM_COL32(200, 204, 210, 255), axis_col = IM_COL32(160, 164, 170, 255);
 
-  char buf[32];
   if (axes.y_log) {
     // decades: a grid line each, labels as often as they fit, minor lines when roomy
     const float ppd = (p1.y - p0.y) / (y_hi - y_lo);

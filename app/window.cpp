@@ -1,8 +1,11 @@
 // GLFW window, OpenGL context and Dear ImGui set-up.
 #include "window.h"
 
+#include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <thread>
 
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_glfw.h>
@@ -50,7 +53,19 @@ bool Window::open(const WindowConfig& config, std::string* error) {
   config_ = config;
   g_glfw_error = error;
   glfwSetErrorCallback(on_glfw_error);
-  if (!glfwInit()) {
+  // an X server now and then refuses a connection that the next attempt gets (seen with
+  // Xvfb in sandboxed VMs: about one connection in ten under load): a few tries, 0.1 s to
+  // 1.6 s apart, before giving up; only the last attempt's messages are kept
+  const std::size_t keep = error->size();
+  bool ready = false;
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    error->resize(keep);
+    if ((ready = glfwInit())) break;
+    const char* display = std::getenv("DISPLAY");
+    if (display == nullptr || *display == '\0') break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100 << attempt));
+  }
+  if (!ready) {
     *error += "could not initialise GLFW (is DISPLAY set to a running X server?)";
     return false;
   }

@@ -1,128 +1,99 @@
-// pba rigid bodies, under each of its four contact solvers, against Bullet on the scenes of
-// shared/peers/ (vertical stacks, the 20-level square pyramid, 1000 falling boxes), all in
-// this process, one core:
-//   taskset -c 1 build/release/bin/bench_rigid [--quick | --budget | --pipeline]
-// Prints ms per 60 Hz step (median of the steps), the top box's sag and drift, and the state
-// hash for each pba solver. --budget instead runs the stacks and a small pyramid under the four
-// solvers at equal budgets of contact passes per step (docs/rigid-bodies.md); --pipeline the
-// soft step's phases before the solver (pairs, manifolds) and its islands on the pyramid and the
-// falling boxes. Bullet: btDiscreteDynamicsWorld, btDbvtBroadphase, sequential impulses with
-// 10 iterations, one step per frame (its default), boxes as btBoxShape, ground a 200 x 2 x 200
-// static box, exactly as the peer harnesses set them up. Sleeping is off in both (the
-// issue's stacks and the first fall row) except in the "sleep" row.
+// pba rigid bodies, under each of its four contact solvers, against Bullet 3.24 and ODE 0.16
+// on the rigid-body issue's scenes (bench/rigid/bench_scenes.cpp: vertical stacks, Jolt's
+// 1240-box pyramid, the 2870-box square pyramid, 1000 falling boxes, a rain of 10,000 boxes
+// and spheres, 5000 bodies at 250 m/s in a closed box, 1764 bodies on a 20,000-triangle
+// terrain), all in this process, one core:
+//   taskset -c 1 build/release/bin/bench_rigid [--scene KEY] [--steps N] [--repeat K]
+//                                             [--peer all|bullet|ode|none] [--solver all|NAME] [--profile]
+//   taskset -c 1 build/release/bin/bench_rigid --quick | --budget
+// --profile adds, under each pba row, the medians of its step's phases (RigidProfile: pairs,
+// manifolds, solve, islands and sleep), the manifolds built and reused in the last step and
+// when every body first slept; --pipeline does so for the soft step alone.
+// For each scene a table: per engine the median, mean and slowest ms per 60 Hz step, the top
+// box's sag and drift from where it rests (stacks and pyramids), the bodies that left the
+// scene (escapes), the bodies awake at the end, each peer's time over the row's (how many
+// times faster than the peer the row is) and pba's state hash. With --repeat K each engine
+// runs K times and the run of median ms is shown. --budget instead runs the stacks and a
+// small pyramid under the four solvers at equal budgets of contact passes per step
+// (docs/rigid-bodies.md). The peers copy each scene from the pba system the scene's builder
+// filled (bench/rigid/peer_bullet.cpp, peer_ode.cpp), set up as shared/peers/ does.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
 
-#include <btBulletDynamicsCommon.h>
-
 #include "pba/rigid_scenes.h"
+#include "rigid/bench_scenes.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-
-struct Result {
-  double ms = 0, sag = 0, drift = 0;
-};
+using pba::bench::BenchResult;
+using pba::bench::BenchScene;
 
 // ---- pba ----
-enum class Scene { Stack, Pyramid, Fall };
 
-Result run_pba(Scene scene, int size, int steps, const pba::ContactSettings& settings, std::uint64_t* hash,
-               double* asleep_at = nullptr) {
-  pba::RigidBodySystem s({.capacity = 4096, .contacts = settings});
-  std::vector<pba::RigidBodyId> b;
-  switch (scene) {
-    case Scene::Stack: b = pba::rigid_scenes::vertical_stack(s, size); break;
-    case Scene::Pyramid: b = pba::rigid_scenes::square_pyramid(s, size); break;
-    case Scene::Fall: b = pba::rigid_scenes::falling_boxes(s, size); break;
-  }
-  const pba::Vec3 top0 = s.center_of_mass(b.back());
-  std::vector<double> ms;
-  for (int i = 0; i < steps; ++i) {
-    const auto t0 = Clock::now();
-    s.step(1.0 / 60, {0, -9.81, 0});
-    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-    if (asleep_at && *asleep_at < 0 && s.awake_count() == 0) *asleep_at = s.time();
-  }
-  const pba::Vec3 top = s.center_of_mass(b.back());
-  if (hash) *hash = s.hash();
-  return {median(ms), top0.y - top.y, std::hypot(top.x - top0.x, top.z - top0.z)};
+// medians over the steps of one pba run of its step's phases (ms), the manifolds built and
+// reused in the last step, and when all bodies first slept (s; -1: never)
+struct Phases {
+  double pairs = 0, manifolds = 0, solve = 0, islands = 0;
+  std::size_t built = 0, reused = 0;
+  double asleep_at = -1;
+};
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
 }
 
-// ---- Bullet ----
-Result run_bullet(Scene scene, int size, int steps, bool sleep) {
-  btDefaultCollisionConfiguration config;
-  btCollisionDispatcher dispatcher(&config);
-  btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
-  btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
-  world.setGravity({0, -9.81f, 0});
-  btBoxShape ground({200, 1, 200}), cube({0.5f, 0.5f, 0.5f});
-  std::vector<btRigidBody*> bodies;
-  const float mu = scene == Scene::Pyramid ? 0.6f : 0.5f;
-  auto add = [&](btCollisionShape* sh, float m, btVector3 p) {
-    btVector3 inertia(0, 0, 0);
-    if (m > 0) sh->calculateLocalInertia(m, inertia);
-    btTransform t;
-    t.setIdentity();
-    t.setOrigin(p);
-    btRigidBody::btRigidBodyConstructionInfo ci(m, nullptr, sh, inertia);
-    ci.m_startWorldTransform = t;
-    auto* r = new btRigidBody(ci);
-    r->setFriction(mu);
-    if (m > 0 && !sleep) r->setActivationState(DISABLE_DEACTIVATION);
-    world.addRigidBody(r);
-    bodies.push_back(r);
-    return r;
-  };
-  add(&ground, 0, {0, -1, 0});
-  switch (scene) {
-    case Scene::Stack:
-      for (int i = 0; i < size; ++i) add(&cube, 1, {0, 0.5f + i, 0});
-      break;
-    case Scene::Pyramid:
-      for (int i = 0; i < size; ++i) {
-        const int k = size - i;
-        for (int a = 0; a < k; ++a)
-          for (int c = 0; c < k; ++c) add(&cube, 1, {a - 0.5f * (k - 1), 0.5f + i, c - 0.5f * (k - 1)});
+BenchResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings& settings, Phases* phases = nullptr) {
+  BenchResult r;
+  try {
+    pba::RigidBodySystem s({.capacity = 16384, .contacts = settings});
+    const std::vector<pba::RigidBodyId> b = scene.build(s);
+    const pba::Vec3 rest = scene.top_rest ? scene.top_rest() : (b.empty() ? pba::Vec3(0) : s.center_of_mass(b.back()));
+    std::vector<double> ms;
+    std::vector<char> out(b.size(), 0);
+    std::vector<double> pairs, manifolds, solve, islands;
+    for (int i = 0; i < steps; ++i) {
+      const auto t0 = Clock::now();
+      s.step(1.0 / 60, {0, -9.81, 0});
+      ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+      // the phases, when asked
+      if (phases) {
+        const pba::RigidProfile& p = s.profile();
+        pairs.push_back(1e3 * p.pairs), manifolds.push_back(1e3 * p.manifolds);
+        solve.push_back(1e3 * p.solve), islands.push_back(1e3 * p.islands);
+        if (phases->asleep_at < 0 && s.awake_count() == 0) phases->asleep_at = s.time();
       }
-      break;
-    case Scene::Fall:
-      for (int x = 0; x < size; ++x)
-        for (int y = 0; y < size; ++y)
-          for (int z = 0; z < size; ++z) add(&cube, 1, {x * 1.5f - 7, 2.0f + y * 1.5f, z * 1.5f - 7});
-      break;
+      for (std::size_t j = 0; j < b.size(); ++j)
+        if (!out[j] && scene.escaped(s.center_of_mass(b[j]))) out[j] = 1, ++r.escapes;
+    }
+    r.ran = true;
+    pba::bench::summarize_times(ms, r);
+    if (phases) {
+      phases->pairs = median_of(pairs), phases->manifolds = median_of(manifolds);
+      phases->solve = median_of(solve), phases->islands = median_of(islands);
+      phases->built = s.profile().built, phases->reused = s.profile().reused;
+    }
+    if (!b.empty()) pba::bench::sag_and_drift(s.center_of_mass(b.back()), rest, r);
+    r.awake = static_cast<int>(s.awake_count());
+    r.hash = s.hash();
+  } catch (const pba::Error& e) {
+    r.note = e.what();
   }
-  const btVector3 top0 = bodies.back()->getWorldTransform().getOrigin();
-  std::vector<double> ms;
-  for (int i = 0; i < steps; ++i) {
-    const auto t0 = Clock::now();
-    world.stepSimulation(1.f / 60.f, 0);
-    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-  }
-  const btVector3 top = bodies.back()->getWorldTransform().getOrigin();
-  for (btRigidBody* r : bodies) {
-    world.removeRigidBody(r);
-    delete r;
-  }
-  return {median(ms), top0.y() - top.y(), std::hypot(top.x() - top0.x(), top.z() - top0.z())};
+  return r;
 }
 
 // the settings of `solver` at a budget of `passes` contact passes per step: the soft step and
 // TGS take passes / 2 substeps of a biased and a relax pass (TGS: one iteration of each), XPBD
 // passes / 2 substeps of one position iteration and its velocity pass, sequential impulses
-// `passes` iterations
+// `passes` iterations; 0: the defaults
 pba::ContactSettings at_budget(pba::RigidSolverType solver, int passes, bool sleep) {
   pba::ContactSettings c{.solver = solver, .sleep = sleep};
   if (passes > 0) {
@@ -134,22 +105,20 @@ pba::ContactSettings at_budget(pba::RigidSolverType solver, int passes, bool sle
 
 // the four solvers on the equal-budget scenes
 int run_budget() {
-  struct Case {
-    const char* name;
-    Scene scene;
-    int size, steps;
-  };
-  const Case cases[] = {{"stack 10", Scene::Stack, 10, 600},
-                        {"stack 20", Scene::Stack, 20, 3600},
-                        {"stack 40", Scene::Stack, 40, 1200},
-                        {"pyramid 10 (385)", Scene::Pyramid, 10, 300}};
+  std::vector<BenchScene> cases;
+  for (BenchScene& c : pba::bench::bench_scenes())
+    if (c.key == "stack10" || c.key == "stack20" || c.key == "stack40") cases.push_back(c);
+  cases[1].steps = 3600, cases[2].steps = 1200;
+  cases.push_back({.key = "pyramid385", .title = "pyramid 10 (385)", .steps = 300,
+                   .build = [](pba::RigidBodySystem& s) { return pba::rigid_scenes::square_pyramid(s, 10); },
+                   .has_top = true, .escaped = [](const pba::Vec3&) { return false; }});
   std::printf("%-18s | %-6s | %-28s | %-28s | %-28s | %-28s\n", "scene (steps)", "passes", "soft step ms/sag/drift",
               "SI", "TGS", "XPBD");
-  for (const Case& c : cases)
+  for (const BenchScene& c : cases)
     for (const int passes : {16, 64}) {
-      std::printf("%-12s (%4d) | %6d", c.name, c.steps, passes);
+      std::printf("%-12s (%4d) | %6d", c.title.c_str(), c.steps, passes);
       for (const pba::RigidSolverType t : pba::kRigidSolvers) {
-        const Result r = run_pba(c.scene, c.size, c.steps, at_budget(t, passes, false), nullptr);
+        const BenchResult r = run_pba(c, c.steps, at_budget(t, passes, false));
         std::printf(" | %7.3f ms %8.4f %8.4f m", r.ms, r.sag, r.drift);
       }
       std::printf("\n");
@@ -158,105 +127,178 @@ int run_budget() {
   return 0;
 }
 
-// ---- the step before the solver (--pipeline): pairs, manifolds, islands and sleep ----
+// ---- the tables ----
 
-// medians over the steps of one pba run of `scene` under the soft step: the whole step and its
-// pre-solver phases (RigidProfile), and the manifolds built and reused in the last step
-struct Phases {
-  double total = 0, pairs = 0, manifolds = 0, islands = 0;
-  std::size_t built = 0, reused = 0, manifold_count = 0;
-  double asleep_at = -1;
+struct Options {
+  std::string scene = "all";
+  int steps = 0;   // 0: the scene's own
+  int repeat = 1;
+  bool bullet = true, ode = true;
+  bool profile = false;  // --profile: each pba row's phases
+  std::vector<pba::RigidSolverType> solvers{pba::kRigidSolvers.begin(), pba::kRigidSolvers.end()};
 };
 
-Phases run_pba_phases(Scene scene, int size, int steps, bool sleep) {
-  pba::RigidBodySystem s({.capacity = 4096, .contacts = {.sleep = sleep}});
-  switch (scene) {
-    case Scene::Stack: pba::rigid_scenes::vertical_stack(s, size); break;
-    case Scene::Pyramid: pba::rigid_scenes::square_pyramid(s, size); break;
-    case Scene::Fall: pba::rigid_scenes::falling_boxes(s, size); break;
+// K runs of `run`; the one of median ms
+template <class F>
+BenchResult median_run(int k, F&& run) {
+  std::vector<BenchResult> runs;
+  for (int i = 0; i < k; ++i) {
+    runs.push_back(run());
+    if (!runs.back().ran) return runs.back();
   }
-  std::vector<double> total, pairs, manifolds, islands;
-  Phases out;
-  for (int i = 0; i < steps; ++i) {
-    const auto t0 = Clock::now();
-    s.step(1.0 / 60, {0, -9.81, 0});
-    total.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-    const pba::RigidProfile& p = s.profile();
-    pairs.push_back(1e3 * p.pairs), manifolds.push_back(1e3 * p.manifolds), islands.push_back(1e3 * p.islands);
-    if (out.asleep_at < 0 && s.awake_count() == 0) out.asleep_at = s.time();
-  }
-  out.total = median(total), out.pairs = median(pairs), out.manifolds = median(manifolds), out.islands = median(islands);
-  out.built = s.profile().built, out.reused = s.profile().reused, out.manifold_count = s.manifold_count();
-  return out;
+  std::sort(runs.begin(), runs.end(), [](const BenchResult& a, const BenchResult& b) { return a.ms < b.ms; });
+  return runs[runs.size() / 2];
 }
 
-int run_pipeline() {
-  struct Case {
-    const char* name;
-    Scene scene;
-    int size, steps;
-    bool sleep;
-  };
-  const Case cases[] = {{"pyramid 20 (2870)", Scene::Pyramid, 20, 120, false},
-                        {"fall 1000", Scene::Fall, 10, 600, false},
-                        {"fall 1000, sleep", Scene::Fall, 10, 600, true}};
-  std::printf("%-18s | %-9s | %-9s | %-9s | %-9s | %-21s | %-9s | %s\n", "scene (steps)", "step ms", "pairs",
-              "manifolds", "islands", "built / reused / all", "Bullet ms", "Bullet / pba");
-  for (const Case& c : cases) {
-    const Phases p = run_pba_phases(c.scene, c.size, c.steps, c.sleep);
-    const Result bt = run_bullet(c.scene, c.size, c.steps, c.sleep);
-    std::printf("%-12s (%3d) | %9.3f | %9.3f | %9.3f | %9.3f | %6zu %6zu %7zu | %9.3f | %.2fx", c.name, c.steps, p.total,
-                p.pairs, p.manifolds, p.islands, p.built, p.reused, p.manifold_count, bt.ms, bt.ms / p.total);
-    if (c.sleep) std::printf("  (all asleep at %.2f s)", p.asleep_at);
-    std::printf("\n");
+void print_row(const char* engine, const BenchScene& scene, const BenchResult& r, const BenchResult& bullet,
+               const BenchResult& ode, bool is_pba) {
+  std::printf("  %-24s", engine);
+  if (!r.ran) {
+    std::printf(" not run: %s\n", r.note.c_str());
+    return;
+  }
+  std::printf(" %9.3f %9.3f %9.2f", r.ms, r.mean, r.max);
+  if (scene.has_top)
+    std::printf(" %9.4f %9.4f", r.sag, r.drift);
+  else
+    std::printf(" %9s %9s", "-", "-");
+  std::printf(" %7d %6d", r.escapes, r.awake);
+  // how many times the peers' time per step the row's is
+  if (bullet.ran && &r != &bullet) std::printf(" %8.2fx", bullet.ms / r.ms); else std::printf(" %9s", "");
+  if (ode.ran && &r != &ode) std::printf(" %8.2fx", ode.ms / r.ms); else std::printf(" %9s", "");
+  if (is_pba) std::printf("  %016llx", static_cast<unsigned long long>(r.hash));
+  // the top box half a metre down has fallen; as far aside with no drop, the top has slid
+  if (scene.has_top && std::abs(r.sag) > 0.5) std::printf("  (fell)");
+  else if (scene.has_top && r.drift > 0.5) std::printf("  (slid)");
+  std::printf("\n");
+}
+
+// one scene under the chosen engines, as a table
+void run_scene(const BenchScene& scene, const Options& o) {
+  const int steps = o.steps > 0 ? o.steps : scene.steps;
+  std::printf("== %s: %d steps of 1/60 s, sleeping %s, median of %d run%s ==\n", scene.title.c_str(), steps,
+              scene.sleep ? "on" : "off", o.repeat, o.repeat > 1 ? "s" : "");
+  std::printf("  %-24s %9s %9s %9s %9s %9s %7s %6s %9s %9s  %s\n", "engine", "ms/step", "mean", "max", "sag m",
+              "drift m", "escapes", "awake", "Bullet/", "ODE/", "hash");
+  std::fflush(stdout);
+  // the peers first, so each pba row shows its ratios as it comes
+  BenchResult bullet, ode;
+  {
+    pba::RigidBodySystem s({.capacity = 16384});
+    const std::vector<pba::RigidBodyId> tracked = scene.build(s);
+    if (o.bullet) bullet = median_run(o.repeat, [&] { return pba::bench::run_bullet(scene, s, tracked, steps); });
+    if (o.ode) ode = median_run(o.repeat, [&] { return pba::bench::run_ode(scene, s, tracked, steps); });
+  }
+  for (const pba::RigidSolverType t : o.solvers) {
+    const std::string name = "pba " + std::string(pba::to_string(t));
+    // each run's phases, and those of the run of median ms
+    std::vector<std::pair<double, Phases>> runs;
+    const BenchResult r = median_run(o.repeat, [&] {
+      Phases p;
+      const BenchResult run = run_pba(scene, steps, at_budget(t, 0, scene.sleep), o.profile ? &p : nullptr);
+      runs.emplace_back(run.ms, p);
+      return run;
+    });
+    Phases phases;
+    for (const auto& [ms, p] : runs)
+      if (ms == r.ms) phases = p;
+    // a mesh scene pba cannot collide with yet: say so instead of a figure
+    if (scene.has_mesh && (!r.ran || r.escapes > 0)) {
+      std::printf("  %-24s pba: mesh contacts not supported yet (%s)\n", name.c_str(),
+                  r.ran ? (std::to_string(r.escapes) + " bodies fell through the terrain").c_str() : r.note.c_str());
+      continue;
+    }
+    print_row(name.c_str(), scene, r, bullet, ode, true);
+    if (o.profile)
+      std::printf("    phases (median ms): pairs %.3f, manifolds %.3f, solve %.3f, islands %.3f; last step %zu built, %zu "
+                  "reused; all asleep %s\n",
+                  phases.pairs, phases.manifolds, phases.solve, phases.islands, phases.built, phases.reused,
+                  phases.asleep_at < 0 ? "never" : (std::to_string(phases.asleep_at) + " s").c_str());
     std::fflush(stdout);
   }
-  return 0;
+  if (o.bullet) {
+    const std::string name = "Bullet 3.24 (" + std::to_string(scene.bullet_iterations) + " it" +
+                             (scene.bullet_ccd ? ", CCD)" : ")");
+    print_row(name.c_str(), scene, bullet, bullet, ode, false);
+  }
+  if (o.ode) print_row("ODE 0.16 QuickStep 20", scene, ode, bullet, ode, false);
+  std::printf("\n");
+  std::fflush(stdout);
+}
+
+int usage(const char* why) {
+  if (why) std::fprintf(stderr, "bench_rigid: %s\n", why);
+  std::fprintf(stderr,
+               "usage: bench_rigid [--scene KEY|all] [--steps N] [--repeat K] [--peer all|bullet|ode|none]\n"
+               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--profile|--pipeline] | --quick | --budget\n"
+               "scenes:");
+  for (const BenchScene& s : pba::bench::bench_scenes()) std::fprintf(stderr, " %s", s.key.c_str());
+  std::fprintf(stderr, "\n");
+  return why ? 2 : 0;
+}
+
+// a positive integer argument
+bool count_arg(const char* text, int* out) {
+  char* end = nullptr;
+  const long v = std::strtol(text, &end, 10);
+  if (!end || *end || v < 1 || v > 1000000) return false;
+  *out = static_cast<int>(v);
+  return true;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
-  if (argc > 1 && std::strcmp(argv[1], "--budget") == 0) return run_budget();
-  if (argc > 1 && std::strcmp(argv[1], "--pipeline") == 0) return run_pipeline();
-  struct Case {
-    const char* name;
-    Scene scene;
-    int size, steps;
-    bool sleep = false;
-  };
-  const std::vector<Case> cases = quick ? std::vector<Case>{{"stack 10", Scene::Stack, 10, 120}}
-                                        : std::vector<Case>{{"stack 10", Scene::Stack, 10, 600},
-                                                            {"stack 20", Scene::Stack, 20, 600},
-                                                            {"stack 40", Scene::Stack, 40, 600},
-                                                            {"fall 1000", Scene::Fall, 10, 600},
-                                                            {"fall 1000, sleep", Scene::Fall, 10, 600, true},
-                                                            {"pyramid 20 (2870)", Scene::Pyramid, 20, 60}};
-  // pba's four solvers at their defaults, then Bullet
-  std::printf("%-18s", "scene");
-  for (const pba::RigidSolverType t : pba::kRigidSolvers) std::printf(" | %-28s", std::string(pba::to_string(t)).c_str());
-  std::printf(" | %-28s | %s\n", "Bullet ms/sag/drift", "Bullet / pba soft");
-  for (const Case& c : cases) {
-    std::printf("%-18s", c.name);
-    Result soft{};
-    std::uint64_t hashes[pba::kRigidSolvers.size()] = {};
-    double asleep = -1;
-    for (std::size_t k = 0; k < pba::kRigidSolvers.size(); ++k) {
-      const Result r = run_pba(c.scene, c.size, c.steps, at_budget(pba::kRigidSolvers[k], 0, c.sleep), &hashes[k],
-                               k == 0 ? &asleep : nullptr);
-      if (k == 0) soft = r;
-      std::printf(" | %7.3f ms %8.4f %8.4f m", r.ms, r.sag, r.drift);
-      std::fflush(stdout);
+  Options o;
+  bool quick = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const char* value = i + 1 < argc ? argv[i + 1] : nullptr;
+    auto need = [&] {
+      if (!value) std::exit(usage((a + ": missing value").c_str()));
+      ++i;
+      return std::string(value);
+    };
+    if (a == "--budget") return run_budget();
+    if (a == "--profile" || a == "--pipeline") {
+      // --pipeline: the soft step's phases alone
+      o.profile = true;
+      if (a == "--pipeline") o.solvers = {pba::RigidSolverType::SoftStep};
+      continue;
     }
-    const Result bt = run_bullet(c.scene, c.size, c.steps, c.sleep);
-    std::printf(" | %7.3f ms %8.4f %8.4f m | %.2fx  (hashes", bt.ms, bt.sag, bt.drift, bt.ms / soft.ms);
-    for (const std::uint64_t h : hashes) std::printf(" %016llx", static_cast<unsigned long long>(h));
-    std::printf(")");
-    if (c.sleep && asleep < 0) std::printf("  pba soft: not all asleep after %d steps", c.steps);
-    if (c.sleep && asleep >= 0) std::printf("  pba soft: all asleep at %.2f s", asleep);
-    std::printf("\n");
-    std::fflush(stdout);
+    if (a == "--help" || a == "-h") return usage(nullptr);
+    if (a == "--quick") {
+      quick = true;
+    } else if (a == "--scene") {
+      o.scene = need();
+    } else if (a == "--steps") {
+      if (!count_arg(need().c_str(), &o.steps)) return usage(("--steps '" + std::string(value) + "': expected a count").c_str());
+    } else if (a == "--repeat") {
+      if (!count_arg(need().c_str(), &o.repeat)) return usage(("--repeat '" + std::string(value) + "': expected a count").c_str());
+    } else if (a == "--peer") {
+      const std::string p = need();
+      if (p != "all" && p != "bullet" && p != "ode" && p != "none")
+        return usage(("--peer '" + p + "': expected all, bullet, ode or none").c_str());
+      o.bullet = p == "all" || p == "bullet";
+      o.ode = p == "all" || p == "ode";
+    } else if (a == "--solver") {
+      const std::string t = need();
+      if (t != "all") {
+        try {
+          o.solvers = {pba::parse_rigid_solver(t, "--solver")};
+        } catch (const pba::Error& e) {
+          return usage(e.what());
+        }
+      }
+    } else {
+      return usage(("unknown argument '" + a + "'").c_str());
+    }
   }
+  std::vector<BenchScene> scenes;
+  for (const BenchScene& s : pba::bench::bench_scenes())
+    if (quick ? s.key == "stack10" : (o.scene == "all" || o.scene == s.key)) scenes.push_back(s);
+  if (scenes.empty()) return usage(("--scene '" + o.scene + "': no such scene").c_str());
+  if (quick && o.steps == 0) o.steps = 120;
+  for (const BenchScene& s : scenes) run_scene(s, o);
   return 0;
 }

@@ -59,7 +59,8 @@ class BouncingBalls final : public Sample {
       const Color c = i == tracked ? kTracked : kBall;
       r.polyline(trails_[i], Color{c.r, c.g, c.b, 0.35f}, 1.5f);
     }
-    for (std::size_t i = 0; i < ps.size(); ++i) r.sphere(ps.position(i), ps.radius(i), i == tracked ? kTracked : kBall);
+    if (ctx_.draw.particles)
+      for (std::size_t i = 0; i < ps.size(); ++i) r.sphere(ps.position(i), ps.radius(i), i == tracked ? kTracked : kBall);
     // the e^2 h and e^4 h marks beside the tracked ball
     if (ctx_.settings.show_labels) {
       const Vec3 p = ps.position(tracked);

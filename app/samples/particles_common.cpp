@@ -23,7 +23,9 @@ void TickWorld(World& world, const Settings& settings, double dt) {
   world.tick(world.time(), dt);
 }
 
-void DrawParticles(Renderer& r, const ParticleSystem& ps, float point_px, double min_radius, std::size_t sphere_limit) {
+void DrawParticles(Renderer& r, const ParticleSystem& ps, const DrawFlags& flags, float point_px, double min_radius,
+                   std::size_t sphere_limit) {
+  if (!flags.particles) return;
   const std::size_t n = ps.size();
   // few particles: lit spheres with shadows
   if (n <= sphere_limit) {
@@ -94,7 +96,8 @@ Color ForcerColor(ForcerKind kind) {
   return colors::white;
 }
 
-void DrawForcer(Renderer& r, const Forcer& f, double t) {
+void DrawForcer(Renderer& r, const Forcer& f, double t, const DrawFlags& flags) {
+  if (!flags.forcers) return;
   const bool on = f.active(t);
   const Color c = ForcerColor(f.kind);
   const Color edge = with_alpha(c, on ? 0.9f : 0.35f);

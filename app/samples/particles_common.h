@@ -33,9 +33,10 @@ inline constexpr Color asleep = Color::hex(0x8c3d0b);    ///< dynamic rigid bodi
 void TickWorld(World& world, const Settings& settings, double dt);
 
 /// Draws the particles: lit spheres (at least `min_radius` metres, so small ones stay
-/// visible) when there are at most `sphere_limit`, else screen-space points of `point_px`.
-void DrawParticles(Renderer& r, const ParticleSystem& ps, float point_px, double min_radius = 0,
-                   std::size_t sphere_limit = 2000);
+/// visible) when there are at most `sphere_limit`, else screen-space points of `point_px`;
+/// nothing when the View menu's `flags.particles` is off.
+void DrawParticles(Renderer& r, const ParticleSystem& ps, const DrawFlags& flags, float point_px,
+                   double min_radius = 0, std::size_t sphere_limit = 2000);
 
 /// Draws the world's rigid bodies (the entities' bodies, not the colliders' stand-ins) as
 /// solids at their poses now: dynamic orange (darker asleep), kinematic as moving colliders,
@@ -55,8 +56,9 @@ void WorldPoints(const World& world, std::vector<Vec3>& out, std::size_t max_poi
 Color ForcerColor(ForcerKind kind);
 
 /// Draws a Forcer volume at time t: a translucent shell, its outline and arrows that
-/// sample the force field inside it (dimmed while an air cannon is off).
-void DrawForcer(Renderer& r, const Forcer& f, double t);
+/// sample the force field inside it (dimmed while an air cannon is off); nothing when the
+/// View menu's `flags.forcers` is off.
+void DrawForcer(Renderer& r, const Forcer& f, double t, const DrawFlags& flags);
 
 /// Draws a field of wind arrows (the air velocity `wind`, m/s) over a box of the ground
 /// from `lo` to `hi`, `n` x `m` arrows at each of the given heights.

@@ -43,11 +43,11 @@ class Forcers final : public Sample {
     // the nozzle and its aim
     const Vec3 o = world_.pose(world_.find("stream")).position;
     const Vec3 aim = glm::normalize(Vec3(1, 0.25, 0));
-    r.capsule(o - 0.18 * aim, o, 0.05, Color::hex(0x5a606b));
+    if (ctx_.draw.forcers) r.capsule(o - 0.18 * aim, o, 0.05, Color::hex(0x5a606b));
     // the volumes, then the stream as points
-    for (const Forcer& f : world_.forcers()) DrawForcer(r, f, world_.time());
-    DrawParticles(r, world_.particles(), 3.0f, 0, 0);
-    if (!ctx_.settings.show_labels) return;
+    for (const Forcer& f : world_.forcers()) DrawForcer(r, f, world_.time(), ctx_.draw);
+    DrawParticles(r, world_.particles(), ctx_.draw, 3.0f, 0, 0);
+    if (!ctx_.settings.show_labels || !ctx_.draw.forcers) return;
     for (const Forcer& f : world_.forcers()) {
       const double top = f.shape == ForcerShape::Box ? f.half_extents.y : (f.shape == ForcerShape::Cylinder ? f.half_height : f.radius);
       const char* name = f.kind == ForcerKind::Fan ? (f.pulse_period > 0 ? "air cannon" : "fan")

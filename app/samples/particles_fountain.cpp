@@ -45,8 +45,8 @@ class Fountain final : public Sample {
   void Draw(Renderer& r, double) override {
     // the nozzle, then every live particle as a point
     const Vec3 o = world_.pose(emitter_entity_).position;
-    r.box(o - Vec3(0, 0.03, 0), {0.06, 0.04, 0.06}, Quat(1, 0, 0, 0), Color::hex(0x5a606b));
-    DrawParticles(r, world_.particles(), point_px_, 0, 0);
+    if (ctx_.draw.forcers) r.box(o - Vec3(0, 0.03, 0), {0.06, 0.04, 0.06}, Quat(1, 0, 0, 0), Color::hex(0x5a606b));
+    DrawParticles(r, world_.particles(), ctx_.draw, point_px_, 0, 0);
     if (ctx_.settings.show_labels) {
       char buf[64];
       std::snprintf(buf, sizeof buf, "%s live particles", Thousands(static_cast<long long>(world_.particles().size())).c_str());

@@ -92,8 +92,8 @@ class SceneFile final : public Sample {
     DrawColliders(r, w.colliders(), {}, f);
     DrawRigidBodies(r, w, f);
     if (f.forcers)
-      for (const Forcer& fc : w.forcers()) DrawForcer(r, fc, w.time());
-    if (f.particles) DrawParticles(r, w.particles(), 3.0f, 0.008 * view_radius_);
+      for (const Forcer& fc : w.forcers()) DrawForcer(r, fc, w.time(), f);
+    DrawParticles(r, w.particles(), f, 3.0f, 0.008 * view_radius_);
     // the soft bodies: cloth and jelly as shaded surfaces, ropes and springs as links and nodes
     if (const SoftSystem* soft = Soft(w))
       for (std::size_t b = 0; b < soft->size(); ++b) DrawSoftBody(r, soft->at(b), b, f);
@@ -236,6 +236,9 @@ class SceneFile final : public Sample {
       std::fprintf(stderr, "pba_samples: Particles/Scene file: %s\n", error_.c_str());
       return;
     }
+    // say what opened (a dropped file has no other echo)
+    std::printf("pba_samples: Particles/Scene file: opened %s\n", fs::absolute(file).lexically_normal().c_str());
+    std::fflush(stdout);
     // the file's step and integrator become the app's (the panel can change them)
     if (adopt_settings) {
       ctx_.settings.stepper.fixed_dt = scene_->world.stepper().settings().fixed_dt;

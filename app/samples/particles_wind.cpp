@@ -79,7 +79,7 @@ class WindDrag final : public Sample {
     for (std::size_t i = 0; i < ps.size(); ++i) {
       const Color c = mass_color(ps.mass(i));
       if (i < trails_.size()) r.polyline(trails_[i], Color{c.r, c.g, c.b, 0.45f}, 1.5f);
-      r.sphere(ps.position(i), 2 * ps.radius(i), c);
+      if (ctx_.draw.particles) r.sphere(ps.position(i), 2 * ps.radius(i), c);
     }
     // the release column
     r.line(Vec3(-3, 0, 0), Vec3(-3, 4.6, 0), Color{1, 1, 1, 0.25f}, 1.0f);

@@ -58,6 +58,69 @@ void RigidSolverKnobs(ContactSettings& s) {
   if (s.solver != RigidSolverType::Xpbd) ImGui::Checkbox("warm starting", &s.warm_starting);
 }
 
+bool RigidGrab::Press(RigidBodySystem& bodies, const Vec3& o, const Vec3& d, double max_distance) {
+  grab_ = {};
+  // the nearest dynamic body's shape under the cursor
+  const Ray ray{o, glm::normalize(d), max_distance};
+  double best = ray.max_distance;
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const RigidBodyId id = bodies.id_at(i);
+    if (bodies.type(id) != BodyType::Dynamic) continue;
+    const Pose body = bodies.pose(id);
+    for (const RigidShapeDef& s : bodies.shapes(id)) {
+      const RayHit hit = ray_cast(s.shape, compose(body, s.local), ray);
+      if (hit.hit && hit.distance < best) {
+        best = hit.distance;
+        grab_ = {id, apply_inverse(body, hit.point), hit.point, hit.distance};
+      }
+    }
+  }
+  if (!bodies.valid(grab_.body)) return false;
+  bodies.wake(grab_.body);
+  ++grabs_;
+  return true;
+}
+
+void RigidGrab::Move(const RigidBodySystem& bodies, const Vec3& o, const Vec3& d) {
+  if (bodies.valid(grab_.body)) grab_.target = o + grab_.depth * glm::normalize(d);
+}
+
+void RigidGrab::Apply(RigidBodySystem& bodies) const {
+  if (!bodies.valid(grab_.body)) return;
+  // a 3 Hz critically damped spring on the grabbed point, scaled by the body's mass and
+  // capped at 50 times its weight
+  const Vec3 at = apply(bodies.pose(grab_.body), grab_.local);
+  const double m = bodies.mass(grab_.body), w = 2 * kPi * 3.0;
+  Vec3 f = m * (w * w * (grab_.target - at) - 2 * w * bodies.velocity_at(grab_.body, at));
+  const double cap = 50 * m * 9.81, len = glm::length(f);
+  if (len > cap) f *= cap / len;
+  bodies.apply_force(grab_.body, f, at);
+}
+
+void RigidGrab::Draw(Renderer& r, const RigidBodySystem& bodies) const {
+  if (!bodies.valid(grab_.body)) return;
+  const Vec3 at = apply(bodies.pose(grab_.body), grab_.local);
+  r.line(at, grab_.target, colors::yellow);
+  r.point(grab_.target, 8.0f, colors::yellow);
+}
+
+void WriteRigidReport(const std::string& path, const Renderer& r, long long frame, const RigidBodySystem& bodies,
+                      RigidBodyId id, const RigidGrab& grab, const std::string& extra) {
+  if (path.empty() || !bodies.valid(id)) return;
+  const Vec3 c = bodies.center_of_mass(id), v = bodies.linear_velocity(id);
+  glm::vec2 px(-1, -1);
+  if (!r.project(c, &px)) px = glm::vec2(-1, -1);
+  // written whole, then renamed, so a reader never sees half a line
+  const std::string tmp = path + ".tmp";
+  FILE* f = std::fopen(tmp.c_str(), "w");
+  if (!f) return;
+  std::fprintf(f, "frame %lld grabs %d held %d body %.6f %.6f %.6f pixel %.1f %.1f velocity %.6f %.6f %.6f%s%s\n", frame,
+               grab.grabs(), grab.held(bodies) ? 1 : 0, c.x, c.y, c.z, px.x, px.y, v.x, v.y, v.z, extra.empty() ? "" : " ",
+               extra.c_str());
+  std::fclose(f);
+  std::rename(tmp.c_str(), path.c_str());
+}
+
 RigidSample::RigidSample(SampleContext& ctx) : Sample(ctx) {
   settings_.solver = RigidSolverOption(ctx);
   palette_ = {colors::blue, colors::cyan, colors::purple, colors::pink, colors::green};
@@ -67,24 +130,14 @@ RigidSample::RigidSample(SampleContext& ctx) : Sample(ctx) {
 }
 
 void RigidSample::Restart() {
-  grab_ = {};
+  grab_.Release();
   bodies_ = RigidBodySystem({.capacity = 1024, .contacts = settings_});
   Build();
 }
 
 void RigidSample::Step(double t, double dt) {
   bodies_.settings() = settings_;
-  // the mouse spring (Box2D's mouse joint as a force): a 3 Hz critically damped spring on
-  // the grabbed point, scaled by the body's mass and capped at 50 times its weight
-  if (bodies_.valid(grab_.body)) {
-    const Pose pose = bodies_.pose(grab_.body);
-    const Vec3 at = apply(pose, grab_.local);
-    const double m = bodies_.mass(grab_.body), w = 2 * kPi * 3.0;
-    Vec3 f = m * (w * w * (grab_.target - at) - 2 * w * bodies_.velocity_at(grab_.body, at));
-    const double cap = 50 * m * 9.81, len = glm::length(f);
-    if (len > cap) f *= cap / len;
-    bodies_.apply_force(grab_.body, f, at);
-  }
+  grab_.Apply(bodies_);
   bodies_.step(dt, gravity_);
   AfterStep(t, dt);
 }
@@ -92,12 +145,8 @@ void RigidSample::Step(double t, double dt) {
 void RigidSample::Draw(Renderer& r, double) {
   draw_options_.palette = palette_;
   bodies_.draw(r, ctx_.draw, draw_options_);
-  if (bodies_.valid(grab_.body)) {
-    const Vec3 at = apply(bodies_.pose(grab_.body), grab_.local);
-    r.line(at, grab_.target, colors::yellow);
-    r.point(grab_.target, 8.0f, colors::yellow);
-  }
-  if (++frames_ % 5 == 0) write_report();
+  grab_.Draw(r, bodies_);
+  if (++frames_ % 5 == 0) WriteRigidReport(report_path_, r, frames_, bodies_, ReportBody(), grab_, ReportExtra());
 }
 
 RigidBodyId RigidSample::ReportBody() const {
@@ -106,49 +155,16 @@ RigidBodyId RigidSample::ReportBody() const {
   return {};
 }
 
-void RigidSample::write_report() {
-  const RigidBodyId id = ReportBody();
-  if (report_path_.empty() || !bodies_.valid(id)) return;
-  const Vec3 c = bodies_.center_of_mass(id), v = bodies_.linear_velocity(id);
-  glm::vec2 px(-1, -1);
-  if (!ctx_.renderer->project(c, &px)) px = glm::vec2(-1, -1);
-  // written whole, then renamed, so a reader never sees half a line
-  const std::string tmp = report_path_ + ".tmp";
-  FILE* f = std::fopen(tmp.c_str(), "w");
-  if (!f) return;
-  std::fprintf(f, "frame %lld grabs %d held %d body %.6f %.6f %.6f pixel %.1f %.1f velocity %.6f %.6f %.6f\n", frames_,
-               grabs_, bodies_.valid(grab_.body) ? 1 : 0, c.x, c.y, c.z, px.x, px.y, v.x, v.y, v.z);
-  std::fclose(f);
-  std::rename(tmp.c_str(), report_path_.c_str());
-}
-
 void RigidSample::Mouse(int button, bool down, const Vec3& o, const Vec3& d) {
   if (button != 0) return;
   if (!down) {
-    grab_ = {};  // the body keeps the velocity the spring gave it: thrown
+    grab_.Release();  // the body keeps the velocity the spring gave it: thrown
     return;
   }
-  // the nearest dynamic body's shape under the cursor
-  const Ray ray{o, glm::normalize(d), 1000.0};
-  double best = ray.max_distance;
-  for (std::size_t i = 0; i < bodies_.size(); ++i) {
-    const RigidBodyId id = bodies_.id_at(i);
-    if (bodies_.type(id) != BodyType::Dynamic) continue;
-    const Pose body = bodies_.pose(id);
-    for (const RigidShapeDef& s : bodies_.shapes(id)) {
-      const RayHit hit = ray_cast(s.shape, compose(body, s.local), ray);
-      if (hit.hit && hit.distance < best) {
-        best = hit.distance;
-        grab_ = {id, apply_inverse(body, hit.point), hit.point, hit.distance};
-      }
-    }
-  }
-  if (bodies_.valid(grab_.body)) bodies_.wake(grab_.body), ++grabs_;
+  grab_.Press(bodies_, o, d);
 }
 
-void RigidSample::MouseMove(const Vec3& o, const Vec3& d) {
-  if (bodies_.valid(grab_.body)) grab_.target = o + grab_.depth * glm::normalize(d);
-}
+void RigidSample::MouseMove(const Vec3& o, const Vec3& d) { grab_.Move(bodies_, o, d); }
 
 FiniteCheck RigidSample::CheckFinite() const {
   for (std::size_t i = 0; i < bodies_.size(); ++i) {

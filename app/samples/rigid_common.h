@@ -19,6 +19,46 @@ RigidSolverType RigidSolverOption(const SampleContext& ctx);
 /// relax, compliance, manifold sweeps, warm starting), editing `s` live.
 void RigidSolverKnobs(ContactSettings& s);
 
+/// The mouse on rigid bodies: a press grabs the dynamic body whose shape the cursor's ray
+/// hits first, a 3 Hz critically damped spring (Box2D's mouse joint as a force, scaled by
+/// the body's mass and capped at 50 times its weight) pulls the grabbed point toward the
+/// cursor at the grabbed depth, a release lets go (the body keeps its velocity: thrown).
+class RigidGrab {
+ public:
+  /// A left press with the world ray (o, d): grabs and wakes the nearest dynamic body of
+  /// `bodies` under the cursor closer than `max_distance` (m) along the ray; true when one
+  /// was grabbed.
+  bool Press(RigidBodySystem& bodies, const Vec3& o, const Vec3& d, double max_distance = 1000);
+  /// Lets go.
+  void Release() { grab_ = {}; }
+  /// The cursor moved: the target follows the ray at the grabbed depth.
+  void Move(const RigidBodySystem& bodies, const Vec3& o, const Vec3& d);
+  /// Applies the spring's force for the next step.
+  void Apply(RigidBodySystem& bodies) const;
+  /// The spring as a yellow line to the cursor's point.
+  void Draw(Renderer& r, const RigidBodySystem& bodies) const;
+  /// True while a body of `bodies` is held.
+  bool held(const RigidBodySystem& bodies) const { return bodies.valid(grab_.body); }
+  /// Presses that grabbed a body so far.
+  int grabs() const { return grabs_; }
+
+ private:
+  struct Grab {
+    RigidBodyId body{};
+    Vec3 local{0, 0, 0};   // anchor in the body frame (m)
+    Vec3 target{0, 0, 0};  // where the cursor holds it (m)
+    double depth = 0;      // distance along the view ray (m)
+  } grab_;
+  int grabs_ = 0;
+};
+
+/// The test hook of the rigid samples (--option report=FILE): writes "frame F grabs G held H
+/// body X Y Z pixel PX PY velocity VX VY VZ" for the centre and velocity of body `id` (its
+/// pixel from the renderer's last view), then `extra`, as one line, whole (a reader never
+/// sees half a line). Nothing when `path` is empty or `id` is not a body of `bodies`.
+void WriteRigidReport(const std::string& path, const Renderer& r, long long frame, const RigidBodySystem& bodies,
+                      RigidBodyId id, const RigidGrab& grab, const std::string& extra = {});
+
 /// Base of the rigid-body samples: override Build() to fill bodies_ (Restart calls it again).
 class RigidSample : public Sample {
  public:
@@ -33,7 +73,7 @@ class RigidSample : public Sample {
   /// Moves the grab target along the view ray, at the grabbed depth.
   void MouseMove(const Vec3& ray_origin, const Vec3& ray_dir) override;
   /// True while a body is held.
-  bool MouseCaptured() const override { return bodies_.valid(grab_.body); }
+  bool MouseCaptured() const override { return grab_.held(bodies_); }
   /// A dynamic body whose centre is not finite.
   FiniteCheck CheckFinite() const override;
   /// The dynamic bodies' centres.
@@ -52,6 +92,8 @@ class RigidSample : public Sample {
   void Readout() const;
   /// The body --option report=FILE describes (default: the first dynamic body).
   virtual RigidBodyId ReportBody() const;
+  /// Text appended to the report line (default: none).
+  virtual std::string ReportExtra() const { return {}; }
 
   RigidBodySystem bodies_;
   ContactSettings settings_{};       ///< applied before every step (the controls edit it)
@@ -60,18 +102,11 @@ class RigidSample : public Sample {
   std::vector<Color> palette_;       ///< dynamic bodies' colours, cycled by index
 
  private:
-  struct Grab {
-    RigidBodyId body{};
-    Vec3 local{0, 0, 0};   // anchor in the body frame (m)
-    Vec3 target{0, 0, 0};  // where the cursor holds it (m)
-    double depth = 0;      // distance along the view ray (m)
-  } grab_;
+  RigidGrab grab_;
   // the test hook (--option report=FILE): every 5 frames the frame, the grabs so far, and the
   // report body's centre (world and pixels) and velocity
-  void write_report();
   std::string report_path_;
   long long frames_ = 0;
-  int grabs_ = 0;
 };
 
 }  // namespace pba::app

@@ -3,7 +3,9 @@
 // solvers, switched live: the soft step (Box2D v3's substeps, soft contacts, relax and
 // restitution passes), sequential impulses, TGS (substeps of rigid contacts, Macklin et al.
 // 2019) or XPBD (positional contacts, Mueller et al. 2020). The panel plots the top box's sag
-// and drift, the deepest overlap and the kinetic energy, and shows where the step's time went.
+// and drift, the deepest overlap, the kinetic energy and the ms per step, and shows where the
+// step's time went. "Compare the four solvers" runs the scene once per solver, side by side at
+// an equal budget of contact passes per step, and plots the four together.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -32,11 +34,41 @@ enum class LabScene : int { Stack, Pyramid, Falling, Restitution, Ramp };
 constexpr const char* kSceneNames[] = {"vertical stack", "square pyramid", "falling boxes", "restitution row",
                                        "friction ramp"};
 
+// Draws through another DebugDraw, everything moved by `offset`: the compare mode runs each
+// solver's copy of the scene at the same place and draws the copies side by side.
+class OffsetDraw final : public DebugDraw {
+ public:
+  OffsetDraw(DebugDraw& to, const Vec3& offset) : to_(to), d_(offset) {}
+  void point(const Vec3& p, float size, Color c) override { to_.point(p + d_, size, c); }
+  void line(const Vec3& a, const Vec3& b, Color c) override { to_.line(a + d_, b + d_, c); }
+  void sphere(const Vec3& center, double radius, Color c) override { to_.sphere(center + d_, radius, c); }
+  void box(const Vec3& center, const Vec3& half, const Quat& q, Color c) override { to_.box(center + d_, half, q, c); }
+  void capsule(const Vec3& a, const Vec3& b, double radius, Color c) override { to_.capsule(a + d_, b + d_, radius, c); }
+  void plane(const Vec3& n, double offset, double half_size, Color c) override {
+    to_.plane(n, offset + glm::dot(n, d_), half_size, c);
+  }
+  void arrow(const Vec3& from, const Vec3& to, double head, Color c) override { to_.arrow(from + d_, to + d_, head, c); }
+  void text(const Vec3& p, std::string_view s, Color c) override { to_.text(p + d_, s, c); }
+  void triangle(const Vec3& a, const Vec3& b, const Vec3& c, Color col) override {
+    to_.triangle(a + d_, b + d_, c + d_, col);
+  }
+
+ private:
+  DebugDraw& to_;
+  Vec3 d_;
+};
+
+// the colour that stands for each solver in the compare mode's plots and labels
+constexpr Color kSolverColor[] = {colors::orange, colors::red, colors::green, colors::purple};
+// and its short name above its copy of the scene
+constexpr const char* kShortName[] = {"soft", "SI", "TGS", "XPBD"};
+
 class RigidLab final : public Sample {
  public:
   explicit RigidLab(SampleContext& ctx) : Sample(ctx) {
     // --option scene=stack|pyramid|falling|restitution|ramp size=N solver=soft|si|tgs|xpbd
-    // (or the solvers' library names: soft-step, sequential-impulse)
+    // (or the solvers' library names: soft-step, sequential-impulse) compare=0|1 (the four
+    // solvers side by side) passes=N (their equal budget) sleep=0|1
     const std::string scene = ctx.option("scene", "stack");
     const char* keys[] = {"stack", "pyramid", "falling", "restitution", "ramp"};
     scene_ = LabScene::Stack;
@@ -46,29 +78,47 @@ class RigidLab final : public Sample {
     if (!found) throw Error("--option scene: expected stack, pyramid, falling, restitution or ramp, got '" + scene + "'");
     settings_.solver = RigidSolverOption(ctx);
     size_ = static_cast<int>(OptionNumber(ctx, "size", 10, 1, 40));
+    compare_ = OptionNumber(ctx, "compare", 0, 0, 1) != 0;
+    // compared, the copies stay awake by default (a sleeping stack shows nothing)
+    settings_.sleep = OptionNumber(ctx, "sleep", compare_ ? 0 : 1, 0, 1) != 0;
+    passes_ = static_cast<int>(OptionNumber(ctx, "passes", 16, 2, 128));
     ctx.settings.stepper.fixed_dt = 1.0 / 60.0;
     build();
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<RigidLab>(ctx); }
 
   void Step(double, double dt) override {
-    bodies_.settings() = settings_;
-    bodies_.step(dt, {0, -9.81, 0});
-    record();
+    for (std::size_t k = 0; k < lanes_.size(); ++k) {
+      Lane& l = lanes_[k];
+      l.bodies.settings() = lane_settings(k);
+      l.bodies.step(dt, {0, -9.81, 0});
+      record(l);
+    }
   }
 
   void Draw(Renderer& r, double) override {
-    // the bodies through the library (View menu: shapes, bounds, contacts, normals)
-    RigidDrawOptions o;
-    o.palette = kPalette;
-    o.fixed = kStatic;
-    o.highlight = top_;
-    o.highlight_color = kTop;
-    o.horizontal_planes = false;  // the app's ground grid
-    bodies_.draw(r, ctx_.draw, o);
-    // a marker ball above the measured body (its flat faces take one shade each, which may
-    // never be the colour itself; a lit ball always shows it somewhere)
-    if (bodies_.valid(top_)) r.sphere(bodies_.center_of_mass(top_) + Vec3(0, 0.9, 0), 0.3, kTop);
+    for (std::size_t k = 0; k < lanes_.size(); ++k) {
+      const Lane& l = lanes_[k];
+      OffsetDraw d(r, offset(k));
+      // the bodies through the library (View menu: shapes, bounds, contacts, normals)
+      RigidDrawOptions o;
+      o.palette = kPalette;
+      o.fixed = kStatic;
+      o.highlight = l.top;
+      o.highlight_color = kTop;
+      o.horizontal_planes = false;  // the app's ground grid
+      // compared, each ramp is drawn as wide as its copy's lane
+      if (compare_ && along_z()) o.plane_half_size = 0.5 * spacing_;
+      l.bodies.draw(d, ctx_.draw, o);
+      // a marker ball above the measured body (its flat faces take one shade each, which may
+      // never be the colour itself; a lit ball always shows it somewhere)
+      if (l.bodies.valid(l.top)) d.sphere(l.bodies.center_of_mass(l.top) + Vec3(0, 0.9, 0), 0.3, kTop);
+      // in the compare mode, each copy's solver written above it
+      if (compare_) {
+        const double top = l.bodies.valid(l.top) ? l.bodies.center_of_mass(l.top).y + 1.8 : 4.0;
+        r.text(offset(k) + Vec3(0, top, 0), kShortName[k], kSolverColor[k], 1.4f, 0.5f);
+      }
+    }
   }
 
   void DrawUI() override {
@@ -77,36 +127,50 @@ class RigidLab final : public Sample {
     bool rebuild = ImGui::Combo("scene", &scene, kSceneNames, 5);
     ImGui::SetNextItemWidth(-110);
     rebuild |= ImGui::SliderInt("size", &size_, 1, 40);
-    RigidSolverKnobs(settings_);
+    rebuild |= ImGui::Checkbox("compare the four solvers", &compare_);
+    if (compare_) {
+      // the same number of contact passes per step for every solver (docs/rigid-bodies.md)
+      ImGui::SetNextItemWidth(-110);
+      ImGui::SliderInt("passes", &passes_, 2, 64);
+      passes_ = std::max(2, passes_ & ~1);
+      ImGui::Checkbox("sleep", &settings_.sleep);
+      ImGui::TextWrapped("Equal budget: %d contact passes per step. Soft step and TGS: %d substeps of a biased and a "
+                         "relax pass; XPBD: %d substeps of a projection and a velocity pass; sequential impulses: "
+                         "%d iterations.",
+                         passes_, passes_ / 2, passes_ / 2, passes_);
+    } else {
+      RigidSolverKnobs(settings_);
+    }
     if (ImGui::Button("Restart") || rebuild) {
       scene_ = static_cast<LabScene>(scene);
       build();
     }
 
-    // live measurements
-    const RigidProfile& p = bodies_.profile();
-    ImGui::Text("%zu bodies, %zu manifolds", bodies_.size(), bodies_.manifold_count());
-    ImGui::Text("step %.2f ms: pairs+manifolds %.2f, solve %.2f", 1e3 * p.total, 1e3 * p.collide, 1e3 * p.solve);
-    if (!t_.empty()) {
-      ImGui::Text("top: sag %.1f mm, drift %.1f mm; deepest overlap %.1f mm", 1e3 * sag_.back(), 1e3 * drift_.back(),
-                  1e3 * depth_.back());
-      PlotAxes ax;
-      ax.x_label = "t (s)";
-      ax.y_label = "mm";
-      std::vector<PlotSeries> series{Series(t_.data(), sag_mm_.data(), static_cast<int>(t_.size()), kTop, 2.0f),
-                                     Series(t_.data(), drift_mm_.data(), static_cast<int>(t_.size()), colors::green, 1.5f),
-                                     Series(t_.data(), depth_mm_.data(), static_cast<int>(t_.size()), colors::red, 1.5f)};
-      LinePlot("sag", series, ax, 130);
-      ImGui::TextColored(ImVec4(kTop.r, kTop.g, kTop.b, 1), "sag");
-      ImGui::SameLine();
-      ImGui::TextColored(ImVec4(0.27f, 0.65f, 0.35f, 1), "drift");
-      ImGui::SameLine();
-      ImGui::TextColored(ImVec4(0.9f, 0.28f, 0.3f, 1), "deepest overlap");
-      PlotAxes ae;
-      ae.x_label = "t (s)";
-      ae.y_label = "J";
-      std::vector<PlotSeries> energy{Series(t_.data(), energy_.data(), static_cast<int>(t_.size()), colors::purple, 1.5f)};
-      LinePlot("energy", energy, ae, 90);
+    // live measurements: one line per copy (the solver's colour is its key in the plots)
+    for (std::size_t k = 0; k < lanes_.size(); ++k) {
+      const Lane& l = lanes_[k];
+      const RigidProfile& p = l.bodies.profile();
+      if (compare_) {
+        const Color c = kSolverColor[k];
+        ImGui::TextColored(ImVec4(c.r, c.g, c.b, 1), "%s", std::string(to_string(kRigidSolvers[k])).c_str());
+        ImGui::SameLine();
+        ImGui::Text("%.2f ms, %zu awake", 1e3 * p.total, l.bodies.awake_count());
+      } else {
+        ImGui::Text("%zu bodies, %zu awake, %zu manifolds", l.bodies.size(), l.bodies.awake_count(),
+                    l.bodies.manifold_count());
+        ImGui::Text("step %.2f ms: pairs+manifolds %.2f, solve %.2f", 1e3 * p.total, 1e3 * p.collide, 1e3 * p.solve);
+      }
+      if (!l.t.empty())
+        ImGui::Text("  top: sag %.1f mm, drift %.1f mm; deepest overlap %.1f mm", l.sag_mm.back(), l.drift_mm.back(),
+                    l.depth_mm.back());
+    }
+    if (!lanes_.empty() && !lanes_[0].t.empty()) {
+      // sag starts negative (the layers start 2 cm apart): the fitted range stops at -50 mm
+      plot("sag of the top body (mm)", "mm", &Lane::sag_mm, kTop, 110, -50);
+      plot("drift of the top body (mm)", "mm", &Lane::drift_mm, colors::green, 90);
+      plot("deepest overlap (mm)", "mm", &Lane::depth_mm, colors::red, 90);
+      plot("kinetic energy (J)", "J", &Lane::energy, colors::purple, 90);
+      plot("ms per step", "ms", &Lane::ms, colors::cyan, 90);
     }
     ImGui::TextWrapped(
         "The yellow body is the one the sag and drift are measured on (the top of a stack or pyramid). Soft step: "
@@ -115,8 +179,9 @@ class RigidLab final : public Sample {
         "iterated, overlap removed by Baumgarte bias: tall stacks fall. TGS: the soft step's substeps with rigid "
         "contacts, biased by the separation at each substep's poses. XPBD: per substep, free motion, then "
         "contacts and static friction as position constraints, velocities from the positions, and a velocity "
-        "pass for dynamic friction and restitution. View > contacts and normals show the manifolds (red "
-        "overlapping, green speculative).");
+        "pass for dynamic friction and restitution. 'Compare the four solvers' runs the same scene under each, "
+        "side by side, at the same number of contact passes per step, and plots them together. View > contacts "
+        "and normals show the manifolds (red overlapping, green speculative).");
   }
 
   std::vector<Color> ExpectedColors() const override {
@@ -125,77 +190,141 @@ class RigidLab final : public Sample {
   }
 
   void SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points) const override {
-    for (std::size_t i = 0; i < bodies_.size() && out.size() < max_points; ++i)
-      if (bodies_.type(bodies_.id_at(i)) == BodyType::Dynamic) out.push_back(bodies_.center_of_mass(bodies_.id_at(i)));
+    for (std::size_t k = 0; k < lanes_.size(); ++k) {
+      const RigidBodySystem& b = lanes_[k].bodies;
+      for (std::size_t i = 0; i < b.size() && out.size() < max_points; ++i)
+        if (b.type(b.id_at(i)) == BodyType::Dynamic) out.push_back(b.center_of_mass(b.id_at(i)) + offset(k));
+    }
   }
 
   FiniteCheck CheckFinite() const override {
-    for (std::size_t i = 0; i < bodies_.size(); ++i) {
-      const RigidBodyId id = bodies_.id_at(i);
-      if (bodies_.type(id) != BodyType::Dynamic) continue;
-      const Vec3 p = bodies_.center_of_mass(id);
-      if (!is_finite(p)) return {false, id.index, "rigid body " + std::to_string(id.index) + " is not finite"};
-    }
+    for (const Lane& l : lanes_)
+      for (std::size_t i = 0; i < l.bodies.size(); ++i) {
+        const RigidBodyId id = l.bodies.id_at(i);
+        if (l.bodies.type(id) != BodyType::Dynamic) continue;
+        const Vec3 p = l.bodies.center_of_mass(id);
+        if (!is_finite(p)) return {false, id.index, "rigid body " + std::to_string(id.index) + " is not finite"};
+      }
     return {};
   }
 
  private:
-  void build() {
-    bodies_ = RigidBodySystem({.capacity = 4096, .contacts = settings_});
-    std::vector<RigidBodyId> dyn;
-    float radius = 6;
-    switch (scene_) {
-      case LabScene::Stack: dyn = rigid_scenes::vertical_stack(bodies_, size_); radius = 0.6f * size_ + 2; break;
-      case LabScene::Pyramid: dyn = rigid_scenes::square_pyramid(bodies_, size_); radius = 0.9f * size_ + 2; break;
-      case LabScene::Falling: dyn = rigid_scenes::falling_boxes(bodies_, std::min(size_, 12)); radius = 12; break;
-      case LabScene::Restitution: dyn = rigid_scenes::restitution_row(bodies_, std::max(2, std::min(size_, 12))); radius = 4; break;
-      case LabScene::Ramp: dyn = rigid_scenes::friction_ramp(bodies_, 0.3805, std::max(1, std::min(size_, 8))); radius = 5; break;
+  // one copy of the scene under one solver, with its measurements over time
+  struct Lane {
+    RigidBodySystem bodies;
+    RigidBodyId top{};
+    Vec3 top0{0, 0, 0};
+    std::vector<float> t, energy, sag_mm, drift_mm, depth_mm, ms;
+  };
+
+  // the settings of lane k: the knobs' in the single mode; in the compare mode the knobs'
+  // shared contact settings with lane k's solver at the equal budget of passes_ per step
+  ContactSettings lane_settings(std::size_t k) const {
+    ContactSettings c = settings_;
+    if (!compare_) return c;
+    c.solver = kRigidSolvers[k];
+    c.substeps = passes_ / 2;
+    c.iterations = passes_;
+    c.substep_iterations = 1;
+    c.relax_iterations = 1;
+    return c;
+  }
+
+  // where lane k's copy is drawn: side by side, centred on the origin, along x (stacks,
+  // pyramids, falling boxes) or along z (the ramp and the row of balls, which lie along x)
+  Vec3 offset(std::size_t k) const {
+    if (lanes_.size() < 2) return Vec3(0);
+    const double d = (static_cast<double>(k) - 0.5 * (lanes_.size() - 1)) * spacing_;
+    return along_z() ? Vec3(0, 0, d) : Vec3(d, 0, 0);
+  }
+  bool along_z() const { return scene_ == LabScene::Ramp || scene_ == LabScene::Restitution; }
+
+  // one plot of a measurement, a curve per lane (coloured by solver in the compare mode)
+  void plot(const char* title, const char* unit, std::vector<float> Lane::*what, Color single, float height,
+            float y_clamp_lo = -1e30f) {
+    ImGui::TextUnformatted(title);
+    PlotAxes ax;
+    ax.x_label = "t (s)";
+    ax.y_label = unit;
+    ax.y_include_zero = true;
+    ax.y_clamp_lo = y_clamp_lo;
+    std::vector<PlotSeries> series;
+    for (std::size_t k = 0; k < lanes_.size(); ++k) {
+      const Lane& l = lanes_[k];
+      PlotSeries s = Series(l.t.data(), (l.*what).data(), static_cast<int>(l.t.size()), compare_ ? kSolverColor[k] : single,
+                            compare_ ? 1.5f : 2.0f);
+      series.push_back(s);
     }
-    top_ = dyn.empty() ? RigidBodyId{} : dyn.back();
-    // sag and drift are measured from the touching stack, before the gaps
-    top0_ = bodies_.valid(top_) ? bodies_.center_of_mass(top_) : Vec3(0);
-    // stacks and pyramids start with 2 cm between layers, so they are seen to settle
-    if (scene_ == LabScene::Stack || scene_ == LabScene::Pyramid)
-      for (const RigidBodyId id : dyn) {
-        Pose p = bodies_.pose(id);
-        p.position.y += 0.02 * std::floor(p.position.y);
-        bodies_.set_pose(id, p);
+    LinePlot(title, series, ax, height);
+  }
+
+  void build() {
+    lanes_.clear();
+    lanes_.resize(compare_ ? kRigidSolvers.size() : 1);
+    float radius = 6;
+    for (std::size_t k = 0; k < lanes_.size(); ++k) {
+      Lane& l = lanes_[k];
+      l.bodies = RigidBodySystem({.capacity = 4096, .contacts = lane_settings(k)});
+      std::vector<RigidBodyId> dyn;
+      switch (scene_) {
+        case LabScene::Stack: dyn = rigid_scenes::vertical_stack(l.bodies, size_); radius = 0.6f * size_ + 2; break;
+        case LabScene::Pyramid: dyn = rigid_scenes::square_pyramid(l.bodies, size_); radius = 0.9f * size_ + 2; break;
+        case LabScene::Falling: dyn = rigid_scenes::falling_boxes(l.bodies, std::min(size_, 12)); radius = 12; break;
+        case LabScene::Restitution:
+          dyn = rigid_scenes::restitution_row(l.bodies, std::max(2, std::min(size_, 12)));
+          radius = 4;
+          break;
+        case LabScene::Ramp: dyn = rigid_scenes::friction_ramp(l.bodies, 0.3805, std::max(1, std::min(size_, 8))); radius = 5; break;
       }
+      l.top = dyn.empty() ? RigidBodyId{} : dyn.back();
+      // sag and drift are measured from the touching stack, before the gaps
+      l.top0 = l.bodies.valid(l.top) ? l.bodies.center_of_mass(l.top) : Vec3(0);
+      // stacks and pyramids start with 2 cm between layers, so they are seen to settle
+      if (scene_ == LabScene::Stack || scene_ == LabScene::Pyramid)
+        for (const RigidBodyId id : dyn) {
+          Pose p = l.bodies.pose(id);
+          p.position.y += 0.02 * std::floor(p.position.y);
+          l.bodies.set_pose(id, p);
+        }
+    }
+    // the copies stand a scene's width (and a margin) apart
+    switch (scene_) {
+      case LabScene::Stack: spacing_ = 4; break;
+      case LabScene::Pyramid: spacing_ = size_ + 3; break;
+      case LabScene::Falling: spacing_ = 1.5 * std::min(size_, 12) + 3; break;
+      case LabScene::Restitution: spacing_ = 1.5; break;
+      case LabScene::Ramp: spacing_ = 0.9 * std::max(1, std::min(size_, 8)) + 1.5; break;
+    }
     const float cy = scene_ == LabScene::Stack || scene_ == LabScene::Pyramid ? 0.45f * size_ : 1.5f;
-    ctx_.camera->frame({0.0f, cy, 0.0f}, radius, 0.5f, 0.3f);
-    t_.clear(), sag_.clear(), drift_.clear(), depth_.clear(), energy_.clear();
-    sag_mm_.clear(), drift_mm_.clear(), depth_mm_.clear();
+    const float wide =
+        compare_ ? std::max(radius, 0.6f * static_cast<float>(spacing_ * lanes_.size())) : radius;
+    ctx_.camera->frame({0.0f, cy, 0.0f}, wide, 0.5f, 0.3f);
   }
 
-  void record() {
-    if (!bodies_.valid(top_)) return;
-    const Vec3 p = bodies_.center_of_mass(top_);
+  void record(Lane& l) {
+    if (!l.bodies.valid(l.top)) return;
+    const Vec3 p = l.bodies.center_of_mass(l.top);
     double deepest = 0, energy = 0;
-    for (const RigidContactPoint& c : bodies_.contacts()) deepest = std::max(deepest, c.depth);
-    for (std::size_t i = 0; i < bodies_.size(); ++i) energy += bodies_.kinetic_energy(bodies_.id_at(i));
-    t_.push_back(static_cast<float>(bodies_.time()));
-    sag_.push_back(top0_.y - p.y);
-    drift_.push_back(std::hypot(p.x - top0_.x, p.z - top0_.z));
-    depth_.push_back(deepest);
-    energy_.push_back(static_cast<float>(energy));
-    sag_mm_.push_back(static_cast<float>(1e3 * sag_.back()));
-    drift_mm_.push_back(static_cast<float>(1e3 * drift_.back()));
-    depth_mm_.push_back(static_cast<float>(1e3 * deepest));
+    for (const RigidContactPoint& c : l.bodies.contacts()) deepest = std::max(deepest, c.depth);
+    for (std::size_t i = 0; i < l.bodies.size(); ++i) energy += l.bodies.kinetic_energy(l.bodies.id_at(i));
+    l.t.push_back(static_cast<float>(l.bodies.time()));
+    l.sag_mm.push_back(static_cast<float>(1e3 * (l.top0.y - p.y)));
+    l.drift_mm.push_back(static_cast<float>(1e3 * std::hypot(p.x - l.top0.x, p.z - l.top0.z)));
+    l.depth_mm.push_back(static_cast<float>(1e3 * deepest));
+    l.energy.push_back(static_cast<float>(energy));
+    l.ms.push_back(static_cast<float>(1e3 * l.bodies.profile().total));
     // keep the last 30 s
-    if (t_.size() > 1800)
-      for (auto* v : {&t_, &energy_, &sag_mm_, &drift_mm_, &depth_mm_}) v->erase(v->begin());
-    if (sag_.size() > 1800)
-      for (auto* v : {&sag_, &drift_, &depth_}) v->erase(v->begin());
+    if (l.t.size() > 1800)
+      for (auto* v : {&l.t, &l.energy, &l.sag_mm, &l.drift_mm, &l.depth_mm, &l.ms}) v->erase(v->begin());
   }
 
-  RigidBodySystem bodies_;
+  std::vector<Lane> lanes_;
   ContactSettings settings_{};
   LabScene scene_ = LabScene::Stack;
   int size_ = 10;
-  RigidBodyId top_{};
-  Vec3 top0_{0, 0, 0};
-  std::vector<float> t_, energy_, sag_mm_, drift_mm_, depth_mm_;
-  std::vector<double> sag_, drift_, depth_;
+  bool compare_ = false;
+  int passes_ = 16;      // contact passes per step of every solver in the compare mode
+  double spacing_ = 12;  // m between the compare mode's copies
 };
 
 const int kRegistered = RegisterSample("Rigid bodies", "Solver lab", RigidLab::Create);

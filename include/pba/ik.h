@@ -264,8 +264,8 @@ struct SolverSettings {
   bool warm_start = true;           ///< start from the current pose; false starts from the rest pose
   double stall_ratio = 1e-9;        ///< in [0, 1]: stop (StopReason::Stalled) when an accepted step changes the error
                                     ///< by less than this fraction of it, a stationary pose (the closest reachable
-                                    ///< pose of an unreachable target); slow progress stops a solve only where every
-                                    ///< step is cut by joint limits (docs/ik.md, "Stopping")
+                                    ///< pose of an unreachable target); slow progress never stops a solve (docs/ik.md,
+                                    ///< "Stopping"): the transpose, the pseudo-inverse, SDLS and FABRIK hand over to DLS
   double max_seconds = 0.0;         ///< time budget per solve (s), >= 0; 0: none. The iterative methods stop
                                     ///< once it is spent (checked every iteration from 64 bones on, every 8
                                     ///< below; one check costs about 60 ns). With a budget, results depend
@@ -298,8 +298,9 @@ struct SolveResult {
                              ///< the methods that honour orientation targets (FABRIK and the Jacobian family)
   bool out_of_time = false;  ///< the solve stopped because SolverSettings::max_seconds was spent
   StopReason stop = StopReason::Converged;  ///< why the solve stopped
-  bool handed_over = false;  ///< CCD or FABRIK stopped making progress and damped least squares took
-                             ///< the remaining iterations (see docs/ik.md)
+  bool handed_over = false;  ///< the method stopped making progress (or stalled where that does not mean a
+                             ///< stationary pose) and damped least squares took the remaining iterations
+                             ///< (every iterative method but DLS can; see docs/ik.md)
 };
 
 /// Default iteration cap of a method (used when SolverSettings::max_iterations is 0).

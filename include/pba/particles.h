@@ -156,11 +156,21 @@ void require_emitter_memory(const EmitterDef& def, std::size_t budget, std::stri
                             std::string_view max_alive_field);
 
 /// Definition of one particle. Start from the defaults and change what you need.
+/// The fastest a particle may be given (m/s), and the strongest wind: the drag squares the
+/// speed relative to the wind in float, which overflows above sqrt(3.4e38) = 1.8e19 m/s, so
+/// a velocity and the wind each stay within half of that.
+inline constexpr double kMaxParticleSpeed = 9e18;
+
+/// Throws Error "<where>: a speed of 1e+20 m/s is above the particles' limit of 9e+18 m/s
+/// (...)" unless `speed` (m/s) is at most kMaxParticleSpeed.
+void require_particle_speed(double speed, std::string_view where);
+
 /// Positions, velocities and radii are stored as float and the mass as its float inverse,
-/// so each must also fit a float (|x| <= 3.4e38, mass in [2.9e-39, 8.5e37] kg).
+/// so each must also fit a float (|x| <= 3.4e38, mass in [2.9e-39, 8.5e37] kg); speeds are
+/// at most kMaxParticleSpeed.
 struct ParticleDef {
   Vec3 position{0, 0, 0};  ///< initial position (m), finite as a float
-  Vec3 velocity{0, 0, 0};  ///< initial velocity (m/s), finite as a float
+  Vec3 velocity{0, 0, 0};  ///< initial velocity (m/s), |velocity| <= kMaxParticleSpeed
   double mass = 1.0;       ///< mass (kg), finite and > 0, 1 / mass a normal float
   double radius = 0.05;    ///< radius (m), finite and > 0 (as a float too); collisions keep the sphere outside surfaces
   double lifetime = kForever;  ///< seconds until it dies (> 0; kForever for immortal)
@@ -417,6 +427,10 @@ class ParticleSystem {
   long long emitted(EmitterId id) const;
   /// Live emitters.
   std::size_t emitter_count() const { return emitters_.size(); }
+  /// The emitter at slot `slot` (0 .. emitter_count() - 1; slots shift when one is removed).
+  EmitterId emitter_at(std::size_t slot) const { return emitters_[slot].id; }
+  /// Where particle i came from: its emitter's slot + 1, or 0 for a particle created by itself.
+  std::uint32_t source(std::size_t i) const { return source_[i]; }
 
   // ---- stepping ----
 

@@ -70,8 +70,9 @@ struct ColliderDef {
   ColliderShape shape{};       ///< shape in the entity frame
   SurfaceMaterial material{};  ///< restitution and friction
   /// A sensor pushes nothing (particles, soft and rigid bodies pass through it) and reports
-  /// the entities whose rigid bodies enter and leave it (World::sensor_enter_events(),
-  /// World::sensor_leave_events()).
+  /// the entities whose rigid bodies or particles enter and leave it
+  /// (World::sensor_enter_events(), World::sensor_leave_events()), and counts the emitters'
+  /// particles inside it (World::sensor_counts()).
   bool sensor = false;
 };
 
@@ -87,10 +88,17 @@ struct TouchBeginEvent {
 struct TouchEndEvent {
   EntityId a{}, b{};  ///< the two entities (a.index < b.index)
 };
-/// A rigid body's entity (`visitor`) entered or left a sensor collider's entity (`sensor`)
-/// in the last tick: some shape of the body overlaps the sensor's shape.
+/// An entity (`visitor`) entered or left a sensor collider's entity (`sensor`) in the last
+/// tick: some shape of its rigid body, or its particle's sphere, overlaps the sensor's shape.
 struct SensorEvent {
-  EntityId sensor{}, visitor{};  ///< the sensor collider's entity and the body's entity
+  EntityId sensor{}, visitor{};  ///< the sensor collider's entity and the visiting entity
+};
+/// How many live particles of an emitter's entity (`emitter`) overlap a sensor collider's
+/// entity (`sensor`) at the end of the last tick (emitted particles are counted, not
+/// reported one by one).
+struct SensorCount {
+  EntityId sensor{}, emitter{};  ///< the sensor collider's entity and the emitter's entity
+  std::size_t inside = 0;        ///< particles whose sphere overlaps the sensor's shape (> 0)
 };
 
 /// How a Kinematic component moves its entity. Paths are closed-form functions of the
@@ -370,10 +378,13 @@ class World {
   /// Entity pairs that stopped touching in the last tick (a pair stays touching while its
   /// bodies sleep; a destroyed entity's pairs end silently).
   std::span<const TouchEndEvent> touch_end_events() const { return touch_end_; }
-  /// Rigid bodies' entities that entered a sensor collider in the last tick.
+  /// Entities (rigid bodies, particles) that entered a sensor collider in the last tick.
   std::span<const SensorEvent> sensor_enter_events() const { return sensor_enter_; }
-  /// Rigid bodies' entities that left a sensor collider in the last tick.
+  /// Entities (rigid bodies, particles) that left a sensor collider in the last tick.
   std::span<const SensorEvent> sensor_leave_events() const { return sensor_leave_; }
+  /// Per sensor and emitter, the emitter's particles inside the sensor after the last tick
+  /// (pairs with none are left out), in sensor then emitter entity order.
+  std::span<const SensorCount> sensor_counts() const { return sensor_counts_; }
   /// Hash of the particle state, the kinematic entity poses, the rigid bodies (once an
   /// entity has one) and every extension system.
   std::uint64_t hash() const;
@@ -497,6 +508,8 @@ class World {
   std::vector<TouchBeginEvent> touch_begin_;
   std::vector<TouchEndEvent> touch_end_;
   std::vector<SensorEvent> sensor_enter_, sensor_leave_;
+  std::vector<SensorCount> sensor_counts_;
+  std::vector<std::size_t> inside_by_slot_;  // one sensor's count per emitter slot
   // component handles: a pool per kind and the owning entity of each handle slot (the
   // entity record holds the component's dense index)
   template <class Tag>

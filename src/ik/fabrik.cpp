@@ -320,7 +320,14 @@ void Solver::Impl::fabrik(SolveResult& r) {
     }
     r.iterations = it + 1;
     measure(r);
-    if (!r.converged && stalled(prev, r.residual)) break;
+    // a fixed point of the two passes with joint constraints is not a stationary pose of
+    // the error (a chain pressed on its limits toward an unreachable target stopped up to
+    // 2.6e-2 m from it): damped least squares goes on from there, and stops at once if
+    // the pose is stationary
+    if (!r.converged && stalled(prev, r.residual)) {
+      handover = true;
+      break;
+    }
     prev = r.residual;
     // with joint constraints the passes can fight the limits and creep (or circle an
     // unreachable target) instead of converging: when 8 iterations have not halved the
@@ -469,23 +476,62 @@ bool Solver::Impl::straighten_if_unreachable(SolveResult& r) {
 // prepare(), straight_first), the tip of the moving part lies within straight_reach of that
 // joint, so a target farther away is closest, at |d| - straight_reach, for the straight
 // path pointing at it, which the ball joint can aim if the direction is inside its cone.
-// Gauss-Newton methods (DLS, SDLS, the pseudo-inverse) approach that pose sublinearly (the
-// straight chain is singular and the residual large: near it, J^T J misses the curvature
-// term that straightens the chain), 3e-4 to 1e-2 m away after their caps on 333 bones.
+// One hinge may come before the ball joint (a chain whose root joint is a hinge): it moves
+// the ball joint's position p on a circle about its axis, and every pose's tip is at least
+// |t - p| - straight_reach from the target, so the closest pose turns the hinge to bring p
+// nearest the target (the angle of analytic_1dof, or the nearer end of its range) and then
+// straightens the rest toward the target. Iterative methods approach these poses only
+// sublinearly (a singular pose with a large residual: Gauss-Newton's J^T J misses the
+// curvature that straightens the chain): DLS ended 3e-3 m away after its 1000 iterations on
+// 333 bones whose root is a hinge.
 bool Solver::Impl::straighten_mixed(SolveResult& r) {
   Skeleton& s = *sk;
   if (straight_first < 0) return false;
   const int f = active_fwd[straight_first];
-  const Vec3 d = s.effector(0).target - s.starts()[f];
-  const double d2 = glm::dot(d, d);
-  if (!(d2 > straight_reach * straight_reach)) return false;
-  // the direction in the ball joint's frame, inside its cone
-  const Vec3 u = detail::rotate_inv(frame(f), d) / std::sqrt(d2);
-  const auto& limited = A::limited(s);
-  if (limited[f] && u.x < std::cos(A::swing(s)[f])) return false;
-  // aim the ball joint (a swing, no twist), every later joint at zero
+  const Vec3 target = s.effector(0).target;
   auto& q = A::q(s);
   auto& angle = A::angle(s);
+  const auto& limited = A::limited(s);
+  // the hinge before the ball joint: the angle that brings the ball joint nearest the target
+  const int h = straight_hinge >= 0 ? active_fwd[straight_hinge] : -1;
+  const double given_angle = h >= 0 ? angle[h] : 0.0;
+  if (h >= 0) {
+    const Vec3 a = detail::rotate(frame(h), A::axis(s)[h]);
+    const Vec3 c = s.starts()[h];
+    Vec3 v = s.starts()[f] - c, w = target - c;
+    v -= glm::dot(v, a) * a;
+    w -= glm::dot(w, a) * a;
+    if (glm::dot(v, v) > 1e-300 && glm::dot(w, w) > 1e-300) {
+      // |t - p|^2 = const - 2 |v| |w| cos(theta - best) over the hinge angle theta
+      const double best = angle[h] + std::atan2(glm::dot(a, glm::cross(v, w)), glm::dot(v, w));
+      double want = detail::wrap_angle(best);
+      if (limited[h] && (want < A::lo(s)[h] || want > A::hi(s)[h])) {
+        // outside the range: the end nearer the best angle around the circle
+        const double dlo = std::abs(detail::wrap_angle(A::lo(s)[h] - best));
+        const double dhi = std::abs(detail::wrap_angle(A::hi(s)[h] - best));
+        want = dlo <= dhi ? A::lo(s)[h] : A::hi(s)[h];
+      }
+      angle[h] = want;
+      A::clamp_joint(s, h);
+      s.forward_kinematics();
+    }
+  }
+  // give the hinge back when the straight path is not the answer
+  auto refuse = [&] {
+    if (h >= 0 && angle[h] != given_angle) {
+      angle[h] = given_angle;
+      A::clamp_joint(s, h);
+      s.forward_kinematics();
+    }
+    return false;
+  };
+  const Vec3 d = target - s.starts()[f];
+  const double d2 = glm::dot(d, d);
+  if (!(d2 > straight_reach * straight_reach)) return refuse();
+  // the direction in the ball joint's frame, inside its cone
+  const Vec3 u = detail::rotate_inv(frame(f), d) / std::sqrt(d2);
+  if (limited[f] && u.x < std::cos(A::swing(s)[f])) return refuse();
+  // aim the ball joint (a swing, no twist), every later joint at zero
   q[f] = detail::from_to(Vec3(1, 0, 0), u);
   A::clamp_joint(s, f);
   for (int k = straight_first + 1; k < static_cast<int>(active_fwd.size()); ++k) {

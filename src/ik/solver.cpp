@@ -76,9 +76,10 @@ int default_max_iterations(Method m) {
     case Method::TwoBone: return 1;
     case Method::Ccd: return 1000;
     case Method::JacobianTranspose: return 2000;
-    case Method::PseudoInverse: return 200;
-    case Method::Dls: return 1000;  // reachable targets take ~5-10; a limited chain pressed on its limits creeps
-    case Method::Sdls: return 300;
+    case Method::PseudoInverse: return 1000;  // reachable targets take ~5-10; a stuck solve hands over to DLS
+    case Method::Dls: return 1000;  // reachable targets take ~5-10; a chain pressed on its limits toward an
+                                    // unreachable target, 50-600 (a large-residual minimum: linear convergence)
+    case Method::Sdls: return 1000;
     case Method::Fabrik: return 1000;  // free ball chains take tens (76 at 1000 bones); limited chains hand over to DLS
   }
   return 100;
@@ -249,6 +250,9 @@ void Solver::Impl::prepare() {
   v.assign(std::max(ncols, 1), 0.0);
   rho.assign(std::max(ncols, 1), 0.0);
   jd.assign(n, Vec3(0));
+  lim1.assign(n, Vec3(0));
+  lim2.assign(n, Vec3(0));
+  hold.assign(n, 0);
   goal.assign(n, Vec3(0));
   acc.assign(n, Vec3(0));
   accw.assign(n, 0.0);
@@ -273,19 +277,25 @@ void Solver::Impl::prepare() {
   simple_chain = na == n;
   for (int i = 0; i < n; ++i)
     if (parents[i] != i - 1) simple_chain = false;
-  // the straight-chain test for paths mixing joints (straighten_mixed): the first moving
-  // joint a ball, every later one able to hold zero (fixed, a hinge whose range holds 0, a
-  // ball whose twist range holds 0), every later rest rotation the identity
+  // the straight-chain test for paths mixing joints (straighten_mixed): a ball joint after
+  // at most one moving joint, a hinge (fixed bones anywhere before it), and every later
+  // joint able to hold zero (fixed, a hinge whose range holds 0, a ball whose twist range
+  // holds 0), every later rest rotation the identity
   straight_first = -1;
+  straight_hinge = -1;
   straight_reach = 0;
   if (ne == 1) {
-    int first = -1;
+    int first = -1, hinge = -1;
     bool ok = true;
     for (int k = 0; k < na && ok; ++k) {
       const int i = active_fwd[k];
       const JointType jt = s.joint_types()[i];
       if (first < 0) {
         if (jt == JointType::Fixed) continue;
+        if (jt == JointType::Hinge && hinge < 0 && glm::length(hx[i]) > 0) {
+          hinge = k;
+          continue;
+        }
         first = k;
         ok = jt == JointType::Ball;
         continue;
@@ -295,6 +305,7 @@ void Solver::Impl::prepare() {
     }
     if (ok && first >= 0) {
       straight_first = first;
+      straight_hinge = hinge;
       for (int k = first; k < na; ++k) straight_reach += cl[k];
     }
   }

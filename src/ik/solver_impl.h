@@ -39,6 +39,7 @@ struct Solver::Impl {
   double path_reach = 0;                 // summed length of the active bones (m): one effector's reach
   int straight_first = -1;               // one effector: index in active_fwd of the path's first moving
                                          // joint when it is a ball and every later joint can be straight
+  int straight_hinge = -1;               // ... and the index in active_fwd of the one hinge before it, or -1
   double straight_reach = 0;             // summed length from that joint to the effector (m)
   std::vector<int> eff_off, eff_list;    // effectors on each bone
   std::vector<int> under_off, under;     // effectors in each bone's subtree
@@ -54,9 +55,20 @@ struct Solver::Impl {
   std::vector<double> J, Amat, L, V, w, work, e, y, t, dtheta, v, rho;
   // one position effector (3 rows): J is never stored, only each joint's vector (see build_compact)
   bool compact = false;
-  bool limit_dropped = false;            // the last Jacobian left out a hinge held at its limit
-  bool step_clamped = false;             // the last apply_dtheta projected a limited joint back into its limits
   std::vector<Vec3> jd;
+  // a limited ball joint held at its swing or twist limit that the error pushes further out:
+  // the outward normals (world rotation vectors, orthonormal; zero when unused) that its
+  // columns are projected off this iteration (ball_active_limits)
+  std::vector<Vec3> lim1, lim2;
+  // limits held out of this iteration's step whatever the gradient says (hold_pushed_limits)
+  static constexpr std::uint8_t kHoldSwing = 1, kHoldTwist = 2, kHoldHinge = 4;
+  // a ball joint's swing or twist within this of its limit (rad) is held there: a step
+  // along a held limit's tangent leaves the joint inside it by the step's second order, and
+  // a joint left just inside would be pushed out and clamped by the next step (rejected,
+  // and the solve creeps); held, it stays at most this far inside, which moves the tip by
+  // at most this times its reach
+  static constexpr double kHeldBand = 1e-6;
+  std::vector<std::uint8_t> hold;
 
   // FABRIK and CCD workspace
   std::vector<Vec3> goal, acc, eff_pos, cp, fw;  // fw: FABRIK stage 1 points, target first
@@ -171,8 +183,21 @@ struct Solver::Impl {
   // fill J and e (error, clamped per effector to `clamp` metres), weighted rows
   void build_jacobian(double clamp, double ori_scale);
 
-  // zero the columns of hinges held at a limit that the error pushes further out
+  // zero the columns of hinges held at a limit that the error pushes further out, and
+  // project limited ball joints' columns off the limits they are held at
   void drop_saturated_columns();
+
+  // limited ball joint j: the outward normals of the swing and twist limits it is held at
+  // that `desc` (its block of J^T e, a world rotation vector) pushes against, into lim1[j]
+  // and lim2[j] (orthonormal, zero when unused); returns how many
+  int ball_active_limits(int j, Vec3 desc);
+
+  // limited ball joint j: which limits it is held at (kHoldSwing, kHoldTwist), with their
+  // outward normals as world rotation vectors (not normalised)
+  int held_ball_limits(int j, Vec3& swing_out, Vec3& twist_out) const;
+
+  // mark in `hold` the held limits that the computed step pushes further out; true if any
+  bool hold_pushed_limits();
 
   // one position effector: e, J J^T and each joint's vector, J never formed
   void build_compact(double clamp);

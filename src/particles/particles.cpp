@@ -205,6 +205,14 @@ void require_float_particle(const Vec3& position, double mass, double radius, st
 
 }  // namespace
 
+// a speed (m/s) at most kMaxParticleSpeed: the drag squares |v - wind| in float
+void require_particle_speed(double speed, std::string_view where) {
+  if (speed <= kMaxParticleSpeed) return;
+  throw Error(std::string(where) + ": a speed of " + format_value(speed) + " m/s is above the particles' limit of " +
+              format_value(kMaxParticleSpeed) + " m/s (the drag squares the speed relative to the wind in float, " +
+              "which overflows above 1.8e19 m/s)");
+}
+
 void ParticleDef::validate(std::string_view where) const {
   if (!is_finite(position)) require_finite(position, field_path(where, "position"));
   if (!is_finite(velocity)) require_finite(velocity, field_path(where, "velocity"));
@@ -214,6 +222,7 @@ void ParticleDef::validate(std::string_view where) const {
     throw Error(field_path(where, "lifetime") + ": must be > 0 (infinity for immortal), got " + format_value(lifetime));
   require_float_particle(position, mass, radius, where);
   if (!is_finite(Vec3f(velocity))) require_float(velocity, field_path(where, "velocity"));
+  if (glm::length(velocity) > kMaxParticleSpeed) require_particle_speed(glm::length(velocity), field_path(where, "velocity"));
 }
 
 void EmitterDef::validate(std::string_view where) const {
@@ -231,10 +240,10 @@ void EmitterDef::validate(std::string_view where) const {
   // the particles' float state, the fastest launch included
   require_float_particle(pose.position, mass, radius, where);
   const double fastest = speed * (1 + speed_jitter);
-  if (!std::isfinite(static_cast<float>(fastest)))
+  if (!(fastest <= kMaxParticleSpeed))
     throw Error(field_path(where, "speed") + ": the fastest launch, speed * (1 + speed_jitter) = " +
-                format_value(fastest) + " m/s, must fit a float (<= " +
-                format_value(std::numeric_limits<float>::max()) + "), got speed " + format_value(speed));
+                format_value(fastest) + " m/s, is above the particles' limit of " + format_value(kMaxParticleSpeed) +
+                " m/s (the drag squares the speed in float), got speed " + format_value(speed));
 }
 
 double EmitterDef::max_live() const {
@@ -257,6 +266,9 @@ void Forces::validate(std::string_view where) const {
     require_float(quadratic_drag, field_path(where, "quadratic_drag"));
   const Vec3 strongest = glm::abs(wind.velocity) + Vec3(wind.gust);
   if (!is_finite(Vec3f(strongest))) require_float(strongest, field_path(where, "wind.velocity + wind.gust"));
+  // (the path is built only on failure: this runs every step, which allocates nothing)
+  if (glm::length(strongest) > kMaxParticleSpeed)
+    require_particle_speed(glm::length(strongest), field_path(where, "wind.velocity + wind.gust"));
 }
 
 // value noise: hashed lattice values in [-1, 1], quintic (C2) interpolation
@@ -460,6 +472,7 @@ void ParticleSystem::set_position(std::size_t i, const Vec3& p) {
 void ParticleSystem::set_velocity(std::size_t i, const Vec3& v) {
   require_finite(v, "ParticleSystem::set_velocity");
   require_float(v, "ParticleSystem::set_velocity");
+  require_particle_speed(glm::length(v), "ParticleSystem::set_velocity");
   require_index(i, size(), "ParticleSystem::set_velocity");
   hot_[kVX][i] = static_cast<float>(v.x);
   hot_[kVY][i] = static_cast<float>(v.y);

@@ -11,6 +11,7 @@ void read_particle(const Node& n, World& w) {
                 "end_color", "kinematic"});
   ParticleDef d;
   d.velocity = n.float_vec("velocity", d.velocity);
+  if (n.has("velocity")) require_particle_speed(glm::length(d.velocity), n.at("velocity").where());
   d.mass = n.mass("mass", d.mass);
   d.radius = n.float_positive("radius", d.radius);
   d.lifetime = n.has("lifetime") ? n.positive("lifetime", 1) : kForever;
@@ -31,6 +32,7 @@ void read_emitter(const Node& n, World& w) {
   d.spread = n.has("spread_deg") ? n.in_range("spread_deg", 0, 180, 0) * kPi / 180 : n.in_range("spread", 0, kPi, d.spread);
   d.speed = n.float_non_negative("speed", d.speed);
   d.speed_jitter = n.in_range("speed_jitter", 0, 1, d.speed_jitter);
+  if (n.has("speed")) require_particle_speed(d.speed * (1 + d.speed_jitter), n.at("speed").where() + " (with its jitter)");
   d.rate = n.non_negative("rate", d.rate);
   d.lifetime = n.positive("lifetime", d.lifetime);
   d.lifetime_jitter = n.in_range("lifetime_jitter", 0, 0.999, d.lifetime_jitter);

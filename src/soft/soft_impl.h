@@ -179,5 +179,10 @@ std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double frac
 /// removes approaching normal velocity with Coulomb friction. Returns the contacts.
 std::size_t collide_velocities(SoftBody::Impl& s, std::span<Vec3> xs, std::span<Vec3> vs, double f);
 
+/// Projects every particle of `s` onto its tether's sphere after a substep's constraints
+/// (Kim, Chentanez & Mueller 2012, sec. 4), copying the anchors first when `copy` (a pin
+/// moved); 8 at a time with AVX2 when `avx2` (same bits). In tethers.cpp.
+void project_all_tethers(SoftBody::Impl& s, bool avx2, bool copy);
+
 }  // namespace detail
 }  // namespace pba

@@ -737,9 +737,8 @@ void World::step_rigid(double t, double dt) {
     }
     collision_.add(body_colliders_[k], body_collider_owner_[k]);
   }
-  // what began and stopped touching, and what entered and left the sensors
+  // what began and stopped touching (the sensors wait for the particles: tick())
   update_touch_events();
-  update_sensor_events();
 }
 
 namespace {
@@ -803,15 +802,57 @@ void World::update_touch_events() {
 
 // Sensor events: a body's entity is in a sensor while one of its shapes overlaps the
 // sensor's shape at the end of the tick (bounds first, then the narrow phase with no
-// speculative margin); this tick's set against last tick's gives enter and leave.
+// speculative margin), a particle entity while its sphere does (the signed distance from
+// its centre to the shape at most its radius); this tick's set against last tick's gives
+// enter and leave. An emitter's particles are counted instead (sensor_counts_), per sensor
+// and emitter: a fountain through a sensor would otherwise make hundreds of events a tick,
+// and its particles have no entity to name (Box2D v3 leaves sensor events to shapes that
+// ask for them, for the same reason).
 void World::update_sensor_events() {
   std::swap(sensing_, sensing_prev_);
   sensing_.clear();
+  sensor_counts_.clear();
+  const std::size_t slots = particles_.emitter_count();
+  if (inside_by_slot_.size() < slots) inside_by_slot_.resize(slots);
   for (std::size_t i = 0; i < colliders_.size(); ++i) {
     if (!colliders_[i].def.sensor) continue;
     const Collider& sc = world_colliders_[i];
     const std::uint32_t sensor = colliders_[i].owner.index;
     const Aabb sb = bounds(sc.shape, sc.end);
+    // a particle's sphere against the sensor: bounds grown by the radius, then the distance
+    auto overlaps = [&](std::size_t p) {
+      const Vec3 x = particles_.position(p);
+      const double r = particles_.radius(p);
+      if (x.x < sb.lo.x - r || x.y < sb.lo.y - r || x.z < sb.lo.z - r || x.x > sb.hi.x + r ||
+          x.y > sb.hi.y + r || x.z > sb.hi.z + r)
+        return false;
+      return point_distance(sc.shape, sc.end, x).distance <= r;
+    };
+    // particle entities
+    for (std::uint32_t e = 0; e < records_.size(); ++e) {
+      const ParticleId pid = records_[e].particle;
+      if (e == sensor || pid.is_null() || !particles_.valid(pid)) continue;
+      if (overlaps(particles_.index_of(pid))) sensing_.push_back(pair_key(sensor, e));
+    }
+    // emitted particles, counted per emitter slot, then named by the emitters' entities
+    if (slots > 0) {
+      std::fill(inside_by_slot_.begin(), inside_by_slot_.begin() + static_cast<std::ptrdiff_t>(slots), 0);
+      bool any = false;
+      for (std::size_t p = 0; p < particles_.size(); ++p) {
+        const std::uint32_t src = particles_.source(p);
+        if (src != 0 && overlaps(p)) ++inside_by_slot_[src - 1], any = true;
+      }
+      if (any)
+        for (std::uint32_t e = 0; e < records_.size(); ++e) {
+          const EmitterId id = records_[e].emitter;
+          if (id.is_null()) continue;
+          for (std::size_t slot = 0; slot < slots; ++slot)
+            if (particles_.emitter_at(slot) == id && inside_by_slot_[slot] > 0)
+              sensor_counts_.push_back({{sensor, entities_.generation(sensor)}, {e, entities_.generation(e)},
+                                        inside_by_slot_[slot]});
+        }
+    }
+    if (rigid_.size() == 0) continue;
     for (std::size_t k = 0; k < body_colliders_.size(); ++k) {
       const Collider& bc = body_colliders_[k];
       const std::uint32_t visitor = body_collider_owner_[k];
@@ -825,6 +866,9 @@ void World::update_sensor_events() {
   }
   std::sort(sensing_.begin(), sensing_.end());
   sensing_.erase(std::unique(sensing_.begin(), sensing_.end()), sensing_.end());
+  std::sort(sensor_counts_.begin(), sensor_counts_.end(), [](const SensorCount& a, const SensorCount& b) {
+    return a.sensor.index != b.sensor.index ? a.sensor.index < b.sensor.index : a.emitter.index < b.emitter.index;
+  });
   // enter: now and not before; leave: before and not now
   auto event = [&](std::uint64_t k) {
     const auto a = static_cast<std::uint32_t>(k >> 32), b = static_cast<std::uint32_t>(k);
@@ -924,6 +968,8 @@ void World::tick(double t, double dt) {
   profile_.collide = pp.collide;
   profile_.recycle = pp.recycle;
   write_particle_poses();
+  // what entered and left the sensors: bodies (moved in the rigid stage) and particles
+  update_sensor_events();
   run_systems(WorldStage::Particles, t, dt);
   stage_done(WorldStage::Particles);
   // 5. soft bodies

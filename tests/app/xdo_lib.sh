@@ -21,6 +21,14 @@ wait_until() {
   done
 }
 
+# start_app ARGS...   starts "$app" ARGS in the background (output to $work/app.log), sets
+#                     pid, and kills it when the script exits
+start_app() {
+  "$app" "$@" >"$work/app.log" 2>&1 &
+  pid=$!
+  trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null' EXIT
+}
+
 # For the tests that read a sample's --option report=FILE ($report):
 #   field NAME [K]     the K-th value (default 1) after NAME in the report
 #   ge A B             true when A >= B (numbers)
@@ -42,6 +50,23 @@ drag() {
     xdotool mousemove --window "$wid" $(($1 + ($3 - $1) * k / 10)) $(($2 + ($4 - $2) * k / 10))
     sleep 0.15
   done
+}
+
+# xdotool, retried when the X server refused its connection (an Xvfb in a sandboxed VM now
+# and then refuses one connection in ten under load; the next attempt gets through); any
+# other failure (a search that finds nothing) returns at once
+xdotool() {
+  local k rc errf
+  errf=$(mktemp)
+  for k in 1 2 3 4 5; do
+    command xdotool "$@" 2>"$errf"
+    rc=$?
+    if [ $rc -eq 0 ] || ! grep -q "open display" "$errf"; then break; fi
+    sleep 0.2
+  done
+  cat "$errf" >&2
+  rm -f "$errf"
+  return $rc
 }
 
 # a display and xdotool, then a clean working directory

@@ -305,8 +305,8 @@ TEST(IkUnreachable, LimitedChainsStopWellBeforeTheCap) {
       EXPECT_FALSE(r.converged);
       worst = std::max(worst, r.iterations);
     }
-    // measured: at most 64 (FABRIK: 8 before the hand-over to DLS, then DLS's creep check
-    // every 16); the cap is 1000 (300 for SDLS)
+    // the cap is 1000; the solves run to their stationary poses (the limits are in the
+    // Jacobian model, docs/ik.md): measured at most 122 iterations (DLS; FABRIK 91, SDLS 119)
     EXPECT_LT(worst, default_max_iterations(m) / 2) << name(m);
   }
 }
@@ -360,17 +360,26 @@ TEST(IkFabrikLimits, TheJointLimitsSampleNeverSpendsTheCap) {
   scenes::bent_pose(s);
   s.add_effector(5, Vec3(0.3, 0.7, 0.2));
   Solver solver(s, Method::Fabrik);
-  int worst = 0;
+  int worst = 0, within_100 = 0;
   for (int f = 0; f < 1200; ++f) {
     const double w = 0.44 * f / 60.0;
     s.set_target(0, Vec3(0.5 * std::sin(w), 0.52 + 0.28 * std::sin(1.7 * w + 0.6), 0.3 * std::sin(0.8 * w + 1.3)));
     const SolveResult r = solver.solve();
     ASSERT_TRUE(s.within_limits(1e-9)) << "frame " << f;
     ASSERT_TRUE(std::isfinite(r.residual)) << "frame " << f;
+    // every frame ends converged or on a stationary pose, never at the budget
+    EXPECT_NE(r.stop, StopReason::IterationCap) << "frame " << f;
     worst = std::max(worst, r.iterations);
+    within_100 += r.iterations <= 100;
   }
-  // before the hand-over, 588 of these 1200 frames ran the full 1000 iterations
-  EXPECT_LT(worst, default_max_iterations(Method::Fabrik) / 4);
+  // before the hand-over, 588 of these 1200 frames ran the full 1000 iterations. The bound
+  // was a quarter of the cap while a solve pressed on limits stopped on slow progress (1% in
+  // 16 iterations); it now runs to the stationary pose, which at a singular pose on the edge
+  // of the reach (frame 207: 0.6 mm short, three hinges on their limits, the other three
+  // unable to move the tip toward the target) damped least squares approaches linearly:
+  // 495 iterations (0.1 ms) on that frame, the rest within 250, 1190 of 1200 within 100
+  EXPECT_LT(worst, default_max_iterations(Method::Fabrik) / 2);
+  EXPECT_GE(within_100, 1188);
 }
 
 // ---------------------------------------------------------------------------

@@ -118,6 +118,36 @@ TEST(FloatState, ParticleValuesThatOverflowAFloatAreRefusedByName) {
             std::string::npos);
 }
 
+// A speed that fits a float can still overflow the float arithmetic: the drag squares the
+// speed relative to the wind in float, so above sqrt(3.4e38) = 1.8e19 m/s it is inf, and with
+// no drag coefficient 0 * inf is NaN: a particle launched at 1e20 m/s was non-finite after
+// the first tick. Speeds (and the wind's) are limited to kMaxParticleSpeed = 9e18 m/s, so
+// that their difference squares finite; refused at creation, at set_velocity, for an
+// emitter's fastest launch and for the wind.
+TEST(FloatState, SpeedsWhoseSquareOverflowsAFloatAreRefusedByName) {
+  ParticleSystem ps;
+  auto message = [&](const pba::ParticleDef& d) { return error_of([&] { ps.create(d, "balls[3]"); }); };
+  const std::string fast = message({.velocity = {0, 0, 1e20}});
+  EXPECT_EQ(fast.rfind("balls[3].velocity: a speed of 1e+20 m/s", 0), 0u) << fast;
+  EXPECT_NE(fast.find("9e+18 m/s"), std::string::npos) << fast;
+  EXPECT_EQ(ps.size(), 0u);
+  // the limit itself steps finite, with and without drag, and against the fastest wind
+  for (double drag : {0.0, 1e-30}) {
+    ParticleSystem s({.forces = {.quadratic_drag = drag, .wind = {.velocity = {-pba::kMaxParticleSpeed, 0, 0}}}});
+    s.create({.velocity = {pba::kMaxParticleSpeed, 0, 0}});
+    s.step(0, 1e-3, {}, {});
+    EXPECT_TRUE(std::isfinite(s.velocity(0).x)) << drag;
+    EXPECT_TRUE(std::isfinite(s.position(0).x)) << drag;
+  }
+  ps.create({});
+  EXPECT_NE(error_of([&] { ps.set_velocity(0, {-2e19, 0, 0}); }).find("ParticleSystem::set_velocity: a speed of 2e+19"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { ps.add_emitter({.speed = 1e19}, "sparks"); }).find("sparks.speed: the fastest launch"),
+            std::string::npos);
+  const std::string wind = error_of([&] { ParticleSystem s({.forces = {.wind = {.velocity = {0, 1e19, 0}}}}); });
+  EXPECT_NE(wind.find("wind.velocity + wind.gust: a speed of 1e+19 m/s"), std::string::npos) << wind;
+}
+
 TEST(FloatState, EmitterAndForceValuesThatOverflowAFloatAreRefusedByName) {
   ParticleSystem ps;
   auto emitter = [&](const pba::EmitterDef& d) { return error_of([&] { ps.add_emitter(d, "sparks"); }); };

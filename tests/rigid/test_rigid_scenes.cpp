@@ -1,0 +1,177 @@
+// The benchmark scenes of rigid_scenes.h that copy the peers' harnesses (shared/peers/):
+// Jolt's pyramid, the rain and the convex-versus-mesh terrain are the scenes the peers ran
+// (counts, sizes, masses), start without overlaps, and behave as their documentation says;
+// the card house of the samples stands until knocked.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "pba/rigid.h"
+#include "pba/rigid_scenes.h"
+
+using pba::RigidBodySystem;
+using pba::Vec3;
+
+namespace {
+
+const Vec3 kGravity{0, -9.81, 0};
+
+// the radius of a body's bounding sphere about its centre of mass (one convex shape)
+double bounding_radius(const RigidBodySystem& s, pba::RigidBodyId id) {
+  const pba::ColliderShape& c = s.shapes(id)[0].shape;
+  return c.type == pba::ShapeType::Sphere ? c.radius : glm::length(c.half_extents);
+}
+
+// Jolt's pyramid as bullet_rigid_b.cpp builds it: 15 levels of (15 - i)^2 cubes of 2 m, 1240
+// in all, levels 2.5 m apart (0.5 m gaps), each odd level shifted by one cube, so every cube
+// above the first level is centred over the corner four cubes below share.
+TEST(RigidScenes, JoltPyramidIsThePeersReplica) {
+  RigidBodySystem s({.capacity = 2048});
+  const auto cubes = pba::rigid_scenes::jolt_pyramid(s, 15);
+  ASSERT_EQ(cubes.size(), 1240u);
+  std::map<double, std::vector<Vec3>> levels;
+  for (const auto id : cubes) {
+    EXPECT_EQ(s.shapes(id)[0].shape.half_extents, Vec3(1));
+    levels[s.center_of_mass(id).y].push_back(s.center_of_mass(id));
+  }
+  ASSERT_EQ(levels.size(), 15u);
+  int i = 0;
+  const std::vector<Vec3>* below = nullptr;
+  for (const auto& [y, level] : levels) {
+    EXPECT_DOUBLE_EQ(y, 1 + 2.5 * i);
+    EXPECT_EQ(level.size(), static_cast<std::size_t>((15 - i) * (15 - i))) << "level " << i;
+    if (below)
+      for (const Vec3& c : level) {
+        int under = 0;
+        for (const Vec3& b : *below) under += std::abs(std::abs(b.x - c.x) - 1) < 1e-12 && std::abs(std::abs(b.z - c.z) - 1) < 1e-12;
+        EXPECT_EQ(under, 4) << "level " << i;
+      }
+    below = &level;
+    ++i;
+  }
+  // the top cube starts 14 gaps of 0.5 m above where it rests
+  const Vec3 top = s.center_of_mass(cubes.back()), rest = pba::rigid_scenes::jolt_pyramid_rest(15);
+  EXPECT_EQ(top, Vec3(rest.x, rest.y + 14 * 0.5, rest.z));
+}
+
+// A 4-level one falls into place: each level drops its 0.5 m gap onto the one below and the
+// top cube comes to rest where jolt_pyramid_rest says, to the soft contacts' deflection (a
+// 4-high stack sags n^2 g / (2 pi f)^2 = 0.3 mm at 120 Hz, docs/rigid-bodies.md) and the
+// linear slop each of the four contacts below it may keep. Every cube ends at rest.
+TEST(RigidScenes, AJoltPyramidFallsIntoPlace) {
+  RigidBodySystem s({.contacts = {.sleep = false}});
+  const auto cubes = pba::rigid_scenes::jolt_pyramid(s, 4);
+  ASSERT_EQ(cubes.size(), 30u);
+  for (int k = 0; k < 180; ++k) s.step(1.0 / 60, kGravity);
+  const Vec3 top = s.center_of_mass(cubes.back()), rest = pba::rigid_scenes::jolt_pyramid_rest(4);
+  const double w = 2 * 3.14159265358979323846 * s.settings().contact_hertz;
+  EXPECT_NEAR(top.y, rest.y, 4 * s.settings().linear_slop + 16 * 9.81 / (w * w));
+  // still on the four cubes below (within a half width of the corner they share); the
+  // landings shift it sideways (measured: 5 cm after three, docs/benchmarks.md)
+  EXPECT_LT(std::abs(top.x - rest.x), 1.0);
+  EXPECT_LT(std::abs(top.z - rest.z), 1.0);
+  for (const auto id : cubes) EXPECT_LT(glm::length(s.linear_velocity(id)), s.settings().sleep_linear);
+}
+
+// The rain starts with no two bodies' bounding spheres touching (so nothing is pushed apart
+// at the first step) and every body above the ground; a small one lands: after 4 s (twice
+// the fall from the top layer) every body is down on the ground or on a heap (none above the
+// height of four of the largest bodies) and none has sunk into the ground.
+TEST(RigidScenes, TheRainStartsApartAndLands) {
+  {
+    RigidBodySystem s({.capacity = 10016});
+    const auto bodies = pba::rigid_scenes::rain(s, 10000);
+    ASSERT_EQ(bodies.size(), 10000u);
+    int boxes = 0;
+    std::vector<std::pair<Vec3, double>> spheres;
+    for (const auto id : bodies) {
+      boxes += s.shapes(id)[0].shape.type == pba::ShapeType::Box;
+      spheres.emplace_back(s.center_of_mass(id), bounding_radius(s, id));
+      EXPECT_GT(s.center_of_mass(id).y - spheres.back().second, 9);
+    }
+    EXPECT_EQ(boxes, 5000);
+    // sorted along x, each against those within reach
+    std::sort(spheres.begin(), spheres.end(), [](const auto& a, const auto& b) { return a.first.x < b.first.x; });
+    int touching = 0;
+    for (std::size_t a = 0; a < spheres.size(); ++a)
+      for (std::size_t b = a + 1; b < spheres.size() && spheres[b].first.x - spheres[a].first.x < 1.0; ++b)
+        touching += glm::length(spheres[a].first - spheres[b].first) <= spheres[a].second + spheres[b].second;
+    EXPECT_EQ(touching, 0);
+  }
+  RigidBodySystem s;
+  EXPECT_THROW(pba::rigid_scenes::rain(s, -1), pba::Error);
+  const auto bodies = pba::rigid_scenes::rain(s, 400);
+  for (int k = 0; k < 240; ++k) s.step(1.0 / 60, kGravity);
+  for (const auto id : bodies) {
+    const Vec3 c = s.center_of_mass(id);
+    EXPECT_GT(c.y, 0.1);    // the smallest body's half size is 0.15 m
+    EXPECT_LT(c.y, 3.2);    // at most four bodies of up to 0.8 m heaped
+  }
+}
+
+// The card tower of the Card house sample stands under the default solver (the soft step,
+// sleeping on) and under TGS: from 1 s (settled) to 6 s no card moves 1 mm; a 100 kg ball
+// thrown at its foot at 8 m/s brings the crown down by half a card within 3 s.
+TEST(RigidScenes, TheCardHouseStandsUntilKnocked) {
+  for (const pba::RigidSolverType solver : {pba::RigidSolverType::SoftStep, pba::RigidSolverType::Tgs}) {
+    SCOPED_TRACE(std::string(pba::to_string(solver)));
+    RigidBodySystem s({.contacts = {.solver = solver}});
+    const auto cards = pba::rigid_scenes::card_house(s, 4);
+    ASSERT_EQ(cards.size(), 17u);
+    std::vector<Vec3> at_one;
+    double moved = 0;
+    for (int k = 1; k <= 360; ++k) {
+      s.step(1.0 / 60, kGravity);
+      if (k == 60)
+        for (const auto c : cards) at_one.push_back(s.center_of_mass(c));
+      if (k > 60)
+        for (std::size_t i = 0; i < cards.size(); ++i) moved = std::max(moved, glm::length(s.center_of_mass(cards[i]) - at_one[i]));
+    }
+    EXPECT_LT(moved, 1e-3);
+    s.create({.pose = {{3, 0.45, 0}}, .linear_velocity = {-8, 1, 0},
+              .shapes = {{.shape = pba::ColliderShape::sphere(0.2), .density = 3000}}});
+    double dropped = 0;
+    for (int k = 0; k < 180; ++k) {
+      s.step(1.0 / 60, kGravity);
+      dropped = std::max(dropped, at_one.back().y - s.center_of_mass(cards.back()).y);
+    }
+    EXPECT_GT(dropped, 0.5);
+  }
+  // the tower's geometry is checked: A-frames too wide to stand side by side on a card
+  RigidBodySystem s;
+  EXPECT_THROW(pba::rigid_scenes::card_house(s, 3, {}, 0.4), pba::Error);
+}
+
+// The convex-versus-mesh scene of bullet_rigid_c.cpp: a 100 x 100 cell terrain of 20,000
+// triangles spanning heights 0 to 10 m, and 21 x 4 x 21 bodies whose masses at 1000 kg/m^3 are
+// the harness's (3000, 523.6, 1701.7 and 666.7 kg: the closed forms of a box, a sphere, a
+// capsule and a square pyramid)
+TEST(RigidScenes, ConvexVersusMeshIsThePeersScene) {
+  const auto mesh = pba::rigid_scenes::sine_terrain_mesh();
+  EXPECT_EQ(mesh->triangles().size(), 20000u);
+  EXPECT_EQ(mesh->vertices().size(), 101u * 101u);
+  EXPECT_GE(mesh->bounds().lo.y, -5.0);
+  EXPECT_LE(mesh->bounds().hi.y, 5.0);
+  RigidBodySystem s({.capacity = 2048});
+  const auto bodies = pba::rigid_scenes::convex_vs_mesh(s);
+  ASSERT_EQ(bodies.size(), 1764u);
+  const double pi = 3.14159265358979323846;
+  const double mass[4] = {1000 * 1.0 * 1.5 * 2.0, 1000 * 4.0 / 3 * pi * 0.125,
+                          1000 * (pi * 0.25 * 1.5 + 4.0 / 3 * pi * 0.125), 1000 * 2.0 / 3};
+  const pba::ShapeType kind[4] = {pba::ShapeType::Box, pba::ShapeType::Sphere, pba::ShapeType::Capsule,
+                                  pba::ShapeType::Hull};
+  for (const auto id : bodies) {
+    const int layer = static_cast<int>(std::lround((s.pose(id).position.y - 15) / 2));
+    ASSERT_GE(layer, 0);
+    ASSERT_LT(layer, 4);
+    EXPECT_EQ(s.shapes(id)[0].shape.type, kind[layer]);
+    EXPECT_NEAR(s.mass(id), mass[layer], 1e-9 * mass[layer]);
+    EXPECT_EQ(s.shapes(id)[0].material.restitution, 0.6);
+  }
+}
+
+}  // namespace
