@@ -380,10 +380,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0xee2871f42f2f36e5ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x7fc5a56c4d835f67ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0xd7d40ae0a54c773eull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x803d2e285fd0cc4dull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x6dc9a62b25b128e5ull) << std::hex << soft;
+  EXPECT_EQ(si, 0xa1e1875451a23812ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x1cd9e6562351473dull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x327d18056b25122dull) << std::hex << xpbd;
 }
 
 }  // namespace
