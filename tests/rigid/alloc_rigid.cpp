@@ -35,7 +35,9 @@ TEST(RigidAlloc, StepsWithContactsNeverAllocate) {
     }
     EXPECT_EQ(g_allocations.load() - before, 0) << to_string(solver) << (sleep ? " sleep on" : "");
     // with sleeping off every contact is live; with it on, islands sleep and wake under the forces
-    if (!sleep) EXPECT_GE(s.manifold_count(), 100u);
+    if (!sleep) {
+      EXPECT_GE(s.manifold_count(), 100u);
+    }
   }
 }
 

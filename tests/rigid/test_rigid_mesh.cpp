@@ -61,7 +61,9 @@ TEST(RigidMesh, ABoxRestsOnAFlatMeshAsOnAPlane) {
       for (int i = 0; i < 600; ++i) s.step(1.0 / 60, kGravity);
       const Vec3 p = s.center_of_mass(box);
       sag[mesh] = p0.y - p.y, drift[mesh] = std::hypot(p.x - p0.x, p.z - p0.z);
-      if (mesh) EXPECT_EQ(s.manifold_count(), 1u) << to_string(solver);
+      if (mesh) {
+        EXPECT_EQ(s.manifold_count(), 1u) << to_string(solver);
+      }
     }
     // they differ in how the points are computed (clipped against triangles, or projected on
     // the plane), so by rounding: a micrometre, where the soft contact's sag is 17 um
