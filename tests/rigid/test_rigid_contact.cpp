@@ -344,4 +344,26 @@ TEST(RigidSleep, ForcesImpulsesPosesAndContactsWakeIslands) {
   EXPECT_EQ(t.awake_count(), 3u);
 }
 
+// A force wakes a sleeping body and acts on it at once: a box asleep on the ground pulled up
+// by three times its weight leaves it, and once off the ground it gains (F / m - g) dt per
+// step exactly (no contact left to act; the closed form of the velocity under constant
+// acceleration, which symplectic Euler reproduces).
+TEST(RigidSleep, AForceWakesASleepingBodyAndActs) {
+  RigidBodySystem s;
+  pba::rigid_scenes::ground(s, 0.5);
+  const auto box = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+  for (int i = 0; i < 120 && s.awake(box); ++i) s.step(1.0 / 60, kGravity);
+  ASSERT_FALSE(s.awake(box));
+  const double m = s.mass(box), g = -kGravity.y, dt = 1.0 / 60;
+  const double y0 = s.center_of_mass(box).y;
+  s.apply_force(box, {0, 3 * m * g, 0});
+  EXPECT_TRUE(s.awake(box));
+  s.step(dt, kGravity);
+  for (int i = 0; i < 9; ++i) s.apply_force(box, {0, 3 * m * g, 0}), s.step(dt, kGravity);
+  EXPECT_GT(s.center_of_mass(box).y, y0 + 0.01);
+  const double v10 = s.linear_velocity(box).y;
+  for (int i = 0; i < 20; ++i) s.apply_force(box, {0, 3 * m * g, 0}), s.step(dt, kGravity);
+  EXPECT_NEAR(s.linear_velocity(box).y - v10, 2 * g * 20 * dt, 1e-9 * g);
+}
+
 }  // namespace
