@@ -171,6 +171,13 @@ struct ContactSettings {
   double contact_compliance = 0;
   double linear_slop = 0.005;    ///< overlap (m) left uncorrected so contacts persist, finite and >= 0
   double speculative_distance = 0.02;  ///< manifolds include points closer than this (m), finite and >= 0
+  /// A pair's manifold is carried over to the next step, its points fixed to the bodies, while
+  /// the bodies' relative position (m; body b's centre in a's frame) has moved less than this
+  /// since the narrow phase made it (Jolt's body pair cache), finite and >= 0; 0 makes every
+  /// manifold afresh each step (see docs/rigid-bodies.md for what it costs in accuracy).
+  double reuse_distance = 0.001;
+  /// ... and their relative rotation less than this (rad), finite and >= 0.
+  double reuse_angle = 0.0175;
   /// Approach speeds (m/s) below this bounce with no restitution, so resting bodies stay put
   /// (finite and >= 0; XPBD also at speeds below 2 |g| h, Mueller et al. 2020).
   double restitution_threshold = 1;
@@ -240,11 +247,18 @@ struct RigidProfile {
   double collide = 0;    ///< pairs and manifolds
   double solve = 0;      ///< contact solver and integration (everything after collide)
   double total = 0;      ///< the whole step
-  // the parts of `solve`:
-  double prepare = 0;    ///< the solver's constraint arrays (anchors, masses, colours)
-  double integrate = 0;  ///< velocities and positions (all substeps)
-  double contacts = 0;   ///< the contact passes: warm start, solve, relax, restitution
-  double finish = 0;     ///< continuous collision, storing the impulses, islands and sleep
+  // the parts of `collide`
+  double pairs = 0;      ///< shape bounds, the pair list and waking sleepers (s)
+  double manifolds = 0;  ///< manifolds built or reused and warm-start data (s)
+  // the parts of `solve`
+  double prepare = 0;    ///< the solver's constraint arrays (colours, blocks) (s)
+  double integrate = 0;  ///< velocities and positions, all substeps (s)
+  double contacts = 0;   ///< the contact passes: solve, relax (with the warm start), restitution (s)
+  double finish = 0;     ///< continuous collision, storing the impulses, islands and sleep (s)
+  double islands = 0;    ///< of `finish`: islands and sleeping (s)
+  std::size_t built = 0;    ///< manifolds (pairs of shapes, or shape and triangle) the narrow phase made
+  std::size_t reused = 0;   ///< manifolds carried over from an earlier step (the pair barely moved)
+  std::size_t moved = 0;    ///< shape proxies that left their fat bounds and were re-inserted
 };
 
 namespace detail {
@@ -427,9 +441,13 @@ class RigidBodySystem {
   std::vector<double> extent_;      // bounding radius of the shapes about the centre of mass (m)
   std::vector<double> min_extent_;  // smallest half size of a shape (m): faster than half of it per step is fast
   std::vector<std::vector<RigidShapeDef>> shapes_;  // by dense index
-  // sleeping: flags, time spent slow, and the island (a dense index) each body last belonged to
+  // sleeping: flags, time spent slow, and for a sleeping body the next member of its island
+  // (a ring of dense indices; an awake body points to itself)
   std::vector<std::uint8_t> asleep_;
   std::vector<double> sleep_time_;
+  // where the body's current rest window began: its centre of mass and principal frame then
+  std::vector<Vec3> rest_com_;
+  std::vector<Quat> rest_q_;
   std::vector<std::uint32_t> island_;
   std::vector<std::uint32_t> parent_;  // union-find scratch
   std::vector<double> island_slow_;    // scratch: the island's shortest slow time

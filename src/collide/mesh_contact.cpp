@@ -42,12 +42,15 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
   Vec3 n, point_a, point_b;
   if (!contact_normal(A, B, margin, n, point_a, point_b)) return false;
   // an internal (flat or concave) edge or vertex takes the face normal, on the side of
-  // the triangle where the shape's centre is
+  // the triangle where the shape's centre is (a hull's centroid: its origin may lie on its
+  // surface, as a pyramid's at the middle of its base, and a pyramid resting on its base
+  // had its side picked by rounding and was pushed through the mesh)
   const std::uint8_t on = feature_edges(tri, point_b);
   const bool internal = on == 0 || (on & flags) == 0;
   Vec3 use = n;
   if (internal) {
-    const double side = glm::dot(pa.position - tri[0], face_normal) >= 0 ? 1.0 : -1.0;
+    const Vec3 centre = a.type == ShapeType::Hull ? apply(pa, a.hull->centroid()) : pa.position;
+    const double side = glm::dot(centre - tri[0], face_normal) >= 0 ? 1.0 : -1.0;
     use = -side * face_normal;
   }
   // the triangle as the reference face (B's), the shape's support feature along the

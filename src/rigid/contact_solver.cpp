@@ -156,7 +156,7 @@ void RigidContacts::color(RigidBodySystem& s) {
   const std::size_t n = s.type_.size(), m = pairs.size();
   // room for as many pairs as the pairs have room for (so steady state does not allocate
   // when the colours or the levels reach a new peak: the counts below are bounded by them)
-  const std::size_t room = std::max(pairs.capacity(), previous.capacity()) + 1;
+  const std::size_t room = pairs.capacity() + 1;
   for (auto* v : {&adjacency, &band_of, &by_band, &color_of, &by_color, &color_count}) v->reserve(2 * room);
   for (auto* v : {&level, &queue, &mask_band, &band_start, &band_colors, &adjacency_start}) v->reserve(n + 3);
   mask.reserve(n + 3);
