@@ -380,10 +380,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x1fb99c6841933a01ull) << std::hex << soft;
-  EXPECT_EQ(si, 0xfbad0f76bfda3358ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x3f886c0926dc6b5eull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x23bbd5acc3617209ull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x33555814b6bd8c04ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x0612c8efc2c9568bull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x17e046b35d587370ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x11f7e9313347d13cull) << std::hex << xpbd;
 }
 
 }  // namespace
