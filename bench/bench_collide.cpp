@@ -3,6 +3,8 @@
 // dSweepAndPruneSpace), on the same scene, in the same process; and 5 m ray casts.
 //
 //   bench_collide [--quick] [--repeat R] [--frames F] [--counts 1000,10000] [--rays N] [--sweeps N]
+//                 [--lanes a,b]   only the lanes whose names contain a or b (and pba tree)
+//                 [--no-queries]  no rays or world queries
 //
 // Scene (exactly as /work/shared/peers/bullet_collision.cpp builds it): N bodies, even ones
 // 1 m boxes, odd ones spheres of 0.5 m radius, at uniform random positions in the cube
@@ -16,6 +18,7 @@
 //   pba <method>      world bounds of every body from shape and pose (pba::bounds) +
 //                     move_proxy + update_pairs
 //   pba tree + collide  the tree, then pba::collide (the contact manifold) for every pair
+//   pba tree + collide, cached  the same, each pair's NarrowPhaseCache carried between frames
 //   bullet broad      updateAabbs() + computeOverlappingPairs(): Bullet's broad phase only
 //   bullet full       performDiscreteCollisionDetection(): the above plus Bullet's narrow
 //                     phase (contact manifolds for every overlapping pair)
@@ -119,15 +122,28 @@ struct FrameResult {
   long pairs = 0;      // pairs in the last frame
 };
 
-// `narrow`: each pair's contact manifold (pba::collide, no cache carried between frames, so
-// every box pair runs its full separating-axis test: Bullet's full lane keeps persistent
-// manifolds); otherwise the pairs are only counted (the broad phase alone)
-FrameResult run_pba(const Scene& s, pba::BroadPhaseMethod method, bool narrow = false) {
+// What run_pba does per pair: `Broad` counts the pairs (the broad phase alone); `Narrow`
+// makes each pair's contact manifold (pba::collide) with no state carried between frames, so
+// every box pair runs its full separating-axis test; `NarrowCached` carries each pair's
+// NarrowPhaseCache from frame to frame, as a caller that keeps its contacts does (the rigid
+// pipeline, and Bullet's full lane, whose persistent manifolds hold its state): the pair list
+// is sorted, so last frame's caches are found by walking both lists in step
+enum class PbaWork { Broad, Narrow, NarrowCached };
+
+FrameResult run_pba(const Scene& s, pba::BroadPhaseMethod method, PbaWork work = PbaWork::Broad) {
   pba::BroadPhase bp({.method = method});
   bp.reserve(std::size_t(s.n));
   Bodies b(s);
   std::vector<pba::ProxyId> ids(std::size_t(s.n));
   for (int i = 0; i < s.n; ++i) ids[i] = bp.create_proxy(pba::bounds(b.shape[i], b.pose[i]), {}, std::uint64_t(i));
+  // each pair's cache, keyed by the pair's proxy indices, in the pair list's order
+  struct PairCache {
+    std::uint64_t key;
+    pba::NarrowPhaseCache cache;
+  };
+  std::vector<PairCache> caches, next;
+  caches.reserve(std::size_t(s.n) * 8);
+  next.reserve(std::size_t(s.n) * 8);
   long sink = 0;
   auto frame = [&](int f) {
     // move every body, update its world bounds from shape and pose, find the pairs
@@ -136,14 +152,24 @@ FrameResult run_pba(const Scene& s, pba::BroadPhaseMethod method, bool narrow = 
       b.pose[i].position += d[i];
       bp.move_proxy(ids[i], pba::bounds(b.shape[i], b.pose[i]));
     }
+    next.clear();
+    std::size_t old = 0;
     for (const pba::ProxyPair& p : bp.update_pairs()) {
-      if (!narrow) {
+      if (work == PbaWork::Broad) {
         sink += p.a.index ^ p.b.index;
         continue;
       }
       const auto ia = std::size_t(bp.user_data(p.a)), ib = std::size_t(bp.user_data(p.b));
-      sink += pba::collide(b.shape[ia], b.pose[ia], b.shape[ib], b.pose[ib]).count;
+      pba::NarrowPhaseCache* cache = nullptr;
+      if (work == PbaWork::NarrowCached) {
+        const std::uint64_t key = (std::uint64_t(p.a.index) << 32) | p.b.index;
+        while (old < caches.size() && caches[old].key < key) ++old;
+        next.push_back({key, old < caches.size() && caches[old].key == key ? caches[old].cache : pba::NarrowPhaseCache{}});
+        cache = &next.back().cache;
+      }
+      sink += pba::collide(b.shape[ia], b.pose[ia], b.shape[ib], b.pose[ib], {}, cache).count;
     }
+    std::swap(caches, next);
   };
   frame(0);  // warm-up: the first frame queries every proxy
   const double t0 = cpu_now();
@@ -503,6 +529,8 @@ void query_rows(const Scene& s, const std::vector<pba::Ray>& rays, int nsweeps, 
 
 int main(int argc, char** argv) {
   int repeat = 5, frames = 200, nrays = 20000, nsweeps = 2000;
+  std::vector<std::string> only;  // --lanes: run the lanes whose names contain one of these
+  bool queries = true;
   std::vector<int> counts{1000, 10000};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -526,6 +554,15 @@ int main(int argc, char** argv) {
       frames = std::max(1, std::atoi(value().c_str()));
     } else if (a == "--rays") {
       nrays = std::max(1, std::atoi(value().c_str()));
+    } else if (a == "--lanes") {
+      const std::string v = value();
+      for (std::size_t p = 0; p < v.size();) {
+        const std::size_t q = v.find(',', p);
+        only.push_back(v.substr(p, q == std::string::npos ? std::string::npos : q - p));
+        p = q == std::string::npos ? v.size() : q + 1;
+      }
+    } else if (a == "--no-queries") {
+      queries = false;
     } else if (a == "--counts") {
       counts.clear();
       const std::string v = value();
@@ -536,7 +573,8 @@ int main(int argc, char** argv) {
       }
     } else {
       std::fprintf(stderr, "unknown flag '%s'\nusage: bench_collide [--quick] [--repeat R] [--frames F] "
-                           "[--counts 1000,10000] [--rays N] [--sweeps N]\n", a.c_str());
+                           "[--counts 1000,10000] [--rays N] [--sweeps N] [--lanes a,b] [--no-queries]\n",
+                   a.c_str());
       return 2;
     }
   }
@@ -546,18 +584,33 @@ int main(int argc, char** argv) {
     const char* name;
     std::function<FrameResult(const Scene&)> run;
   };
-  const std::vector<Lane> lanes{
+  std::vector<Lane> lanes{
       {"pba tree", [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::Tree); }},
       {"pba grid", [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::Grid); }},
       {"pba sap", [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::SweepAndPrune); }},
       {"pba brute-force", [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::BruteForce); }},
-      {"pba tree + collide (broad+narrow)", [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::Tree, true); }},
+      {"pba tree + collide (broad+narrow)",
+       [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::Tree, PbaWork::Narrow); }},
+      {"pba tree + collide, cached",
+       [](const Scene& s) { return run_pba(s, pba::BroadPhaseMethod::Tree, PbaWork::NarrowCached); }},
       {"bullet broad (dbvt)", [](const Scene& s) { return run_bullet(s, false); }},
       {"bullet full (broad+narrow)", [](const Scene& s) { return run_bullet(s, true); }},
       {"ode hash (broad)", [](const Scene& s) { return run_ode(s, false, false); }},
       {"ode sap (broad)", [](const Scene& s) { return run_ode(s, true, false); }},
       {"ode hash+dCollide (broad+narrow)", [](const Scene& s) { return run_ode(s, false, true); }},
   };
+
+  if (!only.empty()) {
+    // the first lane is the reference of the "x pba tree" column: keep it
+    std::vector<Lane> kept{lanes.front()};
+    for (std::size_t l = 1; l < lanes.size(); ++l)
+      for (const std::string& o : only)
+        if (std::strstr(lanes[l].name, o.c_str())) {
+          kept.push_back(lanes[l]);
+          break;
+        }
+    lanes = kept;
+  }
 
   for (int n : counts) {
     const Scene s = make_scene(n, frames);
@@ -584,7 +637,19 @@ int main(int argc, char** argv) {
     std::printf("  %-34s %10s %10s %14s\n", "engine", "ms/frame", "pairs", "x pba tree");
     for (std::size_t l = 0; l < lanes.size(); ++l)
       std::printf("  %-34s %10.3f %10ld %14.2f\n", lanes[l].name, median(ms[l]), pairs[l], median(ratio[l]));
+    // the per-frame goal: each peer's full frame over each pba broad + narrow lane,
+    // the median of the per-run ratios
+    for (std::size_t l = 0; l < lanes.size(); ++l) {
+      if (!std::strstr(lanes[l].name, "+ collide")) continue;
+      for (std::size_t k = 0; k < lanes.size(); ++k) {
+        if (!std::strstr(lanes[k].name, "full") && !std::strstr(lanes[k].name, "dCollide")) continue;
+        std::vector<double> r;
+        for (int run = 0; run < repeat; ++run) r.push_back(ms[k][std::size_t(run)] / ms[l][std::size_t(run)]);
+        std::printf("  %s / %s: %.2f\n", lanes[k].name, lanes[l].name, median(r));
+      }
+    }
 
+    if (!queries) continue;
     // rays
     const std::vector<pba::Ray> rays = make_rays(s, nrays);
     std::vector<double> pa, pe, br, ra, re;

@@ -224,8 +224,8 @@ std::string integrators(const pba::World& w) {
     const pba::ContactSettings& c = w.rigid().settings();
     if (!s.empty()) s += ", ";
     s += "rigid bodies " + std::string(pba::to_string(c.solver)) +
-         (c.solver == pba::RigidSolverType::SoftStep ? " x" + std::to_string(c.substeps) + " substeps"
-                                                     : " x" + std::to_string(c.iterations) + " iterations");
+         (c.solver == pba::RigidSolverType::SequentialImpulse ? " x" + std::to_string(c.iterations) + " iterations"
+                                                              : " x" + std::to_string(c.substeps) + " substeps");
   }
   return s.empty() ? "none (nothing to integrate)" : s;
 }

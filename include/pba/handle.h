@@ -81,6 +81,8 @@ class HandlePool {
   }
   /// The current generation of slot `index` (for tests and debugging).
   std::uint32_t generation(std::uint32_t index) const { return generation_.at(index); }
+  /// The same without the range check, for loops over slots known to exist (index < slots()).
+  std::uint32_t generation_unchecked(std::uint32_t index) const { return generation_[index]; }
   /// Live handles.
   std::size_t size() const { return live_; }
   /// Slots ever issued (live + free): the table's capacity in use.

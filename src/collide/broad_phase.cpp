@@ -273,6 +273,7 @@ void BroadPhase::reserve(std::size_t n) {
   filters_.reserve(n);
   user_.reserve(n);
   node_.reserve(n);
+  fat_.reserve(n);
   alive_.reserve(n);
   moved_.reserve(n);
   move_buffer_.reserve(n);
@@ -288,6 +289,7 @@ ProxyId BroadPhase::create_proxy(const Aabb& box, const CollisionFilter& filter,
     filters_.resize(i + 1);
     user_.resize(i + 1, 0);
     node_.resize(i + 1, DynamicTree::kNull);
+    fat_.resize(i + 1);
     alive_.resize(i + 1, 0);
     moved_.resize(i + 1, 0);
   }
@@ -298,6 +300,7 @@ ProxyId BroadPhase::create_proxy(const Aabb& box, const CollisionFilter& filter,
   // the tree inserts at once and queries the new proxy at the next update
   if (method_ == BroadPhaseMethod::Tree) {
     node_[i] = tree_.create_proxy(box, i);
+    fat_[i] = tree_.fat_box(node_[i]);
     if (!moved_[i]) {
       moved_[i] = 1;
       move_buffer_.push_back(i);
@@ -320,14 +323,25 @@ void BroadPhase::destroy_proxy(ProxyId id) {
 }
 
 void BroadPhase::move_proxy(ProxyId id, const Aabb& box) {
-  check(id, "BroadPhase.move_proxy");
-  require_valid_box(box, "BroadPhase.move_proxy(box)");
+  // the full checks (which build messages) only when the quick ones fail: this runs for
+  // every proxy every frame
+  constexpr double kHuge = 1.7976931348623157e308;  // the largest finite double
+  const bool box_ok = (box.lo.x <= box.hi.x) & (box.lo.y <= box.hi.y) & (box.lo.z <= box.hi.z) &
+                      (std::abs(box.lo.x) <= kHuge) & (std::abs(box.lo.y) <= kHuge) & (std::abs(box.lo.z) <= kHuge) &
+                      (std::abs(box.hi.x) <= kHuge) & (std::abs(box.hi.y) <= kHuge) & (std::abs(box.hi.z) <= kHuge);
+  if (!(pool_.valid(id) & box_ok)) {
+    check(id, "BroadPhase.move_proxy");
+    require_valid_box(box, "BroadPhase.move_proxy(box)");
+  }
   const std::uint32_t i = id.index;
   boxes_[i] = box;
   // a proxy that left its fat box joins the move buffer
-  if (method_ == BroadPhaseMethod::Tree && tree_.move_proxy(node_[i], box) && !moved_[i]) {
-    moved_[i] = 1;
-    move_buffer_.push_back(i);
+  if (method_ == BroadPhaseMethod::Tree && tree_.move_proxy(node_[i], box)) {
+    fat_[i] = tree_.fat_box(node_[i]);
+    if (!moved_[i]) {
+      moved_[i] = 1;
+      move_buffer_.push_back(i);
+    }
   }
 }
 
@@ -371,6 +385,7 @@ void BroadPhase::rebuild_tree() {
   for (std::uint32_t p = 0; p < boxes_.size(); ++p) {
     if (!alive_[p]) continue;
     node_[p] = tree_.create_proxy(boxes_[p], p);
+    fat_[p] = tree_.fat_box(node_[p]);
     moved_[p] = 1;
     move_buffer_.push_back(p);
   }
@@ -386,10 +401,6 @@ const CollisionFilter& BroadPhase::filter(ProxyId id) const {
   check(id, "BroadPhase.filter");
   return filters_[id.index];
 }
-std::uint64_t BroadPhase::user_data(ProxyId id) const {
-  check(id, "BroadPhase.user_data");
-  return user_[id.index];
-}
 ProxyId BroadPhase::id_at(std::uint32_t index) const {
   if (index >= alive_.size() || !alive_[index]) return {};
   return {index, pool_.generation(index)};
@@ -402,55 +413,68 @@ void BroadPhase::update_tree_pairs() {
   new_keys_.clear();
   std::size_t queried = 0;
   for (std::uint32_t p : move_buffer_) {
-    moved_[p] = 0;
     if (!alive_[p]) continue;
     ++queried;
     const CollisionFilter& fp = filters_[p];
-    tree_.query(tree_.fat_box(node_[p]), [&](std::uint32_t q) {
+    tree_.query(fat_[p], [&](std::uint32_t q) {
       if (q != p && should_pair(fp, filters_[q])) new_keys_.push_back(pair_key(p, q));
       return true;
     });
   }
-  move_buffer_.clear();
   stats_.reinserted = queried;
 
-  // merge them into the persistent set of fat-box pairs (both sorted, without duplicates)
-  if (!new_keys_.empty()) {
-    std::sort(new_keys_.begin(), new_keys_.end());
-    new_keys_.erase(std::unique(new_keys_.begin(), new_keys_.end()), new_keys_.end());
-    ensure_capacity(merge_keys_, tree_keys_.size() + new_keys_.size());
-    merge_keys_.resize(tree_keys_.size() + new_keys_.size());
-    const auto end = std::set_union(tree_keys_.begin(), tree_keys_.end(), new_keys_.begin(), new_keys_.end(),
-                                    merge_keys_.begin());
-    merge_keys_.resize(static_cast<std::size_t>(end - merge_keys_.begin()));
-    tree_keys_.swap(merge_keys_);
-  }
+  // the new candidates sorted, without duplicates
+  std::sort(new_keys_.begin(), new_keys_.end());
+  new_keys_.erase(std::unique(new_keys_.begin(), new_keys_.end()), new_keys_.end());
 
-  // keep the pairs whose fat boxes still overlap; report those whose tight boxes do.
-  // Every pair of overlapping fat boxes is in the set: a proxy whose fat box changed was
-  // queried above, and two unchanged fat boxes overlap as before. Tight boxes lie in the
-  // fat ones, so no tight overlap is missed.
-  std::size_t kept = 0, tests = 0;
-  for (const std::uint64_t key : tree_keys_) {
+  // one pass over the persistent set of fat-box pairs merged with the new candidates (both
+  // sorted): keep the pairs whose fat boxes still overlap, report those whose tight boxes
+  // do. Every pair of overlapping fat boxes is in the merge: a proxy whose fat box changed
+  // was queried above, and two unchanged fat boxes overlap as before (so only the pairs of a
+  // proxy in the move buffer test their fat boxes again). Tight boxes lie in the fat ones,
+  // so no tight overlap is missed. The set holds only pairs the filters allow: a pair enters
+  // it from a query, which tests them, and set_filter puts its proxy in the move buffer, so
+  // only those pairs test the filters again. Each pair is written at the end of the list,
+  // which grows by it only when the tight boxes overlap: no branch on that test, which goes
+  // either way (a third of the pairs of fat boxes are apart)
+  const std::size_t nt = tree_keys_.size(), nn = new_keys_.size();
+  ensure_capacity(merge_keys_, nt + nn);
+  merge_keys_.clear();
+  ensure_capacity(pairs_, nt + nn);
+  pairs_.resize(nt + nn);
+  std::size_t tests = 0, touching = 0;
+  for (std::size_t i = 0, j = 0; i < nt || j < nn;) {
+    // the next key of the union (a key in both lists is taken once)
+    std::uint64_t key;
+    if (j == nn || (i < nt && tree_keys_[i] < new_keys_[j])) {
+      key = tree_keys_[i++];
+    } else {
+      key = new_keys_[j++];
+      if (i < nt && tree_keys_[i] == key) ++i;
+    }
     const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key);
     if (!alive_[a] || !alive_[b]) continue;
     ++tests;
-    if (!tree_.fat_box(node_[a]).overlaps(tree_.fat_box(node_[b]))) continue;
-    tree_keys_[kept++] = key;
-    if (boxes_[a].overlaps(boxes_[b]) && should_pair(filters_[a], filters_[b]))
-      pairs_.push_back({{a, pool_.generation(a)}, {b, pool_.generation(b)}});
+    if ((moved_[a] | moved_[b]) && !(fat_[a].overlaps(fat_[b]) & should_pair(filters_[a], filters_[b]))) continue;
+    merge_keys_.push_back(key);
+    pairs_[touching] = {{a, pool_.generation_unchecked(a)}, {b, pool_.generation_unchecked(b)}};
+    touching += boxes_[a].overlaps(boxes_[b]);
   }
-  tree_keys_.resize(kept);
+  pairs_.resize(touching);
+  tree_keys_.swap(merge_keys_);
   stats_.box_tests = tests;
+  for (std::uint32_t p : move_buffer_) moved_[p] = 0;
+  move_buffer_.clear();
 
   // keep the tree's quality: rebuild by the SAH when the inner nodes' area has grown half as
   // much again as after the last rebuild (re-inserted leaves drift from the best layout)
-  if (tree_.proxy_count() > 2 && tree_.area_ratio() > 1.5 * tree_rebuilt_ratio_) {
+  double ratio = tree_.area_ratio();
+  if (tree_.proxy_count() > 2 && ratio > 1.5 * tree_rebuilt_ratio_) {
     tree_.rebuild();
-    tree_rebuilt_ratio_ = tree_.area_ratio();
+    ratio = tree_rebuilt_ratio_ = tree_.area_ratio();
   }
   stats_.tree_height = tree_.height();
-  stats_.tree_area_ratio = tree_.area_ratio();
+  stats_.tree_area_ratio = ratio;
 }
 
 std::span<const ProxyPair> BroadPhase::update_pairs() {

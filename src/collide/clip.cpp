@@ -30,14 +30,12 @@ void world_face(const Poly& poly, const Pose& pose, std::uint32_t f, WorldFace& 
 }
 
 std::uint32_t incident_face(const Poly& poly, const Quat& rotation, const Vec3& n) {
+  // the least dot product (the first of equals), without branches: keep_max on its negation
   const Vec3 nl = glm::conjugate(rotation) * n;
-  std::uint32_t best = 0;
-  double bd = INFINITY;
-  for (std::uint32_t f = 0; f < poly.face_count; ++f) {
-    const double d = glm::dot(poly.faces[f].normal, nl);
-    if (d < bd) bd = d, best = f;
-  }
-  return best;
+  int best = 0;
+  double bd = -INFINITY;
+  for (std::uint32_t f = 0; f < poly.face_count; ++f) keep_max(-glm::dot(poly.faces[f].normal, nl), int(f), bd, best);
+  return std::uint32_t(best);
 }
 
 std::uint32_t most_aligned_face(const Poly& poly, const Quat& rotation, const Vec3& n, double* dot) {

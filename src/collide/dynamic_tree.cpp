@@ -335,9 +335,13 @@ std::int32_t DynamicTree::build_range(std::int32_t* leaves, std::int32_t count, 
 
 double DynamicTree::area_ratio() const {
   if (root_ == kNull || at(root_).is_leaf()) return 0;
+  // leaves and inner nodes alternate in the pool: a select, not a branch (adding 0 for the
+  // others leaves the sum's bits as they were)
   double inner = 0;
-  for (const Node& n : nodes_)
-    if (n.height > 0) inner += n.box.area();
+  for (const Node& n : nodes_) {
+    const double a = n.box.area();
+    inner += n.height > 0 ? a : 0.0;
+  }
   const double root_area = at(root_).box.area();
   return root_area > 0 ? inner / root_area : 0;
 }

@@ -20,26 +20,30 @@ struct EpaFace {
   int v[3];
   Vec3 normal;
   double dist;
-  bool alive;
 };
 
 struct Polytope {
-  // scratch storage, filled as the polytope grows (left uninitialised: no memset per call)
+  // scratch storage, filled as the polytope grows (left uninitialised: no memset per call).
+  // Faces are stored as they are made; the live ones are listed by index with their
+  // distances, in the order they were made (removed ones are squeezed out of the list)
   std::array<SimplexVertex, kMaxVertices> verts;
   int nv = 0;
   std::array<EpaFace, kMaxFaces> faces;
-  int nf = 0;
+  int nf = 0;  // faces stored
+  std::array<int, kMaxFaces> live;
+  std::array<double, kMaxFaces> live_dist;
+  int nl = 0;  // faces live
 
   // a face i, j, k (counter-clockwise seen from outside); degenerate faces get an
   // infinite distance so they are never expanded
   bool add_face(int i, int j, int k) {
     if (nf >= kMaxFaces) return false;
+    live[std::size_t(nl)] = nf;
     EpaFace& f = faces[std::size_t(nf++)];
     f.v[0] = i, f.v[1] = j, f.v[2] = k;
     const Vec3 a = verts[std::size_t(i)].w, b = verts[std::size_t(j)].w, c = verts[std::size_t(k)].w;
     const Vec3 n = glm::cross(b - a, c - a);
     const double len = glm::length(n);
-    f.alive = true;
     if (len <= 1e-30) {
       f.normal = Vec3(0, 0, 1);
       f.dist = INFINITY;
@@ -47,7 +51,17 @@ struct Polytope {
       f.normal = n / len;
       f.dist = glm::dot(f.normal, a);
     }
+    live_dist[std::size_t(nl++)] = f.dist;
     return true;
+  }
+
+  // moves the live faces to the front of the storage, in order (when it fills)
+  void compact() {
+    for (int q = 0; q < nl; ++q) {
+      faces[std::size_t(q)] = faces[std::size_t(live[std::size_t(q)])];
+      live[std::size_t(q)] = q;
+    }
+    nf = nl;
   }
 };
 
@@ -156,38 +170,54 @@ PenetrationResult narrow::epa_from_gjk(const GjkStepper& g) {
   P.add_face(0, 3, 2);
   P.add_face(1, 2, 3);
 
-  EpaFace nearest{{0, 1, 2}, Vec3(0, 0, 1), 0, false};
+  // the loops over the faces run without data-dependent branches where they can (which
+  // face is nearest, which faces the new point sees: as random as the shapes' poses); the
+  // faces stay in the order they were made, so ties go as they always did
+  EpaFace nearest{{0, 1, 2}, Vec3(0, 0, 1), 0};
+  std::array<int, kMaxFaces> gone;  // the faces the new point sees, in order
   for (int it = 0;; ++it) {
-    // nearest live face
-    int best = -1;
-    double bd = INFINITY;
-    for (int f = 0; f < P.nf; ++f) {
-      const EpaFace& F = P.faces[std::size_t(f)];
-      if (F.alive && F.dist < bd) bd = F.dist, best = f;
+    // nearest face (the first of equals)
+    if (P.nl == 0) return r;
+    int bq = 0;
+    double bd = P.live_dist[0];
+    for (int q = 1; q < P.nl; ++q) {
+      const double d = P.live_dist[std::size_t(q)];
+      bq = d < bd ? q : bq;
+      bd = std::min(bd, d);
     }
-    if (best < 0) return r;
+    if (!(bd < INFINITY)) return r;
     r.iterations = it;
-    const EpaFace face = P.faces[std::size_t(best)];
+    const EpaFace face = P.faces[std::size_t(P.live[std::size_t(bq)])];
     nearest = face;
     // support along its normal: on the face means the face is part of the boundary
     const SimplexVertex w = support_point(a, b, face.normal, &P.verts[std::size_t(face.v[0])]);
     const double gain = glm::dot(face.normal, w.w) - face.dist;
     if (gain <= kEpaTolerance || P.nv >= kMaxVertices || it >= 200) break;
-    // remove the faces w sees, keep their boundary (the horizon) as directed edges
+    // the faces w sees (and the nearest) leave; the others close up, in order
+    int ns = 0, kept = 0;
+    for (int q = 0; q < P.nl; ++q) {
+      const int f = P.live[std::size_t(q)];
+      const EpaFace& F = P.faces[std::size_t(f)];
+      const bool sees = (glm::dot(F.normal, w.w - P.verts[std::size_t(F.v[0])].w) > 0) | (q == bq);
+      gone[std::size_t(ns)] = f;
+      ns += sees;
+      P.live_dist[std::size_t(kept)] = P.live_dist[std::size_t(q)];
+      P.live[std::size_t(kept)] = f;
+      kept += !sees;
+    }
+    P.nl = kept;
+    // their boundary (the horizon) as directed edges: an edge seen from both sides is
+    // interior to the removed region
     std::array<std::array<int, 2>, kMaxHorizon> horizon;
     int nh = 0;
     bool overflow = false;
-    for (int f = 0; f < P.nf; ++f) {
-      EpaFace& F = P.faces[std::size_t(f)];
-      if (!F.alive) continue;
-      if (glm::dot(F.normal, w.w - P.verts[std::size_t(F.v[0])].w) <= 0 && f != best) continue;
-      F.alive = false;
+    for (int q = 0; q < ns; ++q) {
+      const EpaFace& F = P.faces[std::size_t(gone[std::size_t(q)])];
       for (int e = 0; e < 3; ++e) {
         const int i = F.v[e], j = F.v[(e + 1) % 3];
-        // an edge seen from both sides is interior to the removed region
         int found = -1;
         for (int h = 0; h < nh; ++h)
-          if (horizon[std::size_t(h)][0] == j && horizon[std::size_t(h)][1] == i) found = h;
+          found = (horizon[std::size_t(h)][0] == j) & (horizon[std::size_t(h)][1] == i) ? h : found;
         if (found >= 0) {
           horizon[std::size_t(found)] = horizon[std::size_t(nh - 1)];
           --nh;
@@ -199,14 +229,8 @@ PenetrationResult narrow::epa_from_gjk(const GjkStepper& g) {
       }
     }
     if (overflow) break;
-    // compact the face array when it fills
-    if (P.nf + nh > kMaxFaces) {
-      int k = 0;
-      for (int f = 0; f < P.nf; ++f)
-        if (P.faces[std::size_t(f)].alive) P.faces[std::size_t(k++)] = P.faces[std::size_t(f)];
-      P.nf = k;
-      if (P.nf + nh > kMaxFaces) break;  // out of room: report the nearest face found
-    }
+    if (P.nf + nh > kMaxFaces) P.compact();
+    if (P.nf + nh > kMaxFaces) break;  // out of room: report the nearest face found
     const int wi = P.nv++;
     P.verts[std::size_t(wi)] = w;
     for (int h = 0; h < nh; ++h) P.add_face(horizon[std::size_t(h)][0], horizon[std::size_t(h)][1], wi);

@@ -116,6 +116,14 @@ struct HullBuilder {
       h->faces_[f].normal = n;
       h->faces_[f].offset = d / static_cast<double>(l.size());
     }
+    // the vertices as three coordinate arrays (the vectorised support scan's layout), each
+    // padded to an even length with the last vertex
+    const std::size_t padded = v.size() + (v.size() & 1);
+    h->vertex_soa_.resize(3 * padded);
+    for (std::size_t i = 0; i < padded; ++i) {
+      const Vec3& p = v[std::min(i, v.size() - 1)];
+      h->vertex_soa_[i] = p.x, h->vertex_soa_[padded + i] = p.y, h->vertex_soa_[2 * padded + i] = p.z;
+    }
     // bounds, volume and centroid
     h->bounds_ = {v[0], v[0]};
     for (const Vec3& p : v) h->bounds_ = {glm::min(h->bounds_.lo, p), glm::max(h->bounds_.hi, p)};

@@ -9,6 +9,10 @@ namespace pba {
 
 using namespace narrow;
 
+namespace {
+constexpr double kHuge = 1.7976931348623157e308;  // the largest finite double
+}  // namespace
+
 narrow::Segment narrow::capsule_core(const ColliderShape& s, const Pose& p) {
   const Vec3 u = p.rotation * Vec3(0, s.half_height, 0);
   return {p.position - u, p.position + u};
@@ -247,16 +251,127 @@ void narrow::check_shape(const ColliderShape& s, const char* where) {
 
 namespace {
 
-int rank(ShapeType t) {
-  switch (t) {
-    case ShapeType::Sphere: return 0;
-    case ShapeType::Capsule: return 1;
-    case ShapeType::Box: return 2;
-    case ShapeType::Hull: return 3;
-    case ShapeType::Plane: return 4;
-    default: return 5;
+// quick checks of collide()'s input: true means check_pose and check_shape would pass (for a
+// pose, |q| within 1e-6 of 1 tested on |q|^2 a little inside those bounds; a false answer
+// sends the input through the full checks, which decide). Combined with & so a pair costs
+// one well-predicted branch, whatever its types
+inline bool pose_looks_valid(const Pose& p) {
+  const Quat& q = p.rotation;
+  const double q2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+  constexpr double kLo = (1 - 0.9e-6) * (1 - 0.9e-6), kHi = (1 + 0.9e-6) * (1 + 0.9e-6);
+  const Vec3& x = p.position;
+  return (q2 >= kLo) & (q2 <= kHi) & (std::abs(x.x) <= kHuge) & (std::abs(x.y) <= kHuge) & (std::abs(x.z) <= kHuge);
+}
+inline bool positive_finite(double x) { return (x > 0) & (x <= kHuge); }
+template <ShapeType T>
+bool looks_valid(const ColliderShape& s) {
+  if constexpr (T == ShapeType::Sphere) return positive_finite(s.radius);
+  else if constexpr (T == ShapeType::Capsule)
+    return positive_finite(s.radius) & (s.half_height >= 0) & (s.half_height <= kHuge);
+  else if constexpr (T == ShapeType::Box)
+    return positive_finite(s.half_extents.x) & positive_finite(s.half_extents.y) & positive_finite(s.half_extents.z);
+  else if constexpr (T == ShapeType::Hull) return s.hull && !s.hull->vertices().empty();
+  else return false;  // planes: the full check
+}
+
+// --- the pair table -----------------------------------------------------------------------
+// One function per ordered pair of shape types, found by indexing a table with the two
+// types: a pair costs one indirect call, not a chain of type tests the branch predictor
+// cannot learn when pairs of every kind come mixed (a broad phase's pair list). Each checks
+// its two shapes, runs the pair's algorithm in canonical order (sphere < capsule < box < hull
+// < plane) and flips the manifold back when it swapped them.
+
+using PairFn = void (*)(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb,
+                        const NarrowPhaseSettings& settings, NarrowPhaseCache* cache, Manifold& m);
+// an algorithm on a canonically ordered pair; `swapped`: A and B are the caller's B and A
+using AlgoFn = void (*)(const ColliderShape& A, const Pose& PA, const ColliderShape& B, const Pose& PB,
+                        const NarrowPhaseSettings& settings, NarrowPhaseCache* cache, bool swapped, Manifold& m);
+
+template <void (*F)(const ColliderShape&, const Pose&, const ColliderShape&, const Pose&, double, Manifold&)>
+void closed(const ColliderShape& A, const Pose& PA, const ColliderShape& B, const Pose& PB,
+            const NarrowPhaseSettings& settings, NarrowPhaseCache*, bool, Manifold& m) {
+  F(A, PA, B, PB, settings.speculative_margin, m);
+}
+
+// box and hull pairs: separating axes (the closed-form box path for two boxes) or GJK/EPA
+void polys(const ColliderShape& A, const Pose& PA, const ColliderShape& B, const Pose& PB,
+           const NarrowPhaseSettings& settings, NarrowPhaseCache* cache, bool swapped, Manifold& m) {
+  const double margin = settings.speculative_margin;
+  if (settings.method != ConvexMethod::Sat) {
+    convex_gjk(A, PA, B, PB, margin, m);
+  } else if (A.type == ShapeType::Box && B.type == ShapeType::Box) {
+    collide_boxes_sat(A.half_extents, PA, B.half_extents, PB, margin, cache ? &cache->sat : nullptr, m);
+  } else {
+    Poly pa, pb;
+    poly_of(A, pa);
+    poly_of(B, pb);
+    // the cache's A and B are the caller's: swap its roles with the pair
+    SatCache* c = cache ? &cache->sat : nullptr;
+    SatCache local{};
+    auto exchange = [](SatCache& k) {
+      if (k.kind == SatCache::Kind::FaceA) k.kind = SatCache::Kind::FaceB;
+      else if (k.kind == SatCache::Kind::FaceB) k.kind = SatCache::Kind::FaceA;
+      std::swap(k.index_a, k.index_b);
+    };
+    if (c && swapped) {
+      local = *c;
+      exchange(local);
+      c = &local;
+    }
+    collide_polys_sat(pa, PA, pb, PB, margin, c, m);
+    if (cache && swapped) {
+      exchange(local);
+      cache->sat = local;
+    }
   }
 }
+
+template <ShapeType TA, ShapeType TB, AlgoFn F, bool Swap>
+void pair_entry(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb,
+                const NarrowPhaseSettings& settings, NarrowPhaseCache* cache, Manifold& m) {
+  if (!(looks_valid<TA>(a) & looks_valid<TB>(b))) {
+    check_shape(a, "collide: shape_a");
+    check_shape(b, "collide: shape_b");
+  }
+  if constexpr (Swap) {
+    F(b, pb, a, pa, settings, cache, true, m);
+    flip(m);
+  } else {
+    F(a, pa, b, pb, settings, cache, false, m);
+  }
+}
+
+constexpr int kTypes = 7;  // ShapeType's values
+struct PairTable {
+  PairFn fn[kTypes][kTypes] = {};
+};
+
+template <ShapeType TA, ShapeType TB, AlgoFn F>
+constexpr void put(PairTable& t) {
+  t.fn[int(TA)][int(TB)] = &pair_entry<TA, TB, F, false>;
+  if constexpr (TA != TB) t.fn[int(TB)][int(TA)] = &pair_entry<TB, TA, F, true>;
+}
+
+constexpr PairTable make_pair_table() {
+  using T = ShapeType;
+  PairTable t{};
+  put<T::Sphere, T::Sphere, closed<sphere_sphere>>(t);
+  put<T::Sphere, T::Capsule, closed<sphere_capsule>>(t);
+  put<T::Sphere, T::Box, closed<sphere_box>>(t);
+  put<T::Sphere, T::Hull, closed<convex_gjk>>(t);
+  put<T::Sphere, T::Plane, closed<convex_plane>>(t);
+  put<T::Capsule, T::Capsule, closed<capsule_capsule>>(t);
+  put<T::Capsule, T::Box, closed<convex_gjk>>(t);
+  put<T::Capsule, T::Hull, closed<convex_gjk>>(t);
+  put<T::Capsule, T::Plane, closed<convex_plane>>(t);
+  put<T::Box, T::Box, polys>(t);
+  put<T::Box, T::Hull, polys>(t);
+  put<T::Box, T::Plane, closed<convex_plane>>(t);
+  put<T::Hull, T::Hull, polys>(t);
+  put<T::Hull, T::Plane, closed<convex_plane>>(t);
+  return t;
+}
+constexpr PairTable kPairTable = make_pair_table();
 
 }  // namespace
 
@@ -314,76 +429,24 @@ void narrow::manifold_from_normal(const ColliderShape& sa, const Pose& pa, const
 
 Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
                  const NarrowPhaseSettings& settings, NarrowPhaseCache* cache) {
-  // bad input is reported before any geometry runs
-  check_pose(pose_a, "collide: pose_a");
-  check_pose(pose_b, "collide: pose_b");
-  check_shape(a, "collide: shape_a");
-  check_shape(b, "collide: shape_b");
+  // bad input is reported before any geometry runs: quick tests first (this is every pair's
+  // fixed cost), the full checks in order (poses, shapes, margin, then the pair) when one fails
   const double margin = settings.speculative_margin;
-  if (!(margin >= 0 && std::isfinite(margin)))
-    require_non_negative(margin, "collide: NarrowPhaseSettings.speculative_margin");
-
-  // put the pair in canonical order (sphere < capsule < box < hull < plane)
-  const int ra = rank(a.type), rb = rank(b.type);
-  if (ra == 5 || rb == 5 || (ra == 4 && rb == 4))
-    throw Error("collide: no narrow phase for the pair " + std::string(to_string(a.type)) + "-" +
-                std::string(to_string(b.type)) + " (meshes and compounds are traversed by their callers)");
-  const bool swap = ra > rb;
-  const ColliderShape& A = swap ? b : a;
-  const ColliderShape& B = swap ? a : b;
-  const Pose& PA = swap ? pose_b : pose_a;
-  const Pose& PB = swap ? pose_a : pose_b;
-  Manifold m;
-  switch (A.type) {
-    case ShapeType::Sphere:
-      switch (B.type) {
-        case ShapeType::Sphere: sphere_sphere(A, PA, B, PB, margin, m); break;
-        case ShapeType::Capsule: sphere_capsule(A, PA, B, PB, margin, m); break;
-        case ShapeType::Box: sphere_box(A, PA, B, PB, margin, m); break;
-        case ShapeType::Hull: convex_gjk(A, PA, B, PB, margin, m); break;
-        default: convex_plane(A, PA, B, PB, margin, m); break;
-      }
-      break;
-    case ShapeType::Capsule:
-      switch (B.type) {
-        case ShapeType::Capsule: capsule_capsule(A, PA, B, PB, margin, m); break;
-        case ShapeType::Box:
-        case ShapeType::Hull: convex_gjk(A, PA, B, PB, margin, m); break;
-        default: convex_plane(A, PA, B, PB, margin, m); break;
-      }
-      break;
-    default:
-      if (B.type == ShapeType::Plane) {
-        convex_plane(A, PA, B, PB, margin, m);
-      } else if (settings.method == ConvexMethod::Sat && A.type == ShapeType::Box && B.type == ShapeType::Box) {
-        collide_boxes_sat(A.half_extents, PA, B.half_extents, PB, margin, cache ? &cache->sat : nullptr, m);
-      } else if (settings.method == ConvexMethod::Sat) {
-        Poly pa, pb;
-        poly_of(A, pa);
-        poly_of(B, pb);
-        // the cache's A and B are the caller's: swap its roles with the pair
-        SatCache* c = cache ? &cache->sat : nullptr;
-        SatCache local{};
-        if (c && swap) {
-          local = *c;
-          if (local.kind == SatCache::Kind::FaceA) local.kind = SatCache::Kind::FaceB;
-          else if (local.kind == SatCache::Kind::FaceB) local.kind = SatCache::Kind::FaceA;
-          std::swap(local.index_a, local.index_b);
-          c = &local;
-        }
-        collide_polys_sat(pa, PA, pb, PB, margin, c, m);
-        if (cache && swap) {
-          if (local.kind == SatCache::Kind::FaceA) local.kind = SatCache::Kind::FaceB;
-          else if (local.kind == SatCache::Kind::FaceB) local.kind = SatCache::Kind::FaceA;
-          std::swap(local.index_a, local.index_b);
-          cache->sat = local;
-        }
-      } else {
-        convex_gjk(A, PA, B, PB, margin, m);
-      }
-      break;
+  const unsigned ta = unsigned(a.type), tb = unsigned(b.type);
+  const PairFn fn = (ta < unsigned(kTypes)) & (tb < unsigned(kTypes)) ? kPairTable.fn[ta][tb] : nullptr;
+  if (!(pose_looks_valid(pose_a) & pose_looks_valid(pose_b) & (margin >= 0) & (margin <= kHuge)) || !fn) {
+    check_pose(pose_a, "collide: pose_a");
+    check_pose(pose_b, "collide: pose_b");
+    check_shape(a, "collide: shape_a");
+    check_shape(b, "collide: shape_b");
+    if (!(margin >= 0 && std::isfinite(margin)))
+      require_non_negative(margin, "collide: NarrowPhaseSettings.speculative_margin");
+    if (!fn)
+      throw Error("collide: no narrow phase for the pair " + std::string(to_string(a.type)) + "-" +
+                  std::string(to_string(b.type)) + " (meshes and compounds are traversed by their callers)");
   }
-  if (swap) flip(m);
+  Manifold m;
+  fn(a, pose_a, b, pose_b, settings, cache, m);
   return m;
 }
 

@@ -14,19 +14,48 @@ namespace pba::narrow {
 using HalfEdge = ConvexHull::HalfEdge;
 using HullFace = ConvexHull::Face;
 
-/// The hull vertex farthest along d: a plain scan up to 64 vertices (contiguous dot
-/// products beat the hill climb's dependent loads there), the hull's hill climb from
-/// `hint` beyond.
+/// best = max(best, x) and index = i when x > best, without a branch (which of a few
+/// candidates wins is as random as the poses of the shapes): the first maximum, as a chain
+/// of ifs keeps it.
+inline void keep_max(double x, int i, double& best, int& index) {
+  index = x > best ? i : index;
+  best = std::max(best, x);
+}
+
+/// The hull vertex farthest along d (the first of equals): up to 64 vertices, a scan of
+/// the coordinate arrays (ConvexHull::vertex_soa) two vertices at a time without branches
+/// (contiguous dot products beat the hill climb's dependent loads there; each lane keeps its
+/// first maximum, and the lanes' tie goes to the lower index); the hull's hill climb from
+/// `hint` beyond. The dot products are summed as glm::dot sums them, (x + y) + z, so the
+/// choice is the plain scan's to the bit.
 inline std::uint32_t hull_support(const ConvexHull& h, const Vec3& d, std::uint32_t hint) {
-  const auto v = h.vertices();
-  if (v.size() > 64) return h.support_index(d, hint);
-  std::uint32_t best = 0;
-  double bd = glm::dot(v[0], d);
-  for (std::uint32_t i = 1; i < v.size(); ++i) {
-    const double s = glm::dot(v[i], d);
-    if (s > bd) bd = s, best = i;
+  const std::size_t n = h.vertices().size();
+  if (n > 64) return h.support_index(d, hint);
+  using v2d = double __attribute__((vector_size(16)));
+  using v2l = long long __attribute__((vector_size(16)));
+  const std::span<const double> soa = h.vertex_soa();
+  const std::size_t m = soa.size() / 3;
+  const double* x = soa.data();
+  const double* y = x + m;
+  const double* z = y + m;
+  const v2d dx = {d.x, d.x}, dy = {d.y, d.y}, dz = {d.z, d.z};
+  auto dots = [&](std::size_t i) {
+    const v2d vx = {x[i], x[i + 1]}, vy = {y[i], y[i + 1]}, vz = {z[i], z[i + 1]};
+    return (vx * dx + vy * dy) + vz * dz;
+  };
+  v2d best = dots(0);
+  v2l index = {0, 1}, best_index = index;
+  const v2l two = {2, 2};
+  for (std::size_t i = 2; i < m; i += 2) {
+    index += two;
+    const v2d s = dots(i);
+    const v2l better = s > best;
+    best = better ? s : best;
+    best_index = better ? index : best_index;
   }
-  return best;
+  const long long i0 = best_index[0], i1 = best_index[1];
+  const bool odd = (best[1] > best[0]) | ((best[1] == best[0]) & (i1 < i0));
+  return std::uint32_t(odd ? i1 : i0);
 }
 
 // --- the box as a half-edge polyhedron ---------------------------------------------
@@ -153,8 +182,8 @@ inline constexpr std::uint32_t kIdFlip = 0x80000000u;
 inline constexpr std::uint32_t kIdCross = 0x40000000u;
 /// Edge-edge contacts: both half edges, marked by bits 30 and 31 both set... kept apart
 /// from face ids by bit 29 of the first label (labels stay below 0x4000 | 0x3fff).
-inline std::uint32_t vertex_id(std::uint32_t v) { return v & kLabelMask; }
-inline std::uint32_t cross_id(std::uint32_t l1, std::uint32_t l2) {
+constexpr std::uint32_t vertex_id(std::uint32_t v) { return v & kLabelMask; }
+constexpr std::uint32_t cross_id(std::uint32_t l1, std::uint32_t l2) {
   return kIdCross | ((l1 & kLabelMask) << 15) | (l2 & kLabelMask);
 }
 inline std::uint32_t edge_pair_id(std::uint32_t ea, std::uint32_t eb) {

@@ -68,14 +68,6 @@ Relative swapped(const Relative& r) {
   return s;
 }
 
-// Gregorius 2013: do arcs AB and CD of the Gauss map cross? (B x A and D x C are the arcs'
-// plane normals, the edge directions)
-bool is_minkowski_face(const Vec3& A, const Vec3& B, const Vec3& C, const Vec3& D, const Vec3& BxA, const Vec3& DxC) {
-  const double cba = glm::dot(C, BxA), dba = glm::dot(D, BxA);
-  const double adc = glm::dot(A, DxC), bdc = glm::dot(B, DxC);
-  return cba * dba < 0 && adc * bdc < 0 && cba * bdc > 0;
-}
-
 // separation along the cross product of two edges (A's frame), oriented away from A's centre
 double edge_separation(const Vec3& pa, const Vec3& ea, const Vec3& pb, const Vec3& eb, const Vec3& ca, Vec3& n) {
   const Vec3 c = glm::cross(ea, eb);
@@ -88,29 +80,58 @@ double edge_separation(const Vec3& pa, const Vec3& ea, const Vec3& pb, const Vec
   return glm::dot(n, pb - pa);
 }
 
-// A's edges, gathered once per query: the Gauss-map arc (its two face normals and their
-// cross product) and the segment
+// an edge of A: its Gauss-map arc (its two faces' normals and their cross product) and its
+// segment
 struct EdgeArc {
   Vec3 u, v, bxa, p, e;
 };
+EdgeArc arc_of(const Poly& a, std::uint32_t i) {
+  const HalfEdge& e1 = a.edges[2 * i];
+  const HalfEdge& t1 = a.edges[2 * i + 1];
+  EdgeArc g;
+  g.u = a.faces[e1.face].normal;
+  g.v = a.faces[t1.face].normal;
+  g.bxa = glm::cross(g.v, g.u);
+  g.p = a.vertices[e1.origin];
+  g.e = a.vertices[t1.origin] - g.p;
+  return g;
+}
+
+// Gregorius 2013: the edges form a face of the Minkowski difference when the Gauss-map arcs
+// A B = (u, v) of A's edge and C D = (-u2, -v2) of B's cross: C and D on opposite sides of
+// A B's plane (normal B x A), A and B on opposite sides of C D's (D x C), and C, B on the
+// same hemisphere. cba = C . (B x A), dba = D . (B x A), adc = A . (D x C), bdc = B . (D x C).
+// The three sign tests are combined without branches (each alone goes either way as randomly
+// as the poses); T is double or a vector of two
+template <class T>
+auto arcs_cross(T cba, T dba, T adc, T bdc) {
+  const T zero{};
+  return (cba * dba < zero) & (adc * bdc < zero) & (cba * bdc > zero);
+}
+
+// A's arcs as coordinate columns for the two-lane test, padded with zero arcs (which cross
+// nothing) to an even count
 constexpr std::uint32_t kMaxGathered = 256;
+struct ArcColumns {
+  alignas(16) double ux[kMaxGathered], uy[kMaxGathered], uz[kMaxGathered];
+  alignas(16) double vx[kMaxGathered], vy[kMaxGathered], vz[kMaxGathered];
+  alignas(16) double bx[kMaxGathered], by[kMaxGathered], bz[kMaxGathered];
+};
 
 EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r) {
+  using v2d = double __attribute__((vector_size(16)));
   EdgeQuery q;
-  std::array<EdgeArc, kMaxGathered> arcs;
-  const std::uint32_t na = std::min(a.edge_count / 2, kMaxGathered);
-  const bool gathered = a.edge_count / 2 <= kMaxGathered;
-  for (std::uint32_t i = 0; i < na; ++i) {
-    const HalfEdge& e1 = a.edges[2 * i];
-    const HalfEdge& t1 = a.edges[2 * i + 1];
-    EdgeArc& g = arcs[i];
-    g.u = a.faces[e1.face].normal;
-    g.v = a.faces[t1.face].normal;
-    g.bxa = glm::cross(g.v, g.u);
-    g.p = a.vertices[e1.origin];
-    g.e = a.vertices[t1.origin] - g.p;
+  const std::uint32_t na = a.edge_count / 2;
+  const bool gathered = na <= kMaxGathered;
+  ArcColumns c;
+  const std::uint32_t nc = gathered ? (na + 1) & ~1u : 0;
+  for (std::uint32_t i = 0; i < nc; ++i) {
+    const EdgeArc g = i < na ? arc_of(a, i) : EdgeArc{Vec3(0.0), Vec3(0.0), Vec3(0.0), Vec3(0.0), Vec3(0.0)};
+    c.ux[i] = g.u.x, c.uy[i] = g.u.y, c.uz[i] = g.u.z;
+    c.vx[i] = g.v.x, c.vy[i] = g.v.y, c.vz[i] = g.v.z;
+    c.bx[i] = g.bxa.x, c.by[i] = g.bxa.y, c.bz[i] = g.bxa.z;
   }
-  // B's edges into A's frame once each (outer loop), A's from the gathered arcs
+  // B's edges into A's frame once each (outer loop), A's arcs tested two at a time (inner)
   for (std::uint32_t j = 0; j < b.edge_count; j += 2) {
     const HalfEdge& e2 = b.edges[j];
     const HalfEdge& t2 = b.edges[j + 1];
@@ -120,25 +141,37 @@ EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r) {
     const Vec3 v2 = r.R * b.faces[t2.face].normal;
     const Vec3 e2d = q2 - p2;
     const Vec3 dxc = glm::cross(v2, u2);
-    for (std::uint32_t i = 0; i < a.edge_count / 2; ++i) {
-      EdgeArc g;
-      if (gathered) {
-        g = arcs[i];
-      } else {
-        const HalfEdge& e1 = a.edges[2 * i];
-        const HalfEdge& t1 = a.edges[2 * i + 1];
-        g = {a.faces[e1.face].normal, a.faces[t1.face].normal, Vec3(0.0), a.vertices[e1.origin], Vec3(0.0)};
-        g.bxa = glm::cross(g.v, g.u);
-        g.e = a.vertices[t1.origin] - g.p;
-      }
-      // the arcs cross (Gregorius 2013) with C = -u2, D = -v2: the first test alone
-      // rejects most pairs
-      const double cba = -glm::dot(u2, g.bxa), dba = -glm::dot(v2, g.bxa);
-      if (!(cba * dba < 0)) continue;
-      if (!is_minkowski_face(g.u, g.v, -u2, -v2, g.bxa, dxc)) continue;
+    // a crossing pair: its separation along the edges' cross product, the largest kept (the
+    // first of equals, in the order j, then i)
+    auto consider = [&](std::uint32_t i) {
+      const EdgeArc g = arc_of(a, i);
       Vec3 n;
       const double s = edge_separation(g.p, g.e, p2, e2d, a.center, n);
       if (s > q.separation) q.separation = s, q.edge_a = 2 * i, q.edge_b = j, q.normal = n;
+    };
+    if (gathered) {
+      // each dot product summed as glm::dot sums it, (x + y) + z, so the tests are the
+      // scalar ones to the bit; crossings are few, so the branch on them is learnt
+      const v2d u2x = {u2.x, u2.x}, u2y = {u2.y, u2.y}, u2z = {u2.z, u2.z};
+      const v2d v2x = {v2.x, v2.x}, v2y = {v2.y, v2.y}, v2z = {v2.z, v2.z};
+      const v2d dx = {dxc.x, dxc.x}, dy = {dxc.y, dxc.y}, dz = {dxc.z, dxc.z};
+      for (std::uint32_t i = 0; i < nc; i += 2) {
+        const v2d bx = {c.bx[i], c.bx[i + 1]}, by = {c.by[i], c.by[i + 1]}, bz = {c.bz[i], c.bz[i + 1]};
+        const v2d ux = {c.ux[i], c.ux[i + 1]}, uy = {c.uy[i], c.uy[i + 1]}, uz = {c.uz[i], c.uz[i + 1]};
+        const v2d vx = {c.vx[i], c.vx[i + 1]}, vy = {c.vy[i], c.vy[i + 1]}, vz = {c.vz[i], c.vz[i + 1]};
+        const v2d cba = -((u2x * bx + u2y * by) + u2z * bz), dba = -((v2x * bx + v2y * by) + v2z * bz);
+        const v2d adc = (ux * dx + uy * dy) + uz * dz, bdc = (vx * dx + vy * dy) + vz * dz;
+        const auto cross = arcs_cross(cba, dba, adc, bdc);
+        if (cross[0] | cross[1]) {
+          if (cross[0]) consider(i);
+          if (cross[1]) consider(i + 1);
+        }
+      }
+    } else {
+      for (std::uint32_t i = 0; i < na; ++i) {
+        const EdgeArc g = arc_of(a, i);
+        if (arcs_cross(-glm::dot(u2, g.bxa), -glm::dot(v2, g.bxa), glm::dot(g.u, dxc), glm::dot(g.v, dxc))) consider(i);
+      }
     }
   }
   return q;

@@ -7,21 +7,29 @@
 namespace pba::scene_detail {
 
 void read_rigid_settings(const Node& n, RigidSystemDef& def) {
-  n.allow_only({"solver", "substeps", "iterations", "manifold_iterations", "contact_hertz", "damping_ratio",
-                "push_out_speed", "baumgarte", "linear_slop", "speculative_distance", "restitution_threshold",
+  n.allow_only({"solver", "substeps", "iterations", "substep_iterations", "relax_iterations", "manifold_iterations",
+                "contact_hertz", "damping_ratio", "push_out_speed", "baumgarte", "contact_compliance", "linear_slop", "speculative_distance", "restitution_threshold",
                 "friction_mix", "restitution_mix", "warm_starting", "sleep", "sleep_linear", "sleep_angular",
                 "time_to_sleep", "capacity"});
   ContactSettings& c = def.contacts;
   c.solver = n.choice<RigidSolverType>(
-      "solver", {{"soft-step", RigidSolverType::SoftStep}, {"sequential-impulse", RigidSolverType::SequentialImpulse}},
+      "solver",
+      {{"soft-step", RigidSolverType::SoftStep},
+       {"sequential-impulse", RigidSolverType::SequentialImpulse},
+       {"tgs", RigidSolverType::Tgs},
+       {"xpbd", RigidSolverType::Xpbd}},
       c.solver);
   if (n.has("substeps")) c.substeps = static_cast<int>(n.at("substeps").integer(1, 64));
   if (n.has("iterations")) c.iterations = static_cast<int>(n.at("iterations").integer(1, 1000));
+  if (n.has("substep_iterations"))
+    c.substep_iterations = static_cast<int>(n.at("substep_iterations").integer(1, 100));
+  if (n.has("relax_iterations")) c.relax_iterations = static_cast<int>(n.at("relax_iterations").integer(0, 100));
   if (n.has("manifold_iterations")) c.manifold_iterations = static_cast<int>(n.at("manifold_iterations").integer(1, 16));
   c.contact_hertz = n.positive("contact_hertz", c.contact_hertz);
   c.damping_ratio = n.non_negative("damping_ratio", c.damping_ratio);
   c.push_out_speed = n.positive("push_out_speed", c.push_out_speed);
   c.baumgarte = n.in_range("baumgarte", 0, 1, c.baumgarte);
+  c.contact_compliance = n.non_negative("contact_compliance", c.contact_compliance);
   c.linear_slop = n.non_negative("linear_slop", c.linear_slop);
   c.speculative_distance = n.non_negative("speculative_distance", c.speculative_distance);
   c.restitution_threshold = n.non_negative("restitution_threshold", c.restitution_threshold);

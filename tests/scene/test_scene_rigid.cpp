@@ -130,7 +130,11 @@ TEST(RigidScenes, BadFieldsAreNamedByPath) {
   EXPECT_EQ(u.rfind("scenes/x.json: /rigid_bodies/0/velocity: unknown field (allowed here: ", 0), 0u) << u;
   EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"solver": "magic"}}})"),
             "scenes/x.json: /settings/rigid/solver: unknown value \"magic\" (expected one of \"soft-step\", "
-            "\"sequential-impulse\")");
+            "\"sequential-impulse\", \"tgs\", \"xpbd\")");
+  EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"relax_iterations": -1}}})"),
+            "scenes/x.json: /settings/rigid/relax_iterations: must be an integer in [0, 100], got -1");
+  EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"contact_compliance": -1e-9}}})"),
+            "scenes/x.json: /settings/rigid/contact_compliance: must be >= 0, got -1e-09");
   EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"substeps": 0}}})"),
             "scenes/x.json: /settings/rigid/substeps: must be an integer in [1, 64], got 0");
   // the library's own validation still names the item and the entity
@@ -151,6 +155,23 @@ TEST(RigidScenes, SettingsReachTheWorld) {
   EXPECT_FALSE(c.sleep);
   EXPECT_EQ(c.friction_mix, pba::MixRule::Minimum);
   EXPECT_EQ(c.contact_hertz, 60);
+}
+
+// every solver of the library is named in scene files, with its own settings
+TEST(RigidScenes, TgsAndXpbdAreReadWithTheirSettings) {
+  pba::Scene t = pba::parse_scene(
+      R"({"version": 1, "settings": {"rigid": {"solver": "tgs", "substeps": 12, "substep_iterations": 2,
+          "relax_iterations": 3}}})",
+      "x.json");
+  const pba::ContactSettings& c = t.world.rigid().settings();
+  EXPECT_EQ(c.solver, pba::RigidSolverType::Tgs);
+  EXPECT_EQ(c.substeps, 12);
+  EXPECT_EQ(c.substep_iterations, 2);
+  EXPECT_EQ(c.relax_iterations, 3);
+  pba::Scene x = pba::parse_scene(
+      R"({"version": 1, "settings": {"rigid": {"solver": "xpbd", "contact_compliance": 1e-7}}})", "x.json");
+  EXPECT_EQ(x.world.rigid().settings().solver, pba::RigidSolverType::Xpbd);
+  EXPECT_EQ(x.world.rigid().settings().contact_compliance, 1e-7);
 }
 
 // a "sensor" collider reaches the World: the ball falls through it (1 m drop to its top

@@ -239,7 +239,7 @@ struct CollisionFilter {
 
 /// True when the filters `a` and `b` accept each other.
 inline bool should_pair(const CollisionFilter& a, const CollisionFilter& b) {
-  return (a.layer & b.mask) != 0 && (b.layer & a.mask) != 0 && (a.owner == 0 || a.owner != b.owner);
+  return ((a.layer & b.mask) != 0) & ((b.layer & a.mask) != 0) & ((a.owner == 0) | (a.owner != b.owner));
 }
 
 /// The pair-finding methods; every one gives the same pair list.
@@ -329,8 +329,11 @@ class BroadPhase {
   const Aabb& box(ProxyId id) const;
   /// The proxy's filter.
   const CollisionFilter& filter(ProxyId id) const;
-  /// The proxy's user data.
-  std::uint64_t user_data(ProxyId id) const;
+  /// The proxy's user data (inline: a caller asks for it twice per pair).
+  std::uint64_t user_data(ProxyId id) const {
+    if (!pool_.valid(id)) check(id, "BroadPhase.user_data");
+    return user_[id.index];
+  }
   /// The live proxy at slot `index` (for a pair's index), null if the slot is free.
   ProxyId id_at(std::uint32_t index) const;
   /// Live proxies.
@@ -358,6 +361,7 @@ class BroadPhase {
   std::vector<CollisionFilter> filters_;
   std::vector<std::uint64_t> user_;
   std::vector<std::int32_t> node_;    // tree leaf, kNull unless the method is Tree
+  std::vector<Aabb> fat_;             // the tree leaf's fat box (a copy, read without the indirection)
   std::vector<std::uint8_t> alive_;
   std::vector<std::uint8_t> moved_;   // in the move buffer this frame
   // the tree, its move buffer and its persistent pair set (keys a << 32 | b)

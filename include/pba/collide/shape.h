@@ -40,8 +40,10 @@ struct Aabb {
 
   /// True when the two boxes overlap or touch.
   bool overlaps(const Aabb& o) const {
-    return lo.x <= o.hi.x && o.lo.x <= hi.x && lo.y <= o.hi.y && o.lo.y <= hi.y && lo.z <= o.hi.z &&
-           o.lo.z <= hi.z;
+    // all six comparisons, combined without branches (trees and pair lists test boxes whose
+    // outcome no branch predictor can guess)
+    return (lo.x <= o.hi.x) & (o.lo.x <= hi.x) & (lo.y <= o.hi.y) & (o.lo.y <= hi.y) & (lo.z <= o.hi.z) &
+           (o.lo.z <= hi.z);
   }
   /// True when `o` lies inside this box (touching counts).
   bool contains(const Aabb& o) const {
@@ -136,6 +138,10 @@ class ConvexHull {
   std::uint32_t support_index(const Vec3& direction, std::uint32_t hint = 0) const;
   /// The point farthest along `direction`.
   Vec3 support(const Vec3& direction) const { return vertices_[support_index(direction)]; }
+  /// The vertices as three arrays of coordinates (m): all x, then all y, then all z, each of
+  /// length vertices().size() rounded up to even (the last vertex repeated): the layout of
+  /// the narrow phase's vectorised support scan.
+  std::span<const double> vertex_soa() const { return vertex_soa_; }
   /// Centroid of the solid (m) and its volume (m^3), computed at build.
   Vec3 centroid() const { return centroid_; }
   /// Volume (m^3).
@@ -152,6 +158,7 @@ class ConvexHull {
   std::vector<HalfEdge> edges_;
   std::vector<Face> faces_;
   std::vector<std::uint32_t> vertex_edge_;  // one half edge leaving each vertex (hill climbing)
+  std::vector<double> vertex_soa_;          // see vertex_soa()
   Vec3 centroid_{0, 0, 0};
   double volume_ = 0;
   Aabb bounds_{};
