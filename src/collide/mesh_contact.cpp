@@ -129,8 +129,16 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     if (written >= int(out.size())) return;
     const auto& idx = M.triangles()[t];
     const Vec3 tri[3] = {M.vertices()[idx[0]], M.vertices()[idx[1]], M.vertices()[idx[2]]};
+    // a shape wholly beyond the margin on one side of the triangle's plane is beyond it from
+    // the triangle (two support points settle what GJK would: a separating axis); the test
+    // is kept a rounding's width short of the margin, so nothing GJK would keep is dropped
+    const Vec3 nf = M.normal(t);
+    const double plane = glm::dot(nf, tri[0]), slack = margin + 1e-12 * (1 + std::abs(plane));
+    const double above = glm::dot(nf, A.support(-nf)) - A.radius - plane;
+    const double below = plane - glm::dot(nf, A.support(nf)) - A.radius;
+    if (above > slack || below > slack) return;
     Manifold& m = out[std::size_t(written)];
-    if (!collide_triangle(a, local, A, tri, M.normal(t), M.edge_flags()[t], margin, t, m)) return;
+    if (!collide_triangle(a, local, A, tri, nf, M.edge_flags()[t], margin, t, m)) return;
     // back to the world
     m.normal = pose_mesh.rotation * m.normal;
     for (int i = 0; i < m.count; ++i) {

@@ -98,6 +98,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i], 0, s.extent_[i]};
     const Quat dq = w.q1 * glm::conjugate(w.q0);
     w.angle = 2 * std::atan2(glm::length(Vec3(dq.x, dq.y, dq.z)), std::abs(dq.w));
+    // (the farthest any point of the body travels in the step, m)
     const double moved = glm::length(w.c1 - w.c0) + w.angle * w.reach;
     if (!s.bullet_[i] && moved <= 0.5 * s.min_extent_[i]) continue;
     // everything the body can touch on its way: its centre's path grown by its reach
@@ -132,6 +133,14 @@ void RigidContacts::continuous(RigidBodySystem& s) {
             ConvexProxy piece{.type = ShapeType::Mesh, .triangle = corners, .pose = pb};
             const Vec3 face = pb.rotation * mesh.normal(tri), corner = apply(pb, corners[0]);
             const std::uint8_t flags = mesh.edge_flags()[tri];
+            // a shape farther from the triangle's plane, on its side, than any of its points
+            // can travel in the step never reaches the triangle (the first advance would
+            // jump past the step's end): two support points instead of GJK
+            const Pose p0 = pose_a(0.0);
+            const double plane = glm::dot(face, corner);
+            const double above = glm::dot(face, apply(p0, support(sa.shape, glm::conjugate(p0.rotation) * -face))) - plane;
+            const double below = plane - glm::dot(face, apply(p0, support(sa.shape, glm::conjugate(p0.rotation) * face)));
+            if (std::max(above, below) - target > moved * (1 + 1e-12) + 1e-12) return;
             toi = std::min(toi, advance(w, [&](double t) {
               const Pose pa = pose_a(t);
               const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, pa), piece);
