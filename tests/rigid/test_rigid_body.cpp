@@ -380,10 +380,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x33555814b6bd8c04ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x0612c8efc2c9568bull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x68a041601f14b5d2ull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x11f7e9313347d13cull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0xf8468756652f4f36ull) << std::hex << soft;
+  EXPECT_EQ(si, 0xbaa191709c1b453dull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x547cedaeefd797d3ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0xfbf5a5b19b207711ull) << std::hex << xpbd;
 }
 
 }  // namespace
