@@ -4,13 +4,16 @@
 // and spheres, 5000 bodies at 250 m/s in a closed box, 1764 bodies on a 20,000-triangle
 // terrain), all in this process, one core:
 //   taskset -c 1 build/release/bin/bench_rigid [--scene KEY] [--steps N] [--repeat K]
-//                                             [--peer all|bullet|ode|none] [--solver all|NAME]
+//                                             [--peer all|bullet|ode|none] [--solver all|NAME] [--profile]
 //   taskset -c 1 build/release/bin/bench_rigid --quick | --budget
 // For each scene a table: per engine the median, mean and slowest ms per 60 Hz step, the top
 // box's sag and drift from where it rests (stacks and pyramids), the bodies that left the
 // scene (escapes), the bodies awake at the end, each peer's time over the row's (how many
 // times faster than the peer the row is) and pba's state hash. With --repeat K each engine
-// runs K times and the run of median ms is shown. --budget instead runs the stacks and a
+// runs K times and the run of median ms is shown. --profile adds under each pba row the medians
+// of its step's phases (RigidProfile: collide with pairs and manifolds; solve with prepare, integrate, contacts,
+// finish, and islands and sleep within finish), the
+// manifolds built and reused in the last step, and when every body first slept. --budget instead runs the stacks and a
 // small pyramid under the four solvers at equal budgets of contact passes per step
 // (docs/rigid-bodies.md). The peers copy each scene from the pba system the scene's builder
 // filled (bench/rigid/peer_bullet.cpp, peer_ode.cpp), set up as shared/peers/ does.
@@ -34,18 +37,36 @@ using pba::bench::BenchScene;
 
 // ---- pba ----
 
-BenchResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings& settings) {
-  BenchResult r;
+// a pba run: the table's figures, and the medians of each phase of RigidProfile over the steps
+struct PbaResult : BenchResult {
+  pba::RigidProfile phases{};  // (s)
+  std::size_t manifolds = 0;   // after the last step
+  double asleep_at = -1;       // when every body first slept (s; -1: never)
+};
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
+PbaResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings& settings) {
+  PbaResult r;
   try {
     pba::RigidBodySystem s({.capacity = 16384, .contacts = settings});
     const std::vector<pba::RigidBodyId> b = scene.build(s);
     const pba::Vec3 rest = scene.top_rest ? scene.top_rest() : (b.empty() ? pba::Vec3(0) : s.center_of_mass(b.back()));
     std::vector<double> ms;
     std::vector<char> out(b.size(), 0);
+    std::vector<double> phase[10];  // each phase of RigidProfile, by step
     for (int i = 0; i < steps; ++i) {
       const auto t0 = Clock::now();
       s.step(1.0 / 60, {0, -9.81, 0});
       ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+      const pba::RigidProfile& p = s.profile();
+      const double parts[10] = {p.collide, p.solve,     p.total,     p.pairs,    p.manifolds,
+                                p.islands, p.prepare, p.integrate, p.contacts, p.finish};
+      for (int k = 0; k < 10; ++k) phase[k].push_back(parts[k]);
+      if (r.asleep_at < 0 && s.awake_count() == 0) r.asleep_at = s.time();
       for (std::size_t j = 0; j < b.size(); ++j)
         if (!out[j] && scene.escaped(s.center_of_mass(b[j]))) out[j] = 1, ++r.escapes;
     }
@@ -54,6 +75,12 @@ BenchResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettin
     if (!b.empty()) pba::bench::sag_and_drift(s.center_of_mass(b.back()), rest, r);
     r.awake = static_cast<int>(s.awake_count());
     r.hash = s.hash();
+    r.phases.collide = median(phase[0]), r.phases.solve = median(phase[1]), r.phases.total = median(phase[2]);
+    r.phases.pairs = median(phase[3]), r.phases.manifolds = median(phase[4]), r.phases.islands = median(phase[5]);
+    r.phases.prepare = median(phase[6]), r.phases.integrate = median(phase[7]);
+    r.phases.contacts = median(phase[8]), r.phases.finish = median(phase[9]);
+    r.phases.built = s.profile().built, r.phases.reused = s.profile().reused;
+    r.manifolds = s.manifold_count();
   } catch (const pba::Error& e) {
     r.note = e.what();
   }
@@ -99,23 +126,36 @@ int run_budget() {
 
 // ---- the tables ----
 
+// the phases of a pba row (median ms per step of the run)
+void print_profile(const PbaResult& r) {
+  const pba::RigidProfile& p = r.phases;
+  std::printf("  %24s phases: collide %.3f (pairs %.3f, manifolds %.3f) | solve %.3f (prepare %.3f, integrate %.3f, "
+              "contacts %.3f, finish %.3f, of which islands %.3f) | total %.3f ms"
+              "  (%zu manifolds: %zu built, %zu reused; all asleep %s)\n",
+              "", 1e3 * p.collide, 1e3 * p.pairs, 1e3 * p.manifolds, 1e3 * p.solve, 1e3 * p.prepare, 1e3 * p.integrate,
+              1e3 * p.contacts, 1e3 * p.finish, 1e3 * p.islands, 1e3 * p.total,
+              r.manifolds, p.built, p.reused, r.asleep_at < 0 ? "never" : (std::to_string(r.asleep_at) + " s").c_str());
+}
+
 struct Options {
   std::string scene = "all";
   int steps = 0;   // 0: the scene's own
   int repeat = 1;
   bool bullet = true, ode = true;
+  bool profile = false;  // a line of per-phase medians under each pba row
   std::vector<pba::RigidSolverType> solvers{pba::kRigidSolvers.begin(), pba::kRigidSolvers.end()};
 };
 
 // K runs of `run`; the one of median ms
 template <class F>
-BenchResult median_run(int k, F&& run) {
-  std::vector<BenchResult> runs;
+auto median_run(int k, F&& run) {
+  using Result = decltype(run());
+  std::vector<Result> runs;
   for (int i = 0; i < k; ++i) {
     runs.push_back(run());
     if (!runs.back().ran) return runs.back();
   }
-  std::sort(runs.begin(), runs.end(), [](const BenchResult& a, const BenchResult& b) { return a.ms < b.ms; });
+  std::sort(runs.begin(), runs.end(), [](const Result& a, const Result& b) { return a.ms < b.ms; });
   return runs[runs.size() / 2];
 }
 
@@ -160,7 +200,7 @@ void run_scene(const BenchScene& scene, const Options& o) {
   }
   for (const pba::RigidSolverType t : o.solvers) {
     const std::string name = "pba " + std::string(pba::to_string(t));
-    const BenchResult r = median_run(o.repeat, [&] { return run_pba(scene, steps, at_budget(t, 0, scene.sleep)); });
+    const PbaResult r = median_run(o.repeat, [&] { return run_pba(scene, steps, at_budget(t, 0, scene.sleep)); });
     // a mesh scene pba cannot collide with yet: say so instead of a figure
     if (scene.has_mesh && (!r.ran || r.escapes > 0)) {
       std::printf("  %-24s pba: mesh contacts not supported yet (%s)\n", name.c_str(),
@@ -168,6 +208,7 @@ void run_scene(const BenchScene& scene, const Options& o) {
       continue;
     }
     print_row(name.c_str(), scene, r, bullet, ode, true);
+    if (o.profile && r.ran) print_profile(r);
     std::fflush(stdout);
   }
   if (o.bullet) {
@@ -184,7 +225,7 @@ int usage(const char* why) {
   if (why) std::fprintf(stderr, "bench_rigid: %s\n", why);
   std::fprintf(stderr,
                "usage: bench_rigid [--scene KEY|all] [--steps N] [--repeat K] [--peer all|bullet|ode|none]\n"
-               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] | --quick | --budget\n"
+               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--profile] | --quick | --budget\n"
                "scenes:");
   for (const BenchScene& s : pba::bench::bench_scenes()) std::fprintf(stderr, " %s", s.key.c_str());
   std::fprintf(stderr, "\n");
@@ -217,6 +258,8 @@ int main(int argc, char** argv) {
     if (a == "--help" || a == "-h") return usage(nullptr);
     if (a == "--quick") {
       quick = true;
+    } else if (a == "--profile") {
+      o.profile = true;
     } else if (a == "--scene") {
       o.scene = need();
     } else if (a == "--steps") {

@@ -171,6 +171,16 @@ struct ContactSettings {
   double contact_compliance = 0;
   double linear_slop = 0.005;    ///< overlap (m) left uncorrected so contacts persist, finite and >= 0
   double speculative_distance = 0.02;  ///< manifolds include points closer than this (m), finite and >= 0
+  /// A pair's manifold is carried over to the next step, its points fixed to the bodies, while
+  /// the bodies' relative position (m; body b's centre in a's frame) has moved less than this
+  /// since the narrow phase made it (Jolt's body pair cache), finite and >= 0; 0 makes every
+  /// manifold afresh each step (see docs/rigid-bodies.md for what it costs in accuracy).
+  /// Off (0) by default: with 1 mm, Jolt's 1240-box pyramid, falling into place, is thrown
+  /// apart within two seconds (its top box 27.7 m down after 500 steps; 0.5 mm without),
+  /// a fault of the carried-over manifolds not found yet.
+  double reuse_distance = 0;
+  /// ... and their relative rotation less than this (rad), finite and >= 0.
+  double reuse_angle = 0.0175;
   /// Approach speeds (m/s) below this bounce with no restitution, so resting bodies stay put
   /// (finite and >= 0; XPBD also at speeds below 2 |g| h, Mueller et al. 2020).
   double restitution_threshold = 1;
@@ -190,6 +200,18 @@ struct ContactSettings {
   void validate(std::string_view where) const;
   bool operator==(const ContactSettings&) const = default;
 };
+
+/// The instructions that run the contact solver's blocks (src/rigid/solver.h). Every path
+/// does the same arithmetic in every lane, so all give the same bits; they differ in speed.
+enum class RigidSimd : std::uint8_t {
+  Best,    ///< the widest this CPU runs (AVX-512, else AVX2, else scalar)
+  Scalar,  ///< one manifold at a time
+  Avx2,    ///< 4 manifolds at a time (x86-64 with AVX2)
+  Avx512,  ///< 8 manifolds at a time (x86-64 with AVX-512F)
+};
+
+/// Lower-case name of a SIMD path ("best", "scalar", "avx2", "avx512").
+std::string_view to_string(RigidSimd s);
 
 /// Settings of a RigidBodySystem.
 struct RigidSystemDef {
@@ -217,17 +239,35 @@ struct RigidManifoldInfo {
   double approach_speed = 0;      ///< fastest normal closing speed of its points before the solve (m/s, >= 0)
   double max_normal_impulse = 0;  ///< largest single normal impulse of the step (N s); > 0: the solver pushed
   int points = 0;                 ///< contact points, 1 to 4
+  /// The constraint-graph colour the solver put it in (the passes run the colours in order;
+  /// no two manifolds of a colour share a dynamic body, so a colour is solved several at a
+  /// time); -1 when it was solved one at a time (rolling resistance, or no colour free) or by XPBD.
+  int color = -1;
 };
 
 /// Where the last step's time went (s).
 struct RigidProfile {
-  double collide = 0;  ///< pairs and manifolds
-  double solve = 0;    ///< contact solver and integration
-  double total = 0;    ///< the whole step
+  double collide = 0;    ///< pairs and manifolds
+  double solve = 0;      ///< contact solver and integration (everything after collide)
+  double total = 0;      ///< the whole step
+  // the parts of `collide`
+  double pairs = 0;      ///< shape bounds, the pair list and waking sleepers (s)
+  double manifolds = 0;  ///< manifolds built or reused and warm-start data (s)
+  // the parts of `solve`
+  double prepare = 0;    ///< the solver's constraint arrays (colours, blocks) (s)
+  double integrate = 0;  ///< velocities and positions, all substeps (s)
+  double contacts = 0;   ///< the contact passes: solve, relax (with the warm start), restitution (s)
+  double finish = 0;     ///< continuous collision, storing the impulses, islands and sleep (s)
+  double islands = 0;    ///< of `finish`: islands and sleeping (s)
+  std::size_t built = 0;    ///< manifolds (pairs of shapes, or shape and triangle) the narrow phase made
+  std::size_t reused = 0;   ///< manifolds carried over from an earlier step (the pair barely moved)
+  std::size_t moved = 0;    ///< shape proxies that left their fat bounds and were re-inserted
 };
 
 namespace detail {
 struct RigidContacts;
+struct SolverBody;
+struct FreeMotionArrays;
 }
 
 
@@ -319,6 +359,11 @@ class RigidBodySystem {
   const ContactSettings& settings() const { return settings_; }
   /// Sets the soft step's substeps per step, in [1, 64].
   void set_substeps(int n);
+  /// Picks the contact solver's SIMD path (for tests and benchmarks; results do not depend on
+  /// it). Throws Error naming the path when this CPU cannot run it.
+  void set_simd(RigidSimd path);
+  /// The SIMD path in use (never Best).
+  RigidSimd simd() const;
   /// Advances every body from t to t + dt (s; finite and > 0) under `gravity` (m/s^2).
   /// Throws Error if a body's state becomes non-finite, naming the body and the step's end
   /// time; the system then refuses to step again.
@@ -358,9 +403,14 @@ class RigidBodySystem {
     return {com_[i] - r * com_local_[i], r};
   }
   std::string describe(std::size_t i) const;
-  void integrate_rotation(std::size_t i, double h);
-  void integrate_velocities(double h, const Vec3& gravity);
-  void integrate_positions(double h);
+  // the free motion's arrays (velocities in `rows` when given, else in v_ and w_)
+  detail::FreeMotionArrays free_motion(detail::SolverBody* rows, detail::SolverBody* warm, double* motion);
+  // rows (optional): the contact solver's velocity rows, used instead of v_ and w_; warm
+  // (optional, by body): velocity changes added after the forces and zeroed
+  void integrate_velocities(double h, const Vec3& gravity, detail::SolverBody* rows = nullptr,
+                            detail::SolverBody* warm = nullptr);
+  // motion (optional, 8 doubles by body): each moving body's dp and turn since the start of the step
+  void integrate_positions(double h, detail::SolverBody* rows = nullptr, double* motion = nullptr);
   void check_finite();
   [[noreturn]] void fail(std::size_t i);
   void update_sleep(double dt);
@@ -394,9 +444,13 @@ class RigidBodySystem {
   std::vector<double> extent_;      // bounding radius of the shapes about the centre of mass (m)
   std::vector<double> min_extent_;  // smallest half size of a shape (m): faster than half of it per step is fast
   std::vector<std::vector<RigidShapeDef>> shapes_;  // by dense index
-  // sleeping: flags, time spent slow, and the island (a dense index) each body last belonged to
+  // sleeping: flags, time spent slow, and for a sleeping body the next member of its island
+  // (a ring of dense indices; an awake body points to itself)
   std::vector<std::uint8_t> asleep_;
   std::vector<double> sleep_time_;
+  // where the body's current rest window began: its centre of mass and principal frame then
+  std::vector<Vec3> rest_com_;
+  std::vector<Quat> rest_q_;
   std::vector<std::uint32_t> island_;
   std::vector<std::uint32_t> parent_;  // union-find scratch
   std::vector<double> island_slow_;    // scratch: the island's shortest slow time

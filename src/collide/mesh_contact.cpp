@@ -42,12 +42,15 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
   Vec3 n, point_a, point_b;
   if (!contact_normal(A, B, margin, n, point_a, point_b)) return false;
   // an internal (flat or concave) edge or vertex takes the face normal, on the side of
-  // the triangle where the shape's centre is
+  // the triangle where the shape's centre is (a hull's centroid: its origin may lie on its
+  // surface, as a pyramid's at the middle of its base, and a pyramid resting on its base
+  // had its side picked by rounding and was pushed through the mesh)
   const std::uint8_t on = feature_edges(tri, point_b);
   const bool internal = on == 0 || (on & flags) == 0;
   Vec3 use = n;
   if (internal) {
-    const double side = glm::dot(pa.position - tri[0], face_normal) >= 0 ? 1.0 : -1.0;
+    const Vec3 centre = a.type == ShapeType::Hull ? apply(pa, a.hull->centroid()) : pa.position;
+    const double side = glm::dot(centre - tri[0], face_normal) >= 0 ? 1.0 : -1.0;
     use = -side * face_normal;
   }
   // the triangle as the reference face (B's), the shape's support feature along the
@@ -126,8 +129,16 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     if (written >= int(out.size())) return;
     const auto& idx = M.triangles()[t];
     const Vec3 tri[3] = {M.vertices()[idx[0]], M.vertices()[idx[1]], M.vertices()[idx[2]]};
+    // a shape wholly beyond the margin on one side of the triangle's plane is beyond it from
+    // the triangle (two support points settle what GJK would: a separating axis); the test
+    // is kept a rounding's width short of the margin, so nothing GJK would keep is dropped
+    const Vec3 nf = M.normal(t);
+    const double plane = glm::dot(nf, tri[0]), slack = margin + 1e-12 * (1 + std::abs(plane));
+    const double above = glm::dot(nf, A.support(-nf)) - A.radius - plane;
+    const double below = plane - glm::dot(nf, A.support(nf)) - A.radius;
+    if (above > slack || below > slack) return;
     Manifold& m = out[std::size_t(written)];
-    if (!collide_triangle(a, local, A, tri, M.normal(t), M.edge_flags()[t], margin, t, m)) return;
+    if (!collide_triangle(a, local, A, tri, nf, M.edge_flags()[t], margin, t, m)) return;
     // back to the world
     m.normal = pose_mesh.rotation * m.normal;
     for (int i = 0; i < m.count; ++i) {

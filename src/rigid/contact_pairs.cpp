@@ -1,12 +1,27 @@
-// Rigid bodies: contact pairs and their manifolds, with warm-start matching. Each step the
-// shapes' bounds (grown by the speculative distance and the step's motion) are swept for
-// pairs, sleeping islands that a moving body reaches are woken, the narrow phase builds each
-// pair's manifold, and each point takes last step's impulses from the point with the same
-// feature id (or the nearest one). The solver passes are in contact_solver.cpp.
+// Rigid bodies: contact pairs and their manifolds, with warm-start matching; what a step does
+// before the solver. Each step:
+//   1. every awake body's shapes get their tight bounds (grown by the speculative distance
+//      and the step's motion); a shape that left the fat box the tree holds for it is
+//      re-inserted with a new one (a dynamic AABB tree, Catto 2019; Box2D v3 keeps its
+//      proxies the same way), and sleeping and unmoved static bodies cost nothing;
+//   2. only the re-inserted shapes query the tree, for pairs new to the persistent, sorted
+//      list of shape pairs whose fat boxes overlap;
+//   3. sleeping islands that a moving body reaches are woken;
+//   4. each pair whose tight bounds overlap gets its manifolds: carried over from an earlier
+//      step while the two bodies' relative pose stays within the reuse thresholds (Jolt's
+//      body pair cache: the points stay fixed to the bodies, the normal to one of them), else
+//      made by the narrow phase (collide(), or collide_mesh() per touching triangle), and
+//      each point takes last step's impulse from the point with the same feature id (or the
+//      nearest one).
+// The pair list is sorted by (body slots, shapes), and a mesh pair's manifolds come in the
+// order of the mesh's tree, so the solver sees the same order in every run. The solver
+// passes are in contact_solver.cpp; the islands in rigid_body.cpp.
 #include "contacts.h"
 
 #include <algorithm>
 #include <cmath>
+
+#include "collide/narrow_internal.h"
 
 namespace pba::detail {
 
@@ -41,145 +56,640 @@ double rolling_radius(const ColliderShape& s) {
   }
 }
 
+// the box a fat box is made from: the tight one, stretched by `ahead` (m) along the motion
+Aabb stretched(const Aabb& box, const Vec3& ahead) {
+  return {box.lo + glm::min(ahead, Vec3(0)), box.hi + glm::max(ahead, Vec3(0))};
+}
+
+// the manifolds of a mesh pair whose normals are closer than this (cosine; the sine of the
+// angle below 1e-4, the mesh's own "flat" for an edge) are merged into one
+constexpr double kMergeCos = 1 - 5e-9;
+// merged points closer than this (m) are one point
+constexpr double kSamePoint = 1e-6;
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
-// pairs and manifolds
+// the pair set
 
-void RigidContacts::update(RigidBodySystem& s, double dt) {
+namespace {
+// a 64-bit mix (splitmix64's finaliser) so that neighbouring keys spread over the table
+std::uint64_t spread(std::uint64_t k) {
+  k ^= k >> 30, k *= 0xbf58476d1ce4e5b9ull;
+  k ^= k >> 27, k *= 0x94d049bb133111ebull;
+  return k ^ (k >> 31);
+}
+}  // namespace
+
+bool PairSet::contains(std::uint64_t key) const {
+  if (slots.empty()) return false;
+  const std::size_t mask = slots.size() - 1;
+  for (std::size_t i = spread(key) & mask;; i = (i + 1) & mask) {
+    if (slots[i] == key) return true;
+    if (slots[i] == 0) return false;
+  }
+}
+
+bool PairSet::insert(std::uint64_t key) {
+  // at most half full: grow by doubling (and rehash)
+  if (2 * (count + 1) > slots.size()) {
+    std::vector<std::uint64_t> old(std::max<std::size_t>(64, 2 * slots.size()), 0);
+    old.swap(slots);
+    count = 0;
+    for (const std::uint64_t k : old)
+      if (k != 0) insert(k);
+  }
+  const std::size_t mask = slots.size() - 1;
+  for (std::size_t i = spread(key) & mask;; i = (i + 1) & mask) {
+    if (slots[i] == key) return false;
+    if (slots[i] == 0) {
+      slots[i] = key;
+      ++count;
+      return true;
+    }
+  }
+}
+
+void PairSet::erase(std::uint64_t key) {
+  if (slots.empty()) return;
+  const std::size_t mask = slots.size() - 1;
+  std::size_t i = spread(key) & mask;
+  while (slots[i] != key) {
+    if (slots[i] == 0) return;
+    i = (i + 1) & mask;
+  }
+  // shift the run after the hole back over it, each key no farther than its home allows
+  for (std::size_t j = (i + 1) & mask; slots[j] != 0; j = (j + 1) & mask) {
+    const std::size_t home = spread(slots[j]) & mask;
+    // j's key may move to i when its home is not cyclically within (i, j]
+    if (((j - home) & mask) >= ((j - i) & mask)) slots[i] = slots[j], i = j;
+  }
+  slots[i] = 0;
+  --count;
+}
+
+void PairSet::clear() {
+  std::fill(slots.begin(), slots.end(), 0);
+  count = 0;
+}
+
+// ---------------------------------------------------------------------------------------
+// pools
+
+std::uint32_t RigidContacts::new_cache() {
+  if (free_cache != kNoIndex) {
+    const std::uint32_t k = free_cache;
+    free_cache = caches[k].first;
+    caches[k] = PairCache{};
+    return k;
+  }
+  caches.emplace_back();
+  return static_cast<std::uint32_t>(caches.size() - 1);
+}
+
+std::uint32_t RigidContacts::new_manifold() {
+  if (free_manifold != kNoIndex) {
+    const std::uint32_t k = free_manifold;
+    free_manifold = manifolds[k].next;
+    manifolds[k].next = kNoIndex;
+    manifolds[k].last = kNoIndex;
+    return k;
+  }
+  manifolds.emplace_back();
+  return static_cast<std::uint32_t>(manifolds.size() - 1);
+}
+
+// The impulses of `record` from the entry of `pairs` that holds them into the record itself
+// (the entry is then no longer its).
+void RigidContacts::settle(std::uint32_t record) {
+  CachedManifold& r = manifolds[record];
+  if (r.last == kNoIndex) return;
+  ContactPair& c = pairs[r.last];
+  for (int k = 0; k < c.count; ++k) r.points[k].normal_impulse = c.points[k].normal_impulse;
+  r.friction = c.friction_old;
+  r.twist = c.twist_impulse;
+  r.rolling = c.rolling_impulse;
+  c.record = kNoIndex;
+  r.last = kNoIndex;
+}
+
+void RigidContacts::settle_all() {
+  for (const ContactPair& c : pairs)
+    if (c.record != kNoIndex) settle(c.record);
+}
+
+void RigidContacts::free_manifolds(PairCache& c) {
+  for (std::uint32_t m = c.first; m != kNoIndex;) {
+    const std::uint32_t next = manifolds[m].next;
+    if (manifolds[m].last != kNoIndex) pairs[manifolds[m].last].record = kNoIndex, manifolds[m].last = kNoIndex;
+    manifolds[m].next = free_manifold;
+    free_manifold = m;
+    m = next;
+  }
+  c.first = kNoIndex;
+}
+
+void RigidContacts::free_pair(ShapePair& p) {
+  pair_set.erase(pair_key(p.proxy_a, p.proxy_b));
+  if (p.cache == kNoIndex) return;
+  free_manifolds(caches[p.cache]);
+  caches[p.cache].first = free_cache;
+  free_cache = p.cache;
+  p.cache = kNoIndex;
+}
+
+// ---------------------------------------------------------------------------------------
+// the broad phase
+
+void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
   const ContactSettings& cs = s.settings_;
   const std::size_t n = s.type_.size();
-  // this step's pairs become last step's
-  std::swap(pairs, previous);
-  pairs.clear();
-  // every shape's bounds, grown by the speculative distance and by how far it can move
-  proxies.clear();
+  moved.clear();
+  std::size_t created = 0;
   for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t slot = s.owner_[i];
+    if (slot >= body_proxies.size()) body_proxies.resize(slot + 1), static_pose.resize(slot + 1);
+    std::vector<std::uint32_t>& mine = body_proxies[slot];
+    const bool fresh = mine.empty();
+    const BodyType type = s.type_[i];
     const Pose body = s.body_pose(i);
-    const double reach = cs.speculative_distance + std::min(glm::length(s.v_[i]) * dt, s.extent_[i]);
-    for (std::uint32_t k = 0; k < s.shapes_[i].size(); ++k)
-      proxies.push_back({bounds(s.shapes_[i][k].shape, compose(body, s.shapes_[i][k].local)).grown(reach),
-                         static_cast<std::uint32_t>(i), k});
-  }
-  // sweep and prune along x (ties broken by owner, so the order is deterministic)
-  std::sort(proxies.begin(), proxies.end(), [](const ShapeProxy& a, const ShapeProxy& b) {
-    if (a.box.lo.x != b.box.lo.x) return a.box.lo.x < b.box.lo.x;
-    if (a.body != b.body) return a.body < b.body;
-    return a.shape < b.shape;
-  });
-  statics.clear();
-  for (std::size_t i = 0; i < proxies.size(); ++i)
-    if (s.type_[proxies[i].body] == BodyType::Static) statics.push_back(static_cast<std::uint32_t>(i));
-  candidates.clear();
-  for (std::size_t i = 0; i < proxies.size(); ++i) {
-    const ShapeProxy& p = proxies[i];
-    for (std::size_t j = i + 1; j < proxies.size() && proxies[j].box.lo.x <= p.box.hi.x; ++j) {
-      const ShapeProxy& q = proxies[j];
-      if (p.body == q.body || !p.box.overlaps(q.box)) continue;
-      // two bodies that cannot move each other make no contact
-      if (s.inv_mass_[p.body] == 0 && s.inv_mass_[q.body] == 0) continue;
-      // order the pair by body slot so the key (and the normal's direction) is stable
-      const bool swap = s.owner_[p.body] > s.owner_[q.body];
-      const ShapeProxy& a = swap ? q : p;
-      const ShapeProxy& b = swap ? p : q;
-      candidates.push_back({s.owner_[a.body], s.owner_[b.body], a.shape, b.shape, a.body, b.body});
+    // a sleeping body does not move, nor does a static one that was not put elsewhere
+    if (!fresh && type == BodyType::Dynamic && s.asleep_[i]) continue;
+    if (type == BodyType::Static) {
+      const Pose& was = static_pose[slot];
+      if (!fresh && was.position == body.position && was.rotation == body.rotation) continue;
+      static_pose[slot] = body;
     }
-  }
-  std::sort(candidates.begin(), candidates.end());
-  // a body moving faster than the sleep tolerances (or a moving kinematic one) whose bounds
-  // reach a sleeping body wakes its island; repeated while waking spreads. A slow awake body
-  // does not: it rests on the sleeper as on a static body (waking on any overlap let two
-  // slow neighbours wake each other forever)
-  auto awake_dynamic = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
-  const double lin2 = cs.sleep_linear * cs.sleep_linear, ang2 = cs.sleep_angular * cs.sleep_angular;
-  auto moving = [&](std::uint32_t i) {
-    const double v2 = glm::dot(s.v_[i], s.v_[i]), w2 = glm::dot(s.w_[i], s.w_[i]);
-    if (awake_dynamic(i)) return v2 > lin2 || w2 > ang2;
-    return s.type_[i] == BodyType::Kinematic && (v2 > 0 || w2 > 0);
-  };
-  for (bool woke = true; woke;) {
-    woke = false;
-    for (const PairKey& c : candidates) {
-      if (s.asleep_[c.b] && moving(c.a)) s.wake_island(c.b), woke = true;
-      if (s.asleep_[c.a] && moving(c.b)) s.wake_island(c.a), woke = true;
-    }
-  }
-  // manifolds, with last step's cache and impulses where the same pair touched
-  for (const PairKey& k : candidates) {
-    // points are made as far out as the two bodies can close in one step (speculative contacts)
-    // (up to each body's size: faster ones are caught by the continuous pass)
-    const NarrowPhaseSettings ns{.speculative_margin = cs.speculative_distance +
-                                                       std::min(glm::length(s.v_[k.a]) * dt, s.extent_[k.a]) +
-                                                       std::min(glm::length(s.v_[k.b]) * dt, s.extent_[k.b])};
-    if (!awake_dynamic(k.a) && !awake_dynamic(k.b)) continue;  // asleep, or asleep on a still body
-    // the pair's entry, kept only when the manifold has points
-    ContactPair& c = pairs.emplace_back();
-    c.slot_a = k.slot_a, c.slot_b = k.slot_b, c.shape_a = k.shape_a, c.shape_b = k.shape_b, c.a = k.a, c.b = k.b;
-    auto old = std::lower_bound(previous.begin(), previous.end(), c);
-    const bool had = old != previous.end() && !(c < *old) && !(*old < c);
-    if (had) c.cache = old->cache;
-    const RigidShapeDef& sa = s.shapes_[c.a][c.shape_a];
-    const RigidShapeDef& sb = s.shapes_[c.b][c.shape_b];
-    const Manifold m = collide(sa.shape, compose(s.body_pose(c.a), sa.local), sb.shape,
-                               compose(s.body_pose(c.b), sb.local), ns, &c.cache);
-    if (m.count == 0) {
-      pairs.pop_back();
-      continue;
-    }
-    c.normal = m.normal;
-    tangent_basis(c.normal, c.t1, c.t2);
-    c.friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
-    c.restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
-    c.rolling = std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
-    c.count = m.count;
-    const bool warm = had && cs.warm_starting;
-    c.rolling_impulse = warm ? old->rolling_impulse : Vec3(0);
-    // friction carried over, re-projected onto this step's tangents
-    c.tangent_impulse[0] = warm ? glm::dot(old->friction_old, c.t1) : 0;
-    c.tangent_impulse[1] = warm ? glm::dot(old->friction_old, c.t2) : 0;
-    c.twist_impulse = warm ? old->twist_impulse : 0;
-    Vec3 centroid(0);
-    for (int k = 0; k < m.count; ++k) centroid += m.points[k].position();
-    centroid /= static_cast<double>(m.count);
-    c.ca = centroid - s.com_[c.a];
-    c.cb = centroid - s.com_[c.b];
-    c.twist_radius = 0;
-    for (int k = 0; k < m.count; ++k) c.twist_radius += glm::length(m.points[k].position() - centroid);
-    c.twist_radius /= m.count;
-    // a constraint that does not act this step carries nothing (a carried twist impulse on a
-    // one-point manifold, never clamped, spun a box on its corner up to 70 rad/s)
-    if (c.twist_radius == 0) c.twist_impulse = 0;
-    if (c.rolling == 0) c.rolling_impulse = Vec3(0);
-    for (int k = 0; k < m.count; ++k) {
-      SolverPoint& p = c.points[k];
-      p = {};
-      const Vec3 at = m.points[k].position();
-      p.ra = at - s.com_[c.a];
-      p.rb = at - s.com_[c.b];
-      p.depth = m.points[k].depth;
-      p.id = m.points[k].id;
-      // the separation now is -depth; keep it relative to the anchors
-      p.sa = m.points[k].point_a - core_radius(sa.shape) * c.normal - s.com_[c.a];
-      p.sb = m.points[k].point_b + core_radius(sb.shape) * c.normal - s.com_[c.b];
-      p.offset = -p.depth - glm::dot((s.com_[c.b] + p.sb) - (s.com_[c.a] + p.sa), c.normal);
-      p.local = glm::conjugate(s.q_[c.a]) * (at - s.com_[c.a]);
-      // warm start from the point with the same feature id or, when the features changed
-      // (a face-on-face contact whose clipped corners sit on the edges flips their labels
-      // under jitter), from the nearest old point within the linear slop in a's frame
-      // (Jolt matches contact points by position the same way)
-      if (warm) {
-        int match = -1;
-        double best = cs.linear_slop * cs.linear_slop;
-        for (int o = 0; o < old->count && match < 0; ++o)
-          if (old->points[o].id == p.id) match = o;
-        for (int o = 0; o < old->count && match < 0; ++o) {
-          const Vec3 d = old->points[o].local - p.local;
-          if (glm::dot(d, d) <= best) best = glm::dot(d, d), match = o;
+    // the tight bounds reach as far as the body can move in the step, and the fat ones two
+    // steps' travel ahead, both up to the body's own size (the continuous pass catches faster
+    // bodies; fat boxes stretched further fill the pair list)
+    const double speed = glm::length(s.v_[i]);
+    const double reach = cs.speculative_distance + std::min(speed * dt, s.extent_[i]);
+    const Vec3 ahead = type == BodyType::Static || speed == 0 ? Vec3(0)
+                                                                : std::min(2 * speed * dt, s.extent_[i]) / speed * s.v_[i];
+    for (std::uint32_t k = 0; k < s.shapes_[i].size(); ++k) {
+      if (fresh) {
+        std::uint32_t q = free_proxy;
+        if (q != kNoIndex) {
+          free_proxy = proxies[q].body;
+        } else {
+          q = static_cast<std::uint32_t>(proxies.size());
+          proxies.emplace_back();
         }
-        if (match >= 0) p.normal_impulse = old->points[match].normal_impulse;
+        mine.push_back(q);
+      }
+      const std::uint32_t q = mine[k];
+      ShapeProxy& p = proxies[q];
+      p.box = bounds(s.shapes_[i][k].shape, compose(body, s.shapes_[i][k].local)).grown(reach);
+      p.body = static_cast<std::uint32_t>(i), p.shape = k, p.slot = slot;
+      const bool bounded = is_finite(p.box.lo) && is_finite(p.box.hi);
+      if (fresh) {
+        // a new shape: into the tree (a plane into the unbounded list) and queried
+        if (bounded) {
+          p.node = tree.create_proxy(stretched(p.box, ahead), q);
+          p.fat = tree.fat_box(p.node);
+        } else {
+          p.node = -1, p.fat = p.box;
+          unbounded.push_back(q);
+        }
+        if (type == BodyType::Static) statics.push_back(q);
+        moved.push_back(q);
+        ++created;
+      } else if (p.node >= 0) {
+        // it left its fat box: a new one, and a query for new pairs. A fat box that has grown
+        // more than a margin too large on some side (stretched while the body fell fast, now
+        // at rest) is made anew too, or it would keep pairs that cannot touch
+        const Aabb want = stretched(p.box, ahead);
+        if (p.fat.contains(p.box) && want.grown(2 * tree.margin()).contains(p.fat)) continue;
+        tree.destroy_proxy(p.node);
+        p.node = tree.create_proxy(want, q);
+        p.fat = tree.fat_box(p.node);
+        moved.push_back(q);
+      } else {
+        // a plane put elsewhere
+        p.fat = p.box;
+        moved.push_back(q);
       }
     }
   }
+  // many insertions at once (the first step of a scene) are better rebuilt than kept; moves
+  // wear the tree down, so its quality is checked now and then (BroadPhase does the same)
+  reinserted_since_check += moved.size();
+  if (created > 16) {
+    tree.rebuild();
+    tree_ratio = tree.area_ratio();
+    reinserted_since_check = 0;
+  } else if (reinserted_since_check > tree.proxy_count() && tree.proxy_count() > 2) {
+    const double ratio = tree.area_ratio();
+    if (ratio > 1.5 * tree_ratio) {
+      tree.rebuild();
+      tree_ratio = tree.area_ratio();
+    }
+    reinserted_since_check = 0;
+  }
+}
+
+void RigidContacts::find_new_pairs(RigidBodySystem& s) {
+  found.clear();
+  if (was_moved.size() < proxies.size()) was_moved.resize(proxies.size(), 0);
+  for (const std::uint32_t p : moved) was_moved[p] = 1;
+  for (const std::uint32_t p : moved) {
+    const ShapeProxy& P = proxies[p];
+    auto consider = [&](std::uint32_t q) {
+      const ShapeProxy& Q = proxies[q];
+      // not with itself, not two bodies that cannot move each other, and two moved shapes
+      // once (from the lower proxy)
+      if (Q.slot == P.slot || (s.inv_mass_[P.body] == 0 && s.inv_mass_[Q.body] == 0)) return;
+      if (was_moved[q] && q < p) return;
+      const bool swap = P.slot > Q.slot;
+      const ShapeProxy& A = swap ? Q : P;
+      const ShapeProxy& B = swap ? P : Q;
+      // only pairs the list does not hold yet (each found once)
+      if (pair_set.insert(pair_key(swap ? q : p, swap ? p : q)))
+        found.push_back({A.slot, B.slot, A.shape, B.shape, swap ? q : p, swap ? p : q, kNoIndex});
+    };
+    tree.query(P.fat, [&](std::uint32_t q) {
+      consider(q);
+      return true;
+    });
+    for (const std::uint32_t u : unbounded)
+      if (proxies[u].fat.overlaps(P.fat)) consider(u);
+  }
+  for (const std::uint32_t p : moved) was_moved[p] = 0;
+  if (found.empty()) return;
+  // the new ones, sorted, merged into the list
+  std::sort(found.begin(), found.end());
+  merged.clear();
+  std::merge(shape_pairs.begin(), shape_pairs.end(), found.begin(), found.end(), std::back_inserter(merged));
+  shape_pairs.swap(merged);
+}
+
+// A body moving faster than the sleep tolerances (or a moving kinematic one) whose bounds
+// reach a sleeping body wakes its island. A slow awake body does not: it rests on the sleeper
+// as on a static body (waking on any overlap let two slow neighbours wake each other forever).
+// A woken body is still (sleep zeroed its velocity), so one pass wakes all that this step can.
+void RigidContacts::wake_touched(RigidBodySystem& s) {
+  const ContactSettings& cs = s.settings_;
+  if (std::find(s.asleep_.begin(), s.asleep_.end(), std::uint8_t{1}) == s.asleep_.end()) return;
+  const double lin2 = cs.sleep_linear * cs.sleep_linear, ang2 = cs.sleep_angular * cs.sleep_angular;
+  auto moving = [&](std::uint32_t i) {
+    const double v2 = glm::dot(s.v_[i], s.v_[i]), w2 = glm::dot(s.w_[i], s.w_[i]);
+    if (s.type_[i] == BodyType::Dynamic) return !s.asleep_[i] && (v2 > lin2 || w2 > ang2);
+    return s.type_[i] == BodyType::Kinematic && (v2 > 0 || w2 > 0);
+  };
+  for (const ShapePair& p : shape_pairs) {
+    const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
+    if (s.asleep_[a] == s.asleep_[b]) continue;
+    const std::uint32_t sleeper = s.asleep_[a] ? a : b, other = s.asleep_[a] ? b : a;
+    if (moving(other) && proxies[p.proxy_a].box.overlaps(proxies[p.proxy_b].box)) s.wake_island(sleeper);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// manifolds
+
+void RigidContacts::update(RigidBodySystem& s, double dt) {
+  Stopwatch clock;
+  // last step's pairs hold the impulses the solver left; they are read as they are rewritten
+  last_count = pairs.size();
+  emitted = 0;
+  update_proxies(s, dt);
+  find_new_pairs(s);
+  wake_touched(s);
+  s.profile_.pairs = clock.seconds();
+  s.profile_.moved = moved.size();
+  clock.reset();
+  make_manifolds(s, dt);
+  // last step's entries beyond this step's end: their impulses back to their manifolds
+  for (std::size_t k = emitted; k < last_count; ++k)
+    if (pairs[k].record != kNoIndex && manifolds[pairs[k].record].last == k) settle(pairs[k].record);
+  pairs.resize(emitted);
+  s.profile_.manifolds = clock.seconds();
+}
+
+void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
+  const ContactSettings& cs = s.settings_;
+  const double cos_half = std::cos(0.5 * cs.reuse_angle), d2 = cs.reuse_distance * cs.reuse_distance;
+  const bool reuse = cs.reuse_distance > 0;
+  auto awake_dynamic = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
+  std::size_t built = 0, reused = 0, keep = 0;
+  for (std::size_t k = 0; k < shape_pairs.size(); ++k) {
+    ShapePair p = shape_pairs[k];
+    const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
+    const ShapeProxy& pa = proxies[p.proxy_a];
+    const ShapeProxy& pb = proxies[p.proxy_b];
+    // a pair whose bodies sleep (or sleep on a static body) is kept as it is, manifolds and
+    // impulses, for when they wake; against a kinematic body that went away it ends
+    if (!awake_dynamic(a) && !awake_dynamic(b)) {
+      const bool kinematic = s.type_[a] == BodyType::Kinematic || s.type_[b] == BodyType::Kinematic;
+      if (kinematic && !pa.fat.overlaps(pb.fat))
+        free_pair(p);
+      else
+        shape_pairs[keep++] = p;
+      continue;
+    }
+    // fat boxes apart: the pair ends
+    if (!pa.fat.overlaps(pb.fat)) {
+      free_pair(p);
+      continue;
+    }
+    // tight boxes apart: no contact this step (the narrow-phase cache stays)
+    if (!pa.box.overlaps(pb.box)) {
+      if (p.cache != kNoIndex) free_manifolds(caches[p.cache]), caches[p.cache].margin = -1;
+      shape_pairs[keep++] = p;
+      continue;
+    }
+    if (p.cache == kNoIndex) p.cache = new_cache();
+    shape_pairs[keep++] = p;
+    // points are made as far out as the two bodies can close in one step (speculative contacts)
+    // (up to each body's size: faster ones are caught by the continuous pass)
+    const double margin = cs.speculative_distance + std::min(glm::length(s.v_[a]) * dt, s.extent_[a]) +
+                          std::min(glm::length(s.v_[b]) * dt, s.extent_[b]);
+    // b's centre and frame in a's frame, against where they were when the manifolds were made
+    const Quat qa_inv = glm::conjugate(s.q_[a]);
+    const Vec3 rel_position = qa_inv * (s.com_[b] - s.com_[a]);
+    const Quat rel_rotation = qa_inv * s.q_[b];
+    PairCache& c = caches[p.cache];
+    const Vec3 dp = rel_position - c.rel_position;
+    const bool same = reuse && c.margin >= margin && glm::dot(dp, dp) <= d2 &&
+                      std::abs(glm::dot(rel_rotation, c.rel_rotation)) >= cos_half;
+    if (!same) {
+      collide_pair(s, p, c, a, b, margin);
+      c.rel_position = rel_position, c.rel_rotation = rel_rotation;
+    }
+    for (std::uint32_t m = caches[p.cache].first; m != kNoIndex; m = manifolds[m].next) {
+      emit(s, p, m, a, b);
+      ++(same ? reused : built);
+    }
+  }
+  shape_pairs.resize(keep);
+  s.profile_.built = built, s.profile_.reused = reused;
+}
+
+// The narrow phase for one pair at a margin `margin` (m) plus the reuse distance (so the
+// manifold stays good while the pair closes by that much), into the pair's cache: each new
+// point takes the impulse of the old point (of the same triangle) with the same feature id
+// or, when the features changed (a face-on-face contact whose clipped corners sit on the
+// edges flips their labels under jitter), of the nearest old point within the linear slop in
+// a's frame (Jolt matches contact points by position the same way). Without that fallback a
+// 5-box stack rocked at 0.04 rad/s.
+void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCache& c, std::uint32_t a,
+                                 std::uint32_t b, double margin) {
+  const ContactSettings& cs = s.settings_;
+  const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
+  const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
+  const Pose pose_a = compose(s.body_pose(a), sa.local), pose_b = compose(s.body_pose(b), sb.local);
+  const NarrowPhaseSettings ns{.speculative_margin = margin + cs.reuse_distance};
+  const double radius_a = core_radius(sa.shape), radius_b = core_radius(sb.shape);
+  // the normal is kept in the frame of the body that does not move, else in a's
+  const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;
+  const Quat qa_inv = glm::conjugate(s.q_[a]), qb_inv = glm::conjugate(s.q_[b]);
+  const Quat q_ref_inv = in_b ? qb_inv : qa_inv;
+  const bool mesh_pair = sa.shape.type == ShapeType::Mesh || sb.shape.type == ShapeType::Mesh;
+  const std::uint32_t old = c.first;
+  for (std::uint32_t o = old; o != kNoIndex; o = manifolds[o].next) settle(o);
+  std::uint32_t tail = kNoIndex;
+  c.first = kNoIndex;
+  // one manifold (flipped when the mesh is a's shape) into the new chain
+  auto keep = [&](const Manifold& m, bool flip) {
+    const std::uint32_t idx = new_manifold();
+    CachedManifold& r = manifolds[idx];
+    const Vec3 n = flip ? -m.normal : m.normal;
+    r.next = kNoIndex;
+    r.sub = m.sub_shape_b;
+    r.count = m.count;
+    r.normal_in_b = in_b;
+    r.normal = q_ref_inv * n;
+    r.radius_a = radius_a, r.radius_b = radius_b;
+    r.friction_mix = cs.friction_mix, r.restitution_mix = cs.restitution_mix;
+    r.mixed_friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
+    r.mixed_restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
+    r.mixed_rolling = std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
+    // the old manifold, for its impulses: a convex pair's only one, or of a mesh pair the one
+    // whose normal is closest to this one's (within the merge angle)
+    const CachedManifold* was = nullptr;
+    double closest = kMergeCos;
+    for (std::uint32_t o = old; o != kNoIndex; o = manifolds[o].next) {
+      const CachedManifold& om = manifolds[o];
+      const double along = glm::dot((om.normal_in_b ? s.q_[b] : s.q_[a]) * om.normal, n);
+      if (!mesh_pair || along >= closest) was = &om, closest = along;
+    }
+    r.friction = was ? was->friction : Vec3(0);
+    r.twist = was ? was->twist : 0;
+    r.rolling = was ? was->rolling : Vec3(0);
+    for (int k = 0; k < m.count; ++k) {
+      const ContactPoint& cp = m.points[k];
+      CachedPoint& q = r.points[k];
+      q.core_a = qa_inv * ((flip ? cp.point_b : cp.point_a) - radius_a * n - s.com_[a]);
+      q.core_b = qb_inv * ((flip ? cp.point_a : cp.point_b) + radius_b * n - s.com_[b]);
+      q.id = cp.id;
+      q.normal_impulse = 0;
+      if (!was) continue;
+      int match = -1;
+      for (int o = 0; o < was->count && match < 0; ++o)
+        if (was->points[o].id == q.id) match = o;
+      const double slop2 = cs.linear_slop * cs.linear_slop;
+      for (int o = 0; o < was->count && match < 0; ++o) {
+        const Vec3 d = was->points[o].core_a - q.core_a;
+        if (glm::dot(d, d) <= slop2) match = o;
+      }
+      if (match >= 0) q.normal_impulse = was->points[match].normal_impulse;
+    }
+    if (tail == kNoIndex)
+      c.first = idx;
+    else
+      manifolds[tail].next = idx;
+    tail = idx;
+  };
+  if (mesh_pair) {
+    // a convex shape on a static mesh: a manifold per touching triangle, in the mesh tree's
+    // order (the scratch grows until it holds them all)
+    const bool mesh_a = sa.shape.type == ShapeType::Mesh;
+    const ColliderShape& convex = mesh_a ? sb.shape : sa.shape;
+    const ColliderShape& mesh = mesh_a ? sa.shape : sb.shape;
+    if (mesh_scratch.empty()) mesh_scratch.resize(16);
+    int count = 0;
+    for (;;) {
+      count = collide_mesh(convex, mesh_a ? pose_b : pose_a, mesh, mesh_a ? pose_a : pose_b, mesh_scratch, ns);
+      if (count < static_cast<int>(mesh_scratch.size())) break;
+      mesh_scratch.resize(2 * mesh_scratch.size());
+    }
+    // the triangles' manifolds of one normal (a face over a flat stretch of the mesh) become
+    // one, reduced to four points as the narrow phase reduces a face's: a box on a flat mesh
+    // gets the manifold it gets on a plane, whatever the triangles under it (Jolt merges a
+    // body pair's manifolds of nearly equal normals the same way). Feature ids are per
+    // triangle, so the triangle is mixed into them
+    group_of.resize(static_cast<std::size_t>(count));
+    int groups = 0;
+    for (int j = 0; j < count; ++j) {
+      const Vec3& nj = mesh_scratch[static_cast<std::size_t>(j)].normal;
+      int g = 0;
+      while (g < groups) {
+        const Vec3& ng = mesh_scratch[static_cast<std::size_t>(group_first[static_cast<std::size_t>(g)])].normal;
+        if (glm::dot(ng, nj) >= kMergeCos) break;
+        ++g;
+      }
+      if (g == groups) {
+        if (group_first.size() <= static_cast<std::size_t>(groups)) group_first.resize(groups + 1);
+        group_first[static_cast<std::size_t>(groups++)] = j;
+      }
+      group_of[static_cast<std::size_t>(j)] = g;
+    }
+    for (int g = 0; g < groups; ++g) {
+      const Manifold& first = mesh_scratch[static_cast<std::size_t>(group_first[static_cast<std::size_t>(g)])];
+      merge_scratch.clear();
+      std::uint32_t deepest_triangle = first.sub_shape_b;
+      double deepest = -INFINITY;
+      for (int j = 0; j < count; ++j) {
+        if (group_of[static_cast<std::size_t>(j)] != g) continue;
+        const Manifold& m = mesh_scratch[static_cast<std::size_t>(j)];
+        for (int k = 0; k < m.count; ++k) {
+          const ContactPoint& cp = m.points[k];
+          const double depth = glm::dot(cp.point_a - cp.point_b, first.normal);
+          if (depth > deepest) deepest = depth, deepest_triangle = m.sub_shape_b;
+          // a point that two triangles both give (a ball over their common edge, a box's
+          // corner on it) is kept once, the deeper
+          auto same = std::find_if(merge_scratch.begin(), merge_scratch.end(), [&](const narrow::Candidate& o) {
+            const Vec3 d = o.b - cp.point_b;
+            return glm::dot(d, d) <= kSamePoint * kSamePoint;
+          });
+          if (same == merge_scratch.end())
+            merge_scratch.push_back({cp.point_a, cp.point_b, depth, cp.id ^ (m.sub_shape_b * 0x9e3779b1u)});
+          else if (depth > same->depth)
+            *same = {cp.point_a, cp.point_b, depth, cp.id ^ (m.sub_shape_b * 0x9e3779b1u)};
+        }
+      }
+      Manifold merged;
+      narrow::reduce(merge_scratch.data(), static_cast<int>(merge_scratch.size()), first.normal, merged);
+      merged.sub_shape_b = deepest_triangle;
+      if (merged.count > 0) keep(merged, mesh_a);
+    }
+  } else {
+    const Manifold m = collide(sa.shape, pose_a, sb.shape, pose_b, ns, &c.narrow);
+    if (m.count > 0) keep(m, false);
+  }
+  // the old chain goes back to the pool
+  PairCache old_chain;
+  old_chain.first = old;
+  free_manifolds(old_chain);
+  c.margin = margin + cs.reuse_distance;
+}
+
+// One cached manifold to the solver: its points and normal in the world at the bodies' poses
+// now (the separation of a point is measured between the shapes' cores, which ride with the
+// bodies), the mixed material, and the impulses it carried (when warm starting).
+void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t record, std::uint32_t a,
+                         std::uint32_t b) {
+  const ContactSettings& cs = s.settings_;
+  const CachedManifold& r = manifolds[record];
+  // in place: last step's entries are overwritten (their impulses saved first when they are
+  // another manifold's), new ones appended
+  const std::size_t at_index = emitted++;
+  if (at_index == pairs.size()) pairs.emplace_back();
+  ContactPair& c = pairs[at_index];
+  CachedManifold& own = manifolds[record];
+  if (c.record != record && c.record != kNoIndex && at_index < last_count && manifolds[c.record].last == at_index)
+    settle(c.record);
+  // this manifold's impulses: in this entry (the same place as last step), in another entry,
+  // or saved in the cached manifold
+  const ContactPair& from = own.last == kNoIndex ? c : pairs[own.last];
+  const bool held = own.last != kNoIndex;
+  double impulse[Manifold::kMaxPoints];
+  for (int k = 0; k < r.count; ++k) impulse[k] = held ? from.points[k].normal_impulse : r.points[k].normal_impulse;
+  const Vec3 friction = held ? from.friction_old : r.friction;
+  const double twist = held ? from.twist_impulse : r.twist;
+  const Vec3 rolling = held ? from.rolling_impulse : r.rolling;
+  if (held && own.last != at_index) pairs[own.last].record = kNoIndex;
+  own.last = static_cast<std::uint32_t>(at_index);
+  c.slot_a = p.slot_a, c.slot_b = p.slot_b, c.shape_a = p.shape_a, c.shape_b = p.shape_b, c.sub = r.sub;
+  c.a = a, c.b = b, c.record = record;
+  const Mat3 qa = glm::mat3_cast(s.q_[a]), qb = glm::mat3_cast(s.q_[b]);
+  const Vec3& com_a = s.com_[a];
+  const Vec3& com_b = s.com_[b];
+  const Vec3 n = (r.normal_in_b ? qb : qa) * r.normal;
+  c.normal = n;
+  tangent_basis(n, c.t1, c.t2);
+  // the material, mixed again if the rules changed since
+  if (own.friction_mix != cs.friction_mix || own.restitution_mix != cs.restitution_mix) {
+    const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
+    const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
+    own.friction_mix = cs.friction_mix, own.restitution_mix = cs.restitution_mix;
+    own.mixed_friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
+    own.mixed_restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
+  }
+  c.friction = r.mixed_friction;
+  c.restitution = r.mixed_restitution;
+  c.rolling = r.mixed_rolling;
+  c.count = r.count;
+  const bool warm = cs.warm_starting;
+  const double radius_a = r.radius_a, radius_b = r.radius_b;
+  Vec3 centroid(0), at[Manifold::kMaxPoints];
+  for (int k = 0; k < r.count; ++k) {
+    const CachedPoint& q = r.points[k];
+    SolverPoint& pt = c.points[k];
+    // the cores now, the surface points on them, and the overlap between the surfaces
+    pt.sa = qa * q.core_a;
+    pt.sb = qb * q.core_b;
+    const Vec3 core_a = com_a + pt.sa, core_b = com_b + pt.sb;
+    const Vec3 on_a = core_a + radius_a * n, on_b = core_b - radius_b * n;
+    pt.depth = glm::dot(on_a - on_b, n);
+    at[k] = 0.5 * (on_a + on_b);
+    centroid += at[k];
+    pt.ra = at[k] - com_a;
+    pt.rb = at[k] - com_b;
+    // the separation now is -depth; keep it relative to the cores
+    pt.offset = -pt.depth - glm::dot(core_b - core_a, n);
+    pt.id = q.id;
+    pt.normal_impulse = warm ? impulse[k] : 0;
+  }
+  centroid /= static_cast<double>(r.count);
+  c.ca = centroid - com_a;
+  c.cb = centroid - com_b;
+  c.twist_radius = 0;
+  for (int k = 0; k < r.count; ++k) c.twist_radius += glm::length(at[k] - centroid);
+  c.twist_radius /= r.count;
+  // friction carried over, re-projected onto this step's tangents
+  c.tangent_impulse[0] = warm ? glm::dot(friction, c.t1) : 0;
+  c.tangent_impulse[1] = warm ? glm::dot(friction, c.t2) : 0;
+  // a constraint that does not act this step carries nothing (a carried twist impulse on a
+  // one-point manifold, never clamped, spun a box on its corner up to 70 rad/s)
+  c.twist_impulse = warm && c.twist_radius > 0 ? twist : 0;
+  c.rolling_impulse = warm && c.rolling > 0 ? rolling : Vec3(0);
+}
+
+// ---------------------------------------------------------------------------------------
+// bodies leaving
+
+void RigidContacts::remove_body(RigidBodySystem& s, std::uint32_t slot, std::size_t i) {
+  // its shapes leave the tree and the lists
+  if (slot < body_proxies.size()) {
+    for (const std::uint32_t q : body_proxies[slot]) {
+      ShapeProxy& p = proxies[q];
+      if (p.node >= 0) tree.destroy_proxy(p.node);
+      std::erase(statics, q);
+      std::erase(unbounded, q);
+      p = ShapeProxy{};
+      p.body = free_proxy;
+      free_proxy = q;
+    }
+    body_proxies[slot].clear();
+  }
+  // its pairs, cached manifolds and contacts (the others' impulses saved first: the entries move)
+  settle_all();
+  std::size_t keep = 0;
+  for (ShapePair& p : shape_pairs) {
+    if (p.slot_a == slot || p.slot_b == slot)
+      free_pair(p);
+    else
+      shape_pairs[keep++] = p;
+  }
+  shape_pairs.resize(keep);
+  std::erase_if(pairs, [&](const ContactPair& c) { return c.slot_a == slot || c.slot_b == slot; });
+  emitted = pairs.size();
+  // the body now at dense index i (the last one, moved into the hole) takes its proxies along
+  if (i < s.type_.size() && s.owner_[i] < body_proxies.size())
+    for (const std::uint32_t q : body_proxies[s.owner_[i]]) proxies[q].body = static_cast<std::uint32_t>(i);
+  for (ContactPair& c : pairs) c.a = s.slot_[c.slot_a], c.b = s.slot_[c.slot_b];
 }
 
 }  // namespace pba::detail

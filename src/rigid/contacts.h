@@ -2,12 +2,19 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
+#include "collide/narrow_internal.h"
+#include "pba/collide/broad_phase.h"
 #include "pba/collide/narrow_phase.h"
 #include "pba/rigid.h"
+#include "solver.h"
 
 namespace pba::detail {
+
+/// "None" for the contact pipeline's indices.
+inline constexpr std::uint32_t kNoIndex = 0xffffffffu;
 
 /// One contact point as the solver sees it: anchors, effective masses and impulses.
 struct SolverPoint {
@@ -18,16 +25,10 @@ struct SolverPoint {
   // turns away from the contact, its centre does not
   Vec3 sa{0, 0, 0}, sb{0, 0, 0};
   double offset = 0;              // (m)
-  // the normal's angular parts, fixed over the step: ra x n and rb x n (m), and the angular
-  // velocity changes per unit normal impulse I_a^-1 (ra x n), I_b^-1 (rb x n) (1/(kg m))
-  Vec3 rna{0, 0, 0}, rnb{0, 0, 0};
-  Vec3 ina{0, 0, 0}, inb{0, 0, 0};
-  double normal_mass = 0;         // 1 / (J M^-1 J^T) along the normal (kg)
   double normal_impulse = 0;      // accumulated (N s per substep)
   double max_normal_impulse = 0;  // largest single normal impulse of the step (N s)
   double approach = 0;            // normal relative velocity before the solve (m/s)
   double depth = 0;               // overlap at the start of the step (m)
-  Vec3 local{0, 0, 0};            // the point in body a's frame (m), for matching by position
   std::uint32_t id = 0;           // feature id (warm starting)
 };
 
@@ -38,17 +39,22 @@ struct SolverPoint {
 /// from the centroid. Per-point friction clamped point by point lets opposing sideways
 /// impulses at different points survive (they cancel in the sum but use up the disc), which
 /// measurably weakens sliding friction.
+///
+/// RigidContacts::update() rewrites the pairs in place each step (no value-initialisation:
+/// at 20,000 manifolds and 1.4 KB each that alone took milliseconds), so every field the
+/// solver reads must be written by update() (contact_pairs.cpp, emit) or by prepare().
 struct ContactPair {
   std::uint32_t slot_a = 0, slot_b = 0;    // body handle slots (stable across removals)
   std::uint32_t shape_a = 0, shape_b = 0;  // shape indices within the bodies
+  std::uint32_t sub = 0;                   // the triangle of a mesh shape (0 for other shapes)
   std::uint32_t a = 0, b = 0;              // dense body indices this step
-  NarrowPhaseCache cache{};
-  Vec3 normal{0, 0, 1}, t1{1, 0, 0}, t2{0, 0, 1};  // from a to b, and the friction basis
+  std::uint32_t record = kNoIndex;         // its CachedManifold (contact_pairs.cpp; impulses go back there)
+  // from a to b, and the friction basis; (t1, t2, normal) is right-handed (t1 x t2 = normal),
+  // which the solver's contact frame relies on (src/rigid/solver.h)
+  Vec3 normal{0, 0, 1}, t1{1, 0, 0}, t2{0, 0, 1};
   double friction = 0, restitution = 0, rolling = 0;  // mixed coefficients (rolling: times radius, m)
   Vec3 ca{0, 0, 0}, cb{0, 0, 0};  // friction anchor (the points' centroid) from each centre of mass (m)
-  double tangent_mass[2] = {0, 0};   // effective masses of the two tangential constraints (kg)
   double tangent_impulse[2] = {0, 0};  // accumulated (N s per substep)
-  double twist_mass = 0;     // effective inertia about the normal (kg m^2)
   double twist_impulse = 0;  // accumulated (N m s per substep)
   double twist_radius = 0;   // mean distance of the points from the centroid (m)
   Vec3 friction_old{0, 0, 0};  // the tangential impulse in world axes at the end of the step
@@ -62,20 +68,8 @@ struct ContactPair {
     if (slot_a != o.slot_a) return slot_a < o.slot_a;
     if (slot_b != o.slot_b) return slot_b < o.slot_b;
     if (shape_a != o.shape_a) return shape_a < o.shape_a;
-    return shape_b < o.shape_b;
-  }
-};
-
-/// A candidate pair of shapes from the sweep (sorted before the manifolds are made: sorting
-/// these, not the kilobyte-sized ContactPairs, keeps the sort cheap).
-struct PairKey {
-  std::uint32_t slot_a = 0, slot_b = 0, shape_a = 0, shape_b = 0;  // as in ContactPair
-  std::uint32_t a = 0, b = 0;                                      // dense body indices
-  bool operator<(const PairKey& o) const {
-    if (slot_a != o.slot_a) return slot_a < o.slot_a;
-    if (slot_b != o.slot_b) return slot_b < o.slot_b;
-    if (shape_a != o.shape_a) return shape_a < o.shape_a;
-    return shape_b < o.shape_b;
+    if (shape_b != o.shape_b) return shape_b < o.shape_b;
+    return sub < o.sub;
   }
 };
 
@@ -107,11 +101,91 @@ inline void apply(BodyView& a, BodyView& b, const Mat3& ia, const Mat3& ib, cons
   *b.w += ib * glm::cross(rb, p);
 }
 
-/// A shape's entry in the sweep: its bounds this step and who owns it.
+/// A shape's entry in the broad phase (contact_pairs.cpp): its tight bounds (the shape's
+/// bounds grown by the speculative distance and the step's motion), and the fat bounds that
+/// the tree holds for it (the tight ones grown by a margin and stretched along the motion).
 struct ShapeProxy {
-  Aabb box{};
+  Aabb box{};               // tight bounds, as of the body's last update (m)
+  Aabb fat{};               // the tree's bounds (m); infinite for a plane
   std::uint32_t body = 0;   // dense index
   std::uint32_t shape = 0;  // index within the body
+  std::uint32_t slot = kNoIndex;  // the body's handle slot; kNoIndex: a free entry
+  std::int32_t node = -1;   // leaf of the tree; -1 for a plane (kept in `unbounded`) or a free entry
+};
+
+/// A pair of shapes whose fat bounds overlap: the persistent pair list, sorted by key.
+struct ShapePair {
+  std::uint32_t slot_a = 0, slot_b = 0, shape_a = 0, shape_b = 0;  // key, as in ContactPair
+  std::uint32_t proxy_a = 0, proxy_b = 0;                          // ShapeProxy indices
+  std::uint32_t cache = kNoIndex;  // its PairCache, once the narrow phase has seen it
+  bool operator<(const ShapePair& o) const {
+    if (slot_a != o.slot_a) return slot_a < o.slot_a;
+    if (slot_b != o.slot_b) return slot_b < o.slot_b;
+    if (shape_a != o.shape_a) return shape_a < o.shape_a;
+    return shape_b < o.shape_b;
+  }
+};
+
+/// A set of 64-bit keys (open addressing, linear probing, deletion by backward shift; grown,
+/// never shrunk): which shape pairs the list holds, so the pairs that moved shapes find are
+/// told from new ones in O(1) instead of by sorting them all (Box2D v3 keeps its pair set
+/// the same way). Key 0 is reserved (never a pair: a pair's two proxies differ).
+struct PairSet {
+  std::vector<std::uint64_t> slots;  // 0: empty
+  std::size_t count = 0;
+  bool contains(std::uint64_t key) const;
+  /// Adds `key`; false when it was there already.
+  bool insert(std::uint64_t key);
+  void erase(std::uint64_t key);
+  void clear();
+};
+
+/// The PairSet key of a shape pair: its two proxies.
+inline std::uint64_t pair_key(std::uint32_t proxy_a, std::uint32_t proxy_b) {
+  return (std::uint64_t{proxy_a} << 32 | proxy_b) + 1;
+}
+
+/// What the narrow phase last found for a shape pair, kept between steps: the relative pose
+/// of the bodies then (body b's centre of mass and principal frame in body a's principal
+/// frame), the speculative margin used, the SAT cache, and the manifolds (one, or one per
+/// touching triangle of a mesh). While the relative pose stays within the reuse thresholds,
+/// the manifolds are carried over instead of made again (Jolt's body pair cache).
+struct PairCache {
+  Vec3 rel_position{0, 0, 0};
+  Quat rel_rotation{1, 0, 0, 0};
+  double margin = -1;  // (m); < 0: nothing computed yet
+  NarrowPhaseCache narrow{};
+  std::uint32_t first = kNoIndex;  // first CachedManifold; the next free PairCache when free
+};
+
+/// One point of a cached manifold, fixed to the bodies: the points of the two shapes' cores
+/// (a sphere's centre, a box's surface) in each body's principal frame from its centre of
+/// mass, and the impulse it carried at the end of its last step.
+struct CachedPoint {
+  Vec3 core_a{0, 0, 0}, core_b{0, 0, 0};  // (m)
+  double normal_impulse = 0;              // (N s per solver step)
+  std::uint32_t id = 0;                   // feature id
+};
+
+/// A manifold in the bodies' frames, and the friction, twist and rolling impulses it carried.
+struct CachedManifold {
+  std::uint32_t next = kNoIndex;  // the shape pair's next manifold (mesh triangles); free list
+  std::uint32_t sub = 0;          // mesh triangle (0 otherwise)
+  // the entry of `pairs` that holds its latest impulses (the solver's), or kNoIndex when the
+  // fields below do: the impulses are saved here only when that entry is about to be reused
+  std::uint32_t last = kNoIndex;
+  int count = 0;
+  bool normal_in_b = false;       // the normal is kept in body b's frame (else a's)
+  Vec3 normal{0, 0, 1};           // unit, from a to b, in that body's principal frame
+  CachedPoint points[Manifold::kMaxPoints];
+  Vec3 friction{0, 0, 0};  // the tangential impulse in world axes at the end of its last step
+  double twist = 0;
+  Vec3 rolling{0, 0, 0};
+  // what does not change while the pair lasts: the shapes' core radii (m), and the mixed
+  // material with the mix rules it was mixed by
+  double radius_a = 0, radius_b = 0;
+  double mixed_friction = 0, mixed_restitution = 0, mixed_rolling = 0;
+  MixRule friction_mix = MixRule::GeometricMean, restitution_mix = MixRule::Maximum;
 };
 
 /// Softness of a contact: Catto's soft step coefficients for a spring of `hertz` and
@@ -123,39 +197,133 @@ struct Softness {
 };
 Softness make_soft(double hertz, double zeta, double h);
 
-/// The contact state of a RigidBodySystem: pairs (this step's and last step's), scratch
-/// for the sweep, and the solver passes. Grown, never shrunk: steady state does not allocate.
+/// The contact state of a RigidBodySystem: this step's contact pairs for the solver, the
+/// broad phase and the pair cache behind them (contact_pairs.cpp), and the solver passes.
+/// Grown, never shrunk: steady state does not allocate.
 struct RigidContacts {
-  std::vector<ContactPair> pairs, previous;
-  std::vector<ShapeProxy> proxies;
-  std::vector<PairKey> candidates;  // the sweep's pairs this step, sorted
+  std::vector<ContactPair> pairs;  // this step's manifolds, for the solver (sorted by key)
+  std::size_t emitted = 0;         // pairs written so far this step
+  std::size_t last_count = 0;      // pairs of last step
   std::vector<Mat3> inv_inertia;  // world inverse inertia by dense body, fixed over the step
-  std::vector<std::uint32_t> statics;  // proxies of static bodies (indices into proxies)
   std::size_t continuous_hits = 0;     // bodies put back to a time of impact, all steps
   double impulse_h = 0;  // the time step (s) the carried impulses were accumulated over; 0: none yet
 
-  /// Finds the overlapping shape pairs, builds their manifolds and carries last step's
-  /// impulses over by feature id.
+  // ---- the broad phase and the pair cache (contact_pairs.cpp) ----
+  std::vector<ShapeProxy> proxies;            // by proxy index (with free entries)
+  std::vector<std::uint32_t> statics;         // proxies of static bodies (indices into proxies)
+  std::vector<std::uint32_t> unbounded;       // proxies of planes (not in the tree)
+  std::vector<std::vector<std::uint32_t>> body_proxies;  // by body slot: its proxies, by shape
+  std::vector<Pose> static_pose;              // by body slot: a static body's pose at its last update
+  DynamicTree tree{0.1};                      // the bounded proxies' fat boxes
+  std::vector<ShapePair> shape_pairs, merged; // the persistent pair list (and merge scratch)
+  PairSet pair_set;                           // the pairs in shape_pairs, by proxies
+  std::vector<ShapePair> found;               // scratch: pairs of the moved proxies this step
+  std::vector<std::uint32_t> moved;           // scratch: proxies re-inserted this step
+  std::vector<std::uint8_t> was_moved;        // scratch: 1 for the proxies in `moved`
+  std::vector<PairCache> caches;              // pool
+  std::vector<CachedManifold> manifolds;      // pool
+  std::vector<Manifold> mesh_scratch;         // collide_mesh output
+  std::vector<int> group_of, group_first;     // scratch: the mesh manifolds' groups of one normal
+  std::vector<narrow::Candidate> merge_scratch;  // scratch: a group's points
+  std::uint32_t free_proxy = kNoIndex, free_cache = kNoIndex, free_manifold = kNoIndex;
+  std::size_t reinserted_since_check = 0;     // tree moves since its quality was last checked
+  double tree_ratio = 0;                      // the tree's area ratio after its last rebuild
+
+  /// Finds the shape pairs whose bounds overlap, wakes sleeping islands that a moving body
+  /// reaches, and gives each pair its manifolds (reused while the bodies' relative pose
+  /// barely changed, else made by the narrow phase), with last step's impulses.
   void update(RigidBodySystem& s, double dt);
-  /// Anchors, effective masses and approach speeds at the start of the step.
+  /// Forgets body `slot` (being destroyed at dense index `i`; the last body moves to `i`).
+  void remove_body(RigidBodySystem& s, std::uint32_t slot, std::size_t i);
+  // update()'s parts
+  void update_proxies(RigidBodySystem& s, double dt);
+  void find_new_pairs(RigidBodySystem& s);
+  void wake_touched(RigidBodySystem& s);
+  void make_manifolds(RigidBodySystem& s, double dt);
+  void collide_pair(RigidBodySystem& s, const ShapePair& p, PairCache& c, std::uint32_t a, std::uint32_t b,
+                    double margin);
+  void emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t record, std::uint32_t a, std::uint32_t b);
+  void settle(std::uint32_t record);
+  void settle_all();
+  std::uint32_t new_cache();
+  std::uint32_t new_manifold();
+  void free_manifolds(PairCache& c);
+  void free_pair(ShapePair& p);
+
+  // the velocity solvers' constraints (src/rigid/solver.h): blocks by colour, then the overflow's
+  std::vector<ContactBlock> blocks;
+  std::size_t block_count = 0;     // blocks in use
+  std::size_t colored_blocks = 0;  // blocks [0, colored_blocks) are coloured, the rest overflow
+  static constexpr std::uint32_t kOverflow = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> color_of;     // by pair: its colour (kOverflow: solved one at a time)
+  std::vector<std::uint32_t> color_count;  // manifolds of each colour
+  std::uint32_t overflow_count = 0;        // manifolds in the overflow
+  std::vector<std::size_t> color_block;    // colour c's blocks from color_block[c]; then the overflow's
+  // colouring scratch: contact-graph levels by body, the dynamic pairs' adjacency, bands by pair
+  std::vector<std::uint32_t> level, adjacency_start, adjacency, queue, cursor, band_of, band_start, by_band;
+  std::vector<std::uint32_t> mask_band;    // by body: the band its mask is for
+  std::vector<std::uint64_t> mask;         // by body: the colours of that band it has manifolds in
+  std::vector<std::uint32_t> by_color;     // the pairs by colour, in pair order within each
+  std::vector<std::size_t> offset;         // scratch: each colour's start in by_color
+  std::vector<std::uint32_t> band_colors;  // each band's first colour, then the number of colours
+  bool backward = true;  // this step runs each band's colours last to first (alternating by step)
+  struct LaneRef {
+    std::uint32_t block, lane;
+  };
+  std::vector<LaneRef> restitution_lanes;  // the lanes with restitution, in pass order
+  // by body, and a last spare row for empty lanes: the velocities while the solver runs, the
+  // motion since the start of the step (dp, then the turn w, x, y, z), and the warm-start
+  // velocity changes for the next integration
+  std::vector<SolverBody> rows;
+  std::vector<double> motion;
+  std::vector<SolverBody> warm;
+  SimdPath simd = best_simd_path();        // the path of the coloured blocks and the free motion
+  std::vector<std::uint32_t> moving;       // the awake dynamic bodies this step (dense indices)
+  bool built = false;       // the blocks hold this step's manifolds (cleared by store())
+  bool has_colors = false;  // color_of holds the last step's colours
+
+  /// World inverse inertias; for the velocity solvers, the colours, the blocks and the
+  /// carried impulses in the warm-start accumulators.
   void prepare(RigidBodySystem& s);
-  /// Applies the carried impulses.
-  void warm_start(RigidBodySystem& s);
+  /// The pairs' colours by contact-graph level (color_of, color_count, overflow_count).
+  void color(RigidBodySystem& s);
+  /// The blocks from the pairs and their colours.
+  void build(RigidBodySystem& s);
+  /// Pair `index` into lane l of block k.
+  void fill(RigidBodySystem& s, ContactBlock& k, int l, std::uint32_t index);
+  /// The bodies' arrays as the kernels see them.
+  BodyArrays arrays(RigidBodySystem& s);
+  /// The velocities back from the solver's rows to the system's arrays.
+  void finish_velocities(RigidBodySystem& s);
+  /// Adds every manifold's carried impulses to the warm-start accumulators.
+  void accumulate_warm(RigidBodySystem& s);
+  /// The same for the rolling resistance of overflow lane l of block k.
+  void warm_rolling(RigidBodySystem& s, const ContactBlock& k, int l);
+  /// Rolling resistance of overflow lane l of block k.
+  void roll(RigidBodySystem& s, const ContactBlock& k, int l);
+  /// One pass over the contacts: `bias` asks for position correction (false: the relax pass),
+  /// `soft` for the soft-step constraint; `update_sep` first measures the separations at the
+  /// poses now, `warm_next` then adds the impulses to the warm-start accumulators. The
+  /// colours run first to last (the ground contacts last), then the overflow in pair order.
+  void pass(RigidBodySystem& s, double h, bool bias, bool soft, bool update_sep, bool warm_next);
+  /// Measures the separations at the poses now (after positions moved without a relax pass).
+  void update_separations(RigidBodySystem& s);
+  /// The colour of pair k in the last step (the number of colours for the overflow), -1 when
+  /// not coloured.
+  long color_of_pair(std::size_t k) const;
   /// Rescales the carried impulses to the solver's time step h (s): they were accumulated
   /// over steps of `impulse_h` (N s per substep of the soft step, TGS and XPBD, per step of
   /// sequential impulses), so a switch of solver, of substeps or of dt would otherwise start
   /// from impulses too large or too small by their ratio (a 5-stack switched from sequential
   /// impulses to TGS was kicked to 0.19 m/s).
   void carry_impulses(double h);
-  /// One pass over the contacts. `soft` picks the soft-step constraint; `bias` asks for
-  /// position correction (false: the relax pass).
-  void solve(RigidBodySystem& s, double h, bool bias, bool soft);
   /// Restitution for points that approached faster than the threshold.
   void restitution(RigidBodySystem& s);
   /// Sweeps fast bodies (and bullets) against static shapes and puts each back at its first
   /// time of impact (continuous.cpp).
   void continuous(RigidBodySystem& s);
-  /// Keeps each point's friction impulse in world axes for next step's re-projection.
+  /// Writes the blocks' impulses back to the pairs and keeps each manifold's friction impulse
+  /// in world axes for next step's re-projection.
   void store();
   /// The TGS solver's step after prepare(): substeps of biased rigid iterations, positions,
   /// relax iterations (src/rigid/tgs.cpp); step() then runs the restitution pass.

@@ -68,6 +68,24 @@ double advance(const Sweep& w, GapAt gap_at, double target, double tol) {
   return t;  // not converged: t is still a time before contact (each advance is safe)
 }
 
+// True when the point q on triangle t (both in the mesh frame) lies inside the face, or on an
+// edge or a vertex whose edges are all internal (flag clear: flat or concave; bits ab = 1,
+// bc = 2, ca = 4, as TriangleMesh::edge_flags gives them).
+bool internal_feature(const Vec3 t[3], const Vec3& q, std::uint8_t flags) {
+  const Vec3 n = glm::cross(t[1] - t[0], t[2] - t[0]);
+  const double nn = glm::dot(n, n);
+  // barycentric weights: u for a, v for b, w for c; a weight near 0 puts q on the opposite edge
+  const double v = glm::dot(glm::cross(q - t[0], t[2] - t[0]), n) / nn;
+  const double w = glm::dot(glm::cross(t[1] - t[0], q - t[0]), n) / nn;
+  const double u = 1 - v - w;
+  constexpr double kOn = 1e-9;
+  std::uint8_t on = 0;
+  if (w <= kOn) on |= 1;
+  if (u <= kOn) on |= 2;
+  if (v <= kOn) on |= 4;
+  return (on & flags) == 0;
+}
+
 }  // namespace
 
 void RigidContacts::continuous(RigidBodySystem& s) {
@@ -80,6 +98,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i], 0, s.extent_[i]};
     const Quat dq = w.q1 * glm::conjugate(w.q0);
     w.angle = 2 * std::atan2(glm::length(Vec3(dq.x, dq.y, dq.z)), std::abs(dq.w));
+    // (the farthest any point of the body travels in the step, m)
     const double moved = glm::length(w.c1 - w.c0) + w.angle * w.reach;
     if (!s.bullet_[i] && moved <= 0.5 * s.min_extent_[i]) continue;
     // everything the body can touch on its way: its centre's path grown by its reach
@@ -112,9 +131,32 @@ void RigidContacts::continuous(RigidBodySystem& s) {
             Vec3 corners[3];
             for (int c = 0; c < 3; ++c) corners[c] = mesh.vertices()[mesh.triangles()[tri][c]];
             ConvexProxy piece{.type = ShapeType::Mesh, .triangle = corners, .pose = pb};
+            const Vec3 face = pb.rotation * mesh.normal(tri), corner = apply(pb, corners[0]);
+            const std::uint8_t flags = mesh.edge_flags()[tri];
+            // a shape farther from the triangle's plane, on its side, than any of its points
+            // can travel in the step never reaches the triangle (the first advance would
+            // jump past the step's end): two support points instead of GJK
+            const Pose p0 = pose_a(0.0);
+            const double plane = glm::dot(face, corner);
+            const double above = glm::dot(face, apply(p0, support(sa.shape, glm::conjugate(p0.rotation) * -face))) - plane;
+            const double below = plane - glm::dot(face, apply(p0, support(sa.shape, glm::conjugate(p0.rotation) * face)));
+            if (std::max(above, below) - target > moved * (1 + 1e-12) + 1e-12) return;
             toi = std::min(toi, advance(w, [&](double t) {
-              const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, pose_a(t)), piece);
-              return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
+              const Pose pa = pose_a(t);
+              const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, pa), piece);
+              if (r.cores_overlap) return Gap{0.0, r.normal};
+              // nearest the face or an internal (flat or concave) edge or vertex: the gap is the
+              // one to the triangle's plane, on the side of the shape's centre, as the contact
+              // takes it (collide_mesh); else a body rolling over a flat mesh was stopped at each
+              // edge between its triangles. The plane is never farther than the triangle, so
+              // the advance stays safe
+              if (internal_feature(corners, apply_inverse(pb, r.point_b), flags)) {
+                const Vec3 centre = sa.shape.type == ShapeType::Hull ? apply(pa, sa.shape.hull->centroid()) : pa.position;
+                const Vec3 n = glm::dot(centre - corner, face) >= 0 ? face : -face;
+                const Vec3 low = apply(pa, support(sa.shape, glm::conjugate(pa.rotation) * -n));
+                return Gap{glm::dot(n, low - corner), -n};
+              }
+              return Gap{r.distance, r.normal};
             }, target, tol));
           });
         } else if (sb.shape.is_convex()) {

@@ -23,14 +23,21 @@ void RigidContacts::step_tgs(RigidBodySystem& s, double dt, const Vec3& gravity)
   const int substeps = cs.substeps;
   const double h = dt / substeps;
   for (int k = 0; k < substeps; ++k) {
-    // velocities and the carried impulses
-    s.integrate_velocities(h, gravity);
-    if (cs.warm_starting) warm_start(s);
+    // velocities with the carried impulses
+    s.integrate_velocities(h, gravity, rows.data(), warm.data());
     // rigid contacts, biased by the separation at this substep's poses
-    for (int it = 0; it < cs.substep_iterations; ++it) solve(s, h, true, false);
-    // positions, then the relax iterations that leave no push-out velocity behind
-    s.integrate_positions(h);
-    for (int it = 0; it < cs.relax_iterations; ++it) solve(s, h, false, false);
+    for (int it = 0; it < cs.substep_iterations; ++it) pass(s, h, true, false, false, false);
+    // positions, then the relax iterations that leave no push-out velocity behind: the first
+    // measures the separations at the new poses, the last carries the impulses to the next
+    // substep (without relax iterations, separate passes do both)
+    s.integrate_positions(h, rows.data(), motion.data());
+    const bool carry = cs.warm_starting && k + 1 < substeps;
+    for (int it = 0; it < cs.relax_iterations; ++it)
+      pass(s, h, false, false, it == 0, carry && it + 1 == cs.relax_iterations);
+    if (cs.relax_iterations == 0) {
+      update_separations(s);
+      if (carry) accumulate_warm(s);
+    }
   }
 }
 

@@ -380,10 +380,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x30000018a1fbbebdull) << std::hex << soft;
-  EXPECT_EQ(si, 0x12f0aeddb29dd226ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x2d05566ad67fd50bull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x55e4ba78337d856cull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0xf8468756652f4f36ull) << std::hex << soft;
+  EXPECT_EQ(si, 0xbaa191709c1b453dull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x547cedaeefd797d3ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0xfbf5a5b19b207711ull) << std::hex << xpbd;
 }
 
 }  // namespace

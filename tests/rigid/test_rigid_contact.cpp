@@ -331,6 +331,29 @@ TEST(RigidSleep, DroppedBoxesFallAsleepAndStayPut) {
   }
 }
 
+// The rest test looks at how far a body moved over the rest window, not at its speed of the
+// moment: a steady motion is held to the tolerances exactly (a free body at 0.9 times the
+// linear or angular tolerance falls asleep after time_to_sleep, one at 1.1 times never does).
+TEST(RigidSleep, SteadyMotionIsHeldToTheTolerances) {
+  const pba::ContactSettings c{};
+  for (const double f : {0.9, 1.1})
+    for (const bool turning : {false, true}) {
+      RigidBodySystem s;
+      const Vec3 v = turning ? Vec3(0) : Vec3(f * c.sleep_linear, 0, 0);
+      const Vec3 w = turning ? Vec3(0, f * c.sleep_angular, 0) : Vec3(0);
+      const auto b = s.create({.linear_velocity = v, .angular_velocity = w, .shapes = {{.shape = ColliderShape::sphere(0.5)}}});
+      int steps = 0;
+      while (s.awake(b) && steps < 600) s.step(1.0 / 60, Vec3(0)), ++steps;
+      if (f < 1) {
+        EXPECT_FALSE(s.awake(b)) << f << (turning ? " turning" : " moving");
+        // the window's time and a step
+        EXPECT_LE(steps / 60.0, c.time_to_sleep + 2.0 / 60) << f << (turning ? " turning" : " moving");
+      } else {
+        EXPECT_TRUE(s.awake(b)) << f << (turning ? " turning" : " moving");
+      }
+    }
+}
+
 // A force, an impulse, a new velocity or pose, or an awake body landing on it wakes a
 // sleeping body and its island (the boxes it rests on), and nothing else.
 TEST(RigidSleep, ForcesImpulsesPosesAndContactsWakeIslands) {
@@ -368,6 +391,28 @@ TEST(RigidSleep, ForcesImpulsesPosesAndContactsWakeIslands) {
   pba::rigid_scenes::vertical_stack(t, 3);
   for (int i = 0; i < 120; ++i) t.step(1.0 / 60, kGravity);
   EXPECT_EQ(t.awake_count(), 3u);
+}
+
+// A force wakes a sleeping body and acts on it at once: a box asleep on the ground pulled up
+// by three times its weight leaves it, and once off the ground it gains (F / m - g) dt per
+// step exactly (no contact left to act; the closed form of the velocity under constant
+// acceleration, which symplectic Euler reproduces).
+TEST(RigidSleep, AForceWakesASleepingBodyAndActs) {
+  RigidBodySystem s;
+  pba::rigid_scenes::ground(s, 0.5);
+  const auto box = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+  for (int i = 0; i < 120 && s.awake(box); ++i) s.step(1.0 / 60, kGravity);
+  ASSERT_FALSE(s.awake(box));
+  const double m = s.mass(box), g = -kGravity.y, dt = 1.0 / 60;
+  const double y0 = s.center_of_mass(box).y;
+  s.apply_force(box, {0, 3 * m * g, 0});
+  EXPECT_TRUE(s.awake(box));
+  s.step(dt, kGravity);
+  for (int i = 0; i < 9; ++i) s.apply_force(box, {0, 3 * m * g, 0}), s.step(dt, kGravity);
+  EXPECT_GT(s.center_of_mass(box).y, y0 + 0.01);
+  const double v10 = s.linear_velocity(box).y;
+  for (int i = 0; i < 20; ++i) s.apply_force(box, {0, 3 * m * g, 0}), s.step(dt, kGravity);
+  EXPECT_NEAR(s.linear_velocity(box).y - v10, 2 * g * 20 * dt, 1e-9 * g);
 }
 
 }  // namespace

@@ -1,0 +1,161 @@
+// Rigid bodies, private: the compact contact solver of the soft step, sequential impulses and
+// TGS. Each step prepare() copies what the velocity passes need out of the contact pairs into
+// blocks of kLanes manifolds (structure of arrays: one cache line per field), grouped by the
+// colours of the constraint graph so that no two manifolds of a block share a dynamic body;
+// the passes then run over whole blocks with SIMD (contact_wide.cpp), and store() writes the
+// impulses back to the pairs for next step's warm starting.
+//
+// Each manifold is solved in its contact frame (t1, t2, n): the bodies' velocities are turned
+// into it, the normal points are swept with the small matrix K = J M^-1 J^T of the manifold's
+// normal rows (Gauss-Seidel on the manifold's problem, as before, without touching the bodies
+// in between), then the friction and twist rows follow, and the change goes back to the bodies
+// once. The same arithmetic runs in every lane of every path (scalar, AVX2, AVX-512), so the
+// results do not depend on the machine.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "pba/rigid.h"
+
+namespace pba::detail {
+
+/// Manifolds per block: the widest SIMD path (AVX-512, 8 doubles); narrower paths take a block
+/// in parts.
+inline constexpr int kLanes = 8;
+/// Colours a band of the constraint graph may use (contact_solver.cpp, RigidContacts::color):
+/// a manifold whose body has this many in its band already goes to the overflow.
+inline constexpr int kBandColors = 64;
+/// The lane of a block that holds no manifold.
+inline constexpr std::uint32_t kNoPair = std::numeric_limits<std::uint32_t>::max();
+
+/// kLanes manifolds in structure-of-arrays form. Empty lanes hold zeros (no mass, no effect)
+/// and write nothing back.
+struct alignas(64) ContactBlock {
+  // the frame (world unit vectors, right-handed: t1 x t2 = n; n from body a to b)
+  double t1[3][kLanes], t2[3][kLanes], n[3][kLanes];
+  double ma[kLanes], mb[kLanes];        // inverse masses (1/kg; 0 for static, kinematic, asleep)
+  double ia[6][kLanes], ib[6][kLanes];  // inverse inertias in the frame: xx, xy, xz, yy, yz, zz (1/(kg m^2))
+  double d[3][kLanes];                  // com_a - com_b at the start of the step, in the frame (m)
+  // the normal points (unused ones have zero mass and K)
+  double x[4][kLanes], y[4][kLanes];    // the points from a's centre of mass, t1 and t2 coordinates (m)
+  double mass[4][kLanes];               // normal effective masses (kg)
+  double k[10][kLanes];                 // K of the normal rows, upper triangle by rows (1/kg)
+  double impulse[4][kLanes];            // accumulated normal impulses (N s)
+  double sep[4][kLanes];                // separations at the bodies' poses now (m)
+  // friction at the points' centroid, twist about the normal
+  double ca[3][kLanes];                 // the centroid from a's centre of mass, in the frame (m)
+  double tangent_mass[2][kLanes];       // (kg)
+  double twist_mass[kLanes];            // (kg m^2)
+  double friction[kLanes];              // mixed coefficient
+  double twist_radius[kLanes];          // mean distance of the points from the centroid (m)
+  double tangent_impulse[2][kLanes];    // accumulated (N s)
+  double twist_impulse[kLanes];         // accumulated (N m s)
+  // written by the biased passes
+  double approach[4][kLanes];           // the most negative normal velocity seen (m/s)
+  double max_impulse[4][kLanes];        // the largest single normal impulse (N s)
+  // the separation at the poses now is base + n.(dp_b - dp_a) + n.(turn_b sb) - n.(turn_a sa),
+  // with sa, sb the anchors on the shapes' cores: in the frame (x - ex, y - ey, za) and
+  // (x + d0 + ex, y + d1 + ey, zb), e being half the step from a's surface point to b's
+  double za[4][kLanes], zb[4][kLanes], base[4][kLanes];  // (m)
+  double ex[4][kLanes], ey[4][kLanes];                   // (m)
+  // bodies (dense indices) and pairs
+  std::uint32_t a[kLanes], b[kLanes];
+  std::uint32_t pair[kLanes];           // index into RigidContacts::pairs, kNoPair when empty
+  std::uint32_t write_a = 0, write_b = 0;  // bit l: lane l writes its body back (dynamic and awake)
+  int lanes = 0;                        // lanes in use, from 0
+};
+
+/// One contact pass's settings (contact_solver.cpp fills them).
+struct PassParams {
+  double inv_h = 0;          // 1 / substep (1/s)
+  // soft step: the spring's coefficients, [0] between dynamic bodies, [1] against a body that
+  // cannot move (twice the stiffness within the same cap)
+  double bias_rate[2] = {0, 0}, mass_scale[2] = {1, 1}, impulse_scale[2] = {0, 0};
+  double push_out = 0;       // largest push-out speed (m/s)
+  double baumgarte_h = 0;    // rigid contacts: baumgarte / h (1/s)
+  double slop = 0;           // rigid contacts: overlap left alone (m)
+  int sweeps = 1;            // sweeps over a manifold's normal points
+  bool bias = true;          // position bias (false: the relax pass)
+  bool soft = true;          // soft contacts (false: rigid, Baumgarte)
+  bool update_sep = false;   // first measure the separations at the poses now (a relax pass after the positions moved)
+  bool warm_next = false;    // then add the impulses to the warm-start accumulators for the next substep
+};
+
+/// A body's velocities as the contact passes and the integration see them: one cache line, so
+/// the SIMD paths load a lane's body in one or two loads and transpose.
+struct alignas(64) SolverBody {
+  double v[3];       // centre-of-mass velocity (m/s)
+  double w[3];       // world angular velocity (rad/s)
+  double pad[2];
+};
+
+/// The bodies as the kernels see them, each array one 64-byte row a body (dense index), with a
+/// last row that empty lanes point at: velocities (read and written), each body's motion since
+/// the start of the step (dp, then the turn as a quaternion w, x, y, z) and the warm-start
+/// accumulators (velocity changes for the next substep, laid out as a SolverBody).
+struct BodyArrays {
+  SolverBody* bodies = nullptr;
+  const double* motion = nullptr;  // 8 a body
+  SolverBody* warm = nullptr;
+};
+
+/// The arrays the free motion of the awake dynamic bodies reads and writes (by dense body).
+struct FreeMotionArrays {
+  double* v = nullptr;            // velocity of body i at v + stride i (m/s)
+  double* w = nullptr;            // angular velocity of body i at w + stride i (rad/s)
+  std::size_t stride = 3;
+  SolverBody* warm = nullptr;     // optional: velocity changes to add after the forces (and zero)
+  Vec3* com = nullptr;            // centres of mass (m)
+  const Vec3* com0 = nullptr;     // at the start of the step
+  Quat* q = nullptr;              // principal frames
+  const Quat* q0 = nullptr;       // at the start of the step
+  const Vec3* inertia = nullptr;  // principal moments (kg m^2)
+  const Vec3* inv_inertia = nullptr;
+  const Vec3* force = nullptr;    // (N)
+  const Vec3* torque = nullptr;   // (N m)
+  const double* inv_mass = nullptr;
+  const double* gravity_scale = nullptr;
+  const double* lin_damp = nullptr;
+  const double* ang_damp = nullptr;
+  double* motion = nullptr;       // optional: dp and turn since the start of the step, 8 a body
+};
+
+/// Which code runs the blocks of a colour.
+enum class SimdPath : std::uint8_t { Scalar, Avx2, Avx512 };
+
+/// The widest path this CPU runs.
+SimdPath best_simd_path();
+
+/// One pass over the coloured blocks [first, last) on `path`: each block's lanes together (no
+/// lane shares a dynamic body with another). With p.update_sep the separations are measured
+/// first, with p.warm_next the impulses are added to the warm-start accumulators after.
+void solve_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const PassParams& p,
+                   const BodyArrays& bodies);
+/// The same for one lane (scalar): the overflow, lane by lane in order.
+void solve_lane(ContactBlock& block, int lane, const PassParams& p, const BodyArrays& bodies);
+/// Adds the accumulated impulses of the coloured blocks [first, last) to the warm-start accumulators.
+void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies);
+/// The same for one lane (scalar).
+void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies);
+/// Measures the separations of the coloured blocks [first, last) at the poses now.
+void separation_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last,
+                        const BodyArrays& bodies);
+/// The same for one lane (scalar).
+void separation_lane(ContactBlock& block, int lane, const BodyArrays& bodies);
+/// The restitution impulses of one lane's points that approached faster than `threshold` and
+/// pushed (scalar; the lanes with restitution, in order).
+void restitution_lane(ContactBlock& block, int lane, double restitution, double threshold, const BodyArrays& bodies);
+/// Gravity, forces, torques, damping and the warm start for `count` awake dynamic bodies
+/// (integrate_wide.cpp). False, with the body in *bad, when a velocity became non-finite.
+bool integrate_velocities_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
+                               const FreeMotionArrays& f, double h, const Vec3& gravity, std::uint32_t* bad);
+/// Positions and rotations (the Dullweber-Leimkuhler-McLachlan splitting) over h of `count`
+/// awake dynamic bodies, and their motion since the start of the step.
+void integrate_positions_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
+                              const FreeMotionArrays& f, double h);
+/// The normal relative velocity (m/s) of each of one lane's points at the velocities now (prepare's approach).
+void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]);
+
+}  // namespace pba::detail

@@ -1,0 +1,165 @@
+// The contact solver's layout: the constraint graph's colours (no two manifolds of a colour
+// share a dynamic body; the bands run bottom up) and its SIMD paths (every path gives the
+// same bits, under every solver).
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "pba/rigid.h"
+#include "pba/rigid_scenes.h"
+
+#include "error_of.h"
+
+using pba::BodyType;
+using pba::ColliderShape;
+using pba::RigidBodySystem;
+using pba::RigidSimd;
+using pba::RigidSolverType;
+using pba::Vec3;
+using pba::test_support::error_of;
+
+namespace {
+
+const Vec3 kGravity{0, -9.81, 0};
+
+// A scene that exercises every part of the solver: a pyramid (coloured blocks, full and
+// partial), bouncing balls (restitution), a ball with rolling resistance (the overflow), a
+// kinematic paddle through the pyramid's side, a spinning box in the air (the rotation's
+// library sines beyond pi/8 a half step), forces and impulses, and a sleeping group woken
+// later.
+std::vector<pba::RigidBodyId> mixed_scene(RigidBodySystem& s) {
+  auto out = pba::rigid_scenes::square_pyramid(s, 5);
+  for (int i = 0; i < 4; ++i)
+    out.push_back(s.create({.pose = {{4.0 + i, 1.0 + 0.5 * i, 0}},
+                            .shapes = {{.shape = ColliderShape::sphere(0.3), .material = {.restitution = 0.25 * i, .friction = 0.4}}}}));
+  out.push_back(s.create({.pose = {{-4, 0.3, 1}}, .linear_velocity = {2, 0, 0},
+                          .shapes = {{.shape = ColliderShape::sphere(0.3), .rolling_resistance = 0.2}}}));
+  s.create({.type = BodyType::Kinematic, .pose = {{-3, 0.5, -3}}, .linear_velocity = {1, 0, 0},
+            .angular_velocity = {0, 0.5, 0}, .shapes = {{.shape = ColliderShape::box({0.2, 0.4, 1})}}});
+  out.push_back(s.create({.pose = {{0, 9, 4}}, .angular_velocity = {0, 300, 40},
+                          .shapes = {{.shape = ColliderShape::box({0.3, 0.2, 0.5})}}}));
+  out.push_back(s.create({.pose = {{6, 0.25, 4}}, .shapes = {{.shape = ColliderShape::box(Vec3(0.25))}}}));
+  return out;
+}
+
+std::uint64_t run_mixed(RigidSolverType solver, RigidSimd path, int steps) {
+  RigidBodySystem s({.contacts = {.solver = solver}});
+  s.set_simd(path);
+  const auto bodies = mixed_scene(s);
+  for (int i = 0; i < steps; ++i) {
+    if (i == 30) s.apply_impulse(bodies[3], {5, 0, 0}, s.center_of_mass(bodies[3]) + Vec3(0, 0.3, 0));
+    if (i % 7 == 0) s.apply_force(bodies[10], {0, 20, 3}, s.center_of_mass(bodies[10]) + Vec3(0.2, 0, 0));
+    if (i == 90) s.wake(bodies.back());  // asleep by then
+    s.step(1.0 / 60, kGravity);
+  }
+  return s.hash();
+}
+
+// the paths this CPU runs
+std::vector<RigidSimd> paths() {
+  std::vector<RigidSimd> out;
+  for (const RigidSimd p : {RigidSimd::Scalar, RigidSimd::Avx2, RigidSimd::Avx512}) {
+    RigidBodySystem s;
+    if (error_of([&] { s.set_simd(p); }).empty()) out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace
+
+// The scalar path, AVX2 and AVX-512 do the same arithmetic in every lane: the same bits after
+// 150 steps of the mixed scene, under each solver (XPBD's passes are scalar, but its free
+// motion runs on the paths too).
+TEST(RigidSimd, EveryPathGivesTheSameBits) {
+  const std::vector<RigidSimd> all = paths();
+  ASSERT_FALSE(all.empty());
+  EXPECT_EQ(all.front(), RigidSimd::Scalar);
+  for (const RigidSolverType solver : pba::kRigidSolvers) {
+    const std::uint64_t scalar = run_mixed(solver, RigidSimd::Scalar, 150);
+    for (const RigidSimd p : all)
+      EXPECT_EQ(run_mixed(solver, p, 150), scalar) << to_string(solver) << " on " << to_string(p);
+  }
+}
+
+TEST(RigidSimd, PathsAreNamedAndBestIsResolved) {
+  EXPECT_EQ(to_string(RigidSimd::Best), "best");
+  EXPECT_EQ(to_string(RigidSimd::Avx512), "avx512");
+  RigidBodySystem s;
+  EXPECT_NE(s.simd(), RigidSimd::Best);
+  s.set_simd(RigidSimd::Scalar);
+  EXPECT_EQ(s.simd(), RigidSimd::Scalar);
+  s.set_simd(RigidSimd::Best);
+  EXPECT_EQ(s.simd(), paths().back());
+}
+
+namespace {
+
+// colour -> the dynamic bodies of its manifolds; fails when one appears twice
+void expect_colors_share_no_dynamic_body(const RigidBodySystem& s, int& colored, int& colors) {
+  std::map<int, std::set<std::uint32_t>> seen;
+  colored = 0;
+  for (std::size_t k = 0; k < s.manifold_count(); ++k) {
+    const pba::RigidManifoldInfo m = s.manifold(k);
+    if (m.color < 0) continue;
+    ++colored;
+    for (const pba::RigidBodyId id : {m.a, m.b}) {
+      if (s.type(id) != BodyType::Dynamic || !s.awake(id)) continue;
+      EXPECT_TRUE(seen[m.color].insert(id.index).second)
+          << "body " << id.index << " twice in colour " << m.color;
+    }
+  }
+  colors = static_cast<int>(seen.size());
+}
+
+}  // namespace
+
+// No two manifolds of a colour share a dynamic body (static, kinematic and sleeping bodies
+// may be shared: the solver never writes them), in a pyramid, in falling boxes landing on
+// each other and in the mixed scene, under the soft step and sequential impulses; and the
+// colours are far fewer than the manifolds (each holds many, solved together).
+TEST(RigidColors, NoTwoManifoldsOfAColourShareADynamicBody) {
+  for (const RigidSolverType solver : {RigidSolverType::SoftStep, RigidSolverType::SequentialImpulse}) {
+    RigidBodySystem pyramid({.capacity = 512, .contacts = {.solver = solver, .sleep = false}});
+    pba::rigid_scenes::square_pyramid(pyramid, 8);
+    RigidBodySystem fall({.capacity = 512, .contacts = {.solver = solver}});
+    pba::rigid_scenes::falling_boxes(fall, 5);
+    RigidBodySystem mixed({.contacts = {.solver = solver}});
+    mixed_scene(mixed);
+    for (int i = 0; i < 90; ++i) {
+      pyramid.step(1.0 / 60, kGravity), fall.step(1.0 / 60, kGravity), mixed.step(1.0 / 60, kGravity);
+      int colored = 0, colors = 0;
+      for (const RigidBodySystem* s : {&pyramid, &fall, &mixed}) expect_colors_share_no_dynamic_body(*s, colored, colors);
+    }
+    int colored = 0, colors = 0;
+    expect_colors_share_no_dynamic_body(pyramid, colored, colors);
+    EXPECT_EQ(colored, static_cast<int>(pyramid.manifold_count())) << to_string(solver);  // no overflow
+    EXPECT_LT(colors * 10, colored) << to_string(solver);
+  }
+}
+
+// The bands run bottom up: in a 6-stack each contact between boxes takes a colour after the
+// one below it (the pass meets a box's support before what the box carries), and the ground's
+// contact comes last; TGS (pair order, contact_solver.cpp) and XPBD do not colour.
+TEST(RigidColors, StacksAreSolvedFromTheGroundUp) {
+  for (const RigidSolverType solver : {RigidSolverType::SoftStep, RigidSolverType::Tgs, RigidSolverType::Xpbd}) {
+    RigidBodySystem s({.contacts = {.solver = solver, .sleep = false}});
+    const auto boxes = pba::rigid_scenes::vertical_stack(s, 6);
+    s.step(1.0 / 60, kGravity);
+    // the colour of the contact under box i (i = 0: the ground's)
+    std::vector<int> under(boxes.size(), -2);
+    for (std::size_t k = 0; k < s.manifold_count(); ++k) {
+      const pba::RigidManifoldInfo m = s.manifold(k);
+      for (std::size_t i = 0; i < boxes.size(); ++i)
+        if (m.b == boxes[i] || (m.a == boxes[i] && s.type(m.b) == BodyType::Static)) under[i] = m.color;
+    }
+    if (solver != RigidSolverType::SoftStep) {
+      for (const int c : under) EXPECT_EQ(c, -1);
+      continue;
+    }
+    for (std::size_t i = 2; i < boxes.size(); ++i) EXPECT_GT(under[i], under[i - 1]) << to_string(solver) << " box " << i;
+    EXPECT_GT(under[0], under.back()) << to_string(solver);
+  }
+}
