@@ -93,4 +93,18 @@ double ImageDifference(const std::vector<std::uint8_t>& a, const std::vector<std
   return static_cast<double>(diff) / (a.size() / 3);
 }
 
+long long ChangedPixels(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b, int w, int x0,
+                        int y0, int x1, int y1) {
+  if (a.size() != b.size() || w <= 0) return 0;
+  const int h = static_cast<int>(a.size() / 3 / static_cast<std::size_t>(w));
+  x0 = std::max(0, x0), x1 = std::min(w, x1), y0 = std::max(0, y0), y1 = std::min(h, y1);
+  long long diff = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const std::size_t i = (static_cast<std::size_t>(y) * w + x) * 3;
+      if (std::abs(a[i] - b[i]) > 8 || std::abs(a[i + 1] - b[i + 1]) > 8 || std::abs(a[i + 2] - b[i + 2]) > 8) ++diff;
+    }
+  return diff;
+}
+
 }  // namespace pba::app

@@ -42,4 +42,9 @@ std::string CheckImage(const ImageStats& stats, const ImageRules& rules, const s
 /// Fraction of pixels whose colour differs by more than 8 in any channel between two images.
 double ImageDifference(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b);
 
+/// Pixels in columns [x0, x1) and rows [y0, y1) whose colour differs by more than 8 in any
+/// channel between two RGB images of width `w` (rows top-down); 0 when the sizes differ.
+long long ChangedPixels(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b, int w, int x0,
+                        int y0, int x1, int y1);
+
 }  // namespace pba::app
