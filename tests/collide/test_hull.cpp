@@ -239,10 +239,10 @@ TEST(CollideHull, IcosphereHullConvergesToTheSphereAtSecondOrder) {
     // it shrinks at every level and is under 0.05 from level 4 on
     if (level >= 2) {
       const double dv = std::abs(prev_v / ev - 4), di = std::abs(prev_i / ei - 4);
-      if (level >= 3) EXPECT_LT(dv, prev_dv) << "level " << level;
-      if (level >= 3) EXPECT_LT(di, prev_di) << "level " << level;
-      if (level >= 4) EXPECT_LT(dv, 0.05) << "level " << level;
-      if (level >= 4) EXPECT_LT(di, 0.05) << "level " << level;
+      if (level >= 3) { EXPECT_LT(dv, prev_dv) << "level " << level; }
+      if (level >= 3) { EXPECT_LT(di, prev_di) << "level " << level; }
+      if (level >= 4) { EXPECT_LT(dv, 0.05) << "level " << level; }
+      if (level >= 4) { EXPECT_LT(di, 0.05) << "level " << level; }
       prev_dv = dv, prev_di = di;
     }
     // the icosahedral symmetry keeps the tensor isotropic

@@ -132,7 +132,7 @@ TEST(CollidePoint, BoxAndCapsuleAgainstDenseSurfaceSamples) {
     EXPECT_NEAR(glm::length(a.point - b.point), 0, 1e-12);
     // the face agrees where it is unique: the nearest point inside a face
     const int out = (std::abs(xl.x) > h.x) + (std::abs(xl.y) > h.y) + (std::abs(xl.z) > h.z);
-    if (out <= 1) EXPECT_EQ(a.feature, b.feature);
+    if (out <= 1) { EXPECT_EQ(a.feature, b.feature); }
   }
   // a point on the capsule's core: finite
   const PointDistance core = point_distance(capsule, Pose{}, Vec3(0, 0.2, 0));
