@@ -14,6 +14,7 @@
 #include <imgui.h>
 
 #include "camera.h"
+#include "offset_draw.h"
 #include "particles_common.h"
 #include "pba/collide/broad_phase.h"
 #include "pba/collide/moving_boxes.h"
@@ -82,7 +83,7 @@ class BroadPhaseLab final : public Sample {
       r.box(c[i] + o, h[i], Quat(1, 0, 0, 0), touching_[i] ? kTouching : kFree);
     // the tree or grid, shifted like the boxes
     if (flags_.tree || flags_.aabbs) {
-      Shifted shifted(r, o);
+      OffsetDraw shifted(r, o);
       draw_broad_phase(bp_, shifted, flags_, depth_);
     }
   }
@@ -138,24 +139,6 @@ class BroadPhaseLab final : public Sample {
   std::vector<Color> ExpectedColors() const override { return {kFree, kTouching}; }
 
  private:
-  // a DebugDraw that shifts every point by `o` (the library draws in scene coordinates)
-  class Shifted final : public DebugDraw {
-   public:
-    Shifted(DebugDraw& d, const Vec3& o) : d_(d), o_(o) {}
-    void point(const Vec3& p, float size, Color c) override { d_.point(p + o_, size, c); }
-    void line(const Vec3& a, const Vec3& b, Color c) override { d_.line(a + o_, b + o_, c); }
-    void sphere(const Vec3& p, double r, Color c) override { d_.sphere(p + o_, r, c); }
-    void box(const Vec3& p, const Vec3& h, const Quat& q, Color c) override { d_.box(p + o_, h, q, c); }
-    void capsule(const Vec3& a, const Vec3& b, double r, Color c) override { d_.capsule(a + o_, b + o_, r, c); }
-    void plane(const Vec3& n, double off, double half, Color c) override { d_.plane(n, off + glm::dot(n, o_), half, c); }
-    void arrow(const Vec3& a, const Vec3& b, double head, Color c) override { d_.arrow(a + o_, b + o_, head, c); }
-    void text(const Vec3& p, std::string_view s, Color c) override { d_.text(p + o_, s, c); }
-
-   private:
-    DebugDraw& d_;
-    Vec3 o_;
-  };
-
   Vec3 offset() const { return {-0.5 * scene_.side(), 0.0, -0.5 * scene_.side()}; }
 
   void build() {

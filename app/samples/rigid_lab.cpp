@@ -15,6 +15,7 @@
 #include <imgui.h>
 
 #include "camera.h"
+#include "offset_draw.h"
 #include "particles_common.h"
 #include "pba/rigid_scenes.h"
 #include "plot.h"
@@ -33,30 +34,6 @@ constexpr Color kPalette[] = {colors::blue, colors::cyan, colors::purple, colors
 enum class LabScene : int { Stack, Pyramid, Falling, Restitution, Ramp };
 constexpr const char* kSceneNames[] = {"vertical stack", "square pyramid", "falling boxes", "restitution row",
                                        "friction ramp"};
-
-// Draws through another DebugDraw, everything moved by `offset`: the compare mode runs each
-// solver's copy of the scene at the same place and draws the copies side by side.
-class OffsetDraw final : public DebugDraw {
- public:
-  OffsetDraw(DebugDraw& to, const Vec3& offset) : to_(to), d_(offset) {}
-  void point(const Vec3& p, float size, Color c) override { to_.point(p + d_, size, c); }
-  void line(const Vec3& a, const Vec3& b, Color c) override { to_.line(a + d_, b + d_, c); }
-  void sphere(const Vec3& center, double radius, Color c) override { to_.sphere(center + d_, radius, c); }
-  void box(const Vec3& center, const Vec3& half, const Quat& q, Color c) override { to_.box(center + d_, half, q, c); }
-  void capsule(const Vec3& a, const Vec3& b, double radius, Color c) override { to_.capsule(a + d_, b + d_, radius, c); }
-  void plane(const Vec3& n, double offset, double half_size, Color c) override {
-    to_.plane(n, offset + glm::dot(n, d_), half_size, c);
-  }
-  void arrow(const Vec3& from, const Vec3& to, double head, Color c) override { to_.arrow(from + d_, to + d_, head, c); }
-  void text(const Vec3& p, std::string_view s, Color c) override { to_.text(p + d_, s, c); }
-  void triangle(const Vec3& a, const Vec3& b, const Vec3& c, Color col) override {
-    to_.triangle(a + d_, b + d_, c + d_, col);
-  }
-
- private:
-  DebugDraw& to_;
-  Vec3 d_;
-};
 
 // the colour that stands for each solver in the compare mode's plots and labels
 constexpr Color kSolverColor[] = {colors::orange, colors::red, colors::green, colors::purple};
