@@ -731,9 +731,18 @@ void World::step_rigid(double t, double dt) {
   refresh_body_colliders(true);
   for (std::size_t k = 0; k < body_colliders_.size(); ++k) {
     if (!body_colliders_[k].ok()) {
+      // finite but beyond what the collision world holds (its bounds are floats): a body flung
+      // past 3.4e38 m stops the world like a non-finite one, naming its entity and the time
       const std::uint32_t e = body_collider_owner_[k];
-      body_colliders_[k].validate("rigid body shape of entity " + std::to_string(e) +
-                                  (records_[e].name.empty() ? "" : " '" + records_[e].name + "'"));
+      try {
+        body_colliders_[k].validate("shape");
+      } catch (const Error& err) {
+        failure_ = "the rigid body of entity " + std::to_string(e) +
+                   (records_[e].name.empty() ? "" : " '" + records_[e].name + "'") +
+                   " left the range of the collision world in the tick to t = " + format_value(t + dt) +
+                   " s (" + err.what() + ")";
+        throw Error("World::tick: " + failure_);
+      }
     }
     collision_.add(body_colliders_[k], body_collider_owner_[k]);
   }

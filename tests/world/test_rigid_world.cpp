@@ -303,6 +303,22 @@ TEST(RigidStage, ANonFiniteBodyStopsTheWorld) {
   EXPECT_NE(again.find("'rocket'"), std::string::npos) << again;
 }
 
+// A body flung beyond what the collision world holds (its bounds are floats, |x| <= 3.4e38 m)
+// while its state is still finite stops the world the same way: its entity, the tick, the value.
+TEST(RigidStage, ABodyBeyondTheFloatRangeStopsTheWorld) {
+  World w;
+  const EntityId e = w.create_entity({.name = "comet"});
+  RigidBodyDef d = box_def({0.5, 0.5, 0.5});
+  d.linear_velocity = {1e308, 0, 0};  // finite; one 60 Hz tick carries it to 1.7e306 m
+  w.add_rigid_body(e, d);
+  const std::string m = error_of([&] { w.step(); });
+  EXPECT_NE(m.find("the rigid body of entity 0 'comet' left the range of the collision world in the tick to t = 0.0166"),
+            std::string::npos) << m;
+  EXPECT_NE(m.find("1.666666666666666"), std::string::npos) << m;  // the position it reached
+  const std::string again = error_of([&] { w.step(); });
+  EXPECT_NE(again.find("the simulation stopped"), std::string::npos) << again;
+}
+
 // World::draw draws each entity body's shapes through the library draw, at the body's pose,
 // coloured by type and sleep, and not the colliders' stand-ins (drawn as colliders)
 TEST(RigidStage, DrawDrawsTheBodiesShapes) {
