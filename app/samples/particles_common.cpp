@@ -237,9 +237,17 @@ void ProfileReadout(const World& world) {
   // semi-implicit Euler runs the fused kernel, whose collisions are timed with the
   // integration (ParticleProfile::integrate); the other integrators time them apart
   if (ps.method() == Method::SemiImplicitEuler)
-    ImGui::Text("integrate + collide %.2f ms (fused), %zu contacts", 1e3 * (p.integrate + p.collide), ps.contacts());
+    ImGui::Text("particles: integrate + collide %.2f ms (fused), %zu contacts", 1e3 * (p.integrate + p.collide),
+                ps.contacts());
   else
-    ImGui::Text("integrate %.2f, collide %.2f ms, %zu contacts", 1e3 * p.integrate, 1e3 * p.collide, ps.contacts());
+    ImGui::Text("particles: integrate %.2f, collide %.2f ms, %zu contacts", 1e3 * p.integrate, 1e3 * p.collide,
+                ps.contacts());
+  // the rigid stage, when entities have bodies (the colliders' stand-ins do not count)
+  bool bodies = false;
+  for (std::size_t i = 0; i < world.rigid().size() && !bodies; ++i) bodies = world.valid(world.rigid().id_at(i));
+  if (bodies)
+    ImGui::Text("rigid bodies %.2f ms, %zu manifolds", 1e3 * p.stages[static_cast<int>(WorldStage::Rigid)],
+                world.rigid().manifold_count());
   // the other stages, when the world has them (a constraint pass costs microseconds)
   if (p.constraints > 1e-5 || world.find_system(SoftSystem::kName))
     ImGui::Text("constraints %.2f, soft bodies %.2f ms", 1e3 * p.constraints, 1e3 * p.systems);

@@ -375,6 +375,14 @@ class RigidBodySystem {
   /// Draws what `flags` select: each body's shapes (sleeping bodies faded), their world
   /// bounds, and the contact points (red overlapping, green speculative) and normals.
   void draw(DebugDraw& draw, const DrawFlags& flags = {}, const RigidDrawOptions& options = {}) const;
+  /// Draws one body's shapes at its pose now in `color`, as `flags` select (shapes, aabbs);
+  /// a plane is a patch `options.plane_half_size` wide (none facing +Y unless
+  /// `options.horizontal_planes`). Throws Error for a stale handle.
+  void draw_body(DebugDraw& draw, RigidBodyId id, Color color, const DrawFlags& flags = {},
+                 const RigidDrawOptions& options = {}) const;
+  /// Draws the last step's contact points (red overlapping, green speculative) and their
+  /// normals, as `flags` select (contacts, normals).
+  void draw_contacts(DebugDraw& draw, const DrawFlags& flags = {}) const;
   /// The contact points of the last step (copies; allocates, for drawing and tests).
   std::vector<RigidContactPoint> contacts() const;
   /// Contact manifolds (touching or speculative shape pairs) in the last step.
@@ -403,6 +411,8 @@ class RigidBodySystem {
     return {com_[i] - r * com_local_[i], r};
   }
   std::string describe(std::size_t i) const;
+  // dense body i's shapes in colour c (draw, draw_body)
+  void draw_shapes(DebugDraw& draw, std::size_t i, Color c, const DrawFlags& flags, const RigidDrawOptions& options) const;
   // the free motion's arrays (velocities in `rows` when given, else in v_ and w_)
   detail::FreeMotionArrays free_motion(detail::SolverBody* rows, detail::SolverBody* warm, double* motion);
   // rows (optional): the contact solver's velocity rows, used instead of v_ and w_; warm

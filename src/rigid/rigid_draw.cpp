@@ -17,7 +17,6 @@ Color fade(Color c, float amount) {
 }  // namespace
 
 void RigidBodySystem::draw(DebugDraw& draw, const DrawFlags& flags, const RigidDrawOptions& options) const {
-  // each body's shapes at its pose, through the colliders' drawing (one switch over shapes)
   for (std::size_t i = 0; i < type_.size(); ++i) {
     Color c = type_[i] == BodyType::Static ? options.fixed
               : type_[i] == BodyType::Kinematic ? options.kinematic
@@ -25,23 +24,38 @@ void RigidBodySystem::draw(DebugDraw& draw, const DrawFlags& flags, const RigidD
                                         : options.palette[i % options.palette.size()];
     if (options.highlight.index == owner_[i] && ids_.valid(options.highlight)) c = options.highlight_color;
     if (asleep_[i]) c = fade(c, options.sleep_fade);
-    const Pose body = body_pose(i);
-    for (const RigidShapeDef& d : shapes_[i]) {
-      Collider shape;
-      shape.shape = d.shape;
-      shape.begin = shape.end = compose(body, d.local);
-      if (d.shape.type == ShapeType::Plane) {
-        // a plane through the body's frame, drawn `plane_half_size` wide
-        if (!flags.shapes) continue;
-        const Vec3 n = glm::normalize(shape.end.rotation * d.shape.normal);
-        if (!options.horizontal_planes && std::abs(n.y) > 0.999) continue;
-        draw.plane(n, d.shape.offset / glm::length(d.shape.normal) + glm::dot(n, shape.end.position),
-                   options.plane_half_size, c);
-        continue;
-      }
-      shape.draw(draw, c, flags);
-    }
+    draw_shapes(draw, i, c, flags, options);
   }
+  draw_contacts(draw, flags);
+}
+
+void RigidBodySystem::draw_body(DebugDraw& draw, RigidBodyId id, Color color, const DrawFlags& flags,
+                                const RigidDrawOptions& options) const {
+  draw_shapes(draw, index(id, "RigidBodySystem::draw_body"), color, flags, options);
+}
+
+void RigidBodySystem::draw_shapes(DebugDraw& draw, std::size_t i, Color c, const DrawFlags& flags,
+                                  const RigidDrawOptions& options) const {
+  // each shape at the body's pose, through the colliders' drawing (one switch over shapes)
+  const Pose body = body_pose(i);
+  for (const RigidShapeDef& d : shapes_[i]) {
+    Collider shape;
+    shape.shape = d.shape;
+    shape.begin = shape.end = compose(body, d.local);
+    if (d.shape.type == ShapeType::Plane) {
+      // a plane through the body's frame, drawn `plane_half_size` wide
+      if (!flags.shapes) continue;
+      const Vec3 n = glm::normalize(shape.end.rotation * d.shape.normal);
+      if (!options.horizontal_planes && std::abs(n.y) > 0.999) continue;
+      draw.plane(n, d.shape.offset / glm::length(d.shape.normal) + glm::dot(n, shape.end.position),
+                 options.plane_half_size, c);
+      continue;
+    }
+    shape.draw(draw, c, flags);
+  }
+}
+
+void RigidBodySystem::draw_contacts(DebugDraw& draw, const DrawFlags& flags) const {
   // contact points of the last step and their normals
   if (!(flags.contacts || flags.normals)) return;
   for (const detail::ContactPair& cp : contacts_->pairs)

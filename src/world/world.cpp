@@ -1024,7 +1024,9 @@ void World::draw(DebugDraw& draw, const DrawFlags& flags) const {
 }
 
 void World::draw_rigid_bodies(DebugDraw& draw, const DrawFlags& flags, const RigidBodyColors& colors) const {
-  // each shape of each entity's body, at the body's pose now
+  // each shape of each entity's body at the body's pose now (horizontal planes are left to a
+  // client's ground grid), then the last tick's contact points and normals
+  const RigidDrawOptions options{.horizontal_planes = false};
   for (std::size_t i = 0; i < rigid_.size(); ++i) {
     const RigidBodyId id = rigid_.id_at(i);
     if (!valid(id)) continue;  // a collider's stand-in: drawn as its collider
@@ -1033,14 +1035,11 @@ void World::draw_rigid_bodies(DebugDraw& draw, const DrawFlags& flags, const Rig
                       : type == BodyType::Kinematic ? colors.kinematic
                       : rigid_.awake(id)            ? colors.awake
                                                     : colors.asleep;
-    const Pose p = rigid_.pose(id);
-    for (const RigidShapeDef& sd : rigid_.shapes(id)) {
-      Collider c;
-      c.shape = sd.shape;
-      c.begin = c.end = compose(p, sd.local);
-      c.draw(draw, col, flags);
-    }
+    // neighbouring entities in three shades of their colour, so the boxes of a stack read apart
+    const float shade = 1.0f - 0.12f * static_cast<float>(body_owner_[id.index].index % 3);
+    rigid_.draw_body(draw, id, {col.r * shade, col.g * shade, col.b * shade, col.a}, flags, options);
   }
+  rigid_.draw_contacts(draw, flags);
 }
 
 }  // namespace pba

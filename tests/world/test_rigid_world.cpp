@@ -348,7 +348,49 @@ TEST(RigidStage, DrawDrawsTheBodiesShapes) {
   EXPECT_EQ(r.planes, 1);  // the ground collider, once
   EXPECT_EQ(r.boxes[0].first, w.pose(e).position);
   EXPECT_EQ(r.spheres[0].first, pba::apply(w.pose(e), Vec3(0, 1, 0)));
-  EXPECT_EQ(r.boxes[0].second.r, pba::colors::orange.r);  // dynamic and awake
+  // dynamic and awake: a shade of orange (76-100% of it, by entity)
+  const pba::Color c = r.boxes[0].second, o = pba::colors::orange;
+  const float k = c.r / o.r;
+  EXPECT_GE(k, 0.76f - 1e-6f);
+  EXPECT_LE(k, 1.0f + 1e-6f);
+  EXPECT_NEAR(c.g, k * o.g, 1e-6f);
+  EXPECT_NEAR(c.b, k * o.b, 1e-6f);
+}
+
+// With the contacts flag, World::draw draws the bodies' contact points where they are: a box
+// resting on the ground collider shows its four bottom corners at y = 0 (within the soft
+// contact's millimetre of overlap), each with one normal arrow along the vertical (the
+// manifold's normal, from its first body to its second).
+TEST(RigidStage, DrawDrawsTheContactPointsAndNormals) {
+  struct Recorder final : pba::DebugDraw {
+    std::vector<Vec3> points, arrows;
+    void point(const Vec3& p, float, pba::Color) override { points.push_back(p); }
+    void line(const Vec3&, const Vec3&, pba::Color) override {}
+    void sphere(const Vec3&, double, pba::Color) override {}
+    void box(const Vec3&, const Vec3&, const pba::Quat&, pba::Color) override {}
+    void capsule(const Vec3&, const Vec3&, double, pba::Color) override {}
+    void plane(const Vec3&, double, double, pba::Color) override {}
+    void arrow(const Vec3& a, const Vec3& b, double, pba::Color) override { arrows.push_back(b - a); }
+    void text(const Vec3&, std::string_view, pba::Color) override {}
+  };
+  World w;
+  ground(w);
+  const EntityId e = w.create_entity({.name = "box", .pose = {{0, 0.5, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}));
+  for (int i = 0; i < 30; ++i) w.step();
+  Recorder none;
+  w.draw(none);
+  EXPECT_TRUE(none.points.empty());  // not unless asked
+  Recorder r;
+  w.draw(r, {.contacts = true, .normals = true});
+  ASSERT_EQ(r.points.size(), 4u);
+  ASSERT_EQ(r.arrows.size(), 4u);
+  for (std::size_t k = 0; k < 4; ++k) {
+    EXPECT_NEAR(std::abs(r.points[k].x), 0.5, 1e-3);
+    EXPECT_NEAR(std::abs(r.points[k].z), 0.5, 1e-3);
+    EXPECT_NEAR(r.points[k].y, 0, 2e-3);
+    EXPECT_NEAR(std::abs(glm::normalize(r.arrows[k]).y), 1, 1e-9);
+  }
 }
 
 // A ball dropped through a sensor box reports one enter and one leave, at the ticks where the
