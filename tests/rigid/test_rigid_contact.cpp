@@ -3,7 +3,9 @@
 // (the substepping ones: soft step, TGS and XPBD; sequential impulses where it meets it).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "pba/rigid.h"
@@ -403,6 +405,176 @@ TEST(RigidRocking, ATenStackSwayingOnItsContactsLosesEnergyEverySwing) {
     }
   EXPECT_GE(maxima, 12);  // it swayed: two maxima a period, 1.5 Hz, over 5 s
   EXPECT_GT(last, 0);
+}
+
+// The soft contacts' spring-damper model of a column of n one-metre cubes (1000 kg) rocking
+// about z on its contacts, linearised about the upright. The unknowns are the boxes' turns
+// theta_k (k = 0 at the bottom). Friction sticks, so each box turns about the centre of the
+// face it stands on: its centre is at x_k = -(theta_0 + ... + theta_{k-1} + theta_k / 2),
+// height y_k = cos theta_0 + ... + cos theta_{k-1} + cos(theta_k) / 2. Each of a contact's four
+// points, half a metre from the axis, is a spring m_p w^2 and a damper 2 zeta m_p w along the
+// normal (w = 2 pi hertz), m_p the point's normal effective mass 1 / K_pp: m / 4 on the ground
+// (1/m + 0.5 * 6/m, the cube's inertia being m / 6) and m / 8 between two cubes. So a contact
+// is a torsion spring 4 * 0.25 * m_p w^2 on the relative turn of its two boxes, with a torsion
+// damper 2 zeta / w times that. Mass matrix: m J^T J + m / 6 (J the x_k above); stiffness: the
+// springs, less m g (1/2 + the boxes above k) on the diagonal (gravity: m g sum y_k, second
+// order); damping: the dampers.
+struct ColumnMode {
+  double lambda = 0;  // the lowest mode's omega^2 (1/s^2): negative when the column buckles
+  double hertz = 0;   // its frequency (Hz) when it stands
+  double zeta = 0;    // its damping ratio, to first order in the dampers
+  double growth = 0;  // when it buckles: the rate (1/s) at which its lean grows, dampers in
+};
+
+ColumnMode column_mode(int n, double ground_hertz, double hertz, double zeta) {
+  const double m = 1000, wg = 2 * pba::kPi * ground_hertz, w = 2 * pba::kPi * hertz;
+  const auto un = static_cast<std::size_t>(n);
+  std::vector<double> M(un * un), K(un * un), C(un * un);
+  auto at = [n](std::vector<double>& a, int i, int j) -> double& { return a[static_cast<std::size_t>(i * n + j)]; };
+  for (int k = 0; k < n; ++k)
+    for (int i = 0; i <= k; ++i)
+      for (int j = 0; j <= k; ++j) at(M, i, j) += m * (i < k ? -1 : -0.5) * (j < k ? -1 : -0.5);
+  for (int k = 0; k < n; ++k) at(M, k, k) += m / 6;
+  at(K, 0, 0) += m / 4 * wg * wg, at(C, 0, 0) += 2 * zeta * m / 4 * wg;
+  for (int k = 0; k + 1 < n; ++k) {
+    const double spring = m / 8 * w * w, damper = 2 * zeta * m / 8 * w;
+    for (int i = k; i <= k + 1; ++i)
+      for (int j = k; j <= k + 1; ++j) at(K, i, j) += (i == j ? 1 : -1) * spring, at(C, i, j) += (i == j ? 1 : -1) * damper;
+  }
+  for (int k = 0; k < n; ++k) at(K, k, k) -= m * kG * (0.5 + (n - 1 - k));
+  // the lowest mode: inverse iteration shifted below every eigenvalue ((K - sigma M) x' = M x
+  // converges to the eigenvalue nearest sigma); sigma is below them all when K - sigma M has
+  // positive pivots (checked)
+  const double sigma = -1;
+  std::vector<double> A(un * un);
+  for (std::size_t i = 0; i < un * un; ++i) A[i] = K[i] - sigma * M[i];
+  for (int c = 0; c < n; ++c) {  // LU without pivoting (symmetric positive definite)
+    EXPECT_GT(at(A, c, c), 0) << "the shift is not below the column's eigenvalues";
+    for (int r = c + 1; r < n; ++r) {
+      at(A, r, c) /= at(A, c, c);
+      for (int j = c + 1; j < n; ++j) at(A, r, j) -= at(A, r, c) * at(A, c, j);
+    }
+  }
+  std::vector<double> x(un, 1.0), y(un);
+  for (int it = 0; it < 2000; ++it) {
+    for (int i = 0; i < n; ++i) {
+      y[i] = 0;
+      for (int j = 0; j < n; ++j) y[i] += at(M, i, j) * x[j];
+    }
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < i; ++j) y[i] -= at(A, i, j) * y[j];
+    for (int i = n; i-- > 0;) {
+      for (int j = i + 1; j < n; ++j) y[i] -= at(A, i, j) * y[j];
+      y[i] /= at(A, i, i);
+    }
+    double norm = 0;
+    for (const double v : y) norm += v * v;
+    for (int i = 0; i < n; ++i) x[i] = y[i] / std::sqrt(norm);
+  }
+  auto form = [&](std::vector<double>& a) {
+    double q = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) q += x[i] * at(a, i, j) * x[j];
+    return q;
+  };
+  const double mm = form(M), kk = form(K), cc = form(C);
+  ColumnMode r;
+  r.lambda = kk / mm;
+  if (r.lambda > 0) {
+    r.hertz = std::sqrt(r.lambda) / (2 * pba::kPi);
+    r.zeta = cc / (2 * std::sqrt(r.lambda) * mm);
+  } else {
+    r.growth = (-cc + std::sqrt(cc * cc - 4 * mm * kk)) / (2 * mm);
+  }
+  return r;
+}
+
+// The contacts' spring rates at a system's settings: contact_hertz up to a quarter of the
+// substep rate, twice that on a body that cannot move within the same cap (contact_solver.cpp).
+std::pair<double, double> ground_and_box_hertz(const ContactSettings& c, double dt) {
+  const double cap = 0.25 * c.substeps / dt, hertz = std::min(c.contact_hertz, cap);
+  return {std::min(2 * hertz, cap), hertz};
+}
+
+// A 10-stack kicked as in the test above sways at its spring model's lowest frequency
+// (column_mode: 1.47 Hz at the defaults) within 5% (measured 1.51 Hz; the model leaves out
+// the column's sag and the substeps), so the soft step's springs are the model's. Its damping
+// is not: the model's dampers (damping ratio 10 at every contact) give the sway a damping
+// ratio of 0.125, the soft step 0.026 (the mean log decrement of the top box's velocity over
+// its half swings from 1 s to 8 s, twelve periods). This asserts the shortfall (under a third
+// of the model's, above zero) as a known limit (docs/rigid-bodies.md, where the measurements
+// behind it are): the soft step's passes, one Gauss-Seidel sweep each per substep (as
+// Box2D's), do not converge on the column's low mode, and how much of the sway they remove
+// depends on how close the contacts are to the cap of a quarter of the substep rate, where
+// the defaults put them (0.20 at 70 Hz, 0.13 at 90 Hz, 0.057 at 110 Hz, 0.026 at 120 Hz, the
+// model 0.13 throughout). If a change makes this fail by damping more, compare with the model.
+TEST(RigidRocking, ATenStackSwaysAtItsSpringModelsFrequencyButWithAFifthOfItsDamping) {
+  constexpr int kBoxes = 10;
+  constexpr double kDt = 1.0 / 60;
+  Stack st(kBoxes);
+  const auto [ground_hz, box_hz] = ground_and_box_hertz(st.s.settings(), kDt);
+  const ColumnMode model = column_mode(kBoxes, ground_hz, box_hz, st.s.settings().damping_ratio);
+  ASSERT_GT(model.lambda, 0);
+  ASSERT_NEAR(model.hertz, 1.47, 0.01);
+  ASSERT_NEAR(model.zeta, 0.125, 0.005);
+  for (int i = 0; i < 60; ++i) st.s.step(kDt, kGravity);
+  for (auto x : st.boxes) {
+    const Vec3 w(0, 0, 0.02);
+    st.s.set_velocity(x, glm::cross(w, st.s.center_of_mass(x)), w);
+  }
+  std::vector<double> v;  // the top box's sway velocity, after each step
+  for (int i = 0; i < 480; ++i) st.s.step(kDt, kGravity), v.push_back(st.s.linear_velocity(st.boxes.back()).x);
+  // its extremes after the first second, where the kick's higher modes have died out
+  std::vector<std::pair<double, double>> peaks;
+  for (std::size_t i = 60; i + 1 < v.size(); ++i)
+    if ((v[i] > v[i - 1] && v[i] >= v[i + 1]) || (v[i] < v[i - 1] && v[i] <= v[i + 1]))
+      peaks.push_back({static_cast<double>(i + 1) * kDt, v[i]});
+  ASSERT_GE(peaks.size(), 20u);
+  double decrement = 0;
+  for (std::size_t k = 1; k < peaks.size(); ++k) {
+    ASSERT_LT(peaks[k].second * peaks[k - 1].second, 0) << "the extremes alternate, at " << peaks[k].first << " s";
+    decrement += std::log(std::abs(peaks[k - 1].second / peaks[k].second));
+  }
+  const double delta = 2 * decrement / static_cast<double>(peaks.size() - 1);  // per period
+  const double zeta = delta / std::sqrt(4 * pba::kPi * pba::kPi + delta * delta);
+  const double hertz = 0.5 * static_cast<double>(peaks.size() - 1) / (peaks.back().first - peaks.front().first);
+  EXPECT_NEAR(hertz, model.hertz, 0.05 * model.hertz);
+  EXPECT_GT(zeta, 0);
+  EXPECT_LT(zeta, model.zeta / 3) << "damped more than before: compare with the model's " << model.zeta;
+}
+
+// The same model for 40 cubes at the defaults (120 Hz on every contact) has a negative
+// stiffness: gravity's overturning outgrows the contacts' springs between 38 and 39 cubes,
+// so a 40-stack cannot stand on them, however they are damped. Kicked at 0.01 mrad/s after a
+// settling second, its lean grows at the model's rate (measured 0.197/s from 10 s to 20 s,
+// the model 0.205/s) within 20%: so near the buckling load the rate is sensitive to the
+// springs (1.7% stiffer ones give 7% less) and the 10-stack's frequency above puts the soft
+// step's up to 5% stiffer than the model's. At 240 Hz (16 substeps) the model stands, its
+// lowest mode at 0.16 Hz (RigidStacking.FortyCubesStandTwentySeconds).
+TEST(RigidStacking, AFortyStackOnTheDefaultContactsLeansOverAtItsSpringModelsBucklingRate) {
+  constexpr int kBoxes = 40;
+  constexpr double kDt = 1.0 / 60;
+  ContactSettings c;
+  c.sleep = false;
+  const auto [ground_hz, box_hz] = ground_and_box_hertz(c, kDt);
+  const ColumnMode model = column_mode(kBoxes, ground_hz, box_hz, c.damping_ratio);
+  ASSERT_LT(model.lambda, 0);
+  ASSERT_GT(column_mode(kBoxes - 2, ground_hz, box_hz, c.damping_ratio).lambda, 0);
+  ASSERT_LT(column_mode(kBoxes - 1, ground_hz, box_hz, c.damping_ratio).lambda, 0);
+  ASSERT_GT(column_mode(kBoxes, 240, 240, c.damping_ratio).lambda, 0);
+  RigidBodySystem s({.capacity = 64, .contacts = c});
+  const auto boxes = pba::rigid_scenes::vertical_stack(s, kBoxes);
+  for (int i = 0; i < 60; ++i) s.step(kDt, kGravity);
+  for (auto x : boxes) {
+    const Vec3 w(0, 0, 1e-5);
+    s.set_velocity(x, glm::cross(w, s.center_of_mass(x)), w);
+  }
+  auto lean = [&] { return std::abs(s.center_of_mass(boxes.back()).x); };
+  for (int i = 0; i < 600; ++i) s.step(kDt, kGravity);
+  const double at10 = lean();
+  for (int i = 0; i < 600; ++i) s.step(kDt, kGravity);
+  const double rate = std::log(lean() / at10) / 10;
+  EXPECT_NEAR(rate, model.growth, 0.2 * model.growth);
 }
 
 // ---------------------------------------------------------------------------------------
