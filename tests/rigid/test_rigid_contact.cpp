@@ -232,8 +232,9 @@ TEST(RigidStacking, TwentyCubesStandForAMinute) {
 // cubes sags by its static deflection n^2 g / w^2 (the contact under k cubes carries k m g on
 // an effective mass near m / 2: 2k - 1 g / w^2 each). Both tests below take 16 substeps and
 // the quarter-substep-rate hertz (240 Hz at 60 Hz): at the defaults (8, 120 Hz) a 40-stack
-// sags 2.8 cm and sways 17 cm in 20 s, and the 400:1 stack overlaps 2.2 cm (measured;
-// docs/rigid-bodies.md, known limits).
+// sags 2.8 cm and is past its buckling load (it leans over,
+// RigidStacking.AFortyStackOnTheDefaultContactsLeansOverAtItsSpringModelsBucklingRate), and
+// the 400:1 stack overlaps 2.2 cm (measured; docs/rigid-bodies.md, known limits).
 ContactSettings stiff_contacts() {
   ContactSettings c;
   c.sleep = false;
