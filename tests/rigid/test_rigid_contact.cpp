@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 #include <vector>
 
@@ -502,14 +503,15 @@ std::pair<double, double> ground_and_box_hertz(const ContactSettings& c, double 
 // the column's sag and the substeps), so the soft step's springs are the model's. Its damping
 // is not: the model's dampers (damping ratio 10 at every contact) give the sway a damping
 // ratio of 0.125, the soft step 0.026 (the mean log decrement of the top box's velocity over
-// its half swings from 1 s to 8 s, twelve periods). This asserts the shortfall (under a third
-// of the model's, above zero) as a known limit (docs/rigid-bodies.md, where the measurements
-// behind it are): the soft step's passes, one Gauss-Seidel sweep each per substep (as
+// its half swings from 1 s to 8 s, twelve periods). The test asserts the frequency and that
+// the sway decays (damping above zero); the shortfall against the model is a known limit
+// (docs/rigid-bodies.md, where the measurements behind it are), printed, not asserted: the
+// soft step's passes, one Gauss-Seidel sweep each per substep (as
 // Box2D's), do not converge on the column's low mode, and how much of the sway they remove
 // depends on how close the contacts are to the cap of a quarter of the substep rate, where
 // the defaults put them (0.20 at 70 Hz, 0.13 at 90 Hz, 0.057 at 110 Hz, 0.026 at 120 Hz, the
-// model 0.13 throughout). If a change makes this fail by damping more, compare with the model.
-TEST(RigidRocking, ATenStackSwaysAtItsSpringModelsFrequencyButWithAFifthOfItsDamping) {
+// model 0.13 throughout).
+TEST(RigidRocking, ATenStackSwaysAtItsSpringModelsFrequencyAndDecays) {
   constexpr int kBoxes = 10;
   constexpr double kDt = 1.0 / 60;
   Stack st(kBoxes);
@@ -541,7 +543,9 @@ TEST(RigidRocking, ATenStackSwaysAtItsSpringModelsFrequencyButWithAFifthOfItsDam
   const double hertz = 0.5 * static_cast<double>(peaks.size() - 1) / (peaks.back().first - peaks.front().first);
   EXPECT_NEAR(hertz, model.hertz, 0.05 * model.hertz);
   EXPECT_GT(zeta, 0);
-  EXPECT_LT(zeta, model.zeta / 3) << "damped more than before: compare with the model's " << model.zeta;
+  EXPECT_LE(zeta, 1.2 * model.zeta) << "damped beyond the spring-damper model's " << model.zeta;
+  std::printf("10-stack sway: %.3f Hz (model %.3f), damping ratio %.4f (model %.4f)\n", hertz, model.hertz, zeta,
+              model.zeta);
 }
 
 // The same model for 40 cubes at the defaults (120 Hz on every contact) has a negative
