@@ -130,6 +130,17 @@ struct HullBuilder {
     const Moments m = polyhedron_moments(v, h->edges_, h->faces_);
     h->volume_ = m.volume;
     h->centroid_ = m.centroid;
+    // the balls about the centroid inside and around the hull, and the edges' arc secants
+    // (the narrow phase's pruning bounds)
+    h->inner_radius_ = INFINITY;
+    for (const ConvexHull::Face& f : h->faces_) h->inner_radius_ = std::min(h->inner_radius_, f.offset - glm::dot(f.normal, m.centroid));
+    h->outer_radius_ = 0;
+    for (const Vec3& p : v) h->outer_radius_ = std::max(h->outer_radius_, glm::length(p - m.centroid));
+    h->edge_arc_secant_.resize(n_half / 2);
+    for (std::size_t i = 0; i < n_half / 2; ++i) {
+      const double c = 1 + glm::dot(h->faces_[h->edges_[2 * i].face].normal, h->faces_[h->edges_[2 * i + 1].face].normal);
+      h->edge_arc_secant_[i] = c > 0 ? std::sqrt(2 / c) : INFINITY;
+    }
     return h;
   }
 

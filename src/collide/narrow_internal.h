@@ -117,6 +117,9 @@ struct Poly {
   const HullFace* faces = nullptr;
   std::uint32_t face_count = 0;
   Vec3 center{0, 0, 0};
+  double inner_radius = 0;              // a ball about `center` inside the solid (m)
+  double outer_radius = 0;              // a ball about `center` holding it (m)
+  const double* arc_secant = nullptr;   // per edge: ConvexHull::edge_arc_secants()
   bool is_box = false;
   Vec3 half{0, 0, 0};
   std::array<Vec3, 8> box_vertices{};
@@ -133,6 +136,12 @@ struct Poly {
   }
   const ConvexHull* hull = nullptr;
 };
+
+/// A box's edges join faces at right angles: each arc's secant is sqrt(2) (rounded up).
+inline constexpr std::array<double, 12> kBoxArcSecants = {
+    1.4142135623730952, 1.4142135623730952, 1.4142135623730952, 1.4142135623730952,
+    1.4142135623730952, 1.4142135623730952, 1.4142135623730952, 1.4142135623730952,
+    1.4142135623730952, 1.4142135623730952, 1.4142135623730952, 1.4142135623730952};
 
 /// Fills `p` with the box of half extents h.
 inline void make_box_poly(const Vec3& h, Poly& p) {
@@ -154,6 +163,9 @@ inline void make_box_poly(const Vec3& h, Poly& p) {
   p.faces = p.box_faces.data();
   p.face_count = 6;
   p.center = Vec3(0.0);
+  p.inner_radius = std::min({h.x, h.y, h.z});
+  p.outer_radius = glm::length(h);
+  p.arc_secant = kBoxArcSecants.data();
 }
 
 /// Points `p` at hull `h`.
@@ -167,6 +179,9 @@ inline void make_hull_poly(const ConvexHull& h, Poly& p) {
   p.faces = h.faces().data();
   p.face_count = std::uint32_t(h.faces().size());
   p.center = h.centroid();
+  p.inner_radius = h.inner_radius();
+  p.outer_radius = h.outer_radius();
+  p.arc_secant = h.edge_arc_secants().data();
 }
 
 // --- feature ids ----------------------------------------------------------------------

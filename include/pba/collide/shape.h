@@ -146,6 +146,17 @@ class ConvexHull {
   Vec3 centroid() const { return centroid_; }
   /// Volume (m^3).
   double volume() const { return volume_; }
+  /// Radius of the largest ball about centroid() inside the hull (m): the least distance
+  /// from the centroid to a face plane.
+  double inner_radius() const { return inner_radius_; }
+  /// Radius of the smallest ball about centroid() holding the hull (m): the distance to the
+  /// farthest vertex.
+  double outer_radius() const { return outer_radius_; }
+  /// Per edge (half edges 2i and 2i + 1), the secant of half the angle between its two
+  /// faces' normals, sqrt(2 / (1 + n1 . n2)) (dimensionless, >= 1; infinite for a fold of
+  /// 180 degrees): how much a unit vector on the arc between the normals can exceed, along
+  /// any vector, the larger of the normals' components (SAT's edge pruning bound).
+  std::span<const double> edge_arc_secants() const { return edge_arc_secant_; }
   /// Local bounds.
   Aabb bounds() const { return bounds_; }
   /// Mass properties at `density` (kg/m^3), exact for the polyhedron (Mirtich 1996 or
@@ -159,8 +170,11 @@ class ConvexHull {
   std::vector<Face> faces_;
   std::vector<std::uint32_t> vertex_edge_;  // one half edge leaving each vertex (hill climbing)
   std::vector<double> vertex_soa_;          // see vertex_soa()
+  std::vector<double> edge_arc_secant_;     // see edge_arc_secants()
   Vec3 centroid_{0, 0, 0};
   double volume_ = 0;
+  double inner_radius_ = 0;
+  double outer_radius_ = 0;
   Aabb bounds_{};
 };
 
