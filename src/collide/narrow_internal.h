@@ -119,7 +119,10 @@ struct Poly {
   Vec3 center{0, 0, 0};
   double inner_radius = 0;              // a ball about `center` inside the solid (m)
   double outer_radius = 0;              // a ball about `center` holding it (m)
-  const double* arc_secant = nullptr;   // per edge: ConvexHull::edge_arc_secants()
+  const double* face_soa = nullptr;     // hulls: ConvexHull::face_soa() (boxes: none)
+  std::uint32_t face_stride = 0;        // its arrays' length
+  const double* edge_soa = nullptr;     // hulls: ConvexHull::edge_soa() (boxes: none)
+  std::uint32_t edge_stride = 0;        // its arrays' length
   bool is_box = false;
   Vec3 half{0, 0, 0};
   std::array<Vec3, 8> box_vertices{};
@@ -136,12 +139,6 @@ struct Poly {
   }
   const ConvexHull* hull = nullptr;
 };
-
-/// A box's edges join faces at right angles: each arc's secant is sqrt(2) (rounded up).
-inline constexpr std::array<double, 12> kBoxArcSecants = {
-    1.4142135623730952, 1.4142135623730952, 1.4142135623730952, 1.4142135623730952,
-    1.4142135623730952, 1.4142135623730952, 1.4142135623730952, 1.4142135623730952,
-    1.4142135623730952, 1.4142135623730952, 1.4142135623730952, 1.4142135623730952};
 
 /// Fills `p` with the box of half extents h.
 inline void make_box_poly(const Vec3& h, Poly& p) {
@@ -165,7 +162,7 @@ inline void make_box_poly(const Vec3& h, Poly& p) {
   p.center = Vec3(0.0);
   p.inner_radius = std::min({h.x, h.y, h.z});
   p.outer_radius = glm::length(h);
-  p.arc_secant = kBoxArcSecants.data();
+  p.face_soa = p.edge_soa = nullptr;
 }
 
 /// Points `p` at hull `h`.
@@ -181,7 +178,10 @@ inline void make_hull_poly(const ConvexHull& h, Poly& p) {
   p.center = h.centroid();
   p.inner_radius = h.inner_radius();
   p.outer_radius = h.outer_radius();
-  p.arc_secant = h.edge_arc_secants().data();
+  p.face_soa = h.face_soa().data();
+  p.face_stride = std::uint32_t(h.face_soa().size() / 4);
+  p.edge_soa = h.edge_soa().data();
+  p.edge_stride = std::uint32_t(h.edge_soa().size() / 10);
 }
 
 // --- feature ids ----------------------------------------------------------------------

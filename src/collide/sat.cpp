@@ -49,12 +49,85 @@ double face_separation(const Poly& a, std::uint32_t f, const Poly& b, const Rela
   return glm::dot(nb, b.vertices[j]) + glm::dot(F.normal, r.t) - F.offset;
 }
 
-// An upper bound of face f's separation: B's centre (`cb`, A's frame) less the radius of
-// a ball about it inside B, measured from the face's plane (B's deepest point along the
-// normal lies at least that ball's radius behind its centre)
+// Pruning bounds. A ball of radius `inner` about a body's centre c lies inside it, so the
+// body reaches at least `inner` behind c along any direction. Face f of A: B's deepest
+// point along the face normal lies at least B's inner radius behind B's centre, so the
+// face's separation is at most the plane distance of B's centre less that radius.
+// Edge of A with arc normals u, v through p, against B (centre c, radius `inner`): a pair
+// forming a Minkowski face has its axis n on the arc, and the edge is A's support along n,
+// so the pair's separation is at most n . (c - p) - inner; over the arc n . w is at most
+// m = max(u . w, v . w) when m <= 0, else m times the arc's secant.
+using v2d = double __attribute__((vector_size(16)));
+using v2l = long long __attribute__((vector_size(16)));
+constexpr std::uint32_t kMaxBounds = 256;  // faces or edges whose bounds are kept on the stack
+
 double face_bound(const Poly& a, std::uint32_t f, const Vec3& cb, double inner_b) {
   const HullFace& F = a.faces[f];
   return glm::dot(F.normal, cb) - F.offset - inner_b;
+}
+double edge_bound(const Vec3& u, const Vec3& v, const Vec3& p, const Vec3& c, double sec, double inner) {
+  const Vec3 w = c - p;
+  const double m = std::max(glm::dot(u, w), glm::dot(v, w));
+  return (m > 0 ? m * sec : m) - inner;
+}
+// a box's edges join faces at right angles: the secant of 45 degrees, rounded up
+constexpr double kBoxSecant = 1.4142135623730952;
+double edge_bound(const Poly& a, std::uint32_t i, const Vec3& c, double inner) {
+  const HalfEdge& e = a.edges[2 * i];
+  const HalfEdge& t = a.edges[2 * i + 1];
+  const double sec = a.is_box ? kBoxSecant : a.edge_soa[9 * a.edge_stride + i];
+  return edge_bound(a.faces[e.face].normal, a.faces[t.face].normal, a.vertices[e.origin], c, sec, inner);
+}
+
+// every face's bound into ub (a.face_count <= kMaxBounds); returns the face of the largest
+// (the first of equals)
+std::uint32_t face_bounds(const Poly& a, const Vec3& cb, double inner_b, double* ub) {
+  if (!a.face_soa) {
+    std::uint32_t best = 0;
+    for (std::uint32_t f = 0; f < a.face_count; ++f) {
+      ub[f] = face_bound(a, f, cb, inner_b);
+      if (ub[f] > ub[best]) best = f;
+    }
+    return best;
+  }
+  // two faces at a time from the coordinate columns (the last padded face repeats the last)
+  const std::uint32_t m = a.face_stride;
+  const double *x = a.face_soa, *y = x + m, *z = y + m, *o = z + m;
+  const v2d cx = {cb.x, cb.x}, cy = {cb.y, cb.y}, cz = {cb.z, cb.z}, in = {inner_b, inner_b};
+  v2d best = {-INFINITY, -INFINITY};
+  v2l index = {0, 1}, best_index = index;
+  const v2l two = {2, 2};
+  for (std::uint32_t i = 0; i < m; i += 2, index += two) {
+    const v2d nx = {x[i], x[i + 1]}, ny = {y[i], y[i + 1]}, nz = {z[i], z[i + 1]}, off = {o[i], o[i + 1]};
+    const v2d u = (((nx * cx + ny * cy) + nz * cz) - off) - in;
+    ub[i] = u[0], ub[i + 1] = u[1];
+    const v2l better = u > best;
+    best = better ? u : best;
+    best_index = better ? index : best_index;
+  }
+  const bool odd = (best[1] > best[0]) | ((best[1] == best[0]) & (best_index[1] < best_index[0]));
+  return std::uint32_t(odd ? best_index[1] : best_index[0]);
+}
+
+// every edge's bound against the other body (centre c in this body's frame, its inner
+// radius) into ub (edge_count / 2 <= kMaxBounds)
+void edge_bounds(const Poly& a, const Vec3& c, double inner, double* ub) {
+  const std::uint32_t n = a.edge_count / 2;
+  if (!a.edge_soa) {
+    for (std::uint32_t i = 0; i < n; ++i) ub[i] = edge_bound(a, i, c, inner);
+    return;
+  }
+  const std::uint32_t m = a.edge_stride;
+  const double* col = a.edge_soa;
+  const v2d cx = {c.x, c.x}, cy = {c.y, c.y}, cz = {c.z, c.z}, in = {inner, inner}, zero = {0, 0};
+  for (std::uint32_t i = 0; i < m; i += 2) {
+    auto at = [&](int k) { return v2d{col[std::uint32_t(k) * m + i], col[std::uint32_t(k) * m + i + 1]}; };
+    const v2d wx = cx - at(6), wy = cy - at(7), wz = cz - at(8);
+    const v2d mu = (at(0) * wx + at(1) * wy) + at(2) * wz, mv = (at(3) * wx + at(4) * wy) + at(5) * wz;
+    const v2d mx = mu > mv ? mu : mv;
+    const v2d u = (mx > zero ? mx * at(9) : mx) - in;
+    ub[i] = u[0], ub[i + 1] = u[1];
+  }
 }
 
 // The faces of A against B: the largest separation and its face, the first of equals.
@@ -64,21 +137,25 @@ double face_bound(const Poly& a, std::uint32_t f, const Vec3& cb, double inner_b
 // so the best found starts near the answer.
 FaceQuery query_faces(const Poly& a, const Poly& b, const Relative& r, double floor, double eps) {
   const Vec3 cb = r.R * b.center + r.t;
+  alignas(16) double ub[kMaxBounds];
+  const bool stored = a.face_count <= kMaxBounds;
   std::uint32_t seed = 0;
-  double seed_bound = -INFINITY;
-  for (std::uint32_t f = 0; f < a.face_count; ++f) {
-    const double u = face_bound(a, f, cb, b.inner_radius);
-    if (u > seed_bound) seed_bound = u, seed = f;
+  if (stored) {
+    seed = face_bounds(a, cb, b.inner_radius, ub);
+  } else {
+    for (std::uint32_t f = 1; f < a.face_count; ++f)
+      if (face_bound(a, f, cb, b.inner_radius) > face_bound(a, seed, cb, b.inner_radius)) seed = f;
   }
+  auto bound = [&](std::uint32_t f) { return stored ? ub[f] : face_bound(a, f, cb, b.inner_radius); };
   FaceQuery q;
   std::uint32_t hint = 0;
   double cut = floor;
-  if (!(seed_bound + eps < cut)) {
+  if (!(bound(seed) + eps < cut)) {
     q.separation = face_separation(a, seed, b, r, &hint), q.index = seed;
     cut = std::max(cut, q.separation);
   }
   for (std::uint32_t f = 0; f < a.face_count; ++f) {
-    if (f == seed || face_bound(a, f, cb, b.inner_radius) + eps < cut) continue;
+    if (f == seed || bound(f) + eps < cut) continue;
     const double s = face_separation(a, f, b, r, &hint);
     if (s > q.separation || (s == q.separation && f < q.index)) q.separation = s, q.index = f;
     cut = std::max(cut, q.separation);
@@ -136,18 +213,6 @@ auto arcs_cross(T cba, T dba, T adc, T bdc) {
   return (cba * dba < zero) & (adc * bdc < zero) & (cba * bdc > zero);
 }
 
-// An upper bound of the separation of any edge pair that forms a Minkowski face with the
-// edge of arc normals u, v through p (the other body's centre c, the radius `inner` of a
-// ball about c inside it, `sec` the arc's secant): the pair's axis n lies on the arc, the
-// edge is its body's support along n, and the other body reaches at least `inner` behind
-// its centre, so the separation is at most n . (c - p) - inner; over the arc n . w is at
-// most the larger of u . w and v . w when that is <= 0, else that times the secant
-double edge_bound(const Vec3& u, const Vec3& v, const Vec3& p, const Vec3& c, double sec, double inner) {
-  const Vec3 w = c - p;
-  const double m = std::max(glm::dot(u, w), glm::dot(v, w));
-  return (m > 0 ? m * sec : m) - inner;
-}
-
 // A's arcs as coordinate columns for the two-lane test, padded with zero arcs (which cross
 // nothing) to an even count; with each kept arc's segment and edge index
 constexpr std::uint32_t kMaxGathered = 256;
@@ -164,18 +229,22 @@ struct ArcColumns {
 // whose bound (edge_bound, within `eps`) is below floor, or B's edges below the best found,
 // are left out.
 EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r, double floor, double eps) {
-  using v2d = double __attribute__((vector_size(16)));
   EdgeQuery q;
-  const std::uint32_t na = a.edge_count / 2;
+  const std::uint32_t na = a.edge_count / 2, nb = b.edge_count / 2;
   const bool gathered = na <= kMaxGathered;
   const Vec3 cb = r.R * b.center + r.t;       // B's centre in A's frame
   const Vec3 ca = r.RT * (a.center - r.t);    // A's centre in B's frame
+  alignas(16) double ub[kMaxBounds];
+  const bool b_stored = nb <= kMaxBounds;
+  if (b_stored) edge_bounds(b, ca, a.inner_radius, ub);
   ArcColumns c;
   std::uint32_t nk = 0;
   if (gathered) {
+    alignas(16) double ua[kMaxBounds];
+    edge_bounds(a, cb, b.inner_radius, ua);
     for (std::uint32_t i = 0; i < na; ++i) {
+      if (ua[i] + eps < floor) continue;
       const EdgeArc g = arc_of(a, i);
-      if (edge_bound(g.u, g.v, g.p, cb, a.arc_secant[i], b.inner_radius) + eps < floor) continue;
       c.ux[nk] = g.u.x, c.uy[nk] = g.u.y, c.uz[nk] = g.u.z;
       c.vx[nk] = g.v.x, c.vy[nk] = g.v.y, c.vz[nk] = g.v.z;
       c.bx[nk] = g.bxa.x, c.by[nk] = g.bxa.y, c.bz[nk] = g.bxa.z;
@@ -193,14 +262,12 @@ EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r, double fl
   for (std::uint32_t j = 0; j < b.edge_count; j += 2) {
     const HalfEdge& e2 = b.edges[j];
     const HalfEdge& t2 = b.edges[j + 1];
-    const Vec3 u2l = b.faces[e2.face].normal, v2l = b.faces[t2.face].normal;
-    if (edge_bound(u2l, v2l, b.vertices[e2.origin], ca, b.arc_secant[j / 2], a.inner_radius) + eps <
-        std::max(floor, q.separation))
+    if ((b_stored ? ub[j / 2] : edge_bound(b, j / 2, ca, a.inner_radius)) + eps < std::max(floor, q.separation))
       continue;
     const Vec3 p2 = r.R * b.vertices[e2.origin] + r.t;
     const Vec3 q2 = r.R * b.vertices[t2.origin] + r.t;
-    const Vec3 u2 = r.R * u2l;
-    const Vec3 v2 = r.R * v2l;
+    const Vec3 u2 = r.R * b.faces[e2.face].normal;
+    const Vec3 v2 = r.R * b.faces[t2.face].normal;
     const Vec3 e2d = q2 - p2;
     const Vec3 dxc = glm::cross(v2, u2);
     // a crossing pair: its separation along the edges' cross product, the largest kept (the
@@ -230,6 +297,7 @@ EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r, double fl
       }
     } else {
       for (std::uint32_t i = 0; i < na; ++i) {
+        if (edge_bound(a, i, cb, b.inner_radius) + eps < floor) continue;
         const EdgeArc g = arc_of(a, i);
         if (arcs_cross(-glm::dot(u2, g.bxa), -glm::dot(v2, g.bxa), glm::dot(g.u, dxc), glm::dot(g.v, dxc)))
           consider(i, g.p, g.e);
