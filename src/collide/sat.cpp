@@ -150,13 +150,31 @@ FaceQuery query_faces(const Poly& a, const Poly& b, const Relative& r, double fl
   FaceQuery q;
   std::uint32_t hint = 0;
   double cut = floor;
+  // B's vertices found deepest so far (A's frame): any vertex of B bounds a face's
+  // separation too (B's deepest point is at most that deep), and they lie where the
+  // answer's does, so a face that passes the ball's bound is measured only when it
+  // passes theirs
+  std::array<Vec3, 4> witness;
+  std::uint32_t witnesses = 0;
+  auto measure = [&](std::uint32_t f) {
+    const double s = face_separation(a, f, b, r, &hint);
+    witness[witnesses++ % witness.size()] = r.R * b.vertices[hint] + r.t;
+    return s;
+  };
+  auto witness_bound = [&](std::uint32_t f) {
+    const HullFace& F = a.faces[f];
+    double u = INFINITY;
+    for (std::uint32_t k = 0; k < std::min<std::uint32_t>(witnesses, witness.size()); ++k)
+      u = std::min(u, glm::dot(F.normal, witness[k]) - F.offset);
+    return u;
+  };
   if (!(bound(seed) + eps < cut)) {
-    q.separation = face_separation(a, seed, b, r, &hint), q.index = seed;
+    q.separation = measure(seed), q.index = seed;
     cut = std::max(cut, q.separation);
   }
   for (std::uint32_t f = 0; f < a.face_count; ++f) {
-    if (f == seed || bound(f) + eps < cut) continue;
-    const double s = face_separation(a, f, b, r, &hint);
+    if (f == seed || bound(f) + eps < cut || witness_bound(f) + eps < cut) continue;
+    const double s = measure(f);
     if (s > q.separation || (s == q.separation && f < q.index)) q.separation = s, q.index = f;
     cut = std::max(cut, q.separation);
   }
