@@ -134,8 +134,10 @@ void edge_bounds(const Poly& a, const Vec3& c, double inner, double* ub) {
 // Exact when the largest exceeds `floor`; otherwise only known to be <= floor. A face whose
 // bound (within `eps`, the bounds' rounding) is below the best found, or below floor, cannot
 // change the answer and is not measured; the face of the largest bound is measured first,
-// so the best found starts near the answer.
-FaceQuery query_faces(const Poly& a, const Poly& b, const Relative& r, double floor, double eps) {
+// so the best found starts near the answer, or `hint_face` (the cached face of the last
+// frame) when it is one of A's faces. The answer does not depend on which face comes first.
+FaceQuery query_faces(const Poly& a, const Poly& b, const Relative& r, double floor, double eps,
+                      std::uint32_t hint_face = ~0u) {
   const Vec3 cb = r.R * b.center + r.t;
   alignas(16) double ub[kMaxBounds];
   const bool stored = a.face_count <= kMaxBounds;
@@ -146,6 +148,7 @@ FaceQuery query_faces(const Poly& a, const Poly& b, const Relative& r, double fl
     for (std::uint32_t f = 1; f < a.face_count; ++f)
       if (face_bound(a, f, cb, b.inner_radius) > face_bound(a, seed, cb, b.inner_radius)) seed = f;
   }
+  if (hint_face < a.face_count) seed = hint_face;
   auto bound = [&](std::uint32_t f) { return stored ? ub[f] : face_bound(a, f, cb, b.inner_radius); };
   FaceQuery q;
   std::uint32_t hint = 0;
@@ -372,12 +375,16 @@ void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose&
   // the bounds' rounding allowance: a tenth of a micrometre per metre of the bodies' size
   // and distance, far above the separations' rounding and the hulls' planarity tolerance
   const double eps = 1e-7 * (a.outer_radius + b.outer_radius + glm::length(r.R * b.center + r.t - a.center));
-  const FaceQuery fa = query_faces(a, b, r, -INFINITY, eps);
+  // a cached face (a touching pair's reference face of the last frame) is measured first
+  const bool cached_a = cache && cache->kind == SatCache::Kind::FaceA;
+  const bool cached_b = cache && cache->kind == SatCache::Kind::FaceB;
+  const FaceQuery fa = query_faces(a, b, r, -INFINITY, eps, cached_a ? cache->index_a : ~0u);
   if (fa.separation > margin) {
     if (cache) *cache = {SatCache::Kind::FaceA, fa.index, 0};
     return;
   }
-  const FaceQuery fb = query_faces(b, a, swapped(r), std::min(fa.separation, kRelFace * fa.separation + kAbs), eps);
+  const FaceQuery fb = query_faces(b, a, swapped(r), std::min(fa.separation, kRelFace * fa.separation + kAbs), eps,
+                                   cached_b ? cache->index_b : ~0u);
   if (fb.separation > margin) {
     if (cache) *cache = {SatCache::Kind::FaceB, 0, fb.index};
     return;
