@@ -32,6 +32,28 @@ void world_face(const Poly& poly, const Pose& pose, std::uint32_t f, WorldFace& 
 std::uint32_t incident_face(const Poly& poly, const Quat& rotation, const Vec3& n) {
   // the least dot product (the first of equals), without branches: keep_max on its negation
   const Vec3 nl = glm::conjugate(rotation) * n;
+  if (poly.face_soa) {
+    // hulls: two faces at a time from the normals' coordinate columns (the padded face
+    // repeats the last, so it never wins), each dot product summed as glm::dot sums it;
+    // each lane keeps its first minimum, the lanes' tie goes to the lower index
+    using v2d = double __attribute__((vector_size(16)));
+    using v2l = long long __attribute__((vector_size(16)));
+    const std::uint32_t m = poly.face_stride;
+    const double *x = poly.face_soa, *y = x + m, *z = y + m;
+    const v2d dx = {nl.x, nl.x}, dy = {nl.y, nl.y}, dz = {nl.z, nl.z};
+    v2d best = {INFINITY, INFINITY};
+    v2l index = {0, 1}, best_index = index;
+    const v2l two = {2, 2};
+    for (std::uint32_t i = 0; i < m; i += 2, index += two) {
+      const v2d vx = {x[i], x[i + 1]}, vy = {y[i], y[i + 1]}, vz = {z[i], z[i + 1]};
+      const v2d d = (vx * dx + vy * dy) + vz * dz;
+      const v2l better = d < best;
+      best = better ? d : best;
+      best_index = better ? index : best_index;
+    }
+    const bool odd = (best[1] < best[0]) | ((best[1] == best[0]) & (best_index[1] < best_index[0]));
+    return std::uint32_t(odd ? best_index[1] : best_index[0]);
+  }
   int best = 0;
   double bd = -INFINITY;
   for (std::uint32_t f = 0; f < poly.face_count; ++f) keep_max(-glm::dot(poly.faces[f].normal, nl), int(f), bd, best);

@@ -130,6 +130,29 @@ struct HullBuilder {
     const Moments m = polyhedron_moments(v, h->edges_, h->faces_);
     h->volume_ = m.volume;
     h->centroid_ = m.centroid;
+    // the balls about the centroid inside and around the hull, and the edges' arc secants
+    // (the narrow phase's pruning bounds)
+    h->inner_radius_ = INFINITY;
+    for (const ConvexHull::Face& f : h->faces_) h->inner_radius_ = std::min(h->inner_radius_, f.offset - glm::dot(f.normal, m.centroid));
+    h->outer_radius_ = 0;
+    for (const Vec3& p : v) h->outer_radius_ = std::max(h->outer_radius_, glm::length(p - m.centroid));
+    const std::size_t nf = h->faces_.size(), pf = nf + (nf & 1);
+    h->face_soa_.resize(4 * pf);
+    for (std::size_t i = 0; i < pf; ++i) {
+      const ConvexHull::Face& f = h->faces_[std::min(i, nf - 1)];
+      h->face_soa_[i] = f.normal.x, h->face_soa_[pf + i] = f.normal.y, h->face_soa_[2 * pf + i] = f.normal.z;
+      h->face_soa_[3 * pf + i] = f.offset;
+    }
+    const std::size_t ne = n_half / 2, pe = ne + (ne & 1);
+    h->edge_soa_.resize(10 * pe);
+    for (std::size_t i = 0; i < pe; ++i) {
+      const std::size_t k = std::min(i, ne - 1);
+      const Vec3 u = h->faces_[h->edges_[2 * k].face].normal, w = h->faces_[h->edges_[2 * k + 1].face].normal;
+      const Vec3 p = v[h->edges_[2 * k].origin];
+      const double c = 1 + glm::dot(u, w);
+      const double col[10] = {u.x, u.y, u.z, w.x, w.y, w.z, p.x, p.y, p.z, c > 0 ? std::sqrt(2 / c) : INFINITY};
+      for (std::size_t j = 0; j < 10; ++j) h->edge_soa_[j * pe + i] = col[j];
+    }
     return h;
   }
 

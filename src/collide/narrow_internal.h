@@ -117,6 +117,12 @@ struct Poly {
   const HullFace* faces = nullptr;
   std::uint32_t face_count = 0;
   Vec3 center{0, 0, 0};
+  double inner_radius = 0;              // a ball about `center` inside the solid (m)
+  double outer_radius = 0;              // a ball about `center` holding it (m)
+  const double* face_soa = nullptr;     // hulls: ConvexHull::face_soa() (boxes: none)
+  std::uint32_t face_stride = 0;        // its arrays' length
+  const double* edge_soa = nullptr;     // hulls: ConvexHull::edge_soa() (boxes: none)
+  std::uint32_t edge_stride = 0;        // its arrays' length
   bool is_box = false;
   Vec3 half{0, 0, 0};
   std::array<Vec3, 8> box_vertices{};
@@ -154,6 +160,9 @@ inline void make_box_poly(const Vec3& h, Poly& p) {
   p.faces = p.box_faces.data();
   p.face_count = 6;
   p.center = Vec3(0.0);
+  p.inner_radius = std::min({h.x, h.y, h.z});
+  p.outer_radius = glm::length(h);
+  p.face_soa = p.edge_soa = nullptr;
 }
 
 /// Points `p` at hull `h`.
@@ -167,6 +176,12 @@ inline void make_hull_poly(const ConvexHull& h, Poly& p) {
   p.faces = h.faces().data();
   p.face_count = std::uint32_t(h.faces().size());
   p.center = h.centroid();
+  p.inner_radius = h.inner_radius();
+  p.outer_radius = h.outer_radius();
+  p.face_soa = h.face_soa().data();
+  p.face_stride = std::uint32_t(h.face_soa().size() / 4);
+  p.edge_soa = h.edge_soa().data();
+  p.edge_stride = std::uint32_t(h.edge_soa().size() / 10);
 }
 
 // --- feature ids ----------------------------------------------------------------------

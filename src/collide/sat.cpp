@@ -49,12 +49,137 @@ double face_separation(const Poly& a, std::uint32_t f, const Poly& b, const Rela
   return glm::dot(nb, b.vertices[j]) + glm::dot(F.normal, r.t) - F.offset;
 }
 
-FaceQuery query_faces_a(const Poly& a, const Poly& b, const Relative& r) {
+// Pruning bounds. A ball of radius `inner` about a body's centre c lies inside it, so the
+// body reaches at least `inner` behind c along any direction. Face f of A: B's deepest
+// point along the face normal lies at least B's inner radius behind B's centre, so the
+// face's separation is at most the plane distance of B's centre less that radius.
+// Edge of A with arc normals u, v through p, against B (centre c, radius `inner`): a pair
+// forming a Minkowski face has its axis n on the arc, and the edge is A's support along n,
+// so the pair's separation is at most n . (c - p) - inner; over the arc n . w is at most
+// m = max(u . w, v . w) when m <= 0, else m times the arc's secant.
+using v2d = double __attribute__((vector_size(16)));
+using v2l = long long __attribute__((vector_size(16)));
+constexpr std::uint32_t kMaxBounds = 256;  // faces or edges whose bounds are kept on the stack
+
+double face_bound(const Poly& a, std::uint32_t f, const Vec3& cb, double inner_b) {
+  const HullFace& F = a.faces[f];
+  return glm::dot(F.normal, cb) - F.offset - inner_b;
+}
+double edge_bound(const Vec3& u, const Vec3& v, const Vec3& p, const Vec3& c, double sec, double inner) {
+  const Vec3 w = c - p;
+  const double m = std::max(glm::dot(u, w), glm::dot(v, w));
+  return (m > 0 ? m * sec : m) - inner;
+}
+// a box's edges join faces at right angles: the secant of 45 degrees, rounded up
+constexpr double kBoxSecant = 1.4142135623730952;
+double edge_bound(const Poly& a, std::uint32_t i, const Vec3& c, double inner) {
+  const HalfEdge& e = a.edges[2 * i];
+  const HalfEdge& t = a.edges[2 * i + 1];
+  const double sec = a.is_box ? kBoxSecant : a.edge_soa[9 * a.edge_stride + i];
+  return edge_bound(a.faces[e.face].normal, a.faces[t.face].normal, a.vertices[e.origin], c, sec, inner);
+}
+
+// every face's bound into ub (a.face_count <= kMaxBounds); returns the face of the largest
+// (the first of equals)
+std::uint32_t face_bounds(const Poly& a, const Vec3& cb, double inner_b, double* ub) {
+  if (!a.face_soa) {
+    std::uint32_t best = 0;
+    for (std::uint32_t f = 0; f < a.face_count; ++f) {
+      ub[f] = face_bound(a, f, cb, inner_b);
+      if (ub[f] > ub[best]) best = f;
+    }
+    return best;
+  }
+  // two faces at a time from the coordinate columns (the last padded face repeats the last)
+  const std::uint32_t m = a.face_stride;
+  const double *x = a.face_soa, *y = x + m, *z = y + m, *o = z + m;
+  const v2d cx = {cb.x, cb.x}, cy = {cb.y, cb.y}, cz = {cb.z, cb.z}, in = {inner_b, inner_b};
+  v2d best = {-INFINITY, -INFINITY};
+  v2l index = {0, 1}, best_index = index;
+  const v2l two = {2, 2};
+  for (std::uint32_t i = 0; i < m; i += 2, index += two) {
+    const v2d nx = {x[i], x[i + 1]}, ny = {y[i], y[i + 1]}, nz = {z[i], z[i + 1]}, off = {o[i], o[i + 1]};
+    const v2d u = (((nx * cx + ny * cy) + nz * cz) - off) - in;
+    ub[i] = u[0], ub[i + 1] = u[1];
+    const v2l better = u > best;
+    best = better ? u : best;
+    best_index = better ? index : best_index;
+  }
+  const bool odd = (best[1] > best[0]) | ((best[1] == best[0]) & (best_index[1] < best_index[0]));
+  return std::uint32_t(odd ? best_index[1] : best_index[0]);
+}
+
+// every edge's bound against the other body (centre c in this body's frame, its inner
+// radius) into ub (edge_count / 2 <= kMaxBounds)
+void edge_bounds(const Poly& a, const Vec3& c, double inner, double* ub) {
+  const std::uint32_t n = a.edge_count / 2;
+  if (!a.edge_soa) {
+    for (std::uint32_t i = 0; i < n; ++i) ub[i] = edge_bound(a, i, c, inner);
+    return;
+  }
+  const std::uint32_t m = a.edge_stride;
+  const double* col = a.edge_soa;
+  const v2d cx = {c.x, c.x}, cy = {c.y, c.y}, cz = {c.z, c.z}, in = {inner, inner}, zero = {0, 0};
+  for (std::uint32_t i = 0; i < m; i += 2) {
+    auto at = [&](int k) { return v2d{col[std::uint32_t(k) * m + i], col[std::uint32_t(k) * m + i + 1]}; };
+    const v2d wx = cx - at(6), wy = cy - at(7), wz = cz - at(8);
+    const v2d mu = (at(0) * wx + at(1) * wy) + at(2) * wz, mv = (at(3) * wx + at(4) * wy) + at(5) * wz;
+    const v2d mx = mu > mv ? mu : mv;
+    const v2d u = (mx > zero ? mx * at(9) : mx) - in;
+    ub[i] = u[0], ub[i + 1] = u[1];
+  }
+}
+
+// The faces of A against B: the largest separation and its face, the first of equals.
+// Exact when the largest exceeds `floor`; otherwise only known to be <= floor. A face whose
+// bound (within `eps`, the bounds' rounding) is below the best found, or below floor, cannot
+// change the answer and is not measured; the face of the largest bound is measured first,
+// so the best found starts near the answer, or `hint_face` (the cached face of the last
+// frame) when it is one of A's faces. The answer does not depend on which face comes first.
+FaceQuery query_faces(const Poly& a, const Poly& b, const Relative& r, double floor, double eps,
+                      std::uint32_t hint_face = ~0u) {
+  const Vec3 cb = r.R * b.center + r.t;
+  alignas(16) double ub[kMaxBounds];
+  const bool stored = a.face_count <= kMaxBounds;
+  std::uint32_t seed = 0;
+  if (stored) {
+    seed = face_bounds(a, cb, b.inner_radius, ub);
+  } else {
+    for (std::uint32_t f = 1; f < a.face_count; ++f)
+      if (face_bound(a, f, cb, b.inner_radius) > face_bound(a, seed, cb, b.inner_radius)) seed = f;
+  }
+  if (hint_face < a.face_count) seed = hint_face;
+  auto bound = [&](std::uint32_t f) { return stored ? ub[f] : face_bound(a, f, cb, b.inner_radius); };
   FaceQuery q;
   std::uint32_t hint = 0;
-  for (std::uint32_t f = 0; f < a.face_count; ++f) {
+  double cut = floor;
+  // B's vertices found deepest so far (A's frame): any vertex of B bounds a face's
+  // separation too (B's deepest point is at most that deep), and they lie where the
+  // answer's does, so a face that passes the ball's bound is measured only when it
+  // passes theirs
+  std::array<Vec3, 4> witness;
+  std::uint32_t witnesses = 0;
+  auto measure = [&](std::uint32_t f) {
     const double s = face_separation(a, f, b, r, &hint);
-    if (s > q.separation) q.separation = s, q.index = f;
+    witness[witnesses++ % witness.size()] = r.R * b.vertices[hint] + r.t;
+    return s;
+  };
+  auto witness_bound = [&](std::uint32_t f) {
+    const HullFace& F = a.faces[f];
+    double u = INFINITY;
+    for (std::uint32_t k = 0; k < std::min<std::uint32_t>(witnesses, witness.size()); ++k)
+      u = std::min(u, glm::dot(F.normal, witness[k]) - F.offset);
+    return u;
+  };
+  if (!(bound(seed) + eps < cut)) {
+    q.separation = measure(seed), q.index = seed;
+    cut = std::max(cut, q.separation);
+  }
+  for (std::uint32_t f = 0; f < a.face_count; ++f) {
+    if (f == seed || bound(f) + eps < cut || witness_bound(f) + eps < cut) continue;
+    const double s = measure(f);
+    if (s > q.separation || (s == q.separation && f < q.index)) q.separation = s, q.index = f;
+    cut = std::max(cut, q.separation);
   }
   return q;
 }
@@ -110,31 +235,56 @@ auto arcs_cross(T cba, T dba, T adc, T bdc) {
 }
 
 // A's arcs as coordinate columns for the two-lane test, padded with zero arcs (which cross
-// nothing) to an even count
+// nothing) to an even count; with each kept arc's segment and edge index
 constexpr std::uint32_t kMaxGathered = 256;
 struct ArcColumns {
   alignas(16) double ux[kMaxGathered], uy[kMaxGathered], uz[kMaxGathered];
   alignas(16) double vx[kMaxGathered], vy[kMaxGathered], vz[kMaxGathered];
   alignas(16) double bx[kMaxGathered], by[kMaxGathered], bz[kMaxGathered];
+  Vec3 p[kMaxGathered], e[kMaxGathered];
+  std::uint32_t edge[kMaxGathered];
 };
 
-EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r) {
-  using v2d = double __attribute__((vector_size(16)));
+// The edge pairs: the largest separation, the first of equals in the order (B's edge, A's
+// edge). Exact when the largest exceeds `floor`; otherwise only known to be <= floor: edges
+// whose bound (edge_bound, within `eps`) is below floor, or B's edges below the best found,
+// are left out.
+EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r, double floor, double eps) {
   EdgeQuery q;
-  const std::uint32_t na = a.edge_count / 2;
+  const std::uint32_t na = a.edge_count / 2, nb = b.edge_count / 2;
   const bool gathered = na <= kMaxGathered;
+  const Vec3 cb = r.R * b.center + r.t;       // B's centre in A's frame
+  const Vec3 ca = r.RT * (a.center - r.t);    // A's centre in B's frame
+  alignas(16) double ub[kMaxBounds];
+  const bool b_stored = nb <= kMaxBounds;
+  if (b_stored) edge_bounds(b, ca, a.inner_radius, ub);
   ArcColumns c;
-  const std::uint32_t nc = gathered ? (na + 1) & ~1u : 0;
-  for (std::uint32_t i = 0; i < nc; ++i) {
-    const EdgeArc g = i < na ? arc_of(a, i) : EdgeArc{Vec3(0.0), Vec3(0.0), Vec3(0.0), Vec3(0.0), Vec3(0.0)};
-    c.ux[i] = g.u.x, c.uy[i] = g.u.y, c.uz[i] = g.u.z;
-    c.vx[i] = g.v.x, c.vy[i] = g.v.y, c.vz[i] = g.v.z;
-    c.bx[i] = g.bxa.x, c.by[i] = g.bxa.y, c.bz[i] = g.bxa.z;
+  std::uint32_t nk = 0;
+  if (gathered) {
+    alignas(16) double ua[kMaxBounds];
+    edge_bounds(a, cb, b.inner_radius, ua);
+    for (std::uint32_t i = 0; i < na; ++i) {
+      if (ua[i] + eps < floor) continue;
+      const EdgeArc g = arc_of(a, i);
+      c.ux[nk] = g.u.x, c.uy[nk] = g.u.y, c.uz[nk] = g.u.z;
+      c.vx[nk] = g.v.x, c.vy[nk] = g.v.y, c.vz[nk] = g.v.z;
+      c.bx[nk] = g.bxa.x, c.by[nk] = g.bxa.y, c.bz[nk] = g.bxa.z;
+      c.p[nk] = g.p, c.e[nk] = g.e, c.edge[nk] = i;
+      ++nk;
+    }
+    if (nk == 0) return q;
+    if (nk & 1) {
+      c.ux[nk] = c.uy[nk] = c.uz[nk] = c.vx[nk] = c.vy[nk] = c.vz[nk] = c.bx[nk] = c.by[nk] = c.bz[nk] = 0.0;
+      c.edge[nk] = na;
+      ++nk;
+    }
   }
   // B's edges into A's frame once each (outer loop), A's arcs tested two at a time (inner)
   for (std::uint32_t j = 0; j < b.edge_count; j += 2) {
     const HalfEdge& e2 = b.edges[j];
     const HalfEdge& t2 = b.edges[j + 1];
+    if ((b_stored ? ub[j / 2] : edge_bound(b, j / 2, ca, a.inner_radius)) + eps < std::max(floor, q.separation))
+      continue;
     const Vec3 p2 = r.R * b.vertices[e2.origin] + r.t;
     const Vec3 q2 = r.R * b.vertices[t2.origin] + r.t;
     const Vec3 u2 = r.R * b.faces[e2.face].normal;
@@ -143,10 +293,9 @@ EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r) {
     const Vec3 dxc = glm::cross(v2, u2);
     // a crossing pair: its separation along the edges' cross product, the largest kept (the
     // first of equals, in the order j, then i)
-    auto consider = [&](std::uint32_t i) {
-      const EdgeArc g = arc_of(a, i);
+    auto consider = [&](std::uint32_t i, const Vec3& p, const Vec3& e) {
       Vec3 n;
-      const double s = edge_separation(g.p, g.e, p2, e2d, a.center, n);
+      const double s = edge_separation(p, e, p2, e2d, a.center, n);
       if (s > q.separation) q.separation = s, q.edge_a = 2 * i, q.edge_b = j, q.normal = n;
     };
     if (gathered) {
@@ -155,22 +304,24 @@ EdgeQuery query_edges(const Poly& a, const Poly& b, const Relative& r) {
       const v2d u2x = {u2.x, u2.x}, u2y = {u2.y, u2.y}, u2z = {u2.z, u2.z};
       const v2d v2x = {v2.x, v2.x}, v2y = {v2.y, v2.y}, v2z = {v2.z, v2.z};
       const v2d dx = {dxc.x, dxc.x}, dy = {dxc.y, dxc.y}, dz = {dxc.z, dxc.z};
-      for (std::uint32_t i = 0; i < nc; i += 2) {
-        const v2d bx = {c.bx[i], c.bx[i + 1]}, by = {c.by[i], c.by[i + 1]}, bz = {c.bz[i], c.bz[i + 1]};
-        const v2d ux = {c.ux[i], c.ux[i + 1]}, uy = {c.uy[i], c.uy[i + 1]}, uz = {c.uz[i], c.uz[i + 1]};
-        const v2d vx = {c.vx[i], c.vx[i + 1]}, vy = {c.vy[i], c.vy[i + 1]}, vz = {c.vz[i], c.vz[i + 1]};
+      for (std::uint32_t k = 0; k < nk; k += 2) {
+        const v2d bx = {c.bx[k], c.bx[k + 1]}, by = {c.by[k], c.by[k + 1]}, bz = {c.bz[k], c.bz[k + 1]};
+        const v2d ux = {c.ux[k], c.ux[k + 1]}, uy = {c.uy[k], c.uy[k + 1]}, uz = {c.uz[k], c.uz[k + 1]};
+        const v2d vx = {c.vx[k], c.vx[k + 1]}, vy = {c.vy[k], c.vy[k + 1]}, vz = {c.vz[k], c.vz[k + 1]};
         const v2d cba = -((u2x * bx + u2y * by) + u2z * bz), dba = -((v2x * bx + v2y * by) + v2z * bz);
         const v2d adc = (ux * dx + uy * dy) + uz * dz, bdc = (vx * dx + vy * dy) + vz * dz;
         const auto cross = arcs_cross(cba, dba, adc, bdc);
         if (cross[0] | cross[1]) {
-          if (cross[0]) consider(i);
-          if (cross[1]) consider(i + 1);
+          if (cross[0]) consider(c.edge[k], c.p[k], c.e[k]);
+          if (cross[1]) consider(c.edge[k + 1], c.p[k + 1], c.e[k + 1]);
         }
       }
     } else {
       for (std::uint32_t i = 0; i < na; ++i) {
+        if (edge_bound(a, i, cb, b.inner_radius) + eps < floor) continue;
         const EdgeArc g = arc_of(a, i);
-        if (arcs_cross(-glm::dot(u2, g.bxa), -glm::dot(v2, g.bxa), glm::dot(g.u, dxc), glm::dot(g.v, dxc))) consider(i);
+        if (arcs_cross(-glm::dot(u2, g.bxa), -glm::dot(v2, g.bxa), glm::dot(g.u, dxc), glm::dot(g.v, dxc)))
+          consider(i, g.p, g.e);
       }
     }
   }
@@ -214,27 +365,37 @@ void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose&
   // the cached feature first: still separating beyond the margin means no contact
   if (cache && cache->kind != SatCache::Kind::None && cached_separation(a, b, r, *cache) > margin) return;
 
-  // faces of A, faces of B, edge pairs; any separation beyond the margin ends the test
-  const FaceQuery fa = query_faces_a(a, b, r);
+  // faces of A, faces of B, edge pairs; any separation beyond the margin ends the test.
+  // Each query skips what cannot change the outcome (see query_faces, query_edges): B's
+  // faces below min(A's best, what would still leave A the reference face), edge pairs
+  // below what would still leave a face the contact (or below the margin)
+  // prefer faces over edges and A's face over B's unless clearly worse (Gregorius 2013:
+  // relative and absolute tolerances keep the choice from flickering between frames)
+  constexpr double kRelEdge = 0.90, kRelFace = 0.98, kAbs = 0.5 * 0.005;
+  // the bounds' rounding allowance: a tenth of a micrometre per metre of the bodies' size
+  // and distance, far above the separations' rounding and the hulls' planarity tolerance
+  const double eps = 1e-7 * (a.outer_radius + b.outer_radius + glm::length(r.R * b.center + r.t - a.center));
+  // a cached face (a touching pair's reference face of the last frame) is measured first
+  const bool cached_a = cache && cache->kind == SatCache::Kind::FaceA;
+  const bool cached_b = cache && cache->kind == SatCache::Kind::FaceB;
+  const FaceQuery fa = query_faces(a, b, r, -INFINITY, eps, cached_a ? cache->index_a : ~0u);
   if (fa.separation > margin) {
     if (cache) *cache = {SatCache::Kind::FaceA, fa.index, 0};
     return;
   }
-  const FaceQuery fb = query_faces_a(b, a, swapped(r));
+  const FaceQuery fb = query_faces(b, a, swapped(r), std::min(fa.separation, kRelFace * fa.separation + kAbs), eps,
+                                   cached_b ? cache->index_b : ~0u);
   if (fb.separation > margin) {
     if (cache) *cache = {SatCache::Kind::FaceB, 0, fb.index};
     return;
   }
-  const EdgeQuery ee = query_edges(a, b, r);
+  const double best_face = std::max(fa.separation, fb.separation);
+  const EdgeQuery ee = query_edges(a, b, r, std::min(margin, kRelEdge * best_face + kAbs), eps);
   if (ee.separation > margin) {
     if (cache) *cache = {SatCache::Kind::Edges, ee.edge_a, ee.edge_b};
     return;
   }
 
-  // prefer faces over edges and A's face over B's unless clearly worse (Gregorius 2013:
-  // relative and absolute tolerances keep the choice from flickering between frames)
-  constexpr double kRelEdge = 0.90, kRelFace = 0.98, kAbs = 0.5 * 0.005;
-  const double best_face = std::max(fa.separation, fb.separation);
   if (ee.separation > kRelEdge * best_face + kAbs) {
     if (cache) *cache = {SatCache::Kind::Edges, ee.edge_a, ee.edge_b};
     // edge contact: the closest points of the two edges

@@ -146,6 +146,24 @@ class ConvexHull {
   Vec3 centroid() const { return centroid_; }
   /// Volume (m^3).
   double volume() const { return volume_; }
+  /// Radius of the largest ball about centroid() inside the hull (m): the least distance
+  /// from the centroid to a face plane.
+  double inner_radius() const { return inner_radius_; }
+  /// Radius of the smallest ball about centroid() holding the hull (m): the distance to the
+  /// farthest vertex.
+  double outer_radius() const { return outer_radius_; }
+  /// The face planes as four arrays: all normal x, all y, all z (unit normal), then all
+  /// offsets (m), each of length faces().size() rounded up to even (the last face
+  /// repeated): the layout of the narrow phase's vectorised face bounds.
+  std::span<const double> face_soa() const { return face_soa_; }
+  /// The edges (edge i: half edges 2i and 2i + 1) as ten arrays, each of length
+  /// edges().size() / 2 rounded up to even (the last edge repeated): the x, y, z of u, the
+  /// unit normal of half edge 2i's face; of v, half edge 2i + 1's; of the origin of half
+  /// edge 2i (m); then the secant of half the angle between u and v, sqrt(2 / (1 + u . v))
+  /// (>= 1, infinite for a fold of 180 degrees), which bounds how far a unit vector on
+  /// the arc from u to v can exceed, along any vector, the larger of u's and v's
+  /// components. The layout of the narrow phase's vectorised edge bounds.
+  std::span<const double> edge_soa() const { return edge_soa_; }
   /// Local bounds.
   Aabb bounds() const { return bounds_; }
   /// Mass properties at `density` (kg/m^3), exact for the polyhedron (Mirtich 1996 or
@@ -159,8 +177,12 @@ class ConvexHull {
   std::vector<Face> faces_;
   std::vector<std::uint32_t> vertex_edge_;  // one half edge leaving each vertex (hill climbing)
   std::vector<double> vertex_soa_;          // see vertex_soa()
+  std::vector<double> face_soa_;            // see face_soa()
+  std::vector<double> edge_soa_;            // see edge_soa()
   Vec3 centroid_{0, 0, 0};
   double volume_ = 0;
+  double inner_radius_ = 0;
+  double outer_radius_ = 0;
   Aabb bounds_{};
 };
 
