@@ -47,7 +47,7 @@ bool moves(const RigidBodySystem& s, std::uint32_t i, const std::vector<BodyType
 
 // an empty lane: zeros everywhere (no mass, no effect), its bodies the spare last row, no pair
 void clear_lane(ContactBlock& b, int l, std::uint32_t spare) {
-  auto zero = [&](double (&f)[kLanes]) { f[l] = 0; };
+  auto zero = [&](Real (&f)[kLanes]) { f[l] = 0; };
   for (int i = 0; i < 3; ++i) zero(b.t1[i]), zero(b.t2[i]), zero(b.n[i]), zero(b.d[i]), zero(b.ca[i]);
   for (int i = 0; i < 6; ++i) zero(b.ia[i]), zero(b.ib[i]);
   for (int i = 0; i < 10; ++i) zero(b.k[i]);
@@ -61,6 +61,16 @@ void clear_lane(ContactBlock& b, int l, std::uint32_t spare) {
   zero(b.twist_impulse);
   b.a[l] = b.b[l] = spare;
   b.pair[l] = kNoPair;
+}
+
+// pairs ahead that build() and store() ask for while they work on one
+constexpr std::size_t kPrefetchAhead = 4;
+
+// the lines of a pair the solver reads and writes: the header and the four points a block holds
+void prefetch_pair(const ContactPair& c) {
+  const char* p = reinterpret_cast<const char*>(&c);
+  constexpr std::size_t kUsed = offsetof(ContactPair, points) + 4 * sizeof(SolverPoint);
+  for (std::size_t line = 0; line < kUsed; line += 64) __builtin_prefetch(p + line);
 }
 
 // 1 / k, or 0 when nothing can move (effective_mass's convention)
@@ -296,6 +306,9 @@ void RigidContacts::build(RigidBodySystem& s) {
       const std::size_t b = color_block[c] + slot / kLanes;
       const int l = static_cast<int>(slot % kLanes);
       const std::uint32_t i = by_color[offset[c] + slot];
+      // a pair a few ahead on its way from the outer caches (colour order visits the pairs out
+      // of order): its header and points
+      if (offset[c] + slot + kPrefetchAhead < by_color.size()) prefetch_pair(pairs[by_color[offset[c] + slot + kPrefetchAhead]]);
       fill(s, blocks[b], l, i);
       if (pairs[i].restitution != 0)
         restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l)});
@@ -514,9 +527,13 @@ void RigidContacts::carry_impulses(double h) {
 
 void RigidContacts::store() {
   // the blocks' impulses back to their pairs (warm starting, contacts(), manifold())
-  if (built)
+  // (every pair is in a block when they are built; its lines are fetched a block ahead, and its
+  // friction impulse in world axes is kept while they are in cache)
+  if (built) {
     for (std::size_t b = 0; b < block_count; ++b) {
       const ContactBlock& k = blocks[b];
+      if (b + 1 < block_count)
+        for (int l = 0; l < blocks[b + 1].lanes; ++l) prefetch_pair(pairs[blocks[b + 1].pair[l]]);
       for (int l = 0; l < k.lanes; ++l) {
         ContactPair& c = pairs[k.pair[l]];
         for (int p = 0; p < c.count; ++p) {
@@ -526,9 +543,12 @@ void RigidContacts::store() {
         }
         c.tangent_impulse[0] = k.tangent_impulse[0][l], c.tangent_impulse[1] = k.tangent_impulse[1][l];
         c.twist_impulse = k.twist_impulse[l];
+        c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
       }
     }
-  built = false;
+    built = false;
+    return;
+  }
   for (ContactPair& c : pairs) c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
 }
 

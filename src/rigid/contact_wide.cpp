@@ -72,6 +72,30 @@ PBA_LANES void sym_mul2(const V m[6], const V v0, const V v1, V out[3]) {
   out[2] = m[2] * v0 + m[4] * v1;
 }
 
+// kWidth<V> consecutive floats from p as doubles (exact), and doubles rounded to the nearest
+// floats (the same rounding on every path)
+template <class V>
+PBA_LANES V widen(const float* p) {
+  if constexpr (std::is_same_v<V, double>) {
+    return static_cast<double>(*p);
+  } else {
+    typedef float F __attribute__((vector_size(sizeof(V) / 2)));
+    F f;
+    std::memcpy(&f, p, sizeof f);
+    return __builtin_convertvector(f, V);
+  }
+}
+template <class V>
+PBA_LANES void narrow(float* p, const V& v) {
+  if constexpr (std::is_same_v<V, double>) {
+    *p = static_cast<float>(v);
+  } else {
+    typedef float F __attribute__((vector_size(sizeof(V) / 2)));
+    const F f = __builtin_convertvector(v, F);
+    std::memcpy(p, &f, sizeof f);
+  }
+}
+
 // ---------------------------------------------------------------------------------------
 // the block's lanes [l0, l0 + width)
 
@@ -79,8 +103,9 @@ template <class V>
 struct Lanes {
   ContactBlock& c;
   int l0;
-  PBA_LANES V operator()(const double (&f)[kLanes]) const { return load<V>(f + l0); }
-  PBA_LANES void put(double (&f)[kLanes], const V& v) const { store<V>(f + l0, v); }
+  // a field's lanes widened to double, and rounded back
+  PBA_LANES V operator()(const Real (&f)[kLanes]) const { return widen<V>(f + l0); }
+  PBA_LANES void put(Real (&f)[kLanes], const V& v) const { narrow<V>(f + l0, v); }
   // the frame
   PBA_LANES void frame(V t1[3], V t2[3], V n[3]) const {
     for (int i = 0; i < 3; ++i) t1[i] = (*this)(c.t1[i]), t2[i] = (*this)(c.t2[i]), n[i] = (*this)(c.n[i]);
