@@ -178,6 +178,33 @@ void RigidContacts::color(RigidBodySystem& s) {
   restitution_lanes.reserve(room);
   constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
   auto moving = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
+  // the colours depend only on the pairs' bodies in order, which of them roll, which bodies move
+  // and the solver: when none of that changed since the last colouring (a pile at rest, a
+  // pyramid), the last colours stand
+  {
+    color_key.reserve(3 * room);
+    color_moving.reserve(n + 3);
+    const bool tgs = s.settings_.solver == RigidSolverType::Tgs;
+    bool same = colored_once && color_key.size() == 3 * m && color_moving.size() == n && color_tgs == tgs;
+    color_key.resize(3 * m);
+    color_moving.resize(n);
+    for (std::size_t i = 0; i < m; ++i) {
+      const ContactPair& c = pairs[i];
+      const std::uint32_t key[3] = {c.a, c.b, c.rolling != 0};
+      for (int j = 0; j < 3; ++j) {
+        same = same && color_key[3 * i + j] == key[j];
+        color_key[3 * i + j] = key[j];
+      }
+    }
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const std::uint8_t x = moving(i);
+      same = same && color_moving[i] == x;
+      color_moving[i] = x;
+    }
+    color_tgs = tgs;
+    if (same) return;
+    colored_once = true;
+  }
   // the dynamic pairs as adjacency lists
   adjacency_start.assign(n + 1, 0);
   for (const ContactPair& c : pairs)
