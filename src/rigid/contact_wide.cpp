@@ -213,7 +213,7 @@ constexpr int kK[4][4] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6, 8, 9}
 // the separations at the poses now: base + n.(dp_b - dp_a) + n.(turn_b sb) - n.(turn_a sa),
 // with n.(turn s) = (turn^-1 n).s taken in the frame
 template <class V>
-PBA_LANES void separations(const Lanes<V>& L, const BodyArrays& r) {
+PBA_LANES void separations(const Lanes<V>& L, const AnchorBlock& g, const BodyArrays& r) {
   ContactBlock& c = L.c;
   V t1[3], t2[3], n[3];
   L.frame(t1, t2, n);
@@ -236,10 +236,10 @@ PBA_LANES void separations(const Lanes<V>& L, const BodyArrays& r) {
   turned_normal(mb, nb);
   const V d0 = L(c.d[0]), d1 = L(c.d[1]);
   for (int k = 0; k < 4; ++k) {
-    const V x = L(c.x[k]), y = L(c.y[k]), ex = L(c.ex[k]), ey = L(c.ey[k]);
-    const V sb = nb[0] * (x + d0 + ex) + nb[1] * (y + d1 + ey) + nb[2] * L(c.zb[k]);
-    const V sa = na[0] * (x - ex) + na[1] * (y - ey) + na[2] * L(c.za[k]);
-    L.put(c.sep[k], L(c.base[k]) + dpn + sb - sa);
+    const V x = L(c.x[k]), y = L(c.y[k]), ex = L(g.ex[k]), ey = L(g.ey[k]);
+    const V sb = nb[0] * (x + d0 + ex) + nb[1] * (y + d1 + ey) + nb[2] * L(g.zb[k]);
+    const V sa = na[0] * (x - ex) + na[1] * (y - ey) + na[2] * L(g.za[k]);
+    L.put(c.sep[k], L(g.base[k]) + dpn + sb - sa);
   }
 }
 
@@ -453,9 +453,9 @@ PBA_LANES void warm(const Lanes<V>& L, const BodyArrays& r) {
 }
 
 template <class V, int kMode>
-PBA_LANES void pass(ContactBlock& c, int l0, const PassParams& p, const BodyArrays& r) {
+PBA_LANES void pass(ContactBlock& c, const AnchorBlock& g, int l0, const PassParams& p, const BodyArrays& r) {
   const Lanes<V> L{c, l0};
-  if (p.update_sep) separations(L, r);
+  if (p.update_sep) separations(L, g, r);
   solve<V, kMode>(L, p, r);
   if (p.warm_next) warm(L, r);
 }
@@ -465,30 +465,30 @@ PBA_LANES void pass(ContactBlock& c, int l0, const PassParams& p, const BodyArra
 // them; asking for all 48 lines of the next block at once stalled the loop on the full fill
 // buffers (measured on the 2870-box pyramid: the whole run 7-8% faster without)
 template <class V, int kMode>
-PBA_LANES void pass_blocks(ContactBlock* blocks, std::size_t first, std::size_t last, const PassParams& p,
-                           const BodyArrays& r) {
+PBA_LANES void pass_blocks(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
+                           const PassParams& p, const BodyArrays& r) {
   for (std::size_t i = first; i < last; ++i) {
     // a block of one lane (a colour of one manifold: a stack's) by the scalar lane, one of
     // up to four by the 4-wide lanes (the same arithmetic in every lane, so the same bits)
     const int lanes = blocks[i].lanes;
     if constexpr (std::is_same_v<V, double>) {
-      for (int l = 0; l < lanes; ++l) pass<double, kMode>(blocks[i], l, p, r);
+      for (int l = 0; l < lanes; ++l) pass<double, kMode>(blocks[i], anchors[i], l, p, r);
     } else if (lanes == 1) {
-      pass<double, kMode>(blocks[i], 0, p, r);
+      pass<double, kMode>(blocks[i], anchors[i], 0, p, r);
     } else if (kWidth<V> == 8 && lanes <= 4) {
-      pass<v4d, kMode>(blocks[i], 0, p, r);
+      pass<v4d, kMode>(blocks[i], anchors[i], 0, p, r);
     } else {
-      for (int l = 0; l < lanes; l += kWidth<V>) pass<V, kMode>(blocks[i], l, p, r);
+      for (int l = 0; l < lanes; l += kWidth<V>) pass<V, kMode>(blocks[i], anchors[i], l, p, r);
     }
   }
 }
 
 template <class V>
-PBA_LANES void pass_any(ContactBlock* blocks, std::size_t first, std::size_t last, const PassParams& p,
-                        const BodyArrays& r) {
-  if (!p.bias) pass_blocks<V, kRelax>(blocks, first, last, p, r);
-  else if (p.soft) pass_blocks<V, kSoft>(blocks, first, last, p, r);
-  else pass_blocks<V, kRigid>(blocks, first, last, p, r);
+PBA_LANES void pass_any(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
+                        const PassParams& p, const BodyArrays& r) {
+  if (!p.bias) pass_blocks<V, kRelax>(blocks, anchors, first, last, p, r);
+  else if (p.soft) pass_blocks<V, kSoft>(blocks, anchors, first, last, p, r);
+  else pass_blocks<V, kRigid>(blocks, anchors, first, last, p, r);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -496,13 +496,13 @@ PBA_LANES void pass_any(ContactBlock* blocks, std::size_t first, std::size_t las
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #define PBA_RIGID_HAVE_X86 1
-__attribute__((target("avx512f"))) void pass_avx512(ContactBlock* blocks, std::size_t first, std::size_t last,
+__attribute__((target("avx512f"))) void pass_avx512(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                                    const PassParams& p, const BodyArrays& r) {
-  pass_any<v8d>(blocks, first, last, p, r);
+  pass_any<v8d>(blocks, anchors, first, last, p, r);
 }
-__attribute__((target("avx2"))) void pass_avx2(ContactBlock* blocks, std::size_t first, std::size_t last,
+__attribute__((target("avx2"))) void pass_avx2(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                               const PassParams& p, const BodyArrays& r) {
-  pass_any<v4d>(blocks, first, last, p, r);
+  pass_any<v4d>(blocks, anchors, first, last, p, r);
 }
 __attribute__((target("avx512f"))) void warm_avx512(ContactBlock* blocks, std::size_t first, std::size_t last,
                                                    const BodyArrays& r) {
@@ -515,15 +515,15 @@ __attribute__((target("avx2"))) void warm_avx2(ContactBlock* blocks, std::size_t
     if (blocks[i].lanes > 4) warm(Lanes<v4d>{blocks[i], 4}, r);
   }
 }
-__attribute__((target("avx512f"))) void separation_avx512(ContactBlock* blocks, std::size_t first, std::size_t last,
+__attribute__((target("avx512f"))) void separation_avx512(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                                          const BodyArrays& r) {
-  for (std::size_t i = first; i < last; ++i) separations(Lanes<v8d>{blocks[i], 0}, r);
+  for (std::size_t i = first; i < last; ++i) separations(Lanes<v8d>{blocks[i], 0}, anchors[i], r);
 }
-__attribute__((target("avx2"))) void separation_avx2(ContactBlock* blocks, std::size_t first, std::size_t last,
+__attribute__((target("avx2"))) void separation_avx2(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                                     const BodyArrays& r) {
   for (std::size_t i = first; i < last; ++i) {
-    separations(Lanes<v4d>{blocks[i], 0}, r);
-    if (blocks[i].lanes > 4) separations(Lanes<v4d>{blocks[i], 4}, r);
+    separations(Lanes<v4d>{blocks[i], 0}, anchors[i], r);
+    if (blocks[i].lanes > 4) separations(Lanes<v4d>{blocks[i], 4}, anchors[i], r);
   }
 }
 #else
@@ -543,20 +543,20 @@ SimdPath best_simd_path() {
 #endif
 }
 
-void solve_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const PassParams& p,
-                   const BodyArrays& bodies) {
+void solve_colored(SimdPath path, ContactBlock* blocks, AnchorBlock* anchors, std::size_t first, std::size_t last,
+                   const PassParams& p, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
-  if (path == SimdPath::Avx512) return pass_avx512(blocks, first, last, p, bodies);
-  if (path == SimdPath::Avx2) return pass_avx2(blocks, first, last, p, bodies);
+  if (path == SimdPath::Avx512) return pass_avx512(blocks, anchors, first, last, p, bodies);
+  if (path == SimdPath::Avx2) return pass_avx2(blocks, anchors, first, last, p, bodies);
 #endif
   (void)path;
-  pass_any<double>(blocks, first, last, p, bodies);
+  pass_any<double>(blocks, anchors, first, last, p, bodies);
 }
 
-void solve_lane(ContactBlock& block, int lane, const PassParams& p, const BodyArrays& bodies) {
-  if (!p.bias) pass<double, kRelax>(block, lane, p, bodies);
-  else if (p.soft) pass<double, kSoft>(block, lane, p, bodies);
-  else pass<double, kRigid>(block, lane, p, bodies);
+void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p, const BodyArrays& bodies) {
+  if (!p.bias) pass<double, kRelax>(block, anchors, lane, p, bodies);
+  else if (p.soft) pass<double, kSoft>(block, anchors, lane, p, bodies);
+  else pass<double, kRigid>(block, anchors, lane, p, bodies);
 }
 
 void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies) {
@@ -571,19 +571,19 @@ void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::s
 
 void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies) { warm(Lanes<double>{block, lane}, bodies); }
 
-void separation_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last,
-                        const BodyArrays& bodies) {
+void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first,
+                        std::size_t last, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
-  if (path == SimdPath::Avx512) return separation_avx512(blocks, first, last, bodies);
-  if (path == SimdPath::Avx2) return separation_avx2(blocks, first, last, bodies);
+  if (path == SimdPath::Avx512) return separation_avx512(blocks, anchors, first, last, bodies);
+  if (path == SimdPath::Avx2) return separation_avx2(blocks, anchors, first, last, bodies);
 #endif
   (void)path;
   for (std::size_t i = first; i < last; ++i)
-    for (int l = 0; l < blocks[i].lanes; ++l) separations(Lanes<double>{blocks[i], l}, bodies);
+    for (int l = 0; l < blocks[i].lanes; ++l) separations(Lanes<double>{blocks[i], l}, anchors[i], bodies);
 }
 
-void separation_lane(ContactBlock& block, int lane, const BodyArrays& bodies) {
-  separations(Lanes<double>{block, lane}, bodies);
+void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const BodyArrays& bodies) {
+  separations(Lanes<double>{block, lane}, anchors, bodies);
 }
 
 void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]) {

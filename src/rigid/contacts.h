@@ -252,6 +252,7 @@ struct RigidContacts {
 
   // the velocity solvers' constraints (src/rigid/solver.h): blocks by colour, then the overflow's
   std::vector<ContactBlock> blocks;
+  std::vector<AnchorBlock> anchors;  // by block: what measuring its separations needs
   std::size_t block_count = 0;     // blocks in use
   std::size_t colored_blocks = 0;  // blocks [0, colored_blocks) are coloured, the rest overflow
   static constexpr std::uint32_t kOverflow = std::numeric_limits<std::uint32_t>::max();
@@ -295,7 +296,7 @@ struct RigidContacts {
   /// The blocks from the pairs and their colours.
   void build(RigidBodySystem& s);
   /// Pair `index` into lane l of block k.
-  void fill(RigidBodySystem& s, ContactBlock& k, int l, std::uint32_t index);
+  void fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, int l, std::uint32_t index);
   /// The bodies' arrays as the kernels see them.
   BodyArrays arrays(RigidBodySystem& s);
   /// The velocities back from the solver's rows to the system's arrays.

@@ -60,16 +60,21 @@ struct alignas(64) ContactBlock {
   // written by the biased passes
   Real approach[4][kLanes];           // the most negative normal velocity seen (m/s)
   Real max_impulse[4][kLanes];        // the largest single normal impulse (N s)
-  // the separation at the poses now is base + n.(dp_b - dp_a) + n.(turn_b sb) - n.(turn_a sa),
-  // with sa, sb the anchors on the shapes' cores: in the frame (x - ex, y - ey, za) and
-  // (x + d0 + ex, y + d1 + ey, zb), e being half the step from a's surface point to b's
-  Real za[4][kLanes], zb[4][kLanes], base[4][kLanes];  // (m)
-  Real ex[4][kLanes], ey[4][kLanes];                   // (m)
   // bodies (dense indices) and pairs
   std::uint32_t a[kLanes], b[kLanes];
   std::uint32_t pair[kLanes];           // index into RigidContacts::pairs, kNoPair when empty
   std::uint32_t write_a = 0, write_b = 0;  // bit l: lane l writes its body back (dynamic and awake)
   int lanes = 0;                        // lanes in use, from 0
+};
+
+/// What measuring the separations of a block's manifolds at the poses now needs besides the
+/// block: apart from it, so that the passes that do not measure them (the biased ones) do not
+/// stream it. The separation at the poses now is base + n.(dp_b - dp_a) + n.(turn_b sb) -
+/// n.(turn_a sa), with sa, sb the anchors on the shapes' cores: in the frame (x - ex, y - ey, za)
+/// and (x + d0 + ex, y + d1 + ey, zb), e being half the step from a's surface point to b's.
+struct alignas(64) AnchorBlock {
+  Real za[4][kLanes], zb[4][kLanes], base[4][kLanes];  // (m)
+  Real ex[4][kLanes], ey[4][kLanes];                   // (m)
 };
 
 /// One contact pass's settings (contact_solver.cpp fills them).
@@ -134,21 +139,21 @@ enum class SimdPath : std::uint8_t { Scalar, Avx2, Avx512 };
 SimdPath best_simd_path();
 
 /// One pass over the coloured blocks [first, last) on `path`: each block's lanes together (no
-/// lane shares a dynamic body with another). With p.update_sep the separations are measured
+/// lane shares a dynamic body with another; anchors[i] goes with blocks[i]). With p.update_sep the separations are measured
 /// first, with p.warm_next the impulses are added to the warm-start accumulators after.
-void solve_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const PassParams& p,
-                   const BodyArrays& bodies);
+void solve_colored(SimdPath path, ContactBlock* blocks, AnchorBlock* anchors, std::size_t first, std::size_t last,
+                   const PassParams& p, const BodyArrays& bodies);
 /// The same for one lane (scalar): the overflow, lane by lane in order.
-void solve_lane(ContactBlock& block, int lane, const PassParams& p, const BodyArrays& bodies);
+void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p, const BodyArrays& bodies);
 /// Adds the accumulated impulses of the coloured blocks [first, last) to the warm-start accumulators.
 void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies);
 /// The same for one lane (scalar).
 void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies);
 /// Measures the separations of the coloured blocks [first, last) at the poses now.
-void separation_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last,
-                        const BodyArrays& bodies);
+void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first,
+                        std::size_t last, const BodyArrays& bodies);
 /// The same for one lane (scalar).
-void separation_lane(ContactBlock& block, int lane, const BodyArrays& bodies);
+void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const BodyArrays& bodies);
 /// The restitution impulses of one lane's points that approached faster than `threshold` and
 /// pushed (scalar; the lanes with restitution, in order).
 void restitution_lane(ContactBlock& block, int lane, double restitution, double threshold, const BodyArrays& bodies);
