@@ -1,7 +1,8 @@
 // Rigid bodies: the contact solver's kernels over blocks of manifolds (src/rigid/solver.h).
 //
 // One template over the lane type runs every path: double (the scalar path, and the overflow
-// lane by lane), 4 doubles (AVX2) and 8 doubles (AVX-512), as GCC vector extensions. Each lane
+// lane by lane), 4 doubles (AVX2) and 8 doubles (AVX-512), as GCC vector extensions; the
+// blocks' floats are widened to double on loading and rounded back on storing. Each lane
 // does the same operations in the same order on every path (the build has -ffp-contract=off,
 // so no fused multiply-add; division and square root are correctly rounded; min, max and the
 // selections are the same comparisons), so the three paths give the same bits

@@ -1,7 +1,8 @@
 // Rigid bodies, private: the compact contact solver of the soft step, sequential impulses and
 // TGS. Each step prepare() copies what the velocity passes need out of the contact pairs into
-// blocks of kLanes manifolds (structure of arrays: one cache line per field), grouped by the
-// colours of the constraint graph so that no two manifolds of a block share a dynamic body;
+// blocks of kLanes manifolds (structure of arrays of floats: half a cache line per field; the
+// separations' anchors in a parallel array), grouped by the colours of the constraint graph
+// so that no two manifolds of a block share a dynamic body;
 // the passes then run over whole blocks with SIMD (contact_wide.cpp), and store() writes the
 // impulses back to the pairs for next step's warm starting.
 //
