@@ -46,21 +46,31 @@ bool moves(const RigidBodySystem& s, std::uint32_t i, const std::vector<BodyType
 }
 
 // an empty lane: zeros everywhere (no mass, no effect), its bodies the spare last row, no pair
-void clear_lane(ContactBlock& b, int l, std::uint32_t spare) {
-  auto zero = [&](double (&f)[kLanes]) { f[l] = 0; };
+void clear_lane(ContactBlock& b, AnchorBlock& g, int l, std::uint32_t spare) {
+  auto zero = [&](Real (&f)[kLanes]) { f[l] = 0; };
   for (int i = 0; i < 3; ++i) zero(b.t1[i]), zero(b.t2[i]), zero(b.n[i]), zero(b.d[i]), zero(b.ca[i]);
   for (int i = 0; i < 6; ++i) zero(b.ia[i]), zero(b.ib[i]);
   for (int i = 0; i < 10; ++i) zero(b.k[i]);
   for (int k = 0; k < 4; ++k) {
     zero(b.x[k]), zero(b.y[k]), zero(b.mass[k]), zero(b.impulse[k]), zero(b.sep[k]);
-    zero(b.approach[k]), zero(b.max_impulse[k]), zero(b.za[k]), zero(b.zb[k]), zero(b.base[k]);
-    zero(b.ex[k]), zero(b.ey[k]);
+    zero(b.approach[k]), zero(b.max_impulse[k]);
+    zero(g.za[k]), zero(g.zb[k]), zero(g.base[k]), zero(g.ex[k]), zero(g.ey[k]);
   }
   zero(b.ma), zero(b.mb), zero(b.tangent_mass[0]), zero(b.tangent_mass[1]), zero(b.twist_mass);
   zero(b.friction), zero(b.twist_radius), zero(b.tangent_impulse[0]), zero(b.tangent_impulse[1]);
   zero(b.twist_impulse);
   b.a[l] = b.b[l] = spare;
   b.pair[l] = kNoPair;
+}
+
+// pairs ahead that build() and store() ask for while they work on one
+constexpr std::size_t kPrefetchAhead = 4;
+
+// the lines of a pair the solver reads and writes: the header and the four points a block holds
+void prefetch_pair(const ContactPair& c) {
+  const char* p = reinterpret_cast<const char*>(&c);
+  constexpr std::size_t kUsed = offsetof(ContactPair, points) + 4 * sizeof(SolverPoint);
+  for (std::size_t line = 0; line < kUsed; line += 64) __builtin_prefetch(p + line);
 }
 
 // 1 / k, or 0 when nothing can move (effective_mass's convention)
@@ -168,6 +178,33 @@ void RigidContacts::color(RigidBodySystem& s) {
   restitution_lanes.reserve(room);
   constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
   auto moving = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
+  // the colours depend only on the pairs' bodies in order, which of them roll, which bodies move
+  // and the solver: when none of that changed since the last colouring (a pile at rest, a
+  // pyramid), the last colours stand
+  {
+    color_key.reserve(3 * room);
+    color_moving.reserve(n + 3);
+    const bool tgs = s.settings_.solver == RigidSolverType::Tgs;
+    bool same = colored_once && color_key.size() == 3 * m && color_moving.size() == n && color_tgs == tgs;
+    color_key.resize(3 * m);
+    color_moving.resize(n);
+    for (std::size_t i = 0; i < m; ++i) {
+      const ContactPair& c = pairs[i];
+      const std::uint32_t key[3] = {c.a, c.b, c.rolling != 0};
+      for (int j = 0; j < 3; ++j) {
+        same = same && color_key[3 * i + j] == key[j];
+        color_key[3 * i + j] = key[j];
+      }
+    }
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const std::uint8_t x = moving(i);
+      same = same && color_moving[i] == x;
+      color_moving[i] = x;
+    }
+    color_tgs = tgs;
+    if (same) return;
+    colored_once = true;
+  }
   // the dynamic pairs as adjacency lists
   adjacency_start.assign(n + 1, 0);
   for (const ContactPair& c : pairs)
@@ -264,8 +301,8 @@ void RigidContacts::build(RigidBodySystem& s) {
   color_block[colors + 1] = next;
   // (grown by half again when a new peak needs more, so a scene that moves does not allocate every step)
   if (blocks.size() < next) {
-    blocks.reserve(next + next / 2);
-    blocks.resize(next);
+    blocks.reserve(next + next / 2), anchors.reserve(next + next / 2);
+    blocks.resize(next), anchors.resize(next);
   }
   block_count = next;
   const auto spare = static_cast<std::uint32_t>(s.type_.size());
@@ -276,7 +313,7 @@ void RigidContacts::build(RigidBodySystem& s) {
       k.lanes = static_cast<int>(std::min<std::uint32_t>(left, kLanes));
       left -= static_cast<std::uint32_t>(k.lanes);
       k.write_a = k.write_b = 0;
-      for (int l = k.lanes; l < kLanes; ++l) clear_lane(k, l, spare);
+      for (int l = k.lanes; l < kLanes; ++l) clear_lane(k, anchors[b], l, spare);
     }
   }
   // each colour's pairs in pair order (the overflow's last), then the blocks filled one after
@@ -296,14 +333,17 @@ void RigidContacts::build(RigidBodySystem& s) {
       const std::size_t b = color_block[c] + slot / kLanes;
       const int l = static_cast<int>(slot % kLanes);
       const std::uint32_t i = by_color[offset[c] + slot];
-      fill(s, blocks[b], l, i);
+      // a pair a few ahead on its way from the outer caches (colour order visits the pairs out
+      // of order): its header and points
+      if (offset[c] + slot + kPrefetchAhead < by_color.size()) prefetch_pair(pairs[by_color[offset[c] + slot + kPrefetchAhead]]);
+      fill(s, blocks[b], anchors[b], l, i);
       if (pairs[i].restitution != 0)
         restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l)});
     }
 }
 
 // One manifold into lane l of block k, in its contact frame (t1, t2, n).
-void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, int l, std::uint32_t index) {
+void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, int l, std::uint32_t index) {
   const ContactPair& c = pairs[index];
   const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
   k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
@@ -339,18 +379,18 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, int l, std::uint32
     if (p < c.count) {
       const SolverPoint& q = c.points[p];
       x[p] = glm::dot(q.ra, c.t1), y[p] = glm::dot(q.ra, c.t2);
-      k.za[p][l] = glm::dot(q.sa, c.normal);
-      k.zb[p][l] = glm::dot(q.sb, c.normal);
+      g.za[p][l] = glm::dot(q.sa, c.normal);
+      g.zb[p][l] = glm::dot(q.sb, c.normal);
       // the core anchors' tangential offsets from the contact point (half the step from a's
       // surface point to b's; zero where the narrow phase puts them on one normal)
       const Vec3 e = 0.5 * ((q.sb + (s.com_[c.b] - s.com_[c.a])) - q.sa);
-      k.ex[p][l] = glm::dot(e, c.t1), k.ey[p][l] = glm::dot(e, c.t2);
-      k.base[p][l] = base + q.offset;
-      k.sep[p][l] = k.base[p][l] + k.zb[p][l] - k.za[p][l];
+      g.ex[p][l] = glm::dot(e, c.t1), g.ey[p][l] = glm::dot(e, c.t2);
+      g.base[p][l] = base + q.offset;
+      k.sep[p][l] = g.base[p][l] + g.zb[p][l] - g.za[p][l];
       k.impulse[p][l] = q.normal_impulse;
     } else {
-      k.za[p][l] = k.zb[p][l] = k.base[p][l] = k.sep[p][l] = k.impulse[p][l] = 0;
-      k.ex[p][l] = k.ey[p][l] = 0;
+      g.za[p][l] = g.zb[p][l] = g.base[p][l] = k.sep[p][l] = k.impulse[p][l] = 0;
+      g.ex[p][l] = g.ey[p][l] = 0;
     }
     k.x[p][l] = x[p], k.y[p][l] = y[p];
     k.max_impulse[p][l] = 0;
@@ -441,7 +481,7 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
   auto overflow = [&](std::size_t b, int l) {
     PassParams q = p;
     q.warm_next = false;
-    solve_lane(blocks[b], l, q, r);
+    solve_lane(blocks[b], anchors[b], l, q, r);
     roll(s, blocks[b], l);
     if (warm_next) {
       warm_lane(blocks[b], l, r);
@@ -451,11 +491,11 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
   // the bands bottom up; within each, its colours first to last on even steps and last to
   // first on odd ones
   if (!backward) {
-    solve_colored(simd, blocks.data(), 0, colored_blocks, p, r);
+    solve_colored(simd, blocks.data(), anchors.data(), 0, colored_blocks, p, r);
   } else {
     for (std::size_t b = 0; b + 1 < band_colors.size(); ++b)
       for (std::uint32_t c = band_colors[b + 1]; c-- > band_colors[b];)
-        if (color_block[c + 1] > color_block[c]) solve_colored(simd, blocks.data(), color_block[c], color_block[c + 1], p, r);
+        if (color_block[c + 1] > color_block[c]) solve_colored(simd, blocks.data(), anchors.data(), color_block[c], color_block[c + 1], p, r);
   }
   for (std::size_t b = colored_blocks; b < block_count; ++b)
     for (int l = 0; l < blocks[b].lanes; ++l) overflow(b, l);
@@ -484,9 +524,9 @@ void RigidContacts::roll(RigidBodySystem& s, const ContactBlock& k, int l) {
 
 void RigidContacts::update_separations(RigidBodySystem& s) {
   const BodyArrays r = arrays(s);
-  separation_colored(simd, blocks.data(), 0, colored_blocks, r);
+  separation_colored(simd, blocks.data(), anchors.data(), 0, colored_blocks, r);
   for (std::size_t b = colored_blocks; b < block_count; ++b)
-    for (int l = 0; l < blocks[b].lanes; ++l) separation_lane(blocks[b], l, r);
+    for (int l = 0; l < blocks[b].lanes; ++l) separation_lane(blocks[b], anchors[b], l, r);
 }
 
 void RigidContacts::restitution(RigidBodySystem& s) {
@@ -514,9 +554,13 @@ void RigidContacts::carry_impulses(double h) {
 
 void RigidContacts::store() {
   // the blocks' impulses back to their pairs (warm starting, contacts(), manifold())
-  if (built)
+  // (every pair is in a block when they are built; its lines are fetched a block ahead, and its
+  // friction impulse in world axes is kept while they are in cache)
+  if (built) {
     for (std::size_t b = 0; b < block_count; ++b) {
       const ContactBlock& k = blocks[b];
+      if (b + 1 < block_count)
+        for (int l = 0; l < blocks[b + 1].lanes; ++l) prefetch_pair(pairs[blocks[b + 1].pair[l]]);
       for (int l = 0; l < k.lanes; ++l) {
         ContactPair& c = pairs[k.pair[l]];
         for (int p = 0; p < c.count; ++p) {
@@ -526,9 +570,12 @@ void RigidContacts::store() {
         }
         c.tangent_impulse[0] = k.tangent_impulse[0][l], c.tangent_impulse[1] = k.tangent_impulse[1][l];
         c.twist_impulse = k.twist_impulse[l];
+        c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
       }
     }
-  built = false;
+    built = false;
+    return;
+  }
   for (ContactPair& c : pairs) c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
 }
 

@@ -1,7 +1,8 @@
 // Rigid bodies: the contact solver's kernels over blocks of manifolds (src/rigid/solver.h).
 //
 // One template over the lane type runs every path: double (the scalar path, and the overflow
-// lane by lane), 4 doubles (AVX2) and 8 doubles (AVX-512), as GCC vector extensions. Each lane
+// lane by lane), 4 doubles (AVX2) and 8 doubles (AVX-512), as GCC vector extensions; the
+// blocks' floats are widened to double on loading and rounded back on storing. Each lane
 // does the same operations in the same order on every path (the build has -ffp-contract=off,
 // so no fused multiply-add; division and square root are correctly rounded; min, max and the
 // selections are the same comparisons), so the three paths give the same bits
@@ -72,6 +73,30 @@ PBA_LANES void sym_mul2(const V m[6], const V v0, const V v1, V out[3]) {
   out[2] = m[2] * v0 + m[4] * v1;
 }
 
+// kWidth<V> consecutive floats from p as doubles (exact), and doubles rounded to the nearest
+// floats (the same rounding on every path)
+template <class V>
+PBA_LANES V widen(const float* p) {
+  if constexpr (std::is_same_v<V, double>) {
+    return static_cast<double>(*p);
+  } else {
+    typedef float F __attribute__((vector_size(sizeof(V) / 2)));
+    F f;
+    std::memcpy(&f, p, sizeof f);
+    return __builtin_convertvector(f, V);
+  }
+}
+template <class V>
+PBA_LANES void narrow(float* p, const V& v) {
+  if constexpr (std::is_same_v<V, double>) {
+    *p = static_cast<float>(v);
+  } else {
+    typedef float F __attribute__((vector_size(sizeof(V) / 2)));
+    const F f = __builtin_convertvector(v, F);
+    std::memcpy(p, &f, sizeof f);
+  }
+}
+
 // ---------------------------------------------------------------------------------------
 // the block's lanes [l0, l0 + width)
 
@@ -79,8 +104,9 @@ template <class V>
 struct Lanes {
   ContactBlock& c;
   int l0;
-  PBA_LANES V operator()(const double (&f)[kLanes]) const { return load<V>(f + l0); }
-  PBA_LANES void put(double (&f)[kLanes], const V& v) const { store<V>(f + l0, v); }
+  // a field's lanes widened to double, and rounded back
+  PBA_LANES V operator()(const Real (&f)[kLanes]) const { return widen<V>(f + l0); }
+  PBA_LANES void put(Real (&f)[kLanes], const V& v) const { narrow<V>(f + l0, v); }
   // the frame
   PBA_LANES void frame(V t1[3], V t2[3], V n[3]) const {
     for (int i = 0; i < 3; ++i) t1[i] = (*this)(c.t1[i]), t2[i] = (*this)(c.t2[i]), n[i] = (*this)(c.n[i]);
@@ -188,7 +214,7 @@ constexpr int kK[4][4] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6, 8, 9}
 // the separations at the poses now: base + n.(dp_b - dp_a) + n.(turn_b sb) - n.(turn_a sa),
 // with n.(turn s) = (turn^-1 n).s taken in the frame
 template <class V>
-PBA_LANES void separations(const Lanes<V>& L, const BodyArrays& r) {
+PBA_LANES void separations(const Lanes<V>& L, const AnchorBlock& g, const BodyArrays& r) {
   ContactBlock& c = L.c;
   V t1[3], t2[3], n[3];
   L.frame(t1, t2, n);
@@ -211,10 +237,10 @@ PBA_LANES void separations(const Lanes<V>& L, const BodyArrays& r) {
   turned_normal(mb, nb);
   const V d0 = L(c.d[0]), d1 = L(c.d[1]);
   for (int k = 0; k < 4; ++k) {
-    const V x = L(c.x[k]), y = L(c.y[k]), ex = L(c.ex[k]), ey = L(c.ey[k]);
-    const V sb = nb[0] * (x + d0 + ex) + nb[1] * (y + d1 + ey) + nb[2] * L(c.zb[k]);
-    const V sa = na[0] * (x - ex) + na[1] * (y - ey) + na[2] * L(c.za[k]);
-    L.put(c.sep[k], L(c.base[k]) + dpn + sb - sa);
+    const V x = L(c.x[k]), y = L(c.y[k]), ex = L(g.ex[k]), ey = L(g.ey[k]);
+    const V sb = nb[0] * (x + d0 + ex) + nb[1] * (y + d1 + ey) + nb[2] * L(g.zb[k]);
+    const V sa = na[0] * (x - ex) + na[1] * (y - ey) + na[2] * L(g.za[k]);
+    L.put(c.sep[k], L(g.base[k]) + dpn + sb - sa);
   }
 }
 
@@ -428,46 +454,42 @@ PBA_LANES void warm(const Lanes<V>& L, const BodyArrays& r) {
 }
 
 template <class V, int kMode>
-PBA_LANES void pass(ContactBlock& c, int l0, const PassParams& p, const BodyArrays& r) {
+PBA_LANES void pass(ContactBlock& c, const AnchorBlock& g, int l0, const PassParams& p, const BodyArrays& r) {
   const Lanes<V> L{c, l0};
-  if (p.update_sep) separations(L, r);
+  if (p.update_sep) separations(L, g, r);
   solve<V, kMode>(L, p, r);
   if (p.warm_next) warm(L, r);
 }
 
-// the next block's lines on their way while this one is solved
-PBA_LANES void prefetch(const ContactBlock* b) {
-  const char* p = reinterpret_cast<const char*>(b);
-  for (std::size_t line = 0; line < sizeof(ContactBlock); line += 64) __builtin_prefetch(p + line);
-}
-
-// blocks [first, last) on lanes of V (several parts of a block when V is narrower)
+// blocks [first, last) on lanes of V (several parts of a block when V is narrower). No software
+// prefetch: the blocks of a colour lie one after another and the hardware's streamer fetches
+// them; asking for all 48 lines of the next block at once stalled the loop on the full fill
+// buffers (measured on the 2870-box pyramid: the whole run 7-8% faster without)
 template <class V, int kMode>
-PBA_LANES void pass_blocks(ContactBlock* blocks, std::size_t first, std::size_t last, const PassParams& p,
-                           const BodyArrays& r) {
+PBA_LANES void pass_blocks(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
+                           const PassParams& p, const BodyArrays& r) {
   for (std::size_t i = first; i < last; ++i) {
-    if (i + 1 < last) prefetch(blocks + i + 1);
     // a block of one lane (a colour of one manifold: a stack's) by the scalar lane, one of
     // up to four by the 4-wide lanes (the same arithmetic in every lane, so the same bits)
     const int lanes = blocks[i].lanes;
     if constexpr (std::is_same_v<V, double>) {
-      for (int l = 0; l < lanes; ++l) pass<double, kMode>(blocks[i], l, p, r);
+      for (int l = 0; l < lanes; ++l) pass<double, kMode>(blocks[i], anchors[i], l, p, r);
     } else if (lanes == 1) {
-      pass<double, kMode>(blocks[i], 0, p, r);
+      pass<double, kMode>(blocks[i], anchors[i], 0, p, r);
     } else if (kWidth<V> == 8 && lanes <= 4) {
-      pass<v4d, kMode>(blocks[i], 0, p, r);
+      pass<v4d, kMode>(blocks[i], anchors[i], 0, p, r);
     } else {
-      for (int l = 0; l < lanes; l += kWidth<V>) pass<V, kMode>(blocks[i], l, p, r);
+      for (int l = 0; l < lanes; l += kWidth<V>) pass<V, kMode>(blocks[i], anchors[i], l, p, r);
     }
   }
 }
 
 template <class V>
-PBA_LANES void pass_any(ContactBlock* blocks, std::size_t first, std::size_t last, const PassParams& p,
-                        const BodyArrays& r) {
-  if (!p.bias) pass_blocks<V, kRelax>(blocks, first, last, p, r);
-  else if (p.soft) pass_blocks<V, kSoft>(blocks, first, last, p, r);
-  else pass_blocks<V, kRigid>(blocks, first, last, p, r);
+PBA_LANES void pass_any(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
+                        const PassParams& p, const BodyArrays& r) {
+  if (!p.bias) pass_blocks<V, kRelax>(blocks, anchors, first, last, p, r);
+  else if (p.soft) pass_blocks<V, kSoft>(blocks, anchors, first, last, p, r);
+  else pass_blocks<V, kRigid>(blocks, anchors, first, last, p, r);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -475,13 +497,13 @@ PBA_LANES void pass_any(ContactBlock* blocks, std::size_t first, std::size_t las
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #define PBA_RIGID_HAVE_X86 1
-__attribute__((target("avx512f"))) void pass_avx512(ContactBlock* blocks, std::size_t first, std::size_t last,
+__attribute__((target("avx512f"))) void pass_avx512(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                                    const PassParams& p, const BodyArrays& r) {
-  pass_any<v8d>(blocks, first, last, p, r);
+  pass_any<v8d>(blocks, anchors, first, last, p, r);
 }
-__attribute__((target("avx2"))) void pass_avx2(ContactBlock* blocks, std::size_t first, std::size_t last,
+__attribute__((target("avx2"))) void pass_avx2(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                               const PassParams& p, const BodyArrays& r) {
-  pass_any<v4d>(blocks, first, last, p, r);
+  pass_any<v4d>(blocks, anchors, first, last, p, r);
 }
 __attribute__((target("avx512f"))) void warm_avx512(ContactBlock* blocks, std::size_t first, std::size_t last,
                                                    const BodyArrays& r) {
@@ -494,15 +516,15 @@ __attribute__((target("avx2"))) void warm_avx2(ContactBlock* blocks, std::size_t
     if (blocks[i].lanes > 4) warm(Lanes<v4d>{blocks[i], 4}, r);
   }
 }
-__attribute__((target("avx512f"))) void separation_avx512(ContactBlock* blocks, std::size_t first, std::size_t last,
+__attribute__((target("avx512f"))) void separation_avx512(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                                          const BodyArrays& r) {
-  for (std::size_t i = first; i < last; ++i) separations(Lanes<v8d>{blocks[i], 0}, r);
+  for (std::size_t i = first; i < last; ++i) separations(Lanes<v8d>{blocks[i], 0}, anchors[i], r);
 }
-__attribute__((target("avx2"))) void separation_avx2(ContactBlock* blocks, std::size_t first, std::size_t last,
+__attribute__((target("avx2"))) void separation_avx2(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                                     const BodyArrays& r) {
   for (std::size_t i = first; i < last; ++i) {
-    separations(Lanes<v4d>{blocks[i], 0}, r);
-    if (blocks[i].lanes > 4) separations(Lanes<v4d>{blocks[i], 4}, r);
+    separations(Lanes<v4d>{blocks[i], 0}, anchors[i], r);
+    if (blocks[i].lanes > 4) separations(Lanes<v4d>{blocks[i], 4}, anchors[i], r);
   }
 }
 #else
@@ -522,20 +544,20 @@ SimdPath best_simd_path() {
 #endif
 }
 
-void solve_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const PassParams& p,
-                   const BodyArrays& bodies) {
+void solve_colored(SimdPath path, ContactBlock* blocks, AnchorBlock* anchors, std::size_t first, std::size_t last,
+                   const PassParams& p, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
-  if (path == SimdPath::Avx512) return pass_avx512(blocks, first, last, p, bodies);
-  if (path == SimdPath::Avx2) return pass_avx2(blocks, first, last, p, bodies);
+  if (path == SimdPath::Avx512) return pass_avx512(blocks, anchors, first, last, p, bodies);
+  if (path == SimdPath::Avx2) return pass_avx2(blocks, anchors, first, last, p, bodies);
 #endif
   (void)path;
-  pass_any<double>(blocks, first, last, p, bodies);
+  pass_any<double>(blocks, anchors, first, last, p, bodies);
 }
 
-void solve_lane(ContactBlock& block, int lane, const PassParams& p, const BodyArrays& bodies) {
-  if (!p.bias) pass<double, kRelax>(block, lane, p, bodies);
-  else if (p.soft) pass<double, kSoft>(block, lane, p, bodies);
-  else pass<double, kRigid>(block, lane, p, bodies);
+void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p, const BodyArrays& bodies) {
+  if (!p.bias) pass<double, kRelax>(block, anchors, lane, p, bodies);
+  else if (p.soft) pass<double, kSoft>(block, anchors, lane, p, bodies);
+  else pass<double, kRigid>(block, anchors, lane, p, bodies);
 }
 
 void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies) {
@@ -550,19 +572,19 @@ void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::s
 
 void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies) { warm(Lanes<double>{block, lane}, bodies); }
 
-void separation_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last,
-                        const BodyArrays& bodies) {
+void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first,
+                        std::size_t last, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
-  if (path == SimdPath::Avx512) return separation_avx512(blocks, first, last, bodies);
-  if (path == SimdPath::Avx2) return separation_avx2(blocks, first, last, bodies);
+  if (path == SimdPath::Avx512) return separation_avx512(blocks, anchors, first, last, bodies);
+  if (path == SimdPath::Avx2) return separation_avx2(blocks, anchors, first, last, bodies);
 #endif
   (void)path;
   for (std::size_t i = first; i < last; ++i)
-    for (int l = 0; l < blocks[i].lanes; ++l) separations(Lanes<double>{blocks[i], l}, bodies);
+    for (int l = 0; l < blocks[i].lanes; ++l) separations(Lanes<double>{blocks[i], l}, anchors[i], bodies);
 }
 
-void separation_lane(ContactBlock& block, int lane, const BodyArrays& bodies) {
-  separations(Lanes<double>{block, lane}, bodies);
+void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const BodyArrays& bodies) {
+  separations(Lanes<double>{block, lane}, anchors, bodies);
 }
 
 void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]) {

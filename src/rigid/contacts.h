@@ -252,6 +252,7 @@ struct RigidContacts {
 
   // the velocity solvers' constraints (src/rigid/solver.h): blocks by colour, then the overflow's
   std::vector<ContactBlock> blocks;
+  std::vector<AnchorBlock> anchors;  // by block: what measuring its separations needs
   std::size_t block_count = 0;     // blocks in use
   std::size_t colored_blocks = 0;  // blocks [0, colored_blocks) are coloured, the rest overflow
   static constexpr std::uint32_t kOverflow = std::numeric_limits<std::uint32_t>::max();
@@ -266,6 +267,11 @@ struct RigidContacts {
   std::vector<std::uint32_t> by_color;     // the pairs by colour, in pair order within each
   std::vector<std::size_t> offset;         // scratch: each colour's start in by_color
   std::vector<std::uint32_t> band_colors;  // each band's first colour, then the number of colours
+  // what the colours were made from: by pair its bodies and whether it rolls, by body whether it
+  // moves, and the solver (color() keeps the colours when none of it changed)
+  std::vector<std::uint32_t> color_key;
+  std::vector<std::uint8_t> color_moving;
+  bool color_tgs = false, colored_once = false;
   bool backward = true;  // this step runs each band's colours last to first (alternating by step)
   struct LaneRef {
     std::uint32_t block, lane;
@@ -290,7 +296,7 @@ struct RigidContacts {
   /// The blocks from the pairs and their colours.
   void build(RigidBodySystem& s);
   /// Pair `index` into lane l of block k.
-  void fill(RigidBodySystem& s, ContactBlock& k, int l, std::uint32_t index);
+  void fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, int l, std::uint32_t index);
   /// The bodies' arrays as the kernels see them.
   BodyArrays arrays(RigidBodySystem& s);
   /// The velocities back from the solver's rows to the system's arrays.

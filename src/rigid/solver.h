@@ -1,7 +1,8 @@
 // Rigid bodies, private: the compact contact solver of the soft step, sequential impulses and
 // TGS. Each step prepare() copies what the velocity passes need out of the contact pairs into
-// blocks of kLanes manifolds (structure of arrays: one cache line per field), grouped by the
-// colours of the constraint graph so that no two manifolds of a block share a dynamic body;
+// blocks of kLanes manifolds (structure of arrays of floats: half a cache line per field; the
+// separations' anchors in a parallel array), grouped by the colours of the constraint graph
+// so that no two manifolds of a block share a dynamic body;
 // the passes then run over whole blocks with SIMD (contact_wide.cpp), and store() writes the
 // impulses back to the pairs for next step's warm starting.
 //
@@ -30,41 +31,51 @@ inline constexpr int kBandColors = 64;
 /// The lane of a block that holds no manifold.
 inline constexpr std::uint32_t kNoPair = std::numeric_limits<std::uint32_t>::max();
 
+/// A block's numbers: single precision in memory (the passes stream the blocks from the caches
+/// every pass, so their size sets the passes' speed); the kernels widen them to double, compute
+/// in double and round the results they keep back.
+using Real = float;
+
 /// kLanes manifolds in structure-of-arrays form. Empty lanes hold zeros (no mass, no effect)
 /// and write nothing back.
 struct alignas(64) ContactBlock {
   // the frame (world unit vectors, right-handed: t1 x t2 = n; n from body a to b)
-  double t1[3][kLanes], t2[3][kLanes], n[3][kLanes];
-  double ma[kLanes], mb[kLanes];        // inverse masses (1/kg; 0 for static, kinematic, asleep)
-  double ia[6][kLanes], ib[6][kLanes];  // inverse inertias in the frame: xx, xy, xz, yy, yz, zz (1/(kg m^2))
-  double d[3][kLanes];                  // com_a - com_b at the start of the step, in the frame (m)
+  Real t1[3][kLanes], t2[3][kLanes], n[3][kLanes];
+  Real ma[kLanes], mb[kLanes];        // inverse masses (1/kg; 0 for static, kinematic, asleep)
+  Real ia[6][kLanes], ib[6][kLanes];  // inverse inertias in the frame: xx, xy, xz, yy, yz, zz (1/(kg m^2))
+  Real d[3][kLanes];                  // com_a - com_b at the start of the step, in the frame (m)
   // the normal points (unused ones have zero mass and K)
-  double x[4][kLanes], y[4][kLanes];    // the points from a's centre of mass, t1 and t2 coordinates (m)
-  double mass[4][kLanes];               // normal effective masses (kg)
-  double k[10][kLanes];                 // K of the normal rows, upper triangle by rows (1/kg)
-  double impulse[4][kLanes];            // accumulated normal impulses (N s)
-  double sep[4][kLanes];                // separations at the bodies' poses now (m)
+  Real x[4][kLanes], y[4][kLanes];    // the points from a's centre of mass, t1 and t2 coordinates (m)
+  Real mass[4][kLanes];               // normal effective masses (kg)
+  Real k[10][kLanes];                 // K of the normal rows, upper triangle by rows (1/kg)
+  Real impulse[4][kLanes];            // accumulated normal impulses (N s)
+  Real sep[4][kLanes];                // separations at the bodies' poses now (m)
   // friction at the points' centroid, twist about the normal
-  double ca[3][kLanes];                 // the centroid from a's centre of mass, in the frame (m)
-  double tangent_mass[2][kLanes];       // (kg)
-  double twist_mass[kLanes];            // (kg m^2)
-  double friction[kLanes];              // mixed coefficient
-  double twist_radius[kLanes];          // mean distance of the points from the centroid (m)
-  double tangent_impulse[2][kLanes];    // accumulated (N s)
-  double twist_impulse[kLanes];         // accumulated (N m s)
+  Real ca[3][kLanes];                 // the centroid from a's centre of mass, in the frame (m)
+  Real tangent_mass[2][kLanes];       // (kg)
+  Real twist_mass[kLanes];            // (kg m^2)
+  Real friction[kLanes];              // mixed coefficient
+  Real twist_radius[kLanes];          // mean distance of the points from the centroid (m)
+  Real tangent_impulse[2][kLanes];    // accumulated (N s)
+  Real twist_impulse[kLanes];         // accumulated (N m s)
   // written by the biased passes
-  double approach[4][kLanes];           // the most negative normal velocity seen (m/s)
-  double max_impulse[4][kLanes];        // the largest single normal impulse (N s)
-  // the separation at the poses now is base + n.(dp_b - dp_a) + n.(turn_b sb) - n.(turn_a sa),
-  // with sa, sb the anchors on the shapes' cores: in the frame (x - ex, y - ey, za) and
-  // (x + d0 + ex, y + d1 + ey, zb), e being half the step from a's surface point to b's
-  double za[4][kLanes], zb[4][kLanes], base[4][kLanes];  // (m)
-  double ex[4][kLanes], ey[4][kLanes];                   // (m)
+  Real approach[4][kLanes];           // the most negative normal velocity seen (m/s)
+  Real max_impulse[4][kLanes];        // the largest single normal impulse (N s)
   // bodies (dense indices) and pairs
   std::uint32_t a[kLanes], b[kLanes];
   std::uint32_t pair[kLanes];           // index into RigidContacts::pairs, kNoPair when empty
   std::uint32_t write_a = 0, write_b = 0;  // bit l: lane l writes its body back (dynamic and awake)
   int lanes = 0;                        // lanes in use, from 0
+};
+
+/// What measuring the separations of a block's manifolds at the poses now needs besides the
+/// block: apart from it, so that the passes that do not measure them (the biased ones) do not
+/// stream it. The separation at the poses now is base + n.(dp_b - dp_a) + n.(turn_b sb) -
+/// n.(turn_a sa), with sa, sb the anchors on the shapes' cores: in the frame (x - ex, y - ey, za)
+/// and (x + d0 + ex, y + d1 + ey, zb), e being half the step from a's surface point to b's.
+struct alignas(64) AnchorBlock {
+  Real za[4][kLanes], zb[4][kLanes], base[4][kLanes];  // (m)
+  Real ex[4][kLanes], ey[4][kLanes];                   // (m)
 };
 
 /// One contact pass's settings (contact_solver.cpp fills them).
@@ -129,21 +140,21 @@ enum class SimdPath : std::uint8_t { Scalar, Avx2, Avx512 };
 SimdPath best_simd_path();
 
 /// One pass over the coloured blocks [first, last) on `path`: each block's lanes together (no
-/// lane shares a dynamic body with another). With p.update_sep the separations are measured
+/// lane shares a dynamic body with another; anchors[i] goes with blocks[i]). With p.update_sep the separations are measured
 /// first, with p.warm_next the impulses are added to the warm-start accumulators after.
-void solve_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const PassParams& p,
-                   const BodyArrays& bodies);
+void solve_colored(SimdPath path, ContactBlock* blocks, AnchorBlock* anchors, std::size_t first, std::size_t last,
+                   const PassParams& p, const BodyArrays& bodies);
 /// The same for one lane (scalar): the overflow, lane by lane in order.
-void solve_lane(ContactBlock& block, int lane, const PassParams& p, const BodyArrays& bodies);
+void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p, const BodyArrays& bodies);
 /// Adds the accumulated impulses of the coloured blocks [first, last) to the warm-start accumulators.
 void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies);
 /// The same for one lane (scalar).
 void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies);
 /// Measures the separations of the coloured blocks [first, last) at the poses now.
-void separation_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last,
-                        const BodyArrays& bodies);
+void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first,
+                        std::size_t last, const BodyArrays& bodies);
 /// The same for one lane (scalar).
-void separation_lane(ContactBlock& block, int lane, const BodyArrays& bodies);
+void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const BodyArrays& bodies);
 /// The restitution impulses of one lane's points that approached faster than `threshold` and
 /// pushed (scalar; the lanes with restitution, in order).
 void restitution_lane(ContactBlock& block, int lane, double restitution, double threshold, const BodyArrays& bodies);

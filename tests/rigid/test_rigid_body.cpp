@@ -380,9 +380,9 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0xf8468756652f4f36ull) << std::hex << soft;
-  EXPECT_EQ(si, 0xbaa191709c1b453dull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x547cedaeefd797d3ull) << std::hex << tgs;
+  EXPECT_EQ(soft, 0x3c069984ad871cd0ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x5cd6669e64b3f25aull) << std::hex << si;
+  EXPECT_EQ(tgs, 0xb5dfe6c5351284f1ull) << std::hex << tgs;
   EXPECT_EQ(xpbd, 0xfbf5a5b19b207711ull) << std::hex << xpbd;
 }
 
