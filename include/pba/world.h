@@ -466,6 +466,8 @@ class World {
   void drive_body(RigidBodyId id, const Pose& target, double dt);
   void step_rigid(double t, double dt);
   void refresh_body_colliders(bool tick);
+  void update_rigid_touches();
+  void update_particle_touches();
   void update_touch_events();
   void update_sensor_events();
   void forget_pairs(EntityId e);
@@ -503,7 +505,10 @@ class World {
     Vec3 normal, point;
     double approach;
   };
-  std::vector<TouchRecord> touching_, touching_prev_;
+  std::vector<TouchRecord> touching_, touching_prev_;  // the bodies' pairs (with sleeping ones kept)
+  std::vector<TouchRecord> particle_touching_;        // the particle entities' pairs
+  std::vector<TouchRecord> touched_, touched_prev_;   // both, this tick and last: the events' sets
+  std::size_t particle_entities_added_ = 0;           // particles added to entities (room in the sets)
   std::vector<std::uint64_t> sensing_, sensing_prev_;
   std::vector<TouchBeginEvent> touch_begin_;
   std::vector<TouchEndEvent> touch_end_;
