@@ -239,14 +239,11 @@ inline constexpr std::uint32_t kNoSlot = 0xffffffffu;
 
 // Records that particle k met collider ci, with the time of impact and the contact state
 // that respond() computes from the same values (before it changes them): the normal, the
-// contact point on the surface and the normal speed toward it there. Out of line and cold:
-// it runs only at an impact of a tracked particle.
-#if defined(__GNUC__)
-__attribute__((noinline, cold))
-#endif
-inline void record_contact(const ContactSink& sink, int k, std::uint32_t ci, float x, float y, float z, float vx,
-                           float vy, float vz, float ox, float oy, float oz, float ovx, float ovy, float ovz, float nx,
-                           float ny, float nz, float s0, float s1, float r, float usx, float usy, float usz) {
+// contact point on the surface and the normal speed toward it there.
+PBA_INLINE void record_contact_inline(const ContactSink& sink, int k, std::uint32_t ci, float x, float y, float z,
+                                      float vx, float vy, float vz, float ox, float oy, float oz, float ovx, float ovy,
+                                      float ovz, float nx, float ny, float nz, float s0, float s1, float r, float usx,
+                                      float usy, float usz) {
   const std::uint32_t slot = sink.owner[k];
   if (slot == kNoSlot) return;
   ContactLog& log = sink.logs[slot];
@@ -267,6 +264,18 @@ inline void record_contact(const ContactSink& sink, int k, std::uint32_t ci, flo
   c.normal = Vec3f(nx, ny, nz);
   c.point = Vec3f(pcx - r * nx, pcy - r * ny, pcz - r * nz);
   c.approach_speed = vn < 0.0f ? -vn : 0.0f;
+}
+
+// The same out of line, for the loops that respond one particle at a time: it runs only at
+// a contact of a tracked particle, and keeps those loops as small as without recording.
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+inline void record_contact(const ContactSink& sink, int k, std::uint32_t ci, float x, float y, float z, float vx,
+                           float vy, float vz, float ox, float oy, float oz, float ovx, float ovy, float ovz, float nx,
+                           float ny, float nz, float s0, float s1, float r, float usx, float usy, float usz) {
+  record_contact_inline(sink, k, ci, x, y, z, vx, vy, vz, ox, oy, oz, ovx, ovy, ovz, nx, ny, nz, s0, s1, r, usx, usy,
+                        usz);
 }
 
 // planes: branch-free so the loop vectorises. Particles below the plane at the end of
@@ -320,8 +329,8 @@ PBA_INLINE int collide_plane_t(int n, const float* PBA_RESTRICT ox, const float*
       const float r = radius[k];
       const float s0 = plane_gap(n0x, n0y, n0z, d0, ox[k], oy[k], oz[k], r);
       const float s1 = plane_gap(nx, ny, nz, d1, x[k], y[k], z[k], r);
-      record_contact(sink, k, ci, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k], ovz[k],
-                     nx, ny, nz, s0, s1, r, usx, usy, usz);
+      record_contact_inline(sink, k, ci, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k],
+                            ovz[k], nx, ny, nz, s0, s1, r, usx, usy, usz);
     }
   int flag = 0;
   for (int k = 0; k < n; ++k) {
