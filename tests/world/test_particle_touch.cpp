@@ -25,7 +25,7 @@ struct Bounce {
   int end_tick = -1;    // the tick that reported the end, -1 for none
   double speed = 0;     // approach speed (m/s)
   double apex = 0;      // highest bottom of the ball (m) over the following flight
-  double gap_at_begin;  // the ball's bottom above the ground at the end of the begin tick (m)
+  double gap_at_begin = 0;  // the ball's bottom above the ground at the end of the begin tick (m)
 };
 
 // A particle entity ball of radius r dropped from rest, its bottom h above a plane of
