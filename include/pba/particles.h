@@ -136,7 +136,9 @@ inline constexpr double kForever = std::numeric_limits<double>::infinity();
 /// an upper bound over every method in steady state (the columns, 88 B: eight hot floats,
 /// birth and death times, two colours, owner and source, the generic path's gather
 /// arrays; a handle, 12 B; the integrator's scratch, at most 132 B for position Verlet's
-/// double state; 232 B in all).
+/// double state; 232 B in all). A tracked particle of a system that records contacts
+/// (ParticleSystem::set_record_contacts, on in a World) has a contact record besides,
+/// by handle slot, outside this figure.
 inline constexpr std::size_t kParticleBytes = 256;
 /// The default memory budget of one ParticleSystem (ParticleSystemDef::memory_budget):
 /// 4 GiB, room for 2^24 (16.8 million) particles of kParticleBytes.
@@ -227,6 +229,19 @@ struct ParticleSystemDef {
   std::size_t memory_budget = kParticleMemoryBudget;
 };
 
+/// One contact of a tracked particle with a collider during a step, as the collision code
+/// met it: at the time of impact inside the step, before the response changed anything.
+struct ParticleContact {
+  std::uint32_t collider = 0;     ///< index of the collider in the step's CollisionWorld
+  Vec3f normal{0, 1, 0};          ///< unit contact normal, out of the surface toward the particle
+  Vec3f point{0, 0, 0};           ///< the contact point on the surface (m): centre at impact - radius * normal
+  float approach_speed = 0;       ///< normal speed toward the surface at impact, relative to it (m/s, >= 0)
+};
+
+/// The most contacts recorded per tracked particle and step (ParticleSystem::contacts());
+/// a particle that meets more colliders in one step keeps the first ones tested.
+inline constexpr std::size_t kMaxParticleContacts = 4;
+
 /// Wall-clock seconds per phase of the last ParticleSystem::step (b2Profile style).
 struct ParticleProfile {
   double emit = 0;       ///< spawning from emitters
@@ -241,6 +256,15 @@ namespace detail {
 /// Particles per block of the fused kernel and of its broad phase (a few KB of columns,
 /// so one block's scratch stays in L1).
 inline constexpr std::size_t kParticleBlock = 256;
+
+/// The contacts one tracked particle made in one step (by handle slot; contact recording).
+/// `step` is the number of the step that wrote them (ParticleSystem::steps() after it):
+/// records of older steps are stale, so nothing is cleared between steps.
+struct ContactLog {
+  long long step = -1;     ///< the step these contacts belong to
+  std::uint32_t count = 0;  ///< contacts recorded, <= kMaxParticleContacts
+  ParticleContact contacts[kMaxParticleContacts];  ///< in the order the colliders were tested
+};
 
 /// What the broad phase knows about one block of kParticleBlock particles at the start of
 /// a step: a box around their positions, a bound on their speeds, their largest radius and
@@ -455,6 +479,22 @@ class ParticleSystem {
   long long newton_fallbacks() const { return newton_fallbacks_; }
   /// Collision responses in the last step.
   std::size_t contacts() const { return contacts_; }
+  /// Switches contact recording on or off (off by default; a World turns it on for its
+  /// particle entities' touch events). On, every tracked particle (one made by create())
+  /// keeps the colliders it met in each step, read with contacts(ParticleId); anonymous
+  /// (emitted or spawned) particles record nothing. The kernels write a record only at an
+  /// impact, never allocate for it, and the physics (every bit) is the same either way.
+  /// The records take sizeof(detail::ContactLog) (144 B) per tracked-particle handle slot,
+  /// allocated with the handle; they are not counted in kParticleBytes.
+  void set_record_contacts(bool on);
+  /// True when contact recording is on.
+  bool record_contacts() const { return record_contacts_; }
+  /// The contacts tracked particle `id` made in the last step (recording on), at most
+  /// kMaxParticleContacts, in the order the colliders were tested (triangle meshes last):
+  /// one per collider whose surface its sphere met during the step (an impact, a resting
+  /// or sliding contact, or a push out of a shape it started in). Empty when it met none,
+  /// when recording is off, or before the first step. Throws Error for a stale handle.
+  std::span<const ParticleContact> contacts(ParticleId id) const;
   /// Switches the fused kernel's per-block broad phase on (the default) or off. Off, every
   /// collider is tested against every particle; the results are bit-identical either way
   /// (the tests compare them; the benchmark measures the difference).
@@ -551,6 +591,8 @@ class ParticleSystem {
   float inv_mass_ref_ = 0, radius_ref_ = 0;
   std::size_t inv_mass_odd_ = 0, radius_odd_ = 0;
   bool broad_phase_ = true;
+  bool record_contacts_ = false;
+  std::vector<detail::ContactLog> contact_logs_;  // by handle slot, while recording
   std::size_t exact_blocks_ = 0;
   double time_ = 0;         // simulated time of the state
   std::span<const Forcer> forcers_now_;  // the forcers of the step in progress

@@ -20,7 +20,9 @@
 //                   body's entity gets its pose, and the bodies' shapes join the tick's
 //                   collision world with their begin and end poses
 //   4. particles    emit, forces + integration, swept collisions, recycling; particle
-//                   entities without a kinematic get their particle's position as pose
+//                   entities without a kinematic get their particle's position as pose;
+//                   then the tick's touch events (bodies and particle entities) and
+//                   sensor events
 //   5. soft         soft bodies (SoftSystem), against the tick's collision world
 //   6. constraints  distance constraints between particle entities
 //   7. post         everything else (the default stage of a WorldSystem)
@@ -77,11 +79,13 @@ struct ColliderDef {
 };
 
 /// Two entities began touching in the last tick: a contact of their rigid bodies (or of a
-/// body and a collider) that the solver pushed. `a` has the smaller entity index.
+/// body and a collider) that the solver pushed, or a particle entity's particle meeting a
+/// collider's entity (a collider, or a shape of its rigid body) during the tick. `a` has
+/// the smaller entity index.
 struct TouchBeginEvent {
   EntityId a{}, b{};          ///< the two entities (a.index < b.index)
   Vec3 normal{0, 1, 0};       ///< unit contact normal from a to b
-  Vec3 point{0, 0, 0};        ///< the deepest contact point (world, m)
+  Vec3 point{0, 0, 0};        ///< the deepest contact point, or the particle's on the surface at impact (world, m)
   double approach_speed = 0;  ///< how fast they closed along the normal before the contact (m/s, >= 0)
 };
 /// Two entities stopped touching in the last tick (`a` has the smaller entity index).
@@ -372,10 +376,14 @@ class World {
   long long ticks() const { return ticks_; }
   /// Timings of the last tick.
   const WorldProfile& profile() const { return profile_; }
-  /// Entity pairs that began touching in the last tick (rigid contacts the solver pushed,
-  /// between bodies or a body and a collider), in entity-index order.
+  /// Entity pairs that began touching in the last tick, in entity-index order: rigid
+  /// contacts the solver pushed (between bodies or a body and a collider), and particle
+  /// entities whose particle met a collider's entity during the tick (at the impact, so a
+  /// bounce inside one tick counts; resting on it keeps touching). Emitted particles have
+  /// no entity and make none. Needs particles().record_contacts() (on by default here).
   std::span<const TouchBeginEvent> touch_begin_events() const { return touch_begin_; }
-  /// Entity pairs that stopped touching in the last tick (a pair stays touching while its
+  /// Entity pairs that stopped touching in the last tick: a particle entity after a tick in
+  /// which its particle met none of the entity's colliders (a pair stays touching while its
   /// bodies sleep; a destroyed entity's pairs end silently).
   std::span<const TouchEndEvent> touch_end_events() const { return touch_end_; }
   /// Entities (rigid bodies, particles) that entered a sensor collider in the last tick.
@@ -468,6 +476,8 @@ class World {
   void drive_body(RigidBodyId id, const Pose& target, double dt);
   void step_rigid(double t, double dt);
   void refresh_body_colliders(bool tick);
+  void update_rigid_touches();
+  void update_particle_touches();
   void update_touch_events();
   void update_sensor_events();
   void forget_pairs(EntityId e);
@@ -505,7 +515,10 @@ class World {
     Vec3 normal, point;
     double approach;
   };
-  std::vector<TouchRecord> touching_, touching_prev_;
+  std::vector<TouchRecord> touching_, touching_prev_;  // the bodies' pairs (with sleeping ones kept)
+  std::vector<TouchRecord> particle_touching_;        // the particle entities' pairs
+  std::vector<TouchRecord> touched_, touched_prev_;   // both, this tick and last: the events' sets
+  std::size_t particle_entities_added_ = 0;           // particles added to entities (room in the sets)
   std::vector<std::uint64_t> sensing_, sensing_prev_;
   std::vector<TouchBeginEvent> touch_begin_;
   std::vector<TouchEndEvent> touch_end_;

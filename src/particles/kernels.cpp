@@ -64,12 +64,13 @@ PBA_INLINE bool kick_drift(int n, float* PBA_RESTRICT x, float* PBA_RESTRICT y, 
 
 // The exact path: keep the start of the step for the swept tests, kick and drift, check
 // the new state, then every collider against the block. Returns the contacts; `bad` is
-// set when something became non-finite.
+// set when something became non-finite; the tracked particles' contacts go to `sink`.
 PBA_INLINE int exact_block(int n, float* PBA_RESTRICT x, float* PBA_RESTRICT y, float* PBA_RESTRICT z,
                            float* PBA_RESTRICT vx, float* PBA_RESTRICT vy, float* PBA_RESTRICT vz,
                            const float* PBA_RESTRICT ax, const float* PBA_RESTRICT ay,
                            const float* PBA_RESTRICT az, const float* PBA_RESTRICT radius, float h,
-                           const ColliderParams* colliders, std::size_t n_colliders, float threshold, int& bad) {
+                           const ColliderParams* colliders, std::size_t n_colliders, float threshold, int& bad,
+                           const ContactSink& sink) {
   alignas(64) float ox[kBlock], oy[kBlock], oz[kBlock], ovx[kBlock], ovy[kBlock], ovz[kBlock];
   int flag = 0;
   for (int k = 0; k < n; ++k) {
@@ -90,7 +91,7 @@ PBA_INLINE int exact_block(int n, float* PBA_RESTRICT x, float* PBA_RESTRICT y, 
   bad |= flag;
   // swept collisions against every surface; each checks the particles it changed
   return collide_block(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, colliders, n_colliders, threshold,
-                       h, bad);
+                       h, bad, sink);
 }
 
 // The block's bounds measured from its state: the box around the positions and a bound on
@@ -366,8 +367,9 @@ FusedResult fused_semi_implicit_euler(const FusedArgs& a) {
     int bad = 0;
     base_accel(n, vx, vy, vz, im, a.forces, ax, ay, az);
     for (std::size_t f = 0; f < a.n_forcers; ++f) forcer_accel(n, x, y, z, im, a.forcers[f], ax, ay, az);
+    const ContactSink sink{a.owner ? a.owner + b : nullptr, a.logs, a.step};
     const int hits = exact_block(n, x, y, z, vx, vy, vz, ax, ay, az, radius, a.h, a.colliders, a.n_colliders,
-                                 a.threshold, bad);
+                                 a.threshold, bad, sink);
     out.contacts += static_cast<std::size_t>(hits);
     ++out.exact_blocks;
     bb.valid = false;

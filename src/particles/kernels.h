@@ -225,6 +225,59 @@ PBA_INLINE void respond(bool hit, float& x, float& y, float& z, float& vx, float
   vz = hit ? usz + tz * scale + vn_end * nz : vz;
 }
 
+/// Where the kernels record contacts (ParticleSystem::set_record_contacts): the handle slot
+/// of each particle of the block (kNoSlot for an anonymous one) and the logs by slot. With
+/// `owner` null, recording is off and a kernel only tests that pointer, once per contact or
+/// per block.
+struct ContactSink {
+  const std::uint32_t* owner = nullptr;  // per particle of the block (offset to the block)
+  ContactLog* logs = nullptr;            // by handle slot
+  long long step = 0;                    // the number of the step being taken
+};
+/// The slot of a particle without a handle.
+inline constexpr std::uint32_t kNoSlot = 0xffffffffu;
+
+// Records that particle k met collider ci, with the time of impact and the contact state
+// that respond() computes from the same values (before it changes them): the normal, the
+// contact point on the surface and the normal speed toward it there.
+PBA_INLINE void record_contact_inline(const ContactSink& sink, int k, std::uint32_t ci, float x, float y, float z,
+                                      float vx, float vy, float vz, float ox, float oy, float oz, float ovx, float ovy,
+                                      float ovz, float nx, float ny, float nz, float s0, float s1, float r, float usx,
+                                      float usy, float usz) {
+  const std::uint32_t slot = sink.owner[k];
+  if (slot == kNoSlot) return;
+  ContactLog& log = sink.logs[slot];
+  if (log.step != sink.step) log.step = sink.step, log.count = 0;
+  if (log.count == kMaxParticleContacts) return;
+  // respond()'s time of impact (1 when the particle started inside) and contact state
+  const bool crossed = s0 >= 0.0f;
+  const float den = s0 - s1;
+  const float f = (crossed & (den > 0.0f)) ? s0 / den : 1.0f;
+  const float push_in = crossed ? 0.0f : (s1 < 0.0f ? -s1 : 0.0f);
+  const float pcx = ox + f * (x - ox) + push_in * nx;
+  const float pcy = oy + f * (y - oy) + push_in * ny;
+  const float pcz = oz + f * (z - oz) + push_in * nz;
+  const float vcx = ovx + f * (vx - ovx), vcy = ovy + f * (vy - ovy), vcz = ovz + f * (vz - ovz);
+  const float vn = (vcx - usx) * nx + (vcy - usy) * ny + (vcz - usz) * nz;
+  ParticleContact& c = log.contacts[log.count++];
+  c.collider = ci;
+  c.normal = Vec3f(nx, ny, nz);
+  c.point = Vec3f(pcx - r * nx, pcy - r * ny, pcz - r * nz);
+  c.approach_speed = vn < 0.0f ? -vn : 0.0f;
+}
+
+// The same out of line, for the loops that respond one particle at a time: it runs only at
+// a contact of a tracked particle, and keeps those loops as small as without recording.
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+inline void record_contact(const ContactSink& sink, int k, std::uint32_t ci, float x, float y, float z, float vx,
+                           float vy, float vz, float ox, float oy, float oz, float ovx, float ovy, float ovz, float nx,
+                           float ny, float nz, float s0, float s1, float r, float usx, float usy, float usz) {
+  record_contact_inline(sink, k, ci, x, y, z, vx, vy, vz, ox, oy, oz, ovx, ovy, ovz, nx, ny, nz, s0, s1, r, usx, usy,
+                        usz);
+}
+
 // planes: branch-free so the loop vectorises. Particles below the plane at the end of
 // the step collide; ones above it at the start crossed it during the step (a plane is a
 // half-space, so nothing passes through it unseen, at any speed). A static plane (the
@@ -235,7 +288,8 @@ PBA_INLINE int collide_plane_t(int n, const float* PBA_RESTRICT ox, const float*
                                const float* PBA_RESTRICT ovy, const float* PBA_RESTRICT ovz, float* PBA_RESTRICT x,
                                float* PBA_RESTRICT y, float* PBA_RESTRICT z, float* PBA_RESTRICT vx,
                                float* PBA_RESTRICT vy, float* PBA_RESTRICT vz, const float* PBA_RESTRICT radius,
-                               const ColliderParams& c, float threshold, float h, int& bad) {
+                               const ColliderParams& c, float threshold, float h, int& bad, const ContactSink& sink,
+                               std::uint32_t ci) {
   const float nx = c.n1x, ny = c.n1y, nz = c.n1z, d1 = c.d1;
   const float n0x = Static ? nx : c.n0x, n0y = Static ? ny : c.n0y, n0z = Static ? nz : c.n0z;
   const float d0 = Static ? d1 : c.d0;
@@ -258,13 +312,26 @@ PBA_INLINE int collide_plane_t(int n, const float* PBA_RESTRICT ox, const float*
       const float r = radius[k];
       const float s0 = plane_gap(n0x, n0y, n0z, d0, ox[k], oy[k], oz[k], r);
       const float s1 = plane_gap(nx, ny, nz, d1, x[k], y[k], z[k], r);
+      if (sink.owner)
+        record_contact(sink, k, ci, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k], ovz[k],
+                       nx, ny, nz, s0, s1, r, usx, usy, usz);
       respond(true, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k], ovz[k], nx, ny, nz,
               s0, s1, d1, r, usx, usy, usz, c.e, c.mu, threshold, h, inv_h);
       bad |= non_finite6(x[k], y[k], z[k], vx[k], vy[k], vz[k]);
     }
     return count;
   }
-  // many contacts (particles resting on the ground): everyone, vectorised
+  // many contacts (particles resting on the ground): the tracked ones' records first (the
+  // loop below overwrites what they are made from), then everyone, vectorised
+  if (sink.owner)
+    for (int k = 0; k < n; ++k) {
+      if (!hits[k]) continue;
+      const float r = radius[k];
+      const float s0 = plane_gap(n0x, n0y, n0z, d0, ox[k], oy[k], oz[k], r);
+      const float s1 = plane_gap(nx, ny, nz, d1, x[k], y[k], z[k], r);
+      record_contact_inline(sink, k, ci, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k],
+                            ovz[k], nx, ny, nz, s0, s1, r, usx, usy, usz);
+    }
   int flag = 0;
   for (int k = 0; k < n; ++k) {
     // signed distances of the particle's surface from the plane, start and end
@@ -291,10 +358,12 @@ PBA_INLINE int collide_plane_t(int n, const float* PBA_RESTRICT ox, const float*
 PBA_INLINE int collide_plane(int n, const float* ox, const float* oy, const float* oz, const float* ovx,
                              const float* ovy, const float* ovz, float* x, float* y, float* z, float* vx, float* vy,
                              float* vz, const float* radius, const ColliderParams& c, float threshold, float h,
-                             int& bad) {
+                             int& bad, const ContactSink& sink, std::uint32_t ci) {
   if (c.is_static)
-    return collide_plane_t<true>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
-  return collide_plane_t<false>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
+    return collide_plane_t<true>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad,
+                                 sink, ci);
+  return collide_plane_t<false>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad, sink,
+                                ci);
 }
 
 // spheres, boxes, capsules, hulls, meshes and compounds: the collide module's swept point
@@ -306,11 +375,14 @@ template <bool (*Contact)(const ColliderParams&, float, float, float, float, flo
 PBA_INLINE int collide_swept(int n, const float* ox, const float* oy, const float* oz, const float* ovx,
                              const float* ovy, const float* ovz, float* x, float* y, float* z, float* vx, float* vy,
                              float* vz, const float* radius, const ColliderParams& c, float threshold, float h,
-                             int& bad) {
+                             int& bad, const ContactSink& sink, std::uint32_t ci) {
   int count = 0;
   for (int k = 0; k < n; ++k) {
     SweptContact<float> q;
     if (!Contact(c, ox[k], oy[k], oz[k], x[k], y[k], z[k], radius[k], q)) continue;
+    if (sink.owner)
+      record_contact(sink, k, ci, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k], ovz[k],
+                     q.nx, q.ny, q.nz, q.s0, q.s1, radius[k], q.ux, q.uy, q.uz);
     respond(true, x[k], y[k], z[k], vx[k], vy[k], vz[k], ox[k], oy[k], oz[k], ovx[k], ovy[k], ovz[k], q.nx, q.ny, q.nz,
             q.s0, q.s1, q.d1, radius[k], q.ux, q.uy, q.uz, c.e, c.mu, threshold, h, 1.0f / h);
     bad |= non_finite6(x[k], y[k], z[k], vx[k], vy[k], vz[k]);
@@ -327,44 +399,48 @@ PBA_INLINE int collide_swept(int n, const float* ox, const float* oy, const floa
 PBA_INLINE int collide_block(int n, const float* ox, const float* oy, const float* oz, const float* ovx,
                              const float* ovy, const float* ovz, float* x, float* y, float* z, float* vx, float* vy,
                              float* vz, const float* radius, const ColliderParams* colliders,
-                             std::size_t n_colliders, float threshold, float h, int& bad) {
+                             std::size_t n_colliders, float threshold, float h, int& bad,
+                             const ContactSink& sink = {}) {
   int count = 0;
   bool meshes = false;
   for (std::size_t ci = 0; ci < n_colliders; ++ci) {
     const ColliderParams& c = colliders[ci];
+    const auto ci32 = static_cast<std::uint32_t>(ci);
     if (c.type == ShapeType::Mesh) {
       meshes = true;
       continue;
     }
     switch (c.type) {
       case ShapeType::Plane:
-        count += collide_plane(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad);
+        count += collide_plane(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c, threshold, h, bad, sink,
+                               ci32);
         break;
       case ShapeType::Sphere:
         count += collide_swept<swept_sphere<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c,
-                                                    threshold, h, bad);
+                                                    threshold, h, bad, sink, ci32);
         break;
       case ShapeType::Box:
         count += collide_swept<swept_box<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c,
-                                                 threshold, h, bad);
+                                                 threshold, h, bad, sink, ci32);
         break;
       case ShapeType::Capsule:
         count += collide_swept<swept_capsule<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c,
-                                                     threshold, h, bad);
+                                                     threshold, h, bad, sink, ci32);
         break;
       case ShapeType::Hull:
       case ShapeType::Mesh:
       case ShapeType::Compound:
         // the generic path: out of line, in double (collide/point_contact_shapes.cpp)
         count += collide_swept<swept_generic<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius, c,
-                                                     threshold, h, bad);
+                                                     threshold, h, bad, sink, ci32);
         break;
     }
   }
   for (std::size_t ci = 0; meshes && ci < n_colliders; ++ci)
     if (colliders[ci].type == ShapeType::Mesh)
       count += collide_swept<swept_generic<float>>(n, ox, oy, oz, ovx, ovy, ovz, x, y, z, vx, vy, vz, radius,
-                                                   colliders[ci], threshold, h, bad);
+                                                   colliders[ci], threshold, h, bad, sink,
+                                                   static_cast<std::uint32_t>(ci));
   return count;
 }
 
@@ -399,6 +475,11 @@ struct FusedArgs {
   std::size_t n_colliders;
   Reach* reach;  // scratch for the broad phase: n_colliders of them (any count)
   float threshold;
+  // contact recording: the handle slot per particle (nullptr: off), the logs by slot and
+  // the number of the step being taken
+  const std::uint32_t* owner = nullptr;
+  ContactLog* logs = nullptr;
+  long long step = 0;
 };
 
 /// Result of the fused kernel.

@@ -379,6 +379,8 @@ ParticleId ParticleSystem::create(const ParticleDef& def, std::string_view where
   def.validate(where);
   const ParticleId id = ids_.create();
   if (slot_.size() <= id.index) slot_.resize(id.index + 1, kNone);
+  if (record_contacts_ && contact_logs_.size() < slot_.size()) contact_logs_.resize(slot_.size());
+  if (record_contacts_) contact_logs_[id.index] = {};  // a reused slot forgets the last owner's
   slot_[id.index] = static_cast<std::uint32_t>(push_particle(def, id.index, 0));
   return id;
 }
@@ -391,6 +393,20 @@ std::size_t ParticleSystem::spawn(const ParticleDef& def, std::string_view where
 std::size_t ParticleSystem::index_of(ParticleId id) const {
   ids_.require(id, "ParticleSystem: particle");
   return slot_[id.index];
+}
+
+void ParticleSystem::set_record_contacts(bool on) {
+  // a log per handle slot (stale ones are told apart by their step number)
+  if (on && !record_contacts_) contact_logs_.assign(slot_.size(), {});
+  record_contacts_ = on;
+}
+
+std::span<const ParticleContact> ParticleSystem::contacts(ParticleId id) const {
+  ids_.require(id, "ParticleSystem::contacts: particle");
+  if (!record_contacts_ || id.index >= contact_logs_.size()) return {};
+  const detail::ContactLog& log = contact_logs_[id.index];
+  if (log.step != steps_) return {};
+  return {log.contacts, log.count};
 }
 
 void ParticleSystem::destroy(ParticleId id) {
@@ -723,6 +739,12 @@ void ParticleSystem::step_fused(double t, double dt, const CollisionWorld& colli
   a.n_colliders = colliders.size();
   a.reach = reach_.data();
   a.threshold = threshold;
+  // contact recording, when on and some particle has a handle to record for
+  if (record_contacts_ && ids_.size() > 0) {
+    a.owner = owner_.data();
+    a.logs = contact_logs_.data();
+    a.step = steps_ + 1;
+  }
   const detail::FusedResult r = detail::fused_semi_implicit_euler(a);
   contacts_ = r.contacts;
   exact_blocks_ = r.exact_blocks;
@@ -779,6 +801,7 @@ void ParticleSystem::step_generic(double t, double dt, const CollisionWorld& col
   // collide block by block: old positions from the columns, new ones from the integrator
   Stopwatch sw;
   const detail::ColliderParams* cp = colliders.flat_float().data();
+  const bool record = record_contacts_ && ids_.size() > 0;
   alignas(64) float bx[detail::kBlock], by[detail::kBlock], bz[detail::kBlock];
   alignas(64) float bvx[detail::kBlock], bvy[detail::kBlock], bvz[detail::kBlock];
   int bad = 0;
@@ -788,10 +811,11 @@ void ParticleSystem::step_generic(double t, double dt, const CollisionWorld& col
       bx[k] = gx_[b + k].x, by[k] = gx_[b + k].y, bz[k] = gx_[b + k].z;
       bvx[k] = gv_[b + k].x, bvy[k] = gv_[b + k].y, bvz[k] = gv_[b + k].z;
     }
+    const detail::ContactSink sink{record ? owner_.data() + b : nullptr, contact_logs_.data(), steps_ + 1};
     contacts_ += static_cast<std::size_t>(detail::collide_block(m, x + b, y + b, z + b, vx + b, vy + b, vz + b, bx, by,
                                                                 bz, bvx, bvy, bvz, hot_[kRadius] + b, cp,
                                                                 colliders.size(), threshold, static_cast<float>(dt),
-                                                                bad));
+                                                                bad, sink));
     bad |= detail::any_non_finite(m, bx, by, bz) | detail::any_non_finite(m, bvx, bvy, bvz);
     for (int k = 0; k < m; ++k) {
       x[b + k] = bx[k], y[b + k] = by[k], z[b + k] = bz[k];

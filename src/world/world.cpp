@@ -140,6 +140,8 @@ World::World(const WorldDef& def)
       particles_(def.particles),
       rigid_(validated_rigid(def.rigid)) {
   particles_.forces().gravity = gravity_;
+  // the particle entities' touch events read the colliders each particle met
+  particles_.set_record_contacts(true);
 }
 
 std::string_view to_string(WorldStage s) {
@@ -299,6 +301,12 @@ ParticleId World::add_particle(EntityId e, const ParticleDef& def) {
   ParticleDef d = def;
   d.position = r.pose.position + r.pose.rotation * def.position;
   r.particle = particles_.create(d, "particle of " + describe(e));
+  // room for the touches of every particle entity added so far (kMaxParticleContacts a
+  // tick each) in the pair sets, so that a tick in which more of them touch at once than
+  // before does not allocate (grown geometrically)
+  const std::size_t need = ++particle_entities_added_ * kMaxParticleContacts;
+  for (auto* v : {&particle_touching_, &touched_, &touched_prev_})
+    if (v->capacity() < need) v->reserve(std::max(need, 2 * v->capacity()));
   return r.particle;
 }
 
@@ -688,7 +696,10 @@ void World::refresh_body_colliders(bool tick) {
 // tick's bodies).
 void World::step_rigid(double t, double dt) {
   touch_begin_.clear(), touch_end_.clear(), sensor_enter_.clear(), sensor_leave_.clear();
-  if (rigid_.size() == 0) return;
+  if (rigid_.size() == 0) {
+    touching_.clear();  // no bodies, no rigid contacts
+    return;
+  }
   // a kinematic body on a path reaches the path's pose at the end of the tick
   for (const KinematicEntry& k : kinematics_) {
     const EntityRecord& r = records_[k.owner.index];
@@ -746,19 +757,26 @@ void World::step_rigid(double t, double dt) {
     }
     collision_.add(body_colliders_[k], body_collider_owner_[k]);
   }
-  // what began and stopped touching (the sensors wait for the particles: tick())
-  update_touch_events();
+  // the bodies' touching pairs (their events wait for the particles: tick())
+  update_rigid_touches();
 }
 
 namespace {
 std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; }
 }  // namespace
 
-// Touch events in the manner of Box2D v3's contact begin/end events: an entity pair touches
-// in a tick when a manifold between their bodies (or a body and a collider's stand-in) was
-// pushed by the solver; pairs whose bodies sleep are not stepped and stay touching. This
-// tick's pairs against last tick's give the begin and end events (sorted keys, merged).
-void World::update_touch_events() {
+namespace {
+// sorted by pair, the fastest approach first (std::unique then keeps it)
+bool by_key_then_approach(const auto& x, const auto& y) {
+  return x.key != y.key ? x.key < y.key : x.approach > y.approach;
+}
+}  // namespace
+
+// The bodies' touching pairs, in the manner of Box2D v3's contact begin/end events: an
+// entity pair touches in a tick when a manifold between their bodies (or a body and a
+// collider's stand-in) was pushed by the solver; pairs whose bodies sleep are not stepped
+// and stay touching. Sorted by key, one record per pair.
+void World::update_rigid_touches() {
   std::swap(touching_, touching_prev_);
   touching_.clear();
   for (std::size_t k = 0; k < rigid_.manifold_count(); ++k) {
@@ -770,10 +788,8 @@ void World::update_touch_events() {
     if (a.index > b.index) std::swap(a, b), n = -n;
     touching_.push_back({pair_key(a.index, b.index), n, m.point, m.approach_speed});
   }
-  // one record per pair: the fastest approach (ties by manifold order, kept by stable sort)
-  auto by_key = [](const TouchRecord& x, const TouchRecord& y) {
-    return x.key != y.key ? x.key < y.key : x.approach > y.approach;
-  };
+  // one record per pair: the fastest approach
+  auto by_key = [](const TouchRecord& x, const TouchRecord& y) { return by_key_then_approach(x, y); };
   std::sort(touching_.begin(), touching_.end(), by_key);
   touching_.erase(std::unique(touching_.begin(), touching_.end(),
                               [](const TouchRecord& x, const TouchRecord& y) { return x.key == y.key; }),
@@ -792,16 +808,66 @@ void World::update_touch_events() {
       touching_.push_back(r);
   }
   std::sort(touching_.begin(), touching_.end(), by_key);
-  // begin: now and not before; end: before and not now
-  auto entity = [&](std::uint32_t i) { return EntityId{i, entities_.generation(i)}; };
+}
+
+// The particle entities' touching pairs: a particle entity touches a collider's entity (a
+// collider, or a shape of a rigid body) in a tick when the particle kernels met that
+// collider during the tick (ParticleSystem::contacts: an impact, resting or sliding on it,
+// a push out of it), at the impact's normal, point and approach speed. A bounce whose
+// impact and rebound fall inside one tick is seen: the kernels record it at the impact,
+// not from where the tick left the particle. Emitted particles have no entity and record
+// nothing. Sorted by key, one record per pair (the fastest approach).
+void World::update_particle_touches() {
+  particle_touching_.clear();
+  const std::span<const std::uint32_t> owners = collision_.owners();
+  for (std::uint32_t e = 0; e < records_.size(); ++e) {
+    const ParticleId pid = records_[e].particle;
+    if (pid.is_null() || !particles_.valid(pid)) continue;
+    for (const ParticleContact& c : particles_.contacts(pid)) {
+      const std::uint32_t o = c.collider < owners.size() ? owners[c.collider] : CollisionWorld::kNoOwner;
+      if (o == CollisionWorld::kNoOwner || o == e || !entities_.valid({o, entities_.generation(o)})) continue;
+      // the contact normal points out of the collider, toward the particle; the event's
+      // from the smaller entity index to the larger
+      const Vec3 n(c.normal);
+      particle_touching_.push_back({e < o ? pair_key(e, o) : pair_key(o, e), e < o ? -n : n, Vec3(c.point),
+                                    static_cast<double>(c.approach_speed)});
+    }
+  }
+  auto by_key = [](const TouchRecord& x, const TouchRecord& y) { return by_key_then_approach(x, y); };
+  std::sort(particle_touching_.begin(), particle_touching_.end(), by_key);
+  particle_touching_.erase(std::unique(particle_touching_.begin(), particle_touching_.end(),
+                                       [](const TouchRecord& x, const TouchRecord& y) { return x.key == y.key; }),
+                           particle_touching_.end());
+}
+
+// This tick's touching pairs (the bodies' and the particles', one record per pair, the
+// bodies' first when both touch) against last tick's give the begin and end events, in
+// key order: by the smaller entity index, then the larger.
+void World::update_touch_events() {
+  update_particle_touches();
+  std::swap(touched_, touched_prev_);
+  touched_.clear();
+  // the union of the two sorted sets
   std::size_t i = 0, j = 0;
-  while (i < touching_.size() || j < touching_prev_.size()) {
-    if (j == touching_prev_.size() || (i < touching_.size() && touching_[i].key < touching_prev_[j].key)) {
-      const TouchRecord& r = touching_[i++];
+  while (i < touching_.size() || j < particle_touching_.size()) {
+    if (j == particle_touching_.size() ||
+        (i < touching_.size() && touching_[i].key <= particle_touching_[j].key)) {
+      if (j < particle_touching_.size() && touching_[i].key == particle_touching_[j].key) ++j;
+      touched_.push_back(touching_[i++]);
+    } else {
+      touched_.push_back(particle_touching_[j++]);
+    }
+  }
+  // begin: now and not before; end: before and not now
+  auto entity = [&](std::uint32_t e) { return EntityId{e, entities_.generation(e)}; };
+  i = 0, j = 0;
+  while (i < touched_.size() || j < touched_prev_.size()) {
+    if (j == touched_prev_.size() || (i < touched_.size() && touched_[i].key < touched_prev_[j].key)) {
+      const TouchRecord& r = touched_[i++];
       touch_begin_.push_back({entity(static_cast<std::uint32_t>(r.key >> 32)), entity(static_cast<std::uint32_t>(r.key)),
                               r.normal, r.point, r.approach});
-    } else if (i == touching_.size() || touching_prev_[j].key < touching_[i].key) {
-      const std::uint64_t k = touching_prev_[j++].key;
+    } else if (i == touched_.size() || touched_prev_[j].key < touched_[i].key) {
+      const std::uint64_t k = touched_prev_[j++].key;
       touch_end_.push_back({entity(static_cast<std::uint32_t>(k >> 32)), entity(static_cast<std::uint32_t>(k))});
     } else {
       ++i, ++j;
@@ -898,6 +964,7 @@ void World::update_sensor_events() {
 void World::forget_pairs(EntityId e) {
   auto involves = [&](std::uint64_t k) { return (k >> 32) == e.index || (k & 0xffffffffu) == e.index; };
   std::erase_if(touching_, [&](const TouchRecord& r) { return involves(r.key); });
+  std::erase_if(touched_, [&](const TouchRecord& r) { return involves(r.key); });
   std::erase_if(sensing_, involves);
 }
 
@@ -977,7 +1044,9 @@ void World::tick(double t, double dt) {
   profile_.collide = pp.collide;
   profile_.recycle = pp.recycle;
   write_particle_poses();
-  // what entered and left the sensors: bodies (moved in the rigid stage) and particles
+  // what began and stopped touching (bodies and particle entities), what entered and left
+  // the sensors: bodies (moved in the rigid stage) and particles
+  update_touch_events();
   update_sensor_events();
   run_systems(WorldStage::Particles, t, dt);
   stage_done(WorldStage::Particles);
