@@ -1,7 +1,8 @@
 // Convex shapes against static triangle meshes: every triangle the BVH returns for the
-// shape's bounds is a thin two-sided hull; GJK (or EPA when the cores overlap) gives its
-// normal and closest points, and a normal that comes from an internal edge or vertex whose
-// flags are clear is replaced by the face normal before the manifold is built (the
+// shape's bounds is a thin two-sided hull; the closest points of a sphere's or capsule's core
+// (closed forms), else GJK (or EPA when the cores overlap), give its normal and closest
+// points, and a normal that comes from an internal edge or vertex whose flags are clear is
+// replaced by the face normal before the manifold is built (the
 // "internal edge" cure of Jolt's ActiveEdges and Box2D's smooth segments: such an edge
 // lies flat or concave between two faces, so its own normal would be a ghost contact).
 #include <cmath>
@@ -31,16 +32,68 @@ std::uint8_t feature_edges(const Vec3 t[3], const Vec3& q) {
   return m;
 }
 
+// The closest points ca (on the segment p-q; p = q for a point) and cb (on the triangle) in
+// closed form (Ericson 2005, 5.1.5 and 5.1.9): apart, the nearest pair is an end of the
+// segment against the triangle or the segment against one of its edges (a segment parallel
+// to the face has such a pair among its nearest ones). False when the segment passes
+// through the triangle or lies in its plane: the cores overlap, and EPA finds the depth.
+bool core_triangle_closest(const Vec3& p, const Vec3& q, const Vec3 tri[3], const Vec3& face_normal, Vec3& ca,
+                           Vec3& cb) {
+  bool interior = false;
+  ca = p;
+  cb = closest_on_triangle(p, tri[0], tri[1], tri[2], interior);
+  if (p == q) return true;
+  const double dp = glm::dot(face_normal, p - tri[0]), dq = glm::dot(face_normal, q - tri[0]);
+  if ((dp <= 0 && dq >= 0) || (dp >= 0 && dq <= 0)) {
+    if (dp == dq) return false;  // in the plane
+    // where the segment crosses the plane: inside the triangle, the cores overlap
+    const Vec3 x = p + (dp / (dp - dq)) * (q - p);
+    closest_on_triangle(x, tri[0], tri[1], tri[2], interior);
+    if (interior) return false;
+  }
+  double best = glm::dot(ca - cb, ca - cb);
+  const Vec3 cq = closest_on_triangle(q, tri[0], tri[1], tri[2], interior);
+  if (const double d = glm::dot(q - cq, q - cq); d < best) best = d, ca = q, cb = cq;
+  for (int k = 0; k < 3; ++k) {
+    Vec3 c1, c2;
+    closest_segments(p, q, tri[k], tri[(k + 1) % 3], c1, c2);
+    if (const double d = glm::dot(c1 - c2, c1 - c2); d < best) best = d, ca = c1, cb = c2;
+  }
+  return true;
+}
+
 // one triangle against the convex shape (both in the mesh's frame); true when in contact
 bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy& A, const Vec3 tri[3],
                       const Vec3& face_normal, std::uint8_t flags, double margin, std::uint32_t t, Manifold& m) {
   m.count = 0;
   m.sub_shape_b = t;
-  ConvexProxy B;
-  B.type = ShapeType::Mesh;
-  B.triangle = tri;
   Vec3 n, point_a, point_b;
-  if (!contact_normal(A, B, margin, n, point_a, point_b)) return false;
+  // a sphere's or capsule's core (a point or a segment) apart from the triangle: the closest
+  // points in closed form give what GJK converges to (its stop at a 1e-10 m gap, and its
+  // test for touching cores, a closest point within 1e-12 m of the origin, kept)
+  bool closed = false;
+  if (a.type == ShapeType::Sphere || a.type == ShapeType::Capsule) {
+    const Segment s = a.type == ShapeType::Capsule ? capsule_core(a, pa) : Segment{pa.position, pa.position};
+    Vec3 ca, cb;
+    if (core_triangle_closest(s.p, s.q, tri, face_normal, ca, cb)) {
+      const Vec3 v = ca - cb;
+      const double vv = glm::dot(v, v);
+      if (vv > 1e-24) {
+        const double dist = std::sqrt(vv);
+        if (dist - A.radius > margin) return false;
+        n = -v / dist;
+        point_a = ca + A.radius * n;
+        point_b = cb;
+        closed = true;
+      }
+    }
+  }
+  if (!closed) {
+    ConvexProxy B;
+    B.type = ShapeType::Mesh;
+    B.triangle = tri;
+    if (!contact_normal(A, B, margin, n, point_a, point_b)) return false;
+  }
   // an internal (flat or concave) edge or vertex takes the face normal, on the side of
   // the triangle where the shape's centre is (a hull's centroid: its origin may lie on its
   // surface, as a pyramid's at the middle of its base, and a pyramid resting on its base
@@ -124,6 +177,16 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   const Aabb box = bounds(a, local).grown(margin);
   const TriangleMesh& M = *mesh.mesh;
   const ConvexProxy A = ConvexProxy::of(a, local);
+  // the shape's reach along a direction d for the triangles' plane test: a box's, capsule's
+  // or sphere's core spans d . centre -+ sum |d . axis_k| (axes scaled by the half extents,
+  // a capsule's by its half length) with no support calls; a hull's, its two support points
+  const Mat3 r = glm::mat3_cast(local.rotation);
+  Vec3 axes[3] = {Vec3(0), Vec3(0), Vec3(0)};
+  if (a.type == ShapeType::Box)
+    axes[0] = r[0] * a.half_extents.x, axes[1] = r[1] * a.half_extents.y, axes[2] = r[2] * a.half_extents.z;
+  else if (a.type == ShapeType::Capsule)
+    axes[0] = r[1] * a.half_height;
+  const bool hull = a.type == ShapeType::Hull;
   int written = 0;
   M.query(box, [&](std::uint32_t t) {
     if (written >= int(out.size())) return;
@@ -134,8 +197,16 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     // is kept a rounding's width short of the margin, so nothing GJK would keep is dropped
     const Vec3 nf = M.normal(t);
     const double plane = glm::dot(nf, tri[0]), slack = margin + 1e-12 * (1 + std::abs(plane));
-    const double above = glm::dot(nf, A.support(-nf)) - A.radius - plane;
-    const double below = plane - glm::dot(nf, A.support(nf)) - A.radius;
+    double lo, hi;
+    if (hull) {
+      lo = glm::dot(nf, A.support(-nf)), hi = glm::dot(nf, A.support(nf));
+    } else {
+      const double c = glm::dot(nf, local.position);
+      const double w = std::abs(glm::dot(nf, axes[0])) + std::abs(glm::dot(nf, axes[1])) + std::abs(glm::dot(nf, axes[2]));
+      lo = c - w, hi = c + w;
+    }
+    const double above = lo - A.radius - plane;
+    const double below = plane - hi - A.radius;
     if (above > slack || below > slack) return;
     Manifold& m = out[std::size_t(written)];
     if (!collide_triangle(a, local, A, tri, nf, M.edge_flags()[t], margin, t, m)) return;
