@@ -72,6 +72,36 @@ TEST(RigidMesh, ABoxRestsOnAFlatMeshAsOnAPlane) {
   }
 }
 
+// A box resting across the diagonal of two coplanar triangles gets one manifold whose points
+// and depths are those of the same box on one triangle that holds its whole footprint
+TEST(RigidMesh, ABoxAcrossTwoCoplanarTrianglesHasTheOneTriangleManifold) {
+  std::vector<pba::RigidContactPoint> got[2];
+  for (const bool split : {false, true}) {
+    const std::vector<Vec3> v = split ? std::vector<Vec3>{{-2, 0, -2}, {2, 0, -2}, {-2, 0, 2}, {2, 0, 2}}
+                                      : std::vector<Vec3>{{-3, 0, -3}, {5, 0, -3}, {-3, 0, 5}};
+    const std::vector<std::array<std::uint32_t, 3>> t =
+        split ? std::vector<std::array<std::uint32_t, 3>>{{0, 2, 1}, {1, 2, 3}} : std::vector<std::array<std::uint32_t, 3>>{{0, 2, 1}};
+    RigidBodySystem s({.contacts = {.sleep = false}});
+    s.create({.type = BodyType::Static, .shapes = {{.shape = ColliderShape::triangles(pba::TriangleMesh::build(v, t, "floor"))}}});
+    // 1 mm into the floor, its corners on both sides of the diagonal x + z = 0
+    pba::rigid_scenes::box(s, {0.1, 0.249, -0.05}, Vec3(0.5, 0.25, 0.4));
+    s.step(1.0 / 60, kGravity);
+    EXPECT_EQ(s.manifold_count(), 1u) << split;
+    got[split] = s.contacts();
+  }
+  ASSERT_EQ(got[1].size(), got[0].size());
+  ASSERT_EQ(got[0].size(), 4u);
+  for (std::size_t k = 0; k < got[0].size(); ++k) {
+    // the same points in some order
+    double nearest = INFINITY;
+    std::size_t at = 0;
+    for (std::size_t j = 0; j < got[1].size(); ++j)
+      if (const double d = glm::length(got[1][j].position - got[0][k].position); d < nearest) nearest = d, at = j;
+    EXPECT_LT(nearest, 1e-9) << k;
+    EXPECT_NEAR(got[1][at].depth, got[0][k].depth, 1e-9) << k;
+  }
+}
+
 // A box resting across the fold of two triangles (a shallow valley): within 5 degrees of
 // each other the triangles' manifolds merge into one of at most four points, along one
 // triangle's normal, and the box stays where it was put (1.5 degrees of tilt in the normal
