@@ -1,7 +1,8 @@
 // Convex shapes against static triangle meshes: every triangle the BVH returns for the
-// shape's bounds is a thin two-sided hull; GJK (or EPA when the cores overlap) gives its
-// normal and closest points, and a normal that comes from an internal edge or vertex whose
-// flags are clear is replaced by the face normal before the manifold is built (the
+// shape's bounds is a thin two-sided hull; the closest points of a sphere's or capsule's core
+// (closed forms), else GJK (or EPA when the cores overlap), give its normal and closest
+// points, and a normal that comes from an internal edge or vertex whose flags are clear is
+// replaced by the face normal before the manifold is built (the
 // "internal edge" cure of Jolt's ActiveEdges and Box2D's smooth segments: such an edge
 // lies flat or concave between two faces, so its own normal would be a ghost contact).
 #include <cmath>
@@ -31,21 +32,222 @@ std::uint8_t feature_edges(const Vec3 t[3], const Vec3& q) {
   return m;
 }
 
+// The closest points ca (on the segment p-q; p = q for a point) and cb (on the triangle) in
+// closed form (Ericson 2005, 5.1.5 and 5.1.9): apart, the nearest pair is an end of the
+// segment against the triangle or the segment against one of its edges (a segment parallel
+// to the face has such a pair among its nearest ones). False when the segment passes
+// through the triangle or lies in its plane: the cores overlap, and EPA finds the depth.
+bool core_triangle_closest(const Vec3& p, const Vec3& q, const Vec3 tri[3], const Vec3& face_normal, Vec3& ca,
+                           Vec3& cb) {
+  bool interior = false;
+  ca = p;
+  cb = closest_on_triangle(p, tri[0], tri[1], tri[2], interior);
+  if (p == q) return true;
+  const double dp = glm::dot(face_normal, p - tri[0]), dq = glm::dot(face_normal, q - tri[0]);
+  if ((dp <= 0 && dq >= 0) || (dp >= 0 && dq <= 0)) {
+    if (dp == dq) return false;  // in the plane
+    // where the segment crosses the plane: inside the triangle, the cores overlap
+    const Vec3 x = p + (dp / (dp - dq)) * (q - p);
+    closest_on_triangle(x, tri[0], tri[1], tri[2], interior);
+    if (interior) return false;
+  }
+  double best = glm::dot(ca - cb, ca - cb);
+  const Vec3 cq = closest_on_triangle(q, tri[0], tri[1], tri[2], interior);
+  if (const double d = glm::dot(q - cq, q - cq); d < best) best = d, ca = q, cb = cq;
+  for (int k = 0; k < 3; ++k) {
+    Vec3 c1, c2;
+    closest_segments(p, q, tri[k], tri[(k + 1) % 3], c1, c2);
+    if (const double d = glm::dot(c1 - c2, c1 - c2); d < best) best = d, ca = c1, cb = c2;
+  }
+  return true;
+}
+
+// A box or hull (P at pose pa, at most 64 vertices) against a triangle by separating axes:
+// the triangle's normal, the shape's face normals and the crosses of their edges. Along
+// each axis the shape and the triangle project to intervals; the largest gap between them
+// is the separation (negative: the overlap), and for two polytopes the smallest overlap
+// over these axes is the penetration depth EPA finds (Gottschalk 1996; Ericson 2005, 5.2.1).
+// Returns 0 when some axis separates them by more than `margin`; 1 when they overlap, or
+// are apart over the triangle's face (the shape's nearest vertex projects into it), with
+// the normal n (shape to triangle), the deepest (or closest) points (point_a on the shape,
+// point_b on the triangle, point_a - point_b = depth n) and the triangle's feature the
+// contact is on (as feature_edges: 0 the face, an edge's bit, a vertex's two); 2 when they
+// are apart otherwise: GJK then finds the distance, which a gap along an axis only bounds.
+int sat_triangle(const Poly& P, const Pose& pa, const Vec3 tri[3], const Vec3& face_normal, double margin, Vec3& n,
+                 Vec3& point_a, Vec3& point_b, std::uint8_t& on) {
+  std::array<Vec3, 64> v;
+  const std::uint32_t nv = P.vertex_count;
+  for (std::uint32_t i = 0; i < nv; ++i) v[i] = apply(pa, P.vertices[i]);
+  // a box projects to its centre -+ the sum of its half axes' projections
+  const Mat3 r = glm::mat3_cast(pa.rotation);
+  const Vec3 half_axes[3] = {r[0] * P.half.x, r[1] * P.half.y, r[2] * P.half.z};
+  // the gap along the unit axis d, and whether the shape lies on its positive side
+  auto gap = [&](const Vec3& d, bool& above) {
+    double lo = INFINITY, hi = -INFINITY;
+    if (P.is_box) {
+      const double c = glm::dot(d, pa.position);
+      const double w = std::abs(glm::dot(d, half_axes[0])) + std::abs(glm::dot(d, half_axes[1])) +
+                       std::abs(glm::dot(d, half_axes[2]));
+      lo = c - w, hi = c + w;
+    } else {
+      for (std::uint32_t i = 0; i < nv; ++i) {
+        const double x = glm::dot(d, v[i]);
+        lo = std::min(lo, x), hi = std::max(hi, x);
+      }
+    }
+    const double t0 = glm::dot(d, tri[0]), t1 = glm::dot(d, tri[1]), t2 = glm::dot(d, tri[2]);
+    const double tlo = std::min(t0, std::min(t1, t2)), thi = std::max(t0, std::max(t1, t2));
+    above = lo - thi >= tlo - hi;
+    return above ? lo - thi : tlo - hi;
+  };
+  enum class Kind { Triangle, Face, Edges } kind = Kind::Triangle;
+  bool above = false;
+  // any gap means the two are apart (GJK's case, or beyond the margin): stop there
+  double best = gap(face_normal, above);
+  if (best > margin) return 0;
+  if (best > 0) {
+    // over the face: the shape's nearest vertex projects into the triangle, so that pair of
+    // points is as far apart as the gap, a lower bound of the distance: they are the closest
+    n = above ? -face_normal : face_normal;
+    std::uint32_t nearest = 0;
+    for (std::uint32_t i = 1; i < nv; ++i)
+      if (glm::dot(n, v[i]) > glm::dot(n, v[nearest])) nearest = i;
+    const Vec3 q = v[nearest] + best * n;
+    bool interior = false;
+    const Vec3 c = closest_on_triangle(q, tri[0], tri[1], tri[2], interior);
+    if (!interior) return 2;
+    point_a = v[nearest], point_b = c, on = 0;
+    return 1;
+  }
+  Vec3 axis = face_normal;
+  bool best_above = above;
+  std::uint32_t edge_a = 0, edge_b = 0;
+  for (std::uint32_t f = 0; f < P.face_count; ++f) {
+    if (P.is_box && (f & 1) == 0) continue;  // a box's opposite faces share their axis
+    const Vec3 d = pa.rotation * P.faces[f].normal;
+    const double g = gap(d, above);
+    if (g > 0) return g > margin ? 0 : 2;
+    if (g > best) best = g, axis = d, best_above = above, kind = Kind::Face;
+  }
+  // edge pairs win over faces only by more than rounding, so a face resting on a face keeps
+  // the face's normal
+  constexpr double kEdgeBias = 1e-9;
+  bool box_direction[3] = {false, false, false};
+  for (std::uint32_t e = 0; e < P.edge_count; ++e) {
+    const HalfEdge& he = P.edges[e];
+    if (he.twin < e) continue;  // each edge once
+    const Vec3 local = P.vertices[P.edges[he.next].origin] - P.vertices[he.origin];
+    if (P.is_box) {
+      // a box's edges run along its three axes: one of each
+      const int i = local.x != 0 ? 0 : local.y != 0 ? 1 : 2;
+      if (box_direction[i]) continue;
+      box_direction[i] = true;
+    }
+    const Vec3 ea = pa.rotation * local;
+    for (std::uint32_t k = 0; k < 3; ++k) {
+      const Vec3 c = glm::cross(ea, tri[(k + 1) % 3] - tri[k]);
+      const double cc = glm::dot(c, c);
+      if (cc <= 1e-20 * glm::dot(ea, ea) * glm::dot(tri[(k + 1) % 3] - tri[k], tri[(k + 1) % 3] - tri[k])) continue;
+      const Vec3 d = c / std::sqrt(cc);
+      const double g = gap(d, above);
+      if (g > 0) return g > margin ? 0 : 2;
+      if (g > best + kEdgeBias) best = g, axis = d, best_above = above, kind = Kind::Edges, edge_a = e, edge_b = k;
+    }
+  }
+  // the normal from the shape to the triangle: against the axis when the shape is above
+  n = best_above ? -axis : axis;
+  const double depth = -best;
+  if (kind == Kind::Triangle) {
+    // the shape's deepest vertex into the triangle, onto its plane; the face
+    std::uint32_t deepest = 0;
+    for (std::uint32_t i = 1; i < nv; ++i)
+      if (glm::dot(n, v[i]) > glm::dot(n, v[deepest])) deepest = i;
+    point_a = v[deepest];
+    point_b = point_a - depth * n;
+    on = 0;
+  } else if (kind == Kind::Face) {
+    // the triangle's deepest vertex (or edge, or all three) into the shape's face
+    const double d0 = glm::dot(n, tri[0]), d1 = glm::dot(n, tri[1]), d2 = glm::dot(n, tri[2]);
+    const double lo = std::min(d0, std::min(d1, d2));
+    const double tie = 1e-9 * (1 + std::abs(lo));
+    const bool at[3] = {d0 <= lo + tie, d1 <= lo + tie, d2 <= lo + tie};
+    const int i = at[0] ? 0 : at[1] ? 1 : 2;
+    point_b = tri[i];
+    point_a = point_b + depth * n;
+    // a vertex touches its two edges (a: ab and ca, b: ab and bc, c: bc and ca); two
+    // vertices, the edge between them; three, the face
+    constexpr std::uint8_t kVertexEdges[3] = {1 | 4, 1 | 2, 2 | 4};
+    on = 0xff;
+    for (int k = 0; k < 3; ++k)
+      if (at[k]) on &= kVertexEdges[k];
+    if (at[0] && at[1] && at[2]) on = 0;
+  } else {
+    // the shape's edge of this direction deepest into the triangle, and the triangle's
+    // edge: their closest points
+    const HalfEdge& he = P.edges[edge_a];
+    const Vec3 dir = P.vertices[P.edges[he.next].origin] - P.vertices[he.origin];
+    std::uint32_t pick = edge_a;
+    double far = -INFINITY;
+    for (std::uint32_t e = 0; e < P.edge_count; ++e) {
+      const HalfEdge& h = P.edges[e];
+      const Vec3 de = P.vertices[P.edges[h.next].origin] - P.vertices[h.origin];
+      if (h.twin < e || glm::dot(glm::cross(de, dir), glm::cross(de, dir)) > 1e-18 * glm::dot(de, de) * glm::dot(dir, dir))
+        continue;
+      const double x = glm::dot(n, v[h.origin] + v[P.edges[h.next].origin]);
+      if (x > far) far = x, pick = e;
+    }
+    const HalfEdge& hp = P.edges[pick];
+    closest_segments(v[hp.origin], v[P.edges[hp.next].origin], tri[edge_b], tri[(edge_b + 1) % 3], point_a, point_b);
+    on = std::uint8_t(1u << edge_b);
+  }
+  return 1;
+}
+
 // one triangle against the convex shape (both in the mesh's frame); true when in contact
 bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy& A, const Vec3 tri[3],
                       const Vec3& face_normal, std::uint8_t flags, double margin, std::uint32_t t, Manifold& m) {
   m.count = 0;
   m.sub_shape_b = t;
-  ConvexProxy B;
-  B.type = ShapeType::Mesh;
-  B.triangle = tri;
   Vec3 n, point_a, point_b;
-  if (!contact_normal(A, B, margin, n, point_a, point_b)) return false;
+  // a sphere's or capsule's core (a point or a segment) apart from the triangle: the closest
+  // points in closed form give what GJK converges to (its stop at a 1e-10 m gap, and its
+  // test for touching cores, a closest point within 1e-12 m of the origin, kept)
+  bool closed = false;
+  std::uint8_t on = 0xff;  // the triangle's feature, when the separating axes give it
+  Poly P;
+  const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
+  if (poly) poly_of(a, P);
+  if (poly && P.vertex_count <= 64) {
+    const int r = sat_triangle(P, pa, tri, face_normal, margin, n, point_a, point_b, on);
+    if (r == 0) return false;
+    closed = r == 1;
+  } else if (a.type == ShapeType::Sphere || a.type == ShapeType::Capsule) {
+    const Segment s = a.type == ShapeType::Capsule ? capsule_core(a, pa) : Segment{pa.position, pa.position};
+    Vec3 ca, cb;
+    if (core_triangle_closest(s.p, s.q, tri, face_normal, ca, cb)) {
+      const Vec3 v = ca - cb;
+      const double vv = glm::dot(v, v);
+      if (vv > 1e-24) {
+        const double dist = std::sqrt(vv);
+        if (dist - A.radius > margin) return false;
+        n = -v / dist;
+        point_a = ca + A.radius * n;
+        point_b = cb;
+        closed = true;
+      }
+    }
+  }
+  if (!closed) {
+    ConvexProxy B;
+    B.type = ShapeType::Mesh;
+    B.triangle = tri;
+    if (!contact_normal(A, B, margin, n, point_a, point_b)) return false;
+  }
   // an internal (flat or concave) edge or vertex takes the face normal, on the side of
   // the triangle where the shape's centre is (a hull's centroid: its origin may lie on its
   // surface, as a pyramid's at the middle of its base, and a pyramid resting on its base
   // had its side picked by rounding and was pushed through the mesh)
-  const std::uint8_t on = feature_edges(tri, point_b);
+  if (on == 0xff) on = feature_edges(tri, point_b);
   const bool internal = on == 0 || (on & flags) == 0;
   Vec3 use = n;
   if (internal) {
@@ -70,9 +272,7 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
   std::array<Candidate, kMaxPolygon> cand;
   int count = 0;
   const double radius = A.radius;
-  if (a.type == ShapeType::Box || a.type == ShapeType::Hull) {
-    Poly P;
-    poly_of(a, P);
+  if (poly) {
     double dot = 0;
     const std::uint32_t f = most_aligned_face(P, pa.rotation, use, &dot);
     // a GJK/EPA normal is clipped against when it is a face normal of the shape to rounding
@@ -124,6 +324,16 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   const Aabb box = bounds(a, local).grown(margin);
   const TriangleMesh& M = *mesh.mesh;
   const ConvexProxy A = ConvexProxy::of(a, local);
+  // the shape's reach along a direction d for the triangles' plane test: a box's, capsule's
+  // or sphere's core spans d . centre -+ sum |d . axis_k| (axes scaled by the half extents,
+  // a capsule's by its half length) with no support calls; a hull's, its two support points
+  const Mat3 r = glm::mat3_cast(local.rotation);
+  Vec3 axes[3] = {Vec3(0), Vec3(0), Vec3(0)};
+  if (a.type == ShapeType::Box)
+    axes[0] = r[0] * a.half_extents.x, axes[1] = r[1] * a.half_extents.y, axes[2] = r[2] * a.half_extents.z;
+  else if (a.type == ShapeType::Capsule)
+    axes[0] = r[1] * a.half_height;
+  const bool hull = a.type == ShapeType::Hull;
   int written = 0;
   M.query(box, [&](std::uint32_t t) {
     if (written >= int(out.size())) return;
@@ -134,8 +344,16 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     // is kept a rounding's width short of the margin, so nothing GJK would keep is dropped
     const Vec3 nf = M.normal(t);
     const double plane = glm::dot(nf, tri[0]), slack = margin + 1e-12 * (1 + std::abs(plane));
-    const double above = glm::dot(nf, A.support(-nf)) - A.radius - plane;
-    const double below = plane - glm::dot(nf, A.support(nf)) - A.radius;
+    double lo, hi;
+    if (hull) {
+      lo = glm::dot(nf, A.support(-nf)), hi = glm::dot(nf, A.support(nf));
+    } else {
+      const double c = glm::dot(nf, local.position);
+      const double w = std::abs(glm::dot(nf, axes[0])) + std::abs(glm::dot(nf, axes[1])) + std::abs(glm::dot(nf, axes[2]));
+      lo = c - w, hi = c + w;
+    }
+    const double above = lo - A.radius - plane;
+    const double below = plane - hi - A.radius;
     if (above > slack || below > slack) return;
     Manifold& m = out[std::size_t(written)];
     if (!collide_triangle(a, local, A, tri, nf, M.edge_flags()[t], margin, t, m)) return;

@@ -229,6 +229,30 @@ inline void closest_segments(const Vec3& p1, const Vec3& q1, const Vec3& p2, con
   c2 = p2 + d2 * t;
 }
 
+// Ericson 2005, "Real-Time Collision Detection" 5.1.5: the closest point of triangle abc
+// to p by its Voronoi regions; `interior` tells whether it is inside the face
+inline Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, bool& interior) {
+  interior = false;
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
+  const Vec3 cp = p - c;
+  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  const double den = 1 / (va + vb + vc);
+  interior = true;
+  return a + ab * (vb * den) + ac * (vc * den);
+}
+
 // --- polygons -------------------------------------------------------------------------
 
 inline constexpr int kMaxPolygon = 64;  // points of a clipped polygon we keep

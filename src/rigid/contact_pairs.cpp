@@ -61,9 +61,10 @@ Aabb stretched(const Aabb& box, const Vec3& ahead) {
   return {box.lo + glm::min(ahead, Vec3(0)), box.hi + glm::max(ahead, Vec3(0))};
 }
 
-// the manifolds of a mesh pair whose normals are closer than this (cosine; the sine of the
-// angle below 1e-4, the mesh's own "flat" for an edge) are merged into one
-constexpr double kMergeCos = 1 - 5e-9;
+// the manifolds of a mesh pair whose normals are within 5 degrees (the cosine; Jolt's
+// manifold reduction angle) are merged into one: a body on a gently curved stretch of a mesh
+// gets one manifold of at most four points, not one per triangle under it
+constexpr double kMergeCos = 0.99619469809174553;
 // merged points closer than this (m) are one point
 constexpr double kSamePoint = 1e-6;
 
@@ -514,11 +515,12 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       if (count < static_cast<int>(mesh_scratch.size())) break;
       mesh_scratch.resize(2 * mesh_scratch.size());
     }
-    // the triangles' manifolds of one normal (a face over a flat stretch of the mesh) become
-    // one, reduced to four points as the narrow phase reduces a face's: a box on a flat mesh
-    // gets the manifold it gets on a plane, whatever the triangles under it (Jolt merges a
-    // body pair's manifolds of nearly equal normals the same way). Feature ids are per
-    // triangle, so the triangle is mixed into them
+    // the triangles' manifolds of normals within 5 degrees of a group's first (in the tree's
+    // order) become one along that normal, their points' depths measured along it, reduced
+    // to four points as the narrow phase reduces a face's: a box on a flat mesh gets the
+    // manifold it gets on a plane, whatever the triangles under it, and a body on a gently
+    // curved mesh one manifold (Jolt merges a body pair's manifolds of nearly equal normals
+    // the same way). Feature ids are per triangle, so the triangle is mixed into them
     group_of.resize(static_cast<std::size_t>(count));
     int groups = 0;
     for (int j = 0; j < count; ++j) {

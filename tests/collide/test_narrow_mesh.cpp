@@ -88,6 +88,121 @@ TEST(Mesh, SphereAndCapsuleOnTheGridMatchThePlane) {
   }
 }
 
+// Spheres and capsules against a triangle take closed forms (the closest points of a point
+// or a segment and the triangle); they give what GJK gives on the same cores, the triangle
+// as a one-triangle mesh (its edges are boundaries, so nothing is snapped): the normal and
+// the depth of every point, and the points of a one-point manifold, over random poses (GJK
+// stops within 1e-10 m of the distance). A capsule lying along the face has its segment
+// clipped to the triangle along that normal, as before. Cores that pierce the triangle go
+// to EPA as before.
+TEST(Mesh, SphereAndCapsuleClosedFormsMatchGjk) {
+  const std::vector<Vec3> v = {{-0.7, 0.1, -0.5}, {0.9, -0.2, -0.3}, {0.1, 0.3, 0.8}};
+  const std::vector<std::array<std::uint32_t, 3>> t = {{0, 1, 2}};
+  const ColliderShape tri = ColliderShape::triangles(TriangleMesh::build(v, t, "one"));
+  ConvexProxy B;
+  B.type = ShapeType::Mesh;
+  B.triangle = v.data();
+  const NarrowPhaseSettings ns{.speculative_margin = 0.6};
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.4, 1.4), w(-1, 1);
+  std::array<Manifold, 4> out;
+  int compared[2] = {0, 0}, one_point = 0;
+  for (int k = 0; k < 4000; ++k) {
+    const bool capsule = k % 2 == 1;
+    const ColliderShape s = capsule ? ColliderShape::capsule(0.5, 0.2) : ColliderShape::sphere(0.3);
+    const Pose p{Vec3(u(rng), u(rng), u(rng)), glm::normalize(Quat(w(rng), w(rng), w(rng), w(rng)))};
+    const DistanceResult ref = gjk_distance(ConvexProxy::of(s, p), B);
+    if (ref.cores_overlap) continue;  // EPA's case, as before
+    const double sep = ref.core_distance - s.radius;  // < 0 overlapping (distance is 0 then)
+    const int n = collide_mesh(s, p, tri, {}, out, ns);
+    if (sep > ns.speculative_margin + 1e-9) {
+      EXPECT_EQ(n, 0) << k;
+      continue;
+    }
+    if (sep > ns.speculative_margin - 1e-9) continue;  // at the margin: either
+    ASSERT_EQ(n, 1) << k;
+    const Manifold& m = out[0];
+    EXPECT_LT(glm::length(m.normal - ref.normal), 1e-6) << k;
+    // a sphere's one point, and a capsule's unless it lies along the normal's plane (within
+    // the 0.05 of its length that makes collide_mesh clip its segment to the triangle): the
+    // closest points
+    const Vec3 axis = p.rotation * Vec3(0, 1, 0);
+    if (!capsule || std::abs(glm::dot(axis, ref.normal)) >= 0.05) {
+      ASSERT_EQ(m.count, 1) << k;
+      const ContactPoint& cp = m.points[0];
+      EXPECT_NEAR(cp.depth, -sep, 1e-9) << k;
+      EXPECT_LT(glm::length(cp.point_a - ref.point_a), 1e-6) << k;
+      EXPECT_LT(glm::length(cp.point_b - ref.point_b), 1e-6) << k;
+      ++one_point;
+    }
+    ++compared[capsule];
+  }
+  // most poses are compared (not overlapping, within the margin), most with one point
+  EXPECT_GT(compared[0], 800);
+  EXPECT_GT(compared[1], 800);
+  EXPECT_GT(one_point, 1400);
+}
+
+// Boxes and hulls against a triangle take separating axes (the triangle's normal, the
+// shape's faces, the crosses of their edges) where they overlap or lie over the face: the
+// depth and normal of EPA (GJK when apart) on the same pair, the triangle as a one-triangle
+// mesh, over random poses: the normal to 1e-6, a one-point manifold's depth to 1e-9 m
+TEST(Mesh, BoxAndHullSeparatingAxesMatchEpa) {
+  const std::vector<Vec3> v = {{-0.7, 0.1, -0.5}, {0.9, -0.2, -0.3}, {0.1, 0.3, 0.8}};
+  const std::vector<std::array<std::uint32_t, 3>> t = {{0, 1, 2}};
+  const ColliderShape tri = ColliderShape::triangles(TriangleMesh::build(v, t, "one"));
+  ConvexProxy B;
+  B.type = ShapeType::Mesh;
+  B.triangle = v.data();
+  const Vec3 apex[5] = {{0, 0.6, 0}, {0.5, 0, 0}, {-0.5, 0, 0}, {0, 0, 0.5}, {0, 0, -0.5}};
+  const ColliderShape pyramid = ColliderShape::convex(ConvexHull::build(apex, "pyramid"));
+  const NarrowPhaseSettings ns{.speculative_margin = 0.3};
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), w(-1, 1);
+  std::array<Manifold, 4> out;
+  int compared[2] = {0, 0}, one_point = 0;
+  for (int k = 0; k < 4000; ++k) {
+    const bool hull = k % 2 == 1;
+    const ColliderShape s = hull ? pyramid : ColliderShape::box(Vec3(0.2, 0.3, 0.4));
+    const Pose p{Vec3(u(rng), u(rng), u(rng)), glm::normalize(Quat(w(rng), w(rng), w(rng), w(rng)))};
+    const ConvexProxy A = ConvexProxy::of(s, p);
+    const DistanceResult d = gjk_distance(A, B);
+    double depth = -d.distance;
+    Vec3 normal = d.normal;
+    if (d.cores_overlap) {
+      const PenetrationResult e = epa_penetration(A, B);
+      ASSERT_TRUE(e.ok) << k;
+      depth = e.depth, normal = e.normal;
+    }
+    const int n = collide_mesh(s, p, tri, {}, out, ns);
+    if (depth < -ns.speculative_margin - 1e-9) {
+      EXPECT_EQ(n, 0) << k;
+      continue;
+    }
+    if (depth < -ns.speculative_margin + 1e-9) continue;  // at the margin: either
+    ASSERT_EQ(n, 1) << k;
+    const Manifold& m = out[0];
+    double deepest = -INFINITY;
+    for (int i = 0; i < m.count; ++i) deepest = std::max(deepest, m.points[std::size_t(i)].depth);
+    // deeper than 0.15 m the side of the triangle is the shape's centre's (the internal
+    // edge rule, as before), which may be against EPA's least overlap
+    if (depth >= 0.15) continue;
+    EXPECT_LT(glm::length(m.normal - normal), 1e-6) << k << " depth " << depth;
+    // one point: the deepest; a clipped face (the shape's face against the triangle, as
+    // before) holds no point deeper than it
+    if (m.count == 1) {
+      EXPECT_NEAR(deepest, depth, 1e-9) << k;
+      ++one_point;
+    } else {
+      EXPECT_LE(deepest, depth + 1e-9) << k;
+    }
+    ++compared[hull];
+  }
+  EXPECT_GT(compared[0], 800);
+  EXPECT_GT(compared[1], 800);
+  EXPECT_GT(one_point, 300);
+}
+
 TEST(Mesh, ConvexRidgeKeepsItsEdgeNormal) {
   // two triangles folded into a ridge along x (a roof, convex edge flagged): a sphere
   // right above the ridge line touches the edge, whose normal points straight up, and a

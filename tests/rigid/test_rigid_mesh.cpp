@@ -72,6 +72,64 @@ TEST(RigidMesh, ABoxRestsOnAFlatMeshAsOnAPlane) {
   }
 }
 
+// A box resting across the diagonal of two coplanar triangles gets one manifold whose points
+// and depths are those of the same box on one triangle that holds its whole footprint
+TEST(RigidMesh, ABoxAcrossTwoCoplanarTrianglesHasTheOneTriangleManifold) {
+  std::vector<pba::RigidContactPoint> got[2];
+  for (const bool split : {false, true}) {
+    const std::vector<Vec3> v = split ? std::vector<Vec3>{{-2, 0, -2}, {2, 0, -2}, {-2, 0, 2}, {2, 0, 2}}
+                                      : std::vector<Vec3>{{-3, 0, -3}, {5, 0, -3}, {-3, 0, 5}};
+    const std::vector<std::array<std::uint32_t, 3>> t =
+        split ? std::vector<std::array<std::uint32_t, 3>>{{0, 2, 1}, {1, 2, 3}} : std::vector<std::array<std::uint32_t, 3>>{{0, 2, 1}};
+    RigidBodySystem s({.contacts = {.sleep = false}});
+    s.create({.type = BodyType::Static, .shapes = {{.shape = ColliderShape::triangles(pba::TriangleMesh::build(v, t, "floor"))}}});
+    // 1 mm into the floor, its corners on both sides of the diagonal x + z = 0
+    pba::rigid_scenes::box(s, {0.1, 0.249, -0.05}, Vec3(0.5, 0.25, 0.4));
+    s.step(1.0 / 60, kGravity);
+    EXPECT_EQ(s.manifold_count(), 1u) << split;
+    got[split] = s.contacts();
+  }
+  ASSERT_EQ(got[1].size(), got[0].size());
+  ASSERT_EQ(got[0].size(), 4u);
+  for (std::size_t k = 0; k < got[0].size(); ++k) {
+    // the same points in some order
+    double nearest = INFINITY;
+    std::size_t at = 0;
+    for (std::size_t j = 0; j < got[1].size(); ++j)
+      if (const double d = glm::length(got[1][j].position - got[0][k].position); d < nearest) nearest = d, at = j;
+    EXPECT_LT(nearest, 1e-9) << k;
+    EXPECT_NEAR(got[1][at].depth, got[0][k].depth, 1e-9) << k;
+  }
+}
+
+// A box resting across the fold of two triangles (a shallow valley): within 5 degrees of
+// each other the triangles' manifolds merge into one of at most four points, along one
+// triangle's normal, and the box stays where it was put (1.5 degrees of tilt in the normal
+// are held by friction: 0.5 um in 2 s, 0.9 um with a manifold per triangle); at 10 degrees
+// each triangle keeps its own manifold
+TEST(RigidMesh, ManifoldsOfNearlyEqualNormalsMerge) {
+  for (const double degrees : {3.0, 10.0}) {
+    // the valley along z: two slopes of half the fold each, meeting at x = 0
+    const double slope = std::tan(0.5 * degrees * pba::kPi / 180);
+    const std::vector<Vec3> v = {{-2, 2 * slope, -2}, {0, 0, -2}, {2, 2 * slope, -2},
+                                 {-2, 2 * slope, 2},  {0, 0, 2},  {2, 2 * slope, 2}};
+    const std::vector<std::array<std::uint32_t, 3>> t = {{0, 3, 1}, {1, 3, 4}, {1, 4, 2}, {2, 4, 5}};
+    RigidBodySystem s({.contacts = {.sleep = false}});
+    s.create({.type = BodyType::Static,
+              .shapes = {{.shape = ColliderShape::triangles(pba::TriangleMesh::build(v, t, "valley"))}}});
+    // its bottom edges on the two slopes
+    const Vec3 p0{0, 0.25 + 0.5 * slope, 0.1};
+    const auto box = pba::rigid_scenes::box(s, p0, Vec3(0.5, 0.25, 0.5));
+    for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+    EXPECT_EQ(s.manifold_count(), degrees < 5 ? 1u : 2u) << degrees;
+    if (degrees < 5) {
+      const Vec3 c = s.center_of_mass(box);
+      EXPECT_LT(std::hypot(c.x - p0.x, c.z - p0.z), 1e-5);
+      EXPECT_LT(glm::length(s.linear_velocity(box)), 1e-6);
+    }
+  }
+}
+
 // A ball rolling at 3.9 m/s over 0.7 m triangles goes where it goes on the plane, never
 // leaving the surface (no ghost contact on the edges between the triangles, and the
 // continuous pass does not stop it at them)

@@ -93,7 +93,10 @@ Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape
 /// static triangle mesh `mesh`: one manifold per touching triangle (Manifold::sub_shape_b
 /// is the triangle), normals from `a` to the mesh, in the order the mesh's BVH visits the
 /// triangles (deterministic). Candidate triangles come from TriangleMesh::query with a's
-/// bounds grown by the margin; each triangle is a thin two-sided hull. A contact on an
+/// bounds grown by the margin; each triangle is a thin two-sided hull (a sphere's or capsule's
+/// core apart from it takes the closest points in closed form, GJK's answer to 1e-10 m; a box
+/// or hull separating axes where it overlaps the triangle or lies over its face, EPA's depth
+/// and normal; GJK otherwise, EPA for a core through the triangle). A contact on an
 /// internal edge or vertex whose edge flags are clear (flat or concave, see
 /// TriangleMesh::edge_flags) takes the triangle's face normal, so a shape sliding over a
 /// flat mesh gets no ghost contacts from the edges between its triangles. Writes at most
