@@ -380,10 +380,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0xf8468756652f4f36ull) << std::hex << soft;
-  EXPECT_EQ(si, 0xbaa191709c1b453dull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x547cedaeefd797d3ull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0xfbf5a5b19b207711ull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x244892456018916cull) << std::hex << soft;
+  EXPECT_EQ(si, 0x26af99d33f560effull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x657edf29dad003c3ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x5a3252e33628ed9bull) << std::hex << xpbd;
 }
 
 }  // namespace

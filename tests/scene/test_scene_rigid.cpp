@@ -87,8 +87,8 @@ TEST(RigidScenes, PinnedHashes) {
     for (int i = 0; i < 600; ++i) s.world.step();
     return hex(s.world.hash());
   };
-  EXPECT_EQ(run("rigid_stack.json"), "abc8e76a2c50cbee");
-  EXPECT_EQ(run("rigid_pyramid.json"), "4c0e2c5902d2441f");
+  EXPECT_EQ(run("rigid_stack.json"), "6335e465d66e4d1b");
+  EXPECT_EQ(run("rigid_pyramid.json"), "9f6cc3ade64fbcea");
 }
 
 TEST(RigidScenes, MassScalesTheShapesMassProperties) {
