@@ -143,6 +143,7 @@ struct Options {
   int repeat = 1;
   bool bullet = true, ode = true;
   bool profile = false;  // a line of per-phase medians under each pba row
+  double reuse = -1;     // the pair cache's reuse distance (m); < 0: the default
   std::vector<pba::RigidSolverType> solvers{pba::kRigidSolvers.begin(), pba::kRigidSolvers.end()};
 };
 
@@ -200,7 +201,9 @@ void run_scene(const BenchScene& scene, const Options& o) {
   }
   for (const pba::RigidSolverType t : o.solvers) {
     const std::string name = "pba " + std::string(pba::to_string(t));
-    const PbaResult r = median_run(o.repeat, [&] { return run_pba(scene, steps, at_budget(t, 0, scene.sleep)); });
+    pba::ContactSettings settings = at_budget(t, 0, scene.sleep);
+    if (o.reuse >= 0) settings.reuse_distance = o.reuse;
+    const PbaResult r = median_run(o.repeat, [&] { return run_pba(scene, steps, settings); });
     // a mesh scene pba cannot collide with yet: say so instead of a figure
     if (scene.has_mesh && (!r.ran || r.escapes > 0)) {
       std::printf("  %-24s pba: mesh contacts not supported yet (%s)\n", name.c_str(),
@@ -225,7 +228,8 @@ int usage(const char* why) {
   if (why) std::fprintf(stderr, "bench_rigid: %s\n", why);
   std::fprintf(stderr,
                "usage: bench_rigid [--scene KEY|all] [--steps N] [--repeat K] [--peer all|bullet|ode|none]\n"
-               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--profile] | --quick | --budget\n"
+               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--profile]\n"
+               "                   | --quick | --budget\n"
                "scenes:");
   for (const BenchScene& s : pba::bench::bench_scenes()) std::fprintf(stderr, " %s", s.key.c_str());
   std::fprintf(stderr, "\n");
@@ -266,6 +270,12 @@ int main(int argc, char** argv) {
       if (!count_arg(need().c_str(), &o.steps)) return usage(("--steps '" + std::string(value) + "': expected a count").c_str());
     } else if (a == "--repeat") {
       if (!count_arg(need().c_str(), &o.repeat)) return usage(("--repeat '" + std::string(value) + "': expected a count").c_str());
+    } else if (a == "--reuse") {
+      const std::string v = need();
+      char* end = nullptr;
+      o.reuse = std::strtod(v.c_str(), &end);
+      if (!end || *end || !(o.reuse >= 0 && o.reuse < 1))
+        return usage(("--reuse '" + v + "': expected a distance in [0, 1) m").c_str());
     } else if (a == "--peer") {
       const std::string p = need();
       if (p != "all" && p != "bullet" && p != "ode" && p != "none")

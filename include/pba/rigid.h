@@ -172,13 +172,12 @@ struct ContactSettings {
   double linear_slop = 0.005;    ///< overlap (m) left uncorrected so contacts persist, finite and >= 0
   double speculative_distance = 0.02;  ///< manifolds include points closer than this (m), finite and >= 0
   /// A pair's manifold is carried over to the next step, its points fixed to the bodies, while
-  /// the bodies' relative position (m; body b's centre in a's frame) has moved less than this
-  /// since the narrow phase made it (Jolt's body pair cache), finite and >= 0; 0 makes every
-  /// manifold afresh each step (see docs/rigid-bodies.md for what it costs in accuracy).
-  /// Off (0) by default: with 1 mm, Jolt's 1240-box pyramid, falling into place, is thrown
-  /// apart within two seconds (its top box 27.7 m down after 500 steps; 0.5 mm without),
-  /// a fault of the carried-over manifolds not found yet.
-  double reuse_distance = 0;
+  /// the pair's points have moved less than this (m) against each other since the narrow phase
+  /// made it (Jolt's body pair cache): the moving body's centre shift in the other's frame plus
+  /// the chord its reach turns through, 2 r sin(angle / 2), so a carried point's separation is
+  /// within this of a fresh one's. Finite and >= 0; 0 makes every manifold afresh each step.
+  /// On by default (1 mm): resting piles then make almost no manifolds (docs/rigid-bodies.md).
+  double reuse_distance = 0.001;
   /// ... and their relative rotation less than this (rad), finite and >= 0.
   double reuse_angle = 0.0175;
   /// Approach speeds (m/s) below this bounce with no restitution, so resting bodies stay put

@@ -368,9 +368,35 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   s.profile_.manifolds = clock.seconds();
 }
 
+namespace {
+
+// How far (m) the points of a pair's cached manifold have moved against each other since the
+// narrow phase made it: the centre's displacement plus the chord that the relative rotation
+// turns the body's farthest point through (2 r sin(angle / 2)), measured in the frame of the
+// body that holds the normal (b's when a dynamic body meets a static or kinematic one, else
+// a's), so it bounds how much any point's separation along that normal has changed, and
+// how much closer a point left out of the manifold has come. The centre alone is not enough:
+// a body turning about its centre (a box rocking on the corner the four below it share, in
+// Jolt's pyramid) moves its corners up to its reach times the angle, 3 cm at 1 degree for a
+// 2 m cube, while its centre stays within the reuse distance.
+// `in_b`: the normal is kept in b's frame; `reach` (m): the moving body's (extent_).
+double carried_points_moved(bool in_b, double reach, const PairCache& c, const Vec3& rel_position,
+                            const Quat& rel_rotation) {
+  // sin(angle / 2) of the relative rotation since then, from its vector part (no cancellation)
+  const Quat turn = glm::conjugate(c.rel_rotation) * rel_rotation;
+  const double sin_half = std::sqrt(turn.x * turn.x + turn.y * turn.y + turn.z * turn.z);
+  // the moving body's centre in the other's frame, then and now (a's in b's frame is -R^T p)
+  const Vec3 shift = in_b ? glm::conjugate(c.rel_rotation) * c.rel_position - glm::conjugate(rel_rotation) * rel_position
+                          : rel_position - c.rel_position;
+  // (a shape of no finite reach, a plane or a mesh, moves infinitely far when it turns at all)
+  return glm::length(shift) + (sin_half > 0 ? 2 * reach * sin_half : 0.0);
+}
+
+}  // namespace
+
 void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
   const ContactSettings& cs = s.settings_;
-  const double cos_half = std::cos(0.5 * cs.reuse_angle), d2 = cs.reuse_distance * cs.reuse_distance;
+  const double cos_half = std::cos(0.5 * cs.reuse_angle);
   const bool reuse = cs.reuse_distance > 0;
   auto awake_dynamic = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
   std::size_t built = 0, reused = 0, keep = 0;
@@ -411,9 +437,11 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
     const Vec3 rel_position = qa_inv * (s.com_[b] - s.com_[a]);
     const Quat rel_rotation = qa_inv * s.q_[b];
     PairCache& c = caches[p.cache];
-    const Vec3 dp = rel_position - c.rel_position;
-    const bool same = reuse && c.margin >= margin && glm::dot(dp, dp) <= d2 &&
-                      std::abs(glm::dot(rel_rotation, c.rel_rotation)) >= cos_half;
+    const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;  // as collide_pair keeps it
+    const bool same = reuse && c.margin >= margin &&
+                      std::abs(glm::dot(rel_rotation, c.rel_rotation)) >= cos_half &&
+                      carried_points_moved(in_b, in_b ? s.extent_[a] : s.extent_[b], c, rel_position, rel_rotation) <=
+                          cs.reuse_distance;
     if (!same) {
       collide_pair(s, p, c, a, b, margin);
       c.rel_position = rel_position, c.rel_rotation = rel_rotation;

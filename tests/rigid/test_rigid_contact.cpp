@@ -608,6 +608,49 @@ TEST(RigidContinuous, AFastSphereStopsAtAThinWall) {
 namespace {
 
 // ---------------------------------------------------------------------------------------
+// the pair cache
+
+// A manifold carried over from an earlier step (ContactSettings::reuse_distance, Jolt's body
+// pair cache) measures the separations a fresh one would, to within the reuse distance: its
+// points ride with the bodies, so they are off only by how far the bodies moved against each
+// other since it was made. A 4 m plank lies tilted on the ground, one bottom edge 1 mm up and
+// the other 22 mm up (outside the 2 cm speculative distance, so not in the manifold). Turned
+// about its centre by 0.9 degrees (under the 1 degree reuse angle, its centre not moved at
+// all), the high edge comes down 31 mm into the ground: a fresh manifold has it 9 mm deep.
+// The corners moved 2 r sin(0.45 deg) = 33 mm (r = 2.08 m, the plank's reach), so the
+// carried manifold, which knows only the other edge, must be made afresh; turned by 0.01
+// degrees (0.36 mm at the corners) it is carried over and still within 1 mm of a fresh one.
+TEST(RigidPairCache, ACarriedOverManifoldSeparatesAsAFreshOneToTheReuseDistance) {
+  const Vec3 half{2, 0.25, 0.5};
+  const double rise = 0.022, sin_a = (rise - 0.001) / (2 * half.x), tilt = std::asin(sin_a);
+  const double height = 0.001 + half.x * sin_a + half.y * std::cos(tilt);  // the low edge 1 mm up
+  for (const double turn : {deg(0.9), deg(0.01)}) {
+    double deepest[2];
+    std::size_t reused[2];
+    for (const double reuse : {0.0, 0.001}) {
+      RigidBodySystem s({.contacts = {.reuse_distance = reuse, .reuse_angle = deg(1)}});
+      ground(s);
+      const auto plank = s.create({.name = "plank", .pose = {{0, height, 0}, glm::angleAxis(tilt, Vec3(0, 0, 1))},
+                                   .shapes = {box_shape(half)}});
+      s.step(1.0 / 60, Vec3(0));  // the manifold: the low edge's two points
+      ASSERT_EQ(s.contacts().size(), 2u);
+      s.set_pose(plank, {{0, height, 0}, glm::angleAxis(tilt - turn, Vec3(0, 0, 1))});
+      s.step(1.0 / 60, Vec3(0));
+      const int k = reuse > 0;
+      deepest[k] = -INFINITY;
+      for (const pba::RigidContactPoint& c : s.contacts()) deepest[k] = std::max(deepest[k], c.depth);
+      reused[k] = s.profile().reused;
+    }
+    // a fresh manifold's deepest point: the high edge's overlap after the turn about the centre
+    if (turn > deg(0.5)) {
+      EXPECT_NEAR(deepest[0], -(height + half.x * std::sin(tilt - turn) - half.y * std::cos(tilt - turn)), 1e-9);
+    }
+    EXPECT_NEAR(deepest[1], deepest[0], 0.001) << "turned " << turn * 180 / pba::kPi << " degrees";
+    EXPECT_EQ(reused[1], turn > deg(0.5) ? 0u : 1u) << "turned " << turn * 180 / pba::kPi << " degrees";
+  }
+}
+
+// ---------------------------------------------------------------------------------------
 // sleeping
 
 // 25 boxes dropped from 2 m onto the ground, each by itself, are all asleep within 5 s under
