@@ -380,10 +380,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x3c069984ad871cd0ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x5cd6669e64b3f25aull) << std::hex << si;
-  EXPECT_EQ(tgs, 0xb5dfe6c5351284f1ull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0xfbf5a5b19b207711ull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0xb6572129fab27720ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x3e658c97b689d1c2ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0xc531a0ee4bf942f2ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x5a3252e33628ed9bull) << std::hex << xpbd;
 }
 
 }  // namespace
