@@ -479,6 +479,7 @@ class World {
   void update_rigid_touches();
   void update_particle_touches();
   void update_touch_events();
+  void reserve_touch_sets();
   void update_sensor_events();
   void forget_pairs(EntityId e);
   EntityId body_entity(RigidBodyId id) const;

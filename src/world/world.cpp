@@ -301,12 +301,8 @@ ParticleId World::add_particle(EntityId e, const ParticleDef& def) {
   ParticleDef d = def;
   d.position = r.pose.position + r.pose.rotation * def.position;
   r.particle = particles_.create(d, "particle of " + describe(e));
-  // room for the touches of every particle entity added so far (kMaxParticleContacts a
-  // tick each) in the pair sets, so that a tick in which more of them touch at once than
-  // before does not allocate (grown geometrically)
-  const std::size_t need = ++particle_entities_added_ * kMaxParticleContacts;
-  for (auto* v : {&particle_touching_, &touched_, &touched_prev_})
-    if (v->capacity() < need) v->reserve(std::max(need, 2 * v->capacity()));
+  ++particle_entities_added_;
+  reserve_touch_sets();
   return r.particle;
 }
 
@@ -419,6 +415,7 @@ RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
   body_owner_[id.index] = e;
   r.body = id;
   ++entity_bodies_;
+  reserve_touch_sets();
   // from now on the entity is where its body is (a path's entity stays on its path)
   if (r.kinematic == kNone) r.pose = rigid_.pose(id);
   refresh_body_colliders(false);
@@ -779,6 +776,10 @@ bool by_key_then_approach(const auto& x, const auto& y) {
 void World::update_rigid_touches() {
   std::swap(touching_, touching_prev_);
   touching_.clear();
+  // at most every manifold and every pair kept from last tick: both sets grow at once
+  const std::size_t need = rigid_.manifold_count() + touching_prev_.size();
+  if (touching_.capacity() < need)
+    for (auto* v : {&touching_, &touching_prev_}) v->reserve(std::max(need, 2 * v->capacity()));
   for (std::size_t k = 0; k < rigid_.manifold_count(); ++k) {
     const RigidManifoldInfo m = rigid_.manifold(k);
     if (!(m.max_normal_impulse > 0)) continue;  // speculative: no contact yet
@@ -840,6 +841,23 @@ void World::update_particle_touches() {
                            particle_touching_.end());
 }
 
+// Room in the touch pair sets for the entities added so far, so that a tick in which more
+// pairs touch at once than before does not allocate: kTouchesPerBody pairs a body entity,
+// kMaxParticleContacts a particle entity (grown geometrically, never shrunk). The event sets
+// swap each tick, so both of a pair of sets get the same room.
+void World::reserve_touch_sets() {
+  constexpr std::size_t kTouchesPerBody = 8;  // a box in a pyramid touches about 8 others and 2 share a pair
+  const std::size_t bodies = entity_bodies_ * kTouchesPerBody, particles = particle_entities_added_ * kMaxParticleContacts;
+  auto room = [](auto& v, std::size_t need) {
+    if (v.capacity() < need) v.reserve(std::max(need, 2 * v.capacity()));
+  };
+  for (auto* v : {&touching_, &touching_prev_}) room(*v, bodies);
+  room(particle_touching_, particles);
+  for (auto* v : {&touched_, &touched_prev_}) room(*v, bodies + particles);
+  room(touch_begin_, bodies + particles);
+  room(touch_end_, bodies + particles);
+}
+
 // This tick's touching pairs (the bodies' and the particles', one record per pair, the
 // bodies' first when both touch) against last tick's give the begin and end events, in
 // key order: by the smaller entity index, then the larger.
@@ -847,6 +865,14 @@ void World::update_touch_events() {
   update_particle_touches();
   std::swap(touched_, touched_prev_);
   touched_.clear();
+  // more pairs than ever before: both sets grow at once (they swap each tick)
+  const std::size_t need = touching_.size() + particle_touching_.size();
+  if (touched_.capacity() < need)
+    for (auto* v : {&touched_, &touched_prev_}) v->reserve(std::max(need, 2 * v->capacity()));
+  // the events: at most a begin a pair now, an end a pair before
+  if (touch_begin_.capacity() < need) touch_begin_.reserve(std::max(need, 2 * touch_begin_.capacity()));
+  if (touch_end_.capacity() < touched_prev_.size())
+    touch_end_.reserve(std::max(touched_prev_.size(), 2 * touch_end_.capacity()));
   // the union of the two sorted sets
   std::size_t i = 0, j = 0;
   while (i < touching_.size() || j < particle_touching_.size()) {
