@@ -548,6 +548,13 @@ void RigidContacts::carry_impulses(double h) {
       c.twist_impulse *= k;
       c.rolling_impulse *= k;
     }
+    // and the manifolds that hold their own impulses (sleeping pairs, pairs not stepped): a
+    // pair asleep while the solver, the substeps or the step changed wakes with the same force
+    for (CachedManifold& m : manifolds) {
+      if (m.last != kNoIndex) continue;  // its impulses are in `pairs`, scaled above
+      for (int j = 0; j < m.count; ++j) m.points[j].normal_impulse *= k;
+      m.friction *= k, m.twist *= k, m.rolling *= k;
+    }
   }
   impulse_h = h;
 }

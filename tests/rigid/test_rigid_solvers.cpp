@@ -3,6 +3,7 @@
 // the static deflection of a spring.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -141,6 +142,32 @@ TEST(RigidSolvers, SwitchingSolversLiveKeepsTheStateValid) {
   EXPECT_LT(std::abs(top0.y - top.y), 0.01);
   // the ball came to rest on the ground, not in it
   EXPECT_NEAR(s.center_of_mass(ball).y, 0.2, 0.01);
+}
+
+// A pair asleep while the solver changes wakes with its carried impulses in the new solver's
+// units: two boxes stacked fall asleep under sequential impulses (impulses per 60 Hz step),
+// the solver becomes the soft step (per substep, 8 a step) and the top box is woken: it stays
+// put (rises under 0.1 mm, where impulses eight times too large lifted it 1.1 mm at 1.3 mm/s).
+TEST(RigidSolvers, ASleepingPairWakesUnderANewSolverWithoutAKick) {
+  RigidBodySystem s({.contacts = {.solver = RigidSolverType::SequentialImpulse}});
+  pba::rigid_scenes::ground(s);
+  const auto bottom = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+  const auto top = pba::rigid_scenes::box(s, {0, 1.5, 0}, Vec3(0.5));
+  int steps = 0;
+  while (s.awake(top) && steps < 600) s.step(1.0 / 60, kGravity), ++steps;
+  ASSERT_FALSE(s.awake(top));
+  ASSERT_FALSE(s.awake(bottom));
+  s.settings().solver = RigidSolverType::SoftStep;
+  s.step(1.0 / 60, kGravity);  // asleep: the pairs are not stepped, their impulses stay cached
+  s.set_velocity(top, Vec3(0), Vec3(0));
+  ASSERT_TRUE(s.awake(top));
+  const double y0 = s.center_of_mass(top).y;
+  double highest = y0;
+  for (int i = 0; i < 30; ++i) {
+    s.step(1.0 / 60, kGravity);
+    highest = std::max(highest, s.center_of_mass(top).y);
+  }
+  EXPECT_LT(highest - y0, 1e-4);
 }
 
 // ---------------------------------------------------------------------------------------
