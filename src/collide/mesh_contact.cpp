@@ -208,6 +208,16 @@ int sat_triangle(const Poly& P, const Pose& pa, const Vec3 tri[3], const Vec3& f
   return 1;
 }
 
+// whether the point x (on the triangle's plane) lies inside the side planes of the
+// triangle rf (counter-clockwise about its normal), as clip_faces keeps points
+bool over_triangle(const WorldFace& rf, const Vec3& x) {
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 p0 = rf.pts[std::size_t(k)].p, p1 = rf.pts[std::size_t((k + 1) % 3)].p;
+    if (glm::dot(glm::cross(p1 - p0, rf.normal), x - p0) > 0) return false;
+  }
+  return true;
+}
+
 // one triangle against the convex shape (both in the mesh's frame); true when in contact
 bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy& A, const Vec3 tri[3],
                       const Vec3& face_normal, std::uint8_t flags, double margin, std::uint32_t t, Manifold& m) {
@@ -317,13 +327,27 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
     count = clip_faces(sf, tp.data(), 3, false, use, 0.0, margin, true, cand.data());
     flip_ids = false;
   } else if (ref == Ref::Triangle && poly) {
-    // the shape's face most along the normal clipped to the triangle: a GJK/EPA or
-    // separating-axes normal when the face is its normal to rounding (as in collide()); a
-    // snapped one when the face is within ~2.5 degrees of it
-    if (dot >= (internal ? 0.999 : kAligned)) {
-      WorldFace inf;
-      world_face(P, pa, f, inf);
-      count = clip_faces(rf, inf.pts.data(), inf.count, false, -use, 0.0, margin, false, cand.data());
+    // the shape's face most along the normal clipped to the triangle, at any tilt (as
+    // box-box clips its incident face): its vertices beyond the margin drop out, so a face
+    // gives its points, an edge its two ends, a vertex itself. Before, only a face within
+    // 1e-9 (a snapped normal: 2.5 degrees) was clipped, else the one deepest vertex: a box
+    // resting on its edge across a slope (in a valley of 10 degrees) was held at one end of
+    // the edge, the deepest vertex switching ends from step to step, and it crept 18 to
+    // 72 mm along the valley in 5 s
+    WorldFace inf;
+    world_face(P, pa, f, inf);
+    count = clip_faces(rf, inf.pts.data(), inf.count, false, -use, 0.0, margin, false, cand.data());
+    // the deepest vertex is one of the face's on a box; on a hull the face nearest the
+    // normal may miss it: then the one-point pair joins them
+    double deepest = -INFINITY;
+    for (int i = 0; i < count; ++i) deepest = std::max(deepest, cand[std::size_t(i)].depth);
+    if (count > 0 && count < kMaxPolygon) {
+      const Vec3 x = internal ? A.support(use) : point_a;
+      const double t = glm::dot(use, x - tri[0]);
+      if (t > deepest + 1e-12 * (1 + std::abs(t))) {
+        const Vec3 y = x - t * use;
+        if (over_triangle(rf, y)) cand[std::size_t(count++)] = {x, y, t, kLabelMask};
+      }
     }
   } else if (ref == Ref::Triangle && a.type == ShapeType::Capsule) {
     const Segment s = capsule_core(a, pa);
@@ -343,11 +367,7 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
       const Vec3 x = (deep == 0 ? s.p : s.q) + radius * use;
       const double t = glm::dot(use, x - tri[0]);
       const Vec3 y = x - t * use;
-      bool over = true;
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 p0 = rf.pts[std::size_t(k)].p, p1 = rf.pts[std::size_t((k + 1) % 3)].p;
-        if (glm::dot(glm::cross(p1 - p0, rf.normal), y - p0) > 0) over = false;
-      }
+      const bool over = over_triangle(rf, y);
       for (int i = 0; i < count; ++i)
         if (cand[std::size_t(i)].id == deep && over) cand[std::size_t(i)] = {x, y, t, deep};
     }
