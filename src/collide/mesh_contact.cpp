@@ -208,12 +208,13 @@ int sat_triangle(const Poly& P, const Pose& pa, const Vec3 tri[3], const Vec3& f
   return 1;
 }
 
-// whether the point x (on the triangle's plane) lies inside the side planes of the
-// triangle rf (counter-clockwise about its normal), as clip_faces keeps points
-bool over_triangle(const WorldFace& rf, const Vec3& x) {
+// whether the point x lies over the triangle: inside its three side planes (through an edge,
+// at right angles to the face)
+bool over_triangle(const Vec3 tri[3], const Vec3& x) {
+  const Vec3 w = glm::cross(tri[1] - tri[0], tri[2] - tri[0]);  // counter-clockwise about w
   for (int k = 0; k < 3; ++k) {
-    const Vec3 p0 = rf.pts[std::size_t(k)].p, p1 = rf.pts[std::size_t((k + 1) % 3)].p;
-    if (glm::dot(glm::cross(p1 - p0, rf.normal), x - p0) > 0) return false;
+    const Vec3 p0 = tri[k], p1 = tri[(k + 1) % 3];
+    if (glm::dot(glm::cross(p1 - p0, w), x - p0) > 0) return false;
   }
   return true;
 }
@@ -285,6 +286,7 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
   // the deepest (a triangle's vertex in a box's face).
   constexpr double kAligned = 1 - 1e-9;
   enum class Ref { None, Triangle, Shape } ref = Ref::None;
+  bool snapped = false;
   std::uint32_t f = 0;
   double dot = 0;
   if (poly) f = most_aligned_face(P, pa.rotation, use, &dot);
@@ -294,9 +296,13 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
     ref = Ref::Shape;
   } else if (kind == Axis::Other) {
     const double along = glm::dot(use, face_normal);
-    if (std::abs(along) >= kAligned) {
+    const Vec3 face_use = along > 0 ? face_normal : -face_normal;
+    // the triangle's normal where the shape's point lies over the triangle along it (else
+    // it is an edge's or a vertex's normal within 4e-5 rad of the face's, and kept)
+    if (std::abs(along) >= kAligned && over_triangle(tri, point_a)) {
       ref = Ref::Triangle;
-      use = along > 0 ? face_normal : -face_normal;
+      use = face_use;
+      snapped = true;
     } else if (poly && dot >= kAligned) {
       ref = Ref::Shape;
       use = pa.rotation * P.faces[f].normal;
@@ -346,7 +352,7 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
       const double t = glm::dot(use, x - tri[0]);
       if (t > deepest + 1e-12 * (1 + std::abs(t))) {
         const Vec3 y = x - t * use;
-        if (over_triangle(rf, y)) cand[std::size_t(count++)] = {x, y, t, kLabelMask};
+        if (over_triangle(tri, y)) cand[std::size_t(count++)] = {x, y, t, kLabelMask};
       }
     }
   } else if (ref == Ref::Triangle && a.type == ShapeType::Capsule) {
@@ -367,15 +373,16 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
       const Vec3 x = (deep == 0 ? s.p : s.q) + radius * use;
       const double t = glm::dot(use, x - tri[0]);
       const Vec3 y = x - t * use;
-      const bool over = over_triangle(rf, y);
+      const bool over = over_triangle(tri, y);
       for (int i = 0; i < count; ++i)
         if (cand[std::size_t(i)].id == deep && over) cand[std::size_t(i)] = {x, y, t, deep};
     }
   }
   if (count <= 0) {
-    // one point: the shape's deepest point along the normal onto the triangle's plane
-    if (internal) {
-      point_a = A.support(use) + radius * use;
+    // one point: the shape's deepest point along the normal onto the triangle's plane (for
+    // a snapped normal, the shape's point of the pair)
+    if (internal || snapped) {
+      if (internal) point_a = A.support(use) + radius * use;
       point_b = point_a - (glm::dot(rf.normal, point_a) - rf.offset) * rf.normal;
     }
     cand[0] = {point_a, point_b, glm::dot(point_a - point_b, use), 0};
