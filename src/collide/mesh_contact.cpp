@@ -62,6 +62,10 @@ bool core_triangle_closest(const Vec3& p, const Vec3& q, const Vec3 tri[3], cons
   return true;
 }
 
+// where a contact normal comes from: the triangle's face, a face of the shape, an edge of
+// each (separating axes), or elsewhere (closed forms, GJK, EPA)
+enum class Axis { Triangle, Face, Edges, Other };
+
 // A box or hull (P at pose pa, at most 64 vertices) against a triangle by separating axes:
 // the triangle's normal, the shape's face normals and the crosses of their edges. Along
 // each axis the shape and the triangle project to intervals; the largest gap between them
@@ -73,8 +77,9 @@ bool core_triangle_closest(const Vec3& p, const Vec3& q, const Vec3 tri[3], cons
 // point_b on the triangle, point_a - point_b = depth n) and the triangle's feature the
 // contact is on (as feature_edges: 0 the face, an edge's bit, a vertex's two); 2 when they
 // are apart otherwise: GJK then finds the distance, which a gap along an axis only bounds.
+// `kind` tells where the normal of a 1 comes from.
 int sat_triangle(const Poly& P, const Pose& pa, const Vec3 tri[3], const Vec3& face_normal, double margin, Vec3& n,
-                 Vec3& point_a, Vec3& point_b, std::uint8_t& on) {
+                 Vec3& point_a, Vec3& point_b, std::uint8_t& on, Axis& kind) {
   std::array<Vec3, 64> v;
   const std::uint32_t nv = P.vertex_count;
   for (std::uint32_t i = 0; i < nv; ++i) v[i] = apply(pa, P.vertices[i]);
@@ -100,7 +105,7 @@ int sat_triangle(const Poly& P, const Pose& pa, const Vec3 tri[3], const Vec3& f
     above = lo - thi >= tlo - hi;
     return above ? lo - thi : tlo - hi;
   };
-  enum class Kind { Triangle, Face, Edges } kind = Kind::Triangle;
+  kind = Axis::Triangle;
   bool above = false;
   // any gap means the two are apart (GJK's case, or beyond the margin): stop there
   double best = gap(face_normal, above);
@@ -127,7 +132,7 @@ int sat_triangle(const Poly& P, const Pose& pa, const Vec3 tri[3], const Vec3& f
     const Vec3 d = pa.rotation * P.faces[f].normal;
     const double g = gap(d, above);
     if (g > 0) return g > margin ? 0 : 2;
-    if (g > best) best = g, axis = d, best_above = above, kind = Kind::Face;
+    if (g > best) best = g, axis = d, best_above = above, kind = Axis::Face;
   }
   // edge pairs win over faces only by more than rounding, so a face resting on a face keeps
   // the face's normal
@@ -151,13 +156,13 @@ int sat_triangle(const Poly& P, const Pose& pa, const Vec3 tri[3], const Vec3& f
       const Vec3 d = c / std::sqrt(cc);
       const double g = gap(d, above);
       if (g > 0) return g > margin ? 0 : 2;
-      if (g > best + kEdgeBias) best = g, axis = d, best_above = above, kind = Kind::Edges, edge_a = e, edge_b = k;
+      if (g > best + kEdgeBias) best = g, axis = d, best_above = above, kind = Axis::Edges, edge_a = e, edge_b = k;
     }
   }
   // the normal from the shape to the triangle: against the axis when the shape is above
   n = best_above ? -axis : axis;
   const double depth = -best;
-  if (kind == Kind::Triangle) {
+  if (kind == Axis::Triangle) {
     // the shape's deepest vertex into the triangle, onto its plane; the face
     std::uint32_t deepest = 0;
     for (std::uint32_t i = 1; i < nv; ++i)
@@ -165,7 +170,7 @@ int sat_triangle(const Poly& P, const Pose& pa, const Vec3 tri[3], const Vec3& f
     point_a = v[deepest];
     point_b = point_a - depth * n;
     on = 0;
-  } else if (kind == Kind::Face) {
+  } else if (kind == Axis::Face) {
     // the triangle's deepest vertex (or edge, or all three) into the shape's face
     const double d0 = glm::dot(n, tri[0]), d1 = glm::dot(n, tri[1]), d2 = glm::dot(n, tri[2]);
     const double lo = std::min(d0, std::min(d1, d2));
@@ -203,6 +208,17 @@ int sat_triangle(const Poly& P, const Pose& pa, const Vec3 tri[3], const Vec3& f
   return 1;
 }
 
+// whether the point x lies over the triangle: inside its three side planes (through an edge,
+// at right angles to the face)
+bool over_triangle(const Vec3 tri[3], const Vec3& x) {
+  const Vec3 w = glm::cross(tri[1] - tri[0], tri[2] - tri[0]);  // counter-clockwise about w
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 p0 = tri[k], p1 = tri[(k + 1) % 3];
+    if (glm::dot(glm::cross(p1 - p0, w), x - p0) > 0) return false;
+  }
+  return true;
+}
+
 // one triangle against the convex shape (both in the mesh's frame); true when in contact
 bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy& A, const Vec3 tri[3],
                       const Vec3& face_normal, std::uint8_t flags, double margin, std::uint32_t t, Manifold& m) {
@@ -213,14 +229,16 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
   // points in closed form give what GJK converges to (its stop at a 1e-10 m gap, and its
   // test for touching cores, a closest point within 1e-12 m of the origin, kept)
   bool closed = false;
+  Axis kind = Axis::Other;
   std::uint8_t on = 0xff;  // the triangle's feature, when the separating axes give it
   Poly P;
   const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
   if (poly) poly_of(a, P);
   if (poly && P.vertex_count <= 64) {
-    const int r = sat_triangle(P, pa, tri, face_normal, margin, n, point_a, point_b, on);
+    const int r = sat_triangle(P, pa, tri, face_normal, margin, n, point_a, point_b, on, kind);
     if (r == 0) return false;
     closed = r == 1;
+    if (!closed) kind = Axis::Other;
   } else if (a.type == ShapeType::Sphere || a.type == ShapeType::Capsule) {
     const Segment s = a.type == ShapeType::Capsule ? capsule_core(a, pa) : Segment{pa.position, pa.position};
     Vec3 ca, cb;
@@ -255,16 +273,49 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
     const double side = glm::dot(centre - tri[0], face_normal) >= 0 ? 1.0 : -1.0;
     use = -side * face_normal;
   }
-  // the triangle as the reference face (B's), the shape's support feature along the
-  // normal as the incident one (Jolt's ManifoldBetweenTwoFaces, with the triangle's three
-  // side planes)
+  // the reference face as separating axes choose it (Gottschalk 1996; Ericson 2005, 5.2.1):
+  // the face the normal comes from. The triangle's when it is the triangle's normal (or an
+  // internal feature's, snapped to it), the shape's face when it is that face's normal (a
+  // triangle's vertex or edge in it: the triangle is then clipped to the face, so its
+  // deepest vertex is a point), and none for an edge's or a vertex's normal (one point).
+  // A normal that is a face's only to rounding (closed forms, GJK, EPA: within ~4e-5 rad)
+  // is made that face's, so the points lie on the face and inside its side planes. Before,
+  // the triangle was always the reference, through its first vertex at right angles to the
+  // normal: a tilted plane off the triangle when the normal was not its own, whose points
+  // lay up to the triangle's size away from both shapes (a capsule over an edge), or missed
+  // the deepest (a triangle's vertex in a box's face).
+  constexpr double kAligned = 1 - 1e-9;
+  enum class Ref { None, Triangle, Shape } ref = Ref::None;
+  bool snapped = false;
+  std::uint32_t f = 0;
+  double dot = 0;
+  if (poly) f = most_aligned_face(P, pa.rotation, use, &dot);
+  if (internal || kind == Axis::Triangle) {
+    ref = Ref::Triangle;
+  } else if (kind == Axis::Face) {
+    ref = Ref::Shape;
+  } else if (kind == Axis::Other) {
+    const double along = glm::dot(use, face_normal);
+    const Vec3 face_use = along > 0 ? face_normal : -face_normal;
+    // the triangle's normal where the shape's point lies over the triangle along it (else
+    // it is an edge's or a vertex's normal within 4e-5 rad of the face's, and kept)
+    if (std::abs(along) >= kAligned && over_triangle(tri, point_a)) {
+      ref = Ref::Triangle;
+      use = face_use;
+      snapped = true;
+    } else if (poly && dot >= kAligned) {
+      ref = Ref::Shape;
+      use = pa.rotation * P.faces[f].normal;
+    }
+  }
+  if (ref == Ref::Triangle && poly) f = most_aligned_face(P, pa.rotation, use, &dot);
+  // the triangle's side that faces the shape, its vertices counter-clockwise about it
   WorldFace rf;
-  rf.normal = -use;  // the triangle's side that faces the shape
+  rf.normal = -use;
   rf.offset = glm::dot(rf.normal, tri[0]);
   rf.count = 3;
   const bool flipped = glm::dot(glm::cross(tri[1] - tri[0], tri[2] - tri[0]), rf.normal) < 0;
   for (int k = 0; k < 3; ++k) {
-    // counter-clockwise about the reference normal
     const int i = flipped ? 2 - k : k;
     rf.pts[std::size_t(k)] = {tri[i], vertex_id(std::uint32_t(i)), std::uint32_t(i)};
     rf.half_edges[std::size_t(k)] = std::uint32_t(flipped ? (i + 2) % 3 : i);
@@ -272,35 +323,75 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
   std::array<Candidate, kMaxPolygon> cand;
   int count = 0;
   const double radius = A.radius;
-  if (poly) {
-    double dot = 0;
-    const std::uint32_t f = most_aligned_face(P, pa.rotation, use, &dot);
-    // a GJK/EPA normal is clipped against when it is a face normal of the shape to rounding
-    // (as in collide()); a snapped one when the shape's face is within ~2.5 degrees of it
-    if (dot >= (internal ? 0.999 : 1 - 1e-9)) {
-      WorldFace inf;
-      world_face(P, pa, f, inf);
-      count = clip_faces(rf, inf.pts.data(), inf.count, false, -use, 0.0, margin, false, cand.data());
+  bool flip_ids = true;  // the triangle's features are B's: their ids carry the flip bit
+  if (ref == Ref::Shape) {
+    // the triangle clipped to the shape's face, onto it along the normal
+    WorldFace sf;
+    world_face(P, pa, f, sf);
+    const std::array<ClipPoint, 3> tp{ClipPoint{tri[0], vertex_id(0), 0}, ClipPoint{tri[1], vertex_id(1), 1},
+                                      ClipPoint{tri[2], vertex_id(2), 2}};
+    count = clip_faces(sf, tp.data(), 3, false, use, 0.0, margin, true, cand.data());
+    flip_ids = false;
+  } else if (ref == Ref::Triangle && poly) {
+    // the shape's face most along the normal clipped to the triangle, at any tilt (as
+    // box-box clips its incident face): its vertices beyond the margin drop out, so a face
+    // gives its points, an edge its two ends, a vertex itself. Before, only a face within
+    // 1e-9 (a snapped normal: 2.5 degrees) was clipped, else the one deepest vertex: a box
+    // resting on its edge across a slope (in a valley of 10 degrees) was held at one end of
+    // the edge, the deepest vertex switching ends from step to step, and it crept 18 to
+    // 72 mm along the valley in 5 s
+    WorldFace inf;
+    world_face(P, pa, f, inf);
+    count = clip_faces(rf, inf.pts.data(), inf.count, false, -use, 0.0, margin, false, cand.data());
+    // the deepest vertex is one of the face's on a box; on a hull the face nearest the
+    // normal may miss it: then the one-point pair joins them
+    double deepest = -INFINITY;
+    for (int i = 0; i < count; ++i) deepest = std::max(deepest, cand[std::size_t(i)].depth);
+    if (count > 0 && count < kMaxPolygon) {
+      const Vec3 x = internal ? A.support(use) : point_a;
+      const double t = glm::dot(use, x - tri[0]);
+      if (t > deepest + 1e-12 * (1 + std::abs(t))) {
+        const Vec3 y = x - t * use;
+        if (over_triangle(tri, y)) cand[std::size_t(count++)] = {x, y, t, kLabelMask};
+      }
     }
-  } else if (a.type == ShapeType::Capsule) {
+  } else if (ref == Ref::Triangle && a.type == ShapeType::Capsule) {
     const Segment s = capsule_core(a, pa);
-    if (std::abs(glm::dot(s.q - s.p, use)) < 0.05 * glm::length(s.q - s.p)) {
-      std::array<ClipPoint, 2> seg{ClipPoint{s.p, 0, kLabelMask}, ClipPoint{s.q, 1, kLabelMask}};
-      count = clip_faces(rf, seg.data(), 2, true, -use, radius, margin, false, cand.data());
+    const Vec3 axis = s.q - s.p;
+    const double along = glm::dot(axis, use);
+    if (std::abs(along) < 0.05 * glm::length(axis)) {
+      // the capsule's side line deepest along the normal (the core moved by the radius at
+      // right angles to it: on the surface, where the core moved along a normal it is not
+      // perpendicular to would lie inside), clipped to the triangle
+      const Vec3 side = glm::normalize(use - (along / glm::dot(axis, axis)) * axis);
+      const std::array<ClipPoint, 2> seg{ClipPoint{s.p + radius * side, 0, kLabelMask},
+                                         ClipPoint{s.q + radius * side, 1, kLabelMask}};
+      count = clip_faces(rf, seg.data(), 2, true, -use, 0.0, margin, false, cand.data());
+      // the deeper end, unclipped, becomes the cap's deepest point along the normal (the
+      // shape's deepest) where that lies over the triangle
+      const std::uint32_t deep = along <= 0 ? 0 : 1;
+      const Vec3 x = (deep == 0 ? s.p : s.q) + radius * use;
+      const double t = glm::dot(use, x - tri[0]);
+      const Vec3 y = x - t * use;
+      const bool over = over_triangle(tri, y);
+      for (int i = 0; i < count; ++i)
+        if (cand[std::size_t(i)].id == deep && over) cand[std::size_t(i)] = {x, y, t, deep};
     }
   }
   if (count <= 0) {
-    // one point: the shape's deepest point along the normal onto the triangle's plane
-    if (internal) {
-      point_a = A.support(use) + radius * use;
+    // one point: the shape's deepest point along the normal onto the triangle's plane (for
+    // a snapped normal, the shape's point of the pair)
+    if (internal || snapped) {
+      if (internal) point_a = A.support(use) + radius * use;
       point_b = point_a - (glm::dot(rf.normal, point_a) - rf.offset) * rf.normal;
     }
     cand[0] = {point_a, point_b, glm::dot(point_a - point_b, use), 0};
     if (cand[0].depth < -margin) return false;
     count = 1;
+    flip_ids = true;
   }
-  // the triangle's features are B's: their ids carry the flip bit
-  for (int i = 0; i < count; ++i) cand[std::size_t(i)].id |= kIdFlip;
+  if (flip_ids)
+    for (int i = 0; i < count; ++i) cand[std::size_t(i)].id |= kIdFlip;
   reduce(cand.data(), count, use, m);
   m.sub_shape_b = t;
   return m.count > 0;
