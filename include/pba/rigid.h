@@ -93,7 +93,8 @@ struct RigidBodyDef {
   Vec3 linear_velocity{0, 0, 0};    ///< velocity of the centre of mass (m/s), finite
   Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), finite
   std::vector<RigidShapeDef> shapes{};  ///< at least one
-  /// Dynamic bodies: mass properties; unset means from the shapes' densities.
+  /// Dynamic bodies: mass properties; unset means from the shapes' densities. The mass (kg)
+  /// and the principal moments (kg m^2) must each be in [2.9e-39, 8.5e37] (create()).
   std::optional<RigidMass> mass{};
   double linear_damping = 0;        ///< 1/s, finite and >= 0: dv/dt = -c v
   double angular_damping = 0;       ///< 1/s, finite and >= 0: dw/dt = -c w
@@ -296,6 +297,9 @@ class RigidBodySystem {
   // ---- bodies ----
 
   /// Creates a body (validates `def`; the Error names `where`, the body's name and the field).
+  /// A dynamic body's mass (kg) and principal moments (kg m^2), given or from the shapes,
+  /// must each be in [2.9e-39, 8.5e37] (the contact solver stores them and their inverses as
+  /// floats). Compounds, nested ones too, become their leaf shapes.
   RigidBodyId create(const RigidBodyDef& def, std::string_view where = "RigidBodyDef");
   /// Removes a body (throws Error for a stale handle).
   void destroy(RigidBodyId id);

@@ -19,6 +19,21 @@ Quat axis_angle(const Vec3& axis, double angle) {
   return Quat(std::cos(0.5 * angle), axis.x * s, axis.y * s, axis.z * s);
 }
 
+// `d`, or for a compound its children (each at the compound's pose composed with its own,
+// with the compound's density and material), recursively, appended to `out`
+void flatten_compound(const RigidShapeDef& d, std::vector<RigidShapeDef>& out) {
+  if (d.shape.type != ShapeType::Compound) {
+    out.push_back(d);
+    return;
+  }
+  for (const CompoundChild& c : d.shape.compound->children) {
+    RigidShapeDef child = d;
+    child.shape = c.shape;
+    child.local = compose(d.local, c.pose);
+    flatten_compound(child, out);
+  }
+}
+
 // the principal moments of a symmetric inertia and the rotation whose columns are the
 // principal axes (a diagonal tensor keeps the identity, so simple bodies stay exact)
 void principal_axes(const Mat3& inertia, Vec3& moments, Quat& rotation) {
@@ -263,20 +278,10 @@ void RigidBodySystem::set_substeps(int n) {
 RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view where) {
   const std::string w = def.name.empty() ? std::string(where) : std::string(where) + " '" + def.name + "'";
   def.validate(w);
-  // compounds become their children, so the narrow phase sees convex shapes and planes only
+  // compounds become their leaves (nested compounds too, depth first), so the narrow phase
+  // sees convex shapes, planes and meshes only
   std::vector<RigidShapeDef> shapes;
-  for (const RigidShapeDef& d : def.shapes) {
-    if (d.shape.type != ShapeType::Compound) {
-      shapes.push_back(d);
-      continue;
-    }
-    for (const CompoundChild& c : d.shape.compound->children) {
-      RigidShapeDef child = d;
-      child.shape = c.shape;
-      child.local = compose(d.local, c.pose);
-      shapes.push_back(child);
-    }
-  }
+  for (const RigidShapeDef& d : def.shapes) flatten_compound(d, shapes);
   // the principal frame of a dynamic body (mass given, or from the shapes); others have no inertia
   Vec3 moments(0), inv(0);
   Quat principal(1, 0, 0, 0);
@@ -295,6 +300,12 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
       m.validate(field_path(w, "mass (from the shapes)"));
     }
     principal_axes(m.inertia, moments, principal);
+    // the contact solver's blocks hold inverse masses and inertias, and effective masses, as
+    // floats (src/rigid/solver.h): outside these ranges the first contact is NaN
+    const std::string mw = def.mass ? field_path(w, "mass") : field_path(w, "mass (from the shapes)");
+    require_float_inverse(m.mass, field_path(mw, "mass"));
+    for (int a = 0; a < 3; ++a)
+      require_float_inverse(moments[a], field_path(mw, "principal moment " + std::to_string(a) + " (kg m^2)"));
     inv = 1.0 / moments;
     inv_mass = 1.0 / m.mass;
     com_local = m.center;

@@ -337,6 +337,103 @@ TEST(RigidBadInput, NamesTheFieldAndTheBody) {
   EXPECT_NE(error_of([&] { s.step(0.01, kG); }).find("settings.contact_hertz"), std::string::npos);
 }
 
+// The contact solver's blocks hold masses, inertias and their inverses as floats: a mass or
+// principal moment whose inverse is no normal float used to pass and turn the first contact
+// into NaN (a 1e39 kg box, a 1e-38 kg ball). Now refused by name, given or from the shapes.
+TEST(RigidBadInput, MassesAndMomentsOutsideTheFloatRangeAreRefusedByName) {
+  RigidBodySystem s;
+  auto msg = [&](RigidBodyDef d) { return error_of([&] { s.create(d); }); };
+  const std::vector<pba::RigidShapeDef> cube{{.shape = pba::ColliderShape::box({0.5, 0.5, 0.5})}};
+  auto given = [&](double m) {
+    return RigidBodyDef{.name = "crate", .shapes = cube, .mass = RigidMass{m, Vec3(0), Mat3(m / 6)}};
+  };
+  for (double m : {1e39, 1e-40}) {
+    const std::string e = msg(given(m));
+    EXPECT_NE(e.find("'crate'.mass.mass: must be in [2.9"), std::string::npos) << e;
+    EXPECT_NE(e.find("got " + pba::format_value(m)), std::string::npos) << e;
+  }
+  // a mass in range whose moments are not: 1e-35 kg over a 1 mm ball (I = 4e-42 kg m^2)
+  const std::string e = msg({.name = "dust", .shapes = {{.shape = pba::ColliderShape::sphere(1e-3)}},
+                             .mass = RigidMass{1e-35, Vec3(0), Mat3(4e-42)}});
+  EXPECT_NE(e.find("'dust'.mass.principal moment 0 (kg m^2): must be in [2.9"), std::string::npos) << e;
+  // from the shapes: a 1 um cube of water weighs 1e-15 kg, I = 1.7e-28 (fine); at 1e-30 m, not
+  EXPECT_EQ(msg({.shapes = {{.shape = pba::ColliderShape::box({1e-6, 1e-6, 1e-6})}}}), "");
+  const std::string f = msg({.name = "speck", .shapes = {{.shape = pba::ColliderShape::box({1e-30, 1e-30, 1e-30})}}});
+  EXPECT_NE(f.find("'speck'.mass (from the shapes).mass: must be in [2.9"), std::string::npos) << f;
+  EXPECT_EQ(msg(given(8e37)), "");
+  EXPECT_EQ(msg(given(3e-39 * 6)), "");
+}
+
+// Soft contacts scale with the body's mass (impulses are effective mass times a velocity
+// change), so a box dropped on a plane falls and settles the same way at any mass: at the
+// two ends of the accepted range it follows the 1 kg box to float rounding of its masses.
+TEST(RigidMassRange, ABoxSettlesTheSameAtTheEndsOfTheMassRange) {
+  auto run = [](double m) {
+    RigidBodySystem s;
+    s.create({.type = BodyType::Static,
+              .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0), .material = {.friction = 0.5}}}});
+    const double ixx = m * (0.25 * 0.25 + 0.5 * 0.5) / 3, iyy = m * (0.5 * 0.5 + 0.5 * 0.5) / 3;
+    Mat3 inertia(0.0);
+    inertia[0][0] = ixx, inertia[1][1] = iyy, inertia[2][2] = ixx;
+    const auto b = s.create({.pose = {{0, 0.6, 0}, glm::angleAxis(0.2, glm::normalize(Vec3(1, 0, 1)))},
+                             .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.25, 0.5}), .material = {.friction = 0.5}}},
+                             .mass = RigidMass{m, Vec3(0), inertia}});
+    for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kG);
+    return s.pose(b);
+  };
+  const pba::Pose one = run(1);
+  EXPECT_NEAR(one.position.y, 0.25, 0.01);  // it landed on a face
+  for (double m : {1e-30, 8e37}) {
+    const pba::Pose p = run(m);
+    EXPECT_LT(glm::length(p.position - one.position), 1e-5) << m;
+    EXPECT_LT(std::abs(std::abs(glm::dot(p.rotation, one.rotation)) - 1), 1e-9) << m;
+  }
+}
+
+// A compound inside a compound is flattened to its leaves at the composed poses (it used to
+// stay a compound, which the narrow phase has no pair for: "no narrow phase for the pair
+// compound-plane" at the first contact). The nested body moves exactly as one made of the
+// leaves at those poses.
+TEST(RigidCompound, ANestedCompoundMovesAsItsLeavesAtTheComposedPoses) {
+  const Quat turn = glm::angleAxis(0.4, Vec3(0, 0, 1));
+  auto inner = pba::CompoundShape::build({{pba::ColliderShape::box({0.3, 0.1, 0.2}), {{0.2, 0, 0}}},
+                                          {pba::ColliderShape::sphere(0.15), {{-0.3, 0, 0}}}});
+  auto outer = pba::CompoundShape::build(
+      {{pba::ColliderShape{.type = pba::ShapeType::Compound, .compound = inner}, {{0, 0.1, 0}, turn}},
+       {pba::ColliderShape::capsule(0.2, 0.05), {{0, -0.2, 0.3}}}});
+  const pba::ColliderShape nested{.type = pba::ShapeType::Compound, .compound = outer};
+  const pba::Pose in{{0, 0.1, 0}, turn};
+  const std::vector<pba::RigidShapeDef> leaves{
+      {.shape = pba::ColliderShape::box({0.3, 0.1, 0.2}), .local = pba::compose(in, {{0.2, 0, 0}})},
+      {.shape = pba::ColliderShape::sphere(0.15), .local = pba::compose(in, {{-0.3, 0, 0}})},
+      {.shape = pba::ColliderShape::capsule(0.2, 0.05), .local = {{0, -0.2, 0.3}}}};
+  // and a table top (a 2 x 0.2 x 2 m box at y = 0.5) as static geometry, nested the same way,
+  // that a ball lands on
+  auto top = pba::CompoundShape::build({{pba::ColliderShape::box({1, 0.1, 1}), {{0, 0.3, 0}}}});
+  auto table = pba::CompoundShape::build(
+      {{pba::ColliderShape{.type = pba::ShapeType::Compound, .compound = top}, {{0, 0.2, 0}}}});
+  const std::vector<pba::RigidShapeDef> nested_table{
+      {.shape = pba::ColliderShape{.type = pba::ShapeType::Compound, .compound = table}}};
+  const std::vector<pba::RigidShapeDef> flat_table{
+      {.shape = pba::ColliderShape::box({1, 0.1, 1}), .local = {{0, 0.5, 0}}}};
+  auto run = [](const std::vector<pba::RigidShapeDef>& shapes, const std::vector<pba::RigidShapeDef>& fixed) {
+    RigidBodySystem s;
+    s.create({.type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+    const auto b = s.create({.pose = {{0, 1, 0}}, .angular_velocity = {0.5, 0, 0.3}, .shapes = shapes});
+    s.create({.type = BodyType::Static, .pose = {{3, 0, 0}}, .shapes = fixed});
+    const auto ball = s.create({.pose = {{3, 1.5, 0}}, .shapes = {{.shape = pba::ColliderShape::sphere(0.1)}}});
+    for (int i = 0; i < 90; ++i) s.step(1.0 / 60, kG);
+    return std::pair{s.pose(b), s.pose(ball)};
+  };
+  const auto [a, ball_a] = run({{.shape = nested}}, nested_table);
+  const auto [b, ball_b] = run(leaves, flat_table);
+  EXPECT_EQ(a.position, b.position);
+  EXPECT_EQ(a.rotation, b.rotation);
+  EXPECT_EQ(ball_a.position, ball_b.position);
+  EXPECT_LT(a.position.y, 0.5);                    // it fell and landed
+  EXPECT_NEAR(ball_a.position.y, 0.7, 0.01);       // the ball rests on the table top (0.6) by its radius
+}
+
 TEST(RigidDivergence, ANonFiniteBodyStopsTheSystemWithItsNameAndTime) {
   RigidBodySystem s({.contacts = {.substeps = 1}});
   s.create({.name = "calm", .pose = {{0.5, 0, 0}}, .shapes = kBall});  // close: a speculative pair
