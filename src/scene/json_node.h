@@ -114,7 +114,8 @@ class Node {
   Vec3 vec(const char* key, const Vec3& def) const { return has(key) ? at(key).vec3() : def; }
   Vec3 nonzero_vec(const char* key, const Vec3& def) const {
     const Vec3 v = vec(key, def);
-    if (glm::length(v) == 0) at(key).fail("must be a non-zero vector, got (0, 0, 0)");
+    if (v == Vec3(0)) at(key).fail("must be a non-zero vector, got (0, 0, 0)");
+    if (glm::length(v) == 0) at(key).fail("is too short to normalise (its length underflows), got " + format_vec3(v));
     return v;
   }
   // values stored as float: finite as a float too (Error names the path)

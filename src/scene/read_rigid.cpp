@@ -77,6 +77,10 @@ void read_rigid_body(const Node& n, World& w) {
       d.type);
   d.linear_velocity = n.vec("linear_velocity", d.linear_velocity);
   d.angular_velocity = n.vec("angular_velocity", d.angular_velocity);
+  // a static body's velocities would be dropped silently (RigidBodySystem::create zeroes them)
+  for (const char* key : {"linear_velocity", "angular_velocity"})
+    if (d.type == BodyType::Static && n.has(key) && n.vec(key, Vec3(0)) != Vec3(0))
+      n.at(key).fail("a \"static\" body does not move (make it \"kinematic\" to give it a velocity)");
   // the shapes: at least one; planes only on static bodies
   const Node shapes = n.at("shapes");
   shapes.require_array();

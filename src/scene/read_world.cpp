@@ -60,7 +60,21 @@ KinematicDef read_kinematic(const Node& n) {
                                                 {"waypoints", PathType::Waypoints},
                                                 {"motor", PathType::Motor},
                                                 {"thruster", PathType::Thruster}});
-  k.velocity = n.vec("velocity", k.velocity);
+  // each field belongs to its paths (docs/scene-format.md, "kinematic"); on another path it
+  // would be ignored silently
+  auto only_for = [&](const char* key, std::initializer_list<PathType> paths, const char* names) {
+    if (!n.has(key)) return;
+    for (PathType p : paths)
+      if (k.path == p) return;
+    n.at(key).fail(std::string("only for \"path\": ") + names);
+  };
+  only_for("velocity", {PathType::Linear, PathType::Thruster}, "\"linear\" or \"thruster\"");
+  for (const char* key : {"center", "axis", "radius", "angular_speed", "phase"})
+    only_for(key, {PathType::Circular}, "\"circular\"");
+  for (const char* key : {"speed", "loop"}) only_for(key, {PathType::Waypoints}, "\"waypoints\"");
+  only_for("thrust", {PathType::Thruster}, "\"thruster\"");
+  // velocities, the spin and the thrust are stored as floats by the colliders they move
+  k.velocity = n.float_vec("velocity", k.velocity);
   k.center = n.vec("center", k.center);
   k.axis = n.nonzero_vec("axis", k.axis);
   k.radius = n.positive("radius", k.radius);
@@ -68,8 +82,8 @@ KinematicDef read_kinematic(const Node& n) {
   k.phase = n.num("phase", k.phase);
   k.speed = n.positive("speed", k.speed);
   k.loop = n.flag("loop", k.loop);
-  k.spin = n.vec("spin", k.spin);
-  k.thrust = n.vec("thrust", k.thrust);
+  k.spin = n.float_vec("spin", k.spin);
+  k.thrust = n.float_vec("thrust", k.thrust);
   if (k.path == PathType::Waypoints) {
     const Node w = n.at("waypoints");
     w.require_array();

@@ -1,6 +1,7 @@
 // The entity-component world: entities, component wiring, kinematic paths, constraints
 // and the fixed phase order of a tick.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -28,6 +29,41 @@ bool same_collider(const ColliderDef& a, const ColliderDef& b) {
 }
 
 bool same_pose(const Pose& a, const Pose& b) { return a.position == b.position && a.rotation == b.rotation; }
+
+// true when a sensor's shape `a` at `pa` and a body's shape `b` at `pb` overlap or touch:
+// compounds by their children, meshes by their triangles against a convex shape
+// (collide_mesh), the rest by collide(); the pairs with no narrow phase (plane against plane,
+// a mesh against a plane or a mesh) never count. Never allocates.
+bool sensor_overlaps(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb) {
+  if (a.type == ShapeType::Compound) {
+    for (const CompoundChild& c : a.compound->children)
+      if (sensor_overlaps(c.shape, compose(pa, c.pose), b, pb)) return true;
+    return false;
+  }
+  if (b.type == ShapeType::Compound) {
+    for (const CompoundChild& c : b.compound->children)
+      if (sensor_overlaps(a, pa, c.shape, compose(pb, c.pose))) return true;
+    return false;
+  }
+  const NarrowPhaseSettings touching{.speculative_margin = 0};
+  auto deep = [](const Manifold& m) {
+    for (int p = 0; p < m.count; ++p)
+      if (m.points[p].depth >= 0) return true;
+    return false;
+  };
+  if (a.type == ShapeType::Mesh || b.type == ShapeType::Mesh) {
+    const bool a_mesh = a.type == ShapeType::Mesh;
+    const ColliderShape& other = a_mesh ? b : a;
+    if (!other.is_convex()) return false;
+    std::array<Manifold, 8> out;
+    const int n = collide_mesh(other, a_mesh ? pb : pa, a_mesh ? a : b, a_mesh ? pa : pb, out, touching);
+    for (int i = 0; i < n; ++i)
+      if (deep(out[static_cast<std::size_t>(i)])) return true;
+    return false;
+  }
+  if (a.type == ShapeType::Plane && b.type == ShapeType::Plane) return false;
+  return deep(collide(a, pa, b, pb, touching));
+}
 
 void require_pose(const Pose& p, std::string_view where) {
   if (!is_finite(p.position)) require_finite(p.position, field_path(where, "position"));
@@ -957,12 +993,9 @@ void World::update_sensor_events() {
     for (std::size_t k = 0; k < body_colliders_.size(); ++k) {
       const Collider& bc = body_colliders_[k];
       const std::uint32_t visitor = body_collider_owner_[k];
-      if (visitor == sensor || (sc.shape.type == ShapeType::Plane && bc.shape.type == ShapeType::Plane)) continue;
+      if (visitor == sensor) continue;
       if (!bounds(bc.shape, bc.end).overlaps(sb)) continue;
-      const Manifold m = collide(sc.shape, sc.end, bc.shape, bc.end, {.speculative_margin = 0});
-      bool overlap = false;
-      for (int p = 0; p < m.count; ++p) overlap |= m.points[p].depth >= 0;
-      if (overlap) sensing_.push_back(pair_key(sensor, visitor));
+      if (sensor_overlaps(sc.shape, sc.end, bc.shape, bc.end)) sensing_.push_back(pair_key(sensor, visitor));
     }
   }
   std::sort(sensing_.begin(), sensing_.end());

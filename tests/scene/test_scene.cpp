@@ -175,6 +175,21 @@ TEST(BadFiles, UnknownFieldsAndVersions) {
             "scenes/x.json: /colliders/0/half_extents/1: must be > 0, got -1");
   EXPECT_EQ(error_of(R"({"version": 1, "forcers": [{"kind": "fan", "kinematic": {"path": "waypoints", "waypoints": [[0,0,0]]}}]})"),
             "scenes/x.json: /forcers/0/kinematic/waypoints: needs at least 2 points, got 1");
+  // a path's fields belong to it: a "radius" on a linear path used to be dropped silently
+  EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "box", "kinematic": {"path": "linear", "radius": 1}}]})"),
+            "scenes/x.json: /colliders/0/kinematic/radius: only for \"path\": \"circular\"");
+  EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "box", "kinematic": {"path": "motor", "velocity": [1, 0, 0]}}]})"),
+            "scenes/x.json: /colliders/0/kinematic/velocity: only for \"path\": \"linear\" or \"thruster\"");
+  EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "box", "kinematic": {"path": "circular", "speed": 2}}]})"),
+            "scenes/x.json: /colliders/0/kinematic/speed: only for \"path\": \"waypoints\"");
+  EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "box", "kinematic": {"path": "motor", "spin": [0, 1, 0]}}]})"), "no error");
+  // a spin that overflows a float used to reach the entity as a NaN pose ("pose.position: must be finite")
+  EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "box", "kinematic": {"path": "motor", "spin": [0, 1e300, 0]}}]})"),
+            "scenes/x.json: /colliders/0/kinematic/spin: must fit a float (|component| <= 3.4028234663852886e+38), got (0, "
+            "1e+300, 0)");
+  // a normal too short to normalise is named with its value (it used to read "got (0, 0, 0)")
+  EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "plane", "normal": [0, 1e-300, 0]}]})"),
+            "scenes/x.json: /colliders/0/normal: is too short to normalise (its length underflows), got (0, 1e-300, 0)");
 }
 
 TEST(BadFiles, MissingFileIsNamed) {

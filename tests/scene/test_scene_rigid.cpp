@@ -137,6 +137,16 @@ TEST(RigidScenes, BadFieldsAreNamedByPath) {
             "scenes/x.json: /settings/rigid/contact_compliance: must be >= 0, got -1e-09");
   EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"substeps": 0}}})"),
             "scenes/x.json: /settings/rigid/substeps: must be an integer in [1, 64], got 0");
+  EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"type": "static", "linear_velocity": [1, 0, 0], "shapes": [{"type": "box"}]}]})"),
+            "scenes/x.json: /rigid_bodies/0/linear_velocity: a \"static\" body does not move (make it \"kinematic\" to "
+            "give it a velocity)");
+  EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"type": "static", "angular_velocity": [0, 0, 0], "shapes": [{"type": "box"}]}]})"),
+            "");
+  // a mass whose inverse is no normal float (the contact solver's blocks are floats) is refused
+  // before it can turn the first contact into NaN
+  const std::string big = error_of(R"({"version": 1, "rigid_bodies": [{"name": "b", "mass": 1e39, "shapes": [{"type": "box"}]}]})");
+  EXPECT_EQ(big.rfind("scenes/x.json: /rigid_bodies/0: rigid body of entity 0 'b'.mass.mass: must be in [2.9", 0), 0u) << big;
+  EXPECT_NE(big.find("got 1e+39"), std::string::npos) << big;
   // the library's own validation still names the item and the entity
   const std::string m =
       error_of(R"({"version": 1, "rigid_bodies": [{"name": "b", "shapes": [{"type": "box", "density": 1e308, "half_extents": [10, 10, 10]}]}]})");
@@ -189,6 +199,48 @@ TEST(RigidScenes, SensorCollidersReportTheirVisitors) {
   }
   EXPECT_EQ(enters, 1);
   EXPECT_LT(s.world.pose(s.world.find("ball")).position.y, -1);  // it pushed nothing
+}
+
+// A compound nested in a compound, as a collider and as a dynamic body's shape: the body
+// lands on the collider's top box and stays on it (both used to stop the run at the first
+// contact: "no narrow phase for the pair sphere-compound")
+TEST(RigidScenes, NestedCompoundsCollideAsTheirLeaves) {
+  pba::Scene s = pba::parse_scene(
+      R"({"version": 1, "colliders": [{"type": "plane"},
+          {"name": "table", "type": "compound", "position": [0, 0.5, 0], "children": [
+            {"type": "compound", "children": [{"type": "box", "half_extents": [1, 0.1, 1]}]}]}],
+          "rigid_bodies": [{"name": "toy", "position": [0, 1.5, 0], "shapes": [{"type": "compound", "children": [
+            {"type": "compound", "position": [0, 0.2, 0], "children": [{"type": "sphere", "radius": 0.2}]}]}]}]})",
+      "x.json");
+  for (int i = 0; i < 120; ++i) s.world.step();
+  // the sphere's centre rests 0.2 above the table top (y = 0.6): the body's frame 0.2 below it
+  EXPECT_NEAR(s.world.pose(s.world.find("toy")).position.y, 0.6, 0.01);
+}
+
+// Sensors of every shape report a ball falling through them: a compound (a box inside a box
+// compound) and a mesh (a 2 m square sheet of two triangles) used to stop the run when the
+// ball reached them ("no narrow phase for the pair compound-sphere"); a box sensor counts
+// for comparison. Each reports one entering and, once the ball is below it, one leaving.
+TEST(RigidScenes, CompoundAndMeshSensorsReportTheirVisitors) {
+  for (const std::string gate :
+       {R"({"name": "gate", "type": "box", "sensor": true, "half_extents": [1, 0.1, 1]})",
+        R"({"name": "gate", "type": "compound", "sensor": true, "children": [{"type": "compound", "children": [
+             {"type": "box", "half_extents": [1, 0.1, 1]}]}]})",
+        R"({"name": "gate", "type": "mesh", "sensor": true, "vertices": [[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]],
+            "triangles": [[0, 1, 2], [0, 2, 3]]})"}) {
+    pba::Scene s = pba::parse_scene(R"({"version": 1, "colliders": [)" + gate + R"(],
+          "rigid_bodies": [{"name": "ball", "position": [0, 1.2, 0], "shapes": [{"type": "sphere", "radius": 0.1}]}]})",
+                                    "x.json");
+    int enters = 0, leaves = 0;
+    for (int i = 0; i < 60; ++i) {
+      s.world.step();
+      for (const pba::SensorEvent& e : s.world.sensor_enter_events()) enters += e.visitor == s.world.find("ball");
+      leaves += static_cast<int>(s.world.sensor_leave_events().size());
+    }
+    EXPECT_EQ(enters, 1) << gate;
+    EXPECT_EQ(leaves, 1) << gate;
+    EXPECT_LT(s.world.pose(s.world.find("ball")).position.y, -1) << gate;  // it pushed nothing
+  }
 }
 
 int run(std::vector<std::string> words) {
