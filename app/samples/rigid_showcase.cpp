@@ -202,6 +202,7 @@ class Bullet final : public RigidSample {
     }
     // the gun
     r.sphere({-10.6, 1.8, 0}, 0.4, kMarker);
+    r.text({-10.6, 2.4, 0}, "gun", colors::white, 0.8f, 0.5f);
     r.box({-10.6, 0.7, 0}, {0.15, 0.7, 0.15}, Quat(1, 0, 0, 0), colors::grey);
   }
 
@@ -290,6 +291,7 @@ class Rain final : public RigidSample {
   void Draw(Renderer& r, double alpha) override {
     RigidSample::Draw(r, alpha);
     r.sphere({9, 0.6, 9}, 0.6, kMarker);  // a corner of the field (the rain falls on 16 x 16 m)
+    r.text({9, 1.5, 9}, "corner of the 16 x 16 m field", colors::white, 0.8f, 0.5f);
   }
   std::vector<Color> ExpectedColors() const override { return {kMarker}; }
 
@@ -410,6 +412,7 @@ class MassRatio final : public RigidSample {
     draw_options_.highlight_color = colors::red;
     RigidSample::Draw(r, alpha);
     r.sphere(bodies_.center_of_mass(heavy_) + Vec3(0, 0.8, 0), 0.2, kMarker);
+    r.text(bodies_.center_of_mass(heavy_) + Vec3(0, 1.2, 0), "the heavy box", colors::white, 0.8f, 0.5f);
   }
 
   void DrawUI() override {
@@ -576,6 +579,7 @@ class Conveyor final : public RigidSample {
   void Draw(Renderer& r, double alpha) override {
     RigidSample::Draw(r, alpha);
     r.sphere({-6, 2.8, 0}, 0.3, kMarker);  // the belt's head
+    r.text({-6, 3.3, 0}, "boxes drop here", colors::white, 0.8f, 0.5f);
   }
 
   void DrawUI() override {
