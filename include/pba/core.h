@@ -69,7 +69,9 @@ std::string format_value(double v);
 
 /// Formats a vector for error messages as "(x, y, z)" with format_value's numbers.
 std::string format_vec3(const Vec3& v);
-/// Joins a field path for error messages: field_path("def", "mass") is "def.mass".
+/// Joins a field path for error messages: field_path("def", "mass") is "def.mass"; a JSON
+/// pointer (a scene file's path) stays one: field_path("/bodies/0", "points[2]") is
+/// "/bodies/0/points/2".
 std::string field_path(std::string_view where, std::string_view name);
 
 /// Throws Error "<where>: must be finite, got <v>" unless v is finite.

@@ -36,8 +36,18 @@ std::string format_vec3(const Vec3& v) {
 
 std::string field_path(std::string_view where, std::string_view name) {
   std::string s;
-  s.reserve(where.size() + name.size() + 1);
-  s.append(where).append(1, '.').append(name);
+  s.reserve(where.size() + name.size() + 2);
+  s.append(where);
+  if (!where.empty() && where.front() == '/') {
+    // a JSON pointer (a scene file's path) goes on as one: "/a/b" + "c[2]" is "/a/b/c/2"
+    for (const char c : name) {
+      if (c == '[' || c == '.') s.append(1, '/');
+      else if (c != ']') s.append(1, c);
+    }
+    if (name.empty() || name.front() != '[') s.insert(where.size(), 1, '/');
+    return s;
+  }
+  s.append(1, '.').append(name);
   return s;
 }
 

@@ -12,6 +12,15 @@ namespace {
 
 using pba::test_support::error_of;
 
+// Field paths join with dots, except a scene file's JSON pointer, which stays a pointer.
+TEST(Validate, FieldPathsJoinDotsOrJsonPointers) {
+  EXPECT_EQ(pba::field_path("def", "mass"), "def.mass");
+  EXPECT_EQ(pba::field_path("def", "waypoints[3]"), "def.waypoints[3]");
+  EXPECT_EQ(pba::field_path("/rigid_bodies/10/kinematic", "waypoints"), "/rigid_bodies/10/kinematic/waypoints");
+  EXPECT_EQ(pba::field_path("/rigid_bodies/10/kinematic", "waypoints[3]"), "/rigid_bodies/10/kinematic/waypoints/3");
+  EXPECT_EQ(pba::field_path("/colliders/0/shape", "half_extents.y"), "/colliders/0/shape/half_extents/y");
+}
+
 TEST(Validate, MessagesNameTheValueAndWhere) {
   EXPECT_EQ(error_of([] { pba::require_positive(-0.5, "settings.dt"); }),
             "settings.dt: must be finite and > 0, got -0.5");
