@@ -148,6 +148,31 @@ PBA_INLINE int non_finite6(float a, float b, float c, float d, float e, float f)
   return ((a - a) + (b - b) + (c - c) + (d - d) + (e - e) + (f - f)) != 0.0f;
 }
 
+// The contact state of a step that met a plane (s0, s1: signed distances at the start and
+// end of the step): the time of impact f = s0 / (s0 - s1) (1 when the particle started
+// inside), and position and velocity interpolated to it (a particle that started inside is
+// pushed out onto the plane). respond() acts on it, record_contact_inline() records it.
+// Branch-free (the division is taken unconditionally and selected), so loops vectorise.
+struct ImpactState {
+  float f, px, py, pz, vx, vy, vz;
+};
+PBA_INLINE ImpactState impact_state(float x, float y, float z, float vx, float vy, float vz, float ox, float oy,
+                                    float oz, float ovx, float ovy, float ovz, float nx, float ny, float nz, float s0,
+                                    float s1) {
+  const bool crossed = s0 >= 0.0f;
+  const float den = s0 - s1;
+  const float f_raw = s0 / (den > 0.0f ? den : 1.0f);
+  const float f = (crossed & (den > 0.0f)) ? f_raw : 1.0f;
+  const float push_in = crossed ? 0.0f : (s1 < 0.0f ? -s1 : 0.0f);
+  return {f,
+          ox + f * (x - ox) + push_in * nx,
+          oy + f * (y - oy) + push_in * ny,
+          oz + f * (z - oz) + push_in * nz,
+          ovx + f * (vx - ovx),
+          ovy + f * (vy - ovy),
+          ovz + f * (vz - ovz)};
+}
+
 // The response to one contact, shared by every shape and written with selects only, so
 // the plane loop vectorises. The contact plane has unit normal n; s0 and s1 are the
 // signed distances of the particle's surface from it at the start and the end of the
@@ -172,17 +197,8 @@ PBA_INLINE void respond(bool hit, float& x, float& y, float& z, float& vx, float
                         float threshold, float h, float inv_h) {
   // every value is computed unconditionally and chosen by selects (no divisions or
   // square roots behind a condition), so the compiler can if-convert and vectorise
-  // time of impact (1 when the particle started inside)
-  const bool crossed = s0 >= 0.0f;
-  const float den = s0 - s1;
-  const float f_raw = s0 / (den > 0.0f ? den : 1.0f);
-  const float f = (crossed & (den > 0.0f)) ? f_raw : 1.0f;
-  // contact state: interpolated position (pushed out if it started inside) and velocity
-  const float push_in = crossed ? 0.0f : (s1 < 0.0f ? -s1 : 0.0f);
-  const float pcx = ox + f * (x - ox) + push_in * nx;
-  const float pcy = oy + f * (y - oy) + push_in * ny;
-  const float pcz = oz + f * (z - oz) + push_in * nz;
-  const float vcx = ovx + f * (vx - ovx), vcy = ovy + f * (vy - ovy), vcz = ovz + f * (vz - ovz);
+  const ImpactState c = impact_state(x, y, z, vx, vy, vz, ox, oy, oz, ovx, ovy, ovz, nx, ny, nz, s0, s1);
+  const float f = c.f, pcx = c.px, pcy = c.py, pcz = c.pz, vcx = c.vx, vcy = c.vy, vcz = c.vz;
   // bounce: the normal velocity relative to the surface reversed and scaled by e
   const float vn = (vcx - usx) * nx + (vcy - usy) * ny + (vcz - usz) * nz;
   const bool approaching = vn < 0.0f;
@@ -249,20 +265,13 @@ PBA_INLINE void record_contact_inline(const ContactSink& sink, int k, std::uint3
   ContactLog& log = sink.logs[slot];
   if (log.step != sink.step) log.step = sink.step, log.count = 0;
   if (log.count == kMaxParticleContacts) return;
-  // respond()'s time of impact (1 when the particle started inside) and contact state
-  const bool crossed = s0 >= 0.0f;
-  const float den = s0 - s1;
-  const float f = (crossed & (den > 0.0f)) ? s0 / den : 1.0f;
-  const float push_in = crossed ? 0.0f : (s1 < 0.0f ? -s1 : 0.0f);
-  const float pcx = ox + f * (x - ox) + push_in * nx;
-  const float pcy = oy + f * (y - oy) + push_in * ny;
-  const float pcz = oz + f * (z - oz) + push_in * nz;
-  const float vcx = ovx + f * (vx - ovx), vcy = ovy + f * (vy - ovy), vcz = ovz + f * (vz - ovz);
-  const float vn = (vcx - usx) * nx + (vcy - usy) * ny + (vcz - usz) * nz;
+  // respond()'s contact state
+  const ImpactState at = impact_state(x, y, z, vx, vy, vz, ox, oy, oz, ovx, ovy, ovz, nx, ny, nz, s0, s1);
+  const float vn = (at.vx - usx) * nx + (at.vy - usy) * ny + (at.vz - usz) * nz;
   ParticleContact& c = log.contacts[log.count++];
   c.collider = ci;
   c.normal = Vec3f(nx, ny, nz);
-  c.point = Vec3f(pcx - r * nx, pcy - r * ny, pcz - r * nz);
+  c.point = Vec3f(at.px - r * nx, at.py - r * ny, at.pz - r * nz);
   c.approach_speed = vn < 0.0f ? -vn : 0.0f;
 }
 
