@@ -799,9 +799,18 @@ std::uint64_t pair_key(std::uint32_t a, std::uint32_t b) { return (std::uint64_t
 }  // namespace
 
 namespace {
-// sorted by pair, the fastest approach first (std::unique then keeps it)
-bool by_key_then_approach(const auto& x, const auto& y) {
-  return x.key != y.key ? x.key < y.key : x.approach > y.approach;
+// Sorts touch records by pair and keeps one record a pair: the fastest approach.
+template <class Record>
+void one_per_pair(std::vector<Record>& v) {
+  std::sort(v.begin(), v.end(),
+            [](const Record& x, const Record& y) { return x.key != y.key ? x.key < y.key : x.approach > y.approach; });
+  v.erase(std::unique(v.begin(), v.end(), [](const Record& x, const Record& y) { return x.key == y.key; }), v.end());
+}
+// Room for `need` elements in each vector, at least doubling (so a tick with more pairs than
+// ever before allocates once, not every tick); sets that swap each tick grow together.
+template <class... V>
+void room(std::size_t need, V&... v) {
+  ((v.capacity() < need ? v.reserve(std::max(need, 2 * v.capacity())) : void()), ...);
 }
 }  // namespace
 
@@ -812,10 +821,8 @@ bool by_key_then_approach(const auto& x, const auto& y) {
 void World::update_rigid_touches() {
   std::swap(touching_, touching_prev_);
   touching_.clear();
-  // at most every manifold and every pair kept from last tick: both sets grow at once
-  const std::size_t need = rigid_.manifold_count() + touching_prev_.size();
-  if (touching_.capacity() < need)
-    for (auto* v : {&touching_, &touching_prev_}) v->reserve(std::max(need, 2 * v->capacity()));
+  // at most every manifold and every pair kept from last tick
+  room(rigid_.manifold_count() + touching_prev_.size(), touching_, touching_prev_);
   for (std::size_t k = 0; k < rigid_.manifold_count(); ++k) {
     const RigidManifoldInfo m = rigid_.manifold(k);
     if (!(m.max_normal_impulse > 0)) continue;  // speculative: no contact yet
@@ -825,12 +832,7 @@ void World::update_rigid_touches() {
     if (a.index > b.index) std::swap(a, b), n = -n;
     touching_.push_back({pair_key(a.index, b.index), n, m.point, m.approach_speed});
   }
-  // one record per pair: the fastest approach
-  auto by_key = [](const TouchRecord& x, const TouchRecord& y) { return by_key_then_approach(x, y); };
-  std::sort(touching_.begin(), touching_.end(), by_key);
-  touching_.erase(std::unique(touching_.begin(), touching_.end(),
-                              [](const TouchRecord& x, const TouchRecord& y) { return x.key == y.key; }),
-                  touching_.end());
+  one_per_pair(touching_);
   // a pair of last tick that a sleeping body is in goes on touching
   auto sleeping = [&](std::uint32_t e) {
     const RigidBodyId id = records_[e].body;
@@ -844,7 +846,7 @@ void World::update_rigid_touches() {
     if (!present && (sleeping(static_cast<std::uint32_t>(r.key >> 32)) || sleeping(static_cast<std::uint32_t>(r.key))))
       touching_.push_back(r);
   }
-  std::sort(touching_.begin(), touching_.end(), by_key);
+  one_per_pair(touching_);  // the kept pairs in key order (their keys are new here)
 }
 
 // The particle entities' touching pairs: a particle entity touches a collider's entity (a
@@ -870,11 +872,7 @@ void World::update_particle_touches() {
                                     static_cast<double>(c.approach_speed)});
     }
   }
-  auto by_key = [](const TouchRecord& x, const TouchRecord& y) { return by_key_then_approach(x, y); };
-  std::sort(particle_touching_.begin(), particle_touching_.end(), by_key);
-  particle_touching_.erase(std::unique(particle_touching_.begin(), particle_touching_.end(),
-                                       [](const TouchRecord& x, const TouchRecord& y) { return x.key == y.key; }),
-                           particle_touching_.end());
+  one_per_pair(particle_touching_);
 }
 
 // Room in the touch pair sets for the entities added so far, so that a tick in which more
@@ -884,14 +882,9 @@ void World::update_particle_touches() {
 void World::reserve_touch_sets() {
   constexpr std::size_t kTouchesPerBody = 8;  // a box in a pyramid touches about 8 others and 2 share a pair
   const std::size_t bodies = entity_bodies_ * kTouchesPerBody, particles = particle_entities_added_ * kMaxParticleContacts;
-  auto room = [](auto& v, std::size_t need) {
-    if (v.capacity() < need) v.reserve(std::max(need, 2 * v.capacity()));
-  };
-  for (auto* v : {&touching_, &touching_prev_}) room(*v, bodies);
-  room(particle_touching_, particles);
-  for (auto* v : {&touched_, &touched_prev_}) room(*v, bodies + particles);
-  room(touch_begin_, bodies + particles);
-  room(touch_end_, bodies + particles);
+  room(bodies, touching_, touching_prev_);
+  room(particles, particle_touching_);
+  room(bodies + particles, touched_, touched_prev_, touch_begin_, touch_end_);
 }
 
 // This tick's touching pairs (the bodies' and the particles', one record per pair, the
@@ -901,14 +894,10 @@ void World::update_touch_events() {
   update_particle_touches();
   std::swap(touched_, touched_prev_);
   touched_.clear();
-  // more pairs than ever before: both sets grow at once (they swap each tick)
+  // the union's pairs, and the events: at most a begin a pair now, an end a pair before
   const std::size_t need = touching_.size() + particle_touching_.size();
-  if (touched_.capacity() < need)
-    for (auto* v : {&touched_, &touched_prev_}) v->reserve(std::max(need, 2 * v->capacity()));
-  // the events: at most a begin a pair now, an end a pair before
-  if (touch_begin_.capacity() < need) touch_begin_.reserve(std::max(need, 2 * touch_begin_.capacity()));
-  if (touch_end_.capacity() < touched_prev_.size())
-    touch_end_.reserve(std::max(touched_prev_.size(), 2 * touch_end_.capacity()));
+  room(need, touched_, touched_prev_, touch_begin_);
+  room(touched_prev_.size(), touch_end_);
   // the union of the two sorted sets
   std::size_t i = 0, j = 0;
   while (i < touching_.size() || j < particle_touching_.size()) {
