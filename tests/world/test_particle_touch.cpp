@@ -360,4 +360,66 @@ TEST(ParticleTouch, DestroyedEntitiesEndTheirTouchesSilently) {
   EXPECT_LT(w.pose(b).position.y, 0.05);
 }
 
+// A kinematic collider that runs into a particle at rest begins the touch at the tick the
+// closed form gives, with its speed as the approach speed (the collider's velocity counts);
+// an elastic hit sends the particle off at twice the collider's speed (the collider is
+// infinitely heavy: v' = v_c + e (v_c - v_p) with e = 1, v_p = 0), so the touch ends the next
+// tick. A sphere of radius R = 0.5 m from x0 = -2.05 m at v = 2 m/s meets a particle of
+// radius r = 0.1 m at the origin when its centre reaches -(R + r): t = (2.05 - 0.6) / 2 =
+// 0.725 s, inside tick 44 of 1/60 s (0.7167 to 0.7333 s).
+TEST(ParticleTouch, AKinematicColliderBeginsATouchAtTheClosedFormTickWithItsSpeed) {
+  const double dt = 1 / 60.0, v = 2, R = 0.5, r = 0.1, x0 = -2.05;
+  World w({.stepper = {.fixed_dt = dt}, .gravity = {0, 0, 0}});
+  const EntityId paddle = w.create_entity({.name = "paddle", .pose = {.position = {x0, 0, 0}}});
+  w.add_collider(paddle, {.shape = ColliderShape::sphere(R), .material = {.restitution = 1, .friction = 0}});
+  w.add_kinematic(paddle, {.path = pba::PathType::Linear, .velocity = {v, 0, 0}});
+  const EntityId ball = w.create_entity({.name = "ball"});
+  w.add_particle(ball, {.radius = r});
+  const int expected = static_cast<int>(std::ceil((-x0 - (R + r)) / v / dt));
+  ASSERT_EQ(expected, 44);
+  int begin_tick = -1, end_tick = -1;
+  for (int n = 1; n <= 60; ++n) {
+    w.step();
+    for (const pba::TouchBeginEvent& ev : w.touch_begin_events()) {
+      EXPECT_EQ(begin_tick, -1) << "a second begin at tick " << n;
+      begin_tick = n;
+      EXPECT_EQ(ev.a, paddle);
+      EXPECT_EQ(ev.b, ball);
+      EXPECT_NEAR(ev.normal.x, 1, 1e-6);
+      EXPECT_NEAR(ev.approach_speed, v, 1e-5 * v);
+    }
+    for (const pba::TouchEndEvent& ev : w.touch_end_events()) {
+      EXPECT_EQ(end_tick, -1) << "a second end at tick " << n;
+      end_tick = n;
+      EXPECT_EQ(ev.b, ball);
+    }
+  }
+  EXPECT_EQ(begin_tick, expected);
+  EXPECT_EQ(end_tick, expected + 1);
+  // and the ball flies off at 2 v (float state: 1e-5 relative)
+  EXPECT_NEAR(w.velocity(ball).x, 2 * v, 1e-5 * v);
+}
+
+// A particle that meets more than kMaxParticleContacts colliders in one step records the
+// first ones tested, in collider order (the World's touch events come from these records,
+// so a seventh wall would not be reported either); the response still meets every wall.
+TEST(ParticleTouch, AParticleMeetingSixWallsRecordsTheFirstFour) {
+  pba::ParticleSystem ps({.forces = {.gravity = {0, 0, 0}}});
+  ps.set_record_contacts(true);
+  const pba::ParticleId id = ps.create({.position = {0, 0, 0}, .radius = 0.1});
+  pba::CollisionWorld cw;
+  // a 0.19 m box of walls around a 0.2 m ball: each wall 5 mm into it
+  for (int axis = 0; axis < 3; ++axis)
+    for (double s : {1.0, -1.0}) {
+      Vec3 n(0.0);
+      n[axis] = s;
+      cw.add(pba::Collider::plane(n, -0.095));
+    }
+  ps.step(0, 1 / 60.0, cw, {});
+  const auto got = ps.contacts(id);
+  ASSERT_EQ(got.size(), pba::kMaxParticleContacts);
+  for (std::size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].collider, i);
+  EXPECT_GE(ps.contacts(), 4u);
+}
+
 }  // namespace
