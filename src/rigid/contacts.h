@@ -196,6 +196,9 @@ struct Softness {
   double impulse_scale = 0;  // in [0, 1)
 };
 Softness make_soft(double hertz, double zeta, double h);
+/// The soft step's largest spring step h w (rad) for a contact against a body that cannot
+/// move (static, kinematic or asleep): 1, so 1 / (2 pi h) Hz (contact_solver.cpp, pass()).
+inline constexpr double kStaticStepAngle = 1.0;
 
 /// The contact state of a RigidBodySystem: this step's contact pairs for the solver, the
 /// broad phase and the pair cache behind them (contact_pairs.cpp), and the solver passes.

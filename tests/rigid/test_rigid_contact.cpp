@@ -174,10 +174,11 @@ TEST(RigidFriction, ASphereRollsAtFiveSeventhsOfGSinTheta) {
     EXPECT_NEAR(a, expected, 0.02 * expected) << to_string(solver);
     if (solver != pba::RigidSolverType::SoftStep) continue;
   // rolling: the material point at the contact is at rest. The solver holds it at rest at
-  // the contact's midpoint, which the soft contact (a spring of contact_hertz) keeps
-  // delta = g cos(theta) / (2 pi f)^2 deep, so the surface point below the centre slips at
-  // |w| delta / 2
-  const double f = 120, delta = kG * std::cos(theta) / std::pow(2 * pba::kPi * f, 2);
+  // the contact's midpoint, which the soft contact (a spring of w = 2 pi f) keeps
+  // delta = g cos(theta) / w^2 deep, so the surface point below the centre slips at
+  // |w| delta / 2. Against the static ground w is twice contact_hertz's but at most one
+  // radian a substep: 1 / h = 480 rad/s at the defaults (8 substeps of 1/60 s)
+  const double w = std::min(2 * 2 * pba::kPi * 120, 8 * 60.0), delta = kG * std::cos(theta) / (w * w);
   const Vec3 slip = s.linear_velocity(ball) + glm::cross(s.angular_velocity(ball), -0.2 * n);
   EXPECT_LT(glm::length(slip), glm::length(s.angular_velocity(ball)) * delta);
   }
@@ -378,9 +379,11 @@ TEST(RigidRocking, AColumnRockingOnItsEdgesLosesHousnersShareAtEveryImpactAndCom
 // has settled into the sway (after a second), the energy (kinetic plus potential, both
 // measured from the settled column) at each of its maxima, where the column passes upright and
 // the springs are back at their static load, is below the one before. Soft step at the
-// defaults, sleeping off. (Measured: each half swing keeps 0.84-0.86 of it, a damping ratio
-// near 0.03; a relax pass solving the column top down instead of bottom up gained energy
-// every swing.)
+// defaults, sleeping off, over the sway's life: its maxima above a thousandth of the kick's
+// energy (below, by about 4.5 s, what is left is the settled column's sub-millimetre motions,
+// 0.002-0.013 J of the kick's 64). (Measured: each half swing keeps 0.53 of it, a damping
+// ratio near 0.1; 0.84-0.86 before the ground's contacts were held to one radian a substep;
+// a relax pass solving the column top down instead of bottom up gained energy every swing.)
 TEST(RigidRocking, ATenStackSwayingOnItsContactsLosesEnergyEverySwing) {
   constexpr int kBoxes = 10;
   constexpr double kDt = 1.0 / 60;
@@ -400,12 +403,13 @@ TEST(RigidRocking, ATenStackSwayingOnItsContactsLosesEnergyEverySwing) {
   for (int i = 0; i < 360; ++i) st.s.step(kDt, kGravity), e.push_back(energy() - settled);
   int maxima = 0;
   double last = INFINITY;
+  const double floor = 1e-3 * e.front();
   for (std::size_t i = 60; i + 1 < e.size(); ++i)
-    if (e[i] >= e[i - 1] && e[i] > e[i + 1]) {
+    if (e[i] >= e[i - 1] && e[i] > e[i + 1] && e[i] > floor) {
       EXPECT_LT(e[i], last) << "the maximum at " << (i + 1) * kDt << " s";
       last = e[i], ++maxima;
     }
-  EXPECT_GE(maxima, 12);  // it swayed: two maxima a period, 1.5 Hz, over 5 s
+  EXPECT_GE(maxima, 8);  // it swayed: two maxima a period, 1.4 Hz, for over 3 s
   EXPECT_GT(last, 0);
 }
 
@@ -492,34 +496,57 @@ ColumnMode column_mode(int n, double ground_hertz, double hertz, double zeta) {
 }
 
 // The contacts' spring rates at a system's settings: contact_hertz up to a quarter of the
-// substep rate, twice that on a body that cannot move within the same cap (contact_solver.cpp).
+// substep rate, twice that on a body that cannot move but no more than one radian a substep
+// (h w <= 1; contact_solver.cpp).
 std::pair<double, double> ground_and_box_hertz(const ContactSettings& c, double dt) {
   const double cap = 0.25 * c.substeps / dt, hertz = std::min(c.contact_hertz, cap);
-  return {std::min(2 * hertz, cap), hertz};
+  return {std::min(2 * hertz, c.substeps / dt / (2 * pba::kPi)), hertz};
 }
 
-// A 10-stack kicked as in the test above sways at its spring model's lowest frequency
-// (column_mode: 1.47 Hz at the defaults) within 5% (measured 1.51 Hz; the model leaves out
-// the column's sag and the substeps), so the soft step's springs are the model's. Its damping
-// is not: the model's dampers (damping ratio 10 at every contact) give the sway a damping
-// ratio of 0.125, the soft step 0.026 (the mean log decrement of the top box's velocity over
-// its half swings from 1 s to 8 s, twelve periods). The test asserts the frequency and that
-// the sway decays (damping above zero); the shortfall against the model is a known limit
-// (docs/rigid-bodies.md, where the measurements behind it are), printed, not asserted: the
-// soft step's passes, one Gauss-Seidel sweep each per substep (as
-// Box2D's), do not converge on the column's low mode, and how much of the sway they remove
-// depends on how close the contacts are to the cap of a quarter of the substep rate, where
-// the defaults put them (0.20 at 70 Hz, 0.13 at 90 Hz, 0.057 at 110 Hz, 0.026 at 120 Hz, the
-// model 0.13 throughout).
+// A cube on the ground under a steady torque about z (sleeping off) tilts until its contact
+// springs balance it: four points half a metre either side of the axis, each a spring
+// m_p w^2 with m_p = m / 4 (1 / K_pp: 1/m + 0.5 * 6/m) and w the ground's rate (twice
+// contact_hertz, but at most one radian a substep: 1 / h = 480 rad/s at the defaults), so a
+// tilt stiffness of m w^2 / 4 less gravity's overturning m g / 2, within 1% (measured 0.07%).
+TEST(RigidRocking, AGroundContactsTiltStiffnessIsItsSprings) {
+  constexpr double kDt = 1.0 / 60, kTorque = 2000;  // N m, well below tipping (m g / 2 = 4905)
+  Stack st(1);
+  const auto [ground_hz, box_hz] = ground_and_box_hertz(st.s.settings(), kDt);
+  ASSERT_NEAR(ground_hz, 480 / (2 * pba::kPi), 1e-9);
+  for (int i = 0; i < 120; ++i) st.s.step(kDt, kGravity);
+  const Quat before = st.s.pose(st.boxes[0]).rotation;
+  for (int i = 0; i < 240; ++i) st.s.apply_torque(st.boxes[0], {0, 0, kTorque}), st.s.step(kDt, kGravity);
+  const Quat turn = st.s.pose(st.boxes[0]).rotation * glm::conjugate(before);
+  const double m = 1000, w = 2 * pba::kPi * ground_hz, stiffness = m * w * w / 4 - m * kG / 2;
+  EXPECT_NEAR(kTorque / (2 * turn.z), stiffness, 0.01 * stiffness);
+}
+
+// A 10-stack kicked as in the test above sways at a frequency between its spring model's
+// (column_mode: 1.29 Hz at the defaults, the ground's contacts at 76 Hz, the others at 120)
+// and the same model's on a rigid ground (1.64 Hz): the ground's contact is a spring in the
+// biased pass, but the relax pass, which solves it last, leaves box 0 with no normal velocity
+// against the ground at the end of every substep, as a rigid support would (measured 1.36 Hz;
+// 1.51 against 1.47 when the ground's contacts were at 120 Hz like the others). The springs
+// themselves are the model's to 0.1% (RigidRocking.AGroundContactsTiltStiffnessIsItsSprings).
+// Its damping: at least half the model's (the dampers at damping ratio 10 give the sway 0.134)
+// and at most 1.2 times it; measured 0.10 (the mean log decrement of the top box's velocity
+// over its half swings from 1 s until the sway has died, about 4.5 s). The soft step's passes
+// are one Gauss-Seidel sweep each per substep (as Box2D's), and the contact against the ground
+// is solved last in each: as it nears the cap of a quarter of the substep rate, that sweep
+// stops damping the sway (0.030 with the ground at 120 Hz, 0.052 at 100 Hz, 0.068 at 90 Hz,
+// 0.10 at 76 Hz, 0.12 at 70 Hz), so contacts against a body that cannot move are held to one
+// radian a substep (contact_solver.cpp; docs/rigid-bodies.md, "A column's sway").
 TEST(RigidRocking, ATenStackSwaysAtItsSpringModelsFrequencyAndDecays) {
   constexpr int kBoxes = 10;
   constexpr double kDt = 1.0 / 60;
   Stack st(kBoxes);
   const auto [ground_hz, box_hz] = ground_and_box_hertz(st.s.settings(), kDt);
   const ColumnMode model = column_mode(kBoxes, ground_hz, box_hz, st.s.settings().damping_ratio);
+  const ColumnMode rigid_ground = column_mode(kBoxes, 1e6, box_hz, st.s.settings().damping_ratio);
   ASSERT_GT(model.lambda, 0);
-  ASSERT_NEAR(model.hertz, 1.47, 0.01);
-  ASSERT_NEAR(model.zeta, 0.125, 0.005);
+  ASSERT_NEAR(model.hertz, 1.29, 0.01);
+  ASSERT_NEAR(model.zeta, 0.134, 0.005);
+  ASSERT_NEAR(rigid_ground.hertz, 1.64, 0.01);
   for (int i = 0; i < 60; ++i) st.s.step(kDt, kGravity);
   for (auto x : st.boxes) {
     const Vec3 w(0, 0, 0.02);
@@ -532,7 +559,7 @@ TEST(RigidRocking, ATenStackSwaysAtItsSpringModelsFrequencyAndDecays) {
   for (std::size_t i = 60; i + 1 < v.size(); ++i)
     if ((v[i] > v[i - 1] && v[i] >= v[i + 1]) || (v[i] < v[i - 1] && v[i] <= v[i + 1]))
       peaks.push_back({static_cast<double>(i + 1) * kDt, v[i]});
-  ASSERT_GE(peaks.size(), 20u);
+  ASSERT_GE(peaks.size(), 10u);  // five periods
   double decrement = 0;
   for (std::size_t k = 1; k < peaks.size(); ++k) {
     ASSERT_LT(peaks[k].second * peaks[k - 1].second, 0) << "the extremes alternate, at " << peaks[k].first << " s";
@@ -541,21 +568,23 @@ TEST(RigidRocking, ATenStackSwaysAtItsSpringModelsFrequencyAndDecays) {
   const double delta = 2 * decrement / static_cast<double>(peaks.size() - 1);  // per period
   const double zeta = delta / std::sqrt(4 * pba::kPi * pba::kPi + delta * delta);
   const double hertz = 0.5 * static_cast<double>(peaks.size() - 1) / (peaks.back().first - peaks.front().first);
-  EXPECT_NEAR(hertz, model.hertz, 0.05 * model.hertz);
-  EXPECT_GT(zeta, 0);
+  EXPECT_GT(hertz, model.hertz) << "softer than its springs";
+  EXPECT_LT(hertz, rigid_ground.hertz) << "stiffer than on a rigid ground";
+  EXPECT_GE(zeta, 0.5 * model.zeta) << "damped at under half the spring-damper model's " << model.zeta;
   EXPECT_LE(zeta, 1.2 * model.zeta) << "damped beyond the spring-damper model's " << model.zeta;
-  std::printf("10-stack sway: %.3f Hz (model %.3f), damping ratio %.4f (model %.4f)\n", hertz, model.hertz, zeta,
-              model.zeta);
+  std::printf("10-stack sway: %.3f Hz (model %.3f, on a rigid ground %.3f), damping ratio %.4f (model %.4f)\n", hertz,
+              model.hertz, rigid_ground.hertz, zeta, model.zeta);
 }
 
-// The same model for 40 cubes at the defaults (120 Hz on every contact) has a negative
-// stiffness: gravity's overturning outgrows the contacts' springs between 38 and 39 cubes,
+// The same model for 40 cubes at the defaults (120 Hz between the cubes, 76 Hz on the ground)
+// has a negative stiffness: gravity's overturning outgrows the contacts' springs between 37
+// and 38 cubes (38 and 39 with the ground at 120 Hz),
 // so a 40-stack cannot stand on them, however they are damped. Kicked at 0.01 mrad/s after a
-// settling second, its lean grows at the model's rate (measured 0.197/s from 10 s to 20 s,
-// the model 0.205/s) within 20%: so near the buckling load the rate is sensitive to the
-// springs (1.7% stiffer ones give 7% less) and the 10-stack's frequency above puts the soft
-// step's up to 5% stiffer than the model's. At 240 Hz (16 substeps) the model stands, its
-// lowest mode at 0.16 Hz (RigidStacking.FortyCubesStandTwentySeconds).
+// settling second, its lean grows at the model's rate (measured 0.235/s from 10 s to 20 s,
+// the model 0.243/s) within 20%: so near the buckling load the rate is sensitive to the
+// springs (1.7% stiffer ones give 7% less). At 16 substeps (240 Hz between the cubes, 153 Hz
+// on the ground) the model stands, its lowest mode at 0.15 Hz
+// (RigidStacking.FortyCubesStandTwentySeconds).
 TEST(RigidStacking, AFortyStackOnTheDefaultContactsLeansOverAtItsSpringModelsBucklingRate) {
   constexpr int kBoxes = 40;
   constexpr double kDt = 1.0 / 60;
@@ -564,9 +593,12 @@ TEST(RigidStacking, AFortyStackOnTheDefaultContactsLeansOverAtItsSpringModelsBuc
   const auto [ground_hz, box_hz] = ground_and_box_hertz(c, kDt);
   const ColumnMode model = column_mode(kBoxes, ground_hz, box_hz, c.damping_ratio);
   ASSERT_LT(model.lambda, 0);
-  ASSERT_GT(column_mode(kBoxes - 2, ground_hz, box_hz, c.damping_ratio).lambda, 0);
-  ASSERT_LT(column_mode(kBoxes - 1, ground_hz, box_hz, c.damping_ratio).lambda, 0);
-  ASSERT_GT(column_mode(kBoxes, 240, 240, c.damping_ratio).lambda, 0);
+  ASSERT_GT(column_mode(kBoxes - 3, ground_hz, box_hz, c.damping_ratio).lambda, 0);
+  ASSERT_LT(column_mode(kBoxes - 2, ground_hz, box_hz, c.damping_ratio).lambda, 0);
+  ContactSettings sixteen = c;
+  sixteen.substeps = 16, sixteen.contact_hertz = 240;
+  const auto [ground16, box16] = ground_and_box_hertz(sixteen, kDt);
+  ASSERT_GT(column_mode(kBoxes, ground16, box16, c.damping_ratio).lambda, 0);
   RigidBodySystem s({.capacity = 64, .contacts = c});
   const auto boxes = pba::rigid_scenes::vertical_stack(s, kBoxes);
   for (int i = 0; i < 60; ++i) s.step(kDt, kGravity);
