@@ -399,6 +399,57 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
   const double cos_half = std::cos(0.5 * cs.reuse_angle);
   const bool reuse = cs.reuse_distance > 0;
   auto awake_dynamic = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
+  // a pair touches this step when one of its bodies is awake and its tight boxes overlap (the
+  // fat ones then do too)
+  auto touching = [&](const ShapePair& p, std::uint32_t a, std::uint32_t b) {
+    return (awake_dynamic(a) || awake_dynamic(b)) && proxies[p.proxy_a].fat.overlaps(proxies[p.proxy_b].fat) &&
+           proxies[p.proxy_a].box.overlaps(proxies[p.proxy_b].box);
+  };
+  // First the touching pairs' plans: the margin, the relative pose, whether the manifolds are
+  // carried over; the box-box pairs that need the narrow phase are made together here by
+  // collide_batch (several at a time in SIMD lanes), the same manifolds and caches to the bit
+  // as collide() pair by pair. A pair without a cache yet gets a fresh one below (new_cache),
+  // so its narrow cache starts from NarrowPhaseCache{} in fresh_narrow until then.
+  plans.resize(shape_pairs.size());
+  fresh_narrow.resize(shape_pairs.size());
+  box_queries.clear();
+  const PairCache blank{};
+  for (std::size_t k = 0; k < shape_pairs.size(); ++k) {
+    const ShapePair& p = shape_pairs[k];
+    const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
+    if (!touching(p, a, b)) continue;
+    PairPlan& plan = plans[k];
+    // points are made as far out as the two bodies can close in one step (speculative contacts)
+    // (up to each body's size: faster ones are caught by the continuous pass)
+    plan.margin = cs.speculative_distance + std::min(glm::length(s.v_[a]) * dt, s.extent_[a]) +
+                  std::min(glm::length(s.v_[b]) * dt, s.extent_[b]);
+    // b's centre and frame in a's frame, against where they were when the manifolds were made
+    const Quat qa_inv = glm::conjugate(s.q_[a]);
+    plan.rel_position = qa_inv * (s.com_[b] - s.com_[a]);
+    plan.rel_rotation = qa_inv * s.q_[b];
+    const PairCache& c = p.cache == kNoIndex ? blank : caches[p.cache];
+    const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;  // as collide_pair keeps it
+    plan.same = reuse && c.margin >= plan.margin &&
+                std::abs(glm::dot(plan.rel_rotation, c.rel_rotation)) >= cos_half &&
+                carried_points_moved(in_b, in_b ? s.extent_[a] : s.extent_[b], c, plan.rel_position,
+                                     plan.rel_rotation) <= cs.reuse_distance;
+    plan.batched = kNoIndex;
+    const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
+    const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
+    if (plan.same || sa.shape.type != ShapeType::Box || sb.shape.type != ShapeType::Box) continue;
+    NarrowPhaseCache* narrow = &fresh_narrow[k];
+    if (p.cache == kNoIndex) *narrow = NarrowPhaseCache{};
+    else narrow = &caches[p.cache].narrow;
+    plan.batched = static_cast<std::uint32_t>(box_queries.size());
+    box_queries.push_back({&sa.shape, compose(s.body_pose(a), sa.local), &sb.shape, compose(s.body_pose(b), sb.local),
+                           plan.margin + cs.reuse_distance, narrow});
+  }
+  box_manifolds.resize(box_queries.size());
+  collide_batch(box_queries, box_manifolds, ConvexMethod::Sat,
+                simd == SimdPath::Scalar ? BatchPath::Scalar : BatchPath::Best);
+
+  // then every pair in order: ended, asleep or apart pairs as they are, touching ones their
+  // manifolds (carried over, made above, or made now) to the solver
   std::size_t built = 0, reused = 0, keep = 0;
   for (std::size_t k = 0; k < shape_pairs.size(); ++k) {
     ShapePair p = shape_pairs[k];
@@ -426,29 +477,19 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
       shape_pairs[keep++] = p;
       continue;
     }
-    if (p.cache == kNoIndex) p.cache = new_cache();
+    const PairPlan& plan = plans[k];
+    const bool fresh = p.cache == kNoIndex;
+    if (fresh) p.cache = new_cache();
     shape_pairs[keep++] = p;
-    // points are made as far out as the two bodies can close in one step (speculative contacts)
-    // (up to each body's size: faster ones are caught by the continuous pass)
-    const double margin = cs.speculative_distance + std::min(glm::length(s.v_[a]) * dt, s.extent_[a]) +
-                          std::min(glm::length(s.v_[b]) * dt, s.extent_[b]);
-    // b's centre and frame in a's frame, against where they were when the manifolds were made
-    const Quat qa_inv = glm::conjugate(s.q_[a]);
-    const Vec3 rel_position = qa_inv * (s.com_[b] - s.com_[a]);
-    const Quat rel_rotation = qa_inv * s.q_[b];
     PairCache& c = caches[p.cache];
-    const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;  // as collide_pair keeps it
-    const bool same = reuse && c.margin >= margin &&
-                      std::abs(glm::dot(rel_rotation, c.rel_rotation)) >= cos_half &&
-                      carried_points_moved(in_b, in_b ? s.extent_[a] : s.extent_[b], c, rel_position, rel_rotation) <=
-                          cs.reuse_distance;
-    if (!same) {
-      collide_pair(s, p, c, a, b, margin);
-      c.rel_position = rel_position, c.rel_rotation = rel_rotation;
+    if (!plan.same) {
+      if (plan.batched != kNoIndex && fresh) c.narrow = fresh_narrow[k];
+      collide_pair(s, p, c, a, b, plan.margin, plan.batched != kNoIndex ? &box_manifolds[plan.batched] : nullptr);
+      c.rel_position = plan.rel_position, c.rel_rotation = plan.rel_rotation;
     }
     for (std::uint32_t m = caches[p.cache].first; m != kNoIndex; m = manifolds[m].next) {
       emit(s, p, m, a, b);
-      ++(same ? reused : built);
+      ++(plan.same ? reused : built);
     }
   }
   shape_pairs.resize(keep);
@@ -461,9 +502,10 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
 // or, when the features changed (a face-on-face contact whose clipped corners sit on the
 // edges flips their labels under jitter), of the nearest old point within the linear slop in
 // a's frame (Jolt matches contact points by position the same way). Without that fallback a
-// 5-box stack rocked at 0.04 rad/s.
+// 5-box stack rocked at 0.04 rad/s. `made`: the pair's manifold when make_manifolds already
+// made it (a box-box pair, by collide_batch, its narrow cache already updated), else null.
 void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCache& c, std::uint32_t a,
-                                 std::uint32_t b, double margin) {
+                                 std::uint32_t b, double margin, const Manifold* made) {
   const ContactSettings& cs = s.settings_;
   const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
   const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
@@ -595,7 +637,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       if (merged.count > 0) keep(merged, mesh_a);
     }
   } else {
-    const Manifold m = collide(sa.shape, pose_a, sb.shape, pose_b, ns, &c.narrow);
+    const Manifold m = made ? *made : collide(sa.shape, pose_a, sb.shape, pose_b, ns, &c.narrow);
     if (m.count > 0) keep(m, false);
   }
   // the old chain goes back to the pool
