@@ -6,6 +6,7 @@
 // same pair as hulls of boxes give the same manifold.
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <utility>
 
 #include "narrow_internal.h"
@@ -567,6 +568,7 @@ template <int W>
 struct BoxLanes {
   double R[3][3][W], AR[3][3][W], t[3][W], tb[3][W], ha[3][W], hb[3][W];  // the BoxPair
   double face_sep_a[3][W], face_sep_b[3][W], edge_sep[9][W];                // every axis's separation
+  double valid[W];  // 1: the pair passes collide()'s quick input checks (else collide() decides)
   double far[W], margin[W], fa[W], fb[W], ee[W], ek[W], face_a[W], face_b[W], edge[W], ref_a[W];
   // the face contact: reference face fr (its half sizes hu, hv, h_face, its side s0), incident
   // face fi (centre c, half axes a1, a2, corners), the deepest incident vertex (the clipping's
@@ -746,6 +748,20 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
     margin = detail::lanes::load<V>(in[20]);
   }
   const V zero = splat<V>(0), one = splat<V>(1), two = splat<V>(2), inf = splat<V>(INFINITY);
+  // collide()'s quick input checks (manifold.cpp): unit quaternions to within 0.9e-6, finite
+  // positions, a finite margin >= 0, finite half extents > 0; a pair that fails them takes
+  // collide(), whose full checks throw or pass it
+  {
+    constexpr double kHuge = std::numeric_limits<double>::max();
+    constexpr double kLo = (1 - 0.9e-6) * (1 - 0.9e-6), kHi = (1 + 0.9e-6) * (1 + 0.9e-6);
+    const V qa2 = qa[0] * qa[0] + qa[1] * qa[1] + qa[2] * qa[2] + qa[3] * qa[3];
+    const V qb2 = qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3];
+    M ok = (qa2 >= kLo) & (qa2 <= kHi) & (qb2 >= kLo) & (qb2 <= kHi) & (margin >= 0) & (margin <= kHuge);
+    for (int k = 0; k < 3; ++k)
+      ok &= (vabs(xa[k]) <= kHuge) & (vabs(xb[k]) <= kHuge) & (ha[k] > 0) & (ha[k] <= kHuge) & (hb[k] > 0) &
+            (hb[k] <= kHuge);
+    store(o.valid, ok ? one : zero);
+  }
   // the bounding spheres
   V d[3];
   for (int k = 0; k < 3; ++k) d[k] = xb[k] - xa[k];
@@ -924,6 +940,10 @@ namespace {
 // contact or the face clipping, reduction and output through the single pair's functions.
 template <int W>
 [[gnu::always_inline]] inline void box_tail(const BoxLanes<W>& o, int l, const PairQuery& q, Manifold& m) {
+  if (o.valid[l] == 0) {
+    m = collide(*q.a, q.pose_a, *q.b, q.pose_b, {.speculative_margin = q.margin}, q.cache);
+    return;
+  }
   // a fresh Manifold, as collide() returns it (stores the width of the lanes, not a string op)
   std::memset(static_cast<void*>(&m), 0, sizeof m);
   m.normal.z = 1;

@@ -113,8 +113,9 @@ enum class BatchPath : std::uint8_t {
 /// left as collide() leaves it. Box-box pairs under ConvexMethod::Sat run several at a time
 /// in SIMD lanes (their separating axes, reference and incident faces side by side, so their
 /// dependent chains overlap and their branches become masks); every other pair runs collide().
-/// Requires out.size() >= pairs.size(). Throws Error like collide() for the first bad pair
-/// (out is then partly written); never allocates.
+/// Requires out.size() >= pairs.size(). Throws Error like collide() for a bad pair (when
+/// several are bad, a box pair's error may come after a later pair's; out is then partly
+/// written); never allocates.
 void collide_batch(std::span<const PairQuery> pairs, std::span<Manifold> out,
                    ConvexMethod method = ConvexMethod::Sat, BatchPath path = BatchPath::Best);
 
