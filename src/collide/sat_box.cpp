@@ -728,24 +728,26 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
   // the pairs, one per lane
   V ha[3], hb[3], xa[3], xb[3], qa[4], qb[4], margin;
   {
-    double in[21][W];
-    for (int l = 0; l < W; ++l) {
-      const PairQuery& p = *q[l < n ? l : n - 1];
-      const Vec3 &a = p.a->half_extents, &b = p.b->half_extents;
-      const Pose &pa = p.pose_a, &pb = p.pose_b;
-      for (int k = 0; k < 3; ++k) {
-        in[k][l] = a[k], in[3 + k][l] = b[k], in[6 + k][l] = pa.position[k], in[9 + k][l] = pb.position[k];
-      }
-      in[12][l] = pa.rotation.w, in[13][l] = pa.rotation.x, in[14][l] = pa.rotation.y, in[15][l] = pa.rotation.z;
-      in[16][l] = pb.rotation.w, in[17][l] = pb.rotation.x, in[18][l] = pb.rotation.y, in[19][l] = pb.rotation.z;
-      in[20][l] = p.margin;
-    }
+    const PairQuery* p[W];
+    for (int l = 0; l < W; ++l) p[l] = q[l < n ? l : n - 1];
+    // one lane per pair, each vector built from its lanes' values (no stores to reload)
+    auto gather = [&]<std::size_t... L>(V& to, auto&& field, std::index_sequence<L...>) { to = V{field(*p[L])...}; };
+    const auto lanes = std::make_index_sequence<std::size_t(W)>{};
     for (int k = 0; k < 3; ++k) {
-      ha[k] = detail::lanes::load<V>(in[k]), hb[k] = detail::lanes::load<V>(in[3 + k]);
-      xa[k] = detail::lanes::load<V>(in[6 + k]), xb[k] = detail::lanes::load<V>(in[9 + k]);
+      gather(ha[k], [k](const PairQuery& x) { return x.a->half_extents[k]; }, lanes);
+      gather(hb[k], [k](const PairQuery& x) { return x.b->half_extents[k]; }, lanes);
+      gather(xa[k], [k](const PairQuery& x) { return x.pose_a.position[k]; }, lanes);
+      gather(xb[k], [k](const PairQuery& x) { return x.pose_b.position[k]; }, lanes);
     }
-    for (int k = 0; k < 4; ++k) qa[k] = detail::lanes::load<V>(in[12 + k]), qb[k] = detail::lanes::load<V>(in[16 + k]);
-    margin = detail::lanes::load<V>(in[20]);
+    gather(qa[0], [](const PairQuery& x) { return x.pose_a.rotation.w; }, lanes);
+    gather(qa[1], [](const PairQuery& x) { return x.pose_a.rotation.x; }, lanes);
+    gather(qa[2], [](const PairQuery& x) { return x.pose_a.rotation.y; }, lanes);
+    gather(qa[3], [](const PairQuery& x) { return x.pose_a.rotation.z; }, lanes);
+    gather(qb[0], [](const PairQuery& x) { return x.pose_b.rotation.w; }, lanes);
+    gather(qb[1], [](const PairQuery& x) { return x.pose_b.rotation.x; }, lanes);
+    gather(qb[2], [](const PairQuery& x) { return x.pose_b.rotation.y; }, lanes);
+    gather(qb[3], [](const PairQuery& x) { return x.pose_b.rotation.z; }, lanes);
+    gather(margin, [](const PairQuery& x) { return x.margin; }, lanes);
   }
   const V zero = splat<V>(0), one = splat<V>(1), two = splat<V>(2), inf = splat<V>(INFINITY);
   // collide()'s quick input checks (manifold.cpp): unit quaternions to within 0.9e-6, finite
