@@ -353,16 +353,18 @@ Vec3 column(const double (&R)[3][3], int j) { return Vec3(R[j][0], R[j][1], R[j]
 }
 
 // The face contact after the clipping: `in` (the clipped points in the reference face's
-// coordinates, their depths; `kept` >= 1) moved onto B's surface, reduced to at most four
+// coordinates, their depths; `kept` >= 1) moved onto B's surface (unless kOnB), reduced to at most four
 // and written to the world through the reference face's frame, frame(wu, wv, ww, origin):
 // its axes (u, v and the face's axis) and the reference box's centre (m). Shared by the
 // single pair and the lanes.
-template <class Frame>
+template <bool kOnB = false, class Frame>
 [[gnu::always_inline]] inline void finish_face(FacePoint* in, const double* depth, int kept, bool ref_a, double s0,
                                                double w_ref, Frame&& frame, Manifold& m) {
   // B's points: the incident points when A holds the reference face, else their feet on it
+  // (kOnB: the caller has moved them)
   const double incident = ref_a ? 1.0 : 0.0;
-  for (int i = 0; i < kept; ++i) in[i].w = in[i].w * incident + w_ref * (1 - incident);
+  if constexpr (!kOnB)
+    for (int i = 0; i < kept; ++i) in[i].w = in[i].w * incident + w_ref * (1 - incident);
   int pick[4];
   const int count = reduce_face_points(in, depth, kept, pick);
   // back to the world: point_a = point_b + depth normal in every case
@@ -654,10 +656,11 @@ PBA_LANES void mat3_of(V w, V x, V y, V z, V (&R)[3][3]) {
 // hu, |v| <= hv, then all 24 candidates (4 corners, 4 edges x 4 sides, 4 rectangle corners)
 // computed as clip_face_rect computes them, each kept by the mask of the test that keeps it
 // there (an edge's candidates when it crosses that side, the rectangle's corners when some
-// corner is outside; none when every corner is outside one side) and by the depth filter
+// corner is outside; none when every corner is outside one side) and by the depth filter;
+// the candidates' w is stored on B's surface (incident 1: as is, 0: w_ref)
 template <class V>
 PBA_LANES void clip_lanes(const V (&corner)[4][3], const V* c, const V* a1, const V* a2, V fi, V hu, V hv, V h_face,
-                          V s0, V margin, BoxLanes<kWidth<V>>& o) {
+                          V s0, V margin, V incident, V w_ref, BoxLanes<kWidth<V>>& o) {
   using M = LaneMask<V>;
   using L = LaneMask<V>;
   // the corners in the loop order of face fi
@@ -686,7 +689,8 @@ PBA_LANES void clip_lanes(const V (&corner)[4][3], const V* c, const V* a1, cons
   const V floor = -margin;
   auto emit = [&](int k, V u, V v, V w, M keep) {
     const V d = h_face - s0 * w;
-    store(o.cu[k], u), store(o.cv[k], v), store(o.cw[k], w), store(o.cd[k], d);
+    // w stored on B's surface (finish_face's move, made here)
+    store(o.cu[k], u), store(o.cv[k], v), store(o.cw[k], w * incident + w_ref * (1 - incident)), store(o.cd[k], d);
     bits |= (keep & (d >= floor)) & (L{} + (1L << k));
   };
   for (int i = 0; i < 4; ++i) emit(i, qu[i], qv[i], qw[i], inside[i] & ~none);
@@ -896,8 +900,9 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
     const V lo = c[r] - a1[r], hi1 = c[r] + a1[r];
     corner[0][r] = lo - a2[r], corner[1][r] = lo + a2[r], corner[2][r] = hi1 - a2[r], corner[3][r] = hi1 + a2[r];
   }
-  store(o.fr, fr), store(o.fi, fi), store(o.s0, s0), store(o.w_ref, s0 * hf[2]);
-  clip_lanes<V>(corner, c, a1, a2, fi, hf[0], hf[1], hf[2], s0, margin, o);
+  const V w_ref = s0 * hf[2], incident = ref_a ? one : zero;
+  store(o.fr, fr), store(o.fi, fi), store(o.s0, s0), store(o.w_ref, w_ref);
+  clip_lanes<V>(corner, c, a1, a2, fi, hf[0], hf[1], hf[2], s0, margin, incident, w_ref, o);
   // the deepest incident vertex (the incident corner farthest along -normal)
   {
     V qv[3] = {tri[0], tri[1], tri[2]}, bits = zero;
@@ -908,7 +913,7 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
     }
     V qf[3];
     rotate3(perm, qv, qf);
-    for (int r = 0; r < 3; ++r) store(o.deep[r], qf[r]);
+    store(o.deep[0], qf[0]), store(o.deep[1], qf[1]), store(o.deep[2], qf[2] * incident + w_ref * (1 - incident));
     store(o.deep_vertex, bits);
     store(o.deep_depth, hf[2] - s0 * qf[2]);
   }
@@ -1002,7 +1007,7 @@ template <int W>
     depth[0] = o.deep_depth[l];
     kept = 1;
   }
-  finish_face(pts.data(), depth.data(), kept, ref_a, s0, o.w_ref[l],
+  finish_face<true>(pts.data(), depth.data(), kept, ref_a, s0, o.w_ref[l],
               [&](Vec3& wu, Vec3& wv, Vec3& ww, Vec3& origin) {
                 wu = Vec3(o.wu[0][l], o.wu[1][l], o.wu[2][l]), wv = Vec3(o.wv[0][l], o.wv[1][l], o.wv[2][l]);
                 ww = Vec3(o.ww[0][l], o.ww[1][l], o.ww[2][l]), origin = Vec3(o.origin[0][l], o.origin[1][l], o.origin[2][l]);
