@@ -1039,8 +1039,10 @@ __attribute__((target("avx2"))) void box_group_avx2(const PairQuery* const* q, M
 
 void collide_boxes_sat_batch(const PairQuery* const* q, Manifold* const* out, int n, BatchPath path) {
 #if PBA_BOX_LANES_X86
-  // Best is AVX2 where the processor has it, even beside AVX-512: on the Xeon of
-  // docs/benchmarks.md the eight-lane path measured slower (0.25 against 0.13 us per pair)
+  // Best is AVX2 where the processor has it, even beside AVX-512: GCC 12 turns the lane masks
+  // of eight-double vectors into scalar code (a compare and a set per lane), so the eight-lane
+  // path measured slower (0.25 against 0.12 us per pair, docs/benchmarks.md); it is kept, and
+  // tested to give the same bits, for a compiler that keeps those masks in registers
   static const bool avx2 = __builtin_cpu_supports("avx2"), avx512 = __builtin_cpu_supports("avx512f");
   if (path == BatchPath::Best) path = avx2 ? BatchPath::Avx2 : BatchPath::Scalar;
   if (path == BatchPath::Avx512 && !avx512) path = avx2 ? BatchPath::Avx2 : BatchPath::Scalar;
