@@ -1015,6 +1015,7 @@ template <int W>
               m);
 }
 
+#if PBA_BOX_LANES_X86
 template <class V>
 [[gnu::always_inline]] inline void box_group(const PairQuery* const* q, Manifold* const* out, int n) {
   constexpr int W = kWidth<V>;
@@ -1026,7 +1027,6 @@ template <class V>
   }
 }
 
-#if PBA_BOX_LANES_X86
 __attribute__((target("avx512f"))) void box_group_avx512(const PairQuery* const* q, Manifold* const* out, int n) {
   box_group<detail::lanes::v8d>(q, out, n);
 }
@@ -1050,6 +1050,7 @@ void collide_boxes_sat_batch(const PairQuery* const* q, Manifold* const* out, in
   if (path == BatchPath::Avx512) return box_group_avx512(q, out, n);
   if (path == BatchPath::Avx2) return box_group_avx2(q, out, n);
 #endif
+  (void)path;
   for (int i = 0; i < n; ++i) {
     const PairQuery& p = *q[i];
     Manifold& m = *out[i];
