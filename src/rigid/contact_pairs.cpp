@@ -419,6 +419,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
   // starts from NarrowPhaseCache{} in fresh_narrow until then.
   constexpr std::size_t kSpan = 64, kBoxes = 16;
   plans.resize(kSpan);
+  fates.resize(kSpan);
   fresh_narrow.resize(kBoxes);
   box_manifolds.resize(kBoxes);
   const PairCache blank{};
@@ -430,9 +431,9 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
     for (; last < shape_pairs.size() && last - first < kSpan && box_queries.size() < kBoxes; ++last) {
       const ShapePair& p = shape_pairs[last];
       const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
+      fates[last - first] = fate_of(p, a, b);
+      if (fates[last - first] != PairPlan::Fate::Touching) continue;
       PairPlan& plan = plans[last - first];
-      plan.fate = fate_of(p, a, b);
-      if (plan.fate != PairPlan::Fate::Touching) continue;
       // points are made as far out as the two bodies can close in one step (speculative
       // contacts) (up to each body's size: faster ones are caught by the continuous pass)
       plan.margin = cs.speculative_distance + std::min(glm::length(s.v_[a]) * dt, s.extent_[a]) +
@@ -464,11 +465,11 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
     // their manifolds (carried over, made above, or made now) to the solver
     for (std::size_t k = first; k < last; ++k) {
       ShapePair p = shape_pairs[k];
-      const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
-      const PairPlan& plan = plans[k - first];
+      const PairPlan::Fate fate = fates[k - first];
       // a pair whose bodies sleep (or sleep on a static body) is kept as it is, manifolds and
       // impulses, for when they wake; against a kinematic body that went away it ends
-      if (plan.fate == PairPlan::Fate::Asleep) {
+      if (fate == PairPlan::Fate::Asleep) {
+        const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
         const bool kinematic = s.type_[a] == BodyType::Kinematic || s.type_[b] == BodyType::Kinematic;
         if (kinematic && !proxies[p.proxy_a].fat.overlaps(proxies[p.proxy_b].fat))
           free_pair(p);
@@ -477,16 +478,18 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
         continue;
       }
       // fat boxes apart: the pair ends
-      if (plan.fate == PairPlan::Fate::End) {
+      if (fate == PairPlan::Fate::End) {
         free_pair(p);
         continue;
       }
       // tight boxes apart: no contact this step (the narrow-phase cache stays)
-      if (plan.fate == PairPlan::Fate::Apart) {
+      if (fate == PairPlan::Fate::Apart) {
         if (p.cache != kNoIndex) free_manifolds(caches[p.cache]), caches[p.cache].margin = -1;
         shape_pairs[keep++] = p;
         continue;
       }
+      const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
+      const PairPlan& plan = plans[k - first];
       const bool fresh = p.cache == kNoIndex;
       if (fresh) p.cache = new_cache();
       shape_pairs[keep++] = p;

@@ -225,17 +225,18 @@ struct RigidContacts {
   std::vector<Manifold> mesh_scratch;         // collide_mesh output
   std::vector<int> group_of, group_first;     // scratch: the mesh manifolds' groups of one normal
   std::vector<narrow::Candidate> merge_scratch;  // scratch: a group's points
-  /// make_manifolds' plan for a pair, made before its span of pairs is walked.
+  /// make_manifolds' plan for a touching pair, made before its span of pairs is walked.
   struct PairPlan {
+    /// What becomes of a pair this step (make_manifolds).
     enum class Fate : std::uint8_t { Asleep, End, Apart, Touching };
-    Fate fate = Fate::Asleep;          // what becomes of the pair this step (make_manifolds)
     Vec3 rel_position{0, 0, 0};        // b's centre in a's frame (m)
     Quat rel_rotation{1, 0, 0, 0};     // b's frame in a's frame
     double margin = 0;                 // the speculative margin of this step (m)
     std::uint32_t batched = kNoIndex;  // its manifold in box_manifolds (a box-box pair), or kNoIndex
     bool same = false;                 // its manifolds are carried over
   };
-  std::vector<PairPlan> plans;                // scratch: by shape pair of the span being walked
+  std::vector<PairPlan::Fate> fates;          // scratch: by shape pair of the span being walked
+  std::vector<PairPlan> plans;                // scratch: the same, written for touching pairs only
   std::vector<PairQuery> box_queries;         // scratch: the box-box pairs to make, for collide_batch
   std::vector<Manifold> box_manifolds;        // scratch: their manifolds
   std::vector<NarrowPhaseCache> fresh_narrow; // scratch: by box query, the narrow cache of a pair without a cache yet
