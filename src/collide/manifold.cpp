@@ -450,4 +450,35 @@ Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   return m;
 }
 
+
+void collide_batch(std::span<const PairQuery> pairs, std::span<Manifold> out, ConvexMethod method, BatchPath path) {
+  if (out.size() < pairs.size())
+    throw Error("collide_batch: out holds " + std::to_string(out.size()) + " manifolds for " +
+                std::to_string(pairs.size()) + " pairs");
+  // box-box pairs wait in groups of kGroup for the lanes; every other pair runs collide()
+  constexpr int kGroup = 32;
+  const PairQuery* group[kGroup];
+  Manifold* group_out[kGroup];
+  int waiting = 0;
+  const bool sat = method == ConvexMethod::Sat;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const PairQuery& p = pairs[i];
+    if (!p.a || !p.b) throw Error("collide_batch: pairs[" + std::to_string(i) + "] has a null shape");
+    // a pair that is not two boxes takes collide(); the lanes make collide()'s quick checks
+    // of a box pair's input (one that fails them takes collide() too, which throws for bad input)
+    if (!(sat & (p.a->type == ShapeType::Box) & (p.b->type == ShapeType::Box))) {
+      const NarrowPhaseSettings settings{.speculative_margin = p.margin, .method = method};
+      out[i] = collide(*p.a, p.pose_a, *p.b, p.pose_b, settings, p.cache);
+      continue;
+    }
+    group[waiting] = &p;
+    group_out[waiting] = &out[i];
+    if (++waiting == kGroup) {
+      collide_boxes_sat_batch(group, group_out, waiting, path);
+      waiting = 0;
+    }
+  }
+  if (waiting > 0) collide_boxes_sat_batch(group, group_out, waiting, path);
+}
+
 }  // namespace pba

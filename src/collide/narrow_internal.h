@@ -336,6 +336,10 @@ void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose&
 /// on two box polyhedra (sat_box.cpp).
 void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pose& pb, double margin, SatCache* cache,
                        Manifold& m);
+/// Box-box pairs q[0..n) (both shapes boxes, already checked) into *out[0..n): the same
+/// bits, and the same cache updates, as collide_boxes_sat pair by pair, computed up to 8
+/// pairs at a time in SIMD lanes on `path` (sat_box.cpp).
+void collide_boxes_sat_batch(const PairQuery* const* q, Manifold* const* out, int n, BatchPath path);
 /// A manifold from a contact normal n (A to B) and one fallback point pair: the support
 /// features of both bodies along n clipped against each other when one of them is a face
 /// within a few degrees of n, else the single point (manifold.cpp).

@@ -5,6 +5,8 @@
 // (sat.cpp, clip.cpp), with the box's fixed half-edge numbering, so a box pair and the
 // same pair as hulls of boxes give the same manifold.
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <utility>
 
 #include "narrow_internal.h"
@@ -99,6 +101,30 @@ constexpr FaceLoopTable make_face_loops() {
   return t;
 }
 constexpr FaceLoopTable kFaceLoops = make_face_loops();
+
+// the feature ids of clip_face_rect's 24 candidates, in its order, for reference face fr and
+// incident face fi: the incident corners' vertices, the (edge, side) crossings, the
+// rectangle's corners
+struct CandidateIdTable {
+  std::uint32_t id[6][6][24] = {};
+};
+constexpr CandidateIdTable make_candidate_ids() {
+  CandidateIdTable t{};
+  for (std::uint32_t fr = 0; fr < 6; ++fr)
+    for (std::uint32_t fi = 0; fi < 6; ++fi) {
+      std::uint32_t* id = t.id[fr][fi];
+      const FaceSides& side = kFaceSides.face[fr];
+      for (int i = 0; i < 4; ++i) {
+        id[i] = kFaceLoops.face[fi][i].vertex;
+        const std::uint32_t edge_id = kIdCross | ((kFaceLoops.face[fi][i].edge & kLabelMask) << 15);
+        for (int k = 0; k < 4; ++k) id[4 + 4 * i + k] = edge_id | side.side_label[k];
+      }
+      for (int ku = 0; ku < 2; ++ku)
+        for (int kv = 0; kv < 2; ++kv) id[20 + 2 * ku + kv] = side.corner_id[ku][kv];
+    }
+  return t;
+}
+constexpr CandidateIdTable kCandidateIds = make_candidate_ids();
 
 // a point of the incident polygon in the reference face's coordinates (u, v in the face, w
 // along its axis), with its feature id and the label of the polygon edge from it to the next
@@ -289,6 +315,75 @@ Vec3 corner(const double* h, std::uint32_t v) {
 }
 Vec3 column(const double (&R)[3][3], int j) { return Vec3(R[j][0], R[j][1], R[j][2]); }
 
+// The edge-edge axis ek = 3 ei + ej (separation ee, above the faces' by the hysteresis): the
+// cache takes the supporting edges; beyond the margin nothing, else the closest points of
+// the two edges (one point). Shared by the single pair and the lanes (the same bits).
+[[gnu::always_inline]] inline void edge_contact(const BoxPair& p, int ek, double ee, double margin, const Pose& pa,
+                                                SatCache* cache, Manifold& m) {
+  const int ei = ek / 3, ej = ek % 3;
+  // the axis from A to B, and the supporting edges: A's along axis ei farthest along it,
+  // B's along ej farthest along its opposite
+  const EdgeAxis a = edge_axis(p, ei, ej);
+  Vec3 L(0.0);
+  L[kNext[ei]] = a.l1;
+  L[kPrev[ei]] = a.l2;
+  const Vec3 axis = (a.d >= 0 ? L : -L) / std::sqrt(a.len2);
+  std::uint32_t va = 0, vb = 0;
+  for (int k = 0; k < 3; ++k)
+    if (k != ei && axis[k] > 0) va |= 1u << k;
+  for (int k = 0; k < 3; ++k)
+    if (k != ej && glm::dot(column(p.R, k), axis) < 0) vb |= 1u << k;
+  const std::uint32_t edge_a = kEdgeTable.he[va][ei] & ~1u, edge_b = kEdgeTable.he[vb][ej] & ~1u;
+  if (cache) *cache = {SatCache::Kind::Edges, edge_a, edge_b};
+  if (ee > margin) return;
+  // edge contact: the closest points of the two edges
+  Vec3 da(0.0);
+  da[ei] = 1;
+  const Vec3 tv(p.t[0], p.t[1], p.t[2]);
+  const Mat3 R(column(p.R, 0), column(p.R, 1), column(p.R, 2));
+  const Vec3 a0 = corner(p.ha, va), a1 = a0 + 2 * p.ha[ei] * da;
+  const Vec3 b0 = R * corner(p.hb, vb) + tv, b1 = b0 + 2 * p.hb[ej] * column(p.R, ej);
+  Vec3 ca, cb;
+  closest_segments(a0, a1, b0, b1, ca, cb);
+  m.normal = pa.rotation * axis;
+  ca = apply(pa, ca);
+  cb = apply(pa, cb);
+  m.count = 1;
+  m.points[0] = {ca, cb, glm::dot(ca - cb, m.normal), edge_pair_id(edge_a, edge_b)};
+}
+
+// The face contact after the clipping: `in` (the clipped points in the reference face's
+// coordinates, their depths; `kept` >= 1) moved onto B's surface (unless kOnB), reduced to at most four
+// and written to the world through the reference face's frame, frame(wu, wv, ww, origin):
+// its axes (u, v and the face's axis) and the reference box's centre (m). Shared by the
+// single pair and the lanes.
+template <bool kOnB = false, class Frame>
+[[gnu::always_inline]] inline void finish_face(FacePoint* in, const double* depth, int kept, bool ref_a, double s0,
+                                               double w_ref, Frame&& frame, Manifold& m) {
+  // B's points: the incident points when A holds the reference face, else their feet on it
+  // (kOnB: the caller has moved them)
+  const double incident = ref_a ? 1.0 : 0.0;
+  if constexpr (!kOnB)
+    for (int i = 0; i < kept; ++i) in[i].w = in[i].w * incident + w_ref * (1 - incident);
+  int pick[4];
+  const int count = reduce_face_points(in, depth, kept, pick);
+  // back to the world: point_a = point_b + depth normal in every case
+  Vec3 wu, wv, ww, origin;
+  frame(wu, wv, ww, origin);
+  m.normal = ww * (ref_a ? s0 : -s0);
+  const std::uint32_t flip_id = ref_a ? 0u : kIdFlip;
+  for (int i = 0; i < count; ++i) {
+    const FacePoint& q = in[pick[i]];
+    const double d = depth[std::size_t(pick[i])];
+    ContactPoint& c = m.points[std::size_t(i)];
+    c.point_b = wu * q.u + wv * q.v + ww * q.w + origin;
+    c.point_a = c.point_b + d * m.normal;
+    c.depth = d;
+    c.id = q.id | flip_id;
+  }
+  m.count = count;
+}
+
 }  // namespace
 
 void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pose& pb, double margin, SatCache* cache,
@@ -369,37 +464,8 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
       keep_max(sep[std::size_t(k)], k, ee, ek);
     }
   }
-  const int ei = ek / 3, ej = ek % 3;
   if (ee > relevant) {
-    // the axis from A to B, and the supporting edges: A's along axis ei farthest along it,
-    // B's along ej farthest along its opposite
-    const EdgeAxis a = edge_axis(p, ei, ej);
-    Vec3 L(0.0);
-    L[kNext[ei]] = a.l1;
-    L[kPrev[ei]] = a.l2;
-    const Vec3 axis = (a.d >= 0 ? L : -L) / std::sqrt(a.len2);
-    std::uint32_t va = 0, vb = 0;
-    for (int k = 0; k < 3; ++k)
-      if (k != ei && axis[k] > 0) va |= 1u << k;
-    for (int k = 0; k < 3; ++k)
-      if (k != ej && glm::dot(column(p.R, k), axis) < 0) vb |= 1u << k;
-    const std::uint32_t edge_a = kEdgeTable.he[va][ei] & ~1u, edge_b = kEdgeTable.he[vb][ej] & ~1u;
-    if (cache) *cache = {SatCache::Kind::Edges, edge_a, edge_b};
-    if (ee > margin) return;
-    // edge contact: the closest points of the two edges
-    Vec3 da(0.0);
-    da[ei] = 1;
-    const Vec3 tv(p.t[0], p.t[1], p.t[2]);
-    const Mat3 R(column(p.R, 0), column(p.R, 1), column(p.R, 2));
-    const Vec3 a0 = corner(p.ha, va), a1 = a0 + 2 * p.ha[ei] * da;
-    const Vec3 b0 = R * corner(p.hb, vb) + tv, b1 = b0 + 2 * p.hb[ej] * column(p.R, ej);
-    Vec3 ca, cb;
-    closest_segments(a0, a1, b0, b1, ca, cb);
-    m.normal = pa.rotation * axis;
-    ca = apply(pa, ca);
-    cb = apply(pa, cb);
-    m.count = 1;
-    m.points[0] = {ca, cb, glm::dot(ca - cb, m.normal), edge_pair_id(edge_a, edge_b)};
+    edge_contact(p, ek, ee, margin, pa, cache, m);
     return;
   }
   const bool ref_a = !(fb > kRelFace * fa + kAbs);
@@ -473,28 +539,525 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
     depth[0] = hr[k0] - s0 * q[k0];
     kept = 1;
   }
-  // B's points: the incident points when A holds the reference face, else their feet on it
-  const double incident = ref_a ? 1.0 : 0.0;
-  for (int i = 0; i < kept; ++i) in[i].w = in[i].w * incident + w_ref * (1 - incident);
-  int pick[4];
-  const int count = reduce_face_points(in, depth.data(), kept, pick);
+  finish_face(in, depth.data(), kept, ref_a, s0, w_ref,
+              [&](Vec3& wu, Vec3& wv, Vec3& ww, Vec3& origin) {
+                const Pose& pr = ref_a ? pa : pb;
+                const Mat3 W = glm::mat3_cast(pr.rotation);
+                wu = W[k1], wv = W[k2], ww = W[k0], origin = pr.position;
+              },
+              m);
+}
 
-  // back to the world: point_a = point_b + depth normal in every case
-  const Pose& pr = ref_a ? pa : pb;
-  const Mat3 W = glm::mat3_cast(pr.rotation);
-  const Vec3 wu = W[k1], wv = W[k2], ww = W[k0];
-  m.normal = ww * (ref_a ? s0 : -s0);
-  const std::uint32_t flip_id = ref_a ? 0u : kIdFlip;
-  for (int i = 0; i < count; ++i) {
-    const FacePoint& q = in[pick[i]];
-    const double d = depth[std::size_t(pick[i])];
-    ContactPoint& c = m.points[std::size_t(i)];
-    c.point_b = wu * q.u + wv * q.v + ww * q.w + pr.position;
-    c.point_a = c.point_b + d * m.normal;
-    c.depth = d;
-    c.id = q.id | flip_id;
+}  // namespace pba::narrow
+
+// --- many pairs in SIMD lanes ---------------------------------------------------------------
+// collide_boxes_sat for up to 8 pairs at once: the relative pose, the fifteen axes and their
+// choice, the reference and incident faces and the incident face's corners in the reference
+// face's coordinates run in SIMD lanes (one pair per lane, AVX2 or AVX-512 doubles as GCC
+// vector extensions, rigid/lanes.h), with selections where the single pair branches or
+// indexes by a run-time axis; the clipping, the reduction and the edge contact then run pair
+// by pair through the single pair's own functions. Each lane does the single pair's
+// operations in its order (the build has -ffp-contract=off; division and square root are
+// correctly rounded; the selections are the same comparisons), so every path gives the same
+// bits (BoxBatch.* in tests/collide/test_narrow_batch.cpp).
+
+namespace pba::narrow {
+
+namespace {
+
+// what the lanes leave for the pair-by-pair tail, lane l of W at [l]
+template <int W>
+struct BoxLanes {
+  double R[3][3][W], AR[3][3][W], t[3][W], tb[3][W], ha[3][W], hb[3][W];  // the BoxPair
+  double face_sep_a[3][W], face_sep_b[3][W], edge_sep[9][W];                // every axis's separation
+  double valid[W];  // 1: the pair passes collide()'s quick input checks (else collide() decides)
+  double far[W], margin[W], fa[W], fb[W], ee[W], ek[W], face_a[W], face_b[W], edge[W], ref_a[W];
+  // the face contact: reference face fr (its half sizes hu, hv, h_face, its side s0), incident
+  // face fi (centre c, half axes a1, a2, corners), the deepest incident vertex (the clipping's
+  // fallback: its face coordinates, vertex, depth) and the reference face's world frame
+  double fr[W], fi[W], s0[W];
+  // the clipping's 24 candidates (clip_face_rect's, in its order): face coordinates and
+  // depth, and in bits[l] bit k set when lane l keeps candidate k
+  double cu[24][W], cv[24][W], cw[24][W], cd[24][W];
+  long bits[W];
+  double deep[3][W], deep_vertex[W], deep_depth[W];
+  double wu[3][W], wv[3][W], ww[3][W], origin[3][W], w_ref[W];
+};
+
+}  // namespace
+
+}  // namespace pba::narrow
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#include "rigid/lanes.h"
+
+namespace pba::narrow {
+
+namespace {
+
+using detail::lanes::kWidth;
+using detail::lanes::splat;
+using detail::lanes::store;
+
+template <class V>
+using LaneMask = decltype(V{} < V{});
+
+// lane by lane (the build has -fno-math-errno: the compiler makes it one vector square root)
+template <class V>
+PBA_LANES V vsqrt(V x) {
+  V r = x;
+  for (int i = 0; i < kWidth<V>; ++i) r[i] = std::sqrt(x[i]);
+  return r;
+}
+// std::abs: the sign bit cleared
+template <class V>
+PBA_LANES V vabs(V x) {
+  using L = LaneMask<V>;
+  return reinterpret_cast<V>(reinterpret_cast<L>(x) & (L{} + 0x7fffffffffffffffL));
+}
+// std::max's and std::min's comparisons
+template <class V>
+PBA_LANES V vmax(V a, V b) {
+  return a < b ? b : a;
+}
+template <class V>
+PBA_LANES V vmin(V a, V b) {
+  return b < a ? b : a;
+}
+// y[r] = x[(s + r) % 3], s in {0, 1, 2} per lane: the cyclic relabelling that indexing by a
+// run-time axis is in the single pair (its face coordinates (k1, k2, k0), its incident axes
+// (k, j1, j2))
+template <class V>
+PBA_LANES void rotate3(V s, const V* x, V* y) {
+  const LaneMask<V> one = s == 1, two = s == 2;
+  y[0] = two ? x[2] : (one ? x[1] : x[0]);
+  y[1] = two ? x[0] : (one ? x[2] : x[1]);
+  y[2] = two ? x[1] : (one ? x[0] : x[2]);
+}
+// glm::mat3_cast, R[column][row]
+template <class V>
+PBA_LANES void mat3_of(V w, V x, V y, V z, V (&R)[3][3]) {
+  const V qxx = x * x, qyy = y * y, qzz = z * z, qxz = x * z, qxy = x * y, qyz = y * z, qwx = w * x, qwy = w * y,
+          qwz = w * z;
+  const V one = splat<V>(1), two = splat<V>(2);
+  R[0][0] = one - two * (qyy + qzz);
+  R[0][1] = two * (qxy + qwz);
+  R[0][2] = two * (qxz - qwy);
+  R[1][0] = two * (qxy - qwz);
+  R[1][1] = one - two * (qxx + qzz);
+  R[1][2] = two * (qyz + qwx);
+  R[2][0] = two * (qxz + qwy);
+  R[2][1] = two * (qyz - qwx);
+  R[2][2] = one - two * (qxx + qyy);
+}
+
+// clip_face_rect in lanes: the incident face's corners (in the order c -+ a1 -+ a2) taken in
+// the incident face fi's loop order, their outcodes against the reference rectangle |u| <=
+// hu, |v| <= hv, then all 24 candidates (4 corners, 4 edges x 4 sides, 4 rectangle corners)
+// computed as clip_face_rect computes them, each kept by the mask of the test that keeps it
+// there (an edge's candidates when it crosses that side, the rectangle's corners when some
+// corner is outside; none when every corner is outside one side) and by the depth filter;
+// the candidates' w is stored on B's surface (incident 1: as is, 0: w_ref)
+template <class V>
+PBA_LANES void clip_lanes(const V (&corner)[4][3], const V* c, const V* a1, const V* a2, V fi, V hu, V hv, V h_face,
+                          V s0, V margin, V incident, V w_ref, BoxLanes<kWidth<V>>& o) {
+  using M = LaneMask<V>;
+  using L = LaneMask<V>;
+  // the corners in the loop order of face fi
+  V qu[4], qv[4], qw[4];
+  {
+    M face[6];
+    for (int f = 0; f < 6; ++f) face[f] = fi == f;
+    for (int i = 0; i < 4; ++i) {
+      V idx = splat<V>(0);
+      for (int f = 0; f < 6; ++f) idx = face[f] ? splat<V>(kFaceLoops.face[f][i].corner) : idx;
+      const M one = idx == 1, two = idx == 2, three = idx == 3;
+      V x[3];
+      for (int r = 0; r < 3; ++r) x[r] = three ? corner[3][r] : (two ? corner[2][r] : (one ? corner[1][r] : corner[0][r]));
+      qu[i] = x[0], qv[i] = x[1], qw[i] = x[2];
+    }
   }
-  m.count = count;
+  M out_u[4], out_nu[4], out_v[4], out_nv[4], inside[4];
+  for (int i = 0; i < 4; ++i) {
+    out_u[i] = qu[i] > hu, out_nu[i] = -qu[i] > hu, out_v[i] = qv[i] > hv, out_nv[i] = -qv[i] > hv;
+    inside[i] = ~(out_u[i] | out_nu[i] | out_v[i] | out_nv[i]);
+  }
+  const M none = (out_u[0] & out_u[1] & out_u[2] & out_u[3]) | (out_nu[0] & out_nu[1] & out_nu[2] & out_nu[3]) |
+                 (out_v[0] & out_v[1] & out_v[2] & out_v[3]) | (out_nv[0] & out_nv[1] & out_nv[2] & out_nv[3]);
+  const M some = ~(inside[0] & inside[1] & inside[2] & inside[3]) & ~none;
+  L bits = L{};
+  const V floor = -margin;
+  auto emit = [&](int k, V u, V v, V w, M keep) {
+    const V d = h_face - s0 * w;
+    // w stored on B's surface (finish_face's move, made here)
+    store(o.cu[k], u), store(o.cv[k], v), store(o.cw[k], w * incident + w_ref * (1 - incident)), store(o.cd[k], d);
+    bits |= (keep & (d >= floor)) & (L{} + (1L << k));
+  };
+  for (int i = 0; i < 4; ++i) emit(i, qu[i], qv[i], qw[i], inside[i] & ~none);
+  for (int i = 0; i < 4; ++i) {
+    const int j = (i + 1) & 3;
+    const V du = qu[j] - qu[i], dv = qv[j] - qv[i], dw = qw[j] - qw[i];
+    const V iu = 1 / du, iv = 1 / dv;
+    const M cross[4] = {out_u[i] ^ out_u[j], out_nu[i] ^ out_nu[j], out_v[i] ^ out_v[j], out_nv[i] ^ out_nv[j]};
+    for (int k = 0; k < 2; ++k) {
+      const V x = k == 0 ? hu : -hu;
+      const V r = (x - qu[i]) * iu, v = qv[i] + dv * r;
+      emit(4 + 4 * i + k, x, v, qw[i] + dw * r, cross[k] & (vabs(v) <= hv) & some);
+    }
+    for (int k = 2; k < 4; ++k) {
+      const V y = k == 2 ? hv : -hv;
+      const V r = (y - qv[i]) * iv, u = qu[i] + du * r;
+      emit(4 + 4 * i + k, u, y, qw[i] + dw * r, cross[k] & (vabs(u) <= hu) & some);
+    }
+  }
+  // the rectangle's corners inside the parallelogram c + alpha a1 + beta a2, |alpha|, |beta| <= 1
+  const V det = a1[0] * a2[1] - a1[1] * a2[0];
+  const V inv = 1 / det;
+  for (int ku = 0; ku < 2; ++ku)
+    for (int kv = 0; kv < 2; ++kv) {
+      const V u = ku == 0 ? hu : -hu, v = kv == 0 ? hv : -hv;
+      const V du = u - c[0], dv = v - c[1];
+      const V alpha = (du * a2[1] - dv * a2[0]) * inv, beta = (a1[0] * dv - a1[1] * du) * inv;
+      emit(20 + 2 * ku + kv, u, v, c[2] + alpha * a1[2] + beta * a2[2],
+           some & (det != 0) & (vabs(alpha) <= 1) & (vabs(beta) <= 1));
+    }
+  detail::lanes::store(reinterpret_cast<double*>(o.bits), reinterpret_cast<V>(bits));
+}
+
+// The lanes' part of up to W pairs (lanes past n repeat the last pair).
+template <class V>
+PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& o) {
+  constexpr int W = kWidth<V>;
+  using M = LaneMask<V>;
+  // the pairs, one per lane
+  V ha[3], hb[3], xa[3], xb[3], qa[4], qb[4], margin;
+  {
+    const PairQuery* p[W];
+    for (int l = 0; l < W; ++l) p[l] = q[l < n ? l : n - 1];
+    // one lane per pair, each vector built from its lanes' values (no stores to reload)
+    auto gather = [&]<std::size_t... L>(V& to, auto&& field, std::index_sequence<L...>) { to = V{field(*p[L])...}; };
+    const auto lanes = std::make_index_sequence<std::size_t(W)>{};
+    for (int k = 0; k < 3; ++k) {
+      gather(ha[k], [k](const PairQuery& x) { return x.a->half_extents[k]; }, lanes);
+      gather(hb[k], [k](const PairQuery& x) { return x.b->half_extents[k]; }, lanes);
+      gather(xa[k], [k](const PairQuery& x) { return x.pose_a.position[k]; }, lanes);
+      gather(xb[k], [k](const PairQuery& x) { return x.pose_b.position[k]; }, lanes);
+    }
+    gather(qa[0], [](const PairQuery& x) { return x.pose_a.rotation.w; }, lanes);
+    gather(qa[1], [](const PairQuery& x) { return x.pose_a.rotation.x; }, lanes);
+    gather(qa[2], [](const PairQuery& x) { return x.pose_a.rotation.y; }, lanes);
+    gather(qa[3], [](const PairQuery& x) { return x.pose_a.rotation.z; }, lanes);
+    gather(qb[0], [](const PairQuery& x) { return x.pose_b.rotation.w; }, lanes);
+    gather(qb[1], [](const PairQuery& x) { return x.pose_b.rotation.x; }, lanes);
+    gather(qb[2], [](const PairQuery& x) { return x.pose_b.rotation.y; }, lanes);
+    gather(qb[3], [](const PairQuery& x) { return x.pose_b.rotation.z; }, lanes);
+    gather(margin, [](const PairQuery& x) { return x.margin; }, lanes);
+  }
+  const V zero = splat<V>(0), one = splat<V>(1), two = splat<V>(2), inf = splat<V>(INFINITY);
+  // collide()'s quick input checks (manifold.cpp): unit quaternions to within 0.9e-6, finite
+  // positions, a finite margin >= 0, finite half extents > 0; a pair that fails them takes
+  // collide(), whose full checks throw or pass it
+  {
+    constexpr double kHuge = std::numeric_limits<double>::max();
+    constexpr double kLo = (1 - 0.9e-6) * (1 - 0.9e-6), kHi = (1 + 0.9e-6) * (1 + 0.9e-6);
+    const V qa2 = qa[0] * qa[0] + qa[1] * qa[1] + qa[2] * qa[2] + qa[3] * qa[3];
+    const V qb2 = qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3];
+    M ok = (qa2 >= kLo) & (qa2 <= kHi) & (qb2 >= kLo) & (qb2 <= kHi) & (margin >= 0) & (margin <= kHuge);
+    for (int k = 0; k < 3; ++k)
+      ok &= (vabs(xa[k]) <= kHuge) & (vabs(xb[k]) <= kHuge) & (ha[k] > 0) & (ha[k] <= kHuge) & (hb[k] > 0) &
+            (hb[k] <= kHuge);
+    store(o.valid, ok ? one : zero);
+  }
+  // the bounding spheres
+  V d[3];
+  for (int k = 0; k < 3; ++k) d[k] = xb[k] - xa[k];
+  {
+    const V r = vsqrt(ha[0] * ha[0] + ha[1] * ha[1] + ha[2] * ha[2]) + vsqrt(hb[0] * hb[0] + hb[1] * hb[1] + hb[2] * hb[2]) +
+                margin;
+    const M far = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > r * r * (1 + 1e-12);
+    store(o.far, far ? one : zero);
+  }
+  // the relative pose: R = mat3_cast(conj(qa) qb), t = conj(qa) (xb - xa), as glm computes them
+  V R[3][3], AR[3][3], t[3], tb[3];
+  {
+    const V pw = qa[0], px = -qa[1], py = -qa[2], pz = -qa[3];
+    const V w = pw * qb[0] - px * qb[1] - py * qb[2] - pz * qb[3];
+    const V x = pw * qb[1] + px * qb[0] + py * qb[3] - pz * qb[2];
+    const V y = pw * qb[2] + py * qb[0] + pz * qb[1] - px * qb[3];
+    const V z = pw * qb[3] + pz * qb[0] + px * qb[2] - py * qb[1];
+    mat3_of(w, x, y, z, R);
+    const V uv[3] = {py * d[2] - d[1] * pz, pz * d[0] - d[2] * px, px * d[1] - d[0] * py};
+    const V uuv[3] = {py * uv[2] - uv[1] * pz, pz * uv[0] - uv[2] * px, px * uv[1] - uv[0] * py};
+    for (int k = 0; k < 3; ++k) t[k] = d[k] + ((uv[k] * pw) + uuv[k]) * two;
+  }
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) AR[j][i] = vabs(R[j][i]) + 1e-12;
+  for (int j = 0; j < 3; ++j) tb[j] = R[j][0] * t[0] + R[j][1] * t[1] + R[j][2] * t[2];
+  for (int j = 0; j < 3; ++j) {
+    store(o.t[j], t[j]), store(o.tb[j], tb[j]), store(o.ha[j], ha[j]), store(o.hb[j], hb[j]);
+    for (int i = 0; i < 3; ++i) store(o.R[j][i], R[j][i]), store(o.AR[j][i], AR[j][i]);
+  }
+  store(o.margin, margin);
+
+  // faces of A, faces of B (keep_max: the first maximum)
+  V fa = -inf, fb = -inf, ia = zero, ib = zero;
+  for (int i = 0; i < 3; ++i) {
+    const V rb = hb[0] * AR[0][i] + hb[1] * AR[1][i] + hb[2] * AR[2][i];
+    const V s = vabs(t[i]) - ha[i] - rb;
+    store(o.face_sep_a[i], s);
+    const M more = s > fa;
+    ia = more ? splat<V>(i) : ia;
+    fa = more ? s : fa;
+  }
+  for (int j = 0; j < 3; ++j) {
+    const V ra = ha[0] * AR[j][0] + ha[1] * AR[j][1] + ha[2] * AR[j][2];
+    const V s = vabs(tb[j]) - hb[j] - ra;
+    store(o.face_sep_b[j], s);
+    const M more = s > fb;
+    ib = more ? splat<V>(j) : ib;
+    fb = more ? s : fb;
+  }
+  V t_ia[3], tb_ib[3];
+  rotate3(ia, t, t_ia);
+  rotate3(ib, tb, tb_ib);
+  const V face_a = two * ia + (t_ia[0] > 0 ? one : zero);
+  const V face_b = two * ib + (tb_ib[0] < 0 ? one : zero);
+  store(o.fa, fa), store(o.fb, fb), store(o.face_a, face_a), store(o.face_b, face_b);
+
+  // the nine edge axes (edge_axis, edge_sep)
+  V ee = -inf, ek = zero;
+#pragma GCC unroll 9
+  for (int k = 0; k < 9; ++k) {
+    const int i = k / 3, j = k % 3, i1 = kNext[i], i2 = kPrev[i], j1 = kNext[j], j2 = kPrev[j];
+    const V l1 = -R[j][i2], l2 = R[j][i1];
+    const V ra = ha[i1] * AR[j][i2] + ha[i2] * AR[j][i1];
+    const V rb = hb[j1] * AR[j2][i] + hb[j2] * AR[j1][i];
+    const V dd = t[i1] * l1 + t[i2] * l2;
+    const V num = vabs(dd) - ra - rb;
+    const V len2 = l1 * l1 + l2 * l2;
+    const V s = len2 < kParallel2 ? -inf : num / vsqrt(len2);
+    store(o.edge_sep[k], s);
+    const M more = s > ee;
+    ek = more ? splat<V>(k) : ek;
+    ee = more ? s : ee;
+  }
+  store(o.ee, ee), store(o.ek, ek);
+  constexpr double kRelEdge = 0.90, kRelFace = 0.98, kAbs = 0.5 * 0.005;
+  const V relevant = vmin(margin, kRelEdge * vmax(fa, fb) + kAbs);
+  store(o.edge, ee > relevant ? one : zero);
+  const M ref_a = !(fb > kRelFace * fa + kAbs);
+  store(o.ref_a, ref_a ? one : zero);
+
+  // the reference face fr (axis k0, side s0) and, in its coordinates (u, v, w) = (x[k1],
+  // x[k2], x[k0]), the incident face's centre, half axes and corners
+  V Rri[3][3], tri[3], hr[3], hi[3];
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) Rri[c][r] = ref_a ? R[c][r] : R[r][c];
+    tri[c] = ref_a ? t[c] : -tb[c];
+    hr[c] = ref_a ? ha[c] : hb[c];
+    hi[c] = ref_a ? hb[c] : ha[c];
+  }
+  const V fr = ref_a ? face_a : face_b;
+  const V k0 = fr >= 4 ? two : (fr >= 2 ? one : zero);
+  const V s0 = (fr - two * k0) * two - one;
+  const V perm = k0 == 2 ? zero : k0 + one;  // (k1, k2, k0) = x[(perm + r) % 3]
+  // the incident axis most parallel to the normal (the first maximum of |Rri[c][k0]|)
+  V g[3];
+  for (int c = 0; c < 3; ++c) {
+    V row[3];
+    rotate3(k0, Rri[c], row);
+    g[c] = row[0];
+  }
+  V kk = zero, best = vabs(g[0]);
+  for (int c = 1; c < 3; ++c) {
+    const M more = vabs(g[c]) > best;
+    kk = more ? splat<V>(c) : kk;
+    best = more ? vabs(g[c]) : best;
+  }
+  V gk[3];
+  rotate3(kk, g, gk);
+  const V back = gk[0] * s0 > 0 ? zero : one;  // the incident face's side bit
+  const V fi = two * kk + back;
+  // its rows (k, j1, j2), then their components in the face's order
+  V rows[3][3], hik[3];
+  for (int r = 0; r < 3; ++r) {
+    const V col[3] = {Rri[0][r], Rri[1][r], Rri[2][r]};
+    V x[3];
+    rotate3(kk, col, x);
+    for (int c = 0; c < 3; ++c) rows[c][r] = x[c];
+  }
+  rotate3(kk, hi, hik);
+  const V hk = hik[0] * (back * two - one);
+  V rk[3], rj1[3], rj2[3], tf[3], hf[3];
+  rotate3(perm, rows[0], rk);
+  rotate3(perm, rows[1], rj1);
+  rotate3(perm, rows[2], rj2);
+  rotate3(perm, tri, tf);
+  rotate3(perm, hr, hf);
+  V c[3], a1[3], a2[3], corner[4][3];
+  for (int r = 0; r < 3; ++r) {
+    c[r] = tf[r] + rk[r] * hk, a1[r] = rj1[r] * hik[1], a2[r] = rj2[r] * hik[2];
+    const V lo = c[r] - a1[r], hi1 = c[r] + a1[r];
+    corner[0][r] = lo - a2[r], corner[1][r] = lo + a2[r], corner[2][r] = hi1 - a2[r], corner[3][r] = hi1 + a2[r];
+  }
+  const V w_ref = s0 * hf[2], incident = ref_a ? one : zero;
+  store(o.fr, fr), store(o.fi, fi), store(o.s0, s0), store(o.w_ref, w_ref);
+  clip_lanes<V>(corner, c, a1, a2, fi, hf[0], hf[1], hf[2], s0, margin, incident, w_ref, o);
+  // the deepest incident vertex (the incident corner farthest along -normal)
+  {
+    V qv[3] = {tri[0], tri[1], tri[2]}, bits = zero;
+    for (int c = 0; c < 3; ++c) {
+      const M set = (-s0 * g[c]) >= 0;
+      bits = bits + (set ? splat<V>(1 << c) : zero);
+      for (int r = 0; r < 3; ++r) qv[r] = qv[r] + Rri[c][r] * (set ? hi[c] : -hi[c]);
+    }
+    V qf[3];
+    rotate3(perm, qv, qf);
+    store(o.deep[0], qf[0]), store(o.deep[1], qf[1]), store(o.deep[2], qf[2] * incident + w_ref * (1 - incident));
+    store(o.deep_vertex, bits);
+    store(o.deep_depth, hf[2] - s0 * qf[2]);
+  }
+  // the reference box's frame in the world: its axes (k1, k2, k0) and centre
+  {
+    V W3[3][3];
+    mat3_of(ref_a ? qa[0] : qb[0], ref_a ? qa[1] : qb[1], ref_a ? qa[2] : qb[2], ref_a ? qa[3] : qb[3], W3);
+    for (int r = 0; r < 3; ++r) {
+      const V col[3] = {W3[0][r], W3[1][r], W3[2][r]};
+      V x[3];
+      rotate3(perm, col, x);
+      store(o.wu[r], x[0]), store(o.wv[r], x[1]), store(o.ww[r], x[2]);
+      store(o.origin[r], ref_a ? xa[r] : xb[r]);
+    }
+  }
+}
+
+}  // namespace
+
+}  // namespace pba::narrow
+#define PBA_BOX_LANES_X86 1
+#else
+#define PBA_BOX_LANES_X86 0
+#endif
+
+namespace pba::narrow {
+
+namespace {
+
+// The pair-by-pair tail of lane l: collide_boxes_sat's decisions in its order, then the edge
+// contact or the face clipping, reduction and output through the single pair's functions.
+template <int W>
+[[gnu::always_inline]] inline void box_tail(const BoxLanes<W>& o, int l, const PairQuery& q, Manifold& m) {
+  if (o.valid[l] == 0) {
+    m = collide(*q.a, q.pose_a, *q.b, q.pose_b, {.speculative_margin = q.margin}, q.cache);
+    return;
+  }
+  // a fresh Manifold, as collide() returns it (stores the width of the lanes, not a string op)
+  std::memset(static_cast<void*>(&m), 0, sizeof m);
+  m.normal.z = 1;
+  if (o.far[l] != 0) return;
+  SatCache* cache = q.cache ? &q.cache->sat : nullptr;
+  const double margin = o.margin[l];
+  if (cache) {
+    double s = -INFINITY;
+    auto axis_of = [](std::uint32_t e) {
+      const std::uint32_t d = kBoxTopology.edges[e].origin ^ kBoxTopology.edges[kBoxTopology.edges[e].twin].origin;
+      return d == 1 ? 0 : (d == 2 ? 1 : 2);
+    };
+    if (cache->kind == SatCache::Kind::FaceA && cache->index_a < 6) s = o.face_sep_a[cache->index_a / 2][l];
+    else if (cache->kind == SatCache::Kind::FaceB && cache->index_b < 6) s = o.face_sep_b[cache->index_b / 2][l];
+    else if (cache->kind == SatCache::Kind::Edges && cache->index_a < 24 && cache->index_b < 24)
+      s = o.edge_sep[3 * axis_of(cache->index_a) + axis_of(cache->index_b)][l];
+    if (s > margin) return;
+  }
+  const std::uint32_t face_a = std::uint32_t(o.face_a[l]), face_b = std::uint32_t(o.face_b[l]);
+  if (o.fa[l] > margin) {
+    if (cache) *cache = {SatCache::Kind::FaceA, face_a, 0};
+    return;
+  }
+  if (o.fb[l] > margin) {
+    if (cache) *cache = {SatCache::Kind::FaceB, 0, face_b};
+    return;
+  }
+  if (o.edge[l] != 0) {
+    BoxPair p;
+    for (int j = 0; j < 3; ++j) {
+      p.t[j] = o.t[j][l], p.tb[j] = o.tb[j][l], p.ha[j] = o.ha[j][l], p.hb[j] = o.hb[j][l];
+      for (int i = 0; i < 3; ++i) p.R[j][i] = o.R[j][i][l], p.AR[j][i] = o.AR[j][i][l];
+    }
+    edge_contact(p, int(o.ek[l]), o.ee[l], margin, q.pose_a, cache, m);
+    return;
+  }
+  const bool ref_a = o.ref_a[l] != 0;
+  if (cache) *cache = ref_a ? SatCache{SatCache::Kind::FaceA, face_a, 0} : SatCache{SatCache::Kind::FaceB, 0, face_b};
+  const std::uint32_t fr = std::uint32_t(o.fr[l]), fi = std::uint32_t(o.fi[l]);
+  const double s0 = o.s0[l];
+  // the kept candidates, in order, with their feature ids
+  std::array<FacePoint, 24> pts;
+  std::array<double, 24> depth;
+  const std::uint32_t* ids = kCandidateIds.id[fr][fi];
+  int kept = 0;
+  for (unsigned long b = static_cast<unsigned long>(o.bits[l]); b != 0; b &= b - 1) {
+    const int k = __builtin_ctzl(b);
+    pts[std::size_t(kept)] = {o.cu[k][l], o.cv[k][l], o.cw[k][l], ids[k], 0};
+    depth[std::size_t(kept)] = o.cd[k][l];
+    ++kept;
+  }
+  if (kept == 0) {
+    pts[0] = {o.deep[0][l], o.deep[1][l], o.deep[2][l], vertex_id(std::uint32_t(o.deep_vertex[l])), 0};
+    depth[0] = o.deep_depth[l];
+    kept = 1;
+  }
+  finish_face<true>(pts.data(), depth.data(), kept, ref_a, s0, o.w_ref[l],
+              [&](Vec3& wu, Vec3& wv, Vec3& ww, Vec3& origin) {
+                wu = Vec3(o.wu[0][l], o.wu[1][l], o.wu[2][l]), wv = Vec3(o.wv[0][l], o.wv[1][l], o.wv[2][l]);
+                ww = Vec3(o.ww[0][l], o.ww[1][l], o.ww[2][l]), origin = Vec3(o.origin[0][l], o.origin[1][l], o.origin[2][l]);
+              },
+              m);
+}
+
+#if PBA_BOX_LANES_X86
+template <class V>
+[[gnu::always_inline]] inline void box_group(const PairQuery* const* q, Manifold* const* out, int n) {
+  constexpr int W = kWidth<V>;
+  BoxLanes<W> o;
+  for (int first = 0; first < n; first += W) {
+    const int count = std::min(W, n - first);
+    box_lanes<V>(q + first, count, o);
+    for (int l = 0; l < count; ++l) box_tail(o, l, *q[first + l], *out[first + l]);
+  }
+}
+
+__attribute__((target("avx512f"))) void box_group_avx512(const PairQuery* const* q, Manifold* const* out, int n) {
+  box_group<detail::lanes::v8d>(q, out, n);
+}
+__attribute__((target("avx2"))) void box_group_avx2(const PairQuery* const* q, Manifold* const* out, int n) {
+  box_group<detail::lanes::v4d>(q, out, n);
+}
+#endif
+
+}  // namespace
+
+void collide_boxes_sat_batch(const PairQuery* const* q, Manifold* const* out, int n, BatchPath path) {
+#if PBA_BOX_LANES_X86
+  // Best is AVX2 where the processor has it, even beside AVX-512: GCC 12 turns the lane masks
+  // of eight-double vectors into scalar code (a compare and a set per lane), so the eight-lane
+  // path measured slower (0.25 against 0.12 us per pair, docs/benchmarks.md); it is kept, and
+  // tested to give the same bits, for a compiler that keeps those masks in registers
+  static const bool avx2 = __builtin_cpu_supports("avx2"), avx512 = __builtin_cpu_supports("avx512f");
+  if (path == BatchPath::Best) path = avx2 ? BatchPath::Avx2 : BatchPath::Scalar;
+  if (path == BatchPath::Avx512 && !avx512) path = avx2 ? BatchPath::Avx2 : BatchPath::Scalar;
+  if (path == BatchPath::Avx2 && !avx2) path = BatchPath::Scalar;
+  if (path == BatchPath::Avx512) return box_group_avx512(q, out, n);
+  if (path == BatchPath::Avx2) return box_group_avx2(q, out, n);
+#endif
+  (void)path;
+  for (int i = 0; i < n; ++i) {
+    const PairQuery& p = *q[i];
+    Manifold& m = *out[i];
+    m = Manifold{};
+    collide_boxes_sat(p.a->half_extents, p.pose_a, p.b->half_extents, p.pose_b, p.margin,
+                      p.cache ? &p.cache->sat : nullptr, m);
+  }
 }
 
 }  // namespace pba::narrow

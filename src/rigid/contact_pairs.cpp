@@ -399,57 +399,112 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
   const double cos_half = std::cos(0.5 * cs.reuse_angle);
   const bool reuse = cs.reuse_distance > 0;
   auto awake_dynamic = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
-  std::size_t built = 0, reused = 0, keep = 0;
-  for (std::size_t k = 0; k < shape_pairs.size(); ++k) {
-    ShapePair p = shape_pairs[k];
-    const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
+  // what becomes of a pair this step: kept as it is while its bodies sleep, ended when its fat
+  // boxes part, without contact while its tight boxes are apart, else touching
+  auto fate_of = [&](const ShapePair& p, std::uint32_t a, std::uint32_t b) {
+    if (!awake_dynamic(a) && !awake_dynamic(b)) return PairPlan::Fate::Asleep;
     const ShapeProxy& pa = proxies[p.proxy_a];
     const ShapeProxy& pb = proxies[p.proxy_b];
-    // a pair whose bodies sleep (or sleep on a static body) is kept as it is, manifolds and
-    // impulses, for when they wake; against a kinematic body that went away it ends
-    if (!awake_dynamic(a) && !awake_dynamic(b)) {
-      const bool kinematic = s.type_[a] == BodyType::Kinematic || s.type_[b] == BodyType::Kinematic;
-      if (kinematic && !pa.fat.overlaps(pb.fat))
+    if (!pa.fat.overlaps(pb.fat)) return PairPlan::Fate::End;
+    if (!pa.box.overlaps(pb.box)) return PairPlan::Fate::Apart;
+    return PairPlan::Fate::Touching;
+  };
+  // The pairs go in spans of up to kSpan pairs holding up to kBoxes box-box pairs to make anew:
+  // first each pair's plan (its fate and, touching, the margin, the relative pose, whether the
+  // manifolds are carried over), and the span's box-box pairs that need the narrow phase made together
+  // by collide_batch (several at a time in SIMD lanes; the same manifolds and caches to the bit
+  // as collide() pair by pair); then the span's pairs in order as one loop would walk them.
+  // (A span, not the whole list: its pairs' data is still in the cache when they are walked.)
+  // A pair without a cache yet gets a fresh one when walked (new_cache), so its narrow cache
+  // starts from NarrowPhaseCache{} in fresh_narrow until then.
+  constexpr std::size_t kSpan = 64, kBoxes = 16;
+  plans.resize(kSpan);
+  fates.resize(kSpan);
+  fresh_narrow.resize(kBoxes);
+  box_manifolds.resize(kBoxes);
+  const PairCache blank{};
+  const BatchPath path = simd == SimdPath::Scalar ? BatchPath::Scalar : BatchPath::Best;
+  std::size_t built = 0, reused = 0, keep = 0;
+  for (std::size_t first = 0; first < shape_pairs.size();) {
+    box_queries.clear();
+    std::size_t last = first;
+    for (; last < shape_pairs.size() && last - first < kSpan && box_queries.size() < kBoxes; ++last) {
+      const ShapePair& p = shape_pairs[last];
+      const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
+      fates[last - first] = fate_of(p, a, b);
+      if (fates[last - first] != PairPlan::Fate::Touching) continue;
+      PairPlan& plan = plans[last - first];
+      // points are made as far out as the two bodies can close in one step (speculative
+      // contacts) (up to each body's size: faster ones are caught by the continuous pass)
+      plan.margin = cs.speculative_distance + std::min(glm::length(s.v_[a]) * dt, s.extent_[a]) +
+                    std::min(glm::length(s.v_[b]) * dt, s.extent_[b]);
+      // b's centre and frame in a's frame, against where they were when the manifolds were made
+      const Quat qa_inv = glm::conjugate(s.q_[a]);
+      plan.rel_position = qa_inv * (s.com_[b] - s.com_[a]);
+      plan.rel_rotation = qa_inv * s.q_[b];
+      const PairCache& c = p.cache == kNoIndex ? blank : caches[p.cache];
+      const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;  // as collide_pair keeps it
+      plan.same = reuse && c.margin >= plan.margin &&
+                  std::abs(glm::dot(plan.rel_rotation, c.rel_rotation)) >= cos_half &&
+                  carried_points_moved(in_b, in_b ? s.extent_[a] : s.extent_[b], c, plan.rel_position,
+                                       plan.rel_rotation) <= cs.reuse_distance;
+      plan.batched = kNoIndex;
+      const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
+      const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
+      if (plan.same || sa.shape.type != ShapeType::Box || sb.shape.type != ShapeType::Box) continue;
+      plan.batched = static_cast<std::uint32_t>(box_queries.size());
+      NarrowPhaseCache* narrow = &fresh_narrow[plan.batched];
+      if (p.cache == kNoIndex) *narrow = NarrowPhaseCache{};
+      else narrow = &caches[p.cache].narrow;
+      box_queries.push_back({&sa.shape, compose(s.body_pose(a), sa.local), &sb.shape,
+                             compose(s.body_pose(b), sb.local), plan.margin + cs.reuse_distance, narrow});
+    }
+    collide_batch(box_queries, {box_manifolds.data(), box_queries.size()}, ConvexMethod::Sat, path);
+
+    // the span's pairs in order: ended, asleep or apart pairs as they are, touching ones
+    // their manifolds (carried over, made above, or made now) to the solver
+    for (std::size_t k = first; k < last; ++k) {
+      ShapePair p = shape_pairs[k];
+      const PairPlan::Fate fate = fates[k - first];
+      // a pair whose bodies sleep (or sleep on a static body) is kept as it is, manifolds and
+      // impulses, for when they wake; against a kinematic body that went away it ends
+      if (fate == PairPlan::Fate::Asleep) {
+        const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
+        const bool kinematic = s.type_[a] == BodyType::Kinematic || s.type_[b] == BodyType::Kinematic;
+        if (kinematic && !proxies[p.proxy_a].fat.overlaps(proxies[p.proxy_b].fat))
+          free_pair(p);
+        else
+          shape_pairs[keep++] = p;
+        continue;
+      }
+      // fat boxes apart: the pair ends
+      if (fate == PairPlan::Fate::End) {
         free_pair(p);
-      else
+        continue;
+      }
+      // tight boxes apart: no contact this step (the narrow-phase cache stays)
+      if (fate == PairPlan::Fate::Apart) {
+        if (p.cache != kNoIndex) free_manifolds(caches[p.cache]), caches[p.cache].margin = -1;
         shape_pairs[keep++] = p;
-      continue;
-    }
-    // fat boxes apart: the pair ends
-    if (!pa.fat.overlaps(pb.fat)) {
-      free_pair(p);
-      continue;
-    }
-    // tight boxes apart: no contact this step (the narrow-phase cache stays)
-    if (!pa.box.overlaps(pb.box)) {
-      if (p.cache != kNoIndex) free_manifolds(caches[p.cache]), caches[p.cache].margin = -1;
+        continue;
+      }
+      const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
+      const PairPlan& plan = plans[k - first];
+      const bool fresh = p.cache == kNoIndex;
+      if (fresh) p.cache = new_cache();
       shape_pairs[keep++] = p;
-      continue;
+      PairCache& c = caches[p.cache];
+      if (!plan.same) {
+        if (plan.batched != kNoIndex && fresh) c.narrow = fresh_narrow[plan.batched];
+        collide_pair(s, p, c, a, b, plan.margin, plan.batched != kNoIndex ? &box_manifolds[plan.batched] : nullptr);
+        c.rel_position = plan.rel_position, c.rel_rotation = plan.rel_rotation;
+      }
+      for (std::uint32_t m = caches[p.cache].first; m != kNoIndex; m = manifolds[m].next) {
+        emit(s, p, m, a, b);
+        ++(plan.same ? reused : built);
+      }
     }
-    if (p.cache == kNoIndex) p.cache = new_cache();
-    shape_pairs[keep++] = p;
-    // points are made as far out as the two bodies can close in one step (speculative contacts)
-    // (up to each body's size: faster ones are caught by the continuous pass)
-    const double margin = cs.speculative_distance + std::min(glm::length(s.v_[a]) * dt, s.extent_[a]) +
-                          std::min(glm::length(s.v_[b]) * dt, s.extent_[b]);
-    // b's centre and frame in a's frame, against where they were when the manifolds were made
-    const Quat qa_inv = glm::conjugate(s.q_[a]);
-    const Vec3 rel_position = qa_inv * (s.com_[b] - s.com_[a]);
-    const Quat rel_rotation = qa_inv * s.q_[b];
-    PairCache& c = caches[p.cache];
-    const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;  // as collide_pair keeps it
-    const bool same = reuse && c.margin >= margin &&
-                      std::abs(glm::dot(rel_rotation, c.rel_rotation)) >= cos_half &&
-                      carried_points_moved(in_b, in_b ? s.extent_[a] : s.extent_[b], c, rel_position, rel_rotation) <=
-                          cs.reuse_distance;
-    if (!same) {
-      collide_pair(s, p, c, a, b, margin);
-      c.rel_position = rel_position, c.rel_rotation = rel_rotation;
-    }
-    for (std::uint32_t m = caches[p.cache].first; m != kNoIndex; m = manifolds[m].next) {
-      emit(s, p, m, a, b);
-      ++(same ? reused : built);
-    }
+    first = last;
   }
   shape_pairs.resize(keep);
   s.profile_.built = built, s.profile_.reused = reused;
@@ -461,13 +516,13 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
 // or, when the features changed (a face-on-face contact whose clipped corners sit on the
 // edges flips their labels under jitter), of the nearest old point within the linear slop in
 // a's frame (Jolt matches contact points by position the same way). Without that fallback a
-// 5-box stack rocked at 0.04 rad/s.
+// 5-box stack rocked at 0.04 rad/s. `made`: the pair's manifold when make_manifolds already
+// made it (a box-box pair, by collide_batch, its narrow cache already updated), else null.
 void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCache& c, std::uint32_t a,
-                                 std::uint32_t b, double margin) {
+                                 std::uint32_t b, double margin, const Manifold* made) {
   const ContactSettings& cs = s.settings_;
   const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
   const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
-  const Pose pose_a = compose(s.body_pose(a), sa.local), pose_b = compose(s.body_pose(b), sb.local);
   const NarrowPhaseSettings ns{.speculative_margin = margin + cs.reuse_distance};
   const double radius_a = core_radius(sa.shape), radius_b = core_radius(sb.shape);
   // the normal is kept in the frame of the body that does not move, else in a's
@@ -530,7 +585,10 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       manifolds[tail].next = idx;
     tail = idx;
   };
-  if (mesh_pair) {
+  if (made) {
+    if (made->count > 0) keep(*made, false);
+  } else if (mesh_pair) {
+    const Pose pose_a = compose(s.body_pose(a), sa.local), pose_b = compose(s.body_pose(b), sb.local);
     // a convex shape on a static mesh: a manifold per touching triangle, in the mesh tree's
     // order (the scratch grows until it holds them all)
     const bool mesh_a = sa.shape.type == ShapeType::Mesh;
@@ -595,7 +653,8 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       if (merged.count > 0) keep(merged, mesh_a);
     }
   } else {
-    const Manifold m = collide(sa.shape, pose_a, sb.shape, pose_b, ns, &c.narrow);
+    const Manifold m = collide(sa.shape, compose(s.body_pose(a), sa.local), sb.shape, compose(s.body_pose(b), sb.local),
+                               ns, &c.narrow);
     if (m.count > 0) keep(m, false);
   }
   // the old chain goes back to the pool

@@ -228,6 +228,21 @@ struct RigidContacts {
   std::vector<Manifold> mesh_scratch;         // collide_mesh output
   std::vector<int> group_of, group_first;     // scratch: the mesh manifolds' groups of one normal
   std::vector<narrow::Candidate> merge_scratch;  // scratch: a group's points
+  /// make_manifolds' plan for a touching pair, made before its span of pairs is walked.
+  struct PairPlan {
+    /// What becomes of a pair this step (make_manifolds).
+    enum class Fate : std::uint8_t { Asleep, End, Apart, Touching };
+    Vec3 rel_position{0, 0, 0};        // b's centre in a's frame (m)
+    Quat rel_rotation{1, 0, 0, 0};     // b's frame in a's frame
+    double margin = 0;                 // the speculative margin of this step (m)
+    std::uint32_t batched = kNoIndex;  // its manifold in box_manifolds (a box-box pair), or kNoIndex
+    bool same = false;                 // its manifolds are carried over
+  };
+  std::vector<PairPlan::Fate> fates;          // scratch: by shape pair of the span being walked
+  std::vector<PairPlan> plans;                // scratch: the same, written for touching pairs only
+  std::vector<PairQuery> box_queries;         // scratch: the box-box pairs to make, for collide_batch
+  std::vector<Manifold> box_manifolds;        // scratch: their manifolds
+  std::vector<NarrowPhaseCache> fresh_narrow; // scratch: by box query, the narrow cache of a pair without a cache yet
   std::uint32_t free_proxy = kNoIndex, free_cache = kNoIndex, free_manifold = kNoIndex;
   std::size_t reinserted_since_check = 0;     // tree moves since its quality was last checked
   double tree_ratio = 0;                      // the tree's area ratio after its last rebuild
@@ -244,7 +259,7 @@ struct RigidContacts {
   void wake_touched(RigidBodySystem& s);
   void make_manifolds(RigidBodySystem& s, double dt);
   void collide_pair(RigidBodySystem& s, const ShapePair& p, PairCache& c, std::uint32_t a, std::uint32_t b,
-                    double margin);
+                    double margin, const Manifold* made = nullptr);
   void emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t record, std::uint32_t a, std::uint32_t b);
   void settle(std::uint32_t record);
   void settle_all();

@@ -50,6 +50,28 @@ TEST(NarrowPhaseAlloc, CollideAllocatesNothing) {
   EXPECT_GT(contacts, 1000);  // the poses overlap often: the contact paths ran
 }
 
+TEST(NarrowPhaseAlloc, CollideBatchAllocatesNothing) {
+  // box pairs among other pairs, every path, with caches: the lanes' state lives on the stack
+  std::mt19937_64 rng(9);
+  const ColliderShape a = ColliderShape::box(Vec3(0.5, 0.3, 0.2)), b = ColliderShape::box(Vec3(1, 0.2, 0.7)),
+                      s = ColliderShape::sphere(0.4);
+  std::vector<PairQuery> q(3000);
+  std::vector<NarrowPhaseCache> caches(q.size());
+  for (std::size_t k = 0; k < q.size(); ++k)
+    q[k] = {k % 7 == 3 ? &s : &a, {test_support::random_vec(rng, 0.3), test_support::random_rotation(rng)}, &b,
+            {test_support::random_vec(rng, 1.0), test_support::random_rotation(rng)}, 0.02, &caches[k]};
+  std::vector<Manifold> out(q.size());
+  int contacts = 0;
+  const long long before = g_allocations.load();
+  for (const BatchPath path : {BatchPath::Scalar, BatchPath::Avx2, BatchPath::Avx512, BatchPath::Best}) {
+    collide_batch(q, out, ConvexMethod::Sat, path);
+    for (const Manifold& m : out) contacts += m.count;
+  }
+  const long long after = g_allocations.load();
+  EXPECT_EQ(after - before, 0);
+  EXPECT_GT(contacts, 1000);
+}
+
 TEST(NarrowPhaseAlloc, CollideMeshAllocatesNothing) {
   // a bumpy 8 x 8 grid, every convex shape dropped on it at random poses
   std::vector<Vec3> v;

@@ -89,6 +89,36 @@ struct NarrowPhaseCache {
 Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
                  const NarrowPhaseSettings& settings = {}, NarrowPhaseCache* cache = nullptr);
 
+/// One pair of collide_batch(): collide()'s arguments, with the pair's own margin.
+struct PairQuery {
+  const ColliderShape* a = nullptr;   ///< shape A (not owned; must not be null)
+  Pose pose_a{};                      ///< A's pose (world)
+  const ColliderShape* b = nullptr;   ///< shape B (not owned; must not be null)
+  Pose pose_b{};                      ///< B's pose (world)
+  double margin = 0.02;               ///< speculative margin (m, finite, >= 0)
+  NarrowPhaseCache* cache = nullptr;  ///< the pair's cache (may be null), read and updated as collide() does
+};
+
+/// Which SIMD path collide_batch() runs box-box pairs on. Every path gives the same bits;
+/// a path the processor lacks falls back to the best one it has.
+enum class BatchPath : std::uint8_t {
+  Best,    ///< the fastest the processor has (AVX2 where present: measured faster than AVX-512)
+  Scalar,  ///< one pair at a time (collide()'s own path)
+  Avx2,    ///< 4 pairs at a time in AVX2 registers
+  Avx512,  ///< 8 pairs at a time in AVX-512 registers
+};
+
+/// collide() of many pairs: out[i] equals collide(*pairs[i].a, pairs[i].pose_a, *pairs[i].b,
+/// pairs[i].pose_b, {pairs[i].margin, method}, pairs[i].cache) to the bit, and every cache is
+/// left as collide() leaves it. Box-box pairs under ConvexMethod::Sat run several at a time
+/// in SIMD lanes (their separating axes, reference and incident faces side by side, so their
+/// dependent chains overlap and their branches become masks); every other pair runs collide().
+/// Requires out.size() >= pairs.size(). Throws Error like collide() for a bad pair (when
+/// several are bad, a box pair's error may come after a later pair's; out is then partly
+/// written); never allocates.
+void collide_batch(std::span<const PairQuery> pairs, std::span<Manifold> out,
+                   ConvexMethod method = ConvexMethod::Sat, BatchPath path = BatchPath::Best);
+
 /// The contact manifolds of a convex shape `a` (sphere, capsule, box or hull) against a
 /// static triangle mesh `mesh`: one manifold per touching triangle (Manifold::sub_shape_b
 /// is the triangle), normals from `a` to the mesh, in the order the mesh's BVH visits the
