@@ -17,6 +17,8 @@
 
 #include <cmath>
 
+#include <immintrin.h>
+
 #include "lanes.h"
 
 namespace pba::detail {
@@ -27,6 +29,45 @@ using namespace lanes;
 
 // the half angles beyond which the library computes the sine and cosine (rad)
 constexpr double kSmall = 0.39269908169872414;  // pi / 8
+
+// true when every lane of a comparison's mask is set (halves folded onto each other, so the
+// mask never leaves the vector registers lane by lane)
+template <class M>
+PBA_LANES bool all_set(M m) {
+  if constexpr (sizeof(M) == 64) {
+    m &= __builtin_shuffle(m, v8l{4, 5, 6, 7, 0, 1, 2, 3});
+    m &= __builtin_shuffle(m, v8l{2, 3, 0, 1, 6, 7, 4, 5});
+    m &= __builtin_shuffle(m, v8l{1, 0, 3, 2, 5, 4, 7, 6});
+  } else {
+    m &= __builtin_shuffle(m, v4l{2, 3, 0, 1});
+    m &= __builtin_shuffle(m, v4l{1, 0, 3, 2});
+  }
+  return m[0] != 0;
+}
+
+// true when every lane of x is within [-limit, limit] (false for a NaN lane)
+template <class V>
+PBA_LANES bool all_within(const V x, double limit) {
+  if constexpr (std::is_same_v<V, double>) return std::abs(x) <= limit;
+  else return all_set((x <= limit) & (x >= -limit));
+}
+
+// true when every lane of the n vectors x is finite (x * 0 is 0 for a finite x, else NaN)
+template <class V>
+PBA_LANES bool all_finite(const V* x, int n) {
+  V z = x[0] * 0.0;
+  for (int k = 1; k < n; ++k) z = z + x[k] * 0.0;
+  if constexpr (std::is_same_v<V, double>) return z == 0;
+  else return all_set(z == 0.0);
+}
+
+// the square root of each lane (IEEE: correctly rounded, the same bits as std::sqrt); the wide
+// ones out of line (once a block), as GCC does not inline a target's intrinsic into a template
+PBA_LANES double sqrt_lanes(double x) { return std::sqrt(x); }
+#if defined(__GNUC__) && defined(__x86_64__)
+[[gnu::target("avx2")]] [[gnu::noinline]] v4d sqrt_lanes(v4d x) { return _mm256_sqrt_pd(x); }
+[[gnu::target("avx512f")]] [[gnu::noinline]] v8d sqrt_lanes(v8d x) { return _mm512_mask_sqrt_pd(x, 0xff, x); }
+#endif
 
 // sin and cos of x for |x| <= kSmall (Horner in x^2)
 template <class V>
@@ -44,6 +85,7 @@ PBA_LANES void sincos_small(const V x, V& s, V& c) {
 template <class V>
 PBA_LANES void sincos_half(const V h, V& s, V& c) {
   sincos_small(h, s, c);
+  if (all_within(h, kSmall)) return;  // one test for all lanes: the steady case
   for (int i = 0; i < kWidth<V>; ++i) {
     const double x = get(h, i);
     if (!(std::abs(x) <= kSmall)) set(s, i, std::sin(x)), set(c, i, std::cos(x));
@@ -131,17 +173,37 @@ PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, d
   store_strided(f.v, f.stride, idx, v);
   store_strided(f.w, f.stride, idx, w);
   // a force too large for a double stops here, before contacts can spread it to others
+  const V all[6] = {v[0], v[1], v[2], w[0], w[1], w[2]};
+  if (all_finite(all, 6)) return true;
   for (int i = 0; i < kWidth<V>; ++i)
     for (int k = 0; k < 3; ++k)
       if (!std::isfinite(get(v[k], i)) || !std::isfinite(get(w[k], i))) return *bad = idx[i], false;
   return true;
 }
 
+// One exact sub-flow of the splitting: the turn about principal axis K for the time whose
+// half is `half_time` (s; the flow's fraction of h, halved), of frame q and body-frame momentum pi
+template <int K, class V>
+PBA_LANES void subflow(double half_time, const V inv[3], V q[4], V pi[3]) {
+  const V half = half_time * pi[K] * inv[K];
+  V hs, hc;
+  sincos_half(half, hs, hc);
+  const V c = 1.0 - 2.0 * hs * hs, sn = 2.0 * hs * hc;
+  // the body turns by +angle about its axis K: q (cos(angle/2), sin(angle/2) e_K)
+  const V qw = q[0], qx = q[1], qy = q[2], qz = q[3];
+  if constexpr (K == 0) q[0] = qw * hc - qx * hs, q[1] = qw * hs + qx * hc, q[2] = qy * hc + qz * hs, q[3] = qz * hc - qy * hs;
+  if constexpr (K == 1) q[0] = qw * hc - qy * hs, q[1] = qx * hc - qz * hs, q[2] = qw * hs + qy * hc, q[3] = qz * hc + qx * hs;
+  if constexpr (K == 2) q[0] = qw * hc - qz * hs, q[1] = qx * hc + qy * hs, q[2] = qy * hc - qx * hs, q[3] = qw * hs + qz * hc;
+  // its momentum, seen from the body, by -angle
+  constexpr int a = (K + 1) % 3, b = (K + 2) % 3;
+  const V pa = pi[a], pb = pi[b];
+  pi[a] = c * pa + sn * pb;
+  pi[b] = -sn * pa + c * pb;
+}
+
 // the lanes' positions and rotations, and their motion since the start of the step
 template <class V>
 PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
-  static constexpr int kAxis[5] = {0, 1, 2, 1, 0};
-  static constexpr double kFraction[5] = {0.5, 0.5, 1.0, 0.5, 0.5};
   V v[3], w[3], x[3], q[4], inertia[3], inv[3];
   load_strided(f.v, f.stride, idx, v);
   load_strided(f.w, f.stride, idx, w);
@@ -155,28 +217,14 @@ PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, do
   V pi[3];
   rotate(q, -1, w, pi);
   for (int k = 0; k < 3; ++k) pi[k] = inertia[k] * pi[k];
-  for (int s = 0; s < 5; ++s) {
-    const int k = kAxis[s];
-    const V half = (0.5 * kFraction[s] * h) * pi[k] * inv[k];
-    V hs, hc;
-    sincos_half(half, hs, hc);
-    const V c = 1.0 - 2.0 * hs * hs, sn = 2.0 * hs * hc;
-    // the body turns by +angle about its axis k: q (cos(angle/2), sin(angle/2) e_k)
-    const V qw = q[0], qx = q[1], qy = q[2], qz = q[3];
-    if (k == 0) q[0] = qw * hc - qx * hs, q[1] = qw * hs + qx * hc, q[2] = qy * hc + qz * hs, q[3] = qz * hc - qy * hs;
-    if (k == 1) q[0] = qw * hc - qy * hs, q[1] = qx * hc - qz * hs, q[2] = qw * hs + qy * hc, q[3] = qz * hc + qx * hs;
-    if (k == 2) q[0] = qw * hc - qz * hs, q[1] = qx * hc + qy * hs, q[2] = qy * hc - qx * hs, q[3] = qw * hs + qz * hc;
-    // its momentum, seen from the body, by -angle
-    const int a = (k + 1) % 3, b = (k + 2) % 3;
-    const V pa = pi[a], pb = pi[b];
-    pi[a] = c * pa + sn * pb;
-    pi[b] = -sn * pa + c * pb;
-  }
+  subflow<0>(0.5 * 0.5 * h, inv, q, pi);
+  subflow<1>(0.5 * 0.5 * h, inv, q, pi);
+  subflow<2>(0.5 * 1.0 * h, inv, q, pi);
+  subflow<1>(0.5 * 0.5 * h, inv, q, pi);
+  subflow<0>(0.5 * 0.5 * h, inv, q, pi);
   // kept unit (glm::normalize's arithmetic), and the world angular velocity back
   const V len = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-  V root = len;
-  for (int i = 0; i < kWidth<V>; ++i) set(root, i, std::sqrt(get(len, i)));
-  const V one_over = 1.0 / root;
+  const V one_over = 1.0 / sqrt_lanes(len);
   for (int k = 0; k < 4; ++k) q[k] = q[k] * one_over;
   for (int k = 0; k < 3; ++k) pi[k] = pi[k] * inv[k];
   rotate(q, 1, pi, w);
