@@ -30,44 +30,61 @@ using namespace lanes;
 // the half angles beyond which the library computes the sine and cosine (rad)
 constexpr double kSmall = 0.39269908169872414;  // pi / 8
 
-// true when every lane of a comparison's mask is set (halves folded onto each other, so the
-// mask never leaves the vector registers lane by lane)
-template <class M>
-PBA_LANES bool all_set(M m) {
-  if constexpr (sizeof(M) == 64) {
-    m &= __builtin_shuffle(m, v8l{4, 5, 6, 7, 0, 1, 2, 3});
-    m &= __builtin_shuffle(m, v8l{2, 3, 0, 1, 6, 7, 4, 5});
-    m &= __builtin_shuffle(m, v8l{1, 0, 3, 2, 5, 4, 7, 6});
-  } else {
-    m &= __builtin_shuffle(m, v4l{2, 3, 0, 1});
-    m &= __builtin_shuffle(m, v4l{1, 0, 3, 2});
-  }
-  return m[0] != 0;
-}
+// Tests and square roots over all lanes, by the targets' instructions (GCC's generic vectors
+// compare into a mask that plain AVX-512F turns back into a vector lane by lane). The wide
+// ones are out of line: GCC does not inline a target's intrinsics into a template.
 
 // true when every lane of x is within [-limit, limit] (false for a NaN lane)
-template <class V>
-PBA_LANES bool all_within(const V x, double limit) {
-  if constexpr (std::is_same_v<V, double>) return std::abs(x) <= limit;
-  else return all_set((x <= limit) & (x >= -limit));
+PBA_LANES bool all_within(double x, double limit) { return std::abs(x) <= limit; }
+// true when every lane of z is zero (false for a NaN lane)
+PBA_LANES bool all_zero(double z) { return z == 0; }
+// the square root of each lane (IEEE: correctly rounded, the same bits as std::sqrt)
+PBA_LANES double sqrt_lanes(double x) { return std::sqrt(x); }
+#if defined(__GNUC__) && defined(__x86_64__)
+[[gnu::target("avx2")]] [[gnu::noinline]] bool all_within(v4d x, double limit) {
+  const __m256d in = _mm256_and_pd(_mm256_cmp_pd(x, _mm256_set1_pd(limit), _CMP_LE_OQ),
+                                   _mm256_cmp_pd(x, _mm256_set1_pd(-limit), _CMP_GE_OQ));
+  return _mm256_movemask_pd(in) == 0xf;
 }
+[[gnu::target("avx2")]] [[gnu::noinline]] bool all_zero(v4d z) {
+  return _mm256_movemask_pd(_mm256_cmp_pd(z, _mm256_setzero_pd(), _CMP_EQ_OQ)) == 0xf;
+}
+[[gnu::target("avx2")]] [[gnu::noinline]] v4d sqrt_lanes(v4d x) { return _mm256_sqrt_pd(x); }
+[[gnu::target("avx512f")]] [[gnu::noinline]] bool all_within(v8d x, double limit) {
+  return (_mm512_cmp_pd_mask(x, _mm512_set1_pd(limit), _CMP_LE_OQ) &
+          _mm512_cmp_pd_mask(x, _mm512_set1_pd(-limit), _CMP_GE_OQ)) == 0xff;
+}
+[[gnu::target("avx512f")]] [[gnu::noinline]] bool all_zero(v8d z) {
+  return _mm512_cmp_pd_mask(z, _mm512_setzero_pd(), _CMP_EQ_OQ) == 0xff;
+}
+[[gnu::target("avx512f")]] [[gnu::noinline]] v8d sqrt_lanes(v8d x) { return _mm512_mask_sqrt_pd(x, 0xff, x); }
+// two blocks of 8 at once: two independent chains the core interleaves (the sub-flows are
+// sequential, so one block alone waits on its own latencies)
+typedef double v16d __attribute__((vector_size(128)));
+[[gnu::target("avx512f")]] PBA_LANES void halves(const v16d x, v8d h[2]) { std::memcpy(h, &x, sizeof x); }
+[[gnu::target("avx512f")]] [[gnu::noinline]] bool all_within(v16d x, double limit) {
+  v8d h[2];
+  halves(x, h);
+  const __m512d hi = _mm512_set1_pd(limit), lo = _mm512_set1_pd(-limit);
+  return (_mm512_cmp_pd_mask(h[0], hi, _CMP_LE_OQ) & _mm512_cmp_pd_mask(h[0], lo, _CMP_GE_OQ) &
+          _mm512_cmp_pd_mask(h[1], hi, _CMP_LE_OQ) & _mm512_cmp_pd_mask(h[1], lo, _CMP_GE_OQ)) == 0xff;
+}
+[[gnu::target("avx512f")]] [[gnu::noinline]] v16d sqrt_lanes(v16d x) {
+  v8d h[2];
+  halves(x, h);
+  h[0] = _mm512_mask_sqrt_pd(h[0], 0xff, h[0]), h[1] = _mm512_mask_sqrt_pd(h[1], 0xff, h[1]);
+  std::memcpy(&x, h, sizeof x);
+  return x;
+}
+#endif
 
 // true when every lane of the n vectors x is finite (x * 0 is 0 for a finite x, else NaN)
 template <class V>
 PBA_LANES bool all_finite(const V* x, int n) {
   V z = x[0] * 0.0;
   for (int k = 1; k < n; ++k) z = z + x[k] * 0.0;
-  if constexpr (std::is_same_v<V, double>) return z == 0;
-  else return all_set(z == 0.0);
+  return all_zero(z);
 }
-
-// the square root of each lane (IEEE: correctly rounded, the same bits as std::sqrt); the wide
-// ones out of line (once a block), as GCC does not inline a target's intrinsic into a template
-PBA_LANES double sqrt_lanes(double x) { return std::sqrt(x); }
-#if defined(__GNUC__) && defined(__x86_64__)
-[[gnu::target("avx2")]] [[gnu::noinline]] v4d sqrt_lanes(v4d x) { return _mm256_sqrt_pd(x); }
-[[gnu::target("avx512f")]] [[gnu::noinline]] v8d sqrt_lanes(v8d x) { return _mm512_mask_sqrt_pd(x, 0xff, x); }
-#endif
 
 // sin and cos of x for |x| <= kSmall (Horner in x^2)
 template <class V>
@@ -263,9 +280,10 @@ PBA_LANES bool velocities_all(const std::uint32_t* idx, std::size_t count, const
   return true;
 }
 
-template <class V>
+template <class V, class W = V>
 PBA_LANES void positions_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double h) {
   std::size_t i = 0;
+  for (; i + kWidth<W> <= count; i += kWidth<W>) positions<W>(idx + i, f, h);
   for (; i + kWidth<V> <= count; i += kWidth<V>) positions<V>(idx + i, f, h);
   for (; i < count; ++i) positions<double>(idx + i, f, h);
 }
@@ -284,7 +302,7 @@ __attribute__((target("avx2"))) bool velocities_avx2(const std::uint32_t* idx, s
 }
 __attribute__((target("avx512f"))) void positions_avx512(const std::uint32_t* idx, std::size_t count,
                                                         const FreeMotionArrays& f, double h) {
-  positions_all<v8d>(idx, count, f, h);
+  positions_all<v8d, v16d>(idx, count, f, h);
 }
 __attribute__((target("avx2"))) void positions_avx2(const std::uint32_t* idx, std::size_t count,
                                                    const FreeMotionArrays& f, double h) {
