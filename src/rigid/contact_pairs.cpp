@@ -411,7 +411,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
   };
   for (std::size_t k = 0; k < count; ++k) {
     if (k + 2 * kPairsAhead < count && shape_pairs[k + 2 * kPairsAhead].cache != kNoIndex)
-      __builtin_prefetch(&caches[shape_pairs[k + 2 * kPairsAhead].cache]);
+      lines(&caches[shape_pairs[k + 2 * kPairsAhead].cache], sizeof(PairCache));
     if (k + kPairsAhead < count) {
       const ShapePair& ahead = shape_pairs[k + kPairsAhead];
       lines(&proxies[ahead.proxy_a], sizeof(ShapeProxy));
