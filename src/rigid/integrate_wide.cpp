@@ -30,6 +30,10 @@ using namespace lanes;
 // the half angles beyond which the library computes the sine and cosine (rad)
 constexpr double kSmall = 0.39269908169872414;  // pi / 8
 
+// two blocks of 8 at once: two independent chains the core interleaves (the sub-flows are
+// sequential, so one block alone waits on its own latencies)
+typedef double v16d __attribute__((vector_size(128)));
+
 // Tests and square roots over all lanes, by the targets' instructions (GCC's generic vectors
 // compare into a mask that plain AVX-512F turns back into a vector lane by lane). The wide
 // ones are out of line: GCC does not inline a target's intrinsics into a template.
@@ -58,9 +62,6 @@ PBA_LANES double sqrt_lanes(double x) { return std::sqrt(x); }
   return _mm512_cmp_pd_mask(z, _mm512_setzero_pd(), _CMP_EQ_OQ) == 0xff;
 }
 [[gnu::target("avx512f")]] [[gnu::noinline]] v8d sqrt_lanes(v8d x) { return _mm512_mask_sqrt_pd(x, 0xff, x); }
-// two blocks of 8 at once: two independent chains the core interleaves (the sub-flows are
-// sequential, so one block alone waits on its own latencies)
-typedef double v16d __attribute__((vector_size(128)));
 [[gnu::target("avx512f")]] PBA_LANES void halves(const v16d x, v8d h[2]) { std::memcpy(h, &x, sizeof x); }
 [[gnu::target("avx512f")]] [[gnu::noinline]] bool all_within(v16d x, double limit) {
   v8d h[2];
@@ -118,8 +119,81 @@ PBA_LANES void rotate(const V q[4], double sign, const V v[3], V out[3]) {
   for (int i = 0; i < 3; ++i) out[i] = v[i] + (uv[i] * q[0] + uuv[i]) * 2.0;
 }
 
+// Loads of 8 bodies in a row (the awake bodies mostly are: `moving` is in index order): whole
+// vectors and a few two-vector permutes instead of a lane at a time. idx ascends, so the 8 are
+// consecutive when the last is 7 past the first.
+PBA_LANES bool in_a_row(const std::uint32_t* idx) { return idx[7] == idx[0] + 7; }
+
+// x, y, z of 8 consecutive Vec3 (24 doubles from p)
+PBA_LANES void rows3(const double* p, v8d out[3]) {
+  const v8d a = load<v8d>(p), b = load<v8d>(p + 8), c = load<v8d>(p + 16);
+  out[0] = __builtin_shuffle(__builtin_shuffle(a, b, v8l{0, 3, 6, 9, 12, 15, 0, 0}), c, v8l{0, 1, 2, 3, 4, 5, 10, 13});
+  out[1] = __builtin_shuffle(__builtin_shuffle(a, b, v8l{1, 4, 7, 10, 13, 0, 0, 0}), c, v8l{0, 1, 2, 3, 4, 8, 11, 14});
+  out[2] = __builtin_shuffle(__builtin_shuffle(a, b, v8l{2, 5, 8, 11, 14, 0, 0, 0}), c, v8l{0, 1, 2, 3, 4, 9, 12, 15});
+}
+
+// the components at memory offsets m[0..3] of 8 consecutive 4-double records (32 doubles from p)
+PBA_LANES void rows4(const double* p, const int m[4], v8d out[4]) {
+  const v8d a = load<v8d>(p), b = load<v8d>(p + 8), c = load<v8d>(p + 16), d = load<v8d>(p + 24);
+  for (int k = 0; k < 4; ++k) {
+    const long j = m[k];
+    const v8l pick{j, j + 4, j + 8, j + 12, 0, 0, 0, 0};
+    out[k] = __builtin_shuffle(__builtin_shuffle(a, b, pick), __builtin_shuffle(c, d, pick), v8l{0, 1, 2, 3, 8, 9, 10, 11});
+  }
+}
+
+// where glm keeps a quaternion's w, x, y, z (x, y, z, w unless told otherwise), in doubles
+static_assert(sizeof(Quat) == 4 * sizeof(double));
+#ifdef GLM_FORCE_QUAT_DATA_WXYZ
+constexpr int kQuatAt[4] = {0, 1, 2, 3};
+#else
+constexpr int kQuatAt[4] = {3, 0, 1, 2};
+#endif
+
+// ... and back: 8 consecutive Vec3 from their x, y, z
+PBA_LANES void unrows3(double* p, const v8d in[3]) {
+  const v8d &x = in[0], &y = in[1], &z = in[2];
+  store<v8d>(p, __builtin_shuffle(__builtin_shuffle(x, y, v8l{0, 8, 0, 1, 9, 0, 2, 10}), z, v8l{0, 1, 8, 3, 4, 9, 6, 7}));
+  store<v8d>(p + 8, __builtin_shuffle(__builtin_shuffle(x, y, v8l{0, 3, 11, 0, 4, 12, 0, 5}), z, v8l{10, 1, 2, 11, 4, 5, 12, 7}));
+  store<v8d>(p + 16, __builtin_shuffle(__builtin_shuffle(x, y, v8l{13, 0, 6, 14, 0, 7, 15, 0}), z, v8l{0, 13, 2, 3, 14, 5, 6, 15}));
+}
+
+// 8 consecutive 4-double records whose memory offset m[k] holds in[k]
+PBA_LANES void unrows4(double* p, const int m[4], const v8d in[4]) {
+  v8d at[4];
+  for (int k = 0; k < 4; ++k) at[m[k]] = in[k];
+  const v8d lo01 = __builtin_shuffle(at[0], at[1], v8l{0, 8, 1, 9, 2, 10, 3, 11});
+  const v8d lo23 = __builtin_shuffle(at[2], at[3], v8l{0, 8, 1, 9, 2, 10, 3, 11});
+  const v8d hi01 = __builtin_shuffle(at[0], at[1], v8l{4, 12, 5, 13, 6, 14, 7, 15});
+  const v8d hi23 = __builtin_shuffle(at[2], at[3], v8l{4, 12, 5, 13, 6, 14, 7, 15});
+  store<v8d>(p, __builtin_shuffle(lo01, lo23, v8l{0, 1, 8, 9, 2, 3, 10, 11}));
+  store<v8d>(p + 8, __builtin_shuffle(lo01, lo23, v8l{4, 5, 12, 13, 6, 7, 14, 15}));
+  store<v8d>(p + 16, __builtin_shuffle(hi01, hi23, v8l{0, 1, 8, 9, 2, 3, 10, 11}));
+  store<v8d>(p + 24, __builtin_shuffle(hi01, hi23, v8l{4, 5, 12, 13, 6, 7, 14, 15}));
+}
+
+// the halves of n wide vectors as blocks of 8
+PBA_LANES void split(const v16d* in, int n, v8d lo[4], v8d hi[4]) {
+  for (int k = 0; k < n; ++k) std::memcpy(&lo[k], &in[k], sizeof(v8d)), std::memcpy(&hi[k], reinterpret_cast<const char*>(&in[k]) + sizeof(v8d), sizeof(v8d));
+}
+
+// a wide load as two blocks of 8 (the first 8 lanes, then the next)
+template <class Load>
+PBA_LANES void twice(const std::uint32_t* idx, int n, v16d* out, Load load8) {
+  v8d lo[4], hi[4];
+  load8(idx, lo);
+  load8(idx + 8, hi);
+  for (int k = 0; k < n; ++k)
+    std::memcpy(&out[k], &lo[k], sizeof(v8d)), std::memcpy(reinterpret_cast<char*>(&out[k]) + sizeof(v8d), &hi[k], sizeof(v8d));
+}
+
 template <class V>
 PBA_LANES void load3(const Vec3* a, const std::uint32_t* idx, V out[3]) {
+  if constexpr (std::is_same_v<V, v16d>) {
+    return twice(idx, 3, out, [&](const std::uint32_t* i, v8d* o) { load3<v8d>(a, i, o); });
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    if (in_a_row(idx)) return rows3(&a[idx[0]].x, out);
+  }
   for (int k = 0; k < 3; ++k) out[k] = splat<V>(0);
   for (int i = 0; i < kWidth<V>; ++i) {
     const Vec3& x = a[idx[i]];
@@ -142,6 +216,11 @@ PBA_LANES void store_strided(double* a, std::size_t stride, const std::uint32_t*
 
 template <class V>
 PBA_LANES void load_quat(const Quat* a, const std::uint32_t* idx, V out[4]) {
+  if constexpr (std::is_same_v<V, v16d>) {
+    return twice(idx, 4, out, [&](const std::uint32_t* i, v8d* o) { load_quat<v8d>(a, i, o); });
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    if (in_a_row(idx)) return rows4(reinterpret_cast<const double*>(&a[idx[0]]), kQuatAt, out);
+  }
   for (int k = 0; k < 4; ++k) out[k] = splat<V>(0);
   for (int i = 0; i < kWidth<V>; ++i) {
     const Quat& q = a[idx[i]];
@@ -150,7 +229,34 @@ PBA_LANES void load_quat(const Quat* a, const std::uint32_t* idx, V out[4]) {
 }
 
 template <class V>
+PBA_LANES void store3(Vec3* a, const std::uint32_t* idx, const V in[3]) {
+  if constexpr (std::is_same_v<V, v16d>) {
+    v8d lo[4], hi[4];
+    split(in, 3, lo, hi);
+    return store3<v8d>(a, idx, lo), store3<v8d>(a, idx + 8, hi);
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    if (in_a_row(idx)) return unrows3(&a[idx[0]].x, in);
+  }
+  for (int i = 0; i < kWidth<V>; ++i) a[idx[i]] = Vec3(get(in[0], i), get(in[1], i), get(in[2], i));
+}
+
+template <class V>
+PBA_LANES void store_quat(Quat* a, const std::uint32_t* idx, const V in[4]) {
+  if constexpr (std::is_same_v<V, v16d>) {
+    v8d lo[4], hi[4];
+    split(in, 4, lo, hi);
+    return store_quat<v8d>(a, idx, lo), store_quat<v8d>(a, idx + 8, hi);
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    if (in_a_row(idx)) return unrows4(reinterpret_cast<double*>(&a[idx[0]]), kQuatAt, in);
+  }
+  for (int i = 0; i < kWidth<V>; ++i) a[idx[i]] = Quat(get(in[0], i), get(in[1], i), get(in[2], i), get(in[3], i));
+}
+
+template <class V>
 PBA_LANES V load1(const double* a, const std::uint32_t* idx) {
+  if constexpr (std::is_same_v<V, v8d>) {
+    if (in_a_row(idx)) return load<v8d>(a + idx[0]);
+  }
   V out = splat<V>(0);
   for (int i = 0; i < kWidth<V>; ++i) set(out, i, a[idx[i]]);
   return out;
@@ -246,10 +352,8 @@ PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, do
   for (int k = 0; k < 3; ++k) pi[k] = pi[k] * inv[k];
   rotate(q, 1, pi, w);
   store_strided(f.w, f.stride, idx, w);
-  for (int i = 0; i < kWidth<V>; ++i) {
-    f.com[idx[i]] = Vec3(get(x[0], i), get(x[1], i), get(x[2], i));
-    f.q[idx[i]] = Quat(get(q[0], i), get(q[1], i), get(q[2], i), get(q[3], i));
-  }
+  store3(f.com, idx, x);
+  store_quat(f.q, idx, q);
   // the motion since the start of the step, for the contacts' separations: dp, and the turn
   // q q0^-1 (glm's product with the conjugate)
   if (f.motion) {
