@@ -13,6 +13,11 @@
 // by a polynomial for half angles within pi/8 (Taylor to degree 13 and 14, truncation under
 // 1e-18 relative; more than 375 rad/s at a 480 Hz substep is needed to leave it), else by
 // the library.
+//
+// Cost (fall1000 spends a sixth of its step here): 8 bodies in a row, the common case, load
+// and store their fields as whole vectors and a few permutes; the all-lanes tests use the
+// targets' compare-to-mask instructions; on AVX-512 the positions run two blocks of 8 at once,
+// as their five sub-flows are one long chain of dependent operations per block.
 #include "solver.h"
 
 #include <cmath>
@@ -172,14 +177,19 @@ PBA_LANES void unrows4(double* p, const int m[4], const v8d in[4]) {
   store<v8d>(p + 24, __builtin_shuffle(hi01, hi23, v8l{4, 5, 12, 13, 6, 7, 14, 15}));
 }
 
-// the halves of n wide vectors as blocks of 8
-PBA_LANES void split(const v16d* in, int n, v8d lo[4], v8d hi[4]) {
-  for (int k = 0; k < n; ++k) std::memcpy(&lo[k], &in[k], sizeof(v8d)), std::memcpy(&hi[k], reinterpret_cast<const char*>(&in[k]) + sizeof(v8d), sizeof(v8d));
+// a wide store as two blocks of 8
+template <class Store>
+PBA_LANES void store_twice(const std::uint32_t* idx, int n, const v16d* in, Store store8) {
+  v8d lo[4], hi[4];
+  for (int k = 0; k < n; ++k)
+    std::memcpy(&lo[k], &in[k], sizeof(v8d)), std::memcpy(&hi[k], reinterpret_cast<const char*>(&in[k]) + sizeof(v8d), sizeof(v8d));
+  store8(idx, lo);
+  store8(idx + 8, hi);
 }
 
 // a wide load as two blocks of 8 (the first 8 lanes, then the next)
 template <class Load>
-PBA_LANES void twice(const std::uint32_t* idx, int n, v16d* out, Load load8) {
+PBA_LANES void load_twice(const std::uint32_t* idx, int n, v16d* out, Load load8) {
   v8d lo[4], hi[4];
   load8(idx, lo);
   load8(idx + 8, hi);
@@ -190,7 +200,7 @@ PBA_LANES void twice(const std::uint32_t* idx, int n, v16d* out, Load load8) {
 template <class V>
 PBA_LANES void load3(const Vec3* a, const std::uint32_t* idx, V out[3]) {
   if constexpr (std::is_same_v<V, v16d>) {
-    return twice(idx, 3, out, [&](const std::uint32_t* i, v8d* o) { load3<v8d>(a, i, o); });
+    return load_twice(idx, 3, out, [&](const std::uint32_t* i, v8d* o) { load3<v8d>(a, i, o); });
   } else if constexpr (std::is_same_v<V, v8d>) {
     if (in_a_row(idx)) return rows3(&a[idx[0]].x, out);
   }
@@ -217,7 +227,7 @@ PBA_LANES void store_strided(double* a, std::size_t stride, const std::uint32_t*
 template <class V>
 PBA_LANES void load_quat(const Quat* a, const std::uint32_t* idx, V out[4]) {
   if constexpr (std::is_same_v<V, v16d>) {
-    return twice(idx, 4, out, [&](const std::uint32_t* i, v8d* o) { load_quat<v8d>(a, i, o); });
+    return load_twice(idx, 4, out, [&](const std::uint32_t* i, v8d* o) { load_quat<v8d>(a, i, o); });
   } else if constexpr (std::is_same_v<V, v8d>) {
     if (in_a_row(idx)) return rows4(reinterpret_cast<const double*>(&a[idx[0]]), kQuatAt, out);
   }
@@ -231,9 +241,7 @@ PBA_LANES void load_quat(const Quat* a, const std::uint32_t* idx, V out[4]) {
 template <class V>
 PBA_LANES void store3(Vec3* a, const std::uint32_t* idx, const V in[3]) {
   if constexpr (std::is_same_v<V, v16d>) {
-    v8d lo[4], hi[4];
-    split(in, 3, lo, hi);
-    return store3<v8d>(a, idx, lo), store3<v8d>(a, idx + 8, hi);
+    return store_twice(idx, 3, in, [&](const std::uint32_t* i, const v8d* x) { store3<v8d>(a, i, x); });
   } else if constexpr (std::is_same_v<V, v8d>) {
     if (in_a_row(idx)) return unrows3(&a[idx[0]].x, in);
   }
@@ -243,9 +251,7 @@ PBA_LANES void store3(Vec3* a, const std::uint32_t* idx, const V in[3]) {
 template <class V>
 PBA_LANES void store_quat(Quat* a, const std::uint32_t* idx, const V in[4]) {
   if constexpr (std::is_same_v<V, v16d>) {
-    v8d lo[4], hi[4];
-    split(in, 4, lo, hi);
-    return store_quat<v8d>(a, idx, lo), store_quat<v8d>(a, idx + 8, hi);
+    return store_twice(idx, 4, in, [&](const std::uint32_t* i, const v8d* x) { store_quat<v8d>(a, i, x); });
   } else if constexpr (std::is_same_v<V, v8d>) {
     if (in_a_row(idx)) return unrows4(reinterpret_cast<double*>(&a[idx[0]]), kQuatAt, in);
   }
