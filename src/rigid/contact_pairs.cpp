@@ -68,6 +68,9 @@ constexpr double kMergeCos = 0.99619469809174553;
 // merged points closer than this (m) are one point
 constexpr double kSamePoint = 1e-6;
 
+// how many pairs ahead make_manifolds() and emit() fetch the pool entries they will read
+constexpr std::size_t kPairsAhead = 4;
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
@@ -425,10 +428,29 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
   const PairCache blank{};
   const BatchPath path = simd == SimdPath::Scalar ? BatchPath::Scalar : BatchPath::Best;
   std::size_t built = 0, reused = 0, keep = 0;
+  // the pool entries of the pairs ahead, on their way from the outer caches while this one is
+  // planned: the pair cache (both lines: `first` sits in the second) two distances ahead, then
+  // its proxies and first cached manifold one distance ahead
+  const std::size_t count = shape_pairs.size();
+  auto lines = [](const void* at, std::size_t bytes) {
+    for (std::size_t line = 0; line < bytes; line += 64) __builtin_prefetch(static_cast<const char*>(at) + line);
+  };
+  auto prefetch_ahead = [&](std::size_t k) {
+    if (k + 2 * kPairsAhead < count && shape_pairs[k + 2 * kPairsAhead].cache != kNoIndex)
+      lines(&caches[shape_pairs[k + 2 * kPairsAhead].cache], sizeof(PairCache));
+    if (k + kPairsAhead < count) {
+      const ShapePair& ahead = shape_pairs[k + kPairsAhead];
+      lines(&proxies[ahead.proxy_a], sizeof(ShapeProxy));
+      lines(&proxies[ahead.proxy_b], sizeof(ShapeProxy));
+      if (ahead.cache != kNoIndex && caches[ahead.cache].first != kNoIndex)
+        lines(&manifolds[caches[ahead.cache].first], sizeof(CachedManifold));
+    }
+  };
   for (std::size_t first = 0; first < shape_pairs.size();) {
     box_queries.clear();
     std::size_t last = first;
     for (; last < shape_pairs.size() && last - first < kSpan && box_queries.size() < kBoxes; ++last) {
+      prefetch_ahead(last);
       const ShapePair& p = shape_pairs[last];
       const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
       fates[last - first] = fate_of(p, a, b);
@@ -675,6 +697,11 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   // another manifold's), new ones appended
   const std::size_t at_index = emitted++;
   if (at_index == pairs.size()) pairs.emplace_back();
+  // last step's entry a few ahead, which the next emits overwrite (read first: the impulses)
+  if (at_index + kPairsAhead < last_count) {
+    const char* ahead = reinterpret_cast<const char*>(&pairs[at_index + kPairsAhead]);
+    for (std::size_t line = 0; line < sizeof(ContactPair); line += 64) __builtin_prefetch(ahead + line);
+  }
   ContactPair& c = pairs[at_index];
   CachedManifold& own = manifolds[record];
   if (c.record != record && c.record != kNoIndex && at_index < last_count && manifolds[c.record].last == at_index)

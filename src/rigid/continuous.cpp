@@ -97,9 +97,15 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // fast: moved more than half its smallest extent, or flagged
     Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i], 0, s.extent_[i]};
     const Quat dq = w.q1 * glm::conjugate(w.q0);
-    w.angle = 2 * std::atan2(glm::length(Vec3(dq.x, dq.y, dq.z)), std::abs(dq.w));
+    const double sine = glm::length(Vec3(dq.x, dq.y, dq.z)), cosine = std::abs(dq.w);
+    const double shift = glm::length(w.c1 - w.c0);
+    // most bodies are slow: atan2(s, c) <= s / c bounds the angle from above (by more than the
+    // library's and the division's rounding), so one that stays within half its extent even
+    // by the bound skips the arc tangent, as the test below would skip it (rounding is monotone)
+    if (!s.bullet_[i] && shift + 2 * (sine / cosine) * (1 + 1e-12) * w.reach <= 0.5 * s.min_extent_[i]) continue;
+    w.angle = 2 * std::atan2(sine, cosine);
     // (the farthest any point of the body travels in the step, m)
-    const double moved = glm::length(w.c1 - w.c0) + w.angle * w.reach;
+    const double moved = shift + w.angle * w.reach;
     if (!s.bullet_[i] && moved <= 0.5 * s.min_extent_[i]) continue;
     // everything the body can touch on its way: its centre's path grown by its reach
     const Aabb path = Aabb{glm::min(w.c0, w.c1), glm::max(w.c0, w.c1)}.grown(w.reach + target);

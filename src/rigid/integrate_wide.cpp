@@ -13,9 +13,16 @@
 // by a polynomial for half angles within pi/8 (Taylor to degree 13 and 14, truncation under
 // 1e-18 relative; more than 375 rad/s at a 480 Hz substep is needed to leave it), else by
 // the library.
+//
+// Cost (fall1000 spends a sixth of its step here): 8 bodies in a row, the common case, load
+// and store their fields as whole vectors and a few permutes; the all-lanes tests use the
+// targets' compare-to-mask instructions; on AVX-512 the positions run two blocks of 8 at once,
+// as their five sub-flows are one long chain of dependent operations per block.
 #include "solver.h"
 
 #include <cmath>
+
+#include <immintrin.h>
 
 #include "lanes.h"
 
@@ -27,6 +34,63 @@ using namespace lanes;
 
 // the half angles beyond which the library computes the sine and cosine (rad)
 constexpr double kSmall = 0.39269908169872414;  // pi / 8
+
+// two blocks of 8 at once: two independent chains the core interleaves (the sub-flows are
+// sequential, so one block alone waits on its own latencies)
+typedef double v16d __attribute__((vector_size(128)));
+
+// Tests and square roots over all lanes, by the targets' instructions (GCC's generic vectors
+// compare into a mask that plain AVX-512F turns back into a vector lane by lane). The wide
+// ones are out of line: GCC does not inline a target's intrinsics into a template.
+
+// true when every lane of x is within [-limit, limit] (false for a NaN lane)
+PBA_LANES bool all_within(double x, double limit) { return std::abs(x) <= limit; }
+// true when every lane of z is zero (false for a NaN lane)
+PBA_LANES bool all_zero(double z) { return z == 0; }
+// the square root of each lane (IEEE: correctly rounded, the same bits as std::sqrt)
+PBA_LANES double sqrt_lanes(double x) { return std::sqrt(x); }
+#if defined(__GNUC__) && defined(__x86_64__)
+[[gnu::target("avx2")]] [[gnu::noinline]] bool all_within(v4d x, double limit) {
+  const __m256d in = _mm256_and_pd(_mm256_cmp_pd(x, _mm256_set1_pd(limit), _CMP_LE_OQ),
+                                   _mm256_cmp_pd(x, _mm256_set1_pd(-limit), _CMP_GE_OQ));
+  return _mm256_movemask_pd(in) == 0xf;
+}
+[[gnu::target("avx2")]] [[gnu::noinline]] bool all_zero(v4d z) {
+  return _mm256_movemask_pd(_mm256_cmp_pd(z, _mm256_setzero_pd(), _CMP_EQ_OQ)) == 0xf;
+}
+[[gnu::target("avx2")]] [[gnu::noinline]] v4d sqrt_lanes(v4d x) { return _mm256_sqrt_pd(x); }
+[[gnu::target("avx512f")]] [[gnu::noinline]] bool all_within(v8d x, double limit) {
+  return (_mm512_cmp_pd_mask(x, _mm512_set1_pd(limit), _CMP_LE_OQ) &
+          _mm512_cmp_pd_mask(x, _mm512_set1_pd(-limit), _CMP_GE_OQ)) == 0xff;
+}
+[[gnu::target("avx512f")]] [[gnu::noinline]] bool all_zero(v8d z) {
+  return _mm512_cmp_pd_mask(z, _mm512_setzero_pd(), _CMP_EQ_OQ) == 0xff;
+}
+[[gnu::target("avx512f")]] [[gnu::noinline]] v8d sqrt_lanes(v8d x) { return _mm512_mask_sqrt_pd(x, 0xff, x); }
+[[gnu::target("avx512f")]] PBA_LANES void halves(const v16d x, v8d h[2]) { std::memcpy(h, &x, sizeof x); }
+[[gnu::target("avx512f")]] [[gnu::noinline]] bool all_within(v16d x, double limit) {
+  v8d h[2];
+  halves(x, h);
+  const __m512d hi = _mm512_set1_pd(limit), lo = _mm512_set1_pd(-limit);
+  return (_mm512_cmp_pd_mask(h[0], hi, _CMP_LE_OQ) & _mm512_cmp_pd_mask(h[0], lo, _CMP_GE_OQ) &
+          _mm512_cmp_pd_mask(h[1], hi, _CMP_LE_OQ) & _mm512_cmp_pd_mask(h[1], lo, _CMP_GE_OQ)) == 0xff;
+}
+[[gnu::target("avx512f")]] [[gnu::noinline]] v16d sqrt_lanes(v16d x) {
+  v8d h[2];
+  halves(x, h);
+  h[0] = _mm512_mask_sqrt_pd(h[0], 0xff, h[0]), h[1] = _mm512_mask_sqrt_pd(h[1], 0xff, h[1]);
+  std::memcpy(&x, h, sizeof x);
+  return x;
+}
+#endif
+
+// true when every lane of the n vectors x is finite (x * 0 is 0 for a finite x, else NaN)
+template <class V>
+PBA_LANES bool all_finite(const V* x, int n) {
+  V z = x[0] * 0.0;
+  for (int k = 1; k < n; ++k) z = z + x[k] * 0.0;
+  return all_zero(z);
+}
 
 // sin and cos of x for |x| <= kSmall (Horner in x^2)
 template <class V>
@@ -44,6 +108,7 @@ PBA_LANES void sincos_small(const V x, V& s, V& c) {
 template <class V>
 PBA_LANES void sincos_half(const V h, V& s, V& c) {
   sincos_small(h, s, c);
+  if (all_within(h, kSmall)) return;  // one test for all lanes: the steady case
   for (int i = 0; i < kWidth<V>; ++i) {
     const double x = get(h, i);
     if (!(std::abs(x) <= kSmall)) set(s, i, std::sin(x)), set(c, i, std::cos(x));
@@ -59,8 +124,86 @@ PBA_LANES void rotate(const V q[4], double sign, const V v[3], V out[3]) {
   for (int i = 0; i < 3; ++i) out[i] = v[i] + (uv[i] * q[0] + uuv[i]) * 2.0;
 }
 
+// Loads of 8 bodies in a row (the awake bodies mostly are: `moving` is in index order): whole
+// vectors and a few two-vector permutes instead of a lane at a time. idx ascends, so the 8 are
+// consecutive when the last is 7 past the first.
+PBA_LANES bool in_a_row(const std::uint32_t* idx) { return idx[7] == idx[0] + 7; }
+
+// x, y, z of 8 consecutive Vec3 (24 doubles from p)
+PBA_LANES void rows3(const double* p, v8d out[3]) {
+  const v8d a = load<v8d>(p), b = load<v8d>(p + 8), c = load<v8d>(p + 16);
+  out[0] = __builtin_shuffle(__builtin_shuffle(a, b, v8l{0, 3, 6, 9, 12, 15, 0, 0}), c, v8l{0, 1, 2, 3, 4, 5, 10, 13});
+  out[1] = __builtin_shuffle(__builtin_shuffle(a, b, v8l{1, 4, 7, 10, 13, 0, 0, 0}), c, v8l{0, 1, 2, 3, 4, 8, 11, 14});
+  out[2] = __builtin_shuffle(__builtin_shuffle(a, b, v8l{2, 5, 8, 11, 14, 0, 0, 0}), c, v8l{0, 1, 2, 3, 4, 9, 12, 15});
+}
+
+// the components at memory offsets m[0..3] of 8 consecutive 4-double records (32 doubles from p)
+PBA_LANES void rows4(const double* p, const int m[4], v8d out[4]) {
+  const v8d a = load<v8d>(p), b = load<v8d>(p + 8), c = load<v8d>(p + 16), d = load<v8d>(p + 24);
+  for (int k = 0; k < 4; ++k) {
+    const long j = m[k];
+    const v8l pick{j, j + 4, j + 8, j + 12, 0, 0, 0, 0};
+    out[k] = __builtin_shuffle(__builtin_shuffle(a, b, pick), __builtin_shuffle(c, d, pick), v8l{0, 1, 2, 3, 8, 9, 10, 11});
+  }
+}
+
+// where glm keeps a quaternion's w, x, y, z (x, y, z, w unless told otherwise), in doubles
+static_assert(sizeof(Quat) == 4 * sizeof(double));
+#ifdef GLM_FORCE_QUAT_DATA_WXYZ
+constexpr int kQuatAt[4] = {0, 1, 2, 3};
+#else
+constexpr int kQuatAt[4] = {3, 0, 1, 2};
+#endif
+
+// ... and back: 8 consecutive Vec3 from their x, y, z
+PBA_LANES void unrows3(double* p, const v8d in[3]) {
+  const v8d &x = in[0], &y = in[1], &z = in[2];
+  store<v8d>(p, __builtin_shuffle(__builtin_shuffle(x, y, v8l{0, 8, 0, 1, 9, 0, 2, 10}), z, v8l{0, 1, 8, 3, 4, 9, 6, 7}));
+  store<v8d>(p + 8, __builtin_shuffle(__builtin_shuffle(x, y, v8l{0, 3, 11, 0, 4, 12, 0, 5}), z, v8l{10, 1, 2, 11, 4, 5, 12, 7}));
+  store<v8d>(p + 16, __builtin_shuffle(__builtin_shuffle(x, y, v8l{13, 0, 6, 14, 0, 7, 15, 0}), z, v8l{0, 13, 2, 3, 14, 5, 6, 15}));
+}
+
+// 8 consecutive 4-double records whose memory offset m[k] holds in[k]
+PBA_LANES void unrows4(double* p, const int m[4], const v8d in[4]) {
+  v8d at[4];
+  for (int k = 0; k < 4; ++k) at[m[k]] = in[k];
+  const v8d lo01 = __builtin_shuffle(at[0], at[1], v8l{0, 8, 1, 9, 2, 10, 3, 11});
+  const v8d lo23 = __builtin_shuffle(at[2], at[3], v8l{0, 8, 1, 9, 2, 10, 3, 11});
+  const v8d hi01 = __builtin_shuffle(at[0], at[1], v8l{4, 12, 5, 13, 6, 14, 7, 15});
+  const v8d hi23 = __builtin_shuffle(at[2], at[3], v8l{4, 12, 5, 13, 6, 14, 7, 15});
+  store<v8d>(p, __builtin_shuffle(lo01, lo23, v8l{0, 1, 8, 9, 2, 3, 10, 11}));
+  store<v8d>(p + 8, __builtin_shuffle(lo01, lo23, v8l{4, 5, 12, 13, 6, 7, 14, 15}));
+  store<v8d>(p + 16, __builtin_shuffle(hi01, hi23, v8l{0, 1, 8, 9, 2, 3, 10, 11}));
+  store<v8d>(p + 24, __builtin_shuffle(hi01, hi23, v8l{4, 5, 12, 13, 6, 7, 14, 15}));
+}
+
+// a wide store as two blocks of 8
+template <class Store>
+PBA_LANES void store_twice(const std::uint32_t* idx, int n, const v16d* in, Store store8) {
+  v8d lo[4], hi[4];
+  for (int k = 0; k < n; ++k)
+    std::memcpy(&lo[k], &in[k], sizeof(v8d)), std::memcpy(&hi[k], reinterpret_cast<const char*>(&in[k]) + sizeof(v8d), sizeof(v8d));
+  store8(idx, lo);
+  store8(idx + 8, hi);
+}
+
+// a wide load as two blocks of 8 (the first 8 lanes, then the next)
+template <class Load>
+PBA_LANES void load_twice(const std::uint32_t* idx, int n, v16d* out, Load load8) {
+  v8d lo[4], hi[4];
+  load8(idx, lo);
+  load8(idx + 8, hi);
+  for (int k = 0; k < n; ++k)
+    std::memcpy(&out[k], &lo[k], sizeof(v8d)), std::memcpy(reinterpret_cast<char*>(&out[k]) + sizeof(v8d), &hi[k], sizeof(v8d));
+}
+
 template <class V>
 PBA_LANES void load3(const Vec3* a, const std::uint32_t* idx, V out[3]) {
+  if constexpr (std::is_same_v<V, v16d>) {
+    return load_twice(idx, 3, out, [&](const std::uint32_t* i, v8d* o) { load3<v8d>(a, i, o); });
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    if (in_a_row(idx)) return rows3(&a[idx[0]].x, out);
+  }
   for (int k = 0; k < 3; ++k) out[k] = splat<V>(0);
   for (int i = 0; i < kWidth<V>; ++i) {
     const Vec3& x = a[idx[i]];
@@ -83,6 +226,11 @@ PBA_LANES void store_strided(double* a, std::size_t stride, const std::uint32_t*
 
 template <class V>
 PBA_LANES void load_quat(const Quat* a, const std::uint32_t* idx, V out[4]) {
+  if constexpr (std::is_same_v<V, v16d>) {
+    return load_twice(idx, 4, out, [&](const std::uint32_t* i, v8d* o) { load_quat<v8d>(a, i, o); });
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    if (in_a_row(idx)) return rows4(reinterpret_cast<const double*>(&a[idx[0]]), kQuatAt, out);
+  }
   for (int k = 0; k < 4; ++k) out[k] = splat<V>(0);
   for (int i = 0; i < kWidth<V>; ++i) {
     const Quat& q = a[idx[i]];
@@ -91,7 +239,30 @@ PBA_LANES void load_quat(const Quat* a, const std::uint32_t* idx, V out[4]) {
 }
 
 template <class V>
+PBA_LANES void store3(Vec3* a, const std::uint32_t* idx, const V in[3]) {
+  if constexpr (std::is_same_v<V, v16d>) {
+    return store_twice(idx, 3, in, [&](const std::uint32_t* i, const v8d* x) { store3<v8d>(a, i, x); });
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    if (in_a_row(idx)) return unrows3(&a[idx[0]].x, in);
+  }
+  for (int i = 0; i < kWidth<V>; ++i) a[idx[i]] = Vec3(get(in[0], i), get(in[1], i), get(in[2], i));
+}
+
+template <class V>
+PBA_LANES void store_quat(Quat* a, const std::uint32_t* idx, const V in[4]) {
+  if constexpr (std::is_same_v<V, v16d>) {
+    return store_twice(idx, 4, in, [&](const std::uint32_t* i, const v8d* x) { store_quat<v8d>(a, i, x); });
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    if (in_a_row(idx)) return unrows4(reinterpret_cast<double*>(&a[idx[0]]), kQuatAt, in);
+  }
+  for (int i = 0; i < kWidth<V>; ++i) a[idx[i]] = Quat(get(in[0], i), get(in[1], i), get(in[2], i), get(in[3], i));
+}
+
+template <class V>
 PBA_LANES V load1(const double* a, const std::uint32_t* idx) {
+  if constexpr (std::is_same_v<V, v8d>) {
+    if (in_a_row(idx)) return load<v8d>(a + idx[0]);
+  }
   V out = splat<V>(0);
   for (int i = 0; i < kWidth<V>; ++i) set(out, i, a[idx[i]]);
   return out;
@@ -131,17 +302,37 @@ PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, d
   store_strided(f.v, f.stride, idx, v);
   store_strided(f.w, f.stride, idx, w);
   // a force too large for a double stops here, before contacts can spread it to others
+  const V all[6] = {v[0], v[1], v[2], w[0], w[1], w[2]};
+  if (all_finite(all, 6)) return true;
   for (int i = 0; i < kWidth<V>; ++i)
     for (int k = 0; k < 3; ++k)
       if (!std::isfinite(get(v[k], i)) || !std::isfinite(get(w[k], i))) return *bad = idx[i], false;
   return true;
 }
 
+// One exact sub-flow of the splitting: the turn about principal axis K for the time whose
+// half is `half_time` (s; the flow's fraction of h, halved), of frame q and body-frame momentum pi
+template <int K, class V>
+PBA_LANES void subflow(double half_time, const V inv[3], V q[4], V pi[3]) {
+  const V half = half_time * pi[K] * inv[K];
+  V hs, hc;
+  sincos_half(half, hs, hc);
+  const V c = 1.0 - 2.0 * hs * hs, sn = 2.0 * hs * hc;
+  // the body turns by +angle about its axis K: q (cos(angle/2), sin(angle/2) e_K)
+  const V qw = q[0], qx = q[1], qy = q[2], qz = q[3];
+  if constexpr (K == 0) q[0] = qw * hc - qx * hs, q[1] = qw * hs + qx * hc, q[2] = qy * hc + qz * hs, q[3] = qz * hc - qy * hs;
+  if constexpr (K == 1) q[0] = qw * hc - qy * hs, q[1] = qx * hc - qz * hs, q[2] = qw * hs + qy * hc, q[3] = qz * hc + qx * hs;
+  if constexpr (K == 2) q[0] = qw * hc - qz * hs, q[1] = qx * hc + qy * hs, q[2] = qy * hc - qx * hs, q[3] = qw * hs + qz * hc;
+  // its momentum, seen from the body, by -angle
+  constexpr int a = (K + 1) % 3, b = (K + 2) % 3;
+  const V pa = pi[a], pb = pi[b];
+  pi[a] = c * pa + sn * pb;
+  pi[b] = -sn * pa + c * pb;
+}
+
 // the lanes' positions and rotations, and their motion since the start of the step
 template <class V>
 PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
-  static constexpr int kAxis[5] = {0, 1, 2, 1, 0};
-  static constexpr double kFraction[5] = {0.5, 0.5, 1.0, 0.5, 0.5};
   V v[3], w[3], x[3], q[4], inertia[3], inv[3];
   load_strided(f.v, f.stride, idx, v);
   load_strided(f.w, f.stride, idx, w);
@@ -155,36 +346,20 @@ PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, do
   V pi[3];
   rotate(q, -1, w, pi);
   for (int k = 0; k < 3; ++k) pi[k] = inertia[k] * pi[k];
-  for (int s = 0; s < 5; ++s) {
-    const int k = kAxis[s];
-    const V half = (0.5 * kFraction[s] * h) * pi[k] * inv[k];
-    V hs, hc;
-    sincos_half(half, hs, hc);
-    const V c = 1.0 - 2.0 * hs * hs, sn = 2.0 * hs * hc;
-    // the body turns by +angle about its axis k: q (cos(angle/2), sin(angle/2) e_k)
-    const V qw = q[0], qx = q[1], qy = q[2], qz = q[3];
-    if (k == 0) q[0] = qw * hc - qx * hs, q[1] = qw * hs + qx * hc, q[2] = qy * hc + qz * hs, q[3] = qz * hc - qy * hs;
-    if (k == 1) q[0] = qw * hc - qy * hs, q[1] = qx * hc - qz * hs, q[2] = qw * hs + qy * hc, q[3] = qz * hc + qx * hs;
-    if (k == 2) q[0] = qw * hc - qz * hs, q[1] = qx * hc + qy * hs, q[2] = qy * hc - qx * hs, q[3] = qw * hs + qz * hc;
-    // its momentum, seen from the body, by -angle
-    const int a = (k + 1) % 3, b = (k + 2) % 3;
-    const V pa = pi[a], pb = pi[b];
-    pi[a] = c * pa + sn * pb;
-    pi[b] = -sn * pa + c * pb;
-  }
+  subflow<0>(0.5 * 0.5 * h, inv, q, pi);
+  subflow<1>(0.5 * 0.5 * h, inv, q, pi);
+  subflow<2>(0.5 * 1.0 * h, inv, q, pi);
+  subflow<1>(0.5 * 0.5 * h, inv, q, pi);
+  subflow<0>(0.5 * 0.5 * h, inv, q, pi);
   // kept unit (glm::normalize's arithmetic), and the world angular velocity back
   const V len = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-  V root = len;
-  for (int i = 0; i < kWidth<V>; ++i) set(root, i, std::sqrt(get(len, i)));
-  const V one_over = 1.0 / root;
+  const V one_over = 1.0 / sqrt_lanes(len);
   for (int k = 0; k < 4; ++k) q[k] = q[k] * one_over;
   for (int k = 0; k < 3; ++k) pi[k] = pi[k] * inv[k];
   rotate(q, 1, pi, w);
   store_strided(f.w, f.stride, idx, w);
-  for (int i = 0; i < kWidth<V>; ++i) {
-    f.com[idx[i]] = Vec3(get(x[0], i), get(x[1], i), get(x[2], i));
-    f.q[idx[i]] = Quat(get(q[0], i), get(q[1], i), get(q[2], i), get(q[3], i));
-  }
+  store3(f.com, idx, x);
+  store_quat(f.q, idx, q);
   // the motion since the start of the step, for the contacts' separations: dp, and the turn
   // q q0^-1 (glm's product with the conjugate)
   if (f.motion) {
@@ -215,9 +390,10 @@ PBA_LANES bool velocities_all(const std::uint32_t* idx, std::size_t count, const
   return true;
 }
 
-template <class V>
+template <class V, class W = V>
 PBA_LANES void positions_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double h) {
   std::size_t i = 0;
+  for (; i + kWidth<W> <= count; i += kWidth<W>) positions<W>(idx + i, f, h);
   for (; i + kWidth<V> <= count; i += kWidth<V>) positions<V>(idx + i, f, h);
   for (; i < count; ++i) positions<double>(idx + i, f, h);
 }
@@ -236,7 +412,7 @@ __attribute__((target("avx2"))) bool velocities_avx2(const std::uint32_t* idx, s
 }
 __attribute__((target("avx512f"))) void positions_avx512(const std::uint32_t* idx, std::size_t count,
                                                         const FreeMotionArrays& f, double h) {
-  positions_all<v8d>(idx, count, f, h);
+  positions_all<v8d, v16d>(idx, count, f, h);
 }
 __attribute__((target("avx2"))) void positions_avx2(const std::uint32_t* idx, std::size_t count,
                                                    const FreeMotionArrays& f, double h) {
