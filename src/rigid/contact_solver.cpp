@@ -48,7 +48,7 @@ bool moves(const RigidBodySystem& s, std::uint32_t i, const std::vector<BodyType
 // an empty lane: zeros everywhere (no mass, no effect), its bodies the spare last row, no pair
 void clear_lane(ContactBlock& b, AnchorBlock& g, int l, std::uint32_t spare) {
   auto zero = [&](Real (&f)[kLanes]) { f[l] = 0; };
-  for (int i = 0; i < 3; ++i) zero(b.t1[i]), zero(b.t2[i]), zero(b.n[i]), zero(b.d[i]), zero(b.ca[i]);
+  for (int i = 0; i < 3; ++i) zero(b.t1[i]), zero(b.t2[i]), zero(b.n[i]), zero(b.ca[i]), zero(b.cb[i]);
   for (int i = 0; i < 6; ++i) zero(b.ia[i]), zero(b.ib[i]);
   for (int i = 0; i < 10; ++i) zero(b.k[i]);
   for (int k = 0; k < 4; ++k) {
@@ -58,6 +58,7 @@ void clear_lane(ContactBlock& b, AnchorBlock& g, int l, std::uint32_t spare) {
   }
   zero(b.ma), zero(b.mb), zero(b.tangent_mass[0]), zero(b.tangent_mass[1]), zero(b.twist_mass);
   zero(b.friction), zero(b.twist_radius), zero(b.tangent_impulse[0]), zero(b.tangent_impulse[1]);
+  b.unit[l] = 1;
   zero(b.twist_impulse);
   b.a[l] = b.b[l] = spare;
   b.pair[l] = kNoPair;
@@ -352,7 +353,16 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
   const Vec3 t[3] = {c.t1, c.t2, c.normal};
   for (int i = 0; i < 3; ++i) k.t1[i][l] = c.t1[i], k.t2[i][l] = c.t2[i], k.n[i][l] = c.normal[i];
   const double ma = s.asleep_[c.a] ? 0 : s.inv_mass_[c.a], mb = s.asleep_[c.b] ? 0 : s.inv_mass_[c.b];
-  k.ma[l] = ma, k.mb[l] = mb;
+  // the lane's impulse unit: the power of two u that puts u (ma + mb) in [0.5, 1), so that the
+  // float kernels see masses near 1 kg whatever the bodies weigh (exact: a power of two scales
+  // every product and quotient without rounding, so it changes no bits unless a float would
+  // leave its range); the block keeps impulses and effective masses divided by u, inverse
+  // masses, inverse inertias and K times u
+  int exponent = 0;
+  if (ma + mb > 0) std::frexp(ma + mb, &exponent);
+  const double unit = std::ldexp(1.0, -exponent);
+  k.unit[l] = static_cast<Real>(unit);
+  k.ma[l] = ma * unit, k.mb[l] = mb * unit;
   // the inverse inertias in the frame, t_i . (I^-1 t_j)
   double ia[6], ib[6];
   {
@@ -362,7 +372,7 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
     for (int e = 0; e < 6; ++e) {
       ia[e] = glm::dot(t[kRow[e]], at[kCol[e]]);
       ib[e] = glm::dot(t[kRow[e]], bt[kCol[e]]);
-      k.ia[e][l] = ia[e], k.ib[e][l] = ib[e];
+      k.ia[e][l] = ia[e] * unit, k.ib[e][l] = ib[e] * unit;
     }
   }
   auto frame = [&](const Vec3& v, double out[3]) {
@@ -371,7 +381,7 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
   double d[3], ca[3];
   frame(s.com_[c.a] - s.com_[c.b], d);
   frame(c.ca, ca);
-  for (int i = 0; i < 3; ++i) k.d[i][l] = d[i], k.ca[i][l] = ca[i];
+  for (int i = 0; i < 3; ++i) k.ca[i][l] = ca[i], k.cb[i][l] = ca[i] + d[i];
   // the points; the normal rows' angular parts are r x n = (y, -x, 0) in the frame
   double x[4] = {}, y[4] = {};
   const double base = glm::dot(s.com_[c.b] - s.com_[c.a], c.normal);
@@ -385,14 +395,14 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
       // surface point to b's; zero where the narrow phase puts them on one normal)
       const Vec3 e = 0.5 * ((q.sb + (s.com_[c.b] - s.com_[c.a])) - q.sa);
       g.ex[p][l] = glm::dot(e, c.t1), g.ey[p][l] = glm::dot(e, c.t2);
-      g.base[p][l] = base + q.offset;
-      k.sep[p][l] = g.base[p][l] + g.zb[p][l] - g.za[p][l];
-      k.impulse[p][l] = q.normal_impulse;
+      // the separation at the start of the step (the kernels add the bodies' motion since)
+      k.sep[p][l] = g.base[p][l] = base + q.offset + glm::dot(q.sb, c.normal) - glm::dot(q.sa, c.normal);
+      k.impulse[p][l] = q.normal_impulse / unit;
     } else {
       g.za[p][l] = g.zb[p][l] = g.base[p][l] = k.sep[p][l] = k.impulse[p][l] = 0;
       g.ex[p][l] = g.ey[p][l] = 0;
     }
-    k.x[p][l] = x[p], k.y[p][l] = y[p];
+    k.x[p][l] = x[p] - ca[0], k.y[p][l] = y[p] - ca[1];
     k.max_impulse[p][l] = 0;
   }
   static constexpr int kPairs[10][2] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}};
@@ -405,22 +415,22 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
       const double rbi[3] = {y[i] + d[1], -(x[i] + d[0]), 0}, rbj[3] = {y[j] + d[1], -(x[j] + d[0]), 0};
       v = ma + mb + quadratic(ia, rai, raj) + quadratic(ib, rbi, rbj);
     }
-    k.k[e][l] = v;
+    k.k[e][l] = v * unit;
     if (i == j) diag[i] = v;
   }
-  for (int p = 0; p < 4; ++p) k.mass[p][l] = inverse(diag[p]);
+  for (int p = 0; p < 4; ++p) k.mass[p][l] = inverse(diag[p]) / unit;
   // friction at the centroid: the tangents' angular parts c x t1 = (0, c2, -c1), c x t2 = (-c2, 0, c0)
   {
     const double cb[3] = {ca[0] + d[0], ca[1] + d[1], ca[2] + d[2]};
     const double a1[3] = {0, ca[2], -ca[1]}, b1[3] = {0, cb[2], -cb[1]};
     const double a2[3] = {-ca[2], 0, ca[0]}, b2[3] = {-cb[2], 0, cb[0]};
-    k.tangent_mass[0][l] = inverse(ma + mb + quadratic(ia, a1, a1) + quadratic(ib, b1, b1));
-    k.tangent_mass[1][l] = inverse(ma + mb + quadratic(ia, a2, a2) + quadratic(ib, b2, b2));
-    k.twist_mass[l] = inverse(ia[5] + ib[5]);
+    k.tangent_mass[0][l] = inverse(ma + mb + quadratic(ia, a1, a1) + quadratic(ib, b1, b1)) / unit;
+    k.tangent_mass[1][l] = inverse(ma + mb + quadratic(ia, a2, a2) + quadratic(ib, b2, b2)) / unit;
+    k.twist_mass[l] = inverse(ia[5] + ib[5]) / unit;
   }
   k.friction[l] = c.friction, k.twist_radius[l] = c.twist_radius;
-  k.tangent_impulse[0][l] = c.tangent_impulse[0], k.tangent_impulse[1][l] = c.tangent_impulse[1];
-  k.twist_impulse[l] = c.twist_impulse;
+  k.tangent_impulse[0][l] = c.tangent_impulse[0] / unit, k.tangent_impulse[1][l] = c.tangent_impulse[1] / unit;
+  k.twist_impulse[l] = c.twist_impulse / unit;
   // the normal velocities before the solve
   double vn[4];
   normal_velocities(k, l, arrays(s), vn);
@@ -512,6 +522,7 @@ void RigidContacts::roll(RigidBodySystem& s, const ContactBlock& k, int l) {
   if (c.rolling == 0) return;
   double total = 0;
   for (int p = 0; p < 4; ++p) total += k.impulse[p][l];
+  total *= k.unit[l];
   (void)s;
   double* wa = rows[c.a].w;
   double* wb = rows[c.b].w;
@@ -575,13 +586,14 @@ void RigidContacts::store() {
         for (int l = 0; l < blocks[b + 1].lanes; ++l) prefetch_pair(pairs[blocks[b + 1].pair[l]]);
       for (int l = 0; l < k.lanes; ++l) {
         ContactPair& c = pairs[k.pair[l]];
+        const double unit = k.unit[l];
         for (int p = 0; p < c.count; ++p) {
-          c.points[p].normal_impulse = k.impulse[p][l];
+          c.points[p].normal_impulse = k.impulse[p][l] * unit;
           c.points[p].approach = k.approach[p][l];
-          c.points[p].max_normal_impulse = k.max_impulse[p][l];
+          c.points[p].max_normal_impulse = k.max_impulse[p][l] * unit;
         }
-        c.tangent_impulse[0] = k.tangent_impulse[0][l], c.tangent_impulse[1] = k.tangent_impulse[1][l];
-        c.twist_impulse = k.twist_impulse[l];
+        c.tangent_impulse[0] = k.tangent_impulse[0][l] * unit, c.tangent_impulse[1] = k.tangent_impulse[1][l] * unit;
+        c.twist_impulse = k.twist_impulse[l] * unit;
         c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
       }
     }

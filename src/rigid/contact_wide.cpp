@@ -1,11 +1,14 @@
 // Rigid bodies: the contact solver's kernels over blocks of manifolds (src/rigid/solver.h).
 //
-// One template over the lane type runs every path: double (the scalar path, and the overflow
-// lane by lane), 4 doubles (AVX2) and 8 doubles (AVX-512), as GCC vector extensions; the
-// blocks' floats are widened to double on loading and rounded back on storing. Each lane
-// does the same operations in the same order on every path (the build has -ffp-contract=off,
-// so no fused multiply-add; division and square root are correctly rounded; min, max and the
-// selections are the same comparisons), so the three paths give the same bits
+// One template over the lane type runs every path: float (the scalar path, and the overflow
+// lane by lane), 8 floats (AVX2, and AVX-512 on blocks of up to 8 manifolds) and 16 floats
+// (AVX-512), as GCC vector extensions. The blocks hold floats and the kernels compute in
+// float (as Box2D v3 and Box3D do); the bodies' velocities and warm-start accumulators stay in
+// double: a kernel reads them rounded to float and adds its float changes back to the doubles.
+// Each lane does the same operations in the same order on every path (the build has
+// -ffp-contract=off, so no fused multiply-add; division and square root are correctly
+// rounded; min, max and the selections are the same comparisons; the pass's settings are
+// rounded to float once), so the three paths give the same bits
 // (RigidSimd.EveryPathGivesTheSameBits).
 //
 // A manifold is solved in its contact frame (t1, t2, n), as in Box2D v3's contact_solver.c but
@@ -17,6 +20,8 @@
 #include "solver.h"
 
 #include <cmath>
+#include <cstring>
+#include <type_traits>
 
 #include "lanes.h"
 
@@ -24,7 +29,71 @@ namespace pba::detail {
 
 namespace {
 
-using namespace lanes;
+using lanes::v4d;
+using lanes::v4l;
+using lanes::v8d;
+using lanes::v8l;
+
+typedef float v8f __attribute__((vector_size(32)));
+typedef float v16f __attribute__((vector_size(64)));
+typedef int v8i __attribute__((vector_size(32)));
+typedef int v16i __attribute__((vector_size(64)));
+
+// a lane type's number: float or double
+template <class V>
+struct ElementOf {
+  using type = std::remove_cvref_t<decltype(std::declval<V>()[0])>;
+};
+template <class V>
+  requires std::is_arithmetic_v<V>
+struct ElementOf<V> {
+  using type = V;
+};
+template <class V>
+using Element = typename ElementOf<V>::type;
+
+// lanes in a lane type
+template <class V>
+constexpr int kWidth = static_cast<int>(sizeof(V) / sizeof(Element<V>));
+
+#define PBA_LANES [[gnu::always_inline]] inline
+
+// x in every lane
+template <class V>
+PBA_LANES V splat(float x) {
+  if constexpr (std::is_arithmetic_v<V>) return x;
+  else return V{} + x;
+}
+
+// kWidth<V> consecutive floats from p, and back (lanes of doubles: widened, exactly, and
+// rounded to the nearest floats)
+template <class V>
+PBA_LANES V load(const float* p) {
+  if constexpr (std::is_arithmetic_v<V>) {
+    return static_cast<V>(*p);
+  } else if constexpr (std::is_same_v<Element<V>, float>) {
+    V v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+  } else {
+    typedef float F __attribute__((vector_size(sizeof(V) / 2)));
+    F f;
+    std::memcpy(&f, p, sizeof f);
+    return __builtin_convertvector(f, V);
+  }
+}
+template <class V>
+PBA_LANES void store(float* p, const V& v) {
+  if constexpr (std::is_arithmetic_v<V>) {
+    *p = static_cast<float>(v);
+  } else if constexpr (std::is_same_v<Element<V>, float>) {
+    std::memcpy(p, &v, sizeof v);
+  } else {
+    typedef float F __attribute__((vector_size(sizeof(V) / 2)));
+    const F f = __builtin_convertvector(v, F);
+    std::memcpy(p, &f, sizeof f);
+  }
+}
 
 // std::max and std::min's comparisons, lane by lane
 template <class V>
@@ -43,7 +112,7 @@ PBA_LANES V vclamp(V v, V lo, V hi) {
 
 template <class V>
 PBA_LANES V vsqrt(V x) {
-  if constexpr (std::is_same_v<V, double>) {
+  if constexpr (std::is_arithmetic_v<V>) {
     return std::sqrt(x);
   } else {
     V r = x;
@@ -73,30 +142,6 @@ PBA_LANES void sym_mul2(const V m[6], const V v0, const V v1, V out[3]) {
   out[2] = m[2] * v0 + m[4] * v1;
 }
 
-// kWidth<V> consecutive floats from p as doubles (exact), and doubles rounded to the nearest
-// floats (the same rounding on every path)
-template <class V>
-PBA_LANES V widen(const float* p) {
-  if constexpr (std::is_same_v<V, double>) {
-    return static_cast<double>(*p);
-  } else {
-    typedef float F __attribute__((vector_size(sizeof(V) / 2)));
-    F f;
-    std::memcpy(&f, p, sizeof f);
-    return __builtin_convertvector(f, V);
-  }
-}
-template <class V>
-PBA_LANES void narrow(float* p, const V& v) {
-  if constexpr (std::is_same_v<V, double>) {
-    *p = static_cast<float>(v);
-  } else {
-    typedef float F __attribute__((vector_size(sizeof(V) / 2)));
-    const F f = __builtin_convertvector(v, F);
-    std::memcpy(p, &f, sizeof f);
-  }
-}
-
 // ---------------------------------------------------------------------------------------
 // the block's lanes [l0, l0 + width)
 
@@ -104,14 +149,50 @@ template <class V>
 struct Lanes {
   ContactBlock& c;
   int l0;
-  // a field's lanes widened to double, and rounded back
-  PBA_LANES V operator()(const Real (&f)[kLanes]) const { return widen<V>(f + l0); }
-  PBA_LANES void put(Real (&f)[kLanes], const V& v) const { narrow<V>(f + l0, v); }
+  // a field's lanes, and back
+  PBA_LANES V operator()(const Real (&f)[kLanes]) const { return load<V>(f + l0); }
+  PBA_LANES void put(Real (&f)[kLanes], const V& v) const { store<V>(f + l0, v); }
   // the frame
   PBA_LANES void frame(V t1[3], V t2[3], V n[3]) const {
     for (int i = 0; i < 3; ++i) t1[i] = (*this)(c.t1[i]), t2[i] = (*this)(c.t2[i]), n[i] = (*this)(c.n[i]);
   }
 };
+
+// The transpose of 8 rows of 8 floats (each its own inverse); in 16 floats, of the two halves
+// apart (rows i and i + 8 share vector i). Three rounds of two-vector shuffles, as for doubles.
+PBA_LANES void transpose(v8f r[8]) {
+  v8f t[8], u[8];
+  for (int i = 0; i < 4; ++i) {
+    t[2 * i] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v8i{0, 8, 2, 10, 4, 12, 6, 14});
+    t[2 * i + 1] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v8i{1, 9, 3, 11, 5, 13, 7, 15});
+  }
+  constexpr int kFirst[4] = {0, 1, 4, 5};
+  for (const int i : kFirst) {
+    u[i] = __builtin_shuffle(t[i], t[i + 2], v8i{0, 1, 8, 9, 4, 5, 12, 13});
+    u[i + 2] = __builtin_shuffle(t[i], t[i + 2], v8i{2, 3, 10, 11, 6, 7, 14, 15});
+  }
+  for (int i = 0; i < 4; ++i) {
+    r[i] = __builtin_shuffle(u[i], u[i + 4], v8i{0, 1, 2, 3, 8, 9, 10, 11});
+    r[i + 4] = __builtin_shuffle(u[i], u[i + 4], v8i{4, 5, 6, 7, 12, 13, 14, 15});
+  }
+}
+
+PBA_LANES void transpose(v16f r[8]) {
+  v16f t[8], u[8];
+  for (int i = 0; i < 4; ++i) {
+    t[2 * i] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v16i{0, 16, 2, 18, 4, 20, 6, 22, 8, 24, 10, 26, 12, 28, 14, 30});
+    t[2 * i + 1] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v16i{1, 17, 3, 19, 5, 21, 7, 23, 9, 25, 11, 27, 13, 29, 15, 31});
+  }
+  constexpr int kFirst[4] = {0, 1, 4, 5};
+  for (const int i : kFirst) {
+    u[i] = __builtin_shuffle(t[i], t[i + 2], v16i{0, 1, 16, 17, 4, 5, 20, 21, 8, 9, 24, 25, 12, 13, 28, 29});
+    u[i + 2] = __builtin_shuffle(t[i], t[i + 2], v16i{2, 3, 18, 19, 6, 7, 22, 23, 10, 11, 26, 27, 14, 15, 30, 31});
+  }
+  for (int i = 0; i < 4; ++i) {
+    r[i] = __builtin_shuffle(u[i], u[i + 4], v16i{0, 1, 2, 3, 16, 17, 18, 19, 8, 9, 10, 11, 24, 25, 26, 27});
+    r[i + 4] = __builtin_shuffle(u[i], u[i + 4], v16i{4, 5, 6, 7, 20, 21, 22, 23, 12, 13, 14, 15, 28, 29, 30, 31});
+  }
+}
 
 // the transpose of 4 rows of 4 doubles, and of 8 rows of 8 (each its own inverse)
 PBA_LANES void transpose(v4d r[4]) {
@@ -138,63 +219,89 @@ PBA_LANES void transpose(v8d r[8]) {
   }
 }
 
-// each lane's 64-byte row (base + 8 index), as 8 vectors of one double a lane
+// a body's 64-byte row of 8 doubles rounded to 8 floats
+PBA_LANES v8f row_floats(const double* base, std::uint32_t index) {
+  v8d d;
+  std::memcpy(&d, base + 8 * static_cast<std::size_t>(index), sizeof d);
+  return __builtin_convertvector(d, v8f);
+}
+
+// each lane's row (base + 8 index) as 8 vectors of one number a lane (rounded to float in
+// lanes of floats)
 template <class V>
 PBA_LANES void load_rows(const double* base, const std::uint32_t* index, V out[8]) {
-  if constexpr (std::is_same_v<V, double>) {
+  if constexpr (std::is_arithmetic_v<V>) {
     const double* p = base + 8 * static_cast<std::size_t>(index[0]);
-    for (int k = 0; k < 8; ++k) out[k] = p[k];
+    for (int k = 0; k < 8; ++k) out[k] = static_cast<V>(p[k]);
   } else if constexpr (std::is_same_v<V, v4d>) {
     for (int i = 0; i < 4; ++i) {
       const double* p = base + 8 * static_cast<std::size_t>(index[i]);
-      out[i] = load<v4d>(p), out[4 + i] = load<v4d>(p + 4);
+      std::memcpy(&out[i], p, sizeof(v4d)), std::memcpy(&out[4 + i], p + 4, sizeof(v4d));
     }
     transpose(out), transpose(out + 4);
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    for (int i = 0; i < 8; ++i) std::memcpy(&out[i], base + 8 * static_cast<std::size_t>(index[i]), sizeof(v8d));
+    transpose(out);
+  } else if constexpr (std::is_same_v<V, v8f>) {
+    for (int i = 0; i < 8; ++i) out[i] = row_floats(base, index[i]);
+    transpose(out);
   } else {
-    for (int i = 0; i < 8; ++i) out[i] = load<v8d>(base + 8 * static_cast<std::size_t>(index[i]));
+    for (int i = 0; i < 8; ++i)
+      out[i] = __builtin_shufflevector(row_floats(base, index[i]), row_floats(base, index[i + 8]), 0, 1, 2, 3, 4, 5, 6, 7,
+                                       8, 9, 10, 11, 12, 13, 14, 15);
     transpose(out);
   }
 }
 
-// and back: every lane's row is written (a lane that may not change its body writes back what
-// it read; empty lanes point at the spare last row)
+// a lane's changes (8 floats) added to its body's row of doubles
+PBA_LANES void add_row(double* base, std::uint32_t index, v8f change) {
+  double* p = base + 8 * static_cast<std::size_t>(index);
+  v8d d;
+  std::memcpy(&d, p, sizeof d);
+  d = d + __builtin_convertvector(change, v8d);
+  std::memcpy(p, &d, sizeof d);
+}
+
+// the first six of each lane's row (velocities, or their changes) plus `change`, widened to
+// double, for the lanes whose bit of `bits` is set (the others write nothing: empty lanes, and
+// bodies the solver does not move)
 template <class V>
-PBA_LANES void store_rows(double* base, const std::uint32_t* index, V in[8]) {
-  if constexpr (std::is_same_v<V, double>) {
+PBA_LANES void add_rows(double* base, const std::uint32_t* index, std::uint32_t bits, const V change[6]) {
+  if constexpr (std::is_same_v<V, float>) {
+    if (!(bits & 1)) return;
     double* p = base + 8 * static_cast<std::size_t>(index[0]);
-    for (int k = 0; k < 8; ++k) p[k] = in[k];
-  } else if constexpr (std::is_same_v<V, v4d>) {
-    transpose(in), transpose(in + 4);
-    for (int i = 0; i < 4; ++i) {
-      double* p = base + 8 * static_cast<std::size_t>(index[i]);
-      store<v4d>(p, in[i]), store<v4d>(p + 4, in[4 + i]);
+    for (int k = 0; k < 6; ++k) p[k] = p[k] + static_cast<double>(change[k]);
+  } else {
+    V t[8] = {change[0], change[1], change[2], change[3], change[4], change[5], V{}, V{}};
+    transpose(t);
+    for (int i = 0; i < 8; ++i) {
+      if constexpr (std::is_same_v<V, v8f>) {
+        if ((bits >> i) & 1) add_row(base, index[i], t[i]);
+      } else {
+        if ((bits >> i) & 1) add_row(base, index[i], __builtin_shufflevector(t[i], t[i], 0, 1, 2, 3, 4, 5, 6, 7));
+        if ((bits >> (i + 8)) & 1) add_row(base, index[i + 8], __builtin_shufflevector(t[i], t[i], 8, 9, 10, 11, 12, 13, 14, 15));
+      }
     }
-  } else {
-    transpose(in);
-    for (int i = 0; i < 8; ++i) store<v8d>(base + 8 * static_cast<std::size_t>(index[i]), in[i]);
   }
 }
 
-// lane i of these is set when bit i of `bits` is
-template <class V>
-PBA_LANES auto lane_mask(std::uint32_t bits) {
-  if constexpr (std::is_same_v<V, double>) {
-    return static_cast<int>(bits & 1);
-  } else if constexpr (std::is_same_v<V, v4d>) {
-    return ((v4l{} + static_cast<long>(bits)) >> v4l{0, 1, 2, 3} & 1) != 0;
-  } else {
-    return ((v8l{} + static_cast<long>(bits)) >> v8l{0, 1, 2, 3, 4, 5, 6, 7} & 1) != 0;
-  }
-}
-
-// a body's rows with the first six doubles (velocities or their changes) replaced by `now`
-// where the lane may write, then stored
-template <class V>
-PBA_LANES void write_rows(double* base, const std::uint32_t* index, std::uint32_t bits, V row[8], const V now[6]) {
-  const auto may = lane_mask<V>(bits);
-  for (int k = 0; k < 6; ++k) row[k] = may ? now[k] : row[k];
-  store_rows(base, index, row);
-}
+// the pass's settings in float (rounded once, the same on every path)
+struct FloatParams {
+  float inv_h, bias_rate[2], mass_scale[2], impulse_scale[2], push_out, baumgarte_h, slop;
+  int sweeps;
+  bool update_sep, warm_next;
+  explicit FloatParams(const PassParams& p)
+      : inv_h(static_cast<float>(p.inv_h)),
+        bias_rate{static_cast<float>(p.bias_rate[0]), static_cast<float>(p.bias_rate[1])},
+        mass_scale{static_cast<float>(p.mass_scale[0]), static_cast<float>(p.mass_scale[1])},
+        impulse_scale{static_cast<float>(p.impulse_scale[0]), static_cast<float>(p.impulse_scale[1])},
+        push_out(static_cast<float>(p.push_out)),
+        baumgarte_h(static_cast<float>(p.baumgarte_h)),
+        slop(static_cast<float>(p.slop)),
+        sweeps(p.sweeps),
+        update_sep(p.update_sep),
+        warm_next(p.warm_next) {}
+};
 
 // world = x0 t1 + x1 t2 + x2 n
 template <class V>
@@ -208,11 +315,14 @@ PBA_LANES void to_frame(const V t1[3], const V t2[3], const V n[3], const V v[3]
   out[0] = dot(v, t1), out[1] = dot(v, t2), out[2] = dot(v, n);
 }
 
+// the separation (m) below which a point counts as touching (see solve())
+constexpr float kTouching = 1e-6f;
+
 // K's upper triangle by rows: (0,0) (0,1) (0,2) (0,3) (1,1) (1,2) (1,3) (2,2) (2,3) (3,3)
 constexpr int kK[4][4] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6, 8, 9}};
 
-// the separations at the poses now: base + n.(dp_b - dp_a) + n.(turn_b sb) - n.(turn_a sa),
-// with n.(turn s) = (turn^-1 n).s taken in the frame
+// the separations at the poses now: base + n.(dp_b - dp_a) + n.(turn_b sb - sb) - n.(turn_a sa -
+// sa), with n.(turn s - s) = (turn^-1 n - n).s taken in the frame
 template <class V>
 PBA_LANES void separations(const Lanes<V>& L, const AnchorBlock& g, const BodyArrays& r) {
   ContactBlock& c = L.c;
@@ -223,23 +333,23 @@ PBA_LANES void separations(const Lanes<V>& L, const AnchorBlock& g, const BodyAr
   load_rows(r.motion, c.b + L.l0, mb);
   const V dp[3] = {mb[0] - ma[0], mb[1] - ma[1], mb[2] - ma[2]};
   const V dpn = dot(dp, n);
-  // turn^-1 n = n + 2 (w (-u x n) + (-u) x ((-u) x n)), in the frame
+  // turn^-1 n - n = 2 (w (-u x n) + (-u) x ((-u) x n)), in the frame
   auto turned_normal = [&](const V* m, V out[3]) {
     const V u[3] = {-m[4], -m[5], -m[6]};
     const V uv[3] = {u[1] * n[2] - u[2] * n[1], u[2] * n[0] - u[0] * n[2], u[0] * n[1] - u[1] * n[0]};
     const V uuv[3] = {u[1] * uv[2] - u[2] * uv[1], u[2] * uv[0] - u[0] * uv[2], u[0] * uv[1] - u[1] * uv[0]};
     V w[3];
-    for (int i = 0; i < 3; ++i) w[i] = n[i] + (uv[i] * m[3] + uuv[i]) * 2.0;
+    for (int i = 0; i < 3; ++i) w[i] = (uv[i] * m[3] + uuv[i]) * 2.0;
     to_frame(t1, t2, n, w, out);
   };
   V na[3], nb[3];
   turned_normal(ma, na);
   turned_normal(mb, nb);
-  const V d0 = L(c.d[0]), d1 = L(c.d[1]);
+  const V ca0 = L(c.ca[0]), ca1 = L(c.ca[1]), cb0 = L(c.cb[0]), cb1 = L(c.cb[1]);
   for (int k = 0; k < 4; ++k) {
     const V x = L(c.x[k]), y = L(c.y[k]), ex = L(g.ex[k]), ey = L(g.ey[k]);
-    const V sb = nb[0] * (x + d0 + ex) + nb[1] * (y + d1 + ey) + nb[2] * L(g.zb[k]);
-    const V sa = na[0] * (x - ex) + na[1] * (y - ey) + na[2] * L(g.za[k]);
+    const V sb = nb[0] * (cb0 + x + ex) + nb[1] * (cb1 + y + ey) + nb[2] * L(g.zb[k]);
+    const V sa = na[0] * (ca0 + x - ex) + na[1] * (ca1 + y - ey) + na[2] * L(g.za[k]);
     L.put(c.sep[k], L(g.base[k]) + dpn + sb - sa);
   }
 }
@@ -250,7 +360,7 @@ enum Mode : int { kSoft, kRigid, kRelax };
 
 // one pass of the block's lanes: normal points, friction, twist
 template <class V, int kMode>
-PBA_LANES void solve(const Lanes<V>& L, const PassParams& p, const BodyArrays& r) {
+PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& r) {
   constexpr bool kBias = kMode != kRelax;
   ContactBlock& c = L.c;
   const int l0 = L.l0;
@@ -277,7 +387,7 @@ PBA_LANES void solve(const Lanes<V>& L, const PassParams& p, const BodyArrays& r
   const V ma = L(c.ma), mb = L(c.mb), msum = ma + mb;
   V ia[6], ib[6];
   for (int i = 0; i < 6; ++i) ia[i] = L(c.ia[i]), ib[i] = L(c.ib[i]);
-  const V d[3] = {L(c.d[0]), L(c.d[1]), L(c.d[2])};
+  const V ca[3] = {L(c.ca[0]), L(c.ca[1]), L(c.ca[2])}, cb[3] = {L(c.cb[0]), L(c.cb[1]), L(c.cb[2])};
   // turning a by -Ia ta and b by Ib tb (frame torques with no third component)
   auto turn2 = [&](const V ta0, const V ta1, const V tb0, const V tb1) {
     V da[3], db[3];
@@ -288,7 +398,12 @@ PBA_LANES void solve(const Lanes<V>& L, const PassParams& p, const BodyArrays& r
 
   // each point's bias, mass scale and impulse scale for this pass: speculative points (apart)
   // close the gap in this substep and no more, and the relax pass leaves them alone; touching
-  // ones are pushed out by the soft spring (up to push_out) or by Baumgarte beyond the slop
+  // ones are pushed out by the soft spring (up to push_out) or by Baumgarte beyond the slop.
+  // A point within kTouching of contact is touching: a gap closed in the last substep measures
+  // zero up to the rounding of float velocities (in double it is exactly zero for a face
+  // meeting a face), and that rounding must not pick between the two (with `sep > 0` a body
+  // passed a wall of the 250 m/s closed box in 28 of 29 slightly perturbed runs, the double
+  // kernels before in 9 of 34; with this margin in none of 13: docs/benchmarks.md)
   const auto fixed = (ma == zero) | (mb == zero);
   V x[4], y[4], lambda[4], lambda0[4], vn[4], bias[4], mscale[4], iscale[4], approach[4], largest[4];
   std::remove_const_t<decltype(fixed)> skip[4];
@@ -297,16 +412,16 @@ PBA_LANES void solve(const Lanes<V>& L, const PassParams& p, const BodyArrays& r
     lambda[k] = lambda0[k] = L(c.impulse[k]);
     approach[k] = L(c.approach[k]), largest[k] = L(c.max_impulse[k]);
     const V sep = L(c.sep[k]);
-    const auto apart = sep > zero;
+    const auto apart = sep > splat<V>(kTouching);
     skip[k] = fixed != fixed;  // none
     if constexpr (kMode == kSoft) {
       const V rate = fixed ? splat<V>(p.bias_rate[1]) : splat<V>(p.bias_rate[0]);
-      bias[k] = apart ? sep * p.inv_h : vmax(rate * sep, splat<V>(-p.push_out));
+      bias[k] = apart ? sep * splat<V>(p.inv_h) : vmax(rate * sep, splat<V>(-p.push_out));
       mscale[k] = apart ? one : (fixed ? splat<V>(p.mass_scale[1]) : splat<V>(p.mass_scale[0]));
       iscale[k] = apart ? zero : (fixed ? splat<V>(p.impulse_scale[1]) : splat<V>(p.impulse_scale[0]));
     } else if constexpr (kMode == kRigid) {
-      bias[k] = apart ? sep * p.inv_h
-                      : vmax(splat<V>(p.baumgarte_h) * vmin(zero, sep + p.slop), splat<V>(-p.push_out));
+      bias[k] = apart ? sep * splat<V>(p.inv_h)
+                      : vmax(splat<V>(p.baumgarte_h) * vmin(zero, sep + splat<V>(p.slop)), splat<V>(-p.push_out));
       mscale[k] = one, iscale[k] = zero;
     } else {
       bias[k] = zero, mscale[k] = one, iscale[k] = zero;
@@ -314,9 +429,9 @@ PBA_LANES void solve(const Lanes<V>& L, const PassParams& p, const BodyArrays& r
     }
   }
   // the normal velocities: (vb + wb x rb - va - wa x ra).n with (w x r).n = w.(r x n), and
-  // r x n = (y, -x, 0) in the frame (rb = ra + d)
+  // r x n = (r1, -r0, 0) in the frame: the centroid's, and each point's (ra = ca + p, rb = cb + p)
   {
-    const V g = rel[2] + d[1] * ob[0] - d[0] * ob[1];
+    const V g = rel[2] + (ob[0] * cb[1] - ob[1] * cb[0]) - (oa[0] * ca[1] - oa[1] * ca[0]);
     const V p1 = ob[0] - oa[0], p2 = ob[1] - oa[1];
     for (int k = 0; k < 4; ++k) vn[k] = g + y[k] * p1 - x[k] * p2;
   }
@@ -339,8 +454,8 @@ PBA_LANES void solve(const Lanes<V>& L, const PassParams& p, const BodyArrays& r
       for (int m = 0; m < 4; ++m) vn[m] = vn[m] + kk[kK[m][k]] * dl;
     }
   }
-  // the points' impulses to the bodies: along n, and the moments (sum dl (y, -x, 0) on a,
-  // with rb = ra + d on b)
+  // the points' impulses to the bodies: along n, and the moments sum dl (ca1 + y, -(ca0 + x), 0)
+  // on a, the same with cb on b
   {
     V sl = zero, sx = zero, sy = zero;
     for (int k = 0; k < 4; ++k) {
@@ -349,12 +464,10 @@ PBA_LANES void solve(const Lanes<V>& L, const PassParams& p, const BodyArrays& r
     }
     rel[2] = rel[2] + msum * sl;
     impulse[2] = impulse[2] + sl;
-    turn2(sy, -sx, sy + d[1] * sl, -(sx + d[0] * sl));
+    turn2(ca[1] * sl + sy, -(ca[0] * sl + sx), cb[1] * sl + sy, -(cb[0] * sl + sx));
   }
   // Coulomb friction at the centroid: the tangential impulse stays inside the disc of radius
   // mu * (total normal impulse)
-  const V ca[3] = {L(c.ca[0]), L(c.ca[1]), L(c.ca[2])};
-  const V cb[3] = {ca[0] + d[0], ca[1] + d[1], ca[2] + d[2]};
   const V mu = L(c.friction);
   {
     const V r0 = rel[0] + (ob[1] * cb[2] - ob[2] * cb[1]) - (oa[1] * ca[2] - oa[2] * ca[1]);
@@ -403,12 +516,9 @@ PBA_LANES void solve(const Lanes<V>& L, const PassParams& p, const BodyArrays& r
   to_world(t1, t2, n, dwa, dwaw);
   to_world(t1, t2, n, dwb, dwbw);
   V na[6], nb[6];
-  for (int i = 0; i < 3; ++i) {
-    na[i] = va[i] - ma * pw[i], na[3 + i] = wa[i] + dwaw[i];
-    nb[i] = vb[i] + mb * pw[i], nb[3 + i] = wb[i] + dwbw[i];
-  }
-  write_rows(base, c.a + l0, c.write_a >> l0, rowa, na);
-  write_rows(base, c.b + l0, c.write_b >> l0, rowb, nb);
+  for (int i = 0; i < 3; ++i) na[i] = -(ma * pw[i]), na[3 + i] = dwaw[i], nb[i] = mb * pw[i], nb[3 + i] = dwbw[i];
+  add_rows(base, c.a + l0, c.write_a >> l0, na);
+  add_rows(base, c.b + l0, c.write_b >> l0, nb);
 }
 
 // the lanes' accumulated impulses added to the warm-start accumulators
@@ -425,12 +535,10 @@ PBA_LANES void warm(const Lanes<V>& L, const BodyArrays& r) {
     sl = sl + l, sx = sx + l * L(c.x[k]), sy = sy + l * L(c.y[k]);
   }
   const V j0 = L(c.tangent_impulse[0]), j1 = L(c.tangent_impulse[1]), tw = L(c.twist_impulse);
-  const V d[3] = {L(c.d[0]), L(c.d[1]), L(c.d[2])};
-  const V ca[3] = {L(c.ca[0]), L(c.ca[1]), L(c.ca[2])};
-  const V cb[3] = {ca[0] + d[0], ca[1] + d[1], ca[2] + d[2]};
+  const V ca[3] = {L(c.ca[0]), L(c.ca[1]), L(c.ca[2])}, cb[3] = {L(c.cb[0]), L(c.cb[1]), L(c.cb[2])};
   // the moments in the frame: the points', the friction's at the centroid, the twist
-  const V ta[3] = {sy - ca[2] * j1, -sx + ca[2] * j0, ca[0] * j1 - ca[1] * j0 + tw};
-  const V tb[3] = {sy + d[1] * sl - cb[2] * j1, -(sx + d[0] * sl) + cb[2] * j0, cb[0] * j1 - cb[1] * j0 + tw};
+  const V ta[3] = {ca[1] * sl + sy - ca[2] * j1, -(ca[0] * sl + sx) + ca[2] * j0, ca[0] * j1 - ca[1] * j0 + tw};
+  const V tb[3] = {cb[1] * sl + sy - cb[2] * j1, -(cb[0] * sl + sx) + cb[2] * j0, cb[0] * j1 - cb[1] * j0 + tw};
   V ia[6], ib[6];
   for (int i = 0; i < 6; ++i) ia[i] = L(c.ia[i]), ib[i] = L(c.ib[i]);
   V da[3], db[3], daw[3], dbw[3], pw[3];
@@ -441,55 +549,80 @@ PBA_LANES void warm(const Lanes<V>& L, const BodyArrays& r) {
   const V pf[3] = {j0, j1, sl};
   to_world(t1, t2, n, pf, pw);
   const V ma = L(c.ma), mb = L(c.mb);
-  double* const base = r.warm[0].v;
-  V rowa[8], rowb[8], na[6], nb[6];
-  load_rows(base, c.a + l0, rowa);
-  load_rows(base, c.b + l0, rowb);
-  for (int i = 0; i < 3; ++i) {
-    na[i] = rowa[i] - ma * pw[i], na[3 + i] = rowa[3 + i] - daw[i];
-    nb[i] = rowb[i] + mb * pw[i], nb[3 + i] = rowb[3 + i] + dbw[i];
-  }
-  write_rows(base, c.a + l0, c.write_a >> l0, rowa, na);
-  write_rows(base, c.b + l0, c.write_b >> l0, rowb, nb);
+  V na[6], nb[6];
+  for (int i = 0; i < 3; ++i) na[i] = -(ma * pw[i]), na[3 + i] = -daw[i], nb[i] = mb * pw[i], nb[3 + i] = dbw[i];
+  add_rows(r.warm[0].v, c.a + l0, c.write_a >> l0, na);
+  add_rows(r.warm[0].v, c.b + l0, c.write_b >> l0, nb);
 }
 
-template <class V, int kMode>
-PBA_LANES void pass(ContactBlock& c, const AnchorBlock& g, int l0, const PassParams& p, const BodyArrays& r) {
+// the separations of the block's lanes [l0, l0 + width) in lanes of doubles D (in double:
+// they are small differences of the bodies' motions, and whether a point is apart or touching
+// turns on their sign)
+template <class D>
+PBA_LANES void separations_of(ContactBlock& c, const AnchorBlock& g, int l0, int width, const BodyArrays& r) {
+  for (int l = l0; l < l0 + width; l += kWidth<D>) separations(Lanes<D>{c, l}, g, r);
+}
+
+template <class V, class D, int kMode>
+PBA_LANES void pass(ContactBlock& c, const AnchorBlock& g, int l0, const FloatParams& p, const BodyArrays& r) {
   const Lanes<V> L{c, l0};
-  if (p.update_sep) separations(L, g, r);
+  if (p.update_sep) separations_of<D>(c, g, l0, kWidth<V>, r);
   solve<V, kMode>(L, p, r);
   if (p.warm_next) warm(L, r);
 }
 
-// blocks [first, last) on lanes of V (several parts of a block when V is narrower). No software
-// prefetch: the blocks of a colour lie one after another and the hardware's streamer fetches
-// them; asking for all 48 lines of the next block at once stalled the loop on the full fill
-// buffers (measured on the 2870-box pyramid: the whole run 7-8% faster without)
-template <class V, int kMode>
+// blocks [first, last) on lanes of V, the separations on lanes of D (several parts of a block
+// when they are narrower). No software prefetch: the blocks of a colour lie one after another
+// and the hardware's streamer fetches them; asking for all the lines of the next block at once
+// stalled the loop on the full fill buffers (measured on the 2870-box pyramid: the whole run
+// 7-8% faster without)
+template <class V, class D, int kMode>
 PBA_LANES void pass_blocks(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
-                           const PassParams& p, const BodyArrays& r) {
+                           const FloatParams& p, const BodyArrays& r) {
   for (std::size_t i = first; i < last; ++i) {
-    // a block of one lane (a colour of one manifold: a stack's) by the scalar lane, one of
-    // up to four by the 4-wide lanes (the same arithmetic in every lane, so the same bits)
+    // a block of one lane (a colour of one manifold: a stack's) by the scalar lane, one of up
+    // to eight by 8 floats (the same arithmetic in every lane, so the same bits)
     const int lanes = blocks[i].lanes;
-    if constexpr (std::is_same_v<V, double>) {
-      for (int l = 0; l < lanes; ++l) pass<double, kMode>(blocks[i], anchors[i], l, p, r);
+    if constexpr (std::is_same_v<V, float>) {
+      for (int l = 0; l < lanes; ++l) pass<float, double, kMode>(blocks[i], anchors[i], l, p, r);
     } else if (lanes == 1) {
-      pass<double, kMode>(blocks[i], anchors[i], 0, p, r);
-    } else if (kWidth<V> == 8 && lanes <= 4) {
-      pass<v4d, kMode>(blocks[i], anchors[i], 0, p, r);
+      pass<float, double, kMode>(blocks[i], anchors[i], 0, p, r);
+    } else if (kWidth<V> == 16 && lanes <= 8) {
+      pass<v8f, D, kMode>(blocks[i], anchors[i], 0, p, r);
     } else {
-      for (int l = 0; l < lanes; l += kWidth<V>) pass<V, kMode>(blocks[i], anchors[i], l, p, r);
+      for (int l = 0; l < lanes; l += kWidth<V>) pass<V, D, kMode>(blocks[i], anchors[i], l, p, r);
     }
   }
 }
 
-template <class V>
+template <class V, class D>
 PBA_LANES void pass_any(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
-                        const PassParams& p, const BodyArrays& r) {
-  if (!p.bias) pass_blocks<V, kRelax>(blocks, anchors, first, last, p, r);
-  else if (p.soft) pass_blocks<V, kSoft>(blocks, anchors, first, last, p, r);
-  else pass_blocks<V, kRigid>(blocks, anchors, first, last, p, r);
+                        const PassParams& params, const BodyArrays& r) {
+  const FloatParams p(params);
+  if (!params.bias) pass_blocks<V, D, kRelax>(blocks, anchors, first, last, p, r);
+  else if (params.soft) pass_blocks<V, D, kSoft>(blocks, anchors, first, last, p, r);
+  else pass_blocks<V, D, kRigid>(blocks, anchors, first, last, p, r);
+}
+
+// each lane of the blocks [first, last): the warm start's accumulators on lanes of V, the
+// separations on lanes of D
+template <class V>
+PBA_LANES void warm_blocks(ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& r) {
+  for (std::size_t i = first; i < last; ++i) {
+    const int lanes = blocks[i].lanes;
+    if constexpr (!std::is_same_v<V, float>) {
+      if (kWidth<V> == 16 && lanes <= 8) {
+        warm(Lanes<v8f>{blocks[i], 0}, r);
+        continue;
+      }
+    }
+    for (int l = 0; l < lanes; l += kWidth<V>) warm(Lanes<V>{blocks[i], l}, r);
+  }
+}
+template <class D>
+PBA_LANES void separation_blocks(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
+                                 const BodyArrays& r) {
+  for (std::size_t i = first; i < last; ++i) separations_of<D>(blocks[i], anchors[i], 0, blocks[i].lanes, r);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -499,33 +632,27 @@ PBA_LANES void pass_any(ContactBlock* blocks, const AnchorBlock* anchors, std::s
 #define PBA_RIGID_HAVE_X86 1
 __attribute__((target("avx512f"))) void pass_avx512(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                                    const PassParams& p, const BodyArrays& r) {
-  pass_any<v8d>(blocks, anchors, first, last, p, r);
+  pass_any<v16f, v8d>(blocks, anchors, first, last, p, r);
 }
 __attribute__((target("avx2"))) void pass_avx2(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                               const PassParams& p, const BodyArrays& r) {
-  pass_any<v4d>(blocks, anchors, first, last, p, r);
+  pass_any<v8f, v4d>(blocks, anchors, first, last, p, r);
 }
 __attribute__((target("avx512f"))) void warm_avx512(ContactBlock* blocks, std::size_t first, std::size_t last,
                                                    const BodyArrays& r) {
-  for (std::size_t i = first; i < last; ++i) warm(Lanes<v8d>{blocks[i], 0}, r);
+  warm_blocks<v16f>(blocks, first, last, r);
 }
 __attribute__((target("avx2"))) void warm_avx2(ContactBlock* blocks, std::size_t first, std::size_t last,
                                               const BodyArrays& r) {
-  for (std::size_t i = first; i < last; ++i) {
-    warm(Lanes<v4d>{blocks[i], 0}, r);
-    if (blocks[i].lanes > 4) warm(Lanes<v4d>{blocks[i], 4}, r);
-  }
+  warm_blocks<v8f>(blocks, first, last, r);
 }
 __attribute__((target("avx512f"))) void separation_avx512(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                                          const BodyArrays& r) {
-  for (std::size_t i = first; i < last; ++i) separations(Lanes<v8d>{blocks[i], 0}, anchors[i], r);
+  separation_blocks<v8d>(blocks, anchors, first, last, r);
 }
 __attribute__((target("avx2"))) void separation_avx2(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
                                                     const BodyArrays& r) {
-  for (std::size_t i = first; i < last; ++i) {
-    separations(Lanes<v4d>{blocks[i], 0}, anchors[i], r);
-    if (blocks[i].lanes > 4) separations(Lanes<v4d>{blocks[i], 4}, anchors[i], r);
-  }
+  separation_blocks<v4d>(blocks, anchors, first, last, r);
 }
 #else
 #define PBA_RIGID_HAVE_X86 0
@@ -551,13 +678,14 @@ void solve_colored(SimdPath path, ContactBlock* blocks, AnchorBlock* anchors, st
   if (path == SimdPath::Avx2) return pass_avx2(blocks, anchors, first, last, p, bodies);
 #endif
   (void)path;
-  pass_any<double>(blocks, anchors, first, last, p, bodies);
+  pass_any<float, double>(blocks, anchors, first, last, p, bodies);
 }
 
 void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p, const BodyArrays& bodies) {
-  if (!p.bias) pass<double, kRelax>(block, anchors, lane, p, bodies);
-  else if (p.soft) pass<double, kSoft>(block, anchors, lane, p, bodies);
-  else pass<double, kRigid>(block, anchors, lane, p, bodies);
+  const FloatParams q(p);
+  if (!p.bias) pass<float, double, kRelax>(block, anchors, lane, q, bodies);
+  else if (p.soft) pass<float, double, kSoft>(block, anchors, lane, q, bodies);
+  else pass<float, double, kRigid>(block, anchors, lane, q, bodies);
 }
 
 void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies) {
@@ -566,11 +694,10 @@ void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::s
   if (path == SimdPath::Avx2) return warm_avx2(blocks, first, last, bodies);
 #endif
   (void)path;
-  for (std::size_t i = first; i < last; ++i)
-    for (int l = 0; l < blocks[i].lanes; ++l) warm(Lanes<double>{blocks[i], l}, bodies);
+  warm_blocks<float>(blocks, first, last, bodies);
 }
 
-void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies) { warm(Lanes<double>{block, lane}, bodies); }
+void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies) { warm(Lanes<float>{block, lane}, bodies); }
 
 void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first,
                         std::size_t last, const BodyArrays& bodies) {
@@ -579,8 +706,7 @@ void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* 
   if (path == SimdPath::Avx2) return separation_avx2(blocks, anchors, first, last, bodies);
 #endif
   (void)path;
-  for (std::size_t i = first; i < last; ++i)
-    for (int l = 0; l < blocks[i].lanes; ++l) separations(Lanes<double>{blocks[i], l}, anchors[i], bodies);
+  separation_blocks<double>(blocks, anchors, first, last, bodies);
 }
 
 void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const BodyArrays& bodies) {
@@ -600,7 +726,7 @@ void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bo
   to_frame(t1, t2, n, dv, rel);
   to_frame(t1, t2, n, wa, oa);
   to_frame(t1, t2, n, wb, ob);
-  const double g = rel[2] + L(c.d[1]) * ob[0] - L(c.d[0]) * ob[1];
+  const double g = rel[2] + (ob[0] * L(c.cb[1]) - ob[1] * L(c.cb[0])) - (oa[0] * L(c.ca[1]) - oa[1] * L(c.ca[0]));
   for (int k = 0; k < 4; ++k) vn[k] = g + L(c.y[k]) * (ob[0] - oa[0]) - L(c.x[k]) * (ob[1] - oa[1]);
 }
 
@@ -609,7 +735,7 @@ void restitution_lane(ContactBlock& c, int lane, double restitution, double thre
   double t1[3], t2[3], n[3], ia[6], ib[6];
   L.frame(t1, t2, n);
   for (int i = 0; i < 6; ++i) ia[i] = L(c.ia[i]), ib[i] = L(c.ib[i]);
-  const double ma = L(c.ma), mb = L(c.mb), d0 = L(c.d[0]), d1 = L(c.d[1]);
+  const double ma = L(c.ma), mb = L(c.mb), ca0 = L(c.ca[0]), ca1 = L(c.ca[1]), cb0 = L(c.cb[0]), cb1 = L(c.cb[1]);
   const bool wa = (c.write_a >> lane) & 1, wb = (c.write_b >> lane) & 1;
   for (int k = 0; k < 4; ++k) {
     // only points that approached fast enough and actually pushed
@@ -621,11 +747,11 @@ void restitution_lane(ContactBlock& c, int lane, double restitution, double thre
     const double total = std::max(old + j, 0.0);
     j = total - old;
     L.put(c.impulse[k], total);
-    // along n at the point: -j on a, +j on b, with the moments (y, -x, 0) and (y + d1, -(x + d0), 0)
+    // along n at the point: -j on a, +j on b, with the moments (ca1 + y, -(ca0 + x), 0) and (cb1 + y, -(cb0 + x), 0)
     const double x = L(c.x[k]), y = L(c.y[k]);
     double da[3], db[3], daw[3], dbw[3];
-    sym_mul2(ia, y * j, -x * j, da);
-    sym_mul2(ib, (y + d1) * j, -(x + d0) * j, db);
+    sym_mul2(ia, (ca1 + y) * j, -(ca0 + x) * j, da);
+    sym_mul2(ib, (cb1 + y) * j, -(cb0 + x) * j, db);
     to_world(t1, t2, n, da, daw);
     to_world(t1, t2, n, db, dbw);
     double* va = bodies.bodies[c.a[lane]].v;

@@ -22,18 +22,18 @@
 
 namespace pba::detail {
 
-/// Manifolds per block: the widest SIMD path (AVX-512, 8 doubles); narrower paths take a block
+/// Manifolds per block: the widest SIMD path (AVX-512, 16 floats); narrower paths take a block
 /// in parts.
-inline constexpr int kLanes = 8;
+inline constexpr int kLanes = 16;
 /// Colours a band of the constraint graph may use (contact_solver.cpp, RigidContacts::color):
 /// a manifold whose body has this many in its band already goes to the overflow.
 inline constexpr int kBandColors = 64;
 /// The lane of a block that holds no manifold.
 inline constexpr std::uint32_t kNoPair = std::numeric_limits<std::uint32_t>::max();
 
-/// A block's numbers: single precision in memory (the passes stream the blocks from the caches
-/// every pass, so their size sets the passes' speed); the kernels widen them to double, compute
-/// in double and round the results they keep back.
+/// A block's numbers: single precision (the passes stream the blocks from the caches every
+/// pass, so their size sets the passes' speed), and the kernels compute in float, 16 lanes to
+/// an AVX-512 register; the bodies' velocities stay in double (the kernels add float changes).
 using Real = float;
 
 /// kLanes manifolds in structure-of-arrays form. Empty lanes hold zeros (no mass, no effect)
@@ -41,17 +41,21 @@ using Real = float;
 struct alignas(64) ContactBlock {
   // the frame (world unit vectors, right-handed: t1 x t2 = n; n from body a to b)
   Real t1[3][kLanes], t2[3][kLanes], n[3][kLanes];
-  Real ma[kLanes], mb[kLanes];        // inverse masses (1/kg; 0 for static, kinematic, asleep)
-  Real ia[6][kLanes], ib[6][kLanes];  // inverse inertias in the frame: xx, xy, xz, yy, yz, zz (1/(kg m^2))
-  Real d[3][kLanes];                  // com_a - com_b at the start of the step, in the frame (m)
+  // Masses and impulses are in the lane's impulse unit u (a power of two, `unit`): the
+  // impulses and effective masses below are divided by u, the inverse masses, the inverse
+  // inertias and K multiplied by it (velocities are unchanged)
+  Real ma[kLanes], mb[kLanes];        // inverse masses times u (1/kg; 0 for static, kinematic, asleep)
+  Real ia[6][kLanes], ib[6][kLanes];  // inverse inertias in the frame times u: xx, xy, xz, yy, yz, zz (1/(kg m^2))
   // the normal points (unused ones have zero mass and K)
-  Real x[4][kLanes], y[4][kLanes];    // the points from a's centre of mass, t1 and t2 coordinates (m)
+  Real x[4][kLanes], y[4][kLanes];    // the points from the centroid (ca), t1 and t2 coordinates (m)
   Real mass[4][kLanes];               // normal effective masses (kg)
-  Real k[10][kLanes];                 // K of the normal rows, upper triangle by rows (1/kg)
+  Real k[10][kLanes];                 // K of the normal rows, upper triangle by rows, times u (1/kg)
   Real impulse[4][kLanes];            // accumulated normal impulses (N s)
   Real sep[4][kLanes];                // separations at the bodies' poses now (m)
   // friction at the points' centroid, twist about the normal
-  Real ca[3][kLanes];                 // the centroid from a's centre of mass, in the frame (m)
+  // the points' centroid from a's centre of mass and from b's, in the frame (each kept apart:
+  // ca - cb, the centres' distance, may be far larger than either)
+  Real ca[3][kLanes], cb[3][kLanes];  // (m)
   Real tangent_mass[2][kLanes];       // (kg)
   Real twist_mass[kLanes];            // (kg m^2)
   Real friction[kLanes];              // mixed coefficient
@@ -64,15 +68,19 @@ struct alignas(64) ContactBlock {
   // bodies (dense indices) and pairs
   std::uint32_t a[kLanes], b[kLanes];
   std::uint32_t pair[kLanes];           // index into RigidContacts::pairs, kNoPair when empty
+  Real unit[kLanes];                    // u (N s; 1 in an empty lane); the kernels do not read it
   std::uint32_t write_a = 0, write_b = 0;  // bit l: lane l writes its body back (dynamic and awake)
   int lanes = 0;                        // lanes in use, from 0
 };
 
 /// What measuring the separations of a block's manifolds at the poses now needs besides the
 /// block: apart from it, so that the passes that do not measure them (the biased ones) do not
-/// stream it. The separation at the poses now is base + n.(dp_b - dp_a) + n.(turn_b sb) -
-/// n.(turn_a sa), with sa, sb the anchors on the shapes' cores: in the frame (x - ex, y - ey, za)
-/// and (x + d0 + ex, y + d1 + ey, zb), e being half the step from a's surface point to b's.
+/// stream it. The separation at the poses now is base + n.(dp_b - dp_a) + n.(turn_b sb - sb) -
+/// n.(turn_a sa - sa), base being the separation at the start of the step and sa, sb the
+/// anchors on the shapes' cores: in the frame (x - ex, y - ey, za) and (x + d0 + ex, y + d1 +
+/// ey, zb), e being half the step from a's surface point to b's. (Each term is small, so float
+/// keeps it to a fraction of a micrometre; the anchors' own projections, near the shapes'
+/// size, would cancel.)
 struct alignas(64) AnchorBlock {
   Real za[4][kLanes], zb[4][kLanes], base[4][kLanes];  // (m)
   Real ex[4][kLanes], ey[4][kLanes];                   // (m)
