@@ -282,7 +282,7 @@ struct BroadPhaseStats {
   std::size_t box_tests = 0;     ///< box-box overlap tests done
   std::size_t reinserted = 0;    ///< tree: proxies queried this frame (left their fat box, new or refiltered)
   int tree_height = -1;          ///< tree: height of the root
-  double tree_area_ratio = 0;    ///< tree: inner-node area over root area
+  double tree_area_ratio = 0;    ///< tree: inner-node area over root area (when last measured)
   double grid_cell = 0;          ///< grid: the cell edge used (m)
 };
 
@@ -369,6 +369,8 @@ class BroadPhase {
   std::vector<std::uint32_t> move_buffer_;
   std::vector<std::uint64_t> tree_keys_, new_keys_, merge_keys_;
   double tree_rebuilt_ratio_ = 0;  // the tree's area ratio after its last rebuild
+  double tree_ratio_ = 0;          // ... when it was last measured
+  std::size_t reinserted_since_check_ = 0;  // proxies queried since it was last measured
   // the other methods' state, and the output
   std::unique_ptr<detail::BroadPhaseMethods> methods_;
   std::vector<ProxyPair> pairs_;
