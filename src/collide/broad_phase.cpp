@@ -443,8 +443,12 @@ void BroadPhase::update_tree_pairs() {
   const std::size_t nt = tree_keys_.size(), nn = new_keys_.size();
   ensure_capacity(merge_keys_, nt + nn);
   merge_keys_.clear();
-  ensure_capacity(pairs_, nt + nn);
-  pairs_.resize(nt + nn);
+  // (room for every pair of the merge, made once: the list is the first `touching` of it,
+  // and the room is not filled afresh each frame)
+  if (pairs_.size() < nt + nn) {
+    ensure_capacity(pairs_, nt + nn);
+    pairs_.resize(nt + nn);
+  }
   std::size_t tests = 0, touching = 0;
   // the higher proxy of each pair is anywhere in the arrays: its tight box is fetched some
   // pairs ahead (the lower one walks the arrays in order)
@@ -467,7 +471,7 @@ void BroadPhase::update_tree_pairs() {
     pairs_[touching] = {{a, pool_.generation_unchecked(a)}, {b, pool_.generation_unchecked(b)}};
     touching += boxes_[a].overlaps(boxes_[b]);
   }
-  pairs_.resize(touching);
+  pair_count_ = touching;
   tree_keys_.swap(merge_keys_);
   stats_.box_tests = tests;
   for (std::uint32_t p : move_buffer_) moved_[p] = 0;
@@ -492,7 +496,7 @@ void BroadPhase::update_tree_pairs() {
 
 std::span<const ProxyPair> BroadPhase::update_pairs() {
   const Stopwatch clock;
-  pairs_.clear();
+  pair_count_ = 0;
   stats_ = BroadPhaseStats{};
   stats_.method = method_;
   stats_.proxies = pool_.size();
@@ -507,19 +511,21 @@ std::span<const ProxyPair> BroadPhase::update_pairs() {
       default: detail::BroadPhaseMethods::brute_force(*this, new_keys_, stats_); break;
     }
     std::sort(new_keys_.begin(), new_keys_.end());
+    pairs_.clear();
     for (const std::uint64_t key : new_keys_) {
       const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key);
       pairs_.push_back({{a, pool_.generation(a)}, {b, pool_.generation(b)}});
     }
+    pair_count_ = pairs_.size();
   }
   // headroom for the next frames' fluctuations
-  ensure_capacity(pairs_, pairs_.size() + pairs_.size() / 4);
+  ensure_capacity(pairs_, pair_count_ + pair_count_ / 4);
   ensure_capacity(new_keys_, new_keys_.size() + new_keys_.size() / 4);
   ensure_capacity(tree_keys_, tree_keys_.size() + tree_keys_.size() / 4);
   ensure_capacity(merge_keys_, tree_keys_.size() + tree_keys_.size() / 4);
-  stats_.pairs = pairs_.size();
+  stats_.pairs = pair_count_;
   stats_.seconds = clock.seconds();
-  return pairs_;
+  return pairs();
 }
 
 }  // namespace pba

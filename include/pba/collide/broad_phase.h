@@ -319,7 +319,7 @@ class BroadPhase {
   /// Finds the pairs of the current boxes; returns them sorted by (a.index, b.index).
   std::span<const ProxyPair> update_pairs();
   /// The pairs of the last update_pairs().
-  std::span<const ProxyPair> pairs() const { return pairs_; }
+  std::span<const ProxyPair> pairs() const { return {pairs_.data(), pair_count_}; }
   /// What the last update_pairs() did.
   const BroadPhaseStats& stats() const { return stats_; }
 
@@ -373,7 +373,8 @@ class BroadPhase {
   std::size_t reinserted_since_check_ = 0;  // proxies queried since it was last measured
   // the other methods' state, and the output
   std::unique_ptr<detail::BroadPhaseMethods> methods_;
-  std::vector<ProxyPair> pairs_;
+  std::vector<ProxyPair> pairs_;  // the pair list is its first pair_count_ (the tree's merge writes past them)
+  std::size_t pair_count_ = 0;
   BroadPhaseMethod method_ = BroadPhaseMethod::Tree;
   BroadPhaseDef def_;
   BroadPhaseStats stats_;
