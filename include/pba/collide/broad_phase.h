@@ -264,7 +264,7 @@ struct ProxyPair {
 /// Settings of a broad phase.
 struct BroadPhaseDef {
   BroadPhaseMethod method = BroadPhaseMethod::Tree;  ///< initial method
-  double tree_margin = 0.1;  ///< fat-box margin of the tree (m), finite and >= 0
+  double tree_margin = 0.2;  ///< fat-box margin of the tree (m), finite and >= 0
   /// Grid cell edge (m): 0 picks 1.5 x the mean largest box extent every frame; else
   /// finite and > 0.
   double grid_cell = 0;
