@@ -412,6 +412,21 @@ ProxyId BroadPhase::id_at(std::uint32_t index) const {
 // --- pairs ----------------------------------------------------------------------------------
 
 void BroadPhase::update_tree_pairs() {
+  // keep the tree's quality: rebuild by the SAH when the inner nodes' area has grown half as
+  // much again as after the last rebuild (re-inserted leaves drift from the best layout).
+  // Measuring the area reads every node, so it is measured once a quarter of the proxies
+  // have been re-inserted since the last time; before the queries, so that a batch of
+  // insertions (the first update) is queried in the rebuilt tree, not the inserted one
+  reinserted_since_check_ += move_buffer_.size();
+  if (4 * reinserted_since_check_ >= tree_.proxy_count()) {
+    reinserted_since_check_ = 0;
+    tree_ratio_ = tree_.area_ratio();
+    if (tree_.proxy_count() > 2 && tree_ratio_ > 1.5 * tree_rebuilt_ratio_) {
+      tree_.rebuild();
+      tree_ratio_ = tree_rebuilt_ratio_ = tree_.area_ratio();
+    }
+  }
+
   // query the tree with the fat box of every proxy in the move buffer: the new candidates
   new_keys_.clear();
   std::size_t queried = 0;
@@ -477,19 +492,6 @@ void BroadPhase::update_tree_pairs() {
   for (std::uint32_t p : move_buffer_) moved_[p] = 0;
   move_buffer_.clear();
 
-  // keep the tree's quality: rebuild by the SAH when the inner nodes' area has grown half as
-  // much again as after the last rebuild (re-inserted leaves drift from the best layout).
-  // Measuring the area reads every node, so it is measured once a quarter of the proxies
-  // have been re-inserted since the last time (at once after many insertions)
-  reinserted_since_check_ += queried;
-  if (4 * reinserted_since_check_ >= tree_.proxy_count()) {
-    reinserted_since_check_ = 0;
-    tree_ratio_ = tree_.area_ratio();
-    if (tree_.proxy_count() > 2 && tree_ratio_ > 1.5 * tree_rebuilt_ratio_) {
-      tree_.rebuild();
-      tree_ratio_ = tree_rebuilt_ratio_ = tree_.area_ratio();
-    }
-  }
   stats_.tree_height = tree_.height();
   stats_.tree_area_ratio = tree_ratio_;
 }
