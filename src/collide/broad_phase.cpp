@@ -335,8 +335,9 @@ void BroadPhase::move_proxy(ProxyId id, const Aabb& box) {
   }
   const std::uint32_t i = id.index;
   boxes_[i] = box;
-  // a proxy that left its fat box joins the move buffer
-  if (method_ == BroadPhaseMethod::Tree && tree_.move_proxy(node_[i], box)) {
+  // a proxy that left its fat box joins the move buffer (the copy of the fat box beside the
+  // tight ones answers the common case without reading the tree's node)
+  if (method_ == BroadPhaseMethod::Tree && !fat_[i].contains(box) && tree_.move_proxy(node_[i], box)) {
     fat_[i] = tree_.fat_box(node_[i]);
     if (!moved_[i]) {
       moved_[i] = 1;
@@ -363,7 +364,8 @@ void BroadPhase::set_method(BroadPhaseMethod m) {
     rebuild_tree();
   } else {
     tree_.clear();
-    tree_rebuilt_ratio_ = 0;
+    tree_rebuilt_ratio_ = tree_ratio_ = 0;
+    reinserted_since_check_ = 0;
     std::fill(node_.begin(), node_.end(), DynamicTree::kNull);
     tree_keys_.clear();
     for (std::uint32_t p : move_buffer_) moved_[p] = 0;
@@ -390,7 +392,8 @@ void BroadPhase::rebuild_tree() {
     move_buffer_.push_back(p);
   }
   tree_.rebuild();
-  tree_rebuilt_ratio_ = tree_.area_ratio();
+  tree_rebuilt_ratio_ = tree_ratio_ = tree_.area_ratio();
+  reinserted_since_check_ = 0;
 }
 
 const Aabb& BroadPhase::box(ProxyId id) const {
@@ -409,6 +412,21 @@ ProxyId BroadPhase::id_at(std::uint32_t index) const {
 // --- pairs ----------------------------------------------------------------------------------
 
 void BroadPhase::update_tree_pairs() {
+  // keep the tree's quality: rebuild by the SAH when the inner nodes' area has grown half as
+  // much again as after the last rebuild (re-inserted leaves drift from the best layout).
+  // Measuring the area reads every node, so it is measured once a quarter of the proxies
+  // have been re-inserted since the last time; before the queries, so that a batch of
+  // insertions (the first update) is queried in the rebuilt tree, not the inserted one
+  reinserted_since_check_ += move_buffer_.size();
+  if (4 * reinserted_since_check_ >= tree_.proxy_count()) {
+    reinserted_since_check_ = 0;
+    tree_ratio_ = tree_.area_ratio();
+    if (tree_.proxy_count() > 2 && tree_ratio_ > 1.5 * tree_rebuilt_ratio_) {
+      tree_.rebuild();
+      tree_ratio_ = tree_rebuilt_ratio_ = tree_.area_ratio();
+    }
+  }
+
   // query the tree with the fat box of every proxy in the move buffer: the new candidates
   new_keys_.clear();
   std::size_t queried = 0;
@@ -440,10 +458,18 @@ void BroadPhase::update_tree_pairs() {
   const std::size_t nt = tree_keys_.size(), nn = new_keys_.size();
   ensure_capacity(merge_keys_, nt + nn);
   merge_keys_.clear();
-  ensure_capacity(pairs_, nt + nn);
-  pairs_.resize(nt + nn);
+  // (room for every pair of the merge, made once: the list is the first `touching` of it,
+  // and the room is not filled afresh each frame)
+  if (pairs_.size() < nt + nn) {
+    ensure_capacity(pairs_, nt + nn);
+    pairs_.resize(nt + nn);
+  }
   std::size_t tests = 0, touching = 0;
+  // the higher proxy of each pair is anywhere in the arrays: its tight box is fetched some
+  // pairs ahead (the lower one walks the arrays in order)
+  constexpr std::size_t kAhead = 12;
   for (std::size_t i = 0, j = 0; i < nt || j < nn;) {
+    if (i + kAhead < nt) __builtin_prefetch(&boxes_[static_cast<std::uint32_t>(tree_keys_[i + kAhead])]);
     // the next key of the union (a key in both lists is taken once)
     std::uint64_t key;
     if (j == nn || (i < nt && tree_keys_[i] < new_keys_[j])) {
@@ -460,26 +486,19 @@ void BroadPhase::update_tree_pairs() {
     pairs_[touching] = {{a, pool_.generation_unchecked(a)}, {b, pool_.generation_unchecked(b)}};
     touching += boxes_[a].overlaps(boxes_[b]);
   }
-  pairs_.resize(touching);
+  pair_count_ = touching;
   tree_keys_.swap(merge_keys_);
   stats_.box_tests = tests;
   for (std::uint32_t p : move_buffer_) moved_[p] = 0;
   move_buffer_.clear();
 
-  // keep the tree's quality: rebuild by the SAH when the inner nodes' area has grown half as
-  // much again as after the last rebuild (re-inserted leaves drift from the best layout)
-  double ratio = tree_.area_ratio();
-  if (tree_.proxy_count() > 2 && ratio > 1.5 * tree_rebuilt_ratio_) {
-    tree_.rebuild();
-    ratio = tree_rebuilt_ratio_ = tree_.area_ratio();
-  }
   stats_.tree_height = tree_.height();
-  stats_.tree_area_ratio = ratio;
+  stats_.tree_area_ratio = tree_ratio_;
 }
 
 std::span<const ProxyPair> BroadPhase::update_pairs() {
   const Stopwatch clock;
-  pairs_.clear();
+  pair_count_ = 0;
   stats_ = BroadPhaseStats{};
   stats_.method = method_;
   stats_.proxies = pool_.size();
@@ -494,19 +513,21 @@ std::span<const ProxyPair> BroadPhase::update_pairs() {
       default: detail::BroadPhaseMethods::brute_force(*this, new_keys_, stats_); break;
     }
     std::sort(new_keys_.begin(), new_keys_.end());
+    pairs_.clear();
     for (const std::uint64_t key : new_keys_) {
       const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key);
       pairs_.push_back({{a, pool_.generation(a)}, {b, pool_.generation(b)}});
     }
+    pair_count_ = pairs_.size();
   }
   // headroom for the next frames' fluctuations
-  ensure_capacity(pairs_, pairs_.size() + pairs_.size() / 4);
+  ensure_capacity(pairs_, pair_count_ + pair_count_ / 4);
   ensure_capacity(new_keys_, new_keys_.size() + new_keys_.size() / 4);
   ensure_capacity(tree_keys_, tree_keys_.size() + tree_keys_.size() / 4);
   ensure_capacity(merge_keys_, tree_keys_.size() + tree_keys_.size() / 4);
-  stats_.pairs = pairs_.size();
+  stats_.pairs = pair_count_;
   stats_.seconds = clock.seconds();
-  return pairs_;
+  return pairs();
 }
 
 }  // namespace pba

@@ -264,7 +264,7 @@ struct ProxyPair {
 /// Settings of a broad phase.
 struct BroadPhaseDef {
   BroadPhaseMethod method = BroadPhaseMethod::Tree;  ///< initial method
-  double tree_margin = 0.1;  ///< fat-box margin of the tree (m), finite and >= 0
+  double tree_margin = 0.2;  ///< fat-box margin of the tree (m), finite and >= 0
   /// Grid cell edge (m): 0 picks 1.5 x the mean largest box extent every frame; else
   /// finite and > 0.
   double grid_cell = 0;
@@ -282,7 +282,7 @@ struct BroadPhaseStats {
   std::size_t box_tests = 0;     ///< box-box overlap tests done
   std::size_t reinserted = 0;    ///< tree: proxies queried this frame (left their fat box, new or refiltered)
   int tree_height = -1;          ///< tree: height of the root
-  double tree_area_ratio = 0;    ///< tree: inner-node area over root area
+  double tree_area_ratio = 0;    ///< tree: inner-node area over root area (when last measured)
   double grid_cell = 0;          ///< grid: the cell edge used (m)
 };
 
@@ -319,7 +319,7 @@ class BroadPhase {
   /// Finds the pairs of the current boxes; returns them sorted by (a.index, b.index).
   std::span<const ProxyPair> update_pairs();
   /// The pairs of the last update_pairs().
-  std::span<const ProxyPair> pairs() const { return pairs_; }
+  std::span<const ProxyPair> pairs() const { return {pairs_.data(), pair_count_}; }
   /// What the last update_pairs() did.
   const BroadPhaseStats& stats() const { return stats_; }
 
@@ -369,9 +369,12 @@ class BroadPhase {
   std::vector<std::uint32_t> move_buffer_;
   std::vector<std::uint64_t> tree_keys_, new_keys_, merge_keys_;
   double tree_rebuilt_ratio_ = 0;  // the tree's area ratio after its last rebuild
+  double tree_ratio_ = 0;          // ... when it was last measured
+  std::size_t reinserted_since_check_ = 0;  // proxies queried since it was last measured
   // the other methods' state, and the output
   std::unique_ptr<detail::BroadPhaseMethods> methods_;
-  std::vector<ProxyPair> pairs_;
+  std::vector<ProxyPair> pairs_;  // the pair list is its first pair_count_ (the tree's merge writes past them)
+  std::size_t pair_count_ = 0;
   BroadPhaseMethod method_ = BroadPhaseMethod::Tree;
   BroadPhaseDef def_;
   BroadPhaseStats stats_;
