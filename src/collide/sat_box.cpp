@@ -554,7 +554,7 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
 // collide_boxes_sat for up to 8 pairs at once: the relative pose, the fifteen axes and their
 // choice, the reference and incident faces and the incident face's corners in the reference
 // face's coordinates run in SIMD lanes (one pair per lane, AVX2 or AVX-512 doubles as GCC
-// vector extensions, rigid/lanes.h), with selections where the single pair branches or
+// vector extensions, core/lanes.h), with selections where the single pair branches or
 // indexes by a run-time axis; the clipping, the reduction and the edge contact then run pair
 // by pair through the single pair's own functions. Each lane does the single pair's
 // operations in its order (the build has -ffp-contract=off; division and square root are
@@ -589,7 +589,7 @@ struct BoxLanes {
 }  // namespace pba::narrow
 
 #if defined(__GNUC__) && defined(__x86_64__)
-#include "rigid/lanes.h"
+#include "core/lanes.h"
 
 namespace pba::narrow {
 

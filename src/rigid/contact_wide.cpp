@@ -23,7 +23,7 @@
 #include <cstring>
 #include <type_traits>
 
-#include "lanes.h"
+#include "core/lanes.h"
 
 namespace pba::detail {
 

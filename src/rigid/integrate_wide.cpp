@@ -24,7 +24,7 @@
 
 #include <immintrin.h>
 
-#include "lanes.h"
+#include "core/lanes.h"
 
 namespace pba::detail {
 

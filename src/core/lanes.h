@@ -1,5 +1,6 @@
-// Rigid bodies, private: the lane arithmetic shared by the contact kernels (contact_wide.cpp)
-// and the free motion (integrate_wide.cpp). One template over the lane type runs every SIMD
+// Private to the library: the lane arithmetic shared by the rigid contact kernels
+// (rigid/contact_wide.cpp), the rigid free motion (rigid/integrate_wide.cpp) and the batched
+// box-box narrow phase (collide/sat_box.cpp). One template over the lane type runs every SIMD
 // path: a double (scalar), 4 doubles (AVX2) or 8 (AVX-512), as GCC vector extensions; each
 // lane does the same operations in the same order on every path, so all give the same bits.
 // Include it only in files whose wide functions are compiled with per-function targets.
