@@ -77,11 +77,32 @@ void prefetch_pair(const ContactPair& c) {
 // 1 / k, or 0 when nothing can move (effective_mass's convention)
 double inverse(double k) { return k > 0 ? 1 / k : 0; }
 
-// u^T M v for the inverse inertia m (xx, xy, xz, yy, yz, zz) and frame vectors u, v
-double quadratic(const double m[6], const double u[3], const double v[3]) {
-  const double mv[3] = {m[0] * v[0] + m[1] * v[1] + m[2] * v[2], m[1] * v[0] + m[3] * v[1] + m[4] * v[2],
-                        m[2] * v[0] + m[4] * v[1] + m[5] * v[2]};
-  return u[0] * mv[0] + u[1] * mv[1] + u[2] * mv[2];
+// u^T M v for the inverse inertia m (xx, xy, xz, yy, yz, zz) and frame vectors u, v whose
+// component z is zero (the points' arms and the centroid's tangent arms in the frame): M v's
+// rows, then their dot with u, each sum in component order without the terms of z. Those
+// terms are exact zeros, so leaving them out changes a sum only where it is itself zero (at
+// most its sign); fill() adds each form to ma + mb, which is never -0, so the masses and K it
+// stores have the bits of the full products. (M v)'s row z is left zero.
+template <int z>
+void product_skipping(const double m[6], const double v[3], double out[3]) {
+  static constexpr int kAt[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  constexpr int i = z == 0 ? 1 : 0, j = z == 2 ? 1 : 2;  // the components kept
+  out[i] = m[kAt[i][i]] * v[i] + m[kAt[i][j]] * v[j];
+  out[j] = m[kAt[j][i]] * v[i] + m[kAt[j][j]] * v[j];
+  out[z] = 0;
+}
+
+template <int z>
+double dot_skipping(const double u[3], const double mv[3]) {
+  constexpr int i = z == 0 ? 1 : 0, j = z == 2 ? 1 : 2;
+  return u[i] * mv[i] + u[j] * mv[j];
+}
+
+template <int z>
+double quadratic_skipping(const double m[6], const double u[3], const double v[3]) {
+  double mv[3];
+  product_skipping<z>(m, v, mv);
+  return dot_skipping<z>(u, mv);
 }
 
 }  // namespace
@@ -99,15 +120,12 @@ void RigidContacts::prepare(RigidBodySystem& s) {
     // a sleeping body holds still like a static one until something wakes it
     inv_inertia[i] = s.asleep_[i] ? Mat3(0.0) : r * d * glm::transpose(r);
   }
-  // rolling resistance acts on the relative angular velocity
-  for (ContactPair& c : pairs)
-    if (c.rolling > 0) {
-      const Mat3 k = inv_inertia[c.a] + inv_inertia[c.b];
-      c.rolling_mass = glm::determinant(k) > 0 ? glm::inverse(k) : Mat3(0.0);
-    }
   built = has_colors = false;
   backward = !backward;
-  if (s.settings_.solver == RigidSolverType::Xpbd) return;  // its own passes on the pairs
+  if (s.settings_.solver == RigidSolverType::Xpbd) {  // its own passes on the pairs
+    for (ContactPair& c : pairs) set_rolling_mass(c);
+    return;
+  }
   // the velocities, the motion since the start of the step (none yet), the colours and the
   // blocks, and the carried impulses, which the first velocity integration applies (the
   // bodies' arrays each with a spare last row)
@@ -339,13 +357,14 @@ void RigidContacts::build(RigidBodySystem& s) {
       if (offset[c] + slot + kPrefetchAhead < by_color.size()) prefetch_pair(pairs[by_color[offset[c] + slot + kPrefetchAhead]]);
       fill(s, blocks[b], anchors[b], l, i);
       if (pairs[i].restitution != 0)
-        restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l)});
+        restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), pairs[i].restitution});
     }
 }
 
 // One manifold into lane l of block k, in its contact frame (t1, t2, n).
 void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, int l, std::uint32_t index) {
-  const ContactPair& c = pairs[index];
+  ContactPair& c = pairs[index];
+  set_rolling_mass(c);  // here, where the pair is read anyway, rather than in a pass of its own
   const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
   k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
   if (da) k.write_a |= 1u << l;
@@ -384,11 +403,20 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
   for (int i = 0; i < 3; ++i) k.ca[i][l] = ca[i], k.cb[i][l] = ca[i] + d[i];
   // the points; the normal rows' angular parts are r x n = (y, -x, 0) in the frame
   double x[4] = {}, y[4] = {};
+  // K's entries ma + mb + ra_i^T Ia ra_j + rb_i^T Ib rb_j for the points' arms in the frame,
+  // ra = (y, -x, 0) and rb = ra + (d1, -d0, 0): the arms' third component is zero (so the
+  // products skip it, product_skipping), and each column's I r is formed once, with
+  // the point (in the loop that finds its arm, so nothing is stored and read back)
+  double ra[4][3], rb[4][3], ira[4][3], irb[4][3];
   const double base = glm::dot(s.com_[c.b] - s.com_[c.a], c.normal);
   for (int p = 0; p < 4; ++p) {
     if (p < c.count) {
       const SolverPoint& q = c.points[p];
       x[p] = glm::dot(q.ra, c.t1), y[p] = glm::dot(q.ra, c.t2);
+      ra[p][0] = y[p], ra[p][1] = -x[p], ra[p][2] = 0;
+      rb[p][0] = y[p] + d[1], rb[p][1] = -(x[p] + d[0]), rb[p][2] = 0;
+      product_skipping<2>(ia, ra[p], ira[p]);
+      product_skipping<2>(ib, rb[p], irb[p]);
       g.za[p][l] = glm::dot(q.sa, c.normal);
       g.zb[p][l] = glm::dot(q.sb, c.normal);
       // the core anchors' tangential offsets from the contact point (half the step from a's
@@ -410,11 +438,7 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
   for (int e = 0; e < 10; ++e) {
     const int i = kPairs[e][0], j = kPairs[e][1];
     double v = 0;
-    if (i < c.count && j < c.count) {
-      const double rai[3] = {y[i], -x[i], 0}, raj[3] = {y[j], -x[j], 0};
-      const double rbi[3] = {y[i] + d[1], -(x[i] + d[0]), 0}, rbj[3] = {y[j] + d[1], -(x[j] + d[0]), 0};
-      v = ma + mb + quadratic(ia, rai, raj) + quadratic(ib, rbi, rbj);
-    }
+    if (i < c.count && j < c.count) v = ma + mb + dot_skipping<2>(ra[i], ira[j]) + dot_skipping<2>(rb[i], irb[j]);
     k.k[e][l] = v * unit;
     if (i == j) diag[i] = v;
   }
@@ -424,8 +448,8 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
     const double cb[3] = {ca[0] + d[0], ca[1] + d[1], ca[2] + d[2]};
     const double a1[3] = {0, ca[2], -ca[1]}, b1[3] = {0, cb[2], -cb[1]};
     const double a2[3] = {-ca[2], 0, ca[0]}, b2[3] = {-cb[2], 0, cb[0]};
-    k.tangent_mass[0][l] = inverse(ma + mb + quadratic(ia, a1, a1) + quadratic(ib, b1, b1)) / unit;
-    k.tangent_mass[1][l] = inverse(ma + mb + quadratic(ia, a2, a2) + quadratic(ib, b2, b2)) / unit;
+    k.tangent_mass[0][l] = inverse(ma + mb + quadratic_skipping<0>(ia, a1, a1) + quadratic_skipping<0>(ib, b1, b1)) / unit;
+    k.tangent_mass[1][l] = inverse(ma + mb + quadratic_skipping<1>(ia, a2, a2) + quadratic_skipping<1>(ib, b2, b2)) / unit;
     k.twist_mass[l] = inverse(ia[5] + ib[5]) / unit;
   }
   k.friction[l] = c.friction, k.twist_radius[l] = c.twist_radius;
@@ -435,6 +459,13 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
   double vn[4];
   normal_velocities(k, l, arrays(s), vn);
   for (int p = 0; p < 4; ++p) k.approach[p][l] = p < c.count ? vn[p] : 0;
+}
+
+// rolling resistance acts on the relative angular velocity: its mass, for a pair that rolls
+void RigidContacts::set_rolling_mass(ContactPair& c) const {
+  if (!(c.rolling > 0)) return;
+  const Mat3 k = inv_inertia[c.a] + inv_inertia[c.b];
+  c.rolling_mass = glm::determinant(k) > 0 ? glm::inverse(k) : Mat3(0.0);
 }
 
 BodyArrays RigidContacts::arrays(RigidBodySystem& s) {
@@ -550,7 +581,7 @@ void RigidContacts::restitution(RigidBodySystem& s) {
   const BodyArrays r = arrays(s);
   for (const LaneRef& x : restitution_lanes) {
     ContactBlock& k = blocks[x.block];
-    restitution_lane(k, static_cast<int>(x.lane), pairs[k.pair[x.lane]].restitution, threshold, r);
+    restitution_lane(k, static_cast<int>(x.lane), x.restitution, threshold, r);
   }
 }
 

@@ -293,6 +293,7 @@ struct RigidContacts {
   bool backward = true;  // this step runs each band's colours last to first (alternating by step)
   struct LaneRef {
     std::uint32_t block, lane;
+    double restitution;  // the pair's (kept here, so the pass does not read the pair again)
   };
   std::vector<LaneRef> restitution_lanes;  // the lanes with restitution, in pass order
   // by body, and a last spare row for empty lanes: the velocities while the solver runs, the
@@ -315,6 +316,9 @@ struct RigidContacts {
   void build(RigidBodySystem& s);
   /// Pair `index` into lane l of block k.
   void fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, int l, std::uint32_t index);
+  /// The inverse of a rolling pair's relative angular inverse inertia (kg m^2) from inv_inertia,
+  /// into c.rolling_mass (prepare for XPBD, fill for the other solvers); nothing for others.
+  void set_rolling_mass(ContactPair& c) const;
   /// The bodies' arrays as the kernels see them.
   BodyArrays arrays(RigidBodySystem& s);
   /// The velocities back from the solver's rows to the system's arrays.
