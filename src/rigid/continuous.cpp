@@ -110,11 +110,37 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // everything the body can touch on its way: its centre's path grown by its reach
     const Aabb path = Aabb{glm::min(w.c0, w.c1), glm::max(w.c0, w.c1)}.grown(w.reach + target);
     double toi = 1;
+    // the body's core: a ball of half its smallest extent about the centre of mass, moving
+    // with the centre only (see below)
+    Sweep core = w;
+    core.angle = 0, core.reach = 0;
+    const ColliderShape core_ball = ColliderShape::sphere(0.5 * s.min_extent_[i]);
     for (const std::uint32_t k : statics) {
       const ShapeProxy& other = proxies[k];
       if (!other.box.overlaps(path)) continue;
       const RigidShapeDef& sb = s.shapes_[other.body][other.shape];
       const Pose pb = compose(s.body_pose(other.body), sb.local);
+      // A body that starts the step touching a static shape is left to the discrete contact
+      // (advance() returns 1 for it). Turning fast, the manifold made at the start of the step
+      // holds corners that turn away within a substep while others come in, and the contact
+      // may not stop it: under XPBD a 0.5 m box reaching a 0.2 m wall at 39 m/s and 309 rad/s
+      // went through it (the closed box at 200 m/s). So the core must not reach a static shape
+      // along the centre's path either (Box2D v3's continuous pass keeps a core out the same
+      // way): where it would, the body goes back to that time. A core that starts the step
+      // within the slop of the shape is past saving and left alone.
+      if (sb.shape.type == ShapeType::Plane) {
+        const Vec3 nw = glm::normalize(pb.rotation * sb.shape.normal);
+        const double off = sb.shape.offset / glm::length(sb.shape.normal) + glm::dot(nw, pb.position);
+        toi = std::min(toi, advance(core, [&](double t) {
+          return Gap{glm::dot(nw, core.c0 + t * (core.c1 - core.c0)) - off - core_ball.radius, -nw};
+        }, target, tol));
+      } else if (sb.shape.is_convex()) {
+        const ConvexProxy pbx = ConvexProxy::of(sb.shape, pb);
+        toi = std::min(toi, advance(core, [&](double t) {
+          const DistanceResult r = gjk_distance(ConvexProxy::of(core_ball, Pose{core.c0 + t * (core.c1 - core.c0)}), pbx);
+          return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
+        }, target, tol));
+      }
       for (const RigidShapeDef& sa : s.shapes_[i]) {
         if (!sa.shape.is_convex()) continue;
         auto pose_a = [&](double t) { return compose(w.body(t), sa.local); };

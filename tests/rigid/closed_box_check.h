@@ -17,12 +17,12 @@ namespace pba::test {
 // times a wall's 0.2 m thickness) in a closed box. A body escapes when its centre crosses a
 // wall's middle plane: from there the wall's contact pushes it out the other side. Without
 // the continuous pass hundreds get out in the first steps. `n` bodies in a box of half size
-// `inner` (m), 60 steps of 60 Hz, under every solver.
-inline void expect_none_escapes(int n, double inner) {
+// `inner` (m), 60 steps of 60 Hz, under every solver, at `speed` (m/s).
+inline void expect_none_escapes(int n, double inner, double speed = 250.0) {
   const double wall = 0.2;
   for (const pba::RigidSolverType solver : pba::kRigidSolvers) {
     pba::RigidBodySystem s({.capacity = static_cast<std::size_t>(n) + 6, .contacts = {.solver = solver}});
-    const auto bodies = pba::rigid_scenes::closed_box(s, n, 250.0, inner, wall);
+    const auto bodies = pba::rigid_scenes::closed_box(s, n, speed, inner, wall);
     int escaped = 0;
     double worst = 0;
     for (int step = 0; step < 60; ++step) {
@@ -34,7 +34,7 @@ inline void expect_none_escapes(int n, double inner) {
         escaped += m >= inner + 0.5 * wall;
       }
     }
-    EXPECT_EQ(escaped, 0) << to_string(solver) << ": farthest centre " << worst;
+    EXPECT_EQ(escaped, 0) << to_string(solver) << " at " << speed << " m/s: farthest centre " << worst;
   }
 }
 
