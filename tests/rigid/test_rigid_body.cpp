@@ -477,10 +477,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x2b3410b2d86438d1ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x73b11c5d708190ddull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x31565553aedb2ec1ull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x5a3252e33628ed9bull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x79f2b4c2967d3b90ull) << std::hex << soft;
+  EXPECT_EQ(si, 0xdcc0be0bb9831ca5ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x7120a9b0e8a35cc0ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x7b246435c80d8a48ull) << std::hex << xpbd;
 }
 
 }  // namespace
