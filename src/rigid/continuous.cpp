@@ -114,7 +114,10 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // with the centre only (see below)
     Sweep core = w;
     core.angle = 0, core.reach = 0;
-    const ColliderShape core_ball = ColliderShape::sphere(0.5 * s.min_extent_[i]);
+    // (set directly: ColliderShape::sphere() validates, and its messages allocate)
+    ColliderShape core_ball;
+    core_ball.type = ShapeType::Sphere;
+    core_ball.radius = 0.5 * s.min_extent_[i];
     for (const std::uint32_t k : statics) {
       const ShapeProxy& other = proxies[k];
       if (!other.box.overlaps(path)) continue;
