@@ -598,31 +598,18 @@ namespace {
 using detail::lanes::kWidth;
 using detail::lanes::splat;
 using detail::lanes::store;
+using detail::lanes::vmax;
+using detail::lanes::vmin;
+using detail::lanes::vsqrt;
 
 template <class V>
 using LaneMask = decltype(V{} < V{});
 
-// lane by lane (the build has -fno-math-errno: the compiler makes it one vector square root)
-template <class V>
-PBA_LANES V vsqrt(V x) {
-  V r = x;
-  for (int i = 0; i < kWidth<V>; ++i) r[i] = std::sqrt(x[i]);
-  return r;
-}
 // std::abs: the sign bit cleared
 template <class V>
 PBA_LANES V vabs(V x) {
   using L = LaneMask<V>;
   return reinterpret_cast<V>(reinterpret_cast<L>(x) & (L{} + 0x7fffffffffffffffL));
-}
-// std::max's and std::min's comparisons
-template <class V>
-PBA_LANES V vmax(V a, V b) {
-  return a < b ? b : a;
-}
-template <class V>
-PBA_LANES V vmin(V a, V b) {
-  return b < a ? b : a;
 }
 // y[r] = x[(s + r) % 3], s in {0, 1, 2} per lane: the cyclic relabelling that indexing by a
 // run-time axis is in the single pair (its face coordinates (k1, k2, k0), its incident axes

@@ -6,6 +6,7 @@
 // Include it only in files whose wide functions are compiled with per-function targets.
 #pragma once
 
+#include <cmath>
 #include <cstring>
 #include <type_traits>
 
@@ -51,6 +52,29 @@ template <class V>
 PBA_LANES void store(double* p, const V& v) {
   if constexpr (std::is_same_v<V, double>) *p = v;
   else std::memcpy(p, &v, sizeof v);
+}
+
+/// std::max's and std::min's comparisons, lane by lane (a plain number too; any element type).
+template <class V>
+PBA_LANES V vmax(V a, V b) {
+  return a < b ? b : a;
+}
+template <class V>
+PBA_LANES V vmin(V a, V b) {
+  return b < a ? b : a;
+}
+
+/// The square root of each lane, correctly rounded (the same bits as std::sqrt; with
+/// -fno-math-errno the compiler makes it one vector instruction).
+template <class V>
+PBA_LANES V vsqrt(V x) {
+  if constexpr (std::is_arithmetic_v<V>) {
+    return std::sqrt(x);
+  } else {
+    V r = x;
+    for (int i = 0; i < static_cast<int>(sizeof(V) / sizeof(x[0])); ++i) r[i] = std::sqrt(x[i]);
+    return r;
+  }
 }
 
 /// Lane i.

@@ -71,6 +71,11 @@ constexpr double kSamePoint = 1e-6;
 // how many pairs ahead make_manifolds() and emit() fetch the pool entries they will read
 constexpr std::size_t kPairsAhead = 4;
 
+// asks for the cache lines of `bytes` from `at` (a prefetch: no effect on the results)
+void prefetch_lines(const void* at, std::size_t bytes) {
+  for (std::size_t line = 0; line < bytes; line += 64) __builtin_prefetch(static_cast<const char*>(at) + line);
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
@@ -432,18 +437,15 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
   // planned: the pair cache (both lines: `first` sits in the second) two distances ahead, then
   // its proxies and first cached manifold one distance ahead
   const std::size_t count = shape_pairs.size();
-  auto lines = [](const void* at, std::size_t bytes) {
-    for (std::size_t line = 0; line < bytes; line += 64) __builtin_prefetch(static_cast<const char*>(at) + line);
-  };
   auto prefetch_ahead = [&](std::size_t k) {
     if (k + 2 * kPairsAhead < count && shape_pairs[k + 2 * kPairsAhead].cache != kNoIndex)
-      lines(&caches[shape_pairs[k + 2 * kPairsAhead].cache], sizeof(PairCache));
+      prefetch_lines(&caches[shape_pairs[k + 2 * kPairsAhead].cache], sizeof(PairCache));
     if (k + kPairsAhead < count) {
       const ShapePair& ahead = shape_pairs[k + kPairsAhead];
-      lines(&proxies[ahead.proxy_a], sizeof(ShapeProxy));
-      lines(&proxies[ahead.proxy_b], sizeof(ShapeProxy));
+      prefetch_lines(&proxies[ahead.proxy_a], sizeof(ShapeProxy));
+      prefetch_lines(&proxies[ahead.proxy_b], sizeof(ShapeProxy));
       if (ahead.cache != kNoIndex && caches[ahead.cache].first != kNoIndex)
-        lines(&manifolds[caches[ahead.cache].first], sizeof(CachedManifold));
+        prefetch_lines(&manifolds[caches[ahead.cache].first], sizeof(CachedManifold));
     }
   };
   for (std::size_t first = 0; first < shape_pairs.size();) {
@@ -698,10 +700,7 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const std::size_t at_index = emitted++;
   if (at_index == pairs.size()) pairs.emplace_back();
   // last step's entry a few ahead, which the next emits overwrite (read first: the impulses)
-  if (at_index + kPairsAhead < last_count) {
-    const char* ahead = reinterpret_cast<const char*>(&pairs[at_index + kPairsAhead]);
-    for (std::size_t line = 0; line < sizeof(ContactPair); line += 64) __builtin_prefetch(ahead + line);
-  }
+  if (at_index + kPairsAhead < last_count) prefetch_lines(&pairs[at_index + kPairsAhead], sizeof(ContactPair));
   ContactPair& c = pairs[at_index];
   CachedManifold& own = manifolds[record];
   if (c.record != record && c.record != kNoIndex && at_index < last_count && manifolds[c.record].last == at_index)

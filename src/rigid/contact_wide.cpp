@@ -33,6 +33,9 @@ using lanes::v4d;
 using lanes::v4l;
 using lanes::v8d;
 using lanes::v8l;
+using lanes::vmax;
+using lanes::vmin;
+using lanes::vsqrt;
 
 typedef float v8f __attribute__((vector_size(32)));
 typedef float v16f __attribute__((vector_size(64)));
@@ -95,31 +98,12 @@ PBA_LANES void store(float* p, const V& v) {
   }
 }
 
-// std::max and std::min's comparisons, lane by lane
-template <class V>
-PBA_LANES V vmax(V a, V b) {
-  return a < b ? b : a;
-}
-template <class V>
-PBA_LANES V vmin(V a, V b) {
-  return b < a ? b : a;
-}
 // std::clamp(v, lo, hi)
 template <class V>
 PBA_LANES V vclamp(V v, V lo, V hi) {
   return v < lo ? lo : (hi < v ? hi : v);
 }
 
-template <class V>
-PBA_LANES V vsqrt(V x) {
-  if constexpr (std::is_arithmetic_v<V>) {
-    return std::sqrt(x);
-  } else {
-    V r = x;
-    for (int i = 0; i < kWidth<V>; ++i) r[i] = std::sqrt(x[i]);
-    return r;
-  }
-}
 
 template <class V>
 PBA_LANES V dot(const V a[3], const V b[3]) {
@@ -158,25 +142,29 @@ struct Lanes {
   }
 };
 
-// The transpose of 8 rows of 8 floats (each its own inverse); in 16 floats, of the two halves
-// apart (rows i and i + 8 share vector i). Three rounds of two-vector shuffles, as for doubles.
-PBA_LANES void transpose(v8f r[8]) {
-  v8f t[8], u[8];
+// The transpose of 8 rows of 8 numbers, floats or doubles (M: the lane type's shuffle mask;
+// each its own inverse): three rounds of two-vector shuffles.
+template <class V, class M>
+PBA_LANES void transpose8(V r[8]) {
+  V t[8], u[8];
   for (int i = 0; i < 4; ++i) {
-    t[2 * i] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v8i{0, 8, 2, 10, 4, 12, 6, 14});
-    t[2 * i + 1] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v8i{1, 9, 3, 11, 5, 13, 7, 15});
+    t[2 * i] = __builtin_shuffle(r[2 * i], r[2 * i + 1], M{0, 8, 2, 10, 4, 12, 6, 14});
+    t[2 * i + 1] = __builtin_shuffle(r[2 * i], r[2 * i + 1], M{1, 9, 3, 11, 5, 13, 7, 15});
   }
   constexpr int kFirst[4] = {0, 1, 4, 5};
   for (const int i : kFirst) {
-    u[i] = __builtin_shuffle(t[i], t[i + 2], v8i{0, 1, 8, 9, 4, 5, 12, 13});
-    u[i + 2] = __builtin_shuffle(t[i], t[i + 2], v8i{2, 3, 10, 11, 6, 7, 14, 15});
+    u[i] = __builtin_shuffle(t[i], t[i + 2], M{0, 1, 8, 9, 4, 5, 12, 13});
+    u[i + 2] = __builtin_shuffle(t[i], t[i + 2], M{2, 3, 10, 11, 6, 7, 14, 15});
   }
   for (int i = 0; i < 4; ++i) {
-    r[i] = __builtin_shuffle(u[i], u[i + 4], v8i{0, 1, 2, 3, 8, 9, 10, 11});
-    r[i + 4] = __builtin_shuffle(u[i], u[i + 4], v8i{4, 5, 6, 7, 12, 13, 14, 15});
+    r[i] = __builtin_shuffle(u[i], u[i + 4], M{0, 1, 2, 3, 8, 9, 10, 11});
+    r[i + 4] = __builtin_shuffle(u[i], u[i + 4], M{4, 5, 6, 7, 12, 13, 14, 15});
   }
 }
 
+PBA_LANES void transpose(v8f r[8]) { transpose8<v8f, v8i>(r); }
+
+// ... in 16 floats, of the two halves apart (rows i and i + 8 share vector i)
 PBA_LANES void transpose(v16f r[8]) {
   v16f t[8], u[8];
   for (int i = 0; i < 4; ++i) {
@@ -194,7 +182,7 @@ PBA_LANES void transpose(v16f r[8]) {
   }
 }
 
-// the transpose of 4 rows of 4 doubles, and of 8 rows of 8 (each its own inverse)
+// the transpose of 4 rows of 4 doubles (its own inverse)
 PBA_LANES void transpose(v4d r[4]) {
   const v4d t0 = __builtin_shuffle(r[0], r[1], v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(r[0], r[1], v4l{1, 5, 3, 7});
   const v4d t2 = __builtin_shuffle(r[2], r[3], v4l{0, 4, 2, 6}), t3 = __builtin_shuffle(r[2], r[3], v4l{1, 5, 3, 7});
@@ -202,22 +190,7 @@ PBA_LANES void transpose(v4d r[4]) {
   r[1] = __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5}), r[3] = __builtin_shuffle(t1, t3, v4l{2, 3, 6, 7});
 }
 
-PBA_LANES void transpose(v8d r[8]) {
-  v8d t[8], u[8];
-  for (int i = 0; i < 4; ++i) {
-    t[2 * i] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v8l{0, 8, 2, 10, 4, 12, 6, 14});
-    t[2 * i + 1] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v8l{1, 9, 3, 11, 5, 13, 7, 15});
-  }
-  constexpr int kFirst[4] = {0, 1, 4, 5};
-  for (const int i : kFirst) {
-    u[i] = __builtin_shuffle(t[i], t[i + 2], v8l{0, 1, 8, 9, 4, 5, 12, 13});
-    u[i + 2] = __builtin_shuffle(t[i], t[i + 2], v8l{2, 3, 10, 11, 6, 7, 14, 15});
-  }
-  for (int i = 0; i < 4; ++i) {
-    r[i] = __builtin_shuffle(u[i], u[i + 4], v8l{0, 1, 2, 3, 8, 9, 10, 11});
-    r[i + 4] = __builtin_shuffle(u[i], u[i + 4], v8l{4, 5, 6, 7, 12, 13, 14, 15});
-  }
-}
+PBA_LANES void transpose(v8d r[8]) { transpose8<v8d, v8l>(r); }
 
 // a body's 64-byte row of 8 doubles rounded to 8 floats
 PBA_LANES v8f row_floats(const double* base, std::uint32_t index) {

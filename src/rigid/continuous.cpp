@@ -123,6 +123,10 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       if (!other.box.overlaps(path)) continue;
       const RigidShapeDef& sb = s.shapes_[other.body][other.shape];
       const Pose pb = compose(s.body_pose(other.body), sb.local);
+      // a plane's unit normal and offset in the world (its solid on the negative side)
+      const bool plane = sb.shape.type == ShapeType::Plane;
+      const Vec3 nw = plane ? glm::normalize(pb.rotation * sb.shape.normal) : Vec3(0.0);
+      const double off = plane ? sb.shape.offset / glm::length(sb.shape.normal) + glm::dot(nw, pb.position) : 0.0;
       // A body that starts the step touching a static shape is left to the discrete contact
       // (advance() returns 1 for it). Turning fast, the manifold made at the start of the step
       // holds corners that turn away within a substep while others come in, and the contact
@@ -131,9 +135,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       // along the centre's path either (Box2D v3's continuous pass keeps a core out the same
       // way): where it would, the body goes back to that time. A core that starts the step
       // within the slop of the shape is past saving and left alone.
-      if (sb.shape.type == ShapeType::Plane) {
-        const Vec3 nw = glm::normalize(pb.rotation * sb.shape.normal);
-        const double off = sb.shape.offset / glm::length(sb.shape.normal) + glm::dot(nw, pb.position);
+      if (plane) {
         toi = std::min(toi, advance(core, [&](double t) {
           return Gap{glm::dot(nw, core.c0 + t * (core.c1 - core.c0)) - off - core_ball.radius, -nw};
         }, target, tol));
@@ -147,11 +149,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       for (const RigidShapeDef& sa : s.shapes_[i]) {
         if (!sa.shape.is_convex()) continue;
         auto pose_a = [&](double t) { return compose(w.body(t), sa.local); };
-        if (sb.shape.type == ShapeType::Plane) {
-          // the plane's solid is on its negative side: the gap is the height of the shape's
-          // lowest point along the normal
-          const Vec3 nw = glm::normalize(pb.rotation * sb.shape.normal);
-          const double off = sb.shape.offset / glm::length(sb.shape.normal) + glm::dot(nw, pb.position);
+        if (plane) {
+          // the gap is the height of the shape's lowest point along the normal
           toi = std::min(toi, advance(w, [&](double t) {
             const Pose pa = pose_a(t);
             const Vec3 low = apply(pa, support(sa.shape, glm::conjugate(pa.rotation) * -nw));
