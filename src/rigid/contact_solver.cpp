@@ -552,16 +552,25 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
   };
   // a colour's blocks with SIMD, then the rolling resistance of its lanes that roll (no two
   // of a colour's manifolds share a body that moves, so each lane's comes right after its
-  // manifold's friction, as in the overflow)
+  // manifold's friction, as in the overflow), a few blocks at a time so that the lanes'
+  // impulses and bodies are still in cache (roll's samples -25% in the rain's landing)
   auto colour = [&](std::uint32_t c) {
     const std::size_t first = color_block[c], last = color_block[c + 1];
     if (last == first) return;
-    solve_colored(simd, blocks.data(), anchors.data(), first, last, p, r);
     const auto end = rolls.begin() + static_cast<std::ptrdiff_t>(colored_rolls);
     auto x = std::lower_bound(rolls.begin(), end, first * kLanes, [](const Rolling& y, std::size_t key) { return y.key < key; });
-    for (; x != end && x->key < last * kLanes; ++x) {
-      roll(*x, blocks[x->key / kLanes], static_cast<int>(x->key % kLanes));
-      if (warm_next) warm_rolling(*x);
+    if (x == end || x->key >= last * kLanes) {
+      solve_colored(simd, blocks.data(), anchors.data(), first, last, p, r);
+      return;
+    }
+    constexpr std::size_t kChunk = 8;  // blocks (about 50 KB)
+    for (std::size_t from = first; from < last; from += kChunk) {
+      const std::size_t to = std::min(last, from + kChunk);
+      solve_colored(simd, blocks.data(), anchors.data(), from, to, p, r);
+      for (; x != end && x->key < to * kLanes; ++x) {
+        roll(*x, blocks[x->key / kLanes], static_cast<int>(x->key % kLanes));
+        if (warm_next) warm_rolling(*x);
+      }
     }
   };
   // the bands bottom up; within each, its colours first to last on even steps and last to
