@@ -5,6 +5,7 @@
 // terrain), all in this process, one core:
 //   taskset -c 1 build/release/bin/bench_rigid [--scene KEY] [--steps N] [--repeat K]
 //                                             [--peer all|bullet|ode|none] [--solver all|NAME] [--profile]
+//                                             [--trace MS]
 //   taskset -c 1 build/release/bin/bench_rigid --quick | --budget
 // For each scene a table: per engine the median, mean and slowest ms per 60 Hz step, the top
 // box's sag and drift from where it rests (stacks and pyramids), the bodies that left the
@@ -13,7 +14,8 @@
 // runs K times and the run of median ms is shown. --profile adds under each pba row the medians
 // of its step's phases (RigidProfile: collide with pairs and manifolds; solve with prepare, integrate, contacts,
 // finish, and islands and sleep within finish), the
-// manifolds built and reused in the last step, and when every body first slept. --budget instead runs the stacks and a
+// manifolds built and reused in the last step, and when every body first slept. --trace MS prints
+// each pba step slower than MS ms with its phases. --budget instead runs the stacks and a
 // small pyramid under the four solvers at equal budgets of contact passes per step
 // (docs/rigid-bodies.md). The peers copy each scene from the pba system the scene's builder
 // filled (bench/rigid/peer_bullet.cpp, peer_ode.cpp), set up as shared/peers/ does.
@@ -49,6 +51,9 @@ double median(std::vector<double> v) {
   return v.empty() ? 0 : v[v.size() / 2];
 }
 
+// --trace MS: every pba step slower than MS ms printed with its phases (0: none)
+double g_trace_ms = 0;
+
 PbaResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings& settings) {
   PbaResult r;
   try {
@@ -66,6 +71,11 @@ PbaResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings
       const double parts[10] = {p.collide, p.solve,     p.total,     p.pairs,    p.manifolds,
                                 p.islands, p.prepare, p.integrate, p.contacts, p.finish};
       for (int k = 0; k < 10; ++k) phase[k].push_back(parts[k]);
+      if (g_trace_ms > 0 && ms.back() > g_trace_ms)
+        std::printf("    step %4d %7.2f ms: pairs %.2f manifolds %.2f (%zu built, %zu reused) | prepare %.2f integrate %.2f "
+                    "contacts %.2f finish %.2f (islands %.2f) | %zu awake, %zu proxies moved\n",
+                    i, ms.back(), 1e3 * p.pairs, 1e3 * p.manifolds, p.built, p.reused, 1e3 * p.prepare,
+                    1e3 * p.integrate, 1e3 * p.contacts, 1e3 * p.finish, 1e3 * p.islands, s.awake_count(), p.moved);
       if (r.asleep_at < 0 && s.awake_count() == 0) r.asleep_at = s.time();
       for (std::size_t j = 0; j < b.size(); ++j)
         if (!out[j] && scene.escaped(s.center_of_mass(b[j]))) out[j] = 1, ++r.escapes;
@@ -229,7 +239,7 @@ int usage(const char* why) {
   std::fprintf(stderr,
                "usage: bench_rigid [--scene KEY|all] [--steps N] [--repeat K] [--peer all|bullet|ode|none]\n"
                "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--profile]\n"
-               "                   | --quick | --budget\n"
+               "                   [--trace MS] | --quick | --budget\n"
                "scenes:");
   for (const BenchScene& s : pba::bench::bench_scenes()) std::fprintf(stderr, " %s", s.key.c_str());
   std::fprintf(stderr, "\n");
@@ -264,6 +274,11 @@ int main(int argc, char** argv) {
       quick = true;
     } else if (a == "--profile") {
       o.profile = true;
+    } else if (a == "--trace") {
+      const std::string v = need();
+      char* end = nullptr;
+      g_trace_ms = std::strtod(v.c_str(), &end);
+      if (!end || *end || !(g_trace_ms > 0)) return usage(("--trace '" + v + "': expected a time in ms > 0").c_str());
     } else if (a == "--scene") {
       o.scene = need();
     } else if (a == "--steps") {

@@ -296,6 +296,20 @@ struct RigidContacts {
     double restitution;  // the pair's (kept here, so the pass does not read the pair again)
   };
   std::vector<LaneRef> restitution_lanes;  // the lanes with restitution, in pass order
+  /// A lane that rolls: what its rolling resistance reads and writes in each pass, copied from
+  /// its pair by build() (read in lane order, not from the pairs and inverse inertias in pair
+  /// order), and its impulse, written back to the pair by finish_velocities().
+  struct Rolling {
+    Mat3 mass{0.0};          // the pair's rolling_mass (kg m^2)
+    Mat3 ia{0.0}, ib{0.0};   // the bodies' world inverse inertias (1 / (kg m^2))
+    Vec3 impulse{0, 0, 0};   // accumulated (N m s per substep)
+    double rolling = 0;      // the pair's coefficient times radius (m)
+    std::uint32_t key = 0;   // block * kLanes + lane
+    std::uint32_t pair = 0, a = 0, b = 0;
+    bool write_a = false, write_b = false;  // the body moves (the solver writes it)
+  };
+  std::vector<Rolling> rolls;      // the lanes that roll, by key (the coloured ones first)
+  std::size_t colored_rolls = 0;   // of them, in coloured blocks
   // by body, and a last spare row for empty lanes: the velocities while the solver runs, the
   // motion since the start of the step (dp, then the turn w, x, y, z), and the warm-start
   // velocity changes for the next integration
@@ -321,18 +335,20 @@ struct RigidContacts {
   void set_rolling_mass(ContactPair& c) const;
   /// The bodies' arrays as the kernels see them.
   BodyArrays arrays(RigidBodySystem& s);
-  /// The velocities back from the solver's rows to the system's arrays.
+  /// The velocities back from the solver's rows to the system's arrays, and the rolling
+  /// impulses to their pairs.
   void finish_velocities(RigidBodySystem& s);
   /// Adds every manifold's carried impulses to the warm-start accumulators.
   void accumulate_warm(RigidBodySystem& s);
-  /// The same for the rolling resistance of overflow lane l of block k.
-  void warm_rolling(RigidBodySystem& s, const ContactBlock& k, int l);
-  /// Rolling resistance of overflow lane l of block k.
-  void roll(RigidBodySystem& s, const ContactBlock& k, int l);
+  /// The same for the rolling resistance of a lane that rolls.
+  void warm_rolling(const Rolling& x);
+  /// Rolling resistance of `x`, lane l of block k.
+  void roll(Rolling& x, const ContactBlock& k, int l);
   /// One pass over the contacts: `bias` asks for position correction (false: the relax pass),
   /// `soft` for the soft-step constraint; `update_sep` first measures the separations at the
   /// poses now, `warm_next` then adds the impulses to the warm-start accumulators. The
-  /// colours run first to last (the ground contacts last), then the overflow in pair order.
+  /// colours run first to last (the ground contacts last), each followed by the rolling
+  /// resistance of its lanes that roll, then the overflow in pair order.
   void pass(RigidBodySystem& s, double h, bool bias, bool soft, bool update_sep, bool warm_next);
   /// Measures the separations at the poses now (after positions moved without a relax pass).
   void update_separations(RigidBodySystem& s);

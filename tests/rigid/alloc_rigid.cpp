@@ -10,8 +10,8 @@
 
 using pba::test_support::g_allocations;
 
-// 100 bodies resting in contact (boxes on the ground, balls on the boxes, a kinematic
-// paddle sliding under none of them), under forces and impulses: once the contact pairs
+// 100 bodies resting in contact (boxes on the ground, balls with rolling resistance on the
+// boxes, a kinematic paddle sliding under none of them), under forces and impulses: once the contact pairs
 // have been seen, stepping allocates nothing, for every solver, with and without sleeping
 TEST(RigidAlloc, StepsWithContactsNeverAllocate) {
   for (const bool sleep : {false, true})
@@ -22,7 +22,8 @@ TEST(RigidAlloc, StepsWithContactsNeverAllocate) {
     for (int i = 0; i < 50; ++i) {
       const double x = (i % 10) * 1.5, z = (i / 10) * 1.5;
       ids.push_back(s.create({.pose = {{x, 0.25, z}}, .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.25, 0.5})}}}));
-      ids.push_back(s.create({.pose = {{x, 0.75, z}}, .shapes = {{.shape = pba::ColliderShape::sphere(0.25)}}}));
+      ids.push_back(s.create({.pose = {{x, 0.75, z}},
+                              .shapes = {{.shape = pba::ColliderShape::sphere(0.25), .rolling_resistance = 0.05}}}));
     }
     s.create({.type = pba::BodyType::Kinematic, .pose = {{-5, 3, 0}}, .linear_velocity = {0.1, 0, 0},
               .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.1, 0.5})}}});

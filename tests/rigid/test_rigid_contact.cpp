@@ -184,6 +184,43 @@ TEST(RigidFriction, ASphereRollsAtFiveSeventhsOfGSinTheta) {
   }
 }
 
+// Rolling resistance c on a solid sphere of radius r rolling on level ground: a torque
+// c r m g against its spin, which the friction at the contact turns into a deceleration.
+// With m a = f and I dw/dt = -(c r m g) - f r, rolling (a = r dw/dt) and I = (2/5) m r^2:
+// a = -(5/7) c g (friction needed: |f| = (5/7) c m g, below mu m g). Then it stops and stays.
+// Under the soft step the ball's ground manifold is coloured (its rolling resistance solved
+// after its colour's blocks), under TGS it is in the overflow (solved with its manifold).
+// Tolerances: the soft contact sinks the ball g / w^2 = 4e-5 m (w = 480 rad/s against the
+// ground), 1.4e-4 of its radius: 0.1% on a (measured 3e-5). The distance: the substeps
+// change the velocity before moving by it (symplectic Euler), so with v falling linearly the
+// ball stops v0 h / 2 short of v0^2 / (2 a) (h = 1/480 s, the substep: 2.1 mm); within 2e-4
+// of that for the soft contact's first steps, while the ball settles into the ground
+// (measured 6e-5 under the soft step, 1e-6 under TGS).
+TEST(RigidFriction, RollingResistanceSlowsASphereAtFiveSeventhsOfCG) {
+  const double r = 0.3, c = 0.1, v0 = 2;
+  const double expected = 5.0 / 7 * c * kG;  // 0.70 m/s^2: stops in v0 / a = 2.9 s
+  for (const auto solver : {pba::RigidSolverType::SoftStep, pba::RigidSolverType::Tgs}) {
+    RigidBodySystem s(with(solver));
+    ground(s, 0.5);
+    auto ball = s.create({.pose = {{0, r, 0}}, .linear_velocity = {v0, 0, 0}, .angular_velocity = {0, 0, -v0 / r},
+                          .shapes = {{.shape = ColliderShape::sphere(r), .material = {.friction = 0.5},
+                                      .rolling_resistance = c}}});
+    for (int i = 0; i < 30; ++i) s.step(1.0 / 60, kGravity);
+    const double v1 = s.linear_velocity(ball).x;
+    for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kGravity);
+    const double a = (v1 - s.linear_velocity(ball).x) / 1.0;
+    EXPECT_NEAR(a, expected, 1e-3 * expected) << to_string(solver);
+    // still rolling: the contact point at rest (within the soft contact's slip)
+    const Vec3 slip = s.linear_velocity(ball) + glm::cross(s.angular_velocity(ball), Vec3(0, -r, 0));
+    EXPECT_LT(glm::length(slip), 1e-3) << to_string(solver);
+    // stopped after v0 / a, where it came to rest: x = v0^2 / (2 a) - v0 h / 2 = 2.85 m
+    for (int i = 0; i < 150; ++i) s.step(1.0 / 60, kGravity);
+    EXPECT_LT(glm::length(s.linear_velocity(ball)), 1e-3) << to_string(solver);
+    const double h = 1.0 / 60 / s.settings().substeps, stop = v0 * v0 / (2 * expected) - v0 * h / 2;
+    EXPECT_NEAR(s.center_of_mass(ball).x, stop, 2e-4 * stop) << to_string(solver);
+  }
+}
+
 // A box of width w and height h on a high-friction incline tips over once tan theta > w / h.
 // Not XPBD: its static friction on a face translates only (see src/rigid/xpbd_rigid.cpp), so
 // it carries no tipping moment, and the box stands at 28.6 degrees (measured tilt 2e-5 rad).

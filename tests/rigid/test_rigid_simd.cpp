@@ -26,7 +26,7 @@ namespace {
 const Vec3 kGravity{0, -9.81, 0};
 
 // A scene that exercises every part of the solver: a pyramid (coloured blocks, full and
-// partial), bouncing balls (restitution), a ball with rolling resistance (the overflow), a
+// partial), bouncing balls (restitution), a ball with rolling resistance (coloured; TGS puts it, and everything, in the overflow), a
 // kinematic paddle through the pyramid's side, a spinning box in the air (the rotation's
 // library sines beyond pi/8 a half step), forces and impulses, and a sleeping group woken
 // later.
