@@ -430,9 +430,9 @@ PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& 
   for (int i = 0; i < 10; ++i) kk[i] = L(c.k[i]);
   // non-penetration, swept over the points `sweeps` times (Gauss-Seidel on the manifold's
   // problem: one sweep leaves a torque imbalance between the points that rocks tall stacks)
-  V total = zero;
-  for (int it = 0; it < p.sweeps; ++it) {
-    total = zero;
+  // (the last sweep apart: after a point's update in it, only the normal velocities of the
+  // points still to come are read, and the total impulse is the sum of the last sweep's)
+  auto sweep = [&](auto last) {
     for (int k = 0; k < 4; ++k) {
       if constexpr (kBias) approach[k] = vmin(approach[k], vn[k]);
       const V j = -L(c.mass[k]) * mscale[k] * (vn[k] + bias[k]) - iscale[k] * lambda[k];
@@ -441,10 +441,12 @@ PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& 
       const V dl = next - lambda[k];
       lambda[k] = next;
       largest[k] = vmax(largest[k], dl);
-      total = total + next;
-      for (int m = 0; m < 4; ++m) vn[m] = vn[m] + kk[kK[m][k]] * dl;
+      for (int m = last ? k + 1 : 0; m < 4; ++m) vn[m] = vn[m] + kk[kK[m][k]] * dl;
     }
-  }
+  };
+  for (int it = 1; it < p.sweeps; ++it) sweep(std::false_type{});
+  sweep(std::true_type{});
+  const V total = zero + lambda[0] + lambda[1] + lambda[2] + lambda[3];
   // the points' impulses to the bodies: along n, and the moments sum dl (ca1 + y, -(ca0 + x), 0)
   // on a, the same with cb on b
   {
