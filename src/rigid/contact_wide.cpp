@@ -23,7 +23,9 @@
 #include <cstring>
 #include <type_traits>
 
+#if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
+#endif
 
 #include "core/lanes.h"
 
@@ -77,8 +79,10 @@ template <bool kZmm>
 PBA_LANES v8d widen(const v8f& f) {
   // (the builtin under _mm512_cvtps_pd, which as an always-inline function of its own target
   // cannot be inlined into these templates; the builtin is checked where it lands)
+#if defined(__GNUC__) && defined(__x86_64__)
   if constexpr (kZmm) return __builtin_ia32_cvtps2pd512_mask(f, v8d{}, -1, _MM_FROUND_CUR_DIRECTION);
-  else return __builtin_convertvector(f, v8d);
+#endif
+  return __builtin_convertvector(f, v8d);
 }
 
 // kWidth<V> consecutive floats from p, and back (lanes of doubles: widened, exactly, and
