@@ -23,6 +23,10 @@
 #include <cstring>
 #include <type_traits>
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 #include "core/lanes.h"
 
 namespace pba::detail {
@@ -68,6 +72,19 @@ PBA_LANES V splat(float x) {
   else return V{} + x;
 }
 
+// 8 floats widened to 8 doubles (exactly). kZmm: on the AVX-512 path, one vcvtps2pd; GCC 12
+// makes __builtin_convertvector of v8f to v8d four instructions there (two halves converted
+// apart, then joined), and the passes widen some 180 rows and fields a block each substep
+template <bool kZmm>
+PBA_LANES v8d widen(const v8f& f) {
+  // (the builtin under _mm512_cvtps_pd, which as an always-inline function of its own target
+  // cannot be inlined into these templates; the builtin is checked where it lands)
+#if defined(__GNUC__) && defined(__x86_64__)
+  if constexpr (kZmm) return __builtin_ia32_cvtps2pd512_mask(f, v8d{}, -1, _MM_FROUND_CUR_DIRECTION);
+#endif
+  return __builtin_convertvector(f, v8d);
+}
+
 // kWidth<V> consecutive floats from p, and back (lanes of doubles: widened, exactly, and
 // rounded to the nearest floats)
 template <class V>
@@ -78,6 +95,10 @@ PBA_LANES V load(const float* p) {
     V v;
     std::memcpy(&v, p, sizeof v);
     return v;
+  } else if constexpr (std::is_same_v<V, v8d>) {  // lanes of 8 doubles: the AVX-512 path only
+    v8f f;
+    std::memcpy(&f, p, sizeof f);
+    return widen<true>(f);
   } else {
     typedef float F __attribute__((vector_size(sizeof(V) / 2)));
     F f;
@@ -227,18 +248,19 @@ PBA_LANES void load_rows(const double* base, const std::uint32_t* index, V out[8
 }
 
 // a lane's changes (8 floats) added to its body's row of doubles
+template <bool kZmm>
 PBA_LANES void add_row(double* base, std::uint32_t index, v8f change) {
   double* p = base + 8 * static_cast<std::size_t>(index);
   v8d d;
   std::memcpy(&d, p, sizeof d);
-  d = d + __builtin_convertvector(change, v8d);
+  d = d + widen<kZmm>(change);
   std::memcpy(p, &d, sizeof d);
 }
 
 // the first six of each lane's row (velocities, or their changes) plus `change`, widened to
 // double, for the lanes whose bit of `bits` is set (the others write nothing: empty lanes, and
-// bodies the solver does not move)
-template <class V>
+// bodies the solver does not move); kZmm on the AVX-512 path
+template <class V, bool kZmm>
 PBA_LANES void add_rows(double* base, const std::uint32_t* index, std::uint32_t bits, const V change[6]) {
   if constexpr (std::is_same_v<V, float>) {
     if (!(bits & 1)) return;
@@ -249,10 +271,10 @@ PBA_LANES void add_rows(double* base, const std::uint32_t* index, std::uint32_t 
     transpose(t);
     for (int i = 0; i < 8; ++i) {
       if constexpr (std::is_same_v<V, v8f>) {
-        if ((bits >> i) & 1) add_row(base, index[i], t[i]);
+        if ((bits >> i) & 1) add_row<kZmm>(base, index[i], t[i]);
       } else {
-        if ((bits >> i) & 1) add_row(base, index[i], __builtin_shufflevector(t[i], t[i], 0, 1, 2, 3, 4, 5, 6, 7));
-        if ((bits >> (i + 8)) & 1) add_row(base, index[i + 8], __builtin_shufflevector(t[i], t[i], 8, 9, 10, 11, 12, 13, 14, 15));
+        if ((bits >> i) & 1) add_row<kZmm>(base, index[i], __builtin_shufflevector(t[i], t[i], 0, 1, 2, 3, 4, 5, 6, 7));
+        if ((bits >> (i + 8)) & 1) add_row<kZmm>(base, index[i + 8], __builtin_shufflevector(t[i], t[i], 8, 9, 10, 11, 12, 13, 14, 15));
       }
     }
   }
@@ -332,7 +354,7 @@ PBA_LANES void separations(const Lanes<V>& L, const AnchorBlock& g, const BodyAr
 enum Mode : int { kSoft, kRigid, kRelax };
 
 // one pass of the block's lanes: normal points, friction, twist
-template <class V, int kMode>
+template <class V, int kMode, bool kZmm>
 PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& r) {
   constexpr bool kBias = kMode != kRelax;
   ContactBlock& c = L.c;
@@ -412,9 +434,9 @@ PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& 
   for (int i = 0; i < 10; ++i) kk[i] = L(c.k[i]);
   // non-penetration, swept over the points `sweeps` times (Gauss-Seidel on the manifold's
   // problem: one sweep leaves a torque imbalance between the points that rocks tall stacks)
-  V total = zero;
-  for (int it = 0; it < p.sweeps; ++it) {
-    total = zero;
+  // (the last sweep apart: after a point's update in it, only the normal velocities of the
+  // points still to come are read, and the total impulse is the sum of the last sweep's)
+  auto sweep = [&](auto last) {
     for (int k = 0; k < 4; ++k) {
       if constexpr (kBias) approach[k] = vmin(approach[k], vn[k]);
       const V j = -L(c.mass[k]) * mscale[k] * (vn[k] + bias[k]) - iscale[k] * lambda[k];
@@ -423,10 +445,12 @@ PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& 
       const V dl = next - lambda[k];
       lambda[k] = next;
       largest[k] = vmax(largest[k], dl);
-      total = total + next;
-      for (int m = 0; m < 4; ++m) vn[m] = vn[m] + kk[kK[m][k]] * dl;
+      for (int m = last ? k + 1 : 0; m < 4; ++m) vn[m] = vn[m] + kk[kK[m][k]] * dl;
     }
-  }
+  };
+  for (int it = 1; it < p.sweeps; ++it) sweep(std::false_type{});
+  sweep(std::true_type{});
+  const V total = zero + lambda[0] + lambda[1] + lambda[2] + lambda[3];
   // the points' impulses to the bodies: along n, and the moments sum dl (ca1 + y, -(ca0 + x), 0)
   // on a, the same with cb on b
   {
@@ -490,12 +514,12 @@ PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& 
   to_world(t1, t2, n, dwb, dwbw);
   V na[6], nb[6];
   for (int i = 0; i < 3; ++i) na[i] = -(ma * pw[i]), na[3 + i] = dwaw[i], nb[i] = mb * pw[i], nb[3 + i] = dwbw[i];
-  add_rows(base, c.a + l0, c.write_a >> l0, na);
-  add_rows(base, c.b + l0, c.write_b >> l0, nb);
+  add_rows<V, kZmm>(base, c.a + l0, c.write_a >> l0, na);
+  add_rows<V, kZmm>(base, c.b + l0, c.write_b >> l0, nb);
 }
 
 // the lanes' accumulated impulses added to the warm-start accumulators
-template <class V>
+template <class V, bool kZmm>
 PBA_LANES void warm(const Lanes<V>& L, const BodyArrays& r) {
   ContactBlock& c = L.c;
   const int l0 = L.l0;
@@ -524,8 +548,8 @@ PBA_LANES void warm(const Lanes<V>& L, const BodyArrays& r) {
   const V ma = L(c.ma), mb = L(c.mb);
   V na[6], nb[6];
   for (int i = 0; i < 3; ++i) na[i] = -(ma * pw[i]), na[3 + i] = -daw[i], nb[i] = mb * pw[i], nb[3 + i] = dbw[i];
-  add_rows(r.warm[0].v, c.a + l0, c.write_a >> l0, na);
-  add_rows(r.warm[0].v, c.b + l0, c.write_b >> l0, nb);
+  add_rows<V, kZmm>(r.warm[0].v, c.a + l0, c.write_a >> l0, na);
+  add_rows<V, kZmm>(r.warm[0].v, c.b + l0, c.write_b >> l0, nb);
 }
 
 // the separations of the block's lanes [l0, l0 + width) in lanes of doubles D (in double:
@@ -540,8 +564,10 @@ template <class V, class D, int kMode>
 PBA_LANES void pass(ContactBlock& c, const AnchorBlock& g, int l0, const FloatParams& p, const BodyArrays& r) {
   const Lanes<V> L{c, l0};
   if (p.update_sep) separations_of<D>(c, g, l0, kWidth<V>, r);
-  solve<V, kMode>(L, p, r);
-  if (p.warm_next) warm(L, r);
+  // (lanes of 8 doubles for the separations: the AVX-512 path)
+  constexpr bool kZmm = std::is_same_v<D, v8d>;
+  solve<V, kMode, kZmm>(L, p, r);
+  if (p.warm_next) warm<V, kZmm>(L, r);
 }
 
 // blocks [first, last) on lanes of V, the separations on lanes of D (several parts of a block
@@ -583,13 +609,13 @@ template <class V>
 PBA_LANES void warm_blocks(ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& r) {
   for (std::size_t i = first; i < last; ++i) {
     const int lanes = blocks[i].lanes;
-    if constexpr (!std::is_same_v<V, float>) {
-      if (kWidth<V> == 16 && lanes <= 8) {
-        warm(Lanes<v8f>{blocks[i], 0}, r);
+    if constexpr (kWidth<V> == 16) {  // AVX-512
+      if (lanes <= 8) {
+        warm<v8f, true>(Lanes<v8f>{blocks[i], 0}, r);
         continue;
       }
     }
-    for (int l = 0; l < lanes; l += kWidth<V>) warm(Lanes<V>{blocks[i], l}, r);
+    for (int l = 0; l < lanes; l += kWidth<V>) warm<V, kWidth<V> == 16>(Lanes<V>{blocks[i], l}, r);
   }
 }
 template <class D>
@@ -670,7 +696,7 @@ void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::s
   warm_blocks<float>(blocks, first, last, bodies);
 }
 
-void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies) { warm(Lanes<float>{block, lane}, bodies); }
+void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies) { warm<float, false>(Lanes<float>{block, lane}, bodies); }
 
 void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first,
                         std::size_t last, const BodyArrays& bodies) {
