@@ -303,7 +303,9 @@ struct RigidContacts {
   std::vector<double> motion;
   std::vector<SolverBody> warm;
   SimdPath simd = best_simd_path();        // the path of the coloured blocks and the free motion
-  std::vector<std::uint32_t> moving;       // the awake dynamic bodies this step (dense indices)
+  // the awake dynamic bodies this step (dense indices, ascending): the round ones (three equal
+  // principal moments: no gyroscopic term, integrate_wide.cpp) apart from the others
+  std::vector<std::uint32_t> moving, moving_round;
   bool built = false;       // the blocks hold this step's manifolds (cleared by store())
   bool has_colors = false;  // color_of holds the last step's colours
 

@@ -167,12 +167,14 @@ void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, 
 /// pushed (scalar; the lanes with restitution, in order).
 void restitution_lane(ContactBlock& block, int lane, double restitution, double threshold, const BodyArrays& bodies);
 /// Gravity, forces, torques, damping and the warm start for `count` awake dynamic bodies
-/// (integrate_wide.cpp). False, with the body in *bad, when a velocity became non-finite.
-bool integrate_velocities_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
+/// (integrate_wide.cpp); `round`: every one of them has three equal principal moments. False,
+/// with the body in *bad, when a velocity became non-finite.
+bool integrate_velocities_wide(SimdPath path, bool round, const std::uint32_t* bodies, std::size_t count,
                                const FreeMotionArrays& f, double h, const Vec3& gravity, std::uint32_t* bad);
-/// Positions and rotations (the Dullweber-Leimkuhler-McLachlan splitting) over h of `count`
-/// awake dynamic bodies, and their motion since the start of the step.
-void integrate_positions_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
+/// Positions and rotations over h of `count` awake dynamic bodies, and their motion since the
+/// start of the step: the Dullweber-Leimkuhler-McLachlan splitting, or with `round` (every one
+/// has three equal principal moments) the exact turn about the constant angular velocity.
+void integrate_positions_wide(SimdPath path, bool round, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, double h);
 /// The normal relative velocity (m/s) of each of one lane's points at the velocities now (prepare's approach).
 void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]);
