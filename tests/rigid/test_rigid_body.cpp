@@ -507,10 +507,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x79f2b4c2967d3b90ull) << std::hex << soft;
-  EXPECT_EQ(si, 0xdcc0be0bb9831ca5ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x7120a9b0e8a35cc0ull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x7b246435c80d8a48ull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0xe54f647d1c9c98a0ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x7979945f58b4d9e3ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0xe1ab42a93eaeedfbull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x2df2717000a7eb5aull) << std::hex << xpbd;
 }
 
 }  // namespace
