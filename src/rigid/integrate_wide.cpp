@@ -12,9 +12,10 @@
 // the half angle give both (cos = 1 - 2 sin^2(angle/2), sin = 2 sin(angle/2) cos(angle/2)),
 // by a polynomial for half angles within pi/8 (Taylor to degree 13 and 14, truncation under
 // 1e-18 relative; more than 375 rad/s at a 480 Hz substep is needed to leave it), else by
-// the library. Round bodies (three equal principal moments; the caller lists them apart) have
-// no gyroscopic term: their world angular velocity is constant and the exact free rotation is
-// one turn about it (positions_round).
+// the library. Bodies with equal principal moments (the caller lists them apart by kind,
+// FreeRotation) have an exact free rotation, which they take instead: round ones (three equal)
+// one turn about their constant world angular velocity (positions_round), axisymmetric ones
+// (two equal) a turn about their momentum and one about their axis (positions).
 //
 // Cost (fall1000, all cubes, spent a sixth of its step here under the splitting, half that
 // with the exact turn): 8 bodies in a row, the common case, load and store their fields as
@@ -428,8 +429,38 @@ PBA_LANES void store_motion(const std::uint32_t* idx, const FreeMotionArrays& f,
   store_rows(f.motion, idx, m, 7);
 }
 
-// the lanes' positions and rotations (the five sub-flows), and their motion since the start of the step
+// the product a b of quaternions (w, x, y, z)
 template <class V>
+PBA_LANES void multiply(const V a[4], const V b[4], V out[4]) {
+  out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+  out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+  out[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+  out[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+}
+
+// The turn t = (cos(|a|), sin(|a|) a / |a|) by the angle 2 |a|: cos and sin(|a|) / |a| are
+// series in y = |a|^2 (the sub-flows' tails, no square root) within kSmall, else the library
+template <class V>
+PBA_LANES void turn_of(const V a[3], V t[4]) {
+  const V y = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+  V c = 1.0 + cos_tail(y), sinc = 1.0 + sin_tail(y);
+  if (!all_within(y, kSmall * kSmall)) {
+    for (int i = 0; i < kWidth<V>; ++i) {
+      const double half = std::sqrt(get(y, i));
+      if (!(half <= kSmall)) set(c, i, std::cos(half)), set(sinc, i, std::sin(half) / half);
+    }
+  }
+  t[0] = c, t[1] = sinc * a[0], t[2] = sinc * a[1], t[3] = sinc * a[2];
+}
+
+// The lanes' positions and rotations, and their motion since the start of the step. Bodies of
+// three different principal moments (Triaxial) take the five sub-flows. Axisymmetric ones (two
+// equal moments I1 about axes a and b, I3 about axis K) take their exact free rotation: the
+// kinetic energy |pi|^2 / (2 I1) + pi_K^2 (1/I3 - 1/I1) / 2 is a sum of two terms whose flows
+// commute (each keeps |pi| and pi_K), both exact turns: the body about its momentum by h |pi| /
+// I1 (pi stays as it is), and the splitting's sub-flow about axis K by h pi_K (1/I3 - 1/I1)
+// (pi turns by minus that); two turns instead of five.
+template <FreeRotation R, class V>
 PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
   V r[8], x[3], q[4], inertia[3], inv[3];
   load_velocities(f, idx, r);
@@ -439,15 +470,30 @@ PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, do
   load3(f.inv_inertia, idx, inv);
   // symplectic Euler for the centre
   for (int k = 0; k < 3; ++k) x[k] = x[k] + h * r[k];
-  // body-frame angular momentum pi = I w_body, then the five exact sub-flows
+  // body-frame angular momentum pi = I w_body, then the exact turns
   V pi[3];
   rotate(q, -1, r + 3, pi);
   for (int k = 0; k < 3; ++k) pi[k] = inertia[k] * pi[k];
-  subflow<0>(0.5 * 0.5 * h, inv, q, pi);
-  subflow<1>(0.5 * 0.5 * h, inv, q, pi);
-  subflow<2>(0.5 * 1.0 * h, inv, q, pi);
-  subflow<1>(0.5 * 0.5 * h, inv, q, pi);
-  subflow<0>(0.5 * 0.5 * h, inv, q, pi);
+  if constexpr (R == FreeRotation::Triaxial) {
+    subflow<0>(0.5 * 0.5 * h, inv, q, pi);
+    subflow<1>(0.5 * 0.5 * h, inv, q, pi);
+    subflow<2>(0.5 * 1.0 * h, inv, q, pi);
+    subflow<1>(0.5 * 0.5 * h, inv, q, pi);
+    subflow<0>(0.5 * 0.5 * h, inv, q, pi);
+  } else {
+    constexpr int K = static_cast<int>(R) - static_cast<int>(FreeRotation::AxialX), a = (K + 1) % 3;
+    // q t: the turn about pi, in the body frame
+    const V scale = (0.5 * h) * inv[a];
+    const V half[3] = {scale * pi[0], scale * pi[1], scale * pi[2]};
+    V t[4];
+    turn_of(half, t);
+    const V was[4] = {q[0], q[1], q[2], q[3]};
+    multiply(was, t, q);
+    // the turn about K at the rate pi_K (1/I3 - 1/I1)
+    const V rate = inv[K] - inv[a];
+    const V rates[3] = {rate, rate, rate};
+    subflow<K>(0.5 * h, rates, q, pi);
+  }
   // kept unit, and the world angular velocity back
   normalize(q);
   for (int k = 0; k < 3; ++k) pi[k] = pi[k] * inv[k];
@@ -460,9 +506,8 @@ PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, do
 
 // The same for round bodies (all three principal moments equal, I): the momentum is I w, so
 // there is no gyroscopic term, the world angular velocity w stays as it is, and the free
-// rotation over h is exactly the turn by the angle t = h |w| about w: q <- (cos(t/2), sin(t/2)
-// w / |w|) q. With a = h w / 2 and y = |a|^2 = (t/2)^2, that is (cos(t/2), sin(t/2) / (t/2) a):
-// both are series in y (the sub-flows' tails, no square root) within kSmall, else the library.
+// rotation over h is exactly the turn by the angle h |w| about w: q <- (cos(|a|), sin(|a|) a /
+// |a|) q with a = h w / 2 (turn_of).
 template <class V>
 PBA_LANES void positions_round(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
   V r[8], x[3], q[4];
@@ -472,21 +517,10 @@ PBA_LANES void positions_round(const std::uint32_t* idx, const FreeMotionArrays&
   for (int k = 0; k < 3; ++k) x[k] = x[k] + h * r[k];
   const double hh = 0.5 * h;
   const V a[3] = {hh * r[3], hh * r[4], hh * r[5]};
-  const V y = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-  V c = 1.0 + cos_tail(y), sinc = 1.0 + sin_tail(y);
-  if (!all_within(y, kSmall * kSmall)) {
-    for (int i = 0; i < kWidth<V>; ++i) {
-      const double half = std::sqrt(get(y, i));
-      if (!(half <= kSmall)) set(c, i, std::cos(half)), set(sinc, i, std::sin(half) / half);
-    }
-  }
-  // the turn (c, sinc a) times q
-  const V tx = sinc * a[0], ty = sinc * a[1], tz = sinc * a[2];
-  const V qw = q[0], qx = q[1], qy = q[2], qz = q[3];
-  q[0] = c * qw - tx * qx - ty * qy - tz * qz;
-  q[1] = c * qx + tx * qw + ty * qz - tz * qy;
-  q[2] = c * qy - tx * qz + ty * qw + tz * qx;
-  q[3] = c * qz + tx * qy - ty * qx + tz * qw;
+  V t[4];
+  turn_of(a, t);
+  const V was[4] = {q[0], q[1], q[2], q[3]};
+  multiply(t, was, q);
   normalize(q);
   store3(f.com, idx, x);
   store_quat(f.q, idx, q);
@@ -504,18 +538,31 @@ PBA_LANES bool velocities_all(const std::uint32_t* idx, std::size_t count, const
   return true;
 }
 
-template <bool Round, class V>
+template <FreeRotation R, class V>
 PBA_LANES void positions_of(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
-  if constexpr (Round) positions_round<V>(idx, f, h);
-  else positions<V>(idx, f, h);
+  if constexpr (R == FreeRotation::Round) positions_round<V>(idx, f, h);
+  else positions<R, V>(idx, f, h);
 }
 
-template <bool Round, class V, class W = V>
+template <FreeRotation R, class V, class W = V>
 PBA_LANES void positions_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double h) {
   std::size_t i = 0;
-  for (; i + kWidth<W> <= count; i += kWidth<W>) positions_of<Round, W>(idx + i, f, h);
-  for (; i + kWidth<V> <= count; i += kWidth<V>) positions_of<Round, V>(idx + i, f, h);
-  for (; i < count; ++i) positions_of<Round, double>(idx + i, f, h);
+  for (; i + kWidth<W> <= count; i += kWidth<W>) positions_of<R, W>(idx + i, f, h);
+  for (; i + kWidth<V> <= count; i += kWidth<V>) positions_of<R, V>(idx + i, f, h);
+  for (; i < count; ++i) positions_of<R, double>(idx + i, f, h);
+}
+
+// the kinds' kernels on a path: two blocks at once where W is wider (the splitting's long chain)
+template <class V, class W>
+PBA_LANES void positions_kind(FreeRotation kind, const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f,
+                              double h) {
+  switch (kind) {
+    case FreeRotation::Triaxial: return positions_all<FreeRotation::Triaxial, V, W>(idx, count, f, h);
+    case FreeRotation::Round: return positions_all<FreeRotation::Round, V>(idx, count, f, h);
+    case FreeRotation::AxialX: return positions_all<FreeRotation::AxialX, V>(idx, count, f, h);
+    case FreeRotation::AxialY: return positions_all<FreeRotation::AxialY, V>(idx, count, f, h);
+    case FreeRotation::AxialZ: return positions_all<FreeRotation::AxialZ, V>(idx, count, f, h);
+  }
 }
 
 #if defined(__GNUC__) && defined(__x86_64__)
@@ -530,15 +577,13 @@ __attribute__((target("avx2"))) bool velocities_avx2(bool round, const std::uint
                                                     std::uint32_t* bad) {
   return round ? velocities_all<v4d, true>(idx, count, f, h, g, bad) : velocities_all<v4d, false>(idx, count, f, h, g, bad);
 }
-__attribute__((target("avx512f"))) void positions_avx512(bool round, const std::uint32_t* idx, std::size_t count,
-                                                        const FreeMotionArrays& f, double h) {
-  if (round) positions_all<true, v8d, v16d>(idx, count, f, h);
-  else positions_all<false, v8d, v16d>(idx, count, f, h);
+__attribute__((target("avx512f"))) void positions_avx512(FreeRotation kind, const std::uint32_t* idx,
+                                                        std::size_t count, const FreeMotionArrays& f, double h) {
+  positions_kind<v8d, v16d>(kind, idx, count, f, h);
 }
-__attribute__((target("avx2"))) void positions_avx2(bool round, const std::uint32_t* idx, std::size_t count,
+__attribute__((target("avx2"))) void positions_avx2(FreeRotation kind, const std::uint32_t* idx, std::size_t count,
                                                    const FreeMotionArrays& f, double h) {
-  if (round) positions_all<true, v4d>(idx, count, f, h);
-  else positions_all<false, v4d>(idx, count, f, h);
+  positions_kind<v4d, v4d>(kind, idx, count, f, h);
 }
 #else
 #define PBA_RIGID_HAVE_X86 0
@@ -557,15 +602,14 @@ bool integrate_velocities_wide(SimdPath path, bool round, const std::uint32_t* b
                : velocities_all<double, false>(bodies, count, f, h, gravity, bad);
 }
 
-void integrate_positions_wide(SimdPath path, bool round, const std::uint32_t* bodies, std::size_t count,
+void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, double h) {
 #if PBA_RIGID_HAVE_X86
-  if (path == SimdPath::Avx512) return positions_avx512(round, bodies, count, f, h);
-  if (path == SimdPath::Avx2) return positions_avx2(round, bodies, count, f, h);
+  if (path == SimdPath::Avx512) return positions_avx512(kind, bodies, count, f, h);
+  if (path == SimdPath::Avx2) return positions_avx2(kind, bodies, count, f, h);
 #endif
   (void)path;
-  if (round) positions_all<true, double>(bodies, count, f, h);
-  else positions_all<false, double>(bodies, count, f, h);
+  positions_kind<double, double>(kind, bodies, count, f, h);
 }
 
 }  // namespace pba::detail

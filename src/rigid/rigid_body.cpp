@@ -223,7 +223,7 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
     v->reserve(n);
   for (auto* v : {&island_, &parent_}) v->reserve(n);
   asleep_.reserve(n);
-  contacts_->moving.reserve(n), contacts_->moving_round.reserve(n);
+  for (auto& list : contacts_->moving) list.reserve(n);
   name_.reserve(n);
   bullet_.reserve(n);
   shapes_.reserve(n);
@@ -533,11 +533,12 @@ void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity, detail
   const detail::RigidContacts& c = *contacts_;
   const detail::FreeMotionArrays f = free_motion(rows, warm, nullptr);
   std::uint32_t bad = 0;
-  if (!detail::integrate_velocities_wide(c.simd, false, c.moving.data(), c.moving.size(), f, h, gravity, &bad) ||
-      !detail::integrate_velocities_wide(c.simd, true, c.moving_round.data(), c.moving_round.size(), f, h, gravity,
-                                         &bad)) {
+  for (std::size_t k = 0; k < c.moving.size(); ++k) {
+    const bool round = static_cast<detail::FreeRotation>(k) == detail::FreeRotation::Round;
+    if (detail::integrate_velocities_wide(c.simd, round, c.moving[k].data(), c.moving[k].size(), f, h, gravity, &bad))
+      continue;
     if (rows) v_[bad] = get3(rows[bad].v), w_[bad] = get3(rows[bad].w);
-    fail(bad);
+    fail(bad);  // throws
   }
   profile_.integrate += clock.seconds();
 }
@@ -545,11 +546,11 @@ void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity, detail
 void RigidBodySystem::integrate_positions(double h, detail::SolverBody* rows, double* motion) {
   const Stopwatch clock;
   // dynamic bodies: symplectic Euler for the centre, the exact-flow splitting for the rotation
-  // (round bodies: the exact turn)
+  // (bodies with equal principal moments: exact turns)
   const detail::RigidContacts& c = *contacts_;
   const detail::FreeMotionArrays f = free_motion(rows, nullptr, motion);
-  detail::integrate_positions_wide(c.simd, false, c.moving.data(), c.moving.size(), f, h);
-  detail::integrate_positions_wide(c.simd, true, c.moving_round.data(), c.moving_round.size(), f, h);
+  for (std::size_t k = 0; k < c.moving.size(); ++k)
+    detail::integrate_positions_wide(c.simd, static_cast<detail::FreeRotation>(k), c.moving[k].data(), c.moving[k].size(), f, h);
   // kinematic bodies: constant velocities, exact translation and rotation
   const std::size_t n = type_.size();
   for (std::size_t i = 0; i < n; ++i) {
@@ -583,12 +584,10 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   for (std::size_t i = 0; i < n; ++i) com0_[i] = com_[i], q0_[i] = q_[i];
   // pairs and manifolds, then the bodies that move freely this step
   contacts_->update(*this, dt);
-  contacts_->moving.clear(), contacts_->moving_round.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
-    const Vec3& m = inertia_[i];
-    (m.x == m.y && m.y == m.z ? contacts_->moving_round : contacts_->moving).push_back(static_cast<std::uint32_t>(i));
-  }
+  for (auto& list : contacts_->moving) list.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    if (type_[i] == BodyType::Dynamic && !asleep_[i])
+      contacts_->moving[static_cast<std::size_t>(detail::free_rotation(inertia_[i]))].push_back(static_cast<std::uint32_t>(i));
   profile_.collide = total.seconds();
   profile_.integrate = 0;  // integrate_velocities and integrate_positions add to it
   // the carried impulses at this solver's time step, then the solver's arrays

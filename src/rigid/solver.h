@@ -171,10 +171,21 @@ void restitution_lane(ContactBlock& block, int lane, double restitution, double 
 /// with the body in *bad, when a velocity became non-finite.
 bool integrate_velocities_wide(SimdPath path, bool round, const std::uint32_t* bodies, std::size_t count,
                                const FreeMotionArrays& f, double h, const Vec3& gravity, std::uint32_t* bad);
-/// Positions and rotations over h of `count` awake dynamic bodies, and their motion since the
-/// start of the step: the Dullweber-Leimkuhler-McLachlan splitting, or with `round` (every one
-/// has three equal principal moments) the exact turn about the constant angular velocity.
-void integrate_positions_wide(SimdPath path, bool round, const std::uint32_t* bodies, std::size_t count,
+/// How a body's free rotation is integrated, by its principal moments (integrate_wide.cpp).
+enum class FreeRotation : std::uint8_t {
+  Triaxial,                 ///< all different: the Dullweber-Leimkuhler-McLachlan splitting
+  Round,                    ///< all three equal: the exact turn about the constant angular velocity
+  AxialX, AxialY, AxialZ,   ///< the other two equal: the exact turns about the momentum and the axis
+};
+/// The kind of a body of principal moments m (kg m^2).
+inline FreeRotation free_rotation(const Vec3& m) {
+  if (m.x == m.y) return m.y == m.z ? FreeRotation::Round : FreeRotation::AxialZ;
+  if (m.y == m.z) return FreeRotation::AxialX;
+  return m.x == m.z ? FreeRotation::AxialY : FreeRotation::Triaxial;
+}
+/// Positions and rotations over h of `count` awake dynamic bodies, all of the rotation `kind`,
+/// and their motion since the start of the step.
+void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, double h);
 /// The normal relative velocity (m/s) of each of one lane's points at the velocities now (prepare's approach).
 void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]);
