@@ -307,6 +307,7 @@ struct RigidContacts {
   // the awake dynamic bodies this step (dense indices, ascending), by the kind of their free
   // rotation (FreeRotation, integrate_wide.cpp)
   std::array<std::vector<std::uint32_t>, 5> moving;
+  bool moving_damped = true;  // some of them have linear or angular damping
   bool built = false;       // the blocks hold this step's manifolds (cleared by store())
   bool has_colors = false;  // color_of holds the last step's colours
 

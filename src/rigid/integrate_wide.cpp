@@ -346,7 +346,7 @@ PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, d
   load3(f.torque, idx, torque);
   load3(f.inv_inertia, idx, inv);
   const V m = load1<V>(f.inv_mass, idx), gs = load1<V>(f.gravity_scale, idx);
-  const V dl = 1.0 + h * load1<V>(f.lin_damp, idx), da = 1.0 + h * load1<V>(f.ang_damp, idx);
+  const V cl = load1<V>(f.lin_damp, idx), ca = load1<V>(f.ang_damp, idx);
   // gravity, applied force and torque (in the principal frame), then implicit damping
   V dw[3];
   if constexpr (Round) {
@@ -359,9 +359,11 @@ PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, d
     rotate(q, 1, tb, dw);
   }
   const double gk[3] = {g.x, g.y, g.z};
-  for (int k = 0; k < 3; ++k) {
-    r[k] = (r[k] + h * (gs * gk[k] + m * force[k])) / dl;
-    r[3 + k] = (r[3 + k] + dw[k]) / da;
+  for (int k = 0; k < 3; ++k) r[k] = r[k] + h * (gs * gk[k] + m * force[k]), r[3 + k] = r[3 + k] + dw[k];
+  // (x / (1 + h c) is x when c = 0: the divisions, the costliest operations here, only when
+  // some body is damped)
+  if (f.damped) {
+    for (int k = 0; k < 3; ++k) r[k] = r[k] / (1.0 + h * cl), r[3 + k] = r[3 + k] / (1.0 + h * ca);
   }
   // the contacts' carried impulses (the warm start), taken once
   if (f.warm) {

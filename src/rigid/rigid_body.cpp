@@ -523,7 +523,7 @@ detail::FreeMotionArrays RigidBodySystem::free_motion(detail::SolverBody* rows, 
   f.inertia = inertia_.data(), f.inv_inertia = inv_inertia_.data();
   f.force = force_.data(), f.torque = torque_.data();
   f.inv_mass = inv_mass_.data(), f.gravity_scale = gravity_scale_.data();
-  f.lin_damp = lin_damp_.data(), f.ang_damp = ang_damp_.data();
+  f.lin_damp = lin_damp_.data(), f.ang_damp = ang_damp_.data(), f.damped = contacts_->moving_damped;
   return f;
 }
 
@@ -585,9 +585,13 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   // pairs and manifolds, then the bodies that move freely this step
   contacts_->update(*this, dt);
   for (auto& list : contacts_->moving) list.clear();
-  for (std::size_t i = 0; i < n; ++i)
-    if (type_[i] == BodyType::Dynamic && !asleep_[i])
-      contacts_->moving[static_cast<std::size_t>(detail::free_rotation(inertia_[i]))].push_back(static_cast<std::uint32_t>(i));
+  bool damped = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    contacts_->moving[static_cast<std::size_t>(detail::free_rotation(inertia_[i]))].push_back(static_cast<std::uint32_t>(i));
+    damped = damped || lin_damp_[i] != 0 || ang_damp_[i] != 0;
+  }
+  contacts_->moving_damped = damped;
   profile_.collide = total.seconds();
   profile_.integrate = 0;  // integrate_velocities and integrate_positions add to it
   // the carried impulses at this solver's time step, then the solver's arrays

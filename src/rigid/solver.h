@@ -138,6 +138,7 @@ struct FreeMotionArrays {
   const double* gravity_scale = nullptr;
   const double* lin_damp = nullptr;
   const double* ang_damp = nullptr;
+  bool damped = true;             // false: no body has damping (the divisions by 1 + h c are left out)
   double* motion = nullptr;       // optional: dp and turn since the start of the step, 8 a body
 };
 
