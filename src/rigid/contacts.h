@@ -306,7 +306,7 @@ struct RigidContacts {
   SimdPath simd = best_simd_path();        // the path of the coloured blocks and the free motion
   // the awake dynamic bodies this step (dense indices, ascending), by the kind of their free
   // rotation (FreeRotation, integrate_wide.cpp)
-  std::array<std::vector<std::uint32_t>, 5> moving;
+  std::array<std::vector<std::uint32_t>, kFreeRotations> moving;
   bool moving_damped = true;  // some of them have linear or angular damping
   bool built = false;       // the blocks hold this step's manifolds (cleared by store())
   bool has_colors = false;  // color_of holds the last step's colours

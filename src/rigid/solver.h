@@ -14,6 +14,7 @@
 // results do not depend on the machine.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -178,6 +179,8 @@ enum class FreeRotation : std::uint8_t {
   Round,                    ///< all three equal: the exact turn about the constant angular velocity
   AxialX, AxialY, AxialZ,   ///< the other two equal: the exact turns about the momentum and the axis
 };
+/// The number of kinds of FreeRotation.
+inline constexpr std::size_t kFreeRotations = 5;
 /// The kind of a body of principal moments m (kg m^2).
 inline FreeRotation free_rotation(const Vec3& m) {
   if (m.x == m.y) return m.y == m.z ? FreeRotation::Round : FreeRotation::AxialZ;
