@@ -6,7 +6,9 @@
 // (1997): each substep is five exact rotations about the body's principal axes, so a
 // torque-free body keeps its world angular momentum to rounding and its kinetic energy to
 // O(h^2) without drift, and the gyroscopic precession (the intermediate-axis flip of a
-// tumbling T-handle) comes out right at game time steps.
+// tumbling T-handle) comes out right at game time steps. Bodies with equal principal moments
+// take their exact free rotation instead: a round one (a cube, a ball) turns about its constant
+// angular velocity, an axisymmetric one (a capsule) about its momentum and its axis.
 //
 // Each body carries one or more shapes of the collide module. A step finds the pairs of
 // shapes whose bounds overlap, builds their manifolds with the narrow phase (speculative

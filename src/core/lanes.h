@@ -91,4 +91,26 @@ PBA_LANES void set(V& v, int i, double x) {
   else v[i] = x;
 }
 
+/// The transpose of 8 rows of 8 numbers, doubles or floats (its own inverse): three rounds of
+/// two-vector shuffles. Rows of 64 bytes (a body's velocities, its motion) become one vector a
+/// field.
+template <class V>
+PBA_LANES void transpose8x8(V r[8]) {
+  using M = decltype(r[0] < r[0]);  // the shuffles' mask: integers of the numbers' width
+  V t[8], u[8];
+  for (int i = 0; i < 4; ++i) {
+    t[2 * i] = __builtin_shuffle(r[2 * i], r[2 * i + 1], M{0, 8, 2, 10, 4, 12, 6, 14});
+    t[2 * i + 1] = __builtin_shuffle(r[2 * i], r[2 * i + 1], M{1, 9, 3, 11, 5, 13, 7, 15});
+  }
+  constexpr int kFirst[4] = {0, 1, 4, 5};
+  for (const int i : kFirst) {
+    u[i] = __builtin_shuffle(t[i], t[i + 2], M{0, 1, 8, 9, 4, 5, 12, 13});
+    u[i + 2] = __builtin_shuffle(t[i], t[i + 2], M{2, 3, 10, 11, 6, 7, 14, 15});
+  }
+  for (int i = 0; i < 4; ++i) {
+    r[i] = __builtin_shuffle(u[i], u[i + 4], M{0, 1, 2, 3, 8, 9, 10, 11});
+    r[i + 4] = __builtin_shuffle(u[i], u[i + 4], M{4, 5, 6, 7, 12, 13, 14, 15});
+  }
+}
+
 }  // namespace pba::detail::lanes

@@ -1,6 +1,7 @@
 // Rigid bodies, private: the contact pairs, their manifolds and the solvers' per-point data.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -317,7 +318,10 @@ struct RigidContacts {
   std::vector<double> motion;
   std::vector<SolverBody> warm;
   SimdPath simd = best_simd_path();        // the path of the coloured blocks and the free motion
-  std::vector<std::uint32_t> moving;       // the awake dynamic bodies this step (dense indices)
+  // the awake dynamic bodies this step (dense indices, ascending), by the kind of their free
+  // rotation (FreeRotation, integrate_wide.cpp)
+  std::array<std::vector<std::uint32_t>, kFreeRotations> moving;
+  bool moving_damped = true;  // some of them have linear or angular damping
   bool built = false;       // the blocks hold this step's manifolds (cleared by store())
   bool has_colors = false;  // color_of holds the last step's colours
 

@@ -12,12 +12,17 @@
 // the half angle give both (cos = 1 - 2 sin^2(angle/2), sin = 2 sin(angle/2) cos(angle/2)),
 // by a polynomial for half angles within pi/8 (Taylor to degree 13 and 14, truncation under
 // 1e-18 relative; more than 375 rad/s at a 480 Hz substep is needed to leave it), else by
-// the library.
+// the library. Bodies with equal principal moments (the caller lists them apart by kind,
+// FreeRotation) have an exact free rotation, which they take instead: round ones (three equal)
+// one turn about their constant world angular velocity (positions_round), axisymmetric ones
+// (two equal) a turn about their momentum and one about their axis (positions).
 //
-// Cost (fall1000 spends a sixth of its step here): 8 bodies in a row, the common case, load
-// and store their fields as whole vectors and a few permutes; the all-lanes tests use the
-// targets' compare-to-mask instructions; on AVX-512 the positions run two blocks of 8 at once,
-// as their five sub-flows are one long chain of dependent operations per block.
+// Cost (fall1000, all cubes, spent a sixth of its step here under the splitting, half that
+// with the exact turn): 8 bodies in a row, the common case, load and store their fields as
+// whole vectors and a few permutes, and the 64-byte rows of velocities, warm-start changes and
+// motion by whole rows and a transpose on AVX-512; the all-lanes tests use the targets'
+// compare-to-mask instructions; on AVX-512 the positions run two blocks of 8 at once, as the
+// splitting's five sub-flows are one long chain of dependent operations per block.
 #include "solver.h"
 
 #include <cmath>
@@ -92,16 +97,27 @@ PBA_LANES bool all_finite(const V* x, int n) {
   return all_zero(z);
 }
 
-// sin and cos of x for |x| <= kSmall (Horner in x^2)
+// The Taylor series' tails for |x| <= kSmall, in x2 = x^2 (Horner): sin x = x + x sin_tail(x2),
+// cos x = 1 + cos_tail(x2)
+template <class V>
+PBA_LANES V sin_tail(const V x2) {
+  constexpr double s1 = -1.0 / 6, s2 = 1.0 / 120, s3 = -1.0 / 5040, s4 = 1.0 / 362880, s5 = -1.0 / 39916800,
+                   s6 = 1.0 / 6227020800.0;
+  return x2 * (s1 + x2 * (s2 + x2 * (s3 + x2 * (s4 + x2 * (s5 + x2 * s6)))));
+}
+template <class V>
+PBA_LANES V cos_tail(const V x2) {
+  constexpr double c1 = -1.0 / 2, c2 = 1.0 / 24, c3 = -1.0 / 720, c4 = 1.0 / 40320, c5 = -1.0 / 3628800,
+                   c6 = 1.0 / 479001600, c7 = -1.0 / 87178291200.0;
+  return x2 * (c1 + x2 * (c2 + x2 * (c3 + x2 * (c4 + x2 * (c5 + x2 * (c6 + x2 * c7))))));
+}
+
+// sin and cos of x for |x| <= kSmall
 template <class V>
 PBA_LANES void sincos_small(const V x, V& s, V& c) {
   const V x2 = x * x;
-  constexpr double s1 = -1.0 / 6, s2 = 1.0 / 120, s3 = -1.0 / 5040, s4 = 1.0 / 362880, s5 = -1.0 / 39916800,
-                   s6 = 1.0 / 6227020800.0;
-  constexpr double c1 = -1.0 / 2, c2 = 1.0 / 24, c3 = -1.0 / 720, c4 = 1.0 / 40320, c5 = -1.0 / 3628800,
-                   c6 = 1.0 / 479001600, c7 = -1.0 / 87178291200.0;
-  s = x + x * (x2 * (s1 + x2 * (s2 + x2 * (s3 + x2 * (s4 + x2 * (s5 + x2 * s6))))));
-  c = 1.0 + x2 * (c1 + x2 * (c2 + x2 * (c3 + x2 * (c4 + x2 * (c5 + x2 * (c6 + x2 * c7))))));
+  s = x + x * sin_tail(x2);
+  c = 1.0 + cos_tail(x2);
 }
 
 // sin and cos of the half angle h, each lane by the polynomial or, beyond kSmall, the library
@@ -180,7 +196,7 @@ PBA_LANES void unrows4(double* p, const int m[4], const v8d in[4]) {
 // a wide store as two blocks of 8
 template <class Store>
 PBA_LANES void store_twice(const std::uint32_t* idx, int n, const v16d* in, Store store8) {
-  v8d lo[4], hi[4];
+  v8d lo[8], hi[8];
   for (int k = 0; k < n; ++k)
     std::memcpy(&lo[k], &in[k], sizeof(v8d)), std::memcpy(&hi[k], reinterpret_cast<const char*>(&in[k]) + sizeof(v8d), sizeof(v8d));
   store8(idx, lo);
@@ -190,7 +206,7 @@ PBA_LANES void store_twice(const std::uint32_t* idx, int n, const v16d* in, Stor
 // a wide load as two blocks of 8 (the first 8 lanes, then the next)
 template <class Load>
 PBA_LANES void load_twice(const std::uint32_t* idx, int n, v16d* out, Load load8) {
-  v8d lo[4], hi[4];
+  v8d lo[8], hi[8];
   load8(idx, lo);
   load8(idx + 8, hi);
   for (int k = 0; k < n; ++k)
@@ -268,45 +284,102 @@ PBA_LANES V load1(const double* a, const std::uint32_t* idx) {
   return out;
 }
 
-// the lanes' velocities; false (and the first bad body in *bad) when one is not finite
+// Rows of 8 doubles a body (the contact solver's velocities and warm-start accumulators, the
+// motion): the lanes' rows at base + 8 idx as 8 vectors of one number a lane. On AVX-512 a
+// block loads and stores whole rows and transposes them; the other paths go lane by lane and
+// store only the first n numbers of a row (the whole-row store writes in[n..7] back too, so
+// they must hold what the rows hold).
 template <class V>
+PBA_LANES void load_rows(const double* base, const std::uint32_t* idx, V out[8]) {
+  if constexpr (std::is_same_v<V, v16d>) {
+    return load_twice(idx, 8, out, [&](const std::uint32_t* i, v8d* o) { load_rows<v8d>(base, i, o); });
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    for (int i = 0; i < 8; ++i) out[i] = load<v8d>(base + 8 * static_cast<std::size_t>(idx[i]));
+    return transpose8x8(out);
+  }
+  for (int k = 0; k < 8; ++k) out[k] = splat<V>(0);
+  for (int i = 0; i < kWidth<V>; ++i)
+    for (int k = 0; k < 8; ++k) set(out[k], i, base[8 * static_cast<std::size_t>(idx[i]) + k]);
+}
+
+template <class V>
+PBA_LANES void store_rows(double* base, const std::uint32_t* idx, const V in[8], int n) {
+  if constexpr (std::is_same_v<V, v16d>) {
+    return store_twice(idx, 8, in, [&](const std::uint32_t* i, const v8d* x) { store_rows<v8d>(base, i, x, n); });
+  } else if constexpr (std::is_same_v<V, v8d>) {
+    v8d r[8];
+    for (int k = 0; k < 8; ++k) r[k] = in[k];
+    transpose8x8(r);
+    for (int i = 0; i < 8; ++i) store<v8d>(base + 8 * static_cast<std::size_t>(idx[i]), r[i]);
+    return;
+  }
+  for (int i = 0; i < kWidth<V>; ++i)
+    for (int k = 0; k < n; ++k) base[8 * static_cast<std::size_t>(idx[i]) + k] = get(in[k], i);
+}
+
+// The lanes' velocities v and w in r[0..2] and r[3..5]: from the contact solver's rows (stride
+// 8, w 3 past v; r[6], r[7] hold the rows' spare numbers) or the system's arrays (stride 3)
+template <class V>
+PBA_LANES void load_velocities(const FreeMotionArrays& f, const std::uint32_t* idx, V r[8]) {
+  if (f.stride == 8) return load_rows(f.v, idx, r);
+  load_strided(f.v, f.stride, idx, r);
+  load_strided(f.w, f.stride, idx, r + 3);
+  r[6] = r[7] = splat<V>(0);
+}
+
+template <class V>
+PBA_LANES void store_velocities(const FreeMotionArrays& f, const std::uint32_t* idx, const V r[8]) {
+  if (f.stride == 8) return store_rows(f.v, idx, r, 6);
+  store_strided(f.v, f.stride, idx, r);
+  store_strided(f.w, f.stride, idx, r + 3);
+}
+
+// The lanes' velocities; false (and the first bad body in *bad) when one is not finite. Round
+// bodies (Round: all three principal moments equal) take the torque's change of w as h torque
+// / I, without turning it into the principal frame and back.
+template <class V, bool Round>
 PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, double h, const Vec3& g,
                           std::uint32_t* bad) {
-  V v[3], w[3], force[3], torque[3], q[4], inv[3];
-  load_strided(f.v, f.stride, idx, v);
-  load_strided(f.w, f.stride, idx, w);
+  V r[8], force[3], torque[3], inv[3];
+  load_velocities(f, idx, r);
   load3(f.force, idx, force);
   load3(f.torque, idx, torque);
-  load_quat(f.q, idx, q);
   load3(f.inv_inertia, idx, inv);
   const V m = load1<V>(f.inv_mass, idx), gs = load1<V>(f.gravity_scale, idx);
-  const V dl = 1.0 + h * load1<V>(f.lin_damp, idx), da = 1.0 + h * load1<V>(f.ang_damp, idx);
+  const V cl = load1<V>(f.lin_damp, idx), ca = load1<V>(f.ang_damp, idx);
   // gravity, applied force and torque (in the principal frame), then implicit damping
-  V tb[3], dw[3];
-  rotate(q, -1, torque, tb);
-  for (int k = 0; k < 3; ++k) tb[k] = h * inv[k] * tb[k];
-  rotate(q, 1, tb, dw);
+  V dw[3];
+  if constexpr (Round) {
+    for (int k = 0; k < 3; ++k) dw[k] = h * inv[0] * torque[k];
+  } else {
+    V q[4], tb[3];
+    load_quat(f.q, idx, q);
+    rotate(q, -1, torque, tb);
+    for (int k = 0; k < 3; ++k) tb[k] = h * inv[k] * tb[k];
+    rotate(q, 1, tb, dw);
+  }
   const double gk[3] = {g.x, g.y, g.z};
-  for (int k = 0; k < 3; ++k) {
-    v[k] = (v[k] + h * (gs * gk[k] + m * force[k])) / dl;
-    w[k] = (w[k] + dw[k]) / da;
+  for (int k = 0; k < 3; ++k) r[k] = r[k] + h * (gs * gk[k] + m * force[k]), r[3 + k] = r[3 + k] + dw[k];
+  // (x / (1 + h c) is x when c = 0: the divisions, the costliest operations here, only when
+  // some body is damped)
+  if (f.damped) {
+    for (int k = 0; k < 3; ++k) r[k] = r[k] / (1.0 + h * cl), r[3 + k] = r[3 + k] / (1.0 + h * ca);
   }
   // the contacts' carried impulses (the warm start), taken once
   if (f.warm) {
-    V av[3], aw[3];
-    load_strided(f.warm[0].v, 8, idx, av);
-    load_strided(f.warm[0].w, 8, idx, aw);
-    for (int k = 0; k < 3; ++k) v[k] = v[k] + av[k], w[k] = w[k] + aw[k];
-    for (int i = 0; i < kWidth<V>; ++i) f.warm[idx[i]] = {};
+    double* warm = f.warm[0].v;
+    V add[8], zero[8];
+    load_rows(warm, idx, add);
+    for (int k = 0; k < 6; ++k) r[k] = r[k] + add[k];
+    for (int k = 0; k < 8; ++k) zero[k] = splat<V>(0);
+    store_rows(warm, idx, zero, 8);
   }
-  store_strided(f.v, f.stride, idx, v);
-  store_strided(f.w, f.stride, idx, w);
+  store_velocities(f, idx, r);
   // a force too large for a double stops here, before contacts can spread it to others
-  const V all[6] = {v[0], v[1], v[2], w[0], w[1], w[2]};
-  if (all_finite(all, 6)) return true;
+  if (all_finite(r, 6)) return true;
   for (int i = 0; i < kWidth<V>; ++i)
-    for (int k = 0; k < 3; ++k)
-      if (!std::isfinite(get(v[k], i)) || !std::isfinite(get(w[k], i))) return *bad = idx[i], false;
+    for (int k = 0; k < 6; ++k)
+      if (!std::isfinite(get(r[k], i))) return *bad = idx[i], false;
   return true;
 }
 
@@ -330,93 +403,189 @@ PBA_LANES void subflow(double half_time, const V inv[3], V q[4], V pi[3]) {
   pi[b] = -sn * pa + c * pb;
 }
 
-// the lanes' positions and rotations, and their motion since the start of the step
+// q kept unit (glm::normalize's arithmetic)
 template <class V>
+PBA_LANES void normalize(V q[4]) {
+  const V len = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  const V one_over = 1.0 / sqrt_lanes(len);
+  for (int k = 0; k < 4; ++k) q[k] = q[k] * one_over;
+}
+
+// the lanes' motion since the start of the step, for the contacts' separations: dp, and the
+// turn q q0^-1 (glm's product with the conjugate), a row of 8 a body (the last zero)
+template <class V>
+PBA_LANES void store_motion(const std::uint32_t* idx, const FreeMotionArrays& f, const V x[3], const V q[4]) {
+  if (!f.motion) return;
+  V x0[3], q0[4];
+  load3(f.com0, idx, x0);
+  load_quat(f.q0, idx, q0);
+  const V bw = q0[0], bx = -q0[1], by = -q0[2], bz = -q0[3];
+  const V m[8] = {x[0] - x0[0],
+                  x[1] - x0[1],
+                  x[2] - x0[2],
+                  q[0] * bw - q[1] * bx - q[2] * by - q[3] * bz,
+                  q[0] * bx + q[1] * bw + q[2] * bz - q[3] * by,
+                  q[0] * by + q[2] * bw + q[3] * bx - q[1] * bz,
+                  q[0] * bz + q[3] * bw + q[1] * by - q[2] * bx,
+                  splat<V>(0)};
+  store_rows(f.motion, idx, m, 7);
+}
+
+// the product a b of quaternions (w, x, y, z)
+template <class V>
+PBA_LANES void multiply(const V a[4], const V b[4], V out[4]) {
+  out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+  out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+  out[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+  out[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+}
+
+// The turn t = (cos(|a|), sin(|a|) a / |a|) by the angle 2 |a|: cos and sin(|a|) / |a| are
+// series in y = |a|^2 (the sub-flows' tails, no square root) within kSmall, else the library
+template <class V>
+PBA_LANES void turn_of(const V a[3], V t[4]) {
+  const V y = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+  V c = 1.0 + cos_tail(y), sinc = 1.0 + sin_tail(y);
+  if (!all_within(y, kSmall * kSmall)) {
+    for (int i = 0; i < kWidth<V>; ++i) {
+      const double half = std::sqrt(get(y, i));
+      if (!(half <= kSmall)) set(c, i, std::cos(half)), set(sinc, i, std::sin(half) / half);
+    }
+  }
+  t[0] = c, t[1] = sinc * a[0], t[2] = sinc * a[1], t[3] = sinc * a[2];
+}
+
+// The lanes' positions and rotations, and their motion since the start of the step. Bodies of
+// three different principal moments (Triaxial) take the five sub-flows. Axisymmetric ones (two
+// equal moments I1 about axes a and b, I3 about axis K) take their exact free rotation: the
+// kinetic energy |pi|^2 / (2 I1) + pi_K^2 (1/I3 - 1/I1) / 2 is a sum of two terms whose flows
+// commute (each keeps |pi| and pi_K), both exact turns: the body about its momentum by h |pi| /
+// I1 (pi stays as it is), and the splitting's sub-flow about axis K by h pi_K (1/I3 - 1/I1)
+// (pi turns by minus that); two turns instead of five.
+template <FreeRotation R, class V>
 PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
-  V v[3], w[3], x[3], q[4], inertia[3], inv[3];
-  load_strided(f.v, f.stride, idx, v);
-  load_strided(f.w, f.stride, idx, w);
+  V r[8], x[3], q[4], inertia[3], inv[3];
+  load_velocities(f, idx, r);
   load3(f.com, idx, x);
   load_quat(f.q, idx, q);
   load3(f.inertia, idx, inertia);
   load3(f.inv_inertia, idx, inv);
   // symplectic Euler for the centre
-  for (int k = 0; k < 3; ++k) x[k] = x[k] + h * v[k];
-  // body-frame angular momentum pi = I w_body, then the five exact sub-flows
+  for (int k = 0; k < 3; ++k) x[k] = x[k] + h * r[k];
+  // body-frame angular momentum pi = I w_body, then the exact turns
   V pi[3];
-  rotate(q, -1, w, pi);
+  rotate(q, -1, r + 3, pi);
   for (int k = 0; k < 3; ++k) pi[k] = inertia[k] * pi[k];
-  subflow<0>(0.5 * 0.5 * h, inv, q, pi);
-  subflow<1>(0.5 * 0.5 * h, inv, q, pi);
-  subflow<2>(0.5 * 1.0 * h, inv, q, pi);
-  subflow<1>(0.5 * 0.5 * h, inv, q, pi);
-  subflow<0>(0.5 * 0.5 * h, inv, q, pi);
-  // kept unit (glm::normalize's arithmetic), and the world angular velocity back
-  const V len = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-  const V one_over = 1.0 / sqrt_lanes(len);
-  for (int k = 0; k < 4; ++k) q[k] = q[k] * one_over;
+  if constexpr (R == FreeRotation::Triaxial) {
+    subflow<0>(0.5 * 0.5 * h, inv, q, pi);
+    subflow<1>(0.5 * 0.5 * h, inv, q, pi);
+    subflow<2>(0.5 * 1.0 * h, inv, q, pi);
+    subflow<1>(0.5 * 0.5 * h, inv, q, pi);
+    subflow<0>(0.5 * 0.5 * h, inv, q, pi);
+  } else {
+    constexpr int K = static_cast<int>(R) - static_cast<int>(FreeRotation::AxialX), a = (K + 1) % 3;
+    // q t: the turn about pi, in the body frame
+    const V scale = (0.5 * h) * inv[a];
+    const V half[3] = {scale * pi[0], scale * pi[1], scale * pi[2]};
+    V t[4];
+    turn_of(half, t);
+    const V was[4] = {q[0], q[1], q[2], q[3]};
+    multiply(was, t, q);
+    // the turn about K at the rate pi_K (1/I3 - 1/I1)
+    const V rate = inv[K] - inv[a];
+    const V rates[3] = {rate, rate, rate};
+    subflow<K>(0.5 * h, rates, q, pi);
+  }
+  // kept unit, and the world angular velocity back
+  normalize(q);
   for (int k = 0; k < 3; ++k) pi[k] = pi[k] * inv[k];
-  rotate(q, 1, pi, w);
-  store_strided(f.w, f.stride, idx, w);
+  rotate(q, 1, pi, r + 3);
+  store_velocities(f, idx, r);
   store3(f.com, idx, x);
   store_quat(f.q, idx, q);
-  // the motion since the start of the step, for the contacts' separations: dp, and the turn
-  // q q0^-1 (glm's product with the conjugate)
-  if (f.motion) {
-    V x0[3], q0[4];
-    load3(f.com0, idx, x0);
-    load_quat(f.q0, idx, q0);
-    const V bw = q0[0], bx = -q0[1], by = -q0[2], bz = -q0[3];
-    const V tw = q[0] * bw - q[1] * bx - q[2] * by - q[3] * bz;
-    const V tx = q[0] * bx + q[1] * bw + q[2] * bz - q[3] * by;
-    const V ty = q[0] * by + q[2] * bw + q[3] * bx - q[1] * bz;
-    const V tz = q[0] * bz + q[3] * bw + q[1] * by - q[2] * bx;
-    for (int i = 0; i < kWidth<V>; ++i) {
-      double* m = f.motion + 8 * static_cast<std::size_t>(idx[i]);
-      m[0] = get(x[0], i) - get(x0[0], i), m[1] = get(x[1], i) - get(x0[1], i), m[2] = get(x[2], i) - get(x0[2], i);
-      m[3] = get(tw, i), m[4] = get(tx, i), m[5] = get(ty, i), m[6] = get(tz, i);
-    }
-  }
+  store_motion(idx, f, x, q);
 }
 
+// The same for round bodies (all three principal moments equal, I): the momentum is I w, so
+// there is no gyroscopic term, the world angular velocity w stays as it is, and the free
+// rotation over h is exactly the turn by the angle h |w| about w: q <- (cos(|a|), sin(|a|) a /
+// |a|) q with a = h w / 2 (turn_of).
 template <class V>
+PBA_LANES void positions_round(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
+  V r[8], x[3], q[4];
+  load_velocities(f, idx, r);
+  load3(f.com, idx, x);
+  load_quat(f.q, idx, q);
+  for (int k = 0; k < 3; ++k) x[k] = x[k] + h * r[k];
+  const double hh = 0.5 * h;
+  const V a[3] = {hh * r[3], hh * r[4], hh * r[5]};
+  V t[4];
+  turn_of(a, t);
+  const V was[4] = {q[0], q[1], q[2], q[3]};
+  multiply(t, was, q);
+  normalize(q);
+  store3(f.com, idx, x);
+  store_quat(f.q, idx, q);
+  store_motion(idx, f, x, q);
+}
+
+template <class V, bool Round>
 PBA_LANES bool velocities_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double h,
                               const Vec3& g, std::uint32_t* bad) {
   std::size_t i = 0;
   for (; i + kWidth<V> <= count; i += kWidth<V>)
-    if (!velocities<V>(idx + i, f, h, g, bad)) return false;
+    if (!velocities<V, Round>(idx + i, f, h, g, bad)) return false;
   for (; i < count; ++i)
-    if (!velocities<double>(idx + i, f, h, g, bad)) return false;
+    if (!velocities<double, Round>(idx + i, f, h, g, bad)) return false;
   return true;
 }
 
-template <class V, class W = V>
+template <FreeRotation R, class V>
+PBA_LANES void positions_of(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
+  if constexpr (R == FreeRotation::Round) positions_round<V>(idx, f, h);
+  else positions<R, V>(idx, f, h);
+}
+
+template <FreeRotation R, class V, class W = V>
 PBA_LANES void positions_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double h) {
   std::size_t i = 0;
-  for (; i + kWidth<W> <= count; i += kWidth<W>) positions<W>(idx + i, f, h);
-  for (; i + kWidth<V> <= count; i += kWidth<V>) positions<V>(idx + i, f, h);
-  for (; i < count; ++i) positions<double>(idx + i, f, h);
+  for (; i + kWidth<W> <= count; i += kWidth<W>) positions_of<R, W>(idx + i, f, h);
+  for (; i + kWidth<V> <= count; i += kWidth<V>) positions_of<R, V>(idx + i, f, h);
+  for (; i < count; ++i) positions_of<R, double>(idx + i, f, h);
+}
+
+// the kinds' kernels on a path: two blocks at once where W is wider (the splitting's long chain)
+template <class V, class W>
+PBA_LANES void positions_kind(FreeRotation kind, const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f,
+                              double h) {
+  switch (kind) {
+    case FreeRotation::Triaxial: return positions_all<FreeRotation::Triaxial, V, W>(idx, count, f, h);
+    case FreeRotation::Round: return positions_all<FreeRotation::Round, V>(idx, count, f, h);
+    case FreeRotation::AxialX: return positions_all<FreeRotation::AxialX, V>(idx, count, f, h);
+    case FreeRotation::AxialY: return positions_all<FreeRotation::AxialY, V>(idx, count, f, h);
+    case FreeRotation::AxialZ: return positions_all<FreeRotation::AxialZ, V>(idx, count, f, h);
+  }
 }
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #define PBA_RIGID_HAVE_X86 1
-__attribute__((target("avx512f"))) bool velocities_avx512(const std::uint32_t* idx, std::size_t count,
+__attribute__((target("avx512f"))) bool velocities_avx512(bool round, const std::uint32_t* idx, std::size_t count,
                                                          const FreeMotionArrays& f, double h, const Vec3& g,
                                                          std::uint32_t* bad) {
-  return velocities_all<v8d>(idx, count, f, h, g, bad);
+  return round ? velocities_all<v8d, true>(idx, count, f, h, g, bad) : velocities_all<v8d, false>(idx, count, f, h, g, bad);
 }
-__attribute__((target("avx2"))) bool velocities_avx2(const std::uint32_t* idx, std::size_t count,
+__attribute__((target("avx2"))) bool velocities_avx2(bool round, const std::uint32_t* idx, std::size_t count,
                                                     const FreeMotionArrays& f, double h, const Vec3& g,
                                                     std::uint32_t* bad) {
-  return velocities_all<v4d>(idx, count, f, h, g, bad);
+  return round ? velocities_all<v4d, true>(idx, count, f, h, g, bad) : velocities_all<v4d, false>(idx, count, f, h, g, bad);
 }
-__attribute__((target("avx512f"))) void positions_avx512(const std::uint32_t* idx, std::size_t count,
-                                                        const FreeMotionArrays& f, double h) {
-  positions_all<v8d, v16d>(idx, count, f, h);
+__attribute__((target("avx512f"))) void positions_avx512(FreeRotation kind, const std::uint32_t* idx,
+                                                        std::size_t count, const FreeMotionArrays& f, double h) {
+  positions_kind<v8d, v16d>(kind, idx, count, f, h);
 }
-__attribute__((target("avx2"))) void positions_avx2(const std::uint32_t* idx, std::size_t count,
+__attribute__((target("avx2"))) void positions_avx2(FreeRotation kind, const std::uint32_t* idx, std::size_t count,
                                                    const FreeMotionArrays& f, double h) {
-  positions_all<v4d>(idx, count, f, h);
+  positions_kind<v4d, v4d>(kind, idx, count, f, h);
 }
 #else
 #define PBA_RIGID_HAVE_X86 0
@@ -424,24 +593,25 @@ __attribute__((target("avx2"))) void positions_avx2(const std::uint32_t* idx, st
 
 }  // namespace
 
-bool integrate_velocities_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
+bool integrate_velocities_wide(SimdPath path, bool round, const std::uint32_t* bodies, std::size_t count,
                                const FreeMotionArrays& f, double h, const Vec3& gravity, std::uint32_t* bad) {
 #if PBA_RIGID_HAVE_X86
-  if (path == SimdPath::Avx512) return velocities_avx512(bodies, count, f, h, gravity, bad);
-  if (path == SimdPath::Avx2) return velocities_avx2(bodies, count, f, h, gravity, bad);
+  if (path == SimdPath::Avx512) return velocities_avx512(round, bodies, count, f, h, gravity, bad);
+  if (path == SimdPath::Avx2) return velocities_avx2(round, bodies, count, f, h, gravity, bad);
 #endif
   (void)path;
-  return velocities_all<double>(bodies, count, f, h, gravity, bad);
+  return round ? velocities_all<double, true>(bodies, count, f, h, gravity, bad)
+               : velocities_all<double, false>(bodies, count, f, h, gravity, bad);
 }
 
-void integrate_positions_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
+void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, double h) {
 #if PBA_RIGID_HAVE_X86
-  if (path == SimdPath::Avx512) return positions_avx512(bodies, count, f, h);
-  if (path == SimdPath::Avx2) return positions_avx2(bodies, count, f, h);
+  if (path == SimdPath::Avx512) return positions_avx512(kind, bodies, count, f, h);
+  if (path == SimdPath::Avx2) return positions_avx2(kind, bodies, count, f, h);
 #endif
   (void)path;
-  positions_all<double>(bodies, count, f, h);
+  positions_kind<double, double>(kind, bodies, count, f, h);
 }
 
 }  // namespace pba::detail

@@ -223,7 +223,7 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
     v->reserve(n);
   for (auto* v : {&island_, &parent_}) v->reserve(n);
   asleep_.reserve(n);
-  contacts_->moving.reserve(n);
+  for (auto& list : contacts_->moving) list.reserve(n);
   name_.reserve(n);
   bullet_.reserve(n);
   shapes_.reserve(n);
@@ -523,19 +523,22 @@ detail::FreeMotionArrays RigidBodySystem::free_motion(detail::SolverBody* rows, 
   f.inertia = inertia_.data(), f.inv_inertia = inv_inertia_.data();
   f.force = force_.data(), f.torque = torque_.data();
   f.inv_mass = inv_mass_.data(), f.gravity_scale = gravity_scale_.data();
-  f.lin_damp = lin_damp_.data(), f.ang_damp = ang_damp_.data();
+  f.lin_damp = lin_damp_.data(), f.ang_damp = ang_damp_.data(), f.damped = contacts_->moving_damped;
   return f;
 }
 
 void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity, detail::SolverBody* rows,
                                            detail::SolverBody* warm) {
   const Stopwatch clock;
-  const std::vector<std::uint32_t>& moving = contacts_->moving;
+  const detail::RigidContacts& c = *contacts_;
+  const detail::FreeMotionArrays f = free_motion(rows, warm, nullptr);
   std::uint32_t bad = 0;
-  if (!detail::integrate_velocities_wide(contacts_->simd, moving.data(), moving.size(),
-                                         free_motion(rows, warm, nullptr), h, gravity, &bad)) {
+  for (std::size_t k = 0; k < c.moving.size(); ++k) {
+    const bool round = static_cast<detail::FreeRotation>(k) == detail::FreeRotation::Round;
+    if (detail::integrate_velocities_wide(c.simd, round, c.moving[k].data(), c.moving[k].size(), f, h, gravity, &bad))
+      continue;
     if (rows) v_[bad] = get3(rows[bad].v), w_[bad] = get3(rows[bad].w);
-    fail(bad);
+    fail(bad);  // throws
   }
   profile_.integrate += clock.seconds();
 }
@@ -543,8 +546,11 @@ void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity, detail
 void RigidBodySystem::integrate_positions(double h, detail::SolverBody* rows, double* motion) {
   const Stopwatch clock;
   // dynamic bodies: symplectic Euler for the centre, the exact-flow splitting for the rotation
-  const std::vector<std::uint32_t>& moving = contacts_->moving;
-  detail::integrate_positions_wide(contacts_->simd, moving.data(), moving.size(), free_motion(rows, nullptr, motion), h);
+  // (bodies with equal principal moments: exact turns)
+  const detail::RigidContacts& c = *contacts_;
+  const detail::FreeMotionArrays f = free_motion(rows, nullptr, motion);
+  for (std::size_t k = 0; k < c.moving.size(); ++k)
+    detail::integrate_positions_wide(c.simd, static_cast<detail::FreeRotation>(k), c.moving[k].data(), c.moving[k].size(), f, h);
   // kinematic bodies: constant velocities, exact translation and rotation
   const std::size_t n = type_.size();
   for (std::size_t i = 0; i < n; ++i) {
@@ -578,9 +584,14 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   for (std::size_t i = 0; i < n; ++i) com0_[i] = com_[i], q0_[i] = q_[i];
   // pairs and manifolds, then the bodies that move freely this step
   contacts_->update(*this, dt);
-  contacts_->moving.clear();
-  for (std::size_t i = 0; i < n; ++i)
-    if (type_[i] == BodyType::Dynamic && !asleep_[i]) contacts_->moving.push_back(static_cast<std::uint32_t>(i));
+  for (auto& list : contacts_->moving) list.clear();
+  bool damped = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    contacts_->moving[static_cast<std::size_t>(detail::free_rotation(inertia_[i]))].push_back(static_cast<std::uint32_t>(i));
+    damped = damped || lin_damp_[i] != 0 || ang_damp_[i] != 0;
+  }
+  contacts_->moving_damped = damped;
   profile_.collide = total.seconds();
   profile_.integrate = 0;  // integrate_velocities and integrate_positions add to it
   // the carried impulses at this solver's time step, then the solver's arrays

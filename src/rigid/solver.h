@@ -14,6 +14,7 @@
 // results do not depend on the machine.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -138,6 +139,7 @@ struct FreeMotionArrays {
   const double* gravity_scale = nullptr;
   const double* lin_damp = nullptr;
   const double* ang_damp = nullptr;
+  bool damped = true;             // false: no body has damping (the divisions by 1 + h c are left out)
   double* motion = nullptr;       // optional: dp and turn since the start of the step, 8 a body
 };
 
@@ -167,12 +169,27 @@ void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, 
 /// pushed (scalar; the lanes with restitution, in order).
 void restitution_lane(ContactBlock& block, int lane, double restitution, double threshold, const BodyArrays& bodies);
 /// Gravity, forces, torques, damping and the warm start for `count` awake dynamic bodies
-/// (integrate_wide.cpp). False, with the body in *bad, when a velocity became non-finite.
-bool integrate_velocities_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
+/// (integrate_wide.cpp); `round`: every one of them has three equal principal moments. False,
+/// with the body in *bad, when a velocity became non-finite.
+bool integrate_velocities_wide(SimdPath path, bool round, const std::uint32_t* bodies, std::size_t count,
                                const FreeMotionArrays& f, double h, const Vec3& gravity, std::uint32_t* bad);
-/// Positions and rotations (the Dullweber-Leimkuhler-McLachlan splitting) over h of `count`
-/// awake dynamic bodies, and their motion since the start of the step.
-void integrate_positions_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
+/// How a body's free rotation is integrated, by its principal moments (integrate_wide.cpp).
+enum class FreeRotation : std::uint8_t {
+  Triaxial,                 ///< all different: the Dullweber-Leimkuhler-McLachlan splitting
+  Round,                    ///< all three equal: the exact turn about the constant angular velocity
+  AxialX, AxialY, AxialZ,   ///< the other two equal: the exact turns about the momentum and the axis
+};
+/// The number of kinds of FreeRotation.
+inline constexpr std::size_t kFreeRotations = 5;
+/// The kind of a body of principal moments m (kg m^2).
+inline FreeRotation free_rotation(const Vec3& m) {
+  if (m.x == m.y) return m.y == m.z ? FreeRotation::Round : FreeRotation::AxialZ;
+  if (m.y == m.z) return FreeRotation::AxialX;
+  return m.x == m.z ? FreeRotation::AxialY : FreeRotation::Triaxial;
+}
+/// Positions and rotations over h of `count` awake dynamic bodies, all of the rotation `kind`,
+/// and their motion since the start of the step.
+void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, double h);
 /// The normal relative velocity (m/s) of each of one lane's points at the velocities now (prepare's approach).
 void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]);

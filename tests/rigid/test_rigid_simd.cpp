@@ -26,9 +26,10 @@ namespace {
 const Vec3 kGravity{0, -9.81, 0};
 
 // A scene that exercises every part of the solver: a pyramid (coloured blocks, full and
-// partial), bouncing balls (restitution), a ball with rolling resistance (coloured; TGS puts it, and everything, in the overflow), a
-// kinematic paddle through the pyramid's side, a spinning box in the air (the rotation's
-// library sines beyond pi/8 a half step), forces and impulses, and a sleeping group woken
+// partial), bouncing balls (restitution), a ball with rolling resistance (coloured; TGS puts
+// it, and everything, in the overflow), a kinematic paddle through the pyramid's side, a
+// spinning box, a spinning cube and nine spinning capsules (the splitting, the round and the axisymmetric bodies' exact turns, each also with
+// the library's sines beyond pi/8 a half step), forces and impulses, and a sleeping group woken
 // later.
 std::vector<pba::RigidBodyId> mixed_scene(RigidBodySystem& s) {
   auto out = pba::rigid_scenes::square_pyramid(s, 5);
@@ -41,6 +42,10 @@ std::vector<pba::RigidBodyId> mixed_scene(RigidBodySystem& s) {
             .angular_velocity = {0, 0.5, 0}, .shapes = {{.shape = ColliderShape::box({0.2, 0.4, 1})}}});
   out.push_back(s.create({.pose = {{0, 9, 4}}, .angular_velocity = {0, 300, 40},
                           .shapes = {{.shape = ColliderShape::box({0.3, 0.2, 0.5})}}}));
+  s.create({.pose = {{4, 12, 4}}, .angular_velocity = {-500, 200, 300}, .shapes = {{.shape = ColliderShape::box(Vec3(0.2))}}});
+  for (int i = 0; i < 9; ++i)
+    s.create({.pose = {{-8, 1.0 + 0.5 * i, 2.0 * i}}, .angular_velocity = {40.0 * i * i, 3, -20},
+              .shapes = {{.shape = ColliderShape::capsule(0.3, 0.2)}}});
   out.push_back(s.create({.pose = {{6, 0.25, 4}}, .shapes = {{.shape = ColliderShape::box(Vec3(0.25))}}}));
   return out;
 }
