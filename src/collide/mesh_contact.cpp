@@ -409,7 +409,7 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
 }  // namespace
 
 int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
-                 std::span<Manifold> out, const NarrowPhaseSettings& settings) {
+                 std::span<Manifold> out, const NarrowPhaseSettings& settings, MeshQueryCache* cache) {
   check_pose(pose_a, "collide_mesh: pose_a");
   check_pose(pose_mesh, "collide_mesh: pose_mesh");
   check_shape(a, "collide_mesh: shape_a");
@@ -441,7 +441,7 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   if (poly) poly_of(a, P);
   if (poly && P.vertex_count <= 64) at.set(P, local);
   int written = 0;
-  M.query(box, [&](std::uint32_t t) {
+  auto visit = [&](std::uint32_t t) {
     if (written >= int(out.size())) return;
     const auto& idx = M.triangles()[t];
     const Vec3 tri[3] = {M.vertices()[idx[0]], M.vertices()[idx[1]], M.vertices()[idx[2]]};
@@ -470,7 +470,36 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
       m.points[std::size_t(i)].point_b = apply(pose_mesh, m.points[std::size_t(i)].point_b);
     }
     ++written;
-  });
+  };
+  if (cache) {
+    // a box a quarter of the shape's smallest half size larger all round than its query box:
+    // its triangles (the tree walked once) serve while the query box stays inside it; its
+    // triangles that overlap the query box are those the tree gives, in the same order.
+    // More than the cache holds: marked (count kCapacity + 1), the tree serves instead
+    constexpr std::uint32_t kTooMany = MeshQueryCache::kCapacity + 1;
+    if (cache->mesh != &M || !cache->box.contains(box)) {
+      const Vec3 half = 0.5 * (box.hi - box.lo);
+      cache->mesh = &M;
+      cache->box = box.grown(0.25 * std::min(half.x, std::min(half.y, half.z)));
+      cache->count = 0;
+      M.query(cache->box, [&](std::uint32_t t) {
+        if (cache->count < std::uint32_t(MeshQueryCache::kCapacity)) cache->triangles[cache->count++] = t;
+        else cache->count = kTooMany;
+      });
+    }
+    if (cache->count != kTooMany) {
+      // each by its bounds, from the corners the contact reads anyway (min and max are exact:
+      // the tree's bounds)
+      const std::span<const Vec3> v = M.vertices();
+      for (std::uint32_t k = 0; k < cache->count; ++k) {
+        const auto& idx = M.triangles()[cache->triangles[k]];
+        const Vec3 &p = v[idx[0]], &q = v[idx[1]], &r = v[idx[2]];
+        if (Aabb{glm::min(p, glm::min(q, r)), glm::max(p, glm::max(q, r))}.overlaps(box)) visit(cache->triangles[k]);
+      }
+      return written;
+    }
+  }
+  M.query(box, visit);
   return written;
 }
 
