@@ -122,7 +122,9 @@ void collide_batch(std::span<const PairQuery> pairs, std::span<Manifold> out,
 /// The triangles of a mesh near a convex shape, kept by the caller between collide_mesh()
 /// calls for one shape and mesh (a contact pair's): the mesh query of a box a little larger
 /// than the shape's, so while the shape's query box stays inside it the next calls test
-/// these triangles' bounds instead of walking the mesh's tree.
+/// these triangles' bounds instead of walking the mesh's tree. Any shape may use it (the
+/// box decides); reset it (`MeshQueryCache{}`) when its mesh is destroyed, as another mesh
+/// built at the same address would be taken for it.
 struct MeshQueryCache {
   static constexpr int kCapacity = 16;  ///< at most this many triangles are kept
   const TriangleMesh* mesh = nullptr;   ///< the mesh `triangles` index (null: nothing kept)
