@@ -231,9 +231,10 @@ bool GjkStepper::step() {
       return false;
     }
   }
-  // add it and reduce
-  const std::array<SimplexVertex, 4> saved = simplex_;
+  // add it and reduce (the simplex kept first: its count_ vertices are all it is)
+  std::array<SimplexVertex, 4> saved;
   const int saved_n = count_;
+  for (int i = 0; i < saved_n; ++i) saved[std::size_t(i)] = simplex_[std::size_t(i)];
   simplex_[std::size_t(count_++)] = s;
   Vec3 v(0.0);
   bool inside = false;
@@ -249,7 +250,7 @@ bool GjkStepper::step() {
   }
   // rounding can stall the descent: keep the better simplex and stop
   if (glm::dot(v, v) >= vv) {
-    simplex_ = saved;
+    for (int i = 0; i < saved_n; ++i) simplex_[std::size_t(i)] = saved[std::size_t(i)];
     count_ = saved_n;
     done_ = true;
     return false;

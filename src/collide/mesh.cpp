@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "pba/collide/shape.h"
@@ -134,6 +135,47 @@ struct MeshBuilder {
     }
   }
 
+  // the tree query() walks (TriangleMesh::QueryNode): nodes_'s inner nodes, root first, each
+  // with its children's bounds rounded outwards to float, and each triangle's exact bounds in
+  // the order of order_
+  static void build_query_tree(TriangleMesh& m) {
+    auto down = [](double x) {
+      float f = static_cast<float>(x);
+      return static_cast<double>(f) > x ? std::nextafter(f, -INFINITY) : f;
+    };
+    auto up = [](double x) {
+      float f = static_cast<float>(x);
+      return static_cast<double>(f) < x ? std::nextafter(f, INFINITY) : f;
+    };
+    m.query_nodes_.clear();
+    m.order_boxes_.resize(m.order_.size());
+    for (std::size_t i = 0; i < m.order_.size(); ++i) {
+      const auto& tr = m.triangles_[m.order_[i]];
+      m.order_boxes_[i] = triangle_box(m.vertices_[tr[0]], m.vertices_[tr[1]], m.vertices_[tr[2]]);
+    }
+    if (m.nodes_.empty() || m.nodes_[0].count > 0) return;
+    // (node of nodes_, its QueryNode) to fill; an inner child gets the next QueryNode
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{0, 0}};
+    m.query_nodes_.emplace_back();
+    while (!todo.empty()) {
+      const auto [node, q] = todo.back();
+      todo.pop_back();
+      for (std::uint32_t c = 0; c < 2; ++c) {
+        const TriangleMesh::Node& child = m.nodes_[m.nodes_[node].first + c];
+        TriangleMesh::QueryNode& qn = m.query_nodes_[q];
+        for (int k = 0; k < 3; ++k) qn.lo[c][k] = down(child.box.lo[k]), qn.hi[c][k] = up(child.box.hi[k]);
+        qn.count[c] = child.count;
+        if (child.count > 0) {
+          qn.first[c] = child.first;
+        } else {
+          qn.first[c] = static_cast<std::uint32_t>(m.query_nodes_.size());
+          todo.push_back({m.nodes_[node].first + c, qn.first[c]});
+          m.query_nodes_.emplace_back();  // (qn is not used past this point)
+        }
+      }
+    }
+  }
+
   // edge flags: set for boundary, non-manifold, inconsistently wound and convex edges
   static void build_edge_flags(TriangleMesh& m) {
     const std::size_t nt = m.triangles_.size();
@@ -207,6 +249,7 @@ std::shared_ptr<const TriangleMesh> TriangleMesh::build(std::span<const Vec3> ve
   }
   MeshBuilder::build_edge_flags(*m);
   MeshBuilder::build_bvh(*m);
+  MeshBuilder::build_query_tree(*m);
   return m;
 }
 

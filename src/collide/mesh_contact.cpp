@@ -77,15 +77,24 @@ enum class Axis { Triangle, Face, Edges, Other };
 // point_b on the triangle, point_a - point_b = depth n) and the triangle's feature the
 // contact is on (as feature_edges: 0 the face, an edge's bit, a vertex's two); 2 when they
 // are apart otherwise: GJK then finds the distance, which a gap along an axis only bounds.
-// `kind` tells where the normal of a 1 comes from.
-int sat_triangle(const Poly& P, const Pose& pa, const Vec3 tri[3], const Vec3& face_normal, double margin, Vec3& n,
-                 Vec3& point_a, Vec3& point_b, std::uint8_t& on, Axis& kind) {
-  std::array<Vec3, 64> v;
+// `kind` tells where the normal of a 1 comes from. The shape's vertices at pa and a box's
+// half axes come from the caller (PolyAt: once for all the triangles).
+struct PolyAt {
+  std::array<Vec3, 64> v;  // P's vertices at pa (world, m)
+  Vec3 half_axes[3];       // a box's: its centre -+ their sum spans it along any axis (m)
+
+  void set(const Poly& P, const Pose& pa) {
+    for (std::uint32_t i = 0; i < P.vertex_count; ++i) v[i] = apply(pa, P.vertices[i]);
+    const Mat3 r = glm::mat3_cast(pa.rotation);
+    half_axes[0] = r[0] * P.half.x, half_axes[1] = r[1] * P.half.y, half_axes[2] = r[2] * P.half.z;
+  }
+};
+
+int sat_triangle(const Poly& P, const PolyAt& at, const Pose& pa, const Vec3 tri[3], const Vec3& face_normal,
+                 double margin, Vec3& n, Vec3& point_a, Vec3& point_b, std::uint8_t& on, Axis& kind) {
+  const std::array<Vec3, 64>& v = at.v;
   const std::uint32_t nv = P.vertex_count;
-  for (std::uint32_t i = 0; i < nv; ++i) v[i] = apply(pa, P.vertices[i]);
-  // a box projects to its centre -+ the sum of its half axes' projections
-  const Mat3 r = glm::mat3_cast(pa.rotation);
-  const Vec3 half_axes[3] = {r[0] * P.half.x, r[1] * P.half.y, r[2] * P.half.z};
+  const Vec3* half_axes = at.half_axes;
   // the gap along the unit axis d, and whether the shape lies on its positive side
   auto gap = [&](const Vec3& d, bool& above) {
     double lo = INFINITY, hi = -INFINITY;
@@ -219,9 +228,12 @@ bool over_triangle(const Vec3 tri[3], const Vec3& x) {
   return true;
 }
 
-// one triangle against the convex shape (both in the mesh's frame); true when in contact
-bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy& A, const Vec3 tri[3],
-                      const Vec3& face_normal, std::uint8_t flags, double margin, std::uint32_t t, Manifold& m) {
+// one triangle against the convex shape (both in the mesh's frame); true when in contact.
+// P: a box's or hull's polyhedron (poly: a is one), at: its vertices at pa (P.vertex_count
+// <= 64), both made once by the caller
+bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy& A, const Poly& P, bool poly,
+                      const PolyAt& at, const Vec3 tri[3], const Vec3& face_normal, std::uint8_t flags, double margin,
+                      std::uint32_t t, Manifold& m) {
   m.count = 0;
   m.sub_shape_b = t;
   Vec3 n, point_a, point_b;
@@ -231,11 +243,8 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
   bool closed = false;
   Axis kind = Axis::Other;
   std::uint8_t on = 0xff;  // the triangle's feature, when the separating axes give it
-  Poly P;
-  const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
-  if (poly) poly_of(a, P);
   if (poly && P.vertex_count <= 64) {
-    const int r = sat_triangle(P, pa, tri, face_normal, margin, n, point_a, point_b, on, kind);
+    const int r = sat_triangle(P, at, pa, tri, face_normal, margin, n, point_a, point_b, on, kind);
     if (r == 0) return false;
     closed = r == 1;
     if (!closed) kind = Axis::Other;
@@ -400,7 +409,7 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
 }  // namespace
 
 int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
-                 std::span<Manifold> out, const NarrowPhaseSettings& settings) {
+                 std::span<Manifold> out, const NarrowPhaseSettings& settings, MeshQueryCache* cache) {
   check_pose(pose_a, "collide_mesh: pose_a");
   check_pose(pose_mesh, "collide_mesh: pose_mesh");
   check_shape(a, "collide_mesh: shape_a");
@@ -425,8 +434,14 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   else if (a.type == ShapeType::Capsule)
     axes[0] = r[1] * a.half_height;
   const bool hull = a.type == ShapeType::Hull;
+  // a box's or hull's polyhedron and its vertices in the mesh frame, for every triangle
+  Poly P;
+  PolyAt at;
+  const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
+  if (poly) poly_of(a, P);
+  if (poly && P.vertex_count <= 64) at.set(P, local);
   int written = 0;
-  M.query(box, [&](std::uint32_t t) {
+  auto visit = [&](std::uint32_t t) {
     if (written >= int(out.size())) return;
     const auto& idx = M.triangles()[t];
     const Vec3 tri[3] = {M.vertices()[idx[0]], M.vertices()[idx[1]], M.vertices()[idx[2]]};
@@ -447,7 +462,7 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     const double below = plane - hi - A.radius;
     if (above > slack || below > slack) return;
     Manifold& m = out[std::size_t(written)];
-    if (!collide_triangle(a, local, A, tri, nf, M.edge_flags()[t], margin, t, m)) return;
+    if (!collide_triangle(a, local, A, P, poly, at, tri, nf, M.edge_flags()[t], margin, t, m)) return;
     // back to the world
     m.normal = pose_mesh.rotation * m.normal;
     for (int i = 0; i < m.count; ++i) {
@@ -455,7 +470,36 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
       m.points[std::size_t(i)].point_b = apply(pose_mesh, m.points[std::size_t(i)].point_b);
     }
     ++written;
-  });
+  };
+  if (cache) {
+    // a box a quarter of the shape's smallest half size larger all round than its query box:
+    // its triangles (the tree walked once) serve while the query box stays inside it; its
+    // triangles that overlap the query box are those the tree gives, in the same order.
+    // More than the cache holds: marked (count kCapacity + 1), the tree serves instead
+    constexpr std::uint32_t kTooMany = MeshQueryCache::kCapacity + 1;
+    if (cache->mesh != &M || !cache->box.contains(box)) {
+      const Vec3 half = 0.5 * (box.hi - box.lo);
+      cache->mesh = &M;
+      cache->box = box.grown(0.25 * std::min(half.x, std::min(half.y, half.z)));
+      cache->count = 0;
+      M.query(cache->box, [&](std::uint32_t t) {
+        if (cache->count < std::uint32_t(MeshQueryCache::kCapacity)) cache->triangles[cache->count++] = t;
+        else cache->count = kTooMany;
+      });
+    }
+    if (cache->count != kTooMany) {
+      // each by its bounds, from the corners the contact reads anyway (min and max are exact:
+      // the tree's bounds)
+      const std::span<const Vec3> v = M.vertices();
+      for (std::uint32_t k = 0; k < cache->count; ++k) {
+        const auto& idx = M.triangles()[cache->triangles[k]];
+        const Vec3 &p = v[idx[0]], &q = v[idx[1]], &r = v[idx[2]];
+        if (Aabb{glm::min(p, glm::min(q, r)), glm::max(p, glm::max(q, r))}.overlaps(box)) visit(cache->triangles[k]);
+      }
+      return written;
+    }
+  }
+  M.query(box, visit);
   return written;
 }
 

@@ -202,6 +202,7 @@ void RigidContacts::free_pair(ShapePair& p) {
   pair_set.erase(pair_key(p.proxy_a, p.proxy_b));
   if (p.cache == kNoIndex) return;
   free_manifolds(caches[p.cache]);
+  if (caches[p.cache].mesh_query != kNoIndex) free_mesh_queries.push_back(caches[p.cache].mesh_query);
   caches[p.cache].first = free_cache;
   free_cache = p.cache;
   p.cache = kNoIndex;
@@ -628,9 +629,21 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     const ColliderShape& convex = mesh_a ? sb.shape : sa.shape;
     const ColliderShape& mesh = mesh_a ? sa.shape : sb.shape;
     if (mesh_scratch.empty()) mesh_scratch.resize(16);
+    // the pair's triangles near the shape (a fresh cache from the pool the first time)
+    if (c.mesh_query == kNoIndex) {
+      if (free_mesh_queries.empty()) {
+        c.mesh_query = static_cast<std::uint32_t>(mesh_queries.size());
+        mesh_queries.emplace_back();
+      } else {
+        c.mesh_query = free_mesh_queries.back();
+        free_mesh_queries.pop_back();
+        mesh_queries[c.mesh_query] = MeshQueryCache{};
+      }
+    }
+    MeshQueryCache* const near = &mesh_queries[c.mesh_query];
     int count = 0;
     for (;;) {
-      count = collide_mesh(convex, mesh_a ? pose_b : pose_a, mesh, mesh_a ? pose_a : pose_b, mesh_scratch, ns);
+      count = collide_mesh(convex, mesh_a ? pose_b : pose_a, mesh, mesh_a ? pose_a : pose_b, mesh_scratch, ns, near);
       if (count < static_cast<int>(mesh_scratch.size())) break;
       mesh_scratch.resize(2 * mesh_scratch.size());
     }

@@ -157,6 +157,7 @@ struct PairCache {
   double margin = -1;  // (m); < 0: nothing computed yet
   NarrowPhaseCache narrow{};
   std::uint32_t first = kNoIndex;  // first CachedManifold; the next free PairCache when free
+  std::uint32_t mesh_query = kNoIndex;  // a mesh pair's MeshQueryCache (in mesh_queries), once made
 };
 
 /// One point of a cached manifold, fixed to the bodies: the points of the two shapes' cores
@@ -227,6 +228,8 @@ struct RigidContacts {
   std::vector<PairCache> caches;              // pool
   std::vector<CachedManifold> manifolds;      // pool
   std::vector<Manifold> mesh_scratch;         // collide_mesh output
+  std::vector<MeshQueryCache> mesh_queries;   // pool: mesh pairs' triangles near the shape
+  std::vector<std::uint32_t> free_mesh_queries;  // its free entries
   std::vector<int> group_of, group_first;     // scratch: the mesh manifolds' groups of one normal
   std::vector<narrow::Candidate> merge_scratch;  // scratch: a group's points
   /// make_manifolds' plan for a touching pair, made before its span of pairs is walked.

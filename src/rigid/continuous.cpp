@@ -161,6 +161,9 @@ void RigidContacts::continuous(RigidBodySystem& s) {
           const TriangleMesh& mesh = *sb.shape.mesh;
           const Aabb local = bounds(ColliderShape::box(0.5 * (path.hi - path.lo)),
                                     compose(inverse(pb), Pose{0.5 * (path.hi + path.lo)}));
+          // the shape at the step's start, once for all the triangles (the advances' first gap too)
+          const Pose p0 = pose_a(0.0);
+          const Quat p0_inv = glm::conjugate(p0.rotation);
           mesh.query(local, [&](std::uint32_t tri) {
             Vec3 corners[3];
             for (int c = 0; c < 3; ++c) corners[c] = mesh.vertices()[mesh.triangles()[tri][c]];
@@ -170,13 +173,12 @@ void RigidContacts::continuous(RigidBodySystem& s) {
             // a shape farther from the triangle's plane, on its side, than any of its points
             // can travel in the step never reaches the triangle (the first advance would
             // jump past the step's end): two support points instead of GJK
-            const Pose p0 = pose_a(0.0);
             const double plane = glm::dot(face, corner);
-            const double above = glm::dot(face, apply(p0, support(sa.shape, glm::conjugate(p0.rotation) * -face))) - plane;
-            const double below = plane - glm::dot(face, apply(p0, support(sa.shape, glm::conjugate(p0.rotation) * face)));
+            const double above = glm::dot(face, apply(p0, support(sa.shape, p0_inv * -face))) - plane;
+            const double below = plane - glm::dot(face, apply(p0, support(sa.shape, p0_inv * face)));
             if (std::max(above, below) - target > moved * (1 + 1e-12) + 1e-12) return;
             toi = std::min(toi, advance(w, [&](double t) {
-              const Pose pa = pose_a(t);
+              const Pose pa = t == 0.0 ? p0 : pose_a(t);
               const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, pa), piece);
               if (r.cores_overlap) return Gap{0.0, r.normal};
               // nearest the face or an internal (flat or concave) edge or vertex: the gap is the

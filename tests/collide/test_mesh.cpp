@@ -132,6 +132,55 @@ TEST(CollideMesh, QueryEqualsBruteForce) {
   }
 }
 
+// query() walks a float copy of the tree whose boxes are rounded outwards: it must give
+// what a walk of nodes() in double gives, the same triangles in the same order, even for
+// boxes that only touch a triangle's bounds, on a mesh far from the origin where float
+// rounding is coarser than the triangles' spacing (2e-3 m cells at 3e4 m: float steps 2e-3)
+TEST(CollideMesh, QueryWalksTheTreeInOrderWhereFloatRounds) {
+  for (const double offset : {0.0, 3e4}) {
+    auto t = test_support::terrain(40, 0.08, [](double x, double z) { return 1e-3 * std::sin(300 * x) * std::cos(200 * z); });
+    for (Vec3& v : t.vertices) v += Vec3(offset, offset, -offset);
+    const auto m = TriangleMesh::build(t.vertices, t.triangles);
+    const auto nodes = m->nodes();
+    auto walk = [&](const Aabb& box, std::vector<std::uint32_t>& out) {
+      std::vector<std::uint32_t> stack{0};
+      while (!stack.empty()) {
+        const auto& n = nodes[stack.back()];
+        stack.pop_back();
+        if (!n.box.overlaps(box)) continue;
+        if (n.count == 0) {
+          stack.push_back(n.first + 1);
+          stack.push_back(n.first);
+          continue;
+        }
+        for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
+          const auto& tri = t.triangles[m->triangle_order()[i]];
+          const Vec3 a = t.vertices[tri[0]], b = t.vertices[tri[1]], c = t.vertices[tri[2]];
+          if (Aabb{glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c))}.overlaps(box)) out.push_back(m->triangle_order()[i]);
+        }
+      }
+    };
+    std::mt19937_64 rng(11);
+    std::uniform_int_distribution<std::size_t> pick(0, t.vertices.size() - 1);
+    std::uniform_real_distribution<double> w(0, 0.01);
+    std::vector<std::uint32_t> got, want;
+    std::size_t hits = 0;
+    for (int k = 0; k < 2000; ++k) {
+      // a box with a corner or a face exactly on a vertex (so on some triangles' bounds)
+      const Vec3 v = t.vertices[pick(rng)];
+      const Vec3 h(w(rng), w(rng), w(rng));
+      const Aabb box = k % 2 ? Aabb{v, v + h} : Aabb{v - h, v};
+      got.clear();
+      want.clear();
+      m->query(box, [&](std::uint32_t tri) { got.push_back(tri); });
+      walk(box, want);
+      EXPECT_EQ(got, want) << "offset " << offset << ", box " << k;
+      hits += want.size();
+    }
+    EXPECT_GT(hits, 2000u);  // the boxes reach triangles
+  }
+}
+
 TEST(CollideMesh, SameInputSameTree) {
   const auto t = test_support::terrain(20, 5.0, [](double x, double z) { return 0.1 * x * z; });
   const auto a = TriangleMesh::build(t.vertices, t.triangles), b = TriangleMesh::build(t.vertices, t.triangles);

@@ -344,6 +344,63 @@ TEST(Mesh, ConvexRidgeKeepsItsEdgeNormal) {
   }
 }
 
+// collide_mesh with a MeshQueryCache gives collide()'s manifolds to the bit without one:
+// shapes of each kind wandering over a bumpy grid in small steps (the cache serving) and
+// jumps (made anew), a large box over more triangles than the cache holds (the tree serving),
+// and one cache taken from one mesh to another
+TEST(Mesh, QueryCacheGivesTheSameManifolds) {
+  std::vector<Vec3> v;
+  std::vector<std::array<std::uint32_t, 3>> t;
+  const int n = 24;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) v.push_back({0.5 * i - 6, 0.15 * std::sin(1.3 * i) * std::cos(0.9 * j), 0.5 * j - 6});
+  auto id = [&](int i, int j) { return std::uint32_t(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      t.push_back({id(i, j), id(i, j + 1), id(i + 1, j)});
+      t.push_back({id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)});
+    }
+  const ColliderShape bumpy = ColliderShape::triangles(TriangleMesh::build(v, t, "bumpy"));
+  const ColliderShape flat = flat_grid(12);
+  const ColliderShape shapes[5] = {ColliderShape::sphere(0.3), ColliderShape::capsule(0.4, 0.2),
+                                   ColliderShape::box({0.3, 0.2, 0.4}), pyramid_hull(),
+                                   ColliderShape::box({2.5, 0.3, 2.5})};
+  const Pose at_mesh{{0.2, -0.1, 0.3}, glm::angleAxis(0.1, glm::normalize(Vec3(1, 2, 3)))};
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Manifold> with(64), without(64);
+  int touching = 0, many = 0;
+  for (const ColliderShape& s : shapes) {
+    MeshQueryCache cache;
+    Vec3 p(0, 0.15, 0);
+    for (int k = 0; k < 400; ++k) {
+      // mostly steps of up to 2 cm, now and then a jump
+      p += (k % 50 == 49 ? 2.0 : 0.02) * Vec3(u(rng), 0.3 * u(rng), u(rng));
+      p = glm::clamp(p, Vec3(-4, -0.2, -4), Vec3(4, 0.5, 4));
+      const Pose pose{p, glm::angleAxis(3 * u(rng), glm::normalize(Vec3(u(rng), 1, u(rng))))};
+      const ColliderShape& mesh = k < 300 ? bumpy : flat;
+      const NarrowPhaseSettings ns{.speculative_margin = 0.05};
+      const int a = collide_mesh(s, pose, mesh, at_mesh, with, ns, &cache);
+      const int b = collide_mesh(s, pose, mesh, at_mesh, without, ns);
+      ASSERT_EQ(a, b) << "step " << k;
+      touching += a > 0;
+      many += a > MeshQueryCache::kCapacity;
+      for (int m = 0; m < a; ++m) {
+        EXPECT_EQ(with[m].sub_shape_b, without[m].sub_shape_b);
+        EXPECT_EQ(with[m].count, without[m].count);
+        EXPECT_TRUE(with[m].normal == without[m].normal) << "step " << k;
+        for (int q = 0; q < with[m].count; ++q) {
+          EXPECT_TRUE(with[m].points[q].point_a == without[m].points[q].point_a);
+          EXPECT_TRUE(with[m].points[q].point_b == without[m].points[q].point_b);
+          EXPECT_EQ(with[m].points[q].id, without[m].points[q].id);
+        }
+      }
+    }
+  }
+  EXPECT_GT(touching, 1000);  // most steps touch
+  EXPECT_GT(many, 100);       // the large box touches more triangles than the cache holds
+}
+
 TEST(Mesh, BadInputAndNoAllocationOfResults) {
   const ColliderShape grid = flat_grid(2);
   std::array<Manifold, 2> out;

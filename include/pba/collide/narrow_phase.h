@@ -119,6 +119,20 @@ enum class BatchPath : std::uint8_t {
 void collide_batch(std::span<const PairQuery> pairs, std::span<Manifold> out,
                    ConvexMethod method = ConvexMethod::Sat, BatchPath path = BatchPath::Best);
 
+/// The triangles of a mesh near a convex shape, kept by the caller between collide_mesh()
+/// calls for one shape and mesh (a contact pair's): the mesh query of a box a little larger
+/// than the shape's, so while the shape's query box stays inside it the next calls test
+/// these triangles' bounds instead of walking the mesh's tree. Any shape may use it (the
+/// box decides); reset it (`MeshQueryCache{}`) when its mesh is destroyed, as another mesh
+/// built at the same address would be taken for it.
+struct MeshQueryCache {
+  static constexpr int kCapacity = 16;  ///< at most this many triangles are kept
+  const TriangleMesh* mesh = nullptr;   ///< the mesh `triangles` index (null: nothing kept)
+  Aabb box{};                           ///< the box queried (mesh frame, m)
+  std::uint32_t count = 0;              ///< triangles kept
+  std::uint32_t triangles[kCapacity]{}; ///< those whose bounds overlap `box`, in TriangleMesh::query()'s order
+};
+
 /// The contact manifolds of a convex shape `a` (sphere, capsule, box or hull) against a
 /// static triangle mesh `mesh`: one manifold per touching triangle (Manifold::sub_shape_b
 /// is the triangle), normals from `a` to the mesh, in the order the mesh's BVH visits the
@@ -131,8 +145,10 @@ void collide_batch(std::span<const PairQuery> pairs, std::span<Manifold> out,
 /// TriangleMesh::edge_flags) takes the triangle's face normal, so a shape sliding over a
 /// flat mesh gets no ghost contacts from the edges between its triangles. Writes at most
 /// out.size() manifolds and returns how many; never allocates. Throws Error like collide().
+/// `cache` (may be null): the triangles near the shape, kept between calls; the same
+/// manifolds, to the bit, with or without it.
 int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
-                 std::span<Manifold> out, const NarrowPhaseSettings& settings = {});
+                 std::span<Manifold> out, const NarrowPhaseSettings& settings = {}, MeshQueryCache* cache = nullptr);
 
 // --- GJK and EPA --------------------------------------------------------------------
 

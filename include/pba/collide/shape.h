@@ -221,42 +221,59 @@ class TriangleMesh {
   Vec3 normal(std::uint32_t t) const { return normals_[t]; }
   /// Local bounds.
   Aabb bounds() const { return nodes_.empty() ? Aabb{} : nodes_[0].box; }
-  /// Calls `visit(t)` for every triangle whose bounds overlap `box` (local frame). Never allocates.
+  /// Calls `visit(t)` for every triangle whose bounds overlap `box` (local frame), in the
+  /// order of the leaves of nodes() (depth first, the first child first). Never allocates.
   template <class F>
   void query(const Aabb& box, F&& visit) const;
 
  private:
   friend struct MeshBuilder;
+  // The tree query() walks: nodes() with its inner nodes only, each holding both children's
+  // bounds in float rounded outwards (a child that overlaps a box in double overlaps it here,
+  // so the walk reaches every leaf the exact tree would), 64 bytes, one cache line a node; a
+  // child is an inner node (count 0: `first` indexes query_nodes_) or a leaf's run of
+  // triangle_order() (first, count).
+  struct QueryNode {
+    float lo[2][3], hi[2][3];
+    std::uint32_t first[2], count[2];
+  };
   std::vector<Vec3> vertices_;
   std::vector<std::array<std::uint32_t, 3>> triangles_;
   std::vector<Vec3> normals_;
   std::vector<std::uint8_t> edge_flags_;
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> order_;
+  std::vector<QueryNode> query_nodes_;  // root first; empty when the root is a leaf
+  std::vector<Aabb> order_boxes_;       // each triangle's exact bounds, in triangle_order()
 };
 
 template <class F>
 void TriangleMesh::query(const Aabb& box, F&& visit) const {
-  // depth-first over the BVH with a fixed stack (the builder caps the depth at 60)
-  if (nodes_.empty()) return;
-  std::uint32_t stack[64];
+  // each triangle of a leaf's run by its own (exact) bounds
+  auto leaf = [&](std::uint32_t first, std::uint32_t count) {
+    for (std::uint32_t i = first; i < first + count; ++i)
+      if (order_boxes_[i].overlaps(box)) visit(order_[i]);
+  };
+  if (nodes_.empty() || !nodes_[0].box.overlaps(box)) return;
+  if (nodes_[0].count > 0) return leaf(nodes_[0].first, nodes_[0].count);
+  // depth-first with a fixed stack (the builder caps the depth at 60): an entry is a child
+  // that overlaps the box (its count in the high half: 0 for an inner node), the second
+  // child pushed first, so the leaves come in the order of a walk of nodes()
+  std::uint64_t stack[64];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
-    const Node& n = nodes_[stack[--top]];
-    if (!n.box.overlaps(box)) continue;
-    if (n.count == 0) {
-      stack[top++] = n.first + 1;
-      stack[top++] = n.first;
+    const std::uint64_t e = stack[--top];
+    const auto first = static_cast<std::uint32_t>(e), count = static_cast<std::uint32_t>(e >> 32);
+    if (count > 0) {
+      leaf(first, count);
       continue;
     }
-    // each triangle of the leaf by its own bounds
-    for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
-      const std::uint32_t t = order_[i];
-      const Vec3 &a = vertices_[triangles_[t][0]], &b = vertices_[triangles_[t][1]], &c = vertices_[triangles_[t][2]];
-      const Aabb tb{glm::min(a, glm::min(b, c)), glm::max(a, glm::max(b, c))};
-      if (tb.overlaps(box)) visit(t);
-    }
+    const QueryNode& n = query_nodes_[first];
+    for (int c = 1; c >= 0; --c)
+      if ((n.lo[c][0] <= box.hi.x) & (box.lo.x <= n.hi[c][0]) & (n.lo[c][1] <= box.hi.y) & (box.lo.y <= n.hi[c][1]) &
+          (n.lo[c][2] <= box.hi.z) & (box.lo.z <= n.hi[c][2]))
+        stack[top++] = (std::uint64_t(n.count[c]) << 32) | n.first[c];
   }
 }
 
