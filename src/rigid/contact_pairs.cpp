@@ -174,8 +174,8 @@ void RigidContacts::settle(std::uint32_t record) {
   CachedManifold& r = manifolds[record];
   if (r.last == kNoIndex) return;
   ContactPair& c = pairs[r.last];
-  for (int k = 0; k < c.count; ++k) r.points[k].normal_impulse = c.points[k].normal_impulse;
-  r.friction = c.friction_old;
+  for (int k = 0; k < c.count; ++k) r.points[k].normal_impulse = c.normal_impulse[k];
+  r.friction = c.friction_impulse();
   r.twist = c.twist_impulse;
   r.rolling = c.rolling_impulse;
   c.record = kNoIndex;
@@ -710,8 +710,8 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const ContactPair& from = own.last == kNoIndex ? c : pairs[own.last];
   const bool held = own.last != kNoIndex;
   double impulse[Manifold::kMaxPoints];
-  for (int k = 0; k < r.count; ++k) impulse[k] = held ? from.points[k].normal_impulse : r.points[k].normal_impulse;
-  const Vec3 friction = held ? from.friction_old : r.friction;
+  for (int k = 0; k < r.count; ++k) impulse[k] = held ? from.normal_impulse[k] : r.points[k].normal_impulse;
+  const Vec3 friction = held ? from.friction_impulse() : r.friction;
   const double twist = held ? from.twist_impulse : r.twist;
   const Vec3 rolling = held ? from.rolling_impulse : r.rolling;
   if (held && own.last != at_index) pairs[own.last].record = kNoIndex;
@@ -750,16 +750,14 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     pt.depth = glm::dot(on_a - on_b, n);
     at[k] = 0.5 * (on_a + on_b);
     centroid += at[k];
-    pt.ra = at[k] - com_a;
-    pt.rb = at[k] - com_b;
+    pt.at = at[k];
     // the separation now is -depth; keep it relative to the cores
     pt.offset = -pt.depth - glm::dot(core_b - core_a, n);
     pt.id = q.id;
-    pt.normal_impulse = warm ? impulse[k] : 0;
+    c.normal_impulse[k] = warm ? impulse[k] : 0;
   }
   centroid /= static_cast<double>(r.count);
   c.ca = centroid - com_a;
-  c.cb = centroid - com_b;
   c.twist_radius = 0;
   for (int k = 0; k < r.count; ++k) c.twist_radius += glm::length(at[k] - centroid);
   c.twist_radius /= r.count;
@@ -799,7 +797,18 @@ void RigidContacts::remove_body(RigidBodySystem& s, std::uint32_t slot, std::siz
       shape_pairs[keep++] = p;
   }
   shape_pairs.resize(keep);
-  std::erase_if(pairs, [&](const ContactPair& c) { return c.slot_a == slot || c.slot_b == slot; });
+  // (and their lanes with them, which manifold() reads until the next step)
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (pairs[k].slot_a == slot || pairs[k].slot_b == slot) continue;
+    if (kept != k) {
+      pairs[kept] = pairs[k];
+      if (k < lane_of.size()) lane_of[kept] = lane_of[k];
+    }
+    ++kept;
+  }
+  pairs.resize(kept);
+  if (lane_of.size() > kept) lane_of.resize(kept);
   emitted = pairs.size();
   // the body now at dense index i (the last one, moved into the hole) takes its proxies along
   if (i < s.type_.size() && s.owner_[i] < body_proxies.size())

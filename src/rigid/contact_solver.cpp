@@ -120,10 +120,12 @@ void RigidContacts::prepare(RigidBodySystem& s) {
     // a sleeping body holds still like a static one until something wakes it
     inv_inertia[i] = s.asleep_[i] ? Mat3(0.0) : r * d * glm::transpose(r);
   }
-  built = has_colors = false;
+  built = has_colors = lanes_valid = false;
   backward = !backward;
+  // (room for as many pairs as `pairs` has, so steady state does not allocate)
+  if (rolling_mass.size() < pairs.size()) rolling_mass.reserve(pairs.capacity()), rolling_mass.resize(pairs.size());
   if (s.settings_.solver == RigidSolverType::Xpbd) {  // its own passes on the pairs
-    for (ContactPair& c : pairs) set_rolling_mass(c);
+    for (std::uint32_t i = 0; i < pairs.size(); ++i) set_rolling_mass(i);
     return;
   }
   // the velocities, the motion since the start of the step (none yet), the colours and the
@@ -141,7 +143,7 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   warm.assign(n + 1, SolverBody{});
   color(s);
   build(s);
-  built = has_colors = true;
+  built = has_colors = lanes_valid = true;
   if (s.settings_.warm_starting) accumulate_warm(s);
 }
 
@@ -342,6 +344,8 @@ void RigidContacts::build(RigidBodySystem& s) {
   offset[colors + 1] = offset[colors] + overflow_count;
   cursor.assign(offset.begin(), offset.end() - 1);
   by_color.resize(pairs.size());
+  lane_of.reserve(pairs.capacity());
+  lane_of.resize(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const std::size_t c = color_of[i] == kOverflow ? colors : color_of[i];
     by_color[cursor[c]++] = static_cast<std::uint32_t>(i);
@@ -356,6 +360,7 @@ void RigidContacts::build(RigidBodySystem& s) {
       // of order): its header and points
       if (offset[c] + slot + kPrefetchAhead < by_color.size()) prefetch_pair(pairs[by_color[offset[c] + slot + kPrefetchAhead]]);
       fill(s, blocks[b], anchors[b], l, i);
+      lane_of[i] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l));
       if (pairs[i].restitution != 0)
         restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), pairs[i].restitution});
     }
@@ -364,7 +369,7 @@ void RigidContacts::build(RigidBodySystem& s) {
 // One manifold into lane l of block k, in its contact frame (t1, t2, n).
 void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, int l, std::uint32_t index) {
   ContactPair& c = pairs[index];
-  set_rolling_mass(c);  // here, where the pair is read anyway, rather than in a pass of its own
+  set_rolling_mass(index);  // here, where the pair is read anyway, rather than in a pass of its own
   const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
   k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
   if (da) k.write_a |= 1u << l;
@@ -412,7 +417,8 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
   for (int p = 0; p < 4; ++p) {
     if (p < c.count) {
       const SolverPoint& q = c.points[p];
-      x[p] = glm::dot(q.ra, c.t1), y[p] = glm::dot(q.ra, c.t2);
+      const Vec3 arm = q.at - s.com_[c.a];  // the anchor from a's centre (com_ is where the step started)
+      x[p] = glm::dot(arm, c.t1), y[p] = glm::dot(arm, c.t2);
       ra[p][0] = y[p], ra[p][1] = -x[p], ra[p][2] = 0;
       rb[p][0] = y[p] + d[1], rb[p][1] = -(x[p] + d[0]), rb[p][2] = 0;
       product_skipping<2>(ia, ra[p], ira[p]);
@@ -425,7 +431,7 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
       g.ex[p][l] = glm::dot(e, c.t1), g.ey[p][l] = glm::dot(e, c.t2);
       // the separation at the start of the step (the kernels add the bodies' motion since)
       k.sep[p][l] = g.base[p][l] = base + q.offset + glm::dot(q.sb, c.normal) - glm::dot(q.sa, c.normal);
-      k.impulse[p][l] = q.normal_impulse / unit;
+      k.impulse[p][l] = c.normal_impulse[p] / unit;
     } else {
       g.za[p][l] = g.zb[p][l] = g.base[p][l] = k.sep[p][l] = k.impulse[p][l] = 0;
       g.ex[p][l] = g.ey[p][l] = 0;
@@ -462,10 +468,20 @@ void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, in
 }
 
 // rolling resistance acts on the relative angular velocity: its mass, for a pair that rolls
-void RigidContacts::set_rolling_mass(ContactPair& c) const {
+void RigidContacts::set_rolling_mass(std::uint32_t index) {
+  const ContactPair& c = pairs[index];
   if (!(c.rolling > 0)) return;
   const Mat3 k = inv_inertia[c.a] + inv_inertia[c.b];
-  c.rolling_mass = glm::determinant(k) > 0 ? glm::inverse(k) : Mat3(0.0);
+  rolling_mass[index] = glm::determinant(k) > 0 ? glm::inverse(k) : Mat3(0.0);
+}
+
+bool RigidContacts::solver_report(std::size_t k, int p, double& approach, double& max_impulse) const {
+  if (!lanes_valid || k >= lane_of.size()) return false;
+  const ContactBlock& b = blocks[lane_of[k] / kLanes];
+  const std::uint32_t l = lane_of[k] % kLanes;
+  approach = b.approach[p][l];
+  max_impulse = static_cast<double>(b.max_impulse[p][l]) * b.unit[l];
+  return true;
 }
 
 BodyArrays RigidContacts::arrays(RigidBodySystem& s) {
@@ -558,7 +574,7 @@ void RigidContacts::roll(RigidBodySystem& s, const ContactBlock& k, int l) {
   double* wa = rows[c.a].w;
   double* wb = rows[c.b].w;
   const Vec3 old = c.rolling_impulse;
-  Vec3 j = old - c.rolling_mass * (Vec3(wb[0], wb[1], wb[2]) - Vec3(wa[0], wa[1], wa[2]));
+  Vec3 j = old - rolling_mass[k.pair[l]] * (Vec3(wb[0], wb[1], wb[2]) - Vec3(wa[0], wa[1], wa[2]));
   const double limit = c.rolling * total, len = glm::length(j);
   if (len > limit) j *= limit / len;
   c.rolling_impulse = j;
@@ -590,7 +606,7 @@ void RigidContacts::carry_impulses(double h) {
   if (impulse_h > 0 && impulse_h != h) {
     const double k = h / impulse_h;
     for (ContactPair& c : pairs) {
-      for (int j = 0; j < c.count; ++j) c.points[j].normal_impulse *= k;
+      for (int j = 0; j < c.count; ++j) c.normal_impulse[j] *= k;
       c.tangent_impulse[0] *= k, c.tangent_impulse[1] *= k;
       c.twist_impulse *= k;
       c.rolling_impulse *= k;
@@ -607,31 +623,24 @@ void RigidContacts::carry_impulses(double h) {
 }
 
 void RigidContacts::store() {
-  // the blocks' impulses back to their pairs (warm starting, contacts(), manifold())
-  // (every pair is in a block when they are built; its lines are fetched a block ahead, and its
-  // friction impulse in world axes is kept while they are in cache)
-  if (built) {
-    for (std::size_t b = 0; b < block_count; ++b) {
-      const ContactBlock& k = blocks[b];
-      if (b + 1 < block_count)
-        for (int l = 0; l < blocks[b + 1].lanes; ++l) prefetch_pair(pairs[blocks[b + 1].pair[l]]);
-      for (int l = 0; l < k.lanes; ++l) {
-        ContactPair& c = pairs[k.pair[l]];
-        const double unit = k.unit[l];
-        for (int p = 0; p < c.count; ++p) {
-          c.points[p].normal_impulse = k.impulse[p][l] * unit;
-          c.points[p].approach = k.approach[p][l];
-          c.points[p].max_normal_impulse = k.max_impulse[p][l] * unit;
-        }
-        c.tangent_impulse[0] = k.tangent_impulse[0][l] * unit, c.tangent_impulse[1] = k.tangent_impulse[1][l] * unit;
-        c.twist_impulse = k.twist_impulse[l] * unit;
-        c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
-      }
+  // the blocks' impulses back to their pairs (warm starting, contacts()): one cache line of
+  // each pair, fetched a block ahead (every pair is in a block when they are built; the
+  // approach speeds and largest impulses stay in the blocks for manifold(), solver_report)
+  if (!built) return;
+  for (std::size_t b = 0; b < block_count; ++b) {
+    const ContactBlock& k = blocks[b];
+    if (b + 1 < block_count)
+      for (int l = 0; l < blocks[b + 1].lanes; ++l) __builtin_prefetch(pairs[blocks[b + 1].pair[l]].normal_impulse, 1);
+    for (int l = 0; l < k.lanes; ++l) {
+      ContactPair& c = pairs[k.pair[l]];
+      const double unit = k.unit[l];
+      // (all four: a lane's unused points hold zeros, and writing them spares reading the count)
+      for (int p = 0; p < 4; ++p) c.normal_impulse[p] = k.impulse[p][l] * unit;
+      c.tangent_impulse[0] = k.tangent_impulse[0][l] * unit, c.tangent_impulse[1] = k.tangent_impulse[1][l] * unit;
+      c.twist_impulse = k.twist_impulse[l] * unit;
     }
-    built = false;
-    return;
   }
-  for (ContactPair& c : pairs) c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
+  built = false;
 }
 
 long RigidContacts::color_of_pair(std::size_t k) const {
