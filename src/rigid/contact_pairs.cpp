@@ -362,6 +362,7 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   // last step's pairs hold the impulses the solver left; they are read as they are rewritten
   last_count = pairs.size();
   emitted = 0;
+  pairs_same = true;  // until emit() finds an entry that differs
   update_proxies(s, dt);
   find_new_pairs(s);
   wake_touched(s);
@@ -703,6 +704,8 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   if (at_index + kPairsAhead < last_count) prefetch_lines(&pairs[at_index + kPairsAhead], sizeof(ContactPair));
   ContactPair& c = pairs[at_index];
   CachedManifold& own = manifolds[record];
+  // the colours' key of last step's entry here (color() keeps the colours while all match)
+  pairs_same = pairs_same && at_index < last_count && c.a == a && c.b == b && (c.rolling != 0) == (r.mixed_rolling != 0);
   if (c.record != record && c.record != kNoIndex && at_index < last_count && manifolds[c.record].last == at_index)
     settle(c.record);
   // this manifold's impulses: in this entry (the same place as last step), in another entry,
@@ -797,7 +800,9 @@ void RigidContacts::remove_body(RigidBodySystem& s, std::uint32_t slot, std::siz
       shape_pairs[keep++] = p;
   }
   shape_pairs.resize(keep);
-  // (and their lanes with them, which manifold() reads until the next step)
+  // (and their lanes with them, which manifold() reads until the next step; their colours are
+  // made anew, the entries having moved)
+  colored_once = false;
   std::size_t kept = 0;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     if (pairs[k].slot_a == slot || pairs[k].slot_b == slot) continue;

@@ -122,9 +122,11 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   }
   built = has_colors = lanes_valid = false;
   backward = !backward;
+  pairs_same = pairs_same && pairs.size() == last_count;
   // (room for as many pairs as `pairs` has, so steady state does not allocate)
   if (rolling_mass.size() < pairs.size()) rolling_mass.reserve(pairs.capacity()), rolling_mass.resize(pairs.size());
   if (s.settings_.solver == RigidSolverType::Xpbd) {  // its own passes on the pairs
+    colored_once = false;  // (the colours stay those of an earlier step's pairs)
     for (std::uint32_t i = 0; i < pairs.size(); ++i) set_rolling_mass(i);
     return;
   }
@@ -201,22 +203,14 @@ void RigidContacts::color(RigidBodySystem& s) {
   auto moving = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
   // the colours depend only on the pairs' bodies in order, which of them roll, which bodies move
   // and the solver: when none of that changed since the last colouring (a pile at rest, a
-  // pyramid), the last colours stand
+  // pyramid), the last colours stand. Whether the pairs changed, emit() found as it rewrote
+  // them (pairs_same: each entry's bodies and rolling as last step's, which the colours were
+  // made from or kept for), so the pairs are not read again here
   {
-    color_key.reserve(3 * room);
     color_moving.reserve(n + 3);
     const bool tgs = s.settings_.solver == RigidSolverType::Tgs;
-    bool same = colored_once && color_key.size() == 3 * m && color_moving.size() == n && color_tgs == tgs;
-    color_key.resize(3 * m);
+    bool same = colored_once && pairs_same && color_moving.size() == n && color_tgs == tgs;
     color_moving.resize(n);
-    for (std::size_t i = 0; i < m; ++i) {
-      const ContactPair& c = pairs[i];
-      const std::uint32_t key[3] = {c.a, c.b, c.rolling != 0};
-      for (int j = 0; j < 3; ++j) {
-        same = same && color_key[3 * i + j] == key[j];
-        color_key[3 * i + j] = key[j];
-      }
-    }
     for (std::uint32_t i = 0; i < n; ++i) {
       const std::uint8_t x = moving(i);
       same = same && color_moving[i] == x;

@@ -300,11 +300,12 @@ struct RigidContacts {
   std::vector<std::uint32_t> by_color;     // the pairs by colour, in pair order within each
   std::vector<std::size_t> offset;         // scratch: each colour's start in by_color
   std::vector<std::uint32_t> band_colors;  // each band's first colour, then the number of colours
-  // what the colours were made from: by pair its bodies and whether it rolls, by body whether it
-  // moves, and the solver (color() keeps the colours when none of it changed)
-  std::vector<std::uint32_t> color_key;
+  // what the colours were made from: by body whether it moves, and the solver; and whether this
+  // step's pairs have last step's bodies and rolling entry by entry (emit() clears pairs_same
+  // at the first that does not; colored_once is cleared when the pairs were changed otherwise).
+  // color() keeps the colours when none of it changed
   std::vector<std::uint8_t> color_moving;
-  bool color_tgs = false, colored_once = false;
+  bool color_tgs = false, colored_once = false, pairs_same = false;
   bool backward = true;  // this step runs each band's colours last to first (alternating by step)
   struct LaneRef {
     std::uint32_t block, lane;
