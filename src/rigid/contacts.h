@@ -335,10 +335,11 @@ struct RigidContacts {
   void color(RigidBodySystem& s);
   /// The blocks from the pairs and their colours.
   void build(RigidBodySystem& s);
-  /// Pair `index` into lane l of block k.
-  void fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, int l, std::uint32_t index);
+  /// The pairs by_color[first, first + lanes) into block b's lanes, in their contact frames
+  /// (the arithmetic on 8 or 4 lanes at once on the SIMD paths; the same bits on every path).
+  void fill_block(RigidBodySystem& s, std::size_t b, std::size_t first);
   /// The inverse of rolling pair `index`'s relative angular inverse inertia (kg m^2) from
-  /// inv_inertia, into rolling_mass[index] (prepare for XPBD, fill for the other solvers);
+  /// inv_inertia, into rolling_mass[index] (prepare for XPBD, fill_block for the other solvers);
   /// nothing for a pair that does not roll.
   void set_rolling_mass(std::uint32_t index);
   /// Point p of pair k as the last step's solver saw it: its normal velocity before the solve
