@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "collide/narrow_internal.h"
 
@@ -71,9 +72,12 @@ constexpr double kSamePoint = 1e-6;
 // how many pairs ahead make_manifolds() and emit() fetch the pool entries they will read
 constexpr std::size_t kPairsAhead = 4;
 
-// asks for the cache lines of `bytes` from `at` (a prefetch: no effect on the results)
+// asks for every cache line that the `bytes` from `at` touch (a prefetch: no effect on the
+// results); from the line `at` is in, so an object that starts mid-line gets its last line too
 void prefetch_lines(const void* at, std::size_t bytes) {
-  for (std::size_t line = 0; line < bytes; line += 64) __builtin_prefetch(static_cast<const char*>(at) + line);
+  const auto start = reinterpret_cast<std::uintptr_t>(at);
+  for (std::uintptr_t line = start & ~std::uintptr_t{63}; line < start + bytes; line += 64)
+    __builtin_prefetch(reinterpret_cast<const void*>(line));
 }
 
 }  // namespace
@@ -741,21 +745,24 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   c.count = r.count;
   const bool warm = cs.warm_starting;
   const double radius_a = r.radius_a, radius_b = r.radius_b;
+  // (each value is computed into a local and stored from there: stored piecewise and read back
+  // whole, a Vec3 waited on the store buffer)
   Vec3 centroid(0), at[Manifold::kMaxPoints];
   for (int k = 0; k < r.count; ++k) {
     const CachedPoint& q = r.points[k];
     SolverPoint& pt = c.points[k];
     // the cores now, the surface points on them, and the overlap between the surfaces
-    pt.sa = qa * q.core_a;
-    pt.sb = qb * q.core_b;
-    const Vec3 core_a = com_a + pt.sa, core_b = com_b + pt.sb;
+    const Vec3 sa = qa * q.core_a, sb = qb * q.core_b;
+    const Vec3 core_a = com_a + sa, core_b = com_b + sb;
     const Vec3 on_a = core_a + radius_a * n, on_b = core_b - radius_b * n;
-    pt.depth = glm::dot(on_a - on_b, n);
-    at[k] = 0.5 * (on_a + on_b);
-    centroid += at[k];
-    pt.at = at[k];
+    const double depth = glm::dot(on_a - on_b, n);
+    const Vec3 mid = 0.5 * (on_a + on_b);
+    centroid += mid;
+    at[k] = mid;
+    pt.at = mid, pt.sa = sa, pt.sb = sb;
+    pt.depth = depth;
     // the separation now is -depth; keep it relative to the cores
-    pt.offset = -pt.depth - glm::dot(core_b - core_a, n);
+    pt.offset = -depth - glm::dot(core_b - core_a, n);
     pt.id = q.id;
     c.normal_impulse[k] = warm ? impulse[k] : 0;
   }
