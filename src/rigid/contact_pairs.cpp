@@ -178,7 +178,7 @@ void RigidContacts::settle(std::uint32_t record) {
   CachedManifold& r = manifolds[record];
   if (r.last == kNoIndex) return;
   ContactPair& c = pairs[r.last];
-  for (int k = 0; k < c.count; ++k) r.points[k].normal_impulse = c.normal_impulse[k];
+  for (int k = 0; k < c.count; ++k) r.normal_impulse[k] = c.normal_impulse[k];
   r.friction = c.friction_impulse();
   r.twist = c.twist_impulse;
   r.rolling = c.rolling_impulse;
@@ -440,7 +440,8 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
   std::size_t built = 0, reused = 0, keep = 0;
   // the pool entries of the pairs ahead, on their way from the outer caches while this one is
   // planned: the pair cache (both lines: `first` sits in the second) two distances ahead, then
-  // its proxies and first cached manifold one distance ahead
+  // its proxies and first cached manifold (what emit reads of it: the impulses after are read
+  // only when no pair entry holds them) one distance ahead
   const std::size_t count = shape_pairs.size();
   auto prefetch_ahead = [&](std::size_t k) {
     if (k + 2 * kPairsAhead < count && shape_pairs[k + 2 * kPairsAhead].cache != kNoIndex)
@@ -450,7 +451,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
       prefetch_lines(&proxies[ahead.proxy_a], sizeof(ShapeProxy));
       prefetch_lines(&proxies[ahead.proxy_b], sizeof(ShapeProxy));
       if (ahead.cache != kNoIndex && caches[ahead.cache].first != kNoIndex)
-        prefetch_lines(&manifolds[caches[ahead.cache].first], sizeof(CachedManifold));
+        prefetch_lines(&manifolds[caches[ahead.cache].first], offsetof(CachedManifold, normal_impulse));
     }
   };
   for (std::size_t first = 0; first < shape_pairs.size();) {
@@ -596,7 +597,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       q.core_a = qa_inv * ((flip ? cp.point_b : cp.point_a) - radius_a * n - s.com_[a]);
       q.core_b = qb_inv * ((flip ? cp.point_a : cp.point_b) + radius_b * n - s.com_[b]);
       q.id = cp.id;
-      q.normal_impulse = 0;
+      r.normal_impulse[k] = 0;
       if (!was) continue;
       int match = -1;
       for (int o = 0; o < was->count && match < 0; ++o)
@@ -606,7 +607,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
         const Vec3 d = was->points[o].core_a - q.core_a;
         if (glm::dot(d, d) <= slop2) match = o;
       }
-      if (match >= 0) q.normal_impulse = was->points[match].normal_impulse;
+      if (match >= 0) r.normal_impulse[k] = was->normal_impulse[match];
     }
     if (tail == kNoIndex)
       c.first = idx;
@@ -717,7 +718,7 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const ContactPair& from = own.last == kNoIndex ? c : pairs[own.last];
   const bool held = own.last != kNoIndex;
   double impulse[Manifold::kMaxPoints];
-  for (int k = 0; k < r.count; ++k) impulse[k] = held ? from.normal_impulse[k] : r.points[k].normal_impulse;
+  for (int k = 0; k < r.count; ++k) impulse[k] = held ? from.normal_impulse[k] : r.normal_impulse[k];
   const Vec3 friction = held ? from.friction_impulse() : r.friction;
   const double twist = held ? from.twist_impulse : r.twist;
   const Vec3 rolling = held ? from.rolling_impulse : r.rolling;

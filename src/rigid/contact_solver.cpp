@@ -740,7 +740,7 @@ void RigidContacts::carry_impulses(double h) {
     // pair asleep while the solver, the substeps or the step changed wakes with the same force
     for (CachedManifold& m : manifolds) {
       if (m.last != kNoIndex) continue;  // its impulses are in `pairs`, scaled above
-      for (int j = 0; j < m.count; ++j) m.points[j].normal_impulse *= k;
+      for (int j = 0; j < m.count; ++j) m.normal_impulse[j] *= k;
       m.friction *= k, m.twist *= k, m.rolling *= k;
     }
   }

@@ -174,15 +174,15 @@ struct PairCache {
 };
 
 /// One point of a cached manifold, fixed to the bodies: the points of the two shapes' cores
-/// (a sphere's centre, a box's surface) in each body's principal frame from its centre of
-/// mass, and the impulse it carried at the end of its last step.
+/// (a sphere's centre, a box's surface) in each body's principal frame from its centre of mass.
 struct CachedPoint {
   Vec3 core_a{0, 0, 0}, core_b{0, 0, 0};  // (m)
-  double normal_impulse = 0;              // (N s per solver step)
   std::uint32_t id = 0;                   // feature id
 };
 
-/// A manifold in the bodies' frames, and the friction, twist and rolling impulses it carried.
+/// A manifold in the bodies' frames, and the impulses it carried. What emit() reads every step
+/// the manifold is carried over comes first (five of its seven cache lines), the impulses last:
+/// they are read only when no entry of `pairs` holds them (`last`, settle()).
 struct CachedManifold {
   std::uint32_t next = kNoIndex;  // the shape pair's next manifold (mesh triangles); free list
   std::uint32_t sub = 0;          // mesh triangle (0 otherwise)
@@ -193,14 +193,16 @@ struct CachedManifold {
   bool normal_in_b = false;       // the normal is kept in body b's frame (else a's)
   Vec3 normal{0, 0, 1};           // unit, from a to b, in that body's principal frame
   CachedPoint points[Manifold::kMaxPoints];
-  Vec3 friction{0, 0, 0};  // the tangential impulse in world axes at the end of its last step
-  double twist = 0;
-  Vec3 rolling{0, 0, 0};
   // what does not change while the pair lasts: the shapes' core radii (m), and the mixed
   // material with the mix rules it was mixed by
   double radius_a = 0, radius_b = 0;
   double mixed_friction = 0, mixed_restitution = 0, mixed_rolling = 0;
   MixRule friction_mix = MixRule::GeometricMean, restitution_mix = MixRule::Maximum;
+  // the impulses it carried at the end of its last step (while `last` is kNoIndex)
+  double normal_impulse[Manifold::kMaxPoints] = {0, 0, 0, 0};  // by point (N s per solver step)
+  Vec3 friction{0, 0, 0};  // the tangential impulse in world axes
+  double twist = 0;
+  Vec3 rolling{0, 0, 0};
 };
 
 /// Softness of a contact: Catto's soft step coefficients for a spring of `hertz` and
