@@ -539,6 +539,15 @@ void RigidContacts::fill_block(RigidBodySystem& s, std::size_t b, std::size_t fi
     }
     const std::uint32_t index = by_color[first + static_cast<std::size_t>(l)];
     if (first + l + kPrefetchAhead < by_color.size()) prefetch_pair(pairs[by_color[first + l + kPrefetchAhead]]);
+    // and the next block's lines, to be written (the passes left them in the outer caches),
+    // spread over this block's lanes
+    if (b + 1 < block_count) {
+      constexpr std::size_t kBlockLines = sizeof(ContactBlock) / 64, kLines = kBlockLines + sizeof(AnchorBlock) / 64;
+      const char* next_block = reinterpret_cast<const char*>(&blocks[b + 1]);
+      const char* next_anchors = reinterpret_cast<const char*>(&anchors[b + 1]);
+      for (std::size_t line = static_cast<std::size_t>(l); line < kLines; line += kLanes)
+        __builtin_prefetch(line < kBlockLines ? next_block + 64 * line : next_anchors + 64 * (line - kBlockLines), 1);
+    }
     const ContactPair& c = pairs[index];
     set_rolling_mass(index);
     const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
