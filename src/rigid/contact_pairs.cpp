@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "collide/narrow_internal.h"
 
@@ -71,9 +72,12 @@ constexpr double kSamePoint = 1e-6;
 // how many pairs ahead make_manifolds() and emit() fetch the pool entries they will read
 constexpr std::size_t kPairsAhead = 4;
 
-// asks for the cache lines of `bytes` from `at` (a prefetch: no effect on the results)
+// asks for every cache line that the `bytes` from `at` touch (a prefetch: no effect on the
+// results); from the line `at` is in, so an object that starts mid-line gets its last line too
 void prefetch_lines(const void* at, std::size_t bytes) {
-  for (std::size_t line = 0; line < bytes; line += 64) __builtin_prefetch(static_cast<const char*>(at) + line);
+  const auto start = reinterpret_cast<std::uintptr_t>(at);
+  for (std::uintptr_t line = start & ~std::uintptr_t{63}; line < start + bytes; line += 64)
+    __builtin_prefetch(reinterpret_cast<const void*>(line));
 }
 
 }  // namespace
@@ -174,8 +178,8 @@ void RigidContacts::settle(std::uint32_t record) {
   CachedManifold& r = manifolds[record];
   if (r.last == kNoIndex) return;
   ContactPair& c = pairs[r.last];
-  for (int k = 0; k < c.count; ++k) r.points[k].normal_impulse = c.points[k].normal_impulse;
-  r.friction = c.friction_old;
+  for (int k = 0; k < c.count; ++k) r.normal_impulse[k] = c.normal_impulse[k];
+  r.friction = c.friction_impulse();
   r.twist = c.twist_impulse;
   r.rolling = c.rolling_impulse;
   c.record = kNoIndex;
@@ -366,6 +370,7 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   // last step's pairs hold the impulses the solver left; they are read as they are rewritten
   last_count = pairs.size();
   emitted = 0;
+  pairs_same = true;  // until emit() finds an entry that differs
   update_proxies(s, dt);
   find_new_pairs(s);
   wake_touched(s);
@@ -442,7 +447,8 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
   // its proxies one distance ahead; a touching pair's first cached manifold is asked for when
   // the walk is a distance before it (asked for in the plan, its six lines a pair crowded out
   // the plan's own loads: in the rain's landing emit and collide_pair took 25% fewer samples
-  // once it moved, make_manifolds about as many)
+  // once it moved, make_manifolds about as many); of it, what emit reads (the carried impulses
+  // after it are read only when no pair entry holds them)
   const std::size_t count = shape_pairs.size();
   auto prefetch_ahead = [&](std::size_t k) {
     if (k + 2 * kPairsAhead < count && shape_pairs[k + 2 * kPairsAhead].cache != kNoIndex)
@@ -496,7 +502,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
       if (k + kPairsAhead < last && fates[k + kPairsAhead - first] == PairPlan::Fate::Touching) {
         const std::uint32_t ahead = shape_pairs[k + kPairsAhead].cache;
         if (ahead != kNoIndex && caches[ahead].first != kNoIndex)
-          prefetch_lines(&manifolds[caches[ahead].first], sizeof(CachedManifold));
+          prefetch_lines(&manifolds[caches[ahead].first], offsetof(CachedManifold, normal_impulse));
       }
       ShapePair p = shape_pairs[k];
       const PairPlan::Fate fate = fates[k - first];
@@ -601,7 +607,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       q.core_a = qa_inv * ((flip ? cp.point_b : cp.point_a) - radius_a * n - s.com_[a]);
       q.core_b = qb_inv * ((flip ? cp.point_a : cp.point_b) + radius_b * n - s.com_[b]);
       q.id = cp.id;
-      q.normal_impulse = 0;
+      r.normal_impulse[k] = 0;
       if (!was) continue;
       int match = -1;
       for (int o = 0; o < was->count && match < 0; ++o)
@@ -611,7 +617,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
         const Vec3 d = was->points[o].core_a - q.core_a;
         if (glm::dot(d, d) <= slop2) match = o;
       }
-      if (match >= 0) q.normal_impulse = was->points[match].normal_impulse;
+      if (match >= 0) r.normal_impulse[k] = was->normal_impulse[match];
     }
     if (tail == kNoIndex)
       c.first = idx;
@@ -725,6 +731,8 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   if (at_index + kPairsAhead < last_count) prefetch_lines(&pairs[at_index + kPairsAhead], sizeof(ContactPair));
   ContactPair& c = pairs[at_index];
   CachedManifold& own = manifolds[record];
+  // the colours' key of last step's entry here (color() keeps the colours while all match)
+  pairs_same = pairs_same && at_index < last_count && c.a == a && c.b == b && (c.rolling != 0) == (r.mixed_rolling != 0);
   if (c.record != record && c.record != kNoIndex && at_index < last_count && manifolds[c.record].last == at_index)
     settle(c.record);
   // this manifold's impulses: in this entry (the same place as last step), in another entry,
@@ -732,8 +740,8 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const ContactPair& from = own.last == kNoIndex ? c : pairs[own.last];
   const bool held = own.last != kNoIndex;
   double impulse[Manifold::kMaxPoints];
-  for (int k = 0; k < r.count; ++k) impulse[k] = held ? from.points[k].normal_impulse : r.points[k].normal_impulse;
-  const Vec3 friction = held ? from.friction_old : r.friction;
+  for (int k = 0; k < r.count; ++k) impulse[k] = held ? from.normal_impulse[k] : r.normal_impulse[k];
+  const Vec3 friction = held ? from.friction_impulse() : r.friction;
   const double twist = held ? from.twist_impulse : r.twist;
   const Vec3 rolling = held ? from.rolling_impulse : r.rolling;
   if (held && own.last != at_index) pairs[own.last].record = kNoIndex;
@@ -760,28 +768,29 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   c.count = r.count;
   const bool warm = cs.warm_starting;
   const double radius_a = r.radius_a, radius_b = r.radius_b;
+  // (each value is computed into a local and stored from there: stored piecewise and read back
+  // whole, a Vec3 waited on the store buffer)
   Vec3 centroid(0), at[Manifold::kMaxPoints];
   for (int k = 0; k < r.count; ++k) {
     const CachedPoint& q = r.points[k];
     SolverPoint& pt = c.points[k];
     // the cores now, the surface points on them, and the overlap between the surfaces
-    pt.sa = qa * q.core_a;
-    pt.sb = qb * q.core_b;
-    const Vec3 core_a = com_a + pt.sa, core_b = com_b + pt.sb;
+    const Vec3 sa = qa * q.core_a, sb = qb * q.core_b;
+    const Vec3 core_a = com_a + sa, core_b = com_b + sb;
     const Vec3 on_a = core_a + radius_a * n, on_b = core_b - radius_b * n;
-    pt.depth = glm::dot(on_a - on_b, n);
-    at[k] = 0.5 * (on_a + on_b);
-    centroid += at[k];
-    pt.ra = at[k] - com_a;
-    pt.rb = at[k] - com_b;
+    const double depth = glm::dot(on_a - on_b, n);
+    const Vec3 mid = 0.5 * (on_a + on_b);
+    centroid += mid;
+    at[k] = mid;
+    pt.at = mid, pt.sa = sa, pt.sb = sb;
+    pt.depth = depth;
     // the separation now is -depth; keep it relative to the cores
-    pt.offset = -pt.depth - glm::dot(core_b - core_a, n);
+    pt.offset = -depth - glm::dot(core_b - core_a, n);
     pt.id = q.id;
-    pt.normal_impulse = warm ? impulse[k] : 0;
+    c.normal_impulse[k] = warm ? impulse[k] : 0;
   }
   centroid /= static_cast<double>(r.count);
   c.ca = centroid - com_a;
-  c.cb = centroid - com_b;
   c.twist_radius = 0;
   for (int k = 0; k < r.count; ++k) c.twist_radius += glm::length(at[k] - centroid);
   c.twist_radius /= r.count;
@@ -821,7 +830,20 @@ void RigidContacts::remove_body(RigidBodySystem& s, std::uint32_t slot, std::siz
       shape_pairs[keep++] = p;
   }
   shape_pairs.resize(keep);
-  std::erase_if(pairs, [&](const ContactPair& c) { return c.slot_a == slot || c.slot_b == slot; });
+  // (and their lanes with them, which manifold() reads until the next step; their colours are
+  // made anew, the entries having moved)
+  colored_once = false;
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (pairs[k].slot_a == slot || pairs[k].slot_b == slot) continue;
+    if (kept != k) {
+      pairs[kept] = pairs[k];
+      if (k < lane_of.size()) lane_of[kept] = lane_of[k];
+    }
+    ++kept;
+  }
+  pairs.resize(kept);
+  if (lane_of.size() > kept) lane_of.resize(kept);
   emitted = pairs.size();
   // the body now at dense index i (the last one, moved into the hole) takes its proxies along
   if (i < s.type_.size() && s.owner_[i] < body_proxies.size())

@@ -26,6 +26,9 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <type_traits>
+
+#include "core/lanes.h"
 
 namespace pba::detail {
 
@@ -74,35 +77,199 @@ void prefetch_pair(const ContactPair& c) {
   for (std::size_t line = 0; line < kUsed; line += 64) __builtin_prefetch(p + line);
 }
 
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// fill: a block's manifolds into its lanes, in their contact frames (t1, t2, n)
+
+namespace {
+
+using lanes::v4d;
+using lanes::v8d;
+typedef float v4f __attribute__((vector_size(16)));
+typedef float v8f __attribute__((vector_size(32)));
+
+// What filling a block reads of its manifolds, by field and lane (doubles, as the pairs and the
+// bodies hold them; lanes past the block's manifolds and points past a manifold's count hold
+// zeros): gathered lane by lane from the pairs (RigidContacts::fill_block), then computed a
+// lane type at a time (fill_lanes), so the arithmetic runs on 8 lanes (AVX-512) or 4 (AVX2)
+// at once; the pairs' gather, not the arithmetic, is what is left of its time (it waits on
+// memory: a block's 16 pairs are 16 scattered 640-byte records).
+struct FillInput {
+  double t[3][3][kLanes];               // t1, t2, n by component
+  double ma[kLanes], mb[kLanes];        // inverse masses (1/kg; 0 for a body that does not move)
+  double unit[kLanes];                  // the lane's impulse unit (fill_lanes)
+  double ia[9][kLanes], ib[9][kLanes];  // the world inverse inertias, column by column (glm's order)
+  double dab[3][kLanes], dba[3][kLanes];  // com_a - com_b, com_b - com_a (m)
+  double ca[3][kLanes];                 // the centroid from a's centre, world axes (m)
+  double active[4][kLanes];             // 1 for the manifold's points, else 0
+  double arm[4][3][kLanes];             // each point from a's centre (m)
+  double sa[4][3][kLanes], sb[4][3][kLanes];  // the core anchors (SolverPoint)
+  double offset[4][kLanes], impulse[4][kLanes];
+  double friction[kLanes], twist_radius[kLanes], tangent_impulse[2][kLanes], twist_impulse[kLanes];
+};
+// (rows of kLanes doubles, so a lane is cleared row by row)
+constexpr std::size_t kInputRows = sizeof(FillInput) / sizeof(double[kLanes]);
+static_assert(sizeof(FillInput) % sizeof(double[kLanes]) == 0, "FillInput is rows of kLanes doubles");
+
+// the floats of a lane type of doubles
+template <class V>
+struct FloatsOf {
+  using type = float;
+};
+template <>
+struct FloatsOf<v4d> {
+  using type = v4f;
+};
+template <>
+struct FloatsOf<v8d> {
+  using type = v8f;
+};
+
+// lanes [l0, l0 + width) of input row f
+template <class V>
+PBA_LANES V from(const double (&f)[kLanes], int l0) {
+  return lanes::load<V>(f + l0);
+}
+
+// v rounded to floats into lanes [l0, l0 + width) of a block's field
+template <class V>
+PBA_LANES void put(Real (&f)[kLanes], int l0, V v) {
+  using F = typename FloatsOf<V>::type;
+  if constexpr (std::is_same_v<V, double>) {
+    f[l0] = static_cast<F>(v);
+  } else {
+    const F x = __builtin_convertvector(v, F);
+    std::memcpy(f + l0, &x, sizeof x);
+  }
+}
+
 // 1 / k, or 0 when nothing can move (effective_mass's convention)
-double inverse(double k) { return k > 0 ? 1 / k : 0; }
-
-// u^T M v for the inverse inertia m (xx, xy, xz, yy, yz, zz) and frame vectors u, v whose
-// component z is zero (the points' arms and the centroid's tangent arms in the frame): M v's
-// rows, then their dot with u, each sum in component order without the terms of z. Those
-// terms are exact zeros, so leaving them out changes a sum only where it is itself zero (at
-// most its sign); fill() adds each form to ma + mb, which is never -0, so the masses and K it
-// stores have the bits of the full products. (M v)'s row z is left zero.
-template <int z>
-void product_skipping(const double m[6], const double v[3], double out[3]) {
-  static constexpr int kAt[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
-  constexpr int i = z == 0 ? 1 : 0, j = z == 2 ? 1 : 2;  // the components kept
-  out[i] = m[kAt[i][i]] * v[i] + m[kAt[i][j]] * v[j];
-  out[j] = m[kAt[j][i]] * v[i] + m[kAt[j][j]] * v[j];
-  out[z] = 0;
+template <class V>
+PBA_LANES V inverse(V k) {
+  const V zero = lanes::splat<V>(0.0);
+  return k > zero ? lanes::splat<V>(1.0) / k : zero;
 }
 
-template <int z>
-double dot_skipping(const double u[3], const double mv[3]) {
-  constexpr int i = z == 0 ? 1 : 0, j = z == 2 ? 1 : 2;
-  return u[i] * mv[i] + u[j] * mv[j];
+// x where the mask m (a comparison's result) is set, else +0
+template <class V, class M>
+PBA_LANES V keep(M m, V x) {
+  return m ? x : lanes::splat<V>(0.0);
 }
 
-template <int z>
-double quadratic_skipping(const double m[6], const double u[3], const double v[3]) {
-  double mv[3];
-  product_skipping<z>(m, v, mv);
-  return dot_skipping<z>(u, mv);
+// dot(u, v) of lanes of 3-vectors, as glm sums it: (u0 v0 + u1 v1) + u2 v2
+template <class V>
+PBA_LANES V dot3(const V u[3], const V v[3]) {
+  return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+}
+
+// Lanes [l0, l0 + width) of a block and its anchors from the gathered input. Every lane type
+// does the same operations in the same order (the build has -ffp-contract=off, division is
+// correctly rounded), so the scalar, AVX2 and AVX-512 paths give the same bits.
+template <class V>
+PBA_LANES void fill_lanes(const FillInput& in, ContactBlock& k, AnchorBlock& g, int l0) {
+  const V zero = lanes::splat<V>(0.0);
+  V t[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int i = 0; i < 3; ++i) t[r][i] = from<V>(in.t[r][i], l0);
+  for (int i = 0; i < 3; ++i) put(k.t1[i], l0, t[0][i]), put(k.t2[i], l0, t[1][i]), put(k.n[i], l0, t[2][i]);
+  // the lane's impulse unit u, a power of two that puts u (ma + mb) in [0.5, 1) (so that the
+  // float kernels see masses near 1 kg whatever the bodies weigh; exact: a power of two scales
+  // every product and quotient without rounding, so it changes no bits unless a float would
+  // leave its range): the block keeps impulses and effective masses divided by u, inverse
+  // masses, inverse inertias and K times u
+  const V ma = from<V>(in.ma, l0), mb = from<V>(in.mb, l0), unit = from<V>(in.unit, l0);
+  put(k.unit, l0, unit);
+  put(k.ma, l0, ma * unit), put(k.mb, l0, mb * unit);
+  // the inverse inertias in the frame, t_i . (I^-1 t_j) (upper triangle: xx, xy, xz, yy, yz, zz)
+  V ia[6], ib[6];
+  {
+    V it_a[3][3], it_b[3][3];  // I^-1 t_j, each component as glm's matrix product sums it
+    for (int j = 0; j < 3; ++j)
+      for (int r = 0; r < 3; ++r) {
+        it_a[j][r] = from<V>(in.ia[r], l0) * t[j][0] + from<V>(in.ia[3 + r], l0) * t[j][1] + from<V>(in.ia[6 + r], l0) * t[j][2];
+        it_b[j][r] = from<V>(in.ib[r], l0) * t[j][0] + from<V>(in.ib[3 + r], l0) * t[j][1] + from<V>(in.ib[6 + r], l0) * t[j][2];
+      }
+    constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kCol[6] = {0, 1, 2, 1, 2, 2};
+    for (int e = 0; e < 6; ++e) {
+      ia[e] = dot3(t[kRow[e]], it_a[kCol[e]]);
+      ib[e] = dot3(t[kRow[e]], it_b[kCol[e]]);
+      put(k.ia[e], l0, ia[e] * unit), put(k.ib[e], l0, ib[e] * unit);
+    }
+  }
+  // the centres' offset d and the centroid in the frame (b's centroid is ca + d)
+  V dab[3], dba[3], cw[3], d[3], ca[3];
+  for (int i = 0; i < 3; ++i) dab[i] = from<V>(in.dab[i], l0), dba[i] = from<V>(in.dba[i], l0), cw[i] = from<V>(in.ca[i], l0);
+  for (int i = 0; i < 3; ++i) d[i] = dot3(dab, t[i]), ca[i] = dot3(cw, t[i]);
+  for (int i = 0; i < 3; ++i) put(k.ca[i], l0, ca[i]), put(k.cb[i], l0, ca[i] + d[i]);
+  // the points. The normal rows' angular parts are r x n = (y, -x, 0) in the frame, a's arm
+  // ra = (y, -x) and b's rb = ra + (d1, -d0); their third components are zero, so the
+  // products with the inverse inertias leave those terms out (exact zeros: a sum changes at
+  // most a zero's sign, and each form is added to ma + mb, never -0), and each point's I r is
+  // formed once, for K's entries ma + mb + ra_i^T Ia ra_j + rb_i^T Ib rb_j
+  V ra[4][2], rb[4][2], ira[4][2], irb[4][2];
+  decltype(zero < zero) on[4];
+  const V base = dot3(dba, t[2]);  // the centres' separation along n
+  for (int p = 0; p < 4; ++p) {
+    on[p] = from<V>(in.active[p], l0) > zero;
+    V arm[3], sa[3], sb[3];
+    for (int i = 0; i < 3; ++i)
+      arm[i] = from<V>(in.arm[p][i], l0), sa[i] = from<V>(in.sa[p][i], l0), sb[i] = from<V>(in.sb[p][i], l0);
+    const V x = keep(on[p], dot3(arm, t[0])), y = keep(on[p], dot3(arm, t[1]));
+    ra[p][0] = y, ra[p][1] = -x;
+    rb[p][0] = y + d[1], rb[p][1] = -(x + d[0]);
+    ira[p][0] = ia[0] * ra[p][0] + ia[1] * ra[p][1];
+    ira[p][1] = ia[1] * ra[p][0] + ia[3] * ra[p][1];
+    irb[p][0] = ib[0] * rb[p][0] + ib[1] * rb[p][1];
+    irb[p][1] = ib[1] * rb[p][0] + ib[3] * rb[p][1];
+    const V za = dot3(sa, t[2]), zb = dot3(sb, t[2]);
+    put(g.za[p], l0, keep(on[p], za)), put(g.zb[p], l0, keep(on[p], zb));
+    // the core anchors' tangential offsets from the contact point (half the step from a's
+    // surface point to b's; zero where the narrow phase puts them on one normal)
+    V e[3];
+    for (int i = 0; i < 3; ++i) e[i] = lanes::splat<V>(0.5) * ((sb[i] + dba[i]) - sa[i]);
+    put(g.ex[p], l0, keep(on[p], dot3(e, t[0]))), put(g.ey[p], l0, keep(on[p], dot3(e, t[1])));
+    // the separation at the start of the step (the kernels add the bodies' motion since)
+    const V sep = keep(on[p], base + from<V>(in.offset[p], l0) + zb - za);
+    put(k.sep[p], l0, sep), put(g.base[p], l0, sep);
+    put(k.impulse[p], l0, keep(on[p], from<V>(in.impulse[p], l0) / unit));
+    put(k.x[p], l0, x - ca[0]), put(k.y[p], l0, y - ca[1]);
+    put(k.max_impulse[p], l0, zero);
+  }
+  static constexpr int kPairs[10][2] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}};
+  V diag[4];
+  for (int e = 0; e < 10; ++e) {
+    const int i = kPairs[e][0], j = kPairs[e][1];
+    const V v = keep(on[i] & on[j], ma + mb + (ra[i][0] * ira[j][0] + ra[i][1] * ira[j][1]) +
+                                        (rb[i][0] * irb[j][0] + rb[i][1] * irb[j][1]));
+    put(k.k[e], l0, v * unit);
+    if (i == j) diag[i] = v;
+  }
+  for (int p = 0; p < 4; ++p) put(k.mass[p], l0, inverse(diag[p]) / unit);
+  // friction at the centroid: the tangents' angular parts c x t1 = (0, c2, -c1) and
+  // c x t2 = (-c2, 0, c0), their quadratic forms again without the zero component
+  {
+    const V cb[3] = {ca[0] + d[0], ca[1] + d[1], ca[2] + d[2]};
+    auto form1 = [](const V m[6], V u1, V u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
+    auto form2 = [](const V m[6], V u0, V u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
+    put(k.tangent_mass[0], l0, inverse(ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1])) / unit);
+    put(k.tangent_mass[1], l0, inverse(ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0])) / unit);
+    put(k.twist_mass, l0, inverse(ia[5] + ib[5]) / unit);
+  }
+  put(k.friction, l0, from<V>(in.friction, l0)), put(k.twist_radius, l0, from<V>(in.twist_radius, l0));
+  put(k.tangent_impulse[0], l0, from<V>(in.tangent_impulse[0], l0) / unit);
+  put(k.tangent_impulse[1], l0, from<V>(in.tangent_impulse[1], l0) / unit);
+  put(k.twist_impulse, l0, from<V>(in.twist_impulse, l0) / unit);
+}
+
+__attribute__((target("avx512f"))) void fill_avx512(const FillInput& in, ContactBlock& k, AnchorBlock& g, int lanes) {
+  for (int l0 = 0; l0 < lanes; l0 += 8) fill_lanes<v8d>(in, k, g, l0);
+}
+__attribute__((target("avx2"))) void fill_avx2(const FillInput& in, ContactBlock& k, AnchorBlock& g, int lanes) {
+  for (int l0 = 0; l0 < lanes; l0 += 4) fill_lanes<v4d>(in, k, g, l0);
+}
+void fill_scalar(const FillInput& in, ContactBlock& k, AnchorBlock& g, int lanes) {
+  for (int l = 0; l < lanes; ++l) fill_lanes<double>(in, k, g, l);
 }
 
 }  // namespace
@@ -120,10 +287,14 @@ void RigidContacts::prepare(RigidBodySystem& s) {
     // a sleeping body holds still like a static one until something wakes it
     inv_inertia[i] = s.asleep_[i] ? Mat3(0.0) : r * d * glm::transpose(r);
   }
-  built = has_colors = false;
+  built = has_colors = lanes_valid = false;
   backward = !backward;
+  pairs_same = pairs_same && pairs.size() == last_count;
+  // (room for as many pairs as `pairs` has, so steady state does not allocate)
+  if (rolling_mass.size() < pairs.size()) rolling_mass.reserve(pairs.capacity()), rolling_mass.resize(pairs.size());
   if (s.settings_.solver == RigidSolverType::Xpbd) {  // its own passes on the pairs
-    for (ContactPair& c : pairs) set_rolling_mass(c);
+    colored_once = false;  // (the colours stay those of an earlier step's pairs)
+    for (std::uint32_t i = 0; i < pairs.size(); ++i) set_rolling_mass(i);
     return;
   }
   // the velocities, the motion since the start of the step (none yet), the colours and the
@@ -141,7 +312,7 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   warm.assign(n + 1, SolverBody{});
   color(s);
   build(s);
-  built = has_colors = true;
+  built = has_colors = lanes_valid = true;
   if (s.settings_.warm_starting) accumulate_warm(s);
 }
 
@@ -200,26 +371,19 @@ void RigidContacts::color(RigidBodySystem& s) {
   color_block.reserve(room + 3);
   restitution_lanes.reserve(room);
   rolls.reserve(room);
+  color_key.reserve(2 * room);
   constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
   auto moving = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
   // the colours depend only on the pairs' bodies in order, which of them roll, which bodies move
   // and the solver: when none of that changed since the last colouring (a pile at rest, a
-  // pyramid), the last colours stand
+  // pyramid), the last colours stand. Whether the pairs changed, emit() found as it rewrote
+  // them (pairs_same: each entry's bodies and rolling as last step's, which the colours were
+  // made from or kept for), so the pairs are not read again here
   {
-    color_key.reserve(3 * room);
     color_moving.reserve(n + 3);
     const bool tgs = s.settings_.solver == RigidSolverType::Tgs;
-    bool same = colored_once && color_key.size() == 3 * m && color_moving.size() == n && color_tgs == tgs;
-    color_key.resize(3 * m);
+    bool same = colored_once && pairs_same && color_moving.size() == n && color_tgs == tgs;
     color_moving.resize(n);
-    for (std::size_t i = 0; i < m; ++i) {
-      const ContactPair& c = pairs[i];
-      const std::uint32_t key[3] = {c.a, c.b, c.rolling != 0};
-      for (int j = 0; j < 3; ++j) {
-        same = same && color_key[3 * i + j] == key[j];
-        color_key[3 * i + j] = key[j];
-      }
-    }
     for (std::uint32_t i = 0; i < n; ++i) {
       const std::uint8_t x = moving(i);
       same = same && color_moving[i] == x;
@@ -229,12 +393,15 @@ void RigidContacts::color(RigidBodySystem& s) {
     if (same) return;
     colored_once = true;
   }
-  // (from here on the pairs' bodies are read from color_key, 12 bytes a pair in order, rather
-  // than from the pairs, a line or two each, and whether a body moves from color_moving: the
-  // colouring's samples -18% in the rain's landing, where it runs every step)
+  // the pairs' bodies copied once into color_key, 8 bytes a pair in order, and read from there
+  // rather than from the pairs (a line or two each) by the passes below, and whether a body
+  // moves from color_moving: the colouring's samples -18% in the rain's landing, where it runs
+  // every step
+  color_key.resize(2 * m);
+  for (std::size_t i = 0; i < m; ++i) color_key[2 * i] = pairs[i].a, color_key[2 * i + 1] = pairs[i].b;
   auto moving_now = [&](std::uint32_t i) { return color_moving[i] != 0; };
-  auto body_a = [&](std::size_t i) { return color_key[3 * i]; };
-  auto body_b = [&](std::size_t i) { return color_key[3 * i + 1]; };
+  auto body_a = [&](std::size_t i) { return color_key[2 * i]; };
+  auto body_b = [&](std::size_t i) { return color_key[2 * i + 1]; };
   // the dynamic pairs as adjacency lists
   adjacency_start.assign(n + 1, 0);
   for (std::size_t i = 0; i < m; ++i) {
@@ -358,6 +525,8 @@ void RigidContacts::build(RigidBodySystem& s) {
   offset[colors + 1] = offset[colors] + overflow_count;
   cursor.assign(offset.begin(), offset.end() - 1);
   by_color.resize(pairs.size());
+  lane_of.reserve(pairs.capacity());
+  lane_of.resize(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const std::size_t c = color_of[i] == kOverflow ? colors : color_of[i];
     by_color[cursor[c]++] = static_cast<std::uint32_t>(i);
@@ -366,132 +535,121 @@ void RigidContacts::build(RigidBodySystem& s) {
   rolls.clear();
   colored_rolls = 0;
   for (std::size_t c = 0; c <= colors; ++c)
-    for (std::uint32_t slot = 0; slot < offset[c + 1] - offset[c]; ++slot) {
-      const std::size_t b = color_block[c] + slot / kLanes;
-      const int l = static_cast<int>(slot % kLanes);
-      const std::uint32_t i = by_color[offset[c] + slot];
-      // a pair a few ahead on its way from the outer caches (colour order visits the pairs out
-      // of order): its header and points
-      if (offset[c] + slot + kPrefetchAhead < by_color.size()) prefetch_pair(pairs[by_color[offset[c] + slot + kPrefetchAhead]]);
-      fill(s, blocks[b], anchors[b], l, i);
-      if (pairs[i].restitution != 0)
-        restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), pairs[i].restitution});
-      if (pairs[i].rolling != 0) {
+    for (std::size_t b = color_block[c]; b < color_block[c + 1]; ++b) {
+      const std::size_t first = offset[c] + (b - color_block[c]) * kLanes;  // the block's first slot of by_color
+      fill_block(s, b, first);
+      // the lanes that roll: what their rolling resistance reads, copied in lane order
+      const ContactBlock& k = blocks[b];
+      for (int l = 0; l < k.lanes; ++l) {
+        const std::uint32_t i = k.pair[l];
         const ContactPair& p = pairs[i];
-        rolls.push_back({.mass = p.rolling_mass, .ia = inv_inertia[p.a], .ib = inv_inertia[p.b],
+        if (p.rolling == 0) continue;
+        rolls.push_back({.mass = rolling_mass[i], .ia = inv_inertia[p.a], .ib = inv_inertia[p.b],
                          .impulse = p.rolling_impulse, .rolling = p.rolling,
-                         .key = static_cast<std::uint32_t>(b * kLanes + l), .pair = i, .a = p.a, .b = p.b,
-                         .write_a = ((blocks[b].write_a >> l) & 1) != 0, .write_b = ((blocks[b].write_b >> l) & 1) != 0});
+                         .key = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)), .pair = i, .a = p.a,
+                         .b = p.b, .write_a = ((k.write_a >> l) & 1) != 0, .write_b = ((k.write_b >> l) & 1) != 0});
         if (c < colors) ++colored_rolls;
       }
     }
 }
 
-// One manifold into lane l of block k, in its contact frame (t1, t2, n).
-void RigidContacts::fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, int l, std::uint32_t index) {
-  ContactPair& c = pairs[index];
-  set_rolling_mass(c);  // here, where the pair is read anyway, rather than in a pass of its own
-  const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
-  k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
-  if (da) k.write_a |= 1u << l;
-  if (db) k.write_b |= 1u << l;
-  const Vec3 t[3] = {c.t1, c.t2, c.normal};
-  for (int i = 0; i < 3; ++i) k.t1[i][l] = c.t1[i], k.t2[i][l] = c.t2[i], k.n[i][l] = c.normal[i];
-  const double ma = s.asleep_[c.a] ? 0 : s.inv_mass_[c.a], mb = s.asleep_[c.b] ? 0 : s.inv_mass_[c.b];
-  // the lane's impulse unit: the power of two u that puts u (ma + mb) in [0.5, 1), so that the
-  // float kernels see masses near 1 kg whatever the bodies weigh (exact: a power of two scales
-  // every product and quotient without rounding, so it changes no bits unless a float would
-  // leave its range); the block keeps impulses and effective masses divided by u, inverse
-  // masses, inverse inertias and K times u
-  int exponent = 0;
-  if (ma + mb > 0) std::frexp(ma + mb, &exponent);
-  const double unit = std::ldexp(1.0, -exponent);
-  k.unit[l] = static_cast<Real>(unit);
-  k.ma[l] = ma * unit, k.mb[l] = mb * unit;
-  // the inverse inertias in the frame, t_i . (I^-1 t_j)
-  double ia[6], ib[6];
-  {
-    const Vec3 at[3] = {inv_inertia[c.a] * t[0], inv_inertia[c.a] * t[1], inv_inertia[c.a] * t[2]};
-    const Vec3 bt[3] = {inv_inertia[c.b] * t[0], inv_inertia[c.b] * t[1], inv_inertia[c.b] * t[2]};
-    constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kCol[6] = {0, 1, 2, 1, 2, 2};
-    for (int e = 0; e < 6; ++e) {
-      ia[e] = glm::dot(t[kRow[e]], at[kCol[e]]);
-      ib[e] = glm::dot(t[kRow[e]], bt[kCol[e]]);
-      k.ia[e][l] = ia[e] * unit, k.ib[e][l] = ib[e] * unit;
+// Block b's manifolds (by_color from `first`) into its lanes: what they need gathered lane by
+// lane (FillInput), the frames, masses and anchors a lane type at a time (fill_lanes), then
+// each lane's normal velocities before the solve.
+void RigidContacts::fill_block(RigidBodySystem& s, std::size_t b, std::size_t first) {
+  ContactBlock& k = blocks[b];
+  AnchorBlock& g = anchors[b];
+  const int width = simd == SimdPath::Avx512 ? 8 : simd == SimdPath::Avx2 ? 4 : 1;
+  const int used = (k.lanes + width - 1) / width * width;
+  const auto spare = static_cast<std::uint32_t>(s.type_.size());
+  FillInput in;
+  auto* rows_of_input = reinterpret_cast<double(*)[kLanes]>(&in);
+  int count[kLanes] = {};
+  for (int l = 0; l < used; ++l) {
+    if (l >= k.lanes) {  // past the block's manifolds: zeros, unit 1 (clear_lane's values)
+      for (std::size_t r = 0; r < kInputRows; ++r) rows_of_input[r][l] = 0;
+      in.unit[l] = 1;
+      continue;
     }
-  }
-  auto frame = [&](const Vec3& v, double out[3]) {
-    out[0] = glm::dot(v, c.t1), out[1] = glm::dot(v, c.t2), out[2] = glm::dot(v, c.normal);
-  };
-  double d[3], ca[3];
-  frame(s.com_[c.a] - s.com_[c.b], d);
-  frame(c.ca, ca);
-  for (int i = 0; i < 3; ++i) k.ca[i][l] = ca[i], k.cb[i][l] = ca[i] + d[i];
-  // the points; the normal rows' angular parts are r x n = (y, -x, 0) in the frame
-  double x[4] = {}, y[4] = {};
-  // K's entries ma + mb + ra_i^T Ia ra_j + rb_i^T Ib rb_j for the points' arms in the frame,
-  // ra = (y, -x, 0) and rb = ra + (d1, -d0, 0): the arms' third component is zero (so the
-  // products skip it, product_skipping), and each column's I r is formed once, with
-  // the point (in the loop that finds its arm, so nothing is stored and read back)
-  double ra[4][3], rb[4][3], ira[4][3], irb[4][3];
-  const double base = glm::dot(s.com_[c.b] - s.com_[c.a], c.normal);
-  for (int p = 0; p < 4; ++p) {
-    if (p < c.count) {
+    const std::uint32_t index = by_color[first + static_cast<std::size_t>(l)];
+    if (first + l + kPrefetchAhead < by_color.size()) prefetch_pair(pairs[by_color[first + l + kPrefetchAhead]]);
+    // and the next block's lines, to be written (the passes left them in the outer caches),
+    // spread over this block's lanes
+    if (b + 1 < block_count) {
+      constexpr std::size_t kBlockLines = sizeof(ContactBlock) / 64, kLines = kBlockLines + sizeof(AnchorBlock) / 64;
+      const char* next_block = reinterpret_cast<const char*>(&blocks[b + 1]);
+      const char* next_anchors = reinterpret_cast<const char*>(&anchors[b + 1]);
+      for (std::size_t line = static_cast<std::size_t>(l); line < kLines; line += kLanes)
+        __builtin_prefetch(line < kBlockLines ? next_block + 64 * line : next_anchors + 64 * (line - kBlockLines), 1);
+    }
+    const ContactPair& c = pairs[index];
+    set_rolling_mass(index);
+    const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
+    k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
+    if (da) k.write_a |= 1u << l;
+    if (db) k.write_b |= 1u << l;
+    const double ma = s.asleep_[c.a] ? 0 : s.inv_mass_[c.a], mb = s.asleep_[c.b] ? 0 : s.inv_mass_[c.b];
+    int exponent = 0;  // the lane's impulse unit (fill_lanes)
+    if (ma + mb > 0) std::frexp(ma + mb, &exponent);
+    in.ma[l] = ma, in.mb[l] = mb, in.unit[l] = std::ldexp(1.0, -exponent);
+    const Vec3 t[3] = {c.t1, c.t2, c.normal};
+    const Mat3& ia = inv_inertia[c.a];
+    const Mat3& ib = inv_inertia[c.b];
+    const Vec3& com_a = s.com_[c.a];
+    const Vec3& com_b = s.com_[c.b];
+    const Vec3 dab = com_a - com_b, dba = com_b - com_a;
+    for (int i = 0; i < 3; ++i) {
+      for (int r = 0; r < 3; ++r) in.t[r][i][l] = t[r][i], in.ia[3 * i + r][l] = ia[i][r], in.ib[3 * i + r][l] = ib[i][r];
+      in.dab[i][l] = dab[i], in.dba[i][l] = dba[i], in.ca[i][l] = c.ca[i];
+    }
+    count[l] = c.count;
+    for (int p = 0; p < 4; ++p) {
+      const bool on = p < c.count;
       const SolverPoint& q = c.points[p];
-      x[p] = glm::dot(q.ra, c.t1), y[p] = glm::dot(q.ra, c.t2);
-      ra[p][0] = y[p], ra[p][1] = -x[p], ra[p][2] = 0;
-      rb[p][0] = y[p] + d[1], rb[p][1] = -(x[p] + d[0]), rb[p][2] = 0;
-      product_skipping<2>(ia, ra[p], ira[p]);
-      product_skipping<2>(ib, rb[p], irb[p]);
-      g.za[p][l] = glm::dot(q.sa, c.normal);
-      g.zb[p][l] = glm::dot(q.sb, c.normal);
-      // the core anchors' tangential offsets from the contact point (half the step from a's
-      // surface point to b's; zero where the narrow phase puts them on one normal)
-      const Vec3 e = 0.5 * ((q.sb + (s.com_[c.b] - s.com_[c.a])) - q.sa);
-      g.ex[p][l] = glm::dot(e, c.t1), g.ey[p][l] = glm::dot(e, c.t2);
-      // the separation at the start of the step (the kernels add the bodies' motion since)
-      k.sep[p][l] = g.base[p][l] = base + q.offset + glm::dot(q.sb, c.normal) - glm::dot(q.sa, c.normal);
-      k.impulse[p][l] = q.normal_impulse / unit;
-    } else {
-      g.za[p][l] = g.zb[p][l] = g.base[p][l] = k.sep[p][l] = k.impulse[p][l] = 0;
-      g.ex[p][l] = g.ey[p][l] = 0;
+      const Vec3 arm = on ? q.at - com_a : Vec3(0);
+      in.active[p][l] = on ? 1 : 0;
+      for (int i = 0; i < 3; ++i) in.arm[p][i][l] = arm[i], in.sa[p][i][l] = on ? q.sa[i] : 0, in.sb[p][i][l] = on ? q.sb[i] : 0;
+      in.offset[p][l] = on ? q.offset : 0;
+      in.impulse[p][l] = on ? c.normal_impulse[p] : 0;
     }
-    k.x[p][l] = x[p] - ca[0], k.y[p][l] = y[p] - ca[1];
-    k.max_impulse[p][l] = 0;
+    in.friction[l] = c.friction, in.twist_radius[l] = c.twist_radius;
+    in.tangent_impulse[0][l] = c.tangent_impulse[0], in.tangent_impulse[1][l] = c.tangent_impulse[1];
+    in.twist_impulse[l] = c.twist_impulse;
+    lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l));
+    if (c.restitution != 0)
+      restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), c.restitution});
   }
-  static constexpr int kPairs[10][2] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}};
-  double diag[4] = {};
-  for (int e = 0; e < 10; ++e) {
-    const int i = kPairs[e][0], j = kPairs[e][1];
-    double v = 0;
-    if (i < c.count && j < c.count) v = ma + mb + dot_skipping<2>(ra[i], ira[j]) + dot_skipping<2>(rb[i], irb[j]);
-    k.k[e][l] = v * unit;
-    if (i == j) diag[i] = v;
-  }
-  for (int p = 0; p < 4; ++p) k.mass[p][l] = inverse(diag[p]) / unit;
-  // friction at the centroid: the tangents' angular parts c x t1 = (0, c2, -c1), c x t2 = (-c2, 0, c0)
-  {
-    const double cb[3] = {ca[0] + d[0], ca[1] + d[1], ca[2] + d[2]};
-    const double a1[3] = {0, ca[2], -ca[1]}, b1[3] = {0, cb[2], -cb[1]};
-    const double a2[3] = {-ca[2], 0, ca[0]}, b2[3] = {-cb[2], 0, cb[0]};
-    k.tangent_mass[0][l] = inverse(ma + mb + quadratic_skipping<0>(ia, a1, a1) + quadratic_skipping<0>(ib, b1, b1)) / unit;
-    k.tangent_mass[1][l] = inverse(ma + mb + quadratic_skipping<1>(ia, a2, a2) + quadratic_skipping<1>(ib, b2, b2)) / unit;
-    k.twist_mass[l] = inverse(ia[5] + ib[5]) / unit;
-  }
-  k.friction[l] = c.friction, k.twist_radius[l] = c.twist_radius;
-  k.tangent_impulse[0][l] = c.tangent_impulse[0] / unit, k.tangent_impulse[1][l] = c.tangent_impulse[1] / unit;
-  k.twist_impulse[l] = c.twist_impulse / unit;
+  if (simd == SimdPath::Avx512)
+    fill_avx512(in, k, g, k.lanes);
+  else if (simd == SimdPath::Avx2)
+    fill_avx2(in, k, g, k.lanes);
+  else
+    fill_scalar(in, k, g, k.lanes);
+  for (int l = k.lanes; l < used; ++l) clear_lane(k, g, l, spare);
   // the normal velocities before the solve
-  double vn[4];
-  normal_velocities(k, l, arrays(s), vn);
-  for (int p = 0; p < 4; ++p) k.approach[p][l] = p < c.count ? vn[p] : 0;
+  const BodyArrays r = arrays(s);
+  for (int l = 0; l < k.lanes; ++l) {
+    double vn[4];
+    normal_velocities(k, l, r, vn);
+    for (int p = 0; p < 4; ++p) k.approach[p][l] = p < count[l] ? vn[p] : 0;
+  }
 }
 
 // rolling resistance acts on the relative angular velocity: its mass, for a pair that rolls
-void RigidContacts::set_rolling_mass(ContactPair& c) const {
+void RigidContacts::set_rolling_mass(std::uint32_t index) {
+  const ContactPair& c = pairs[index];
   if (!(c.rolling > 0)) return;
   const Mat3 k = inv_inertia[c.a] + inv_inertia[c.b];
-  c.rolling_mass = glm::determinant(k) > 0 ? glm::inverse(k) : Mat3(0.0);
+  rolling_mass[index] = glm::determinant(k) > 0 ? glm::inverse(k) : Mat3(0.0);
+}
+
+bool RigidContacts::solver_report(std::size_t k, int p, double& approach, double& max_impulse) const {
+  if (!lanes_valid || k >= lane_of.size()) return false;
+  const ContactBlock& b = blocks[lane_of[k] / kLanes];
+  const std::uint32_t l = lane_of[k] % kLanes;
+  approach = b.approach[p][l];
+  max_impulse = static_cast<double>(b.max_impulse[p][l]) * b.unit[l];
+  return true;
 }
 
 BodyArrays RigidContacts::arrays(RigidBodySystem& s) {
@@ -638,7 +796,7 @@ void RigidContacts::carry_impulses(double h) {
   if (impulse_h > 0 && impulse_h != h) {
     const double k = h / impulse_h;
     for (ContactPair& c : pairs) {
-      for (int j = 0; j < c.count; ++j) c.points[j].normal_impulse *= k;
+      for (int j = 0; j < c.count; ++j) c.normal_impulse[j] *= k;
       c.tangent_impulse[0] *= k, c.tangent_impulse[1] *= k;
       c.twist_impulse *= k;
       c.rolling_impulse *= k;
@@ -647,7 +805,7 @@ void RigidContacts::carry_impulses(double h) {
     // pair asleep while the solver, the substeps or the step changed wakes with the same force
     for (CachedManifold& m : manifolds) {
       if (m.last != kNoIndex) continue;  // its impulses are in `pairs`, scaled above
-      for (int j = 0; j < m.count; ++j) m.points[j].normal_impulse *= k;
+      for (int j = 0; j < m.count; ++j) m.normal_impulse[j] *= k;
       m.friction *= k, m.twist *= k, m.rolling *= k;
     }
   }
@@ -655,31 +813,24 @@ void RigidContacts::carry_impulses(double h) {
 }
 
 void RigidContacts::store() {
-  // the blocks' impulses back to their pairs (warm starting, contacts(), manifold())
-  // (every pair is in a block when they are built; its lines are fetched a block ahead, and its
-  // friction impulse in world axes is kept while they are in cache)
-  if (built) {
-    for (std::size_t b = 0; b < block_count; ++b) {
-      const ContactBlock& k = blocks[b];
-      if (b + 1 < block_count)
-        for (int l = 0; l < blocks[b + 1].lanes; ++l) prefetch_pair(pairs[blocks[b + 1].pair[l]]);
-      for (int l = 0; l < k.lanes; ++l) {
-        ContactPair& c = pairs[k.pair[l]];
-        const double unit = k.unit[l];
-        for (int p = 0; p < c.count; ++p) {
-          c.points[p].normal_impulse = k.impulse[p][l] * unit;
-          c.points[p].approach = k.approach[p][l];
-          c.points[p].max_normal_impulse = k.max_impulse[p][l] * unit;
-        }
-        c.tangent_impulse[0] = k.tangent_impulse[0][l] * unit, c.tangent_impulse[1] = k.tangent_impulse[1][l] * unit;
-        c.twist_impulse = k.twist_impulse[l] * unit;
-        c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
-      }
+  // the blocks' impulses back to their pairs (warm starting, contacts()): one cache line of
+  // each pair, fetched a block ahead (every pair is in a block when they are built; the
+  // approach speeds and largest impulses stay in the blocks for manifold(), solver_report)
+  if (!built) return;
+  for (std::size_t b = 0; b < block_count; ++b) {
+    const ContactBlock& k = blocks[b];
+    if (b + 1 < block_count)
+      for (int l = 0; l < blocks[b + 1].lanes; ++l) __builtin_prefetch(pairs[blocks[b + 1].pair[l]].normal_impulse, 1);
+    for (int l = 0; l < k.lanes; ++l) {
+      ContactPair& c = pairs[k.pair[l]];
+      const double unit = k.unit[l];
+      // (all four: a lane's unused points hold zeros, and writing them spares reading the count)
+      for (int p = 0; p < 4; ++p) c.normal_impulse[p] = k.impulse[p][l] * unit;
+      c.tangent_impulse[0] = k.tangent_impulse[0][l] * unit, c.tangent_impulse[1] = k.tangent_impulse[1][l] * unit;
+      c.twist_impulse = k.twist_impulse[l] * unit;
     }
-    built = false;
-    return;
   }
-  for (ContactPair& c : pairs) c.friction_old = c.tangent_impulse[0] * c.t1 + c.tangent_impulse[1] * c.t2;
+  built = false;
 }
 
 long RigidContacts::color_of_pair(std::size_t k) const {

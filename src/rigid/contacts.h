@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -17,18 +18,18 @@ namespace pba::detail {
 /// "None" for the contact pipeline's indices.
 inline constexpr std::uint32_t kNoIndex = 0xffffffffu;
 
-/// One contact point as the solver sees it: anchors, effective masses and impulses.
+/// One contact point as the solver sees it: where it is, its anchors and its separation.
 struct SolverPoint {
-  Vec3 ra{0, 0, 0}, rb{0, 0, 0};  // anchors from the centres of mass at the start of the step (m)
+  // the point (midway between the two surfaces) in the world at the start of the step (m);
+  // its anchors from the centres of mass are at - com_a and at - com_b (com at the start of
+  // the step: RigidBodySystem::com0_, which prepare() and the solvers read as com_ then)
+  Vec3 at{0, 0, 0};
   // the separation now is dot(core_b_now - core_a_now, n) + offset, where core_x are the
   // points of the shapes' cores (a sphere's centre, a capsule's segment, a box's surface) at
   // sa, sb from the centres of mass, turned with the bodies: a rolling ball's surface point
   // turns away from the contact, its centre does not
   Vec3 sa{0, 0, 0}, sb{0, 0, 0};
   double offset = 0;              // (m)
-  double normal_impulse = 0;      // accumulated (N s per substep)
-  double max_normal_impulse = 0;  // largest single normal impulse of the step (N s)
-  double approach = 0;            // normal relative velocity before the solve (m/s)
   double depth = 0;               // overlap at the start of the step (m)
   std::uint32_t id = 0;           // feature id (warm starting)
 };
@@ -42,27 +43,38 @@ struct SolverPoint {
 /// measurably weakens sliding friction.
 ///
 /// RigidContacts::update() rewrites the pairs in place each step (no value-initialisation:
-/// at 20,000 manifolds and 1.4 KB each that alone took milliseconds), so every field the
-/// solver reads must be written by update() (contact_pairs.cpp, emit) or by prepare().
-struct ContactPair {
+/// at 20,000 manifolds that alone took milliseconds), so every field the solver reads must be
+/// written by update() (contact_pairs.cpp, emit) or by prepare(). The pairs stream from memory
+/// three times a step (emit writes them, prepare's fill reads them in colour order, store
+/// writes the impulses back), so they hold only what those and the public queries need, in
+/// ten cache lines: the key and the frame, the impulses together in one line (all that
+/// store() writes), the centroid, then the points. A rolling pair's mass is kept apart
+/// (RigidContacts::rolling_mass), as are the solver's per-point approach speeds and largest
+/// impulses, which stay in the blocks (RigidContacts::lane_of).
+struct alignas(64) ContactPair {
   std::uint32_t slot_a = 0, slot_b = 0;    // body handle slots (stable across removals)
   std::uint32_t shape_a = 0, shape_b = 0;  // shape indices within the bodies
   std::uint32_t sub = 0;                   // the triangle of a mesh shape (0 for other shapes)
   std::uint32_t a = 0, b = 0;              // dense body indices this step
   std::uint32_t record = kNoIndex;         // its CachedManifold (contact_pairs.cpp; impulses go back there)
+  int count = 0;                           // points
   // from a to b, and the friction basis; (t1, t2, normal) is right-handed (t1 x t2 = normal),
   // which the solver's contact frame relies on (src/rigid/solver.h)
   Vec3 normal{0, 0, 1}, t1{1, 0, 0}, t2{0, 0, 1};
-  double friction = 0, restitution = 0, rolling = 0;  // mixed coefficients (rolling: times radius, m)
-  Vec3 ca{0, 0, 0}, cb{0, 0, 0};  // friction anchor (the points' centroid) from each centre of mass (m)
-  double tangent_impulse[2] = {0, 0};  // accumulated (N s per substep)
-  double twist_impulse = 0;  // accumulated (N m s per substep)
-  double twist_radius = 0;   // mean distance of the points from the centroid (m)
-  Vec3 friction_old{0, 0, 0};  // the tangential impulse in world axes at the end of the step
-  Mat3 rolling_mass{0.0};    // inverse of the relative angular inverse inertia (kg m^2)
+  double friction = 0, restitution = 0;  // mixed coefficients
+  // the accumulated impulses (N s per substep; the twist's N m s), one cache line
+  double normal_impulse[Manifold::kMaxPoints] = {0, 0, 0, 0};  // by point
+  double tangent_impulse[2] = {0, 0};  // along t1, t2
+  double twist_impulse = 0;            // about the normal
+  double rolling = 0;                  // mixed rolling-resistance coefficient times radius (m)
+  Vec3 ca{0, 0, 0};           // friction anchor (the points' centroid) from a's centre of mass (m)
+  double twist_radius = 0;    // mean distance of the points from the centroid (m)
   Vec3 rolling_impulse{0, 0, 0};  // accumulated rolling-resistance angular impulse (N m s)
-  int count = 0;
   SolverPoint points[Manifold::kMaxPoints];
+
+  /// The tangential impulse in world axes (N s per substep): what the next step re-projects
+  /// onto its tangents (valid until the pair is rewritten).
+  Vec3 friction_impulse() const { return tangent_impulse[0] * t1 + tangent_impulse[1] * t2; }
 
   // the ordering of pairs (by body slots, then shapes): deterministic, and binary-searchable
   bool operator<(const ContactPair& o) const {
@@ -73,6 +85,9 @@ struct ContactPair {
     return sub < o.sub;
   }
 };
+static_assert(offsetof(ContactPair, normal_impulse) % 64 == 0 &&
+                  offsetof(ContactPair, twist_impulse) + sizeof(double) <= offsetof(ContactPair, normal_impulse) + 64,
+              "store() writes one cache line of a pair");
 
 /// Pointers to one body's solver state (velocities, centre and orientation) and its inverse mass.
 struct BodyView {
@@ -161,15 +176,15 @@ struct PairCache {
 };
 
 /// One point of a cached manifold, fixed to the bodies: the points of the two shapes' cores
-/// (a sphere's centre, a box's surface) in each body's principal frame from its centre of
-/// mass, and the impulse it carried at the end of its last step.
+/// (a sphere's centre, a box's surface) in each body's principal frame from its centre of mass.
 struct CachedPoint {
   Vec3 core_a{0, 0, 0}, core_b{0, 0, 0};  // (m)
-  double normal_impulse = 0;              // (N s per solver step)
   std::uint32_t id = 0;                   // feature id
 };
 
-/// A manifold in the bodies' frames, and the friction, twist and rolling impulses it carried.
+/// A manifold in the bodies' frames, and the impulses it carried. What emit() reads every step
+/// the manifold is carried over comes first (five of its seven cache lines), the impulses last:
+/// they are read only when no entry of `pairs` holds them (`last`, settle()).
 struct CachedManifold {
   std::uint32_t next = kNoIndex;  // the shape pair's next manifold (mesh triangles); free list
   std::uint32_t sub = 0;          // mesh triangle (0 otherwise)
@@ -180,14 +195,16 @@ struct CachedManifold {
   bool normal_in_b = false;       // the normal is kept in body b's frame (else a's)
   Vec3 normal{0, 0, 1};           // unit, from a to b, in that body's principal frame
   CachedPoint points[Manifold::kMaxPoints];
-  Vec3 friction{0, 0, 0};  // the tangential impulse in world axes at the end of its last step
-  double twist = 0;
-  Vec3 rolling{0, 0, 0};
   // what does not change while the pair lasts: the shapes' core radii (m), and the mixed
   // material with the mix rules it was mixed by
   double radius_a = 0, radius_b = 0;
   double mixed_friction = 0, mixed_restitution = 0, mixed_rolling = 0;
   MixRule friction_mix = MixRule::GeometricMean, restitution_mix = MixRule::Maximum;
+  // the impulses it carried at the end of its last step (while `last` is kNoIndex)
+  double normal_impulse[Manifold::kMaxPoints] = {0, 0, 0, 0};  // by point (N s per solver step)
+  Vec3 friction{0, 0, 0};  // the tangential impulse in world axes
+  double twist = 0;
+  Vec3 rolling{0, 0, 0};
 };
 
 /// Softness of a contact: Catto's soft step coefficients for a spring of `hertz` and
@@ -289,11 +306,13 @@ struct RigidContacts {
   std::vector<std::uint32_t> by_color;     // the pairs by colour, in pair order within each
   std::vector<std::size_t> offset;         // scratch: each colour's start in by_color
   std::vector<std::uint32_t> band_colors;  // each band's first colour, then the number of colours
-  // what the colours were made from: by pair its bodies and whether it rolls, by body whether it
-  // moves, and the solver (color() keeps the colours when none of it changed)
-  std::vector<std::uint32_t> color_key;
+  // what the colours were made from: by body whether it moves, and the solver; and whether this
+  // step's pairs have last step's bodies and rolling entry by entry (emit() clears pairs_same
+  // at the first that does not; colored_once is cleared when the pairs were changed otherwise).
+  // color() keeps the colours when none of it changed
   std::vector<std::uint8_t> color_moving;
-  bool color_tgs = false, colored_once = false;
+  std::vector<std::uint32_t> color_key;  // scratch of color(): each pair's bodies a, b in pair order
+  bool color_tgs = false, colored_once = false, pairs_same = false;
   bool backward = true;  // this step runs each band's colours last to first (alternating by step)
   struct LaneRef {
     std::uint32_t block, lane;
@@ -314,6 +333,11 @@ struct RigidContacts {
   };
   std::vector<Rolling> rolls;      // the lanes that roll, by key (the coloured ones first)
   std::size_t colored_rolls = 0;   // of them, in coloured blocks
+  std::vector<Mat3> rolling_mass;  // by pair, for those that roll: set_rolling_mass (kg m^2)
+  // by pair: its lane of the blocks (block * kLanes + lane), while lanes_valid: the blocks keep
+  // the approach speeds and largest impulses of the last step for manifold() until the next prepare
+  std::vector<std::uint32_t> lane_of;
+  bool lanes_valid = false;
   // by body, and a last spare row for empty lanes: the velocities while the solver runs, the
   // motion since the start of the step (dp, then the turn w, x, y, z), and the warm-start
   // velocity changes for the next integration
@@ -335,11 +359,17 @@ struct RigidContacts {
   void color(RigidBodySystem& s);
   /// The blocks from the pairs and their colours.
   void build(RigidBodySystem& s);
-  /// Pair `index` into lane l of block k.
-  void fill(RigidBodySystem& s, ContactBlock& k, AnchorBlock& g, int l, std::uint32_t index);
-  /// The inverse of a rolling pair's relative angular inverse inertia (kg m^2) from inv_inertia,
-  /// into c.rolling_mass (prepare for XPBD, fill for the other solvers); nothing for others.
-  void set_rolling_mass(ContactPair& c) const;
+  /// The pairs by_color[first, first + lanes) into block b's lanes, in their contact frames
+  /// (the arithmetic on 8 or 4 lanes at once on the SIMD paths; the same bits on every path).
+  void fill_block(RigidBodySystem& s, std::size_t b, std::size_t first);
+  /// The inverse of rolling pair `index`'s relative angular inverse inertia (kg m^2) from
+  /// inv_inertia, into rolling_mass[index] (prepare for XPBD, fill_block for the other solvers);
+  /// nothing for a pair that does not roll.
+  void set_rolling_mass(std::uint32_t index);
+  /// Point p of pair k as the last step's solver saw it: its normal velocity before the solve
+  /// (m/s; < 0 closes) and its largest single normal impulse (N s), from the pair's lane of
+  /// the blocks; false (and nothing written) when no blocks hold the pair (XPBD, or no step yet).
+  bool solver_report(std::size_t k, int p, double& approach, double& max_impulse) const;
   /// The bodies' arrays as the kernels see them.
   BodyArrays arrays(RigidBodySystem& s);
   /// The velocities back from the solver's rows to the system's arrays, and the rolling
@@ -373,8 +403,8 @@ struct RigidContacts {
   /// Sweeps fast bodies (and bullets) against static shapes and puts each back at its first
   /// time of impact (continuous.cpp).
   void continuous(RigidBodySystem& s);
-  /// Writes the blocks' impulses back to the pairs and keeps each manifold's friction impulse
-  /// in world axes for next step's re-projection.
+  /// Writes the blocks' impulses back to the pairs (after the soft step, sequential impulses
+  /// and TGS; XPBD writes its own), for next step's warm start and contacts().
   void store();
   /// The TGS solver's step after prepare(): substeps of biased rigid iterations, positions,
   /// relax iterations (src/rigid/tgs.cpp); step() then runs the restitution pass.

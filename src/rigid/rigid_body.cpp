@@ -776,10 +776,10 @@ std::vector<RigidContactPoint> RigidBodySystem::contacts() const {
       RigidContactPoint r;
       r.a = {c.slot_a, ids_.generation(c.slot_a)};
       r.b = {c.slot_b, ids_.generation(c.slot_b)};
-      r.position = com0_[c.a] + p.ra;
+      r.position = p.at;
       r.normal = c.normal;
       r.depth = p.depth;
-      r.normal_impulse = p.normal_impulse;
+      r.normal_impulse = c.normal_impulse[k];
       r.tangent_impulse = std::hypot(c.tangent_impulse[0], c.tangent_impulse[1]) / c.count;
       r.id = p.id;
       out.push_back(r);
@@ -805,9 +805,11 @@ RigidManifoldInfo RigidBodySystem::manifold(std::size_t k) const {
   // the deepest point, the fastest approach (approach < 0 closes) and the largest push
   for (int i = 0; i < c.count; ++i) {
     const detail::SolverPoint& p = c.points[i];
-    if (p.depth > m.depth) m.depth = p.depth, m.point = com0_[c.a] + p.ra;
-    m.approach_speed = std::max(m.approach_speed, -p.approach);
-    m.max_normal_impulse = std::max(m.max_normal_impulse, p.max_normal_impulse);
+    if (p.depth > m.depth) m.depth = p.depth, m.point = p.at;
+    double approach = 0, max_impulse = 0;  // (0 when the solver keeps none: XPBD)
+    contacts_->solver_report(k, i, approach, max_impulse);
+    m.approach_speed = std::max(m.approach_speed, -approach);
+    m.max_normal_impulse = std::max(m.max_normal_impulse, max_impulse);
   }
   return m;
 }

@@ -66,9 +66,11 @@ Quat turned(const Quat& now, const Quat& start) { return now * glm::conjugate(st
 // stays along the normal (a rolling ball's contact stays below its centre, a box's corner
 // turns with the box; the paper's fixed material points, r = q r_local, let a ball rolling
 // at 12 rad/s push 11 degrees off its contact by the end of a 60 Hz step)
-void levers(const SolverPoint& p, const Quat& ta, const Quat& tb, Vec3& ra, Vec3& rb) {
-  ra = ta * p.sa + (p.ra - p.sa);
-  rb = tb * p.sb + (p.rb - p.sb);
+// (com0_a, com0_b: the centres at the start of the step, which the point's anchors are from)
+void levers(const SolverPoint& p, const Vec3& com0_a, const Vec3& com0_b, const Quat& ta, const Quat& tb, Vec3& ra,
+            Vec3& rb) {
+  ra = ta * p.sa + ((p.at - com0_a) - p.sa);
+  rb = tb * p.sb + ((p.at - com0_b) - p.sb);
 }
 
 // how far the body's material point now at lever r from the centre has moved since the pose
@@ -105,7 +107,7 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
   for (int j = 0; j < n; ++j) {
     const SolverPoint& p = c.points[j];
     Vec3 ra, rb;
-    levers(p, ta, tb, ra, rb);
+    levers(p, s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
     ca += ra, cb += rb;
     la[j] = lb[j] = c.normal;
     aa[j] = glm::cross(ra, c.normal), ab[j] = glm::cross(rb, c.normal);
@@ -210,7 +212,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       const Quat ta = turned(s.q_[c.a], s.q0_[c.a]), tb = turned(s.q_[c.b], s.q0_[c.b]);
       for (int j = 0; j < c.count; ++j) {
         Vec3 ra, rb;
-        levers(c.points[j], ta, tb, ra, rb);
+        levers(c.points[j], s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
         const Vec3 dv = s.v_[c.b] + glm::cross(s.w_[c.b], rb) - s.v_[c.a] - glm::cross(s.w_[c.a], ra);
         xpbd[k].approach[j] = glm::dot(dv, c.normal);
       }
@@ -246,7 +248,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       for (int j = 0; j < c.count; ++j) total += x.normal[j];
       if (total == 0) {
         // apart this substep: nothing pushed
-        for (int j = 0; j < c.count; ++j) c.points[j].normal_impulse = 0;
+        for (int j = 0; j < c.count; ++j) c.normal_impulse[j] = 0;
         c.tangent_impulse[0] = c.tangent_impulse[1] = c.twist_impulse = 0;
         c.rolling_impulse = Vec3(0);
         continue;
@@ -267,7 +269,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       for (int sweep = 0; sweep < cs.manifold_iterations; ++sweep)
       for (int j = 0; j < c.count; ++j) {
         Vec3 ra, rb;
-        levers(c.points[j], ta, tb, ra, rb);
+        levers(c.points[j], s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
         const Vec3 dv = *b.v + glm::cross(*b.w, rb) - *a.v - glm::cross(*a.w, ra);
         const double approach = x.approach[j];
         const double e = approach < -threshold ? c.restitution : 0;
@@ -286,7 +288,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
         Vec3 ca(0), cb(0);
         for (int j = 0; j < c.count; ++j) {
           Vec3 ra, rb;
-          levers(c.points[j], ta, tb, ra, rb);
+          levers(c.points[j], s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
           ca += ra, cb += rb;
         }
         ca /= static_cast<double>(c.count), cb /= static_cast<double>(c.count);
@@ -313,7 +315,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
         twist += j;
       }
       if (c.rolling > 0) {
-        Vec3 j = -(c.rolling_mass * (*b.w - *a.w));
+        Vec3 j = -(rolling_mass[k] * (*b.w - *a.w));
         const double limit = c.rolling * normal_impulse, len = glm::length(j);
         if (len > limit) j *= limit / len;
         *a.w -= ia * j;
@@ -321,7 +323,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
         c.rolling_impulse = j;
       }
       // the substep's impulses, for contacts(), islands and warm starting after a switch
-      for (int j = 0; j < c.count; ++j) c.points[j].normal_impulse = x.normal[j] / h;
+      for (int j = 0; j < c.count; ++j) c.normal_impulse[j] = x.normal[j] / h;
       c.tangent_impulse[0] = glm::dot(friction, c.t1);
       c.tangent_impulse[1] = glm::dot(friction, c.t2);
       c.twist_impulse = twist;
