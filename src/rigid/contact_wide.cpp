@@ -163,27 +163,8 @@ struct Lanes {
   }
 };
 
-// The transpose of 8 rows of 8 numbers, floats or doubles (M: the lane type's shuffle mask;
-// each its own inverse): three rounds of two-vector shuffles.
-template <class V, class M>
-PBA_LANES void transpose8(V r[8]) {
-  V t[8], u[8];
-  for (int i = 0; i < 4; ++i) {
-    t[2 * i] = __builtin_shuffle(r[2 * i], r[2 * i + 1], M{0, 8, 2, 10, 4, 12, 6, 14});
-    t[2 * i + 1] = __builtin_shuffle(r[2 * i], r[2 * i + 1], M{1, 9, 3, 11, 5, 13, 7, 15});
-  }
-  constexpr int kFirst[4] = {0, 1, 4, 5};
-  for (const int i : kFirst) {
-    u[i] = __builtin_shuffle(t[i], t[i + 2], M{0, 1, 8, 9, 4, 5, 12, 13});
-    u[i + 2] = __builtin_shuffle(t[i], t[i + 2], M{2, 3, 10, 11, 6, 7, 14, 15});
-  }
-  for (int i = 0; i < 4; ++i) {
-    r[i] = __builtin_shuffle(u[i], u[i + 4], M{0, 1, 2, 3, 8, 9, 10, 11});
-    r[i + 4] = __builtin_shuffle(u[i], u[i + 4], M{4, 5, 6, 7, 12, 13, 14, 15});
-  }
-}
-
-PBA_LANES void transpose(v8f r[8]) { transpose8<v8f, v8i>(r); }
+// the transpose of 8 rows of 8 floats or doubles (core/lanes.h)
+PBA_LANES void transpose(v8f r[8]) { pba::detail::lanes::transpose8x8(r); }
 
 // ... in 16 floats, of the two halves apart (rows i and i + 8 share vector i)
 PBA_LANES void transpose(v16f r[8]) {
@@ -211,7 +192,7 @@ PBA_LANES void transpose(v4d r[4]) {
   r[1] = __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5}), r[3] = __builtin_shuffle(t1, t3, v4l{2, 3, 6, 7});
 }
 
-PBA_LANES void transpose(v8d r[8]) { transpose8<v8d, v8l>(r); }
+PBA_LANES void transpose(v8d r[8]) { pba::detail::lanes::transpose8x8(r); }
 
 // a body's 64-byte row of 8 doubles rounded to 8 floats
 PBA_LANES v8f row_floats(const double* base, std::uint32_t index) {
