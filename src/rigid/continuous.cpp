@@ -57,7 +57,13 @@ double advance(const Sweep& w, GapAt gap_at, double target, double tol) {
   double t = 0;
   Gap g = gap_at(0.0);
   if (g.distance <= target + tol) return 1;
-  for (int it = 0; it < 50; ++it) {
+  // An advance that does not converge had a gap above target + tol, and no closing speed
+  // exceeds |dc| + angle reach, so each moves t by more than tol / (|dc| + angle reach): past
+  // the step's end within that many. A fixed cap (it was 50) stopped slow approaches short of
+  // it instead, a ball spinning just above the ground among them, and put the body back to a
+  // time before a contact that never came. (A zero slop has no such bound: 50 then.)
+  const double limit = tol > 0 ? (glm::length(dc) + w.angle * w.reach) / tol + 2 : 50;
+  for (int it = 0; it < limit; ++it) {
     const double closing = glm::dot(dc, g.normal) + w.angle * w.reach;
     if (closing <= 0) return 1;
     t += (g.distance - target) / closing;
@@ -65,7 +71,7 @@ double advance(const Sweep& w, GapAt gap_at, double target, double tol) {
     g = gap_at(t);
     if (g.distance <= target + tol) return t;
   }
-  return t;  // not converged: t is still a time before contact (each advance is safe)
+  return t;  // not converged (zero slop only): t is still a time before contact (each advance is safe)
 }
 
 // True when the point q on triangle t (both in the mesh frame) lies inside the face, or on an
