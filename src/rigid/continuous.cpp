@@ -9,8 +9,9 @@
 // (Box2D v3's continuous pass does the same). Times of impact come from conservative
 // advancement (Mirtich 1996): at time t the shapes are d apart; no point of the moving shape
 // closes faster than the centre's velocity along the normal plus the angular speed times the
-// body's bounding radius, so t can safely advance by d over that bound. It stops when the
-// shapes are within the linear slop, so the body arrives touching, not overlapping.
+// body's bounding radius times the sine of the angle between the rotation axis and the normal,
+// so t can safely advance by d over that bound. It stops when the shapes are within the
+// linear slop, so the body arrives touching, not overlapping.
 #include <algorithm>
 #include <cmath>
 
@@ -31,6 +32,7 @@ struct Sweep {
   Vec3 com_local;   // centre of mass in the body frame
   double angle = 0;  // rotation over the step (rad)
   double reach = 0;  // bounding radius about the centre of mass (m)
+  Vec3 axis{0, 0, 0};  // unit axis of that rotation in the world (slerp turns about it); 0 when none
 
   Pose body(double t) const {
     const Vec3 c = c0 + t * (c1 - c0);
@@ -64,7 +66,9 @@ double advance(const Sweep& w, GapAt gap_at, double target, double tol) {
   // time before a contact that never came. (A zero slop has no such bound: 50 then.)
   const double limit = tol > 0 ? (glm::length(dc) + w.angle * w.reach) / tol + 2 : 50;
   for (int it = 0; it < limit; ++it) {
-    const double closing = glm::dot(dc, g.normal) + w.angle * w.reach;
+    // a point at r from the centre moves along n at angle (axis x r) . n <= angle |axis x n|
+    // |r| per step: turning about n moves nothing along n
+    const double closing = glm::dot(dc, g.normal) + w.angle * w.reach * glm::length(glm::cross(w.axis, g.normal));
     if (closing <= 0) return 1;
     t += (g.distance - target) / closing;
     if (t >= 1) return 1;
@@ -101,7 +105,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
   for (std::size_t i = 0; i < n; ++i) {
     if (s.type_[i] != BodyType::Dynamic || s.asleep_[i]) continue;
     // fast: moved more than half its smallest extent, or flagged
-    Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i], 0, s.extent_[i]};
+    Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i], 0, s.extent_[i], Vec3(0)};
     const Quat dq = w.q1 * glm::conjugate(w.q0);
     const double sine = glm::length(Vec3(dq.x, dq.y, dq.z)), cosine = std::abs(dq.w);
     const double shift = glm::length(w.c1 - w.c0);
@@ -110,6 +114,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // by the bound skips the arc tangent, as the test below would skip it (rounding is monotone)
     if (!s.bullet_[i] && shift + 2 * (sine / cosine) * (1 + 1e-12) * w.reach <= 0.5 * s.min_extent_[i]) continue;
     w.angle = 2 * std::atan2(sine, cosine);
+    if (sine > 0) w.axis = Vec3(dq.x, dq.y, dq.z) / sine;
     // (the farthest any point of the body travels in the step, m)
     const double moved = shift + w.angle * w.reach;
     if (!s.bullet_[i] && moved <= 0.5 * s.min_extent_[i]) continue;
