@@ -96,6 +96,24 @@ bool internal_feature(const Vec3 t[3], const Vec3& q, std::uint8_t flags) {
   return (on & flags) == 0;
 }
 
+// How far (m) from the body's centre of mass `com` (body frame) the core of shape `d` reaches:
+// its centre (sphere), segment (capsule) or corners (box, hull). Turning the body moves a
+// rounded shape's surface within itself, so only the core's points bound how fast the shape
+// closes on another along a normal: a ball turning about its centre closes no faster than
+// the centre moves.
+double core_reach(const RigidShapeDef& d, const Vec3& com) {
+  const double centre = glm::length(d.local.position - com);
+  switch (d.shape.type) {
+    case ShapeType::Sphere: return centre;
+    case ShapeType::Capsule: return centre + d.shape.half_height;
+    case ShapeType::Box: return centre + glm::length(d.shape.half_extents);
+    default: {
+      const Aabb b = bounds(d.shape, Pose{});
+      return centre + glm::length(glm::max(glm::abs(b.lo), glm::abs(b.hi)));
+    }
+  }
+}
+
 }  // namespace
 
 void RigidContacts::continuous(RigidBodySystem& s) {
@@ -160,9 +178,13 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       for (const RigidShapeDef& sa : s.shapes_[i]) {
         if (!sa.shape.is_convex()) continue;
         auto pose_a = [&](double t) { return compose(w.body(t), sa.local); };
+        // the shape's own sweep: the body's, turning its core's reach (never more than the body's)
+        Sweep ws = w;
+        ws.reach = std::min(w.reach, core_reach(sa, s.com_local_[i]));
+        const double moved_a = shift + ws.angle * ws.reach;  // the farthest its core travels (m)
         if (plane) {
           // the gap is the height of the shape's lowest point along the normal
-          toi = std::min(toi, advance(w, [&](double t) {
+          toi = std::min(toi, advance(ws, [&](double t) {
             const Pose pa = pose_a(t);
             const Vec3 low = apply(pa, support(sa.shape, glm::conjugate(pa.rotation) * -nw));
             return Gap{glm::dot(nw, low) - off, -nw};
@@ -187,8 +209,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
             const double plane = glm::dot(face, corner);
             const double above = glm::dot(face, apply(p0, support(sa.shape, p0_inv * -face))) - plane;
             const double below = plane - glm::dot(face, apply(p0, support(sa.shape, p0_inv * face)));
-            if (std::max(above, below) - target > moved * (1 + 1e-12) + 1e-12) return;
-            toi = std::min(toi, advance(w, [&](double t) {
+            if (std::max(above, below) - target > moved_a * (1 + 1e-12) + 1e-12) return;
+            toi = std::min(toi, advance(ws, [&](double t) {
               const Pose pa = t == 0.0 ? p0 : pose_a(t);
               const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, pa), piece);
               if (r.cores_overlap) return Gap{0.0, r.normal};
@@ -208,7 +230,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
           });
         } else if (sb.shape.is_convex()) {
           const ConvexProxy pbx = ConvexProxy::of(sb.shape, pb);
-          toi = std::min(toi, advance(w, [&](double t) {
+          toi = std::min(toi, advance(ws, [&](double t) {
             const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, pose_a(t)), pbx);
             return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
           }, target, tol));
