@@ -136,6 +136,14 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // (the farthest any point of the body travels in the step, m)
     const double moved = shift + w.angle * w.reach;
     if (!s.bullet_[i] && moved <= 0.5 * s.min_extent_[i]) continue;
+    // ... or rather the farthest its shapes' cores travel: a ball that rolls or spins moves
+    // its surface within itself (see core_reach)
+    if (!s.bullet_[i]) {
+      double core = 0;
+      for (const RigidShapeDef& sa : s.shapes_[i])
+        core = std::max(core, sa.shape.is_convex() ? core_reach(sa, w.com_local) : w.reach);
+      if (shift + w.angle * std::min(core, w.reach) <= 0.5 * s.min_extent_[i]) continue;
+    }
     // everything the body can touch on its way: its centre's path grown by its reach
     const Aabb path = Aabb{glm::min(w.c0, w.c1), glm::max(w.c0, w.c1)}.grown(w.reach + target);
     double toi = 1;
