@@ -9,8 +9,9 @@
 // (Box2D v3's continuous pass does the same). Times of impact come from conservative
 // advancement (Mirtich 1996): at time t the shapes are d apart; no point of the moving shape
 // closes faster than the centre's velocity along the normal plus the angular speed times the
-// body's bounding radius, so t can safely advance by d over that bound. It stops when the
-// shapes are within the linear slop, so the body arrives touching, not overlapping.
+// body's bounding radius times the sine of the angle between the rotation axis and the normal,
+// so t can safely advance by d over that bound. It stops when the shapes are within the
+// linear slop, so the body arrives touching, not overlapping.
 #include <algorithm>
 #include <cmath>
 
@@ -31,6 +32,7 @@ struct Sweep {
   Vec3 com_local;   // centre of mass in the body frame
   double angle = 0;  // rotation over the step (rad)
   double reach = 0;  // bounding radius about the centre of mass (m)
+  Vec3 axis{0, 0, 0};  // unit axis of that rotation in the world (slerp turns about it); 0 when none
 
   Pose body(double t) const {
     const Vec3 c = c0 + t * (c1 - c0);
@@ -57,15 +59,23 @@ double advance(const Sweep& w, GapAt gap_at, double target, double tol) {
   double t = 0;
   Gap g = gap_at(0.0);
   if (g.distance <= target + tol) return 1;
-  for (int it = 0; it < 50; ++it) {
-    const double closing = glm::dot(dc, g.normal) + w.angle * w.reach;
+  // An advance that does not converge had a gap above target + tol, and no closing speed
+  // exceeds |dc| + angle reach, so each moves t by more than tol / (|dc| + angle reach): past
+  // the step's end within that many. A fixed cap (it was 50) stopped slow approaches short of
+  // it instead, a ball spinning just above the ground among them, and put the body back to a
+  // time before a contact that never came. (A zero slop has no such bound: 50 then.)
+  const double limit = tol > 0 ? (glm::length(dc) + w.angle * w.reach) / tol + 2 : 50;
+  for (int it = 0; it < limit; ++it) {
+    // a point at r from the centre moves along n at angle (axis x r) . n <= angle |axis x n|
+    // |r| per step: turning about n moves nothing along n
+    const double closing = glm::dot(dc, g.normal) + w.angle * w.reach * glm::length(glm::cross(w.axis, g.normal));
     if (closing <= 0) return 1;
     t += (g.distance - target) / closing;
     if (t >= 1) return 1;
     g = gap_at(t);
     if (g.distance <= target + tol) return t;
   }
-  return t;  // not converged: t is still a time before contact (each advance is safe)
+  return t;  // not converged (zero slop only): t is still a time before contact (each advance is safe)
 }
 
 // True when the point q on triangle t (both in the mesh frame) lies inside the face, or on an
@@ -86,6 +96,24 @@ bool internal_feature(const Vec3 t[3], const Vec3& q, std::uint8_t flags) {
   return (on & flags) == 0;
 }
 
+// How far (m) from the body's centre of mass `com` (body frame) the core of shape `d` reaches:
+// its centre (sphere), segment (capsule) or corners (box, hull). Turning the body moves a
+// rounded shape's surface within itself, so only the core's points bound how fast the shape
+// closes on another along a normal: a ball turning about its centre closes no faster than
+// the centre moves.
+double core_reach(const RigidShapeDef& d, const Vec3& com) {
+  const double centre = glm::length(d.local.position - com);
+  switch (d.shape.type) {
+    case ShapeType::Sphere: return centre;
+    case ShapeType::Capsule: return centre + d.shape.half_height;
+    case ShapeType::Box: return centre + glm::length(d.shape.half_extents);
+    default: {
+      const Aabb b = bounds(d.shape, Pose{});
+      return centre + glm::length(glm::max(glm::abs(b.lo), glm::abs(b.hi)));
+    }
+  }
+}
+
 }  // namespace
 
 void RigidContacts::continuous(RigidBodySystem& s) {
@@ -95,7 +123,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
   for (std::size_t i = 0; i < n; ++i) {
     if (s.type_[i] != BodyType::Dynamic || s.asleep_[i]) continue;
     // fast: moved more than half its smallest extent, or flagged
-    Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i], 0, s.extent_[i]};
+    Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i], 0, s.extent_[i], Vec3(0)};
     const Quat dq = w.q1 * glm::conjugate(w.q0);
     const double sine = glm::length(Vec3(dq.x, dq.y, dq.z)), cosine = std::abs(dq.w);
     const double shift = glm::length(w.c1 - w.c0);
@@ -104,9 +132,18 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // by the bound skips the arc tangent, as the test below would skip it (rounding is monotone)
     if (!s.bullet_[i] && shift + 2 * (sine / cosine) * (1 + 1e-12) * w.reach <= 0.5 * s.min_extent_[i]) continue;
     w.angle = 2 * std::atan2(sine, cosine);
+    if (sine > 0) w.axis = Vec3(dq.x, dq.y, dq.z) / sine;
     // (the farthest any point of the body travels in the step, m)
     const double moved = shift + w.angle * w.reach;
     if (!s.bullet_[i] && moved <= 0.5 * s.min_extent_[i]) continue;
+    // ... or rather the farthest its shapes' cores travel: a ball that rolls or spins moves
+    // its surface within itself (see core_reach)
+    if (!s.bullet_[i]) {
+      double core = 0;
+      for (const RigidShapeDef& sa : s.shapes_[i])
+        core = std::max(core, sa.shape.is_convex() ? core_reach(sa, w.com_local) : w.reach);
+      if (shift + w.angle * std::min(core, w.reach) <= 0.5 * s.min_extent_[i]) continue;
+    }
     // everything the body can touch on its way: its centre's path grown by its reach
     const Aabb path = Aabb{glm::min(w.c0, w.c1), glm::max(w.c0, w.c1)}.grown(w.reach + target);
     double toi = 1;
@@ -149,9 +186,13 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       for (const RigidShapeDef& sa : s.shapes_[i]) {
         if (!sa.shape.is_convex()) continue;
         auto pose_a = [&](double t) { return compose(w.body(t), sa.local); };
+        // the shape's own sweep: the body's, turning its core's reach (never more than the body's)
+        Sweep ws = w;
+        ws.reach = std::min(w.reach, core_reach(sa, s.com_local_[i]));
+        const double moved_a = shift + ws.angle * ws.reach;  // the farthest its core travels (m)
         if (plane) {
           // the gap is the height of the shape's lowest point along the normal
-          toi = std::min(toi, advance(w, [&](double t) {
+          toi = std::min(toi, advance(ws, [&](double t) {
             const Pose pa = pose_a(t);
             const Vec3 low = apply(pa, support(sa.shape, glm::conjugate(pa.rotation) * -nw));
             return Gap{glm::dot(nw, low) - off, -nw};
@@ -176,8 +217,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
             const double plane = glm::dot(face, corner);
             const double above = glm::dot(face, apply(p0, support(sa.shape, p0_inv * -face))) - plane;
             const double below = plane - glm::dot(face, apply(p0, support(sa.shape, p0_inv * face)));
-            if (std::max(above, below) - target > moved * (1 + 1e-12) + 1e-12) return;
-            toi = std::min(toi, advance(w, [&](double t) {
+            if (std::max(above, below) - target > moved_a * (1 + 1e-12) + 1e-12) return;
+            toi = std::min(toi, advance(ws, [&](double t) {
               const Pose pa = t == 0.0 ? p0 : pose_a(t);
               const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, pa), piece);
               if (r.cores_overlap) return Gap{0.0, r.normal};
@@ -197,7 +238,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
           });
         } else if (sb.shape.is_convex()) {
           const ConvexProxy pbx = ConvexProxy::of(sb.shape, pb);
-          toi = std::min(toi, advance(w, [&](double t) {
+          toi = std::min(toi, advance(ws, [&](double t) {
             const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, pose_a(t)), pbx);
             return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
           }, target, tol));

@@ -554,10 +554,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0xe54f647d1c9c98a0ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x7979945f58b4d9e3ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0xe1ab42a93eaeedfbull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x2df2717000a7eb5aull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x96f8e90be0e618dfull) << std::hex << soft;
+  EXPECT_EQ(si, 0x8e91d03e0ace5e9bull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x45db174daca064a3ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x2663f6b8d6c72294ull) << std::hex << xpbd;
 }
 
 }  // namespace
