@@ -87,13 +87,23 @@ struct RigidShapeDef {
   double rolling_resistance = 0;
 };
 
+/// The fastest a rigid body may move, 1e20 m/s, and turn, 1e20 rad/s. The contact rows carry
+/// speeds and impulses in float (at most 3.4e38): a body far faster would overflow them and
+/// turn the bodies it touches non-finite. A velocity beyond it is refused where it is given
+/// (create, set_velocity, impulses); a body a force takes beyond it stops the step, named.
+inline constexpr double kMaxRigidSpeed = 1e20;
+
+/// Throws an Error naming `where` unless |v| <= kMaxRigidSpeed (a NaN fails too); `unit` is
+/// the value's unit for the message ("m/s" or "rad/s").
+void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view unit);
+
 /// Definition of a rigid body. Start from the defaults and change what you need.
 struct RigidBodyDef {
   std::string name{};               ///< optional; used in error messages
   BodyType type = BodyType::Dynamic;  ///< static, kinematic or dynamic
   Pose pose{};                      ///< body frame in the world (finite position, unit rotation)
-  Vec3 linear_velocity{0, 0, 0};    ///< velocity of the centre of mass (m/s), finite
-  Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), finite
+  Vec3 linear_velocity{0, 0, 0};    ///< velocity of the centre of mass (m/s), |v| <= kMaxRigidSpeed
+  Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), |w| <= kMaxRigidSpeed
   std::vector<RigidShapeDef> shapes{};  ///< at least one
   /// Dynamic bodies: mass properties; unset means from the shapes' densities. The mass (kg)
   /// and the principal moments (kg m^2) must each be in [2.9e-39, 8.5e37] (create()).
@@ -398,6 +408,9 @@ class RigidBodySystem {
   RigidManifoldInfo manifold(std::size_t k) const;
   /// Timings of the last step.
   const RigidProfile& profile() const { return profile_; }
+  /// The body that stopped the system (its state non-finite, or faster than kMaxRigidSpeed;
+  /// step() throws naming it), or a null handle while it runs.
+  RigidBodyId failed_body() const { return failed_; }
   /// The world bounds of every shape of body `id` at its pose now.
   std::vector<Aabb> shape_bounds(RigidBodyId id) const;
   /// The shapes of body `id` (in the body frame).
@@ -438,6 +451,7 @@ class RigidBodySystem {
   double time_ = 0;
   double last_dt_ = 0;
   std::string failure_;
+  RigidBodyId failed_{};  // the body failure_ names
   HandlePool<RigidBodyTag> ids_;
   std::vector<std::uint32_t> slot_;   // handle slot -> dense index
   std::vector<std::uint32_t> owner_;  // dense index -> handle slot

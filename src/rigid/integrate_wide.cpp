@@ -50,8 +50,6 @@ typedef double v16d __attribute__((vector_size(128)));
 
 // true when every lane of x is within [-limit, limit] (false for a NaN lane)
 PBA_LANES bool all_within(double x, double limit) { return std::abs(x) <= limit; }
-// true when every lane of z is zero (false for a NaN lane)
-PBA_LANES bool all_zero(double z) { return z == 0; }
 // the square root of each lane (IEEE: correctly rounded, the same bits as std::sqrt)
 PBA_LANES double sqrt_lanes(double x) { return std::sqrt(x); }
 #if defined(__GNUC__) && defined(__x86_64__)
@@ -60,16 +58,10 @@ PBA_LANES double sqrt_lanes(double x) { return std::sqrt(x); }
                                    _mm256_cmp_pd(x, _mm256_set1_pd(-limit), _CMP_GE_OQ));
   return _mm256_movemask_pd(in) == 0xf;
 }
-[[gnu::target("avx2")]] [[gnu::noinline]] bool all_zero(v4d z) {
-  return _mm256_movemask_pd(_mm256_cmp_pd(z, _mm256_setzero_pd(), _CMP_EQ_OQ)) == 0xf;
-}
 [[gnu::target("avx2")]] [[gnu::noinline]] v4d sqrt_lanes(v4d x) { return _mm256_sqrt_pd(x); }
 [[gnu::target("avx512f")]] [[gnu::noinline]] bool all_within(v8d x, double limit) {
   return (_mm512_cmp_pd_mask(x, _mm512_set1_pd(limit), _CMP_LE_OQ) &
           _mm512_cmp_pd_mask(x, _mm512_set1_pd(-limit), _CMP_GE_OQ)) == 0xff;
-}
-[[gnu::target("avx512f")]] [[gnu::noinline]] bool all_zero(v8d z) {
-  return _mm512_cmp_pd_mask(z, _mm512_setzero_pd(), _CMP_EQ_OQ) == 0xff;
 }
 [[gnu::target("avx512f")]] [[gnu::noinline]] v8d sqrt_lanes(v8d x) { return _mm512_mask_sqrt_pd(x, 0xff, x); }
 [[gnu::target("avx512f")]] PBA_LANES void halves(const v16d x, v8d h[2]) { std::memcpy(h, &x, sizeof x); }
@@ -88,14 +80,6 @@ PBA_LANES double sqrt_lanes(double x) { return std::sqrt(x); }
   return x;
 }
 #endif
-
-// true when every lane of the n vectors x is finite (x * 0 is 0 for a finite x, else NaN)
-template <class V>
-PBA_LANES bool all_finite(const V* x, int n) {
-  V z = x[0] * 0.0;
-  for (int k = 1; k < n; ++k) z = z + x[k] * 0.0;
-  return all_zero(z);
-}
 
 // The Taylor series' tails for |x| <= kSmall, in x2 = x^2 (Horner): sin x = x + x sin_tail(x2),
 // cos x = 1 + cos_tail(x2)
@@ -375,11 +359,13 @@ PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, d
     store_rows(warm, idx, zero, 8);
   }
   store_velocities(f, idx, r);
-  // a force too large for a double stops here, before contacts can spread it to others
-  if (all_finite(r, 6)) return true;
+  // a force too large for the contacts' float rows (or for a double) stops here, before
+  // contacts can spread it to others: |v| and |w| within kMaxRigidSpeed (a NaN fails)
+  const V v2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2], w2 = r[3] * r[3] + r[4] * r[4] + r[5] * r[5];
+  constexpr double limit2 = kMaxRigidSpeed * kMaxRigidSpeed;
+  if (all_within(v2, limit2) && all_within(w2, limit2)) return true;
   for (int i = 0; i < kWidth<V>; ++i)
-    for (int k = 0; k < 6; ++k)
-      if (!std::isfinite(get(r[k], i))) return *bad = idx[i], false;
+    if (!(get(v2, i) <= limit2 && get(w2, i) <= limit2)) return *bad = idx[i], false;
   return true;
 }
 

@@ -177,11 +177,28 @@ void RigidMass::validate(std::string_view where) const {
                 " break the triangle inequality (each must be at most the sum of the other two)");
 }
 
+namespace {
+// |v| <= kMaxRigidSpeed, without building a message (false for NaN; |v|^2 overflows to inf
+// only far beyond the limit)
+bool speed_ok(const Vec3& v) { return glm::dot(v, v) <= kMaxRigidSpeed * kMaxRigidSpeed; }
+}  // namespace
+
+void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view unit) {
+  if (!is_finite(v)) require_finite(v, where);
+  // |v| scaled by its largest component, which cannot overflow (1e308 m/s has a length)
+  const double big = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  const double speed = big > 0 ? big * glm::length(v / big) : 0.0;
+  if (speed <= kMaxRigidSpeed) return;
+  throw Error(std::string(where) + ": " + format_vec3(v) + " has a magnitude of " + format_value(speed) + " " +
+              std::string(unit) + ", above the rigid bodies' limit of " + format_value(kMaxRigidSpeed) + " " +
+              std::string(unit) + " (the contact rows carry speeds and impulses in float)");
+}
+
 void RigidBodyDef::validate(std::string_view where) const {
   require_finite(pose.position, field_path(where, "pose.position"));
   require_unit_quat(pose.rotation, field_path(where, "pose.rotation"));
-  require_finite(linear_velocity, field_path(where, "linear_velocity"));
-  require_finite(angular_velocity, field_path(where, "angular_velocity"));
+  require_rigid_speed(linear_velocity, field_path(where, "linear_velocity"), "m/s");
+  require_rigid_speed(angular_velocity, field_path(where, "angular_velocity"), "rad/s");
   require_non_negative(linear_damping, field_path(where, "linear_damping"));
   require_non_negative(angular_damping, field_path(where, "angular_damping"));
   require_finite(gravity_scale, field_path(where, "gravity_scale"));
@@ -452,8 +469,8 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
 
 void RigidBodySystem::set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular) {
   const std::size_t i = index(id, "RigidBodySystem::set_velocity");
-  if (!is_finite(linear)) require_finite(linear, describe(i) + " set_velocity linear");
-  if (!is_finite(angular)) require_finite(angular, describe(i) + " set_velocity angular");
+  if (!speed_ok(linear)) require_rigid_speed(linear, describe(i) + " set_velocity linear", "m/s");
+  if (!speed_ok(angular)) require_rigid_speed(angular, describe(i) + " set_velocity angular", "rad/s");
   if (type_[i] == BodyType::Static) return;  // a static body never moves
   v_[i] = linear;
   w_[i] = angular;
@@ -487,19 +504,24 @@ void RigidBodySystem::apply_impulse(RigidBodyId id, const Vec3& j, const Vec3& p
   if (!is_finite(j)) require_finite(j, describe(i) + " apply_impulse impulse");
   if (!is_finite(p)) require_finite(p, describe(i) + " apply_impulse point");
   if (type_[i] != BodyType::Dynamic) return;
-  wake_island(i);
-  v_[i] += inv_mass_[i] * j;
   // dw = I^-1 (r x J) with I^-1 = R diag(1/I) R^T
   const Vec3 l = glm::conjugate(q_[i]) * glm::cross(p - com_[i], j);
-  w_[i] += q_[i] * (inv_inertia_[i] * l);
+  const Vec3 v = v_[i] + inv_mass_[i] * j, w = w_[i] + q_[i] * (inv_inertia_[i] * l);
+  if (!speed_ok(v)) require_rigid_speed(v, describe(i) + " apply_impulse: the linear velocity it gives", "m/s");
+  if (!speed_ok(w)) require_rigid_speed(w, describe(i) + " apply_impulse: the angular velocity it gives", "rad/s");
+  wake_island(i);
+  v_[i] = v, w_[i] = w;
 }
 
 void RigidBodySystem::apply_angular_impulse(RigidBodyId id, const Vec3& j) {
   const std::size_t i = index(id, "RigidBodySystem::apply_angular_impulse");
   if (!is_finite(j)) require_finite(j, describe(i) + " apply_angular_impulse");
   if (type_[i] != BodyType::Dynamic) return;
+  const Vec3 w = w_[i] + q_[i] * (inv_inertia_[i] * (glm::conjugate(q_[i]) * j));
+  if (!speed_ok(w))
+    require_rigid_speed(w, describe(i) + " apply_angular_impulse: the angular velocity it gives", "rad/s");
   wake_island(i);
-  w_[i] += q_[i] * (inv_inertia_[i] * (glm::conjugate(q_[i]) * j));
+  w_[i] = w;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -650,9 +672,14 @@ void RigidBodySystem::check_finite() {
 }
 
 void RigidBodySystem::fail(std::size_t i) {
-  failure_ = describe(i) + " became non-finite in the step to t = " + format_value(time_ + last_dt_) +
-             " s: position " + format_vec3(com_[i]) + ", velocity " + format_vec3(v_[i]) + ", angular velocity " +
-             format_vec3(w_[i]);
+  const bool finite = is_finite(com_[i]) && is_finite(v_[i]) && is_finite(w_[i]) && finite_quat(q_[i]);
+  failed_ = id_at(i);
+  failure_ = describe(i) +
+             (finite ? " went faster than kMaxRigidSpeed (" + format_value(kMaxRigidSpeed) +
+                           " m/s or rad/s: a force too large for the contacts' float rows)"
+                     : std::string(" became non-finite")) +
+             " in the step to t = " + format_value(time_ + last_dt_) + " s: position " + format_vec3(com_[i]) +
+             ", velocity " + format_vec3(v_[i]) + ", angular velocity " + format_vec3(w_[i]);
   throw Error(failure_);
 }
 

@@ -77,6 +77,8 @@ void read_rigid_body(const Node& n, World& w) {
       d.type);
   d.linear_velocity = n.vec("linear_velocity", d.linear_velocity);
   d.angular_velocity = n.vec("angular_velocity", d.angular_velocity);
+  if (n.has("linear_velocity")) require_rigid_speed(d.linear_velocity, n.at("linear_velocity").where(), "m/s");
+  if (n.has("angular_velocity")) require_rigid_speed(d.angular_velocity, n.at("angular_velocity").where(), "rad/s");
   // a static body's velocities would be dropped silently (RigidBodySystem::create zeroes them)
   for (const char* key : {"linear_velocity", "angular_velocity"})
     if (d.type == BodyType::Static && n.has(key) && n.vec(key, Vec3(0)) != Vec3(0))

@@ -745,20 +745,14 @@ void World::step_rigid(double t, double dt) {
   try {
     rigid_.step(dt, gravity_);
   } catch (const Error& err) {
-    // a body whose state stopped being finite stops the world, naming its entity and the time
-    for (std::size_t i = 0; i < n; ++i) {
-      const RigidBodyId id = rigid_.id_at(i);
-      const Pose p = rigid_.pose(id);
-      const bool finite = is_finite(p.position) && is_finite(rigid_.linear_velocity(id)) &&
-                          is_finite(rigid_.angular_velocity(id)) && std::isfinite(p.rotation.w) &&
-                          std::isfinite(p.rotation.x) && std::isfinite(p.rotation.y) && std::isfinite(p.rotation.z);
-      if (finite) continue;
-      const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
-      failure_ = (owner.is_null() ? std::string("a rigid body") : "the rigid body of " + describe(owner)) +
-                 " became non-finite in the tick to t = " + format_value(t + dt) + " s (" + err.what() + ")";
-      throw Error("World::tick: " + failure_);
-    }
-    throw;
+    // a body whose state stopped being finite (or that a force took past kMaxRigidSpeed)
+    // stops the world, naming its entity and the time
+    const RigidBodyId id = rigid_.failed_body();
+    if (id.is_null()) throw;
+    const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
+    failure_ = (owner.is_null() ? std::string("a rigid body") : "the rigid body of " + describe(owner)) +
+               " stopped the world in the tick to t = " + format_value(t + dt) + " s (" + err.what() + ")";
+    throw Error("World::tick: " + failure_);
   }
   // whichever system simulates an entity writes its pose: the body, unless a path drives it
   for (std::size_t i = 0; i < n; ++i) {

@@ -24,6 +24,7 @@ namespace {
 const Vec3 kG{0, -9.81, 0};
 // a shape for bodies whose mass is given: far from everything else, it never collides
 const std::vector<pba::RigidShapeDef> kBall{{.shape = pba::ColliderShape::sphere(0.05)}};
+const std::vector<pba::RigidShapeDef> kBox{{.shape = pba::ColliderShape::box(Vec3(0.5))}};
 
 // relative difference of two vectors
 double rel(const Vec3& a, const Vec3& b) { return glm::length(a - b) / glm::length(b); }
@@ -521,6 +522,55 @@ TEST(RigidDivergence, ANonFiniteBodyStopsTheSystemWithItsNameAndTime) {
   const std::string m = error_of([&] { s.step(0.5, kG); });
   EXPECT_NE(m.find("rigid body 1 'wild' became non-finite in the step to t = 1 s"), std::string::npos) << m;
   EXPECT_EQ(error_of([&] { s.step(0.5, kG); }), m);  // and refuses to go on
+  EXPECT_EQ(s.failed_body(), wild);
+}
+
+// Speeds beyond kMaxRigidSpeed would overflow the contacts' float rows and poison the bodies
+// a fast one touches: refused where they are given, naming the value and where it came from.
+TEST(RigidDivergence, VelocitiesBeyondTheSpeedLimitAreRefusedWhereTheyAreGiven) {
+  RigidBodySystem s;
+  const double over = 2 * pba::kMaxRigidSpeed;
+  RigidBodyDef d{.name = "comet", .linear_velocity = {over, 0, 0}, .shapes = kBall};
+  std::string m = error_of([&] { s.create(d); });
+  EXPECT_NE(m.find("linear_velocity"), std::string::npos) << m;
+  EXPECT_NE(m.find("above the rigid bodies' limit of 1e+20 m/s"), std::string::npos) << m;
+  d.linear_velocity = {0, 0, 0}, d.angular_velocity = {0, 0, -over};
+  m = error_of([&] { s.create(d); });
+  EXPECT_NE(m.find("angular_velocity"), std::string::npos) << m;
+  EXPECT_NE(m.find("rad/s"), std::string::npos) << m;
+  // at the limit itself a body is accepted, and moves
+  d.angular_velocity = {0, 0, 0}, d.linear_velocity = {pba::kMaxRigidSpeed, 0, 0};
+  const auto b = s.create(d);
+  m = error_of([&] { s.set_velocity(b, {0, over, 0}, {0, 0, 0}); });
+  EXPECT_NE(m.find("rigid body 0 'comet' set_velocity linear"), std::string::npos) << m;
+  // an impulse is checked by the velocity it gives (1 kg m/s too many on the limit), and
+  // leaves the body as it was when refused
+  const double mass = s.mass(b);
+  m = error_of([&] { s.apply_impulse(b, {0.5 * pba::kMaxRigidSpeed * mass, 0, 0}, s.pose(b).position); });
+  EXPECT_NE(m.find("apply_impulse: the linear velocity it gives"), std::string::npos) << m;
+  m = error_of([&] { s.apply_angular_impulse(b, {0, over * 10, 0}); });
+  EXPECT_NE(m.find("apply_angular_impulse"), std::string::npos) << m;
+  EXPECT_EQ(s.linear_velocity(b), Vec3(pba::kMaxRigidSpeed, 0, 0));
+  EXPECT_EQ(s.angular_velocity(b), Vec3(0, 0, 0));
+  s.step(1.0 / 60, kG);
+  EXPECT_NEAR(s.pose(b).position.x, pba::kMaxRigidSpeed / 60, 1e6);
+}
+
+// A force that takes a body past the limit stops the step before the contacts run, so the
+// body it touches stays finite and the message names the forced body, not its neighbour
+// (before, a box at 1e40 m/s turned its resting neighbour to NaN, and the neighbour was named).
+TEST(RigidDivergence, AForceBeyondTheSpeedLimitStopsTheStepNamingTheForcedBody) {
+  RigidBodySystem s;
+  s.create({.type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+  const auto calm = s.create({.name = "calm", .pose = {{0, 0.5, 0}}, .shapes = kBox});
+  const auto pushed = s.create({.name = "pushed", .pose = {{0, 1.5, 0}}, .shapes = kBox});
+  for (int i = 0; i < 10; ++i) s.step(1.0 / 60, kG);
+  s.apply_force(pushed, {1e30 * s.mass(pushed), 0, 0});  // 1e30 m/s^2 for 1/60 s: 1.7e28 m/s
+  const std::string m = error_of([&] { s.step(1.0 / 60, kG); });
+  EXPECT_NE(m.find("rigid body 2 'pushed' went faster than kMaxRigidSpeed"), std::string::npos) << m;
+  EXPECT_EQ(s.failed_body(), pushed);
+  EXPECT_TRUE(pba::is_finite(s.pose(calm).position));
+  EXPECT_TRUE(pba::is_finite(s.linear_velocity(calm)));
 }
 
 // A pile of tumbling boxes and balls on the ground, and a free-flying T-handle: the same

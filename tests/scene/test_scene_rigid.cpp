@@ -142,6 +142,10 @@ TEST(RigidScenes, BadFieldsAreNamedByPath) {
             "give it a velocity)");
   EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"type": "static", "angular_velocity": [0, 0, 0], "shapes": [{"type": "box"}]}]})"),
             "");
+  // a speed beyond kMaxRigidSpeed (the contact rows' float range) is refused at its field
+  const std::string fast = error_of(R"({"version": 1, "rigid_bodies": [{"angular_velocity": [0, 3e20, 0], "shapes": [{"type": "box"}]}]})");
+  EXPECT_EQ(fast.rfind("scenes/x.json: /rigid_bodies/0/angular_velocity: (0, 3e+20, 0) has a magnitude of 3e+20 rad/s, "
+                       "above the rigid bodies' limit of 1e+20 rad/s", 0), 0u) << fast;
   // a mass whose inverse is no normal float (the contact solver's blocks are floats) is refused
   // before it can turn the first contact into NaN
   const std::string big = error_of(R"({"version": 1, "rigid_bodies": [{"name": "b", "mass": 1e39, "shapes": [{"type": "box"}]}]})");

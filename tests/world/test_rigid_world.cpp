@@ -295,22 +295,45 @@ TEST(RigidStage, ANonFiniteBodyStopsTheWorld) {
   d.gravity_scale = 1e308;  // finite, but g times it is not
   w.add_rigid_body(e, d);
   const std::string m = error_of([&] { w.step(); });
-  EXPECT_NE(m.find("the rigid body of entity 0 'rocket' became non-finite in the tick to t = 0.0166"),
+  EXPECT_NE(m.find("the rigid body of entity 0 'rocket' stopped the world in the tick to t = 0.0166"),
             std::string::npos) << m;
+  EXPECT_NE(m.find("rigid body 0 'rocket' became non-finite"), std::string::npos) << m;
+  EXPECT_EQ(w.rigid().failed_body(), w.rigid_body_id(e));
   // the world refuses further ticks, repeating the message
   const std::string again = error_of([&] { w.step(); });
   EXPECT_NE(again.find("the simulation stopped"), std::string::npos) << again;
   EXPECT_NE(again.find("'rocket'"), std::string::npos) << again;
 }
 
-// A body flung beyond what the collision world holds (its bounds are floats, |x| <= 3.4e38 m)
+// A box pushed past kMaxRigidSpeed beside a resting one: the world names the pushed box's
+// entity (before, the contacts turned its resting neighbour to NaN first, and the neighbour
+// was named), and the neighbour stays finite.
+TEST(RigidStage, ABodyForcedPastTheSpeedLimitIsTheOneNamed) {
+  World w;
+  ground(w);
+  const EntityId calm = w.create_entity({.name = "calm", .pose = {{0, 0.5, 0}}});
+  w.add_rigid_body(calm, box_def({0.5, 0.5, 0.5}));
+  const EntityId pushed = w.create_entity({.name = "pushed", .pose = {{0, 1.5, 0}}});
+  w.add_rigid_body(pushed, box_def({0.5, 0.5, 0.5}));
+  for (int i = 0; i < 5; ++i) w.step();
+  const RigidBodyId p = w.rigid_body_id(pushed);
+  w.rigid().apply_force(p, {0, 0, 1e30 * w.rigid().mass(p)});
+  const std::string m = error_of([&] { w.step(); });
+  EXPECT_NE(m.find("the rigid body of entity 2 'pushed' stopped the world"), std::string::npos) << m;
+  EXPECT_NE(m.find("went faster than kMaxRigidSpeed"), std::string::npos) << m;
+  EXPECT_TRUE(pba::is_finite(w.rigid().linear_velocity(w.rigid_body_id(calm))));
+}
+
+// A body put beyond what the collision world holds (its bounds are floats, |x| <= 3.4e38 m)
 // while its state is still finite stops the world the same way: its entity, the tick, the value.
+// (No velocity within kMaxRigidSpeed carries a body there: 1e21 m a tick at most.)
 TEST(RigidStage, ABodyBeyondTheFloatRangeStopsTheWorld) {
   World w;
   const EntityId e = w.create_entity({.name = "comet"});
   RigidBodyDef d = box_def({0.5, 0.5, 0.5});
-  d.linear_velocity = {1e308, 0, 0};  // finite; one 60 Hz tick carries it to 1.7e306 m
-  w.add_rigid_body(e, d);
+  d.linear_velocity = {1e20, 0, 0};
+  const RigidBodyId b = w.add_rigid_body(e, d);
+  w.rigid().set_pose(b, {{1.6666666666666666e306, 0, 0}});  // finite as a double, not as a float
   const std::string m = error_of([&] { w.step(); });
   EXPECT_NE(m.find("the rigid body of entity 0 'comet' left the range of the collision world in the tick to t = 0.0166"),
             std::string::npos) << m;
