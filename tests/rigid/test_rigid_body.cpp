@@ -604,10 +604,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x96f8e90be0e618dfull) << std::hex << soft;
-  EXPECT_EQ(si, 0x8e91d03e0ace5e9bull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x45db174daca064a3ull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x2663f6b8d6c72294ull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0xe3171dd02a63f32ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x3d51ddced33d4c11ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x44cb15c21223febeull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0xc3b3fdea9e9a6c12ull) << std::hex << xpbd;
 }
 
 }  // namespace
