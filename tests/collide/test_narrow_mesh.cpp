@@ -428,12 +428,10 @@ using namespace pba;
 // along it, the capsule's far end over A, 0.55 m below B's plane (the surface falls away from
 // B across the convex edge). The solver pushed the capsule up out of the ground it lay on at
 // the push-out speed. No triangle may find the capsule deeper than it lies in the mesh (0.1
-// mm on A), and every point must lie on its triangle.
-// DISABLED: this is the defect as found (collide_mesh's one-point fallback for an internal
-// feature); the fixes tried so far each broke another invariant (Mesh.BoxSlidingOverInternal
-// EdgesHasNoGhostContacts, Mesh.SphereAndCapsuleOnTheGridMatchThePlane) or lost concave
-// valleys' speculative contacts. See the ccdfix report.
-TEST(Mesh, DISABLED_AnInternalEdgesContactIsNoDeeperThanTheShapeLiesInTheMesh) {
+// mm on A), and every point must lie on its triangle. (B's contact now keeps the face normal
+// at the pair's own depth, minus the 5 cm distance, at its closest point on B: the plane's
+// point lies over no triangle of B's plane.)
+TEST(Mesh, AnInternalEdgesContactIsNoDeeperThanTheShapeLiesInTheMesh) {
   const std::vector<Vec3> v = {{0, 0.447, -3}, {-3, -0.848, 0}, {0, 0, 0}, {3, 0.169, -3}, {3, -0.253, 0}};
   const std::vector<std::array<std::uint32_t, 3>> t = {{0, 1, 2}, {0, 2, 3}, {3, 2, 4}};  // A, C, B
   const ColliderShape fan = ColliderShape::triangles(TriangleMesh::build(v, t, "fan"));
