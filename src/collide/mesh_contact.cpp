@@ -228,12 +228,31 @@ bool over_triangle(const Vec3 tri[3], const Vec3& x) {
   return true;
 }
 
-// one triangle against the convex shape (both in the mesh's frame); true when in contact.
-// P: a box's or hull's polyhedron (poly: a is one), at: its vertices at pa (P.vertex_count
-// <= 64), both made once by the caller
+// whether the point y of triangle t's plane lies on another triangle of the mesh in that
+// plane (its normal parallel, y in its plane and over it, each to rounding): the surface goes
+// on flat there, so t's plane is the surface at y (a flat grid's neighbour, which then gives
+// the same point itself)
+bool on_coplanar_triangle(const TriangleMesh& M, std::uint32_t t, const Vec3& y, const Vec3& face_normal) {
+  const double eps = 1e-9 * (1 + std::max(std::abs(y.x), std::max(std::abs(y.y), std::abs(y.z))));
+  bool found = false;
+  M.query(Aabb{y - Vec3(eps), y + Vec3(eps)}, [&](std::uint32_t k) {
+    if (found || k == t) return;
+    const Vec3 nk = M.normal(k);
+    if (std::abs(glm::dot(nk, face_normal)) < 1 - 1e-9) return;
+    const auto& idx = M.triangles()[k];
+    const Vec3 tk[3] = {M.vertices()[idx[0]], M.vertices()[idx[1]], M.vertices()[idx[2]]};
+    if (std::abs(glm::dot(nk, y - tk[0])) > eps) return;
+    found = over_triangle(tk, y);
+  });
+  return found;
+}
+
+// one triangle (t of the mesh M) against the convex shape (both in the mesh's frame); true
+// when in contact. P: a box's or hull's polyhedron (poly: a is one), at: its vertices at pa
+// (P.vertex_count <= 64), both made once by the caller
 bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy& A, const Poly& P, bool poly,
-                      const PolyAt& at, const Vec3 tri[3], const Vec3& face_normal, std::uint8_t flags, double margin,
-                      std::uint32_t t, Manifold& m) {
+                      const PolyAt& at, const TriangleMesh& M, const Vec3 tri[3], const Vec3& face_normal,
+                      std::uint8_t flags, double margin, std::uint32_t t, Manifold& m) {
   m.count = 0;
   m.sub_shape_b = t;
   Vec3 n, point_a, point_b;
@@ -390,8 +409,32 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
   if (count <= 0) {
     // one point: the shape's deepest point along the normal onto the triangle's plane (for
     // a snapped normal, the shape's point of the pair)
-    if (internal || snapped) {
-      if (internal) point_a = A.support(use) + radius * use;
+    if (internal) {
+      // the face normal, but the depth along it is the plane's, which is the triangle's only
+      // where that point lies over the triangle, or over a triangle of the same plane next to
+      // it (a flat grid: the neighbour under the shape gives the same point). Elsewhere the
+      // plane runs on where the mesh does not: the terrain had a capsule resting on one
+      // triangle 5 cm from another, which met it at a vertex across a convex and a concave
+      // edge; the capsule's deepest point along that one's face normal lay 1.5 m off it and
+      // 0.55 m below its plane, and the solver pushed the capsule out of the ground it lay on.
+      // There the pair's own depth (EPA's, or minus GJK's distance) is reported along the
+      // face normal, at the pair's point on the triangle: no translation along any direction
+      // separates two convex shapes by less than their penetration depth, nor brings them
+      // into contact by less than their distance, so it is never deeper than the truth along
+      // that normal, and the plane's depth is never shallower (the plane holds the triangle)
+      const double depth0 = glm::dot(point_a - point_b, n);
+      const Vec3 x = A.support(use) + radius * use;
+      const Vec3 y = x - (glm::dot(rf.normal, x) - rf.offset) * rf.normal;
+      // (shallower by more than rounding: a separating-axes pair along the face normal is the
+      // plane's already, and its point of the triangle is then the projection, maybe off it)
+      const double plane_depth = glm::dot(x - y, use);
+      if (depth0 < plane_depth - 1e-9 * (1 + std::abs(plane_depth)) && !over_triangle(tri, y) &&
+          !on_coplanar_triangle(M, t, y, face_normal)) {
+        point_a = point_b + depth0 * use;
+      } else {
+        point_a = x, point_b = y;
+      }
+    } else if (snapped) {
       point_b = point_a - (glm::dot(rf.normal, point_a) - rf.offset) * rf.normal;
     }
     cand[0] = {point_a, point_b, glm::dot(point_a - point_b, use), 0};
@@ -462,7 +505,7 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     const double below = plane - hi - A.radius;
     if (above > slack || below > slack) return;
     Manifold& m = out[std::size_t(written)];
-    if (!collide_triangle(a, local, A, P, poly, at, tri, nf, M.edge_flags()[t], margin, t, m)) return;
+    if (!collide_triangle(a, local, A, P, poly, at, M, tri, nf, M.edge_flags()[t], margin, t, m)) return;
     // back to the world
     m.normal = pose_mesh.rotation * m.normal;
     for (int i = 0; i < m.count; ++i) {

@@ -428,12 +428,10 @@ using namespace pba;
 // along it, the capsule's far end over A, 0.55 m below B's plane (the surface falls away from
 // B across the convex edge). The solver pushed the capsule up out of the ground it lay on at
 // the push-out speed. No triangle may find the capsule deeper than it lies in the mesh (0.1
-// mm on A), and every point must lie on its triangle.
-// DISABLED: this is the defect as found (collide_mesh's one-point fallback for an internal
-// feature); the fixes tried so far each broke another invariant (Mesh.BoxSlidingOverInternal
-// EdgesHasNoGhostContacts, Mesh.SphereAndCapsuleOnTheGridMatchThePlane) or lost concave
-// valleys' speculative contacts. See the ccdfix report.
-TEST(Mesh, DISABLED_AnInternalEdgesContactIsNoDeeperThanTheShapeLiesInTheMesh) {
+// mm on A), and every point must lie on its triangle. (B's contact now keeps the face normal
+// at the pair's own depth, minus the 5 cm distance, at its closest point on B: the plane's
+// point lies over no triangle of B's plane.)
+TEST(Mesh, AnInternalEdgesContactIsNoDeeperThanTheShapeLiesInTheMesh) {
   const std::vector<Vec3> v = {{0, 0.447, -3}, {-3, -0.848, 0}, {0, 0, 0}, {3, 0.169, -3}, {3, -0.253, 0}};
   const std::vector<std::array<std::uint32_t, 3>> t = {{0, 1, 2}, {0, 2, 3}, {3, 2, 4}};  // A, C, B
   const ColliderShape fan = ColliderShape::triangles(TriangleMesh::build(v, t, "fan"));
@@ -456,6 +454,32 @@ TEST(Mesh, DISABLED_AnInternalEdgesContactIsNoDeeperThanTheShapeLiesInTheMesh) {
       EXPECT_TRUE(wb >= -1e-9 && wc >= -1e-9 && wb + wc <= 1 + 1e-9) << "triangle " << k.sub_shape_b << ": " << wb << ", " << wc;
     }
   }
+}
+
+// A valley of two triangles meeting at a concave (internal) crease along z, sides rising at
+// 30 degrees: a ball over the right side, sunk 0.14 m into it, is 6 cm from the left side,
+// whose nearest point is on the crease; its deepest point along the left side's normal lies
+// over the right side, 6 cm (to rounding) above the left plane there. The left triangle still
+// gives its speculative contact (not dropped: a shape coming down into a valley is stopped by
+// it), along the left face's normal, at the crease point, as deep as the ball lies from the
+// triangle (minus the distance: 0.3 - |(0.2, 0.3)|), not at the plane's depth.
+TEST(Mesh, AConcaveCreasesSpeculativeContactKeepsTheDistance) {
+  const double t = std::tan(kPi / 6), L = 4;
+  const std::vector<Vec3> v = {{0, 0, L}, {0, 0, -L}, {-L, L * t, 0}, {L, L * t, 0}};
+  const std::vector<std::array<std::uint32_t, 3>> tri = {{0, 1, 2}, {1, 0, 3}};
+  const ColliderShape valley = ColliderShape::triangles(TriangleMesh::build(v, tri, "valley"));
+  ASSERT_EQ(valley.mesh->edge_flags()[0] & 1, 0);  // the crease is internal
+  const Vec3 centre{0.2, 0.3, 0.1};
+  std::array<Manifold, 4> out;
+  const int n = collide_mesh(ColliderShape::sphere(0.3), {centre, Quat(1, 0, 0, 0)}, valley, {}, out,
+                             {.speculative_margin = 0.1});
+  ASSERT_EQ(n, 2);
+  const Manifold& left = out[0].sub_shape_b == 0 ? out[0] : out[1];
+  ASSERT_EQ(left.sub_shape_b, 0u);
+  ASSERT_EQ(left.count, 1);
+  EXPECT_NEAR(glm::length(left.normal + valley.mesh->normal(0)), 0.0, 1e-12);
+  EXPECT_NEAR(left.points[0].depth, 0.3 - std::hypot(0.2, 0.3), 1e-12);
+  EXPECT_NEAR(glm::length(left.points[0].point_b - Vec3(0, 0, 0.1)), 0.0, 1e-12);
 }
 
 }  // namespace
