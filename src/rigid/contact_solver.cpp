@@ -57,7 +57,7 @@ void clear_lane(ContactBlock& b, AnchorBlock& g, int l, std::uint32_t spare) {
   for (int k = 0; k < 4; ++k) {
     zero(b.x[k]), zero(b.y[k]), zero(b.mass[k]), zero(b.impulse[k]), zero(b.sep[k]);
     zero(b.approach[k]), zero(b.max_impulse[k]);
-    zero(g.za[k]), zero(g.zb[k]), zero(g.base[k]), zero(g.ex[k]), zero(g.ey[k]);
+    zero(g.za[k]), zero(g.zb[k]), zero(g.base[k]), zero(g.ex[k]), zero(g.ey[k]), zero(g.last[k]);
   }
   zero(b.ma), zero(b.mb), zero(b.tangent_mass[0]), zero(b.tangent_mass[1]), zero(b.twist_mass);
   zero(b.friction), zero(b.twist_radius), zero(b.tangent_impulse[0]), zero(b.tangent_impulse[1]);
@@ -232,7 +232,8 @@ PBA_LANES void fill_lanes(const FillInput& in, ContactBlock& k, AnchorBlock& g, 
     // the separation at the start of the step (the kernels add the bodies' motion since)
     const V sep = keep(on[p], base + from<V>(in.offset[p], l0) + zb - za);
     put(k.sep[p], l0, sep), put(g.base[p], l0, sep);
-    put(k.impulse[p], l0, keep(on[p], from<V>(in.impulse[p], l0) / unit));
+    const V carried = keep(on[p], from<V>(in.impulse[p], l0) / unit);
+    put(k.impulse[p], l0, carried), put(g.last[p], l0, carried);
     put(k.x[p], l0, x - ca[0]), put(k.y[p], l0, y - ca[1]);
     put(k.max_impulse[p], l0, zero);
   }
@@ -705,6 +706,10 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
   p.slop = cs.linear_slop;
   p.sweeps = cs.manifold_iterations;
   p.bias = bias, p.soft = soft, p.update_sep = update_sep, p.warm_next = warm_next;
+  // the soft step's relax pass caps what each point carries to the next substep: an impact's
+  // impulse is no guess for the next substep's (contact_wide.cpp, pass())
+  p.cap_carry = soft && !bias;
+  p.carry_speed = gravity_speed * h;
   const BodyArrays r = arrays(s);
   // the overflow, one manifold at a time; rolling resistance after its manifold's friction
   std::size_t next_roll = colored_rolls;  // the overflow's lanes that roll, in lane order

@@ -314,6 +314,7 @@ struct RigidContacts {
   std::vector<std::uint32_t> color_key;  // scratch of color(): each pair's bodies a, b in pair order
   bool color_tgs = false, colored_once = false, pairs_same = false;
   bool backward = true;  // this step runs each band's colours last to first (alternating by step)
+  double gravity_speed = 0;  // |g| of this step (m/s^2): the soft step's cap on carried impulses
   struct LaneRef {
     std::uint32_t block, lane;
     double restitution;  // the pair's (kept here, so the pass does not read the pair again)

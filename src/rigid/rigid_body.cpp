@@ -624,6 +624,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   const double solver_start = total.seconds();
   detail::RigidContacts& c = *contacts_;
   const bool warm = settings_.warm_starting;
+  c.gravity_speed = glm::length(gravity);
   if (settings_.solver == RigidSolverType::Tgs) {
     c.step_tgs(*this, dt, gravity);  // src/rigid/tgs.cpp
   } else if (settings_.solver == RigidSolverType::Xpbd) {

@@ -85,6 +85,9 @@ struct alignas(64) ContactBlock {
 struct alignas(64) AnchorBlock {
   Real za[4][kLanes], zb[4][kLanes], base[4][kLanes];  // (m)
   Real ex[4][kLanes], ey[4][kLanes];                   // (m)
+  // the normal impulses the soft step's last relax pass solved, before its cap (N s, in u;
+  // mutable: the passes take the anchors as const, and only the relax pass writes this)
+  mutable Real last[4][kLanes];
 };
 
 /// One contact pass's settings (contact_solver.cpp fills them).
@@ -101,6 +104,8 @@ struct PassParams {
   bool soft = true;          // soft contacts (false: rigid, Baumgarte)
   bool update_sep = false;   // first measure the separations at the poses now (a relax pass after the positions moved)
   bool warm_next = false;    // then add the impulses to the warm-start accumulators for the next substep
+  double carry_speed = 0;    // cap_carry: |g| h (m/s), the velocity gravity gives in a substep
+  bool cap_carry = false;    // with update_sep: cap each point's carried impulse (contact_wide.cpp, pass())
 };
 
 /// A body's velocities as the contact passes and the integration see them: one cache line, so
