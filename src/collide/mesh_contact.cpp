@@ -483,6 +483,7 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
   if (poly) poly_of(a, P);
   if (poly && P.vertex_count <= 64) at.set(P, local);
+  const bool hull_placed = hull && P.vertex_count <= 64;
   int written = 0;
   auto visit = [&](std::uint32_t t) {
     if (written >= int(out.size())) return;
@@ -494,7 +495,17 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     const Vec3 nf = M.normal(t);
     const double plane = glm::dot(nf, tri[0]), slack = margin + 1e-12 * (1 + std::abs(plane));
     double lo, hi;
-    if (hull) {
+    if (hull && hull_placed) {
+      // the hull's vertices, placed once above: their extremes along nf (two support calls
+      // turned the direction into the hull's frame and the vertex back, per triangle; the
+      // largest dot of the placed vertices is never below the support vertex's, so nothing
+      // the support test kept is dropped)
+      lo = INFINITY, hi = -INFINITY;
+      for (std::uint32_t i = 0; i < P.vertex_count; ++i) {
+        const double x = glm::dot(nf, at.v[i]);
+        lo = std::min(lo, x), hi = std::max(hi, x);
+      }
+    } else if (hull) {
       lo = glm::dot(nf, A.support(-nf)), hi = glm::dot(nf, A.support(nf));
     } else {
       const double c = glm::dot(nf, local.position);
