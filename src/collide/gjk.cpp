@@ -31,6 +31,16 @@ ConvexProxy ConvexProxy::of(const ColliderShape& s, const Pose& pose) {
 }
 
 Vec3 ConvexProxy::support(const Vec3& d, std::uint32_t* vertex, std::uint32_t hint) const {
+  // a mesh's triangle in the mesh's own frame (collide_mesh's, half of GJK's support calls
+  // there): the rotations below are the identity, so the triangle's vertex itself, plus the
+  // pose's +0 that turns a -0 coordinate into +0 as apply() does (the same bits)
+  if (type == ShapeType::Mesh && pose.rotation.w == 1 && pose.rotation.x == 0 && pose.rotation.y == 0 &&
+      pose.rotation.z == 0 && pose.position == Vec3(0)) {
+    const double d0 = glm::dot(triangle[0], d), d1 = glm::dot(triangle[1], d), d2 = glm::dot(triangle[2], d);
+    const std::uint32_t index = d1 > d0 ? (d2 > d1 ? 2u : 1u) : (d2 > d0 ? 2u : 0u);
+    if (vertex) *vertex = index;
+    return triangle[index] + Vec3(0.0);
+  }
   // direction into the local frame, local support, back to the world
   const Vec3 dl = glm::conjugate(pose.rotation) * d;
   Vec3 local(0.0);

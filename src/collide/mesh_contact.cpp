@@ -114,9 +114,22 @@ int sat_triangle(const Poly& P, const PolyAt& at, const Pose& pa, const Vec3 tri
     above = lo - thi >= tlo - hi;
     return above ? lo - thi : tlo - hi;
   };
+  // whether the shape lies beyond one of the triangle's sides (the planes through an edge at
+  // right angles to the face) by more than the margin: a shape apart from the triangle is
+  // mostly beside it, past an edge that a neighbour triangle shares
+  auto beyond_sides = [&] {
+    bool side_above = false;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 c = glm::cross(tri[(k + 1) % 3] - tri[k], face_normal);
+      const double cc = glm::dot(c, c);
+      if (!(cc > 0)) continue;
+      if (gap(c / std::sqrt(cc), side_above) > margin) return true;
+    }
+    return false;
+  };
   kind = Axis::Triangle;
   bool above = false;
-  // any gap means the two are apart (GJK's case, or beyond the margin): stop there
+  // a gap beyond the margin along any axis: no contact
   double best = gap(face_normal, above);
   if (best > margin) return 0;
   if (best > 0) {
@@ -129,10 +142,17 @@ int sat_triangle(const Poly& P, const PolyAt& at, const Pose& pa, const Vec3 tri
     const Vec3 q = v[nearest] + best * n;
     bool interior = false;
     const Vec3 c = closest_on_triangle(q, tri[0], tri[1], tri[2], interior);
-    if (!interior) return 2;
-    point_a = v[nearest], point_b = c, on = 0;
-    return 1;
+    if (interior) {
+      point_a = v[nearest], point_b = c, on = 0;
+      return 1;
+    }
   }
+  // apart along an axis by no more than the margin (here and below): GJK's case, unless one
+  // of the triangle's sides separates them by more. GJK's distance (never below the true one)
+  // is then beyond the margin too, so the answer is the same without the GJK run: on the
+  // terrain a fifth of these runs were saved so, for a tenth of their cost (scanning all the
+  // remaining axes as well saved half the runs, but cost about as much as it saved)
+  if (best > 0) return beyond_sides() ? 0 : 2;
   Vec3 axis = face_normal;
   bool best_above = above;
   std::uint32_t edge_a = 0, edge_b = 0;
@@ -140,7 +160,8 @@ int sat_triangle(const Poly& P, const PolyAt& at, const Pose& pa, const Vec3 tri
     if (P.is_box && (f & 1) == 0) continue;  // a box's opposite faces share their axis
     const Vec3 d = pa.rotation * P.faces[f].normal;
     const double g = gap(d, above);
-    if (g > 0) return g > margin ? 0 : 2;
+    if (g > margin) return 0;
+    if (g > 0) return beyond_sides() ? 0 : 2;
     if (g > best) best = g, axis = d, best_above = above, kind = Axis::Face;
   }
   // edge pairs win over faces only by more than rounding, so a face resting on a face keeps
@@ -164,7 +185,8 @@ int sat_triangle(const Poly& P, const PolyAt& at, const Pose& pa, const Vec3 tri
       if (cc <= 1e-20 * glm::dot(ea, ea) * glm::dot(tri[(k + 1) % 3] - tri[k], tri[(k + 1) % 3] - tri[k])) continue;
       const Vec3 d = c / std::sqrt(cc);
       const double g = gap(d, above);
-      if (g > 0) return g > margin ? 0 : 2;
+      if (g > margin) return 0;
+      if (g > 0) return beyond_sides() ? 0 : 2;
       if (g > best + kEdgeBias) best = g, axis = d, best_above = above, kind = Axis::Edges, edge_a = e, edge_b = k;
     }
   }
@@ -483,6 +505,7 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
   if (poly) poly_of(a, P);
   if (poly && P.vertex_count <= 64) at.set(P, local);
+  const bool hull_placed = hull && P.vertex_count <= 64;
   int written = 0;
   auto visit = [&](std::uint32_t t) {
     if (written >= int(out.size())) return;
@@ -494,7 +517,17 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     const Vec3 nf = M.normal(t);
     const double plane = glm::dot(nf, tri[0]), slack = margin + 1e-12 * (1 + std::abs(plane));
     double lo, hi;
-    if (hull) {
+    if (hull && hull_placed) {
+      // the hull's vertices, placed once above: their extremes along nf (two support calls
+      // turned the direction into the hull's frame and the vertex back, per triangle; the
+      // largest dot of the placed vertices is never below the support vertex's, so nothing
+      // the support test kept is dropped)
+      lo = INFINITY, hi = -INFINITY;
+      for (std::uint32_t i = 0; i < P.vertex_count; ++i) {
+        const double x = glm::dot(nf, at.v[i]);
+        lo = std::min(lo, x), hi = std::max(hi, x);
+      }
+    } else if (hull) {
       lo = glm::dot(nf, A.support(-nf)), hi = glm::dot(nf, A.support(nf));
     } else {
       const double c = glm::dot(nf, local.position);
