@@ -14,7 +14,8 @@
 // runs K times and the run of median ms is shown. --profile adds under each pba row the medians
 // of its step's phases (RigidProfile: collide with pairs and manifolds; solve with prepare, integrate, contacts,
 // finish, and islands and sleep within finish), the
-// manifolds built and reused in the last step, and when every body first slept. --trace MS prints
+// manifolds built and reused in the last step, when every body first slept, and the deepest
+// overlap any manifold started a step with (m, and the step: read outside the timing). --trace MS prints
 // each pba step slower than MS ms with its phases. --budget instead runs the stacks and a
 // small pyramid under the four solvers at equal budgets of contact passes per step
 // (docs/rigid-bodies.md). The peers copy each scene from the pba system the scene's builder
@@ -44,6 +45,8 @@ struct PbaResult : BenchResult {
   pba::RigidProfile phases{};  // (s)
   std::size_t manifolds = 0;   // after the last step
   double asleep_at = -1;       // when every body first slept (s; -1: never)
+  double deepest = 0;          // the deepest overlap of any manifold at the start of any step (m)
+  int deepest_step = -1;       // the step it was in
 };
 
 double median(std::vector<double> v) {
@@ -77,6 +80,11 @@ PbaResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings
                     i, ms.back(), 1e3 * p.pairs, 1e3 * p.manifolds, p.built, p.reused, 1e3 * p.prepare,
                     1e3 * p.integrate, 1e3 * p.contacts, 1e3 * p.finish, 1e3 * p.islands, s.awake_count(), p.moved);
       if (r.asleep_at < 0 && s.awake_count() == 0) r.asleep_at = s.time();
+      // (after the clock: not timed) the deepest overlap the step started with
+      for (std::size_t k = 0, m = s.manifold_count(); k < m; ++k) {
+        const double depth = s.manifold(k).depth;
+        if (depth > r.deepest) r.deepest = depth, r.deepest_step = i;
+      }
       for (std::size_t j = 0; j < b.size(); ++j)
         if (!out[j] && scene.escaped(s.center_of_mass(b[j]))) out[j] = 1, ++r.escapes;
     }
@@ -141,10 +149,11 @@ void print_profile(const PbaResult& r) {
   const pba::RigidProfile& p = r.phases;
   std::printf("  %24s phases: collide %.3f (pairs %.3f, manifolds %.3f) | solve %.3f (prepare %.3f, integrate %.3f, "
               "contacts %.3f, finish %.3f, of which islands %.3f) | total %.3f ms"
-              "  (%zu manifolds: %zu built, %zu reused; all asleep %s)\n",
+              "  (%zu manifolds: %zu built, %zu reused; all asleep %s; deepest overlap %.4f m at step %d)\n",
               "", 1e3 * p.collide, 1e3 * p.pairs, 1e3 * p.manifolds, 1e3 * p.solve, 1e3 * p.prepare, 1e3 * p.integrate,
               1e3 * p.contacts, 1e3 * p.finish, 1e3 * p.islands, 1e3 * p.total,
-              r.manifolds, p.built, p.reused, r.asleep_at < 0 ? "never" : (std::to_string(r.asleep_at) + " s").c_str());
+              r.manifolds, p.built, p.reused, r.asleep_at < 0 ? "never" : (std::to_string(r.asleep_at) + " s").c_str(),
+              r.deepest, r.deepest_step);
 }
 
 struct Options {
