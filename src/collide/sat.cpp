@@ -390,13 +390,17 @@ void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose&
     return;
   }
   const double best_face = std::max(fa.separation, fb.separation);
-  const EdgeQuery ee = query_edges(a, b, r, std::min(margin, kRelEdge * best_face + kAbs), eps);
+  // what an edge pair must exceed to be the contact: the best face's separation and a tenth of
+  // it, whatever its sign (0.9 times a positive separation let an edge pair whose axis is a
+  // face normal tie with the face, and a face-on speculative contact became one point)
+  const double edge_over = (best_face > 0 ? (2 - kRelEdge) * best_face : kRelEdge * best_face) + kAbs;
+  const EdgeQuery ee = query_edges(a, b, r, std::min(margin, edge_over), eps);
   if (ee.separation > margin) {
     if (cache) *cache = {SatCache::Kind::Edges, ee.edge_a, ee.edge_b};
     return;
   }
 
-  if (ee.separation > kRelEdge * best_face + kAbs) {
+  if (ee.separation > edge_over) {
     if (cache) *cache = {SatCache::Kind::Edges, ee.edge_a, ee.edge_b};
     // edge contact: the closest points of the two edges
     const Vec3 p1 = apply(pa, a.vertices[a.edges[ee.edge_a].origin]);

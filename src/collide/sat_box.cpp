@@ -451,7 +451,11 @@ void collide_boxes_sat(const Vec3& ha, const Pose& pa, const Vec3& hb, const Pos
   // axis matters only when it separates (beyond the margin) or beats the faces by the
   // hysteresis below (Gregorius 2013), that is when it exceeds `relevant`
   constexpr double kRelEdge = 0.90, kRelFace = 0.98, kAbs = 0.5 * 0.005;
-  const double relevant = std::min(margin, kRelEdge * std::max(fa, fb) + kAbs);
+  // (the tolerance is a tenth of the face's separation whatever its sign: for boxes apart,
+  // 0.9 times it would let an edge pair tie with a face, as e_x x e_z does with the y faces
+  // of two aligned boxes, and make a face-on speculative contact one point)
+  const double face = std::max(fa, fb);
+  const double relevant = std::min(margin, (face > 0 ? (2 - kRelEdge) * face : kRelEdge * face) + kAbs);
   double ee = -INFINITY;
   int ek = 0;
   {
@@ -830,7 +834,8 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
   }
   store(o.ee, ee), store(o.ek, ek);
   constexpr double kRelEdge = 0.90, kRelFace = 0.98, kAbs = 0.5 * 0.005;
-  const V relevant = vmin(margin, kRelEdge * vmax(fa, fb) + kAbs);
+  const V face = vmax(fa, fb);
+  const V relevant = vmin(margin, (face > 0 ? (2 - kRelEdge) * face : kRelEdge * face) + kAbs);
   store(o.edge, ee > relevant ? one : zero);
   const M ref_a = !(fb > kRelFace * fa + kAbs);
   store(o.ref_a, ref_a ? one : zero);
