@@ -605,9 +605,9 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
   EXPECT_EQ(soft, 0x63fa5ef57077da01ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x3d51ddced33d4c11ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x44cb15c21223febeull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0xc3b3fdea9e9a6c12ull) << std::hex << xpbd;
+  EXPECT_EQ(si, 0x4b5664a03f8e1dc0ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x8b008d1fdaac5173ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x73f1cc0056eea7a8ull) << std::hex << xpbd;
 }
 
 }  // namespace
