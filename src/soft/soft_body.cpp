@@ -424,7 +424,7 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
   } else {
     s.step_mass_spring(t, dt);
   }
-  // (XPBD's collision time is an estimate, which may exceed what the collisions took)
+  // (the collisions' time is measured within the solver's, so the difference is >= 0)
   s.profile.solve = std::max(0.0, sw.seconds() - s.profile.collide);
   // pins end exactly at their targets
   for (std::size_t k = 0; k < s.pins.size(); ++k) s.pin_from[k] = s.pin_to[k];
