@@ -188,7 +188,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
         auto pose_a = [&](double t) { return compose(w.body(t), sa.local); };
         // the shape's own sweep: the body's, turning its core's reach (never more than the body's)
         Sweep ws = w;
-        ws.reach = std::min(w.reach, core_reach(sa, s.com_local_[i]));
+        ws.reach = std::min(w.reach, core_reach(sa, w.com_local));
         const double moved_a = shift + ws.angle * ws.reach;  // the farthest its core travels (m)
         // A swept hit matters only when the step left the shape deeper than the slop: one that
         // ends on its side of the surface, within the slop, was stopped by the discrete

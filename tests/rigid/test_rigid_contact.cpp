@@ -159,17 +159,20 @@ TEST(RigidRestitution, EqualMassesSwapVelocitiesInAnElasticHeadOnCollision) {
 // ---------------------------------------------------------------------------------------
 // friction
 
-// A box resting on a plane tilted by theta, both mu = 0.5 (tan theta* = 0.5 at 26.57 deg).
+// A box (half extents `half`, a 0.5 m cube by default) resting on a plane tilted by theta
+// about z, both of friction mu (the tests below: 0.5, tan theta* = 0.5 at 26.57 deg).
 struct Incline {
   RigidBodySystem s;
   pba::RigidBodyId box;
   Vec3 down;  // unit vector down the slope
-  Incline(double theta, double mu, pba::RigidSolverType solver = pba::RigidSolverType::SoftStep) : s(with(solver)) {
+  Incline(double theta, double mu, pba::RigidSolverType solver = pba::RigidSolverType::SoftStep,
+          const Vec3& half = Vec3(0.25))
+      : s(with(solver)) {
     ground(s, mu, 0, theta);
     const Quat q = glm::angleAxis(theta, Vec3(0, 0, 1));
     const Vec3 n{-std::sin(theta), std::cos(theta), 0};
     down = Vec3(-std::cos(theta), -std::sin(theta), 0);
-    box = s.create({.name = "box", .pose = {0.25 * n, q}, .shapes = {box_shape({0.25, 0.25, 0.25}, mu)}});
+    box = s.create({.name = "box", .pose = {half.y * n, q}, .shapes = {box_shape(half, mu)}});
   }
   double along() const { return glm::dot(s.center_of_mass(box), down); }
 };
@@ -210,23 +213,20 @@ TEST(RigidFriction, AFlatBoxOnAnInclineStaysOrSlidesOverTheInputRange) {
   for (const double mu : {0.1, 0.3, 0.6, 1.0})
   for (const double offset : {-deg(4), deg(4), deg(15)}) {
     const double theta = std::atan(mu) + offset;
-    RigidBodySystem s(with(solver));
-    ground(s, mu, 0, theta);
-    const Vec3 n{-std::sin(theta), std::cos(theta), 0}, down{-std::cos(theta), -std::sin(theta), 0};
-    auto box = s.create({.pose = {0.05 * n, glm::angleAxis(theta, Vec3(0, 0, 1))},
-                         .shapes = {box_shape({0.25, 0.05, 0.25}, mu)}});
-    const double x0 = glm::dot(s.center_of_mass(box), down);
+    Incline in(theta, mu, solver, {0.25, 0.05, 0.25});
+    const double x0 = in.along();
     const std::string what = std::string(to_string(solver)) + " mu = " + std::to_string(mu) + " theta = " +
                              std::to_string(theta * 180 / pba::kPi);
     if (offset < 0) {
-      for (int i = 0; i < 300; ++i) s.step(1.0 / 60, kGravity);
-      EXPECT_LT(std::abs(glm::dot(s.center_of_mass(box), down) - x0), 1e-3) << what;
+      for (int i = 0; i < 300; ++i) in.s.step(1.0 / 60, kGravity);
+      EXPECT_LT(std::abs(in.along() - x0), 1e-3) << what;
       continue;
     }
-    for (int i = 0; i < 30; ++i) s.step(1.0 / 60, kGravity);
-    const double v1 = glm::dot(s.linear_velocity(box), down);
-    for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kGravity);
-    const double a = glm::dot(s.linear_velocity(box), down) - v1;
+    auto speed = [&] { return glm::dot(in.s.linear_velocity(in.box), in.down); };
+    for (int i = 0; i < 30; ++i) in.s.step(1.0 / 60, kGravity);
+    const double v1 = speed();
+    for (int i = 0; i < 60; ++i) in.s.step(1.0 / 60, kGravity);
+    const double a = speed() - v1;
     const double expected = kG * (std::sin(theta) - mu * std::cos(theta));
     EXPECT_NEAR(a, expected, 1e-3 * expected) << what;
   }
