@@ -31,6 +31,9 @@ constexpr Color kTop = colors::yellow;
 constexpr Color kStatic = colors::grey;
 constexpr Color kPalette[] = {colors::blue, colors::cyan, colors::purple, colors::pink, colors::green};
 
+// the friction ramp's slope (rad): tan = 0.40, between the boxes' mu of 0.3 and 0.5
+constexpr double kRampAngle = 0.3805;
+
 enum class LabScene : int { Stack, Pyramid, Falling, Restitution, Ramp };
 constexpr const char* kSceneNames[] = {"vertical stack", "square pyramid", "falling boxes", "restitution row",
                                        "friction ramp"};
@@ -89,7 +92,33 @@ class RigidLab final : public Sample {
       l.bodies.draw(d, ctx_.draw, o);
       // a marker ball above the measured body (its flat faces take one shade each, which may
       // never be the colour itself; a lit ball always shows it somewhere)
-      if (l.bodies.valid(l.top)) d.sphere(l.bodies.center_of_mass(l.top) + Vec3(0, 0.9, 0), 0.3, kTop);
+      // (not in the ramp and the row, whose bodies are labelled: the measured one's label takes
+      // the marker's colour instead, as a ball over a ball would read as one more ball)
+      if (l.bodies.valid(l.top) && l.labelled.empty()) d.sphere(l.bodies.center_of_mass(l.top) + Vec3(0, 0.9, 0), 0.3, kTop);
+      // the ramp's boxes and the row's balls carry their coefficient ("mu=0.30", "e=0.40"),
+      // and the scene its closed form, so the picture says which should stick or how high
+      // each should rise
+      for (std::size_t i = 0; i < l.labelled.size(); ++i) {
+        const RigidBodyId id = l.labelled[i];
+        if (!l.bodies.valid(id)) continue;
+        const std::string& name = l.bodies.name(id);
+        const std::size_t space = name.find(' ');
+        // every other label a little higher, so that neighbours' labels do not run together
+        r.text(offset(k) + l.bodies.center_of_mass(id) + Vec3(0, i % 2 ? 0.75 : 0.45, 0),
+               space == std::string::npos ? std::string_view(name) : std::string_view(name).substr(space + 1),
+               id == l.top ? kTop : Color{0.92f, 0.93f, 0.96f, 1}, 0.8f, 0.5f);
+      }
+      // (compared, over the middle of the copies, above their solvers' names)
+      const Vec3 title_at = compare_ ? Vec3(0, 4.6, 0) : offset(k);
+      if (k == 0 && scene_ == LabScene::Ramp) {
+        char line[128];
+        std::snprintf(line, sizeof line, "slope %.1f deg: mu above tan = %.2f sticks, below it slides at g (sin - mu cos)",
+                      kRampAngle * 180 / kPi, std::tan(kRampAngle));
+        r.text(title_at + Vec3(0, 3.2, 0), line, Color{0.92f, 0.93f, 0.96f, 1}, 1.0f, 0.5f);
+      }
+      if (k == 0 && scene_ == LabScene::Restitution)
+        r.text(title_at + Vec3(0, 3.6, 0), "dropped from 2 m: each ball rebounds to e^2 of its drop",
+               Color{0.92f, 0.93f, 0.96f, 1}, 1.0f, 0.5f);
       // in the compare mode, each copy's solver written above it
       if (compare_) {
         const double top = l.bodies.valid(l.top) ? l.bodies.center_of_mass(l.top).y + 1.8 : 4.0;
@@ -191,6 +220,7 @@ class RigidLab final : public Sample {
     RigidBodySystem bodies;
     RigidBodyId top{};
     Vec3 top0{0, 0, 0};
+    std::vector<RigidBodyId> labelled;  // bodies whose name is written above them (ramp, restitution row)
     std::vector<float> t, energy, sag_mm, drift_mm, depth_mm, ms;
   };
 
@@ -251,9 +281,11 @@ class RigidLab final : public Sample {
           dyn = rigid_scenes::restitution_row(l.bodies, std::max(2, std::min(size_, 12)));
           radius = 4;
           break;
-        case LabScene::Ramp: dyn = rigid_scenes::friction_ramp(l.bodies, 0.3805, std::max(1, std::min(size_, 8))); radius = 5; break;
+        case LabScene::Ramp: dyn = rigid_scenes::friction_ramp(l.bodies, kRampAngle, std::max(1, std::min(size_, 8))); radius = 5; break;
       }
       l.top = dyn.empty() ? RigidBodyId{} : dyn.back();
+      // (alone: compared, four rows of labels run together)
+      l.labelled = along_z() && !compare_ ? dyn : std::vector<RigidBodyId>{};
       // sag and drift are measured from the touching stack, before the gaps
       l.top0 = l.bodies.valid(l.top) ? l.bodies.center_of_mass(l.top) : Vec3(0);
       // stacks and pyramids start with 2 cm between layers, so they are seen to settle
@@ -275,7 +307,14 @@ class RigidLab final : public Sample {
     const float cy = scene_ == LabScene::Stack || scene_ == LabScene::Pyramid ? 0.45f * size_ : 1.5f;
     const float wide =
         compare_ ? std::max(radius, 0.6f * static_cast<float>(spacing_ * lanes_.size())) : radius;
-    ctx_.camera->frame({0.0f, cy, 0.0f}, wide, 0.5f, 0.3f);
+    // the ramp alone is seen from down the slope, so its row of boxes (along z) spreads across
+    // the picture and each box's label stands clear of the next
+    // (and its compared copies, which stand along z as its rows do, are seen from there too so
+    // that they stand side by side)
+    if (scene_ == LabScene::Ramp)
+      ctx_.camera->frame({1.5f, 1.0f, 0.0f}, compare_ ? 0.8f * wide : radius - 0.5f, -1.45f, compare_ ? 0.3f : 0.35f);
+    else
+      ctx_.camera->frame({0.0f, cy, 0.0f}, wide, 0.5f, 0.3f);
   }
 
   void record(Lane& l) {

@@ -242,8 +242,10 @@ inline std::vector<RigidBodyId> friction_ramp(RigidBodySystem& s, double angle =
     const double mu = 0.1 + 0.2 * i;
     // along the slope's upper part, side by side in z; friction mixes as sqrt(1 * mu^2) = mu
     const Vec3 p = 0.25 * normal + Vec3(std::cos(angle), std::sin(angle), 0) * 3.0 + Vec3(0, 0, (i - 0.5 * (n - 1)) * 0.9);
-    out.push_back(s.create({.pose = {p, q}, .shapes = {{.shape = ColliderShape::box(Vec3(0.25)),
-                                                         .material = {.restitution = 0, .friction = mu * mu}}}}));
+    out.push_back(s.create({.name = "box mu=" + std::to_string(mu).substr(0, 4),
+                            .pose = {p, q},
+                            .shapes = {{.shape = ColliderShape::box(Vec3(0.25)),
+                                        .material = {.restitution = 0, .friction = mu * mu}}}}));
   }
   return out;
 }
