@@ -218,9 +218,11 @@ inline std::vector<RigidBodyId> convex_vs_mesh(RigidBodySystem& s, int n = 100, 
   return out;
 }
 
-/// A row of `n` balls of radius 0.2 m dropped from 2 m, restitution 0 ... 1 left to right.
+/// A row of `n` balls of radius 0.2 m dropped from 2 m, restitution 0 ... 1 left to right, on
+/// a ground of restitution 0 (restitutions mix by the maximum unless the settings say otherwise,
+/// so each contact has its ball's).
 inline std::vector<RigidBodyId> restitution_row(RigidBodySystem& s, int n = 6) {
-  ground(s, 0.0, 1.0);
+  ground(s, 0.0, 0.0);
   std::vector<RigidBodyId> out;
   for (int i = 0; i < n; ++i) {
     const double e = n > 1 ? static_cast<double>(i) / (n - 1) : 1.0;

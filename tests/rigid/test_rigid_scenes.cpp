@@ -236,3 +236,65 @@ TEST(RigidScenes, ConvexVersusMeshIsThePeersScene) {
 }
 
 }  // namespace
+
+namespace {
+
+// The lab's restitution row: balls of e = 0, 0.2, ..., 1 dropped 2 m (their lowest point) onto
+// a ground of e = 0, restitution mixing by the maximum: each ball's first rebound rises to e^2
+// of its drop within 3% (the tolerance; e = 0 under 1 cm). The apex is read from the
+// state each step as y + vy^2 / 2g, so the 60 Hz sampling costs nothing. (The row's ground
+// had e = 1, and the maximum rule gave every ball e = 1: all six rose 2 m.)
+TEST(RigidScenes, TheRestitutionRowReboundsToESquaredOfItsDrop) {
+  RigidBodySystem s({.capacity = 16});
+  const auto balls = pba::rigid_scenes::restitution_row(s, 6);
+  constexpr double kDrop = 2.0, kRadius = 0.2;
+  for (std::size_t i = 0; i < balls.size(); ++i) {
+    ASSERT_NEAR(s.center_of_mass(balls[i]).y - kRadius, kDrop, 1e-12);
+    ASSERT_NEAR(s.shapes(balls[i])[0].shape.radius, kRadius, 1e-12);
+  }
+  std::vector<double> apex(balls.size(), 0.0);
+  std::vector<bool> bounced(balls.size(), false);
+  for (int step = 0; step < 150; ++step) {  // 2.5 s: the fall takes 0.64 s, an e = 1 rise as long
+    s.step(1.0 / 60, kGravity);
+    for (std::size_t i = 0; i < balls.size(); ++i) {
+      const Vec3 v = s.linear_velocity(balls[i]);
+      if (v.y > 0) bounced[i] = true;
+      if (bounced[i])
+        apex[i] = std::max(apex[i], s.center_of_mass(balls[i]).y - kRadius + (v.y > 0 ? v.y * v.y / (2 * 9.81) : 0));
+    }
+  }
+  for (std::size_t i = 0; i < balls.size(); ++i) {
+    const double e = static_cast<double>(i) / 5, want = e * e * kDrop;
+    if (e == 0)
+      EXPECT_LT(apex[i], 0.01) << "e = 0";
+    else
+      EXPECT_NEAR(apex[i], want, 0.03 * want) << "e = " << e;
+  }
+}
+
+// The lab's friction ramp: boxes of mu = 0.1 ... 0.9 on a slope whose tangent is 0.40 (the
+// ramp's own mu is 1 and friction mixes by the geometric mean, so each box's contact has its
+// mu). Over 1 s those with mu above the tangent move under 1 mm; the others slide
+// g (sin - mu cos) t^2 / 2 down the slope within 2% (the incline tolerance).
+TEST(RigidScenes, TheFrictionRampsBoxesStickOrSlideByTheirMu) {
+  constexpr double kAngle = 0.3805;
+  RigidBodySystem s({.capacity = 16});
+  const auto boxes = pba::rigid_scenes::friction_ramp(s, kAngle, 5);
+  std::vector<Vec3> start;
+  for (const auto b : boxes) start.push_back(s.center_of_mass(b));
+  for (int step = 0; step < 60; ++step) s.step(1.0 / 60, kGravity);
+  const Vec3 down{-std::cos(kAngle), -std::sin(kAngle), 0};
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const double mu = 0.1 + 0.2 * static_cast<double>(i);
+    const Vec3 moved = s.center_of_mass(boxes[i]) - start[i];
+    if (mu > std::tan(kAngle)) {
+      EXPECT_LT(glm::length(moved), 1e-3) << "mu = " << mu;
+    } else {
+      const double want = 0.5 * 9.81 * (std::sin(kAngle) - mu * std::cos(kAngle));
+      EXPECT_NEAR(glm::dot(moved, down), want, 0.02 * want) << "mu = " << mu;
+      EXPECT_LT(glm::length(moved - glm::dot(moved, down) * down), 1e-3) << "mu = " << mu << " leaves the line of the slope";
+    }
+  }
+}
+
+}  // namespace
