@@ -78,7 +78,7 @@ struct RigidMass {
 /// A shape attached to a body, with its material.
 struct RigidShapeDef {
   ColliderShape shape{};  ///< any shape; planes and meshes only on static bodies
-  Pose local{};           ///< placement in the body frame
+  Pose local{};           ///< placement in the body frame (position within the float range, m)
   double density = 1000;  ///< kg/m^3, finite and > 0: the body's mass comes from its shapes' densities
   /// Friction and restitution (mixed between the two shapes of a contact, see ContactSettings).
   SurfaceMaterial material{.restitution = 0, .friction = 0.6};
@@ -101,7 +101,9 @@ void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view
 struct RigidBodyDef {
   std::string name{};               ///< optional; used in error messages
   BodyType type = BodyType::Dynamic;  ///< static, kinematic or dynamic
-  Pose pose{};                      ///< body frame in the world (finite position, unit rotation)
+  /// Body frame in the world: a unit rotation, and a position within the float range
+  /// (|component| <= 3.4e38 m: the shapes' bounds and the contact rows hold it as floats).
+  Pose pose{};
   Vec3 linear_velocity{0, 0, 0};    ///< velocity of the centre of mass (m/s), |v| <= kMaxRigidSpeed
   Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), |w| <= kMaxRigidSpeed
   std::vector<RigidShapeDef> shapes{};  ///< at least one
@@ -351,7 +353,8 @@ class RigidBodySystem {
   /// The body's name.
   const std::string& name(RigidBodyId id) const;
 
-  /// Moves a body (validated).
+  /// Moves a body (validated as RigidBodyDef::pose: a unit rotation, a position within the
+  /// float range).
   void set_pose(RigidBodyId id, const Pose& pose);
   /// Sets the centre of mass velocity and the angular velocity (validated).
   void set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular);

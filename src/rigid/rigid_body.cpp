@@ -195,7 +195,9 @@ void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view
 }
 
 void RigidBodyDef::validate(std::string_view where) const {
+  // the shapes' bounds and the contact rows hold positions as floats (beyond, a step made NaN)
   require_finite(pose.position, field_path(where, "pose.position"));
+  require_float(pose.position, field_path(where, "pose.position"));
   require_unit_quat(pose.rotation, field_path(where, "pose.rotation"));
   require_rigid_speed(linear_velocity, field_path(where, "linear_velocity"), "m/s");
   require_rigid_speed(angular_velocity, field_path(where, "angular_velocity"), "rad/s");
@@ -208,6 +210,7 @@ void RigidBodyDef::validate(std::string_view where) const {
     const std::string w = field_path(where, "shapes[" + std::to_string(k) + "]");
     d.shape.validate(field_path(w, "shape"));
     require_finite(d.local.position, field_path(w, "local.position"));
+    require_float(d.local.position, field_path(w, "local.position"));
     require_unit_quat(d.local.rotation, field_path(w, "local.rotation"));
     require_positive(d.density, field_path(w, "density"));
     require_in_range(d.material.restitution, 0, 1, field_path(w, "material.restitution"));
@@ -461,6 +464,7 @@ double RigidBodySystem::kinetic_energy(RigidBodyId id) const {
 void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   const std::size_t i = index(id, "RigidBodySystem::set_pose");
   if (!is_finite(pose.position)) require_finite(pose.position, describe(i) + " set_pose position");
+  require_float(pose.position, describe(i) + " set_pose position");  // as RigidBodyDef::validate
   if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
   com_[i] = apply(pose, com_local_[i]);
   q_[i] = glm::normalize(pose.rotation * principal_[i]);

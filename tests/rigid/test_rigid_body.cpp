@@ -442,6 +442,31 @@ TEST(RigidBadInput, MassesAndMomentsOutsideTheFloatRangeAreRefusedByName) {
   EXPECT_EQ(msg(given(3e-39 * 6)), "");
 }
 
+// The shapes' bounds and the contact rows hold positions as floats: a body set beyond the
+// float range (1e39 m, finite as a double) was accepted by create and set_pose, and the next
+// step against a ground plane turned it to NaN and stopped the system. Refused where it is
+// given, as scene files refuse such positions; the largest float position still steps.
+TEST(RigidBadInput, PositionsOutsideTheFloatRangeAreRefusedWhereTheyAreGiven) {
+  RigidBodySystem s;
+  s.create({.name = "ground", .type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+  const std::vector<pba::RigidShapeDef> cube{{.shape = pba::ColliderShape::box({0.5, 0.5, 0.5})}};
+  std::string m = error_of([&] { s.create({.name = "far", .pose = {{1e39, 0.5, 0}}, .shapes = cube}); });
+  EXPECT_NE(m.find("'far'.pose.position: must fit a float"), std::string::npos) << m;
+  EXPECT_NE(m.find("got (1e+39, 0.5, 0)"), std::string::npos) << m;
+  m = error_of([&] {
+    s.create({.name = "odd", .shapes = {{.shape = pba::ColliderShape::sphere(0.5), .local = {{0, 0, -1e39}}}}});
+  });
+  EXPECT_NE(m.find("'odd'.shapes[0].local.position: must fit a float"), std::string::npos) << m;
+  const double edge = 3.4e38;
+  const auto b = s.create({.name = "crate", .pose = {{edge, 0.5, 0}}, .shapes = cube});
+  m = error_of([&] { s.set_pose(b, {{-1e39, 0.5, 0}}); });
+  EXPECT_NE(m.find("'crate' set_pose position: must fit a float"), std::string::npos) << m;
+  EXPECT_EQ(s.pose(b).position, Vec3(edge, 0.5, 0));  // left as it was
+  for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kG);
+  EXPECT_EQ(s.pose(b).position.x, edge);
+  EXPECT_NEAR(s.pose(b).position.y, 0.5, 1e-3);  // rests on the ground
+}
+
 // Soft contacts scale with the body's mass (impulses are effective mass times a velocity
 // change), so a box dropped on a plane falls and settles the same way at any mass: at the
 // two ends of the accepted range it follows the 1 kg box to float rounding of its masses.
