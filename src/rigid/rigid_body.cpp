@@ -847,9 +847,10 @@ RigidManifoldInfo RigidBodySystem::manifold(std::size_t k) const {
 }
 
 std::vector<Aabb> RigidBodySystem::shape_bounds(RigidBodyId id) const {
-  const Pose body = pose(id);
+  const std::size_t i = index(id, "RigidBodySystem::shape_bounds");
+  const Pose body = body_pose(i);
   std::vector<Aabb> out;
-  for (const RigidShapeDef& d : shapes_[index(id, "RigidBodySystem::shape_bounds")])
+  for (const RigidShapeDef& d : shapes_[i])
     out.push_back(bounds(d.shape, compose(body, d.local)));
   return out;
 }

@@ -346,6 +346,9 @@ TEST(RigidHandles, DestroyKeepsTheOthersAndRejectsStaleHandles) {
   EXPECT_EQ(s.name(c), "c");
   EXPECT_NE(error_of([&] { s.pose(b); }).find("stale handle"), std::string::npos);
   EXPECT_NE(error_of([&] { s.apply_impulse(b, {1, 0, 0}, {0, 0, 0}); }).find("stale handle"), std::string::npos);
+  // each call names itself (shape_bounds named pose, which it calls first)
+  EXPECT_NE(error_of([&] { s.shape_bounds(b); }).find("RigidBodySystem::shape_bounds: stale handle"),
+            std::string::npos) << error_of([&] { s.shape_bounds(b); });
   auto d = s.create({.name = "d", .shapes = kBall});  // reuses b's slot at a new generation
   EXPECT_EQ(d.index, b.index);
   EXPECT_FALSE(s.valid(b));
