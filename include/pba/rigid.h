@@ -204,7 +204,7 @@ struct ContactSettings {
   /// Let resting islands (bodies linked by touching contacts) fall asleep: an island whose
   /// every body has moved slower than the tolerances for `time_to_sleep` stops being
   /// simulated until a contact with an awake body, a force, an impulse or a pose or velocity
-  /// change wakes it.
+  /// change wakes it. Turned off, the next step wakes every sleeping body.
   bool sleep = true;
   double sleep_linear = 0.05;    ///< m/s, finite and >= 0 (Box2D's linear sleep tolerance)
   double sleep_angular = 0.0349; ///< rad/s (2 degrees/s), finite and >= 0
@@ -354,7 +354,8 @@ class RigidBodySystem {
   const std::string& name(RigidBodyId id) const;
 
   /// Moves a body (validated as RigidBodyDef::pose: a unit rotation, a position within the
-  /// float range).
+  /// float range) and wakes it; a static body moved also wakes the sleeping bodies its shapes'
+  /// bounds reach before or after the move (what rested on it).
   void set_pose(RigidBodyId id, const Pose& pose);
   /// Sets the centre of mass velocity and the angular velocity (validated).
   void set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular);

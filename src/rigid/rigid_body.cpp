@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <Eigen/Eigenvalues>
@@ -466,9 +467,27 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   if (!is_finite(pose.position)) require_finite(pose.position, describe(i) + " set_pose position");
   require_float(pose.position, describe(i) + " set_pose position");  // as RigidBodyDef::validate
   if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
+  // a static body moved wakes the sleeping bodies its shapes' bounds reach, before or after
+  // the move (grown by the speculative distance): they rested on it, and nothing else would
+  // wake them (the ground lowered under a sleeping stack left it floating)
+  const bool fixed = type_[i] == BodyType::Static;
+  Aabb reach{Vec3(std::numeric_limits<double>::infinity()), Vec3(-std::numeric_limits<double>::infinity())};
+  if (fixed)
+    for (const RigidShapeDef& d : shapes_[i]) reach = reach.merged(bounds(d.shape, compose(body_pose(i), d.local)));
   com_[i] = apply(pose, com_local_[i]);
   q_[i] = glm::normalize(pose.rotation * principal_[i]);
   wake_island(i);
+  if (!fixed) return;
+  for (const RigidShapeDef& d : shapes_[i]) reach = reach.merged(bounds(d.shape, compose(body_pose(i), d.local)));
+  reach = reach.grown(settings_.speculative_distance);
+  for (std::size_t k = 0; k < type_.size(); ++k) {
+    if (!asleep_[k]) continue;
+    for (const RigidShapeDef& d : shapes_[k])
+      if (reach.overlaps(bounds(d.shape, compose(body_pose(k), d.local)))) {
+        wake_island(k);
+        break;
+      }
+  }
 }
 
 void RigidBodySystem::set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular) {
@@ -601,6 +620,11 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   if (!is_finite(gravity)) require_finite(gravity, "RigidBodySystem::step gravity");
   if (!(settings_ == validated_)) {
     settings_.validate("RigidBodySystem.settings");
+    // sleeping turned off wakes the sleepers (as Box2D's b2World_EnableSleeping does): nothing
+    // else would wake a pile asleep away from anything moving
+    if (!settings_.sleep && validated_.sleep)
+      for (std::size_t i = 0; i < type_.size(); ++i)
+        if (asleep_[i]) wake_island(i);
     validated_ = settings_;
   }
   last_dt_ = dt;

@@ -979,6 +979,32 @@ TEST(RigidSleep, ForcesImpulsesPosesAndContactsWakeIslands) {
   EXPECT_EQ(t.awake_count(), 3u);
 }
 
+// Turning sleeping off wakes the sleepers, as Box2D's b2World_EnableSleeping(false) does:
+// nothing else would ever wake a pile asleep far from anything moving, and it stayed frozen
+// with `sleep` false (in the air, with the gravity turned sideways). Moving a static body
+// wakes what rests on it: the ground lowered 0.3 m under a sleeping stack left it floating.
+TEST(RigidSleep, TurningSleepingOffAndMovingAStaticBodyWakeTheSleepers) {
+  RigidBodySystem s;
+  const auto ground = pba::rigid_scenes::ground(s, 0.5);
+  auto low = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+  auto high = pba::rigid_scenes::box(s, {0, 1.5, 0}, Vec3(0.5));
+  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+  ASSERT_FALSE(s.awake(low) || s.awake(high));
+  // the ground lowered: the stack wakes and falls 0.3 m onto it (at rest within 1 mm)
+  s.set_pose(ground, {{0, -0.3, 0}});
+  EXPECT_TRUE(s.awake(low) && s.awake(high));
+  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+  EXPECT_NEAR(s.center_of_mass(high).y, 1.2, 1e-3);
+  ASSERT_FALSE(s.awake(low) || s.awake(high));
+  // sleeping off: the next step wakes them, and under gravity along x (nothing presses them
+  // on the ground, so no friction holds them) they fall sideways at g (within 1% in this
+  // first step, where the resting contacts' carried impulses still act: measured 0.08%)
+  s.settings().sleep = false;
+  s.step(1.0 / 60, {kG, 0, 0});
+  EXPECT_EQ(s.awake_count(), 2u);
+  EXPECT_NEAR(s.linear_velocity(high).x, kG / 60, 0.01 * kG / 60);
+}
+
 // A force wakes a sleeping body and acts on it at once: a box asleep on the ground pulled up
 // by three times its weight leaves it, and once off the ground it gains (F / m - g) dt per
 // step exactly (no contact left to act; the closed form of the velocity under constant
