@@ -347,6 +347,21 @@ TEST(RigidStage, ABodyBeyondTheFloatRangeStopsTheWorld) {
   EXPECT_NE(again.find("the simulation stopped"), std::string::npos) << again;
 }
 
+// World::set_pose beyond the float range on an entity with a rigid body is refused before
+// anything moves, by the World's name: it set the entity's pose, and then the body refused it
+// in its own name. (An entity without one may stand there; its components refuse it.)
+TEST(RigidStage, SetPoseBeyondTheFloatRangeIsRefusedAndMovesNothing) {
+  World w;
+  const EntityId e = w.create_entity({.name = "crate", .pose = {{1, 2, 3}}});
+  w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}));
+  const std::string m = error_of([&] { w.set_pose(e, {{1e39, 0, 0}}); });
+  EXPECT_EQ(m.rfind("World::set_pose.position: must fit a float", 0), 0u) << m;
+  EXPECT_EQ(w.pose(e).position, Vec3(1, 2, 3));
+  EXPECT_EQ(w.rigid().pose(w.rigid_body_id(e)).position, Vec3(1, 2, 3));
+  const EntityId far = w.create_entity({.name = "far", .pose = {{0, -1e39, 0}}});
+  EXPECT_EQ(w.pose(far).position.y, -1e39);
+}
+
 // World::draw draws each entity body's shapes through the library draw, at the body's pose,
 // coloured by type and sleep, and not the colliders' stand-ins (drawn as colliders)
 TEST(RigidStage, DrawDrawsTheBodiesShapes) {
