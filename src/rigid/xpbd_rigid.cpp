@@ -275,7 +275,13 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       // manifold that did not push (on a face the block's multipliers are not unique, and
       // some corners get none) only has its approach stopped: left alone, such corners kept
       // approaching, tilted boxes landing on each other, and a falling column of ten fell
-      // over. Swept `manifold_iterations` times, as the points are coupled
+      // over. Swept `manifold_iterations` times, as the points are coupled, each point's
+      // impulse kept from pulling more than the position solve pushed there (lambda / h, 0
+      // where it did not push). Until 2026-12-03 the points that did not push were bounced
+      // too, at e times their approach, one application at a time: corners that had not
+      // touched threw frictionless boxes colliding at e = 1 apart with up to 25% more energy
+      // than they met with (3.7% now, as the impulse solvers' 3%)
+      double given[Manifold::kMaxPoints] = {};
       for (int sweep = 0; sweep < cs.manifold_iterations; ++sweep)
       for (int j = 0; j < c.count; ++j) {
         Vec3 ra, rb;
@@ -283,11 +289,12 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
         const Vec3 dv = *b.v + glm::cross(*b.w, rb) - *a.v - glm::cross(*a.w, ra);
         const double approach = x.approach[j];
         const double e = approach < -threshold ? c.restitution : 0;
-        const double target = std::max(-e * approach, 0.0);
+        const double target = x.normal[j] == 0 ? 0.0 : std::max(-e * approach, 0.0);  // see above
         const double m = effective_mass(a.inv_mass, b.inv_mass, ia, ib, ra, rb, c.normal);
-        double dvn = target - glm::dot(dv, c.normal);
-        if (x.normal[j] == 0) dvn = std::max(dvn, 0.0);
-        apply(a, b, ia, ib, ra, rb, dvn * m * c.normal);
+        const double dvn = target - glm::dot(dv, c.normal);
+        const double next = std::max(given[j] + dvn * m, -x.normal[j] / h);
+        apply(a, b, ia, ib, ra, rb, (next - given[j]) * c.normal);
+        given[j] = next;
       }
       // dynamic friction at the centroid: a tangential impulse against the sliding, up to mu
       // times the normal impulse less what static friction took (eq. 30 limits the velocity
