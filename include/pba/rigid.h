@@ -78,7 +78,7 @@ struct RigidMass {
 /// A shape attached to a body, with its material.
 struct RigidShapeDef {
   ColliderShape shape{};  ///< any shape; planes and meshes only on static bodies
-  Pose local{};           ///< placement in the body frame
+  Pose local{};           ///< placement in the body frame (position within the float range, m)
   double density = 1000;  ///< kg/m^3, finite and > 0: the body's mass comes from its shapes' densities
   /// Friction and restitution (mixed between the two shapes of a contact, see ContactSettings).
   SurfaceMaterial material{.restitution = 0, .friction = 0.6};
@@ -101,7 +101,9 @@ void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view
 struct RigidBodyDef {
   std::string name{};               ///< optional; used in error messages
   BodyType type = BodyType::Dynamic;  ///< static, kinematic or dynamic
-  Pose pose{};                      ///< body frame in the world (finite position, unit rotation)
+  /// Body frame in the world: a unit rotation, and a position within the float range
+  /// (|component| <= 3.4e38 m: the shapes' bounds and the contact rows hold it as floats).
+  Pose pose{};
   Vec3 linear_velocity{0, 0, 0};    ///< velocity of the centre of mass (m/s), |v| <= kMaxRigidSpeed
   Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), |w| <= kMaxRigidSpeed
   std::vector<RigidShapeDef> shapes{};  ///< at least one
@@ -202,7 +204,7 @@ struct ContactSettings {
   /// Let resting islands (bodies linked by touching contacts) fall asleep: an island whose
   /// every body has moved slower than the tolerances for `time_to_sleep` stops being
   /// simulated until a contact with an awake body, a force, an impulse or a pose or velocity
-  /// change wakes it.
+  /// change wakes it. Turned off, the next step wakes every sleeping body.
   bool sleep = true;
   double sleep_linear = 0.05;    ///< m/s, finite and >= 0 (Box2D's linear sleep tolerance)
   double sleep_angular = 0.0349; ///< rad/s (2 degrees/s), finite and >= 0
@@ -351,7 +353,9 @@ class RigidBodySystem {
   /// The body's name.
   const std::string& name(RigidBodyId id) const;
 
-  /// Moves a body (validated).
+  /// Moves a body (validated as RigidBodyDef::pose: a unit rotation, a position within the
+  /// float range) and wakes it; a static body moved also wakes the sleeping bodies its shapes'
+  /// bounds reach before or after the move (what rested on it).
   void set_pose(RigidBodyId id, const Pose& pose);
   /// Sets the centre of mass velocity and the angular velocity (validated).
   void set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular);

@@ -792,7 +792,7 @@ void RigidContacts::restitution(RigidBodySystem& s) {
   const BodyArrays r = arrays(s);
   for (const LaneRef& x : restitution_lanes) {
     ContactBlock& k = blocks[x.block];
-    restitution_lane(k, static_cast<int>(x.lane), x.restitution, threshold, r);
+    restitution_lane(k, static_cast<int>(x.lane), x.restitution, threshold, s.settings_.manifold_iterations, r);
   }
 }
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <Eigen/Eigenvalues>
@@ -195,7 +196,9 @@ void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view
 }
 
 void RigidBodyDef::validate(std::string_view where) const {
+  // the shapes' bounds and the contact rows hold positions as floats (beyond, a step made NaN)
   require_finite(pose.position, field_path(where, "pose.position"));
+  require_float(pose.position, field_path(where, "pose.position"));
   require_unit_quat(pose.rotation, field_path(where, "pose.rotation"));
   require_rigid_speed(linear_velocity, field_path(where, "linear_velocity"), "m/s");
   require_rigid_speed(angular_velocity, field_path(where, "angular_velocity"), "rad/s");
@@ -208,6 +211,7 @@ void RigidBodyDef::validate(std::string_view where) const {
     const std::string w = field_path(where, "shapes[" + std::to_string(k) + "]");
     d.shape.validate(field_path(w, "shape"));
     require_finite(d.local.position, field_path(w, "local.position"));
+    require_float(d.local.position, field_path(w, "local.position"));
     require_unit_quat(d.local.rotation, field_path(w, "local.rotation"));
     require_positive(d.density, field_path(w, "density"));
     require_in_range(d.material.restitution, 0, 1, field_path(w, "material.restitution"));
@@ -461,10 +465,29 @@ double RigidBodySystem::kinetic_energy(RigidBodyId id) const {
 void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   const std::size_t i = index(id, "RigidBodySystem::set_pose");
   if (!is_finite(pose.position)) require_finite(pose.position, describe(i) + " set_pose position");
+  require_float(pose.position, describe(i) + " set_pose position");  // as RigidBodyDef::validate
   if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
+  // a static body moved wakes the sleeping bodies its shapes' bounds reach, before or after
+  // the move (grown by the speculative distance): they rested on it, and nothing else would
+  // wake them (the ground lowered under a sleeping stack left it floating)
+  const bool fixed = type_[i] == BodyType::Static;
+  Aabb reach{Vec3(std::numeric_limits<double>::infinity()), Vec3(-std::numeric_limits<double>::infinity())};
+  if (fixed)
+    for (const RigidShapeDef& d : shapes_[i]) reach = reach.merged(bounds(d.shape, compose(body_pose(i), d.local)));
   com_[i] = apply(pose, com_local_[i]);
   q_[i] = glm::normalize(pose.rotation * principal_[i]);
   wake_island(i);
+  if (!fixed) return;
+  for (const RigidShapeDef& d : shapes_[i]) reach = reach.merged(bounds(d.shape, compose(body_pose(i), d.local)));
+  reach = reach.grown(settings_.speculative_distance);
+  for (std::size_t k = 0; k < type_.size(); ++k) {
+    if (!asleep_[k]) continue;
+    for (const RigidShapeDef& d : shapes_[k])
+      if (reach.overlaps(bounds(d.shape, compose(body_pose(k), d.local)))) {
+        wake_island(k);
+        break;
+      }
+  }
 }
 
 void RigidBodySystem::set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular) {
@@ -597,6 +620,11 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   if (!is_finite(gravity)) require_finite(gravity, "RigidBodySystem::step gravity");
   if (!(settings_ == validated_)) {
     settings_.validate("RigidBodySystem.settings");
+    // sleeping turned off wakes the sleepers (as Box2D's b2World_EnableSleeping does): nothing
+    // else would wake a pile asleep away from anything moving
+    if (!settings_.sleep && validated_.sleep)
+      for (std::size_t i = 0; i < type_.size(); ++i)
+        if (asleep_[i]) wake_island(i);
     validated_ = settings_;
   }
   last_dt_ = dt;
@@ -843,9 +871,10 @@ RigidManifoldInfo RigidBodySystem::manifold(std::size_t k) const {
 }
 
 std::vector<Aabb> RigidBodySystem::shape_bounds(RigidBodyId id) const {
-  const Pose body = pose(id);
+  const std::size_t i = index(id, "RigidBodySystem::shape_bounds");
+  const Pose body = body_pose(i);
   std::vector<Aabb> out;
-  for (const RigidShapeDef& d : shapes_[index(id, "RigidBodySystem::shape_bounds")])
+  for (const RigidShapeDef& d : shapes_[i])
     out.push_back(bounds(d.shape, compose(body, d.local)));
   return out;
 }

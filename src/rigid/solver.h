@@ -171,8 +171,10 @@ void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* 
 /// The same for one lane (scalar).
 void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const BodyArrays& bodies);
 /// The restitution impulses of one lane's points that approached faster than `threshold` and
-/// pushed (scalar; the lanes with restitution, in order).
-void restitution_lane(ContactBlock& block, int lane, double restitution, double threshold, const BodyArrays& bodies);
+/// pushed (scalar; the lanes with restitution, in order), swept `sweeps` times over the points:
+/// they are coupled through the bodies' turn, and one sweep in order spun a box that landed flat.
+void restitution_lane(ContactBlock& block, int lane, double restitution, double threshold, int sweeps,
+                      const BodyArrays& bodies);
 /// Gravity, forces, torques, damping and the warm start for `count` awake dynamic bodies
 /// (integrate_wide.cpp); `round`: every one of them has three equal principal moments. False,
 /// with the body in *bad, when a velocity became non-finite.

@@ -97,7 +97,7 @@ void read_rigid_body(const Node& n, World& w) {
   // a given mass scales the shapes' mass properties (density ratios kept): m I / M about the same centre
   if (n.has("mass")) {
     if (d.type != BodyType::Dynamic) n.at("mass").fail("only for a \"dynamic\" body");
-    const double m = n.positive("mass", 1);
+    const double m = n.mass("mass", 1);  // its inverse a normal float, named by its path
     RigidMass total;
     for (std::size_t k = 0; k < d.shapes.size(); ++k) {
       const RigidMass part = RigidMass::of_shape(d.shapes[k].shape, d.shapes[k].density, d.shapes[k].local,

@@ -314,6 +314,9 @@ Vec3 World::velocity(EntityId e) const {
 void World::set_pose(EntityId e, const Pose& pose) {
   require_pose(pose, "World::set_pose");
   EntityRecord& r = record(e, "World::set_pose");
+  // a rigid body holds its position as floats: refused before anything moves (the body refused
+  // it after the entity had moved)
+  if (rigid_.valid(r.body)) require_float(pose.position, "World::set_pose.position");
   r.pose = pose;
   if (particles_.valid(r.particle)) particles_.set_position(particles_.index_of(r.particle), pose.position);
   // a body jumps there (and wakes with its island)

@@ -326,20 +326,40 @@ TEST(RigidStage, ABodyForcedPastTheSpeedLimitIsTheOneNamed) {
 
 // A body put beyond what the collision world holds (its bounds are floats, |x| <= 3.4e38 m)
 // while its state is still finite stops the world the same way: its entity, the tick, the value.
-// (No velocity within kMaxRigidSpeed carries a body there: 1e21 m a tick at most.)
+// (No velocity within kMaxRigidSpeed carries a body there: 1e21 m a tick at most. A pose or a
+// shape's placement beyond it is refused where it is given, RigidBodySystem::set_pose; each
+// within the range, they can still add up beyond it.)
 TEST(RigidStage, ABodyBeyondTheFloatRangeStopsTheWorld) {
   World w;
   const EntityId e = w.create_entity({.name = "comet"});
   RigidBodyDef d = box_def({0.5, 0.5, 0.5});
   d.linear_velocity = {1e20, 0, 0};
+  d.shapes[0].local.position = {3e38, 0, 0};
   const RigidBodyId b = w.add_rigid_body(e, d);
-  w.rigid().set_pose(b, {{1.6666666666666666e306, 0, 0}});  // finite as a double, not as a float
+  EXPECT_NE(error_of([&] { w.rigid().set_pose(b, {{1.6666666666666666e306, 0, 0}}); }).find("must fit a float"),
+            std::string::npos);
+  w.rigid().set_pose(b, {{3e38, 0, 0}});  // its shape at 6e38 m: finite as a double, not as a float
   const std::string m = error_of([&] { w.step(); });
   EXPECT_NE(m.find("the rigid body of entity 0 'comet' left the range of the collision world in the tick to t = 0.0166"),
             std::string::npos) << m;
-  EXPECT_NE(m.find("1.666666666666666"), std::string::npos) << m;  // the position it reached
+  EXPECT_NE(m.find("got (6e+38, 0, 0)"), std::string::npos) << m;  // where its shape reached
   const std::string again = error_of([&] { w.step(); });
   EXPECT_NE(again.find("the simulation stopped"), std::string::npos) << again;
+}
+
+// World::set_pose beyond the float range on an entity with a rigid body is refused before
+// anything moves, by the World's name: it set the entity's pose, and then the body refused it
+// in its own name. (An entity without one may stand there; its components refuse it.)
+TEST(RigidStage, SetPoseBeyondTheFloatRangeIsRefusedAndMovesNothing) {
+  World w;
+  const EntityId e = w.create_entity({.name = "crate", .pose = {{1, 2, 3}}});
+  w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}));
+  const std::string m = error_of([&] { w.set_pose(e, {{1e39, 0, 0}}); });
+  EXPECT_EQ(m.rfind("World::set_pose.position: must fit a float", 0), 0u) << m;
+  EXPECT_EQ(w.pose(e).position, Vec3(1, 2, 3));
+  EXPECT_EQ(w.rigid().pose(w.rigid_body_id(e)).position, Vec3(1, 2, 3));
+  const EntityId far = w.create_entity({.name = "far", .pose = {{0, -1e39, 0}}});
+  EXPECT_EQ(w.pose(far).position.y, -1e39);
 }
 
 // World::draw draws each entity body's shapes through the library draw, at the body's pose,
