@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <initializer_list>
+#include <map>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -19,9 +20,11 @@ namespace pba::scene_detail {
 
 using json = nlohmann::json;
 
-// the file name that prefixes every message
+// the file name that prefixes every message, and the entity names the file has given so far
+// (each with the path of the entity that took it)
 struct Context {
   std::string source;
+  mutable std::map<std::string, std::string, std::less<>> names;
 };
 
 // a JSON value and where it is
@@ -57,6 +60,15 @@ class Node {
     }
   }
   bool has(const char* key) const { return j_.is_object() && j_.contains(key); }
+  // this entity's "name" (empty when none): two entities of a file may not share one, as the
+  // CSV's body column and World::find tell entities by it
+  std::string entity_name() const {
+    std::string name = str("name", "");
+    if (name.empty()) return name;
+    const auto [it, fresh] = ctx_.names.try_emplace(name, path_);
+    if (!fresh) at("name").fail("\"" + name + "\" is already the name of " + it->second + " (entity names must be unique)");
+    return name;
+  }
   Node at(const char* key) const {
     if (!has(key)) fail(std::string("missing required field \"") + key + "\"");
     return Node(j_.at(key), child_path(key), ctx_);

@@ -178,7 +178,7 @@ void read_soft_body(const Node& n, World& w) {
       break;
     }
   }
-  const EntityId e = w.create_entity({.name = n.str("name", "")});
+  const EntityId e = w.create_entity({.name = n.entity_name()});
   soft_system(w).add(w, e, std::move(body));
 }
 

@@ -101,7 +101,7 @@ void read_common(const Node& n, World& w, EntityId e) {
 }
 
 EntityId make_entity(const Node& n, World& w) {
-  return w.create_entity({.name = n.str("name", ""), .pose = read_pose(n)});
+  return w.create_entity({.name = n.entity_name(), .pose = read_pose(n)});
 }
 
 Method read_method(const Node& m) {

@@ -216,6 +216,20 @@ TEST(BadFiles, DuplicateKeysNameTheKeyAndBothPlaces) {
             "no error");
 }
 
+// Entities are told apart by name (the CSV's body column, World::find): two of a file may not
+// share one, whatever their kinds; entities without a name are many
+TEST(BadFiles, TwoEntitiesOfOneNameNameBothPlaces) {
+  EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"name": "box", "shapes": [{"type": "sphere", "radius": 1}]},
+                         {"name": "box", "shapes": [{"type": "sphere", "radius": 1}]}]})"),
+            "scenes/x.json: /rigid_bodies/1/name: \"box\" is already the name of /rigid_bodies/0 (entity names must be unique)");
+  EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"name": "floor", "type": "plane"}],
+                         "rigid_bodies": [{"name": "floor", "shapes": [{"type": "sphere", "radius": 1}]}]})"),
+            "scenes/x.json: /rigid_bodies/0/name: \"floor\" is already the name of /colliders/0 (entity names must be unique)");
+  EXPECT_EQ(error_of(R"({"version": 1, "colliders": [{"type": "plane"}, {"type": "plane", "normal": [1, 0, 0]}],
+                         "rigid_bodies": [{"shapes": [{"type": "sphere", "radius": 1}]}]})"),
+            "no error");
+}
+
 TEST(BadFiles, ADirectoryIsNotAScene) {
   // a directory opens and reads as an empty text on Linux: it was a "JSON syntax error"
   const std::string m = [] {
