@@ -411,8 +411,9 @@ class MassRatio final : public RigidSample {
     draw_options_.highlight = heavy_;
     draw_options_.highlight_color = colors::red;
     RigidSample::Draw(r, alpha);
-    r.sphere(bodies_.center_of_mass(heavy_) + Vec3(0, 0.8, 0), 0.2, kMarker);
-    r.text(bodies_.center_of_mass(heavy_) + Vec3(0, 1.2, 0), "the heavy box", colors::white, 0.8f, 0.5f);
+    // the label just over the box's top (a marker ball there read as one more body)
+    const double top = bodies_.shapes(heavy_)[0].shape.half_extents.y;
+    r.text(bodies_.center_of_mass(heavy_) + Vec3(0, top + 0.25, 0), "the heavy box", colors::white, 0.8f, 0.5f);
   }
 
   void DrawUI() override {
