@@ -57,6 +57,11 @@ void clear_lane(B& b, AnchorsOf<B::kPoints>& g, int l, std::uint32_t spare) {
   for (int i = 0; i < 3; ++i) zero(b.t1[i]), zero(b.t2[i]), zero(b.n[i]), zero(b.ca[i]), zero(b.cb[i]);
   for (int i = 0; i < 6; ++i) zero(b.ia[i]), zero(b.ib[i]);
   for (int i = 0; i < P * (P + 1) / 2; ++i) zero(b.k[i]);
+  if constexpr (P == 1) {
+    zero(b.rolling);
+    for (int i = 0; i < 6; ++i) zero(b.rolling_mass[i]);
+    for (int i = 0; i < 3; ++i) zero(b.rolling_impulse[i]);
+  }
   for (int k = 0; k < P; ++k) {
     if constexpr (P > 1) zero(b.x[k]), zero(b.y[k]);
     zero(b.mass[k]), zero(b.impulse[k]), zero(b.sep[k]);
@@ -111,6 +116,7 @@ struct FillInput {
   double sa[4][3][kLanes], sb[4][3][kLanes];  // the core anchors (SolverPoint)
   double offset[4][kLanes], impulse[4][kLanes];
   double friction[kLanes], twist_radius[kLanes], tangent_impulse[2][kLanes], twist_impulse[kLanes];
+  double rolling[kLanes], rolling_impulse[3][kLanes];  // rolling resistance (one-point blocks' lanes)
 };
 // (rows of kLanes doubles, so a lane is cleared row by row)
 constexpr std::size_t kInputRows = sizeof(FillInput) / sizeof(double[kLanes]);
@@ -270,6 +276,21 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
   if constexpr (P > 1) {
     put(k.twist_radius, l0, from<V>(in.twist_radius, l0));
     put(k.twist_impulse, l0, from<V>(in.twist_impulse, l0) / unit);
+  } else {
+    // the rolling resistance of a lane that rolls: its mass (Ia^-1 + Ib^-1)^-1 in the frame,
+    // the adjugate over the determinant (0 when singular, as set_rolling_mass), and its
+    // carried impulse in the frame
+    const V coefficient = from<V>(in.rolling, l0);
+    const auto rolls = coefficient > zero;
+    put(k.rolling, l0, keep(rolls, coefficient));
+    const V a = ia[0] + ib[0], b = ia[1] + ib[1], c = ia[2] + ib[2], d = ia[3] + ib[3], e = ia[4] + ib[4], f = ia[5] + ib[5];
+    const V adj[6] = {d * f - e * e, c * e - b * f, b * e - c * d, a * f - c * c, b * c - a * e, a * d - b * b};
+    const V det = a * adj[0] + b * adj[1] + c * adj[2];
+    const auto invertible = rolls & (det > zero);
+    for (int i = 0; i < 6; ++i) put(k.rolling_mass[i], l0, keep(invertible, adj[i] / det / unit));
+    V impulse[3];
+    for (int i = 0; i < 3; ++i) impulse[i] = from<V>(in.rolling_impulse[i], l0);
+    for (int i = 0; i < 3; ++i) put(k.rolling_impulse[i], l0, keep(rolls, dot3(impulse, t[i]) / unit));
   }
 }
 
@@ -578,7 +599,8 @@ void RigidContacts::build(RigidBodySystem& s) {
   rolls.clear();
   roll_start.resize(colors + 1);
   // the lanes that roll: what their rolling resistance reads, copied in lane order
-  auto collect_rolls = [&](const auto& k, std::size_t b, bool one) {
+  // (a one-point lane's rolling resistance is its block's: OnePointBlock)
+  auto collect_rolls = [&](const ContactBlock& k, std::size_t b) {
     for (int l = 0; l < k.lanes; ++l) {
       const std::uint32_t i = k.pair[l];
       const ContactPair& p = pairs[i];
@@ -586,8 +608,7 @@ void RigidContacts::build(RigidBodySystem& s) {
       rolls.push_back({.mass = rolling_mass[i], .ia = inv_inertia[p.a], .ib = inv_inertia[p.b],
                        .impulse = p.rolling_impulse, .rolling = p.rolling,
                        .key = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)), .pair = i, .a = p.a,
-                       .b = p.b, .write_a = ((k.write_a >> l) & 1) != 0, .write_b = ((k.write_b >> l) & 1) != 0,
-                       .one = one});
+                       .b = p.b, .write_a = ((k.write_a >> l) & 1) != 0, .write_b = ((k.write_b >> l) & 1) != 0});
     }
   };
   // (colour `colors` is the overflow)
@@ -595,7 +616,7 @@ void RigidContacts::build(RigidBodySystem& s) {
     for (std::size_t b = color_block[c]; b < color_block[c + 1]; ++b) {
       const std::size_t first = offset[c] + (b - color_block[c]) * kLanes;  // the block's first slot of by_color
       fill_block(s, blocks.data(), anchors.data(), block_count, b, first);
-      collect_rolls(blocks[b], b, false);
+      collect_rolls(blocks[b], b);
     }
   };
   for (std::size_t c = 0; c < colors; ++c) {
@@ -604,7 +625,6 @@ void RigidContacts::build(RigidBodySystem& s) {
     const std::size_t first_one = offset[c + 1] - ones_of_color[c];
     for (std::size_t b = color_ones[c]; b < color_ones[c + 1]; ++b) {
       fill_block(s, ones.data(), one_anchors.data(), one_blocks, b, first_one + (b - color_ones[c]) * kLanes);
-      collect_rolls(ones[b], b, true);
     }
   }
   colored_rolls = rolls.size();
@@ -628,6 +648,7 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
   FillInput in;
   auto* rows_of_input = reinterpret_cast<double(*)[kLanes]>(&in);
   int count[kLanes] = {};
+  if constexpr (kOne) k.rolls = 0;
   for (int l = 0; l < used; ++l) {
     if (l >= k.lanes) {  // past the block's manifolds: zeros, unit 1 (clear_lane's values)
       for (std::size_t r = 0; r < kInputRows; ++r) rows_of_input[r][l] = 0;
@@ -646,7 +667,7 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
         __builtin_prefetch(line < kBlockLines ? next_block + 64 * line : next_anchors + 64 * (line - kBlockLines), 1);
     }
     const ContactPair& c = pairs[index];
-    set_rolling_mass(index);
+    if constexpr (!kOne) set_rolling_mass(index);  // (a one-point lane's is fill_lanes')
     const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
     k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
     if (da) k.write_a |= 1u << l;
@@ -678,6 +699,10 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
     in.friction[l] = c.friction, in.twist_radius[l] = c.twist_radius;
     in.tangent_impulse[0][l] = c.tangent_impulse[0], in.tangent_impulse[1][l] = c.tangent_impulse[1];
     in.twist_impulse[l] = c.twist_impulse;
+    in.rolling[l] = c.rolling;
+    for (int i = 0; i < 3; ++i) in.rolling_impulse[i][l] = c.rolling_impulse[i];
+    if constexpr (kOne)
+      if (c.rolling > 0) k.rolls |= 1u << l;
     lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)) | (kOne ? kOneLane : 0u);
     if (c.restitution != 0)
       restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), c.restitution, kOne});
@@ -802,32 +827,29 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
     }
   };
   // a colour's blocks with SIMD, its ContactBlocks then its one-point blocks (no two of a
-  // colour's manifolds share a body that moves, so their order within it changes nothing),
-  // then the rolling resistance of its lanes that roll (each lane's comes right after its
-  // manifold's friction, as in the overflow), a few blocks at a time so that the lanes'
-  // impulses and bodies are still in cache (roll's samples -25% in the rain's landing)
+  // colour's manifolds share a body that moves, so their order within it changes nothing).
+  // The rolling resistance of a ContactBlock's lanes that roll follows its block (each lane's
+  // comes right after its manifold's friction, as in the overflow; a one-point lane's is in
+  // its block), a few blocks at a time so that the lanes' impulses and bodies are still in
+  // cache (roll's samples -25% in the rain's landing)
   auto colour = [&](std::uint32_t c) {
     const std::size_t first = color_block[c], last = color_block[c + 1];
-    const std::size_t first_one = color_ones[c], last_one = color_ones[c + 1];
     auto x = rolls.begin() + static_cast<std::ptrdiff_t>(roll_start[c]);
     const auto end = rolls.begin() + static_cast<std::ptrdiff_t>(roll_start[c + 1]);
-    auto run = [&](auto& array, auto& anchor_array, std::size_t from_block, std::size_t to_block, bool one) {
-      if (x == end || x->one != one) {
-        solve_colored(simd, array.data(), anchor_array.data(), from_block, to_block, p, r);
-        return;
-      }
-      constexpr std::size_t kChunk = 8;  // blocks (about 50 KB of ContactBlocks)
-      for (std::size_t from = from_block; from < to_block; from += kChunk) {
-        const std::size_t to = std::min(to_block, from + kChunk);
-        solve_colored(simd, array.data(), anchor_array.data(), from, to, p, r);
-        for (; x != end && x->one == one && x->key < to * kLanes; ++x) {
-          roll(*x, array[x->key / kLanes], static_cast<int>(x->key % kLanes));
+    if (x == end) {
+      solve_colored(simd, blocks.data(), anchors.data(), first, last, p, r);
+    } else {
+      constexpr std::size_t kChunk = 8;  // blocks (about 50 KB)
+      for (std::size_t from = first; from < last; from += kChunk) {
+        const std::size_t to = std::min(last, from + kChunk);
+        solve_colored(simd, blocks.data(), anchors.data(), from, to, p, r);
+        for (; x != end && x->key < to * kLanes; ++x) {
+          roll(*x, blocks[x->key / kLanes], static_cast<int>(x->key % kLanes));
           if (warm_next) warm_rolling(*x);
         }
       }
-    };
-    if (last != first) run(blocks, anchors, first, last, false);
-    if (last_one != first_one) run(ones, one_anchors, first_one, last_one, true);
+    }
+    solve_colored(simd, ones.data(), one_anchors.data(), color_ones[c], color_ones[c + 1], p, r);
   };
   // the bands bottom up; within each, its colours first to last on even steps and last to
   // first on odd ones
@@ -844,10 +866,9 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
 }
 
 // rolling resistance: an angular impulse against the relative spin, up to rolling * normal
-template <class B>
-void RigidContacts::roll(Rolling& x, const B& k, int l) {
+void RigidContacts::roll(Rolling& x, const ContactBlock& k, int l) {
   double total = 0;
-  for (int p = 0; p < B::kPoints; ++p) total += k.impulse[p][l];
+  for (int p = 0; p < 4; ++p) total += k.impulse[p][l];
   total *= k.unit[l];
   double* wa = rows[x.a].w;
   double* wb = rows[x.b].w;
@@ -919,8 +940,16 @@ void RigidContacts::store() {
         // count; a one-point lane's others are zeros)
         for (int p = 0; p < 4; ++p) c.normal_impulse[p] = p < P ? k.impulse[p < P ? p : 0][l] * unit : 0.0;
         c.tangent_impulse[0] = k.tangent_impulse[0][l] * unit, c.tangent_impulse[1] = k.tangent_impulse[1][l] * unit;
-        if constexpr (P > 1) c.twist_impulse = k.twist_impulse[l] * unit;
-        else c.twist_impulse = 0;
+        if constexpr (P > 1) {
+          c.twist_impulse = k.twist_impulse[l] * unit;
+        } else {
+          c.twist_impulse = 0;
+          if ((k.rolls >> l) & 1) {  // the rolling impulse, from the frame to world axes
+            const double j0 = k.rolling_impulse[0][l] * unit, j1 = k.rolling_impulse[1][l] * unit;
+            const double j2 = k.rolling_impulse[2][l] * unit;
+            c.rolling_impulse = j0 * c.t1 + j1 * c.t2 + j2 * c.normal;
+          }
+        }
       }
     }
   };

@@ -512,6 +512,38 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     constexpr int kColumn[3] = {2, 4, 5};
     for (int i = 0; i < 3; ++i) dwa[i] = dwa[i] - e * ia[kColumn[i]], dwb[i] = dwb[i] + e * ib[kColumn[i]];
   }
+  // a one-point lane's rolling resistance, right after its friction (RigidContacts::roll's
+  // arithmetic in the frame): an angular impulse against the relative turning, up to rolling *
+  // total normal. Lanes that do not roll keep their velocities (selected, so that skipping
+  // blocks in which no lane rolls changes no bits)
+  if constexpr (P == 1) {
+    constexpr std::uint32_t kMask = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
+    if ((c.rolls >> l0) & kMask) {
+      const V coefficient = L(c.rolling);
+      const auto on = coefficient > zero;
+      V m[6], old[3], rel[3], j[3];
+      for (int i = 0; i < 6; ++i) m[i] = L(c.rolling_mass[i]);
+      for (int i = 0; i < 3; ++i) old[i] = L(c.rolling_impulse[i]), rel[i] = ob[i] - oa[i];
+      V mr[3];
+      sym_mul(m, rel, mr);
+      for (int i = 0; i < 3; ++i) j[i] = old[i] - mr[i];
+      const V limit = coefficient * total, len = vsqrt(j[0] * j[0] + j[1] * j[1] + j[2] * j[2]);
+      const auto over = len > limit;
+      const V scale = over ? limit / len : one;
+      V e[3], da[3], db[3];
+      for (int i = 0; i < 3; ++i) {
+        j[i] = over ? j[i] * scale : j[i];
+        L.put(c.rolling_impulse[i], on ? j[i] : old[i]);
+        e[i] = j[i] - old[i];
+      }
+      sym_mul(ia, e, da);
+      sym_mul(ib, e, db);
+      for (int i = 0; i < 3; ++i) {
+        oa[i] = on ? oa[i] - da[i] : oa[i], dwa[i] = on ? dwa[i] - da[i] : dwa[i];
+        ob[i] = on ? ob[i] + db[i] : ob[i], dwb[i] = on ? dwb[i] + db[i] : dwb[i];
+      }
+    }
+  }
   for (int k = 0; k < P; ++k) {
     L.put(c.impulse[k], lambda[k]);
     L.put(c.max_impulse[k], largest[k]);
@@ -555,6 +587,12 @@ PBA_LANES void warm(const Lanes<V, B>& L, const BodyArrays& r) {
   } else {
     ta[0] = ca[1] * sl - ca[2] * j1, ta[1] = -(ca[0] * sl) + ca[2] * j0, ta[2] = ca[0] * j1 - ca[1] * j0;
     tb[0] = cb[1] * sl - cb[2] * j1, tb[1] = -(cb[0] * sl) + cb[2] * j0, tb[2] = cb[0] * j1 - cb[1] * j0;
+    // and the rolling resistance's angular impulse (lanes that roll)
+    const auto on = L(c.rolling) > zero;
+    for (int i = 0; i < 3; ++i) {
+      const V roll = L(c.rolling_impulse[i]);
+      ta[i] = on ? ta[i] + roll : ta[i], tb[i] = on ? tb[i] + roll : tb[i];
+    }
   }
   V ia[6], ib[6];
   for (int i = 0; i < 6; ++i) ia[i] = L(c.ia[i]), ib[i] = L(c.ib[i]);

@@ -339,12 +339,11 @@ struct RigidContacts {
     Mat3 ia{0.0}, ib{0.0};   // the bodies' world inverse inertias (1 / (kg m^2))
     Vec3 impulse{0, 0, 0};   // accumulated (N m s per substep)
     double rolling = 0;      // the pair's coefficient times radius (m)
-    std::uint32_t key = 0;   // block * kLanes + lane (of `ones` when `one`)
+    std::uint32_t key = 0;   // block * kLanes + lane (of `blocks`)
     std::uint32_t pair = 0, a = 0, b = 0;
     bool write_a = false, write_b = false;  // the body moves (the solver writes it)
-    bool one = false;                       // in a one-point block
   };
-  std::vector<Rolling> rolls;      // the lanes that roll, by colour, ContactBlocks' then one-point blocks', by key within each, then the overflow's
+  std::vector<Rolling> rolls;      // the ContactBlocks' lanes that roll, by key (the coloured ones first; one-point lanes roll in their blocks)
   std::size_t colored_rolls = 0;   // of them, in coloured blocks
   std::vector<Mat3> rolling_mass;  // by pair, for those that roll: set_rolling_mass (kg m^2)
   // by pair: its lane of the blocks (block * kLanes + lane; plus kOneLane for a lane of
@@ -397,9 +396,8 @@ struct RigidContacts {
   void accumulate_warm(RigidBodySystem& s);
   /// The same for the rolling resistance of a lane that rolls.
   void warm_rolling(const Rolling& x);
-  /// Rolling resistance of `x`, lane l of block k (a ContactBlock or a OnePointBlock).
-  template <class B>
-  void roll(Rolling& x, const B& k, int l);
+  /// Rolling resistance of `x`, lane l of block k.
+  void roll(Rolling& x, const ContactBlock& k, int l);
   /// One pass over the contacts: `bias` asks for position correction (false: the relax pass),
   /// `soft` for the soft-step constraint; `update_sep` first measures the separations at the
   /// poses now, `warm_next` then adds the impulses to the warm-start accumulators. The

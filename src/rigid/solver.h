@@ -84,7 +84,9 @@ struct alignas(64) ContactBlock {
 /// zeros); the block is 44 rows to ContactBlock's 79, and its normal sweeps touch one point,
 /// not four with their K. prepare() puts a colour's one-point manifolds in blocks of their
 /// own after its ContactBlocks (no two manifolds of a colour share a body that moves, so the
-/// order within a colour changes nothing); the overflow keeps ContactBlocks.
+/// order within a colour changes nothing); the overflow keeps ContactBlocks. A one-point
+/// lane's rolling resistance (a ball's) is solved in the block too, right after its friction,
+/// with SIMD (a ContactBlock's lanes that roll are solved one by one after their blocks).
 struct alignas(64) OnePointBlock {
   static constexpr int kPoints = 1;
   // the frame (as ContactBlock's)
@@ -100,12 +102,18 @@ struct alignas(64) OnePointBlock {
   Real tangent_mass[2][kLanes];       // (kg)
   Real friction[kLanes];              // mixed coefficient
   Real tangent_impulse[2][kLanes];    // accumulated (N s)
+  // rolling resistance: an angular impulse against the bodies' relative turning, up to
+  // rolling * the normal impulse (zeros in a lane whose pair does not roll)
+  Real rolling[kLanes];               // mixed coefficient times radius (m)
+  Real rolling_mass[6][kLanes];       // (Ia^-1 + Ib^-1)^-1 in the frame divided by u: xx, xy, xz, yy, yz, zz (kg m^2)
+  Real rolling_impulse[3][kLanes];    // accumulated, in the frame (N m s)
   Real approach[1][kLanes];           // the most negative normal velocity seen (m/s)
   Real max_impulse[1][kLanes];        // the largest single normal impulse (N s)
   std::uint32_t a[kLanes], b[kLanes];
   std::uint32_t pair[kLanes];           // index into RigidContacts::pairs, kNoPair when empty
   Real unit[kLanes];                    // u (N s; 1 in an empty lane)
   std::uint32_t write_a = 0, write_b = 0;  // bit l: lane l writes its body back
+  std::uint32_t rolls = 0;                 // bit l: lane l's pair rolls
   int lanes = 0;                        // lanes in use, from 0
 };
 

@@ -178,10 +178,11 @@ constexpr double kG = 9.81;  // (m/s^2, kGravity's)
 // a square pyramid of boxes; 20 balls rolling down a static ramp of 20 degrees side by side
 // (one block of 16 one-point lanes and one of 4); a 5 x 5 grid of balls resting on the
 // ground; a ball resting on top of each of 16 boxes (one-point manifolds between dynamic
-// bodies); four balls of restitution 0.5 dropped from 1 m.
+// bodies); four balls of restitution 0.5 dropped from 1 m; 16 balls with rolling resistance
+// rolling on the ground at 2 m/s (a full block of one-point lanes that roll).
 struct BallsAmongBoxes {
-  static constexpr double kRadius = 0.2, kTheta = 20 * pba::kPi / 180, kDrop = 1.0, kE = 0.5;
-  std::vector<pba::RigidBodyId> rolling, resting, on_boxes, bouncing, boxes;
+  static constexpr double kRadius = 0.2, kTheta = 20 * pba::kPi / 180, kDrop = 1.0, kE = 0.5, kC = 0.1, kV0 = 2;
+  std::vector<pba::RigidBodyId> rolling, resting, on_boxes, bouncing, resisted, boxes;
   Vec3 down{-std::cos(kTheta), -std::sin(kTheta), 0};
 
   explicit BallsAmongBoxes(RigidBodySystem& s) {
@@ -206,6 +207,11 @@ struct BallsAmongBoxes {
         on_boxes.push_back(ball({20.0 + 2 * i, 1 + kRadius, -3.0 + 2 * j}));
       }
     for (int i = 0; i < 4; ++i) bouncing.push_back(ball({-8.0, kDrop + kRadius, -3.0 + 2 * i}, kE));
+    for (int i = 0; i < 16; ++i)
+      resisted.push_back(s.create({.pose = {{40, kRadius, -8.0 + i}}, .linear_velocity = {kV0, 0, 0},
+                                   .angular_velocity = {0, 0, -kV0 / kRadius},
+                                   .shapes = {{.shape = ColliderShape::sphere(kRadius), .material = {.friction = 0.5},
+                                               .rolling_resistance = kC}}}));
   }
 };
 
@@ -213,6 +219,8 @@ struct BallsAmongBoxes {
 
 // A ball in a one-point block gives the physics, next to boxes in four-point blocks: it rolls
 // down a slope at (5/7) g sin(theta) (2%, as RigidFriction.ASphereRollsAtFiveSeventhsOfGSinTheta),
+// its rolling resistance c slows it at (5/7) c g on level ground (1e-3, as
+// RigidFriction.RollingResistanceSlowsASphereAtFiveSeventhsOfCG),
 // rests on the ground and on boxes (under 1 mm/s; its centre within 0.1 mm of a radius up:
 // the soft contact's sag is g / w^2, 43 um at the ground's 480 rad/s), rebounds to e^2 of
 // its drop (3%, as RigidRestitution.ASphereReboundsToESquaredOfItsHeight), and the boxes'
@@ -225,24 +233,26 @@ TEST(RigidSimd, OnePointBlocksKeepTheBallsPhysicsAmongBoxes) {
     const BallsAmongBoxes scene(s);
     std::vector<Vec3> pyramid;
     for (const auto b : scene.boxes) pyramid.push_back(s.center_of_mass(b));
-    std::vector<double> v1(scene.rolling.size()), peak(scene.bouncing.size(), 0.0);
+    std::vector<double> v1(scene.rolling.size()), peak(scene.bouncing.size(), 0.0), u1(scene.resisted.size());
     std::vector<char> bounced(scene.bouncing.size(), 0);
     std::size_t most_one_point = 0;
     for (int i = 0; i < 120; ++i) {
       s.step(1.0 / 60, kGravity);
       most_one_point = std::max(most_one_point, s.profile().one_point);
-      if (i == 29)
+      if (i == 29) {
         for (std::size_t k = 0; k < scene.rolling.size(); ++k) v1[k] = glm::dot(s.linear_velocity(scene.rolling[k]), scene.down);
+        for (std::size_t k = 0; k < scene.resisted.size(); ++k) u1[k] = s.linear_velocity(scene.resisted[k]).x;
+      }
       for (std::size_t k = 0; k < scene.bouncing.size(); ++k) {
         const double y = s.center_of_mass(scene.bouncing[k]).y - BallsAmongBoxes::kRadius;
         if (s.linear_velocity(scene.bouncing[k]).y > 0) bounced[k] = 1;
         if (bounced[k]) peak[k] = std::max(peak[k], y);
       }
     }
-    // the solvers that colour put the balls' manifolds in one-point blocks: 20 + 25 + 16 + 4
-    // of them against the ground, the ramp and the boxes once all have landed
+    // the solvers that colour put the balls' manifolds in one-point blocks: 20 + 25 + 16 + 4 +
+    // 16 of them against the ground, the ramp and the boxes once all have landed
     if (solver == RigidSolverType::Tgs) EXPECT_EQ(most_one_point, 0u);
-    else EXPECT_GE(most_one_point, 65u) << to_string(solver);
+    else EXPECT_GE(most_one_point, 81u) << to_string(solver);
     const double expected = 5.0 / 7 * kG * std::sin(BallsAmongBoxes::kTheta);
     if (solver != RigidSolverType::SequentialImpulse) {
       for (std::size_t k = 0; k < scene.rolling.size(); ++k) {
@@ -252,6 +262,11 @@ TEST(RigidSimd, OnePointBlocksKeepTheBallsPhysicsAmongBoxes) {
       const double rebound = BallsAmongBoxes::kE * BallsAmongBoxes::kE * BallsAmongBoxes::kDrop;
       for (std::size_t k = 0; k < scene.bouncing.size(); ++k)
         EXPECT_NEAR(peak[k], rebound, 0.03 * rebound) << to_string(solver) << " ball " << k;
+      const double slowing = 5.0 / 7 * BallsAmongBoxes::kC * kG;
+      for (std::size_t k = 0; k < scene.resisted.size(); ++k) {
+        const double a = (u1[k] - s.linear_velocity(scene.resisted[k]).x) / 1.5;
+        EXPECT_NEAR(a, slowing, 1e-3 * slowing) << to_string(solver) << " ball " << k;
+      }
     }
     for (const auto b : scene.resting) {
       EXPECT_LT(glm::length(s.linear_velocity(b)), 1e-3) << to_string(solver);
