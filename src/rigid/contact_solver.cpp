@@ -79,10 +79,12 @@ void clear_lane(B& b, AnchorsOf<B::kPoints>& g, int l, std::uint32_t spare) {
 // pairs ahead that build() and store() ask for while they work on one
 constexpr std::size_t kPrefetchAhead = 4;
 
-// the lines of a pair the solver reads and writes: the header and the four points a block holds
+// the lines of a pair the solver reads and writes: the header and the points a block holds (P:
+// four for a ContactBlock, one for a OnePointBlock, whose pairs' other points are not read)
+template <int P>
 void prefetch_pair(const ContactPair& c) {
   const char* p = reinterpret_cast<const char*>(&c);
-  constexpr std::size_t kUsed = offsetof(ContactPair, points) + 4 * sizeof(SolverPoint);
+  constexpr std::size_t kUsed = offsetof(ContactPair, points) + P * sizeof(SolverPoint);
   for (std::size_t line = 0; line < kUsed; line += 64) __builtin_prefetch(p + line);
 }
 
@@ -656,7 +658,7 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
       continue;
     }
     const std::uint32_t index = by_color[first + static_cast<std::size_t>(l)];
-    if (first + l + kPrefetchAhead < by_color.size()) prefetch_pair(pairs[by_color[first + l + kPrefetchAhead]]);
+    if (first + l + kPrefetchAhead < by_color.size()) prefetch_pair<P>(pairs[by_color[first + l + kPrefetchAhead]]);
     // and the next block's lines, to be written (the passes left them in the outer caches),
     // spread over this block's lanes
     if (b + 1 < count_in_use) {
