@@ -401,7 +401,11 @@ void RigidContacts::color(RigidBodySystem& s) {
   // room for as many pairs as the pairs have room for (so steady state does not allocate
   // when the colours or the levels reach a new peak: the counts below are bounded by them)
   const std::size_t room = pairs.capacity() + 1;
-  for (auto* v : {&adjacency, &band_of, &by_band, &color_of, &by_color, &color_count}) v->reserve(2 * room);
+  for (auto* v : {&adjacency, &band_of, &by_band, &color_of, &by_color, &color_count, &ones_of_color, &one_cursor})
+    v->reserve(2 * room);
+  one_of.reserve(room);
+  color_ones.reserve(room + 3);
+  roll_start.reserve(room + 3);
   for (auto* v : {&level, &queue, &mask_band, &band_start, &band_colors, &adjacency_start}) v->reserve(n + 3);
   mask.reserve(n + 3);
   cursor.reserve(std::max(n, room) + 3);
