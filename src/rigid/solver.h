@@ -79,14 +79,16 @@ struct alignas(64) ContactBlock {
 /// corner): the point is the manifold's centroid, so it has no lever arm from it (x = y = 0,
 /// exactly: the pairs' centroid of one point is the point), no twist (its radius is 0, and a
 /// pair carries no twist impulse then) and a K of one entry. The same rows as ContactBlock's
-/// otherwise, so the kernels are one template over both (contact_wide.cpp) and a one-point
-/// lane gives the bits of the same manifold in a ContactBlock (whose other three points hold
-/// zeros); the block is 44 rows to ContactBlock's 79, and its normal sweeps touch one point,
-/// not four with their K. prepare() puts a colour's one-point manifolds in blocks of their
-/// own after its ContactBlocks (no two manifolds of a colour share a body that moves, so the
-/// order within a colour changes nothing); the overflow keeps ContactBlocks. A one-point
-/// lane's rolling resistance (a ball's) is solved in the block too, right after its friction,
-/// with SIMD (a ContactBlock's lanes that roll are solved one by one after their blocks).
+/// otherwise, so the kernels are one template over both (contact_wide.cpp), and a one-point
+/// lane's normal and friction rows give the bits of the same manifold in a ContactBlock
+/// (whose other three points hold zeros). A one-point lane's rolling resistance (a ball's) is
+/// solved in the block too, right after its friction, with SIMD and in the frame (a
+/// ContactBlock's lanes that roll are solved one by one, in double, after their blocks). The
+/// block is 54 rows (10 of them the rolling resistance's) to ContactBlock's 79, and its normal
+/// sweeps touch one point, not four with their K. prepare() puts a colour's one-point
+/// manifolds in blocks of their own after its ContactBlocks (no two manifolds of a colour share
+/// a body that moves, so the order within a colour changes nothing); the overflow keeps
+/// ContactBlocks.
 struct alignas(64) OnePointBlock {
   static constexpr int kPoints = 1;
   // the frame (as ContactBlock's)
