@@ -541,8 +541,9 @@ void RigidContacts::build(RigidBodySystem& s) {
   const std::size_t colors = color_count.size();
   ones_of_color.assign(colors, 0);
   one_of.resize(pairs.size());
+  const bool counted = pair_points.size() >= pairs.size();  // (emit() wrote every pair's)
   for (std::size_t i = 0; i < pairs.size(); ++i) {
-    const bool one = color_of[i] != kOverflow && pairs[i].count == 1;
+    const bool one = color_of[i] != kOverflow && (counted ? pair_points[i] : pairs[i].count) == 1;
     one_of[i] = one;
     if (one) ++ones_of_color[color_of[i]];
   }

@@ -307,6 +307,10 @@ struct RigidContacts {
   std::vector<std::size_t> color_ones;
   std::vector<std::uint32_t> ones_of_color;  // scratch of build(): each colour's one-point manifolds
   std::vector<std::uint8_t> one_of;          // scratch of build(): by pair, 1 when it goes to a one-point block
+  // by pair: its points (emit() writes it with the pair's count, remove_body() moves it with
+  // the pair), so that build() sorts the one-point manifolds out without reading each pair
+  // (a line of 640 bytes apart: +1.4% of the 2870 pyramid's step when it did)
+  std::vector<std::uint8_t> pair_points;
   std::vector<std::uint32_t> one_cursor;     // scratch of build()
   std::vector<std::size_t> roll_start;       // colour c's lanes that roll are rolls[roll_start[c], roll_start[c + 1])
   // colouring scratch: contact-graph levels by body, the dynamic pairs' adjacency, bands by pair
