@@ -75,9 +75,9 @@ PbaResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings
                                 p.islands, p.prepare, p.integrate, p.contacts, p.finish};
       for (int k = 0; k < 10; ++k) phase[k].push_back(parts[k]);
       if (g_trace_ms > 0 && ms.back() > g_trace_ms)
-        std::printf("    step %4d %7.2f ms: pairs %.2f manifolds %.2f (%zu built, %zu reused) | prepare %.2f integrate %.2f "
+        std::printf("    step %4d %7.2f ms: pairs %.2f manifolds %.2f (%zu built, %zu reused, %zu one-point) | prepare %.2f integrate %.2f "
                     "contacts %.2f finish %.2f (islands %.2f) | %zu awake, %zu proxies moved\n",
-                    i, ms.back(), 1e3 * p.pairs, 1e3 * p.manifolds, p.built, p.reused, 1e3 * p.prepare,
+                    i, ms.back(), 1e3 * p.pairs, 1e3 * p.manifolds, p.built, p.reused, p.one_point, 1e3 * p.prepare,
                     1e3 * p.integrate, 1e3 * p.contacts, 1e3 * p.finish, 1e3 * p.islands, s.awake_count(), p.moved);
       if (r.asleep_at < 0 && s.awake_count() == 0) r.asleep_at = s.time();
       // (after the clock: not timed) the deepest overlap the step started with

@@ -766,6 +766,8 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   c.restitution = r.mixed_restitution;
   c.rolling = r.mixed_rolling;
   c.count = r.count;
+  if (pair_points.size() <= at_index) pair_points.resize(pairs.capacity());  // (grows with the pairs)
+  pair_points[at_index] = static_cast<std::uint8_t>(r.count);
   const bool warm = cs.warm_starting;
   const double radius_a = r.radius_a, radius_b = r.radius_b;
   // (each value is computed into a local and stored from there: stored piecewise and read back
@@ -839,6 +841,7 @@ void RigidContacts::remove_body(RigidBodySystem& s, std::uint32_t slot, std::siz
     if (kept != k) {
       pairs[kept] = pairs[k];
       if (k < lane_of.size()) lane_of[kept] = lane_of[k];
+      if (k < pair_points.size()) pair_points[kept] = pair_points[k];
     }
     ++kept;
   }

@@ -49,20 +49,29 @@ bool moves(const RigidBodySystem& s, std::uint32_t i, const std::vector<BodyType
 }
 
 // an empty lane: zeros everywhere (no mass, no effect), its bodies the spare last row, no pair
-void clear_lane(ContactBlock& b, AnchorBlock& g, int l, std::uint32_t spare) {
+// (B: ContactBlock or OnePointBlock)
+template <class B>
+void clear_lane(B& b, AnchorsOf<B::kPoints>& g, int l, std::uint32_t spare) {
+  constexpr int P = B::kPoints;
   auto zero = [&](Real (&f)[kLanes]) { f[l] = 0; };
   for (int i = 0; i < 3; ++i) zero(b.t1[i]), zero(b.t2[i]), zero(b.n[i]), zero(b.ca[i]), zero(b.cb[i]);
   for (int i = 0; i < 6; ++i) zero(b.ia[i]), zero(b.ib[i]);
-  for (int i = 0; i < 10; ++i) zero(b.k[i]);
-  for (int k = 0; k < 4; ++k) {
-    zero(b.x[k]), zero(b.y[k]), zero(b.mass[k]), zero(b.impulse[k]), zero(b.sep[k]);
+  for (int i = 0; i < P * (P + 1) / 2; ++i) zero(b.k[i]);
+  if constexpr (P == 1) {
+    zero(b.rolling);
+    for (int i = 0; i < 6; ++i) zero(b.rolling_mass[i]);
+    for (int i = 0; i < 3; ++i) zero(b.rolling_impulse[i]);
+  }
+  for (int k = 0; k < P; ++k) {
+    if constexpr (P > 1) zero(b.x[k]), zero(b.y[k]);
+    zero(b.mass[k]), zero(b.impulse[k]), zero(b.sep[k]);
     zero(b.approach[k]), zero(b.max_impulse[k]);
     zero(g.za[k]), zero(g.zb[k]), zero(g.base[k]), zero(g.ex[k]), zero(g.ey[k]), zero(g.last[k]);
   }
-  zero(b.ma), zero(b.mb), zero(b.tangent_mass[0]), zero(b.tangent_mass[1]), zero(b.twist_mass);
-  zero(b.friction), zero(b.twist_radius), zero(b.tangent_impulse[0]), zero(b.tangent_impulse[1]);
+  zero(b.ma), zero(b.mb), zero(b.tangent_mass[0]), zero(b.tangent_mass[1]);
+  zero(b.friction), zero(b.tangent_impulse[0]), zero(b.tangent_impulse[1]);
+  if constexpr (P > 1) zero(b.twist_mass), zero(b.twist_radius), zero(b.twist_impulse);
   b.unit[l] = 1;
-  zero(b.twist_impulse);
   b.a[l] = b.b[l] = spare;
   b.pair[l] = kNoPair;
 }
@@ -70,10 +79,12 @@ void clear_lane(ContactBlock& b, AnchorBlock& g, int l, std::uint32_t spare) {
 // pairs ahead that build() and store() ask for while they work on one
 constexpr std::size_t kPrefetchAhead = 4;
 
-// the lines of a pair the solver reads and writes: the header and the four points a block holds
+// the lines of a pair the solver reads and writes: the header and the points a block holds (P:
+// four for a ContactBlock, one for a OnePointBlock, whose pairs' other points are not read)
+template <int P>
 void prefetch_pair(const ContactPair& c) {
   const char* p = reinterpret_cast<const char*>(&c);
-  constexpr std::size_t kUsed = offsetof(ContactPair, points) + 4 * sizeof(SolverPoint);
+  constexpr std::size_t kUsed = offsetof(ContactPair, points) + P * sizeof(SolverPoint);
   for (std::size_t line = 0; line < kUsed; line += 64) __builtin_prefetch(p + line);
 }
 
@@ -107,6 +118,7 @@ struct FillInput {
   double sa[4][3][kLanes], sb[4][3][kLanes];  // the core anchors (SolverPoint)
   double offset[4][kLanes], impulse[4][kLanes];
   double friction[kLanes], twist_radius[kLanes], tangent_impulse[2][kLanes], twist_impulse[kLanes];
+  double rolling[kLanes], rolling_impulse[3][kLanes];  // rolling resistance (one-point blocks' lanes)
 };
 // (rows of kLanes doubles, so a lane is cleared row by row)
 constexpr std::size_t kInputRows = sizeof(FillInput) / sizeof(double[kLanes]);
@@ -166,8 +178,11 @@ PBA_LANES V dot3(const V u[3], const V v[3]) {
 // Lanes [l0, l0 + width) of a block and its anchors from the gathered input. Every lane type
 // does the same operations in the same order (the build has -ffp-contract=off, division is
 // correctly rounded), so the scalar, AVX2 and AVX-512 paths give the same bits.
-template <class V>
-PBA_LANES void fill_lanes(const FillInput& in, ContactBlock& k, AnchorBlock& g, int l0) {
+template <class V, class B>
+PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int l0) {
+  // the points a lane holds: a one-point lane's is its centroid (its x, y are zero; the
+  // block keeps neither them nor a twist)
+  constexpr int P = B::kPoints;
   const V zero = lanes::splat<V>(0.0);
   V t[3][3];
   for (int r = 0; r < 3; ++r)
@@ -207,10 +222,10 @@ PBA_LANES void fill_lanes(const FillInput& in, ContactBlock& k, AnchorBlock& g, 
   // products with the inverse inertias leave those terms out (exact zeros: a sum changes at
   // most a zero's sign, and each form is added to ma + mb, never -0), and each point's I r is
   // formed once, for K's entries ma + mb + ra_i^T Ia ra_j + rb_i^T Ib rb_j
-  V ra[4][2], rb[4][2], ira[4][2], irb[4][2];
-  decltype(zero < zero) on[4];
+  V ra[P][2], rb[P][2], ira[P][2], irb[P][2];
+  decltype(zero < zero) on[P];
   const V base = dot3(dba, t[2]);  // the centres' separation along n
-  for (int p = 0; p < 4; ++p) {
+  for (int p = 0; p < P; ++p) {
     on[p] = from<V>(in.active[p], l0) > zero;
     V arm[3], sa[3], sb[3];
     for (int i = 0; i < 3; ++i)
@@ -234,19 +249,19 @@ PBA_LANES void fill_lanes(const FillInput& in, ContactBlock& k, AnchorBlock& g, 
     put(k.sep[p], l0, sep), put(g.base[p], l0, sep);
     const V carried = keep(on[p], from<V>(in.impulse[p], l0) / unit);
     put(k.impulse[p], l0, carried), put(g.last[p], l0, carried);
-    put(k.x[p], l0, x - ca[0]), put(k.y[p], l0, y - ca[1]);
+    if constexpr (P > 1) put(k.x[p], l0, x - ca[0]), put(k.y[p], l0, y - ca[1]);
     put(k.max_impulse[p], l0, zero);
   }
   static constexpr int kPairs[10][2] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}};
-  V diag[4];
-  for (int e = 0; e < 10; ++e) {
+  V diag[P];
+  for (int e = 0; e < P * (P + 1) / 2; ++e) {
     const int i = kPairs[e][0], j = kPairs[e][1];
     const V v = keep(on[i] & on[j], ma + mb + (ra[i][0] * ira[j][0] + ra[i][1] * ira[j][1]) +
                                         (rb[i][0] * irb[j][0] + rb[i][1] * irb[j][1]));
     put(k.k[e], l0, v * unit);
     if (i == j) diag[i] = v;
   }
-  for (int p = 0; p < 4; ++p) put(k.mass[p], l0, inverse(diag[p]) / unit);
+  for (int p = 0; p < P; ++p) put(k.mass[p], l0, inverse(diag[p]) / unit);
   // friction at the centroid: the tangents' angular parts c x t1 = (0, c2, -c1) and
   // c x t2 = (-c2, 0, c0), their quadratic forms again without the zero component
   {
@@ -255,21 +270,42 @@ PBA_LANES void fill_lanes(const FillInput& in, ContactBlock& k, AnchorBlock& g, 
     auto form2 = [](const V m[6], V u0, V u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
     put(k.tangent_mass[0], l0, inverse(ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1])) / unit);
     put(k.tangent_mass[1], l0, inverse(ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0])) / unit);
-    put(k.twist_mass, l0, inverse(ia[5] + ib[5]) / unit);
+    if constexpr (P > 1) put(k.twist_mass, l0, inverse(ia[5] + ib[5]) / unit);
   }
-  put(k.friction, l0, from<V>(in.friction, l0)), put(k.twist_radius, l0, from<V>(in.twist_radius, l0));
+  put(k.friction, l0, from<V>(in.friction, l0));
   put(k.tangent_impulse[0], l0, from<V>(in.tangent_impulse[0], l0) / unit);
   put(k.tangent_impulse[1], l0, from<V>(in.tangent_impulse[1], l0) / unit);
-  put(k.twist_impulse, l0, from<V>(in.twist_impulse, l0) / unit);
+  if constexpr (P > 1) {
+    put(k.twist_radius, l0, from<V>(in.twist_radius, l0));
+    put(k.twist_impulse, l0, from<V>(in.twist_impulse, l0) / unit);
+  } else {
+    // the rolling resistance of a lane that rolls: its mass (Ia^-1 + Ib^-1)^-1 in the frame,
+    // the adjugate over the determinant (0 when singular, as set_rolling_mass), and its
+    // carried impulse in the frame
+    const V coefficient = from<V>(in.rolling, l0);
+    const auto rolls = coefficient > zero;
+    put(k.rolling, l0, keep(rolls, coefficient));
+    const V a = ia[0] + ib[0], b = ia[1] + ib[1], c = ia[2] + ib[2], d = ia[3] + ib[3], e = ia[4] + ib[4], f = ia[5] + ib[5];
+    const V adj[6] = {d * f - e * e, c * e - b * f, b * e - c * d, a * f - c * c, b * c - a * e, a * d - b * b};
+    const V det = a * adj[0] + b * adj[1] + c * adj[2];
+    const auto invertible = rolls & (det > zero);
+    for (int i = 0; i < 6; ++i) put(k.rolling_mass[i], l0, keep(invertible, adj[i] / det / unit));
+    V impulse[3];
+    for (int i = 0; i < 3; ++i) impulse[i] = from<V>(in.rolling_impulse[i], l0);
+    for (int i = 0; i < 3; ++i) put(k.rolling_impulse[i], l0, keep(rolls, dot3(impulse, t[i]) / unit));
+  }
 }
 
-__attribute__((target("avx512f"))) void fill_avx512(const FillInput& in, ContactBlock& k, AnchorBlock& g, int lanes) {
+template <class B>
+__attribute__((target("avx512f"))) void fill_avx512(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes) {
   for (int l0 = 0; l0 < lanes; l0 += 8) fill_lanes<v8d>(in, k, g, l0);
 }
-__attribute__((target("avx2"))) void fill_avx2(const FillInput& in, ContactBlock& k, AnchorBlock& g, int lanes) {
+template <class B>
+__attribute__((target("avx2"))) void fill_avx2(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes) {
   for (int l0 = 0; l0 < lanes; l0 += 4) fill_lanes<v4d>(in, k, g, l0);
 }
-void fill_scalar(const FillInput& in, ContactBlock& k, AnchorBlock& g, int lanes) {
+template <class B>
+void fill_scalar(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes) {
   for (int l = 0; l < lanes; ++l) fill_lanes<double>(in, k, g, l);
 }
 
@@ -289,6 +325,7 @@ void RigidContacts::prepare(RigidBodySystem& s) {
     inv_inertia[i] = s.asleep_[i] ? Mat3(0.0) : r * d * glm::transpose(r);
   }
   built = has_colors = lanes_valid = false;
+  s.profile_.one_point = 0;  // (build() counts them)
   backward = !backward;
   pairs_same = pairs_same && pairs.size() == last_count;
   // (room for as many pairs as `pairs` has, so steady state does not allocate)
@@ -364,7 +401,11 @@ void RigidContacts::color(RigidBodySystem& s) {
   // room for as many pairs as the pairs have room for (so steady state does not allocate
   // when the colours or the levels reach a new peak: the counts below are bounded by them)
   const std::size_t room = pairs.capacity() + 1;
-  for (auto* v : {&adjacency, &band_of, &by_band, &color_of, &by_color, &color_count}) v->reserve(2 * room);
+  for (auto* v : {&adjacency, &band_of, &by_band, &color_of, &by_color, &color_count, &ones_of_color, &one_cursor})
+    v->reserve(2 * room);
+  one_of.reserve(room);
+  color_ones.reserve(room + 3);
+  roll_start.reserve(room + 3);
   for (auto* v : {&level, &queue, &mask_band, &band_start, &band_colors, &adjacency_start}) v->reserve(n + 3);
   mask.reserve(n + 3);
   cursor.reserve(std::max(n, room) + 3);
@@ -493,12 +534,33 @@ void RigidContacts::color(RigidBodySystem& s) {
 }
 
 void RigidContacts::build(RigidBodySystem& s) {
-  // the blocks: each colour's manifolds in pair order, kLanes to a block, then the overflow's
+  // the blocks: each colour's manifolds in pair order, kLanes to a block, its manifolds of more
+  // than one point in ContactBlocks and those of one point in OnePointBlocks (src/rigid/solver.h;
+  // decided here each step, as a pair's points come and go while its colour stays), then the
+  // overflow's, all in ContactBlocks. Only whole OnePointBlocks: a colour's one-point manifolds
+  // beyond a multiple of kLanes (its last ones in pair order) stay in its ContactBlocks, where
+  // they fill the last block's empty lanes, so a colour takes no more blocks than before (with
+  // a partial block of each kind per colour, the 2870 pyramid's 1,337 one-point manifolds over
+  // its colours made the passes' samples 2-3% more, not fewer)
   const std::size_t colors = color_count.size();
+  ones_of_color.assign(colors, 0);
+  one_of.resize(pairs.size());
+  const bool counted = pair_points.size() >= pairs.size();  // (emit() wrote every pair's)
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const bool one = color_of[i] != kOverflow && (counted ? pair_points[i] : pairs[i].count) == 1;
+    one_of[i] = one;
+    if (one) ++ones_of_color[color_of[i]];
+  }
+  for (std::size_t c = 0; c < colors; ++c) ones_of_color[c] -= ones_of_color[c] % kLanes;
   color_block.resize(colors + 2);
-  std::size_t next = 0;
-  for (std::size_t c = 0; c < colors; ++c) color_block[c] = next, next += (color_count[c] + kLanes - 1) / kLanes;
+  color_ones.resize(colors + 1);
+  std::size_t next = 0, next_one = 0;
+  for (std::size_t c = 0; c < colors; ++c) {
+    color_block[c] = next, next += (color_count[c] - ones_of_color[c] + kLanes - 1) / kLanes;
+    color_ones[c] = next_one, next_one += (ones_of_color[c] + kLanes - 1) / kLanes;
+  }
   color_block[colors] = next;
+  color_ones[colors] = next_one;
   colored_blocks = next;
   next += (overflow_count + kLanes - 1) / kLanes;
   color_block[colors + 1] = next;
@@ -507,65 +569,99 @@ void RigidContacts::build(RigidBodySystem& s) {
     blocks.reserve(next + next / 2), anchors.reserve(next + next / 2);
     blocks.resize(next), anchors.resize(next);
   }
+  if (ones.size() < next_one) {
+    ones.reserve(next_one + next_one / 2), one_anchors.reserve(next_one + next_one / 2);
+    ones.resize(next_one), one_anchors.resize(next_one);
+  }
   block_count = next;
+  one_blocks = next_one;
+  for (std::size_t c = 0; c < colors; ++c) s.profile_.one_point += ones_of_color[c];
   const auto spare = static_cast<std::uint32_t>(s.type_.size());
-  for (std::size_t c = 0; c <= colors; ++c) {
-    std::uint32_t left = c < colors ? color_count[c] : overflow_count;
-    for (std::size_t b = color_block[c]; b < color_block[c + 1]; ++b) {
-      ContactBlock& k = blocks[b];
+  auto lay_out = [&](auto* array, auto* anchor_array, std::size_t from, std::size_t to, std::uint32_t left) {
+    for (std::size_t b = from; b < to; ++b) {
+      auto& k = array[b];
       k.lanes = static_cast<int>(std::min<std::uint32_t>(left, kLanes));
       left -= static_cast<std::uint32_t>(k.lanes);
       k.write_a = k.write_b = 0;
-      for (int l = k.lanes; l < kLanes; ++l) clear_lane(k, anchors[b], l, spare);
+      for (int l = k.lanes; l < kLanes; ++l) clear_lane(k, anchor_array[b], l, spare);
     }
+  };
+  for (std::size_t c = 0; c <= colors; ++c) {
+    const std::uint32_t all = c < colors ? color_count[c] : overflow_count, one = c < colors ? ones_of_color[c] : 0;
+    lay_out(blocks.data(), anchors.data(), color_block[c], color_block[c + 1], all - one);
+    if (c < colors) lay_out(ones.data(), one_anchors.data(), color_ones[c], color_ones[c + 1], one);
   }
-  // each colour's pairs in pair order (the overflow's last), then the blocks filled one after
-  // another (a block's lines stay in cache while its lanes are written)
+  // each colour's pairs in pair order, those of more points first (the overflow's last), then
+  // the blocks filled one after another (a block's lines stay in cache while its lanes are written)
   offset.assign(colors + 2, 0);
   for (std::size_t c = 0; c < colors; ++c) offset[c + 1] = offset[c] + color_count[c];
   offset[colors + 1] = offset[colors] + overflow_count;
   cursor.assign(offset.begin(), offset.end() - 1);
+  one_cursor.resize(colors);
+  for (std::size_t c = 0; c < colors; ++c) one_cursor[c] = static_cast<std::uint32_t>(offset[c + 1] - ones_of_color[c]);
   by_color.resize(pairs.size());
   lane_of.reserve(pairs.capacity());
   lane_of.resize(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const std::size_t c = color_of[i] == kOverflow ? colors : color_of[i];
-    by_color[cursor[c]++] = static_cast<std::uint32_t>(i);
+    // (one_cursor[c] reaches offset[c + 1] when the colour's whole one-point blocks are full)
+    if (one_of[i] && one_cursor[c] < offset[c + 1]) by_color[one_cursor[c]++] = static_cast<std::uint32_t>(i);
+    else by_color[cursor[c]++] = static_cast<std::uint32_t>(i);
   }
   restitution_lanes.clear();
   rolls.clear();
-  colored_rolls = 0;
-  for (std::size_t c = 0; c <= colors; ++c)
+  roll_start.resize(colors + 1);
+  // the lanes that roll: what their rolling resistance reads, copied in lane order
+  // (a one-point lane's rolling resistance is its block's: OnePointBlock)
+  auto collect_rolls = [&](const ContactBlock& k, std::size_t b) {
+    for (int l = 0; l < k.lanes; ++l) {
+      const std::uint32_t i = k.pair[l];
+      const ContactPair& p = pairs[i];
+      if (p.rolling == 0) continue;
+      rolls.push_back({.mass = rolling_mass[i], .ia = inv_inertia[p.a], .ib = inv_inertia[p.b],
+                       .impulse = p.rolling_impulse, .rolling = p.rolling,
+                       .key = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)), .pair = i, .a = p.a,
+                       .b = p.b, .write_a = ((k.write_a >> l) & 1) != 0, .write_b = ((k.write_b >> l) & 1) != 0});
+    }
+  };
+  // (colour `colors` is the overflow)
+  auto fill_blocks = [&](std::size_t c) {
     for (std::size_t b = color_block[c]; b < color_block[c + 1]; ++b) {
       const std::size_t first = offset[c] + (b - color_block[c]) * kLanes;  // the block's first slot of by_color
-      fill_block(s, b, first);
-      // the lanes that roll: what their rolling resistance reads, copied in lane order
-      const ContactBlock& k = blocks[b];
-      for (int l = 0; l < k.lanes; ++l) {
-        const std::uint32_t i = k.pair[l];
-        const ContactPair& p = pairs[i];
-        if (p.rolling == 0) continue;
-        rolls.push_back({.mass = rolling_mass[i], .ia = inv_inertia[p.a], .ib = inv_inertia[p.b],
-                         .impulse = p.rolling_impulse, .rolling = p.rolling,
-                         .key = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)), .pair = i, .a = p.a,
-                         .b = p.b, .write_a = ((k.write_a >> l) & 1) != 0, .write_b = ((k.write_b >> l) & 1) != 0});
-        if (c < colors) ++colored_rolls;
-      }
+      fill_block(s, blocks.data(), anchors.data(), block_count, b, first);
+      collect_rolls(blocks[b], b);
     }
+  };
+  for (std::size_t c = 0; c < colors; ++c) {
+    roll_start[c] = rolls.size();
+    fill_blocks(c);
+    const std::size_t first_one = offset[c + 1] - ones_of_color[c];
+    for (std::size_t b = color_ones[c]; b < color_ones[c + 1]; ++b) {
+      fill_block(s, ones.data(), one_anchors.data(), one_blocks, b, first_one + (b - color_ones[c]) * kLanes);
+    }
+  }
+  colored_rolls = rolls.size();
+  roll_start[colors] = colored_rolls;
+  fill_blocks(colors);
 }
 
 // Block b's manifolds (by_color from `first`) into its lanes: what they need gathered lane by
 // lane (FillInput), the frames, masses and anchors a lane type at a time (fill_lanes), then
 // each lane's normal velocities before the solve.
-void RigidContacts::fill_block(RigidBodySystem& s, std::size_t b, std::size_t first) {
-  ContactBlock& k = blocks[b];
-  AnchorBlock& g = anchors[b];
+template <class B>
+void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::kPoints>* anchor_array,
+                               std::size_t count_in_use, std::size_t b, std::size_t first) {
+  constexpr int P = B::kPoints;
+  constexpr bool kOne = P == 1;
+  B& k = block_array[b];
+  AnchorsOf<P>& g = anchor_array[b];
   const int width = simd == SimdPath::Avx512 ? 8 : simd == SimdPath::Avx2 ? 4 : 1;
   const int used = (k.lanes + width - 1) / width * width;
   const auto spare = static_cast<std::uint32_t>(s.type_.size());
   FillInput in;
   auto* rows_of_input = reinterpret_cast<double(*)[kLanes]>(&in);
   int count[kLanes] = {};
+  if constexpr (kOne) k.rolls = 0;
   for (int l = 0; l < used; ++l) {
     if (l >= k.lanes) {  // past the block's manifolds: zeros, unit 1 (clear_lane's values)
       for (std::size_t r = 0; r < kInputRows; ++r) rows_of_input[r][l] = 0;
@@ -573,18 +669,18 @@ void RigidContacts::fill_block(RigidBodySystem& s, std::size_t b, std::size_t fi
       continue;
     }
     const std::uint32_t index = by_color[first + static_cast<std::size_t>(l)];
-    if (first + l + kPrefetchAhead < by_color.size()) prefetch_pair(pairs[by_color[first + l + kPrefetchAhead]]);
+    if (first + l + kPrefetchAhead < by_color.size()) prefetch_pair<P>(pairs[by_color[first + l + kPrefetchAhead]]);
     // and the next block's lines, to be written (the passes left them in the outer caches),
     // spread over this block's lanes
-    if (b + 1 < block_count) {
-      constexpr std::size_t kBlockLines = sizeof(ContactBlock) / 64, kLines = kBlockLines + sizeof(AnchorBlock) / 64;
-      const char* next_block = reinterpret_cast<const char*>(&blocks[b + 1]);
-      const char* next_anchors = reinterpret_cast<const char*>(&anchors[b + 1]);
+    if (b + 1 < count_in_use) {
+      constexpr std::size_t kBlockLines = sizeof(B) / 64, kLines = kBlockLines + sizeof(AnchorsOf<P>) / 64;
+      const char* next_block = reinterpret_cast<const char*>(&block_array[b + 1]);
+      const char* next_anchors = reinterpret_cast<const char*>(&anchor_array[b + 1]);
       for (std::size_t line = static_cast<std::size_t>(l); line < kLines; line += kLanes)
         __builtin_prefetch(line < kBlockLines ? next_block + 64 * line : next_anchors + 64 * (line - kBlockLines), 1);
     }
     const ContactPair& c = pairs[index];
-    set_rolling_mass(index);
+    if constexpr (!kOne) set_rolling_mass(index);  // (a one-point lane's is fill_lanes')
     const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
     k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
     if (da) k.write_a |= 1u << l;
@@ -604,7 +700,7 @@ void RigidContacts::fill_block(RigidBodySystem& s, std::size_t b, std::size_t fi
       in.dab[i][l] = dab[i], in.dba[i][l] = dba[i], in.ca[i][l] = c.ca[i];
     }
     count[l] = c.count;
-    for (int p = 0; p < 4; ++p) {
+    for (int p = 0; p < P; ++p) {
       const bool on = p < c.count;
       const SolverPoint& q = c.points[p];
       const Vec3 arm = on ? q.at - com_a : Vec3(0);
@@ -616,9 +712,13 @@ void RigidContacts::fill_block(RigidBodySystem& s, std::size_t b, std::size_t fi
     in.friction[l] = c.friction, in.twist_radius[l] = c.twist_radius;
     in.tangent_impulse[0][l] = c.tangent_impulse[0], in.tangent_impulse[1][l] = c.tangent_impulse[1];
     in.twist_impulse[l] = c.twist_impulse;
-    lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l));
+    in.rolling[l] = c.rolling;
+    for (int i = 0; i < 3; ++i) in.rolling_impulse[i][l] = c.rolling_impulse[i];
+    if constexpr (kOne)
+      if (c.rolling > 0) k.rolls |= 1u << l;
+    lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)) | (kOne ? kOneLane : 0u);
     if (c.restitution != 0)
-      restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), c.restitution});
+      restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), c.restitution, kOne});
   }
   if (simd == SimdPath::Avx512)
     fill_avx512(in, k, g, k.lanes);
@@ -630,9 +730,9 @@ void RigidContacts::fill_block(RigidBodySystem& s, std::size_t b, std::size_t fi
   // the normal velocities before the solve
   const BodyArrays r = arrays(s);
   for (int l = 0; l < k.lanes; ++l) {
-    double vn[4];
+    double vn[P];
     normal_velocities(k, l, r, vn);
-    for (int p = 0; p < 4; ++p) k.approach[p][l] = p < count[l] ? vn[p] : 0;
+    for (int p = 0; p < P; ++p) k.approach[p][l] = p < count[l] ? vn[p] : 0;
   }
 }
 
@@ -646,8 +746,14 @@ void RigidContacts::set_rolling_mass(std::uint32_t index) {
 
 bool RigidContacts::solver_report(std::size_t k, int p, double& approach, double& max_impulse) const {
   if (!lanes_valid || k >= lane_of.size()) return false;
-  const ContactBlock& b = blocks[lane_of[k] / kLanes];
-  const std::uint32_t l = lane_of[k] % kLanes;
+  const std::uint32_t lane = lane_of[k] & ~kOneLane, l = lane % kLanes;
+  if (lane_of[k] & kOneLane) {  // a one-point lane: its other points are none (zeros, as a ContactBlock's)
+    const OnePointBlock& b = ones[lane / kLanes];
+    approach = p == 0 ? b.approach[0][l] : 0;
+    max_impulse = p == 0 ? static_cast<double>(b.max_impulse[0][l]) * b.unit[l] : 0;
+    return true;
+  }
+  const ContactBlock& b = blocks[lane / kLanes];
   approach = b.approach[p][l];
   max_impulse = static_cast<double>(b.max_impulse[p][l]) * b.unit[l];
   return true;
@@ -663,7 +769,16 @@ BodyArrays RigidContacts::arrays(RigidBodySystem& s) {
 
 void RigidContacts::accumulate_warm(RigidBodySystem& s) {
   const BodyArrays r = arrays(s);
-  warm_colored(simd, blocks.data(), 0, colored_blocks, r);
+  // colour by colour when there are one-point blocks, so that each body's accumulators add its
+  // manifolds' impulses in colour order, as they do from the ContactBlocks alone
+  if (one_blocks == 0) {
+    warm_colored(simd, blocks.data(), 0, colored_blocks, r);
+  } else {
+    for (std::size_t c = 0; c + 1 < color_ones.size(); ++c) {
+      warm_colored(simd, blocks.data(), color_block[c], color_block[c + 1], r);
+      warm_colored(simd, ones.data(), color_ones[c], color_ones[c + 1], r);
+    }
+  }
   for (std::size_t x = 0; x < colored_rolls; ++x) warm_rolling(rolls[x]);
   std::size_t x = colored_rolls;  // the overflow's lanes that roll, in lane order
   for (std::size_t b = colored_blocks; b < block_count; ++b)
@@ -724,32 +839,34 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
       if (x) warm_rolling(*x);
     }
   };
-  // a colour's blocks with SIMD, then the rolling resistance of its lanes that roll (no two
-  // of a colour's manifolds share a body that moves, so each lane's comes right after its
-  // manifold's friction, as in the overflow), a few blocks at a time so that the lanes'
-  // impulses and bodies are still in cache (roll's samples -25% in the rain's landing)
+  // a colour's blocks with SIMD, its ContactBlocks then its one-point blocks (no two of a
+  // colour's manifolds share a body that moves, so their order within it changes nothing).
+  // The rolling resistance of a ContactBlock's lanes that roll follows its block (each lane's
+  // comes right after its manifold's friction, as in the overflow; a one-point lane's is in
+  // its block), a few blocks at a time so that the lanes' impulses and bodies are still in
+  // cache (roll's samples -25% in the rain's landing)
   auto colour = [&](std::uint32_t c) {
     const std::size_t first = color_block[c], last = color_block[c + 1];
-    if (last == first) return;
-    const auto end = rolls.begin() + static_cast<std::ptrdiff_t>(colored_rolls);
-    auto x = std::lower_bound(rolls.begin(), end, first * kLanes, [](const Rolling& y, std::size_t key) { return y.key < key; });
-    if (x == end || x->key >= last * kLanes) {
+    auto x = rolls.begin() + static_cast<std::ptrdiff_t>(roll_start[c]);
+    const auto end = rolls.begin() + static_cast<std::ptrdiff_t>(roll_start[c + 1]);
+    if (x == end) {
       solve_colored(simd, blocks.data(), anchors.data(), first, last, p, r);
-      return;
-    }
-    constexpr std::size_t kChunk = 8;  // blocks (about 50 KB)
-    for (std::size_t from = first; from < last; from += kChunk) {
-      const std::size_t to = std::min(last, from + kChunk);
-      solve_colored(simd, blocks.data(), anchors.data(), from, to, p, r);
-      for (; x != end && x->key < to * kLanes; ++x) {
-        roll(*x, blocks[x->key / kLanes], static_cast<int>(x->key % kLanes));
-        if (warm_next) warm_rolling(*x);
+    } else {
+      constexpr std::size_t kChunk = 8;  // blocks (about 50 KB)
+      for (std::size_t from = first; from < last; from += kChunk) {
+        const std::size_t to = std::min(last, from + kChunk);
+        solve_colored(simd, blocks.data(), anchors.data(), from, to, p, r);
+        for (; x != end && x->key < to * kLanes; ++x) {
+          roll(*x, blocks[x->key / kLanes], static_cast<int>(x->key % kLanes));
+          if (warm_next) warm_rolling(*x);
+        }
       }
     }
+    solve_colored(simd, ones.data(), one_anchors.data(), color_ones[c], color_ones[c + 1], p, r);
   };
   // the bands bottom up; within each, its colours first to last on even steps and last to
   // first on odd ones
-  if (!backward && colored_rolls == 0) {
+  if (!backward && colored_rolls == 0 && one_blocks == 0) {
     solve_colored(simd, blocks.data(), anchors.data(), 0, colored_blocks, p, r);
   } else if (!backward) {
     for (std::uint32_t c = 0; c < color_count.size(); ++c) colour(c);
@@ -783,6 +900,7 @@ void RigidContacts::roll(Rolling& x, const ContactBlock& k, int l) {
 void RigidContacts::update_separations(RigidBodySystem& s) {
   const BodyArrays r = arrays(s);
   separation_colored(simd, blocks.data(), anchors.data(), 0, colored_blocks, r);
+  separation_colored(simd, ones.data(), one_anchors.data(), 0, one_blocks, r);
   for (std::size_t b = colored_blocks; b < block_count; ++b)
     for (int l = 0; l < blocks[b].lanes; ++l) separation_lane(blocks[b], anchors[b], l, r);
 }
@@ -791,8 +909,11 @@ void RigidContacts::restitution(RigidBodySystem& s) {
   const double threshold = s.settings_.restitution_threshold;
   const BodyArrays r = arrays(s);
   for (const LaneRef& x : restitution_lanes) {
-    ContactBlock& k = blocks[x.block];
-    restitution_lane(k, static_cast<int>(x.lane), x.restitution, threshold, s.settings_.manifold_iterations, r);
+    if (x.one)
+      restitution_lane(ones[x.block], static_cast<int>(x.lane), x.restitution, threshold, r);
+    else
+      restitution_lane(blocks[x.block], static_cast<int>(x.lane), x.restitution, threshold,
+                       s.settings_.manifold_iterations, r);
   }
 }
 
@@ -822,19 +943,34 @@ void RigidContacts::store() {
   // each pair, fetched a block ahead (every pair is in a block when they are built; the
   // approach speeds and largest impulses stay in the blocks for manifold(), solver_report)
   if (!built) return;
-  for (std::size_t b = 0; b < block_count; ++b) {
-    const ContactBlock& k = blocks[b];
-    if (b + 1 < block_count)
-      for (int l = 0; l < blocks[b + 1].lanes; ++l) __builtin_prefetch(pairs[blocks[b + 1].pair[l]].normal_impulse, 1);
-    for (int l = 0; l < k.lanes; ++l) {
-      ContactPair& c = pairs[k.pair[l]];
-      const double unit = k.unit[l];
-      // (all four: a lane's unused points hold zeros, and writing them spares reading the count)
-      for (int p = 0; p < 4; ++p) c.normal_impulse[p] = k.impulse[p][l] * unit;
-      c.tangent_impulse[0] = k.tangent_impulse[0][l] * unit, c.tangent_impulse[1] = k.tangent_impulse[1][l] * unit;
-      c.twist_impulse = k.twist_impulse[l] * unit;
+  auto store_blocks = [&](const auto* array, std::size_t count) {
+    constexpr int P = std::remove_cvref_t<decltype(*array)>::kPoints;
+    for (std::size_t b = 0; b < count; ++b) {
+      const auto& k = array[b];
+      if (b + 1 < count)
+        for (int l = 0; l < array[b + 1].lanes; ++l) __builtin_prefetch(pairs[array[b + 1].pair[l]].normal_impulse, 1);
+      for (int l = 0; l < k.lanes; ++l) {
+        ContactPair& c = pairs[k.pair[l]];
+        const double unit = k.unit[l];
+        // (all four: a lane's unused points hold zeros, and writing them spares reading the
+        // count; a one-point lane's others are zeros)
+        for (int p = 0; p < 4; ++p) c.normal_impulse[p] = p < P ? k.impulse[p < P ? p : 0][l] * unit : 0.0;
+        c.tangent_impulse[0] = k.tangent_impulse[0][l] * unit, c.tangent_impulse[1] = k.tangent_impulse[1][l] * unit;
+        if constexpr (P > 1) {
+          c.twist_impulse = k.twist_impulse[l] * unit;
+        } else {
+          c.twist_impulse = 0;
+          if ((k.rolls >> l) & 1) {  // the rolling impulse, from the frame to world axes
+            const double j0 = k.rolling_impulse[0][l] * unit, j1 = k.rolling_impulse[1][l] * unit;
+            const double j2 = k.rolling_impulse[2][l] * unit;
+            c.rolling_impulse = j0 * c.t1 + j1 * c.t2 + j2 * c.normal;
+          }
+        }
+      }
     }
-  }
+  };
+  store_blocks(blocks.data(), block_count);
+  store_blocks(ones.data(), one_blocks);
   built = false;
 }
 

@@ -19,6 +19,7 @@
 // about the normal, and the change goes back to the two bodies once.
 #include "solver.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <type_traits>
@@ -150,9 +151,10 @@ PBA_LANES void sym_mul2(const V m[6], const V v0, const V v1, V out[3]) {
 // ---------------------------------------------------------------------------------------
 // the block's lanes [l0, l0 + width)
 
-template <class V>
+// (B: ContactBlock or OnePointBlock)
+template <class V, class B = ContactBlock>
 struct Lanes {
-  ContactBlock& c;
+  B& c;
   int l0;
   // a field's lanes, and back
   PBA_LANES V operator()(const Real (&f)[kLanes]) const { return load<V>(f + l0); }
@@ -306,9 +308,10 @@ constexpr int kK[4][4] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6, 8, 9}
 
 // the separations at the poses now: base + n.(dp_b - dp_a) + n.(turn_b sb - sb) - n.(turn_a sa -
 // sa), with n.(turn s - s) = (turn^-1 n - n).s taken in the frame
-template <class V>
-PBA_LANES void separations(const Lanes<V>& L, const AnchorBlock& g, const BodyArrays& r) {
-  ContactBlock& c = L.c;
+template <class V, class B>
+PBA_LANES void separations(const Lanes<V, B>& L, const AnchorsOf<B::kPoints>& g, const BodyArrays& r) {
+  constexpr int P = B::kPoints;
+  B& c = L.c;
   V t1[3], t2[3], n[3];
   L.frame(t1, t2, n);
   V ma[8], mb[8];  // dp, then the turn (w, x, y, z)
@@ -329,10 +332,17 @@ PBA_LANES void separations(const Lanes<V>& L, const AnchorBlock& g, const BodyAr
   turned_normal(ma, na);
   turned_normal(mb, nb);
   const V ca0 = L(c.ca[0]), ca1 = L(c.ca[1]), cb0 = L(c.cb[0]), cb1 = L(c.cb[1]);
-  for (int k = 0; k < 4; ++k) {
-    const V x = L(c.x[k]), y = L(c.y[k]), ex = L(g.ex[k]), ey = L(g.ey[k]);
-    const V sb = nb[0] * (cb0 + x + ex) + nb[1] * (cb1 + y + ey) + nb[2] * L(g.zb[k]);
-    const V sa = na[0] * (ca0 + x - ex) + na[1] * (ca1 + y - ey) + na[2] * L(g.za[k]);
+  for (int k = 0; k < P; ++k) {
+    const V ex = L(g.ex[k]), ey = L(g.ey[k]);
+    V sb, sa;
+    if constexpr (P > 1) {
+      const V x = L(c.x[k]), y = L(c.y[k]);
+      sb = nb[0] * (cb0 + x + ex) + nb[1] * (cb1 + y + ey) + nb[2] * L(g.zb[k]);
+      sa = na[0] * (ca0 + x - ex) + na[1] * (ca1 + y - ey) + na[2] * L(g.za[k]);
+    } else {  // the point is the centroid (x = y = 0)
+      sb = nb[0] * (cb0 + ex) + nb[1] * (cb1 + ey) + nb[2] * L(g.zb[k]);
+      sa = na[0] * (ca0 - ex) + na[1] * (ca1 - ey) + na[2] * L(g.za[k]);
+    }
     L.put(c.sep[k], L(g.base[k]) + dpn + sb - sa);
   }
 }
@@ -342,10 +352,14 @@ PBA_LANES void separations(const Lanes<V>& L, const AnchorBlock& g, const BodyAr
 enum Mode : int { kSoft, kRigid, kRelax };
 
 // one pass of the block's lanes: normal points, friction, twist
-template <class V, int kMode, bool kZmm>
-PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& r) {
+template <class V, int kMode, bool kZmm, class B>
+PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r) {
   constexpr bool kBias = kMode != kRelax;
-  ContactBlock& c = L.c;
+  // the points of a lane: a one-point lane's is its centroid (x = y = 0), and it has no twist;
+  // what the four-point kernel adds or multiplies by those zeros is left out (it changes at
+  // most a zero's sign)
+  constexpr int P = B::kPoints;
+  B& c = L.c;
   const int l0 = L.l0;
   const V zero = splat<V>(0), one = splat<V>(1);
   // the bodies, and their velocities in the frame: the relative linear one, each angular one
@@ -388,10 +402,10 @@ PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& 
   // passed a wall of the 250 m/s closed box in 28 of 29 slightly perturbed runs, the double
   // kernels before in 9 of 34; with this margin in none of 13: docs/benchmarks.md)
   const auto fixed = (ma == zero) | (mb == zero);
-  V x[4], y[4], lambda[4], lambda0[4], vn[4], bias[4], mscale[4], iscale[4], approach[4], largest[4];
-  std::remove_const_t<decltype(fixed)> skip[4];
-  for (int k = 0; k < 4; ++k) {
-    x[k] = L(c.x[k]), y[k] = L(c.y[k]);
+  V x[P], y[P], lambda[P], lambda0[P], vn[P], bias[P], mscale[P], iscale[P], approach[P], largest[P];
+  std::remove_const_t<decltype(fixed)> skip[P];
+  for (int k = 0; k < P; ++k) {
+    if constexpr (P > 1) x[k] = L(c.x[k]), y[k] = L(c.y[k]);
     lambda[k] = lambda0[k] = L(c.impulse[k]);
     approach[k] = L(c.approach[k]), largest[k] = L(c.max_impulse[k]);
     const V sep = L(c.sep[k]);
@@ -415,45 +429,53 @@ PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& 
   // r x n = (r1, -r0, 0) in the frame: the centroid's, and each point's (ra = ca + p, rb = cb + p)
   {
     const V g = rel[2] + (ob[0] * cb[1] - ob[1] * cb[0]) - (oa[0] * ca[1] - oa[1] * ca[0]);
-    const V p1 = ob[0] - oa[0], p2 = ob[1] - oa[1];
-    for (int k = 0; k < 4; ++k) vn[k] = g + y[k] * p1 - x[k] * p2;
+    if constexpr (P > 1) {
+      const V p1 = ob[0] - oa[0], p2 = ob[1] - oa[1];
+      for (int k = 0; k < P; ++k) vn[k] = g + y[k] * p1 - x[k] * p2;
+    } else {
+      vn[0] = g;
+    }
   }
   // the approach speeds, from the velocities before this pass's impulses: read inside the
   // sweep, a point's took the turn the points before it gave the body, and a box landing flat
   // recorded corners approaching at 7.0 to 7.7 m/s, which the restitution pass bounced unevenly
   if constexpr (kBias)
-    for (int k = 0; k < 4; ++k) approach[k] = vmin(approach[k], vn[k]);
-  V kk[10];
-  for (int i = 0; i < 10; ++i) kk[i] = L(c.k[i]);
+    for (int k = 0; k < P; ++k) approach[k] = vmin(approach[k], vn[k]);
+  constexpr int kEntries = P * (P + 1) / 2;
+  V kk[kEntries];
+  for (int i = 0; i < kEntries; ++i) kk[i] = L(c.k[i]);
   // non-penetration, swept over the points `sweeps` times (Gauss-Seidel on the manifold's
   // problem: one sweep leaves a torque imbalance between the points that rocks tall stacks)
   // (the last sweep apart: after a point's update in it, only the normal velocities of the
   // points still to come are read, and the total impulse is the sum of the last sweep's)
   auto sweep = [&](auto last) {
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < P; ++k) {
       const V j = -L(c.mass[k]) * mscale[k] * (vn[k] + bias[k]) - iscale[k] * lambda[k];
       V next = vmax(lambda[k] + j, zero);
       if constexpr (!kBias) next = skip[k] ? lambda[k] : next;
       const V dl = next - lambda[k];
       lambda[k] = next;
       largest[k] = vmax(largest[k], dl);
-      for (int m = last ? k + 1 : 0; m < 4; ++m) vn[m] = vn[m] + kk[kK[m][k]] * dl;
+      for (int m = last ? k + 1 : 0; m < P; ++m) vn[m] = vn[m] + kk[kK[m][k]] * dl;
     }
   };
   for (int it = 1; it < p.sweeps; ++it) sweep(std::false_type{});
   sweep(std::true_type{});
-  const V total = zero + lambda[0] + lambda[1] + lambda[2] + lambda[3];
+  V total = zero;
+  for (int k = 0; k < P; ++k) total = total + lambda[k];
   // the points' impulses to the bodies: along n, and the moments sum dl (ca1 + y, -(ca0 + x), 0)
   // on a, the same with cb on b
   {
     V sl = zero, sx = zero, sy = zero;
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < P; ++k) {
       const V dl = lambda[k] - lambda0[k];
-      sl = sl + dl, sx = sx + dl * x[k], sy = sy + dl * y[k];
+      sl = sl + dl;
+      if constexpr (P > 1) sx = sx + dl * x[k], sy = sy + dl * y[k];
     }
     rel[2] = rel[2] + msum * sl;
     impulse[2] = impulse[2] + sl;
-    turn2(ca[1] * sl + sy, -(ca[0] * sl + sx), cb[1] * sl + sy, -(cb[0] * sl + sx));
+    if constexpr (P > 1) turn2(ca[1] * sl + sy, -(ca[0] * sl + sx), cb[1] * sl + sy, -(cb[0] * sl + sx));
+    else turn2(ca[1] * sl, -(ca[0] * sl), cb[1] * sl, -(cb[0] * sl));
   }
   // Coulomb friction at the centroid: the tangential impulse stays inside the disc of radius
   // mu * (total normal impulse)
@@ -482,8 +504,8 @@ PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& 
     sym_mul(ib, tb, db);
     for (int i = 0; i < 3; ++i) oa[i] = oa[i] - da[i], dwa[i] = dwa[i] - da[i], ob[i] = ob[i] + db[i], dwb[i] = dwb[i] + db[i];
   }
-  // twist friction about the normal, up to mu * total normal * mean lever arm
-  {
+  // twist friction about the normal, up to mu * total normal * mean lever arm (none for one point)
+  if constexpr (P > 1) {
     const V radius = L(c.twist_radius);
     const V old = L(c.twist_impulse), limit = mu * total * radius;
     V j = vclamp(old - L(c.twist_mass) * (ob[2] - oa[2]), -limit, limit);
@@ -494,7 +516,39 @@ PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& 
     constexpr int kColumn[3] = {2, 4, 5};
     for (int i = 0; i < 3; ++i) dwa[i] = dwa[i] - e * ia[kColumn[i]], dwb[i] = dwb[i] + e * ib[kColumn[i]];
   }
-  for (int k = 0; k < 4; ++k) {
+  // a one-point lane's rolling resistance, right after its friction (RigidContacts::roll's
+  // arithmetic in the frame): an angular impulse against the relative turning, up to rolling *
+  // total normal. Lanes that do not roll keep their velocities (selected, so that skipping
+  // blocks in which no lane rolls changes no bits)
+  if constexpr (P == 1) {
+    constexpr std::uint32_t kMask = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
+    if ((c.rolls >> l0) & kMask) {
+      const V coefficient = L(c.rolling);
+      const auto on = coefficient > zero;
+      V m[6], old[3], rel[3], j[3];
+      for (int i = 0; i < 6; ++i) m[i] = L(c.rolling_mass[i]);
+      for (int i = 0; i < 3; ++i) old[i] = L(c.rolling_impulse[i]), rel[i] = ob[i] - oa[i];
+      V mr[3];
+      sym_mul(m, rel, mr);
+      for (int i = 0; i < 3; ++i) j[i] = old[i] - mr[i];
+      const V limit = coefficient * total, len = vsqrt(j[0] * j[0] + j[1] * j[1] + j[2] * j[2]);
+      const auto over = len > limit;
+      const V scale = over ? limit / len : one;
+      V e[3], da[3], db[3];
+      for (int i = 0; i < 3; ++i) {
+        j[i] = over ? j[i] * scale : j[i];
+        L.put(c.rolling_impulse[i], on ? j[i] : old[i]);
+        e[i] = j[i] - old[i];
+      }
+      sym_mul(ia, e, da);
+      sym_mul(ib, e, db);
+      for (int i = 0; i < 3; ++i) {
+        oa[i] = on ? oa[i] - da[i] : oa[i], dwa[i] = on ? dwa[i] - da[i] : dwa[i];
+        ob[i] = on ? ob[i] + db[i] : ob[i], dwb[i] = on ? dwb[i] + db[i] : dwb[i];
+      }
+    }
+  }
+  for (int k = 0; k < P; ++k) {
     L.put(c.impulse[k], lambda[k]);
     L.put(c.max_impulse[k], largest[k]);
     if constexpr (kBias) L.put(c.approach[k], approach[k]);
@@ -511,23 +565,39 @@ PBA_LANES void solve(const Lanes<V>& L, const FloatParams& p, const BodyArrays& 
 }
 
 // the lanes' accumulated impulses added to the warm-start accumulators
-template <class V, bool kZmm>
-PBA_LANES void warm(const Lanes<V>& L, const BodyArrays& r) {
-  ContactBlock& c = L.c;
+template <class V, bool kZmm, class B>
+PBA_LANES void warm(const Lanes<V, B>& L, const BodyArrays& r) {
+  constexpr int P = B::kPoints;
+  B& c = L.c;
   const int l0 = L.l0;
   const V zero = splat<V>(0);
   V t1[3], t2[3], n[3];
   L.frame(t1, t2, n);
   V sl = zero, sx = zero, sy = zero;
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < P; ++k) {
     const V l = L(c.impulse[k]);
-    sl = sl + l, sx = sx + l * L(c.x[k]), sy = sy + l * L(c.y[k]);
+    sl = sl + l;
+    if constexpr (P > 1) sx = sx + l * L(c.x[k]), sy = sy + l * L(c.y[k]);
   }
-  const V j0 = L(c.tangent_impulse[0]), j1 = L(c.tangent_impulse[1]), tw = L(c.twist_impulse);
+  const V j0 = L(c.tangent_impulse[0]), j1 = L(c.tangent_impulse[1]);
   const V ca[3] = {L(c.ca[0]), L(c.ca[1]), L(c.ca[2])}, cb[3] = {L(c.cb[0]), L(c.cb[1]), L(c.cb[2])};
-  // the moments in the frame: the points', the friction's at the centroid, the twist
-  const V ta[3] = {ca[1] * sl + sy - ca[2] * j1, -(ca[0] * sl + sx) + ca[2] * j0, ca[0] * j1 - ca[1] * j0 + tw};
-  const V tb[3] = {cb[1] * sl + sy - cb[2] * j1, -(cb[0] * sl + sx) + cb[2] * j0, cb[0] * j1 - cb[1] * j0 + tw};
+  // the moments in the frame: the points', the friction's at the centroid, the twist (a
+  // one-point lane: its point is the centroid, and it has no twist)
+  V ta[3], tb[3];
+  if constexpr (P > 1) {
+    const V tw = L(c.twist_impulse);
+    ta[0] = ca[1] * sl + sy - ca[2] * j1, ta[1] = -(ca[0] * sl + sx) + ca[2] * j0, ta[2] = ca[0] * j1 - ca[1] * j0 + tw;
+    tb[0] = cb[1] * sl + sy - cb[2] * j1, tb[1] = -(cb[0] * sl + sx) + cb[2] * j0, tb[2] = cb[0] * j1 - cb[1] * j0 + tw;
+  } else {
+    ta[0] = ca[1] * sl - ca[2] * j1, ta[1] = -(ca[0] * sl) + ca[2] * j0, ta[2] = ca[0] * j1 - ca[1] * j0;
+    tb[0] = cb[1] * sl - cb[2] * j1, tb[1] = -(cb[0] * sl) + cb[2] * j0, tb[2] = cb[0] * j1 - cb[1] * j0;
+    // and the rolling resistance's angular impulse (lanes that roll)
+    const auto on = L(c.rolling) > zero;
+    for (int i = 0; i < 3; ++i) {
+      const V roll = L(c.rolling_impulse[i]);
+      ta[i] = on ? ta[i] + roll : ta[i], tb[i] = on ? tb[i] + roll : tb[i];
+    }
+  }
   V ia[6], ib[6];
   for (int i = 0; i < 6; ++i) ia[i] = L(c.ia[i]), ib[i] = L(c.ib[i]);
   V da[3], db[3], daw[3], dbw[3], pw[3];
@@ -547,14 +617,14 @@ PBA_LANES void warm(const Lanes<V>& L, const BodyArrays& r) {
 // the separations of the block's lanes [l0, l0 + width) in lanes of doubles D (in double:
 // they are small differences of the bodies' motions, and whether a point is apart or touching
 // turns on their sign)
-template <class D>
-PBA_LANES void separations_of(ContactBlock& c, const AnchorBlock& g, int l0, int width, const BodyArrays& r) {
-  for (int l = l0; l < l0 + width; l += kWidth<D>) separations(Lanes<D>{c, l}, g, r);
+template <class D, class B>
+PBA_LANES void separations_of(B& c, const AnchorsOf<B::kPoints>& g, int l0, int width, const BodyArrays& r) {
+  for (int l = l0; l < l0 + width; l += kWidth<D>) separations(Lanes<D, B>{c, l}, g, r);
 }
 
-template <class V, class D, int kMode>
-PBA_LANES void pass(ContactBlock& c, const AnchorBlock& g, int l0, const FloatParams& p, const BodyArrays& r) {
-  const Lanes<V> L{c, l0};
+template <class V, class D, int kMode, class B>
+PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatParams& p, const BodyArrays& r) {
+  const Lanes<V, B> L{c, l0};
   if (p.update_sep) separations_of<D>(c, g, l0, kWidth<V>, r);
   // (lanes of 8 doubles for the separations: the AVX-512 path)
   constexpr bool kZmm = std::is_same_v<D, v8d>;
@@ -574,7 +644,7 @@ PBA_LANES void pass(ContactBlock& c, const AnchorBlock& g, int l0, const FloatPa
     if (p.cap_carry) {
       const V zero = splat<V>(0);
       V all = zero, kept = zero;
-      for (int k = 0; k < 4; ++k) {
+      for (int k = 0; k < B::kPoints; ++k) {
         const V l = L(c.impulse[k]), before = L(g.last[k]);
         const V carried = vmin(l, before * splat<V>(kCarryGrowth) + L(c.mass[k]) * splat<V>(p.carry_speed));
         all = all + l, kept = kept + carried;
@@ -584,7 +654,7 @@ PBA_LANES void pass(ContactBlock& c, const AnchorBlock& g, int l0, const FloatPa
       const V scale = all > zero ? kept / all : splat<V>(1);
       L.put(c.tangent_impulse[0], L(c.tangent_impulse[0]) * scale);
       L.put(c.tangent_impulse[1], L(c.tangent_impulse[1]) * scale);
-      L.put(c.twist_impulse, L(c.twist_impulse) * scale);
+      if constexpr (B::kPoints > 1) L.put(c.twist_impulse, L(c.twist_impulse) * scale);
     }
   if (p.warm_next) warm<V, kZmm>(L, r);
 }
@@ -594,8 +664,8 @@ PBA_LANES void pass(ContactBlock& c, const AnchorBlock& g, int l0, const FloatPa
 // and the hardware's streamer fetches them; asking for all the lines of the next block at once
 // stalled the loop on the full fill buffers (measured on the 2870-box pyramid: the whole run
 // 7-8% faster without)
-template <class V, class D, int kMode>
-PBA_LANES void pass_blocks(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
+template <class V, class D, int kMode, class B>
+PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first, std::size_t last,
                            const FloatParams& p, const BodyArrays& r) {
   for (std::size_t i = first; i < last; ++i) {
     // a block of one lane (a colour of one manifold: a stack's) by the scalar lane, one of up
@@ -613,8 +683,8 @@ PBA_LANES void pass_blocks(ContactBlock* blocks, const AnchorBlock* anchors, std
   }
 }
 
-template <class V, class D>
-PBA_LANES void pass_any(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
+template <class V, class D, class B>
+PBA_LANES void pass_any(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first, std::size_t last,
                         const PassParams& params, const BodyArrays& r) {
   const FloatParams p(params);
   if (!params.bias) pass_blocks<V, D, kRelax>(blocks, anchors, first, last, p, r);
@@ -624,21 +694,21 @@ PBA_LANES void pass_any(ContactBlock* blocks, const AnchorBlock* anchors, std::s
 
 // each lane of the blocks [first, last): the warm start's accumulators on lanes of V, the
 // separations on lanes of D
-template <class V>
-PBA_LANES void warm_blocks(ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& r) {
+template <class V, class B>
+PBA_LANES void warm_blocks(B* blocks, std::size_t first, std::size_t last, const BodyArrays& r) {
   for (std::size_t i = first; i < last; ++i) {
     const int lanes = blocks[i].lanes;
     if constexpr (kWidth<V> == 16) {  // AVX-512
       if (lanes <= 8) {
-        warm<v8f, true>(Lanes<v8f>{blocks[i], 0}, r);
+        warm<v8f, true>(Lanes<v8f, B>{blocks[i], 0}, r);
         continue;
       }
     }
-    for (int l = 0; l < lanes; l += kWidth<V>) warm<V, kWidth<V> == 16>(Lanes<V>{blocks[i], l}, r);
+    for (int l = 0; l < lanes; l += kWidth<V>) warm<V, kWidth<V> == 16>(Lanes<V, B>{blocks[i], l}, r);
   }
 }
-template <class D>
-PBA_LANES void separation_blocks(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
+template <class D, class B>
+PBA_LANES void separation_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first, std::size_t last,
                                  const BodyArrays& r) {
   for (std::size_t i = first; i < last; ++i) separations_of<D>(blocks[i], anchors[i], 0, blocks[i].lanes, r);
 }
@@ -648,28 +718,33 @@ PBA_LANES void separation_blocks(ContactBlock* blocks, const AnchorBlock* anchor
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #define PBA_RIGID_HAVE_X86 1
-__attribute__((target("avx512f"))) void pass_avx512(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
-                                                   const PassParams& p, const BodyArrays& r) {
+// (templates over the block kind, B: ContactBlock or OnePointBlock)
+template <class B>
+__attribute__((target("avx512f"))) void pass_avx512(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first,
+                                                   std::size_t last, const PassParams& p, const BodyArrays& r) {
   pass_any<v16f, v8d>(blocks, anchors, first, last, p, r);
 }
-__attribute__((target("avx2"))) void pass_avx2(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
-                                              const PassParams& p, const BodyArrays& r) {
+template <class B>
+__attribute__((target("avx2"))) void pass_avx2(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first,
+                                              std::size_t last, const PassParams& p, const BodyArrays& r) {
   pass_any<v8f, v4d>(blocks, anchors, first, last, p, r);
 }
-__attribute__((target("avx512f"))) void warm_avx512(ContactBlock* blocks, std::size_t first, std::size_t last,
-                                                   const BodyArrays& r) {
+template <class B>
+__attribute__((target("avx512f"))) void warm_avx512(B* blocks, std::size_t first, std::size_t last, const BodyArrays& r) {
   warm_blocks<v16f>(blocks, first, last, r);
 }
-__attribute__((target("avx2"))) void warm_avx2(ContactBlock* blocks, std::size_t first, std::size_t last,
-                                              const BodyArrays& r) {
+template <class B>
+__attribute__((target("avx2"))) void warm_avx2(B* blocks, std::size_t first, std::size_t last, const BodyArrays& r) {
   warm_blocks<v8f>(blocks, first, last, r);
 }
-__attribute__((target("avx512f"))) void separation_avx512(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
-                                                         const BodyArrays& r) {
+template <class B>
+__attribute__((target("avx512f"))) void separation_avx512(B* blocks, const AnchorsOf<B::kPoints>* anchors,
+                                                         std::size_t first, std::size_t last, const BodyArrays& r) {
   separation_blocks<v8d>(blocks, anchors, first, last, r);
 }
-__attribute__((target("avx2"))) void separation_avx2(ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first, std::size_t last,
-                                                    const BodyArrays& r) {
+template <class B>
+__attribute__((target("avx2"))) void separation_avx2(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first,
+                                                    std::size_t last, const BodyArrays& r) {
   separation_blocks<v4d>(blocks, anchors, first, last, r);
 }
 #else
@@ -689,8 +764,11 @@ SimdPath best_simd_path() {
 #endif
 }
 
-void solve_colored(SimdPath path, ContactBlock* blocks, AnchorBlock* anchors, std::size_t first, std::size_t last,
-                   const PassParams& p, const BodyArrays& bodies) {
+namespace {
+
+template <class B>
+void solve_colored_of(SimdPath path, B* blocks, AnchorsOf<B::kPoints>* anchors, std::size_t first, std::size_t last,
+                      const PassParams& p, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
   if (path == SimdPath::Avx512) return pass_avx512(blocks, anchors, first, last, p, bodies);
   if (path == SimdPath::Avx2) return pass_avx2(blocks, anchors, first, last, p, bodies);
@@ -699,14 +777,8 @@ void solve_colored(SimdPath path, ContactBlock* blocks, AnchorBlock* anchors, st
   pass_any<float, double>(blocks, anchors, first, last, p, bodies);
 }
 
-void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p, const BodyArrays& bodies) {
-  const FloatParams q(p);
-  if (!p.bias) pass<float, double, kRelax>(block, anchors, lane, q, bodies);
-  else if (p.soft) pass<float, double, kSoft>(block, anchors, lane, q, bodies);
-  else pass<float, double, kRigid>(block, anchors, lane, q, bodies);
-}
-
-void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies) {
+template <class B>
+void warm_colored_of(SimdPath path, B* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
   if (path == SimdPath::Avx512) return warm_avx512(blocks, first, last, bodies);
   if (path == SimdPath::Avx2) return warm_avx2(blocks, first, last, bodies);
@@ -715,10 +787,9 @@ void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::s
   warm_blocks<float>(blocks, first, last, bodies);
 }
 
-void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies) { warm<float, false>(Lanes<float>{block, lane}, bodies); }
-
-void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first,
-                        std::size_t last, const BodyArrays& bodies) {
+template <class B>
+void separation_colored_of(SimdPath path, B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first,
+                           std::size_t last, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
   if (path == SimdPath::Avx512) return separation_avx512(blocks, anchors, first, last, bodies);
   if (path == SimdPath::Avx2) return separation_avx2(blocks, anchors, first, last, bodies);
@@ -727,13 +798,12 @@ void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* 
   separation_blocks<double>(blocks, anchors, first, last, bodies);
 }
 
-void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const BodyArrays& bodies) {
-  separations(Lanes<double>{block, lane}, anchors, bodies);
-}
-
-void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]) {
-  ContactBlock& c = const_cast<ContactBlock&>(block);
-  const Lanes<double> L{c, lane};
+// each of one lane's points' normal velocity at the velocities now (in double)
+template <class B>
+void normal_velocities_of(const B& block, int lane, const BodyArrays& bodies, double* vn) {
+  constexpr int P = B::kPoints;
+  B& c = const_cast<B&>(block);
+  const Lanes<double, B> L{c, lane};
   double t1[3], t2[3], n[3], rel[3], oa[3], ob[3];
   const double* va = bodies.bodies[c.a[lane]].v;
   const double* wa = bodies.bodies[c.a[lane]].w;
@@ -745,33 +815,43 @@ void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bo
   to_frame(t1, t2, n, wa, oa);
   to_frame(t1, t2, n, wb, ob);
   const double g = rel[2] + (ob[0] * L(c.cb[1]) - ob[1] * L(c.cb[0])) - (oa[0] * L(c.ca[1]) - oa[1] * L(c.ca[0]));
-  for (int k = 0; k < 4; ++k) vn[k] = g + L(c.y[k]) * (ob[0] - oa[0]) - L(c.x[k]) * (ob[1] - oa[1]);
+  if constexpr (P > 1)
+    for (int k = 0; k < P; ++k) vn[k] = g + L(c.y[k]) * (ob[0] - oa[0]) - L(c.x[k]) * (ob[1] - oa[1]);
+  else
+    vn[0] = g;
 }
 
-void restitution_lane(ContactBlock& c, int lane, double restitution, double threshold, int sweeps,
-                      const BodyArrays& bodies) {
-  const Lanes<double> L{c, lane};
+template <class B>
+void restitution_lane_of(B& c, int lane, double restitution, double threshold, int sweeps, const BodyArrays& bodies) {
+  constexpr int P = B::kPoints;
+  const Lanes<double, B> L{c, lane};
   double t1[3], t2[3], n[3], ia[6], ib[6];
   L.frame(t1, t2, n);
   for (int i = 0; i < 6; ++i) ia[i] = L(c.ia[i]), ib[i] = L(c.ib[i]);
   const double ma = L(c.ma), mb = L(c.mb), ca0 = L(c.ca[0]), ca1 = L(c.ca[1]), cb0 = L(c.cb[0]), cb1 = L(c.cb[1]);
   const bool wa = (c.write_a >> lane) & 1, wb = (c.write_b >> lane) & 1;
   for (int sweep = 0; sweep < sweeps; ++sweep)
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < P; ++k) {
     // only points that approached fast enough and actually pushed
     if (L(c.approach[k]) > -threshold || L(c.max_impulse[k]) == 0) continue;
-    double vn[4];
-    normal_velocities(c, lane, bodies, vn);
+    double vn[P];
+    normal_velocities_of(c, lane, bodies, vn);
     const double old = L(c.impulse[k]);
     double j = -L(c.mass[k]) * (vn[k] + restitution * L(c.approach[k]));
     const double total = std::max(old + j, 0.0);
     j = total - old;
     L.put(c.impulse[k], total);
     // along n at the point: -j on a, +j on b, with the moments (ca1 + y, -(ca0 + x), 0) and (cb1 + y, -(cb0 + x), 0)
-    const double x = L(c.x[k]), y = L(c.y[k]);
+    double x = 0, y = 0;
+    if constexpr (P > 1) x = L(c.x[k]), y = L(c.y[k]);
     double da[3], db[3], daw[3], dbw[3];
-    sym_mul2(ia, (ca1 + y) * j, -(ca0 + x) * j, da);
-    sym_mul2(ib, (cb1 + y) * j, -(cb0 + x) * j, db);
+    if constexpr (P > 1) {
+      sym_mul2(ia, (ca1 + y) * j, -(ca0 + x) * j, da);
+      sym_mul2(ib, (cb1 + y) * j, -(cb0 + x) * j, db);
+    } else {
+      sym_mul2(ia, ca1 * j, -ca0 * j, da);
+      sym_mul2(ib, cb1 * j, -cb0 * j, db);
+    }
     to_world(t1, t2, n, da, daw);
     to_world(t1, t2, n, db, dbw);
     double* va = bodies.bodies[c.a[lane]].v;
@@ -783,6 +863,61 @@ void restitution_lane(ContactBlock& c, int lane, double restitution, double thre
       if (wb) vb[i] += (mb * j) * n[i], wvb[i] += dbw[i];
     }
   }
+}
+
+}  // namespace
+
+void solve_colored(SimdPath path, ContactBlock* blocks, AnchorBlock* anchors, std::size_t first, std::size_t last,
+                   const PassParams& p, const BodyArrays& bodies) {
+  solve_colored_of(path, blocks, anchors, first, last, p, bodies);
+}
+void solve_colored(SimdPath path, OnePointBlock* blocks, OnePointAnchors* anchors, std::size_t first, std::size_t last,
+                   const PassParams& p, const BodyArrays& bodies) {
+  solve_colored_of(path, blocks, anchors, first, last, p, bodies);
+}
+
+void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p, const BodyArrays& bodies) {
+  const FloatParams q(p);
+  if (!p.bias) pass<float, double, kRelax>(block, anchors, lane, q, bodies);
+  else if (p.soft) pass<float, double, kSoft>(block, anchors, lane, q, bodies);
+  else pass<float, double, kRigid>(block, anchors, lane, q, bodies);
+}
+
+void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies) {
+  warm_colored_of(path, blocks, first, last, bodies);
+}
+void warm_colored(SimdPath path, OnePointBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies) {
+  warm_colored_of(path, blocks, first, last, bodies);
+}
+
+void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies) { warm<float, false>(Lanes<float>{block, lane}, bodies); }
+
+void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first,
+                        std::size_t last, const BodyArrays& bodies) {
+  separation_colored_of(path, blocks, anchors, first, last, bodies);
+}
+void separation_colored(SimdPath path, OnePointBlock* blocks, const OnePointAnchors* anchors, std::size_t first,
+                        std::size_t last, const BodyArrays& bodies) {
+  separation_colored_of(path, blocks, anchors, first, last, bodies);
+}
+
+void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const BodyArrays& bodies) {
+  separations(Lanes<double>{block, lane}, anchors, bodies);
+}
+
+void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]) {
+  normal_velocities_of(block, lane, bodies, vn);
+}
+void normal_velocities(const OnePointBlock& block, int lane, const BodyArrays& bodies, double vn[1]) {
+  normal_velocities_of(block, lane, bodies, vn);
+}
+
+void restitution_lane(ContactBlock& c, int lane, double restitution, double threshold, int sweeps,
+                      const BodyArrays& bodies) {
+  restitution_lane_of(c, lane, restitution, threshold, sweeps, bodies);
+}
+void restitution_lane(OnePointBlock& c, int lane, double restitution, double threshold, const BodyArrays& bodies) {
+  restitution_lane_of(c, lane, restitution, threshold, 1, bodies);  // one point: one sweep is all
 }
 
 }  // namespace pba::detail

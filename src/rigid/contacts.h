@@ -299,6 +299,20 @@ struct RigidContacts {
   std::vector<std::uint32_t> color_count;  // manifolds of each colour
   std::uint32_t overflow_count = 0;        // manifolds in the overflow
   std::vector<std::size_t> color_block;    // colour c's blocks from color_block[c]; then the overflow's
+  // the coloured one-point manifolds (src/rigid/solver.h, OnePointBlock): colour c's in blocks
+  // [color_ones[c], color_ones[c + 1]) of `ones`, solved after its ContactBlocks
+  std::vector<OnePointBlock> ones;
+  std::vector<OnePointAnchors> one_anchors;  // by one-point block
+  std::size_t one_blocks = 0;                // one-point blocks in use
+  std::vector<std::size_t> color_ones;
+  std::vector<std::uint32_t> ones_of_color;  // scratch of build(): each colour's one-point manifolds
+  std::vector<std::uint8_t> one_of;          // scratch of build(): by pair, 1 when it goes to a one-point block
+  // by pair: its points (emit() writes it with the pair's count, remove_body() moves it with
+  // the pair), so that build() sorts the one-point manifolds out without reading each pair
+  // (a line of 640 bytes apart: +1.4% of the 2870 pyramid's step when it did)
+  std::vector<std::uint8_t> pair_points;
+  std::vector<std::uint32_t> one_cursor;     // scratch of build()
+  std::vector<std::size_t> roll_start;       // colour c's lanes that roll are rolls[roll_start[c], roll_start[c + 1])
   // colouring scratch: contact-graph levels by body, the dynamic pairs' adjacency, bands by pair
   std::vector<std::uint32_t> level, adjacency_start, adjacency, queue, cursor, band_of, band_start, by_band;
   std::vector<std::uint32_t> mask_band;    // by body: the band its mask is for
@@ -318,6 +332,7 @@ struct RigidContacts {
   struct LaneRef {
     std::uint32_t block, lane;
     double restitution;  // the pair's (kept here, so the pass does not read the pair again)
+    bool one;            // block is one of `ones`
   };
   std::vector<LaneRef> restitution_lanes;  // the lanes with restitution, in pass order
   /// A lane that rolls: what its rolling resistance reads and writes in each pass, copied from
@@ -328,16 +343,18 @@ struct RigidContacts {
     Mat3 ia{0.0}, ib{0.0};   // the bodies' world inverse inertias (1 / (kg m^2))
     Vec3 impulse{0, 0, 0};   // accumulated (N m s per substep)
     double rolling = 0;      // the pair's coefficient times radius (m)
-    std::uint32_t key = 0;   // block * kLanes + lane
+    std::uint32_t key = 0;   // block * kLanes + lane (of `blocks`)
     std::uint32_t pair = 0, a = 0, b = 0;
     bool write_a = false, write_b = false;  // the body moves (the solver writes it)
   };
-  std::vector<Rolling> rolls;      // the lanes that roll, by key (the coloured ones first)
+  std::vector<Rolling> rolls;      // the ContactBlocks' lanes that roll, by key (the coloured ones first; one-point lanes roll in their blocks)
   std::size_t colored_rolls = 0;   // of them, in coloured blocks
   std::vector<Mat3> rolling_mass;  // by pair, for those that roll: set_rolling_mass (kg m^2)
-  // by pair: its lane of the blocks (block * kLanes + lane), while lanes_valid: the blocks keep
+  // by pair: its lane of the blocks (block * kLanes + lane; plus kOneLane for a lane of
+  // `ones`), while lanes_valid: the blocks keep
   // the approach speeds and largest impulses of the last step for manifold() until the next prepare
   std::vector<std::uint32_t> lane_of;
+  static constexpr std::uint32_t kOneLane = 0x80000000u;
   bool lanes_valid = false;
   // by body, and a last spare row for empty lanes: the velocities while the solver runs, the
   // motion since the start of the step (dp, then the turn w, x, y, z), and the warm-start
@@ -362,7 +379,10 @@ struct RigidContacts {
   void build(RigidBodySystem& s);
   /// The pairs by_color[first, first + lanes) into block b's lanes, in their contact frames
   /// (the arithmetic on 8 or 4 lanes at once on the SIMD paths; the same bits on every path).
-  void fill_block(RigidBodySystem& s, std::size_t b, std::size_t first);
+  /// B: ContactBlock (of `blocks`, `count` of them in use) or OnePointBlock (of `ones`).
+  template <class B>
+  void fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::kPoints>* anchor_array, std::size_t count,
+                  std::size_t b, std::size_t first);
   /// The inverse of rolling pair `index`'s relative angular inverse inertia (kg m^2) from
   /// inv_inertia, into rolling_mass[index] (prepare for XPBD, fill_block for the other solvers);
   /// nothing for a pair that does not roll.

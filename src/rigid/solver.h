@@ -40,6 +40,7 @@ using Real = float;
 /// kLanes manifolds in structure-of-arrays form. Empty lanes hold zeros (no mass, no effect)
 /// and write nothing back.
 struct alignas(64) ContactBlock {
+  static constexpr int kPoints = 4;  // normal points a lane holds
   // the frame (world unit vectors, right-handed: t1 x t2 = n; n from body a to b)
   Real t1[3][kLanes], t2[3][kLanes], n[3][kLanes];
   // Masses and impulses are in the lane's impulse unit u (a power of two, `unit`): the
@@ -74,6 +75,50 @@ struct alignas(64) ContactBlock {
   int lanes = 0;                        // lanes in use, from 0
 };
 
+/// kLanes manifolds of ONE normal point each (a sphere on anything, a capsule's tip, a box's
+/// corner): the point is the manifold's centroid, so it has no lever arm from it (x = y = 0,
+/// exactly: the pairs' centroid of one point is the point), no twist (its radius is 0, and a
+/// pair carries no twist impulse then) and a K of one entry. The same rows as ContactBlock's
+/// otherwise, so the kernels are one template over both (contact_wide.cpp), and a one-point
+/// lane's normal and friction rows give the bits of the same manifold in a ContactBlock
+/// (whose other three points hold zeros). A one-point lane's rolling resistance (a ball's) is
+/// solved in the block too, right after its friction, with SIMD and in the frame (a
+/// ContactBlock's lanes that roll are solved one by one, in double, after their blocks). The
+/// block is 54 rows (10 of them the rolling resistance's) to ContactBlock's 79, and its normal
+/// sweeps touch one point, not four with their K. prepare() puts a colour's one-point
+/// manifolds in blocks of their own after its ContactBlocks (no two manifolds of a colour share
+/// a body that moves, so the order within a colour changes nothing); the overflow keeps
+/// ContactBlocks.
+struct alignas(64) OnePointBlock {
+  static constexpr int kPoints = 1;
+  // the frame (as ContactBlock's)
+  Real t1[3][kLanes], t2[3][kLanes], n[3][kLanes];
+  // in the lane's impulse unit u, as ContactBlock's
+  Real ma[kLanes], mb[kLanes];        // inverse masses times u (1/kg)
+  Real ia[6][kLanes], ib[6][kLanes];  // inverse inertias in the frame times u (1/(kg m^2))
+  Real mass[1][kLanes];               // normal effective mass (kg)
+  Real k[1][kLanes];                  // K of the normal row, times u (1/kg; the sweeps after the first read it)
+  Real impulse[1][kLanes];            // accumulated normal impulse (N s)
+  Real sep[1][kLanes];                // separation at the bodies' poses now (m)
+  Real ca[3][kLanes], cb[3][kLanes];  // the point from a's centre of mass and from b's, in the frame (m)
+  Real tangent_mass[2][kLanes];       // (kg)
+  Real friction[kLanes];              // mixed coefficient
+  Real tangent_impulse[2][kLanes];    // accumulated (N s)
+  // rolling resistance: an angular impulse against the bodies' relative turning, up to
+  // rolling * the normal impulse (zeros in a lane whose pair does not roll)
+  Real rolling[kLanes];               // mixed coefficient times radius (m)
+  Real rolling_mass[6][kLanes];       // (Ia^-1 + Ib^-1)^-1 in the frame divided by u: xx, xy, xz, yy, yz, zz (kg m^2)
+  Real rolling_impulse[3][kLanes];    // accumulated, in the frame (N m s)
+  Real approach[1][kLanes];           // the most negative normal velocity seen (m/s)
+  Real max_impulse[1][kLanes];        // the largest single normal impulse (N s)
+  std::uint32_t a[kLanes], b[kLanes];
+  std::uint32_t pair[kLanes];           // index into RigidContacts::pairs, kNoPair when empty
+  Real unit[kLanes];                    // u (N s; 1 in an empty lane)
+  std::uint32_t write_a = 0, write_b = 0;  // bit l: lane l writes its body back
+  std::uint32_t rolls = 0;                 // bit l: lane l's pair rolls
+  int lanes = 0;                        // lanes in use, from 0
+};
+
 /// What measuring the separations of a block's manifolds at the poses now needs besides the
 /// block: apart from it, so that the passes that do not measure them (the biased ones) do not
 /// stream it. The separation at the poses now is base + n.(dp_b - dp_a) + n.(turn_b sb - sb) -
@@ -82,13 +127,19 @@ struct alignas(64) ContactBlock {
 /// ey, zb), e being half the step from a's surface point to b's. (Each term is small, so float
 /// keeps it to a fraction of a micrometre; the anchors' own projections, near the shapes'
 /// size, would cancel.)
-struct alignas(64) AnchorBlock {
-  Real za[4][kLanes], zb[4][kLanes], base[4][kLanes];  // (m)
-  Real ex[4][kLanes], ey[4][kLanes];                   // (m)
+/// P: the normal points of a lane (4: a ContactBlock's, 1: a OnePointBlock's).
+template <int P>
+struct alignas(64) AnchorsOf {
+  Real za[P][kLanes], zb[P][kLanes], base[P][kLanes];  // (m)
+  Real ex[P][kLanes], ey[P][kLanes];                   // (m)
   // the normal impulses the soft step's last relax pass solved, before its cap (N s, in u;
   // mutable: the passes take the anchors as const, and only the relax pass writes this)
-  mutable Real last[4][kLanes];
+  mutable Real last[P][kLanes];
 };
+/// A ContactBlock's anchors.
+using AnchorBlock = AnchorsOf<4>;
+/// A OnePointBlock's anchors.
+using OnePointAnchors = AnchorsOf<1>;
 
 /// One contact pass's settings (contact_solver.cpp fills them).
 struct PassParams {
@@ -200,5 +251,20 @@ void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint3
                               const FreeMotionArrays& f, double h);
 /// The normal relative velocity (m/s) of each of one lane's points at the velocities now (prepare's approach).
 void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]);
+
+// the same for blocks of one-point manifolds (OnePointBlock), with the same arithmetic
+
+/// One pass over the one-point blocks [first, last) on `path` (as solve_colored).
+void solve_colored(SimdPath path, OnePointBlock* blocks, OnePointAnchors* anchors, std::size_t first, std::size_t last,
+                   const PassParams& p, const BodyArrays& bodies);
+/// Adds the accumulated impulses of the one-point blocks [first, last) to the warm-start accumulators.
+void warm_colored(SimdPath path, OnePointBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies);
+/// Measures the separations of the one-point blocks [first, last) at the poses now.
+void separation_colored(SimdPath path, OnePointBlock* blocks, const OnePointAnchors* anchors, std::size_t first,
+                        std::size_t last, const BodyArrays& bodies);
+/// The restitution impulse of one lane of a one-point block (as restitution_lane above).
+void restitution_lane(OnePointBlock& block, int lane, double restitution, double threshold, const BodyArrays& bodies);
+/// The normal relative velocity (m/s) of one lane's point at the velocities now (vn[0]).
+void normal_velocities(const OnePointBlock& block, int lane, const BodyArrays& bodies, double vn[1]);
 
 }  // namespace pba::detail

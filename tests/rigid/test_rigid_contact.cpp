@@ -394,7 +394,8 @@ TEST(RigidFriction, ABallRollsAtFiveSeventhsOfGSinThetaOverTheInputRange) {
 // With m a = f and I dw/dt = -(c r m g) - f r, rolling (a = r dw/dt) and I = (2/5) m r^2:
 // a = -(5/7) c g (friction needed: |f| = (5/7) c m g, below mu m g). Then it stops and stays.
 // Under the soft step the ball's ground manifold is coloured (its rolling resistance solved
-// after its colour's blocks), under TGS it is in the overflow (solved with its manifold).
+// in its one-point block, in float), under TGS it is in the overflow (solved with its
+// manifold, in double).
 // Tolerances: the soft contact sinks the ball g / w^2 = 4e-5 m (w = 480 rad/s against the
 // ground), 1.4e-4 of its radius: 0.1% on a (measured 3e-5). The distance: the substeps
 // change the velocity before moving by it (symplectic Euler), so with v falling linearly the

@@ -168,3 +168,131 @@ TEST(RigidColors, StacksAreSolvedFromTheGroundUp) {
     EXPECT_GT(under[0], under.back()) << to_string(solver);
   }
 }
+
+namespace {
+
+constexpr double kG = 9.81;  // (m/s^2, kGravity's)
+
+// Balls among boxes, so that the solver's two block kinds run side by side, in the same
+// colours (src/rigid/solver.h: a colour's manifolds of one point go to blocks of their own):
+// a square pyramid of boxes; 20 balls rolling down a static ramp of 20 degrees side by side;
+// a 5 x 5 grid of balls resting on the ground; a ball resting on top of each of 16 boxes
+// (one-point manifolds between dynamic bodies, a colour of their own); four balls of
+// restitution 0.5 dropped from 1 m; 16 balls with rolling resistance rolling on the ground at
+// 2 m/s (one-point lanes that roll). The balls against the ground and the ramp share a colour
+// with the boxes' ground contacts: four whole one-point blocks, and one ball in a
+// ContactBlock's lane.
+struct BallsAmongBoxes {
+  static constexpr double kRadius = 0.2, kTheta = 20 * pba::kPi / 180, kDrop = 1.0, kE = 0.5, kC = 0.1, kV0 = 2;
+  std::vector<pba::RigidBodyId> rolling, resting, on_boxes, bouncing, resisted, boxes;
+  Vec3 down{-std::cos(kTheta), -std::sin(kTheta), 0};
+
+  explicit BallsAmongBoxes(RigidBodySystem& s) {
+    boxes = pba::rigid_scenes::square_pyramid(s, 4);  // (and the ground, mu 0.6)
+    // the ramp: a static slab whose top face passes through (-30, 10, 0), tilted down towards -x
+    const Vec3 up{-std::sin(kTheta), std::cos(kTheta), 0};
+    const pba::Quat tilt = glm::angleAxis(kTheta, Vec3(0, 0, 1));
+    const Vec3 top{-30, 10, 0};
+    s.create({.type = BodyType::Static, .pose = {top - 0.5 * up, tilt},
+              .shapes = {{.shape = ColliderShape::box({12, 0.5, 12}), .material = {.friction = 1}}}});
+    auto ball = [&](const Vec3& at, double restitution = 0) {
+      return s.create({.pose = {at}, .shapes = {{.shape = ColliderShape::sphere(kRadius),
+                                                 .material = {.restitution = restitution, .friction = 1}}}});
+    };
+    for (int i = 0; i < 20; ++i) rolling.push_back(ball(top + kRadius * up + Vec3(0, 0, -9.5 + i)));
+    for (int i = 0; i < 5; ++i)
+      for (int j = 0; j < 5; ++j) resting.push_back(ball({10.0 + i, kRadius, -2.0 + j}));
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        boxes.push_back(s.create({.pose = {{20.0 + 2 * i, 0.5, -3.0 + 2 * j}},
+                                  .shapes = {{.shape = ColliderShape::box(Vec3(0.5)), .material = {.friction = 1}}}}));
+        on_boxes.push_back(ball({20.0 + 2 * i, 1 + kRadius, -3.0 + 2 * j}));
+      }
+    for (int i = 0; i < 4; ++i) bouncing.push_back(ball({-8.0, kDrop + kRadius, -3.0 + 2 * i}, kE));
+    for (int i = 0; i < 16; ++i)
+      resisted.push_back(s.create({.pose = {{40, kRadius, -8.0 + i}}, .linear_velocity = {kV0, 0, 0},
+                                   .angular_velocity = {0, 0, -kV0 / kRadius},
+                                   .shapes = {{.shape = ColliderShape::sphere(kRadius), .material = {.friction = 0.5},
+                                               .rolling_resistance = kC}}}));
+  }
+};
+
+}  // namespace
+
+// A ball in a one-point block (or in a ContactBlock's lane, beyond its colour's whole
+// one-point blocks) gives the physics, next to boxes in four-point blocks: it rolls
+// down a slope at (5/7) g sin(theta) (2%, as RigidFriction.ASphereRollsAtFiveSeventhsOfGSinTheta),
+// its rolling resistance c slows it at (5/7) c g on level ground (1e-3, as
+// RigidFriction.RollingResistanceSlowsASphereAtFiveSeventhsOfCG),
+// rests on the ground and on boxes (under 1 mm/s; its centre within 0.1 mm of a radius up:
+// the soft contact's sag is g / w^2, 43 um at the ground's 480 rad/s), rebounds to e^2 of
+// its drop (3%, as RigidRestitution.ASphereReboundsToESquaredOfItsHeight), and the boxes'
+// pyramid stands; under the soft step and TGS (which solves everything lane by lane), and
+// the sequential impulses' rest (its one step of 1/60 s has neither's rolling nor bounce).
+// Every SIMD path gives the same bits under every solver.
+TEST(RigidSimd, OnePointBlocksKeepTheBallsPhysicsAmongBoxes) {
+  for (const RigidSolverType solver : {RigidSolverType::SoftStep, RigidSolverType::SequentialImpulse, RigidSolverType::Tgs}) {
+    RigidBodySystem s({.contacts = {.solver = solver, .sleep = false}});
+    const BallsAmongBoxes scene(s);
+    std::vector<Vec3> pyramid;
+    for (const auto b : scene.boxes) pyramid.push_back(s.center_of_mass(b));
+    std::vector<double> v1(scene.rolling.size()), peak(scene.bouncing.size(), 0.0), u1(scene.resisted.size());
+    std::vector<char> bounced(scene.bouncing.size(), 0);
+    std::size_t most_one_point = 0;
+    for (int i = 0; i < 120; ++i) {
+      s.step(1.0 / 60, kGravity);
+      most_one_point = std::max(most_one_point, s.profile().one_point);
+      if (i == 29) {
+        for (std::size_t k = 0; k < scene.rolling.size(); ++k) v1[k] = glm::dot(s.linear_velocity(scene.rolling[k]), scene.down);
+        for (std::size_t k = 0; k < scene.resisted.size(); ++k) u1[k] = s.linear_velocity(scene.resisted[k]).x;
+      }
+      for (std::size_t k = 0; k < scene.bouncing.size(); ++k) {
+        const double y = s.center_of_mass(scene.bouncing[k]).y - BallsAmongBoxes::kRadius;
+        if (s.linear_velocity(scene.bouncing[k]).y > 0) bounced[k] = 1;
+        if (bounced[k]) peak[k] = std::max(peak[k], y);
+      }
+    }
+    // the solvers that colour put the balls' manifolds in whole one-point blocks: of the 20 +
+    // 25 + 16 + 4 against the ground and the ramp (a colour) 64, the 65th in a ContactBlock's
+    // lane, and the 16 on the boxes (another colour), once all have landed
+    if (solver == RigidSolverType::Tgs) EXPECT_EQ(most_one_point, 0u);
+    else EXPECT_EQ(most_one_point, 80u) << to_string(solver);
+    const double expected = 5.0 / 7 * kG * std::sin(BallsAmongBoxes::kTheta);
+    if (solver != RigidSolverType::SequentialImpulse) {
+      for (std::size_t k = 0; k < scene.rolling.size(); ++k) {
+        const double a = (glm::dot(s.linear_velocity(scene.rolling[k]), scene.down) - v1[k]) / 1.5;
+        EXPECT_NEAR(a, expected, 0.02 * expected) << to_string(solver) << " ball " << k;
+      }
+      const double rebound = BallsAmongBoxes::kE * BallsAmongBoxes::kE * BallsAmongBoxes::kDrop;
+      for (std::size_t k = 0; k < scene.bouncing.size(); ++k)
+        EXPECT_NEAR(peak[k], rebound, 0.03 * rebound) << to_string(solver) << " ball " << k;
+      const double slowing = 5.0 / 7 * BallsAmongBoxes::kC * kG;
+      for (std::size_t k = 0; k < scene.resisted.size(); ++k) {
+        const double a = (u1[k] - s.linear_velocity(scene.resisted[k]).x) / 1.5;
+        EXPECT_NEAR(a, slowing, 1e-3 * slowing) << to_string(solver) << " ball " << k;
+      }
+    }
+    for (const auto b : scene.resting) {
+      EXPECT_LT(glm::length(s.linear_velocity(b)), 1e-3) << to_string(solver);
+      EXPECT_NEAR(s.center_of_mass(b).y, BallsAmongBoxes::kRadius, 1e-4) << to_string(solver);
+    }
+    for (const auto b : scene.on_boxes) {
+      EXPECT_LT(glm::length(s.linear_velocity(b)), 1e-3) << to_string(solver);
+      EXPECT_NEAR(s.center_of_mass(b).y, 1 + BallsAmongBoxes::kRadius, 2e-4) << to_string(solver);
+    }
+    for (std::size_t k = 0; k < scene.boxes.size(); ++k)
+      EXPECT_LT(glm::length(s.center_of_mass(scene.boxes[k]) - pyramid[k]), 1e-3) << to_string(solver) << " box " << k;
+  }
+  const std::vector<RigidSimd> all = paths();
+  for (const RigidSolverType solver : pba::kRigidSolvers) {
+    auto run = [&](RigidSimd path) {
+      RigidBodySystem s({.contacts = {.solver = solver, .sleep = false}});
+      s.set_simd(path);
+      const BallsAmongBoxes scene(s);
+      for (int i = 0; i < 90; ++i) s.step(1.0 / 60, kGravity);
+      return s.hash();
+    };
+    const std::uint64_t scalar = run(RigidSimd::Scalar);
+    for (const RigidSimd p : all) EXPECT_EQ(run(p), scalar) << to_string(solver) << " on " << to_string(p);
+  }
+}
