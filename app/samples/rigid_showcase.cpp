@@ -411,9 +411,11 @@ class MassRatio final : public RigidSample {
     draw_options_.highlight = heavy_;
     draw_options_.highlight_color = colors::red;
     RigidSample::Draw(r, alpha);
-    // the label just over the box's top (a marker ball there read as one more body)
+    // a pin over the box's top with its caption beside it (the caption had sat on the ball)
     const double top = bodies_.shapes(heavy_)[0].shape.half_extents.y;
-    r.text(bodies_.center_of_mass(heavy_) + Vec3(0, top + 0.25, 0), "the heavy box", colors::white, 0.8f, 0.5f);
+    const Vec3 pin = bodies_.center_of_mass(heavy_) + Vec3(0, top + 0.3, 0);
+    r.sphere(pin, 0.12, kMarker);
+    r.text(pin + Vec3(0.2, 0.05, 0), "the heavy box", colors::white, 0.8f, 0.0f);
   }
 
   void DrawUI() override {
