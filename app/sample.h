@@ -129,6 +129,10 @@ class Sample {
   virtual bool OpenFile(const std::string& path) { (void)path; return false; }
   /// True when the sample runs its own time steppers and ignores the app's strategy.
   virtual bool OwnsTime() const { return false; }
+  /// Whether the Simulation panel's integrator (Settings::method) drives this sample; the rigid
+  /// body samples integrate with their solver (its settings in their own panel), so the panel
+  /// leaves the choice out for them.
+  virtual bool UsesIntegrator() const { return true; }
 
  protected:
   SampleContext& ctx_;

@@ -144,12 +144,14 @@ void simulation_panel(SampleContext& ctx, const UiFrame& f, UiActions& act) {
   ImGui::SliderInt("substeps", &s.substeps, 1, 32);
   s.substeps = std::clamp(s.substeps, 1, 1000);
   ImGui::EndDisabled();
-  // integrator (used by samples that run their own steppers, too)
-  ImGui::SetNextItemWidth(-90);
-  if (ImGui::BeginCombo("integrator", std::string(label(s.method)).c_str())) {
-    for (Method m : kAllMethods)
-      if (ImGui::Selectable(std::string(label(m)).c_str(), m == s.method)) s.method = m;
-    ImGui::EndCombo();
+  // integrator (used by samples that run their own steppers, too; not by the rigid bodies')
+  if (!f.sample || f.sample->UsesIntegrator()) {
+    ImGui::SetNextItemWidth(-90);
+    if (ImGui::BeginCombo("integrator", std::string(label(s.method)).c_str())) {
+      for (Method m : kAllMethods)
+        if (ImGui::Selectable(std::string(label(m)).c_str(), m == s.method)) s.method = m;
+      ImGui::EndCombo();
+    }
   }
   ImGui::BeginDisabled(own);
   float scale = static_cast<float>(st.time_scale);

@@ -66,6 +66,8 @@ class RigidSample : public Sample {
 
   /// The mouse spring, then one step of the bodies, then AfterStep().
   void Step(double t, double dt) override;
+  /// False: the bodies integrate with their solver, not the panel's integrator.
+  bool UsesIntegrator() const override { return false; }
   /// The bodies (library drawing) and the mouse spring.
   void Draw(Renderer& r, double alpha) override;
   /// Left press: grabs the dynamic body under the cursor; release: lets it go (thrown).

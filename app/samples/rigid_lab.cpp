@@ -66,6 +66,7 @@ class RigidLab final : public Sample {
     build();
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<RigidLab>(ctx); }
+  bool UsesIntegrator() const override { return false; }  // the solvers integrate
 
   void Step(double, double dt) override {
     for (std::size_t k = 0; k < lanes_.size(); ++k) {

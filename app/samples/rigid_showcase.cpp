@@ -125,7 +125,7 @@ class THandle final : public RigidSample {
                   flips_.back() - flips_[flips_.size() - 3]);
     else
       ImGui::Text("flips so far: %zu", flips_.size());
-    trace_.plot("omega", {colors::red, kMarker, colors::blue}, "rad/s (body axes x y z)");
+    trace_.plot("omega", {colors::red, kMarker, colors::blue}, "rad/s about the body axes: x red, y yellow, z blue");
     ImGui::TextWrapped(
         "Spun about its intermediate axis (the stem, yellow ball at its end), the T-handle turns over every "
         "half period and back, while its angular momentum (green arrow) stays fixed. The rotation is integrated "
@@ -281,7 +281,7 @@ class Rain final : public RigidSample {
     ImGui::SetNextItemWidth(-110);
     if (ImGui::SliderInt("bodies", &count_, 1, 20000, "%d", ImGuiSliderFlags_Logarithmic)) count_ = std::max(count_, 1);
     Readout();
-    trace_.plot("sleep", {colors::blue, colors::grey}, "bodies awake, asleep");
+    trace_.plot("sleep", {colors::blue, colors::grey}, "bodies awake (blue), asleep (grey)");
     ImGui::TextWrapped(
         "Bodies touching each other form islands; an island whose bodies have all been slower than the sleep "
         "tolerances for half a second falls asleep (drawn faded) and costs nothing until something fast comes "
@@ -423,7 +423,7 @@ class MassRatio final : public RigidSample {
     ImGui::SetNextItemWidth(-110);
     if (ImGui::SliderFloat("mass ratio", &ratio_, 1, 10000, "%.0f : 1", ImGuiSliderFlags_Logarithmic)) Restart();
     if (!trace_.t.empty()) ImGui::Text("deepest overlap %.2f mm (the issue's bound: 10 mm)", trace_.y[0].back());
-    trace_.plot("overlap", {colors::red, colors::grey}, "mm");
+    trace_.plot("overlap", {colors::red, colors::grey}, "mm: overlap (red), 10 mm bound (grey)");
     Readout();
     ImGui::TextWrapped("The red box is 'mass ratio' times heavier than each small box below it (its density "
                        "is scaled; it is twice their size). --option ratio=R.");
