@@ -320,7 +320,15 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   for (std::size_t i = 0; i < n; ++i) {
     const Mat3 r = glm::mat3_cast(s.q_[i]);
     Mat3 d(0.0);
-    d[0][0] = s.inv_inertia_[i].x, d[1][1] = s.inv_inertia_[i].y, d[2][2] = s.inv_inertia_[i].z;
+    // the float solvers (not XPBD, which solves in double) see inverse moments at most
+    // kSolverInertiaRatio times the smallest: a frame's inverse inertia in float holds the
+    // rounding of the largest in every entry (2^-24 of it), and a 2 mm x 4 m rod's 2,000,000 : 1
+    // buried its transverse inverse moments under it (12%), the passes' impulses no longer
+    // matched their K, and the rod's spin grew tenfold a pass (docs/rigid-bodies.md)
+    Vec3 m = s.inv_inertia_[i];
+    if (s.settings_.solver != RigidSolverType::Xpbd)
+      m = glm::min(m, Vec3(kSolverInertiaRatio * std::min({m.x, m.y, m.z})));
+    d[0][0] = m.x, d[1][1] = m.y, d[2][2] = m.z;
     // a sleeping body holds still like a static one until something wakes it
     inv_inertia[i] = s.asleep_[i] ? Mat3(0.0) : r * d * glm::transpose(r);
   }
@@ -905,7 +913,7 @@ void RigidContacts::update_separations(RigidBodySystem& s) {
     for (int l = 0; l < blocks[b].lanes; ++l) separation_lane(blocks[b], anchors[b], l, r);
 }
 
-void RigidContacts::restitution(RigidBodySystem& s) {
+void RigidContacts::restitution(RigidBodySystem& s, double dt, const Vec3& gravity) {
   const double threshold = s.settings_.restitution_threshold;
   const BodyArrays r = arrays(s);
   for (const LaneRef& x : restitution_lanes) {
@@ -914,6 +922,86 @@ void RigidContacts::restitution(RigidBodySystem& s) {
     else
       restitution_lane(blocks[x.block], static_cast<int>(x.lane), x.restitution, threshold,
                        s.settings_.manifold_iterations, r);
+  }
+  // (s.v_, s.w_ and s.q0_ still hold the step's start: finish_velocities has not run)
+  if (restitution_lanes.empty()) return;
+  find_bounces(s, dt, gravity, true, s.v_.data(), s.w_.data(), s.q0_.data());
+  bound_bounces(s, true);
+}
+
+namespace {
+
+// kinetic energy of a body of inverse mass im and principal moments `inertia` with velocity v
+// and angular velocity wb in its principal frame (J)
+double kinetic(double im, const Vec3& inertia, const Vec3& v, const Vec3& wb) {
+  return 0.5 * glm::dot(v, v) / im + 0.5 * glm::dot(wb, inertia * wb);
+}
+
+}  // namespace
+
+void RigidContacts::find_bounces(RigidBodySystem& s, double h, const Vec3& gravity, bool from_lanes, const Vec3* v,
+                                 const Vec3* w, const Quat* q) {
+  bounces.clear();
+  if (!from_lanes && std::none_of(pairs.begin(), pairs.end(), [](const ContactPair& c) { return c.restitution != 0; }))
+    return;
+  const std::size_t n = s.type_.size();
+  auto dynamic = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
+  auto moves = [&](std::uint32_t i) { return s.type_[i] == BodyType::Kinematic || dynamic(i); };
+  // the bodies that touch a body that moves (by any manifold, with restitution or not)
+  shared.assign(n, 0);
+  for (const ContactPair& c : pairs)
+    if (moves(c.a) && moves(c.b)) shared[c.a] = shared[c.b] = 1;
+  auto add = [&](std::uint32_t i) {
+    if (i >= n || !dynamic(i) || shared[i] != 0) return;
+    shared[i] = 2;
+    // the free motion: the velocity under gravity and force, the angular velocity with the
+    // torque's turn in the body frame (the free rotation keeps the energy of the rest; damping
+    // only takes energy, so it is left out)
+    const double im = s.inv_mass_[i];
+    const Vec3& inertia = s.inertia_[i];
+    const Vec3 vf = v[i] + h * (s.gravity_scale_[i] * gravity + im * s.force_[i]);
+    const Vec3 wb = glm::conjugate(q[i]) * w[i];
+    const Vec3 wf = wb + h * (s.inv_inertia_[i] * (glm::conjugate(q[i]) * s.torque_[i]));
+    bounces.push_back({i, std::max(kinetic(im, inertia, v[i], wb), kinetic(im, inertia, vf, wf)), vf, wf});
+  };
+  if (from_lanes) {
+    for (const LaneRef& x : restitution_lanes) {
+      if (x.one) add(ones[x.block].a[x.lane]), add(ones[x.block].b[x.lane]);
+      else add(blocks[x.block].a[x.lane]), add(blocks[x.block].b[x.lane]);
+    }
+  } else {
+    for (const ContactPair& c : pairs)
+      if (c.restitution != 0) add(c.a), add(c.b);
+  }
+}
+
+void RigidContacts::bound_bounces(RigidBodySystem& s, bool from_rows) {
+  for (const Bounce& b : bounces) {
+    const std::uint32_t i = b.body;
+    const Vec3 v = from_rows ? Vec3(rows[i].v[0], rows[i].v[1], rows[i].v[2]) : s.v_[i];
+    const Vec3 w = from_rows ? Vec3(rows[i].w[0], rows[i].w[1], rows[i].w[2]) : s.w_[i];
+    const double im = s.inv_mass_[i];
+    const Vec3& inertia = s.inertia_[i];
+    const Quat& q = s.q_[i];
+    const Vec3 wb = glm::conjugate(q) * w;
+    const double now = kinetic(im, inertia, v, wb);
+    // (above the bound by more than rounding and the free rotation's energy error, 1e-6 of it:
+    // at the bound itself, a body touching nothing that stops it, the step's own integration
+    // and this one's differ in the last bits)
+    if (!(now > b.bound * (1 + 1e-6))) continue;
+    // E(f) = E0 + f B + f^2 A from the free motion (E0 <= bound) along the contacts' change
+    // (dv, dwb); the largest f in [0, 1] with E(f) = bound (E(1) = now > bound)
+    const Vec3 dv = v - b.v, dwb = wb - b.wb;
+    const double a = kinetic(im, inertia, dv, dwb);
+    const double bb = glm::dot(b.v, dv) / im + glm::dot(b.wb, inertia * dwb);
+    const double c = kinetic(im, inertia, b.v, b.wb) - b.bound;  // <= 0
+    const double f = std::clamp((-bb + std::sqrt(std::max(bb * bb - 4 * a * c, 0.0))) / (2 * a), 0.0, 1.0);
+    const Vec3 vf = b.v + f * dv, wf = q * (b.wb + f * dwb);
+    if (from_rows) {
+      for (int k = 0; k < 3; ++k) rows[i].v[k] = vf[k], rows[i].w[k] = wf[k];
+    } else {
+      s.v_[i] = vf, s.w_[i] = wf;
+    }
   }
 }
 

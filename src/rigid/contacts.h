@@ -419,8 +419,36 @@ struct RigidContacts {
   /// from impulses too large or too small by their ratio (a 5-stack switched from sequential
   /// impulses to TGS was kicked to 0.19 m/s).
   void carry_impulses(double h);
-  /// Restitution for points that approached faster than the threshold.
-  void restitution(RigidBodySystem& s);
+  /// Restitution for points that approached faster than the threshold, then the energy bound
+  /// of the bodies that bounced off fixed bodies only (bound_bounces; dt: the step, s).
+  void restitution(RigidBodySystem& s, double dt, const Vec3& gravity);
+  /// The bodies whose every manifold this step is against bodies that do not move (static or
+  /// asleep; not kinematic, not awake dynamic) and one of whose manifolds has restitution, into
+  /// `bounces`, with their free motion over the next `h` seconds (under gravity, forces and
+  /// torques, from the velocities v, w at orientations q, the system's now) and its energy
+  /// bound. from_lanes: the manifolds of restitution_lanes (the impulse solvers); otherwise
+  /// the pairs (XPBD).
+  void find_bounces(RigidBodySystem& s, double h, const Vec3& gravity, bool from_lanes, const Vec3* v,
+                    const Vec3* w, const Quat* q);
+  /// Each of `bounces`' bodies whose kinetic energy is now above its bound gets its velocities
+  /// at the free motion plus the largest fraction of the contacts' change from it that keeps
+  /// it at the bound (the root of a quadratic). rows: the velocities are the solver's rows
+  /// (else the system's arrays).
+  void bound_bounces(RigidBodySystem& s, bool rows);
+  // A collision with bodies that do not move cannot leave a body with more kinetic energy (in
+  // their frame) than the larger of what it had and what its free motion would have had (a
+  // bounce with e <= 1 gives back at most what the impact took). The solvers' passes over the
+  // several points of a slender body's manifold can: a thin rod's end (4 points 2 mm apart,
+  // principal moments 2,000,000 : 1) gained a thousandfold in a few bounces
+  // (docs/rigid-bodies.md). Dynamic neighbours are left out: energy passes legitimately
+  // through a chain (Newton's cradle).
+  struct Bounce {
+    std::uint32_t body;
+    double bound;  // max(kinetic energy now, after the free motion) (J)
+    Vec3 v, wb;    // the free motion's velocity (m/s) and angular velocity in the body frame (rad/s)
+  };
+  std::vector<Bounce> bounces;
+  std::vector<std::uint8_t> shared;  // by body, scratch of find_bounces (1: touches a body that moves; 2: listed)
   /// Sweeps fast bodies (and bullets) against static shapes and puts each back at its first
   /// time of impact (continuous.cpp).
   void continuous(RigidBodySystem& s);

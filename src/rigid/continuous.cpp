@@ -344,8 +344,12 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     if (toi >= 1) continue;
     // back to the first contact, moving as the solver left it (but not on into a shape its
     // core started the step touching: the next step's contact would not stop it either)
+    // (the angular velocity turned back with the body, as its frame's: kept in world axes, a
+    // rod spinning 84 rad/s about its long axis put back 0.17 rad gained 36% of its energy)
+    const Quat back = glm::normalize(glm::slerp(w.q0, w.q1, toi));
     s.com_[i] = w.c0 + toi * (w.c1 - w.c0);
-    s.q_[i] = glm::normalize(glm::slerp(w.q0, w.q1, toi));
+    s.w_[i] = back * (glm::conjugate(s.q_[i]) * s.w_[i]);
+    s.q_[i] = back;
     if (toi == 0) s.v_[i] -= std::max(0.0, glm::dot(s.v_[i], into)) * into;
     ++continuous_hits;
   }

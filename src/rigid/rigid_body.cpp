@@ -675,7 +675,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
     integrate_positions(dt, c.rows.data(), c.motion.data());
   }
   if (settings_.solver != RigidSolverType::Xpbd) {
-    c.restitution(*this);
+    c.restitution(*this, dt, gravity);
     c.finish_velocities(*this);  // the solver's rows back to the system's arrays
   }
   const double solver_end = total.seconds();

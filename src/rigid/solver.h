@@ -29,6 +29,11 @@ inline constexpr int kLanes = 16;
 /// Colours a band of the constraint graph may use (contact_solver.cpp, RigidContacts::color):
 /// a manifold whose body has this many in its band already goes to the overflow.
 inline constexpr int kBandColors = 64;
+/// The largest ratio of a body's principal moments of inertia the float passes see (the soft
+/// step, sequential impulses, TGS): a larger one is taken at this ratio (its smallest moment
+/// raised), which keeps the rounding of the frame's inverse inertia (2^-24 of its largest
+/// entry) under 1e-3 of its smallest inverse moment.
+inline constexpr double kSolverInertiaRatio = 1e4;
 /// The lane of a block that holds no manifold.
 inline constexpr std::uint32_t kNoPair = std::numeric_limits<std::uint32_t>::max();
 

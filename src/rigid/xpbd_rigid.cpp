@@ -218,6 +218,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
   for (int sub = 0; sub < substeps; ++sub) {
     // 1. free motion from the saved poses
     for (std::size_t i = 0; i < n; ++i) x_start[i] = s.com_[i], q_start[i] = s.q_[i];
+    find_bounces(s, h, gravity, false, s.v_.data(), s.w_.data(), s.q_.data());
     s.integrate_velocities(h, gravity);
     // the normal velocities before the position solve, for restitution
     for (std::size_t k = 0; k < pairs.size(); ++k) {
@@ -348,6 +349,8 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       c.tangent_impulse[1] = glm::dot(friction, c.t2);
       c.twist_impulse = twist;
     }
+    // 5. the bodies that bounced off fixed bodies only keep at most their energy bound
+    bound_bounces(s, false);
   }
 }
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -217,6 +218,130 @@ TEST(RigidRestitution, EqualMassesSwapVelocitiesInAnElasticHeadOnCollision) {
     EXPECT_NEAR(s.linear_velocity(b).x, 2, 1e-3) << to_string(solver);
     const Vec3 p1 = s.mass(a) * s.linear_velocity(a) + s.mass(b) * s.linear_velocity(b);
     EXPECT_LT(glm::length(p1 - p0) / glm::length(p0), 1e-5) << to_string(solver);
+  }
+}
+
+// Slender bodies bouncing on a static ground (docs/rigid-bodies.md, "Thin rods that bounce"):
+// a collision with a body that does not move cannot raise a body's mechanical energy
+// (kinetic + m g y, the ground at y = 0). A body dropped from rest with its lowest point 0.5 m
+// above the ground, 10 s at 60 Hz: its largest energy after the start and in the last second.
+// (`points`: the shape's extreme points in the body frame, `radius` about them,
+// to place its lowest point.)
+struct Fall {
+  double start = 0, most = 0;  // mechanical energy at the start and the largest after it (J)
+  double last = 0;             // the largest in the last second (J)
+  double allowance = 0;        // m g v h: the bounce's discretisation (see the tests) (J)
+};
+Fall fall(pba::RigidSolverType solver, const pba::ColliderShape& shape, const std::vector<Vec3>& points,
+          double radius, const Quat& q, double e) {
+  RigidBodySystem s({.contacts = {.solver = solver, .sleep = false}});
+  ground(s, 0.5, e);
+  double lowest = 0;
+  for (const Vec3& p : points) lowest = std::min(lowest, (q * p).y - radius);
+  const double drop = 0.5;
+  auto body = s.create({.pose = {{0, drop - lowest, 0}, q},
+                        .shapes = {{.shape = shape, .material = {.restitution = e, .friction = 0.5}}}});
+  const double m = s.mass(body);
+  auto energy = [&] { return s.kinetic_energy(body) + m * kG * s.center_of_mass(body).y; };
+  Fall f;
+  f.start = energy();
+  f.most = -1;
+  for (int i = 0; i < 600; ++i) {
+    s.step(1.0 / 60, kGravity);
+    f.most = std::max(f.most, energy());
+    if (i >= 540) f.last = std::max(f.last, energy());
+  }
+  const double h = solver == pba::RigidSolverType::SequentialImpulse ? 1.0 / 60 : 1.0 / 60 / s.settings().substeps;
+  f.allowance = m * kG * std::sqrt(2 * kG * drop) * h;
+  return f;
+}
+
+std::vector<Vec3> box_corners(const Vec3& half) {
+  std::vector<Vec3> c;
+  for (int i = 0; i < 8; ++i)
+    c.push_back({(i & 1 ? 1 : -1) * half.x, (i & 2 ? 1 : -1) * half.y, (i & 4 ? 1 : -1) * half.z});
+  return c;
+}
+
+// Square rods 1 mm to 2 cm thick (principal moments 8,000,000 to 5,000 : 1), 2 and 4 m long,
+// dropped 0 to 60 degrees from upright, e = 0.2 and 0.5, every solver. The bound is the
+// bounce's discretisation: the restitution gives back the approach speed v of the substep h
+// in which the rod meets the ground, having fallen less than v h in it, so a bounce may keep
+// up to m g v h more than it had (v = sqrt(2 g 0.5 m), the landing's speed; symplectic
+// Euler's flight loses energy). And in the last second each is down: under 2% of its start (a
+// rod lying on the ground has m g t / 2, at most 0.7% of it here; TGS leaves the 2 cm rods
+// rocking on the ground at up to 0.2 m/s, 0.2% of it); dropped upright, a rod may stay standing
+// on its end, an equilibrium. Measured after the fix: none rises
+// above its start, each is down by 10 s (the last second under 0.7%). Before (main at 0d7ff98): 340 of 512 such drops (e 0.2 to 1) rose, the worst
+// by 1e13, and every solver blew some up (the soft step 2 mm x 4 m at e = 0.5: 1e5 within 92
+// steps). Three causes (docs/rigid-bodies.md): the float passes' inverse inertia, the
+// restitution's Newton law at a manifold's four points, and the continuous pass's rewind.
+TEST(RigidRestitution, ThinRodsBouncingOnTheGroundGainNoEnergy) {
+  for (const auto solver : kAll)
+  for (const double t : {0.001, 0.002, 0.006, 0.02})
+  for (const double length : {2.0, 4.0})
+  for (const double e : {0.2, 0.5})
+  for (const double angle : {0.0, 10.0, 30.0, 60.0}) {
+    const Vec3 half{t / 2, length / 2, t / 2};
+    const Fall f = fall(solver, ColliderShape::box(half), box_corners(half), 0,
+                        glm::angleAxis(deg(angle), Vec3(0, 0, 1)), e);
+    const std::string what = std::string(to_string(solver)) + " t = " + std::to_string(t) + " L = " +
+                             std::to_string(length) + " e = " + std::to_string(e) + " angle = " + std::to_string(angle);
+    EXPECT_LT(f.most, f.start + f.allowance) << what;
+    if (angle > 0) EXPECT_LT(f.last, 0.02 * f.start) << what;  // (upright, it may stand: XPBD's 2 cm rods do)
+  }
+}
+
+// Other slender bodies, the same bound: a 4 m x 4 m x 2 mm plate landing on an edge and on a
+// corner, a needle capsule (1 mm radius, 4 m) and a needle cylinder (an octagonal hull of 1 mm
+// radius, 4 m), e = 0.2 and 0.5, every solver.
+TEST(RigidRestitution, ThinPlatesAndNeedlesBouncingOnTheGroundGainNoEnergy) {
+  std::vector<Vec3> octagon;
+  for (int k = 0; k < 16; ++k) {
+    const double a = 2 * pba::kPi * (k % 8) / 8;
+    octagon.push_back({0.001 * std::cos(a), k < 8 ? -2.0 : 2.0, 0.001 * std::sin(a)});
+  }
+  const Vec3 plate{2, 0.001, 2};
+  struct Case {
+    const char* name;
+    ColliderShape shape;
+    std::vector<Vec3> points;
+    double radius;
+    Quat q;
+  };
+  const Quat upright10 = glm::angleAxis(deg(10), Vec3(0, 0, 1));
+  const Case cases[] = {
+      {"plate on an edge", ColliderShape::box(plate), box_corners(plate), 0, glm::angleAxis(deg(80), Vec3(1, 0, 0))},
+      {"plate on a corner", ColliderShape::box(plate), box_corners(plate), 0,
+       glm::angleAxis(deg(30), Vec3(0, 0, 1)) * glm::angleAxis(deg(45), Vec3(1, 0, 0))},
+      {"needle capsule", ColliderShape::capsule(2, 0.001), {{0, -2, 0}, {0, 2, 0}}, 0.001, upright10},
+      {"needle cylinder", ColliderShape::convex(pba::ConvexHull::build(octagon, "needle")), octagon, 0, upright10},
+  };
+  for (const auto solver : kAll)
+  for (const Case& c : cases)
+  for (const double e : {0.2, 0.5}) {
+    const Fall f = fall(solver, c.shape, c.points, c.radius, c.q, e);
+    EXPECT_LT(f.most, f.start + f.allowance) << to_string(solver) << " " << c.name << " e = " << e;
+    EXPECT_LT(f.last, 0.02 * f.start) << to_string(solver) << " " << c.name << " e = " << e;
+  }
+}
+
+// e = 0.9 and 1: the rods of the test above no longer gain without bound (before: up to 1e13,
+// most of them), but some still rise above their start by more than a bounce's discretisation
+// (worst measured: 21% for a 1 mm x 2 m rod at e = 1 under the soft step, 4.5% at e = 0.9; a
+// known limit, docs/rigid-bodies.md). This guards the bound that holds, not a law: under 1.25
+// times the start.
+TEST(RigidRestitution, ElasticThinRodsStayBounded) {
+  for (const auto solver : kAll)
+  for (const double t : {0.001, 0.002, 0.006, 0.02})
+  for (const double length : {2.0, 4.0})
+  for (const double e : {0.9, 1.0})
+  for (const double angle : {0.0, 10.0, 30.0, 60.0}) {
+    const Vec3 half{t / 2, length / 2, t / 2};
+    const Fall f = fall(solver, ColliderShape::box(half), box_corners(half), 0,
+                        glm::angleAxis(deg(angle), Vec3(0, 0, 1)), e);
+    EXPECT_LT(f.most, 1.25 * f.start) << to_string(solver) << " t = " << t << " L = " << length << " e = " << e
+                                      << " angle = " << angle;
   }
 }
 
