@@ -632,10 +632,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0xaba31b76d344a357ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x1357dc66a75eb46eull) << std::hex << si;
-  EXPECT_EQ(tgs, 0xbc28d351674514eeull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0xdc08953a2d95cc0eull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x300423034568f3b4ull) << std::hex << soft;
+  EXPECT_EQ(si, 0xae0f9cb2ec2fc419ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x9423ce3eef61e316ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x6a064b1f292fdbe2ull) << std::hex << xpbd;
 }
 
 }  // namespace
