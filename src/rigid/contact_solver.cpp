@@ -338,6 +338,8 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   pairs_same = pairs_same && pairs.size() == last_count;
   // (room for as many pairs as `pairs` has, so steady state does not allocate)
   if (rolling_mass.size() < pairs.size()) rolling_mass.reserve(pairs.capacity()), rolling_mass.resize(pairs.size());
+  // (room for every body in the energy bound's lists, so a first bounce later does not allocate)
+  bounces.reserve(n), shared.reserve(n);
   if (s.settings_.solver == RigidSolverType::Xpbd) {  // its own passes on the pairs
     colored_once = false;  // (the colours stay those of an earlier step's pairs)
     for (std::uint32_t i = 0; i < pairs.size(); ++i) set_rolling_mass(i);
