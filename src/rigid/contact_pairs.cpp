@@ -226,9 +226,10 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
     std::vector<std::uint32_t>& mine = body_proxies[slot];
     const bool fresh = mine.empty();
     const BodyType type = s.type_[i];
-    const Pose body = s.body_pose(i);
-    // a sleeping body does not move, nor does a static one that was not put elsewhere
+    // a sleeping body does not move, nor does a static one that was not put elsewhere (its
+    // pose, a normalised product, is made only past the sleepers)
     if (!fresh && type == BodyType::Dynamic && s.asleep_[i]) continue;
+    const Pose body = s.body_pose(i);
     if (type == BodyType::Static) {
       const Pose& was = static_pose[slot];
       if (!fresh && was.position == body.position && was.rotation == body.rotation) continue;
