@@ -1,11 +1,12 @@
 // Rigid bodies: contact pairs and their manifolds, with warm-start matching; what a step does
 // before the solver. Each step:
 //   1. every awake body's shapes get their tight bounds (grown by the speculative distance
-//      and the step's motion); a shape that left the fat box the tree holds for it is
-//      re-inserted with a new one (a dynamic AABB tree, Catto 2019; Box2D v3 keeps its
-//      proxies the same way), and sleeping and unmoved static bodies cost nothing;
-//   2. only the re-inserted shapes query the tree, for pairs new to the persistent, sorted
-//      list of shape pairs whose fat boxes overlap;
+//      and the step's motion); a shape that left the fat box the tree holds for it gets a
+//      new one, set where its leaf stands (a dynamic AABB tree, Catto 2019; Box2D v3 enlarges
+//      its proxies in place too), the tree rebuilt when its quality wore down; sleeping and
+//      unmoved static bodies cost nothing;
+//   2. only the shapes with new fat boxes query the tree, for pairs new to the persistent,
+//      sorted list of shape pairs whose fat boxes overlap;
 //   3. sleeping islands that a moving body reaches are woken;
 //   4. each pair whose tight bounds overlap gets its manifolds: carried over from an earlier
 //      step while the two bodies' relative pose stays within the reuse thresholds (Jolt's
