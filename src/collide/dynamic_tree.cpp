@@ -85,6 +85,21 @@ bool DynamicTree::move_proxy(std::int32_t node, const Aabb& box) {
   return true;
 }
 
+void DynamicTree::set_leaf_box(std::int32_t node, const Aabb& box) {
+  if (node < 0 || static_cast<std::size_t>(node) >= nodes_.size() || at(node).height != 0)
+    throw Error("DynamicTree.set_leaf_box: node " + std::to_string(node) + " is not a live leaf");
+  require_valid_box(box, "DynamicTree.set_leaf_box(box)");
+  at(node).box = box.grown(margin_);
+  // each ancestor the union of its children again; one that keeps its box leaves the ones
+  // above it as they were (each was the union of boxes that have not changed)
+  for (std::int32_t n = at(node).parent; n != kNull; n = at(n).parent) {
+    Node& inner = at(n);
+    const Aabb joined = at(inner.child1).box.merged(at(inner.child2).box);
+    if (joined.lo == inner.box.lo && joined.hi == inner.box.hi) break;
+    inner.box = joined;
+  }
+}
+
 void DynamicTree::insert_leaf(std::int32_t leaf) {
   if (root_ == kNull) {
     root_ = leaf;

@@ -482,6 +482,63 @@ TEST(DynamicTree, QueryAndRayCastEqualBruteForce) {
   EXPECT_EQ(calls, 1);
 }
 
+// leaves given new boxes in place (set_leaf_box: no re-insertion) while they move: a heap of
+// boxes falling together, some jittering, a few teleported across the scene. The tree keeps
+// its shape (the same nodes and links), every inner box stays the exact union of its
+// children's (validate(), and the root equals the union of all leaves), and queries find
+// exactly what brute force finds over the fat boxes
+TEST(DynamicTree, LeafBoxesSetInPlaceKeepTheTreeExact) {
+  Rng rng{53};
+  const double side = 25;
+  DynamicTree tree(0.1);
+  std::vector<std::int32_t> node;
+  std::vector<Aabb> box;
+  for (std::uint32_t i = 0; i < 3000; ++i) {
+    box.push_back(random_box(rng, side));
+    node.push_back(tree.create_proxy(box.back(), i));
+  }
+  tree.rebuild();
+  std::vector<Aabb> base = box;
+  std::vector<std::int32_t> links;
+  for (const DynamicTree::Node& n : tree.nodes()) links.insert(links.end(), {n.parent, n.child1, n.child2, n.height});
+  for (int round = 0; round < 30; ++round) {
+    for (std::size_t i = 0; i < box.size(); ++i) {
+      const std::uint32_t r = rng.below(100);
+      const Vec3 d = r < 3    ? Vec3(rng.uniform(-side, side), rng.uniform(-side, side), rng.uniform(-side, side)) * 0.5
+                     : r < 50 ? Vec3(rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05))
+                              : Vec3(0, -0.3, 0);
+      base[i] = {base[i].lo + d, base[i].hi + d};
+      // some a little smaller than the box they move with (a fat box made anew smaller):
+      // ancestors must shrink with them
+      box[i] = r % 7 == 0 ? Aabb{base[i].lo + Vec3(0.02), base[i].hi - Vec3(0.02)} : base[i];
+      tree.set_leaf_box(node[i], box[i]);
+    }
+    tree.validate();
+    Aabb all = tree.fat_box(node[0]);
+    for (std::size_t i = 0; i < box.size(); ++i) {
+      EXPECT_EQ(tree.fat_box(node[i]).lo, box[i].lo - Vec3(0.1)) << i;
+      EXPECT_EQ(tree.fat_box(node[i]).hi, box[i].hi + Vec3(0.1)) << i;
+      all = all.merged(tree.fat_box(node[i]));
+    }
+    // the root is the union itself, not a box that merely contains it
+    ASSERT_EQ(tree.nodes()[static_cast<std::size_t>(tree.root())].box.lo, all.lo) << "round " << round;
+    ASSERT_EQ(tree.nodes()[static_cast<std::size_t>(tree.root())].box.hi, all.hi) << "round " << round;
+    for (int q = 0; q < 50; ++q) {
+      const Aabb b = random_box(rng, side);
+      std::set<std::uint32_t> got, want;
+      tree.query(b, [&](std::uint32_t u) { return got.insert(u).second; });
+      for (std::uint32_t u = 0; u < node.size(); ++u)
+        if (tree.fat_box(node[u]).overlaps(b)) want.insert(u);
+      ASSERT_EQ(got, want) << "round " << round << ", query " << q;
+    }
+  }
+  // nothing was re-inserted or rotated
+  std::vector<std::int32_t> after;
+  for (const DynamicTree::Node& n : tree.nodes()) after.insert(after.end(), {n.parent, n.child1, n.child2, n.height});
+  EXPECT_EQ(after, links);
+  EXPECT_EQ(tree.proxy_count(), box.size());
+}
+
 // the slab test against closed forms
 TEST(DynamicTree, SlabTestMatchesClosedForms) {
   const Aabb unit{{0, 0, 0}, {1, 1, 1}};
@@ -541,8 +598,17 @@ TEST(BroadPhase, BadInputIsNamed) {
   t.create_proxy({{0, 0, 0}, {1, 1, 1}}, 1);
   EXPECT_EQ(error_of([&] { t.destroy_proxy(t.root()); }),
             "DynamicTree.destroy_proxy: node " + std::to_string(t.root()) + " is not a live leaf");
+  EXPECT_EQ(error_of([&] { t.set_leaf_box(t.root(), {{0, 0, 0}, {1, 1, 1}}); }),
+            "DynamicTree.set_leaf_box: node " + std::to_string(t.root()) + " is not a live leaf");
+  EXPECT_EQ(error_of([&] { t.set_leaf_box(a, {{0, nan, 0}, {1, 1, 1}}); }),
+            "DynamicTree.set_leaf_box(box).lo: must be finite, got (0, nan, 0)");
+  EXPECT_EQ(error_of([&] { t.set_leaf_box(a, {{0, 2, 0}, {1, 1, 1}}); }),
+            "DynamicTree.set_leaf_box(box): inverted box, lo (0, 2, 0) > hi (1, 1, 1) on y");
+  EXPECT_EQ(t.fat_box(a).hi, Vec3(1.1, 1.1, 1.1));  // a rejected box leaves the leaf's
   t.destroy_proxy(a);
   EXPECT_EQ(error_of([&] { t.destroy_proxy(a); }), "DynamicTree.destroy_proxy: node " + std::to_string(a) + " is not a live leaf");
+  EXPECT_EQ(error_of([&] { t.set_leaf_box(a, {{0, 0, 0}, {1, 1, 1}}); }),
+            "DynamicTree.set_leaf_box: node " + std::to_string(a) + " is not a live leaf");
   EXPECT_EQ(error_of([] { pba::MovingBoxes m({.count = 0}); }), "MovingBoxesDef.count: must be an integer in [1, 10000000], got 0");
 }
 

@@ -93,6 +93,16 @@ class DynamicTree {
   /// the fat box (nothing changes); otherwise re-inserts the leaf with a new fat box and
   /// returns true.
   bool move_proxy(std::int32_t node, const Aabb& box);
+  /// Gives the leaf `node` the fat box of the tight box `box` (finite, lo <= hi; grown by the
+  /// margin as create_proxy grows it) where it stands: its ancestors' boxes are made the
+  /// union of their children's again up to the first that does not change, and nothing is
+  /// re-inserted or rotated, so the tree's shape stays and its quality may wear (watch
+  /// area_ratio(), rebuild() when it grew). A query finds the same leaves as after
+  /// move_proxy(); the cost is one box a level instead of a search, a removal and two walks
+  /// with rotations (many leaves moving together, as bodies falling in a heap, keep their
+  /// neighbours, and the shape the tree had still suits them). Throws Error if `node` is not
+  /// a live leaf or the box is bad.
+  void set_leaf_box(std::int32_t node, const Aabb& box);
   /// Removes every node.
   void clear();
   /// Rebuilds the whole tree top-down over the leaves' fat boxes by the binned surface-area
