@@ -323,7 +323,8 @@ class World {
 
   /// Gravity (m/s^2), read by every system each tick.
   const Vec3& gravity() const { return gravity_; }
-  /// Changes gravity from the next tick on (finite; throws Error naming the value).
+  /// Changes gravity from the next tick on (finite; throws Error naming the value); the
+  /// rigid bodies asleep under the old gravity wake at that tick.
   void set_gravity(const Vec3& g);
 
   /// The particle system (particles, emitters, forces, integrator).

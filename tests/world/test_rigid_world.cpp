@@ -165,6 +165,29 @@ TEST(RigidStage, SetPoseWakesTheBody) {
   EXPECT_LT(w.pose(e).position.y, 3);
 }
 
+// World::set_gravity wakes the bodies asleep under the old gravity: a box asleep on the
+// ground, with gravity turned to the ground's plane, slides off at g (frictionless: nothing
+// presses it on the ground; within 1% in the first tick, as the rigid stage's test) and is
+// g t^2 / 2 along within symplectic Euler's first-order error after a second. Before, it hung
+// asleep under the new gravity.
+TEST(RigidStage, SetGravityWakesTheSleepers) {
+  World w;
+  ground(w);
+  const EntityId e = w.create_entity({.name = "box", .pose = {{0, 0.5, 0}, pba::Quat(1, 0, 0, 0)}});
+  const RigidBodyId b = w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}));
+  for (int i = 0; i < 120 && w.rigid().awake(b); ++i) w.step();
+  ASSERT_FALSE(w.rigid().awake(b));
+  const double g = 9.81, dt = w.stepper().settings().fixed_dt;
+  w.set_gravity({0, 0, g});
+  w.step();
+  EXPECT_TRUE(w.rigid().awake(b));
+  EXPECT_NEAR(w.rigid().linear_velocity(b).z, g * dt, 0.01 * g * dt);
+  const int n = static_cast<int>(std::lround(1 / dt));
+  for (int i = 1; i < n; ++i) w.step();
+  const double t = n * dt;
+  EXPECT_NEAR(w.pose(e).position.z, g * t * t / 2, g * t * dt);
+}
+
 // Particles dropped on a rigid box land on its top face: at the box's top plus their
 // radius, not at the ground and not inside. The particle contact keeps the sphere outside
 // the surface to float rounding; the box itself sits on the ground within the slop (above).
