@@ -632,10 +632,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0xaba31b76d344a357ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x1357dc66a75eb46eull) << std::hex << si;
-  EXPECT_EQ(tgs, 0xbc28d351674514eeull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0xdc08953a2d95cc0eull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x6a4efed3b682663aull) << std::hex << soft;
+  EXPECT_EQ(si, 0x59edfaec48d40ab5ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0xa8f59c33f214032cull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0xd4af23f284400282ull) << std::hex << xpbd;
 }
 
 }  // namespace
