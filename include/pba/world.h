@@ -410,18 +410,18 @@ class World {
   // ---- queries ----
 
   /// Ray casts, shape casts, overlap and distance queries (collide/query.h) over the
-  /// colliders of the last tick, collision(); a hit's owner is the entity's index. Built on
-  /// the first call after the collision world changed (the same collider count refits the
-  /// tree and does not allocate); not thread-safe, the queries on the result are.
-  const QueryWorld& queries() {
-    if (queries_revision_ != collision_.revision()) {
-      queries_.build(collision_);
-      queries_revision_ = collision_.revision();
-    }
-    return queries_;
-  }
+  /// colliders of the last tick, collision(), as the World stands now: a body or collider
+  /// added, moved (World::set_pose) or destroyed since the tick is where it is now (before
+  /// the first tick, the colliders and bodies as added); a hit's owner is the entity's index.
+  /// Built on the first call after the collision world changed (the same collider count
+  /// refits the tree and does not allocate); not thread-safe, the queries on the result are.
+  const QueryWorld& queries();
 
  private:
+  // collision_ made again from the colliders and the bodies' shapes as they are now (after a
+  // change between ticks: queries() must not report a destroyed entity or a moved body's old pose)
+  void rebuild_collision();
+  bool collision_stale_ = true;            // the World changed since collision_ was made
   QueryWorld queries_;                     // queries(), built from collision_ when stale
   std::uint64_t queries_revision_ = ~0ull;  // collision_.revision() it was built from
   struct EntityRecord {

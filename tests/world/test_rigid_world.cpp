@@ -188,6 +188,46 @@ TEST(RigidStage, SetGravityWakesTheSleepers) {
   EXPECT_NEAR(w.pose(e).position.z, g * t * t / 2, g * t * dt);
 }
 
+// Ray casts see the bodies where they are now, also between ticks: a ray straight down hits
+// a body's top face (its pose's y + 0.5) before the first tick, after ticks, after
+// World::set_pose moves it (not its old place), and not at all once its entity is destroyed
+// (the ground under it then, owned by the ground's entity); a static collider moved by
+// set_pose is hit where it went. Before, queries() read the last tick's collision world: it
+// found nothing before the first tick, the moved body at its old place, and the destroyed
+// entity still (a hit owned by an entity that no longer exists).
+TEST(RigidStage, QueriesSeeTheBodiesWhereTheyAreBetweenTicks) {
+  World w;
+  const EntityId g = ground(w);
+  // the height a ray straight down from y = 10 at (x, 0) meets, and whose it is
+  auto down = [&](double x) { return w.queries().ray_cast({{x, 10, 0}, {0, -1, 0}, 100.0}); };
+  auto top = [&](double x) {
+    const pba::QueryRayHit h = down(x);
+    return h.hit ? 10 - h.distance : -1.0;
+  };
+  EXPECT_NEAR(top(0), 0, 1e-12);
+  const EntityId e = w.create_entity({.name = "box", .pose = {{0, 3, 0}, pba::Quat(1, 0, 0, 0)}});
+  const RigidBodyId b = w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}));
+  EXPECT_NEAR(top(0), 3.5, 1e-6);
+  for (int i = 0; i < 10; ++i) w.step();
+  EXPECT_NEAR(top(0), w.rigid().pose(b).position.y + 0.5, 1e-6);
+  w.set_pose(e, {{2, 3, 0}, pba::Quat(1, 0, 0, 0)});
+  EXPECT_NEAR(top(2), 3.5, 1e-6);
+  EXPECT_NEAR(top(0), 0, 1e-12);
+  EXPECT_EQ(down(2).owner, e.index);
+  w.step();
+  EXPECT_NEAR(top(2), w.rigid().pose(b).position.y + 0.5, 1e-6);
+  w.destroy_entity(e);
+  EXPECT_NEAR(top(2), 0, 1e-12);
+  EXPECT_EQ(down(2).owner, g.index);
+  const EntityId shelf = w.create_entity({.name = "shelf", .pose = {{5, 1, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_collider(shelf, {.shape = ColliderShape::box({0.5, 0.5, 0.5})});
+  EXPECT_NEAR(top(5), 1.5, 1e-6);
+  w.step();
+  w.set_pose(shelf, {{7, 1, 0}, pba::Quat(1, 0, 0, 0)});
+  EXPECT_NEAR(top(7), 1.5, 1e-6);
+  EXPECT_NEAR(top(5), 0, 1e-12);
+}
+
 // Particles dropped on a rigid box land on its top face: at the box's top plus their
 // radius, not at the ground and not inside. The particle contact keeps the sphere outside
 // the surface to float rounding; the box itself sits on the ground within the slop (above).
