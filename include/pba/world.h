@@ -341,8 +341,8 @@ class World {
   /// The entities' rigid-body shapes as world-space colliders (begin and end poses of the
   /// last tick, velocities at the shape origins; every shape type), as
   /// they joined the tick's collision world after the rigid stage. Refreshed when a body is
-  /// added or moved between ticks (then begin = end).
-  std::span<const Collider> body_colliders() const { return body_colliders_; }
+  /// added, moved or destroyed between ticks (then begin = end), on the first read after it.
+  std::span<const Collider> body_colliders() const;
   /// World-space colliders of the last tick (or of now, before the first).
   std::span<const Collider> colliders() const { return world_colliders_; }
   /// The collision world of the last tick: its colliders, then the bodies' shapes
@@ -476,7 +476,13 @@ class World {
   void destroy_mirror(ColliderEntry& c);
   void drive_body(RigidBodyId id, const Pose& target, double dt);
   void step_rigid(double t, double dt);
-  void refresh_body_colliders(bool tick);
+  // the bodies' shapes as colliders: for the tick (swept from body_begin_), or as they are
+  // now (a change between ticks; mutable: body_colliders() makes them on the first read)
+  void refresh_body_colliders(bool tick) const;
+  // a body or collider changed between ticks: the bodies' colliders and the collision world
+  // are made again when next read (making them at each change cost O(n) per body added, and
+  // a scene of 20,000 bodies took 24 s to load)
+  void changed_between_ticks() { body_colliders_stale_ = true, collision_stale_ = true; }
   void update_rigid_touches();
   void update_particle_touches();
   void update_touch_events();
@@ -507,8 +513,9 @@ class World {
   std::vector<EntityId> body_owner_;        // by rigid-body handle slot: the entity (null for mirrors)
   std::size_t entity_bodies_ = 0;           // bodies that belong to entities
   std::vector<Pose> body_begin_;            // by dense body index: the pose at the start of the tick
-  std::vector<Collider> body_colliders_;    // the entities' body shapes this tick
-  std::vector<std::uint32_t> body_collider_owner_;  // parallel: the entity index
+  mutable std::vector<Collider> body_colliders_;    // the entities' body shapes this tick
+  mutable std::vector<std::uint32_t> body_collider_owner_;  // parallel: the entity index
+  mutable bool body_colliders_stale_ = false;  // a body changed since they were made
   std::vector<EntityId> mirror_owner_;      // by rigid-body handle slot: the collider's entity of a stand-in
   // touching entity pairs and sensor overlaps, as sorted keys (smaller index << 32 | larger,
   // sensor << 32 | visitor), this tick's and last tick's, and the events between them

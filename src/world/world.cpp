@@ -248,7 +248,7 @@ void World::destroy_entity(EntityId e) {
     rigid_.destroy(r.body);
     body_owner_[r.body.index] = EntityId{};
     --entity_bodies_;
-    refresh_body_colliders(false);
+    changed_between_ticks();
   }
   if (r.collider != kNone) {
     const std::uint32_t i = r.collider;
@@ -323,7 +323,7 @@ void World::set_pose(EntityId e, const Pose& pose) {
   // a body jumps there (and wakes with its island)
   if (rigid_.valid(r.body)) {
     rigid_.set_pose(r.body, pose);
-    refresh_body_colliders(false);
+    changed_between_ticks();
   }
   // a teleported collider does not sweep
   if (r.collider != kNone) {
@@ -419,7 +419,7 @@ KinematicId World::add_kinematic(EntityId e, const KinematicDef& def) {
   // a kinematic body starts on the path too
   if (rigid_.valid(r.body)) {
     rigid_.set_pose(r.body, r.pose);
-    refresh_body_colliders(false);
+    changed_between_ticks();
   }
   return kinematics_.back().id;
 }
@@ -465,7 +465,7 @@ RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
   reserve_touch_sets();
   // from now on the entity is where its body is (a path's entity stays on its path)
   if (r.kinematic == kNone) r.pose = rigid_.pose(id);
-  refresh_body_colliders(false);
+  changed_between_ticks();
   return id;
 }
 
@@ -710,8 +710,13 @@ void World::sync_mirrors(double dt) {
 // The bodies' shapes as world colliders (planes, spheres, boxes, capsules; hulls and meshes
 // have no point contact yet): at the end pose, from the begin pose of the tick (`tick`) or
 // without a sweep, with the velocity of the body's material point at each shape's origin.
-void World::refresh_body_colliders(bool tick) {
-  if (!tick) collision_stale_ = true;  // a change between ticks: queries() remakes the collision world
+std::span<const Collider> World::body_colliders() const {
+  if (body_colliders_stale_) refresh_body_colliders(false);
+  return body_colliders_;
+}
+
+void World::refresh_body_colliders(bool tick) const {
+  body_colliders_stale_ = false;
   body_colliders_.clear();
   body_collider_owner_.clear();
   const std::size_t n = rigid_.size();
@@ -758,7 +763,8 @@ void World::rebuild_collision() {
     if (!wc.ok()) wc.validate("collider of " + describe(c.owner));
     collision_.add(wc, c.owner.index);
   }
-  // ... then the bodies' shapes (refreshed by every change between ticks)
+  // ... then the bodies' shapes as they are now
+  if (body_colliders_stale_) refresh_body_colliders(false);
   for (std::size_t k = 0; k < body_colliders_.size(); ++k) collision_.add(body_colliders_[k], body_collider_owner_[k]);
 }
 
