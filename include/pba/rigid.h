@@ -362,9 +362,12 @@ class RigidBodySystem {
   /// jumped into). A kinematic body moved this way has no velocity: what rests on it is not
   /// carried by friction (give it a velocity for that).
   void set_pose(RigidBodyId id, const Pose& pose);
-  /// Sets the centre of mass velocity and the angular velocity (validated).
+  /// Sets the centre of mass velocity and the angular velocity (validated) and wakes the
+  /// body; a static body never moves, so on one it only validates (make it kinematic to move it).
   void set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular);
   /// Adds a force (N) at world point `p` (m) for the next step (a torque (p - com) x F too).
+  /// Forces, torques and impulses act on dynamic bodies only: on a static or kinematic body
+  /// (infinite mass) they are validated and change nothing.
   void apply_force(RigidBodyId id, const Vec3& force, const Vec3& p);
   /// Adds a force (N) at the centre of mass for the next step.
   void apply_force(RigidBodyId id, const Vec3& force);
