@@ -357,12 +357,17 @@ class RigidBodySystem {
   const std::string& name(RigidBodyId id) const;
 
   /// Moves a body (validated as RigidBodyDef::pose: a unit rotation, a position within the
-  /// float range) and wakes it; a static body moved also wakes the sleeping bodies its shapes'
-  /// bounds reach before or after the move (what rested on it).
+  /// float range) and wakes it; a static or kinematic body moved also wakes the sleeping
+  /// bodies its shapes' bounds reach before or after the move (what rested on it, what it
+  /// jumped into). A kinematic body moved this way has no velocity: what rests on it is not
+  /// carried by friction (give it a velocity for that).
   void set_pose(RigidBodyId id, const Pose& pose);
-  /// Sets the centre of mass velocity and the angular velocity (validated).
+  /// Sets the centre of mass velocity and the angular velocity (validated) and wakes the
+  /// body; a static body never moves, so on one it only validates (make it kinematic to move it).
   void set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular);
   /// Adds a force (N) at world point `p` (m) for the next step (a torque (p - com) x F too).
+  /// Forces, torques and impulses act on dynamic bodies only: on a static or kinematic body
+  /// (infinite mass) they are validated and change nothing.
   void apply_force(RigidBodyId id, const Vec3& force, const Vec3& p);
   /// Adds a force (N) at the centre of mass for the next step.
   void apply_force(RigidBodyId id, const Vec3& force);
@@ -386,7 +391,8 @@ class RigidBodySystem {
   void set_simd(RigidSimd path);
   /// The SIMD path in use (never Best).
   RigidSimd simd() const;
-  /// Advances every body from t to t + dt (s; finite and > 0) under `gravity` (m/s^2).
+  /// Advances every body from t to t + dt (s; finite and > 0) under `gravity` (m/s^2). A
+  /// gravity other than the last step's wakes the sleeping bodies (gravity_scale != 0).
   /// Throws Error if a body's state becomes non-finite, naming the body and the step's end
   /// time; the system then refuses to step again.
   void step(double dt, const Vec3& gravity);
@@ -457,6 +463,7 @@ class RigidBodySystem {
   std::unique_ptr<detail::RigidContacts> contacts_;
   double time_ = 0;
   double last_dt_ = 0;
+  Vec3 gravity_{0, 0, 0};  // the last step's gravity (m/s^2): a change wakes the sleepers
   std::string failure_;
   RigidBodyId failed_{};  // the body failure_ names
   HandlePool<RigidBodyTag> ids_;

@@ -323,7 +323,8 @@ class World {
 
   /// Gravity (m/s^2), read by every system each tick.
   const Vec3& gravity() const { return gravity_; }
-  /// Changes gravity from the next tick on (finite; throws Error naming the value).
+  /// Changes gravity from the next tick on (finite; throws Error naming the value); the
+  /// rigid bodies asleep under the old gravity wake at that tick.
   void set_gravity(const Vec3& g);
 
   /// The particle system (particles, emitters, forces, integrator).
@@ -340,8 +341,8 @@ class World {
   /// The entities' rigid-body shapes as world-space colliders (begin and end poses of the
   /// last tick, velocities at the shape origins; every shape type), as
   /// they joined the tick's collision world after the rigid stage. Refreshed when a body is
-  /// added or moved between ticks (then begin = end).
-  std::span<const Collider> body_colliders() const { return body_colliders_; }
+  /// added, moved or destroyed between ticks (then begin = end), on the first read after it.
+  std::span<const Collider> body_colliders() const;
   /// World-space colliders of the last tick (or of now, before the first).
   std::span<const Collider> colliders() const { return world_colliders_; }
   /// The collision world of the last tick: its colliders, then the bodies' shapes
@@ -409,18 +410,18 @@ class World {
   // ---- queries ----
 
   /// Ray casts, shape casts, overlap and distance queries (collide/query.h) over the
-  /// colliders of the last tick, collision(); a hit's owner is the entity's index. Built on
-  /// the first call after the collision world changed (the same collider count refits the
-  /// tree and does not allocate); not thread-safe, the queries on the result are.
-  const QueryWorld& queries() {
-    if (queries_revision_ != collision_.revision()) {
-      queries_.build(collision_);
-      queries_revision_ = collision_.revision();
-    }
-    return queries_;
-  }
+  /// colliders of the last tick, collision(), as the World stands now: a body or collider
+  /// added, moved (World::set_pose) or destroyed since the tick is where it is now (before
+  /// the first tick, the colliders and bodies as added); a hit's owner is the entity's index.
+  /// Built on the first call after the collision world changed (the same collider count
+  /// refits the tree and does not allocate); not thread-safe, the queries on the result are.
+  const QueryWorld& queries();
 
  private:
+  // collision_ made again from the colliders and the bodies' shapes as they are now (after a
+  // change between ticks: queries() must not report a destroyed entity or a moved body's old pose)
+  void rebuild_collision();
+  bool collision_stale_ = true;            // the World changed since collision_ was made
   QueryWorld queries_;                     // queries(), built from collision_ when stale
   std::uint64_t queries_revision_ = ~0ull;  // collision_.revision() it was built from
   struct EntityRecord {
@@ -475,7 +476,13 @@ class World {
   void destroy_mirror(ColliderEntry& c);
   void drive_body(RigidBodyId id, const Pose& target, double dt);
   void step_rigid(double t, double dt);
-  void refresh_body_colliders(bool tick);
+  // the bodies' shapes as colliders: for the tick (swept from body_begin_), or as they are
+  // now (a change between ticks; mutable: body_colliders() makes them on the first read)
+  void refresh_body_colliders(bool tick) const;
+  // a body or collider changed between ticks: the bodies' colliders and the collision world
+  // are made again when next read (making them at each change cost O(n) per body added, and
+  // a scene of 20,000 bodies took 24 s to load)
+  void changed_between_ticks() { body_colliders_stale_ = true, collision_stale_ = true; }
   void update_rigid_touches();
   void update_particle_touches();
   void update_touch_events();
@@ -506,8 +513,9 @@ class World {
   std::vector<EntityId> body_owner_;        // by rigid-body handle slot: the entity (null for mirrors)
   std::size_t entity_bodies_ = 0;           // bodies that belong to entities
   std::vector<Pose> body_begin_;            // by dense body index: the pose at the start of the tick
-  std::vector<Collider> body_colliders_;    // the entities' body shapes this tick
-  std::vector<std::uint32_t> body_collider_owner_;  // parallel: the entity index
+  mutable std::vector<Collider> body_colliders_;    // the entities' body shapes this tick
+  mutable std::vector<std::uint32_t> body_collider_owner_;  // parallel: the entity index
+  mutable bool body_colliders_stale_ = false;  // a body changed since they were made
   std::vector<EntityId> mirror_owner_;      // by rigid-body handle slot: the collider's entity of a stand-in
   // touching entity pairs and sensor overlaps, as sorted keys (smaller index << 32 | larger,
   // sensor << 32 | visitor), this tick's and last tick's, and the events between them

@@ -467,10 +467,12 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   if (!is_finite(pose.position)) require_finite(pose.position, describe(i) + " set_pose position");
   require_float(pose.position, describe(i) + " set_pose position");  // as RigidBodyDef::validate
   if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
-  // a static body moved wakes the sleeping bodies its shapes' bounds reach, before or after
-  // the move (grown by the speculative distance): they rested on it, and nothing else would
-  // wake them (the ground lowered under a sleeping stack left it floating)
-  const bool fixed = type_[i] == BodyType::Static;
+  // a static or kinematic body moved wakes the sleeping bodies its shapes' bounds reach,
+  // before or after the move (grown by the speculative distance): they rested on it, or it
+  // jumped into them, and nothing else would wake them (the ground lowered under a sleeping
+  // stack left it floating; a kinematic wall stepped by set_pose has no velocity, so it went
+  // through a sleeping box as if it were not there)
+  const bool fixed = type_[i] != BodyType::Dynamic;
   Aabb reach{Vec3(std::numeric_limits<double>::infinity()), Vec3(-std::numeric_limits<double>::infinity())};
   if (fixed)
     for (const RigidShapeDef& d : shapes_[i]) reach = reach.merged(bounds(d.shape, compose(body_pose(i), d.local)));
@@ -626,6 +628,13 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
       for (std::size_t i = 0; i < type_.size(); ++i)
         if (asleep_[i]) wake_island(i);
     validated_ = settings_;
+  }
+  // a change of gravity wakes the sleepers it acts on (as set_gravity does in Box2D v3): an
+  // island asleep under the old gravity would hang there under the new one
+  if (gravity != gravity_) {
+    for (std::size_t i = 0; i < type_.size(); ++i)
+      if (asleep_[i] && gravity_scale_[i] != 0) wake_island(i);
+    gravity_ = gravity;
   }
   last_dt_ = dt;
   Stopwatch total;

@@ -239,6 +239,7 @@ void World::remove_dense(std::vector<Entry>& v, std::uint32_t EntityRecord::*mem
 
 void World::destroy_entity(EntityId e) {
   EntityRecord& r = record(e, "World::destroy_entity");
+  collision_stale_ = true;
   // components first, in a fixed order
   for (auto& s : systems_) s->on_destroy(e);
   if (particles_.valid(r.particle)) particles_.destroy(r.particle);
@@ -247,7 +248,7 @@ void World::destroy_entity(EntityId e) {
     rigid_.destroy(r.body);
     body_owner_[r.body.index] = EntityId{};
     --entity_bodies_;
-    refresh_body_colliders(false);
+    changed_between_ticks();
   }
   if (r.collider != kNone) {
     const std::uint32_t i = r.collider;
@@ -322,10 +323,13 @@ void World::set_pose(EntityId e, const Pose& pose) {
   // a body jumps there (and wakes with its island)
   if (rigid_.valid(r.body)) {
     rigid_.set_pose(r.body, pose);
-    refresh_body_colliders(false);
+    changed_between_ticks();
   }
   // a teleported collider does not sweep
-  if (r.collider != kNone) world_colliders_[r.collider].begin = world_colliders_[r.collider].end = pose;
+  if (r.collider != kNone) {
+    world_colliders_[r.collider].begin = world_colliders_[r.collider].end = pose;
+    collision_stale_ = true;
+  }
   if (r.kinematic != kNone) {
     // restart the path from here
     kinematics_[r.kinematic].start = time_;
@@ -359,6 +363,7 @@ ColliderId World::add_collider(EntityId e, const ColliderDef& def) {
   colliders_.push_back({e, def, collider_ids_.create(e)});
   colliders_.back().def.shape.normal = c.shape.normal;
   world_colliders_.push_back(c);
+  collision_stale_ = true;
   return colliders_.back().id;
 }
 
@@ -406,12 +411,15 @@ KinematicId World::add_kinematic(EntityId e, const KinematicDef& def) {
   r.velocity = v;
   k.start_pose.rotation = r.pose.rotation;
   // a collider jumps to the path's start instead of sweeping there
-  if (r.collider != kNone) world_colliders_[r.collider].begin = world_colliders_[r.collider].end = r.pose;
+  if (r.collider != kNone) {
+    world_colliders_[r.collider].begin = world_colliders_[r.collider].end = r.pose;
+    collision_stale_ = true;
+  }
   kinematics_.push_back(std::move(k));
   // a kinematic body starts on the path too
   if (rigid_.valid(r.body)) {
     rigid_.set_pose(r.body, r.pose);
-    refresh_body_colliders(false);
+    changed_between_ticks();
   }
   return kinematics_.back().id;
 }
@@ -457,7 +465,7 @@ RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
   reserve_touch_sets();
   // from now on the entity is where its body is (a path's entity stays on its path)
   if (r.kinematic == kNone) r.pose = rigid_.pose(id);
-  refresh_body_colliders(false);
+  changed_between_ticks();
   return id;
 }
 
@@ -512,6 +520,7 @@ EmitterId World::emitter(EntityId e) const { return record(e, "World::emitter").
 ColliderDef& World::collider(EntityId e) {
   EntityRecord& r = record(e, "World::collider");
   if (r.collider == kNone) throw Error("World::collider: " + describe(e) + " has no collider");
+  collision_stale_ = true;  // the caller may change the shape (queries() then shows it)
   return colliders_[r.collider].def;
 }
 
@@ -588,6 +597,7 @@ void World::sync(double /*t*/, double dt) {
   // the colliders' stand-ins among the rigid bodies follow them
   sync_mirrors(dt);
   // the collision world of the tick (validated and flattened once for every client)
+  collision_stale_ = false;
   collision_.clear();
   for (std::size_t i = 0; i < world_colliders_.size(); ++i) {
     const EntityId owner = colliders_[i].owner;
@@ -700,7 +710,13 @@ void World::sync_mirrors(double dt) {
 // The bodies' shapes as world colliders (planes, spheres, boxes, capsules; hulls and meshes
 // have no point contact yet): at the end pose, from the begin pose of the tick (`tick`) or
 // without a sweep, with the velocity of the body's material point at each shape's origin.
-void World::refresh_body_colliders(bool tick) {
+std::span<const Collider> World::body_colliders() const {
+  if (body_colliders_stale_) refresh_body_colliders(false);
+  return body_colliders_;
+}
+
+void World::refresh_body_colliders(bool tick) const {
+  body_colliders_stale_ = false;
   body_colliders_.clear();
   body_collider_owner_.clear();
   const std::size_t n = rigid_.size();
@@ -724,6 +740,32 @@ void World::refresh_body_colliders(bool tick) {
       body_collider_owner_.push_back(owner.index);
     }
   }
+}
+
+const QueryWorld& World::queries() {
+  if (collision_stale_) rebuild_collision();
+  if (queries_revision_ != collision_.revision()) {
+    queries_.build(collision_);
+    queries_revision_ = collision_.revision();
+  }
+  return queries_;
+}
+
+void World::rebuild_collision() {
+  collision_stale_ = false;
+  collision_.clear();
+  // the colliders (sensors push nothing), as sync() adds them, at their poses now ...
+  for (std::size_t i = 0; i < colliders_.size(); ++i) {
+    ColliderEntry& c = colliders_[i];
+    if (c.def.sensor) continue;
+    Collider& wc = world_colliders_[i];
+    wc.shape = c.def.shape, wc.material = c.def.material;
+    if (!wc.ok()) wc.validate("collider of " + describe(c.owner));
+    collision_.add(wc, c.owner.index);
+  }
+  // ... then the bodies' shapes as they are now
+  if (body_colliders_stale_) refresh_body_colliders(false);
+  for (std::size_t k = 0; k < body_colliders_.size(); ++k) collision_.add(body_colliders_[k], body_collider_owner_[k]);
 }
 
 // The rigid stage: kinematic bodies driven to their paths' poses, one step of every body
