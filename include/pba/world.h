@@ -421,6 +421,9 @@ class World {
   // collision_ made again from the colliders and the bodies' shapes as they are now (after a
   // change between ticks: queries() must not report a destroyed entity or a moved body's old pose)
   void rebuild_collision();
+  // collision_ cleared and given the colliders (validated; sensors push nothing): the tick's
+  // collision world starts so (sync), and so does rebuild_collision
+  void collide_colliders();
   bool collision_stale_ = true;            // the World changed since collision_ was made
   QueryWorld queries_;                     // queries(), built from collision_ when stale
   std::uint64_t queries_revision_ = ~0ull;  // collision_.revision() it was built from

@@ -112,7 +112,7 @@ DuplicateKey find_duplicate_key(std::string_view text) {
 }  // namespace
 
 Scene parse_scene(std::string_view text, std::string_view source) {
-  const Context ctx{std::string(source)};
+  const Context ctx{std::string(source), {}};
   // syntax: report line and column
   json doc;
   try {

@@ -597,14 +597,7 @@ void World::sync(double /*t*/, double dt) {
   // the colliders' stand-ins among the rigid bodies follow them
   sync_mirrors(dt);
   // the collision world of the tick (validated and flattened once for every client)
-  collision_stale_ = false;
-  collision_.clear();
-  for (std::size_t i = 0; i < world_colliders_.size(); ++i) {
-    const EntityId owner = colliders_[i].owner;
-    if (colliders_[i].def.sensor) continue;  // a sensor pushes nothing
-    if (!world_colliders_[i].ok()) world_colliders_[i].validate("collider of " + describe(owner));
-    collision_.add(world_colliders_[i], owner.index);
-  }
+  collide_colliders();
   // forcers and emitters follow their entities
   for (std::size_t i = 0; i < forcers_.size(); ++i) {
     const EntityRecord& r = records_[forcers_[i].owner.index];
@@ -751,18 +744,23 @@ const QueryWorld& World::queries() {
   return queries_;
 }
 
-void World::rebuild_collision() {
+void World::collide_colliders() {
   collision_stale_ = false;
   collision_.clear();
-  // the colliders (sensors push nothing), as sync() adds them, at their poses now ...
-  for (std::size_t i = 0; i < colliders_.size(); ++i) {
-    ColliderEntry& c = colliders_[i];
-    if (c.def.sensor) continue;
-    Collider& wc = world_colliders_[i];
-    wc.shape = c.def.shape, wc.material = c.def.material;
-    if (!wc.ok()) wc.validate("collider of " + describe(c.owner));
-    collision_.add(wc, c.owner.index);
+  for (std::size_t i = 0; i < world_colliders_.size(); ++i) {
+    const EntityId owner = colliders_[i].owner;
+    if (colliders_[i].def.sensor) continue;  // a sensor pushes nothing
+    if (!world_colliders_[i].ok()) world_colliders_[i].validate("collider of " + describe(owner));
+    collision_.add(world_colliders_[i], owner.index);
   }
+}
+
+void World::rebuild_collision() {
+  // the colliders at their poses now, with their definitions as they are (World::collider()
+  // may have changed one) ...
+  for (std::size_t i = 0; i < colliders_.size(); ++i)
+    world_colliders_[i].shape = colliders_[i].def.shape, world_colliders_[i].material = colliders_[i].def.material;
+  collide_colliders();
   // ... then the bodies' shapes as they are now
   if (body_colliders_stale_) refresh_body_colliders(false);
   for (std::size_t k = 0; k < body_colliders_.size(); ++k) collision_.add(body_colliders_[k], body_collider_owner_[k]);

@@ -263,6 +263,16 @@ std::vector<Vec3> box_corners(const Vec3& half) {
   return c;
 }
 
+// a square rod t thick and `length` long (m) dropped `angle` degrees from upright (fall())
+Fall rod_fall(pba::RigidSolverType solver, double t, double length, double e, double angle) {
+  const Vec3 half{t / 2, length / 2, t / 2};
+  return fall(solver, ColliderShape::box(half), box_corners(half), 0, glm::angleAxis(deg(angle), Vec3(0, 0, 1)), e);
+}
+std::string rod_case(pba::RigidSolverType solver, double t, double length, double e, double angle) {
+  return std::string(to_string(solver)) + " t = " + std::to_string(t) + " L = " + std::to_string(length) +
+         " e = " + std::to_string(e) + " angle = " + std::to_string(angle);
+}
+
 // Square rods 1 mm to 2 cm thick (principal moments 8,000,000 to 5,000 : 1), 2 and 4 m long,
 // dropped 0 to 60 degrees from upright, e = 0.2 and 0.5, every solver. The bound is the
 // bounce's discretisation: the restitution gives back the approach speed v of the substep h
@@ -282,13 +292,12 @@ TEST(RigidRestitution, ThinRodsBouncingOnTheGroundGainNoEnergy) {
   for (const double length : {2.0, 4.0})
   for (const double e : {0.2, 0.5})
   for (const double angle : {0.0, 10.0, 30.0, 60.0}) {
-    const Vec3 half{t / 2, length / 2, t / 2};
-    const Fall f = fall(solver, ColliderShape::box(half), box_corners(half), 0,
-                        glm::angleAxis(deg(angle), Vec3(0, 0, 1)), e);
-    const std::string what = std::string(to_string(solver)) + " t = " + std::to_string(t) + " L = " +
-                             std::to_string(length) + " e = " + std::to_string(e) + " angle = " + std::to_string(angle);
+    const Fall f = rod_fall(solver, t, length, e, angle);
+    const std::string what = rod_case(solver, t, length, e, angle);
     EXPECT_LT(f.most, f.start + f.allowance) << what;
-    if (angle > 0) EXPECT_LT(f.last, 0.02 * f.start) << what;  // (upright, it may stand: XPBD's 2 cm rods do)
+    if (angle > 0) {  // (upright, it may stand: XPBD's 2 cm rods do)
+      EXPECT_LT(f.last, 0.02 * f.start) << what;
+    }
   }
 }
 
@@ -337,11 +346,8 @@ TEST(RigidRestitution, ElasticThinRodsStayBounded) {
   for (const double length : {2.0, 4.0})
   for (const double e : {0.9, 1.0})
   for (const double angle : {0.0, 10.0, 30.0, 60.0}) {
-    const Vec3 half{t / 2, length / 2, t / 2};
-    const Fall f = fall(solver, ColliderShape::box(half), box_corners(half), 0,
-                        glm::angleAxis(deg(angle), Vec3(0, 0, 1)), e);
-    EXPECT_LT(f.most, 1.25 * f.start) << to_string(solver) << " t = " << t << " L = " << length << " e = " << e
-                                      << " angle = " << angle;
+    const Fall f = rod_fall(solver, t, length, e, angle);
+    EXPECT_LT(f.most, 1.25 * f.start) << rod_case(solver, t, length, e, angle);
   }
 }
 

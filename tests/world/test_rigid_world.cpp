@@ -152,13 +152,19 @@ TEST(RigidStage, WorldCollidersAreStaticGeometry) {
   EXPECT_NEAR(w.pose(e).position.y, 2.75, slop + 1e-4);
 }
 
-// set_pose wakes a sleeping body
-TEST(RigidStage, SetPoseWakesTheBody) {
-  World w;
+// a World with the ground and a one-metre box on it, stepped until the box sleeps (2 s at most)
+std::pair<EntityId, RigidBodyId> box_asleep_on_the_ground(World& w) {
   ground(w);
   const EntityId e = w.create_entity({.name = "box", .pose = {{0, 0.5, 0}, pba::Quat(1, 0, 0, 0)}});
   const RigidBodyId b = w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}));
   for (int i = 0; i < 120 && w.rigid().awake(b); ++i) w.step();
+  return {e, b};
+}
+
+// set_pose wakes a sleeping body
+TEST(RigidStage, SetPoseWakesTheBody) {
+  World w;
+  const auto [e, b] = box_asleep_on_the_ground(w);
   ASSERT_FALSE(w.rigid().awake(b));
   w.set_pose(e, {{0, 3, 0}, pba::Quat(1, 0, 0, 0)});
   EXPECT_TRUE(w.rigid().awake(b));
@@ -173,10 +179,7 @@ TEST(RigidStage, SetPoseWakesTheBody) {
 // asleep under the new gravity.
 TEST(RigidStage, SetGravityWakesTheSleepers) {
   World w;
-  ground(w);
-  const EntityId e = w.create_entity({.name = "box", .pose = {{0, 0.5, 0}, pba::Quat(1, 0, 0, 0)}});
-  const RigidBodyId b = w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}));
-  for (int i = 0; i < 120 && w.rigid().awake(b); ++i) w.step();
+  const auto [e, b] = box_asleep_on_the_ground(w);
   ASSERT_FALSE(w.rigid().awake(b));
   const double g = 9.81, dt = w.stepper().settings().fixed_dt;
   w.set_gravity({0, 0, g});
