@@ -73,12 +73,17 @@ constexpr double kSamePoint = 1e-6;
 // how many pairs ahead make_manifolds() and emit() fetch the pool entries they will read
 constexpr std::size_t kPairsAhead = 4;
 
-// asks for every cache line that the `bytes` from `at` touch (a prefetch: no effect on the
-// results); from the line `at` is in, so an object that starts mid-line gets its last line too
-void prefetch_lines(const void* at, std::size_t bytes) {
+// asks for every cache line that the `Bytes` from `at` touch (a prefetch: no effect on the
+// results); from the line `at` is in, so an object that starts mid-line gets its last line
+// too. The count is known but for that last line, so the loop unrolls (a loop of unknown
+// count was 4% of the 1240 pyramid's manifolds phase by instructions)
+template <std::size_t Bytes>
+void prefetch_lines(const void* at) {
   const auto start = reinterpret_cast<std::uintptr_t>(at);
-  for (std::uintptr_t line = start & ~std::uintptr_t{63}; line < start + bytes; line += 64)
-    __builtin_prefetch(reinterpret_cast<const void*>(line));
+  const std::uintptr_t first = start & ~std::uintptr_t{63};
+  constexpr std::size_t kLines = (Bytes + 63) / 64;
+  for (std::size_t k = 0; k < kLines; ++k) __builtin_prefetch(reinterpret_cast<const void*>(first + 64 * k));
+  if (first + 64 * kLines < start + Bytes) __builtin_prefetch(reinterpret_cast<const void*>(first + 64 * kLines));
 }
 
 }  // namespace
@@ -227,6 +232,9 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
     std::vector<std::uint32_t>& mine = body_proxies[slot];
     const bool fresh = mine.empty();
     const BodyType type = s.type_[i];
+    // (a still body, as every sleeping one is, travels 0, its speed's square root unmade)
+    const double speed = s.v_[i] == Vec3(0) ? 0.0 : glm::length(s.v_[i]);
+    travel[i] = std::min(speed * dt, s.extent_[i]);
     // a sleeping body does not move, nor does a static one that was not put elsewhere (its
     // pose, a normalised product, is made only past the sleepers)
     if (!fresh && type == BodyType::Dynamic && s.asleep_[i]) continue;
@@ -239,8 +247,7 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
     // the tight bounds reach as far as the body can move in the step, and the fat ones two
     // steps' travel ahead, both up to the body's own size (the continuous pass catches faster
     // bodies; fat boxes stretched further fill the pair list)
-    const double speed = glm::length(s.v_[i]);
-    const double reach = cs.speculative_distance + std::min(speed * dt, s.extent_[i]);
+    const double reach = cs.speculative_distance + travel[i];
     const Vec3 ahead = type == BodyType::Static || speed == 0 ? Vec3(0)
                                                                 : std::min(2 * speed * dt, s.extent_[i]) / speed * s.v_[i];
     for (std::uint32_t k = 0; k < s.shapes_[i].size(); ++k) {
@@ -376,13 +383,16 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   last_count = pairs.size();
   emitted = 0;
   pairs_same = true;  // until emit() finds an entry that differs
+  const std::size_t n = s.type_.size();
+  if (rotations.size() < n) rotations.resize(n), rotation_stamp.resize(n, 0), travel.resize(n);
+  if (++stamp == 0) std::fill(rotation_stamp.begin(), rotation_stamp.end(), 0), stamp = 1;
   update_proxies(s, dt);
   find_new_pairs(s);
   wake_touched(s);
   s.profile_.pairs = clock.seconds();
   s.profile_.moved = moved.size();
   clock.reset();
-  make_manifolds(s, dt);
+  make_manifolds(s);
   // last step's entries beyond this step's end: their impulses back to their manifolds
   for (std::size_t k = emitted; k < last_count; ++k)
     if (pairs[k].record != kNoIndex && manifolds[pairs[k].record].last == k) settle(pairs[k].record);
@@ -416,7 +426,7 @@ double carried_points_moved(bool in_b, double reach, const PairCache& c, const V
 
 }  // namespace
 
-void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
+void RigidContacts::make_manifolds(RigidBodySystem& s) {
   const ContactSettings& cs = s.settings_;
   const double cos_half = std::cos(0.5 * cs.reuse_angle);
   const bool reuse = cs.reuse_distance > 0;
@@ -457,11 +467,11 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
   const std::size_t count = shape_pairs.size();
   auto prefetch_ahead = [&](std::size_t k) {
     if (k + 2 * kPairsAhead < count && shape_pairs[k + 2 * kPairsAhead].cache != kNoIndex)
-      prefetch_lines(&caches[shape_pairs[k + 2 * kPairsAhead].cache], sizeof(PairCache));
+      prefetch_lines<sizeof(PairCache)>(&caches[shape_pairs[k + 2 * kPairsAhead].cache]);
     if (k + kPairsAhead < count) {
       const ShapePair& ahead = shape_pairs[k + kPairsAhead];
-      prefetch_lines(&proxies[ahead.proxy_a], sizeof(ShapeProxy));
-      prefetch_lines(&proxies[ahead.proxy_b], sizeof(ShapeProxy));
+      prefetch_lines<sizeof(ShapeProxy)>(&proxies[ahead.proxy_a]);
+      prefetch_lines<sizeof(ShapeProxy)>(&proxies[ahead.proxy_b]);
     }
   };
   for (std::size_t first = 0; first < shape_pairs.size();) {
@@ -476,8 +486,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
       PairPlan& plan = plans[last - first];
       // points are made as far out as the two bodies can close in one step (speculative
       // contacts) (up to each body's size: faster ones are caught by the continuous pass)
-      plan.margin = cs.speculative_distance + std::min(glm::length(s.v_[a]) * dt, s.extent_[a]) +
-                    std::min(glm::length(s.v_[b]) * dt, s.extent_[b]);
+      plan.margin = cs.speculative_distance + travel[a] + travel[b];
       // b's centre and frame in a's frame, against where they were when the manifolds were made
       const Quat qa_inv = glm::conjugate(s.q_[a]);
       plan.rel_position = qa_inv * (s.com_[b] - s.com_[a]);
@@ -507,7 +516,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s, double dt) {
       if (k + kPairsAhead < last && fates[k + kPairsAhead - first] == PairPlan::Fate::Touching) {
         const std::uint32_t ahead = shape_pairs[k + kPairsAhead].cache;
         if (ahead != kNoIndex && caches[ahead].first != kNoIndex)
-          prefetch_lines(&manifolds[caches[ahead].first], offsetof(CachedManifold, normal_impulse));
+          prefetch_lines<offsetof(CachedManifold, normal_impulse)>(&manifolds[caches[ahead].first]);
       }
       ShapePair p = shape_pairs[k];
       const PairPlan::Fate fate = fates[k - first];
@@ -733,7 +742,7 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const std::size_t at_index = emitted++;
   if (at_index == pairs.size()) pairs.emplace_back();
   // last step's entry a few ahead, which the next emits overwrite (read first: the impulses)
-  if (at_index + kPairsAhead < last_count) prefetch_lines(&pairs[at_index + kPairsAhead], sizeof(ContactPair));
+  if (at_index + kPairsAhead < last_count) prefetch_lines<sizeof(ContactPair)>(&pairs[at_index + kPairsAhead]);
   ContactPair& c = pairs[at_index];
   CachedManifold& own = manifolds[record];
   // the colours' key of last step's entry here (color() keeps the colours while all match)
@@ -745,7 +754,8 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const ContactPair& from = own.last == kNoIndex ? c : pairs[own.last];
   const bool held = own.last != kNoIndex;
   double impulse[Manifold::kMaxPoints];
-  for (int k = 0; k < r.count; ++k) impulse[k] = held ? from.normal_impulse[k] : r.normal_impulse[k];
+  // (all four, the unused ones too: a loop of the points' count was a call of memcpy)
+  for (int k = 0; k < Manifold::kMaxPoints; ++k) impulse[k] = held ? from.normal_impulse[k] : r.normal_impulse[k];
   const Vec3 friction = held ? from.friction_impulse() : r.friction;
   const double twist = held ? from.twist_impulse : r.twist;
   const Vec3 rolling = held ? from.rolling_impulse : r.rolling;
@@ -753,7 +763,8 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   own.last = static_cast<std::uint32_t>(at_index);
   c.slot_a = p.slot_a, c.slot_b = p.slot_b, c.shape_a = p.shape_a, c.shape_b = p.shape_b, c.sub = r.sub;
   c.a = a, c.b = b, c.record = record;
-  const Mat3 qa = glm::mat3_cast(s.q_[a]), qb = glm::mat3_cast(s.q_[b]);
+  const Mat3& qa = rotation(s, a);
+  const Mat3& qb = rotation(s, b);
   const Vec3& com_a = s.com_[a];
   const Vec3& com_b = s.com_[b];
   const Vec3 n = (r.normal_in_b ? qb : qa) * r.normal;

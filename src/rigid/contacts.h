@@ -265,6 +265,13 @@ struct RigidContacts {
   std::vector<Manifold> box_manifolds;        // scratch: their manifolds
   std::vector<NarrowPhaseCache> fresh_narrow; // scratch: by box query, the narrow cache of a pair without a cache yet
   std::uint32_t free_proxy = kNoIndex, free_cache = kNoIndex, free_manifold = kNoIndex;
+  // by dense body, for this step's update(): how far the body travels in the step, up to its
+  // size (min(|v| dt, extent), m; update_proxies), which the speculative margins are made of;
+  // and its rotation matrix, made the first time emit() needs it this step (rotation())
+  std::vector<double> travel;
+  std::vector<Mat3> rotations;
+  std::vector<std::uint32_t> rotation_stamp;  // the update() that made rotations[i]
+  std::uint32_t stamp = 0;                    // this update()'s
   std::size_t reinserted_since_check = 0;     // tree moves since its quality was last checked
   double tree_ratio = 0;                      // the tree's area ratio after its last rebuild
 
@@ -278,10 +285,15 @@ struct RigidContacts {
   void update_proxies(RigidBodySystem& s, double dt);
   void find_new_pairs(RigidBodySystem& s);
   void wake_touched(RigidBodySystem& s);
-  void make_manifolds(RigidBodySystem& s, double dt);
+  void make_manifolds(RigidBodySystem& s);
   void collide_pair(RigidBodySystem& s, const ShapePair& p, PairCache& c, std::uint32_t a, std::uint32_t b,
                     double margin, const Manifold* made = nullptr);
   void emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t record, std::uint32_t a, std::uint32_t b);
+  /// Body i's rotation matrix at its orientation now (made once a step: a body is in several manifolds).
+  const Mat3& rotation(const RigidBodySystem& s, std::uint32_t i) {
+    if (rotation_stamp[i] != stamp) rotations[i] = glm::mat3_cast(s.q_[i]), rotation_stamp[i] = stamp;
+    return rotations[i];
+  }
   void settle(std::uint32_t record);
   void settle_all();
   std::uint32_t new_cache();
