@@ -163,7 +163,25 @@ std::uint32_t RigidContacts::new_cache() {
     return k;
   }
   caches.emplace_back();
+  // (the spare pool grows with it, so reorder_caches() does not allocate in a later step)
+  if (caches_spare.capacity() < caches.capacity()) caches_spare.reserve(caches.capacity());
   return static_cast<std::uint32_t>(caches.size() - 1);
+}
+
+// Pairs are made as shapes meet and end as they part, so the pool's order drifts from the
+// pairs' (on the terrain, where bodies land and roll, the loads of the pair caches that the
+// plan makes in pair order went to memory one by one: 31-38% of make_manifolds' samples
+// on a single compare, whatever was prefetched 8 pairs ahead). In pair order the plan reads
+// the pool as one stream. Only the indices change: no result does.
+void RigidContacts::reorder_caches() {
+  caches_spare.clear();
+  for (ShapePair& p : shape_pairs) {
+    if (p.cache == kNoIndex) continue;
+    caches_spare.push_back(caches[p.cache]);
+    p.cache = static_cast<std::uint32_t>(caches_spare.size() - 1);
+  }
+  caches.swap(caches_spare);
+  free_cache = kNoIndex;
 }
 
 std::uint32_t RigidContacts::new_manifold() {
@@ -457,6 +475,9 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
   const PairCache blank{};
   const BatchPath path = simd == SimdPath::Scalar ? BatchPath::Scalar : BatchPath::Best;
   std::size_t built = 0, reused = 0, keep = 0;
+  // the pairs with a cache, and of them those whose cache does not follow the last one's in the pool
+  std::size_t cached = 0, out_of_order = 0;
+  std::uint32_t previous_cache = kNoIndex - 1;
   // the pool entries of the pairs ahead, on their way from the outer caches while this one is
   // planned: the pair cache (both lines: `first` sits in the second) two distances ahead, then
   // its proxies one distance ahead; a touching pair's first cached manifold is asked for when
@@ -512,13 +533,23 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
 
     // the span's pairs in order: ended, asleep or apart pairs as they are, touching ones
     // their manifolds (carried over, made above, or made now) to the solver
+    // (a touching pair's first manifold is asked for a distance before the walk reaches it:
+    // the span's first pairs' before the walk starts. And the walk's last pairs ask again for
+    // the next span's first pool entries, which the plan asked for before this span's walk
+    // (the terrain's mesh pairs, made anew, evict them): without that the plan's first loads of
+    // a span, a pair cache's margin, were 31% of make_manifolds' samples on the terrain)
+    auto prefetch_manifold = [&](std::size_t j) {
+      if (fates[j - first] != PairPlan::Fate::Touching) return;
+      const std::uint32_t ahead = shape_pairs[j].cache;
+      if (ahead != kNoIndex && caches[ahead].first != kNoIndex)
+        prefetch_lines<offsetof(CachedManifold, normal_impulse)>(&manifolds[caches[ahead].first]);
+    };
+    for (std::size_t j = first; j < last && j < first + kPairsAhead; ++j) prefetch_manifold(j);
     for (std::size_t k = first; k < last; ++k) {
-      if (k + kPairsAhead < last && fates[k + kPairsAhead - first] == PairPlan::Fate::Touching) {
-        const std::uint32_t ahead = shape_pairs[k + kPairsAhead].cache;
-        if (ahead != kNoIndex && caches[ahead].first != kNoIndex)
-          prefetch_lines<offsetof(CachedManifold, normal_impulse)>(&manifolds[caches[ahead].first]);
-      }
+      if (k + kPairsAhead < last) prefetch_manifold(k + kPairsAhead);
+      if (k + 2 * kPairsAhead >= last) prefetch_ahead(k);
       ShapePair p = shape_pairs[k];
+      if (p.cache != kNoIndex) out_of_order += p.cache != previous_cache + 1, previous_cache = p.cache, ++cached;
       const PairPlan::Fate fate = fates[k - first];
       // a pair whose bodies sleep (or sleep on a static body) is kept as it is, manifolds and
       // impulses, for when they wake; against a kinematic body that went away it ends
@@ -561,6 +592,8 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
     first = last;
   }
   shape_pairs.resize(keep);
+  // (a pass over the pool, done when an eighth of the pairs read it out of order)
+  if (8 * out_of_order > cached) reorder_caches();
   s.profile_.built = built, s.profile_.reused = reused;
 }
 
@@ -741,8 +774,19 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   // another manifold's), new ones appended
   const std::size_t at_index = emitted++;
   if (at_index == pairs.size()) pairs.emplace_back();
-  // last step's entry a few ahead, which the next emits overwrite (read first: the impulses)
-  if (at_index + kPairsAhead < last_count) prefetch_lines<sizeof(ContactPair)>(&pairs[at_index + kPairsAhead]);
+  // last step's entry two distances ahead, which the next emits overwrite (read first: the
+  // impulses); and of the entry a distance ahead, its record when it is another manifold's
+  // (whenever the entries shifted: 58% of the terrain's emits), which is read, and written
+  // by settle(), before the entry is overwritten (a load from the pool, its order not the
+  // pairs': 27% of emit's samples on the terrain)
+  if (at_index + 2 * kPairsAhead < last_count) prefetch_lines<sizeof(ContactPair)>(&pairs[at_index + 2 * kPairsAhead]);
+  if (at_index + kPairsAhead < last_count) {
+    const std::uint32_t displaced = pairs[at_index + kPairsAhead].record;
+    if (displaced != kNoIndex) {
+      __builtin_prefetch(&manifolds[displaced].last);
+      prefetch_lines<sizeof(CachedManifold) - offsetof(CachedManifold, normal_impulse)>(&manifolds[displaced].normal_impulse);
+    }
+  }
   ContactPair& c = pairs[at_index];
   CachedManifold& own = manifolds[record];
   // the colours' key of last step's entry here (color() keeps the colours while all match)

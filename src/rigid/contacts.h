@@ -243,6 +243,7 @@ struct RigidContacts {
   std::vector<std::uint32_t> moved;           // scratch: proxies re-inserted this step
   std::vector<std::uint8_t> was_moved;        // scratch: 1 for the proxies in `moved`
   std::vector<PairCache> caches;              // pool
+  std::vector<PairCache> caches_spare;        // scratch: the pool in pair order (reorder_caches), as large
   std::vector<CachedManifold> manifolds;      // pool
   std::vector<Manifold> mesh_scratch;         // collide_mesh output
   std::vector<MeshQueryCache> mesh_queries;   // pool: mesh pairs' triangles near the shape
@@ -297,6 +298,8 @@ struct RigidContacts {
   void settle(std::uint32_t record);
   void settle_all();
   std::uint32_t new_cache();
+  /// The pair caches moved into the order of shape_pairs (the free ones dropped).
+  void reorder_caches();
   std::uint32_t new_manifold();
   void free_manifolds(PairCache& c);
   void free_pair(ShapePair& p);
