@@ -533,21 +533,12 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
 
     // the span's pairs in order: ended, asleep or apart pairs as they are, touching ones
     // their manifolds (carried over, made above, or made now) to the solver
-    // (a touching pair's first manifold is asked for a distance before the walk reaches it:
-    // the span's first pairs' before the walk starts. And the walk's last pairs ask again for
-    // the next span's first pool entries, which the plan asked for before this span's walk
-    // (the terrain's mesh pairs, made anew, evict them): without that the plan's first loads of
-    // a span, a pair cache's margin, were 31% of make_manifolds' samples on the terrain)
-    auto prefetch_manifold = [&](std::size_t j) {
-      if (fates[j - first] != PairPlan::Fate::Touching) return;
-      const std::uint32_t ahead = shape_pairs[j].cache;
-      if (ahead != kNoIndex && caches[ahead].first != kNoIndex)
-        prefetch_lines<offsetof(CachedManifold, normal_impulse)>(&manifolds[caches[ahead].first]);
-    };
-    for (std::size_t j = first; j < last && j < first + kPairsAhead; ++j) prefetch_manifold(j);
     for (std::size_t k = first; k < last; ++k) {
-      if (k + kPairsAhead < last) prefetch_manifold(k + kPairsAhead);
-      if (k + 2 * kPairsAhead >= last) prefetch_ahead(k);
+      if (k + kPairsAhead < last && fates[k + kPairsAhead - first] == PairPlan::Fate::Touching) {
+        const std::uint32_t ahead = shape_pairs[k + kPairsAhead].cache;
+        if (ahead != kNoIndex && caches[ahead].first != kNoIndex)
+          prefetch_lines<offsetof(CachedManifold, normal_impulse)>(&manifolds[caches[ahead].first]);
+      }
       ShapePair p = shape_pairs[k];
       if (p.cache != kNoIndex) out_of_order += p.cache != previous_cache + 1, previous_cache = p.cache, ++cached;
       const PairPlan::Fate fate = fates[k - first];
@@ -776,16 +767,13 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   if (at_index == pairs.size()) pairs.emplace_back();
   // last step's entry two distances ahead, which the next emits overwrite (read first: the
   // impulses); and of the entry a distance ahead, its record when it is another manifold's
-  // (whenever the entries shifted: 58% of the terrain's emits), which is read, and written
-  // by settle(), before the entry is overwritten (a load from the pool, its order not the
-  // pairs': 27% of emit's samples on the terrain)
+  // (whenever the entries shifted: 58% of the terrain's emits), whose `last` is read before
+  // the entry is overwritten (a load from the pool, its order not the pairs': 27% of emit's
+  // samples on the terrain)
   if (at_index + 2 * kPairsAhead < last_count) prefetch_lines<sizeof(ContactPair)>(&pairs[at_index + 2 * kPairsAhead]);
   if (at_index + kPairsAhead < last_count) {
     const std::uint32_t displaced = pairs[at_index + kPairsAhead].record;
-    if (displaced != kNoIndex) {
-      __builtin_prefetch(&manifolds[displaced].last);
-      prefetch_lines<sizeof(CachedManifold) - offsetof(CachedManifold, normal_impulse)>(&manifolds[displaced].normal_impulse);
-    }
+    if (displaced != kNoIndex) __builtin_prefetch(&manifolds[displaced].last);
   }
   ContactPair& c = pairs[at_index];
   CachedManifold& own = manifolds[record];
