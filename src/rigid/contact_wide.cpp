@@ -448,9 +448,18 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // problem: one sweep leaves a torque imbalance between the points that rocks tall stacks)
   // (the last sweep apart: after a point's update in it, only the normal velocities of the
   // points still to come are read, and the total impulse is the sum of the last sweep's)
+  // (each point's -mass * mass scale formed once for the sweeps: the same product each sweep
+  // formed before. The rigid and relax passes' impulse scale is zero and their mass scale one:
+  // their `- 0 * lambda` is left out, which changes no bit, since no impulse is ever -0: they
+  // start at +0 or above, and vmax(lambda + j, 0) gives -0 only from -0 + -0)
+  V negm[P];
+  for (int k = 0; k < P; ++k) negm[k] = kMode == kSoft ? -L(c.mass[k]) * mscale[k] : -L(c.mass[k]);
   auto sweep = [&](auto last) {
     for (int k = 0; k < P; ++k) {
-      const V j = -L(c.mass[k]) * mscale[k] * (vn[k] + bias[k]) - iscale[k] * lambda[k];
+      V j;
+      if constexpr (kMode == kSoft) j = negm[k] * (vn[k] + bias[k]) - iscale[k] * lambda[k];
+      else if constexpr (kMode == kRigid) j = negm[k] * (vn[k] + bias[k]);
+      else j = negm[k] * (vn[k] + zero);
       V next = vmax(lambda[k] + j, zero);
       if constexpr (!kBias) next = skip[k] ? lambda[k] : next;
       const V dl = next - lambda[k];
