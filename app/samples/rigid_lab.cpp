@@ -57,11 +57,19 @@ class RigidLab final : public Sample {
       if (scene == keys[i]) scene_ = static_cast<LabScene>(i), found = true;
     if (!found) throw Error("--option scene: expected stack, pyramid, falling, restitution or ramp, got '" + scene + "'");
     settings_.solver = RigidSolverOption(ctx);
-    size_ = static_cast<int>(OptionNumber(ctx, "size", 10, 1, 40));
-    compare_ = OptionNumber(ctx, "compare", 0, 0, 1) != 0;
+    size_ = OptionInteger(ctx, "size", 10, 1, 40);
+    compare_ = OptionFlag(ctx, "compare", false);
     // compared, the copies stay awake by default (a sleeping stack shows nothing)
-    settings_.sleep = OptionNumber(ctx, "sleep", compare_ ? 0 : 1, 0, 1) != 0;
-    passes_ = static_cast<int>(OptionNumber(ctx, "passes", 16, 2, 128));
+    settings_.sleep = OptionFlag(ctx, "sleep", !compare_);
+    passes_ = OptionInteger(ctx, "passes", 16, 2, 128);
+    // the compare mode runs the four solvers at one budget, the single mode one solver at its
+    // own settings: an option of the other mode would be silently ignored, so it is refused
+    if (compare_ && ctx.options.count("solver"))
+      throw Error("--option solver=" + ctx.options.at("solver") +
+                  ": the compare mode (compare=1) runs all four solvers; leave solver out or set compare=0");
+    if (!compare_ && ctx.options.count("passes"))
+      throw Error("--option passes=" + ctx.options.at("passes") +
+                  ": the four solvers' equal budget, used only by the compare mode; add --option compare=1");
     ctx.settings.stepper.fixed_dt = 1.0 / 60.0;
     build();
   }
