@@ -149,7 +149,13 @@ void RigidSample::Draw(Renderer& r, double) {
   draw_options_.palette = palette_;
   bodies_.draw(r, ctx_.draw, draw_options_);
   grab_.Draw(r, bodies_);
-  if (++frames_ % 5 == 0) WriteRigidReport(report_path_, r, frames_, bodies_, ReportBody(), grab_, ReportExtra());
+  if (++frames_ % 5 == 0 && !report_path_.empty()) {
+    // the tick length, so a test sees which step rate the sample runs at
+    char dt[48];
+    std::snprintf(dt, sizeof dt, "dt %.9g", ctx_.settings.stepper.fixed_dt);
+    const std::string extra = ReportExtra();
+    WriteRigidReport(report_path_, r, frames_, bodies_, ReportBody(), grab_, extra.empty() ? dt : dt + (" " + extra));
+  }
 }
 
 RigidBodyId RigidSample::ReportBody() const {

@@ -105,8 +105,8 @@ class RigidSample : public Sample {
 
  private:
   RigidGrab grab_;
-  // the test hook (--option report=FILE): every 5 frames the frame, the grabs so far, and the
-  // report body's centre (world and pixels) and velocity
+  // the test hook (--option report=FILE): every 5 frames the frame, the grabs so far, the
+  // report body's centre (world and pixels) and velocity, and the tick length (dt, s)
   std::string report_path_;
   long long frames_ = 0;
 };
