@@ -808,6 +808,21 @@ void World::step_rigid(double t, double dt) {
     r.velocity = rigid_.velocity_at(id, r.pose.position);
     r.angular_velocity = rigid_.angular_velocity(id);
   }
+  // a collider on the entity of a body that the rigid stage moves follows the body to this
+  // tick's pose: sync() placed it at the entity's pose of the tick's start, a tick behind the
+  // body (a particle riding a rising body sat v dt inside its collider; a sensor on a body
+  // tested last tick's place). It sweeps from there to the body's new pose.
+  bool moved = false;
+  for (std::size_t i = 0; i < colliders_.size(); ++i) {
+    const EntityRecord& r = records_[colliders_[i].owner.index];
+    if (!rigid_.valid(r.body) || r.kinematic != kNone || rigid_.type(r.body) == BodyType::Static) continue;
+    Collider& c = world_colliders_[i];
+    c.end = r.pose;
+    c.velocity = r.velocity;
+    c.angular_velocity = r.angular_velocity;
+    moved = true;
+  }
+  if (moved) collide_colliders();  // the tick's collision world again, with them where they are now
   // this tick's bodies join the collision world
   refresh_body_colliders(true);
   for (std::size_t k = 0; k < body_colliders_.size(); ++k) {
