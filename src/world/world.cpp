@@ -341,6 +341,10 @@ ParticleId World::add_particle(EntityId e, const ParticleDef& def) {
   EntityRecord& r = record(e, "World::add_particle");
   if (!r.particle.is_null() && particles_.valid(r.particle))
     throw Error("World::add_particle: " + describe(e) + " already has a particle");
+  // the body and the particle would both simulate the entity, each writing its pose
+  if (rigid_.valid(r.body))
+    throw Error("World::add_particle: " + describe(e) +
+                " has a rigid body, which moves it; a particle would move it too (give the particle an entity of its own)");
   ParticleDef d = def;
   d.position = r.pose.position + r.pose.rotation * def.position;
   r.particle = particles_.create(d, "particle of " + describe(e));
@@ -445,6 +449,9 @@ ConstraintId World::add_constraint(EntityId e, const ConstraintDef& def) {
 RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
   EntityRecord& r = record(e, "World::add_rigid_body");
   if (rigid_.valid(r.body)) throw Error("World::add_rigid_body: " + describe(e) + " already has a rigid body");
+  if (!r.particle.is_null() && particles_.valid(r.particle))
+    throw Error("World::add_rigid_body: " + describe(e) +
+                " has a particle, which moves it; a body would move it too (give the body an entity of its own)");
   const std::string where = "rigid body of " + describe(e);
   // the definition as given (its pose is relative to the entity), then in the world
   def.validate(where);

@@ -320,6 +320,25 @@ TEST(RigidStage, ClothLandsOnAFallingBox) {
   EXPECT_NEAR(w.pose(e).position.y, 0.5, w.rigid().settings().linear_slop + 1e-4);
 }
 
+// An entity with a particle cannot take a rigid body, nor one with a body a particle: both
+// would move it (before, both were accepted, and the entity went where the particle went,
+// 5.5 m from its body after 1 s, while World::pose was documented as the body's).
+TEST(RigidComponent, AParticleAndABodyOnOneEntityAreRefused) {
+  World w;
+  const EntityId a = w.create_entity({.name = "dot"});
+  w.add_particle(a, {.radius = 0.1});
+  std::string m = error_of([&] { w.add_rigid_body(a, box_def({0.5, 0.5, 0.5})); });
+  EXPECT_NE(m.find("World::add_rigid_body: entity 0 'dot' has a particle"), std::string::npos) << m;
+  EXPECT_FALSE(w.valid(w.rigid_body_id(a)));
+  const EntityId b = w.create_entity({.name = "crate"});
+  w.add_rigid_body(b, box_def({0.5, 0.5, 0.5}));
+  m = error_of([&] { w.add_particle(b, {.radius = 0.1}); });
+  EXPECT_NE(m.find("World::add_particle: entity 1 'crate' has a rigid body"), std::string::npos) << m;
+  EXPECT_EQ(w.particles().size(), 1u);
+  for (int i = 0; i < 10; ++i) w.step();  // the world goes on
+  EXPECT_NEAR(w.pose(b).position.y, w.rigid().pose(w.rigid_body_id(b)).position.y, 0);
+}
+
 // A collider on the entity of a dynamic body follows the body within the tick: a body
 // rising at 3 m/s without gravity carries a 1 m collider box, and a particle resting on the
 // box's top stays at the top plus its radius at the end of every tick, as on a body's own
