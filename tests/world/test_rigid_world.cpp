@@ -344,17 +344,24 @@ TEST(RigidComponent, AParticleAndABodyOnOneEntityAreRefused) {
 // box's top stays at the top plus its radius at the end of every tick, as on a body's own
 // shape (before, the collider sat at the entity's pose of the tick's start, and the particle
 // rode v dt = 5 cm inside it); a cloth laid on it likewise stays at its thickness above the
-// top (to 0.1 mm: its substeps' contacts leave 11 um at most here, against the 5 cm lag). A sensor on a body moving at 2 m/s along x reports a resting particle entity in the
-// tick in which the sensor's face reaches its sphere: (2 - 0.05 - 0.5) / 2 = 0.725 s, the
-// tick to 44/60 s (before: one tick later).
-TEST(RigidStage, AColliderOnABodysEntityFollowsTheBodyInTheSameTick) {
-  World w({.gravity = {0, 0, 0}});
-  const EntityId e = w.create_entity({.name = "lift"});
+// top (to 0.1 mm: its substeps' contacts leave 11 um at most here, against the 5 cm lag).
+// A sensor on a body moving at 2 m/s along x reports a resting particle entity in the tick in
+// which the sensor's face reaches its sphere: (2 - 0.05 - 0.5) / 2 = 0.725 s, the tick to
+// 44/60 s (before: one tick later).
+// (a ball of 10 cm moving at `v` whose entity carries a 1 m World collider box)
+EntityId carrier_of_a_box(World& w, const char* name, const Vec3& v, bool sensor) {
+  const EntityId e = w.create_entity({.name = name});
   RigidBodyDef d;
   d.shapes = {{.shape = ColliderShape::sphere(0.1)}};
-  d.linear_velocity = {0, 3, 0};
+  d.linear_velocity = v;
   w.add_rigid_body(e, d);
-  w.add_collider(e, {.shape = ColliderShape::box(Vec3(0.5)), .material = {.restitution = 0}});
+  w.add_collider(e, {.shape = ColliderShape::box(Vec3(0.5)), .material = {.restitution = 0}, .sensor = sensor});
+  return e;
+}
+
+TEST(RigidStage, AColliderOnABodysEntityFollowsTheBodyInTheSameTick) {
+  World w({.gravity = {0, 0, 0}});
+  const EntityId e = carrier_of_a_box(w, "lift", {0, 3, 0}, false);
   const EntityId p = w.create_entity({.name = "rider"});
   w.add_particle(p, {.position = {0.2, 0.52, 0.2}, .radius = 0.02});
   const EntityId c = w.create_entity({.name = "cloth"});
@@ -373,12 +380,7 @@ TEST(RigidStage, AColliderOnABodysEntityFollowsTheBodyInTheSameTick) {
   }
 
   World s({.gravity = {0, 0, 0}});
-  const EntityId carrier = s.create_entity({.name = "carrier"});
-  RigidBodyDef cd;
-  cd.shapes = {{.shape = ColliderShape::sphere(0.1)}};
-  cd.linear_velocity = {2, 0, 0};
-  s.add_rigid_body(carrier, cd);
-  s.add_collider(carrier, {.shape = ColliderShape::box(Vec3(0.5)), .sensor = true});
+  const EntityId carrier = carrier_of_a_box(s, "carrier", {2, 0, 0}, true);
   const EntityId visitor = s.create_entity({.name = "visitor"});
   s.add_particle(visitor, {.position = {2, 0, 0}, .radius = 0.05});
   int entered = -1;
