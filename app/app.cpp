@@ -105,8 +105,12 @@ void App::load_sample(int index) {
   stop_expected_ = false;
   sample_index_ = index;
   ctx_.option_keys.clear();
+  // a restart keeps the step rate, strategy, substeps and integrator the user has (the
+  // command line's or the panel's): a sample's constructor sets its preferences, which
+  // before overrode --dt and the panel's choices at every R
+  const Settings kept = ctx_.settings;
   sample_ = Samples()[index].create(ctx_);
-  if (restart) camera_ = keep;
+  if (restart) camera_ = keep, ctx_.settings = kept;
   else apply_options_to_settings();
   physics_->attach(sample_.get());
 }

@@ -37,7 +37,7 @@ constexpr Color kMethodColor[] = {colors::green, colors::cyan, colors::purple, c
 class BroadPhaseLab final : public Sample {
  public:
   explicit BroadPhaseLab(SampleContext& ctx) : Sample(ctx) {
-    count_ = static_cast<int>(OptionNumber(ctx, "count", 2000, 100, 20000));
+    count_ = OptionInteger(ctx, "count", 2000, 100, 20000);
     const BroadPhaseMethod m = broad_phase_method_from_string(ctx.option("method", "tree"), "--option method");
     method_ = static_cast<int>(std::find(std::begin(kMethods), std::end(kMethods), m) - std::begin(kMethods));
     flags_.tree = true;

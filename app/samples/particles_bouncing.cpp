@@ -29,7 +29,7 @@ class BouncingBalls final : public Sample {
     // --option restitution=E friction=MU count=N
     params_.restitution = OptionNumber(ctx, "restitution", 0.8, 0, 1);
     params_.friction = OptionNumber(ctx, "friction", 0.2, 0, 2);
-    params_.count = static_cast<int>(OptionNumber(ctx, "count", 8, 1, 100));
+    params_.count = OptionInteger(ctx, "count", 8, 1, 100);
     // a short step so the rebound heights follow e^2 h closely (the panel can change it)
     ctx.settings.stepper.fixed_dt = 1.0 / 240.0;
     ctx.renderer->style.grid_spacing = 0.5f;

@@ -218,6 +218,24 @@ double OptionNumber(const SampleContext& ctx, const std::string& key, double fal
   return x;
 }
 
+int OptionInteger(const SampleContext& ctx, const std::string& key, int fallback, int lo, int hi) {
+  const double x = OptionNumber(ctx, key, fallback, lo, hi);
+  // a count or a size given with a fraction is a mistake, not a number to round
+  if (x != std::floor(x)) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, ": expected an integer in [%d, %d]", lo, hi);
+    throw Error("--option " + key + "=" + ctx.option(key, "") + buf);
+  }
+  return static_cast<int>(x);
+}
+
+bool OptionFlag(const SampleContext& ctx, const std::string& key, bool fallback) {
+  const std::string v = ctx.option(key, "");
+  if (v.empty()) return fallback;
+  if (v != "0" && v != "1") throw Error("--option " + key + "=" + v + ": expected 0 (off) or 1 (on)");
+  return v == "1";
+}
+
 PlotSeries Series(const float* x, const float* y, int count, Color color, float width) {
   PlotSeries s;
   s.x = x, s.y = y, s.count = count, s.color = color, s.width = width;

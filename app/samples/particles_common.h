@@ -68,6 +68,15 @@ void DrawWindField(Renderer& r, const Vec3& wind, const Vec3& lo, const Vec3& hi
 /// when it is not a number in [lo, hi].
 double OptionNumber(const SampleContext& ctx, const std::string& key, double fallback, double lo, double hi);
 
+/// The whole number given by --option key=value (a count, a size), or `fallback`; throws
+/// Error naming the option when it is not an integer in [lo, hi] (`count=2.5` is refused, not
+/// cut to 2).
+int OptionInteger(const SampleContext& ctx, const std::string& key, int fallback, int lo, int hi);
+
+/// The switch given by --option key=0 or key=1, or `fallback`; throws Error naming the option
+/// for any other value (`compare=0.5` is refused, not read as on).
+bool OptionFlag(const SampleContext& ctx, const std::string& key, bool fallback);
+
 /// A plot series from its arrays, colour and width.
 PlotSeries Series(const float* x, const float* y, int count, Color color, float width);
 

@@ -23,7 +23,7 @@ class Forcers final : public Sample {
  public:
   explicit Forcers(SampleContext& ctx) : Sample(ctx) {
     // --option cannon=0|1 rate=N fan=MN vortex=MN attractor=MN (strengths in millinewtons)
-    params_.air_cannon = OptionNumber(ctx, "cannon", 0, 0, 1) > 0.5;
+    params_.air_cannon = OptionFlag(ctx, "cannon", false);
     params_.rate = OptionNumber(ctx, "rate", 3000, 0, 50000);
     params_.fan_strength = 1e-3 * OptionNumber(ctx, "fan", 40, -60, 60);
     params_.vortex_strength = 1e-3 * OptionNumber(ctx, "vortex", 10, -60, 60);

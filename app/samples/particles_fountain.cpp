@@ -24,11 +24,11 @@ class Fountain final : public Sample {
  public:
   explicit Fountain(SampleContext& ctx) : Sample(ctx) {
     // --option sparks=0|1 rate=N lifetime=S prewarm=0|1 point=PX
-    params_.sparks = OptionNumber(ctx, "sparks", 0, 0, 1) > 0.5;
+    params_.sparks = OptionFlag(ctx, "sparks", false);
     preset(params_.sparks);
     params_.rate = OptionNumber(ctx, "rate", params_.rate, 0, 200000);
     params_.lifetime = OptionNumber(ctx, "lifetime", params_.lifetime, 0.05, 20);
-    prewarm_ = OptionNumber(ctx, "prewarm", 1, 0, 1) > 0.5;
+    prewarm_ = OptionFlag(ctx, "prewarm", true);
     point_px_ = static_cast<float>(OptionNumber(ctx, "point", point_px_, 1, 8));
     ctx.renderer->style.grid_spacing = 0.5f;
     ctx.camera->frame({0.0f, 1.5f, 0.0f}, 4.2f, 0.35f, 0.28f);

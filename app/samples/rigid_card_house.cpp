@@ -26,7 +26,7 @@ constexpr Vec3 kLauncher{3.0, 0.45, 0};   // where the ball starts (m)
 class CardHouse final : public RigidSample {
  public:
   explicit CardHouse(SampleContext& ctx) : RigidSample(ctx) {
-    levels_ = static_cast<int>(OptionNumber(ctx, "levels", 4, 1, 8));
+    levels_ = OptionInteger(ctx, "levels", 4, 1, 8);
     knock_at_ = OptionNumber(ctx, "knock_at", -1, -1, 1e6);
     // playing cards: white faces, one red
     palette_ = {Color::hex(0xf4f1ea), Color::hex(0xe8e2d4), Color::hex(0xf4f1ea), Color::hex(0xd9473f)};

@@ -28,7 +28,7 @@ class ClothOnBoxSample final : public Sample {
  public:
   explicit ClothOnBoxSample(SampleContext& ctx) : Sample(ctx) {
     settings_.solver = RigidSolverOption(ctx);
-    n_ = static_cast<int>(OptionNumber(ctx, "n", 31, 2, 101));
+    n_ = OptionInteger(ctx, "n", 31, 2, 101);
     report_path_ = ctx.option("report", "");
     ctx.settings.stepper.fixed_dt = 1.0 / 60.0;
     ctx.renderer->style.grid_spacing = 0.5f;

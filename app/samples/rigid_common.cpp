@@ -60,12 +60,13 @@ void RigidSolverKnobs(ContactSettings& s) {
 
 bool RigidGrab::Press(RigidBodySystem& bodies, const Vec3& o, const Vec3& d, double max_distance) {
   grab_ = {};
-  // the nearest dynamic body's shape under the cursor
+  // the nearest shape under the cursor, of any body: a static wall or a kinematic paddle in
+  // front hides what is behind it, so a press on it grabs nothing (it used to reach through
+  // to the nearest dynamic body behind)
   const Ray ray{o, glm::normalize(d), max_distance};
   double best = ray.max_distance;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     const RigidBodyId id = bodies.id_at(i);
-    if (bodies.type(id) != BodyType::Dynamic) continue;
     const Pose body = bodies.pose(id);
     for (const RigidShapeDef& s : bodies.shapes(id)) {
       const RayHit hit = ray_cast(s.shape, compose(body, s.local), ray);
@@ -75,6 +76,8 @@ bool RigidGrab::Press(RigidBodySystem& bodies, const Vec3& o, const Vec3& d, dou
       }
     }
   }
+  // only a dynamic body can be pulled
+  if (bodies.valid(grab_.body) && bodies.type(grab_.body) != BodyType::Dynamic) grab_ = {};
   if (!bodies.valid(grab_.body)) return false;
   bodies.wake(grab_.body);
   ++grabs_;
@@ -146,7 +149,13 @@ void RigidSample::Draw(Renderer& r, double) {
   draw_options_.palette = palette_;
   bodies_.draw(r, ctx_.draw, draw_options_);
   grab_.Draw(r, bodies_);
-  if (++frames_ % 5 == 0) WriteRigidReport(report_path_, r, frames_, bodies_, ReportBody(), grab_, ReportExtra());
+  if (++frames_ % 5 == 0 && !report_path_.empty()) {
+    // the tick length, so a test sees which step rate the sample runs at
+    char dt[48];
+    std::snprintf(dt, sizeof dt, "dt %.9g", ctx_.settings.stepper.fixed_dt);
+    const std::string extra = ReportExtra();
+    WriteRigidReport(report_path_, r, frames_, bodies_, ReportBody(), grab_, extra.empty() ? dt : dt + (" " + extra));
+  }
 }
 
 RigidBodyId RigidSample::ReportBody() const {

@@ -25,9 +25,9 @@ void RigidSolverKnobs(ContactSettings& s);
 /// cursor at the grabbed depth, a release lets go (the body keeps its velocity: thrown).
 class RigidGrab {
  public:
-  /// A left press with the world ray (o, d): grabs and wakes the nearest dynamic body of
-  /// `bodies` under the cursor closer than `max_distance` (m) along the ray; true when one
-  /// was grabbed.
+  /// A left press with the world ray (o, d): grabs and wakes the body of `bodies` whose shape
+  /// the ray hits first, closer than `max_distance` (m), when it is dynamic (a static or
+  /// kinematic shape in front hides the bodies behind it); true when one was grabbed.
   bool Press(RigidBodySystem& bodies, const Vec3& o, const Vec3& d, double max_distance = 1000);
   /// Lets go.
   void Release() { grab_ = {}; }
@@ -105,8 +105,8 @@ class RigidSample : public Sample {
 
  private:
   RigidGrab grab_;
-  // the test hook (--option report=FILE): every 5 frames the frame, the grabs so far, and the
-  // report body's centre (world and pixels) and velocity
+  // the test hook (--option report=FILE): every 5 frames the frame, the grabs so far, the
+  // report body's centre (world and pixels) and velocity, and the tick length (dt, s)
   std::string report_path_;
   long long frames_ = 0;
 };

@@ -241,7 +241,7 @@ class Bullet final : public RigidSample {
 class Rain final : public RigidSample {
  public:
   explicit Rain(SampleContext& ctx) : RigidSample(ctx) {
-    count_ = static_cast<int>(OptionNumber(ctx, "count", 1000, 1, 20000));
+    count_ = OptionInteger(ctx, "count", 1000, 1, 20000);
     Restart();
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<Rain>(ctx); }
@@ -307,7 +307,7 @@ class Rain final : public RigidSample {
 class Dominoes final : public RigidSample {
  public:
   explicit Dominoes(SampleContext& ctx) : RigidSample(ctx) {
-    count_ = static_cast<int>(OptionNumber(ctx, "count", 40, 2, 400));
+    count_ = OptionInteger(ctx, "count", 40, 2, 400);
     Restart();
   }
   static std::unique_ptr<Sample> Create(SampleContext& ctx) { return std::make_unique<Dominoes>(ctx); }

@@ -43,8 +43,8 @@ class CompareSample final : public SoftSample {
   explicit CompareSample(SampleContext& ctx) : SoftSample(ctx) {
     // --option k=N/M substeps=N n=N
     k_ = OptionNumber(ctx, "k", k_, 1, 1e6);
-    ms_substeps_ = static_cast<int>(OptionNumber(ctx, "substeps", ms_substeps_, 1, 1000));
-    n_ = static_cast<int>(OptionNumber(ctx, "n", n_, 2, 64));
+    ms_substeps_ = OptionInteger(ctx, "substeps", ms_substeps_, 1, 1000);
+    n_ = OptionInteger(ctx, "n", n_, 2, 64);
     ctx.renderer->style.grid_spacing = 0.5f;
     ctx.camera->frame({0.0f, 1.75f, 0.25f}, 1.3f, 0.3f, 0.36f);
     build();

@@ -27,7 +27,7 @@ class DrapeSample final : public OneBodySample {
     // --option friction=MU n=N radius=M solver=xpbd|mass-spring
     def_ = XpbdCloth(12, 0.1);
     def_.friction = OptionNumber(ctx, "friction", 0.4, 0, 2);
-    n_ = static_cast<int>(OptionNumber(ctx, "n", n_, 2, 256));
+    n_ = OptionInteger(ctx, "n", n_, 2, 256);
     radius_ = OptionNumber(ctx, "radius", radius_, 0.1, 1.0);
     def_.thickness = 0.012;
     view_.strain = false;

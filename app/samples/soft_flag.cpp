@@ -33,8 +33,8 @@ class FlagSample final : public OneBodySample {
     def_.forces.wind.gust = OptionNumber(ctx, "gust", 3.0, 0, 20);
     def_.aero.drag = OptionNumber(ctx, "drag", 1.0, 0, 5);
     def_.aero.lift = OptionNumber(ctx, "lift", 0.6, 0, 5);
-    nx_ = static_cast<int>(OptionNumber(ctx, "nx", nx_, 2, 256));
-    ny_ = static_cast<int>(OptionNumber(ctx, "ny", ny_, 2, 256));
+    nx_ = OptionInteger(ctx, "nx", nx_, 2, 256);
+    ny_ = OptionInteger(ctx, "ny", ny_, 2, 256);
     def_.forces.wind.gust_period = 0.45;
     def_.forces.wind.seed = 7;
     ctx.renderer->style.grid_spacing = 0.5f;

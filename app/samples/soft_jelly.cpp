@@ -34,7 +34,7 @@ class JellySample final : public OneBodySample {
     mat_.young = OptionNumber(ctx, "young", mat_.young, 1e2, 1e6);
     mat_.poisson = OptionNumber(ctx, "poisson", mat_.poisson, 0.27, 0.49);
     mat_.damping_time = OptionNumber(ctx, "damping_time", mat_.damping_time, 0, 0.1);
-    cells_ = static_cast<int>(OptionNumber(ctx, "cells", cells_, 1, 16));
+    cells_ = OptionInteger(ctx, "cells", cells_, 1, 16);
     height_ = OptionNumber(ctx, "height", height_, 0.5, 5);
     def_.friction = 0.6;
     view_.strain = false;

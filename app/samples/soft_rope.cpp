@@ -42,11 +42,11 @@ class RopeSample final : public SoftSample {
  public:
   explicit RopeSample(SampleContext& ctx) : SoftSample(ctx) {
     // --option segments=N load=RATIO substeps=N iterations=N both=0|1
-    segments_ = static_cast<int>(OptionNumber(ctx, "segments", segments_, 2, 400));
+    segments_ = OptionInteger(ctx, "segments", segments_, 2, 400);
     load_ratio_ = OptionNumber(ctx, "load", load_ratio_, 1, 1000);
-    substeps_ = static_cast<int>(OptionNumber(ctx, "substeps", substeps_, 1, 200));
-    iterations_ = static_cast<int>(OptionNumber(ctx, "iterations", iterations_, 1, 200));
-    both_ends_ = OptionNumber(ctx, "both", 0, 0, 1) > 0;
+    substeps_ = OptionInteger(ctx, "substeps", substeps_, 1, 200);
+    iterations_ = OptionInteger(ctx, "iterations", iterations_, 1, 200);
+    both_ends_ = OptionFlag(ctx, "both", false);
     ctx.renderer->style.grid_spacing = 0.5f;
     ctx.camera->frame({0.1f, 1.8f, 0.0f}, 3.4f, 0.0f, 0.12f);
     build();

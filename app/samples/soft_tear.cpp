@@ -32,8 +32,8 @@ class TearSample final : public OneBodySample {
     //          solver=xpbd|mass-spring
     def_ = XpbdCloth(12, 0.2);
     def_.tear_strain = OptionNumber(ctx, "tear", 0.3, 0.01, 5);
-    n_ = static_cast<int>(OptionNumber(ctx, "n", n_, 2, 256));
-    demo_ = OptionNumber(ctx, "demo", 1, 0, 1) > 0;
+    n_ = OptionInteger(ctx, "n", n_, 2, 256);
+    demo_ = OptionFlag(ctx, "demo", true);
     const std::string pull = ctx.option("pull", "apart");
     if (pull == "down") pull_ = Pull::Down;
     else if (pull == "apart") pull_ = Pull::Apart;

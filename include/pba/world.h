@@ -268,6 +268,7 @@ class World {
   //      a duplicate component or bad data, naming the entity) ----
 
   /// Gives the entity a particle; `def.position` is taken relative to the entity pose.
+  /// Refused on an entity with a rigid body (both would move it).
   ParticleId add_particle(EntityId e, const ParticleDef& def);
   /// Makes the entity a collision surface.
   ColliderId add_collider(EntityId e, const ColliderDef& def);
@@ -283,7 +284,8 @@ class World {
   /// to the entity pose (the body starts at entity pose * def.pose; from then on the
   /// entity's pose is the body's). An unnamed body takes the entity's name. A Kinematic
   /// component drives only a kinematic body, so a static or dynamic body on an entity with
-  /// one is refused. Errors name the entity and the field.
+  /// one is refused, and so is a body on an entity with a particle (both would move it).
+  /// Errors name the entity and the field.
   RigidBodyId add_rigid_body(EntityId e, const RigidBodyDef& def);
 
   /// True when the handle names a live component (false once its entity is destroyed).

@@ -341,6 +341,10 @@ ParticleId World::add_particle(EntityId e, const ParticleDef& def) {
   EntityRecord& r = record(e, "World::add_particle");
   if (!r.particle.is_null() && particles_.valid(r.particle))
     throw Error("World::add_particle: " + describe(e) + " already has a particle");
+  // the body and the particle would both simulate the entity, each writing its pose
+  if (rigid_.valid(r.body))
+    throw Error("World::add_particle: " + describe(e) +
+                " has a rigid body, which moves it; a particle would move it too (give the particle an entity of its own)");
   ParticleDef d = def;
   d.position = r.pose.position + r.pose.rotation * def.position;
   r.particle = particles_.create(d, "particle of " + describe(e));
@@ -445,6 +449,9 @@ ConstraintId World::add_constraint(EntityId e, const ConstraintDef& def) {
 RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
   EntityRecord& r = record(e, "World::add_rigid_body");
   if (rigid_.valid(r.body)) throw Error("World::add_rigid_body: " + describe(e) + " already has a rigid body");
+  if (!r.particle.is_null() && particles_.valid(r.particle))
+    throw Error("World::add_rigid_body: " + describe(e) +
+                " has a particle, which moves it; a body would move it too (give the body an entity of its own)");
   const std::string where = "rigid body of " + describe(e);
   // the definition as given (its pose is relative to the entity), then in the world
   def.validate(where);
@@ -808,6 +815,21 @@ void World::step_rigid(double t, double dt) {
     r.velocity = rigid_.velocity_at(id, r.pose.position);
     r.angular_velocity = rigid_.angular_velocity(id);
   }
+  // a collider on the entity of a body that the rigid stage moves follows the body to this
+  // tick's pose: sync() placed it at the entity's pose of the tick's start, a tick behind the
+  // body (a particle riding a rising body sat v dt inside its collider; a sensor on a body
+  // tested last tick's place). It sweeps from there to the body's new pose.
+  bool moved = false;
+  for (std::size_t i = 0; i < colliders_.size(); ++i) {
+    const EntityRecord& r = records_[colliders_[i].owner.index];
+    if (!rigid_.valid(r.body) || r.kinematic != kNone || rigid_.type(r.body) == BodyType::Static) continue;
+    Collider& c = world_colliders_[i];
+    c.end = r.pose;
+    c.velocity = r.velocity;
+    c.angular_velocity = r.angular_velocity;
+    moved = true;
+  }
+  if (moved) collide_colliders();  // the tick's collision world again, with them where they are now
   // this tick's bodies join the collision world
   refresh_body_colliders(true);
   for (std::size_t k = 0; k < body_colliders_.size(); ++k) {

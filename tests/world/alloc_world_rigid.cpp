@@ -1,6 +1,6 @@
 // Zero allocations per World tick with rigid bodies in steady state: the rigid stage (paths
-// driving kinematic bodies, the colliders' stand-ins, the step, the entities' poses, the
-// bodies' shapes in the collision world) and particles landing on the bodies, counted by a
+// driving kinematic bodies, the colliders' stand-ins, the step, the entities' poses and the
+// colliders on them, the bodies' shapes in the collision world) and particles landing on the bodies, counted by a
 // replaced operator new.
 #include <gtest/gtest.h>
 
@@ -25,6 +25,8 @@ TEST(WorldRigidAlloc, TicksWithBodiesNeverAllocate) {
   for (int i = 0; i < 20; ++i) {
     const pba::EntityId e = w.create_entity({.pose = {{(i % 5) * 1.2 - 2.4, 0.5 + (i / 5) * 1.1, 0}, pba::Quat(1, 0, 0, 0)}});
     w.add_rigid_body(e, {.shapes = {{.shape = i % 2 ? pba::ColliderShape::sphere(0.4) : pba::ColliderShape::box({0.4, 0.4, 0.4})}}});
+    // some carry a World collider too, which the rigid stage moves with them
+    if (i % 7 == 0) w.add_collider(e, {.shape = pba::ColliderShape::sphere(0.45)});
     const pba::EntityId p = w.create_entity({});
     w.add_particle(p, {.position = {(i % 5) * 1.2 - 2.4, 6, 0.1}, .radius = 0.03});
   }
