@@ -146,7 +146,9 @@ bool RigidContacts::push_out(RigidBodySystem& s, const Vec3& gravity) {
       lift[o.b] += o.mb * d;
     }
   }
-  for (std::uint32_t i = 0; i < n; ++i) s.com_[i] += lift[i];  // (zero for bodies that do not move)
+  // (only the bodies moved: adding a zero would turn a -0 coordinate into +0)
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (lift[i] != Vec3(0)) s.com_[i] += lift[i];
   for (Ordered& o : order) o.after = now(o);
   // the manifolds the pass moved apart stop closing: the approach of their bodies' centres
   // along the normal is taken away (bottom up, the supports holding still as above), so that
