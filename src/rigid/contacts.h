@@ -471,6 +471,7 @@ struct RigidContacts {
     double before;  // the deepest point's separation before the pass (m)
     double after;   // and after it (m)
     double ma, mb;  // the bodies' inverse masses for the pass (1/kg; 0: held still)
+    bool held;      // the lower body is held still as the upper one's support
     Vec3 n;         // the normal, from a to b
     std::uint32_t pair, a, b;
   };

@@ -109,8 +109,8 @@ bool RigidContacts::push_out(RigidBodySystem& s, const Vec3& gravity) {
         o.height = std::min(ma ? glm::dot(s.com_[c.a], up) : -1e300, mb ? glm::dot(s.com_[c.b], up) : -1e300);
         o.ma = ma ? s.inv_mass_[c.a] : 0, o.mb = mb ? s.inv_mass_[c.b] : 0;
         const double rise = glm::dot(c.normal, up);  // > 0: b is above a
-        if (rise > kSupportCos && o.mb > 0) o.ma = 0;
-        if (rise < -kSupportCos && o.ma > 0) o.mb = 0;
+        if (rise > kSupportCos && o.mb > 0 && o.ma > 0) o.ma = 0, o.held = true;
+        if (rise < -kSupportCos && o.ma > 0 && o.mb > 0) o.mb = 0, o.held = true;
         const double shift = manifolds[c.record].preload;
         o.before = separation(c, 0, shift);
         for (int p = 1; p < c.count; ++p) o.before = std::min(o.before, separation(c, p, shift));
@@ -160,7 +160,12 @@ bool RigidContacts::push_out(RigidBodySystem& s, const Vec3& gravity) {
       if (!(o.after > o.before) || o.ma + o.mb == 0) continue;
       const double vn = glm::dot(s.v_[o.b] - s.v_[o.a], o.n);
       if (vn >= 0) continue;
-      const Vec3 d = (-vn / (o.ma + o.mb)) * o.n;
+      // a body on a support held still is stopped, not thrown: it loses at most its own
+      // speed toward the support (a light body thrown up into a heavy one must not give the
+      // heavy one its speed)
+      double stop = -vn;
+      if (o.held) stop = std::min(stop, std::max(0.0, o.mb > 0 ? -glm::dot(s.v_[o.b], o.n) : glm::dot(s.v_[o.a], o.n)));
+      const Vec3 d = (stop / (o.ma + o.mb)) * o.n;
       s.v_[o.a] -= o.ma * d;
       s.v_[o.b] += o.mb * d;
     }
