@@ -29,6 +29,7 @@
 // a stack is put right in one sweep whatever its masses. Other contacts (sideways, or without
 // gravity) share the correction by the bodies' effective masses.
 #include <algorithm>
+#include <type_traits>
 
 #include "contacts.h"
 
