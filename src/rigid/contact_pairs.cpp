@@ -400,6 +400,7 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   // last step's pairs hold the impulses the solver left; they are read as they are rewritten
   last_count = pairs.size();
   emitted = 0;
+  preloaded.clear();
   pairs_same = true;  // until emit() finds an entry that differs
   const std::size_t n = s.type_.size();
   if (rotations.size() < n) rotations.resize(n), rotation_stamp.resize(n, 0), travel.resize(n);
@@ -637,6 +638,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       if (!mesh_pair || along >= closest) was = &om, closest = along;
     }
     r.friction = was ? was->friction : Vec3(0);
+    r.preload = was ? was->preload : 0.0f;
     r.twist = was ? was->twist : 0;
     r.rolling = was ? was->rolling : Vec3(0);
     for (int k = 0; k < m.count; ++k) {
@@ -818,6 +820,13 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   pair_points[at_index] = static_cast<std::uint8_t>(r.count);
   const bool warm = cs.warm_starting;
   const double radius_a = r.radius_a, radius_b = r.radius_b;
+  // the springs' shifted rest (the soft step's; the other solvers drop it)
+  if (r.preload != 0 && cs.solver != RigidSolverType::SoftStep) own.preload = 0;
+  const double preload = r.preload;
+  if (preload != 0) {
+    if (preloaded.size() == preloaded.capacity()) preloaded.reserve(pairs.capacity() + 1);
+    preloaded.push_back(static_cast<std::uint32_t>(at_index));
+  }
   // (each value is computed into a local and stored from there: stored piecewise and read back
   // whole, a Vec3 waited on the store buffer)
   Vec3 centroid(0), at[Manifold::kMaxPoints];
@@ -835,7 +844,7 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     pt.at = mid, pt.sa = sa, pt.sb = sb;
     pt.depth = depth;
     // the separation now is -depth; keep it relative to the cores
-    pt.offset = -depth - glm::dot(core_b - core_a, n);
+    pt.offset = -depth - glm::dot(core_b - core_a, n) - preload;
     pt.id = q.id;
     c.normal_impulse[k] = warm ? impulse[k] : 0;
   }

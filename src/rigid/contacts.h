@@ -193,6 +193,11 @@ struct CachedManifold {
   std::uint32_t last = kNoIndex;
   int count = 0;
   bool normal_in_b = false;       // the normal is kept in body b's frame (else a's)
+  // the soft step's shift of the contact springs' rest separation (m, >= 0): as much as the
+  // position pass (push_out.cpp) moved the manifold's bodies apart beyond what the springs
+  // hold, so that the springs still see the overlap they carry the load at (in the padding
+  // before `normal`)
+  float preload = 0;
   Vec3 normal{0, 0, 1};           // unit, from a to b, in that body's principal frame
   CachedPoint points[Manifold::kMaxPoints];
   // what does not change while the pair lasts: the shapes' core radii (m), and the mixed
@@ -467,6 +472,29 @@ struct RigidContacts {
   /// Sweeps fast bodies (and bullets) against static shapes and puts each back at its first
   /// time of impact (continuous.cpp).
   void continuous(RigidBodySystem& s);
+  /// The soft step's position pass after its substeps (push_out.cpp): when some point
+  /// overlaps more than the linear slop at the poses now (or a manifold's springs have a
+  /// shifted rest), moves the bodies of the manifolds that touch those bodies apart (without
+  /// turning them) until none overlaps more than half the slop, shifts those manifolds'
+  /// springs by as much, and takes away the approach of the bodies it moved apart. `gravity`
+  /// says which body of a contact supports the other. True when it ran.
+  bool push_out(RigidBodySystem& s, const Vec3& gravity);
+  /// push_out's scratch: the deep manifolds (pair indices), by body whether it is pushed, the
+  /// manifolds to sweep, and by body its move.
+  struct Ordered {
+    double height;  // of the lower body (m; -1e300 for a body that does not move)
+    double before;  // the deepest point's separation before the pass (m)
+    double after;   // and after it (m)
+    double ma, mb;  // the bodies' inverse masses for the pass (1/kg; 0: held still)
+    bool held;      // the lower body is held still as the upper one's support
+    Vec3 n;         // the normal, from a to b
+    std::uint32_t pair, a, b;
+  };
+  std::vector<std::uint32_t> deep;
+  std::vector<std::uint32_t> preloaded;  // the pairs whose manifold has a preload (emit() lists them)
+  std::vector<std::uint8_t> pushed;
+  std::vector<Ordered> order;
+  std::vector<Vec3> lift;  // by body: its move in the pass (m)
   /// Writes the blocks' impulses back to the pairs (after the soft step, sequential impulses
   /// and TGS; XPBD writes its own), for next step's warm start and contacts().
   void store();

@@ -687,6 +687,8 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
     c.restitution(*this, dt, gravity);
     c.finish_velocities(*this);  // the solver's rows back to the system's arrays
   }
+  // contacts the springs left deeper than the slop (heavy bodies on light ones), put right
+  if (soft) c.push_out(*this, gravity);  // src/rigid/push_out.cpp
   const double solver_end = total.seconds();
   profile_.contacts = solver_end - solver_start - profile_.integrate;
   contacts_->continuous(*this);
