@@ -142,7 +142,7 @@ std::optional<int> parse(int argc, char** argv, Options& o) {
   std::string steps, every, csv, method;
   app.add_option("scene", o.scene, "the scene file to run")->type_name("SCENE.json");
   app.add_option("--steps", steps, "steps to run, 1..1000000000 (default: 1000)")->type_name("N");
-  app.add_option("--csv", csv, "write the state every K steps and at step 0 (columns below)")->type_name("FILE");
+  app.add_option("--csv", csv, "write the state every K steps, at step 0 and at the last step (columns below)")->type_name("FILE");
   app.add_option("--every", every, "CSV interval in steps, 1..1000000000 (default: 1); needs --csv")
       ->type_name("K");
   app.add_option("--method", method, "replace the scene's integrators (see below)")->type_name("NAME");
@@ -309,7 +309,8 @@ int pba_run_command(int argc, char** argv) {
         sum.stages[static_cast<std::size_t>(pba::WorldStage::Rigid)] += p.stages[static_cast<std::size_t>(pba::WorldStage::Rigid)];
         rigid_contacts += w.rigid().manifold_count();
         contacts += w.particles().contacts();
-        if (csv && s % o.every == 0) write_rows(csv, s, w, rigid);
+        // every K steps, and the last step whatever K: the CSV ends with the final state
+        if (csv && (s % o.every == 0 || s == o.steps)) write_rows(csv, s, w, rigid);
         progress.update(s);
       }
     } catch (const pba::Error& e) {

@@ -258,6 +258,46 @@ TEST(RunCommand, BadSceneExitsOneNamingTheFile) {
   EXPECT_NE(err.find(bad.string() + ": /emitters/0/rate: must be >= 0, got -5"), std::string::npos) << err;
 }
 
+// The CSV ends with the final state whatever the interval: 25 steps every 10 write steps 0,
+// 10, 20 and 25 (before, the last snapshot was step 20, 5 steps short of the state whose hash
+// the command printed), each step once (100 steps every 10, or 7 every 1, add no repeat).
+TEST(RunCommand, CsvEndsWithTheFinalStep) {
+  const auto csv = std::filesystem::temp_directory_path() / "pba_run_final_step.csv";
+  auto snapshots = [&](const char* steps, const char* every) {
+    testing::internal::CaptureStdout();
+    EXPECT_EQ(run({kScene, "--steps", steps, "--every", every, "--csv", csv.string()}), 0);
+    testing::internal::GetCapturedStdout();
+    std::vector<long long> out;
+    std::ifstream in(csv);
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+      const long long s = std::stoll(line.substr(0, line.find(',')));
+      if (out.empty() || out.back() != s) out.push_back(s);
+    }
+    return out;
+  };
+  EXPECT_EQ(snapshots("25", "10"), (std::vector<long long>{0, 10, 20, 25}));
+  EXPECT_EQ(snapshots("100", "10"), (std::vector<long long>{0, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100}));
+  EXPECT_EQ(snapshots("7", "1"), (std::vector<long long>{0, 1, 2, 3, 4, 5, 6, 7}));
+  EXPECT_EQ(snapshots("3", "1000"), (std::vector<long long>{0, 3}));
+  // the last rows are the state of the World stepped 25 times here (8 particles at t = 25 dt)
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(run({kScene, "--steps", "25", "--every", "10", "--csv", csv.string()}), 0);
+  testing::internal::GetCapturedStdout();
+  pba::Scene s = pba::load_scene(kScene);
+  for (int i = 0; i < 25; ++i) s.world.step();
+  std::ifstream in(csv);
+  std::string line, last;
+  while (std::getline(in, line)) last = line;
+  const std::size_t i = s.world.particles().size() - 1;
+  const pba::Vec3 x = s.world.particles().position(i);
+  char want[160];
+  std::snprintf(want, sizeof want, "25,%.17g,%zu,%.9g,%.9g,%.9g,", s.world.time(), i, static_cast<float>(x.x),
+                static_cast<float>(x.y), static_cast<float>(x.z));
+  EXPECT_EQ(last.rfind(want, 0), 0u) << last << "\nwant " << want;
+}
+
 TEST(RunCommand, WritesCsvAndPrintsTheWorldsHash) {
   const auto csv = std::filesystem::temp_directory_path() / "pba_run_test.csv";
   testing::internal::CaptureStdout();
