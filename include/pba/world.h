@@ -190,6 +190,19 @@ struct WorldProfile {
   double total = 0;        ///< the whole tick
 };
 
+/// How often the World has made its derived collision data again, since it was made: counts
+/// of work, not time, so a test can assert that a change or a tick does O(1) rebuilds (a
+/// wall-clock ratio flaked on a loaded machine).
+struct WorldBuildCounts {
+  /// The collision world cleared and filled again (once a tick; once on the first read after
+  /// a change between ticks).
+  std::uint64_t collision_builds = 0;
+  /// The bodies' shapes made again as colliders (body_colliders()), every body each time.
+  std::uint64_t body_collider_builds = 0;
+  /// Colliders made in those builds, summed (the work of a build is its collider count).
+  std::uint64_t body_colliders_made = 0;
+};
+
 class World;
 
 /// Extension point for the modules (soft bodies, rigid bodies, IK): a system with its own
@@ -379,6 +392,8 @@ class World {
   long long ticks() const { return ticks_; }
   /// Timings of the last tick.
   const WorldProfile& profile() const { return profile_; }
+  /// How often the collision world and the bodies' colliders were made, since construction.
+  const WorldBuildCounts& build_counts() const { return build_counts_; }
   /// Entity pairs that began touching in the last tick, in entity-index order: rigid
   /// contacts the solver pushed (between bodies or a body and a collider), and particle
   /// entities whose particle met a collider's entity during the tick (at the impact, so a
@@ -521,6 +536,7 @@ class World {
   mutable std::vector<Collider> body_colliders_;    // the entities' body shapes this tick
   mutable std::vector<std::uint32_t> body_collider_owner_;  // parallel: the entity index
   mutable bool body_colliders_stale_ = false;  // a body changed since they were made
+  mutable WorldBuildCounts build_counts_;   // build_counts() (body_colliders() counts its builds)
   std::vector<EntityId> mirror_owner_;      // by rigid-body handle slot: the collider's entity of a stand-in
   // touching entity pairs and sensor overlaps, as sorted keys (smaller index << 32 | larger,
   // sensor << 32 | visitor), this tick's and last tick's, and the events between them

@@ -717,6 +717,7 @@ std::span<const Collider> World::body_colliders() const {
 
 void World::refresh_body_colliders(bool tick) const {
   body_colliders_stale_ = false;
+  ++build_counts_.body_collider_builds;
   body_colliders_.clear();
   body_collider_owner_.clear();
   const std::size_t n = rigid_.size();
@@ -740,6 +741,7 @@ void World::refresh_body_colliders(bool tick) const {
       body_collider_owner_.push_back(owner.index);
     }
   }
+  build_counts_.body_colliders_made += body_colliders_.size();
 }
 
 const QueryWorld& World::queries() {
@@ -753,6 +755,7 @@ const QueryWorld& World::queries() {
 
 void World::collide_colliders() {
   collision_stale_ = false;
+  ++build_counts_.collision_builds;
   collision_.clear();
   for (std::size_t i = 0; i < world_colliders_.size(); ++i) {
     const EntityId owner = colliders_[i].owner;
