@@ -180,7 +180,7 @@ using ConstraintId = Handle<ConstraintTag>;
 struct WorldProfile {
   double stages[kWorldStageCount] = {};  ///< each stage, its systems included, indexed by WorldStage
   double kinematic = 0;    ///< scripted paths
-  double sync = 0;         ///< collider, forcer and emitter poses and the collision world
+  double sync = 0;         ///< collider, forcer and emitter poses (validated; the collision world: rigid stage)
   double emit = 0;         ///< particle emission
   double integrate = 0;    ///< forces and integration (fused with collisions for semi-implicit Euler)
   double collide = 0;      ///< collisions (generic integrator path only)
@@ -438,9 +438,14 @@ class World {
   // collision_ made again from the colliders and the bodies' shapes as they are now (after a
   // change between ticks: queries() must not report a destroyed entity or a moved body's old pose)
   void rebuild_collision();
-  // collision_ cleared and given the colliders (validated; sensors push nothing): the tick's
-  // collision world starts so (sync), and so does rebuild_collision
+  // collision_ cleared and given the colliders (sensors push nothing): the tick's collision
+  // world starts so (step_rigid), and so does rebuild_collision
   void collide_colliders();
+  // every collider but the sensors validated, an Error naming its entity (sync, before the
+  // rigid stage moves anything; collide_colliders)
+  void validate_colliders();
+  // whether an extension system is registered at `stage`
+  bool systems_at(WorldStage stage) const;
   bool collision_stale_ = true;            // the World changed since collision_ was made
   QueryWorld queries_;                     // queries(), built from collision_ when stale
   std::uint64_t queries_revision_ = ~0ull;  // collision_.revision() it was built from

@@ -603,8 +603,11 @@ void World::sync(double /*t*/, double dt) {
   }
   // the colliders' stand-ins among the rigid bodies follow them
   sync_mirrors(dt);
-  // the collision world of the tick (validated and flattened once for every client)
-  collide_colliders();
+  // the colliders validated now, so a bad one stops the tick before any body moves; the
+  // tick's collision world is built in the rigid stage, once the colliders riding on bodies
+  // are where their bodies end the tick (built here as well, it was built twice a tick)
+  validate_colliders();
+  collision_stale_ = true;  // until then (a tick that fails midway leaves queries() to rebuild)
   // forcers and emitters follow their entities
   for (std::size_t i = 0; i < forcers_.size(); ++i) {
     const EntityRecord& r = records_[forcers_[i].owner.index];
@@ -753,16 +756,25 @@ const QueryWorld& World::queries() {
   return queries_;
 }
 
+void World::validate_colliders() {
+  for (std::size_t i = 0; i < world_colliders_.size(); ++i)
+    if (!colliders_[i].def.sensor && !world_colliders_[i].ok())
+      world_colliders_[i].validate("collider of " + describe(colliders_[i].owner));
+}
+
 void World::collide_colliders() {
+  validate_colliders();
   collision_stale_ = false;
   ++build_counts_.collision_builds;
   collision_.clear();
-  for (std::size_t i = 0; i < world_colliders_.size(); ++i) {
-    const EntityId owner = colliders_[i].owner;
-    if (colliders_[i].def.sensor) continue;  // a sensor pushes nothing
-    if (!world_colliders_[i].ok()) world_colliders_[i].validate("collider of " + describe(owner));
-    collision_.add(world_colliders_[i], owner.index);
-  }
+  for (std::size_t i = 0; i < world_colliders_.size(); ++i)
+    if (!colliders_[i].def.sensor) collision_.add(world_colliders_[i], colliders_[i].owner.index);  // a sensor pushes nothing
+}
+
+bool World::systems_at(WorldStage stage) const {
+  for (const auto& s : systems_)
+    if (s->stage() == stage) return true;
+  return false;
 }
 
 void World::rebuild_collision() {
@@ -784,6 +796,7 @@ void World::step_rigid(double t, double dt) {
   touch_begin_.clear(), touch_end_.clear(), sensor_enter_.clear(), sensor_leave_.clear();
   if (rigid_.size() == 0) {
     touching_.clear();  // no bodies, no rigid contacts
+    collide_colliders();  // the tick's collision world: the colliders alone
     return;
   }
   // a kinematic body on a path reaches the path's pose at the end of the tick
@@ -822,7 +835,6 @@ void World::step_rigid(double t, double dt) {
   // tick's pose: sync() placed it at the entity's pose of the tick's start, a tick behind the
   // body (a particle riding a rising body sat v dt inside its collider; a sensor on a body
   // tested last tick's place). It sweeps from there to the body's new pose.
-  bool moved = false;
   for (std::size_t i = 0; i < colliders_.size(); ++i) {
     const EntityRecord& r = records_[colliders_[i].owner.index];
     if (!rigid_.valid(r.body) || r.kinematic != kNone || rigid_.type(r.body) == BodyType::Static) continue;
@@ -830,10 +842,10 @@ void World::step_rigid(double t, double dt) {
     c.end = r.pose;
     c.velocity = r.velocity;
     c.angular_velocity = r.angular_velocity;
-    moved = true;
   }
-  if (moved) collide_colliders();  // the tick's collision world again, with them where they are now
-  // this tick's bodies join the collision world
+  // the tick's collision world, built once: the colliders where they end the tick ...
+  collide_colliders();
+  // ... then this tick's bodies
   refresh_body_colliders(true);
   for (std::size_t k = 0; k < body_colliders_.size(); ++k) {
     if (!body_colliders_[k].ok()) {
@@ -1131,12 +1143,15 @@ void World::tick(double t, double dt) {
   profile_.kinematic = sw.seconds();
   run_systems(WorldStage::Kinematic, t, dt);
   stage_done(WorldStage::Kinematic);
-  // 2. collide: poses of colliders, forcers and emitters; the tick's collision world
+  // 2. collide: poses of colliders, forcers and emitters
   sync(t, dt);
   profile_.sync = sw.seconds();
+  // a system of this stage may read the collision world: the colliders at this tick's poses
+  // (the rigid stage builds it again, with the colliders riding on bodies moved and the bodies)
+  if (systems_at(WorldStage::Collide)) collide_colliders();
   run_systems(WorldStage::Collide, t, dt);
   stage_done(WorldStage::Collide);
-  // 3. rigid: the bodies, then their shapes join the collision world
+  // 3. rigid: the bodies, then the tick's collision world: the colliders and the bodies' shapes
   step_rigid(t, dt);
   run_systems(WorldStage::Rigid, t, dt);
   stage_done(WorldStage::Rigid);

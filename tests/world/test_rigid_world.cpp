@@ -396,6 +396,37 @@ TEST(RigidStage, AColliderOnABodysEntityFollowsTheBodyInTheSameTick) {
   EXPECT_EQ(entered, 44);
 }
 
+// The tick's collision world is built once a tick, also when a collider sits on a moving
+// body's entity (before, sync() built it and the rigid stage built it again with that collider
+// moved to the body's new pose: 2 builds a tick); a world without bodies builds it once too,
+// and queries() after a tick reads the tick's (no build). What the build holds is tested above:
+// the rider and the sensor meet the carrier's pose of this tick.
+TEST(RigidStage, TheCollisionWorldIsBuiltOnceATick) {
+  World w({.gravity = {0, 0, 0}});
+  ground(w);
+  carrier_of_a_box(w, "lift", {0, 3, 0}, false);
+  const EntityId sensor = carrier_of_a_box(w, "carrier", {2, 0, 0}, true);
+  w.set_pose(sensor, {{0, 0, 5}, pba::Quat(1, 0, 0, 0)});
+  const EntityId p = w.create_entity({.name = "rider"});
+  w.add_particle(p, {.position = {0.2, 0.52, 0.2}, .radius = 0.02});
+  w.step();
+  const std::uint64_t b0 = w.build_counts().collision_builds;
+  for (int i = 0; i < 10; ++i) w.step();
+  EXPECT_EQ(w.build_counts().collision_builds, b0 + 10);
+  w.queries();
+  EXPECT_EQ(w.build_counts().collision_builds, b0 + 10);
+  // the rider's collider is in it, at the lift's pose of this tick
+  EXPECT_NEAR(w.pose(p).position.y, w.collision().colliders()[1].end.position.y + 0.5 + 0.02, 1e-5);
+
+  World particles_only;
+  ground(particles_only);
+  particles_only.add_particle(particles_only.create_entity({}), {.position = {0, 1, 0}, .radius = 0.02});
+  particles_only.step();
+  const std::uint64_t q0 = particles_only.build_counts().collision_builds;
+  for (int i = 0; i < 10; ++i) particles_only.step();
+  EXPECT_EQ(particles_only.build_counts().collision_builds, q0 + 10);
+}
+
 // A kinematic paddle on a linear path pushes a resting box on frictionless ground: the box
 // ends moving at the paddle's speed (a perfectly inelastic push, e = 0), so its momentum is
 // m v_paddle, and it sits against the paddle; the paddle keeps its path to rounding. The
