@@ -637,12 +637,17 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     r.mixed_rolling = std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
     // the old manifold, for its impulses: a convex pair's only one, or of a mesh pair the one
     // whose normal is closest to this one's (within the merge angle)
+    // (the normals compared only for a mesh pair: a convex pair's old chain is one manifold)
     const CachedManifold* was = nullptr;
     double closest = kMergeCos;
     for (std::uint32_t o = old; o != kNoIndex; o = manifolds[o].next) {
       const CachedManifold& om = manifolds[o];
+      if (!mesh_pair) {
+        was = &om;
+        continue;
+      }
       const double along = glm::dot((om.normal_in_b ? s.q_[b] : s.q_[a]) * om.normal, n);
-      if (!mesh_pair || along >= closest) was = &om, closest = along;
+      if (along >= closest) was = &om, closest = along;
     }
     r.friction = was ? was->friction : Vec3(0);
     r.preload = was ? was->preload : 0.0f;
