@@ -215,7 +215,40 @@ namespace {
 
 }  // namespace
 
+namespace {
+
+// quick checks of collide()'s input: true means check_pose and check_shape would pass (for a
+// pose, |q| within 1e-6 of 1 tested on |q|^2 a little inside those bounds; a false answer
+// sends the input through the full checks, which decide). Combined with & so a pair costs
+// one well-predicted branch, whatever its types
+// (a squared length whose length is within 1e-6 of 1, a little inside: a plane's normal too)
+inline bool unit_length2(double l2) {
+  constexpr double kLo = (1 - 0.9e-6) * (1 - 0.9e-6), kHi = (1 + 0.9e-6) * (1 + 0.9e-6);
+  return (l2 >= kLo) & (l2 <= kHi);
+}
+inline bool pose_looks_valid(const Pose& p) {
+  const Quat& q = p.rotation;
+  const double q2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+  const Vec3& x = p.position;
+  return unit_length2(q2) & (std::abs(x.x) <= kHuge) & (std::abs(x.y) <= kHuge) & (std::abs(x.z) <= kHuge);
+}
+inline bool positive_finite(double x) { return (x > 0) & (x <= kHuge); }
+template <ShapeType T>
+bool looks_valid(const ColliderShape& s) {
+  if constexpr (T == ShapeType::Sphere) return positive_finite(s.radius);
+  else if constexpr (T == ShapeType::Capsule)
+    return positive_finite(s.radius) & (s.half_height >= 0) & (s.half_height <= kHuge);
+  else if constexpr (T == ShapeType::Box)
+    return positive_finite(s.half_extents.x) & positive_finite(s.half_extents.y) & positive_finite(s.half_extents.z);
+  else if constexpr (T == ShapeType::Hull) return s.hull && !s.hull->vertices().empty();
+  else if constexpr (T == ShapeType::Plane) return unit_length2(glm::dot(s.normal, s.normal)) & (std::abs(s.offset) <= kHuge);
+  else return false;
+}
+
+}  // namespace
+
 void narrow::check_pose(const Pose& p, const char* where) {
+  if (pose_looks_valid(p)) return;  // (collide_mesh's every call: the lengths' square roots only when in doubt)
   const double qn = glm::length(p.rotation);
   if (!is_finite(p.position)) require_finite(p.position, std::string(where) + ".position");
   if (!(std::abs(qn - 1) <= 1e-6)) require_unit_quat(p.rotation, std::string(where) + ".rotation");
@@ -250,29 +283,6 @@ void narrow::check_shape(const ColliderShape& s, const char* where) {
 }
 
 namespace {
-
-// quick checks of collide()'s input: true means check_pose and check_shape would pass (for a
-// pose, |q| within 1e-6 of 1 tested on |q|^2 a little inside those bounds; a false answer
-// sends the input through the full checks, which decide). Combined with & so a pair costs
-// one well-predicted branch, whatever its types
-inline bool pose_looks_valid(const Pose& p) {
-  const Quat& q = p.rotation;
-  const double q2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
-  constexpr double kLo = (1 - 0.9e-6) * (1 - 0.9e-6), kHi = (1 + 0.9e-6) * (1 + 0.9e-6);
-  const Vec3& x = p.position;
-  return (q2 >= kLo) & (q2 <= kHi) & (std::abs(x.x) <= kHuge) & (std::abs(x.y) <= kHuge) & (std::abs(x.z) <= kHuge);
-}
-inline bool positive_finite(double x) { return (x > 0) & (x <= kHuge); }
-template <ShapeType T>
-bool looks_valid(const ColliderShape& s) {
-  if constexpr (T == ShapeType::Sphere) return positive_finite(s.radius);
-  else if constexpr (T == ShapeType::Capsule)
-    return positive_finite(s.radius) & (s.half_height >= 0) & (s.half_height <= kHuge);
-  else if constexpr (T == ShapeType::Box)
-    return positive_finite(s.half_extents.x) & positive_finite(s.half_extents.y) & positive_finite(s.half_extents.z);
-  else if constexpr (T == ShapeType::Hull) return s.hull && !s.hull->vertices().empty();
-  else return false;  // planes: the full check
-}
 
 // --- the pair table -----------------------------------------------------------------------
 // One function per ordered pair of shape types, found by indexing a table with the two

@@ -281,7 +281,10 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
       }
       const std::uint32_t q = mine[k];
       ShapeProxy& p = proxies[q];
-      p.box = bounds(s.shapes_[i][k].shape, compose(body, s.shapes_[i][k].local)).grown(reach);
+      if (shape_poses.size() < proxies.size())  // (grows with the proxies)
+        shape_poses.resize(proxies.capacity()), shape_pose_stamp.resize(proxies.capacity(), 0);
+      shape_poses[q] = compose(body, s.shapes_[i][k].local), shape_pose_stamp[q] = stamp;
+      p.box = bounds(s.shapes_[i][k].shape, shape_poses[q]).grown(reach);
       p.body = static_cast<std::uint32_t>(i), p.shape = k, p.slot = slot;
       const bool bounded = is_finite(p.box.lo) && is_finite(p.box.hi);
       if (fresh) {
@@ -404,7 +407,11 @@ void RigidContacts::update(RigidBodySystem& s, double dt) {
   pairs_same = true;  // until emit() finds an entry that differs
   const std::size_t n = s.type_.size();
   if (rotations.size() < n) rotations.resize(n), rotation_stamp.resize(n, 0), travel.resize(n);
-  if (++stamp == 0) std::fill(rotation_stamp.begin(), rotation_stamp.end(), 0), stamp = 1;
+  if (++stamp == 0) {
+    std::fill(rotation_stamp.begin(), rotation_stamp.end(), 0);
+    std::fill(shape_pose_stamp.begin(), shape_pose_stamp.end(), 0);
+    stamp = 1;
+  }
   update_proxies(s, dt);
   find_new_pairs(s);
   wake_touched(s);
@@ -527,8 +534,8 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       NarrowPhaseCache* narrow = &fresh_narrow[plan.batched];
       if (p.cache == kNoIndex) *narrow = NarrowPhaseCache{};
       else narrow = &caches[p.cache].narrow;
-      box_queries.push_back({&sa.shape, compose(s.body_pose(a), sa.local), &sb.shape,
-                             compose(s.body_pose(b), sb.local), plan.margin + cs.reuse_distance, narrow});
+      box_queries.push_back({&sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), &sb.shape,
+                             shape_pose(s, p.proxy_b, b, p.shape_b), plan.margin + cs.reuse_distance, narrow});
     }
     collide_batch(box_queries, {box_manifolds.data(), box_queries.size()}, ConvexMethod::Sat, path);
 
@@ -630,12 +637,17 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     r.mixed_rolling = std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
     // the old manifold, for its impulses: a convex pair's only one, or of a mesh pair the one
     // whose normal is closest to this one's (within the merge angle)
+    // (the normals compared only for a mesh pair: a convex pair's old chain is one manifold)
     const CachedManifold* was = nullptr;
     double closest = kMergeCos;
     for (std::uint32_t o = old; o != kNoIndex; o = manifolds[o].next) {
       const CachedManifold& om = manifolds[o];
+      if (!mesh_pair) {
+        was = &om;
+        continue;
+      }
       const double along = glm::dot((om.normal_in_b ? s.q_[b] : s.q_[a]) * om.normal, n);
-      if (!mesh_pair || along >= closest) was = &om, closest = along;
+      if (along >= closest) was = &om, closest = along;
     }
     r.friction = was ? was->friction : Vec3(0);
     r.preload = was ? was->preload : 0.0f;
@@ -668,7 +680,8 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
   if (made) {
     if (made->count > 0) keep(*made, false);
   } else if (mesh_pair) {
-    const Pose pose_a = compose(s.body_pose(a), sa.local), pose_b = compose(s.body_pose(b), sb.local);
+    const Pose& pose_a = shape_pose(s, p.proxy_a, a, p.shape_a);
+    const Pose& pose_b = shape_pose(s, p.proxy_b, b, p.shape_b);
     // a convex shape on a static mesh: a manifold per touching triangle, in the mesh tree's
     // order (the scratch grows until it holds them all)
     const bool mesh_a = sa.shape.type == ShapeType::Mesh;
@@ -745,8 +758,8 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       if (merged.count > 0) keep(merged, mesh_a);
     }
   } else {
-    const Manifold m = collide(sa.shape, compose(s.body_pose(a), sa.local), sb.shape, compose(s.body_pose(b), sb.local),
-                               ns, &c.narrow);
+    const Manifold m = collide(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape,
+                               shape_pose(s, p.proxy_b, b, p.shape_b), ns, &c.narrow);
     if (m.count > 0) keep(m, false);
   }
   // the old chain goes back to the pool

@@ -278,6 +278,12 @@ struct RigidContacts {
   std::vector<Mat3> rotations;
   std::vector<std::uint32_t> rotation_stamp;  // the update() that made rotations[i]
   std::uint32_t stamp = 0;                    // this update()'s
+  // by proxy, its shape's world pose at the step's start (compose(body_pose, local)), made by
+  // update_proxies for the bodies it moves or the first time shape_pose() needs it this step:
+  // the narrow phase made it per pair, two normalised products a body, the ground's for each
+  // of the rain's 5,000 pairs made a step
+  std::vector<Pose> shape_poses;
+  std::vector<std::uint32_t> shape_pose_stamp;  // the update() that made shape_poses[q]
   std::size_t reinserted_since_check = 0;     // tree moves since its quality was last checked
   double tree_ratio = 0;                      // the tree's area ratio after its last rebuild
 
@@ -299,6 +305,12 @@ struct RigidContacts {
   const Mat3& rotation(const RigidBodySystem& s, std::uint32_t i) {
     if (rotation_stamp[i] != stamp) rotations[i] = glm::mat3_cast(s.q_[i]), rotation_stamp[i] = stamp;
     return rotations[i];
+  }
+  /// Proxy q's shape's world pose (m, unit quaternion) at the poses of this step's start: shape
+  /// k of dense body i (q's). Poses that change after update() (the solver's) are not seen.
+  const Pose& shape_pose(const RigidBodySystem& s, std::uint32_t q, std::uint32_t i, std::uint32_t k) {
+    if (shape_pose_stamp[q] != stamp) shape_poses[q] = compose(s.body_pose(i), s.shapes_[i][k].local), shape_pose_stamp[q] = stamp;
+    return shape_poses[q];
   }
   void settle(std::uint32_t record);
   void settle_all();

@@ -213,7 +213,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       const ShapeProxy& other = proxies[k];
       if (!other.box.overlaps(path)) continue;
       const RigidShapeDef& sb = s.shapes_[other.body][other.shape];
-      const Pose pb = compose(s.body_pose(other.body), sb.local);
+      const Pose& pb = shape_pose(s, k, other.body, other.shape);  // (static: as at the step's start)
       // a plane's unit normal and offset in the world (its solid on the negative side)
       const bool plane = sb.shape.type == ShapeType::Plane;
       const Vec3 nw = plane ? glm::normalize(pb.rotation * sb.shape.normal) : Vec3(0.0);

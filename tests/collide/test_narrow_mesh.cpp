@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -68,6 +69,26 @@ bool reference_contact(const ConvexProxy& A, const ConvexProxy& B, double& depth
 TEST(Mesh, GridHasUpNormalsAndFlatInternalEdges) {
   const ColliderShape g = flat_grid(4);
   for (std::uint32_t k = 0; k < g.mesh->triangles().size(); ++k) EXPECT_NEAR(g.mesh->normal(k).y, 1.0, 1e-15);
+}
+
+// collide_mesh's poses take the quick check first: a rotation 2e-6 off unit length or a
+// non-finite position still fails and is named
+TEST(Mesh, BadPosesThrowNamingTheValue) {
+  const ColliderShape grid = flat_grid(4);
+  const ColliderShape box = ColliderShape::box(Vec3(0.5));
+  std::array<Manifold, 16> out;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  using test_support::error_of;
+  EXPECT_NE(error_of([&] { collide_mesh(box, {Vec3(0, 0.49, 0), Quat(1 + 2e-6, 0, 0, 0)}, grid, {}, out); })
+                .find("collide_mesh: pose_a.rotation"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { collide_mesh(box, {Vec3(nan, 0.49, 0), Quat(1, 0, 0, 0)}, grid, {}, out); })
+                .find("collide_mesh: pose_a.position"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { collide_mesh(box, {Vec3(0, 0.49, 0), Quat(1, 0, 0, 0)}, grid, {Vec3(0), Quat(0.5, 0, 0, 0)}, out); })
+                .find("collide_mesh: pose_mesh.rotation"),
+            std::string::npos);
+  EXPECT_GT(collide_mesh(box, {Vec3(0, 0.49, 0), Quat(1 + 1e-7, 0, 0, 0)}, grid, {}, out), 0);
 }
 
 TEST(Mesh, BoxSlidingOverInternalEdgesHasNoGhostContacts) {

@@ -343,4 +343,23 @@ TEST(Collide, BadInputThrowsNamingTheValue) {
             std::string::npos);
 }
 
+// Planes take the quick input check too (on the normal's squared length): a normal 2e-6 off
+// unit length, or a non-finite one or offset, still fails it and is named, as a shape A or B
+// with a sphere or a box; one 1e-7 off passes, as the full check (1e-6) lets it
+TEST(Collide, BadPlanesThrowNamingTheValue) {
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const ColliderShape ball = sphere(0.5), b = box(Vec3(0.5));
+  const ColliderShape bad[] = {plane(Vec3(0, 1 + 2e-6, 0), 0), plane(Vec3(0, 1 - 2e-6, 0), 0), plane(Vec3(0, 2, 0), 0),
+                               plane(Vec3(nan, 1, 0), 0), plane(Vec3(0, 1, 0), inf), plane(Vec3(0, 1, 0), nan)};
+  for (const ColliderShape& p : bad)
+    for (const ColliderShape* other : {&ball, &b}) {
+      EXPECT_NE(error_of([&] { collide(p, at(Vec3(0)), *other, at(Vec3(0, 0.4, 0))); }).find("shape_a.normal/offset"),
+                std::string::npos);
+      EXPECT_NE(error_of([&] { collide(*other, at(Vec3(0, 0.4, 0)), p, at(Vec3(0))); }).find("shape_b.normal/offset"),
+                std::string::npos);
+    }
+  const Manifold m = collide(ball, at(Vec3(0, 0.4, 0)), plane(Vec3(0, 1 + 1e-7, 0), 0), at(Vec3(0)));
+  EXPECT_EQ(m.count, 1);
+}
+
 }  // namespace
