@@ -170,6 +170,7 @@ struct ContactSettings {
   int relax_iterations = 1;
   /// Sweeps over a manifold's points per pass, in [1, 16]: more converge its points toward
   /// their joint solution (4 keeps a 20-box stack from rocking; see docs/rigid-bodies.md).
+  /// The relax passes (soft step, TGS) take three quarters of them, rounded up (3 of 4).
   int manifold_iterations = 4;
   /// Soft step: contact stiffness (Hz), finite and > 0, used up to a quarter of the substep
   /// rate. Contacts are implicit springs of this natural frequency, damped by `damping_ratio`,

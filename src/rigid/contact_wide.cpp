@@ -325,7 +325,7 @@ PBA_LANES void separations(const Lanes<V, B>& L, const AnchorsOf<B::kPoints>& g,
     const V uv[3] = {u[1] * n[2] - u[2] * n[1], u[2] * n[0] - u[0] * n[2], u[0] * n[1] - u[1] * n[0]};
     const V uuv[3] = {u[1] * uv[2] - u[2] * uv[1], u[2] * uv[0] - u[0] * uv[2], u[0] * uv[1] - u[1] * uv[0]};
     V w[3];
-    for (int i = 0; i < 3; ++i) w[i] = (uv[i] * m[3] + uuv[i]) * 2.0;
+    for (int i = 0; i < 3; ++i) w[i] = (uv[i] * m[3] + uuv[i]) * splat<V>(2);
     to_frame(t1, t2, n, w, out);
   };
   V na[3], nb[3];
@@ -623,9 +623,8 @@ PBA_LANES void warm(const Lanes<V, B>& L, const BodyArrays& r) {
   add_rows<V, kZmm>(r.warm[0].v, c.b + l0, c.write_b >> l0, nb);
 }
 
-// the separations of the block's lanes [l0, l0 + width) in lanes of doubles D (in double:
-// they are small differences of the bodies' motions, and whether a point is apart or touching
-// turns on their sign)
+// the separations of the block's lanes [l0, l0 + width) in lanes of doubles D (outside the
+// passes: TGS without relax iterations; the passes measure theirs in float, see pass())
 template <class D, class B>
 PBA_LANES void separations_of(B& c, const AnchorsOf<B::kPoints>& g, int l0, int width, const BodyArrays& r) {
   for (int l = l0; l < l0 + width; l += kWidth<D>) separations(Lanes<D, B>{c, l}, g, r);
@@ -634,8 +633,14 @@ PBA_LANES void separations_of(B& c, const AnchorsOf<B::kPoints>& g, int l0, int 
 template <class V, class D, int kMode, class B>
 PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatParams& p, const BodyArrays& r) {
   const Lanes<V, B> L{c, l0};
-  if (p.update_sep) separations_of<D>(c, g, l0, kWidth<V>, r);
-  // (lanes of 8 doubles for the separations: the AVX-512 path)
+  // the separations in float, on the pass's own lanes. Each is base + n.dp + the turned
+  // anchors' terms, every term small (the step's overlap or gap, and the step's motion), so
+  // float's rounding of it is about 2^-24 of those (1e-9 m for a resting box, 2.4e-7 m for the
+  // 4 m step of a 250 m/s body), under the kTouching margin that already absorbs the float
+  // velocities' rounding; the doubles cost two or four extra halves of a block and the
+  // conversions to them (AVX2: 17.6% of the kernel's instructions, docs/benchmarks.md)
+  if (p.update_sep) separations(L, g, r);
+  // (the AVX-512 path: kZmm widens rows with its one-instruction conversion)
   constexpr bool kZmm = std::is_same_v<D, v8d>;
   solve<V, kMode, kZmm>(L, p, r);
   // the soft step's relax pass (cap_carry): a point carries to the next substep at most

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -151,7 +152,15 @@ TEST(RigidSolvers, SwitchingSolversLiveKeepsTheStateValid) {
 // body slower than push_out_speed across the ground (the push is horizontal) throughout, 1%
 // over it for sequential impulses, which have no relax pass and keep the capped push-out as
 // velocity (measured 3.0005 m/s: the cap is on each point's normal speed, and the points of a
-// manifold turn the box a little); and at the end no overlap deeper than the linear slop.
+// manifold turn the box a little); and at the end no overlap deeper than the linear slop, to
+// the contact kernels' float resolution there: TGS's Baumgarte bias, baumgarte / h *
+// min(0, sep + slop), has its fixed point at an overlap of exactly the slop and approaches it
+// from deeper (the excess times 1 - baumgarte a substep: nothing of 0.8 m is left after the
+// 960 substeps), and the kernels measure the separation in float, each of its few terms (the
+// overlap at the step's start, about the slop, and the step's motion, about zero at rest)
+// rounded by at most 2^-24 of it; so the overlap ends within a few of float's steps of the
+// slop (2^-24 slop = 3e-10 m), on either side: slop (1 + 4 FLT_EPSILON) bounds it (measured:
+// 1.0e-11 m over the slop, the two boxes under TGS).
 TEST(RigidSolvers, OverlappingBodiesArePushedApartNoFasterThanThePushOutSpeed) {
   for (const auto solver : pba::kRigidSolvers) {
     RigidBodySystem s({.contacts = {.solver = solver, .sleep = false}});
@@ -167,7 +176,8 @@ TEST(RigidSolvers, OverlappingBodiesArePushedApartNoFasterThanThePushOutSpeed) {
     }
     const double kept = solver == RigidSolverType::SequentialImpulse ? 1.01 : 1.0;
     EXPECT_LT(fastest, kept * s.settings().push_out_speed) << to_string(solver);
-    for (const auto& c : s.contacts()) EXPECT_LT(c.depth, s.settings().linear_slop) << to_string(solver);
+    const double slop = s.settings().linear_slop;
+    for (const auto& c : s.contacts()) EXPECT_LE(c.depth, slop * (1 + 4 * FLT_EPSILON)) << to_string(solver);
   }
 }
 
