@@ -314,24 +314,29 @@ void fill_scalar(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes)
 // ---------------------------------------------------------------------------------------
 // prepare: inverse inertias, colours, blocks, the first warm start
 
+Mat3 RigidContacts::world_inv_inertia(const RigidBodySystem& s, std::size_t i) {
+  // a sleeping body holds still like a static one until something wakes it
+  if (s.asleep_[i]) return Mat3(0.0);
+  const Mat3 r = glm::mat3_cast(s.q_[i]);
+  Mat3 d(0.0);
+  // the float solvers (not XPBD, which solves in double) see inverse moments at most
+  // kSolverInertiaRatio times the smallest: a frame's inverse inertia in float holds the
+  // rounding of the largest in every entry (2^-24 of it), and a 2 mm x 4 m rod's 2,000,000 : 1
+  // buried its transverse inverse moments under it (12%), the passes' impulses no longer
+  // matched their K, and the rod's spin grew tenfold a pass (docs/rigid-bodies.md)
+  Vec3 m = s.inv_inertia_[i];
+  if (s.settings_.solver != RigidSolverType::Xpbd) m = glm::min(m, Vec3(kSolverInertiaRatio * std::min({m.x, m.y, m.z})));
+  d[0][0] = m.x, d[1][1] = m.y, d[2][2] = m.z;
+  return r * d * glm::transpose(r);
+}
+
 void RigidContacts::prepare(RigidBodySystem& s) {
   const std::size_t n = s.type_.size();
   inv_inertia.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Mat3 r = glm::mat3_cast(s.q_[i]);
-    Mat3 d(0.0);
-    // the float solvers (not XPBD, which solves in double) see inverse moments at most
-    // kSolverInertiaRatio times the smallest: a frame's inverse inertia in float holds the
-    // rounding of the largest in every entry (2^-24 of it), and a 2 mm x 4 m rod's 2,000,000 : 1
-    // buried its transverse inverse moments under it (12%), the passes' impulses no longer
-    // matched their K, and the rod's spin grew tenfold a pass (docs/rigid-bodies.md)
-    Vec3 m = s.inv_inertia_[i];
-    if (s.settings_.solver != RigidSolverType::Xpbd)
-      m = glm::min(m, Vec3(kSolverInertiaRatio * std::min({m.x, m.y, m.z})));
-    d[0][0] = m.x, d[1][1] = m.y, d[2][2] = m.z;
-    // a sleeping body holds still like a static one until something wakes it
-    inv_inertia[i] = s.asleep_[i] ? Mat3(0.0) : r * d * glm::transpose(r);
-  }
+  inertia_q.resize(n);
+  refreshed.resize(n + 1, 0);
+  refresh_list.reserve(n);  // (so that a first refresh later does not allocate)
+  for (std::size_t i = 0; i < n; ++i) inv_inertia[i] = world_inv_inertia(s, i), inertia_q[i] = s.q_[i];
   built = has_colors = lanes_valid = false;
   s.profile_.one_point = 0;  // (build() counts them)
   backward = !backward;
@@ -752,6 +757,108 @@ void RigidContacts::set_rolling_mass(std::uint32_t index) {
   if (!(c.rolling > 0)) return;
   const Mat3 k = inv_inertia[c.a] + inv_inertia[c.b];
   rolling_mass[index] = glm::determinant(k) > 0 ? glm::inverse(k) : Mat3(0.0);
+}
+
+namespace {
+
+// The rows of lane l of block k that depend on its bodies' inverse inertias, from the world
+// inverse inertias ia, ib (1/(kg m^2)), the lane's frame and arms as filled (fill_lanes'
+// arithmetic in double, rounded to the block's floats): the inverse inertias in the frame, K,
+// the normal, tangent and twist effective masses, and a one-point lane's rolling mass. A point
+// is in use where its effective mass is not zero (a lane of a body that moves).
+template <class B>
+void refresh_lane(B& k, int l, const Mat3& ia_world, const Mat3& ib_world) {
+  constexpr int P = B::kPoints;
+  const double unit = k.unit[l];
+  const Vec3 t[3] = {{k.t1[0][l], k.t1[1][l], k.t1[2][l]}, {k.t2[0][l], k.t2[1][l], k.t2[2][l]}, {k.n[0][l], k.n[1][l], k.n[2][l]}};
+  const double ma = k.ma[l] / unit, mb = k.mb[l] / unit;
+  double ia[6], ib[6];
+  constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kCol[6] = {0, 1, 2, 1, 2, 2};
+  for (int e = 0; e < 6; ++e) {
+    ia[e] = glm::dot(t[kRow[e]], ia_world * t[kCol[e]]);
+    ib[e] = glm::dot(t[kRow[e]], ib_world * t[kCol[e]]);
+    k.ia[e][l] = static_cast<Real>(ia[e] * unit), k.ib[e][l] = static_cast<Real>(ib[e] * unit);
+  }
+  const double ca[3] = {k.ca[0][l], k.ca[1][l], k.ca[2][l]};
+  const double cb[3] = {k.cb[0][l], k.cb[1][l], k.cb[2][l]};
+  const double d[3] = {cb[0] - ca[0], cb[1] - ca[1], cb[2] - ca[2]};
+  double ra[P][2], rb[P][2], ira[P][2], irb[P][2];
+  bool on[P];
+  for (int p = 0; p < P; ++p) {
+    on[p] = k.mass[p][l] != 0;
+    double x = ca[0], y = ca[1];
+    if constexpr (P > 1) x += k.x[p][l], y += k.y[p][l];
+    ra[p][0] = y, ra[p][1] = -x;
+    rb[p][0] = y + d[1], rb[p][1] = -(x + d[0]);
+    ira[p][0] = ia[0] * ra[p][0] + ia[1] * ra[p][1];
+    ira[p][1] = ia[1] * ra[p][0] + ia[3] * ra[p][1];
+    irb[p][0] = ib[0] * rb[p][0] + ib[1] * rb[p][1];
+    irb[p][1] = ib[1] * rb[p][0] + ib[3] * rb[p][1];
+  }
+  static constexpr int kPairs[10][2] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}};
+  for (int e = 0; e < P * (P + 1) / 2; ++e) {
+    const int i = kPairs[e][0], j = kPairs[e][1];
+    const double v = on[i] && on[j] ? ma + mb + (ra[i][0] * ira[j][0] + ra[i][1] * ira[j][1]) +
+                                          (rb[i][0] * irb[j][0] + rb[i][1] * irb[j][1])
+                                    : 0.0;
+    k.k[e][l] = static_cast<Real>(v * unit);
+    if (i == j) k.mass[i][l] = static_cast<Real>((v > 0 ? 1 / v : 0.0) / unit);
+  }
+  auto form1 = [](const double m[6], double u1, double u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
+  auto form2 = [](const double m[6], double u0, double u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
+  auto inverse = [](double v) { return v > 0 ? 1 / v : 0.0; };
+  k.tangent_mass[0][l] = static_cast<Real>(inverse(ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1])) / unit);
+  k.tangent_mass[1][l] = static_cast<Real>(inverse(ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0])) / unit);
+  if constexpr (P > 1) {
+    k.twist_mass[l] = static_cast<Real>(inverse(ia[5] + ib[5]) / unit);
+  } else if (k.rolling[l] > 0) {
+    const double a = ia[0] + ib[0], b = ia[1] + ib[1], c = ia[2] + ib[2], dd = ia[3] + ib[3], e = ia[4] + ib[4],
+                 f = ia[5] + ib[5];
+    const double adj[6] = {dd * f - e * e, c * e - b * f, b * e - c * dd, a * f - c * c, b * c - a * e, a * dd - b * b};
+    const double det = a * adj[0] + b * adj[1] + c * adj[2];
+    for (int i = 0; i < 6; ++i) k.rolling_mass[i][l] = static_cast<Real>(det > 0 ? adj[i] / det / unit : 0.0);
+  }
+}
+
+}  // namespace
+
+void RigidContacts::refresh_inertia(RigidBodySystem& s) {
+  // the bodies that turned too far from their inverse inertia's orientation: (r - 1) a >
+  // kInertiaTurn, a the angle between the orientations, cos(a / 2) = |q . q_ref|, taken as
+  // 8 (1 - cos(a / 2)) = a^2 (its small-angle form; larger angles only refresh sooner)
+  refresh_list.clear();
+  for (std::size_t kind = 0; kind < moving.size(); ++kind) {
+    if (static_cast<FreeRotation>(kind) == FreeRotation::Round) continue;
+    for (const std::uint32_t i : moving[kind]) {
+      const Vec3& m = s.inv_inertia_[i];
+      const double least = std::min({m.x, m.y, m.z});
+      const double spread = std::min(std::max({m.x, m.y, m.z}), kSolverInertiaRatio * least) / least - 1;
+      const double c = std::abs(glm::dot(s.q_[i], inertia_q[i]));
+      if (8 * (1 - c) * spread * spread <= kInertiaTurn * kInertiaTurn) continue;
+      inv_inertia[i] = world_inv_inertia(s, i);
+      inertia_q[i] = s.q_[i];
+      refreshed[i] = 1;
+      refresh_list.push_back(i);
+    }
+  }
+  if (refresh_list.empty()) return;
+  for (std::size_t b = 0; b < block_count; ++b) {
+    ContactBlock& k = blocks[b];
+    for (int l = 0; l < k.lanes; ++l)
+      if (refreshed[k.a[l]] | refreshed[k.b[l]]) refresh_lane(k, l, inv_inertia[k.a[l]], inv_inertia[k.b[l]]);
+  }
+  for (std::size_t b = 0; b < one_blocks; ++b) {
+    OnePointBlock& k = ones[b];
+    for (int l = 0; l < k.lanes; ++l)
+      if (refreshed[k.a[l]] | refreshed[k.b[l]]) refresh_lane(k, l, inv_inertia[k.a[l]], inv_inertia[k.b[l]]);
+  }
+  for (Rolling& x : rolls) {
+    if (!(refreshed[x.a] | refreshed[x.b])) continue;
+    set_rolling_mass(x.pair);
+    x.mass = rolling_mass[x.pair];
+    x.ia = inv_inertia[x.a], x.ib = inv_inertia[x.b];
+  }
+  for (const std::uint32_t i : refresh_list) refreshed[i] = 0;
 }
 
 bool RigidContacts::solver_report(std::size_t k, int p, double& approach, double& max_impulse) const {

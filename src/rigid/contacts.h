@@ -231,7 +231,12 @@ struct RigidContacts {
   std::vector<ContactPair> pairs;  // this step's manifolds, for the solver (sorted by key)
   std::size_t emitted = 0;         // pairs written so far this step
   std::size_t last_count = 0;      // pairs of last step
-  std::vector<Mat3> inv_inertia;  // world inverse inertia by dense body, fixed over the step
+  // world inverse inertia by dense body: at the start of the step, and for a body that turns
+  // far in it at its pose of the last substep (refresh_inertia)
+  std::vector<Mat3> inv_inertia;
+  std::vector<Quat> inertia_q;          // by dense body: the orientation inv_inertia is of
+  std::vector<std::uint8_t> refreshed;  // scratch of refresh_inertia, by body (and a last spare row): 1 when refreshed
+  std::vector<std::uint32_t> refresh_list;  // scratch of refresh_inertia: the bodies it refreshed
   std::size_t continuous_hits = 0;     // bodies put back to a time of impact, all steps
   double impulse_h = 0;  // the time step (s) the carried impulses were accumulated over; 0: none yet
 
@@ -402,6 +407,16 @@ struct RigidContacts {
   bool built = false;       // the blocks hold this step's manifolds (cleared by store())
   bool has_colors = false;  // color_of holds the last step's colours
 
+  /// Body i's world inverse inertia as the solvers see it, at its orientation now (1/(kg m^2)):
+  /// zero while asleep; for the float solvers its moments at most kSolverInertiaRatio apart.
+  static Mat3 world_inv_inertia(const RigidBodySystem& s, std::size_t i);
+  /// After the positions of a substep moved (the soft step, sequential impulses, TGS): each
+  /// awake body whose inverse inertia the blocks hold at an orientation that is now
+  /// kInertiaTurn / (its ratio of moments - 1) or more away gets it at its pose now, and so do
+  /// the rows of its lanes that depend on it (inverse inertias, K, effective masses, rolling
+  /// masses); their frames, arms and impulses stay. A body of three equal moments never needs
+  /// it (its inverse inertia is the same in every frame).
+  void refresh_inertia(RigidBodySystem& s);
   /// World inverse inertias; for the velocity solvers, the colours, the blocks and the
   /// carried impulses in the warm-start accumulators.
   void prepare(RigidBodySystem& s);

@@ -675,6 +675,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
       integrate_velocities(h, gravity, c.rows.data(), c.warm.data());
       c.pass(*this, h, true, true, false, false);
       integrate_positions(h, c.rows.data(), c.motion.data());
+      c.refresh_inertia(*this);  // (the inverse inertias of bodies that turned far, at their poses now)
       c.pass(*this, h, false, true, true, warm && s + 1 < substeps);
     }
   } else {
@@ -682,6 +683,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
     integrate_velocities(dt, gravity, c.rows.data(), c.warm.data());
     for (int k = 0; k < settings_.iterations; ++k) c.pass(*this, dt, true, false, false, false);
     integrate_positions(dt, c.rows.data(), c.motion.data());
+    c.refresh_inertia(*this);
   }
   if (settings_.solver != RigidSolverType::Xpbd) {
     c.restitution(*this, dt, gravity);

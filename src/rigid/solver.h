@@ -34,6 +34,14 @@ inline constexpr int kBandColors = 64;
 /// raised), which keeps the rounding of the frame's inverse inertia (2^-24 of its largest
 /// entry) under 1e-3 of its smallest inverse moment.
 inline constexpr double kSolverInertiaRatio = 1e4;
+/// A body's inverse inertia in the blocks is taken again at its pose now (after a substep's
+/// positions: RigidContacts::refresh_inertia) once it has turned by this over (its ratio of
+/// principal moments - 1) radians from the orientation the blocks hold it at (rad). An
+/// impulse through an inverse inertia turned by a from the body's gives it an angular
+/// velocity whose energy is off by about (ratio - 1) a of the impulse's: a thin rod (moments
+/// 1e4 : 1 as the passes see them) tumbling 2 rad a 60 Hz step was driven to 1e3-1e5 rad/s
+/// within a step with its step's start inverse inertia (docs/rigid-bodies.md).
+inline constexpr double kInertiaTurn = 0.01;
 /// The lane of a block that holds no manifold.
 inline constexpr std::uint32_t kNoPair = std::numeric_limits<std::uint32_t>::max();
 

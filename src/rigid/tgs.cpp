@@ -31,6 +31,7 @@ void RigidContacts::step_tgs(RigidBodySystem& s, double dt, const Vec3& gravity)
     // measures the separations at the new poses, the last carries the impulses to the next
     // substep (without relax iterations, separate passes do both)
     s.integrate_positions(h, rows.data(), motion.data());
+    refresh_inertia(s);
     const bool carry = cs.warm_starting && k + 1 < substeps;
     for (int it = 0; it < cs.relax_iterations; ++it)
       pass(s, h, false, false, it == 0, carry && it + 1 == cs.relax_iterations);
