@@ -65,14 +65,22 @@ double advance(const Sweep& w, GapAt gap_at, double target, double tol) {
   // the step's end within that many. A fixed cap (it was 50) stopped slow approaches short of
   // it instead, a ball spinning just above the ground among them, and put the body back to a
   // time before a contact that never came. (A zero slop has no such bound: 50 then.)
-  const double limit = tol > 0 ? (glm::length(dc) + w.angle * w.reach) / tol + 2 : 50;
-  for (int it = 0; it < limit; ++it) {
+  // Far from the origin the bound fails by rounding: a body at 1e14 m (positions 1.6 cm apart
+  // there) closing 4e14 m in a step advanced t by less than its rounding, and the loop, whose
+  // bound was then 3e17 passes, never ended. So it also ends when t stops moving (t is still a
+  // time before contact) and after kMaxAdvances passes (more than any approach the slop bounds
+  // below 1.2 km a step needs).
+  constexpr double kMaxAdvances = 1e6;
+  const double limit = tol > 0 ? std::min((glm::length(dc) + w.angle * w.reach) / tol + 2, kMaxAdvances) : 50;
+  for (double it = 0; it < limit; ++it) {
     // a point at r from the centre moves along n at angle (axis x r) . n <= angle |axis x n|
     // |r| per step: turning about n moves nothing along n
     const double closing = glm::dot(dc, g.normal) + w.angle * w.reach * glm::length(glm::cross(w.axis, g.normal));
     if (closing <= 0) return 1;
-    t += (g.distance - target) / closing;
-    if (t >= 1) return 1;
+    const double next = t + (g.distance - target) / closing;
+    if (next >= 1) return 1;
+    if (!(next > t)) return t;  // the advance is below t's rounding
+    t = next;
     g = gap_at(t);
     if (g.distance <= target + tol) return t;
   }

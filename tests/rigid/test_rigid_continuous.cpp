@@ -1,9 +1,11 @@
 // Rigid bodies, continuous collision: fast bodies stop at static walls instead of passing
 // through them, and the continuous pass leaves slow bodies alone.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <memory>
 #include <vector>
 
@@ -267,6 +269,29 @@ TEST(RigidContinuous, ABodyWithItsCentreOfMassOutsideItsShapesPassesWhatGoesThro
       EXPECT_NEAR(s.center_of_mass(b).y, 1 - 50 * 0.5, 1e-9) << pba::to_string(solver) << (hull ? ", hull" : ", box");
       EXPECT_NEAR(s.linear_velocity(b).y, -50, 1e-9);
     }
+}
+
+// A spinning box far from the origin (1e14 m up, where positions are 1.6 cm apart) falling at
+// 2.2e16 m/s (within kMaxRigidSpeed) onto the ground: the continuous pass's conservative
+// advancement came within 5 cm of the plane and then advanced its time by less than the time's
+// rounding, pass after pass, with a bound of 3e17 passes: step() never returned (under every
+// solver; a scene with gravity 1e20 m/s^2 got there under TGS). Each step must end, run in a
+// child process that an alarm kills after 30 s.
+TEST(RigidContinuous, AnAdvanceStalledByRoundingFarFromTheOriginEnds) {
+  for (const RigidSolverType solver : pba::kRigidSolvers)
+    for (const double y : {1e14, 1e15})
+      EXPECT_EXIT(
+          {
+            alarm(30);
+            RigidBodySystem s({.capacity = 4, .contacts = {.solver = solver}});
+            ground(s, false);
+            const auto b = s.create({.name = "far", .pose = {{0, y, 0}}, .linear_velocity = {0, -y * 60 / 0.27, 0},
+                                     .angular_velocity = {0, 0, 34}, .shapes = {{.shape = ColliderShape::box(Vec3(0.5))}}});
+            for (int i = 0; i < 3; ++i) s.step(1.0 / 60, Vec3(0));
+            std::exit(s.center_of_mass(b).y < y ? 0 : 3);  // it fell
+          },
+          ::testing::ExitedWithCode(0), "")
+          << pba::to_string(solver) << " from y = " << y;
 }
 
 }  // namespace
