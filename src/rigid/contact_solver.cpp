@@ -36,6 +36,9 @@ Softness make_soft(double hertz, double zeta, double h) {
   if (hertz == 0) return {0, 1, 0};
   const double omega = 2 * kPi * hertz;
   const double a1 = 2 * zeta + h * omega, a2 = h * omega * a1, a3 = 1 / (1 + a2);
+  // an overdamped spring beyond the doubles (damping_ratio 1e308: a2 = inf) is its limit, a
+  // rigid contact without bias (inf * 0 made the mass scale NaN)
+  if (!std::isfinite(a2)) return {omega / a1, 1, 0};
   return {omega / a1, a2 * a3, a3};
 }
 

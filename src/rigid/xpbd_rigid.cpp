@@ -43,6 +43,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace pba::detail {
 
@@ -211,7 +212,9 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
   const double h = dt / substeps;
   // compliance per substep (alpha / h^2, eq. 4) and the restitution threshold: the setting or
   // the speed gravity gives in two substeps, whichever is larger (eq. 34)
-  const double alpha = cs.contact_compliance / (h * h);
+  // (at most the largest double: beyond it, contact_compliance 1e308, inf * 0 made the
+  // projection NaN; the largest is as soft, a contact that pushes nothing)
+  const double alpha = std::min(cs.contact_compliance / (h * h), std::numeric_limits<double>::max());
   const double threshold = std::max(cs.restitution_threshold, 2 * glm::length(gravity) * h);
   x_start.resize(n), x_free.resize(n), q_start.resize(n), q_free.resize(n);
   xpbd.resize(pairs.size());
