@@ -1,5 +1,6 @@
 // The scene reader's world-level fields (docs/scene-format.md): rotations, poses and
 // colours shared by every module, kinematic paths, the settings, shapes and colliders.
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -19,9 +20,13 @@ Quat read_rotation(const Node& n) {
     if (!r.raw().is_array() || r.size() != 4)
       r.fail("must be a quaternion [w, x, y, z], got " + Node::type_name(r.raw()));
     const Quat q(r.item(0).number(), r.item(1).number(), r.item(2).number(), r.item(3).number());
-    const double len = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
-    if (len == 0) r.fail("must be a non-zero quaternion");
-    return q / len;
+    const double big = std::max({std::abs(q.w), std::abs(q.x), std::abs(q.y), std::abs(q.z)});
+    if (big == 0) r.fail("must be a non-zero quaternion");
+    // far from 1, scaled by its largest component first: the squares of [1e200, 1e200, 0, 0]
+    // overflowed (normalised to zeros, refused as "a finite unit quaternion" without the
+    // field's path) and those of [1e-200, 0, 0, 0] underflowed (refused as zero)
+    const Quat u = big > 1e150 || big < 1e-150 ? q / big : q;
+    return u / std::sqrt(u.w * u.w + u.x * u.x + u.y * u.y + u.z * u.z);
   }
   return Quat(1, 0, 0, 0);
 }

@@ -3,6 +3,7 @@
 // row per body with its quaternion and prints the World's hash.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -184,6 +185,28 @@ TEST(RigidScenes, BadFieldsAreNamedByPath) {
       error_of(R"({"version": 1, "rigid_bodies": [{"name": "b", "shapes": [{"type": "box", "density": 1e308, "half_extents": [10, 10, 10]}]}]})");
   EXPECT_EQ(m.rfind("scenes/x.json: /rigid_bodies/0: rigid body of entity 0 'b'", 0), 0u) << m;
   EXPECT_NE(m.find("mass: must be"), std::string::npos) << m;
+}
+
+// A quaternion is normalised whatever its scale: [1e200, 1e200, 0, 0] is a quarter turn
+// about x and [1e-200, 0, 0, 0] no turn. Their squares overflowed and underflowed: the first
+// was refused as "/rigid_bodies/0: EntityDef 'a'.rotation: must be a finite unit quaternion"
+// (normalised to zeros, not named by the field's path), the second as "must be a non-zero
+// quaternion".
+TEST(RigidScenes, AQuaternionOfAnyScaleIsNormalised) {
+  pba::Scene s = pba::parse_scene(R"({"version": 1, "rigid_bodies": [
+      {"name": "a", "rotation": [1e200, 1e200, 0, 0], "shapes": [{"type": "box"}]},
+      {"name": "b", "rotation": [1e-200, 0, 0, 0], "shapes": [{"type": "box"}]},
+      {"name": "c", "rotation": [0, 0, 3e-160, -4e-160], "shapes": [{"type": "box"}]}]})",
+                                  "scenes/x.json");
+  const pba::Quat a = s.world.pose(s.world.find("a")).rotation, b = s.world.pose(s.world.find("b")).rotation,
+                  c = s.world.pose(s.world.find("c")).rotation;
+  EXPECT_NEAR(a.w, std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(a.x, std::sqrt(0.5), 1e-15);
+  EXPECT_EQ(b, pba::Quat(1, 0, 0, 0));
+  EXPECT_NEAR(c.y, 0.6, 1e-15);
+  EXPECT_NEAR(c.z, -0.8, 1e-15);
+  EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"rotation": [0, 0, 0, 0], "shapes": [{"type": "box"}]}]})"),
+            "scenes/x.json: /rigid_bodies/0/rotation: must be a non-zero quaternion");
 }
 
 TEST(RigidScenes, SettingsReachTheWorld) {
