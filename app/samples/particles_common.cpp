@@ -206,11 +206,12 @@ void DrawWindField(Renderer& r, const Vec3& wind, const Vec3& lo, const Vec3& hi
 }
 
 double OptionNumber(const SampleContext& ctx, const std::string& key, double fallback, double lo, double hi) {
+  // (a key given with no value, "spin=", is refused: it ran the default)
   const std::string v = ctx.option(key, "");
-  if (v.empty()) return fallback;
+  if (v.empty() && !ctx.options.count(key)) return fallback;
   char* end = nullptr;
   const double x = std::strtod(v.c_str(), &end);
-  if (end != v.c_str() + v.size() || !std::isfinite(x) || x < lo || x > hi) {
+  if (v.empty() || end != v.c_str() + v.size() || !std::isfinite(x) || x < lo || x > hi) {
     char buf[160];
     std::snprintf(buf, sizeof buf, ": expected a number in [%g, %g]", lo, hi);
     throw Error("--option " + key + "=" + v + buf);
@@ -231,7 +232,7 @@ int OptionInteger(const SampleContext& ctx, const std::string& key, int fallback
 
 bool OptionFlag(const SampleContext& ctx, const std::string& key, bool fallback) {
   const std::string v = ctx.option(key, "");
-  if (v.empty()) return fallback;
+  if (v.empty() && !ctx.options.count(key)) return fallback;
   if (v != "0" && v != "1") throw Error("--option " + key + "=" + v + ": expected 0 (off) or 1 (on)");
   return v == "1";
 }

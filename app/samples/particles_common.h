@@ -64,8 +64,8 @@ void DrawForcer(Renderer& r, const Forcer& f, double t, const DrawFlags& flags);
 /// from `lo` to `hi`, `n` x `m` arrows at each of the given heights.
 void DrawWindField(Renderer& r, const Vec3& wind, const Vec3& lo, const Vec3& hi, int n, int m);
 
-/// The number given by --option key=value, or `fallback`; throws Error naming the option
-/// when it is not a number in [lo, hi].
+/// The number given by --option key=value, or `fallback` when the key is not given; throws
+/// Error naming the option when it is not a number in [lo, hi] (an empty value, `spin=`, too).
 double OptionNumber(const SampleContext& ctx, const std::string& key, double fallback, double lo, double hi);
 
 /// The whole number given by --option key=value (a count, a size), or `fallback`; throws
@@ -73,8 +73,9 @@ double OptionNumber(const SampleContext& ctx, const std::string& key, double fal
 /// cut to 2).
 int OptionInteger(const SampleContext& ctx, const std::string& key, int fallback, int lo, int hi);
 
-/// The switch given by --option key=0 or key=1, or `fallback`; throws Error naming the option
-/// for any other value (`compare=0.5` is refused, not read as on).
+/// The switch given by --option key=0 or key=1, or `fallback` when the key is not given;
+/// throws Error naming the option for any other value (`compare=0.5` is refused, not read as
+/// on; an empty `sleep=` is refused, not read as the default).
 bool OptionFlag(const SampleContext& ctx, const std::string& key, bool fallback);
 
 /// A plot series from its arrays, colour and width.
