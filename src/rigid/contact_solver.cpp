@@ -72,6 +72,7 @@ void clear_lane(B& b, AnchorsOf<B::kPoints>& g, int l, std::uint32_t spare) {
     zero(g.za[k]), zero(g.zb[k]), zero(g.base[k]), zero(g.ex[k]), zero(g.ey[k]), zero(g.last[k]);
   }
   zero(b.ma), zero(b.mb), zero(b.tangent_mass[0]), zero(b.tangent_mass[1]);
+  for (int i = 0; i < 3; ++i) zero(b.tangent_k[i]);
   zero(b.friction), zero(b.tangent_impulse[0]), zero(b.tangent_impulse[1]);
   if constexpr (P > 1) zero(b.twist_mass), zero(b.twist_radius), zero(b.twist_impulse);
   b.unit[l] = 1;
@@ -271,8 +272,14 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
     const V cb[3] = {ca[0] + d[0], ca[1] + d[1], ca[2] + d[2]};
     auto form1 = [](const V m[6], V u1, V u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
     auto form2 = [](const V m[6], V u0, V u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
-    put(k.tangent_mass[0], l0, inverse(ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1])) / unit);
-    put(k.tangent_mass[1], l0, inverse(ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0])) / unit);
+    // (c x t1)^T m (c x t2), the off-diagonal entry (no linear part: t1 . t2 = 0)
+    auto form12 = [](const V m[6], V u1, V u2, V w0, V w2) { return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2); };
+    const V k11 = ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1]);
+    const V k22 = ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0]);
+    const V k12 = form12(ia, ca[2], -ca[1], -ca[2], ca[0]) + form12(ib, cb[2], -cb[1], -cb[2], cb[0]);
+    put(k.tangent_mass[0], l0, inverse(k11) / unit);
+    put(k.tangent_mass[1], l0, inverse(k22) / unit);
+    put(k.tangent_k[0], l0, k11 * unit), put(k.tangent_k[1], l0, k12 * unit), put(k.tangent_k[2], l0, k22 * unit);
     if constexpr (P > 1) put(k.twist_mass, l0, inverse(ia[5] + ib[5]) / unit);
   }
   put(k.friction, l0, from<V>(in.friction, l0));
@@ -809,9 +816,17 @@ void refresh_lane(B& k, int l, const Mat3& ia_world, const Mat3& ib_world) {
   }
   auto form1 = [](const double m[6], double u1, double u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
   auto form2 = [](const double m[6], double u0, double u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
+  auto form12 = [](const double m[6], double u1, double u2, double w0, double w2) {
+    return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2);
+  };
   auto inverse = [](double v) { return v > 0 ? 1 / v : 0.0; };
-  k.tangent_mass[0][l] = static_cast<Real>(inverse(ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1])) / unit);
-  k.tangent_mass[1][l] = static_cast<Real>(inverse(ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0])) / unit);
+  const double k11 = ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1]);
+  const double k22 = ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0]);
+  const double k12 = form12(ia, ca[2], -ca[1], -ca[2], ca[0]) + form12(ib, cb[2], -cb[1], -cb[2], cb[0]);
+  k.tangent_mass[0][l] = static_cast<Real>(inverse(k11) / unit);
+  k.tangent_mass[1][l] = static_cast<Real>(inverse(k22) / unit);
+  k.tangent_k[0][l] = static_cast<Real>(k11 * unit), k.tangent_k[1][l] = static_cast<Real>(k12 * unit);
+  k.tangent_k[2][l] = static_cast<Real>(k22 * unit);
   if constexpr (P > 1) {
     k.twist_mass[l] = static_cast<Real>(inverse(ia[5] + ib[5]) / unit);
   } else if (k.rolling[l] > 0) {
