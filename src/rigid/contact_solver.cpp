@@ -72,6 +72,7 @@ void clear_lane(B& b, AnchorsOf<B::kPoints>& g, int l, std::uint32_t spare) {
     zero(g.za[k]), zero(g.zb[k]), zero(g.base[k]), zero(g.ex[k]), zero(g.ey[k]), zero(g.last[k]);
   }
   zero(b.ma), zero(b.mb), zero(b.tangent_mass[0]), zero(b.tangent_mass[1]);
+  for (int i = 0; i < 3; ++i) zero(b.tangent_k[i]);
   zero(b.friction), zero(b.tangent_impulse[0]), zero(b.tangent_impulse[1]);
   if constexpr (P > 1) zero(b.twist_mass), zero(b.twist_radius), zero(b.twist_impulse);
   b.unit[l] = 1;
@@ -271,8 +272,14 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
     const V cb[3] = {ca[0] + d[0], ca[1] + d[1], ca[2] + d[2]};
     auto form1 = [](const V m[6], V u1, V u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
     auto form2 = [](const V m[6], V u0, V u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
-    put(k.tangent_mass[0], l0, inverse(ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1])) / unit);
-    put(k.tangent_mass[1], l0, inverse(ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0])) / unit);
+    // (c x t1)^T m (c x t2), the off-diagonal entry (no linear part: t1 . t2 = 0)
+    auto form12 = [](const V m[6], V u1, V u2, V w0, V w2) { return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2); };
+    const V k11 = ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1]);
+    const V k22 = ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0]);
+    const V k12 = form12(ia, ca[2], -ca[1], -ca[2], ca[0]) + form12(ib, cb[2], -cb[1], -cb[2], cb[0]);
+    put(k.tangent_mass[0], l0, inverse(k11) / unit);
+    put(k.tangent_mass[1], l0, inverse(k22) / unit);
+    put(k.tangent_k[0], l0, k11 * unit), put(k.tangent_k[1], l0, k12 * unit), put(k.tangent_k[2], l0, k22 * unit);
     if constexpr (P > 1) put(k.twist_mass, l0, inverse(ia[5] + ib[5]) / unit);
   }
   put(k.friction, l0, from<V>(in.friction, l0));
@@ -809,9 +816,17 @@ void refresh_lane(B& k, int l, const Mat3& ia_world, const Mat3& ib_world) {
   }
   auto form1 = [](const double m[6], double u1, double u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
   auto form2 = [](const double m[6], double u0, double u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
+  auto form12 = [](const double m[6], double u1, double u2, double w0, double w2) {
+    return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2);
+  };
   auto inverse = [](double v) { return v > 0 ? 1 / v : 0.0; };
-  k.tangent_mass[0][l] = static_cast<Real>(inverse(ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1])) / unit);
-  k.tangent_mass[1][l] = static_cast<Real>(inverse(ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0])) / unit);
+  const double k11 = ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1]);
+  const double k22 = ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0]);
+  const double k12 = form12(ia, ca[2], -ca[1], -ca[2], ca[0]) + form12(ib, cb[2], -cb[1], -cb[2], cb[0]);
+  k.tangent_mass[0][l] = static_cast<Real>(inverse(k11) / unit);
+  k.tangent_mass[1][l] = static_cast<Real>(inverse(k22) / unit);
+  k.tangent_k[0][l] = static_cast<Real>(k11 * unit), k.tangent_k[1][l] = static_cast<Real>(k12 * unit);
+  k.tangent_k[2][l] = static_cast<Real>(k22 * unit);
   if constexpr (P > 1) {
     k.twist_mass[l] = static_cast<Real>(inverse(ia[5] + ib[5]) / unit);
   } else if (k.rolling[l] > 0) {
@@ -1029,22 +1044,6 @@ void RigidContacts::update_separations(RigidBodySystem& s) {
     for (int l = 0; l < blocks[b].lanes; ++l) separation_lane(blocks[b], anchors[b], l, r);
 }
 
-void RigidContacts::restitution(RigidBodySystem& s, double dt, const Vec3& gravity) {
-  const double threshold = s.settings_.restitution_threshold;
-  const BodyArrays r = arrays(s);
-  for (const LaneRef& x : restitution_lanes) {
-    if (x.one)
-      restitution_lane(ones[x.block], static_cast<int>(x.lane), x.restitution, threshold, r);
-    else
-      restitution_lane(blocks[x.block], static_cast<int>(x.lane), x.restitution, threshold,
-                       s.settings_.manifold_iterations, r);
-  }
-  // (s.v_, s.w_ and s.q0_ still hold the step's start: finish_velocities has not run)
-  if (restitution_lanes.empty()) return;
-  find_bounces(s, dt, gravity, true, s.v_.data(), s.w_.data(), s.q0_.data());
-  bound_bounces(s, true);
-}
-
 namespace {
 
 // kinetic energy of a body of inverse mass im and principal moments `inertia` with velocity v
@@ -1053,7 +1052,64 @@ double kinetic(double im, const Vec3& inertia, const Vec3& v, const Vec3& wb) {
   return 0.5 * glm::dot(v, v) / im + 0.5 * glm::dot(wb, inertia * wb);
 }
 
+// the largest f in [0, 1] with E(f) = bound, E(f) = E0 + f B + f^2 A the kinetic energy at the
+// velocities (v, wb) + f (dv, dwb) (E0 <= bound < E(1)): the root of the quadratic
+double fraction_at(double im, const Vec3& inertia, const Vec3& v, const Vec3& wb, const Vec3& dv, const Vec3& dwb,
+                   double bound) {
+  const double a = kinetic(im, inertia, dv, dwb);
+  const double bb = glm::dot(v, dv) / im + glm::dot(wb, inertia * dwb);
+  const double c = kinetic(im, inertia, v, wb) - bound;  // <= 0
+  return std::clamp((-bb + std::sqrt(std::max(bb * bb - 4 * a * c, 0.0))) / (2 * a), 0.0, 1.0);
+}
+
 }  // namespace
+
+void RigidContacts::restitution(RigidBodySystem& s, double dt, const Vec3& gravity) {
+  const double threshold = s.settings_.restitution_threshold;
+  const BodyArrays r = arrays(s);
+  if (restitution_lanes.empty()) return;
+  // the bodies that bounce off fixed bodies only, with their velocities before the bounces
+  // (s.v_, s.w_ and s.q0_ still hold the step's start: finish_velocities has not run)
+  find_bounces(s, dt, gravity, true, s.v_.data(), s.w_.data(), s.q0_.data());
+  for (Bounce& b : bounces) {
+    const SolverBody& row = rows[b.body];
+    b.pre_v = Vec3(row.v[0], row.v[1], row.v[2]), b.pre_w = Vec3(row.w[0], row.w[1], row.w[2]);
+  }
+  for (const LaneRef& x : restitution_lanes) {
+    if (x.one)
+      restitution_lane(ones[x.block], static_cast<int>(x.lane), x.restitution, threshold, r);
+    else
+      restitution_lane(blocks[x.block], static_cast<int>(x.lane), x.restitution, threshold,
+                       s.settings_.manifold_iterations, r);
+  }
+  bound_bounces(s, true);
+  bound_bounce_work(s, gravity);
+}
+
+void RigidContacts::bound_bounce_work(RigidBodySystem& s, const Vec3& gravity) {
+  for (const Bounce& b : bounces) {
+    const std::uint32_t i = b.body;
+    if (s.torque_[i] != Vec3(0)) continue;  // (a torque's work over the step is not tracked)
+    const double im = s.inv_mass_[i];
+    const Vec3& inertia = s.inertia_[i];
+    const Quat& q = s.q_[i];
+    const Vec3 v(rows[i].v[0], rows[i].v[1], rows[i].v[2]), w(rows[i].w[0], rows[i].w[1], rows[i].w[2]);
+    const Vec3 wb = glm::conjugate(q) * w, pre = glm::conjugate(q) * b.pre_w;
+    const double now = kinetic(im, inertia, v, wb);
+    // the start's kinetic energy plus the work of gravity and force along the step's path
+    const double start = kinetic(im, inertia, s.v_[i], glm::conjugate(s.q0_[i]) * s.w_[i]);
+    const double work = glm::dot(s.gravity_scale_[i] * gravity / im + s.force_[i], s.com_[i] - s.com0_[i]);
+    const double before = kinetic(im, inertia, b.pre_v, pre);
+    const double bound = std::max(before, start + work);
+    if (!(now > bound * (1 + 1e-6))) continue;
+    // from the velocities before the bounces (their energy `before` <= bound) along the
+    // bounces' change
+    const Vec3 dv = v - b.pre_v, dwb = wb - pre;
+    const double f = fraction_at(im, inertia, b.pre_v, pre, dv, dwb, bound);
+    const Vec3 vf = b.pre_v + f * dv, wf = q * (pre + f * dwb);
+    for (int k = 0; k < 3; ++k) rows[i].v[k] = vf[k], rows[i].w[k] = wf[k];
+  }
+}
 
 void RigidContacts::find_bounces(RigidBodySystem& s, double h, const Vec3& gravity, bool from_lanes, const Vec3* v,
                                  const Vec3* w, const Quat* q) {
@@ -1108,10 +1164,7 @@ void RigidContacts::bound_bounces(RigidBodySystem& s, bool from_rows) {
     // E(f) = E0 + f B + f^2 A from the free motion (E0 <= bound) along the contacts' change
     // (dv, dwb); the largest f in [0, 1] with E(f) = bound (E(1) = now > bound)
     const Vec3 dv = v - b.v, dwb = wb - b.wb;
-    const double a = kinetic(im, inertia, dv, dwb);
-    const double bb = glm::dot(b.v, dv) / im + glm::dot(b.wb, inertia * dwb);
-    const double c = kinetic(im, inertia, b.v, b.wb) - b.bound;  // <= 0
-    const double f = std::clamp((-bb + std::sqrt(std::max(bb * bb - 4 * a * c, 0.0))) / (2 * a), 0.0, 1.0);
+    const double f = fraction_at(im, inertia, b.v, b.wb, dv, dwb, b.bound);
     const Vec3 vf = b.v + f * dv, wf = q * (b.wb + f * dwb);
     if (from_rows) {
       for (int k = 0; k < 3; ++k) rows[i].v[k] = vf[k], rows[i].w[k] = wf[k];

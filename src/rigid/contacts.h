@@ -482,6 +482,13 @@ struct RigidContacts {
   /// it at the bound (the root of a quadratic). rows: the velocities are the solver's rows
   /// (else the system's arrays).
   void bound_bounces(RigidBodySystem& s, bool rows);
+  /// Each of `bounces`' bodies whose kinetic energy after the restitution pass is above both
+  /// its energy before the pass and its energy at the step's start plus the work of gravity
+  /// and force along the step's path (a body that rose during the step cannot also get back
+  /// all that it approached with) gets its velocities before the pass plus the largest
+  /// fraction of the pass's change that keeps it at that bound (the solver's rows; bodies
+  /// under a torque are left as they are).
+  void bound_bounce_work(RigidBodySystem& s, const Vec3& gravity);
   // A collision with bodies that do not move cannot leave a body with more kinetic energy (in
   // their frame) than the larger of what it had and what its free motion would have had (a
   // bounce with e <= 1 gives back at most what the impact took). The solvers' passes over the
@@ -493,6 +500,7 @@ struct RigidContacts {
     std::uint32_t body;
     double bound;  // max(kinetic energy now, after the free motion) (J)
     Vec3 v, wb;    // the free motion's velocity (m/s) and angular velocity in the body frame (rad/s)
+    Vec3 pre_v, pre_w;  // the solver's velocity (m/s) and world angular velocity (rad/s) before the restitution pass
   };
   std::vector<Bounce> bounces;
   std::vector<std::uint8_t> shared;  // by body, scratch of find_bounces (1: touches a body that moves; 2: listed)

@@ -72,6 +72,7 @@ struct alignas(64) ContactBlock {
   // ca - cb, the centres' distance, may be far larger than either)
   Real ca[3][kLanes], cb[3][kLanes];  // (m)
   Real tangent_mass[2][kLanes];       // (kg)
+  Real tangent_k[3][kLanes];          // K of the tangent rows times u: t1 t1, t1 t2, t2 t2 (1/kg)
   Real twist_mass[kLanes];            // (kg m^2)
   Real friction[kLanes];              // mixed coefficient
   Real twist_radius[kLanes];          // mean distance of the points from the centroid (m)
@@ -97,7 +98,7 @@ struct alignas(64) ContactBlock {
 /// (whose other three points hold zeros). A one-point lane's rolling resistance (a ball's) is
 /// solved in the block too, right after its friction, with SIMD and in the frame (a
 /// ContactBlock's lanes that roll are solved one by one, in double, after their blocks). The
-/// block is 54 rows (10 of them the rolling resistance's) to ContactBlock's 79, and its normal
+/// block is 57 rows (10 of them the rolling resistance's) to ContactBlock's 82, and its normal
 /// sweeps touch one point, not four with their K. prepare() puts a colour's one-point
 /// manifolds in blocks of their own after its ContactBlocks (no two manifolds of a colour share
 /// a body that moves, so the order within a colour changes nothing); the overflow keeps
@@ -115,6 +116,7 @@ struct alignas(64) OnePointBlock {
   Real sep[1][kLanes];                // separation at the bodies' poses now (m)
   Real ca[3][kLanes], cb[3][kLanes];  // the point from a's centre of mass and from b's, in the frame (m)
   Real tangent_mass[2][kLanes];       // (kg)
+  Real tangent_k[3][kLanes];          // K of the tangent rows times u: t1 t1, t1 t2, t2 t2 (1/kg)
   Real friction[kLanes];              // mixed coefficient
   Real tangent_impulse[2][kLanes];    // accumulated (N s)
   // rolling resistance: an angular impulse against the bodies' relative turning, up to

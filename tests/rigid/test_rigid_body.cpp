@@ -632,9 +632,9 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0xb252c69b896d619full) << std::hex << soft;
-  EXPECT_EQ(si, 0xc0bc8a861661b5c7ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0xe4ddd200e2e28785ull) << std::hex << tgs;
+  EXPECT_EQ(soft, 0x260b0191c618cdd4ull) << std::hex << soft;
+  EXPECT_EQ(si, 0xd15d4424f1a2d6adull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x45e23ed67dc10319ull) << std::hex << tgs;
   EXPECT_EQ(xpbd, 0xd4af23f284400282ull) << std::hex << xpbd;
 }
 
