@@ -318,20 +318,87 @@ void fill_scalar(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes)
 // ---------------------------------------------------------------------------------------
 // prepare: inverse inertias, colours, blocks, the first warm start
 
-Mat3 RigidContacts::world_inv_inertia(const RigidBodySystem& s, std::size_t i) {
-  // a sleeping body holds still like a static one until something wakes it
-  if (s.asleep_[i]) return Mat3(0.0);
-  const Mat3 r = glm::mat3_cast(s.q_[i]);
-  Mat3 d(0.0);
+namespace {
+
+// What making bodies' world inverse inertias reads, gathered a body a lane: the orientation
+// and the principal inverse moments (already held to kSolverInertiaRatio where asked)
+struct InertiaInput {
+  double q[4][kLanes];  // w, x, y, z
+  double m[3][kLanes];  // (1/(kg m^2))
+};
+
+// Lanes [l0, l0 + width): R diag(m) R^T into out (column by column, glm's order), R being
+// glm::mat3_cast(q), by glm's arithmetic: mat3_cast's, and the two products summed as glm's
+// mat3 product sums them, the diagonal matrix's zeros included (they set zeros' signs), so
+// every lane type gives the bits of `glm::mat3_cast(q) * d * glm::transpose(...)` in double.
+template <class V>
+PBA_LANES void world_inertia_lanes(const InertiaInput& in, double (&out)[9][kLanes], int l0) {
+  const V w = from<V>(in.q[0], l0), x = from<V>(in.q[1], l0), y = from<V>(in.q[2], l0), z = from<V>(in.q[3], l0);
+  const V xx = x * x, yy = y * y, zz = z * z, xz = x * z, xy = x * y, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+  const V r[3][3] = {{1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy)},
+                     {2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx)},
+                     {2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy)}};
+  const V zero = lanes::splat<V>(0.0);
+  V d[3][3];
+  for (int j = 0; j < 3; ++j)
+    for (int k = 0; k < 3; ++k) d[j][k] = j == k ? from<V>(in.m[j], l0) : zero;
+  V rd[3][3];
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) rd[j][i] = r[0][i] * d[j][0] + r[1][i] * d[j][1] + r[2][i] * d[j][2];
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i)
+      lanes::store(out[3 * j + i] + l0, rd[0][i] * r[0][j] + rd[1][i] * r[1][j] + rd[2][i] * r[2][j]);
+}
+
+__attribute__((target("avx512f"))) void world_inertia_avx512(const InertiaInput& in, double (&out)[9][kLanes], int lanes) {
+  for (int l0 = 0; l0 < lanes; l0 += 8) world_inertia_lanes<v8d>(in, out, l0);
+}
+__attribute__((target("avx2"))) void world_inertia_avx2(const InertiaInput& in, double (&out)[9][kLanes], int lanes) {
+  for (int l0 = 0; l0 < lanes; l0 += 4) world_inertia_lanes<v4d>(in, out, l0);
+}
+void world_inertia_scalar(const InertiaInput& in, double (&out)[9][kLanes], int lanes) {
+  for (int l = 0; l < lanes; ++l) world_inertia_lanes<double>(in, out, l);
+}
+
+}  // namespace
+
+void RigidContacts::world_inv_inertias(const RigidBodySystem& s, const std::uint32_t* bodies, std::size_t count, Mat3* out) const {
   // the float solvers (not XPBD, which solves in double) see inverse moments at most
   // kSolverInertiaRatio times the smallest: a frame's inverse inertia in float holds the
   // rounding of the largest in every entry (2^-24 of it), and a 2 mm x 4 m rod's 2,000,000 : 1
   // buried its transverse inverse moments under it (12%), the passes' impulses no longer
   // matched their K, and the rod's spin grew tenfold a pass (docs/rigid-bodies.md)
-  Vec3 m = s.inv_inertia_[i];
-  if (s.settings_.solver != RigidSolverType::Xpbd) m = glm::min(m, Vec3(kSolverInertiaRatio * std::min({m.x, m.y, m.z})));
-  d[0][0] = m.x, d[1][1] = m.y, d[2][2] = m.z;
-  return r * d * glm::transpose(r);
+  const bool clamp = s.settings_.solver != RigidSolverType::Xpbd;
+  InertiaInput in{};  // (zeros in the lanes past the last body)
+  double world[9][kLanes];
+  for (std::size_t first = 0; first < count; first += kLanes) {
+    const int lanes = static_cast<int>(std::min<std::size_t>(kLanes, count - first));
+    for (int l = 0; l < lanes; ++l) {
+      const std::size_t i = bodies ? bodies[first + static_cast<std::size_t>(l)] : first + static_cast<std::size_t>(l);
+      const Quat& q = s.q_[i];
+      Vec3 m = s.inv_inertia_[i];
+      if (clamp) m = glm::min(m, Vec3(kSolverInertiaRatio * std::min({m.x, m.y, m.z})));
+      in.q[0][l] = q.w, in.q[1][l] = q.x, in.q[2][l] = q.y, in.q[3][l] = q.z;
+      in.m[0][l] = m.x, in.m[1][l] = m.y, in.m[2][l] = m.z;
+    }
+    if (simd == SimdPath::Avx512)
+      world_inertia_avx512(in, world, lanes);
+    else if (simd == SimdPath::Avx2)
+      world_inertia_avx2(in, world, lanes);
+    else
+      world_inertia_scalar(in, world, lanes);
+    for (int l = 0; l < lanes; ++l) {
+      const std::size_t i = bodies ? bodies[first + static_cast<std::size_t>(l)] : first + static_cast<std::size_t>(l);
+      Mat3& o = out[i];
+      // a sleeping body holds still like a static one until something wakes it
+      if (s.asleep_[i]) {
+        o = Mat3(0.0);
+        continue;
+      }
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) o[c][r] = world[3 * c + r][l];
+    }
+  }
 }
 
 void RigidContacts::prepare(RigidBodySystem& s) {
@@ -340,7 +407,8 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   inertia_q.resize(n);
   refreshed.resize(n + 1, 0);
   refresh_list.reserve(n);  // (so that a first refresh later does not allocate)
-  for (std::size_t i = 0; i < n; ++i) inv_inertia[i] = world_inv_inertia(s, i), inertia_q[i] = s.q_[i];
+  world_inv_inertias(s, nullptr, n, inv_inertia.data());
+  for (std::size_t i = 0; i < n; ++i) inertia_q[i] = s.q_[i];
   built = has_colors = lanes_valid = false;
   s.profile_.one_point = 0;  // (build() counts them)
   backward = !backward;
@@ -927,13 +995,13 @@ void RigidContacts::refresh_inertia(RigidBodySystem& s) {
       const double spread = std::min(std::max({m.x, m.y, m.z}), kSolverInertiaRatio * least) / least - 1;
       const double c = std::abs(glm::dot(s.q_[i], inertia_q[i]));
       if (8 * (1 - c) * spread * spread <= kInertiaTurn * kInertiaTurn) continue;
-      inv_inertia[i] = world_inv_inertia(s, i);
       inertia_q[i] = s.q_[i];
       refreshed[i] = 1;
       refresh_list.push_back(i);
     }
   }
   if (refresh_list.empty()) return;
+  world_inv_inertias(s, refresh_list.data(), refresh_list.size(), inv_inertia.data());
   refresh_blocks(simd, blocks.data(), block_count, refreshed.data(), inv_inertia.data());
   refresh_blocks(simd, ones.data(), one_blocks, refreshed.data(), inv_inertia.data());
   for (Rolling& x : rolls) {
