@@ -404,6 +404,7 @@ struct RigidContacts {
   // rotation (FreeRotation, integrate_wide.cpp)
   std::array<std::vector<std::uint32_t>, kFreeRotations> moving;
   bool moving_damped = true;  // some of them have linear or angular damping
+  std::vector<std::uint32_t> kinematic;  // this step's kinematic bodies, in index order (their exact motion)
   bool built = false;       // the blocks hold this step's manifolds (cleared by store())
   bool has_colors = false;  // color_of holds the last step's colours
 
