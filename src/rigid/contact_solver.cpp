@@ -362,7 +362,7 @@ void world_inertia_scalar(const InertiaInput& in, double (&out)[9][kLanes], int 
 
 }  // namespace
 
-void RigidContacts::world_inv_inertias(const RigidBodySystem& s, const std::uint32_t* bodies, std::size_t count, Mat3* out) const {
+void RigidContacts::world_inv_inertias(const RigidBodySystem& s, const std::uint32_t* bodies, std::size_t count) {
   // the float solvers (not XPBD, which solves in double) see inverse moments at most
   // kSolverInertiaRatio times the smallest: a frame's inverse inertia in float holds the
   // rounding of the largest in every entry (2^-24 of it), and a 2 mm x 4 m rod's 2,000,000 : 1
@@ -376,6 +376,7 @@ void RigidContacts::world_inv_inertias(const RigidBodySystem& s, const std::uint
     for (int l = 0; l < lanes; ++l) {
       const std::size_t i = bodies ? bodies[first + static_cast<std::size_t>(l)] : first + static_cast<std::size_t>(l);
       const Quat& q = s.q_[i];
+      inertia_q[i] = q;
       Vec3 m = s.inv_inertia_[i];
       if (clamp) m = glm::min(m, Vec3(kSolverInertiaRatio * std::min({m.x, m.y, m.z})));
       in.q[0][l] = q.w, in.q[1][l] = q.x, in.q[2][l] = q.y, in.q[3][l] = q.z;
@@ -389,7 +390,7 @@ void RigidContacts::world_inv_inertias(const RigidBodySystem& s, const std::uint
       world_inertia_scalar(in, world, lanes);
     for (int l = 0; l < lanes; ++l) {
       const std::size_t i = bodies ? bodies[first + static_cast<std::size_t>(l)] : first + static_cast<std::size_t>(l);
-      Mat3& o = out[i];
+      Mat3& o = inv_inertia[i];
       // a sleeping body holds still like a static one until something wakes it
       if (s.asleep_[i]) {
         o = Mat3(0.0);
@@ -407,8 +408,7 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   inertia_q.resize(n);
   refreshed.resize(n + 1, 0);
   refresh_list.reserve(n);  // (so that a first refresh later does not allocate)
-  world_inv_inertias(s, nullptr, n, inv_inertia.data());
-  for (std::size_t i = 0; i < n; ++i) inertia_q[i] = s.q_[i];
+  world_inv_inertias(s, nullptr, n);
   built = has_colors = lanes_valid = false;
   s.profile_.one_point = 0;  // (build() counts them)
   backward = !backward;
@@ -995,13 +995,12 @@ void RigidContacts::refresh_inertia(RigidBodySystem& s) {
       const double spread = std::min(std::max({m.x, m.y, m.z}), kSolverInertiaRatio * least) / least - 1;
       const double c = std::abs(glm::dot(s.q_[i], inertia_q[i]));
       if (8 * (1 - c) * spread * spread <= kInertiaTurn * kInertiaTurn) continue;
-      inertia_q[i] = s.q_[i];
       refreshed[i] = 1;
       refresh_list.push_back(i);
     }
   }
   if (refresh_list.empty()) return;
-  world_inv_inertias(s, refresh_list.data(), refresh_list.size(), inv_inertia.data());
+  world_inv_inertias(s, refresh_list.data(), refresh_list.size());
   refresh_blocks(simd, blocks.data(), block_count, refreshed.data(), inv_inertia.data());
   refresh_blocks(simd, ones.data(), one_blocks, refreshed.data(), inv_inertia.data());
   for (Rolling& x : rolls) {

@@ -409,10 +409,11 @@ struct RigidContacts {
   bool has_colors = false;  // color_of holds the last step's colours
 
   /// The world inverse inertias as the solvers see them, at the bodies' orientations now
-  /// (1/(kg m^2)), of bodies[0 .. count) (nullptr: bodies 0 .. count) into out[body]: zero
-  /// while asleep; for the float solvers the moments at most kSolverInertiaRatio apart. A
-  /// lane type at a time on the SIMD paths, every path giving glm's bits.
-  void world_inv_inertias(const RigidBodySystem& s, const std::uint32_t* bodies, std::size_t count, Mat3* out) const;
+  /// (1/(kg m^2)), of bodies[0 .. count) (nullptr: bodies 0 .. count) into inv_inertia, and
+  /// those orientations into inertia_q: zero while asleep; for the float solvers the moments
+  /// at most kSolverInertiaRatio apart. A lane type at a time on the SIMD paths, every path
+  /// giving glm's bits.
+  void world_inv_inertias(const RigidBodySystem& s, const std::uint32_t* bodies, std::size_t count);
   /// After the positions of a substep moved (the soft step, sequential impulses, TGS): each
   /// awake body whose inverse inertia the blocks hold at an orientation that is now
   /// kInertiaTurn / (its ratio of moments - 1) or more away gets it at its pose now, and so do
