@@ -179,6 +179,19 @@ PBA_LANES V dot3(const V u[3], const V v[3]) {
   return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
 }
 
+// An inverse inertia in the frame t (t1, t2, n), t_i . (I^-1 t_j), upper triangle (xx, xy,
+// xz, yy, yz, zz), from the world one's rows `world` (column by column, glm's order), I^-1 t_j
+// summed as glm's matrix product sums it (1/(kg m^2))
+template <class V>
+PBA_LANES void in_frame(const double (&world)[9][kLanes], const V t[3][3], int l0, V out[6]) {
+  V it[3][3];
+  for (int j = 0; j < 3; ++j)
+    for (int r = 0; r < 3; ++r)
+      it[j][r] = from<V>(world[r], l0) * t[j][0] + from<V>(world[3 + r], l0) * t[j][1] + from<V>(world[6 + r], l0) * t[j][2];
+  constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kCol[6] = {0, 1, 2, 1, 2, 2};
+  for (int e = 0; e < 6; ++e) out[e] = dot3(t[kRow[e]], it[kCol[e]]);
+}
+
 // Lanes [l0, l0 + width) of a block and its anchors from the gathered input. Every lane type
 // does the same operations in the same order (the build has -ffp-contract=off, division is
 // correctly rounded), so the scalar, AVX2 and AVX-512 paths give the same bits.
@@ -202,20 +215,8 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
   put(k.ma, l0, ma * unit), put(k.mb, l0, mb * unit);
   // the inverse inertias in the frame, t_i . (I^-1 t_j) (upper triangle: xx, xy, xz, yy, yz, zz)
   V ia[6], ib[6];
-  {
-    V it_a[3][3], it_b[3][3];  // I^-1 t_j, each component as glm's matrix product sums it
-    for (int j = 0; j < 3; ++j)
-      for (int r = 0; r < 3; ++r) {
-        it_a[j][r] = from<V>(in.ia[r], l0) * t[j][0] + from<V>(in.ia[3 + r], l0) * t[j][1] + from<V>(in.ia[6 + r], l0) * t[j][2];
-        it_b[j][r] = from<V>(in.ib[r], l0) * t[j][0] + from<V>(in.ib[3 + r], l0) * t[j][1] + from<V>(in.ib[6 + r], l0) * t[j][2];
-      }
-    constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kCol[6] = {0, 1, 2, 1, 2, 2};
-    for (int e = 0; e < 6; ++e) {
-      ia[e] = dot3(t[kRow[e]], it_a[kCol[e]]);
-      ib[e] = dot3(t[kRow[e]], it_b[kCol[e]]);
-      put(k.ia[e], l0, ia[e] * unit), put(k.ib[e], l0, ib[e] * unit);
-    }
-  }
+  in_frame(in.ia, t, l0, ia), in_frame(in.ib, t, l0, ib);
+  for (int e = 0; e < 6; ++e) put(k.ia[e], l0, ia[e] * unit), put(k.ib[e], l0, ib[e] * unit);
   // the centres' offset d and the centroid in the frame (b's centroid is ca + d)
   V dab[3], dba[3], cw[3], d[3], ca[3];
   for (int i = 0; i < 3; ++i) dab[i] = from<V>(in.dab[i], l0), dba[i] = from<V>(in.dba[i], l0), cw[i] = from<V>(in.ca[i], l0);
@@ -324,20 +325,88 @@ void fill_scalar(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes)
 // ---------------------------------------------------------------------------------------
 // prepare: inverse inertias, colours, blocks, the first warm start
 
-Mat3 RigidContacts::world_inv_inertia(const RigidBodySystem& s, std::size_t i) {
-  // a sleeping body holds still like a static one until something wakes it
-  if (s.asleep_[i]) return Mat3(0.0);
-  const Mat3 r = glm::mat3_cast(s.q_[i]);
-  Mat3 d(0.0);
+namespace {
+
+// What making bodies' world inverse inertias reads, gathered a body a lane: the orientation
+// and the principal inverse moments (already held to kSolverInertiaRatio where asked)
+struct InertiaInput {
+  double q[4][kLanes];  // w, x, y, z
+  double m[3][kLanes];  // (1/(kg m^2))
+};
+
+// Lanes [l0, l0 + width): R diag(m) R^T into out (column by column, glm's order), R being
+// glm::mat3_cast(q), by glm's arithmetic: mat3_cast's, and the two products summed as glm's
+// mat3 product sums them, the diagonal matrix's zeros included (they set zeros' signs), so
+// every lane type gives the bits of `glm::mat3_cast(q) * d * glm::transpose(...)` in double.
+template <class V>
+PBA_LANES void world_inertia_lanes(const InertiaInput& in, double (&out)[9][kLanes], int l0) {
+  const V w = from<V>(in.q[0], l0), x = from<V>(in.q[1], l0), y = from<V>(in.q[2], l0), z = from<V>(in.q[3], l0);
+  const V xx = x * x, yy = y * y, zz = z * z, xz = x * z, xy = x * y, yz = y * z, wx = w * x, wy = w * y, wz = w * z;
+  const V r[3][3] = {{1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy)},
+                     {2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx)},
+                     {2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy)}};
+  const V zero = lanes::splat<V>(0.0);
+  V d[3][3];
+  for (int j = 0; j < 3; ++j)
+    for (int k = 0; k < 3; ++k) d[j][k] = j == k ? from<V>(in.m[j], l0) : zero;
+  V rd[3][3];
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) rd[j][i] = r[0][i] * d[j][0] + r[1][i] * d[j][1] + r[2][i] * d[j][2];
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i)
+      lanes::store(out[3 * j + i] + l0, rd[0][i] * r[0][j] + rd[1][i] * r[1][j] + rd[2][i] * r[2][j]);
+}
+
+__attribute__((target("avx512f"))) void world_inertia_avx512(const InertiaInput& in, double (&out)[9][kLanes], int lanes) {
+  for (int l0 = 0; l0 < lanes; l0 += 8) world_inertia_lanes<v8d>(in, out, l0);
+}
+__attribute__((target("avx2"))) void world_inertia_avx2(const InertiaInput& in, double (&out)[9][kLanes], int lanes) {
+  for (int l0 = 0; l0 < lanes; l0 += 4) world_inertia_lanes<v4d>(in, out, l0);
+}
+void world_inertia_scalar(const InertiaInput& in, double (&out)[9][kLanes], int lanes) {
+  for (int l = 0; l < lanes; ++l) world_inertia_lanes<double>(in, out, l);
+}
+
+}  // namespace
+
+void RigidContacts::world_inv_inertias(const RigidBodySystem& s, const std::uint32_t* bodies, std::size_t count) {
   // the float solvers (not XPBD, which solves in double) see inverse moments at most
   // kSolverInertiaRatio times the smallest: a frame's inverse inertia in float holds the
   // rounding of the largest in every entry (2^-24 of it), and a 2 mm x 4 m rod's 2,000,000 : 1
   // buried its transverse inverse moments under it (12%), the passes' impulses no longer
   // matched their K, and the rod's spin grew tenfold a pass (docs/rigid-bodies.md)
-  Vec3 m = s.inv_inertia_[i];
-  if (s.settings_.solver != RigidSolverType::Xpbd) m = glm::min(m, Vec3(kSolverInertiaRatio * std::min({m.x, m.y, m.z})));
-  d[0][0] = m.x, d[1][1] = m.y, d[2][2] = m.z;
-  return r * d * glm::transpose(r);
+  const bool clamp = s.settings_.solver != RigidSolverType::Xpbd;
+  InertiaInput in{};  // (zeros in the lanes past the last body)
+  double world[9][kLanes];
+  for (std::size_t first = 0; first < count; first += kLanes) {
+    const int lanes = static_cast<int>(std::min<std::size_t>(kLanes, count - first));
+    for (int l = 0; l < lanes; ++l) {
+      const std::size_t i = bodies ? bodies[first + static_cast<std::size_t>(l)] : first + static_cast<std::size_t>(l);
+      const Quat& q = s.q_[i];
+      inertia_q[i] = q;
+      Vec3 m = s.inv_inertia_[i];
+      if (clamp) m = glm::min(m, Vec3(kSolverInertiaRatio * std::min({m.x, m.y, m.z})));
+      in.q[0][l] = q.w, in.q[1][l] = q.x, in.q[2][l] = q.y, in.q[3][l] = q.z;
+      in.m[0][l] = m.x, in.m[1][l] = m.y, in.m[2][l] = m.z;
+    }
+    if (simd == SimdPath::Avx512)
+      world_inertia_avx512(in, world, lanes);
+    else if (simd == SimdPath::Avx2)
+      world_inertia_avx2(in, world, lanes);
+    else
+      world_inertia_scalar(in, world, lanes);
+    for (int l = 0; l < lanes; ++l) {
+      const std::size_t i = bodies ? bodies[first + static_cast<std::size_t>(l)] : first + static_cast<std::size_t>(l);
+      Mat3& o = inv_inertia[i];
+      // a sleeping body holds still like a static one until something wakes it
+      if (s.asleep_[i]) {
+        o = Mat3(0.0);
+        continue;
+      }
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) o[c][r] = world[3 * c + r][l];
+    }
+  }
 }
 
 void RigidContacts::prepare(RigidBodySystem& s) {
@@ -346,7 +415,7 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   inertia_q.resize(n);
   refreshed.resize(n + 1, 0);
   refresh_list.reserve(n);  // (so that a first refresh later does not allocate)
-  for (std::size_t i = 0; i < n; ++i) inv_inertia[i] = world_inv_inertia(s, i), inertia_q[i] = s.q_[i];
+  world_inv_inertias(s, nullptr, n);
   built = has_colors = lanes_valid = false;
   s.profile_.one_point = 0;  // (build() counts them)
   backward = !backward;
@@ -771,33 +840,54 @@ void RigidContacts::set_rolling_mass(std::uint32_t index) {
 
 namespace {
 
-// The rows of lane l of block k that depend on its bodies' inverse inertias, from the world
-// inverse inertias ia, ib (1/(kg m^2)), the lane's frame and arms as filled (fill_lanes'
-// arithmetic in double, rounded to the block's floats): the inverse inertias in the frame, K,
-// the normal, tangent and twist effective masses, and a one-point lane's rolling mass. A point
-// is in use where its effective mass is not zero (a lane of a body that moves).
-template <class B>
-void refresh_lane(B& k, int l, const Mat3& ia_world, const Mat3& ib_world) {
-  constexpr int P = B::kPoints;
-  const double unit = k.unit[l];
-  const Vec3 t[3] = {{k.t1[0][l], k.t1[1][l], k.t1[2][l]}, {k.t2[0][l], k.t2[1][l], k.t2[2][l]}, {k.n[0][l], k.n[1][l], k.n[2][l]}};
-  const double ma = k.ma[l] / unit, mb = k.mb[l] / unit;
-  double ia[6], ib[6];
-  constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kCol[6] = {0, 1, 2, 1, 2, 2};
-  for (int e = 0; e < 6; ++e) {
-    ia[e] = glm::dot(t[kRow[e]], ia_world * t[kCol[e]]);
-    ib[e] = glm::dot(t[kRow[e]], ib_world * t[kCol[e]]);
-    k.ia[e][l] = static_cast<Real>(ia[e] * unit), k.ib[e][l] = static_cast<Real>(ib[e] * unit);
-  }
-  const double ca[3] = {k.ca[0][l], k.ca[1][l], k.ca[2][l]};
-  const double cb[3] = {k.cb[0][l], k.cb[1][l], k.cb[2][l]};
-  const double d[3] = {cb[0] - ca[0], cb[1] - ca[1], cb[2] - ca[2]};
-  double ra[P][2], rb[P][2], ira[P][2], irb[P][2];
-  bool on[P];
+// What refreshing a lane's rows that depend on its bodies' inverse inertias reads
+// (refresh_inertia): its block's frame, masses and arms as filled, and the bodies' world
+// inverse inertias at their poses now, gathered lane by lane from the lanes that need it (a
+// compact list: in the rain's landing about one lane in seven of the blocks, scattered), so
+// that the arithmetic runs a lane type at a time as fill_lanes' does.
+struct RefreshInput {
+  double t[3][3][kLanes];               // t1, t2, n by component (the block's floats)
+  double ma[kLanes], mb[kLanes];        // the block's inverse masses times u (1/kg)
+  double unit[kLanes];                  // the lane's impulse unit u
+  double ca[3][kLanes], cb[3][kLanes];  // the centroid from a's centre and from b's, in the frame (m)
+  double x[4][kLanes], y[4][kLanes];    // a ContactBlock's points from the centroid (m)
+  double on[4][kLanes];                 // 1 where the point's effective mass is not zero (in use)
+  double ia[9][kLanes], ib[9][kLanes];  // the world inverse inertias, column by column (glm's order)
+};
+// ... and the rows it makes, rounded to the block's floats, to be put back into the lanes
+struct RefreshOutput {
+  Real ia[6][kLanes], ib[6][kLanes];  // the inverse inertias in the frame times u
+  Real k[10][kLanes], mass[4][kLanes];
+  Real tangent_mass[2][kLanes], tangent_k[3][kLanes], twist_mass[kLanes];
+  Real rolling_mass[6][kLanes];       // a one-point lane's (written back where it rolls)
+};
+
+// Lanes [l0, l0 + width) of `out` from `in` (P: the normal points of the lanes' block type):
+// the inverse inertias in the frame, K, the normal, tangent and twist effective masses and a
+// one-point lane's rolling mass, by fill_lanes' arithmetic in double from the block's floats.
+// The operations and their order are the same on every lane type (and were those of the
+// lane-by-lane refresh before it), so every path gives the same bits.
+template <class V, int P>
+PBA_LANES void refresh_lanes(const RefreshInput& in, RefreshOutput& out, int l0) {
+  const V zero = lanes::splat<V>(0.0);
+  const V unit = from<V>(in.unit, l0);
+  V t[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int i = 0; i < 3; ++i) t[r][i] = from<V>(in.t[r][i], l0);
+  const V ma = from<V>(in.ma, l0) / unit, mb = from<V>(in.mb, l0) / unit;
+  // the inverse inertias in the frame
+  V ia[6], ib[6];
+  in_frame(in.ia, t, l0, ia), in_frame(in.ib, t, l0, ib);
+  for (int e = 0; e < 6; ++e) put(out.ia[e], l0, ia[e] * unit), put(out.ib[e], l0, ib[e] * unit);
+  // the normal rows' arms in the frame (fill_lanes' ra, rb) and K's entries
+  V ca[3], cb[3], d[3];
+  for (int i = 0; i < 3; ++i) ca[i] = from<V>(in.ca[i], l0), cb[i] = from<V>(in.cb[i], l0), d[i] = cb[i] - ca[i];
+  V ra[P][2], rb[P][2], ira[P][2], irb[P][2];
+  decltype(zero < zero) on[P];
   for (int p = 0; p < P; ++p) {
-    on[p] = k.mass[p][l] != 0;
-    double x = ca[0], y = ca[1];
-    if constexpr (P > 1) x += k.x[p][l], y += k.y[p][l];
+    on[p] = from<V>(in.on[p], l0) > zero;
+    V x = ca[0], y = ca[1];
+    if constexpr (P > 1) x = x + from<V>(in.x[p], l0), y = y + from<V>(in.y[p], l0);
     ra[p][0] = y, ra[p][1] = -x;
     rb[p][0] = y + d[1], rb[p][1] = -(x + d[0]);
     ira[p][0] = ia[0] * ra[p][0] + ia[1] * ra[p][1];
@@ -808,34 +898,99 @@ void refresh_lane(B& k, int l, const Mat3& ia_world, const Mat3& ib_world) {
   static constexpr int kPairs[10][2] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}};
   for (int e = 0; e < P * (P + 1) / 2; ++e) {
     const int i = kPairs[e][0], j = kPairs[e][1];
-    const double v = on[i] && on[j] ? ma + mb + (ra[i][0] * ira[j][0] + ra[i][1] * ira[j][1]) +
-                                          (rb[i][0] * irb[j][0] + rb[i][1] * irb[j][1])
-                                    : 0.0;
-    k.k[e][l] = static_cast<Real>(v * unit);
-    if (i == j) k.mass[i][l] = static_cast<Real>((v > 0 ? 1 / v : 0.0) / unit);
+    const V v = keep(on[i] & on[j], ma + mb + (ra[i][0] * ira[j][0] + ra[i][1] * ira[j][1]) +
+                                        (rb[i][0] * irb[j][0] + rb[i][1] * irb[j][1]));
+    put(out.k[e], l0, v * unit);
+    if (i == j) put(out.mass[i], l0, inverse(v) / unit);
   }
-  auto form1 = [](const double m[6], double u1, double u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
-  auto form2 = [](const double m[6], double u0, double u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
-  auto form12 = [](const double m[6], double u1, double u2, double w0, double w2) {
-    return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2);
-  };
-  auto inverse = [](double v) { return v > 0 ? 1 / v : 0.0; };
-  const double k11 = ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1]);
-  const double k22 = ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0]);
-  const double k12 = form12(ia, ca[2], -ca[1], -ca[2], ca[0]) + form12(ib, cb[2], -cb[1], -cb[2], cb[0]);
-  k.tangent_mass[0][l] = static_cast<Real>(inverse(k11) / unit);
-  k.tangent_mass[1][l] = static_cast<Real>(inverse(k22) / unit);
-  k.tangent_k[0][l] = static_cast<Real>(k11 * unit), k.tangent_k[1][l] = static_cast<Real>(k12 * unit);
-  k.tangent_k[2][l] = static_cast<Real>(k22 * unit);
+  // friction at the centroid (fill_lanes' quadratic forms, K's off-diagonal entry included), twist, rolling
+  auto form1 = [](const V m[6], V u1, V u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
+  auto form2 = [](const V m[6], V u0, V u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
+  auto form12 = [](const V m[6], V u1, V u2, V w0, V w2) { return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2); };
+  const V k11 = ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1]);
+  const V k22 = ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0]);
+  const V k12 = form12(ia, ca[2], -ca[1], -ca[2], ca[0]) + form12(ib, cb[2], -cb[1], -cb[2], cb[0]);
+  put(out.tangent_mass[0], l0, inverse(k11) / unit);
+  put(out.tangent_mass[1], l0, inverse(k22) / unit);
+  put(out.tangent_k[0], l0, k11 * unit), put(out.tangent_k[1], l0, k12 * unit), put(out.tangent_k[2], l0, k22 * unit);
   if constexpr (P > 1) {
-    k.twist_mass[l] = static_cast<Real>(inverse(ia[5] + ib[5]) / unit);
-  } else if (k.rolling[l] > 0) {
-    const double a = ia[0] + ib[0], b = ia[1] + ib[1], c = ia[2] + ib[2], dd = ia[3] + ib[3], e = ia[4] + ib[4],
-                 f = ia[5] + ib[5];
-    const double adj[6] = {dd * f - e * e, c * e - b * f, b * e - c * dd, a * f - c * c, b * c - a * e, a * dd - b * b};
-    const double det = a * adj[0] + b * adj[1] + c * adj[2];
-    for (int i = 0; i < 6; ++i) k.rolling_mass[i][l] = static_cast<Real>(det > 0 ? adj[i] / det / unit : 0.0);
+    put(out.twist_mass, l0, inverse(ia[5] + ib[5]) / unit);
+  } else {
+    const V a = ia[0] + ib[0], b = ia[1] + ib[1], c = ia[2] + ib[2], dd = ia[3] + ib[3], e = ia[4] + ib[4], f = ia[5] + ib[5];
+    const V adj[6] = {dd * f - e * e, c * e - b * f, b * e - c * dd, a * f - c * c, b * c - a * e, a * dd - b * b};
+    const V det = a * adj[0] + b * adj[1] + c * adj[2];
+    for (int i = 0; i < 6; ++i) put(out.rolling_mass[i], l0, keep(det > zero, adj[i] / det / unit));
   }
+}
+
+template <int P>
+__attribute__((target("avx512f"))) void refresh_avx512(const RefreshInput& in, RefreshOutput& out, int lanes) {
+  for (int l0 = 0; l0 < lanes; l0 += 8) refresh_lanes<v8d, P>(in, out, l0);
+}
+template <int P>
+__attribute__((target("avx2"))) void refresh_avx2(const RefreshInput& in, RefreshOutput& out, int lanes) {
+  for (int l0 = 0; l0 < lanes; l0 += 4) refresh_lanes<v4d, P>(in, out, l0);
+}
+template <int P>
+void refresh_scalar(const RefreshInput& in, RefreshOutput& out, int lanes) {
+  for (int l = 0; l < lanes; ++l) refresh_lanes<double, P>(in, out, l);
+}
+
+// The lanes of blocks [0, count) with a body whose inverse inertia was refreshed (`refreshed`,
+// by body) made again from the world inverse inertias `inv_inertia` (by body): up to kLanes
+// of them at a time gathered into a RefreshInput, computed, and put back lane by lane.
+template <class B>
+void refresh_blocks(SimdPath simd, B* blocks, std::size_t count, const std::uint8_t* refreshed, const Mat3* inv_inertia) {
+  constexpr int P = B::kPoints;
+  RefreshInput in{};  // (zeros in the lanes past the last gathered: their results are not put back)
+  RefreshOutput out;
+  std::uint32_t at[kLanes];  // each gathered lane's block * kLanes + lane
+  int n = 0;
+  auto flush = [&] {
+    if (simd == SimdPath::Avx512)
+      refresh_avx512<P>(in, out, n);
+    else if (simd == SimdPath::Avx2)
+      refresh_avx2<P>(in, out, n);
+    else
+      refresh_scalar<P>(in, out, n);
+    for (int i = 0; i < n; ++i) {
+      B& k = blocks[at[i] / kLanes];
+      const int l = static_cast<int>(at[i] % kLanes);
+      for (int e = 0; e < 6; ++e) k.ia[e][l] = out.ia[e][i], k.ib[e][l] = out.ib[e][i];
+      for (int e = 0; e < P * (P + 1) / 2; ++e) k.k[e][l] = out.k[e][i];
+      for (int p = 0; p < P; ++p) k.mass[p][l] = out.mass[p][i];
+      k.tangent_mass[0][l] = out.tangent_mass[0][i], k.tangent_mass[1][l] = out.tangent_mass[1][i];
+      for (int e = 0; e < 3; ++e) k.tangent_k[e][l] = out.tangent_k[e][i];
+      if constexpr (P > 1) {
+        k.twist_mass[l] = out.twist_mass[i];
+      } else if (k.rolling[l] > 0) {
+        for (int e = 0; e < 6; ++e) k.rolling_mass[e][l] = out.rolling_mass[e][i];
+      }
+    }
+    n = 0;
+  };
+  for (std::size_t b = 0; b < count; ++b) {
+    const B& k = blocks[b];
+    for (int l = 0; l < k.lanes; ++l) {
+      if (!(refreshed[k.a[l]] | refreshed[k.b[l]])) continue;
+      at[n] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l));
+      in.t[0][0][n] = k.t1[0][l], in.t[0][1][n] = k.t1[1][l], in.t[0][2][n] = k.t1[2][l];
+      in.t[1][0][n] = k.t2[0][l], in.t[1][1][n] = k.t2[1][l], in.t[1][2][n] = k.t2[2][l];
+      in.t[2][0][n] = k.n[0][l], in.t[2][1][n] = k.n[1][l], in.t[2][2][n] = k.n[2][l];
+      in.ma[n] = k.ma[l], in.mb[n] = k.mb[l], in.unit[n] = k.unit[l];
+      for (int i = 0; i < 3; ++i) in.ca[i][n] = k.ca[i][l], in.cb[i][n] = k.cb[i][l];
+      for (int p = 0; p < P; ++p) {
+        in.on[p][n] = k.mass[p][l] != 0 ? 1 : 0;
+        if constexpr (P > 1) in.x[p][n] = k.x[p][l], in.y[p][n] = k.y[p][l];
+      }
+      const Mat3& ia = inv_inertia[k.a[l]];
+      const Mat3& ib = inv_inertia[k.b[l]];
+      for (int i = 0; i < 3; ++i)
+        for (int r = 0; r < 3; ++r) in.ia[3 * i + r][n] = ia[i][r], in.ib[3 * i + r][n] = ib[i][r];
+      if (++n == kLanes) flush();
+    }
+  }
+  if (n > 0) flush();
 }
 
 }  // namespace
@@ -853,23 +1008,14 @@ void RigidContacts::refresh_inertia(RigidBodySystem& s) {
       const double spread = std::min(std::max({m.x, m.y, m.z}), kSolverInertiaRatio * least) / least - 1;
       const double c = std::abs(glm::dot(s.q_[i], inertia_q[i]));
       if (8 * (1 - c) * spread * spread <= kInertiaTurn * kInertiaTurn) continue;
-      inv_inertia[i] = world_inv_inertia(s, i);
-      inertia_q[i] = s.q_[i];
       refreshed[i] = 1;
       refresh_list.push_back(i);
     }
   }
   if (refresh_list.empty()) return;
-  for (std::size_t b = 0; b < block_count; ++b) {
-    ContactBlock& k = blocks[b];
-    for (int l = 0; l < k.lanes; ++l)
-      if (refreshed[k.a[l]] | refreshed[k.b[l]]) refresh_lane(k, l, inv_inertia[k.a[l]], inv_inertia[k.b[l]]);
-  }
-  for (std::size_t b = 0; b < one_blocks; ++b) {
-    OnePointBlock& k = ones[b];
-    for (int l = 0; l < k.lanes; ++l)
-      if (refreshed[k.a[l]] | refreshed[k.b[l]]) refresh_lane(k, l, inv_inertia[k.a[l]], inv_inertia[k.b[l]]);
-  }
+  world_inv_inertias(s, refresh_list.data(), refresh_list.size());
+  refresh_blocks(simd, blocks.data(), block_count, refreshed.data(), inv_inertia.data());
+  refresh_blocks(simd, ones.data(), one_blocks, refreshed.data(), inv_inertia.data());
   for (Rolling& x : rolls) {
     if (!(refreshed[x.a] | refreshed[x.b])) continue;
     set_rolling_mass(x.pair);

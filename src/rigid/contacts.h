@@ -404,12 +404,16 @@ struct RigidContacts {
   // rotation (FreeRotation, integrate_wide.cpp)
   std::array<std::vector<std::uint32_t>, kFreeRotations> moving;
   bool moving_damped = true;  // some of them have linear or angular damping
+  std::vector<std::uint32_t> kinematic;  // this step's kinematic bodies, in index order (their exact motion)
   bool built = false;       // the blocks hold this step's manifolds (cleared by store())
   bool has_colors = false;  // color_of holds the last step's colours
 
-  /// Body i's world inverse inertia as the solvers see it, at its orientation now (1/(kg m^2)):
-  /// zero while asleep; for the float solvers its moments at most kSolverInertiaRatio apart.
-  static Mat3 world_inv_inertia(const RigidBodySystem& s, std::size_t i);
+  /// The world inverse inertias as the solvers see them, at the bodies' orientations now
+  /// (1/(kg m^2)), of bodies[0 .. count) (nullptr: bodies 0 .. count) into inv_inertia, and
+  /// those orientations into inertia_q: zero while asleep; for the float solvers the moments
+  /// at most kSolverInertiaRatio apart. A lane type at a time on the SIMD paths, every path
+  /// giving glm's bits.
+  void world_inv_inertias(const RigidBodySystem& s, const std::uint32_t* bodies, std::size_t count);
   /// After the positions of a substep moved (the soft step, sequential impulses, TGS): each
   /// awake body whose inverse inertia the blocks hold at an orientation that is now
   /// kInertiaTurn / (its ratio of moments - 1) or more away gets it at its pose now, and so do

@@ -598,10 +598,8 @@ void RigidBodySystem::integrate_positions(double h, detail::SolverBody* rows, do
   const detail::FreeMotionArrays f = free_motion(rows, nullptr, motion);
   for (std::size_t k = 0; k < c.moving.size(); ++k)
     detail::integrate_positions_wide(c.simd, static_cast<detail::FreeRotation>(k), c.moving[k].data(), c.moving[k].size(), f, h);
-  // kinematic bodies: constant velocities, exact translation and rotation
-  const std::size_t n = type_.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (type_[i] != BodyType::Kinematic) continue;
+  // kinematic bodies (listed by step()): constant velocities, exact translation and rotation
+  for (const std::uint32_t i : c.kinematic) {
     const Vec3 v = rows ? get3(rows[i].v) : v_[i], w = rows ? get3(rows[i].w) : w_[i];
     com_[i] += h * v;
     const double wl = glm::length(w);
@@ -644,8 +642,10 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   // pairs and manifolds, then the bodies that move freely this step
   contacts_->update(*this, dt);
   for (auto& list : contacts_->moving) list.clear();
+  contacts_->kinematic.clear();
   bool damped = false;
   for (std::size_t i = 0; i < n; ++i) {
+    if (type_[i] == BodyType::Kinematic) contacts_->kinematic.push_back(static_cast<std::uint32_t>(i));
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     contacts_->moving[static_cast<std::size_t>(detail::free_rotation(inertia_[i]))].push_back(static_cast<std::uint32_t>(i));
     damped = damped || lin_damp_[i] != 0 || ang_damp_[i] != 0;
