@@ -515,7 +515,18 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       PairPlan& plan = plans[last - first];
       // points are made as far out as the two bodies can close in one step (speculative
       // contacts) (up to each body's size: faster ones are caught by the continuous pass)
-      plan.margin = cs.speculative_distance + travel[a] + travel[b];
+      // (the setting's reach, or less for a small body: pair_speculative, with how far the
+      // bodies' points travel by turning, up to each body's size)
+      // (`thinnest` says whether any body may be that small)
+      double reach = cs.speculative_distance;
+      if (kSpeculativePerHalfSize * thinnest < reach) {
+        const double thin = std::min(s.min_extent_[a], s.min_extent_[b]);
+        auto turn = [&](std::uint32_t i) {
+          return s.w_[i] == Vec3(0) ? 0.0 : std::min(glm::length(s.w_[i]) * s.extent_[i] * s.last_dt_, s.extent_[i]);
+        };
+        if (kSpeculativePerHalfSize * thin < reach) reach = pair_speculative(cs, thin, turn(a) + turn(b));
+      }
+      plan.margin = reach + travel[a] + travel[b];
       // b's centre and frame in a's frame, against where they were when the manifolds were made
       const Quat qa_inv = glm::conjugate(s.q_[a]);
       plan.rel_position = qa_inv * (s.com_[b] - s.com_[a]);
@@ -616,6 +627,10 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
   const Quat qa_inv = glm::conjugate(s.q_[a]), qb_inv = glm::conjugate(s.q_[b]);
   const Quat q_ref_inv = in_b ? qb_inv : qa_inv;
   const bool mesh_pair = sa.shape.type == ShapeType::Mesh || sb.shape.type == ShapeType::Mesh;
+  // old points are matched within the pair's slop (less for a small body: pair_slop)
+  const double slop = kSlopPerHalfSize * thinnest < cs.linear_slop ? pair_slop(cs, std::min(s.min_extent_[a], s.min_extent_[b]))
+                                                                   : cs.linear_slop;
+  const double slop2 = slop * slop;
   const std::uint32_t old = c.first;
   for (std::uint32_t o = old; o != kNoIndex; o = manifolds[o].next) settle(o);
   std::uint32_t tail = kNoIndex;
@@ -664,7 +679,6 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       int match = -1;
       for (int o = 0; o < was->count && match < 0; ++o)
         if (was->points[o].id == q.id) match = o;
-      const double slop2 = cs.linear_slop * cs.linear_slop;
       for (int o = 0; o < was->count && match < 0; ++o) {
         const Vec3 d = was->points[o].core_a - q.core_a;
         if (glm::dot(d, d) <= slop2) match = o;

@@ -71,7 +71,7 @@ void clear_lane(B& b, AnchorsOf<B::kPoints>& g, int l, std::uint32_t spare) {
     zero(b.approach[k]), zero(b.max_impulse[k]);
     zero(g.za[k]), zero(g.zb[k]), zero(g.base[k]), zero(g.ex[k]), zero(g.ey[k]), zero(g.last[k]);
   }
-  zero(b.ma), zero(b.mb), zero(b.tangent_mass[0]), zero(b.tangent_mass[1]);
+  zero(b.ma), zero(b.mb), zero(b.slop), zero(b.tangent_mass[0]), zero(b.tangent_mass[1]);
   for (int i = 0; i < 3; ++i) zero(b.tangent_k[i]);
   zero(b.friction), zero(b.tangent_impulse[0]), zero(b.tangent_impulse[1]);
   if constexpr (P > 1) zero(b.twist_mass), zero(b.twist_radius), zero(b.twist_impulse);
@@ -753,6 +753,8 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
   const int used = (k.lanes + width - 1) / width * width;
   const auto spare = static_cast<std::uint32_t>(s.type_.size());
   FillInput in;
+  const double slop = s.settings_.linear_slop;
+  const bool small = kSlopPerHalfSize * thinnest < slop;
   auto* rows_of_input = reinterpret_cast<double(*)[kLanes]>(&in);
   int count[kLanes] = {};
   if constexpr (kOne) k.rolls = 0;
@@ -783,6 +785,9 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
     int exponent = 0;  // the lane's impulse unit (fill_lanes)
     if (ma + mb > 0) std::frexp(ma + mb, &exponent);
     in.ma[l] = ma, in.mb[l] = mb, in.unit[l] = std::ldexp(1.0, -exponent);
+    // the overlap the rigid passes leave alone: the settings' slop, less for a small body
+    // (`thinnest` says whether any body may be that small)
+    k.slop[l] = static_cast<Real>(small ? pair_slop(s.settings_, std::min(s.min_extent_[c.a], s.min_extent_[c.b])) : slop);
     const Vec3 t[3] = {c.t1, c.t2, c.normal};
     const Mat3& ia = inv_inertia[c.a];
     const Mat3& ib = inv_inertia[c.b];
@@ -1099,7 +1104,6 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
   p.impulse_scale[1] = static_soft.impulse_scale;
   p.push_out = cs.push_out_speed;
   p.baumgarte_h = cs.baumgarte / h;
-  p.slop = cs.linear_slop;
   // the relax passes sweep three quarters as often (rounded up: 4 -> 3): they start from the
   // biased pass's impulses and only take back its push-out velocity. Measured: a box pushed by
   // a kinematic paddle keeps 0.05 mm/s of push-out at 3 relax sweeps, 0.02 at 4, 6.7 at 2

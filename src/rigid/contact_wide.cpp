@@ -265,7 +265,7 @@ PBA_LANES void add_rows(double* base, const std::uint32_t* index, std::uint32_t 
 
 // the pass's settings in float (rounded once, the same on every path)
 struct FloatParams {
-  float inv_h, bias_rate[2], mass_scale[2], impulse_scale[2], push_out, baumgarte_h, slop, carry_speed;
+  float inv_h, bias_rate[2], mass_scale[2], impulse_scale[2], push_out, baumgarte_h, carry_speed;
   int sweeps;
   bool update_sep, warm_next, cap_carry;
   explicit FloatParams(const PassParams& p)
@@ -275,7 +275,6 @@ struct FloatParams {
         impulse_scale{static_cast<float>(p.impulse_scale[0]), static_cast<float>(p.impulse_scale[1])},
         push_out(static_cast<float>(p.push_out)),
         baumgarte_h(static_cast<float>(p.baumgarte_h)),
-        slop(static_cast<float>(p.slop)),
         carry_speed(static_cast<float>(p.carry_speed)),
         sweeps(p.sweeps),
         update_sep(p.update_sep),
@@ -395,7 +394,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
 
   // each point's bias, mass scale and impulse scale for this pass: speculative points (apart)
   // close the gap in this substep and no more, and the relax pass leaves them alone; touching
-  // ones are pushed out by the soft spring (up to push_out) or by Baumgarte beyond the slop.
+  // ones are pushed out by the soft spring (up to push_out) or by Baumgarte beyond the lane's
+  // slop (pair_slop: less for a small body).
   // A point within kTouching of contact is touching: a gap closed in the last substep measures
   // zero up to the rounding of float velocities (in double it is exactly zero for a face
   // meeting a face), and that rounding must not pick between the two (with `sep > 0` a body
@@ -418,7 +418,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       iscale[k] = apart ? zero : (fixed ? splat<V>(p.impulse_scale[1]) : splat<V>(p.impulse_scale[0]));
     } else if constexpr (kMode == kRigid) {
       bias[k] = apart ? sep * splat<V>(p.inv_h)
-                      : vmax(splat<V>(p.baumgarte_h) * vmin(zero, sep + splat<V>(p.slop)), splat<V>(-p.push_out));
+                      : vmax(splat<V>(p.baumgarte_h) * vmin(zero, sep + L(c.slop)), splat<V>(-p.push_out));
       mscale[k] = one, iscale[k] = zero;
     } else {
       bias[k] = zero, mscale[k] = one, iscale[k] = zero;

@@ -1,6 +1,7 @@
 // Rigid bodies, private: the contact pairs, their manifolds and the solvers' per-point data.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -224,6 +225,33 @@ Softness make_soft(double hertz, double zeta, double h);
 /// move (static, kinematic or asleep): 1, so 1 / (2 pi h) Hz (contact_solver.cpp, pass()).
 inline constexpr double kStaticStepAngle = 1.0;
 
+/// Contact tolerances scaled to small bodies. ContactSettings::linear_slop (5 mm) and
+/// speculative_distance (2 cm) are lengths sized, as Box2D's, for bodies of 5 cm half size and
+/// more (their ratios to such a body's half size: at most 0.1 and 0.4). A pair whose thinner
+/// body is smaller takes those ratios of its half size instead (PhysX sizes its contact offset
+/// per shape the same way): a 1 cm cube (half size 5 mm) reaches for speculative points 2 mm
+/// out, not 2 cm, which took its top face's corners for contact points; it matches its
+/// points for the warm start within 0.5 mm, not within its own half size; and the rigid passes'
+/// Baumgarte term (sequential impulses, TGS: the blocks' `slop`), the soft step's position pass
+/// and the continuous pass's target leave 0.5 mm of overlap, not its whole half size. At the
+/// settings' values cubes of 1 mm to 1 cm half size came to rest up to 46 degrees over, a
+/// corner 1.4 half sizes deep or spinning at up to 60 rad/s (tests/rigid/test_rigid_contact.cpp,
+/// RigidSmallBodies). A pair with no body under 5 cm half size keeps the settings' values.
+inline constexpr double kSlopPerHalfSize = 0.1, kSpeculativePerHalfSize = 0.4;
+/// The linear slop (m) of a pair whose thinner body's smallest half size is `thin` (m):
+/// the setting, or kSlopPerHalfSize of `thin` when that is smaller.
+inline double pair_slop(const ContactSettings& cs, double thin) {
+  return std::min(cs.linear_slop, kSlopPerHalfSize * thin);
+}
+/// The speculative distance (m) of a pair whose thinner body's smallest half size is `thin`
+/// (m) and whose bodies' points may travel up to `turn` (m) in the step by turning: the
+/// setting, or kSpeculativePerHalfSize of `thin` plus `turn` when that is smaller (a thin rod
+/// tumbling onto the ground brings its far corners in by turning, which the bodies' linear
+/// travel added to the margin does not count).
+inline double pair_speculative(const ContactSettings& cs, double thin, double turn) {
+  return std::min(cs.speculative_distance, kSpeculativePerHalfSize * thin + turn);
+}
+
 /// The contact state of a RigidBodySystem: this step's contact pairs for the solver, the
 /// broad phase and the pair cache behind them (contact_pairs.cpp), and the solver passes.
 /// Grown, never shrunk: steady state does not allocate.
@@ -239,6 +267,9 @@ struct RigidContacts {
   std::vector<std::uint32_t> refresh_list;  // scratch of refresh_inertia: the bodies it refreshed
   std::size_t continuous_hits = 0;     // bodies put back to a time of impact, all steps
   double impulse_h = 0;  // the time step (s) the carried impulses were accumulated over; 0: none yet
+  // the least smallest half size of any body created (m; not raised when one is destroyed):
+  // whether some pair may take less than the settings' slop (pair_slop)
+  double thinnest = std::numeric_limits<double>::infinity();
 
   // ---- the broad phase and the pair cache (contact_pairs.cpp) ----
   std::vector<ShapeProxy> proxies;            // by proxy index (with free entries)
@@ -526,6 +557,7 @@ struct RigidContacts {
     double after;   // and after it (m)
     double ma, mb;  // the bodies' inverse masses for the pass (1/kg; 0: held still)
     bool held;      // the lower body is held still as the upper one's support
+    double slop;    // the pair's linear slop (m): pair_slop() of its thinner body
     Vec3 n;         // the normal, from a to b
     std::uint32_t pair, a, b;
   };

@@ -151,7 +151,6 @@ bool holds_ball(const RigidShapeDef& d, const Vec3& p, double radius) {
 void RigidContacts::continuous(RigidBodySystem& s) {
   const ContactSettings& cs = s.settings_;
   const std::size_t n = s.type_.size();
-  const double target = cs.linear_slop, tol = 0.25 * cs.linear_slop;
   for (std::size_t i = 0; i < n; ++i) {
     if (s.type_[i] != BodyType::Dynamic || s.asleep_[i]) continue;
     // fast: moved more than half its smallest extent, or flagged
@@ -176,6 +175,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
         core = std::max(core, sa.shape.is_convex() ? core_reach(sa, w.com_local) : w.reach);
       if (shift + w.angle * std::min(core, w.reach) <= 0.5 * s.min_extent_[i]) continue;
     }
+    // stopped within its slop of what it hits (pair_slop: less for a small body)
+    const double target = pair_slop(cs, s.min_extent_[i]), tol = 0.25 * target;
     // everything the body can touch on its way: its centre's path grown by its reach
     const Aabb path = Aabb{glm::min(w.c0, w.c1), glm::max(w.c0, w.c1)}.grown(w.reach + target);
     double toi = 1;

@@ -368,6 +368,7 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   }
   extent_.push_back(reach);
   min_extent_.push_back(thin);
+  contacts_->thinnest = std::min(contacts_->thinnest, thin);
   shapes_.push_back(std::move(shapes));
   asleep_.push_back(0);
   sleep_time_.push_back(0);

@@ -67,6 +67,7 @@ struct alignas(64) ContactBlock {
   Real k[10][kLanes];                 // K of the normal rows, upper triangle by rows, times u (1/kg)
   Real impulse[4][kLanes];            // accumulated normal impulses (N s)
   Real sep[4][kLanes];                // separations at the bodies' poses now (m)
+  Real slop[kLanes];                  // sequential impulses and TGS: overlap left alone (m), pair_slop()
   // friction at the points' centroid, twist about the normal
   // the points' centroid from a's centre of mass and from b's, in the frame (each kept apart:
   // ca - cb, the centres' distance, may be far larger than either)
@@ -98,7 +99,7 @@ struct alignas(64) ContactBlock {
 /// (whose other three points hold zeros). A one-point lane's rolling resistance (a ball's) is
 /// solved in the block too, right after its friction, with SIMD and in the frame (a
 /// ContactBlock's lanes that roll are solved one by one, in double, after their blocks). The
-/// block is 57 rows (10 of them the rolling resistance's) to ContactBlock's 82, and its normal
+/// block is 58 rows (10 of them the rolling resistance's) to ContactBlock's 83, and its normal
 /// sweeps touch one point, not four with their K. prepare() puts a colour's one-point
 /// manifolds in blocks of their own after its ContactBlocks (no two manifolds of a colour share
 /// a body that moves, so the order within a colour changes nothing); the overflow keeps
@@ -114,6 +115,7 @@ struct alignas(64) OnePointBlock {
   Real k[1][kLanes];                  // K of the normal row, times u (1/kg; the sweeps after the first read it)
   Real impulse[1][kLanes];            // accumulated normal impulse (N s)
   Real sep[1][kLanes];                // separation at the bodies' poses now (m)
+  Real slop[kLanes];                  // sequential impulses and TGS: overlap left alone (m), pair_slop()
   Real ca[3][kLanes], cb[3][kLanes];  // the point from a's centre of mass and from b's, in the frame (m)
   Real tangent_mass[2][kLanes];       // (kg)
   Real tangent_k[3][kLanes];          // K of the tangent rows times u: t1 t1, t1 t2, t2 t2 (1/kg)
@@ -164,7 +166,6 @@ struct PassParams {
   double bias_rate[2] = {0, 0}, mass_scale[2] = {1, 1}, impulse_scale[2] = {0, 0};
   double push_out = 0;       // largest push-out speed (m/s)
   double baumgarte_h = 0;    // rigid contacts: baumgarte / h (1/s)
-  double slop = 0;           // rigid contacts: overlap left alone (m)
   int sweeps = 1;            // sweeps over a manifold's normal points
   bool bias = true;          // position bias (false: the relax pass)
   bool soft = true;          // soft contacts (false: rigid, Baumgarte)

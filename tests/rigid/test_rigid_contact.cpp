@@ -1474,3 +1474,130 @@ TEST(RigidSleep, AForceWakesASleepingBodyAndActs) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------------------
+// small bodies
+
+namespace {
+
+// the contact tolerances a body of smallest half size `half` (m) gets at the defaults: the
+// linear slop, ContactSettings::linear_slop or a tenth of the half size (src/rigid/contacts.h)
+double slop_of(double half) { return std::min(ContactSettings{}.linear_slop, 0.1 * half); }
+
+// the steps a 60 Hz frame takes for a cube of half size `half` (m) under the one-manifold-a-step
+// rigid solvers (sequential impulses, TGS): a cube rocks on an edge at about sqrt(g / half)
+// rad/s, and a step must turn it by at most 1.2 rad of that (a 2 mm cube at 60 Hz: 1.17; a
+// 1 mm one: 1.65, where sequential impulses sank it to 0.17 of its half size and TGS rocked it
+// on two edges for ever)
+int steps_a_frame(pba::RigidSolverType solver, double half) {
+  if (solver == pba::RigidSolverType::SoftStep || solver == pba::RigidSolverType::Xpbd) return 1;
+  return static_cast<int>(std::ceil(std::sqrt(kG / half) / (1.2 * 60)));
+}
+
+// a cube's tilt (rad): the angle of its axis nearest the vertical from it
+double tilt_of(const RigidBodySystem& s, pba::RigidBodyId b) {
+  const Quat q = s.pose(b).rotation;
+  double up = 0;
+  for (const Vec3& e : {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}) up = std::max(up, std::abs((q * e).y));
+  return std::acos(std::min(1.0, up));
+}
+
+// the lowest of a cube's corners (m), in the world
+double lowest_corner(const RigidBodySystem& s, pba::RigidBodyId b, double half) {
+  double low = 1e300;
+  for (const Vec3& c : box_corners(Vec3(half))) low = std::min(low, pba::apply(s.pose(b), c).y);
+  return low;
+}
+
+}  // namespace
+
+// Small cubes, 1 mm to 5 cm half size, dropped tilted (three orientations), spinning about
+// the vertical at 0 and 5 rad/s, from their lowest corner at 0 and 5 cm above the ground (mu
+// = 0.5), the defaults, 3 s: each rests on a face. The contacts leave overlap within the
+// slop s alone (the rigid passes' Baumgarte, the soft step's position pass), so every corner
+// is at most s deep (and one touches) and a face can lean by at most atan(2 s / (2 sqrt(2) half)), one corner
+// s deep and the opposite one s up across the face's diagonal (measured: 4.07 degrees under
+// sequential impulses for a 2 mm cube, s = 0.1 half); 5% over s for a step's drift. The soft
+// step's springs and XPBD hold every corner of a face at the same depth: they lean by no more
+// than a sleeping body may still have turned in its rest window (sleep_angular x
+// time_to_sleep, 1 degree). Still: at most sleep_angular, and the centre then at most a
+// corner's speed at it. Before (main at 72937a9: linear_slop 5 mm and speculative_distance
+// 2 cm for every size) a 1 mm cube rested 45.7 degrees over, its centre at 0.44 of its half
+// size, and spinning at 5.2 rad/s (the speculative points reached its top face's corners, the
+// warm start matched every point with every other within the slop, and the slop let a corner
+// sink 5 half sizes).
+TEST(RigidSmallBodies, SmallCubesComeToRestOnAFace) {
+  const ContactSettings defaults;
+  const double sleep_turn = defaults.sleep_angular * defaults.time_to_sleep;
+  const Quat tilts[] = {glm::quat(Vec3(deg(20), deg(10), deg(30))), glm::quat(Vec3(deg(40), deg(0), deg(15))),
+                        glm::quat(Vec3(deg(5), deg(60), deg(-25)))};
+  for (const auto solver : kAll)
+  for (const double half : {0.001, 0.002, 0.005, 0.01, 0.02, 0.05})
+  for (const Quat& q : tilts)
+  for (const double spin : {0.0, 5.0})
+  for (const double drop : {0.0, 0.05}) {
+    RigidBodySystem s(with(solver));
+    ground(s, 0.5);
+    const auto box = s.create({.pose = {{0, half * std::sqrt(3.0) + drop, 0}, q}, .angular_velocity = {0, spin, 0},
+                               .shapes = {box_shape(Vec3(half), 0.5)}});
+    const int n = steps_a_frame(solver, half);
+    for (int i = 0; i < 180 * n; ++i) s.step(1.0 / 60 / n, kGravity);
+    const double slop = 1.05 * slop_of(half), tilt = tilt_of(s, box);
+    const bool flat = solver == pba::RigidSolverType::SoftStep || solver == pba::RigidSolverType::Xpbd;
+    const std::string what = std::string(to_string(solver)) + " half " + std::to_string(half) + " spin " +
+                             std::to_string(spin) + " drop " + std::to_string(drop) + " tilt " +
+                             std::to_string(&q - tilts);
+    EXPECT_LT(tilt, flat ? sleep_turn : std::atan(slop / (std::sqrt(2.0) * half))) << what;
+    const double low = lowest_corner(s, box, half);
+    EXPECT_GT(low, -slop) << what;
+    EXPECT_LT(low, 0.01 * slop) << what;  // touching
+    EXPECT_LE(glm::length(s.angular_velocity(box)), defaults.sleep_angular) << what;
+    EXPECT_LE(glm::length(s.linear_velocity(box)), defaults.sleep_angular * std::sqrt(3.0) * half) << what;
+  }
+}
+
+// A small cube dropped onto one of the same size resting on the ground, 0.3 half sizes off its
+// axis, turned and spinning at 2 rad/s, 1 mm to 5 cm half size, 3 s: both rest on a face, the
+// upper one on the lower: each within the slop's lean (above), and the upper one's centre
+// within two slops under 3 half sizes (each contact overlaps at most the slop).
+TEST(RigidSmallBodies, ASmallCubeRestsFlatOnASmallCube) {
+  for (const auto solver : kAll)
+  for (const double half : {0.001, 0.002, 0.005, 0.01, 0.05}) {
+    RigidBodySystem s(with(solver));
+    ground(s, 0.5);
+    const auto lower = s.create({.pose = {{0, half, 0}}, .shapes = {box_shape(Vec3(half), 0.5)}});
+    const auto upper = s.create({.pose = {{0.3 * half, 3.2 * half, 0}, glm::quat(Vec3(deg(8), deg(20), deg(5)))},
+                                 .angular_velocity = {0, 2, 0}, .shapes = {box_shape(Vec3(half), 0.5)}});
+    const int n = steps_a_frame(solver, half);
+    for (int i = 0; i < 180 * n; ++i) s.step(1.0 / 60 / n, kGravity);
+    const double slop = 1.05 * slop_of(half), lean = std::atan(slop / (std::sqrt(2.0) * half));
+    const std::string what = std::string(to_string(solver)) + " half " + std::to_string(half);
+    EXPECT_LT(tilt_of(s, lower), lean) << what;
+    EXPECT_LT(tilt_of(s, upper), lean) << what;
+    EXPECT_GT(s.center_of_mass(upper).y, 3 * half - 2 * slop) << what;
+    EXPECT_LT(s.center_of_mass(upper).y, 3 * half + 0.01 * slop) << what;
+  }
+}
+
+// Small balls (1 mm to 5 cm) rolling down a 20 degree slope, mu = 1: TGS at (5/7) g sin theta
+// to 1e-3, the soft step at the rate of a ball rolling on the point its springs hold at rest,
+// delta / 2 deep (delta = g cos theta / w^2, w = 1 / h against the static ground:
+// RigidFriction.ASphereRollsAtFiveSeventhsOfGSinTheta): g sin theta / (1 + (2/5) r^2 /
+// (r - delta / 2)^2), 0.988 of the closed form for a 1 mm ball, to 1e-3.
+TEST(RigidSmallBodies, SmallBallsRollAtTheirClosedForm) {
+  const double theta = deg(20);
+  for (const auto solver : {pba::RigidSolverType::SoftStep, pba::RigidSolverType::Tgs})
+  for (const double r : {0.001, 0.002, 0.005, 0.01, 0.05}) {
+    RigidBodySystem s(with(solver));
+    ground(s, 1.0, 0, theta);
+    const Vec3 n{-std::sin(theta), std::cos(theta), 0}, down{-std::cos(theta), -std::sin(theta), 0};
+    auto ball = s.create({.pose = {r * n}, .shapes = {{.shape = ColliderShape::sphere(r), .material = {.friction = 1}}}});
+    for (int i = 0; i < 30; ++i) s.step(1.0 / 60, kGravity);
+    const double v1 = glm::dot(s.linear_velocity(ball), down);
+    for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kGravity);
+    const double a = glm::dot(s.linear_velocity(ball), down) - v1;
+    const double w = 8 * 60.0, delta = solver == pba::RigidSolverType::SoftStep ? kG * std::cos(theta) / (w * w) : 0;
+    const double expected = kG * std::sin(theta) / (1 + 0.4 * r * r / ((r - delta / 2) * (r - delta / 2)));
+    EXPECT_NEAR(a, expected, 1e-3 * expected) << to_string(solver) << " r = " << r;
+  }
+}
