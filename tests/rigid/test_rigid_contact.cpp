@@ -380,7 +380,7 @@ TEST(RigidRestitution, PerturbedRodDropsGainNoEnergyAndJumpNowhere) {
 // trajectories), a 4 m rod at 60 degrees (raised 3e-7 m) was pushed 2 cm up by the substeps
 // of its landing step, and the restitution pass then gave back 10.85 of the 10.87 J/kg it
 // approached with: 1.0049 of its start (the allowance 1.0043). With the smaller-mass friction
-// tried before (tag keep/audit-slip), a 2 m rod at 10 degrees (4e-7 m) landing flat while
+// tried before (an audit's unmerged branch), a 2 m rod at 10 degrees (4e-7 m) landing flat while
 // tumbling was held only at its free motion over the whole step, m g v dt above: 1.024. Now
 // RigidContacts::bound_bounce_work keeps each at that energy (the worst 1.000000).
 TEST(RigidRestitution, ElasticRodsLandingWhileTurningGainNoEnergy) {
