@@ -456,6 +456,9 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
   const ContactSettings& cs = s.settings_;
   const double cos_half = std::cos(0.5 * cs.reuse_angle);
   const bool reuse = cs.reuse_distance > 0;
+  // whether some pair may take less than the settings' speculative or reuse distance (`thinnest`)
+  const bool small_possible = kSpeculativePerHalfSize * thinnest < cs.speculative_distance ||
+                              kReusePerHalfSize * thinnest < cs.reuse_distance;
   auto awake_dynamic = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
   // what becomes of a pair this step: kept as it is while its bodies sleep, ended when its fat
   // boxes part, without contact while its tight boxes are apart, else touching
@@ -517,11 +520,11 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       // contacts) (up to each body's size: faster ones are caught by the continuous pass)
       // (the setting's reach, or less for a small body: pair_speculative, with how far the
       // bodies' points travel by turning, up to each body's size)
-      // (`thinnest` says whether any body may be that small); the manifolds are kept while
+      // (`small_possible`: whether any body may be that small); the manifolds are kept while
       // the pair's points move less than the reuse distance (less for a small body: pair_reuse)
       double reach = cs.speculative_distance;
       plan.reuse = cs.reuse_distance;
-      if (kSpeculativePerHalfSize * thinnest < reach || kReusePerHalfSize * thinnest < plan.reuse) {
+      if (small_possible) {
         const double thin = std::min(s.min_extent_[a], s.min_extent_[b]);
         auto turn = [&](std::uint32_t i) {
           return s.w_[i] == Vec3(0) ? 0.0 : std::min(glm::length(s.w_[i]) * s.extent_[i] * s.last_dt_, s.extent_[i]);
