@@ -456,6 +456,9 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
   const ContactSettings& cs = s.settings_;
   const double cos_half = std::cos(0.5 * cs.reuse_angle);
   const bool reuse = cs.reuse_distance > 0;
+  // whether some pair may take less than the settings' speculative or reuse distance (`thinnest`)
+  const bool small_possible = kSpeculativePerHalfSize * thinnest < cs.speculative_distance ||
+                              kReusePerHalfSize * thinnest < cs.reuse_distance;
   auto awake_dynamic = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
   // what becomes of a pair this step: kept as it is while its bodies sleep, ended when its fat
   // boxes part, without contact while its tight boxes are apart, else touching
@@ -517,14 +520,17 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       // contacts) (up to each body's size: faster ones are caught by the continuous pass)
       // (the setting's reach, or less for a small body: pair_speculative, with how far the
       // bodies' points travel by turning, up to each body's size)
-      // (`thinnest` says whether any body may be that small)
+      // (`small_possible`: whether any body may be that small); the manifolds are kept while
+      // the pair's points move less than the reuse distance (less for a small body: pair_reuse)
       double reach = cs.speculative_distance;
-      if (kSpeculativePerHalfSize * thinnest < reach) {
+      plan.reuse = cs.reuse_distance;
+      if (small_possible) {
         const double thin = std::min(s.min_extent_[a], s.min_extent_[b]);
         auto turn = [&](std::uint32_t i) {
           return s.w_[i] == Vec3(0) ? 0.0 : std::min(glm::length(s.w_[i]) * s.extent_[i] * s.last_dt_, s.extent_[i]);
         };
         if (kSpeculativePerHalfSize * thin < reach) reach = pair_speculative(cs, thin, turn(a) + turn(b));
+        plan.reuse = pair_reuse(cs, thin);
       }
       plan.margin = reach + travel[a] + travel[b];
       // b's centre and frame in a's frame, against where they were when the manifolds were made
@@ -536,7 +542,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       plan.same = reuse && c.margin >= plan.margin &&
                   std::abs(glm::dot(plan.rel_rotation, c.rel_rotation)) >= cos_half &&
                   carried_points_moved(in_b, in_b ? s.extent_[a] : s.extent_[b], c, plan.rel_position,
-                                       plan.rel_rotation) <= cs.reuse_distance;
+                                       plan.rel_rotation) <= plan.reuse;
       plan.batched = kNoIndex;
       const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
       const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
@@ -546,7 +552,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       if (p.cache == kNoIndex) *narrow = NarrowPhaseCache{};
       else narrow = &caches[p.cache].narrow;
       box_queries.push_back({&sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), &sb.shape,
-                             shape_pose(s, p.proxy_b, b, p.shape_b), plan.margin + cs.reuse_distance, narrow});
+                             shape_pose(s, p.proxy_b, b, p.shape_b), plan.margin + plan.reuse, narrow});
     }
     collide_batch(box_queries, {box_manifolds.data(), box_queries.size()}, ConvexMethod::Sat, path);
 
@@ -591,7 +597,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       PairCache& c = caches[p.cache];
       if (!plan.same) {
         if (plan.batched != kNoIndex && fresh) c.narrow = fresh_narrow[plan.batched];
-        collide_pair(s, p, c, a, b, plan.margin, plan.batched != kNoIndex ? &box_manifolds[plan.batched] : nullptr);
+        collide_pair(s, p, c, a, b, plan.margin + plan.reuse, plan.batched != kNoIndex ? &box_manifolds[plan.batched] : nullptr);
         c.rel_position = plan.rel_position, c.rel_rotation = plan.rel_rotation;
       }
       for (std::uint32_t m = caches[p.cache].first; m != kNoIndex; m = manifolds[m].next) {
@@ -607,20 +613,20 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
   s.profile_.built = built, s.profile_.reused = reused;
 }
 
-// The narrow phase for one pair at a margin `margin` (m) plus the reuse distance (so the
-// manifold stays good while the pair closes by that much), into the pair's cache: each new
-// point takes the impulse of the old point (of the same triangle) with the same feature id
-// or, when the features changed (a face-on-face contact whose clipped corners sit on the
-// edges flips their labels under jitter), of the nearest old point within the linear slop in
-// a's frame (Jolt matches contact points by position the same way). Without that fallback a
+// The narrow phase for one pair out to `reach` (m): its speculative margin plus its reuse
+// distance (so the manifold stays good while the pair closes by that much; pair_reuse), into
+// the pair's cache: each new point takes the impulse of the old point (of the same triangle)
+// with the same feature id or, when the features changed (a face-on-face contact whose
+// clipped corners sit on the edges flips their labels under jitter), of the nearest old
+// point within the linear slop in a's frame (Jolt matches contact points by position the same way). Without that fallback a
 // 5-box stack rocked at 0.04 rad/s. `made`: the pair's manifold when make_manifolds already
 // made it (a box-box pair, by collide_batch, its narrow cache already updated), else null.
 void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCache& c, std::uint32_t a,
-                                 std::uint32_t b, double margin, const Manifold* made) {
+                                 std::uint32_t b, double reach, const Manifold* made) {
   const ContactSettings& cs = s.settings_;
   const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
   const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
-  const NarrowPhaseSettings ns{.speculative_margin = margin + cs.reuse_distance};
+  const NarrowPhaseSettings ns{.speculative_margin = reach};
   const double radius_a = core_radius(sa.shape), radius_b = core_radius(sb.shape);
   // the normal is kept in the frame of the body that does not move, else in a's
   const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;
@@ -780,7 +786,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
   PairCache old_chain;
   old_chain.first = old;
   free_manifolds(old_chain);
-  c.margin = margin + cs.reuse_distance;
+  c.margin = reach;
 }
 
 // One cached manifold to the solver: its points and normal in the world at the bodies' poses
