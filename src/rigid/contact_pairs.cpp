@@ -634,9 +634,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
   const Quat q_ref_inv = in_b ? qb_inv : qa_inv;
   const bool mesh_pair = sa.shape.type == ShapeType::Mesh || sb.shape.type == ShapeType::Mesh;
   // old points are matched within the pair's slop (less for a small body: pair_slop)
-  const double slop = kSlopPerHalfSize * thinnest < cs.linear_slop ? pair_slop(cs, std::min(s.min_extent_[a], s.min_extent_[b]))
-                                                                   : cs.linear_slop;
-  const double slop2 = slop * slop;
+  const double slop = slop_of(s, a, b), slop2 = slop * slop;
   const std::uint32_t old = c.first;
   for (std::uint32_t o = old; o != kNoIndex; o = manifolds[o].next) settle(o);
   std::uint32_t tail = kNoIndex;

@@ -192,6 +192,54 @@ PBA_LANES void in_frame(const double (&world)[9][kLanes], const V t[3][3], int l
   for (int e = 0; e < 6; ++e) out[e] = dot3(t[kRow[e]], it[kCol[e]]);
 }
 
+// The rows a lane's bodies' inverse inertias enter, made by fill_lanes and, for a body that
+// turned, by refresh_lanes with the same operations in the same order (so the same bits): the
+// normal rows' K (upper triangle, times u) and effective masses (over u), the friction's K at
+// the centroid and its two rows' masses, and a ContactBlock's twist mass, into `k` (a block or
+// a RefreshOutput). ia, ib: the inverse inertias in the frame (1/(kg m^2)); ma, mb: the
+// inverse masses (1/kg); unit: the lane's impulse unit u; x, y: each point's offset from a's
+// centre in the frame (m), `on` where the point is in use; d: b's centre from a's in the frame
+// (m); ca, cb: the centroid from a's centre and from b's (m).
+template <class V, int P, class Rows, class M>
+PBA_LANES void inertia_rows(Rows& k, int l0, const V (&ia)[6], const V (&ib)[6], V ma, V mb, V unit, const V (&x)[P],
+                            const V (&y)[P], const M (&on)[P], const V (&d)[3], const V (&ca)[3], const V (&cb)[3]) {
+  // the normal rows' angular parts are r x n = (y, -x, 0) in the frame, a's arm ra = (y, -x)
+  // and b's rb = ra + (d1, -d0); their third components are zero, so the products with the
+  // inverse inertias leave those terms out (exact zeros: a sum changes at most a zero's sign,
+  // and each form is added to ma + mb, never -0), and each point's I r is formed once, for K's
+  // entries ma + mb + ra_i^T Ia ra_j + rb_i^T Ib rb_j
+  V ra[P][2], rb[P][2], ira[P][2], irb[P][2];
+  for (int p = 0; p < P; ++p) {
+    ra[p][0] = y[p], ra[p][1] = -x[p];
+    rb[p][0] = y[p] + d[1], rb[p][1] = -(x[p] + d[0]);
+    ira[p][0] = ia[0] * ra[p][0] + ia[1] * ra[p][1];
+    ira[p][1] = ia[1] * ra[p][0] + ia[3] * ra[p][1];
+    irb[p][0] = ib[0] * rb[p][0] + ib[1] * rb[p][1];
+    irb[p][1] = ib[1] * rb[p][0] + ib[3] * rb[p][1];
+  }
+  static constexpr int kPairs[10][2] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}};
+  for (int e = 0; e < P * (P + 1) / 2; ++e) {
+    const int i = kPairs[e][0], j = kPairs[e][1];
+    const V v = keep(on[i] & on[j], ma + mb + (ra[i][0] * ira[j][0] + ra[i][1] * ira[j][1]) +
+                                        (rb[i][0] * irb[j][0] + rb[i][1] * irb[j][1]));
+    put(k.k[e], l0, v * unit);
+    if (i == j) put(k.mass[i], l0, inverse(v) / unit);
+  }
+  // friction at the centroid: the tangents' angular parts c x t1 = (0, c2, -c1) and
+  // c x t2 = (-c2, 0, c0), their quadratic forms again without the zero component
+  auto form1 = [](const V m[6], V u1, V u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
+  auto form2 = [](const V m[6], V u0, V u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
+  // (c x t1)^T m (c x t2), the off-diagonal entry (no linear part: t1 . t2 = 0)
+  auto form12 = [](const V m[6], V u1, V u2, V w0, V w2) { return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2); };
+  const V k11 = ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1]);
+  const V k22 = ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0]);
+  const V k12 = form12(ia, ca[2], -ca[1], -ca[2], ca[0]) + form12(ib, cb[2], -cb[1], -cb[2], cb[0]);
+  put(k.tangent_mass[0], l0, inverse(k11) / unit);
+  put(k.tangent_mass[1], l0, inverse(k22) / unit);
+  put(k.tangent_k[0], l0, k11 * unit), put(k.tangent_k[1], l0, k12 * unit), put(k.tangent_k[2], l0, k22 * unit);
+  if constexpr (P > 1) put(k.twist_mass, l0, inverse(ia[5] + ib[5]) / unit);
+}
+
 // Lanes [l0, l0 + width) of a block and its anchors from the gathered input. Every lane type
 // does the same operations in the same order (the build has -ffp-contract=off, division is
 // correctly rounded), so the scalar, AVX2 and AVX-512 paths give the same bits.
@@ -222,12 +270,9 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
   for (int i = 0; i < 3; ++i) dab[i] = from<V>(in.dab[i], l0), dba[i] = from<V>(in.dba[i], l0), cw[i] = from<V>(in.ca[i], l0);
   for (int i = 0; i < 3; ++i) d[i] = dot3(dab, t[i]), ca[i] = dot3(cw, t[i]);
   for (int i = 0; i < 3; ++i) put(k.ca[i], l0, ca[i]), put(k.cb[i], l0, ca[i] + d[i]);
-  // the points. The normal rows' angular parts are r x n = (y, -x, 0) in the frame, a's arm
-  // ra = (y, -x) and b's rb = ra + (d1, -d0); their third components are zero, so the
-  // products with the inverse inertias leave those terms out (exact zeros: a sum changes at
-  // most a zero's sign, and each form is added to ma + mb, never -0), and each point's I r is
-  // formed once, for K's entries ma + mb + ra_i^T Ia ra_j + rb_i^T Ib rb_j
-  V ra[P][2], rb[P][2], ira[P][2], irb[P][2];
+  // the points (their arms, anchors, separations and carried impulses), then the rows their
+  // bodies' inverse inertias enter (inertia_rows)
+  V px[P], py[P];
   decltype(zero < zero) on[P];
   const V base = dot3(dba, t[2]);  // the centres' separation along n
   for (int p = 0; p < P; ++p) {
@@ -236,12 +281,7 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
     for (int i = 0; i < 3; ++i)
       arm[i] = from<V>(in.arm[p][i], l0), sa[i] = from<V>(in.sa[p][i], l0), sb[i] = from<V>(in.sb[p][i], l0);
     const V x = keep(on[p], dot3(arm, t[0])), y = keep(on[p], dot3(arm, t[1]));
-    ra[p][0] = y, ra[p][1] = -x;
-    rb[p][0] = y + d[1], rb[p][1] = -(x + d[0]);
-    ira[p][0] = ia[0] * ra[p][0] + ia[1] * ra[p][1];
-    ira[p][1] = ia[1] * ra[p][0] + ia[3] * ra[p][1];
-    irb[p][0] = ib[0] * rb[p][0] + ib[1] * rb[p][1];
-    irb[p][1] = ib[1] * rb[p][0] + ib[3] * rb[p][1];
+    px[p] = x, py[p] = y;
     const V za = dot3(sa, t[2]), zb = dot3(sb, t[2]);
     put(g.za[p], l0, keep(on[p], za)), put(g.zb[p], l0, keep(on[p], zb));
     // the core anchors' tangential offsets from the contact point (half the step from a's
@@ -257,32 +297,8 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
     if constexpr (P > 1) put(k.x[p], l0, x - ca[0]), put(k.y[p], l0, y - ca[1]);
     put(k.max_impulse[p], l0, zero);
   }
-  static constexpr int kPairs[10][2] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}};
-  V diag[P];
-  for (int e = 0; e < P * (P + 1) / 2; ++e) {
-    const int i = kPairs[e][0], j = kPairs[e][1];
-    const V v = keep(on[i] & on[j], ma + mb + (ra[i][0] * ira[j][0] + ra[i][1] * ira[j][1]) +
-                                        (rb[i][0] * irb[j][0] + rb[i][1] * irb[j][1]));
-    put(k.k[e], l0, v * unit);
-    if (i == j) diag[i] = v;
-  }
-  for (int p = 0; p < P; ++p) put(k.mass[p], l0, inverse(diag[p]) / unit);
-  // friction at the centroid: the tangents' angular parts c x t1 = (0, c2, -c1) and
-  // c x t2 = (-c2, 0, c0), their quadratic forms again without the zero component
-  {
-    const V cb[3] = {ca[0] + d[0], ca[1] + d[1], ca[2] + d[2]};
-    auto form1 = [](const V m[6], V u1, V u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
-    auto form2 = [](const V m[6], V u0, V u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
-    // (c x t1)^T m (c x t2), the off-diagonal entry (no linear part: t1 . t2 = 0)
-    auto form12 = [](const V m[6], V u1, V u2, V w0, V w2) { return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2); };
-    const V k11 = ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1]);
-    const V k22 = ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0]);
-    const V k12 = form12(ia, ca[2], -ca[1], -ca[2], ca[0]) + form12(ib, cb[2], -cb[1], -cb[2], cb[0]);
-    put(k.tangent_mass[0], l0, inverse(k11) / unit);
-    put(k.tangent_mass[1], l0, inverse(k22) / unit);
-    put(k.tangent_k[0], l0, k11 * unit), put(k.tangent_k[1], l0, k12 * unit), put(k.tangent_k[2], l0, k22 * unit);
-    if constexpr (P > 1) put(k.twist_mass, l0, inverse(ia[5] + ib[5]) / unit);
-  }
+  const V cb[3] = {ca[0] + d[0], ca[1] + d[1], ca[2] + d[2]};
+  inertia_rows<V, P>(k, l0, ia, ib, ma, mb, unit, px, py, on, d, ca, cb);
   put(k.friction, l0, from<V>(in.friction, l0));
   put(k.tangent_impulse[0], l0, from<V>(in.tangent_impulse[0], l0) / unit);
   put(k.tangent_impulse[1], l0, from<V>(in.tangent_impulse[1], l0) / unit);
@@ -753,8 +769,6 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
   const int used = (k.lanes + width - 1) / width * width;
   const auto spare = static_cast<std::uint32_t>(s.type_.size());
   FillInput in;
-  const double slop = s.settings_.linear_slop;
-  const bool small = kSlopPerHalfSize * thinnest < slop;
   auto* rows_of_input = reinterpret_cast<double(*)[kLanes]>(&in);
   int count[kLanes] = {};
   if constexpr (kOne) k.rolls = 0;
@@ -786,8 +800,7 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
     if (ma + mb > 0) std::frexp(ma + mb, &exponent);
     in.ma[l] = ma, in.mb[l] = mb, in.unit[l] = std::ldexp(1.0, -exponent);
     // the overlap the rigid passes leave alone: the settings' slop, less for a small body
-    // (`thinnest` says whether any body may be that small)
-    k.slop[l] = static_cast<Real>(small ? pair_slop(s.settings_, std::min(s.min_extent_[c.a], s.min_extent_[c.b])) : slop);
+    k.slop[l] = static_cast<Real>(slop_of(s, c.a, c.b));
     const Vec3 t[3] = {c.t1, c.t2, c.normal};
     const Mat3& ia = inv_inertia[c.a];
     const Mat3& ib = inv_inertia[c.b];
@@ -884,43 +897,19 @@ PBA_LANES void refresh_lanes(const RefreshInput& in, RefreshOutput& out, int l0)
   V ia[6], ib[6];
   in_frame(in.ia, t, l0, ia), in_frame(in.ib, t, l0, ib);
   for (int e = 0; e < 6; ++e) put(out.ia[e], l0, ia[e] * unit), put(out.ib[e], l0, ib[e] * unit);
-  // the normal rows' arms in the frame (fill_lanes' ra, rb) and K's entries
+  // the points' offsets from a's centre in the frame, and the rows the inverse inertias enter
   V ca[3], cb[3], d[3];
   for (int i = 0; i < 3; ++i) ca[i] = from<V>(in.ca[i], l0), cb[i] = from<V>(in.cb[i], l0), d[i] = cb[i] - ca[i];
-  V ra[P][2], rb[P][2], ira[P][2], irb[P][2];
+  V x[P], y[P];
   decltype(zero < zero) on[P];
   for (int p = 0; p < P; ++p) {
     on[p] = from<V>(in.on[p], l0) > zero;
-    V x = ca[0], y = ca[1];
-    if constexpr (P > 1) x = x + from<V>(in.x[p], l0), y = y + from<V>(in.y[p], l0);
-    ra[p][0] = y, ra[p][1] = -x;
-    rb[p][0] = y + d[1], rb[p][1] = -(x + d[0]);
-    ira[p][0] = ia[0] * ra[p][0] + ia[1] * ra[p][1];
-    ira[p][1] = ia[1] * ra[p][0] + ia[3] * ra[p][1];
-    irb[p][0] = ib[0] * rb[p][0] + ib[1] * rb[p][1];
-    irb[p][1] = ib[1] * rb[p][0] + ib[3] * rb[p][1];
+    x[p] = ca[0], y[p] = ca[1];
+    if constexpr (P > 1) x[p] = x[p] + from<V>(in.x[p], l0), y[p] = y[p] + from<V>(in.y[p], l0);
   }
-  static constexpr int kPairs[10][2] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}, {1, 2}, {1, 3}, {2, 2}, {2, 3}, {3, 3}};
-  for (int e = 0; e < P * (P + 1) / 2; ++e) {
-    const int i = kPairs[e][0], j = kPairs[e][1];
-    const V v = keep(on[i] & on[j], ma + mb + (ra[i][0] * ira[j][0] + ra[i][1] * ira[j][1]) +
-                                        (rb[i][0] * irb[j][0] + rb[i][1] * irb[j][1]));
-    put(out.k[e], l0, v * unit);
-    if (i == j) put(out.mass[i], l0, inverse(v) / unit);
-  }
-  // friction at the centroid (fill_lanes' quadratic forms, K's off-diagonal entry included), twist, rolling
-  auto form1 = [](const V m[6], V u1, V u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
-  auto form2 = [](const V m[6], V u0, V u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
-  auto form12 = [](const V m[6], V u1, V u2, V w0, V w2) { return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2); };
-  const V k11 = ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1]);
-  const V k22 = ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0]);
-  const V k12 = form12(ia, ca[2], -ca[1], -ca[2], ca[0]) + form12(ib, cb[2], -cb[1], -cb[2], cb[0]);
-  put(out.tangent_mass[0], l0, inverse(k11) / unit);
-  put(out.tangent_mass[1], l0, inverse(k22) / unit);
-  put(out.tangent_k[0], l0, k11 * unit), put(out.tangent_k[1], l0, k12 * unit), put(out.tangent_k[2], l0, k22 * unit);
-  if constexpr (P > 1) {
-    put(out.twist_mass, l0, inverse(ia[5] + ib[5]) / unit);
-  } else {
+  inertia_rows<V, P>(out, l0, ia, ib, ma, mb, unit, x, y, on, d, ca, cb);
+  // a one-point lane's rolling mass
+  if constexpr (P == 1) {
     const V a = ia[0] + ib[0], b = ia[1] + ib[1], c = ia[2] + ib[2], dd = ia[3] + ib[3], e = ia[4] + ib[4], f = ia[5] + ib[5];
     const V adj[6] = {dd * f - e * e, c * e - b * f, b * e - c * dd, a * f - c * c, b * c - a * e, a * dd - b * b};
     const V det = a * adj[0] + b * adj[1] + c * adj[2];
@@ -1284,7 +1273,7 @@ void RigidContacts::find_bounces(RigidBodySystem& s, double h, const Vec3& gravi
     const Vec3 vf = v[i] + h * (s.gravity_scale_[i] * gravity + im * s.force_[i]);
     const Vec3 wb = glm::conjugate(q[i]) * w[i];
     const Vec3 wf = wb + h * (s.inv_inertia_[i] * (glm::conjugate(q[i]) * s.torque_[i]));
-    bounces.push_back({i, std::max(kinetic(im, inertia, v[i], wb), kinetic(im, inertia, vf, wf)), vf, wf});
+    bounces.push_back({i, std::max(kinetic(im, inertia, v[i], wb), kinetic(im, inertia, vf, wf)), vf, wf, Vec3(0), Vec3(0)});
   };
   if (from_lanes) {
     for (const LaneRef& x : restitution_lanes) {

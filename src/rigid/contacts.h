@@ -287,6 +287,13 @@ struct RigidContacts {
   // the least smallest half size of any body created (m; not raised when one is destroyed):
   // whether some pair may take less than the settings' slop (pair_slop)
   double thinnest = std::numeric_limits<double>::infinity();
+  /// The linear slop (m) of the pair of bodies a, b (dense indices): pair_slop() of the
+  /// thinner when some body may be small enough to take less (`thinnest`), else the setting.
+  double slop_of(const RigidBodySystem& s, std::uint32_t a, std::uint32_t b) const {
+    const double setting = s.settings_.linear_slop;
+    if (!(kSlopPerHalfSize * thinnest < setting)) return setting;
+    return pair_slop(s.settings_, std::min(s.min_extent_[a], s.min_extent_[b]));
+  }
 
   // ---- the broad phase and the pair cache (contact_pairs.cpp) ----
   std::vector<ShapeProxy> proxies;            // by proxy index (with free entries)

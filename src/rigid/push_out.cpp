@@ -53,9 +53,6 @@ bool RigidContacts::push_out(RigidBodySystem& s, const Vec3& gravity) {
   // (`thinnest` says whether there may be one: else every pair's is the setting's)
   const double slop = cs.linear_slop;
   const bool small = kSlopPerHalfSize * thinnest < slop;
-  auto slop_of = [&](std::uint32_t a, std::uint32_t b) {
-    return small ? pair_slop(cs, std::min(s.min_extent_[a], s.min_extent_[b])) : slop;
-  };
   // the deep manifolds, from the separations the last relax pass measured at the poses now
   // (those of the springs: a shifted manifold is listed in `preloaded` anyway)
   deep.clear();
@@ -67,7 +64,7 @@ bool RigidContacts::push_out(RigidBodySystem& s, const Vec3& gravity) {
         Real least = 0;
         for (int p = 0; p < P; ++p) least = std::min(least, k.sep[p][l]);
         if (k.pair[l] == kNoPair || least >= 0) continue;
-        if (least < -slop || (small && least < -slop_of(k.a[l], k.b[l]))) deep.push_back(k.pair[l]);
+        if (least < -slop || (small && least < -slop_of(s, k.a[l], k.b[l]))) deep.push_back(k.pair[l]);
       }
     }
   };
@@ -113,7 +110,7 @@ bool RigidContacts::push_out(RigidBodySystem& s, const Vec3& gravity) {
         if (c.record == kNoIndex) continue;
         Ordered o{};
         o.pair = k.pair[l], o.a = c.a, o.b = c.b, o.n = c.normal;
-        o.slop = slop_of(c.a, c.b);
+        o.slop = slop_of(s, c.a, c.b);
         const bool ma = moving(c.a), mb = moving(c.b);
         o.height = std::min(ma ? glm::dot(s.com_[c.a], up) : -1e300, mb ? glm::dot(s.com_[c.b], up) : -1e300);
         o.ma = ma ? s.inv_mass_[c.a] : 0, o.mb = mb ? s.inv_mass_[c.b] : 0;
