@@ -163,6 +163,7 @@ struct Options {
   bool bullet = true, ode = true;
   bool profile = false;  // a line of per-phase medians under each pba row
   double reuse = -1;     // the pair cache's reuse distance (m); < 0: the default
+  int substeps = 0;      // the solver's substeps (sequential impulses: ignored); 0: the default
   std::vector<pba::RigidSolverType> solvers{pba::kRigidSolvers.begin(), pba::kRigidSolvers.end()};
 };
 
@@ -222,6 +223,7 @@ void run_scene(const BenchScene& scene, const Options& o) {
     const std::string name = "pba " + std::string(pba::to_string(t));
     pba::ContactSettings settings = at_budget(t, 0, scene.sleep);
     if (o.reuse >= 0) settings.reuse_distance = o.reuse;
+    if (o.substeps > 0) settings.substeps = o.substeps;
     const PbaResult r = median_run(o.repeat, [&] { return run_pba(scene, steps, settings); });
     // a mesh scene pba cannot collide with yet: say so instead of a figure
     if (scene.has_mesh && (!r.ran || r.escapes > 0)) {
@@ -247,7 +249,7 @@ int usage(const char* why) {
   if (why) std::fprintf(stderr, "bench_rigid: %s\n", why);
   std::fprintf(stderr,
                "usage: bench_rigid [--scene KEY|all] [--steps N] [--repeat K] [--peer all|bullet|ode|none]\n"
-               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--profile]\n"
+               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--substeps N] [--profile]\n"
                "                   [--trace MS] | --quick | --budget\n"
                "scenes:");
   for (const BenchScene& s : pba::bench::bench_scenes()) std::fprintf(stderr, " %s", s.key.c_str());
@@ -300,6 +302,9 @@ int main(int argc, char** argv) {
       o.reuse = std::strtod(v.c_str(), &end);
       if (!end || *end || !(o.reuse >= 0 && o.reuse < 1))
         return usage(("--reuse '" + v + "': expected a distance in [0, 1) m").c_str());
+    } else if (a == "--substeps") {
+      if (!count_arg(need().c_str(), &o.substeps) || o.substeps > 64)
+        return usage(("--substeps '" + std::string(value) + "': expected a count in [1, 64]").c_str());
     } else if (a == "--peer") {
       const std::string p = need();
       if (p != "all" && p != "bullet" && p != "ode" && p != "none")
