@@ -352,7 +352,9 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       c.tangent_impulse[1] = glm::dot(friction, c.t2);
       c.twist_impulse = twist;
     }
-    // 5. the bodies that bounced off fixed bodies only keep at most their energy bound
+    // 5. the bodies that bounced off fixed bodies only keep at most their energy bound: no
+    // more than they began the substep with plus the work of gravity along their path
+    bound_bounces_to_work(s, gravity, x_start.data());
     bound_bounces(s, false);
   }
 }
