@@ -626,8 +626,9 @@ struct RigidContacts {
   };
   std::vector<XpbdPair> xpbd;
   /// XPBD: one manifold's positional contacts and static friction, solved as a block.
-  // (max_push: the most of a point's overlap at the start of the substep pushed out in it, m)
-  void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double alpha, double max_push);
+  // (h: the substep, s; max_push: the most of a point's overlap at the start of the substep
+  // pushed out in it, m)
+  void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push);
   /// Body i's solver state.
   static BodyView view(RigidBodySystem& s, std::size_t i) {
     return {&s.v_[i], &s.w_[i], &s.com_[i], &s.q_[i], s.asleep_[i] ? 0.0 : s.inv_mass_[i]};

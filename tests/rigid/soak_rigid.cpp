@@ -59,8 +59,9 @@ TEST(RigidSoak, ThousandDroppedBoxesAreAllAsleepWithinFiveSeconds) {
 // their half thickness (2026-12-04, src/rigid/contacts.h, pair_slop): sequential impulses
 // 1.0119, XPBD 1.0448 (13 drops). Since a bounce under XPBD keeps no more than the substep's
 // start plus gravity's work along its path (RigidContacts::bound_bounces_to_work): XPBD 1.0303
-// (11 drops); what is left comes from the continuous pass's put-backs (docs/rigid-bodies.md,
-// "The elastic bound").
+// (11 drops); with its static friction on a round surface held by the end velocity
+// (xpbd_rigid.cpp, material_motion) 1.0161 (13 drops). What is left comes from the continuous
+// pass's put-backs (docs/rigid-bodies.md, "The elastic bound").
 TEST(RigidSoak, PerturbedRodDropsGainNoEnergyAndJumpNowhere) {
   for (const auto solver : pba::kRigidSolvers) {
     double worst = 0, jump = -1e300;
