@@ -1621,6 +1621,19 @@ TEST(RigidSmallBodies, ASmallCubeRestsFlatOnASmallCube) {
   }
 }
 
+// The acceleration down a slope of theta (rad) of a ball of radius r (m) set on it at rest,
+// both of friction 1, from its velocity at 0.5 s and at 1.5 s, 60 Hz (m/s^2)
+double rolling_acceleration(const pba::RigidSystemDef& def, double r, double theta) {
+  RigidBodySystem s(def);
+  ground(s, 1.0, 0, theta);
+  const Vec3 n{-std::sin(theta), std::cos(theta), 0}, down{-std::cos(theta), -std::sin(theta), 0};
+  auto ball = s.create({.pose = {r * n}, .shapes = {{.shape = ColliderShape::sphere(r), .material = {.friction = 1}}}});
+  for (int i = 0; i < 30; ++i) s.step(1.0 / 60, kGravity);
+  const double v1 = glm::dot(s.linear_velocity(ball), down);
+  for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kGravity);
+  return glm::dot(s.linear_velocity(ball), down) - v1;
+}
+
 // Small balls (1 mm to 5 cm) rolling down a 20 degree slope, mu = 1: TGS and XPBD at (5/7) g
 // sin theta to 1e-3, the soft step at the rate of a ball rolling on the point its springs hold
 // at rest, delta / 2 deep (delta = g cos theta / w^2, w = 1 / h against the static ground:
@@ -1633,14 +1646,7 @@ TEST(RigidSmallBodies, SmallBallsRollAtTheirClosedForm) {
   const double theta = deg(20);
   for (const auto solver : {pba::RigidSolverType::SoftStep, pba::RigidSolverType::Tgs, pba::RigidSolverType::Xpbd})
   for (const double r : {0.001, 0.002, 0.005, 0.01, 0.05}) {
-    RigidBodySystem s(with(solver));
-    ground(s, 1.0, 0, theta);
-    const Vec3 n{-std::sin(theta), std::cos(theta), 0}, down{-std::cos(theta), -std::sin(theta), 0};
-    auto ball = s.create({.pose = {r * n}, .shapes = {{.shape = ColliderShape::sphere(r), .material = {.friction = 1}}}});
-    for (int i = 0; i < 30; ++i) s.step(1.0 / 60, kGravity);
-    const double v1 = glm::dot(s.linear_velocity(ball), down);
-    for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kGravity);
-    const double a = glm::dot(s.linear_velocity(ball), down) - v1;
+    const double a = rolling_acceleration(with(solver), r, theta);
     const double w = 8 * 60.0, delta = solver == pba::RigidSolverType::SoftStep ? kG * std::cos(theta) / (w * w) : 0;
     const double expected = kG * std::sin(theta) / (1 + 0.4 * r * r / ((r - delta / 2) * (r - delta / 2)));
     EXPECT_NEAR(a, expected, 1e-3 * expected) << to_string(solver) << " r = " << r;
@@ -1651,20 +1657,14 @@ TEST(RigidSmallBodies, SmallBallsRollAtTheirClosedForm) {
 // (up to 15 rad a substep for the 1 mm ball at 4), the same slope: (5/7) g sin theta to 1e-3
 // (measured: within 6e-5). Main before 2026-12-04, whose static friction held the contact's
 // material point by its displacement (a cycloid's, src/rigid/xpbd_rigid.cpp material_motion),
-// rolled the 1 mm ball at 0.068, 0.195 and 0.66 of it at 4, 8 and 32 substeps, the 5 mm one
+// rolled the 1 mm ball at 0.067, 0.21 and 0.66 of it at 4, 8 and 32 substeps, the 5 mm one
 // at 0.21 at 4.
 TEST(RigidSmallBodies, XpbdBallsRollAtTheirClosedFormAtAnySubsteps) {
   const double theta = deg(20);
   for (const int substeps : {4, 8, 32})
   for (const double r : {0.001, 0.005, 0.05, 0.5}) {
-    RigidBodySystem s({.contacts = {.solver = pba::RigidSolverType::Xpbd, .substeps = substeps}});
-    ground(s, 1.0, 0, theta);
-    const Vec3 n{-std::sin(theta), std::cos(theta), 0}, down{-std::cos(theta), -std::sin(theta), 0};
-    auto ball = s.create({.pose = {r * n}, .shapes = {{.shape = ColliderShape::sphere(r), .material = {.friction = 1}}}});
-    for (int i = 0; i < 30; ++i) s.step(1.0 / 60, kGravity);
-    const double v1 = glm::dot(s.linear_velocity(ball), down);
-    for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kGravity);
-    const double a = glm::dot(s.linear_velocity(ball), down) - v1, expected = 5.0 / 7 * kG * std::sin(theta);
+    const double a = rolling_acceleration({.contacts = {.solver = pba::RigidSolverType::Xpbd, .substeps = substeps}}, r, theta);
+    const double expected = 5.0 / 7 * kG * std::sin(theta);
     EXPECT_NEAR(a, expected, 1e-3 * expected) << substeps << " substeps, r = " << r;
   }
 }
