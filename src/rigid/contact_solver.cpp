@@ -1237,7 +1237,7 @@ void RigidContacts::bound_bounce_work(RigidBodySystem& s, const Vec3& gravity) {
     const double now = kinetic(im, inertia, v, wb);
     // the start's kinetic energy plus the work of gravity and force along the step's path
     const double start = kinetic(im, inertia, s.v_[i], glm::conjugate(s.q0_[i]) * s.w_[i]);
-    const double work = glm::dot(s.gravity_scale_[i] * gravity / im + s.force_[i], s.com_[i] - s.com0_[i]);
+    const double work = path_work(s, i, gravity, s.com0_[i]);
     const double before = kinetic(im, inertia, b.pre_v, pre);
     const double bound = std::max(before, start + work);
     if (!(now > bound * (1 + 1e-6))) continue;
@@ -1247,6 +1247,17 @@ void RigidContacts::bound_bounce_work(RigidBodySystem& s, const Vec3& gravity) {
     const double f = fraction_at(im, inertia, b.pre_v, pre, dv, dwb, bound);
     const Vec3 vf = b.pre_v + f * dv, wf = q * (pre + f * dwb);
     for (int k = 0; k < 3; ++k) rows[i].v[k] = vf[k], rows[i].w[k] = wf[k];
+  }
+}
+
+double RigidContacts::path_work(const RigidBodySystem& s, std::uint32_t i, const Vec3& gravity, const Vec3& from) {
+  return glm::dot(s.gravity_scale_[i] * gravity / s.inv_mass_[i] + s.force_[i], s.com_[i] - from);
+}
+
+void RigidContacts::bound_bounces_to_work(RigidBodySystem& s, const Vec3& gravity, const Vec3* x_start) {
+  for (Bounce& b : bounces) {
+    if (s.torque_[b.body] != Vec3(0)) continue;  // (a torque's work is not tracked)
+    b.bound = std::max(b.free, std::min(b.bound, b.start + path_work(s, b.body, gravity, x_start[b.body])));
   }
 }
 
@@ -1273,7 +1284,8 @@ void RigidContacts::find_bounces(RigidBodySystem& s, double h, const Vec3& gravi
     const Vec3 vf = v[i] + h * (s.gravity_scale_[i] * gravity + im * s.force_[i]);
     const Vec3 wb = glm::conjugate(q[i]) * w[i];
     const Vec3 wf = wb + h * (s.inv_inertia_[i] * (glm::conjugate(q[i]) * s.torque_[i]));
-    bounces.push_back({i, std::max(kinetic(im, inertia, v[i], wb), kinetic(im, inertia, vf, wf)), vf, wf, Vec3(0), Vec3(0)});
+    const double start = kinetic(im, inertia, v[i], wb), free = kinetic(im, inertia, vf, wf);
+    bounces.push_back({i, std::max(start, free), start, free, vf, wf, Vec3(0), Vec3(0)});
   };
   if (from_lanes) {
     for (const LaneRef& x : restitution_lanes) {

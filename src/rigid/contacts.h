@@ -549,6 +549,18 @@ struct RigidContacts {
   /// fraction of the pass's change that keeps it at that bound (the solver's rows; bodies
   /// under a torque are left as they are).
   void bound_bounce_work(RigidBodySystem& s, const Vec3& gravity);
+  /// XPBD, a substep's bounces (before bound_bounces): each of `bounces`' bodies gets at most
+  /// the kinetic energy it began the substep with plus the work of gravity and force along
+  /// the path it took in it (from x_start to its centre now), and never less than its free
+  /// motion's (bodies under a torque are left as they are). The bound of find_bounces lets a
+  /// body that rose in the substep keep the energy it began with at the height it rose to:
+  /// a tumbling 1 mm rod whose edges touched the ground in substep after substep as it rose
+  /// gained m g times the rise each time, about 1e-3 of its start (docs/rigid-bodies.md, "The
+  /// elastic bound").
+  void bound_bounces_to_work(RigidBodySystem& s, const Vec3& gravity, const Vec3* x_start);
+  /// The work of gravity and the body's force on body i along the path from `from` to its
+  /// centre now (J).
+  static double path_work(const RigidBodySystem& s, std::uint32_t i, const Vec3& gravity, const Vec3& from);
   // A collision with bodies that do not move cannot leave a body with more kinetic energy (in
   // their frame) than the larger of what it had and what its free motion would have had (a
   // bounce with e <= 1 gives back at most what the impact took). The solvers' passes over the
@@ -559,6 +571,7 @@ struct RigidContacts {
   struct Bounce {
     std::uint32_t body;
     double bound;  // max(kinetic energy now, after the free motion) (J)
+    double start, free;  // the kinetic energy now and after the free motion (J)
     Vec3 v, wb;    // the free motion's velocity (m/s) and angular velocity in the body frame (rad/s)
     Vec3 pre_v, pre_w;  // the solver's velocity (m/s) and world angular velocity (rad/s) before the restitution pass
   };
@@ -613,8 +626,9 @@ struct RigidContacts {
   };
   std::vector<XpbdPair> xpbd;
   /// XPBD: one manifold's positional contacts and static friction, solved as a block.
-  // (max_push: the most of a point's overlap at the start of the substep pushed out in it, m)
-  void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double alpha, double max_push);
+  // (h: the substep, s; max_push: the most of a point's overlap at the start of the substep
+  // pushed out in it, m)
+  void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push);
   /// Body i's solver state.
   static BodyView view(RigidBodySystem& s, std::size_t i) {
     return {&s.v_[i], &s.w_[i], &s.com_[i], &s.q_[i], s.asleep_[i] ? 0.0 : s.inv_mass_[i]};
