@@ -47,6 +47,8 @@ struct PbaResult : BenchResult {
   double asleep_at = -1;       // when every body first slept (s; -1: never)
   double deepest = 0;          // the deepest overlap of any manifold at the start of any step (m)
   int deepest_step = -1;       // the step it was in
+  int most_substeps = 0;       // the most substeps a step took (RigidProfile::substeps)
+  int tallest = 0;             // the tallest column the soft step measured (RigidProfile::column)
 };
 
 double median(std::vector<double> v) {
@@ -74,6 +76,7 @@ PbaResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings
       const double parts[10] = {p.collide, p.solve,     p.total,     p.pairs,    p.manifolds,
                                 p.islands, p.prepare, p.integrate, p.contacts, p.finish};
       for (int k = 0; k < 10; ++k) phase[k].push_back(parts[k]);
+      r.most_substeps = std::max(r.most_substeps, p.substeps), r.tallest = std::max(r.tallest, p.column);
       if (g_trace_ms > 0 && ms.back() > g_trace_ms)
         std::printf("    step %4d %7.2f ms: pairs %.2f manifolds %.2f (%zu built, %zu reused, %zu one-point) | prepare %.2f integrate %.2f "
                     "contacts %.2f finish %.2f (islands %.2f) | %zu awake, %zu proxies moved\n",
@@ -98,6 +101,7 @@ PbaResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings
     r.phases.prepare = median(phase[6]), r.phases.integrate = median(phase[7]);
     r.phases.contacts = median(phase[8]), r.phases.finish = median(phase[9]);
     r.phases.built = s.profile().built, r.phases.reused = s.profile().reused;
+    r.phases.substeps = s.profile().substeps, r.phases.column = s.profile().column;
     r.manifolds = s.manifold_count();
   } catch (const pba::Error& e) {
     r.note = e.what();
@@ -113,6 +117,7 @@ pba::ContactSettings at_budget(pba::RigidSolverType solver, int passes, bool sle
   pba::ContactSettings c{.solver = solver, .sleep = sleep};
   if (passes > 0) {
     c.substeps = std::max(1, passes / 2);
+    c.auto_substeps = false;  // (the budget is exact)
     c.iterations = passes;
   }
   return c;
@@ -149,11 +154,12 @@ void print_profile(const PbaResult& r) {
   const pba::RigidProfile& p = r.phases;
   std::printf("  %24s phases: collide %.3f (pairs %.3f, manifolds %.3f) | solve %.3f (prepare %.3f, integrate %.3f, "
               "contacts %.3f, finish %.3f, of which islands %.3f) | total %.3f ms"
-              "  (%zu manifolds: %zu built, %zu reused; all asleep %s; deepest overlap %.4f m at step %d)\n",
+              "  (%zu manifolds: %zu built, %zu reused; all asleep %s; deepest overlap %.4f m at step %d; "
+              "substeps %d at the end, at most %d; tallest column %d)\n",
               "", 1e3 * p.collide, 1e3 * p.pairs, 1e3 * p.manifolds, 1e3 * p.solve, 1e3 * p.prepare, 1e3 * p.integrate,
               1e3 * p.contacts, 1e3 * p.finish, 1e3 * p.islands, 1e3 * p.total,
               r.manifolds, p.built, p.reused, r.asleep_at < 0 ? "never" : (std::to_string(r.asleep_at) + " s").c_str(),
-              r.deepest, r.deepest_step);
+              r.deepest, r.deepest_step, p.substeps, r.most_substeps, r.tallest);
 }
 
 struct Options {

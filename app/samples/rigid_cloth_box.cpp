@@ -68,7 +68,7 @@ class ClothOnBoxSample final : public Sample {
   }
 
   void DrawUI() override {
-    RigidSolverKnobs(settings_);
+    RigidSolverKnobs(settings_, world_.rigid().profile().substeps);
     ImGui::Checkbox("sleep", &settings_.sleep);
     ImGui::SameLine();
     if (ImGui::Button("Restart")) Restart();

@@ -20,7 +20,7 @@ RigidSolverType RigidSolverOption(const SampleContext& ctx) {
   throw Error("--option solver: expected soft, si, tgs or xpbd, got '" + solver + "'");
 }
 
-void RigidSolverKnobs(ContactSettings& s) {
+void RigidSolverKnobs(ContactSettings& s, int in_use) {
   static constexpr const char* kNames[] = {"soft step", "sequential impulses", "TGS", "XPBD"};
   int solver = static_cast<int>(s.solver);
   ImGui::SetNextItemWidth(-110);
@@ -28,7 +28,15 @@ void RigidSolverKnobs(ContactSettings& s) {
   // each solver's own knobs (the substeps are shared by the three that substep)
   if (s.solver != RigidSolverType::SequentialImpulse) {
     ImGui::SetNextItemWidth(-110);
-    ImGui::SliderInt("substeps", &s.substeps, 1, 64);
+    // a substep count picked by hand is taken exactly (auto_substeps off)
+    if (ImGui::SliderInt("substeps", &s.substeps, 1, 64)) s.auto_substeps = false;
+  }
+  if (s.solver == RigidSolverType::SoftStep) {
+    ImGui::Checkbox("more for tall columns", &s.auto_substeps);
+    if (in_use > 0) {
+      ImGui::SameLine();
+      ImGui::Text("(%d in use)", in_use);
+    }
   }
   if (s.solver == RigidSolverType::SoftStep) {
     float hz = static_cast<float>(s.contact_hertz);
@@ -190,7 +198,7 @@ void RigidSample::SimulatedPoints(std::vector<Vec3>& out, std::size_t max_points
 }
 
 bool RigidSample::SolverControls() {
-  RigidSolverKnobs(settings_);
+  RigidSolverKnobs(settings_, bodies_.profile().substeps);
   ImGui::Checkbox("sleep", &settings_.sleep);
   ImGui::SameLine();
   const bool restart = ImGui::Button("Restart");

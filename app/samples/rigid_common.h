@@ -16,8 +16,10 @@ namespace pba::app {
 RigidSolverType RigidSolverOption(const SampleContext& ctx);
 
 /// The solver combo and the chosen solver's own knobs (substeps, contact Hz, iterations,
-/// relax, compliance, manifold sweeps, warm starting), editing `s` live.
-void RigidSolverKnobs(ContactSettings& s);
+/// relax, compliance, manifold sweeps, warm starting, the soft step's auto substeps), editing
+/// `s` live; `in_use` (when > 0) is shown as the substeps the last step took
+/// (RigidProfile::substeps). Moving the substeps slider turns auto_substeps off.
+void RigidSolverKnobs(ContactSettings& s, int in_use = 0);
 
 /// The mouse on rigid bodies: a press grabs the dynamic body whose shape the cursor's ray
 /// hits first, a 3 Hz critically damped spring (Box2D's mouse joint as a force, scaled by

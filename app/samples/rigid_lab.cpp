@@ -154,7 +154,7 @@ class RigidLab final : public Sample {
                          "%d iterations.",
                          passes_, passes_ / 2, passes_ / 2, passes_);
     } else {
-      RigidSolverKnobs(settings_);
+      RigidSolverKnobs(settings_, lanes_.empty() ? 0 : lanes_[0].bodies.profile().substeps);
     }
     if (ImGui::Button("Restart") || rebuild) {
       scene_ = static_cast<LabScene>(scene);
@@ -243,6 +243,7 @@ class RigidLab final : public Sample {
     if (!compare_) return c;
     c.solver = kRigidSolvers[k];
     c.substeps = passes_ / 2;
+    c.auto_substeps = false;  // (the budget is exact)
     c.iterations = passes_;
     c.substep_iterations = 1;
     c.relax_iterations = 1;

@@ -161,6 +161,14 @@ enum class MixRule : std::uint8_t {
 struct ContactSettings {
   RigidSolverType solver = RigidSolverType::SoftStep;  ///< which solver
   int substeps = 8;  ///< soft step, TGS and XPBD: substeps per step, in [1, 64]
+  /// Soft step: take more substeps while a column of boxes stands too tall for the contacts'
+  /// springs at `substeps` (its buckling load: docs/rigid-bodies.md, "Why 8 substeps and
+  /// 120 Hz"): the substeps and `contact_hertz` are doubled together, up to four times (and
+  /// 64 substeps), for the whole system, and halved again once the columns have fitted the
+  /// fewer substeps for a second. Worlds without a tall column keep `substeps` exactly (and
+  /// their bits). RigidProfile::substeps tells the substeps a step took. Off (or
+  /// set_substeps()), the soft step takes exactly `substeps` and `contact_hertz`.
+  bool auto_substeps = true;
   int iterations = 10;  ///< sequential impulses: velocity iterations per step, in [1, 1000]
   /// TGS: biased contact iterations per substep; XPBD: position iterations per substep; in
   /// [1, 100]. TGS and XPBD take many substeps of few iterations (Macklin et al. 2019).
@@ -177,6 +185,7 @@ struct ContactSettings {
   /// so a contact under a load W between bodies of effective mass m settles
   /// W / (m (2 pi hertz)^2) deep, and a stack of n boxes sags by about n^2 g / (2 pi hertz)^2:
   /// 7 mm for 20 one-metre boxes at the default 120 Hz and 8 substeps of a 60 Hz step.
+  /// `auto_substeps` raises it with the substeps for a tall column (240 Hz at 16).
   double contact_hertz = 120;
   double damping_ratio = 10;     ///< soft step: contact damping ratio, finite and >= 0
   double push_out_speed = 3;     ///< largest speed (m/s) at which overlap is pushed apart, finite and > 0
@@ -269,7 +278,7 @@ struct RigidProfile {
   double pairs = 0;      ///< shape bounds, the pair list and waking sleepers (s)
   double manifolds = 0;  ///< manifolds built or reused and warm-start data (s)
   // the parts of `solve`
-  double prepare = 0;    ///< the solver's constraint arrays (colours, blocks) (s)
+  double prepare = 0;    ///< the solver's constraint arrays (colours, blocks), the soft step's columns (s)
   double integrate = 0;  ///< velocities and positions, all substeps (s)
   double contacts = 0;   ///< the contact passes: solve, relax (with the warm start), restitution (s)
   double finish = 0;     ///< continuous collision, storing the impulses, islands and sleep (s)
@@ -280,6 +289,12 @@ struct RigidProfile {
   /// manifolds the velocity solver took in blocks of one-point manifolds (a sphere's, a
   /// capsule's tip; the soft step and sequential impulses; 0 under TGS and XPBD)
   std::size_t one_point = 0;
+  /// substeps the step took (the soft step: `substeps`, or more for a tall column under
+  /// ContactSettings::auto_substeps; TGS and XPBD: `substeps`; sequential impulses: 1)
+  int substeps = 0;
+  /// the soft step's tallest column of the last measure: dynamic bodies resting face on face
+  /// along gravity, counted from one that rests on a body that does not move (0 for the other solvers)
+  int column = 0;
 };
 
 namespace detail {
@@ -385,7 +400,7 @@ class RigidBodySystem {
   ContactSettings& settings() { return settings_; }
   /// Contact and solver settings.
   const ContactSettings& settings() const { return settings_; }
-  /// Sets the soft step's substeps per step, in [1, 64].
+  /// Sets the substeps per step, in [1, 64], exactly: it turns ContactSettings::auto_substeps off.
   void set_substeps(int n);
   /// Picks the contact solver's SIMD path (for tests and benchmarks; results do not depend on
   /// it). Throws Error naming the path when this CPU cannot run it.
@@ -501,6 +516,12 @@ class RigidBodySystem {
   // start of the step, for the contact solver's separation updates
   std::vector<Vec3> com0_;
   std::vector<Quat> q0_;
+  // ContactSettings::auto_substeps: the factor on the substeps and contact_hertz now (1, 2 or
+  // 4), and how long (s) the columns have fitted half of it
+  int auto_factor_ = 1;
+  double auto_calm_ = 0;
+  // the soft step's substeps this step (auto_substeps) and its factor on contact_hertz
+  int step_substeps(double dt, const Vec3& gravity);
 };
 
 }  // namespace pba

@@ -921,8 +921,9 @@ void RigidContacts::remove_body(RigidBodySystem& s, std::uint32_t slot, std::siz
   }
   shape_pairs.resize(keep);
   // (and their lanes with them, which manifold() reads until the next step; their colours are
-  // made anew, the entries having moved)
+  // made anew, the entries having moved; the columns measured anew)
   colored_once = false;
+  column_known = false;
   std::size_t kept = 0;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     if (pairs[k].slot_a == slot || pairs[k].slot_b == slot) continue;

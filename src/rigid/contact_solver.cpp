@@ -1084,7 +1084,7 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
   // 10-stack's damping ratio 0.030 with it at 120 Hz, 0.10 at 76 Hz, its spring-damper
   // model's 0.13; docs/rigid-bodies.md, "A column's sway"). It carries a stack's load
   // once, not once per box, so the sag barely changes (6.9 -> 7.4 mm for the 20-stack)
-  const double hertz = std::min(cs.contact_hertz, 0.25 / h);
+  const double hertz = std::min(cs.contact_hertz * hertz_scale, 0.25 / h);
   const Softness dynamic_soft = make_soft(hertz, cs.damping_ratio, h);
   const Softness static_soft = make_soft(std::min(2 * hertz, kStaticStepAngle / (2 * kPi * h)), cs.damping_ratio, h);
   p.bias_rate[0] = dynamic_soft.bias_rate, p.mass_scale[0] = dynamic_soft.mass_scale;

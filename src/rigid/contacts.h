@@ -421,6 +421,25 @@ struct RigidContacts {
   std::vector<std::uint32_t> color_key;  // scratch of color(): each pair's bodies a, b in pair order
   bool color_tgs = false, colored_once = false, pairs_same = false;
   bool backward = true;  // this step runs each band's colours last to first (alternating by step)
+  /// The columns (columns.cpp): each awake dynamic body's height in bodies resting face on
+  /// face along `up` (unit, against gravity) from one that rests on a body that does not move,
+  /// into column_level (0: on no such column); returns the largest level^3 / (2 x smallest half
+  /// size) over the bodies (1/m; the load the column model asks of the contacts) and the tallest
+  /// level in `tallest`. O(bodies + pairs); no allocation once the scratch has grown.
+  double measure_columns(const RigidBodySystem& s, const Vec3& up, int& tallest);
+  // its scratch: by body the level and the first of its edges (bodies resting on it) in
+  // column_edge, the (lower, upper) face pairs, the breadth-first queue
+  std::vector<std::uint32_t> column_level, column_start, column_edge, column_queue;
+  std::vector<std::uint64_t> column_pairs;
+  // the last measure (RigidBodySystem::step_substeps): its result, the bodies and the up it
+  // was made for, the steps since, and whether it stands (cleared when a body is destroyed)
+  double column_need = 0;
+  int column_top = 0;
+  std::size_t column_bodies = 0;
+  Vec3 column_up{0, 0, 0};
+  int column_age = 0;
+  bool column_known = false;
+  double hertz_scale = 1;  // the soft step's factor on contact_hertz this step (auto_substeps)
   double gravity_speed = 0;  // |g| of this step (m/s^2): the soft step's cap on carried impulses
   struct LaneRef {
     std::uint32_t block, lane;

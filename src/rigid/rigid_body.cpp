@@ -294,6 +294,7 @@ RigidSimd RigidBodySystem::simd() const {
 void RigidBodySystem::set_substeps(int n) {
   require_count(n, 1, 64, "ContactSettings.substeps");
   settings_.substeps = n;
+  settings_.auto_substeps = false;
 }
 
 RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view where) {
@@ -654,9 +655,13 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   contacts_->moving_damped = damped;
   profile_.collide = total.seconds();
   profile_.integrate = 0;  // integrate_velocities and integrate_positions add to it
-  // the carried impulses at this solver's time step, then the solver's arrays
   const bool soft = settings_.solver == RigidSolverType::SoftStep;
-  contacts_->carry_impulses(settings_.solver == RigidSolverType::SequentialImpulse ? dt : dt / settings_.substeps);
+  // the substeps this step takes (more than the setting for a tall column: auto_substeps,
+  // columns.cpp; counted in profile_.prepare), the carried impulses at this solver's time
+  // step, then the solver's arrays
+  const int substeps = step_substeps(dt, gravity);
+  profile_.substeps = substeps;
+  contacts_->carry_impulses(dt / substeps);
   contacts_->prepare(*this);
   profile_.prepare = total.seconds() - profile_.collide;
   const double solver_start = total.seconds();
@@ -670,7 +675,6 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   } else if (soft) {
     // substeps: velocities with the carried impulses, soft solve, positions, relax (which
     // measures the separations at the new poses and carries the impulses to the next substep)
-    const int substeps = settings_.substeps;
     const double h = dt / substeps;
     for (int s = 0; s < substeps; ++s) {
       integrate_velocities(h, gravity, c.rows.data(), c.warm.data());

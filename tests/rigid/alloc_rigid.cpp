@@ -42,6 +42,28 @@ TEST(RigidAlloc, StepsWithContactsNeverAllocate) {
   }
 }
 
+// A 40-stack at the defaults, which the soft step takes at 16 substeps (auto_substeps: its
+// columns measured every step): once stepping, it allocates nothing, nor when it comes back
+// to 8 substeps after its top half is taken away
+TEST(RigidAlloc, ATallColumnsStepsNeverAllocate) {
+  pba::RigidBodySystem s({.capacity = 64, .contacts = {.sleep = false}});
+  s.create({.type = pba::BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+  std::vector<pba::RigidBodyId> ids;
+  for (int i = 0; i < 40; ++i)
+    ids.push_back(s.create({.pose = {{0, 0.5 + i, 0}}, .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.5, 0.5})}}}));
+  for (int k = 0; k < 30; ++k) s.step(1.0 / 60, {0, -9.81, 0});
+  long long before = g_allocations.load();
+  for (int k = 0; k < 100; ++k) s.step(1.0 / 60, {0, -9.81, 0});
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(s.profile().substeps, 16);
+  for (int i = 20; i < 40; ++i) s.destroy(ids[static_cast<std::size_t>(i)]);
+  s.step(1.0 / 60, {0, -9.81, 0});
+  before = g_allocations.load();
+  for (int k = 0; k < 100; ++k) s.step(1.0 / 60, {0, -9.81, 0});
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(s.profile().substeps, 8);
+}
+
 // Boxes and balls rolling and sliding over a bumpy static triangle mesh (manifolds made anew
 // every step, merged per normal, carried over when the bodies come to rest): once the pairs
 // have been seen, stepping allocates nothing

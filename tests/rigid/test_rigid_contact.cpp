@@ -728,6 +728,131 @@ TEST(RigidStacking, TwentySmallCubesStandAtSixteenSubsteps) {
   }
 }
 
+// At the defaults the soft step takes more substeps for a column too tall for its springs
+// (ContactSettings::auto_substeps, src/rigid/columns.cpp): it doubles the substeps and
+// contact_hertz together while a column's n^3 g / (w^2 s) (n cubes of side s on springs of w;
+// a column buckles near 0.8-0.93 of it, Greenhill's 0.98 for the spring model) is over 0.5.
+// 40 one-metre cubes carry 1.10 of it at 120 Hz (past their buckling load: they lean over,
+// RigidStacking.AFortyStackOnTheDefaultContactsLeansOverAtItsSpringModelsBucklingRate) and
+// 0.28 at 240 Hz: every step takes 16 substeps, and the stack stands as at stiff_contacts():
+// sleeping off, 30 s, its top drifts under 1 cm and it sags by the closed form 40^2 g / w^2 =
+// 6.9 mm at 240 Hz within 10%.
+TEST(RigidStacking, FortyCubesStandAtTheDefaults) {
+  RigidBodySystem s({.capacity = 64, .contacts = {.sleep = false}});
+  const auto boxes = pba::rigid_scenes::vertical_stack(s, 40);
+  double drift = 0;
+  int fewest = 64, most = 0;
+  for (int i = 0; i < 1800; ++i) {
+    s.step(1.0 / 60, kGravity);
+    fewest = std::min(fewest, s.profile().substeps), most = std::max(most, s.profile().substeps);
+    const Vec3 top = s.center_of_mass(boxes.back());
+    drift = std::max(drift, std::hypot(top.x, top.z));
+  }
+  EXPECT_EQ(fewest, 16);
+  EXPECT_EQ(most, 16);
+  EXPECT_EQ(s.profile().column, 40);
+  const double w = 2 * pba::kPi * 240, closed = 40 * 40 * kG / (w * w);
+  const double sag = 39.5 - s.center_of_mass(boxes.back()).y;
+  EXPECT_LT(drift, 0.01);
+  EXPECT_NEAR(sag, closed, 0.1 * closed);
+}
+
+// The same for 20 cubes of 10 cm and of 20 cm (n^3 g / (w^2 s) at 120 Hz: 1.38 and 0.69; a
+// column of 10 cm cubes stands 17 high at 8 substeps, RigidStacking.TwentySmallCubesStandAtSixteenSubsteps):
+// at the defaults they take 16 substeps and 240 Hz and stand 30 s, their tops within 1% of a
+// cube's size of the axis, and sag by the closed form n^2 g / w^2 within 10%.
+TEST(RigidStacking, TwentySmallCubesStandAtTheDefaults) {
+  for (const double half : {0.05, 0.1}) {
+    RigidBodySystem s({.capacity = 64, .contacts = {.sleep = false}});
+    const auto boxes = pba::rigid_scenes::vertical_stack(s, 20, half);
+    double drift = 0;
+    int most = 0;
+    for (int i = 0; i < 1800; ++i) {
+      s.step(1.0 / 60, kGravity);
+      most = std::max(most, s.profile().substeps);
+      const Vec3 top = s.center_of_mass(boxes.back());
+      drift = std::max(drift, std::hypot(top.x, top.z));
+    }
+    const double w = 2 * pba::kPi * 240, closed = 20 * 20 * kG / (w * w);
+    const double sag = 39 * half - s.center_of_mass(boxes.back()).y;
+    EXPECT_EQ(most, 16) << "cubes of " << 2 * half << " m";
+    EXPECT_LT(drift, 0.01 * 2 * half) << "cubes of " << 2 * half << " m";
+    EXPECT_NEAR(sag, closed, 0.1 * closed) << "cubes of " << 2 * half << " m";
+  }
+}
+
+// What stands on the 8 substeps keeps them, and its bits: a 20-stack of one-metre cubes (0.14
+// of the bound's n^3 g / (w^2 s)), a 10-level square pyramid (10 levels: 0.017) and the same
+// pyramid's boxes dropped from a grid (falling_boxes: columns of 10 as they land) step every
+// step at 8 substeps, to the same hash as with auto_substeps off. The measure sees the columns
+// (the 20-stack's is 20 cubes, the pyramid's 10).
+TEST(RigidStacking, WhatStandsAtEightSubstepsKeepsThemAndItsBits) {
+  struct Case {
+    const char* name;
+    int column;  // the tallest column at the end (-1: not checked)
+    std::vector<pba::RigidBodyId> (*build)(RigidBodySystem&);
+  };
+  const Case cases[] = {
+      {"20-stack", 20, [](RigidBodySystem& s) { return pba::rigid_scenes::vertical_stack(s, 20); }},
+      {"pyramid", 10, [](RigidBodySystem& s) { return pba::rigid_scenes::square_pyramid(s, 10); }},
+      {"falling boxes", -1, [](RigidBodySystem& s) { return pba::rigid_scenes::falling_boxes(s, 6); }},
+  };
+  for (const Case& c : cases) {
+    std::uint64_t hash[2] = {0, 0};
+    for (const bool automatic : {true, false}) {
+      RigidBodySystem s({.capacity = 1024, .contacts = {.auto_substeps = automatic, .sleep = false}});
+      c.build(s);
+      for (int i = 0; i < 240; ++i) {
+        s.step(1.0 / 60, kGravity);
+        ASSERT_EQ(s.profile().substeps, 8) << c.name << " at step " << i;
+      }
+      if (automatic && c.column >= 0) {
+        EXPECT_EQ(s.profile().column, c.column) << c.name;
+      }
+      hash[automatic] = s.hash();
+    }
+    EXPECT_EQ(hash[0], hash[1]) << c.name;
+  }
+}
+
+// The substeps come down again once the columns fit fewer with room: a 40-stack at the
+// defaults (16 substeps) whose top 20 boxes are taken away carries 0.14 of the bound at 8
+// substeps, under half of it, and returns to 8 after a second (kCalmTime: 59 more steps at 16);
+// with only its top 10 taken away (30 boxes, 0.47) it fits 8 substeps but not with that room,
+// and keeps 16 (no switching back and forth about the bound).
+TEST(RigidStacking, TheSubstepsComeDownASecondAfterTheColumnFitsFewerWithRoom) {
+  for (const int removed : {20, 10}) {
+    RigidBodySystem s({.capacity = 64, .contacts = {.sleep = false}});
+    auto boxes = pba::rigid_scenes::vertical_stack(s, 40);
+    for (int i = 0; i < 30; ++i) s.step(1.0 / 60, kGravity);
+    ASSERT_EQ(s.profile().substeps, 16);
+    for (int k = 0; k < removed; ++k) s.destroy(boxes[boxes.size() - 1 - static_cast<std::size_t>(k)]);
+    std::vector<int> taken;
+    for (int i = 0; i < 180; ++i) s.step(1.0 / 60, kGravity), taken.push_back(s.profile().substeps);
+    EXPECT_EQ(s.profile().column, 40 - removed);
+    if (removed == 20) {
+      for (int i = 0; i < 59; ++i) EXPECT_EQ(taken[static_cast<std::size_t>(i)], 16) << "step " << i << " after";
+      for (int i = 61; i < 180; ++i) EXPECT_EQ(taken[static_cast<std::size_t>(i)], 8) << "step " << i << " after";
+    } else {
+      for (int i = 0; i < 180; ++i) EXPECT_EQ(taken[static_cast<std::size_t>(i)], 16) << "step " << i << " after";
+    }
+  }
+}
+
+// Substeps set by hand are taken exactly: set_substeps (which turns auto_substeps off) keeps
+// a 40-stack at 8 substeps.
+TEST(RigidStacking, SubstepsSetByHandAreTakenExactly) {
+  RigidBodySystem s({.capacity = 64, .contacts = {.sleep = false}});
+  pba::rigid_scenes::vertical_stack(s, 40);
+  s.set_substeps(8);
+  EXPECT_FALSE(s.settings().auto_substeps);
+  for (int i = 0; i < 60; ++i) {
+    s.step(1.0 / 60, kGravity);
+    ASSERT_EQ(s.profile().substeps, 8);
+  }
+  EXPECT_EQ(s.profile().column, 0);  // (not measured when off)
+}
+
 // A 400:1 mass ratio: a one-metre cube of 50 t on a column of three 0.5 m cubes of 125 kg,
 // 10 s, sleep off: no contact overlaps 1 cm or more at any step, and the heavy cube stays on
 // the column (its centre within 1 cm of the axis, at most 2 cm under its resting height of
@@ -1164,7 +1289,8 @@ TEST(RigidRocking, ATenStackSwaysAtItsSpringModelsFrequencyAndDecays) {
               model.hertz, rigid_ground.hertz, zeta, model.zeta);
 }
 
-// The same model for 40 cubes at the defaults (120 Hz between the cubes, 76 Hz on the ground)
+// The same model for 40 cubes on the default contacts (8 substeps, auto_substeps off: 120 Hz
+// between the cubes, 76 Hz on the ground)
 // has a negative stiffness: gravity's overturning outgrows the contacts' springs between 37
 // and 38 cubes (38 and 39 with the ground at 120 Hz),
 // so a 40-stack cannot stand on them, however they are damped. Kicked at 0.01 mrad/s after a
@@ -1178,6 +1304,7 @@ TEST(RigidStacking, AFortyStackOnTheDefaultContactsLeansOverAtItsSpringModelsBuc
   constexpr double kDt = 1.0 / 60;
   ContactSettings c;
   c.sleep = false;
+  c.auto_substeps = false;  // (the default contacts: 8 substeps and 120 Hz, not more for the column)
   const auto [ground_hz, box_hz] = ground_and_box_hertz(c, kDt);
   const ColumnMode model = column_mode(kBoxes, ground_hz, box_hz, c.damping_ratio);
   ASSERT_LT(model.lambda, 0);

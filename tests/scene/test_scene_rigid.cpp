@@ -44,6 +44,7 @@ TEST(RigidScenes, StackHoldsWhatTheFileSaysAndStands) {
   EXPECT_FALSE(w.kinematic_id(paddle).is_null());
   EXPECT_EQ(w.rigid().shapes(w.rigid_body_id(ball))[0].rolling_resistance, 0.05);
   EXPECT_EQ(w.rigid().settings().substeps, 8);
+  EXPECT_FALSE(w.rigid().settings().auto_substeps);  // substeps given are taken exactly
   EXPECT_TRUE(w.rigid().settings().sleep);
   for (int i = 0; i < 600; ++i) w.step();
   // the stack stands: its top box sags by the soft contacts' n^2 g / (2 pi f)^2 (8 boxes,
@@ -233,6 +234,13 @@ TEST(RigidScenes, TgsAndXpbdAreReadWithTheirSettings) {
   EXPECT_EQ(c.substeps, 12);
   EXPECT_EQ(c.substep_iterations, 2);
   EXPECT_EQ(c.relax_iterations, 3);
+  EXPECT_FALSE(c.auto_substeps);
+  // without substeps the soft step may take more for a tall column; asked, also with them
+  EXPECT_TRUE(pba::parse_scene(R"({"version": 1})", "x.json").world.rigid().settings().auto_substeps);
+  const pba::Scene a = pba::parse_scene(
+      R"({"version": 1, "settings": {"rigid": {"substeps": 4, "auto_substeps": true}}})", "x.json");
+  EXPECT_TRUE(a.world.rigid().settings().auto_substeps);
+  EXPECT_EQ(a.world.rigid().settings().substeps, 4);
   pba::Scene x = pba::parse_scene(
       R"({"version": 1, "settings": {"rigid": {"solver": "xpbd", "contact_compliance": 1e-7}}})", "x.json");
   EXPECT_EQ(x.world.rigid().settings().solver, pba::RigidSolverType::Xpbd);

@@ -1,0 +1,169 @@
+// Rigid bodies: the soft step's substeps for tall columns (ContactSettings::auto_substeps).
+//
+// A column of boxes on soft contacts is an inverted pendulum chain: each face contact resists
+// the boxes' relative tilt with its springs, and the weight above overturns it. Past its
+// buckling load it leans over whatever the damping (docs/rigid-bodies.md, "Why 8 substeps and
+// 120 Hz"). The contacts' stiffness is capped at a quarter of the substep rate, because one
+// Gauss-Seidel sweep a substep does not hold a stiffer spring ("What we tried for tall stacks
+// at default settings"), so the only way up is more substeps with the stiffness raised with
+// them. The soft step measures its tallest columns each step and doubles the substeps and
+// contact_hertz together while a column is past what the springs hold with a margin.
+//
+// The model. n cubes of side s and mass m on face contacts whose four points are springs of
+// m_p w^2 each (m_p = m / 8 between two cubes), s / 2 from the tilt axis: each contact is a
+// torsion spring k = 4 (m / 8) w^2 (s / 2)^2 = m w^2 s^2 / 8 every s of height, so the column
+// bends as a beam of stiffness EI = k s = m w^2 s^3 / 8 under its own weight q = m g / s per
+// metre. A column clamped at its foot and free at its top buckles under its own weight when
+// q L^3 = 7.837 EI (Greenhill 1881; Timoshenko and Gere, "Theory of elastic stability", 2.11),
+// L = n s: at n^3 = (7.837 / 8) w^2 s / g = 0.98 w^2 s / g. Measured at the defaults (8
+// substeps, 120 Hz, the ground's contacts at 76 Hz; docs/rigid-bodies.md): the tallest columns
+// that stand are 17 cubes of 10 cm, 21 of 20 cm, 30 of 50 cm and 37 of 1 m, n^3 = 0.85, 0.80,
+// 0.93 and 0.87 of w^2 s / g (the softer ground and the discrete chain take the rest; the
+// spring model of the tests, column_mode, gives 37 for 1 m). A column whose n^3 g / (w^2 s) is
+// over kColumnLoad takes more substeps: the columns left at fewer carry at most 0.5 / 0.8 =
+// 5/8 of the load under which the weakest measured column buckled.
+//
+// Which bodies make a column: a dynamic body resting on another on a face (a manifold of three
+// points or more: one or two points are a hinge, which the springs do not hold upright and
+// the model does not describe) whose normal is within 45 degrees of the vertical (steeper, the
+// contact carries the body above more sideways than down: a wall is not a column), touching
+// (its deepest point within the pair's linear slop). Levels are breadth first from the bodies
+// that rest so on a body that does not move (static, kinematic or asleep), so a wide pile's
+// height is its depth, not its width. The body's side s is taken as twice its smallest half
+// size (exact for cubes; a plate lying flat counts as a cube of its thickness, which asks for
+// more substeps than it needs, never fewer).
+#include <algorithm>
+#include <cmath>
+
+#include "contacts.h"
+
+namespace pba {
+
+namespace {
+
+// the largest n^3 g / (w^2 s) a column may carry on the soft step's substeps (above)
+constexpr double kColumnLoad = 0.5;
+// the cosine of the steepest face that still counts as carrying the body above (45 degrees)
+constexpr double kFaceCosine = 0.7071067811865476;
+// the substeps (and contact_hertz) are raised by up to this factor (8 -> 32 at the defaults:
+// columns up to 4^(2/3) = 2.5 times as tall, at up to four times the solver's cost)
+constexpr int kMostFactor = 4;
+// how long (s) the columns must fit half the factor before it is halved: a second is a
+// period of a column's sway on its contacts (1.37 Hz for a 10-stack at the defaults), so a
+// rocking column or a box sliding over it does not switch the substeps back and forth
+constexpr double kCalmTime = 1;
+// a column can grow while the pairs stay the same ones (a box on its edge settling onto its
+// face, a speculative pair closing): measured at least every 8 steps (0.13 s at 60 Hz), within
+// a small part of the time a column past its bound takes to lean (its lean grows e-fold in
+// over 4 s at the 40-stack, 0.24/s), and so 1/8 of the measure's cost on a pile at rest
+constexpr int kMeasureEvery = 8;
+
+}  // namespace
+
+namespace detail {
+
+double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, int& tallest) {
+  const std::size_t n = s.type_.size();
+  auto moving = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
+  // (room for every body and pair, so that steady state does not allocate)
+  column_level.reserve(n), column_start.reserve(n + 1), column_queue.reserve(n);
+  column_pairs.reserve(pairs.capacity()), column_edge.reserve(pairs.capacity());
+  column_level.assign(n, 0);
+  column_start.assign(n + 1, 0);
+  column_queue.clear(), column_pairs.clear();
+  // the face pairs along `up`: the lower body's count of bodies on it, and the bodies on a
+  // body that does not move (level 1)
+  for (const ContactPair& c : pairs) {
+    if (c.count < 3) continue;
+    const double d = glm::dot(c.normal, up);
+    if (std::abs(d) < kFaceCosine) continue;
+    double deepest = c.points[0].depth;
+    for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.points[p].depth);
+    if (deepest < -slop_of(s, c.a, c.b)) continue;
+    const std::uint32_t lower = d > 0 ? c.a : c.b, upper = d > 0 ? c.b : c.a;
+    if (!moving(upper)) continue;
+    if (!moving(lower)) {
+      if (column_level[upper] == 0) column_level[upper] = 1, column_queue.push_back(upper);
+    } else {
+      column_pairs.push_back(std::uint64_t{lower} << 32 | upper);
+      ++column_start[lower + 1];
+    }
+  }
+  // the bodies on each body (column_edge[column_start[i], column_start[i + 1]))
+  for (std::size_t i = 0; i < n; ++i) column_start[i + 1] += column_start[i];
+  column_edge.resize(column_pairs.size());
+  for (const std::uint64_t e : column_pairs) {
+    const auto lower = static_cast<std::uint32_t>(e >> 32);
+    column_edge[column_start[lower]++] = static_cast<std::uint32_t>(e);
+  }
+  // (the fill moved each start to the next body's: shift back)
+  for (std::size_t i = n; i > 0; --i) column_start[i] = column_start[i - 1];
+  column_start[0] = 0;
+  // breadth first up the columns, with each body's load on the model
+  double need = 0;
+  std::uint32_t top = 0;
+  for (std::size_t head = 0; head < column_queue.size(); ++head) {
+    const std::uint32_t x = column_queue[head], l = column_level[x];
+    const double side = 2 * s.min_extent_[x], cube = static_cast<double>(l) * l * l;
+    need = std::max(need, cube / side);
+    top = std::max(top, l);
+    for (std::uint32_t e = column_start[x]; e < column_start[x + 1]; ++e)
+      if (column_level[column_edge[e]] == 0) column_level[column_edge[e]] = l + 1, column_queue.push_back(column_edge[e]);
+  }
+  tallest = static_cast<int>(top);
+  return need;
+}
+
+}  // namespace detail
+
+int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
+  detail::RigidContacts& c = *contacts_;
+  c.hertz_scale = 1;
+  profile_.column = 0;
+  const int base = settings_.substeps;
+  if (settings_.solver != RigidSolverType::SoftStep || !settings_.auto_substeps) {
+    auto_factor_ = 1, auto_calm_ = 0;
+    c.column_known = false;
+    return settings_.solver == RigidSolverType::SequentialImpulse ? 1 : base;
+  }
+  const double g = glm::length(gravity);
+  if (g == 0) {
+    c.column_need = 0, c.column_top = 0, c.column_known = false;
+  } else {
+    // measured again when the pairs changed (a body came or went, woke or fell asleep), the
+    // bodies or gravity's direction did, and otherwise every kMeasureEvery steps
+    const Vec3 up = -gravity / g;
+    const bool same = c.column_known && c.pairs_same && c.pairs.size() == c.last_count &&
+                      c.column_bodies == type_.size() && c.column_up == up;
+    if (!same || ++c.column_age >= kMeasureEvery) {
+      c.column_need = c.measure_columns(*this, up, c.column_top);
+      c.column_bodies = type_.size(), c.column_up = up, c.column_age = 0, c.column_known = true;
+    }
+  }
+  const double need = c.column_need;  // n^3 / s (1/m)
+  profile_.column = c.column_top;
+  // the columns' load n^3 g / (w^2 s) at `factor` times the substeps and contact_hertz (the
+  // stiffness capped at a quarter of the substep rate, as the passes take it)
+  auto load = [&](int factor) {
+    const double w = 2 * kPi * factor * std::min(settings_.contact_hertz, 0.25 * base / dt);
+    return need * g / (w * w);
+  };
+  int most = 1;
+  while (most < kMostFactor && 2 * most * base <= 64) most *= 2;
+  int factor = 1;
+  while (factor < most && load(factor) > kColumnLoad) factor *= 2;
+  // raised at once; lowered a halving at a time, once the columns have carried at most half
+  // the bound at half the factor (each 0.79 of the height that would raise it) for kCalmTime
+  if (factor >= auto_factor_ || load(auto_factor_ / 2) > 0.5 * kColumnLoad) {
+    auto_factor_ = std::max(factor, auto_factor_);
+    auto_calm_ = 0;
+  } else if ((auto_calm_ += dt) >= kCalmTime) {
+    auto_factor_ /= 2;
+    auto_calm_ = 0;
+  }
+  auto_factor_ = std::min(auto_factor_, most);  // (the settings may have changed)
+  c.hertz_scale = auto_factor_;
+  return base * auto_factor_;
+}
+
+}  // namespace pba
