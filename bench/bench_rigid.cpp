@@ -169,7 +169,7 @@ struct Options {
   bool bullet = true, ode = true;
   bool profile = false;  // a line of per-phase medians under each pba row
   double reuse = -1;     // the pair cache's reuse distance (m); < 0: the default
-  int substeps = 0;      // the solver's substeps (sequential impulses: ignored); 0: the default
+  int substeps = 0;      // the solver's substeps, exactly (auto off; sequential impulses: ignored); 0: the default
   std::vector<pba::RigidSolverType> solvers{pba::kRigidSolvers.begin(), pba::kRigidSolvers.end()};
 };
 
@@ -229,7 +229,7 @@ void run_scene(const BenchScene& scene, const Options& o) {
     const std::string name = "pba " + std::string(pba::to_string(t));
     pba::ContactSettings settings = at_budget(t, 0, scene.sleep);
     if (o.reuse >= 0) settings.reuse_distance = o.reuse;
-    if (o.substeps > 0) settings.substeps = o.substeps;
+    if (o.substeps > 0) settings.substeps = o.substeps, settings.auto_substeps = false;  // (exactly N)
     const PbaResult r = median_run(o.repeat, [&] { return run_pba(scene, steps, settings); });
     // a mesh scene pba cannot collide with yet: say so instead of a figure
     if (scene.has_mesh && (!r.ran || r.escapes > 0)) {
