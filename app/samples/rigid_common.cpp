@@ -32,11 +32,14 @@ void RigidSolverKnobs(ContactSettings& s, int in_use) {
     if (ImGui::SliderInt("substeps", &s.substeps, 1, 64)) s.auto_substeps = false;
   }
   if (s.solver == RigidSolverType::SoftStep) {
-    ImGui::Checkbox("more for tall columns", &s.auto_substeps);
-    if (in_use > 0) {
-      ImGui::SameLine();
-      ImGui::Text("(%d in use)", in_use);
-    }
+    // the count in use in the checkbox's own label: a text on the same line wrapped a character
+    // a line in a narrow panel (a blank block at 640x360)
+    char label[64];
+    if (in_use > 0)
+      std::snprintf(label, sizeof label, "more for tall columns (%d in use)###auto_substeps", in_use);
+    else
+      std::snprintf(label, sizeof label, "more for tall columns###auto_substeps");
+    ImGui::Checkbox(label, &s.auto_substeps);
   }
   if (s.solver == RigidSolverType::SoftStep) {
     float hz = static_cast<float>(s.contact_hertz);

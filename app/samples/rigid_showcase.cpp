@@ -112,7 +112,9 @@ class THandle final : public RigidSample {
     const Pose p = bodies_.pose(handle_);
     const Vec3 c = bodies_.center_of_mass(handle_);
     r.arrow(c, c + 0.1 * bodies_.angular_momentum(handle_), 0.08, colors::green);
-    r.sphere(apply(p, Vec3(0, -0.65, 0)), 0.06, kMarker);
+    // the stem's end marked by a ball seated on it, big enough to find at 640x360 (at 0.06 m, half
+    // inside the stem, it was 1-3 pixels there and the selftest counted the plot's yellow line)
+    r.sphere(apply(p, Vec3(0, -0.7, 0)), 0.1, kMarker);
   }
 
   void DrawUI() override {
