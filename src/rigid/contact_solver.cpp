@@ -859,13 +859,8 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
   else
     fill_scalar(in, k, g, k.lanes);
   for (int l = k.lanes; l < used; ++l) clear_lane(k, g, l, spare);
-  // the normal velocities before the solve
-  const BodyArrays r = arrays(s);
-  for (int l = 0; l < k.lanes; ++l) {
-    double vn[P];
-    normal_velocities(k, l, r, vn);
-    for (int p = 0; p < P; ++p) k.approach[p][l] = p < count[l] ? vn[p] : 0;
-  }
+  // the normal velocities before the solve (a lane type at a time)
+  approaches(simd, k, count, arrays(s));
 }
 
 // rolling resistance acts on the relative angular velocity: its mass, for a pair that rolls
