@@ -814,7 +814,8 @@ struct PointsInput {
 // The points (each its surface points' midpoint, its anchors from the centres, its overlap
 // and its separation's offset from the cores), their centroid (m, in the world) and their mean
 // distance from it (m): one point after another. The reference for emit_points_avx2.
-void emit_points_scalar(const PointsInput& in, SolverPoint* out, Vec3& centroid, double& twist_radius) {
+[[gnu::always_inline]] inline void emit_points_scalar(const PointsInput& in, SolverPoint* out, Vec3& centroid,
+                                                       double& twist_radius) {
   const Mat3& qa = *in.qa;
   const Mat3& qb = *in.qb;
   const Vec3& n = in.n;
@@ -984,7 +985,8 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     if (preloaded.size() == preloaded.capacity()) preloaded.reserve(pairs.capacity() + 1);
     preloaded.push_back(static_cast<std::uint32_t>(at_index));
   }
-  // the points, on the SIMD path four at a time (the same bits)
+  // the points, on the SIMD paths four at a time when there are three or four (the same bits;
+  // the lanes cost what four points do, and one point alone is about half as dear in scalar code)
   // (each value is computed into a local and stored from there: stored piecewise and read back
   // whole, a Vec3 waited on the store buffer)
   const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
@@ -992,7 +994,7 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   Vec3 centroid;
   double twist_radius;
 #if PBA_EMIT_AVX2
-  if (simd != SimdPath::Scalar)
+  if (simd != SimdPath::Scalar && r.count > 2)
     emit_points_avx2(in, c.points, centroid, twist_radius);
   else
 #endif
