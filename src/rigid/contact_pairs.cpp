@@ -21,7 +21,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <cstring>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define PBA_EMIT_AVX2 1
+#else
+#define PBA_EMIT_AVX2 0
+#endif
 
 #include "collide/narrow_internal.h"
 
@@ -674,17 +683,17 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     r.rolling = was ? was->rolling : Vec3(0);
     for (int k = 0; k < m.count; ++k) {
       const ContactPoint& cp = m.points[k];
-      CachedPoint& q = r.points[k];
-      q.core_a = qa_inv * ((flip ? cp.point_b : cp.point_a) - radius_a * n - s.com_[a]);
-      q.core_b = qb_inv * ((flip ? cp.point_a : cp.point_b) + radius_b * n - s.com_[b]);
-      q.id = cp.id;
+      const Vec3 core_a = qa_inv * ((flip ? cp.point_b : cp.point_a) - radius_a * n - s.com_[a]);
+      const Vec3 core_b = qb_inv * ((flip ? cp.point_a : cp.point_b) + radius_b * n - s.com_[b]);
+      for (int i = 0; i < 3; ++i) r.core[i][k] = core_a[i], r.core[3 + i][k] = core_b[i];
+      r.id[k] = cp.id;
       r.normal_impulse[k] = 0;
       if (!was) continue;
       int match = -1;
       for (int o = 0; o < was->count && match < 0; ++o)
-        if (was->points[o].id == q.id) match = o;
+        if (was->id[o] == cp.id) match = o;
       for (int o = 0; o < was->count && match < 0; ++o) {
-        const Vec3 d = was->points[o].core_a - q.core_a;
+        const Vec3 d = was->core_a(o) - core_a;
         if (glm::dot(d, d) <= slop2) match = o;
       }
       if (match >= 0) r.normal_impulse[k] = was->normal_impulse[match];
@@ -787,6 +796,124 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
   c.margin = reach;
 }
 
+namespace {
+
+// What emit() reads to put a cached manifold's points in the world at the bodies' poses now.
+struct PointsInput {
+  const double (*core)[Manifold::kMaxPoints];  // CachedManifold::core
+  const std::uint32_t* id;                     // CachedManifold::id
+  const Mat3* qa;                              // the bodies' rotations now
+  const Mat3* qb;
+  Vec3 com_a, com_b;  // their centres of mass now (m)
+  Vec3 n;             // the normal in the world
+  double radius_a, radius_b;  // the shapes' core radii (m)
+  double preload;     // the springs' shifted rest (m)
+  int count;          // points, 1 to 4
+};
+
+// The points (each its surface points' midpoint, its anchors from the centres, its overlap
+// and its separation's offset from the cores), their centroid (m, in the world) and their mean
+// distance from it (m): one point after another. The reference for emit_points_avx2.
+[[gnu::always_inline]] inline void emit_points_scalar(const PointsInput& in, SolverPoint* out, Vec3& centroid,
+                                                       double& twist_radius) {
+  const Mat3& qa = *in.qa;
+  const Mat3& qb = *in.qb;
+  const Vec3& n = in.n;
+  Vec3 sum(0), at[Manifold::kMaxPoints];
+  for (int k = 0; k < in.count; ++k) {
+    SolverPoint& pt = out[k];
+    // the cores now, the surface points on them, and the overlap between the surfaces
+    const Vec3 sa = qa * Vec3(in.core[0][k], in.core[1][k], in.core[2][k]);
+    const Vec3 sb = qb * Vec3(in.core[3][k], in.core[4][k], in.core[5][k]);
+    const Vec3 core_a = in.com_a + sa, core_b = in.com_b + sb;
+    const Vec3 on_a = core_a + in.radius_a * n, on_b = core_b - in.radius_b * n;
+    const double depth = glm::dot(on_a - on_b, n);
+    const Vec3 mid = 0.5 * (on_a + on_b);
+    sum += mid;
+    at[k] = mid;
+    pt.at = mid, pt.sa = sa, pt.sb = sb;
+    pt.depth = depth;
+    // the separation now is -depth; keep it relative to the cores
+    pt.offset = -depth - glm::dot(core_b - core_a, n) - in.preload;
+    pt.id = in.id[k];
+  }
+  sum /= static_cast<double>(in.count);
+  centroid = sum;
+  twist_radius = 0;
+  for (int k = 0; k < in.count; ++k) twist_radius += glm::length(at[k] - sum);
+  twist_radius /= in.count;
+}
+
+static_assert(Manifold::kMaxPoints == 4 && sizeof(SolverPoint) == 96 && offsetof(SolverPoint, sa) == 24 &&
+                  offsetof(SolverPoint, sb) == 48 && offsetof(SolverPoint, offset) == 72 &&
+                  offsetof(SolverPoint, depth) == 80 && offsetof(SolverPoint, id) == 88,
+              "emit_points_avx2 writes a point as three rows of four doubles");
+
+// emit_points_scalar's arithmetic with the four points in the lanes of AVX2 vectors (the cores
+// loaded a coordinate at a time, CachedManifold::core): each lane does the same operations in
+// the same order as the scalar code does for its point, and the centroid and the mean distance
+// sum the points in their order, so both give the same bits. The lanes past the count compute
+// on whatever the manifold holds there and are neither stored nor summed. The points go out
+// as rows (the 4 x 4 transposes of at, sa, sb, offset, depth and id).
+#if PBA_EMIT_AVX2
+// x in every lane (a broadcast: `0 + x` would make a -0 +0)
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d all(const double& x) { return _mm256_broadcast_sd(&x); }
+
+__attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, SolverPoint* out, Vec3& centroid,
+                                                      double& twist_radius) {
+  using V = __m256d;
+  const double* qa = &(*in.qa)[0][0];  // glm's columns, one after another
+  const double* qb = &(*in.qb)[0][0];
+  V sa[3], sb[3], core_a[3], core_b[3], gap[3], mid[3];
+  {
+    const V ax = _mm256_loadu_pd(in.core[0]), ay = _mm256_loadu_pd(in.core[1]), az = _mm256_loadu_pd(in.core[2]);
+    const V bx = _mm256_loadu_pd(in.core[3]), by = _mm256_loadu_pd(in.core[4]), bz = _mm256_loadu_pd(in.core[5]);
+    for (int i = 0; i < 3; ++i) {
+      // glm's mat3 * vec3: the columns times the vector's x, y, z, summed in that order
+      sa[i] = all(qa[i]) * ax + all(qa[3 + i]) * ay + all(qa[6 + i]) * az;
+      sb[i] = all(qb[i]) * bx + all(qb[3 + i]) * by + all(qb[6 + i]) * bz;
+      core_a[i] = all(in.com_a[i]) + sa[i], core_b[i] = all(in.com_b[i]) + sb[i];
+      const double ra = in.radius_a * in.n[i], rb = in.radius_b * in.n[i];
+      const V on_a = core_a[i] + all(ra), on_b = core_b[i] - all(rb);
+      gap[i] = on_a - on_b;
+      mid[i] = all(0.5) * (on_a + on_b);
+    }
+  }
+  const V n[3] = {all(in.n.x), all(in.n.y), all(in.n.z)};
+  const V depth = gap[0] * n[0] + gap[1] * n[1] + gap[2] * n[2];
+  const V apart = (core_b[0] - core_a[0]) * n[0] + (core_b[1] - core_a[1]) * n[1] + (core_b[2] - core_a[2]) * n[2];
+  const V offset = -depth - apart - all(in.preload);
+  // (the ids, widened to 64 bits: the row's last element is the id and the padding after it)
+  const V id_bits = _mm256_castsi256_pd(_mm256_cvtepu32_epi64(_mm_loadu_si128(reinterpret_cast<const __m128i*>(in.id))));
+  // the rows of the points: (at, sa.x), (sa.y, sa.z, sb.x, sb.y), (sb.z, offset, depth, id)
+  V rows[3][4] = {{mid[0], mid[1], mid[2], sa[0]}, {sa[1], sa[2], sb[0], sb[1]}, {sb[2], offset, depth, id_bits}};
+  for (V(&r)[4] : rows) {
+    const V t0 = _mm256_unpacklo_pd(r[0], r[1]), t1 = _mm256_unpackhi_pd(r[0], r[1]);
+    const V t2 = _mm256_unpacklo_pd(r[2], r[3]), t3 = _mm256_unpackhi_pd(r[2], r[3]);
+    r[0] = _mm256_permute2f128_pd(t0, t2, 0x20), r[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+    r[2] = _mm256_permute2f128_pd(t0, t2, 0x31), r[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+  }
+  V sum = _mm256_setzero_pd();
+  for (int k = 0; k < in.count; ++k) {
+    double* to = reinterpret_cast<double*>(&out[k]);
+    for (int j = 0; j < 3; ++j) _mm256_storeu_pd(to + 4 * j, rows[j][k]);
+    sum = sum + rows[0][k];  // (its fourth lane, sa.x, is not read)
+  }
+  sum = sum / _mm256_set1_pd(static_cast<double>(in.count));
+  alignas(32) double c[4];
+  _mm256_store_pd(c, sum);
+  centroid = Vec3(c[0], c[1], c[2]);
+  const V dx = mid[0] - all(c[0]), dy = mid[1] - all(c[1]), dz = mid[2] - all(c[2]);
+  alignas(32) double distance[4];
+  _mm256_store_pd(distance, _mm256_sqrt_pd(dx * dx + dy * dy + dz * dz));
+  twist_radius = 0;
+  for (int k = 0; k < in.count; ++k) twist_radius += distance[k];
+  twist_radius /= in.count;
+}
+#endif
+
+}  // namespace
+
 // One cached manifold to the solver: its points and normal in the world at the bodies' poses
 // now (the separation of a point is measured between the shapes' cores, which ride with the
 // bodies), the mixed material, and the impulses it carried (when warm starting).
@@ -858,32 +985,23 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     if (preloaded.size() == preloaded.capacity()) preloaded.reserve(pairs.capacity() + 1);
     preloaded.push_back(static_cast<std::uint32_t>(at_index));
   }
+  // the points, on the SIMD paths four at a time when there are three or four (the same bits;
+  // the lanes cost what four points do, and one point alone is about half as dear in scalar code)
   // (each value is computed into a local and stored from there: stored piecewise and read back
   // whole, a Vec3 waited on the store buffer)
-  Vec3 centroid(0), at[Manifold::kMaxPoints];
-  for (int k = 0; k < r.count; ++k) {
-    const CachedPoint& q = r.points[k];
-    SolverPoint& pt = c.points[k];
-    // the cores now, the surface points on them, and the overlap between the surfaces
-    const Vec3 sa = qa * q.core_a, sb = qb * q.core_b;
-    const Vec3 core_a = com_a + sa, core_b = com_b + sb;
-    const Vec3 on_a = core_a + radius_a * n, on_b = core_b - radius_b * n;
-    const double depth = glm::dot(on_a - on_b, n);
-    const Vec3 mid = 0.5 * (on_a + on_b);
-    centroid += mid;
-    at[k] = mid;
-    pt.at = mid, pt.sa = sa, pt.sb = sb;
-    pt.depth = depth;
-    // the separation now is -depth; keep it relative to the cores
-    pt.offset = -depth - glm::dot(core_b - core_a, n) - preload;
-    pt.id = q.id;
-    c.normal_impulse[k] = warm ? impulse[k] : 0;
-  }
-  centroid /= static_cast<double>(r.count);
+  const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
+                       .radius_a = radius_a, .radius_b = radius_b, .preload = preload, .count = r.count};
+  Vec3 centroid;
+  double twist_radius;
+#if PBA_EMIT_AVX2
+  if (simd != SimdPath::Scalar && r.count > 2)
+    emit_points_avx2(in, c.points, centroid, twist_radius);
+  else
+#endif
+    emit_points_scalar(in, c.points, centroid, twist_radius);
+  for (int k = 0; k < r.count; ++k) c.normal_impulse[k] = warm ? impulse[k] : 0;
   c.ca = centroid - com_a;
-  c.twist_radius = 0;
-  for (int k = 0; k < r.count; ++k) c.twist_radius += glm::length(at[k] - centroid);
-  c.twist_radius /= r.count;
+  c.twist_radius = twist_radius;
   // friction carried over, re-projected onto this step's tangents
   c.tangent_impulse[0] = warm ? glm::dot(friction, c.t1) : 0;
   c.tangent_impulse[1] = warm ? glm::dot(friction, c.t2) : 0;

@@ -852,6 +852,50 @@ void normal_velocities_of(const B& block, int lane, const BodyArrays& bodies, do
     vn[0] = g;
 }
 
+// normal_velocities_of for the lanes [l0, l0 + width) of the lane type V at once (its
+// operations in its order on each lane: the same bits on every path), into the block's
+// approach speeds for the lanes below `filled` and the points below each lane's count (0 past
+// it; the lanes past `filled` keep clear_lane's zeros)
+template <class V, class B>
+PBA_LANES void approach_lanes(B& c, int l0, int filled, const int* count, const BodyArrays& bodies) {
+  constexpr int P = B::kPoints;
+  const Lanes<V, B> L{c, l0};
+  V t1[3], t2[3], n[3], ra[8], rb[8], rel[3], oa[3], ob[3];
+  L.frame(t1, t2, n);
+  // each lane's bodies' rows: v, then w (SolverBody)
+  const double* rows = bodies.bodies[0].v;
+  load_rows<V>(rows, c.a + l0, ra);
+  load_rows<V>(rows, c.b + l0, rb);
+  const V dv[3] = {rb[0] - ra[0], rb[1] - ra[1], rb[2] - ra[2]};
+  to_frame(t1, t2, n, dv, rel);
+  to_frame(t1, t2, n, ra + 3, oa);
+  to_frame(t1, t2, n, rb + 3, ob);
+  const V g = rel[2] + (ob[0] * L(c.cb[1]) - ob[1] * L(c.cb[0])) - (oa[0] * L(c.ca[1]) - oa[1] * L(c.ca[0]));
+  V vn[P];
+  if constexpr (P > 1)
+    for (int k = 0; k < P; ++k) vn[k] = g + L(c.y[k]) * (ob[0] - oa[0]) - L(c.x[k]) * (ob[1] - oa[1]);
+  else
+    vn[0] = g;
+  for (int j = 0; j < kWidth<V> && l0 + j < filled; ++j)
+    for (int k = 0; k < P; ++k) c.approach[k][l0 + j] = k < count[l0 + j] ? static_cast<Real>(lanes::get(vn[k], j)) : 0;
+}
+
+#if PBA_RIGID_HAVE_X86
+template <class B>
+__attribute__((target("avx512f"))) void approaches_avx512(B& c, int filled, const int* count, const BodyArrays& r) {
+  for (int l0 = 0; l0 < filled; l0 += 8) approach_lanes<v8d>(c, l0, filled, count, r);
+}
+template <class B>
+__attribute__((target("avx2"))) void approaches_avx2(B& c, int filled, const int* count, const BodyArrays& r) {
+  for (int l0 = 0; l0 < filled; l0 += 4) approach_lanes<v4d>(c, l0, filled, count, r);
+}
+#endif
+
+template <class B>
+void approaches_scalar(B& c, int filled, const int* count, const BodyArrays& bodies) {
+  for (int l = 0; l < filled; ++l) approach_lanes<double>(c, l, filled, count, bodies);
+}
+
 template <class B>
 void restitution_lane_of(B& c, int lane, double restitution, double threshold, int sweeps, const BodyArrays& bodies) {
   constexpr int P = B::kPoints;
@@ -936,11 +980,21 @@ void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, 
   separations(Lanes<double>{block, lane}, anchors, bodies);
 }
 
-void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]) {
-  normal_velocities_of(block, lane, bodies, vn);
+template <class B>
+void approaches_of(SimdPath path, B& block, const int* count, const BodyArrays& bodies) {
+#if PBA_RIGID_HAVE_X86
+  if (path == SimdPath::Avx512) return approaches_avx512(block, block.lanes, count, bodies);
+  if (path == SimdPath::Avx2) return approaches_avx2(block, block.lanes, count, bodies);
+#endif
+  (void)path;
+  approaches_scalar(block, block.lanes, count, bodies);
 }
-void normal_velocities(const OnePointBlock& block, int lane, const BodyArrays& bodies, double vn[1]) {
-  normal_velocities_of(block, lane, bodies, vn);
+
+void approaches(SimdPath path, ContactBlock& block, const int* count, const BodyArrays& bodies) {
+  approaches_of(path, block, count, bodies);
+}
+void approaches(SimdPath path, OnePointBlock& block, const int* count, const BodyArrays& bodies) {
+  approaches_of(path, block, count, bodies);
 }
 
 void restitution_lane(ContactBlock& c, int lane, double restitution, double threshold, int sweeps,

@@ -176,13 +176,6 @@ struct PairCache {
   std::uint32_t mesh_query = kNoIndex;  // a mesh pair's MeshQueryCache (in mesh_queries), once made
 };
 
-/// One point of a cached manifold, fixed to the bodies: the points of the two shapes' cores
-/// (a sphere's centre, a box's surface) in each body's principal frame from its centre of mass.
-struct CachedPoint {
-  Vec3 core_a{0, 0, 0}, core_b{0, 0, 0};  // (m)
-  std::uint32_t id = 0;                   // feature id
-};
-
 /// A manifold in the bodies' frames, and the impulses it carried. What emit() reads every step
 /// the manifold is carried over comes first (five of its seven cache lines), the impulses last:
 /// they are read only when no entry of `pairs` holds them (`last`, settle()).
@@ -200,7 +193,14 @@ struct CachedManifold {
   // before `normal`)
   float preload = 0;
   Vec3 normal{0, 0, 1};           // unit, from a to b, in that body's principal frame
-  CachedPoint points[Manifold::kMaxPoints];
+  // the points, fixed to the bodies: the points of the two shapes' cores (a sphere's centre, a
+  // box's surface) in each body's principal frame from its centre of mass (m), a row a
+  // coordinate (a's x, y, z, then b's) and a column a point, so that emit() loads each
+  // coordinate of all the points at once; and their feature ids
+  double core[6][Manifold::kMaxPoints] = {};
+  std::uint32_t id[Manifold::kMaxPoints] = {};
+  Vec3 core_a(int k) const { return {core[0][k], core[1][k], core[2][k]}; }
+  Vec3 core_b(int k) const { return {core[3][k], core[4][k], core[5][k]}; }
   // what does not change while the pair lasts: the shapes' core radii (m), and the mixed
   // material with the mix rules it was mixed by
   double radius_a = 0, radius_b = 0;

@@ -265,8 +265,9 @@ inline FreeRotation free_rotation(const Vec3& m) {
 /// and their motion since the start of the step.
 void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, double h);
-/// The normal relative velocity (m/s) of each of one lane's points at the velocities now (prepare's approach).
-void normal_velocities(const ContactBlock& block, int lane, const BodyArrays& bodies, double vn[4]);
+/// The approach speeds before the solve (m/s): the normal relative velocity of each point of
+/// the block's lanes at the velocities now, for the points below each lane's `count` (0 past it).
+void approaches(SimdPath path, ContactBlock& block, const int* count, const BodyArrays& bodies);
 
 // the same for blocks of one-point manifolds (OnePointBlock), with the same arithmetic
 
@@ -280,7 +281,7 @@ void separation_colored(SimdPath path, OnePointBlock* blocks, const OnePointAnch
                         std::size_t last, const BodyArrays& bodies);
 /// The restitution impulse of one lane of a one-point block (as restitution_lane above).
 void restitution_lane(OnePointBlock& block, int lane, double restitution, double threshold, const BodyArrays& bodies);
-/// The normal relative velocity (m/s) of one lane's point at the velocities now (vn[0]).
-void normal_velocities(const OnePointBlock& block, int lane, const BodyArrays& bodies, double vn[1]);
+/// The approach speeds before the solve of the block's lanes (as approaches above).
+void approaches(SimdPath path, OnePointBlock& block, const int* count, const BodyArrays& bodies);
 
 }  // namespace pba::detail

@@ -89,6 +89,43 @@ TEST(RigidSimd, EveryPathGivesTheSameBits) {
   }
 }
 
+// The approach speeds before the solve (prepare's, a lane type at a time) on every path: a
+// unit cube rising at 3 m/s and turning at 2 rad/s about x under a ceiling, and a ball rising at
+// 3 m/s, each a centimetre below it. Gravity and the passes' impulses only slow their closing
+// in the step, so the step's fastest closing is at its start: the ball's 3 m/s, the cube's
+// 3 + 2 x 0.5 m/s at the corners its turn lifts (its top face's corners, 0.5 m from the axis).
+// Each to the approach speed's float resolution (2^-21 m/s at 4), the same bits on every path.
+TEST(RigidSimd, ApproachSpeedsBeforeTheSolveAreTheClosingSpeedsOnEveryPath) {
+  std::vector<double> scalar;
+  for (const RigidSimd p : paths()) {
+    RigidBodySystem s;
+    s.set_simd(p);
+    s.create({.type = BodyType::Static, .pose = {{0, 2.5, 0}}, .shapes = {{.shape = ColliderShape::box({5, 0.5, 5})}}});
+    const auto cube = s.create({.pose = {{0, 1.49, 0}}, .linear_velocity = {0, 3, 0}, .angular_velocity = {2, 0, 0},
+                                .shapes = {{.shape = ColliderShape::box(Vec3(0.5))}}});
+    const auto ball = s.create({.pose = {{3, 1.69, 0}}, .linear_velocity = {0, 3, 0},
+                                .shapes = {{.shape = ColliderShape::sphere(0.3)}}});
+    s.step(1.0 / 60, kGravity);
+    std::vector<double> speeds;
+    int seen = 0;
+    for (std::size_t k = 0; k < s.manifold_count(); ++k) {
+      const pba::RigidManifoldInfo m = s.manifold(k);
+      speeds.push_back(m.approach_speed);
+      if (m.a == cube || m.b == cube) {
+        EXPECT_EQ(m.points, 4) << to_string(p);
+        EXPECT_NEAR(m.approach_speed, 4.0, 0x1p-21) << "the cube on " << to_string(p);
+        ++seen;
+      } else if (m.a == ball || m.b == ball) {
+        EXPECT_NEAR(m.approach_speed, 3.0, 0x1p-22) << "the ball on " << to_string(p);
+        ++seen;
+      }
+    }
+    EXPECT_EQ(seen, 2) << to_string(p);
+    if (scalar.empty()) scalar = speeds;
+    EXPECT_EQ(speeds, scalar) << to_string(p);
+  }
+}
+
 TEST(RigidSimd, PathsAreNamedAndBestIsResolved) {
   EXPECT_EQ(to_string(RigidSimd::Best), "best");
   EXPECT_EQ(to_string(RigidSimd::Avx512), "avx512");
