@@ -179,6 +179,9 @@ void DynamicTree::query(const Aabb& box, F&& f) const {
     if (n.is_leaf()) {
       if (!f(n.user)) return;
     } else {
+      // (both children asked for now: the walk reaches child1 only after child2's subtree, and
+      // a node's box is where a query waits)
+      __builtin_prefetch(&at(n.child1)), __builtin_prefetch(&at(n.child2));
       stack[top++] = n.child1;
       stack[top++] = n.child2;
     }
