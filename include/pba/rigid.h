@@ -174,8 +174,9 @@ struct ContactSettings {
   /// that the halving may give, finite and >= 0; 0 (the default) never lowers. Halved once
   /// the columns have carried, for a second, at most half the buckling bound that raises the
   /// substeps, and a sag predicted from the contacts' carried loads (each contact gives
-  /// load / (m_eff w^2) at the halved rate, summed up the levels) of at most half the budget;
-  /// back at once when either passes its whole bound. Only for an even `substeps`.
+  /// load / (m_eff w^2) at the halved rate, summed up the levels) of at most half the budget,
+  /// with the same contact pairs all that second (not while a pile lands); back at once when
+  /// either passes its whole bound. Only for an even `substeps`.
   /// docs/rigid-bodies.md, "Fewer substeps for short columns".
   double auto_substeps_sag = 0;
   int iterations = 10;  ///< sequential impulses: velocity iterations per step, in [1, 1000]

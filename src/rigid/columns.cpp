@@ -41,11 +41,13 @@
 // contacts carried in the last step (their normal impulses per substep over the substep): a
 // face contact of effective mass m_eff = 1 / (1/ma + 1/mb) (the lower body's taken as
 // infinite when it does not move) on springs of w deflects by load / (m_eff w^2), and a
-// body sinks by its contact's deflection on the most that a body under it sank. For a column
+// body sinks as a body without turning on its springs to the bodies under it would (their
+// stiffness-weighted mean of what each support sank plus its contact's deflection). For a column
 // of cubes that is n g / w_g^2 + n (n - 1) g / w^2 (w_g the ground's rate), exactly the
 // springs' sag; a pyramid's loads spread over the levels and the sum follows them, where the
 // column's n^2 g / w^2 would take its height for a column's. Back to the setting's substeps
-// at once when either passes its whole bound, with kCalmTime before halving again.
+// at once when either passes its whole bound, with kCalmTime (and the same pairs all that
+// time: not while a pile lands) before halving again.
 #include <algorithm>
 #include <cmath>
 
