@@ -170,6 +170,7 @@ struct Options {
   bool profile = false;  // a line of per-phase medians under each pba row
   double reuse = -1;     // the pair cache's reuse distance (m); < 0: the default
   int substeps = 0;      // the solver's substeps, exactly (auto off; sequential impulses: ignored); 0: the default
+  double down_sag = -1;  // ContactSettings::auto_substeps_sag (m): fewer substeps where the columns allow; < 0: the default
   std::vector<pba::RigidSolverType> solvers{pba::kRigidSolvers.begin(), pba::kRigidSolvers.end()};
 };
 
@@ -230,6 +231,7 @@ void run_scene(const BenchScene& scene, const Options& o) {
     pba::ContactSettings settings = at_budget(t, 0, scene.sleep);
     if (o.reuse >= 0) settings.reuse_distance = o.reuse;
     if (o.substeps > 0) settings.substeps = o.substeps, settings.auto_substeps = false;  // (exactly N)
+    if (o.down_sag >= 0) settings.auto_substeps_sag = o.down_sag;
     const PbaResult r = median_run(o.repeat, [&] { return run_pba(scene, steps, settings); });
     // a mesh scene pba cannot collide with yet: say so instead of a figure
     if (scene.has_mesh && (!r.ran || r.escapes > 0)) {
@@ -255,7 +257,7 @@ int usage(const char* why) {
   if (why) std::fprintf(stderr, "bench_rigid: %s\n", why);
   std::fprintf(stderr,
                "usage: bench_rigid [--scene KEY|all] [--steps N] [--repeat K] [--peer all|bullet|ode|none]\n"
-               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--substeps N] [--profile]\n"
+               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--substeps N] [--down M] [--profile]\n"
                "                   [--trace MS] | --quick | --budget\n"
                "scenes:");
   for (const BenchScene& s : pba::bench::bench_scenes()) std::fprintf(stderr, " %s", s.key.c_str());
@@ -311,6 +313,12 @@ int main(int argc, char** argv) {
     } else if (a == "--substeps") {
       if (!count_arg(need().c_str(), &o.substeps) || o.substeps > 64)
         return usage(("--substeps '" + std::string(value) + "': expected a count in [1, 64]").c_str());
+    } else if (a == "--down") {
+      const std::string v = need();
+      char* end = nullptr;
+      o.down_sag = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end || !(o.down_sag >= 0 && o.down_sag < 1))
+        return usage(("--down '" + v + "': expected a sag budget in [0, 1) m").c_str());
     } else if (a == "--peer") {
       const std::string p = need();
       if (p != "all" && p != "bullet" && p != "ode" && p != "none")

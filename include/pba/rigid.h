@@ -169,6 +169,16 @@ struct ContactSettings {
   /// their bits). RigidProfile::substeps tells the substeps a step took. Off (or
   /// set_substeps()), the soft step takes exactly `substeps` and `contact_hertz`.
   bool auto_substeps = true;
+  /// Soft step with `auto_substeps`: where the columns allow it, also HALVE the substeps and
+  /// `contact_hertz` (8 -> 4 and 120 -> 60 Hz at the defaults), a budget (m) on the static sag
+  /// that the halving may give, finite and >= 0; 0 (the default) never lowers. Halved once
+  /// the columns have carried, for a second, at most half the buckling bound that raises the
+  /// substeps, and a sag predicted from the contacts' carried loads (each contact gives
+  /// load / (m_eff w^2) at the halved rate, summed up the levels) of at most half the budget,
+  /// with the same contact pairs all that second (not while a pile lands); back at once when
+  /// either passes its whole bound. Only for an even `substeps`.
+  /// docs/rigid-bodies.md, "Fewer substeps for short columns".
+  double auto_substeps_sag = 0;
   int iterations = 10;  ///< sequential impulses: velocity iterations per step, in [1, 1000]
   /// TGS: biased contact iterations per substep; XPBD: position iterations per substep; in
   /// [1, 100]. TGS and XPBD take many substeps of few iterations (Macklin et al. 2019).
@@ -516,9 +526,10 @@ class RigidBodySystem {
   // start of the step, for the contact solver's separation updates
   std::vector<Vec3> com0_;
   std::vector<Quat> q0_;
-  // ContactSettings::auto_substeps: the factor on the substeps and contact_hertz now (1, 2 or
-  // 4), and how long (s) the columns have fitted half of it
-  int auto_factor_ = 1;
+  // ContactSettings::auto_substeps: the factor on the substeps and contact_hertz now, as a
+  // power of two (-1 with auto_substeps_sag, 0, 1 or 2), and how long (s) the columns have
+  // fitted half of it
+  int auto_shift_ = 0;
   double auto_calm_ = 0;
   // the soft step's substeps this step (auto_substeps) and its factor on contact_hertz
   int step_substeps(double dt, const Vec3& gravity);

@@ -32,6 +32,22 @@
 // height is its depth, not its width. The body's side s is taken as twice its smallest half
 // size (exact for cubes; a plate lying flat counts as a cube of its thickness, which asks for
 // more substeps than it needs, never fewer).
+//
+// Fewer substeps (ContactSettings::auto_substeps_sag > 0, off by default). The passes' cost
+// goes with the substeps, so where the columns are short the step may take half of them (and
+// half contact_hertz): when the columns' load fits the halved rate with the same room as the
+// lowering above (kColumnLoad / 2 at the half: one-metre cubes up to 15 high), and the static
+// sag the halving gives is at most half the budget. The sag is predicted from the loads the
+// contacts carried in the last step (their normal impulses per substep over the substep): a
+// face contact of effective mass m_eff = 1 / (1/ma + 1/mb) (the lower body's taken as
+// infinite when it does not move) on springs of w deflects by load / (m_eff w^2), and a
+// body sinks as a body without turning on its springs to the bodies under it would (their
+// stiffness-weighted mean of what each support sank plus its contact's deflection). For a column
+// of cubes that is n g / w_g^2 + n (n - 1) g / w^2 (w_g the ground's rate), exactly the
+// springs' sag; a pyramid's loads spread over the levels and the sum follows them, where the
+// column's n^2 g / w^2 would take its height for a column's. Back to the setting's substeps
+// at once when either passes its whole bound, with kCalmTime (and the same pairs all that
+// time: not while a pile lands) before halving again.
 #include <algorithm>
 #include <cmath>
 
@@ -45,9 +61,9 @@ namespace {
 constexpr double kColumnLoad = 0.5;
 // the cosine of the steepest face that still counts as carrying the body above (45 degrees)
 constexpr double kFaceCosine = 0.7071067811865476;
-// the substeps (and contact_hertz) are raised by up to this factor (8 -> 32 at the defaults:
+// the substeps (and contact_hertz) are raised by up to 2^this (8 -> 32 at the defaults:
 // columns up to 4^(2/3) = 2.5 times as tall, at up to four times the solver's cost)
-constexpr int kMostFactor = 4;
+constexpr int kMostShift = 2;
 // how long (s) the columns must fit half the factor before it is halved: a second is a
 // period of a column's sway on its contacts (1.37 Hz for a 10-stack at the defaults), so a
 // rocking column or a box sliding over it does not switch the substeps back and forth
@@ -62,7 +78,8 @@ constexpr int kMeasureEvery = 8;
 
 namespace detail {
 
-double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, int& tallest) {
+double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, int& tallest, bool give,
+                                     double w_dynamic, double w_static) {
   const std::size_t n = s.type_.size();
   auto moving = [&](std::uint32_t i) { return s.type_[i] == BodyType::Dynamic && !s.asleep_[i]; };
   // (room for every body and pair, so that steady state does not allocate)
@@ -71,6 +88,22 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
   column_level.assign(n, 0);
   column_start.assign(n + 1, 0);
   column_queue.clear(), column_pairs.clear();
+  if (give) {
+    column_sink.reserve(n), column_pair_spring.reserve(pairs.capacity()), column_spring.reserve(pairs.capacity());
+    column_sink.assign(n, {});
+    column_pair_spring.clear();
+  }
+  // a face contact as a spring: its load (the normal impulse it carried in the last step's
+  // substeps over the substep, impulse_h) and its stiffness m_eff w^2 (the points' springs in
+  // parallel: for cubes face on face the points' effective masses, m / 8 each with their
+  // turning, add up to the pair's m / 2)
+  auto spring_of = [&](const ContactPair& c, double inv_mass, double w) {
+    detail::RigidContacts::ColumnSpring k;
+    if (impulse_h <= 0 || inv_mass <= 0) return k;
+    for (int p = 0; p < c.count; ++p) k.load += c.normal_impulse[p];
+    k.load /= impulse_h, k.stiffness = w * w / inv_mass;
+    return k;
+  };
   // the face pairs along `up`: the lower body's count of bodies on it, and the bodies on a
   // body that does not move (level 1)
   for (const ContactPair& c : pairs) {
@@ -84,33 +117,54 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     if (!moving(upper)) continue;
     if (!moving(lower)) {
       if (column_level[upper] == 0) column_level[upper] = 1, column_queue.push_back(upper);
+      if (give) {
+        const ColumnSpring k = spring_of(c, s.inv_mass_[upper], w_static);
+        column_sink[upper].load += k.load, column_sink[upper].stiffness += k.stiffness;
+      }
     } else {
       column_pairs.push_back(std::uint64_t{lower} << 32 | upper);
+      if (give) column_pair_spring.push_back(spring_of(c, s.inv_mass_[lower] + s.inv_mass_[upper], w_dynamic));
       ++column_start[lower + 1];
     }
   }
   // the bodies on each body (column_edge[column_start[i], column_start[i + 1]))
   for (std::size_t i = 0; i < n; ++i) column_start[i + 1] += column_start[i];
   column_edge.resize(column_pairs.size());
-  for (const std::uint64_t e : column_pairs) {
-    const auto lower = static_cast<std::uint32_t>(e >> 32);
-    column_edge[column_start[lower]++] = static_cast<std::uint32_t>(e);
+  if (give) column_spring.resize(column_pairs.size());
+  for (std::size_t k = 0; k < column_pairs.size(); ++k) {
+    const auto lower = static_cast<std::uint32_t>(column_pairs[k] >> 32);
+    if (give) column_spring[column_start[lower]] = column_pair_spring[k];
+    column_edge[column_start[lower]++] = static_cast<std::uint32_t>(column_pairs[k]);
   }
   // (the fill moved each start to the next body's: shift back)
   for (std::size_t i = n; i > 0; --i) column_start[i] = column_start[i - 1];
   column_start[0] = 0;
-  // breadth first up the columns, with each body's load on the model
-  double need = 0;
+  // breadth first up the columns, with each body's load on the model and (with `give`) its
+  // sink: held by the springs k_i under loads F_i to supports sunk by z_i, a body that sinks
+  // without turning sinks by sum (F_i + k_i z_i) / sum k_i (one support: its z + F / k). Its
+  // supports one level down are all reached before it; a support at its own level or higher
+  // (a pile's bodies side by side) is left out of it, as the column model leaves it out
+  double need = 0, sag = 0;
   std::uint32_t top = 0;
   for (std::size_t head = 0; head < column_queue.size(); ++head) {
     const std::uint32_t x = column_queue[head], l = column_level[x];
     const double side = 2 * s.min_extent_[x], cube = static_cast<double>(l) * l * l;
     need = std::max(need, cube / side);
     top = std::max(top, l);
-    for (std::uint32_t e = column_start[x]; e < column_start[x + 1]; ++e)
-      if (column_level[column_edge[e]] == 0) column_level[column_edge[e]] = l + 1, column_queue.push_back(column_edge[e]);
+    double sink = 0;
+    if (give && column_sink[x].stiffness > 0) sink = column_sink[x].load / column_sink[x].stiffness;
+    sag = std::max(sag, sink);
+    for (std::uint32_t e = column_start[x]; e < column_start[x + 1]; ++e) {
+      const std::uint32_t y = column_edge[e];
+      if (column_level[y] == 0) column_level[y] = l + 1, column_queue.push_back(y);
+      if (give && column_level[y] == l + 1) {
+        const ColumnSpring& k = column_spring[e];
+        column_sink[y].load += k.load + k.stiffness * sink, column_sink[y].stiffness += k.stiffness;
+      }
+    }
   }
   tallest = static_cast<int>(top);
+  column_sag_top = sag;
   return need;
 }
 
@@ -122,13 +176,21 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   profile_.column = 0;
   const int base = settings_.substeps;
   if (settings_.solver != RigidSolverType::SoftStep || !settings_.auto_substeps) {
-    auto_factor_ = 1, auto_calm_ = 0;
+    auto_shift_ = 0, auto_calm_ = 0;
     c.column_known = false;
     return settings_.solver == RigidSolverType::SequentialImpulse ? 1 : base;
   }
+  // the contacts' angular rate (rad/s) at 2^shift times the substeps and contact_hertz (the
+  // stiffness capped at a quarter of the substep rate, as the passes take it), and a static
+  // contact's (twice that, at most one radian a substep)
+  auto rate = [&](int shift) { return 2 * kPi * std::ldexp(std::min(settings_.contact_hertz, 0.25 * base / dt), shift); };
+  auto static_rate = [&](int shift) { return std::min(2 * rate(shift), detail::kStaticStepAngle * std::ldexp(base / dt, shift)); };
+  // halving (auto_substeps_sag) needs whole substeps
+  const double budget = settings_.auto_substeps_sag;
+  const int least = budget > 0 && base % 2 == 0 ? -1 : 0;
   const double g = glm::length(gravity);
   if (g == 0) {
-    c.column_need = 0, c.column_top = 0, c.column_known = false;
+    c.column_need = 0, c.column_top = 0, c.column_sag_top = 0, c.column_known = false;
   } else {
     // measured again when the pairs changed (a body came or went, woke or fell asleep), the
     // bodies or gravity's direction did, and otherwise every kMeasureEvery steps
@@ -136,34 +198,39 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     const bool same = c.column_known && c.pairs_same && c.pairs.size() == c.last_count &&
                       c.column_bodies == type_.size() && c.column_up == up;
     if (!same || ++c.column_age >= kMeasureEvery) {
-      c.column_need = c.measure_columns(*this, up, c.column_top);
+      c.column_need = c.measure_columns(*this, up, c.column_top, least < 0, rate(-1), static_rate(-1));
       c.column_bodies = type_.size(), c.column_up = up, c.column_age = 0, c.column_known = true;
     }
   }
   const double need = c.column_need;  // n^3 / s (1/m)
   profile_.column = c.column_top;
-  // the columns' load n^3 g / (w^2 s) at `factor` times the substeps and contact_hertz (the
-  // stiffness capped at a quarter of the substep rate, as the passes take it)
-  auto load = [&](int factor) {
-    const double w = 2 * kPi * factor * std::min(settings_.contact_hertz, 0.25 * base / dt);
-    return need * g / (w * w);
+  // whether the columns fit 2^shift times the substeps with `margin` of the bounds: their load
+  // n^3 g / (w^2 s), and below the setting's substeps the sag predicted at half of them
+  auto fits = [&](int shift, double margin) {
+    const double w = rate(shift);
+    return need * g / (w * w) <= margin * kColumnLoad && (shift >= 0 || c.column_sag_top <= margin * budget);
   };
-  int most = 1;
-  while (most < kMostFactor && 2 * most * base <= 64) most *= 2;
-  int factor = 1;
-  while (factor < most && load(factor) > kColumnLoad) factor *= 2;
-  // raised at once; lowered a halving at a time, once the columns have carried at most half
-  // the bound at half the factor (each 0.79 of the height that would raise it) for kCalmTime
-  if (factor >= auto_factor_ || load(auto_factor_ / 2) > 0.5 * kColumnLoad) {
-    auto_factor_ = std::max(factor, auto_factor_);
+  int most = 0;
+  while (most < kMostShift && (base << (most + 1)) <= 64) ++most;
+  int shift = least;
+  while (shift < most && !fits(shift, 1)) ++shift;
+  // raised at once; lowered a halving at a time, once the columns have fitted half the bounds
+  // at half the factor (each 0.79 of the height that would raise it) for kCalmTime; below the
+  // setting's substeps also only once the pairs have stayed the same that long, so that a pile
+  // still landing (its contacts' loads not yet those of its rest) is not halved: the Jolt
+  // pyramid halved while its upper levels landed settled with its top 3.6 cm aside, against
+  // 1.0 cm at 8 substeps, and halved at rest its top stays where it was
+  const bool settled = c.pairs_same && c.pairs.size() == c.last_count;
+  if (shift >= auto_shift_ || !fits(auto_shift_ - 1, 0.5) || (auto_shift_ == 0 && !settled)) {
+    auto_shift_ = std::max(shift, auto_shift_);
     auto_calm_ = 0;
   } else if ((auto_calm_ += dt) >= kCalmTime) {
-    auto_factor_ /= 2;
+    --auto_shift_;
     auto_calm_ = 0;
   }
-  auto_factor_ = std::min(auto_factor_, most);  // (the settings may have changed)
-  c.hertz_scale = auto_factor_;
-  return base * auto_factor_;
+  auto_shift_ = std::clamp(auto_shift_, least, most);  // (the settings may have changed)
+  c.hertz_scale = std::ldexp(1.0, auto_shift_);
+  return auto_shift_ >= 0 ? base << auto_shift_ : base >> 1;
 }
 
 }  // namespace pba

@@ -426,14 +426,27 @@ struct RigidContacts {
   /// into column_level (0: on no such column); returns the largest level^3 / (2 x smallest half
   /// size) over the bodies (1/m; the load the column model asks of the contacts) and the tallest
   /// level in `tallest`. O(bodies + pairs); no allocation once the scratch has grown.
-  double measure_columns(const RigidBodySystem& s, const Vec3& up, int& tallest);
+  /// With `give` (ContactSettings::auto_substeps_sag), also the most static sag (m) of a body
+  /// on the contacts' carried loads at the angular rates w_dynamic, w_static (rad/s) into
+  /// column_sag_top: each face contact is a spring m_eff w^2 under its load, and a body sinks
+  /// as on its springs to the bodies under it (columns.cpp).
+  double measure_columns(const RigidBodySystem& s, const Vec3& up, int& tallest, bool give = false,
+                         double w_dynamic = 0, double w_static = 0);
   // its scratch: by body the level and the first of its edges (bodies resting on it) in
   // column_edge, the (lower, upper) face pairs, the breadth-first queue
   std::vector<std::uint32_t> column_level, column_start, column_edge, column_queue;
   std::vector<std::uint64_t> column_pairs;
+  // with the sag: a face contact's load (N) and stiffness (N/m) by face pair, then by edge;
+  // by body the sum over its supports of load + stiffness x the support's sink, and of the
+  // stiffness (its sink is their ratio)
+  struct ColumnSpring {
+    double load = 0, stiffness = 0;
+  };
+  std::vector<ColumnSpring> column_sink, column_pair_spring, column_spring;
   // the last measure (RigidBodySystem::step_substeps): its result, the bodies and the up it
   // was made for, the steps since, and whether it stands (cleared when a body is destroyed)
   double column_need = 0;
+  double column_sag_top = 0;  // the sag it predicted (m; with auto_substeps_sag)
   int column_top = 0;
   std::size_t column_bodies = 0;
   Vec3 column_up{0, 0, 0};

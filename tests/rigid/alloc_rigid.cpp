@@ -64,6 +64,21 @@ TEST(RigidAlloc, ATallColumnsStepsNeverAllocate) {
   EXPECT_EQ(s.profile().substeps, 8);
 }
 
+// A 5-stack with ContactSettings::auto_substeps_sag, whose measure also sums the contacts'
+// springs: stepping allocates nothing, through its halving to 4 substeps a second in
+TEST(RigidAlloc, AShortColumnAtFewerSubstepsNeverAllocates) {
+  pba::RigidBodySystem s({.capacity = 64, .contacts = {.auto_substeps_sag = 0.01, .sleep = false}});
+  s.create({.type = pba::BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+  for (int i = 0; i < 5; ++i)
+    s.create({.pose = {{0, 0.5 + i, 0}}, .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.5, 0.5})}}});
+  for (int k = 0; k < 10; ++k) s.step(1.0 / 60, {0, -9.81, 0});
+  EXPECT_EQ(s.profile().substeps, 8);
+  const long long before = g_allocations.load();
+  for (int k = 0; k < 100; ++k) s.step(1.0 / 60, {0, -9.81, 0});
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(s.profile().substeps, 4);
+}
+
 // Boxes and balls rolling and sliding over a bumpy static triangle mesh (manifolds made anew
 // every step, merged per normal, carried over when the bodies come to rest): once the pairs
 // have been seen, stepping allocates nothing

@@ -416,6 +416,11 @@ TEST(RigidBadInput, NamesTheFieldAndTheBody) {
             std::string::npos);
   s.settings().contact_hertz = -1;
   EXPECT_NE(error_of([&] { s.step(0.01, kG); }).find("settings.contact_hertz"), std::string::npos);
+  s.settings().contact_hertz = 120;
+  for (const double sag : {-0.01, double(NAN), double(INFINITY)}) {
+    s.settings().auto_substeps_sag = sag;
+    EXPECT_NE(error_of([&] { s.step(0.01, kG); }).find("settings.auto_substeps_sag"), std::string::npos) << sag;
+  }
 }
 
 // The contact solver's blocks hold masses, inertias and their inverses as floats: a mass or

@@ -839,6 +839,73 @@ TEST(RigidStacking, TheSubstepsComeDownASecondAfterTheColumnFitsFewerWithRoom) {
   }
 }
 
+// With ContactSettings::auto_substeps_sag the soft step also halves the substeps and
+// contact_hertz (8 -> 4, 120 -> 60 Hz; the ground's contacts 38 Hz, one radian a substep)
+// where a column fits with room: n^3 g / (w^2 s) at 60 Hz at most half the bound (0.25: cubes
+// of 1 m up to 15 high, of 10 cm up to 7), and the sag predicted from the carried loads at
+// 60 Hz at most half the budget. A column of n cubes (of any size) sags by n g / w_g^2 on the
+// ground and k g / ((m / 2) w^2) under k cubes between two, n g / w_g^2 + n (n - 1) g / w^2 in
+// all: at 4 substeps 2.2 mm for 5 cubes, 5.2 mm for 8, 7.9 mm for 10, 29.6 mm for 20 (at 8
+// substeps a quarter of it). Sleeping off, 10 s: with a budget of 1 cm the 5-stack of one-metre
+// cubes takes 8 substeps for the first second (kCalmTime) and 4 from then on, stands (its top
+// within 1% of a cube of the axis) and sags by the closed form at 4 substeps within 10%; the 10-stack
+// (its load 0.069 fits, its sag does not) and the 20-stack (0.55: neither) keep 8 and sag by
+// the closed form at 8. With 2 cm the 10-stack takes 4 after its second and sags by its
+// closed form at 4; 8 cubes of 10 cm (sag 5.2 mm fits, load 0.35 does not) keep 8.
+TEST(RigidStacking, FewerSubstepsWhereTheColumnsAllowIt) {
+  struct Case {
+    int boxes;
+    double half;    // the cubes' half size (m)
+    double budget;  // m
+    int substeps;   // after the first second
+  };
+  for (const Case k : {Case{5, 0.5, 0.01, 4}, Case{10, 0.5, 0.01, 8}, Case{20, 0.5, 0.01, 8}, Case{10, 0.5, 0.02, 4},
+                       Case{8, 0.05, 0.02, 8}}) {
+    RigidBodySystem s({.capacity = 64, .contacts = {.auto_substeps_sag = k.budget, .sleep = false}});
+    const auto boxes = pba::rigid_scenes::vertical_stack(s, k.boxes, k.half);
+    double drift = 0;
+    std::vector<int> taken;
+    for (int i = 0; i < 600; ++i) {
+      s.step(1.0 / 60, kGravity);
+      taken.push_back(s.profile().substeps);
+      const Vec3 top = s.center_of_mass(boxes.back());
+      drift = std::max(drift, std::hypot(top.x, top.z));
+    }
+    const std::string name = std::to_string(k.boxes) + " cubes of " + std::to_string(2 * k.half) + " m, budget " +
+                             std::to_string(k.budget) + " m";
+    for (std::size_t i = 0; i < 59; ++i) EXPECT_EQ(taken[i], 8) << name << " at step " << i;
+    for (std::size_t i = 61; i < taken.size(); ++i) ASSERT_EQ(taken[i], k.substeps) << name << " at step " << i;
+    const double n = k.boxes, h = 1.0 / (60 * k.substeps);
+    const double w = 2 * pba::kPi * 15 * k.substeps, ground = std::min(2 * w, 1 / h);
+    const double closed = n * kG / (ground * ground) + n * (n - 1) * kG / (w * w);
+    EXPECT_LT(drift, 0.01 * 2 * k.half) << name;
+    const double sag = (2 * n - 1) * k.half - s.center_of_mass(boxes.back()).y;
+    EXPECT_NEAR(sag, closed, 0.1 * closed) << name;
+    std::printf("%s: %d substeps, sag %.2f mm (closed form %.2f), drift %.3f mm\n", name.c_str(), k.substeps, 1e3 * sag,
+                1e3 * closed, 1e3 * drift);
+  }
+}
+
+// Below the setting's substeps the halving also waits for the contacts to stay the same pairs
+// for its second: a pile still landing carries impact loads, not its rest's (the Jolt pyramid
+// halved while its upper levels landed settled with its top 3.6 cm aside, against 1.0 cm at 8
+// substeps). A 5-stack (which takes 4 substeps a second in when alone) with a ball of 20 cm
+// dropped from 1 m beside it every half second for 3 s keeps 8 substeps while they land, and
+// takes 4 a second after the last has come to rest on the ground.
+TEST(RigidStacking, APileStillLandingIsNotHalved) {
+  RigidBodySystem s({.capacity = 64, .contacts = {.auto_substeps_sag = 0.01, .sleep = false}});
+  pba::rigid_scenes::vertical_stack(s, 5);
+  std::vector<int> taken;
+  for (int i = 0; i < 360; ++i) {
+    if (i % 30 == 0 && i < 180)
+      s.create({.pose = {{3 + 0.5 * (i / 30), 1, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.2)}}});
+    s.step(1.0 / 60, kGravity);
+    taken.push_back(s.profile().substeps);
+  }
+  for (std::size_t i = 0; i < 180; ++i) ASSERT_EQ(taken[i], 8) << "step " << i;
+  EXPECT_EQ(taken.back(), 4);
+}
+
 // Substeps set by hand are taken exactly: set_substeps (which turns auto_substeps off) keeps
 // a 40-stack at 8 substeps.
 TEST(RigidStacking, SubstepsSetByHandAreTakenExactly) {
