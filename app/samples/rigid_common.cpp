@@ -40,6 +40,13 @@ void RigidSolverKnobs(ContactSettings& s, int in_use) {
     else
       std::snprintf(label, sizeof label, "more for tall columns###auto_substeps");
     ImGui::Checkbox(label, &s.auto_substeps);
+    if (s.auto_substeps) {
+      // the halving where the columns are short and at rest (auto_substeps_sag; 0: off)
+      float mm = static_cast<float>(1e3 * s.auto_substeps_sag);
+      ImGui::SetNextItemWidth(-110);
+      if (ImGui::SliderFloat("halve under sag", &mm, 0, 20, mm > 0 ? "%.1f mm" : "off"))
+        s.auto_substeps_sag = 1e-3 * std::max(0.0f, mm);
+    }
   }
   if (s.solver == RigidSolverType::SoftStep) {
     float hz = static_cast<float>(s.contact_hertz);

@@ -16,7 +16,8 @@ namespace pba::app {
 RigidSolverType RigidSolverOption(const SampleContext& ctx);
 
 /// The solver combo and the chosen solver's own knobs (substeps, contact Hz, iterations,
-/// relax, compliance, manifold sweeps, warm starting, the soft step's auto substeps), editing
+/// relax, compliance, manifold sweeps, warm starting, the soft step's auto substeps and its
+/// halving's sag budget), editing
 /// `s` live; `in_use` (when > 0) is shown as the substeps the last step took
 /// (RigidProfile::substeps). Moving the substeps slider turns auto_substeps off.
 void RigidSolverKnobs(ContactSettings& s, int in_use = 0);

@@ -48,7 +48,8 @@ class RigidLab final : public Sample {
   explicit RigidLab(SampleContext& ctx) : Sample(ctx) {
     // --option scene=stack|pyramid|falling|restitution|ramp size=N solver=soft|si|tgs|xpbd
     // (or the solvers' library names: soft-step, sequential-impulse) compare=0|1 (the four
-    // solvers side by side) passes=N (their equal budget) sleep=0|1
+    // solvers side by side) passes=N (their equal budget) sleep=0|1 halve_sag_mm=MM (the soft
+    // step's halving of the substeps, 0-20 mm; 0: off)
     const std::string scene = ctx.option("scene", "stack");
     const char* keys[] = {"stack", "pyramid", "falling", "restitution", "ramp"};
     scene_ = LabScene::Stack;
@@ -57,6 +58,9 @@ class RigidLab final : public Sample {
       if (scene == keys[i]) scene_ = static_cast<LabScene>(i), found = true;
     if (!found) throw Error("--option scene: expected stack, pyramid, falling, restitution or ramp, got '" + scene + "'");
     settings_.solver = RigidSolverOption(ctx);
+    // the soft step's halving of the substeps where the columns allow it, a sag budget in mm
+    // (ContactSettings::auto_substeps_sag; 0: off, the default)
+    settings_.auto_substeps_sag = 1e-3 * OptionNumber(ctx, "halve_sag_mm", 0, 0, 20);
     size_ = OptionInteger(ctx, "size", 10, 1, 40);
     compare_ = OptionFlag(ctx, "compare", false);
     // compared, the copies stay awake by default (a sleeping stack shows nothing)
