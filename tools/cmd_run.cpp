@@ -226,6 +226,12 @@ std::string integrators(const pba::World& w) {
     s += "rigid bodies " + std::string(pba::to_string(c.solver)) +
          (c.solver == pba::RigidSolverType::SequentialImpulse ? " x" + std::to_string(c.iterations) + " iterations"
                                                               : " x" + std::to_string(c.substeps) + " substeps");
+    // the soft step's own changes to that count (ContactSettings::auto_substeps)
+    if (c.solver == pba::RigidSolverType::SoftStep && c.auto_substeps) {
+      char sag[64] = "";
+      if (c.auto_substeps_sag > 0) std::snprintf(sag, sizeof sag, ", halved under %g mm of sag", 1e3 * c.auto_substeps_sag);
+      s += std::string(" (more for tall columns") + sag + ")";
+    }
   }
   return s.empty() ? "none (nothing to integrate)" : s;
 }

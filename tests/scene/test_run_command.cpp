@@ -226,6 +226,26 @@ TEST(RunCommand, MethodAppliesToMassSpringBodies) {
       << out;
 }
 
+// the summary says when the soft step may change the substeps it was given (auto_substeps)
+// and not when the scene fixed them
+TEST(RunCommand, SummarySaysWhenTheSoftStepPicksItsSubsteps) {
+  const char* body = R"("rigid_bodies": [{"type": "static", "shapes": [{"type": "plane"}]},
+      {"shapes": [{"type": "box"}], "position": [0, 0.5, 0]}]})";
+  auto summary = [&](const std::string& name, const std::string& settings) {
+    const std::string file = write_scene(name, R"({"version": 1, "settings": {"rigid": )" + settings + "}, " + body);
+    testing::internal::CaptureStdout();
+    EXPECT_EQ(run({file, "--steps", "2"}), 0);
+    return testing::internal::GetCapturedStdout();
+  };
+  const std::string fixed = summary("pba_run_fixed.json", R"({"substeps": 8})");
+  EXPECT_NE(fixed.find("integrators  rigid bodies soft-step x8 substeps\n"), std::string::npos) << fixed;
+  const std::string grows = summary("pba_run_auto.json", "{}");
+  EXPECT_NE(grows.find("soft-step x8 substeps (more for tall columns)\n"), std::string::npos) << grows;
+  const std::string halves = summary("pba_run_halve.json", R"({"auto_substeps_sag": 0.01})");
+  EXPECT_NE(halves.find("soft-step x8 substeps (more for tall columns, halved under 10 mm of sag)\n"), std::string::npos)
+      << halves;
+}
+
 // progress goes to stderr as lines when it is not a terminal (here a file), at the
 // PBA_PROGRESS_INTERVAL period; --quiet prints none
 TEST(RunCommand, ProgressLinesUnlessQuiet) {
