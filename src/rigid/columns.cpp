@@ -189,14 +189,15 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   const double budget = settings_.auto_substeps_sag;
   const int least = budget > 0 && base % 2 == 0 ? -1 : 0;
   const double g = glm::length(gravity);
+  // the same contact pairs as the last step
+  const bool settled = c.pairs_same && c.pairs.size() == c.last_count;
   if (g == 0) {
     c.column_need = 0, c.column_top = 0, c.column_sag_top = 0, c.column_known = false;
   } else {
     // measured again when the pairs changed (a body came or went, woke or fell asleep), the
     // bodies or gravity's direction did, and otherwise every kMeasureEvery steps
     const Vec3 up = -gravity / g;
-    const bool same = c.column_known && c.pairs_same && c.pairs.size() == c.last_count &&
-                      c.column_bodies == type_.size() && c.column_up == up;
+    const bool same = c.column_known && settled && c.column_bodies == type_.size() && c.column_up == up;
     if (!same || ++c.column_age >= kMeasureEvery) {
       c.column_need = c.measure_columns(*this, up, c.column_top, least < 0, rate(-1), static_rate(-1));
       c.column_bodies = type_.size(), c.column_up = up, c.column_age = 0, c.column_known = true;
@@ -220,7 +221,6 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   // still landing (its contacts' loads not yet those of its rest) is not halved: the Jolt
   // pyramid halved while its upper levels landed settled with its top 3.6 cm aside, against
   // 1.0 cm at 8 substeps, and halved at rest its top stays where it was
-  const bool settled = c.pairs_same && c.pairs.size() == c.last_count;
   if (shift >= auto_shift_ || !fits(auto_shift_ - 1, 0.5) || (auto_shift_ == 0 && !settled)) {
     auto_shift_ = std::max(shift, auto_shift_);
     auto_calm_ = 0;

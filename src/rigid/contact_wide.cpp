@@ -829,53 +829,51 @@ void separation_colored_of(SimdPath path, B* blocks, const AnchorsOf<B::kPoints>
   separation_blocks<double>(blocks, anchors, first, last, bodies);
 }
 
-// each of one lane's points' normal velocity at the velocities now (in double)
-template <class B>
-void normal_velocities_of(const B& block, int lane, const BodyArrays& bodies, double* vn) {
+// each point's normal relative velocity in the lanes of L (m/s), from the lanes' bodies'
+// velocities va, vb and angular velocities wa, wb (world), into vn: the one formula of the
+// approach speeds before the solve (approach_lanes) and the restitution pass's
+// (normal_velocities_of), so both give the same bits
+template <class V, class B>
+PBA_LANES void point_normal_velocities(const Lanes<V, B>& L, const V* va, const V* wa, const V* vb, const V* wb,
+                                       V (&vn)[B::kPoints]) {
   constexpr int P = B::kPoints;
-  B& c = const_cast<B&>(block);
-  const Lanes<double, B> L{c, lane};
-  double t1[3], t2[3], n[3], rel[3], oa[3], ob[3];
-  const double* va = bodies.bodies[c.a[lane]].v;
-  const double* wa = bodies.bodies[c.a[lane]].w;
-  const double* vb = bodies.bodies[c.b[lane]].v;
-  const double* wb = bodies.bodies[c.b[lane]].w;
+  const B& c = L.c;
+  V t1[3], t2[3], n[3], rel[3], oa[3], ob[3];
   L.frame(t1, t2, n);
-  const double dv[3] = {vb[0] - va[0], vb[1] - va[1], vb[2] - va[2]};
+  const V dv[3] = {vb[0] - va[0], vb[1] - va[1], vb[2] - va[2]};
   to_frame(t1, t2, n, dv, rel);
   to_frame(t1, t2, n, wa, oa);
   to_frame(t1, t2, n, wb, ob);
-  const double g = rel[2] + (ob[0] * L(c.cb[1]) - ob[1] * L(c.cb[0])) - (oa[0] * L(c.ca[1]) - oa[1] * L(c.ca[0]));
+  const V g = rel[2] + (ob[0] * L(c.cb[1]) - ob[1] * L(c.cb[0])) - (oa[0] * L(c.ca[1]) - oa[1] * L(c.ca[0]));
   if constexpr (P > 1)
     for (int k = 0; k < P; ++k) vn[k] = g + L(c.y[k]) * (ob[0] - oa[0]) - L(c.x[k]) * (ob[1] - oa[1]);
   else
     vn[0] = g;
 }
 
-// normal_velocities_of for the lanes [l0, l0 + width) of the lane type V at once (its
-// operations in its order on each lane: the same bits on every path), into the block's
+// each of one lane's points' normal velocity at the velocities now (in double)
+template <class B>
+void normal_velocities_of(const B& block, int lane, const BodyArrays& bodies, double (&vn)[B::kPoints]) {
+  B& c = const_cast<B&>(block);
+  const SolverBody& a = bodies.bodies[c.a[lane]];
+  const SolverBody& b = bodies.bodies[c.b[lane]];
+  point_normal_velocities(Lanes<double, B>{c, lane}, a.v, a.w, b.v, b.w, vn);
+}
+
+// the approach speeds of the lanes [l0, l0 + width) of the lane type V at once
+// (point_normal_velocities' operations in its order on each lane: the same bits on every path), into the block's
 // approach speeds for the lanes below `filled` and the points below each lane's count (0 past
 // it; the lanes past `filled` keep clear_lane's zeros)
 template <class V, class B>
 PBA_LANES void approach_lanes(B& c, int l0, int filled, const int* count, const BodyArrays& bodies) {
   constexpr int P = B::kPoints;
-  const Lanes<V, B> L{c, l0};
-  V t1[3], t2[3], n[3], ra[8], rb[8], rel[3], oa[3], ob[3];
-  L.frame(t1, t2, n);
+  V ra[8], rb[8];
   // each lane's bodies' rows: v, then w (SolverBody)
   const double* rows = bodies.bodies[0].v;
   load_rows<V>(rows, c.a + l0, ra);
   load_rows<V>(rows, c.b + l0, rb);
-  const V dv[3] = {rb[0] - ra[0], rb[1] - ra[1], rb[2] - ra[2]};
-  to_frame(t1, t2, n, dv, rel);
-  to_frame(t1, t2, n, ra + 3, oa);
-  to_frame(t1, t2, n, rb + 3, ob);
-  const V g = rel[2] + (ob[0] * L(c.cb[1]) - ob[1] * L(c.cb[0])) - (oa[0] * L(c.ca[1]) - oa[1] * L(c.ca[0]));
   V vn[P];
-  if constexpr (P > 1)
-    for (int k = 0; k < P; ++k) vn[k] = g + L(c.y[k]) * (ob[0] - oa[0]) - L(c.x[k]) * (ob[1] - oa[1]);
-  else
-    vn[0] = g;
+  point_normal_velocities(Lanes<V, B>{c, l0}, ra, ra + 3, rb, rb + 3, vn);
   for (int j = 0; j < kWidth<V> && l0 + j < filled; ++j)
     for (int k = 0; k < P; ++k) c.approach[k][l0 + j] = k < count[l0 + j] ? static_cast<Real>(lanes::get(vn[k], j)) : 0;
 }
