@@ -542,6 +542,55 @@ TEST(RigidFriction, TheStopDistanceOverTheInputRangeIsTheClosedFormLessHalfASubs
   }
 }
 
+// A 1 m box dropped flat (from 1.5 m, thrown down at 0, 2 or 5 m/s) while moving sideways at
+// vx (1 to 8 m/s, along x and at 40 degrees), mu = 0.5, e = 0. Coulomb's law at the landing:
+// the ground stops the fall, an impulse of m v_l (v_l the landing speed, sqrt(vy^2 + 2 g 1.5 m)),
+// and friction takes up to mu m v_l of the sideways momentum, all of it while the box slips;
+// then the box slides to a stop at mu g. From where it touches, x_touch = vx t_touch, it
+// travels v'^2 / (2 mu g), v' = max(vx - mu v_l, 0), and a box (mu = 0.5 < its width over its
+// height) does not tip. The steps' share: the contact takes the landing in the step the box
+// would go through the ground in, within a step of the touch, and symplectic Euler falls
+// ahead of the closed form by up to half a step's time: 1.5 vx dt either way; gravity adds up
+// to g dt to the landing speed within that step, and the slide stops short by up to half a
+// substep's travel (TheStopDistanceOverTheInputRangeIsTheClosedFormLessHalfASubstepsTravel).
+// Under XPBD the dynamic friction was held to mu lambda / h, the position solve's share of
+// the landing, which a speculative contact leaves a fraction of, and it was applied after
+// the points' rows, so its moment tipped the box onto its leading edge: landing at 5.8 m/s
+// while moving at 6 m/s it hopped at 1.5 m/s and slid 2.73 m (Coulomb: 0.99 m); now 0.98 m
+// (22 of these 30 landings broke a bound before, none now).
+// The soft step and TGS break these bounds too (5 and 8 of these 30 drops), and are not held
+// to them here: their boxes hop on landing (the soft step: 0.64 m/s up and 1.1 rad/s after
+// landing at 7.3 m/s while moving at 3 m/s) and travel up to 0.41 m (soft step) and 0.48 m
+// (TGS) beyond the upper bound, landing at 7.4 m/s at 6 m/s, or stop short of the lower
+// one (the soft step by 0.06 m; TGS moves 5 cm back at 1 m/s); found 2026-12-04, left for
+// their own fix.
+TEST(RigidFriction, ABoxLandingFlatWhileSlidingStopsWhereCoulombSays) {
+  const double mu = 0.5, y0 = 2.0, dt = 1.0 / 60;
+  for (const auto solver : {pba::RigidSolverType::SequentialImpulse, pba::RigidSolverType::Xpbd})
+  for (const double vy : {0.0, 2.0, 5.0})
+  for (const double vx : {1.0, 2.5, 4.0, 6.0, 8.0})
+  for (const double a : {0.0, deg(40)}) {
+    RigidBodySystem s(with(solver));
+    ground(s, mu);
+    const Vec3 dir{std::cos(a), 0, std::sin(a)};
+    auto box = s.create({.pose = {{0, y0, 0}}, .linear_velocity = vx * dir + Vec3(0, -vy, 0), .shapes = {box_shape(Vec3(0.5), mu)}});
+    // the closed form: the touch (the bottom falls y0 - 0.5), the landing speed, the slide
+    const double t = (-vy + std::sqrt(vy * vy + 2 * kG * (y0 - 0.5))) / kG, land = vy + kG * t;
+    const double h = solver == pba::RigidSolverType::SequentialImpulse ? dt : dt / s.settings().substeps;
+    const double slide = std::pow(std::max(vx - mu * land, 0.0), 2) / (2 * mu * kG);
+    const double least = std::pow(std::max(vx - mu * (land + kG * dt), 0.0), 2) / (2 * mu * kG) - vx * h / 2;
+    for (int i = 0; i < 180; ++i) s.step(dt, kGravity);
+    const Vec3 p = s.center_of_mass(box);
+    const double travel = glm::dot(Vec3(p.x, 0, p.z), dir) - vx * t;
+    const std::string what = std::string(to_string(solver)) + " vy " + std::to_string(vy) + " vx " + std::to_string(vx) +
+                             " at " + std::to_string(a);
+    EXPECT_LE(travel, slide + 1.5 * vx * dt) << what;
+    EXPECT_GE(travel, least - 1.5 * vx * dt) << what;
+    EXPECT_NEAR(p.y, 0.5, 0.01) << what;  // on its face, not tipped
+    EXPECT_LT(glm::length(s.linear_velocity(box)), 1e-3) << what;
+  }
+}
+
 // A solid sphere that rolls without slipping accelerates at (5/7) g sin theta (mu large
 // enough: it needs mu >= (2/7) tan theta).
 TEST(RigidFriction, ASphereRollsAtFiveSeventhsOfGSinTheta) {
@@ -1503,9 +1552,16 @@ struct DroppedBoxes {
 // RigidSoak.ThousandDroppedBoxesAreAllAsleepWithinFiveSeconds.) Each by itself: the boxes
 // are 5 m apart, and none touches another. They were 1.5 m apart until 2026-12-04, less than
 // two of these cubes turned span (up to sqrt(3) m): 13 pairs overlapped by up to 13 cm as
-// created, and more leaned on each other once down, which is the next test's case. A box
-// travels up to 0.7 m from under where it was dropped under the soft step and TGS, up to
-// 1.8 m under XPBD (measured over 8 drops 1e-4 m apart).
+// created, and more leaned on each other once down, which is the next test's case. How far
+// a box travels from under where it was dropped (8 drops 1e-4 m apart, 200 boxes; median and
+// largest): soft step 0.46 and 0.66 m, sequential impulses 0.45 and 0.65, TGS 0.56 and 0.70,
+// XPBD 0.46 and 0.73 (0.83 and 1.88 m until its dynamic friction took the landing's whole
+// normal impulse and was solved with the points, 2026-12-04:
+// RigidFriction.ABoxLandingFlatWhileSlidingStopsWhereCoulombSays); Bullet 3.24 (the same
+// drops, a throwaway program; mu 0.5 per body, which Bullet multiplies to 0.25: 0.22 and
+// 0.80; 0.707 each, 0.5: 0.14 and 0.73). A turned box lands on a corner or an edge, and the
+// landing's impulse there turns it and sends it over: travel of about half its size is the
+// tumble (a box dropped flat travels nothing under every solver).
 TEST(RigidSleep, DroppedBoxesFallAsleepAndStayPut) {
   for (const auto solver : kSubstepping) {
     DroppedBoxes d(solver, 5.0);
