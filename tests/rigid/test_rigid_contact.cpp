@@ -342,8 +342,10 @@ TEST(RigidRestitution, ThinPlatesAndNeedlesBouncingOnTheGroundGainNoEnergy) {
 // most of them). Some rose above their start by more than a bounce's discretisation (worst
 // measured: 21% for a 1 mm x 2 m rod at e = 1 under the soft step, 4.5% at e = 0.9) until the
 // blocks' inverse inertia followed a body that turns (RigidContacts::refresh_inertia): since,
-// none does (the worst 1.0039 of the start, TGS at e = 1; docs/rigid-bodies.md). This guards
-// the bound that held before, not a law: under 1.25 times the start.
+// none does (the worst 1.0039 of the start, TGS at e = 1; docs/rigid-bodies.md). This guarded
+// the bound that held before, not a law, 1.25 times the start, until the continuous pass
+// put bodies back with their velocity at the time of impact (2026-12-04): they are now held
+// to the bound of the tests above, the start plus the bounce's allowance m g v h.
 TEST(RigidRestitution, ElasticThinRodsStayBounded) {
   for (const auto solver : kAll)
   for (const double t : {0.001, 0.002, 0.006, 0.02})
@@ -351,7 +353,7 @@ TEST(RigidRestitution, ElasticThinRodsStayBounded) {
   for (const double e : {0.9, 1.0})
   for (const double angle : {0.0, 10.0, 30.0, 60.0}) {
     const Fall f = rod_fall(solver, t, length, e, angle);
-    EXPECT_LT(f.most, 1.25 * f.start) << rod_case(solver, t, length, e, angle);
+    EXPECT_LT(f.most, f.start + f.allowance) << rod_case(solver, t, length, e, angle) << ": " << f.most / f.start << " of the start, allowance " << f.allowance / f.start;
   }
 }
 
