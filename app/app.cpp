@@ -323,9 +323,24 @@ void App::check_frame(int frame_index, const std::vector<std::uint8_t>& rgb, int
   if (frame_index < 2 || (frame_index % 4 != 0 && !last)) return;
   const std::vector<Color> expected = sample_->ExpectedColors();
   ImageRules rules;
+  // a sample's colours count only in the 3D viewport: the region the side panels and the
+  // menu bar leave, less every ImGui window drawn this frame (a panel's plot line in a
+  // body's colour passed the check while the body it stood for was 1-3 pixels)
+  const int tw = target_->width(), th = target_->height();
+  viewport_.assign(static_cast<std::size_t>(tw) * static_cast<std::size_t>(th), 0);
+  auto mark = [&](float x0, float y0, float x1, float y1, std::uint8_t value) {
+    const int ax = std::clamp(static_cast<int>(std::floor(x0)), 0, tw), bx = std::clamp(static_cast<int>(std::ceil(x1)), 0, tw);
+    const int ay = std::clamp(static_cast<int>(std::floor(y0)), 0, th), by = std::clamp(static_cast<int>(std::ceil(y1)), 0, th);
+    for (int y = ay; y < by; ++y)
+      std::fill(viewport_.begin() + static_cast<std::ptrdiff_t>(y) * tw + ax, viewport_.begin() + static_cast<std::ptrdiff_t>(y) * tw + bx, value);
+  };
+  mark(ctx_.view.x0, ctx_.view.y0, ctx_.view.x1, ctx_.view.y1, 1);
+  // (imgui_internal.h: Dear ImGui 1.86 lists its windows only there; the unused implicit
+  // "Debug" window is inactive by the end of the frame)
+  for (const ImGuiWindow* win : ImGui::GetCurrentContext()->Windows)
+    if (win->Active && !win->Hidden) mark(win->Pos.x, win->Pos.y, win->Pos.x + win->Size.x, win->Pos.y + win->Size.y, 0);
   const ImageStats st = MeasureImage(
-      rgb, target_->width(), target_->height(), [&](int y) { return renderer_->background_at_row(y); }, expected,
-      rules.color_tolerance);
+      rgb, tw, th, [&](int y) { return renderer_->background_at_row(y); }, expected, rules.color_tolerance, &viewport_);
   const std::string err = CheckImage(st, rules, expected);
   if (!err.empty()) failures_.push_back("frame " + std::to_string(frame_index) + ": " + err);
   // what the sample simulates is drawn (checked last: it renders the empty scene over the frame)

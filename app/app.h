@@ -71,6 +71,7 @@ class App {
   std::vector<std::uint8_t> first_checked_;
   std::vector<std::uint8_t> rgb_;
   std::vector<std::uint8_t> empty_;  // the empty scene, for check_drawn
+  std::vector<std::uint8_t> viewport_;  // 1 where a pixel shows the 3D view (no ImGui window over it), for check_frame
   std::vector<Vec3> points_;         // simulated points, for check_drawn
   std::vector<glm::vec2> pixels_;    // and those in view, projected
   bool screenshot_ = false;          // save the next finished frame

@@ -11,7 +11,7 @@ namespace pba::app {
 
 ImageStats MeasureImage(const std::vector<std::uint8_t>& rgb, int width, int height,
                         const std::function<Color(int row)>& background, const std::vector<Color>& expected,
-                        double color_tolerance) {
+                        double color_tolerance, const std::vector<std::uint8_t>* counted) {
   ImageStats s;
   s.color_hits.assign(expected.size(), 0);
   const double n = static_cast<double>(width) * height;
@@ -20,6 +20,7 @@ ImageStats MeasureImage(const std::vector<std::uint8_t>& rgb, int width, int hei
   long long bg = 0, smooth = 0;
   std::unordered_set<int> colors;
   const double tol2 = color_tolerance * color_tolerance;
+  if (counted && counted->size() != static_cast<std::size_t>(n)) counted = nullptr;
   for (int y = 0; y < height; ++y) {
     const Color b = background(y);
     for (int x = 0; x < width; ++x) {
@@ -36,7 +37,8 @@ ImageStats MeasureImage(const std::vector<std::uint8_t>& rgb, int width, int hei
         if (std::abs(p[0] - q[0]) <= 3 && std::abs(p[1] - q[1]) <= 3 && std::abs(p[2] - q[2]) <= 3) ++smooth;
       }
       colors.insert((p[0] >> 3) << 10 | (p[1] >> 3) << 5 | (p[2] >> 3));
-      // expected colours
+      // expected colours (where they count)
+      if (counted && !(*counted)[static_cast<std::size_t>(y) * width + x]) continue;
       for (std::size_t k = 0; k < expected.size(); ++k) {
         const double dr = p[0] - 255.0 * expected[k].r, dg = p[1] - 255.0 * expected[k].g,
                      db = p[2] - 255.0 * expected[k].b;

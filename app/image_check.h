@@ -30,10 +30,13 @@ struct ImageRules {
 };
 
 /// Measures `rgb` (width x height, top row first). `background(y)` gives the background
-/// colour expected at row y; `expected` colours are counted in color_hits.
+/// colour expected at row y; `expected` colours are counted in color_hits, over the pixels
+/// whose entry in `counted` (width x height, top row first) is nonzero, or over every pixel
+/// when it is null or of another size (the self-test passes the 3D viewport's pixels: a
+/// sample's colour on a panel's plot line is not its body in the scene).
 ImageStats MeasureImage(const std::vector<std::uint8_t>& rgb, int width, int height,
                         const std::function<Color(int row)>& background, const std::vector<Color>& expected,
-                        double color_tolerance);
+                        double color_tolerance, const std::vector<std::uint8_t>* counted = nullptr);
 
 /// Empty when `stats` satisfies `rules`, else a message listing each failed rule;
 /// `expected` names the colours for the message.

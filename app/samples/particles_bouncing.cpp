@@ -59,8 +59,20 @@ class BouncingBalls final : public Sample {
       const Color c = i == tracked ? kTracked : kBall;
       r.polyline(trails_[i], Color{c.r, c.g, c.b, 0.35f}, 1.5f);
     }
-    if (ctx_.draw.particles)
+    if (ctx_.draw.particles) {
       for (std::size_t i = 0; i < ps.size(); ++i) r.sphere(ps.position(i), ps.radius(i), i == tracked ? kTracked : kBall);
+      // the tracked ball ringed, three radii out in the plane facing the default camera: at
+      // 640x360 the ball itself is 2-3 pixels across, and the plot's yellow line beside the
+      // scene was what a look for its colour found
+      const Vec3 c = ps.position(tracked);
+      const double ring = 3 * ps.radius(tracked);
+      ring_.clear();
+      for (int k = 0; k <= 32; ++k) {
+        const double a = 2 * kPi * k / 32;
+        ring_.push_back(c + ring * Vec3(std::cos(a), std::sin(a), 0));
+      }
+      r.polyline(ring_, kTracked, 2.0f);
+    }
     // the e^2 h and e^4 h marks beside the tracked ball
     if (ctx_.settings.show_labels) {
       const Vec3 p = ps.position(tracked);
@@ -179,6 +191,7 @@ class BouncingBalls final : public Sample {
   bool auto_drop_ = true, rising_ = false;
   double last_vy_ = 0;
   std::vector<std::vector<Vec3>> trails_;
+  std::vector<Vec3> ring_;  // the tracked ball's ring, drawn each frame (kept: no allocation per frame)
   std::vector<float> hist_t_, hist_h_;
   std::vector<double> peaks_;
 };

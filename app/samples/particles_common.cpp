@@ -244,9 +244,20 @@ PlotSeries Series(const float* x, const float* y, int count, Color color, float 
 }
 
 std::string Thousands(long long n) {
-  std::string s = std::to_string(n < 0 ? -n : n);
-  for (int i = static_cast<int>(s.size()) - 3; i > 0; i -= 3) s.insert(static_cast<std::size_t>(i), " ");
-  return n < 0 ? "-" + s : s;
+  // the result built front to back in one string: the sign, then the digits with a space
+  // before each group of three from the right. (Prepending the sign with "-" + s, which
+  // inserts into s at its front, drew GCC's -Wrestrict in the release build; and -n
+  // overflowed at the smallest long long, so the magnitude is taken unsigned.)
+  const unsigned long long magnitude = n < 0 ? 0ull - static_cast<unsigned long long>(n) : static_cast<unsigned long long>(n);
+  const std::string digits = std::to_string(magnitude);
+  std::string s;
+  s.reserve(digits.size() + digits.size() / 3 + 1);
+  if (n < 0) s.push_back('-');
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) s.push_back(' ');
+    s.push_back(digits[i]);
+  }
+  return s;
 }
 
 void ProfileReadout(const World& world) {

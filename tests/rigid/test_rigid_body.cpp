@@ -640,7 +640,7 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_EQ(soft, 0x260b0191c618cdd4ull) << std::hex << soft;
   EXPECT_EQ(si, 0xd15d4424f1a2d6adull) << std::hex << si;
   EXPECT_EQ(tgs, 0x45e23ed67dc10319ull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x9a2b31e18485fdd3ull) << std::hex << xpbd;
+  EXPECT_EQ(xpbd, 0x09fbe74397e15d37ull) << std::hex << xpbd;
 }
 
 }  // namespace

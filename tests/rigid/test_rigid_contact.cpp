@@ -90,7 +90,9 @@ TEST(RigidRestitution, ASphereReboundsToESquaredOfItsHeight) {
 // within the step, then rises for the rest of it (measured: soft step and TGS within 0.4%
 // of e^2 h, XPBD within 0.55 of the bound). The 5 cm ball drops at most 0.5 m: faster, it
 // outruns its speculative margin (its size) and the continuous pass puts it back to its time
-// of impact with the step's velocity kept, 0.9% over e^2 h from 3 m (docs/rigid-bodies.md).
+// of impact (docs/rigid-bodies.md): from 3 m, 0.86% over e^2 h with the step's end velocity
+// kept, 0.09% since it takes the velocity at the time of impact (e = 1: 0.27% under, where
+// the fall's own loss, e^2 v h / 2, adds to this bound's).
 TEST(RigidRestitution, TheApexIsESquaredOfTheDropOverTheInputRange) {
   for (const auto solver : kSubstepping)
   for (const double e : {0.2, 0.5, 0.8, 1.0})
@@ -340,8 +342,10 @@ TEST(RigidRestitution, ThinPlatesAndNeedlesBouncingOnTheGroundGainNoEnergy) {
 // most of them). Some rose above their start by more than a bounce's discretisation (worst
 // measured: 21% for a 1 mm x 2 m rod at e = 1 under the soft step, 4.5% at e = 0.9) until the
 // blocks' inverse inertia followed a body that turns (RigidContacts::refresh_inertia): since,
-// none does (the worst 1.0039 of the start, TGS at e = 1; docs/rigid-bodies.md). This guards
-// the bound that held before, not a law: under 1.25 times the start.
+// none does (the worst 1.0039 of the start, TGS at e = 1; docs/rigid-bodies.md). This guarded
+// the bound that held before, not a law, 1.25 times the start, until the continuous pass
+// put bodies back with their velocity at the time of impact (2026-12-04): they are now held
+// to the bound of the tests above, the start plus the bounce's allowance m g v h.
 TEST(RigidRestitution, ElasticThinRodsStayBounded) {
   for (const auto solver : kAll)
   for (const double t : {0.001, 0.002, 0.006, 0.02})
@@ -349,7 +353,7 @@ TEST(RigidRestitution, ElasticThinRodsStayBounded) {
   for (const double e : {0.9, 1.0})
   for (const double angle : {0.0, 10.0, 30.0, 60.0}) {
     const Fall f = rod_fall(solver, t, length, e, angle);
-    EXPECT_LT(f.most, 1.25 * f.start) << rod_case(solver, t, length, e, angle);
+    EXPECT_LT(f.most, f.start + f.allowance) << rod_case(solver, t, length, e, angle) << ": " << f.most / f.start << " of the start, allowance " << f.allowance / f.start;
   }
 }
 
@@ -537,6 +541,55 @@ TEST(RigidFriction, TheStopDistanceOverTheInputRangeIsTheClosedFormLessHalfASubs
     EXPECT_LE(d, expected) << to_string(solver) << " mu = " << mu << " v = " << v << " a = " << a;
     EXPECT_GE(d, expected - 1.001 * v * h / 2) << to_string(solver) << " mu = " << mu << " v = " << v << " a = " << a;
     EXPECT_LT(glm::length(s.linear_velocity(box)), 1e-6) << to_string(solver) << " mu = " << mu << " v = " << v;
+  }
+}
+
+// A 1 m box dropped flat (from 1.5 m, thrown down at 0, 2 or 5 m/s) while moving sideways at
+// vx (1 to 8 m/s, along x and at 40 degrees), mu = 0.5, e = 0. Coulomb's law at the landing:
+// the ground stops the fall, an impulse of m v_l (v_l the landing speed, sqrt(vy^2 + 2 g 1.5 m)),
+// and friction takes up to mu m v_l of the sideways momentum, all of it while the box slips;
+// then the box slides to a stop at mu g. From where it touches, x_touch = vx t_touch, it
+// travels v'^2 / (2 mu g), v' = max(vx - mu v_l, 0), and a box (mu = 0.5 < its width over its
+// height) does not tip. The steps' share: the contact takes the landing in the step the box
+// would go through the ground in, within a step of the touch, and symplectic Euler falls
+// ahead of the closed form by up to half a step's time: 1.5 vx dt either way; gravity adds up
+// to g dt to the landing speed within that step, and the slide stops short by up to half a
+// substep's travel (TheStopDistanceOverTheInputRangeIsTheClosedFormLessHalfASubstepsTravel).
+// Under XPBD the dynamic friction was held to mu lambda / h, the position solve's share of
+// the landing, which a speculative contact leaves a fraction of, and it was applied after
+// the points' rows, so its moment tipped the box onto its leading edge: landing at 5.8 m/s
+// while moving at 6 m/s it hopped at 1.5 m/s and slid 2.73 m (Coulomb: 0.99 m); now 0.98 m
+// (22 of these 30 landings broke a bound before, none now).
+// The soft step and TGS break these bounds too (5 and 8 of these 30 drops), and are not held
+// to them here: their boxes hop on landing (the soft step: 0.64 m/s up and 1.1 rad/s after
+// landing at 7.3 m/s while moving at 3 m/s) and travel up to 0.41 m (soft step) and 0.48 m
+// (TGS) beyond the upper bound, landing at 7.4 m/s at 6 m/s, or stop short of the lower
+// one (the soft step by 0.06 m; TGS moves 5 cm back at 1 m/s); found 2026-12-04, left for
+// their own fix.
+TEST(RigidFriction, ABoxLandingFlatWhileSlidingStopsWhereCoulombSays) {
+  const double mu = 0.5, y0 = 2.0, dt = 1.0 / 60;
+  for (const auto solver : {pba::RigidSolverType::SequentialImpulse, pba::RigidSolverType::Xpbd})
+  for (const double vy : {0.0, 2.0, 5.0})
+  for (const double vx : {1.0, 2.5, 4.0, 6.0, 8.0})
+  for (const double a : {0.0, deg(40)}) {
+    RigidBodySystem s(with(solver));
+    ground(s, mu);
+    const Vec3 dir{std::cos(a), 0, std::sin(a)};
+    auto box = s.create({.pose = {{0, y0, 0}}, .linear_velocity = vx * dir + Vec3(0, -vy, 0), .shapes = {box_shape(Vec3(0.5), mu)}});
+    // the closed form: the touch (the bottom falls y0 - 0.5), the landing speed, the slide
+    const double t = (-vy + std::sqrt(vy * vy + 2 * kG * (y0 - 0.5))) / kG, land = vy + kG * t;
+    const double h = solver == pba::RigidSolverType::SequentialImpulse ? dt : dt / s.settings().substeps;
+    const double slide = std::pow(std::max(vx - mu * land, 0.0), 2) / (2 * mu * kG);
+    const double least = std::pow(std::max(vx - mu * (land + kG * dt), 0.0), 2) / (2 * mu * kG) - vx * h / 2;
+    for (int i = 0; i < 180; ++i) s.step(dt, kGravity);
+    const Vec3 p = s.center_of_mass(box);
+    const double travel = glm::dot(Vec3(p.x, 0, p.z), dir) - vx * t;
+    const std::string what = std::string(to_string(solver)) + " vy " + std::to_string(vy) + " vx " + std::to_string(vx) +
+                             " at " + std::to_string(a);
+    EXPECT_LE(travel, slide + 1.5 * vx * dt) << what;
+    EXPECT_GE(travel, least - 1.5 * vx * dt) << what;
+    EXPECT_NEAR(p.y, 0.5, 0.01) << what;  // on its face, not tipped
+    EXPECT_LT(glm::length(s.linear_velocity(box)), 1e-3) << what;
   }
 }
 
@@ -1501,9 +1554,16 @@ struct DroppedBoxes {
 // RigidSoak.ThousandDroppedBoxesAreAllAsleepWithinFiveSeconds.) Each by itself: the boxes
 // are 5 m apart, and none touches another. They were 1.5 m apart until 2026-12-04, less than
 // two of these cubes turned span (up to sqrt(3) m): 13 pairs overlapped by up to 13 cm as
-// created, and more leaned on each other once down, which is the next test's case. A box
-// travels up to 0.7 m from under where it was dropped under the soft step and TGS, up to
-// 1.8 m under XPBD (measured over 8 drops 1e-4 m apart).
+// created, and more leaned on each other once down, which is the next test's case. How far
+// a box travels from under where it was dropped (8 drops 1e-4 m apart, 200 boxes; median and
+// largest): soft step 0.46 and 0.66 m, sequential impulses 0.45 and 0.65, TGS 0.56 and 0.70,
+// XPBD 0.46 and 0.73 (0.83 and 1.88 m until its dynamic friction took the landing's whole
+// normal impulse and was solved with the points, 2026-12-04:
+// RigidFriction.ABoxLandingFlatWhileSlidingStopsWhereCoulombSays); Bullet 3.24 (the same
+// drops, a throwaway program; mu 0.5 per body, which Bullet multiplies to 0.25: 0.22 and
+// 0.80; 0.707 each, 0.5: 0.14 and 0.73). A turned box lands on a corner or an edge, and the
+// landing's impulse there turns it and sends it over: travel of about half its size is the
+// tumble (a box dropped flat travels nothing under every solver).
 TEST(RigidSleep, DroppedBoxesFallAsleepAndStayPut) {
   for (const auto solver : kSubstepping) {
     DroppedBoxes d(solver, 5.0);
