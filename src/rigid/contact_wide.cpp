@@ -271,14 +271,23 @@ PBA_LANES void add_rows(double* base, const std::uint32_t* index, std::uint32_t 
   } else {
     V t[8] = {change[0], change[1], change[2], change[3], change[4], change[5], V{}, V{}};
     transpose(t);
-    for (int i = 0; i < 8; ++i) {
-      if constexpr (std::is_same_v<V, v8f>) {
-        if ((bits >> i) & 1) add_row<kZmm>(base, index[i], t[i]);
-      } else {
-        if ((bits >> i) & 1) add_row<kZmm>(base, index[i], __builtin_shufflevector(t[i], t[i], 0, 1, 2, 3, 4, 5, 6, 7));
-        if ((bits >> (i + 8)) & 1) add_row<kZmm>(base, index[i + 8], __builtin_shufflevector(t[i], t[i], 8, 9, 10, 11, 12, 13, 14, 15));
+    // (every: all the lanes write, as in most blocks of a pile, and no lane's bit is tested)
+    auto rows = [&](auto every) {
+      constexpr bool kEvery = decltype(every)::value;
+      for (int i = 0; i < 8; ++i) {
+        if constexpr (std::is_same_v<V, v8f>) {
+          if (kEvery || ((bits >> i) & 1)) add_row<kZmm>(base, index[i], t[i]);
+        } else {
+          if (kEvery || ((bits >> i) & 1))
+            add_row<kZmm>(base, index[i], __builtin_shufflevector(t[i], t[i], 0, 1, 2, 3, 4, 5, 6, 7));
+          if (kEvery || ((bits >> (i + 8)) & 1))
+            add_row<kZmm>(base, index[i + 8], __builtin_shufflevector(t[i], t[i], 8, 9, 10, 11, 12, 13, 14, 15));
+        }
       }
-    }
+    };
+    constexpr std::uint32_t kAll = (1u << kWidth<V>) - 1;
+    if ((bits & kAll) == kAll) rows(std::true_type{});
+    else rows(std::false_type{});
   }
 }
 
