@@ -163,7 +163,7 @@ struct Lanes {
   // numbers): the block's address passes through an empty asm, so the compiler cannot reuse
   // the loads made through this one. Kept from the start of solve(), the frame, the inverse
   // masses and inertias, the arms, the points and K outlived the 32 registers, and each was
-  // stored to the stack and read back (the AVX-512 pass's code: 273 such stores, 169 after);
+  // stored to the stack and read back (the AVX-512 pass's code: 273 such stores, 132 after);
   // the block is in L1, and a load folds into the instruction that uses it
   PBA_LANES Lanes again() const {
     B* p = &c;
@@ -469,6 +469,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // the approach speeds, from the velocities before this pass's impulses: read inside the
   // sweep, a point's took the turn the points before it gave the body, and a box landing flat
   // recorded corners approaching at 7.0 to 7.7 m/s, which the restitution pass bounced unevenly
+  // (written now: nothing below reads them, and held to the end they took four registers)
   if constexpr (kBias)
     for (int k = 0; k < P; ++k) L.put(c.approach[k], vmin(L(c.approach[k]), vn[k]));
   // non-penetration, swept over the points `sweeps` times (Gauss-Seidel on the manifold's
