@@ -159,9 +159,28 @@ struct Lanes {
   // a field's lanes, and back
   PBA_LANES V operator()(const Real (&f)[kLanes]) const { return load<V>(f + l0); }
   PBA_LANES void put(Real (&f)[kLanes], const V& v) const { store<V>(f + l0, v); }
+  // the same lanes of the same block, for reading fields again where they are used (the same
+  // numbers): the block's address passes through an empty asm, so the compiler cannot reuse
+  // the loads made through this one. Kept from the start of solve(), the frame, the inverse
+  // masses and inertias, the arms, the points and K outlived the 32 registers, and each was
+  // stored to the stack and read back (the AVX-512 pass's code: 273 such stores, 132 after);
+  // the block is in L1, and a load folds into the instruction that uses it
+  PBA_LANES Lanes again() const {
+    B* p = &c;
+    asm volatile("" : "+r"(p));
+    return Lanes{*p, l0};
+  }
   // the frame
   PBA_LANES void frame(V t1[3], V t2[3], V n[3]) const {
     for (int i = 0; i < 3; ++i) t1[i] = (*this)(c.t1[i]), t2[i] = (*this)(c.t2[i]), n[i] = (*this)(c.n[i]);
+  }
+  // the inverse inertias, a's and b's
+  PBA_LANES void inertias(V ia[6], V ib[6]) const {
+    for (int i = 0; i < 6; ++i) ia[i] = (*this)(c.ia[i]), ib[i] = (*this)(c.ib[i]);
+  }
+  // the centroid's arms, from a and from b
+  PBA_LANES void arms(V ca[3], V cb[3]) const {
+    for (int i = 0; i < 3; ++i) ca[i] = (*this)(c.ca[i]), cb[i] = (*this)(c.cb[i]);
   }
 };
 
@@ -252,14 +271,23 @@ PBA_LANES void add_rows(double* base, const std::uint32_t* index, std::uint32_t 
   } else {
     V t[8] = {change[0], change[1], change[2], change[3], change[4], change[5], V{}, V{}};
     transpose(t);
-    for (int i = 0; i < 8; ++i) {
-      if constexpr (std::is_same_v<V, v8f>) {
-        if ((bits >> i) & 1) add_row<kZmm>(base, index[i], t[i]);
-      } else {
-        if ((bits >> i) & 1) add_row<kZmm>(base, index[i], __builtin_shufflevector(t[i], t[i], 0, 1, 2, 3, 4, 5, 6, 7));
-        if ((bits >> (i + 8)) & 1) add_row<kZmm>(base, index[i + 8], __builtin_shufflevector(t[i], t[i], 8, 9, 10, 11, 12, 13, 14, 15));
+    // (every: all the lanes write, as in most blocks of a pile, and no lane's bit is tested)
+    auto rows = [&](auto every) {
+      constexpr bool kEvery = decltype(every)::value;
+      for (int i = 0; i < 8; ++i) {
+        if constexpr (std::is_same_v<V, v8f>) {
+          if (kEvery || ((bits >> i) & 1)) add_row<kZmm>(base, index[i], t[i]);
+        } else {
+          if (kEvery || ((bits >> i) & 1))
+            add_row<kZmm>(base, index[i], __builtin_shufflevector(t[i], t[i], 0, 1, 2, 3, 4, 5, 6, 7));
+          if (kEvery || ((bits >> (i + 8)) & 1))
+            add_row<kZmm>(base, index[i + 8], __builtin_shufflevector(t[i], t[i], 8, 9, 10, 11, 12, 13, 14, 15));
+        }
       }
-    }
+    };
+    constexpr std::uint32_t kAll = (1u << kWidth<V>) - 1;
+    if ((bits & kAll) == kAll) rows(std::true_type{});
+    else rows(std::false_type{});
   }
 }
 
@@ -380,13 +408,13 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   to_frame(t1, t2, n, wa, oa);
   to_frame(t1, t2, n, wb, ob);
   V dwa[3] = {zero, zero, zero}, dwb[3] = {zero, zero, zero}, impulse[3] = {zero, zero, zero};
-  const V ma = L(c.ma), mb = L(c.mb), msum = ma + mb;
-  V ia[6], ib[6];
-  for (int i = 0; i < 6; ++i) ia[i] = L(c.ia[i]), ib[i] = L(c.ib[i]);
-  const V ca[3] = {L(c.ca[0]), L(c.ca[1]), L(c.ca[2])}, cb[3] = {L(c.cb[0]), L(c.cb[1]), L(c.cb[2])};
+  // (the inverse masses and inertias, the arms, the points, K and the frame are read from the
+  // block again where they are used: Lanes::again)
+  const V ma = L(c.ma), mb = L(c.mb);
   // turning a by -Ia ta and b by Ib tb (frame torques with no third component)
   auto turn2 = [&](const V ta0, const V ta1, const V tb0, const V tb1) {
-    V da[3], db[3];
+    V da[3], db[3], ia[6], ib[6];
+    L.again().inertias(ia, ib);
     sym_mul2(ia, ta0, ta1, da);
     sym_mul2(ib, tb0, tb1, db);
     for (int i = 0; i < 3; ++i) oa[i] = oa[i] - da[i], dwa[i] = dwa[i] - da[i], ob[i] = ob[i] + db[i], dwb[i] = dwb[i] + db[i];
@@ -402,12 +430,11 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // passed a wall of the 250 m/s closed box in 28 of 29 slightly perturbed runs, the double
   // kernels before in 9 of 34; with this margin in none of 13: docs/benchmarks.md)
   const auto fixed = (ma == zero) | (mb == zero);
-  V x[P], y[P], lambda[P], lambda0[P], vn[P], bias[P], mscale[P], iscale[P], approach[P], largest[P];
+  V lambda[P], vn[P], bias[P], mscale[P], iscale[P], largest[P];
   std::remove_const_t<decltype(fixed)> skip[P];
   for (int k = 0; k < P; ++k) {
-    if constexpr (P > 1) x[k] = L(c.x[k]), y[k] = L(c.y[k]);
-    lambda[k] = lambda0[k] = L(c.impulse[k]);
-    approach[k] = L(c.approach[k]), largest[k] = L(c.max_impulse[k]);
+    lambda[k] = L(c.impulse[k]);
+    largest[k] = L(c.max_impulse[k]);
     const V sep = L(c.sep[k]);
     const auto apart = sep > splat<V>(kTouching);
     skip[k] = fixed != fixed;  // none
@@ -428,10 +455,13 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // the normal velocities: (vb + wb x rb - va - wa x ra).n with (w x r).n = w.(r x n), and
   // r x n = (r1, -r0, 0) in the frame: the centroid's, and each point's (ra = ca + p, rb = cb + p)
   {
+    V ca[3], cb[3];
+    const auto F = L.again();
+    F.arms(ca, cb);
     const V g = rel[2] + (ob[0] * cb[1] - ob[1] * cb[0]) - (oa[0] * ca[1] - oa[1] * ca[0]);
     if constexpr (P > 1) {
       const V p1 = ob[0] - oa[0], p2 = ob[1] - oa[1];
-      for (int k = 0; k < P; ++k) vn[k] = g + y[k] * p1 - x[k] * p2;
+      for (int k = 0; k < P; ++k) vn[k] = g + F(F.c.y[k]) * p1 - F(F.c.x[k]) * p2;
     } else {
       vn[0] = g;
     }
@@ -439,11 +469,9 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // the approach speeds, from the velocities before this pass's impulses: read inside the
   // sweep, a point's took the turn the points before it gave the body, and a box landing flat
   // recorded corners approaching at 7.0 to 7.7 m/s, which the restitution pass bounced unevenly
+  // (written now: nothing below reads them, and held to the end they took four registers)
   if constexpr (kBias)
-    for (int k = 0; k < P; ++k) approach[k] = vmin(approach[k], vn[k]);
-  constexpr int kEntries = P * (P + 1) / 2;
-  V kk[kEntries];
-  for (int i = 0; i < kEntries; ++i) kk[i] = L(c.k[i]);
+    for (int k = 0; k < P; ++k) L.put(c.approach[k], vmin(L(c.approach[k]), vn[k]));
   // non-penetration, swept over the points `sweeps` times (Gauss-Seidel on the manifold's
   // problem: one sweep leaves a torque imbalance between the points that rocks tall stacks)
   // (the last sweep apart: after a point's update in it, only the normal velocities of the
@@ -455,6 +483,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   V negm[P];
   for (int k = 0; k < P; ++k) negm[k] = kMode == kSoft ? -L(c.mass[k]) * mscale[k] : -L(c.mass[k]);
   auto sweep = [&](auto last) {
+    const auto F = L.again();
     for (int k = 0; k < P; ++k) {
       V j;
       if constexpr (kMode == kSoft) j = negm[k] * (vn[k] + bias[k]) - iscale[k] * lambda[k];
@@ -465,7 +494,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       const V dl = next - lambda[k];
       lambda[k] = next;
       largest[k] = vmax(largest[k], dl);
-      for (int m = last ? k + 1 : 0; m < P; ++m) vn[m] = vn[m] + kk[kK[m][k]] * dl;
+      for (int m = last ? k + 1 : 0; m < P; ++m) vn[m] = vn[m] + F(F.c.k[kK[m][k]]) * dl;
     }
   };
   for (int it = 1; it < p.sweeps; ++it) sweep(std::false_type{});
@@ -476,12 +505,15 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // on a, the same with cb on b
   {
     V sl = zero, sx = zero, sy = zero;
+    const auto F = L.again();
     for (int k = 0; k < P; ++k) {
-      const V dl = lambda[k] - lambda0[k];
+      const V dl = lambda[k] - F(F.c.impulse[k]);  // (the block's impulses are the pass's start's until the end)
       sl = sl + dl;
-      if constexpr (P > 1) sx = sx + dl * x[k], sy = sy + dl * y[k];
+      if constexpr (P > 1) sx = sx + dl * F(F.c.x[k]), sy = sy + dl * F(F.c.y[k]);
     }
-    rel[2] = rel[2] + msum * sl;
+    V ca[3], cb[3];
+    F.arms(ca, cb);
+    rel[2] = rel[2] + (F(F.c.ma) + F(F.c.mb)) * sl;
     impulse[2] = impulse[2] + sl;
     if constexpr (P > 1) turn2(ca[1] * sl + sy, -(ca[0] * sl + sx), cb[1] * sl + sy, -(cb[0] * sl + sx));
     else turn2(ca[1] * sl, -(ca[0] * sl), cb[1] * sl, -(cb[0] * sl));
@@ -496,6 +528,10 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // over mu = 0.5: 3.6-4.7 degrees, 0.2-0.3 m aside in 3.7 m)
   const V mu = L(c.friction);
   {
+    V ca[3], cb[3], ia[6], ib[6];
+    const auto F = L.again();
+    F.arms(ca, cb);
+    const V msum = F(F.c.ma) + F(F.c.mb);
     const V r0 = rel[0] + (ob[1] * cb[2] - ob[2] * cb[1]) - (oa[1] * ca[2] - oa[2] * ca[1]);
     const V r1 = rel[1] + (ob[2] * cb[0] - ob[0] * cb[2]) - (oa[2] * ca[0] - oa[0] * ca[2]);
     const V old0 = L(c.tangent_impulse[0]), old1 = L(c.tangent_impulse[1]);
@@ -526,6 +562,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     V da[3], db[3];
     const V ta[3] = {-ca[2] * e1, ca[2] * e0, ca[0] * e1 - ca[1] * e0};
     const V tb[3] = {-cb[2] * e1, cb[2] * e0, cb[0] * e1 - cb[1] * e0};
+    L.again().inertias(ia, ib);
     sym_mul(ia, ta, da);
     sym_mul(ib, tb, db);
     for (int i = 0; i < 3; ++i) oa[i] = oa[i] - da[i], dwa[i] = dwa[i] - da[i], ob[i] = ob[i] + db[i], dwb[i] = dwb[i] + db[i];
@@ -540,7 +577,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     // the turns e I^-1 n: the inverse inertias' third columns (xz, yz, zz)
     const V e = j - old;
     constexpr int kColumn[3] = {2, 4, 5};
-    for (int i = 0; i < 3; ++i) dwa[i] = dwa[i] - e * ia[kColumn[i]], dwb[i] = dwb[i] + e * ib[kColumn[i]];
+    const auto F = L.again();
+    for (int i = 0; i < 3; ++i) dwa[i] = dwa[i] - e * F(F.c.ia[kColumn[i]]), dwb[i] = dwb[i] + e * F(F.c.ib[kColumn[i]]);
   }
   // a one-point lane's rolling resistance, right after its friction (RigidContacts::roll's
   // arithmetic in the frame): an angular impulse against the relative turning, up to rolling *
@@ -560,7 +598,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       const V limit = coefficient * total, len = vsqrt(j[0] * j[0] + j[1] * j[1] + j[2] * j[2]);
       const auto over = len > limit;
       const V scale = over ? limit / len : one;
-      V e[3], da[3], db[3];
+      V e[3], da[3], db[3], ia[6], ib[6];
+      L.again().inertias(ia, ib);
       for (int i = 0; i < 3; ++i) {
         j[i] = over ? j[i] * scale : j[i];
         L.put(c.rolling_impulse[i], on ? j[i] : old[i]);
@@ -577,15 +616,17 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   for (int k = 0; k < P; ++k) {
     L.put(c.impulse[k], lambda[k]);
     L.put(c.max_impulse[k], largest[k]);
-    if constexpr (kBias) L.put(c.approach[k], approach[k]);
   }
   // the change back to the bodies, in world axes
   V pw[3], dwaw[3], dwbw[3];
+  const auto F = L.again();
+  F.frame(t1, t2, n);
   to_world(t1, t2, n, impulse, pw);
   to_world(t1, t2, n, dwa, dwaw);
   to_world(t1, t2, n, dwb, dwbw);
   V na[6], nb[6];
-  for (int i = 0; i < 3; ++i) na[i] = -(ma * pw[i]), na[3 + i] = dwaw[i], nb[i] = mb * pw[i], nb[3 + i] = dwbw[i];
+  const V ma2 = F(F.c.ma), mb2 = F(F.c.mb);
+  for (int i = 0; i < 3; ++i) na[i] = -(ma2 * pw[i]), na[3 + i] = dwaw[i], nb[i] = mb2 * pw[i], nb[3 + i] = dwbw[i];
   add_rows<V, kZmm>(base, c.a + l0, c.write_a >> l0, na);
   add_rows<V, kZmm>(base, c.b + l0, c.write_b >> l0, nb);
 }
