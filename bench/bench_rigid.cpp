@@ -49,6 +49,9 @@ struct PbaResult : BenchResult {
   int deepest_step = -1;       // the step it was in
   int most_substeps = 0;       // the most substeps a step took (RigidProfile::substeps)
   int tallest = 0;             // the tallest column the soft step measured (RigidProfile::column)
+  // the substeps over time: each run of steps that took the same count, as "8 x0-125" (the
+  // count, then its first and last step), for --profile
+  std::string substeps_runs;
 };
 
 double median(std::vector<double> v) {
@@ -68,6 +71,7 @@ PbaResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings
     std::vector<double> ms;
     std::vector<char> out(b.size(), 0);
     std::vector<double> phase[10];  // each phase of RigidProfile, by step
+    int last_substeps = 0;
     for (int i = 0; i < steps; ++i) {
       const auto t0 = Clock::now();
       s.step(1.0 / 60, {0, -9.81, 0});
@@ -77,6 +81,12 @@ PbaResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings
                                 p.islands, p.prepare, p.integrate, p.contacts, p.finish};
       for (int k = 0; k < 10; ++k) phase[k].push_back(parts[k]);
       r.most_substeps = std::max(r.most_substeps, p.substeps), r.tallest = std::max(r.tallest, p.column);
+      if (i == 0 || p.substeps != last_substeps) {
+        if (i > 0) r.substeps_runs += "-" + std::to_string(i - 1) + ", ";
+        r.substeps_runs += std::to_string(p.substeps) + " x" + std::to_string(i);
+        last_substeps = p.substeps;
+      }
+      if (i + 1 == steps) r.substeps_runs += "-" + std::to_string(i);
       if (g_trace_ms > 0 && ms.back() > g_trace_ms)
         std::printf("    step %4d %7.2f ms: pairs %.2f manifolds %.2f (%zu built, %zu reused, %zu one-point) | prepare %.2f integrate %.2f "
                     "contacts %.2f finish %.2f (islands %.2f) | %zu awake, %zu proxies moved\n",
@@ -160,6 +170,7 @@ void print_profile(const PbaResult& r) {
               1e3 * p.contacts, 1e3 * p.finish, 1e3 * p.islands, 1e3 * p.total,
               r.manifolds, p.built, p.reused, r.asleep_at < 0 ? "never" : (std::to_string(r.asleep_at) + " s").c_str(),
               r.deepest, r.deepest_step, p.substeps, r.most_substeps, r.tallest);
+  std::printf("  %24s substeps by step: %s\n", "", r.substeps_runs.c_str());
 }
 
 struct Options {
@@ -171,6 +182,7 @@ struct Options {
   double reuse = -1;     // the pair cache's reuse distance (m); < 0: the default
   int substeps = 0;      // the solver's substeps, exactly (auto off; sequential impulses: ignored); 0: the default
   double down_sag = -1;  // ContactSettings::auto_substeps_sag (m): fewer substeps where the columns allow; < 0: the default
+  double down_fraction = -1;  // ContactSettings::auto_substeps_sag_fraction (of a body's size); < 0: the default
   std::vector<pba::RigidSolverType> solvers{pba::kRigidSolvers.begin(), pba::kRigidSolvers.end()};
 };
 
@@ -232,6 +244,7 @@ void run_scene(const BenchScene& scene, const Options& o) {
     if (o.reuse >= 0) settings.reuse_distance = o.reuse;
     if (o.substeps > 0) settings.substeps = o.substeps, settings.auto_substeps = false;  // (exactly N)
     if (o.down_sag >= 0) settings.auto_substeps_sag = o.down_sag;
+    if (o.down_fraction >= 0) settings.auto_substeps_sag_fraction = o.down_fraction;
     const PbaResult r = median_run(o.repeat, [&] { return run_pba(scene, steps, settings); });
     // a mesh scene pba cannot collide with yet: say so instead of a figure
     if (scene.has_mesh && (!r.ran || r.escapes > 0)) {
@@ -257,7 +270,7 @@ int usage(const char* why) {
   if (why) std::fprintf(stderr, "bench_rigid: %s\n", why);
   std::fprintf(stderr,
                "usage: bench_rigid [--scene KEY|all] [--steps N] [--repeat K] [--peer all|bullet|ode|none]\n"
-               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--substeps N] [--down M] [--profile]\n"
+               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--substeps N] [--down M] [--down-fraction F] [--profile]\n"
                "                   [--trace MS] | --quick | --budget\n"
                "scenes:");
   for (const BenchScene& s : pba::bench::bench_scenes()) std::fprintf(stderr, " %s", s.key.c_str());
@@ -319,6 +332,12 @@ int main(int argc, char** argv) {
       o.down_sag = std::strtod(v.c_str(), &end);
       if (v.empty() || *end || !(o.down_sag >= 0 && o.down_sag < 1))
         return usage(("--down '" + v + "': expected a sag budget in [0, 1) m").c_str());
+    } else if (a == "--down-fraction") {
+      const std::string v = need();
+      char* end = nullptr;
+      o.down_fraction = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end || !(o.down_fraction >= 0 && o.down_fraction <= 1))
+        return usage(("--down-fraction '" + v + "': expected a sag budget in [0, 1] of a body's size").c_str());
     } else if (a == "--peer") {
       const std::string p = need();
       if (p != "all" && p != "bullet" && p != "ode" && p != "none")

@@ -228,9 +228,18 @@ std::string integrators(const pba::World& w) {
                                                               : " x" + std::to_string(c.substeps) + " substeps");
     // the soft step's own changes to that count (ContactSettings::auto_substeps)
     if (c.solver == pba::RigidSolverType::SoftStep && c.auto_substeps) {
-      char sag[64] = "";
-      if (c.auto_substeps_sag > 0) std::snprintf(sag, sizeof sag, ", halved under %g mm of sag", 1e3 * c.auto_substeps_sag);
-      s += std::string(" (more for tall columns") + sag + ")";
+      // and the halving's sag budgets, each when set
+      std::string sag;
+      char part[64];
+      if (c.auto_substeps_sag_fraction > 0) {
+        std::snprintf(part, sizeof part, "%g%% of each body's size", 100 * c.auto_substeps_sag_fraction);
+        sag = part;
+      }
+      if (c.auto_substeps_sag > 0) {
+        std::snprintf(part, sizeof part, "%g mm", 1e3 * c.auto_substeps_sag);
+        sag += (sag.empty() ? "" : " and ") + std::string(part);
+      }
+      s += " (more for tall columns" + (sag.empty() ? "" : ", halved under a sag of " + sag) + ")";
     }
   }
   return s.empty() ? "none (nothing to integrate)" : s;

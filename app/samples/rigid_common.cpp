@@ -41,7 +41,13 @@ void RigidSolverKnobs(ContactSettings& s, int in_use) {
       std::snprintf(label, sizeof label, "more for tall columns###auto_substeps");
     ImGui::Checkbox(label, &s.auto_substeps);
     if (s.auto_substeps) {
-      // the halving where the columns are short and at rest (auto_substeps_sag; 0: off)
+      // the halving where the bodies allow it: its sag budgets, a percentage of each body's
+      // size (auto_substeps_sag_fraction, on by default) and millimetres (auto_substeps_sag);
+      // each 0: none, both 0: never halved
+      float percent = static_cast<float>(100 * s.auto_substeps_sag_fraction);
+      ImGui::SetNextItemWidth(-110);
+      if (ImGui::SliderFloat("halve under sag %", &percent, 0, 10, percent > 0 ? "%.1f%% of size" : "off"))
+        s.auto_substeps_sag_fraction = 0.01 * std::clamp(percent, 0.0f, 100.0f);
       float mm = static_cast<float>(1e3 * s.auto_substeps_sag);
       ImGui::SetNextItemWidth(-110);
       if (ImGui::SliderFloat("halve under sag", &mm, 0, 20, mm > 0 ? "%.1f mm" : "off"))

@@ -48,8 +48,9 @@ class RigidLab final : public Sample {
   explicit RigidLab(SampleContext& ctx) : Sample(ctx) {
     // --option scene=stack|pyramid|falling|restitution|ramp size=N solver=soft|si|tgs|xpbd
     // (or the solvers' library names: soft-step, sequential-impulse) compare=0|1 (the four
-    // solvers side by side) passes=N (their equal budget) sleep=0|1 halve_sag_mm=MM (the soft
-    // step's halving of the substeps, 0-20 mm; 0: off)
+    // solvers side by side) passes=N (their equal budget) sleep=0|1 halve_sag_percent=P and
+    // halve_sag_mm=MM (the soft step's halving of the substeps: budgets of 0-100% of a body's
+    // size, 2 by default, and 0-20 mm, 0 by default; each 0: none)
     const std::string scene = ctx.option("scene", "stack");
     const char* keys[] = {"stack", "pyramid", "falling", "restitution", "ramp"};
     scene_ = LabScene::Stack;
@@ -58,8 +59,11 @@ class RigidLab final : public Sample {
       if (scene == keys[i]) scene_ = static_cast<LabScene>(i), found = true;
     if (!found) throw Error("--option scene: expected stack, pyramid, falling, restitution or ramp, got '" + scene + "'");
     settings_.solver = RigidSolverOption(ctx);
-    // the soft step's halving of the substeps where the columns allow it, a sag budget in mm
-    // (ContactSettings::auto_substeps_sag; 0: off, the default)
+    // the soft step's halving of the substeps where the bodies allow it: its sag budgets, a
+    // percentage of each body's size (ContactSettings::auto_substeps_sag_fraction, 2 by
+    // default) and mm (auto_substeps_sag; 0, the default: none); both 0: never halved
+    settings_.auto_substeps_sag_fraction =
+        0.01 * OptionNumber(ctx, "halve_sag_percent", 100 * ContactSettings{}.auto_substeps_sag_fraction, 0, 100);
     settings_.auto_substeps_sag = 1e-3 * OptionNumber(ctx, "halve_sag_mm", 0, 0, 20);
     size_ = OptionInteger(ctx, "size", 10, 1, 40);
     compare_ = OptionFlag(ctx, "compare", false);

@@ -169,15 +169,26 @@ struct ContactSettings {
   /// their bits). RigidProfile::substeps tells the substeps a step took. Off (or
   /// set_substeps()), the soft step takes exactly `substeps` and `contact_hertz`.
   bool auto_substeps = true;
-  /// Soft step with `auto_substeps`: where the columns allow it, also HALVE the substeps and
-  /// `contact_hertz` (8 -> 4 and 120 -> 60 Hz at the defaults), a budget (m) on the static sag
-  /// that the halving may give, finite and >= 0; 0 (the default) never lowers. Halved once
-  /// the columns have carried, for a second, at most half the buckling bound that raises the
-  /// substeps, and a sag predicted from the contacts' carried loads (each contact gives
-  /// load / (m_eff w^2) at the halved rate, summed up the levels) of at most half the budget,
-  /// with the same contact pairs all that second (not while a pile lands); back at once when
-  /// either passes its whole bound. Only for an even `substeps`.
-  /// docs/rigid-bodies.md, "Fewer substeps for short columns".
+  /// Soft step with `auto_substeps`: where the bodies allow it, also HALVE the substeps and
+  /// `contact_hertz` (8 -> 4 and 120 -> 60 Hz at the defaults), a budget on the static sag
+  /// that the halving may give, as a fraction of each body's size (twice its smallest half
+  /// size), finite and in [0, 1]; 0: no such budget. Halved once, for a second, the columns
+  /// have carried at most half the buckling bound that raises the substeps, every awake
+  /// body's sag predicted from the contacts' carried loads (each contact gives load /
+  /// (m_eff w^2) at the halved rate, summed up the levels of a column) and each touching
+  /// contact's own deflection have stayed within half the budget of the body's size, the
+  /// contact pairs have stayed the same and every awake body has moved slower than
+  /// `sleep_linear` and `sleep_angular` (at rest: not while a pile lands or a column rocks);
+  /// back at once when the load or the sag passes its whole bound. Only for an even
+  /// `substeps`. The default 0.02 halves a column of one-metre cubes only where it sags at
+  /// most 1 cm at 4 substeps (up to 11 cubes: the 20-stack bound) and keeps balls of
+  /// 1-5 mm at 8 (their ground springs sink them 0.17 mm at 4). docs/rigid-bodies.md,
+  /// "Fewer substeps where the bodies allow it".
+  double auto_substeps_sag_fraction = 0.02;
+  /// Soft step with `auto_substeps`: a budget (m) on the static sag of the halving above, in
+  /// metres whatever the bodies' sizes, finite and >= 0; 0 (the default): none. With both
+  /// budgets the halving needs both; with neither (`auto_substeps_sag_fraction` 0 too) the
+  /// soft step never lowers the substeps.
   double auto_substeps_sag = 0;
   int iterations = 10;  ///< sequential impulses: velocity iterations per step, in [1, 1000]
   /// TGS: biased contact iterations per substep; XPBD: position iterations per substep; in
@@ -529,7 +540,7 @@ class RigidBodySystem {
   std::vector<Vec3> com0_;
   std::vector<Quat> q0_;
   // ContactSettings::auto_substeps: the factor on the substeps and contact_hertz now, as a
-  // power of two (-1 with auto_substeps_sag, 0, 1 or 2), and how long (s) the columns have
+  // power of two (-1 when halved by a sag budget, 0, 1 or 2), and how long (s) the columns have
   // fitted half of it
   int auto_shift_ = 0;
   double auto_calm_ = 0;

@@ -33,21 +33,29 @@
 // size (exact for cubes; a plate lying flat counts as a cube of its thickness, which asks for
 // more substeps than it needs, never fewer).
 //
-// Fewer substeps (ContactSettings::auto_substeps_sag > 0, off by default). The passes' cost
-// goes with the substeps, so where the columns are short the step may take half of them (and
-// half contact_hertz): when the columns' load fits the halved rate with the same room as the
-// lowering above (kColumnLoad / 2 at the half: one-metre cubes up to 15 high), and the static
-// sag the halving gives is at most half the budget. The sag is predicted from the loads the
-// contacts carried in the last step (their normal impulses per substep over the substep): a
-// face contact of effective mass m_eff = 1 / (1/ma + 1/mb) (the lower body's taken as
-// infinite when it does not move) on springs of w deflects by load / (m_eff w^2), and a
-// body sinks as a body without turning on its springs to the bodies under it would (their
-// stiffness-weighted mean of what each support sank plus its contact's deflection). For a column
-// of cubes that is n g / w_g^2 + n (n - 1) g / w^2 (w_g the ground's rate), exactly the
-// springs' sag; a pyramid's loads spread over the levels and the sum follows them, where the
-// column's n^2 g / w^2 would take its height for a column's. Back to the setting's substeps
-// at once when either passes its whole bound, with kCalmTime (and the same pairs all that
-// time: not while a pile lands) before halving again.
+// Fewer substeps (ContactSettings::auto_substeps_sag_fraction, 2% of a body's size by default,
+// and auto_substeps_sag in metres, none by default). The passes' cost goes with the substeps,
+// so where the columns are short the step may take half of them (and half contact_hertz):
+// when the columns' load fits the halved rate with the same room as the lowering above
+// (kColumnLoad / 2 at the half: one-metre cubes up to 15 high), and the static sag the halving
+// gives is at most half of each budget. The sag is predicted from the loads the contacts
+// carried in the last step (their normal impulses per substep over the substep): a face
+// contact of effective mass m_eff = 1 / (1/ma + 1/mb) (the lower body's taken as infinite when
+// it does not move) on springs of w deflects by load / (m_eff w^2), and a body sinks as a body
+// without turning on its springs to the bodies under it would (their stiffness-weighted mean
+// of what each support sank plus its contact's deflection). For a column of cubes that is
+// n g / w_g^2 + n (n - 1) g / w^2 (w_g the ground's rate), exactly the springs' sag; a
+// pyramid's loads spread over the levels and the sum follows them, where the column's
+// n^2 g / w^2 would take its height for a column's. The budget relative to size compares each
+// body's sag with its own size (twice its smallest half size), and each touching contact's own
+// deflection (any manifold: a ball's one point is no column) with the size of the smaller
+// moving body on it: the springs sink a body g / w^2 whatever its size (0.17 mm on the ground
+// at 4 substeps), a sixth of a 1 mm ball's radius but nothing to a one-metre cube. Back to the
+// setting's substeps at once when either passes its whole bound, with kCalmTime before halving
+// again in which the pairs stayed the same and every awake body moved slower than the sleep
+// tolerances (at rest: the sag predicted is a rest's, and springs a quarter as stiff store four
+// times the energy, which halving under a body moving on them feeds into its motion: a column
+// rocking on its edges, docs/rigid-bodies.md, "Why rest").
 #include <algorithm>
 #include <cmath>
 
@@ -106,7 +114,24 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
   };
   // the face pairs along `up`: the lower body's count of bodies on it, and the bodies on a
   // body that does not move (level 1)
+  double ratio = 0;
   for (const ContactPair& c : pairs) {
+    // (with `give`) every touching contact's own deflection under its load, over the size of
+    // the smaller moving body on it: a ball's one point on the ground is no column, yet its
+    // springs sink it g / w^2 (0.17 mm at 4 substeps, a sixth of a 1 mm ball's radius)
+    if (give && c.count > 0 && (moving(c.a) || moving(c.b))) {
+      double deepest = c.points[0].depth;
+      for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.points[p].depth);
+      if (deepest >= -slop_of(s, c.a, c.b)) {
+        const double inv_a = moving(c.a) ? s.inv_mass_[c.a] : 0, inv_b = moving(c.b) ? s.inv_mass_[c.b] : 0;
+        const bool fixed = inv_a == 0 || inv_b == 0;
+        const ColumnSpring k = spring_of(c, inv_a + inv_b, fixed ? w_static : w_dynamic);
+        double side = INFINITY;
+        if (moving(c.a)) side = 2 * s.min_extent_[c.a];
+        if (moving(c.b)) side = std::min(side, 2 * s.min_extent_[c.b]);
+        if (k.stiffness > 0 && side > 0) ratio = std::max(ratio, k.load / (k.stiffness * side));
+      }
+    }
     if (c.count < 3) continue;
     const double d = glm::dot(c.normal, up);
     if (std::abs(d) < kFaceCosine) continue;
@@ -154,6 +179,7 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     double sink = 0;
     if (give && column_sink[x].stiffness > 0) sink = column_sink[x].load / column_sink[x].stiffness;
     sag = std::max(sag, sink);
+    if (side > 0) ratio = std::max(ratio, sink / side);
     for (std::uint32_t e = column_start[x]; e < column_start[x + 1]; ++e) {
       const std::uint32_t y = column_edge[e];
       if (column_level[y] == 0) column_level[y] = l + 1, column_queue.push_back(y);
@@ -164,7 +190,7 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     }
   }
   tallest = static_cast<int>(top);
-  column_sag_top = sag;
+  column_sag_top = sag, column_sag_ratio = ratio;
   return need;
 }
 
@@ -185,14 +211,15 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   // contact's (twice that, at most one radian a substep)
   auto rate = [&](int shift) { return 2 * kPi * std::ldexp(std::min(settings_.contact_hertz, 0.25 * base / dt), shift); };
   auto static_rate = [&](int shift) { return std::min(2 * rate(shift), detail::kStaticStepAngle * std::ldexp(base / dt, shift)); };
-  // halving (auto_substeps_sag) needs whole substeps
-  const double budget = settings_.auto_substeps_sag;
-  const int least = budget > 0 && base % 2 == 0 ? -1 : 0;
+  // halving (a sag budget: relative to the bodies' sizes, auto_substeps_sag_fraction, and
+  // in metres, auto_substeps_sag) needs whole substeps
+  const double budget = settings_.auto_substeps_sag, fraction = settings_.auto_substeps_sag_fraction;
+  const int least = (budget > 0 || fraction > 0) && base % 2 == 0 ? -1 : 0;
   const double g = glm::length(gravity);
   // the same contact pairs as the last step
   const bool settled = c.pairs_same && c.pairs.size() == c.last_count;
   if (g == 0) {
-    c.column_need = 0, c.column_top = 0, c.column_sag_top = 0, c.column_known = false;
+    c.column_need = 0, c.column_top = 0, c.column_sag_top = 0, c.column_sag_ratio = 0, c.column_known = false;
   } else {
     // measured again when the pairs changed (a body came or went, woke or fell asleep), the
     // bodies or gravity's direction did, and otherwise every kMeasureEvery steps
@@ -206,10 +233,23 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   const double need = c.column_need;  // n^3 / s (1/m)
   profile_.column = c.column_top;
   // whether the columns fit 2^shift times the substeps with `margin` of the bounds: their load
-  // n^3 g / (w^2 s), and below the setting's substeps the sag predicted at half of them
+  // n^3 g / (w^2 s), and below the setting's substeps the sag predicted at half of them, within
+  // each budget that is set (a fraction of the bodies' sizes, metres)
   auto fits = [&](int shift, double margin) {
     const double w = rate(shift);
-    return need * g / (w * w) <= margin * kColumnLoad && (shift >= 0 || c.column_sag_top <= margin * budget);
+    if (need * g / (w * w) > margin * kColumnLoad) return false;
+    return shift >= 0 || ((budget <= 0 || c.column_sag_top <= margin * budget) &&
+                          (fraction <= 0 || c.column_sag_ratio <= margin * fraction));
+  };
+  // every awake dynamic body slower than the sleep tolerances this step: the sag is predicted
+  // for bodies at rest, and a body moving on its contacts (a column rocking on its edges, a
+  // pile's bodies settling) carries loads that are not its rest's
+  auto still = [&] {
+    const double v2 = settings_.sleep_linear * settings_.sleep_linear, w2 = settings_.sleep_angular * settings_.sleep_angular;
+    for (std::size_t i = 0; i < type_.size(); ++i)
+      if (type_[i] == BodyType::Dynamic && !asleep_[i] && (glm::dot(v_[i], v_[i]) >= v2 || glm::dot(w_[i], w_[i]) >= w2))
+        return false;
+    return true;
   };
   int most = 0;
   while (most < kMostShift && (base << (most + 1)) <= 64) ++most;
@@ -217,11 +257,13 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   while (shift < most && !fits(shift, 1)) ++shift;
   // raised at once; lowered a halving at a time, once the columns have fitted half the bounds
   // at half the factor (each 0.79 of the height that would raise it) for kCalmTime; below the
-  // setting's substeps also only once the pairs have stayed the same that long, so that a pile
-  // still landing (its contacts' loads not yet those of its rest) is not halved: the Jolt
-  // pyramid halved while its upper levels landed settled with its top 3.6 cm aside, against
-  // 1.0 cm at 8 substeps, and halved at rest its top stays where it was
-  if (shift >= auto_shift_ || !fits(auto_shift_ - 1, 0.5) || (auto_shift_ == 0 && !settled)) {
+  // setting's substeps also only once the pairs have stayed the same and every body has been
+  // still that long, so that neither a pile still landing (its contacts' loads not yet those of
+  // its rest) nor a body moving on its contacts is halved: the Jolt pyramid halved while its
+  // upper levels landed settled with its top 3.6 cm aside, against 1.0 cm at 8 substeps (and
+  // halved at rest its top stays where it was), and a column of five cubes halved while it
+  // rocked on its edges rocked on with the springs' 82 J more (docs/rigid-bodies.md, "Why rest")
+  if (shift >= auto_shift_ || !fits(auto_shift_ - 1, 0.5) || (auto_shift_ == 0 && (!settled || !still()))) {
     auto_shift_ = std::max(shift, auto_shift_);
     auto_calm_ = 0;
   } else if ((auto_calm_ += dt) >= kCalmTime) {

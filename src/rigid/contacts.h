@@ -426,10 +426,12 @@ struct RigidContacts {
   /// into column_level (0: on no such column); returns the largest level^3 / (2 x smallest half
   /// size) over the bodies (1/m; the load the column model asks of the contacts) and the tallest
   /// level in `tallest`. O(bodies + pairs); no allocation once the scratch has grown.
-  /// With `give` (ContactSettings::auto_substeps_sag), also the most static sag (m) of a body
-  /// on the contacts' carried loads at the angular rates w_dynamic, w_static (rad/s) into
-  /// column_sag_top: each face contact is a spring m_eff w^2 under its load, and a body sinks
-  /// as on its springs to the bodies under it (columns.cpp).
+  /// With `give` (the halving's budgets, ContactSettings::auto_substeps_sag_fraction and
+  /// auto_substeps_sag), also the most static sag (m) of a body on the contacts' carried loads
+  /// at the angular rates w_dynamic, w_static (rad/s) into column_sag_top: each face contact is
+  /// a spring m_eff w^2 under its load, and a body sinks as on its springs to the bodies under
+  /// it (columns.cpp); and into column_sag_ratio the most of that sag over the body's size and
+  /// of each touching contact's own deflection over its smaller moving body's size.
   double measure_columns(const RigidBodySystem& s, const Vec3& up, int& tallest, bool give = false,
                          double w_dynamic = 0, double w_static = 0);
   // its scratch: by body the level and the first of its edges (bodies resting on it) in
@@ -446,7 +448,10 @@ struct RigidContacts {
   // the last measure (RigidBodySystem::step_substeps): its result, the bodies and the up it
   // was made for, the steps since, and whether it stands (cleared when a body is destroyed)
   double column_need = 0;
-  double column_sag_top = 0;  // the sag it predicted (m; with auto_substeps_sag)
+  double column_sag_top = 0;  // the sag it predicted (m; with the halving's budgets)
+  // the most, over the awake bodies and the touching contacts, of that sag (a contact's own
+  // deflection) over the body's size, twice its smallest half size (the smaller body's)
+  double column_sag_ratio = 0;
   int column_top = 0;
   std::size_t column_bodies = 0;
   Vec3 column_up{0, 0, 0};

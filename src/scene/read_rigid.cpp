@@ -7,7 +7,7 @@
 namespace pba::scene_detail {
 
 void read_rigid_settings(const Node& n, RigidSystemDef& def) {
-  n.allow_only({"solver", "substeps", "auto_substeps", "auto_substeps_sag", "iterations", "substep_iterations", "relax_iterations", "manifold_iterations",
+  n.allow_only({"solver", "substeps", "auto_substeps", "auto_substeps_sag", "auto_substeps_sag_fraction", "iterations", "substep_iterations", "relax_iterations", "manifold_iterations",
                 "contact_hertz", "damping_ratio", "push_out_speed", "baumgarte", "contact_compliance", "linear_slop", "speculative_distance", "restitution_threshold",
                 "friction_mix", "restitution_mix", "warm_starting", "sleep", "sleep_linear", "sleep_angular",
                 "time_to_sleep", "capacity"});
@@ -22,8 +22,10 @@ void read_rigid_settings(const Node& n, RigidSystemDef& def) {
   // substeps given are taken exactly, unless auto_substeps asks for more for tall columns
   if (n.has("substeps")) c.substeps = static_cast<int>(n.at("substeps").integer(1, 64)), c.auto_substeps = false;
   c.auto_substeps = n.flag("auto_substeps", c.auto_substeps);
-  // the halving's sag budget (m): 0 never lowers the substeps
+  // the halving's sag budgets: a fraction of each body's size (in [0, 1]) and metres (0: none);
+  // with both 0 the substeps are never lowered
   c.auto_substeps_sag = n.non_negative("auto_substeps_sag", c.auto_substeps_sag);
+  c.auto_substeps_sag_fraction = n.in_range("auto_substeps_sag_fraction", 0, 1, c.auto_substeps_sag_fraction);
   if (n.has("iterations")) c.iterations = static_cast<int>(n.at("iterations").integer(1, 1000));
   if (n.has("substep_iterations"))
     c.substep_iterations = static_cast<int>(n.at("substep_iterations").integer(1, 100));

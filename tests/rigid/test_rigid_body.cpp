@@ -36,12 +36,13 @@ double rel(const Vec3& a, const Vec3& b) { return glm::length(a - b) / glm::leng
 // x_n = x0 + v0 n h + g h^2 n (n + 1) / 2; its distance from the exact parabola is
 // g h t / 2, first order in h. Every solver: the substepping ones at h = dt / substeps (XPBD's
 // velocity from the position change is exactly v when nothing corrects the position),
-// sequential impulses at h = dt.
+// sequential impulses at h = dt. The substeps are taken exactly (auto_substeps off: the soft
+// step would halve them a second in, nothing touching; the closed form is the scheme's at h).
 TEST(RigidFreeFall, MatchesTheDiscreteSolutionAndConvergesToTheParabola) {
   for (const auto solver : pba::kRigidSolvers)
   for (const double dt : {1.0 / 30, 1.0 / 60, 1.0 / 240}) {
     for (const int substeps : {1, 4}) {
-      RigidBodySystem s({.contacts = {.solver = solver, .substeps = substeps}});
+      RigidBodySystem s({.contacts = {.solver = solver, .substeps = substeps, .auto_substeps = false}});
       const Vec3 x0{0, 100, 0}, v0{2, 5, -1};
       auto b = s.create({.pose = {x0}, .linear_velocity = v0, .shapes = kBall, .mass = RigidMass::box(3, {0.5, 0.5, 0.5})});
       const int steps = static_cast<int>(std::lround(2.0 / dt));
@@ -75,10 +76,11 @@ TEST(RigidFreeFall, GravityScaleAndStaticBodies) {
   EXPECT_TRUE(std::isinf(s.mass(ground)));
 }
 
-// implicit damping: v_n = v0 / (1 + h c)^n, which tends to v0 exp(-c t) as h -> 0
+// implicit damping: v_n = v0 / (1 + h c)^n, which tends to v0 exp(-c t) as h -> 0 (the
+// substeps taken exactly, auto_substeps off: the discrete law is the scheme's at that h)
 TEST(RigidDamping, FollowsItsDiscreteLawAndTheExponential) {
   for (const int substeps : {1, 8, 64}) {
-    RigidBodySystem s({.contacts = {.substeps = substeps}});
+    RigidBodySystem s({.contacts = {.substeps = substeps, .auto_substeps = false}});
     auto b = s.create({.linear_velocity = {4, 0, 0}, .angular_velocity = {0, 0, 3},
                        .shapes = kBall, .mass = RigidMass::sphere(1, 0.5), .linear_damping = 2, .angular_damping = 0.5});
     for (int i = 0; i < 60; ++i) s.step(1.0 / 60, Vec3(0));
@@ -420,6 +422,12 @@ TEST(RigidBadInput, NamesTheFieldAndTheBody) {
   for (const double sag : {-0.01, double(NAN), double(INFINITY)}) {
     s.settings().auto_substeps_sag = sag;
     EXPECT_NE(error_of([&] { s.step(0.01, kG); }).find("settings.auto_substeps_sag"), std::string::npos) << sag;
+  }
+  s.settings().auto_substeps_sag = 0;
+  for (const double fraction : {-0.01, 1.5, double(NAN), double(INFINITY)}) {
+    s.settings().auto_substeps_sag_fraction = fraction;
+    EXPECT_NE(error_of([&] { s.step(0.01, kG); }).find("settings.auto_substeps_sag_fraction"), std::string::npos)
+        << fraction;
   }
 }
 

@@ -166,6 +166,8 @@ TEST(RigidScenes, BadFieldsAreNamedByPath) {
             "scenes/x.json: /settings/rigid/contact_compliance: must be >= 0, got -1e-09");
   EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"auto_substeps_sag": -0.01}}})"),
             "scenes/x.json: /settings/rigid/auto_substeps_sag: must be >= 0, got -0.01");
+  EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"auto_substeps_sag_fraction": 1.5}}})"),
+            "scenes/x.json: /settings/rigid/auto_substeps_sag_fraction: must be in [0, 1], got 1.5");
   EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"substeps": 0}}})"),
             "scenes/x.json: /settings/rigid/substeps: must be an integer in [1, 64], got 0");
   EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"type": "static", "linear_velocity": [1, 0, 0], "shapes": [{"type": "box"}]}]})"),
@@ -243,13 +245,14 @@ TEST(RigidScenes, TgsAndXpbdAreReadWithTheirSettings) {
       R"({"version": 1, "settings": {"rigid": {"substeps": 4, "auto_substeps": true}}})", "x.json");
   EXPECT_TRUE(a.world.rigid().settings().auto_substeps);
   EXPECT_EQ(a.world.rigid().settings().substeps, 4);
-  // the halving's sag budget: off unless given
-  EXPECT_EQ(pba::parse_scene(R"({"version": 1})", "x.json").world.rigid().settings().auto_substeps_sag, 0);
-  EXPECT_EQ(pba::parse_scene(R"({"version": 1, "settings": {"rigid": {"auto_substeps_sag": 0.01}}})", "x.json")
-                .world.rigid()
-                .settings()
-                .auto_substeps_sag,
-            0.01);
+  // the halving's sag budgets: 2% of each body's size unless given, none in metres unless given
+  auto settings_of = [](const char* json) { return pba::parse_scene(json, "x.json").world.rigid().settings(); };
+  EXPECT_EQ(settings_of(R"({"version": 1})").auto_substeps_sag_fraction, 0.02);
+  EXPECT_EQ(settings_of(R"({"version": 1, "settings": {"rigid": {"auto_substeps_sag_fraction": 0}}})")
+                .auto_substeps_sag_fraction,
+            0);
+  EXPECT_EQ(settings_of(R"({"version": 1})").auto_substeps_sag, 0);
+  EXPECT_EQ(settings_of(R"({"version": 1, "settings": {"rigid": {"auto_substeps_sag": 0.01}}})").auto_substeps_sag, 0.01);
   pba::Scene x = pba::parse_scene(
       R"({"version": 1, "settings": {"rigid": {"solver": "xpbd", "contact_compliance": 1e-7}}})", "x.json");
   EXPECT_EQ(x.world.rigid().settings().solver, pba::RigidSolverType::Xpbd);
