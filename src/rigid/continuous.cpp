@@ -7,11 +7,12 @@
 // the step to its pose at the end against every static shape its path's bounds reach, and
 // put back at the first time of impact with its velocity there (the step's end velocity less
 // what gravity and the applied force add over the part of the step not travelled): the next
-// step's contact stops it (Box2D v3's continuous pass puts bodies back the same way). Times of impact come from conservative
-// advancement (Mirtich 1996): at time t the shapes are d apart; no point of the moving shape
-// closes faster than the centre's velocity along the normal plus the angular speed times the
-// body's bounding radius times the sine of the angle between the rotation axis and the normal,
-// so t can safely advance by d over that bound. It stops when the shapes are within the
+// step's contact stops it (Box2D v3's continuous pass also puts bodies back at their time of
+// impact). Times of impact come from conservative advancement (Mirtich 1996): at time t the
+// shapes are d apart; no point of the moving shape closes faster than the centre's velocity
+// along the normal plus the angular speed times the body's bounding radius times the sine of
+// the angle between the rotation axis and the normal, so t can safely advance by d over that
+// bound. It stops when the shapes are within the
 // linear slop, so the body arrives touching, not overlapping.
 #include <algorithm>
 #include <cmath>
