@@ -46,11 +46,11 @@ void RigidSolverKnobs(ContactSettings& s, int in_use) {
       // each 0: none, both 0: never halved
       float percent = static_cast<float>(100 * s.auto_substeps_sag_fraction);
       ImGui::SetNextItemWidth(-110);
-      if (ImGui::SliderFloat("halve under sag %", &percent, 0, 10, percent > 0 ? "%.1f%% of size" : "off"))
+      if (ImGui::SliderFloat("halve: sag % size", &percent, 0, 10, percent > 0 ? "%.1f%% of size" : "off"))
         s.auto_substeps_sag_fraction = 0.01 * std::clamp(percent, 0.0f, 100.0f);
       float mm = static_cast<float>(1e3 * s.auto_substeps_sag);
       ImGui::SetNextItemWidth(-110);
-      if (ImGui::SliderFloat("halve under sag", &mm, 0, 20, mm > 0 ? "%.1f mm" : "off"))
+      if (ImGui::SliderFloat("halve: sag mm", &mm, 0, 20, mm > 0 ? "%.1f mm" : "off"))
         s.auto_substeps_sag = 1e-3 * std::max(0.0f, mm);
     }
   }
