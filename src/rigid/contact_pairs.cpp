@@ -584,11 +584,15 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
         // the bodies' rotation matrices, which emit turns the points by (the pair's first
         // load of them, 30% of emit's samples in the rain's landing), and the line of the
         // shapes' definitions that holds the materials collide_pair mixes (update() sized
-        // `rotations` for every body)
+        // `rotations` for every body), the latter only for a pair made anew: a carried-over
+        // manifold holds its mixed material, and emit() reads the shapes only when the mix
+        // rules changed
         const std::uint32_t a = s.slot_[pair_ahead.slot_a], b = s.slot_[pair_ahead.slot_b];
         prefetch_lines<sizeof(Mat3)>(&rotations[a]), prefetch_lines<sizeof(Mat3)>(&rotations[b]);
-        __builtin_prefetch(&s.shapes_[a][pair_ahead.shape_a].material);
-        __builtin_prefetch(&s.shapes_[b][pair_ahead.shape_b].material);
+        if (!plans[k + kPairsAhead - first].same) {
+          __builtin_prefetch(&s.shapes_[a][pair_ahead.shape_a].material);
+          __builtin_prefetch(&s.shapes_[b][pair_ahead.shape_b].material);
+        }
       }
       ShapePair p = shape_pairs[k];
       if (p.cache != kNoIndex) out_of_order += p.cache != previous_cache + 1, previous_cache = p.cache, ++cached;
