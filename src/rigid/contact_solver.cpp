@@ -745,11 +745,12 @@ void RigidContacts::build(RigidBodySystem& s) {
   roll_start.resize(colors + 1);
   // the lanes that roll: what their rolling resistance reads, copied in lane order
   // (a one-point lane's rolling resistance is its block's: OnePointBlock)
+  // (the lanes that roll as fill_block found them: filled_rolls)
   auto collect_rolls = [&](const ContactBlock& k, std::size_t b) {
-    for (int l = 0; l < k.lanes; ++l) {
+    for (std::uint32_t left = filled_rolls; left != 0; left &= left - 1) {
+      const int l = std::countr_zero(left);
       const std::uint32_t i = k.pair[l];
       const ContactPair& p = pairs[i];
-      if (p.rolling == 0) continue;
       rolls.push_back({.mass = rolling_mass[i], .ia = inv_inertia[p.a], .ib = inv_inertia[p.b],
                        .impulse = p.rolling_impulse, .rolling = p.rolling,
                        .key = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)), .pair = i, .a = p.a,
@@ -794,6 +795,7 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
   auto* rows_of_input = reinterpret_cast<double(*)[kLanes]>(&in);
   int count[kLanes] = {};
   if constexpr (kOne) k.rolls = 0;
+  [[maybe_unused]] std::uint32_t rolling_lanes = 0;  // (filled_rolls)
   for (int l = 0; l < used; ++l) {
     if (l >= k.lanes) {  // past the block's manifolds: zeros, unit 1 (clear_lane's values)
       for (std::size_t r = 0; r < kInputRows; ++r) rows_of_input[r][l] = 0;
@@ -812,7 +814,9 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
         __builtin_prefetch(line < kBlockLines ? next_block + 64 * line : next_anchors + 64 * (line - kBlockLines), 1);
     }
     const ContactPair& c = pairs[index];
-    if constexpr (!kOne) set_rolling_mass(index);  // (a one-point lane's is fill_lanes')
+    // (a one-point lane's rolling mass is fill_lanes'; the test here, not a call per lane)
+    if constexpr (!kOne)
+      if (c.rolling > 0) set_rolling_mass(index);
     const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
     k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
     if (da) k.write_a |= 1u << l;
@@ -846,12 +850,16 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
     in.twist_impulse[l] = c.twist_impulse;
     in.rolling[l] = c.rolling;
     for (int i = 0; i < 3; ++i) in.rolling_impulse[i][l] = c.rolling_impulse[i];
-    if constexpr (kOne)
+    if constexpr (kOne) {
       if (c.rolling > 0) k.rolls |= 1u << l;
+    } else if (c.rolling != 0) {
+      rolling_lanes |= 1u << l;  // (the test collect_rolls made of the pair)
+    }
     lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)) | (kOne ? kOneLane : 0u);
     if (c.restitution != 0)
       restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), c.restitution, kOne});
   }
+  if constexpr (!kOne) filled_rolls = rolling_lanes;
   if (simd == SimdPath::Avx512)
     fill_avx512(in, k, g, k.lanes);
   else if (simd == SimdPath::Avx2)
