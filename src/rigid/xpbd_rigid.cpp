@@ -324,14 +324,14 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       // points' rows again, which hold its moment about the centre; their impulses there are
       // a couple and do not raise the limit (counted, with friction and rows swept together, a
       // box sliding down a 60 degree slope at mu = 1, whose trailing corners had no multiplier
-      // to give back, slid 1.6% slow). With
-      // mu lambda / h applied once after the points, a landing met by a speculative contact
-      // (which leaves only the overlap at the substep's end to the position solve, so lambda /
-      // h was a fraction of the landing's impulse) got a fraction of its friction, and the
-      // friction's moment, unheld, tipped a box onto its leading edge and threw it up: a 1 m
-      // box landing flat at 5.8 m/s while moving at 6 m/s hopped at 1.5 m/s and slid 2.73 m
-      // after the touch, where Coulomb's law at the landing leaves 6 - mu 5.8 m/s and 0.99 m
-      // (now 0.98 m, the soft step's; RigidFriction.ABoxLandingFlatWhileSlidingStopsWhereCoulombSays).
+      // to give back, slid 1.6% slow). With mu lambda / h applied once after the points, a
+      // landing met by a speculative contact (which leaves only the overlap at the substep's
+      // end to the position solve, so lambda / h was a fraction of the landing's impulse) got
+      // a fraction of its friction, and the friction's moment, unheld, tipped a box onto its
+      // leading edge and threw it up: a 1 m box landing flat at 5.8 m/s while moving at 6 m/s
+      // hopped at 1.5 m/s and slid 2.73 m after the touch, where Coulomb's law at the landing
+      // leaves 6 - mu 5.8 m/s and 0.99 m (now 0.98 m, the soft step's;
+      // RigidFriction.ABoxLandingFlatWhileSlidingStopsWhereCoulombSays).
       Vec3 ca(0), cb(0);
       for (int j = 0; j < c.count; ++j) {
         Vec3 ra, rb;
