@@ -327,9 +327,18 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
     // the contact solver's blocks hold inverse masses and inertias, and effective masses, as
     // floats (src/rigid/solver.h): outside these ranges the first contact is NaN
     const std::string mw = def.mass ? field_path(w, "mass") : field_path(w, "mass (from the shapes)");
-    require_float_inverse(m.mass, field_path(mw, "mass"));
-    for (int a = 0; a < 3; ++a)
-      require_float_inverse(moments[a], field_path(mw, "principal moment " + std::to_string(a) + " (kg m^2)"));
+    try {
+      require_float_inverse(m.mass, field_path(mw, "mass"));
+      for (int a = 0; a < 3; ++a)
+        require_float_inverse(moments[a], field_path(mw, "principal moment " + std::to_string(a) + " (kg m^2)"));
+    } catch (const Error& e) {
+      if (def.mass) throw;
+      // from the shapes, the number alone does not say what to change (a 1e-9 m ball's
+      // moment, 7e-43 kg m^2, named no size): say it is the shapes' size or density
+      throw Error(std::string(e.what()) +
+                  ": the shapes' sizes and densities make the body too small or light, or too large or heavy, "
+                  "for the contact solver's float rows (scale the shapes or the density, or give the mass and inertia)");
+    }
     inv = 1.0 / moments;
     inv_mass = 1.0 / m.mass;
     com_local = m.center;

@@ -454,6 +454,11 @@ TEST(RigidBadInput, MassesAndMomentsOutsideTheFloatRangeAreRefusedByName) {
   EXPECT_EQ(msg({.shapes = {{.shape = pba::ColliderShape::box({1e-6, 1e-6, 1e-6})}}}), "");
   const std::string f = msg({.name = "speck", .shapes = {{.shape = pba::ColliderShape::box({1e-30, 1e-30, 1e-30})}}});
   EXPECT_NE(f.find("'speck'.mass (from the shapes).mass: must be in [2.9"), std::string::npos) << f;
+  EXPECT_NE(f.find("the shapes' sizes and densities make the body too small or light"), std::string::npos) << f;
+  // a 1 nm ball of water: its mass is a normal float's inverse, its moment (4e-42) is not
+  const std::string g = msg({.name = "mote", .shapes = {{.shape = pba::ColliderShape::sphere(1e-9)}}});
+  EXPECT_NE(g.find("'mote'.mass (from the shapes).principal moment 0 (kg m^2): must be in [2.9"), std::string::npos) << g;
+  EXPECT_NE(g.find("scale the shapes or the density, or give the mass and inertia"), std::string::npos) << g;
   EXPECT_EQ(msg(given(8e37)), "");
   EXPECT_EQ(msg(given(3e-39 * 6)), "");
 }
