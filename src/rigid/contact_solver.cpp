@@ -745,9 +745,9 @@ void RigidContacts::build(RigidBodySystem& s) {
   roll_start.resize(colors + 1);
   // the lanes that roll: what their rolling resistance reads, copied in lane order
   // (a one-point lane's rolling resistance is its block's: OnePointBlock)
-  // (the lanes that roll as fill_block found them: filled_rolls)
-  auto collect_rolls = [&](const ContactBlock& k, std::size_t b) {
-    for (std::uint32_t left = filled_rolls; left != 0; left &= left - 1) {
+  // (the lanes that roll as fill_block found them: its result)
+  auto collect_rolls = [&](const ContactBlock& k, std::size_t b, std::uint32_t rolling_lanes) {
+    for (std::uint32_t left = rolling_lanes; left != 0; left &= left - 1) {
       const int l = std::countr_zero(left);
       const std::uint32_t i = k.pair[l];
       const ContactPair& p = pairs[i];
@@ -761,8 +761,7 @@ void RigidContacts::build(RigidBodySystem& s) {
   auto fill_blocks = [&](std::size_t c) {
     for (std::size_t b = color_block[c]; b < color_block[c + 1]; ++b) {
       const std::size_t first = offset[c] + (b - color_block[c]) * kLanes;  // the block's first slot of by_color
-      fill_block(s, blocks.data(), anchors.data(), block_count, b, first);
-      collect_rolls(blocks[b], b);
+      collect_rolls(blocks[b], b, fill_block(s, blocks.data(), anchors.data(), block_count, b, first));
     }
   };
   for (std::size_t c = 0; c < colors; ++c) {
@@ -782,7 +781,7 @@ void RigidContacts::build(RigidBodySystem& s) {
 // lane (FillInput), the frames, masses and anchors a lane type at a time (fill_lanes), then
 // each lane's normal velocities before the solve.
 template <class B>
-void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::kPoints>* anchor_array,
+std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::kPoints>* anchor_array,
                                std::size_t count_in_use, std::size_t b, std::size_t first) {
   constexpr int P = B::kPoints;
   constexpr bool kOne = P == 1;
@@ -794,8 +793,7 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
   FillInput in;
   auto* rows_of_input = reinterpret_cast<double(*)[kLanes]>(&in);
   int count[kLanes] = {};
-  if constexpr (kOne) k.rolls = 0;
-  [[maybe_unused]] std::uint32_t rolling_lanes = 0;  // (filled_rolls)
+  std::uint32_t rolling_lanes = 0;  // (bit l: lane l's pair rolls; the result)
   for (int l = 0; l < used; ++l) {
     if (l >= k.lanes) {  // past the block's manifolds: zeros, unit 1 (clear_lane's values)
       for (std::size_t r = 0; r < kInputRows; ++r) rows_of_input[r][l] = 0;
@@ -850,16 +848,12 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
     in.twist_impulse[l] = c.twist_impulse;
     in.rolling[l] = c.rolling;
     for (int i = 0; i < 3; ++i) in.rolling_impulse[i][l] = c.rolling_impulse[i];
-    if constexpr (kOne) {
-      if (c.rolling > 0) k.rolls |= 1u << l;
-    } else if (c.rolling != 0) {
-      rolling_lanes |= 1u << l;  // (the test collect_rolls made of the pair)
-    }
+    if (c.rolling > 0) rolling_lanes |= 1u << l;
     lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)) | (kOne ? kOneLane : 0u);
     if (c.restitution != 0)
       restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), c.restitution, kOne});
   }
-  if constexpr (!kOne) filled_rolls = rolling_lanes;
+  if constexpr (kOne) k.rolls = rolling_lanes;
   if (simd == SimdPath::Avx512)
     fill_avx512(in, k, g, k.lanes);
   else if (simd == SimdPath::Avx2)
@@ -869,6 +863,7 @@ void RigidContacts::fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::
   for (int l = k.lanes; l < used; ++l) clear_lane(k, g, l, spare);
   // the normal velocities before the solve (a lane type at a time)
   approaches(simd, k, count, arrays(s));
+  return rolling_lanes;
 }
 
 // rolling resistance acts on the relative angular velocity: its mass, for a pair that rolls

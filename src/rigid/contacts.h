@@ -479,10 +479,6 @@ struct RigidContacts {
   };
   std::vector<Rolling> rolls;      // the ContactBlocks' lanes that roll, by key (the coloured ones first; one-point lanes roll in their blocks)
   std::size_t colored_rolls = 0;   // of them, in coloured blocks
-  // the lanes of the ContactBlock fill_block() filled last whose pairs roll (bit l: lane l),
-  // so that build() lists them in `rolls` without reading the pairs again (by then their
-  // lines have left L1: 0.6 L1 read misses a manifold in a pyramid where none rolls)
-  std::uint32_t filled_rolls = 0;
   std::vector<Mat3> rolling_mass;  // by pair, for those that roll: set_rolling_mass (kg m^2)
   // by pair: its lane of the blocks (block * kLanes + lane; plus kOneLane for a lane of
   // `ones`), while lanes_valid: the blocks keep
@@ -528,8 +524,11 @@ struct RigidContacts {
   /// The pairs by_color[first, first + lanes) into block b's lanes, in their contact frames
   /// (the arithmetic on 8 or 4 lanes at once on the SIMD paths; the same bits on every path).
   /// B: ContactBlock (of `blocks`, `count` of them in use) or OnePointBlock (of `ones`).
+  /// Returns the lanes whose pairs roll (bit l: lane l), so that build() lists them in `rolls`
+  /// without reading the pairs again (by then their lines have left L1: 0.6 L1 read misses a
+  /// manifold in a pyramid where none rolls).
   template <class B>
-  void fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::kPoints>* anchor_array, std::size_t count,
+  std::uint32_t fill_block(RigidBodySystem& s, B* block_array, AnchorsOf<B::kPoints>* anchor_array, std::size_t count,
                   std::size_t b, std::size_t first);
   /// The inverse of rolling pair `index`'s relative angular inverse inertia (kg m^2) from
   /// inv_inertia, into rolling_mass[index] (prepare for XPBD, fill_block for the other solvers);
