@@ -1,10 +1,13 @@
 // Image statistics for the self-test: uniformity, background, colours, smoothness.
 #include "image_check.h"
 
+#include "pba/core.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 #include <unordered_set>
 
 namespace pba::app {
@@ -20,7 +23,12 @@ ImageStats MeasureImage(const std::vector<std::uint8_t>& rgb, int width, int hei
   long long bg = 0, smooth = 0;
   std::unordered_set<int> colors;
   const double tol2 = color_tolerance * color_tolerance;
-  if (counted && counted->size() != static_cast<std::size_t>(n)) counted = nullptr;
+  // a mask of another size is the caller's bug (a frame and a mask of different windows):
+  // counting every pixel instead would pass a colour seen only on a panel
+  if (counted && counted->size() != static_cast<std::size_t>(n))
+    throw Error("MeasureImage: the counted-pixel mask has " + std::to_string(counted->size()) + " entries, the image " +
+                std::to_string(width) + " x " + std::to_string(height) + " = " +
+                std::to_string(static_cast<long long>(n)) + " pixels");
   for (int y = 0; y < height; ++y) {
     const Color b = background(y);
     for (int x = 0; x < width; ++x) {

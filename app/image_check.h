@@ -32,8 +32,9 @@ struct ImageRules {
 /// Measures `rgb` (width x height, top row first). `background(y)` gives the background
 /// colour expected at row y; `expected` colours are counted in color_hits, over the pixels
 /// whose entry in `counted` (width x height, top row first) is nonzero, or over every pixel
-/// when it is null or of another size (the self-test passes the 3D viewport's pixels: a
-/// sample's colour on a panel's plot line is not its body in the scene).
+/// when it is null (the self-test passes the 3D viewport's pixels: a sample's colour on a
+/// panel's plot line is not its body in the scene). Throws pba::Error, naming both sizes,
+/// when `counted` is not width x height.
 ImageStats MeasureImage(const std::vector<std::uint8_t>& rgb, int width, int height,
                         const std::function<Color(int row)>& background, const std::vector<Color>& expected,
                         double color_tolerance, const std::vector<std::uint8_t>* counted = nullptr);

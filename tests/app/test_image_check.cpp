@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "image_check.h"
+#include "pba/core.h"
 
 namespace {
 
@@ -41,6 +43,16 @@ TEST(AppImageCheck, ExpectedColoursCountOnlyWhereMarked) {
   const pba::app::ImageStats some = pba::app::MeasureImage(rgb, w, h, grey, red, 28.0, &left);
   EXPECT_EQ(all.background_fraction, some.background_fraction);
   EXPECT_EQ(all.distinct_colors, some.distinct_colors);
+  // a mask of another size (a frame and a mask of different windows) is refused by its sizes,
+  // not taken for "count everything"
+  const std::vector<std::uint8_t> short_mask(static_cast<std::size_t>(w) * h - 1, 1);
+  try {
+    pba::app::MeasureImage(rgb, w, h, grey, red, 28.0, &short_mask);
+    ADD_FAILURE() << "a 799-entry mask for a 40 x 20 image was taken";
+  } catch (const pba::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("799 entries"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("40 x 20 = 800"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
