@@ -312,6 +312,10 @@ struct RigidProfile {
   /// manifolds the velocity solver took in blocks of one-point manifolds (a sphere's, a
   /// capsule's tip; the soft step and sequential impulses; 0 under TGS and XPBD)
   std::size_t one_point = 0;
+  /// manifolds whose solver lanes kept last step's bodies, write masks, inverse masses,
+  /// impulse unit and slop (the colours and the blocks' layout stood: a pile at rest; the
+  /// soft step, sequential impulses and TGS; 0 when the layout was made anew)
+  std::size_t lanes_kept = 0;
   /// substeps the step took (the soft step: `substeps`, or more for a tall column under
   /// ContactSettings::auto_substeps; TGS and XPBD: `substeps`; sequential impulses: 1)
   int substeps = 0;
@@ -430,6 +434,10 @@ class RigidBodySystem {
   void set_simd(RigidSimd path);
   /// The SIMD path in use (never Best).
   RigidSimd simd() const;
+  /// Whether a step whose contact colours and block layout are last step's keeps the solver
+  /// lanes' bodies, inverse masses and slop instead of gathering them again (on by default;
+  /// for tests and benchmarks: results do not depend on it, RigidProfile::lanes_kept counts them).
+  void set_lane_reuse(bool on);
   /// Advances every body from t to t + dt (s; finite and > 0) under `gravity` (m/s^2). A
   /// gravity other than the last step's wakes the sleeping bodies (gravity_scale != 0).
   /// Throws Error if a body's state becomes non-finite, naming the body and the step's end

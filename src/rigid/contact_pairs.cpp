@@ -966,18 +966,26 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   // or saved in the cached manifold
   const ContactPair& from = own.last == kNoIndex ? c : pairs[own.last];
   const bool held = own.last != kNoIndex;
-  // the entry is the manifold's own of last step (a pile at rest): its impulses stay where they are
-  const bool in_place = held && own.last == at_index;
+  // the entry is the manifold's own of last step (a pile at rest): its impulses stay where they
+  // are, and so does its key (its shape pair's, the triangle and the record: the entry was
+  // written for this manifold, and a record freed and reused starts with no entry)
+  const bool in_place = held && own.last == at_index && c.record == record;
+  const bool warm = cs.warm_starting;
   double impulse[Manifold::kMaxPoints];
-  // (all four, the unused ones too: a loop of the points' count was a call of memcpy)
-  for (int k = 0; k < Manifold::kMaxPoints; ++k) impulse[k] = held ? from.normal_impulse[k] : r.normal_impulse[k];
+  // (all four, the unused ones too: a loop of the points' count was a call of memcpy; none in
+  // place and warm, where the entry keeps them)
+  if (!(warm && in_place))
+    for (int k = 0; k < Manifold::kMaxPoints; ++k) impulse[k] = held ? from.normal_impulse[k] : r.normal_impulse[k];
   const Vec3 friction = held ? from.friction_impulse() : r.friction;
   const double twist = held ? from.twist_impulse : r.twist;
   const Vec3 rolling = held ? from.rolling_impulse : r.rolling;
   if (held && own.last != at_index) pairs[own.last].record = kNoIndex;
   own.last = static_cast<std::uint32_t>(at_index);
-  c.slot_a = p.slot_a, c.slot_b = p.slot_b, c.shape_a = p.shape_a, c.shape_b = p.shape_b, c.sub = r.sub;
-  c.a = a, c.b = b, c.record = record;
+  if (!in_place) {
+    c.slot_a = p.slot_a, c.slot_b = p.slot_b, c.shape_a = p.shape_a, c.shape_b = p.shape_b, c.sub = r.sub;
+    c.record = record;
+  }
+  c.a = a, c.b = b;
   const Mat3& qa = rotation(s, a);
   const Mat3& qb = rotation(s, b);
   const Vec3& com_a = s.com_[a];
@@ -999,7 +1007,6 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   c.count = r.count;
   if (pair_points.size() <= at_index) pair_points.resize(pairs.capacity());  // (grows with the pairs)
   pair_points[at_index] = static_cast<std::uint8_t>(r.count);
-  const bool warm = cs.warm_starting;
   const double radius_a = r.radius_a, radius_b = r.radius_b;
   // the springs' shifted rest (the soft step's; the other solvers drop it)
   if (r.preload != 0 && cs.solver != RigidSolverType::SoftStep) own.preload = 0;

@@ -455,7 +455,7 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   refresh_list.reserve(n);  // (so that a first refresh later does not allocate)
   world_inv_inertias(s, nullptr, n);
   built = has_colors = lanes_valid = false;
-  s.profile_.one_point = 0;  // (build() counts them)
+  s.profile_.one_point = s.profile_.lanes_kept = 0;  // (build() counts them)
   backward = !backward;
   pairs_same = pairs_same && pairs.size() == last_count;
   // (room for as many pairs as `pairs` has, so steady state does not allocate)
@@ -464,6 +464,7 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   bounces.reserve(n), shared.reserve(n);
   if (s.settings_.solver == RigidSolverType::Xpbd) {  // its own passes on the pairs
     colored_once = false;  // (the colours stay those of an earlier step's pairs)
+    lanes_filled = false;  // (and the blocks those of an earlier step's layout)
     for (std::uint32_t i = 0; i < pairs.size(); ++i) set_rolling_mass(i);
     return;
   }
@@ -564,6 +565,7 @@ void RigidContacts::color(RigidBodySystem& s) {
       color_moving[i] = x;
     }
     color_tgs = tgs;
+    colors_kept = same;
     if (same) return;
     colored_once = true;
   }
@@ -676,13 +678,20 @@ void RigidContacts::build(RigidBodySystem& s) {
   // its colours made the passes' samples 2-3% more, not fewer)
   const std::size_t colors = color_count.size();
   ones_of_color.assign(colors, 0);
+  // (whether the layout stands: see lanes_kept)
+  bool kept = reuse_lanes && lanes_filled && colors_kept && one_of.size() == pairs.size() &&
+              kept_slop == s.settings_.linear_slop && kept_thinnest == thinnest;
   one_of.resize(pairs.size());
   const bool counted = pair_points.size() >= pairs.size();  // (emit() wrote every pair's)
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const bool one = color_of[i] != kOverflow && (counted ? pair_points[i] : pairs[i].count) == 1;
+    kept = kept && one_of[i] == one;
     one_of[i] = one;
     if (one) ++ones_of_color[color_of[i]];
   }
+  lanes_kept = kept;
+  lanes_filled = false;  // (until the blocks are filled below)
+  kept_slop = s.settings_.linear_slop, kept_thinnest = thinnest;
   for (std::size_t c = 0; c < colors; ++c) ones_of_color[c] -= ones_of_color[c] % kLanes;
   color_block.resize(colors + 2);
   color_ones.resize(colors + 1);
@@ -698,12 +707,13 @@ void RigidContacts::build(RigidBodySystem& s) {
   color_block[colors + 1] = next;
   // (grown by half again when a new peak needs more, so a scene that moves does not allocate every step)
   if (blocks.size() < next) {
-    blocks.reserve(next + next / 2), anchors.reserve(next + next / 2);
-    blocks.resize(next), anchors.resize(next);
+    blocks.reserve(next + next / 2), anchors.reserve(next + next / 2), block_masses.reserve(next + next / 2);
+    blocks.resize(next), anchors.resize(next), block_masses.resize(next);
   }
   if (ones.size() < next_one) {
     ones.reserve(next_one + next_one / 2), one_anchors.reserve(next_one + next_one / 2);
-    ones.resize(next_one), one_anchors.resize(next_one);
+    one_masses.reserve(next_one + next_one / 2);
+    ones.resize(next_one), one_anchors.resize(next_one), one_masses.resize(next_one);
   }
   block_count = next;
   one_blocks = next_one;
@@ -714,7 +724,7 @@ void RigidContacts::build(RigidBodySystem& s) {
       auto& k = array[b];
       k.lanes = static_cast<int>(std::min<std::uint32_t>(left, kLanes));
       left -= static_cast<std::uint32_t>(k.lanes);
-      k.write_a = k.write_b = 0;
+      if (!kept) k.write_a = k.write_b = 0;  // (kept: last step's, which fill_block leaves)
       for (int l = k.lanes; l < kLanes; ++l) clear_lane(k, anchor_array[b], l, spare);
     }
   };
@@ -734,7 +744,8 @@ void RigidContacts::build(RigidBodySystem& s) {
   by_color.resize(pairs.size());
   lane_of.reserve(pairs.capacity());
   lane_of.resize(pairs.size());
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
+  // (kept: by_color is last step's, made from the same colours and kinds of block)
+  for (std::size_t i = 0; i < (kept ? 0 : pairs.size()); ++i) {
     const std::size_t c = color_of[i] == kOverflow ? colors : color_of[i];
     // (one_cursor[c] reaches offset[c + 1] when the colour's whole one-point blocks are full)
     if (one_of[i] && one_cursor[c] < offset[c + 1]) by_color[one_cursor[c]++] = static_cast<std::uint32_t>(i);
@@ -775,6 +786,8 @@ void RigidContacts::build(RigidBodySystem& s) {
   colored_rolls = rolls.size();
   roll_start[colors] = colored_rolls;
   fill_blocks(colors);
+  lanes_filled = true;
+  if (kept) s.profile_.lanes_kept = pairs.size();
 }
 
 // Block b's manifolds (by_color from `first`) into its lanes: what they need gathered lane by
@@ -794,6 +807,15 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   auto* rows_of_input = reinterpret_cast<double(*)[kLanes]>(&in);
   int count[kLanes] = {};
   std::uint32_t rolling_lanes = 0;  // (bit l: lane l's pair rolls; the result)
+  // the lanes' bodies, write masks, inverse masses, units and slop: last step's while the
+  // layout stands (lanes_kept), else gathered below and kept for the next step
+  const bool kept = lanes_kept;
+  LaneMasses& masses = (kOne ? one_masses : block_masses)[b];
+  if (kept) {
+    std::memcpy(in.ma, masses.ma, sizeof in.ma);
+    std::memcpy(in.mb, masses.mb, sizeof in.mb);
+    std::memcpy(in.unit, masses.unit, sizeof in.unit);
+  }
   for (int l = 0; l < used; ++l) {
     if (l >= k.lanes) {  // past the block's manifolds: zeros, unit 1 (clear_lane's values)
       for (std::size_t r = 0; r < kInputRows; ++r) rows_of_input[r][l] = 0;
@@ -815,14 +837,17 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
     // (a one-point lane's rolling mass is fill_lanes'; the test here, not a call per lane)
     if constexpr (!kOne)
       if (c.rolling > 0) set_rolling_mass(index);
-    const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
-    k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
-    if (da) k.write_a |= 1u << l;
-    if (db) k.write_b |= 1u << l;
-    const double ma = s.asleep_[c.a] ? 0 : s.inv_mass_[c.a], mb = s.asleep_[c.b] ? 0 : s.inv_mass_[c.b];
-    in.ma[l] = ma, in.mb[l] = mb, in.unit[l] = impulse_unit(ma + mb);  // the lane's impulse unit (fill_lanes)
-    // the overlap the rigid passes leave alone: the settings' slop, less for a small body
-    k.slop[l] = static_cast<Real>(slop_of(s, c.a, c.b));
+    if (!kept) {
+      const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
+      k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
+      if (da) k.write_a |= 1u << l;
+      if (db) k.write_b |= 1u << l;
+      const double ma = s.asleep_[c.a] ? 0 : s.inv_mass_[c.a], mb = s.asleep_[c.b] ? 0 : s.inv_mass_[c.b];
+      in.ma[l] = ma, in.mb[l] = mb, in.unit[l] = impulse_unit(ma + mb);  // the lane's impulse unit (fill_lanes)
+      // the overlap the rigid passes leave alone: the settings' slop, less for a small body
+      k.slop[l] = static_cast<Real>(slop_of(s, c.a, c.b));
+      lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)) | (kOne ? kOneLane : 0u);
+    }
     const Vec3 t[3] = {c.t1, c.t2, c.normal};
     const Mat3& ia = inv_inertia[c.a];
     const Mat3& ib = inv_inertia[c.b];
@@ -849,11 +874,15 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
     in.rolling[l] = c.rolling;
     for (int i = 0; i < 3; ++i) in.rolling_impulse[i][l] = c.rolling_impulse[i];
     if (c.rolling > 0) rolling_lanes |= 1u << l;
-    lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)) | (kOne ? kOneLane : 0u);
     if (c.restitution != 0)
       restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), c.restitution, kOne});
   }
   if constexpr (kOne) k.rolls = rolling_lanes;
+  if (!kept) {
+    std::memcpy(masses.ma, in.ma, sizeof in.ma);
+    std::memcpy(masses.mb, in.mb, sizeof in.mb);
+    std::memcpy(masses.unit, in.unit, sizeof in.unit);
+  }
   if (simd == SimdPath::Avx512)
     fill_avx512(in, k, g, k.lanes);
   else if (simd == SimdPath::Avx2)

@@ -399,7 +399,26 @@ struct RigidContacts {
   std::size_t one_blocks = 0;                // one-point blocks in use
   std::vector<std::size_t> color_ones;
   std::vector<std::uint32_t> ones_of_color;  // scratch of build(): each colour's one-point manifolds
-  std::vector<std::uint8_t> one_of;          // scratch of build(): by pair, 1 when it goes to a one-point block
+  std::vector<std::uint8_t> one_of;          // by pair, 1 when it went to a one-point block (build())
+  /// A block's lanes' inverse masses and impulse units as fill_block gathered them (doubles:
+  /// the block keeps them times the unit, in floats), kept for the next step's fill while the
+  /// layout stands (lanes_kept).
+  struct LaneMasses {
+    double ma[kLanes], mb[kLanes];  // the bodies' inverse masses (1/kg; 0 for one that does not move)
+    double unit[kLanes];            // the lane's impulse unit
+  };
+  std::vector<LaneMasses> block_masses, one_masses;  // by block of `blocks`, of `ones`
+  // The blocks' layout stands when the colours stood (colors_kept: color() kept last step's)
+  // and every pair goes to the same kind of block as last step (one_of): then by_color,
+  // lane_of and each lane's pair are last step's, and so are its bodies, write masks, inverse
+  // masses and impulse unit (a body's type and mass do not change while it lives; whether it
+  // moves is part of the colours' key), and its slop while the setting and `thinnest` are
+  // those it was found with (kept_slop, kept_thinnest). build() then leaves them in the lanes
+  // (lanes_kept) and fill_block gathers only what the poses change. reuse_lanes: the switch
+  // (RigidBodySystem::set_lane_reuse); lanes_filled: the blocks hold a layout (cleared by
+  // prepare() until build() has filled them).
+  bool colors_kept = false, lanes_kept = false, lanes_filled = false, reuse_lanes = true;
+  double kept_slop = -1, kept_thinnest = -1;  // (m)
   // by pair: its points (emit() writes it with the pair's count, remove_body() moves it with
   // the pair), so that build() sorts the one-point manifolds out without reading each pair
   // (a line of 640 bytes apart: +1.4% of the 2870 pyramid's step when it did)

@@ -293,6 +293,8 @@ RigidSimd RigidBodySystem::simd() const {
   return RigidSimd::Scalar;
 }
 
+void RigidBodySystem::set_lane_reuse(bool on) { contacts_->reuse_lanes = on; }
+
 void RigidBodySystem::set_substeps(int n) {
   require_count(n, 1, 64, "ContactSettings.substeps");
   settings_.substeps = n;

@@ -333,3 +333,50 @@ TEST(RigidSimd, OnePointBlocksKeepTheBallsPhysicsAmongBoxes) {
     for (const RigidSimd p : all) EXPECT_EQ(run(p), scalar) << to_string(solver) << " on " << to_string(p);
   }
 }
+
+// While the colours and the blocks' layout stand (a pile at rest), the solver lanes keep last
+// step's bodies, write masks, inverse masses, impulse units and slop instead of gathering them
+// again (RigidContacts::lanes_kept); when the layout changes they are gathered anew. Either
+// way the same bits: a 5-level pyramid, balls on the ground (one-point blocks, one with rolling
+// resistance), a 1 cm cube (a slop of its own, half the settings'), a box dropped on the
+// pyramid at step 60 (a new body: the colours are made anew) and the settings' slop changed at
+// step 100 (the kept slop would be stale), under the three solvers that fill blocks, on every
+// SIMD path, with the reuse on and off; and the reuse ran (kept lanes before step 60 and after
+// the slop changed, none at steps 60 and 100, none with it off).
+TEST(RigidColors, KeptLanesGiveTheSameBitsAsLanesGatheredAnew) {
+  for (const RigidSolverType solver : {RigidSolverType::SoftStep, RigidSolverType::SequentialImpulse, RigidSolverType::Tgs}) {
+    for (const RigidSimd path : paths()) {
+      std::uint64_t hash[2] = {0, 0};
+      for (const bool reuse : {false, true}) {
+        RigidBodySystem s({.contacts = {.solver = solver, .sleep = false}});
+        s.set_simd(path);
+        s.set_lane_reuse(reuse);
+        pba::rigid_scenes::square_pyramid(s, 5);
+        for (int i = 0; i < 3; ++i)
+          s.create({.pose = {{4.0 + i, 0.3, 2}}, .shapes = {{.shape = ColliderShape::sphere(0.3), .rolling_resistance = 0.1 * i}}});
+        s.create({.pose = {{-3, 0.005, 3}}, .shapes = {{.shape = ColliderShape::box(Vec3(0.005))}}});
+        std::size_t kept_before = 0, kept_after = 0, kept_at_changes = 0, kept_off = 0;
+        for (int i = 0; i < 150; ++i) {
+          if (i == 60) s.create({.pose = {{0.3, 6, 0.2}}, .shapes = {{.shape = ColliderShape::box(Vec3(0.5))}}});
+          if (i == 100) s.settings().linear_slop = 0.004;
+          s.step(1.0 / 60, kGravity);
+          const std::size_t kept = s.profile().lanes_kept;
+          if (!reuse) kept_off += kept;
+          else if (i == 60 || i == 100) kept_at_changes += kept;
+          else if (i < 60) kept_before += kept;
+          else if (i > 100) kept_after += kept;
+        }
+        hash[reuse] = s.hash();
+        const std::string what = std::string(to_string(solver)) + " on " + std::string(to_string(path));
+        if (reuse) {
+          EXPECT_GT(kept_before, 0u) << what;
+          EXPECT_GT(kept_after, 0u) << what;
+          EXPECT_EQ(kept_at_changes, 0u) << what;
+        } else {
+          EXPECT_EQ(kept_off, 0u) << what;
+        }
+      }
+      EXPECT_EQ(hash[1], hash[0]) << to_string(solver) << " on " << to_string(path);
+    }
+  }
+}
