@@ -112,6 +112,7 @@ PbaResult run_pba(const BenchScene& scene, int steps, const pba::ContactSettings
     r.phases.contacts = median(phase[8]), r.phases.finish = median(phase[9]);
     r.phases.built = s.profile().built, r.phases.reused = s.profile().reused;
     r.phases.substeps = s.profile().substeps, r.phases.column = s.profile().column;
+    r.phases.half_load = s.profile().half_load;
     r.manifolds = s.manifold_count();
   } catch (const pba::Error& e) {
     r.note = e.what();
@@ -165,11 +166,11 @@ void print_profile(const PbaResult& r) {
   std::printf("  %24s phases: collide %.3f (pairs %.3f, manifolds %.3f) | solve %.3f (prepare %.3f, integrate %.3f, "
               "contacts %.3f, finish %.3f, of which islands %.3f) | total %.3f ms"
               "  (%zu manifolds: %zu built, %zu reused; all asleep %s; deepest overlap %.4f m at step %d; "
-              "substeps %d at the end, at most %d; tallest column %d)\n",
+              "substeps %d at the end, at most %d; tallest column %d; load at half the substeps %.3f)\n",
               "", 1e3 * p.collide, 1e3 * p.pairs, 1e3 * p.manifolds, 1e3 * p.solve, 1e3 * p.prepare, 1e3 * p.integrate,
               1e3 * p.contacts, 1e3 * p.finish, 1e3 * p.islands, 1e3 * p.total,
               r.manifolds, p.built, p.reused, r.asleep_at < 0 ? "never" : (std::to_string(r.asleep_at) + " s").c_str(),
-              r.deepest, r.deepest_step, p.substeps, r.most_substeps, r.tallest);
+              r.deepest, r.deepest_step, p.substeps, r.most_substeps, r.tallest, p.half_load);
   std::printf("  %24s substeps by step: %s\n", "", r.substeps_runs.c_str());
 }
 

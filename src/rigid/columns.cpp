@@ -56,6 +56,46 @@
 // tolerances (at rest: the sag predicted is a rest's, and springs a quarter as stiff store four
 // times the energy, which halving under a body moving on them feeds into its motion: a column
 // rocking on its edges, docs/rigid-bodies.md, "Why rest").
+//
+// Braced piles (measure_braced; with the halving's budgets). The column model counts a
+// pile's height in bodies, but a cube in a square pyramid rests on four and carries four: its
+// level is braced by the lattice, not a free column (the 20-level pyramid is 20 cubes high,
+// load 0.55 at the halved rate, and stood 1000 steps at 4 substeps with its top sagging 4.3 mm).
+// The halving is judged by a tilt chain of the pile's levels instead: bodies resting on a
+// common body, or carrying one, on face pairs (those above) move together as a level
+// (union-find; a support that does not move ties nothing, so columns side by side on the
+// ground, touching or not, stay apart: side contacts carry no load, and friction ties
+// nothing). In each horizontal direction a level has three unknowns: its bodies' tilt t, each
+// about its own centre; its turn psi, lifting each body by psi (x_body - x_level); and its lift
+// z. Each point p of a face pair is a spring k_p = m_eff w^2 / points (the sag's springs),
+// stretched by a . (t, psi, z) of the upper body's level less b . (t, psi, z) of the lower's,
+// a = (x_p - x_upper, x_upper - x_level, 1) (b the same of the lower; none for a support that
+// does not move). Gravity is the chain's geometric stiffness: a body tilted by t about its
+// supports (their centroid at height z0, weighted by their loads) carries each load F on it
+// at height z sideways by (z - z0) t and lowers it by (z - z0) t^2 / 2, its own weight so
+// from its centre: G = sum F (z - z0) + m g (z_centre - z0) on its level's tilt, with the
+// loads the contacts carried. The pile stands gravity times f when K - f G is positive
+// definite; with each level on one level at most (a tree) a block LDL^T from the tips down
+// decides it in O(levels). The load is kGreenhill / f at the least f it does not stand
+// (bisected), which for a free column of n cubes is the column's own chain: n^3 g / (w^2 s)
+// times 1.24 at 10 cubes, 1.115 at 20 (the discrete chain and the softer foot carry less than
+// Greenhill's clamped beam, by a part first order in 1 / n; the tallest measured to stand, 37,
+// had 0.87 of the bound and is at 0.93 here), and by the same bound (kColumnLoad / 2). Braced,
+// a cube cannot lean with its level below it: tilting alone it stretches its springs to its
+// supports by their offset (half a cube in the pyramid), so the tilts do not add up the way a
+// column's do, and a level tilting whole (t = psi) stands on the springs of a footing as wide
+// as itself. The 20-level pyramid's load is 1.4e-3 and it halves at rest; 3 x 3 free columns of
+// 20 touching keep their 0.62 (as one column), and a pyramid carrying a column of 20 keeps that
+// column's (0.65). It is a Ritz estimate (every body of a level tilting alike), as the column
+// model is (every cube alike): where bodies would tilt unlike each other it overstates what
+// the pile carries; it is held to the same margin. What is not a tree takes the column model
+// for the whole measure: a level resting on two levels (a plank bridging two columns: the
+// columns under it sway as free columns, which a level joined through the plank would not), or
+// resting on itself. Its cost is a union-find, the face points twice (two directions), and a
+// pass over each tree of levels per factor tried: one for a tree that carries less than the
+// most found so far, about 20 for one whose load is found. It is made only when the halving
+// can use it (halved, or with the same pairs as the last step): a pile whose pairs change
+// every step (the rain landing) restarts its calm every step whatever the load.
 #include <algorithm>
 #include <cmath>
 
@@ -67,6 +107,13 @@ namespace {
 
 // the largest n^3 g / (w^2 s) a column may carry on the soft step's substeps (above)
 constexpr double kColumnLoad = 0.5;
+// Greenhill's load of a free column of cubes in the column model's measure, 7.837 / 8: the
+// braced model's load is this over the factor on gravity its chain stands (a free column of
+// n cubes: n^3 g / (w^2 s), less the discrete chain's difference, 1.1 / n)
+constexpr double kGreenhill = 7.837 / 8;
+// the braced model's loads are found between these (below the first, the pile is far from
+// any bound; above the second, far past them)
+constexpr double kLeastLoad = 1e-5, kMostLoad = 1e3;
 // the cosine of the steepest face that still counts as carrying the body above (45 degrees)
 constexpr double kFaceCosine = 0.7071067811865476;
 // the substeps (and contact_hertz) are raised by up to 2^this (8 -> 32 at the defaults:
@@ -100,6 +147,8 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     column_sink.reserve(n), column_pair_spring.reserve(pairs.capacity()), column_spring.reserve(pairs.capacity());
     column_sink.assign(n, {});
     column_pair_spring.clear();
+    brace_face.reserve(pairs.capacity());
+    brace_face.clear();
   }
   // a face contact as a spring: its load (the normal impulse it carried in the last step's
   // substeps over the substep, impulse_h) and its stiffness m_eff w^2 (the points' springs in
@@ -140,15 +189,26 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     if (deepest < -slop_of(s, c.a, c.b)) continue;
     const std::uint32_t lower = d > 0 ? c.a : c.b, upper = d > 0 ? c.b : c.a;
     if (!moving(upper)) continue;
+    // (with `give`) the face pair for the braced model: its spring and its points' height
+    auto face = [&](const ColumnSpring& k, bool moves) {
+      double z = 0;
+      for (int p = 0; p < c.count; ++p) z += glm::dot(c.points[p].at, up);
+      brace_face.push_back({static_cast<std::uint32_t>(&c - pairs.data()), lower, upper, k.load, k.stiffness,
+                            z / c.count, moves});
+    };
     if (!moving(lower)) {
       if (column_level[upper] == 0) column_level[upper] = 1, column_queue.push_back(upper);
       if (give) {
         const ColumnSpring k = spring_of(c, s.inv_mass_[upper], w_static);
         column_sink[upper].load += k.load, column_sink[upper].stiffness += k.stiffness;
+        face(k, false);
       }
     } else {
       column_pairs.push_back(std::uint64_t{lower} << 32 | upper);
-      if (give) column_pair_spring.push_back(spring_of(c, s.inv_mass_[lower] + s.inv_mass_[upper], w_dynamic));
+      if (give) {
+        column_pair_spring.push_back(spring_of(c, s.inv_mass_[lower] + s.inv_mass_[upper], w_dynamic));
+        face(column_pair_spring.back(), true);
+      }
       ++column_start[lower + 1];
     }
   }
@@ -194,12 +254,224 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
   return need;
 }
 
+namespace {
+
+// the lower Cholesky factor of a symmetric 3x3 block (row major) in place; false when it is
+// not positive definite
+bool cholesky3(std::array<double, 9>& a) {
+  if (!(a[0] > 0)) return false;
+  const double l00 = std::sqrt(a[0]), l10 = a[3] / l00, l20 = a[6] / l00;
+  const double d1 = a[4] - l10 * l10;
+  if (!(d1 > 0)) return false;
+  const double l11 = std::sqrt(d1), l21 = (a[7] - l20 * l10) / l11;
+  const double d2 = a[8] - l20 * l20 - l21 * l21;
+  if (!(d2 > 0)) return false;
+  a = {l00, 0, 0, l10, l11, 0, l20, l21, std::sqrt(d2)};
+  return true;
+}
+
+}  // namespace
+
+double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, double g) {
+  const std::size_t n = s.type_.size();
+  brace_body.reserve(n), brace_level.reserve(n), brace_order.reserve(n), brace_tree.reserve(n), brace_s.reserve(n);
+  brace_count.reserve(n + 1);
+  brace_body.assign(n, {kNoIndex, kNoIndex, kNoIndex, kNoIndex, 0, 0, 0, 0});
+  for (std::size_t i = 0; i < n; ++i) brace_body[i].root = static_cast<std::uint32_t>(i);
+  brace_level.clear(), brace_order.clear();
+  auto find = [&](std::uint32_t x) {
+    while (brace_body[x].root != x) x = brace_body[x].root = brace_body[brace_body[x].root].root;
+    return x;
+  };
+  // (the smaller index as root: the levels do not depend on the pair order)
+  auto unite = [&](std::uint32_t a, std::uint32_t b) {
+    a = find(a), b = find(b);
+    if (a != b) brace_body[std::max(a, b)].root = std::min(a, b);
+  };
+  // a face pair between bodies on the columns (an upper body reached from the ground, on a
+  // support that does not move or that was reached too)
+  auto counts = [&](const BraceFace& f) { return column_level[f.upper] != 0 && (!f.moving || column_level[f.lower] != 0); };
+  // the levels: bodies resting on a common body, or carrying a common body, move together
+  // (a support that does not move ties nothing: columns side by side on the ground stay apart)
+  for (const BraceFace& f : brace_face) {
+    if (!f.moving || !counts(f)) continue;
+    BraceBody &lower = brace_body[f.lower], &upper = brace_body[f.upper];
+    if (lower.up == kNoIndex) lower.up = f.upper; else unite(lower.up, f.upper);
+    if (upper.down == kNoIndex) upper.down = f.lower; else unite(upper.down, f.lower);
+  }
+  // the horizontal directions the chain is tilted in
+  const Vec3 pick = std::abs(up.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+  const Vec3 e0 = glm::normalize(pick - up * glm::dot(pick, up)), dir[2] = {e0, glm::cross(up, e0)};
+  for (const std::uint32_t x : column_queue) {
+    const std::uint32_t r = find(x);
+    if (brace_body[r].level == kNoIndex) {
+      brace_body[r].level = static_cast<std::uint32_t>(brace_level.size());
+      BraceLevel& l = brace_level.emplace_back();
+      l.parent = kNoIndex, l.depth = kNoIndex, l.count = 0, l.gravity = 0, l.size = INFINITY;
+      for (int d = 0; d < 2; ++d) {
+        l.sum[d] = 0, l.lo[d] = INFINITY, l.hi[d] = -INFINITY;
+        std::fill(std::begin(l.d[d]), std::end(l.d[d]), 0.0), std::fill(std::begin(l.c[d]), std::end(l.c[d]), 0.0);
+      }
+    }
+    BraceLevel& l = brace_level[brace_body[x].level = brace_body[r].level];
+    ++l.count, l.size = std::min(l.size, 2 * s.min_extent_[x]);
+    for (int d = 0; d < 2; ++d) {
+      const double at = glm::dot(s.com_[x], dir[d]);
+      l.sum[d] += at, l.lo[d] = std::min(l.lo[d], at), l.hi[d] = std::max(l.hi[d], at);
+    }
+  }
+  // (a spread under a thousandth of its smallest body's size is a level in line along the
+  // direction: it does not turn as a level, and its turn would be a zero pivot)
+  for (BraceLevel& l : brace_level)
+    for (int d = 0; d < 2; ++d) l.psi[d] = l.hi[d] - l.lo[d] > 1e-3 * l.size;
+  // each level rests on one level at most (or on bodies that do not move): the chain is a
+  // tree. Otherwise (a level bridging two, a level resting on itself) the column model rules
+  const auto levels = static_cast<std::uint32_t>(brace_level.size());
+  for (const BraceFace& f : brace_face) {
+    if (!f.moving || !counts(f)) continue;
+    const std::uint32_t lu = brace_body[f.upper].level, ll = brace_body[f.lower].level;
+    BraceLevel& u = brace_level[lu];
+    if (lu == ll || (u.parent != kNoIndex && u.parent != ll)) return -1;
+    u.parent = ll;
+  }
+  // the depths from the ground and the tree's root (a walk longer than the levels is a cycle:
+  // not a tree)
+  for (std::uint32_t l = 0; l < levels; ++l) {
+    std::uint32_t x = l, walk = 0;
+    while (brace_level[x].depth == kNoIndex && brace_level[x].parent != kNoIndex) {
+      x = brace_level[x].parent;
+      if (++walk > levels) return -1;
+    }
+    if (brace_level[x].depth == kNoIndex) brace_level[x].depth = 0, brace_level[x].root = x;
+    // down the walk again, numbering
+    std::uint32_t depth = brace_level[x].depth + walk;
+    for (std::uint32_t y = l; y != x; y = brace_level[y].parent)
+      brace_level[y].depth = depth--, brace_level[y].root = brace_level[x].root;
+  }
+  // the order the elimination takes them in: by tree, each tree's deepest first (so a level
+  // after those resting on it). Two counting sorts: by depth down, then (stable) by root
+  brace_count.assign(levels + 1, 0);
+  for (const BraceLevel& l : brace_level) ++brace_count[levels - l.depth];
+  for (std::uint32_t i = 1; i <= levels; ++i) brace_count[i] += brace_count[i - 1];
+  brace_order.resize(levels), brace_tree.resize(levels);
+  for (std::uint32_t l = levels; l-- > 0;) brace_tree[--brace_count[levels - brace_level[l].depth]] = l;
+  brace_count.assign(levels + 1, 0);
+  for (const BraceLevel& l : brace_level) ++brace_count[l.root + 1];
+  for (std::uint32_t i = 1; i <= levels; ++i) brace_count[i] += brace_count[i - 1];
+  for (const std::uint32_t l : brace_tree) brace_order[brace_count[brace_level[l].root]++] = l;
+  // gravity: a body tilted by t about its supports (the height of their centroid weighted by
+  // their loads, z0) carries each load F on it at height z sideways by (z - z0) t and lowers
+  // it by (z - z0) t^2 / 2, and its own weight so from its centre: the chain's geometric
+  // stiffness, G = sum F (z - z0) + m g (z_c - z0) over the level's bodies (P-delta)
+  for (const BraceFace& f : brace_face) {
+    if (!counts(f)) continue;
+    BraceBody& b = brace_body[f.upper];
+    b.fz += f.load * f.z, b.f += f.load, b.z += f.z, ++b.supports;
+  }
+  auto base = [&](std::uint32_t x) {
+    const BraceBody& b = brace_body[x];
+    return b.f > 0 ? b.fz / b.f : b.z / b.supports;
+  };
+  for (const std::uint32_t x : column_queue)
+    brace_level[brace_body[x].level].gravity += std::max(0.0, g / s.inv_mass_[x] * (glm::dot(s.com_[x], up) - base(x)));
+  for (const BraceFace& f : brace_face)
+    if (f.moving && counts(f)) brace_level[brace_body[f.lower].level].gravity += std::max(0.0, f.load * (f.z - base(f.lower)));
+  // the springs: each point of a face pair a spring k_p of the pair's m_eff w^2 over its
+  // points. A level's bodies tilt by t each (the lever x_p - x_body), the level turns by psi
+  // (each body lifted by psi (x_body - x_level)) and lifts by z: the point's spring is
+  // stretched by a . (t, psi, z) of the upper level less b . (t, psi, z) of the lower, a =
+  // (du, a1, 1), b = (dl, b1, 1) with du = x_p - x_upper, dl = x_p - x_lower. The pair adds
+  // k sum a a^T to the upper level's D, k sum b b^T to the lower's, -k sum a b^T to the
+  // upper's C: made of the points' sums of du, dl, du^2, dl^2, du dl
+  for (const BraceFace& f : brace_face) {
+    if (!counts(f)) continue;
+    const ContactPair& c = pairs[f.pair];
+    const double k = f.stiffness / c.count, n = c.count;
+    BraceLevel& u = brace_level[brace_body[f.upper].level];
+    BraceLevel* l = f.moving ? &brace_level[brace_body[f.lower].level] : nullptr;
+    for (int d = 0; d < 2; ++d) {
+      const double xu = glm::dot(s.com_[f.upper], dir[d]), xl = f.moving ? glm::dot(s.com_[f.lower], dir[d]) : 0;
+      const double a1 = u.psi[d] ? xu - u.sum[d] / u.count : 0, b1 = l && l->psi[d] ? xl - l->sum[d] / l->count : 0;
+      double su = 0, sl = 0, suu = 0, sll = 0, sul = 0;
+      for (int p = 0; p < c.count; ++p) {
+        const double x = glm::dot(c.points[p].at, dir[d]), du = x - xu, dl = x - xl;
+        su += du, sl += dl, suu += du * du, sll += dl * dl, sul += du * dl;
+      }
+      // (the blocks are symmetric: both triangles written)
+      auto add = [](double* m, double s2, double s1, double one, double nn, double kk) {
+        const double v[6] = {s2, one * s1, s1, one * one * nn, one * nn, nn};
+        const int at[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+        for (int i = 0; i < 6; ++i) {
+          m[3 * at[i][0] + at[i][1]] += kk * v[i];
+          if (at[i][0] != at[i][1]) m[3 * at[i][1] + at[i][0]] += kk * v[i];
+        }
+      };
+      add(u.d[d], suu, su, a1, n, k);
+      if (!l) continue;
+      add(l->d[d], sll, sl, b1, n, k);
+      const double cross[9] = {sul, b1 * su, su, a1 * sl, a1 * b1 * n, a1 * n, sl, b1 * n, n};
+      for (int i = 0; i < 9; ++i) u.c[d][i] -= k * cross[i];
+    }
+  }
+  // (a level that does not turn: its turn is no unknown)
+  for (BraceLevel& l : brace_level)
+    for (int d = 0; d < 2; ++d)
+      if (!l.psi[d]) l.d[d][4] = 1;
+  brace_s.resize(levels);
+  // the load: kGreenhill over the least factor on gravity the chain does not stand, to within
+  // 2e-5 between kLeastLoad and kMostLoad (beyond them, those). Tree by tree: one that stands
+  // the factor of the most found so far carries less and is passed over (one pass of it), so
+  // only the trees that raise the most are bisected (a rain of small piles: one pass each)
+  double most = kLeastLoad;
+  for (std::uint32_t begin = 0, end = 0; begin < levels; begin = end) {
+    while (end < levels && brace_level[brace_order[end]].root == brace_level[brace_order[begin]].root) ++end;
+    if (braced_stands(kGreenhill / most, begin, end)) continue;
+    if (!braced_stands(kGreenhill / kMostLoad, begin, end)) return kMostLoad;
+    double stands = most, falls = kMostLoad;
+    while (falls > stands * (1 + 2e-5)) {
+      const double mid = std::sqrt(stands * falls);
+      (braced_stands(kGreenhill / mid, begin, end) ? falls : stands) = mid;
+    }
+    most = falls;
+  }
+  return most;
+}
+
+bool RigidContacts::braced_stands(double factor, std::uint32_t begin, std::uint32_t end) {
+  for (int d = 0; d < 2; ++d) {
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const std::uint32_t l = brace_order[i];
+      std::copy(std::begin(brace_level[l].d[d]), std::end(brace_level[l].d[d]), brace_s[l].begin());
+      brace_s[l][0] -= factor * brace_level[l].gravity;
+    }
+    // block LDL^T of the tree, from its tips down: S_parent -= C^T S^-1 C
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const std::uint32_t l = brace_order[i];
+      std::array<double, 9>& f = brace_s[l];
+      if (!cholesky3(f)) return false;
+      const BraceLevel& v = brace_level[l];
+      if (v.parent == kNoIndex) continue;
+      // y = L^-1 C, column by column; then C^T S^-1 C = y^T y
+      double y[9];
+      for (int j = 0; j < 3; ++j) {
+        y[j] = v.c[d][j] / f[0];
+        y[3 + j] = (v.c[d][3 + j] - f[3] * y[j]) / f[4];
+        y[6 + j] = (v.c[d][6 + j] - f[6] * y[j] - f[7] * y[3 + j]) / f[8];
+      }
+      std::array<double, 9>& p = brace_s[v.parent];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) p[3 * i + j] -= y[i] * y[j] + y[3 + i] * y[3 + j] + y[6 + i] * y[6 + j];
+    }
+  }
+  return true;
+}
+
 }  // namespace detail
 
 int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   detail::RigidContacts& c = *contacts_;
   c.hertz_scale = 1;
-  profile_.column = 0;
+  profile_.column = 0, profile_.half_load = 0;
   const int base = settings_.substeps;
   if (settings_.solver != RigidSolverType::SoftStep || !settings_.auto_substeps) {
     auto_shift_ = 0, auto_calm_ = 0;
@@ -220,6 +492,7 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   const bool settled = c.pairs_same && c.pairs.size() == c.last_count;
   if (g == 0) {
     c.column_need = 0, c.column_top = 0, c.column_sag_top = 0, c.column_sag_ratio = 0, c.column_known = false;
+    c.column_braced = -1, c.brace_due = false;
   } else {
     // measured again when the pairs changed (a body came or went, woke or fell asleep), the
     // bodies or gravity's direction did, and otherwise every kMeasureEvery steps
@@ -228,16 +501,30 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     if (!same || ++c.column_age >= kMeasureEvery) {
       c.column_need = c.measure_columns(*this, up, c.column_top, least < 0, rate(-1), static_rate(-1));
       c.column_bodies = type_.size(), c.column_up = up, c.column_age = 0, c.column_known = true;
+      // (before a step has carried loads, as in the first, the springs are not known: the
+      // column model judges that measure)
+      c.column_braced = -1, c.brace_due = least < 0 && c.impulse_h > 0;
     }
+    // the braced model of that measure, once the halving can use it: halved (the way back),
+    // or with the same pairs as the last step (the calm before halving). While the pairs
+    // change the calm starts again every step whatever the load, so a pile still landing (the
+    // rain) does not pay for it; made later from the same face pairs, their points now
+    if (c.brace_due && (settled || auto_shift_ < 0)) c.column_braced = c.measure_braced(*this, up, g), c.brace_due = false;
   }
   const double need = c.column_need;  // n^3 / s (1/m)
   profile_.column = c.column_top;
+  // the load at half the substeps: the braced model's where the pile's levels make a tree,
+  // the column model's otherwise
+  auto load = [&](int shift) {
+    const double w = rate(shift);
+    return shift < 0 && c.column_braced >= 0 ? c.column_braced : need * g / (w * w);
+  };
+  profile_.half_load = least < 0 ? load(-1) : 0;
   // whether the columns fit 2^shift times the substeps with `margin` of the bounds: their load
   // n^3 g / (w^2 s), and below the setting's substeps the sag predicted at half of them, within
   // each budget that is set (a fraction of the bodies' sizes, metres)
   auto fits = [&](int shift, double margin) {
-    const double w = rate(shift);
-    if (need * g / (w * w) > margin * kColumnLoad) return false;
+    if (load(shift) > margin * kColumnLoad) return false;
     return shift >= 0 || ((budget <= 0 || c.column_sag_top <= margin * budget) &&
                           (fraction <= 0 || c.column_sag_ratio <= margin * fraction));
   };

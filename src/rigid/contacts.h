@@ -464,6 +464,57 @@ struct RigidContacts {
     double load = 0, stiffness = 0;
   };
   std::vector<ColumnSpring> column_sink, column_pair_spring, column_spring;
+  /// The braced model (columns.cpp, "Braced piles"), with the halving's budgets: the load, in
+  /// the column model's n^3 g / (w^2 s), under which the pile measured last stands on its
+  /// springs (those measure_columns gave its face pairs) with the margin a free column of cubes
+  /// has at that load: kGreenhill over the smallest factor on gravity that the tilt chain of
+  /// its levels stands (its levels: bodies joined by a common support or a common load on face
+  /// contacts). Into column_braced; -1 when the levels do not make a tree (a level resting on
+  /// two, or on itself), where the column model's is taken. Needs the loads of a step. O(bodies + face points) per
+  /// factor tried; no allocation once the scratch has grown. Needs measure_columns' face pairs.
+  double measure_braced(const RigidBodySystem& s, const Vec3& up, double g);
+  /// Whether the trees of levels brace_order[begin, end) (whole trees) stand gravity times
+  /// `factor` (K - factor G positive definite) in both horizontal directions.
+  bool braced_stands(double factor, std::uint32_t begin, std::uint32_t end);
+  // its scratch. By face pair (touching, 3 points or more, within 45 degrees of the vertical,
+  // with a moving upper body): the pair, its bodies, load (N) and spring (N/m, m_eff w^2) and
+  // the height of its points' centroid along up (m)
+  struct BraceFace {
+    std::uint32_t pair, lower, upper;
+    double load, stiffness, z;
+    bool moving;  // the lower body moves
+  };
+  std::vector<BraceFace> brace_face;
+  // by body: its union-find root, the first body seen on it and under it, its level, and the
+  // sums for the height it tilts about (its supports' centroids weighted by their loads)
+  struct BraceBody {
+    std::uint32_t root, up, down, level;
+    double fz, f, z;
+    int supports;
+  };
+  std::vector<BraceBody> brace_body;
+  // by level: the level it rests on (kNoIndex: none that moves), its depth from the ground,
+  // the root of its tree (the level under it that rests on none that moves),
+  // bodies, the gravity term G (N m per rad^2 of its bodies' tilt), its smallest body's size
+  // (m), and by direction the sum, least and most of its bodies' coordinates (m), whether it
+  // turns as a level (psi), and its blocks of the tilt chain's stiffness: D on its (tilt,
+  // turn, lift) and C to its support level's
+  struct BraceLevel {
+    std::uint32_t parent, depth, count, root;
+    double gravity, size;
+    double sum[2], lo[2], hi[2];
+    bool psi[2];
+    double d[2][9], c[2][9];
+  };
+  std::vector<BraceLevel> brace_level;
+  // the levels by tree (root), each after every level resting on it; the order by depth
+  // alone, and the counting sorts' counts, on the way
+  std::vector<std::uint32_t> brace_order, brace_tree, brace_count;
+  std::vector<std::array<double, 9>> brace_s;  // a level's block as the elimination leaves it
+  // the last measure_braced (-1: the column model's, also while it is owed), and whether it
+  // is owed for the last measure_columns (RigidBodySystem::step_substeps)
+  double column_braced = -1;
+  bool brace_due = false;
   // the last measure (RigidBodySystem::step_substeps): its result, the bodies and the up it
   // was made for, the steps since, and whether it stands (cleared when a body is destroyed)
   double column_need = 0;
