@@ -171,7 +171,7 @@ struct PassParams {
   bool soft = true;          // soft contacts (false: rigid, Baumgarte)
   bool update_sep = false;   // first measure the separations at the poses now (a relax pass after the positions moved)
   bool warm_next = false;    // then add the impulses to the warm-start accumulators for the next substep
-  double carry_speed = 0;    // cap_carry: |g| h (m/s), the velocity gravity gives in a substep
+  double carry_speed = 0;    // |g| h (m/s), the velocity gravity gives in a substep: cap_carry, and a landing while sliding
   bool cap_carry = false;    // with update_sep: cap each point's carried impulse (contact_wide.cpp, pass())
 };
 
