@@ -215,7 +215,9 @@ void RigidContacts::settle(std::uint32_t record) {
   CachedManifold& r = manifolds[record];
   if (r.last == kNoIndex) return;
   ContactPair& c = pairs[r.last];
-  for (int k = 0; k < c.count; ++k) r.normal_impulse[k] = c.normal_impulse[k];
+  // (all four: the slots past the count are read by no one, and a loop of the count was a
+  // call of memcpy)
+  for (int k = 0; k < Manifold::kMaxPoints; ++k) r.normal_impulse[k] = c.normal_impulse[k];
   r.friction = c.friction_impulse();
   r.twist = c.twist_impulse;
   r.rolling = c.rolling_impulse;
