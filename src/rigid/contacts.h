@@ -153,6 +153,8 @@ struct PairSet {
   bool contains(std::uint64_t key) const;
   /// Adds `key`; false when it was there already.
   bool insert(std::uint64_t key);
+  /// Asks for the line where a search for `key` starts (a hint; nothing changes).
+  void prefetch(std::uint64_t key) const;
   void erase(std::uint64_t key);
   void clear();
 };
@@ -305,6 +307,8 @@ struct RigidContacts {
   std::vector<ShapePair> shape_pairs, merged; // the persistent pair list (and merge scratch)
   PairSet pair_set;                           // the pairs in shape_pairs, by proxies
   std::vector<ShapePair> found;               // scratch: pairs of the moved proxies this step
+  std::vector<std::uint64_t> hits;            // scratch: the moved proxies' query hits (proxy << 32 | other)
+  std::vector<ShapePair> candidates;          // scratch: the hits that may pair, in the hits' order
   std::vector<std::uint32_t> moved;           // scratch: proxies re-inserted this step
   std::vector<std::uint8_t> was_moved;        // scratch: 1 for the proxies in `moved`
   std::vector<PairCache> caches;              // pool
