@@ -325,8 +325,8 @@ struct RigidProfile {
   /// the soft step's load at half the substeps of the last measure, in the column model's
   /// n^3 g / (w^2 s) (a free column of n cubes of side s at the halved rate w): the braced
   /// model's for piles whose levels make a tree, the column model's otherwise and while the
-  /// pairs change at 8 substeps (when the halving cannot use it, it is not made); halved at
-  /// most 0.25 (docs/rigid-bodies.md, "Braced piles"; 0 without a halving budget or other
+  /// pairs change at 8 substeps (when the halving cannot use it, it is not made); the halving
+  /// needs at most 0.25 (docs/rigid-bodies.md, "Braced piles"; 0 without a halving budget or other
   /// solvers)
   double half_load = 0;
 };

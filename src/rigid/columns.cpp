@@ -386,6 +386,9 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   for (const BraceFace& f : brace_face) {
     if (!counts(f)) continue;
     const ContactPair& c = pairs[f.pair];
+    // (made a step after the measure, a pair may have lost points since: no longer a face,
+    // the model does not describe it, and the column model judges the pile)
+    if (c.count < 3) return -1;
     const double k = f.stiffness / c.count, n = c.count;
     BraceLevel& u = brace_level[brace_body[f.upper].level];
     BraceLevel* l = f.moving ? &brace_level[brace_body[f.lower].level] : nullptr;
@@ -500,6 +503,7 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     const bool same = c.column_known && settled && c.column_bodies == type_.size() && c.column_up == up;
     if (!same || ++c.column_age >= kMeasureEvery) {
       c.column_need = c.measure_columns(*this, up, c.column_top, least < 0, rate(-1), static_rate(-1));
+      c.column_rate = rate(-1), c.column_static_rate = static_rate(-1);
       c.column_bodies = type_.size(), c.column_up = up, c.column_age = 0, c.column_known = true;
       // (before a step has carried loads, as in the first, the springs are not known: the
       // column model judges that measure)
@@ -509,15 +513,26 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     // or with the same pairs as the last step (the calm before halving). While the pairs
     // change the calm starts again every step whatever the load, so a pile still landing (the
     // rain) does not pay for it; made later from the same face pairs, their points now
-    if (c.brace_due && (settled || auto_shift_ < 0)) c.column_braced = c.measure_braced(*this, up, g), c.brace_due = false;
+    if (c.brace_due && (settled || auto_shift_ < 0))
+      c.column_braced = c.measure_braced(*this, up, g), c.column_braced_g = g, c.brace_due = false;
   }
   const double need = c.column_need;  // n^3 / s (1/m)
   profile_.column = c.column_top;
   // the load at half the substeps: the braced model's where the pile's levels make a tree,
   // the column model's otherwise
+  // (the braced load was made on the springs of the measure's rates and the gravity then: G
+  // goes with g and K with the rates squared, so it is scaled to this step's by the larger of
+  // the dynamic and the static springs' ratios, which never lowers it for springs that did not
+  // soften alike; exactly 1 at a fixed dt and settings)
   auto load = [&](int shift) {
     const double w = rate(shift);
-    return shift < 0 && c.column_braced >= 0 ? c.column_braced : need * g / (w * w);
+    const double ws = static_rate(shift);
+    if (shift < 0 && c.column_braced >= 0 && w > 0 && ws > 0 && c.column_rate > 0 && c.column_static_rate > 0 &&
+        c.column_braced_g > 0) {
+      const double rd = c.column_rate / w, rs = c.column_static_rate / ws;
+      return c.column_braced * (g / c.column_braced_g) * std::max(rd * rd, rs * rs);
+    }
+    return need * g / (w * w);
   };
   profile_.half_load = least < 0 ? load(-1) : 0;
   // whether the columns fit 2^shift times the substeps with `margin` of the bounds: their load

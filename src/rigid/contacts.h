@@ -420,7 +420,7 @@ struct RigidContacts {
   // those it was found with (kept_slop, kept_thinnest). build() then leaves them in the lanes
   // (lanes_kept) and fill_block gathers only what the poses change. reuse_lanes: the switch
   // (RigidBodySystem::set_lane_reuse); lanes_filled: the blocks hold a layout (cleared by
-  // prepare() until build() has filled them).
+  // build() until it has filled them, and by prepare() for XPBD, which fills none).
   bool colors_kept = false, lanes_kept = false, lanes_filled = false, reuse_lanes = true;
   double kept_slop = -1, kept_thinnest = -1;  // (m)
   // by pair: its points (emit() writes it with the pair's count, remove_body() moves it with
@@ -519,6 +519,10 @@ struct RigidContacts {
   // is owed for the last measure_columns (RigidBodySystem::step_substeps)
   double column_braced = -1;
   bool brace_due = false;
+  // the rates (rad/s) the last measure_columns took its springs at, dynamic and static, and
+  // the gravity (m/s^2) of the last measure_braced: its load is scaled to the step's
+  // (RigidBodySystem::step_substeps), as a varying dt or a changed contact_hertz moves them
+  double column_rate = 0, column_static_rate = 0, column_braced_g = 0;
   // the last measure (RigidBodySystem::step_substeps): its result, the bodies and the up it
   // was made for, the steps since, and whether it stands (cleared when a body is destroyed)
   double column_need = 0;

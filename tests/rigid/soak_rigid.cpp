@@ -78,8 +78,7 @@ TEST(RigidSoak, TheSquarePyramidOf2870CubesHalvesAndStandsAMinute) {
   EXPECT_LT(first, 90);
   const pba::Vec3 top = s.center_of_mass(boxes.back());
   const double sag = start.back().y - top.y, drift = std::hypot(top.x - start.back().x, top.z - start.back().z);
-  EXPECT_LT(sag, 0.01);
-  EXPECT_LT(sag, 0.016);  // Bullet's (above)
+  EXPECT_LT(sag, 0.01);  // the bound, under Bullet's 16 mm (above)
   EXPECT_LT(drift, 0.01);
   const pba::test::PileMotion m = pba::test::pile_motion(s, boxes, start);
   EXPECT_LT(m.moved, 0.01);
