@@ -15,7 +15,8 @@
 // of its step's phases (RigidProfile: collide with pairs and manifolds; solve with prepare, integrate, contacts,
 // finish, and islands and sleep within finish), the
 // manifolds built and reused in the last step, when every body first slept, and the deepest
-// overlap any manifold started a step with (m, and the step: read outside the timing). --trace MS prints
+// overlap any manifold started a step with (m, and the step: read outside the timing), and under
+// Bullet's row its own (its manifolds' points after each step's collision phase). --trace MS prints
 // each pba step slower than MS ms with its phases. --budget instead runs the stacks and a
 // small pyramid under the four solvers at equal budgets of contact passes per step
 // (docs/rigid-bodies.md). The peers copy each scene from the pba system the scene's builder
@@ -45,8 +46,6 @@ struct PbaResult : BenchResult {
   pba::RigidProfile phases{};  // (s)
   std::size_t manifolds = 0;   // after the last step
   double asleep_at = -1;       // when every body first slept (s; -1: never)
-  double deepest = 0;          // the deepest overlap of any manifold at the start of any step (m)
-  int deepest_step = -1;       // the step it was in
   int most_substeps = 0;       // the most substeps a step took (RigidProfile::substeps)
   int tallest = 0;             // the tallest column the soft step measured (RigidProfile::column)
   // the substeps over time: each run of steps that took the same count, as "8 x0-125" (the
@@ -261,6 +260,9 @@ void run_scene(const BenchScene& scene, const Options& o) {
     const std::string name = "Bullet 3.24 (" + std::to_string(scene.bullet_iterations) + " it" +
                              (scene.bullet_ccd ? ", CCD)" : ")");
     print_row(name.c_str(), scene, bullet, bullet, ode, false);
+    if (o.profile && bullet.ran)
+      std::printf("  %24s deepest overlap %.4f m at step %d (its manifolds' points after its collision phase)\n", "",
+                  bullet.deepest, bullet.deepest_step);
   }
   if (o.ode) print_row("ODE 0.16 QuickStep 20", scene, ode, bullet, ode, false);
   std::printf("\n");

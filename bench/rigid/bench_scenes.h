@@ -49,6 +49,11 @@ struct BenchResult {
   int escapes = 0;        ///< bodies that left the scene at some step
   int awake = -1;         ///< dynamic bodies awake at the end (-1: not known)
   std::uint64_t hash = 0; ///< pba: the system's state hash after the run
+  /// The deepest overlap of any contact point at the start of any step (m; the narrow
+  /// phase's, before that step's solve; 0 when none overlapped), and that step (-1: none or
+  /// not known: ODE)
+  double deepest = 0;
+  int deepest_step = -1;
   std::string note;       ///< why it did not run, or what went wrong
 };
 

@@ -172,6 +172,14 @@ BenchResult run_bullet(const BenchScene& scene, const RigidBodySystem& s, const 
     const auto t0 = Clock::now();
     w.world.stepSimulation(1.f / 60.f, 0);
     ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    // (after the clock: not timed) the deepest overlap the step's collision detection found,
+    // as pba's row reports it: the manifolds' distances are made before the solve
+    btDispatcher* const d = w.world.getDispatcher();
+    for (int m = 0, n = d->getNumManifolds(); m < n; ++m) {
+      const btPersistentManifold* pm = d->getManifoldByIndexInternal(m);
+      for (int c = 0; c < pm->getNumContacts(); ++c)
+        if (const double depth = -pm->getContactPoint(c).getDistance(); depth > r.deepest) r.deepest = depth, r.deepest_step = k;
+    }
     for (std::size_t j = 0; j < bodies.size(); ++j)
       if (!out[j] && scene.escaped(from_bt(bodies[j]->getWorldTransform().getOrigin()))) out[j] = 1, ++r.escapes;
   }

@@ -82,37 +82,94 @@ enum class Axis { Triangle, Face, Edges, Other };
 struct PolyAt {
   std::array<Vec3, 64> v;  // P's vertices at pa (world, m)
   Vec3 half_axes[3];       // a box's: its centre -+ their sum spans it along any axis (m)
+  // What the separating axes take from the shape alone, the same for every triangle of the
+  // call, made at its first sat_triangle (`made`): the face axes it tests (a box's three, a
+  // hull's all) turned to the world, the shape's span along each, and the edge directions
+  // (a box's three, a hull's edges once each) turned to the world with the edge each came
+  // from and 1e-20 times its squared length (the parallel test's scale). Before, each
+  // triangle turned them and, on a hull, projected every vertex on every face axis again:
+  // a pyramid on two triangles did it twice. A hull of at most 64 vertices has at most
+  // 2 * 64 - 4 faces and 3 * 64 - 6 edges (Euler), so they fit
+  static constexpr std::uint32_t kFaces = 124, kEdges = 186;
+  bool made = false;
+  std::uint32_t face_axes = 0, edge_dirs = 0;
+  Vec3 face_d[kFaces];
+  double face_lo[kFaces], face_hi[kFaces];
+  Vec3 edge_d[kEdges];
+  double edge_scale[kEdges];
+  std::uint32_t edge_of[kEdges];
 
   void set(const Poly& P, const Pose& pa) {
     for (std::uint32_t i = 0; i < P.vertex_count; ++i) v[i] = apply(pa, P.vertices[i]);
     const Mat3 r = glm::mat3_cast(pa.rotation);
     half_axes[0] = r[0] * P.half.x, half_axes[1] = r[1] * P.half.y, half_axes[2] = r[2] * P.half.z;
+    made = false;
   }
-};
 
-int sat_triangle(const Poly& P, const PolyAt& at, const Pose& pa, const Vec3 tri[3], const Vec3& face_normal,
-                 double margin, Vec3& n, Vec3& point_a, Vec3& point_b, std::uint8_t& on, Axis& kind) {
-  const std::array<Vec3, 64>& v = at.v;
-  const std::uint32_t nv = P.vertex_count;
-  const Vec3* half_axes = at.half_axes;
-  // the gap along the unit axis d, and whether the shape lies on its positive side
-  auto gap = [&](const Vec3& d, bool& above) {
-    double lo = INFINITY, hi = -INFINITY;
+  // the shape's span [lo, hi] along the unit axis d (m)
+  void span(const Poly& P, const Pose& pa, const Vec3& d, double& lo, double& hi) const {
     if (P.is_box) {
       const double c = glm::dot(d, pa.position);
       const double w = std::abs(glm::dot(d, half_axes[0])) + std::abs(glm::dot(d, half_axes[1])) +
                        std::abs(glm::dot(d, half_axes[2]));
       lo = c - w, hi = c + w;
     } else {
-      for (std::uint32_t i = 0; i < nv; ++i) {
+      lo = INFINITY, hi = -INFINITY;
+      for (std::uint32_t i = 0; i < P.vertex_count; ++i) {
         const double x = glm::dot(d, v[i]);
         lo = std::min(lo, x), hi = std::max(hi, x);
       }
     }
+  }
+
+  void make(const Poly& P, const Pose& pa) {
+    made = true;
+    face_axes = 0, edge_dirs = 0;
+    for (std::uint32_t f = 0; f < P.face_count; ++f) {
+      if (P.is_box && (f & 1) == 0) continue;  // a box's opposite faces share their axis
+      const Vec3 d = pa.rotation * P.faces[f].normal;
+      face_d[face_axes] = d;
+      span(P, pa, d, face_lo[face_axes], face_hi[face_axes]);
+      ++face_axes;
+    }
+    bool box_direction[3] = {false, false, false};
+    for (std::uint32_t e = 0; e < P.edge_count; ++e) {
+      const HalfEdge& he = P.edges[e];
+      if (he.twin < e) continue;  // each edge once
+      const Vec3 local = P.vertices[P.edges[he.next].origin] - P.vertices[he.origin];
+      if (P.is_box) {
+        // a box's edges run along its three axes: one of each
+        const int i = local.x != 0 ? 0 : local.y != 0 ? 1 : 2;
+        if (box_direction[i]) continue;
+        box_direction[i] = true;
+      }
+      const Vec3 ea = pa.rotation * local;
+      edge_d[edge_dirs] = ea;
+      edge_scale[edge_dirs] = 1e-20 * glm::dot(ea, ea);
+      edge_of[edge_dirs] = e;
+      ++edge_dirs;
+    }
+  }
+};
+
+int sat_triangle(const Poly& P, PolyAt& at, const Pose& pa, const Vec3 tri[3], const Vec3& face_normal,
+                 double normal_lo, double normal_hi, double margin, Vec3& n, Vec3& point_a, Vec3& point_b,
+                 std::uint8_t& on, Axis& kind) {
+  const std::array<Vec3, 64>& v = at.v;
+  const std::uint32_t nv = P.vertex_count;
+  if (!at.made) at.make(P, pa);
+  // the gap along the unit axis d given the shape's span [lo, hi] along it, and whether the
+  // shape lies on its positive side
+  auto gap_of = [&](const Vec3& d, double lo, double hi, bool& above) {
     const double t0 = glm::dot(d, tri[0]), t1 = glm::dot(d, tri[1]), t2 = glm::dot(d, tri[2]);
     const double tlo = std::min(t0, std::min(t1, t2)), thi = std::max(t0, std::max(t1, t2));
     above = lo - thi >= tlo - hi;
     return above ? lo - thi : tlo - hi;
+  };
+  auto gap = [&](const Vec3& d, bool& above) {
+    double lo, hi;
+    at.span(P, pa, d, lo, hi);
+    return gap_of(d, lo, hi, above);
   };
   // whether the shape lies beyond one of the triangle's sides (the planes through an edge at
   // right angles to the face) by more than the margin: a shape apart from the triangle is
@@ -129,8 +186,9 @@ int sat_triangle(const Poly& P, const PolyAt& at, const Pose& pa, const Vec3 tri
   };
   kind = Axis::Triangle;
   bool above = false;
-  // a gap beyond the margin along any axis: no contact
-  double best = gap(face_normal, above);
+  // a gap beyond the margin along any axis: no contact (the shape's span along the
+  // triangle's normal is the caller's plane test's)
+  double best = gap_of(face_normal, normal_lo, normal_hi, above);
   if (best > margin) return 0;
   if (best > 0) {
     // over the face: the shape's nearest vertex projects into the triangle, so that pair of
@@ -156,10 +214,9 @@ int sat_triangle(const Poly& P, const PolyAt& at, const Pose& pa, const Vec3 tri
   Vec3 axis = face_normal;
   bool best_above = above;
   std::uint32_t edge_a = 0, edge_b = 0;
-  for (std::uint32_t f = 0; f < P.face_count; ++f) {
-    if (P.is_box && (f & 1) == 0) continue;  // a box's opposite faces share their axis
-    const Vec3 d = pa.rotation * P.faces[f].normal;
-    const double g = gap(d, above);
+  for (std::uint32_t f = 0; f < at.face_axes; ++f) {
+    const Vec3& d = at.face_d[f];
+    const double g = gap_of(d, at.face_lo[f], at.face_hi[f], above);
     if (g > margin) return 0;
     if (g > 0) return beyond_sides() ? 0 : 2;
     if (g > best) best = g, axis = d, best_above = above, kind = Axis::Face;
@@ -167,27 +224,19 @@ int sat_triangle(const Poly& P, const PolyAt& at, const Pose& pa, const Vec3 tri
   // edge pairs win over faces only by more than rounding, so a face resting on a face keeps
   // the face's normal
   constexpr double kEdgeBias = 1e-9;
-  bool box_direction[3] = {false, false, false};
-  for (std::uint32_t e = 0; e < P.edge_count; ++e) {
-    const HalfEdge& he = P.edges[e];
-    if (he.twin < e) continue;  // each edge once
-    const Vec3 local = P.vertices[P.edges[he.next].origin] - P.vertices[he.origin];
-    if (P.is_box) {
-      // a box's edges run along its three axes: one of each
-      const int i = local.x != 0 ? 0 : local.y != 0 ? 1 : 2;
-      if (box_direction[i]) continue;
-      box_direction[i] = true;
-    }
-    const Vec3 ea = pa.rotation * local;
+  const Vec3 te[3] = {tri[1] - tri[0], tri[2] - tri[1], tri[0] - tri[2]};
+  const double tt[3] = {glm::dot(te[0], te[0]), glm::dot(te[1], te[1]), glm::dot(te[2], te[2])};
+  for (std::uint32_t j = 0; j < at.edge_dirs; ++j) {
+    const Vec3& ea = at.edge_d[j];
     for (std::uint32_t k = 0; k < 3; ++k) {
-      const Vec3 c = glm::cross(ea, tri[(k + 1) % 3] - tri[k]);
+      const Vec3 c = glm::cross(ea, te[k]);
       const double cc = glm::dot(c, c);
-      if (cc <= 1e-20 * glm::dot(ea, ea) * glm::dot(tri[(k + 1) % 3] - tri[k], tri[(k + 1) % 3] - tri[k])) continue;
+      if (cc <= at.edge_scale[j] * tt[k]) continue;
       const Vec3 d = c / std::sqrt(cc);
       const double g = gap(d, above);
       if (g > margin) return 0;
       if (g > 0) return beyond_sides() ? 0 : 2;
-      if (g > best + kEdgeBias) best = g, axis = d, best_above = above, kind = Axis::Edges, edge_a = e, edge_b = k;
+      if (g > best + kEdgeBias) best = g, axis = d, best_above = above, kind = Axis::Edges, edge_a = at.edge_of[j], edge_b = k;
     }
   }
   // the normal from the shape to the triangle: against the axis when the shape is above
@@ -273,8 +322,8 @@ bool on_coplanar_triangle(const TriangleMesh& M, std::uint32_t t, const Vec3& y,
 // when in contact. P: a box's or hull's polyhedron (poly: a is one), at: its vertices at pa
 // (P.vertex_count <= 64), both made once by the caller
 bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy& A, const Poly& P, bool poly,
-                      const PolyAt& at, const TriangleMesh& M, const Vec3 tri[3], const Vec3& face_normal,
-                      std::uint8_t flags, double margin, std::uint32_t t, Manifold& m) {
+                      PolyAt& at, const TriangleMesh& M, const Vec3 tri[3], const Vec3& face_normal, double normal_lo,
+                      double normal_hi, std::uint8_t flags, double margin, std::uint32_t t, Manifold& m) {
   m.count = 0;
   m.sub_shape_b = t;
   Vec3 n, point_a, point_b;
@@ -285,7 +334,7 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
   Axis kind = Axis::Other;
   std::uint8_t on = 0xff;  // the triangle's feature, when the separating axes give it
   if (poly && P.vertex_count <= 64) {
-    const int r = sat_triangle(P, at, pa, tri, face_normal, margin, n, point_a, point_b, on, kind);
+    const int r = sat_triangle(P, at, pa, tri, face_normal, normal_lo, normal_hi, margin, n, point_a, point_b, on, kind);
     if (r == 0) return false;
     closed = r == 1;
     if (!closed) kind = Axis::Other;
@@ -538,7 +587,7 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     const double below = plane - hi - A.radius;
     if (above > slack || below > slack) return;
     Manifold& m = out[std::size_t(written)];
-    if (!collide_triangle(a, local, A, P, poly, at, M, tri, nf, M.edge_flags()[t], margin, t, m)) return;
+    if (!collide_triangle(a, local, A, P, poly, at, M, tri, nf, lo, hi, M.edge_flags()[t], margin, t, m)) return;
     // back to the world
     m.normal = pose_mesh.rotation * m.normal;
     for (int i = 0; i < m.count; ++i) {
@@ -567,7 +616,18 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
       // each by its bounds, from the corners the contact reads anyway (min and max are exact:
       // the tree's bounds)
       const std::span<const Vec3> v = M.vertices();
+      // (prefetches, no effect on the results: the triangles' corner indices, then as each
+      // triangle is tested the next one's corners and edge flags; loads from the mesh's
+      // arrays, at the shape's place in them, were a third of this function's samples on the
+      // terrain)
+      for (std::uint32_t k = 0; k < cache->count; ++k) __builtin_prefetch(&M.triangles()[cache->triangles[k]]);
       for (std::uint32_t k = 0; k < cache->count; ++k) {
+        if (k + 1 < cache->count) {
+          const std::uint32_t ahead = cache->triangles[k + 1];
+          const auto& next = M.triangles()[ahead];
+          __builtin_prefetch(&v[next[0]]), __builtin_prefetch(&v[next[1]]), __builtin_prefetch(&v[next[2]]);
+          __builtin_prefetch(&M.edge_flags()[ahead]);
+        }
         const auto& idx = M.triangles()[cache->triangles[k]];
         const Vec3 &p = v[idx[0]], &q = v[idx[1]], &r = v[idx[2]];
         if (Aabb{glm::min(p, glm::min(q, r)), glm::max(p, glm::max(q, r))}.overlaps(box)) visit(cache->triangles[k]);

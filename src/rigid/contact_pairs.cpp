@@ -620,6 +620,10 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
         if (!plans[k + kPairsAhead - first].same) {
           __builtin_prefetch(&s.shapes_[a][pair_ahead.shape_a].material);
           __builtin_prefetch(&s.shapes_[b][pair_ahead.shape_b].material);
+          // a mesh pair made anew: its triangles near the shape (collide_mesh's first load;
+          // a sixth of its samples on the terrain waited on it)
+          if (ahead != kNoIndex && caches[ahead].mesh_query != kNoIndex)
+            prefetch_lines<sizeof(MeshQueryCache)>(&mesh_queries[caches[ahead].mesh_query]);
         }
       }
       ShapePair p = shape_pairs[k];
