@@ -27,6 +27,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -180,6 +181,7 @@ struct Options {
   bool bullet = true, ode = true;
   bool profile = false;  // a line of per-phase medians under each pba row
   double reuse = -1;     // the pair cache's reuse distance (m); < 0: the default
+  double reuse_angle = -1;  // ... and its relative turn (degrees); < 0: the default
   int substeps = 0;      // the solver's substeps, exactly (auto off; sequential impulses: ignored); 0: the default
   double down_sag = -1;  // ContactSettings::auto_substeps_sag (m): fewer substeps where the columns allow; < 0: the default
   double down_fraction = -1;  // ContactSettings::auto_substeps_sag_fraction (of a body's size); < 0: the default
@@ -242,6 +244,7 @@ void run_scene(const BenchScene& scene, const Options& o) {
     const std::string name = "pba " + std::string(pba::to_string(t));
     pba::ContactSettings settings = at_budget(t, 0, scene.sleep);
     if (o.reuse >= 0) settings.reuse_distance = o.reuse;
+    if (o.reuse_angle >= 0) settings.reuse_angle = o.reuse_angle * (std::numbers::pi / 180);
     if (o.substeps > 0) settings.substeps = o.substeps, settings.auto_substeps = false;  // (exactly N)
     if (o.down_sag >= 0) settings.auto_substeps_sag = o.down_sag;
     if (o.down_fraction >= 0) settings.auto_substeps_sag_fraction = o.down_fraction;
@@ -273,7 +276,7 @@ int usage(const char* why) {
   if (why) std::fprintf(stderr, "bench_rigid: %s\n", why);
   std::fprintf(stderr,
                "usage: bench_rigid [--scene KEY|all] [--steps N] [--repeat K] [--peer all|bullet|ode|none]\n"
-               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--substeps N] [--down M] [--down-fraction F] [--profile]\n"
+               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--reuse-angle DEG] [--substeps N] [--down M] [--down-fraction F] [--profile]\n"
                "                   [--trace MS] | --quick | --budget\n"
                "scenes:");
   for (const BenchScene& s : pba::bench::bench_scenes()) std::fprintf(stderr, " %s", s.key.c_str());
@@ -326,6 +329,12 @@ int main(int argc, char** argv) {
       o.reuse = std::strtod(v.c_str(), &end);
       if (!end || *end || !(o.reuse >= 0 && o.reuse < 1))
         return usage(("--reuse '" + v + "': expected a distance in [0, 1) m").c_str());
+    } else if (a == "--reuse-angle") {
+      const std::string v = need();
+      char* end = nullptr;
+      o.reuse_angle = std::strtod(v.c_str(), &end);
+      if (!end || *end || !(o.reuse_angle >= 0 && o.reuse_angle <= 180))
+        return usage(("--reuse-angle '" + v + "': expected an angle in [0, 180] degrees").c_str());
     } else if (a == "--substeps") {
       if (!count_arg(need().c_str(), &o.substeps) || o.substeps > 64)
         return usage(("--substeps '" + std::string(value) + "': expected a count in [1, 64]").c_str());

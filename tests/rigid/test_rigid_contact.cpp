@@ -1797,6 +1797,50 @@ TEST(RigidPairCache, ACarriedOverManifoldSeparatesAsAFreshOneToTheReuseDistance)
   }
 }
 
+// The reuse angle never binds above 2 asin(0.01 / sqrt(3)) = 0.662 degrees, whatever the
+// reuse distance: the distance test counts the chord 2 r sin(angle / 2) a turn moves the
+// body's reach r through, r is at least sqrt(3) times the body's thinnest half size t (r
+// reaches a corner of the shapes' bounds), and the pair's reuse distance is at most 0.02 t
+// (pair_reuse), so no body keeps its manifold past that turn. Turned in place about the
+// vertical on the ground, 1 mm up, at a reuse distance of 1 mm: a 1 m cube (r = 0.866 m) by
+// 1.5 degrees (its corners 22.7 mm) gets a fresh manifold whatever the angle allows (1,
+// Jolt's 2, 180: the test off), by 0.05 degrees (0.76 mm) it keeps it; a 5 cm ball (r = 86.6
+// mm) keeps it at 0.6 degrees (0.91 mm) and not at 0.7 (1.06 mm) with the angle test off;
+// a 1 cm ball (reuse 0.2 mm, r = 17.3 mm) keeps it at 0.65 degrees (0.197 mm) and not at 0.68
+// (0.206 mm). At a reuse distance of 10 mm the 1 m cube (reuse 10 mm) keeps it at 0.65
+// degrees (9.8 mm) and not at 0.68 (10.3 mm).
+TEST(RigidPairCache, TheReuseAngleNeverBindsAboveTwoThirdsOfADegree) {
+  struct Case {
+    double half;  // the cube's half size, or the ball's radius (m)
+    bool ball;
+    double reuse, turn, angle;
+    std::size_t reused;
+  };
+  const Case cases[] = {
+      {0.5, false, 0.001, deg(1.5), deg(1), 0},   {0.5, false, 0.001, deg(1.5), deg(2), 0},
+      {0.5, false, 0.001, deg(1.5), deg(180), 0}, {0.5, false, 0.001, deg(0.05), deg(1), 1},
+      {0.05, true, 0.001, deg(0.6), deg(180), 1}, {0.05, true, 0.001, deg(0.7), deg(180), 0},
+      {0.01, true, 0.001, deg(0.65), deg(180), 1}, {0.01, true, 0.001, deg(0.68), deg(180), 0},
+      {0.5, false, 0.01, deg(0.65), deg(180), 1}, {0.5, false, 0.01, deg(0.68), deg(180), 0},
+  };
+  for (const Case& c : cases) {
+    const std::string what = std::string(c.ball ? "ball " : "cube ") + std::to_string(c.half) + " m, reuse " +
+                             std::to_string(c.reuse) + " m, turned " + std::to_string(c.turn * 180 / pba::kPi) +
+                             " degrees, reuse angle " + std::to_string(c.angle * 180 / pba::kPi);
+    RigidBodySystem s({.contacts = {.reuse_distance = c.reuse, .reuse_angle = c.angle}});
+    ground(s);
+    const double up = 0.001;  // within the speculative distance (0.4 of the half size for the 1 cm ball)
+    const auto body = s.create({.name = "body", .pose = {{0, c.half + up, 0}},
+                                .shapes = {{.shape = c.ball ? ColliderShape::sphere(c.half) : ColliderShape::box(Vec3(c.half))}}});
+    s.step(1.0 / 60, Vec3(0));  // the manifold
+    ASSERT_EQ(s.contacts().size(), c.ball ? 1u : 4u) << what;
+    s.set_pose(body, {{0, c.half + up, 0}, glm::angleAxis(c.turn, Vec3(0, 1, 0))});
+    s.step(1.0 / 60, Vec3(0));
+    EXPECT_EQ(s.profile().reused, c.reused) << what;
+    EXPECT_EQ(s.profile().built + s.profile().reused, 1u) << what;
+  }
+}
+
 // ---------------------------------------------------------------------------------------
 // sleeping
 
