@@ -61,11 +61,17 @@
 // pile's height in bodies, but a cube in a square pyramid rests on four and carries four: its
 // level is braced by the lattice, not a free column (the 20-level pyramid is 20 cubes high,
 // load 0.55 at the halved rate, and stood 1000 steps at 4 substeps with its top sagging 4.3 mm).
-// The halving is judged by a tilt chain of the pile's levels instead: bodies resting on a
-// common body, or carrying one, on face pairs (those above) move together as a level
-// (union-find; a support that does not move ties nothing, so columns side by side on the
-// ground, touching or not, stay apart: side contacts carry no load, and friction ties
-// nothing). In each horizontal direction a level has three unknowns: its bodies' tilt t, each
+// The halving is judged by a tilt chain of the pile's levels instead: bodies carrying a common
+// body on face pairs (those above) move together as a level (union-find), where that body's
+// springs on each are the stiffest the body has: the tie makes the path through the common
+// body rigid, as stiff as a joint of the body's own chain made rigid, which the margin
+// carries; a lighter or softer common body barely holds them, and tied through it a light
+// plank over a column's top and a tall box would clamp the column's tilt to the box's footing
+// (a column of 26 so tied was called 0.53, where alone it carries 1.2 and falls at 4
+// substeps, as it did). Bodies that only rest on a common body are not tied (what would tilt
+// them alike is its own tilt, held by its own supports: a column's foot on a slab beside short
+// cubes was clamped by their springs). Columns side by side, touching or not, stay apart: side
+// contacts carry no load, and friction ties nothing. In each horizontal direction a level has three unknowns: its bodies' tilt t, each
 // about its own centre; its turn psi, lifting each body by psi (x_body - x_level); and its lift
 // z. Each point p of a face pair is a spring k_p = m_eff w^2 / points (the sag's springs),
 // stretched by a . (t, psi, z) of the upper body's level less b . (t, psi, z) of the lower's,
@@ -74,7 +80,8 @@
 // supports (their centroid at height z0, weighted by their loads) carries each load F on it
 // at height z sideways by (z - z0) t and lowers it by (z - z0) t^2 / 2, its own weight so
 // from its centre: G = sum F (z - z0) + m g (z_centre - z0) on its level's tilt, with the
-// loads the contacts carried. The pile stands gravity times f when K - f G is positive
+// loads the contacts carried: every touching pair's on it, the vertical part of a pair's that
+// is no face pair (a heavy ball's point, an edge, a steep face) at its points' height. The pile stands gravity times f when K - f G is positive
 // definite; with each level on one level at most (a tree) a block LDL^T from the tips down
 // decides it in O(levels). The load is kGreenhill / f at the least f it does not stand
 // (bisected), which for a free column of n cubes is the column's own chain: n^3 g / (w^2 s)
@@ -90,8 +97,8 @@
 // model is (every cube alike): where bodies would tilt unlike each other it overstates what
 // the pile carries; it is held to the same margin. What is not a tree takes the column model
 // for the whole measure: a level resting on two levels (a plank bridging two columns: the
-// columns under it sway as free columns, which a level joined through the plank would not), or
-// resting on itself. Its cost is a union-find, the face points twice (two directions), and a
+// columns under it sway as free columns, which a level joined through the plank would not; a
+// common body not stiff enough to tie what it rests on), or resting on itself. Its cost is a union-find, the face points twice (two directions), and a
 // pass over each tree of levels per factor tried: one for a tree that carries less than the
 // most found so far, about 20 for one whose load is found. It is made only when the halving
 // can use it (halved, or with the same pairs as the last step): a pile whose pairs change
@@ -147,8 +154,8 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     column_sink.reserve(n), column_pair_spring.reserve(pairs.capacity()), column_spring.reserve(pairs.capacity());
     column_sink.assign(n, {});
     column_pair_spring.clear();
-    brace_face.reserve(pairs.capacity());
-    brace_face.clear();
+    brace_face.reserve(pairs.capacity()), brace_load.reserve(pairs.capacity());
+    brace_face.clear(), brace_load.clear();
   }
   // a face contact as a spring: its load (the normal impulse it carried in the last step's
   // substeps over the substep, impulse_h) and its stiffness m_eff w^2 (the points' springs in
@@ -179,6 +186,17 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
         if (moving(c.a)) side = 2 * s.min_extent_[c.a];
         if (moving(c.b)) side = std::min(side, 2 * s.min_extent_[c.b]);
         if (k.stiffness > 0 && side > 0) ratio = std::max(ratio, k.load / (k.stiffness * side));
+        // a touching pair that is no face pair of the columns below (a ball's point, an edge, a
+        // steep face, a body that does not move pressing from above) still loads the body under
+        // it: the vertical part of its load, at its points' height, for the braced model's G
+        const double d = glm::dot(c.normal, up);
+        const std::uint32_t lower = d > 0 ? c.a : c.b, upper = d > 0 ? c.b : c.a;
+        const bool face = c.count >= 3 && std::abs(d) >= kFaceCosine && moving(upper);
+        if (!face && moving(lower) && d != 0 && impulse_h > 0) {
+          double load = 0, z = 0;
+          for (int p = 0; p < c.count; ++p) load += c.normal_impulse[p], z += glm::dot(c.points[p].at, up);
+          if (load > 0) brace_load.push_back({lower, load / impulse_h * std::abs(d), z / c.count});
+        }
       }
     }
     if (c.count < 3) continue;
@@ -276,7 +294,7 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   const std::size_t n = s.type_.size();
   brace_body.reserve(n), brace_level.reserve(n), brace_order.reserve(n), brace_tree.reserve(n), brace_s.reserve(n);
   brace_count.reserve(n + 1);
-  brace_body.assign(n, {kNoIndex, kNoIndex, kNoIndex, kNoIndex, 0, 0, 0, 0});
+  brace_body.assign(n, {kNoIndex, kNoIndex, kNoIndex, 0, 0, 0, 0, 0});
   for (std::size_t i = 0; i < n; ++i) brace_body[i].root = static_cast<std::uint32_t>(i);
   brace_level.clear(), brace_order.clear();
   auto find = [&](std::uint32_t x) {
@@ -291,12 +309,24 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   // a face pair between bodies on the columns (an upper body reached from the ground, on a
   // support that does not move or that was reached too)
   auto counts = [&](const BraceFace& f) { return column_level[f.upper] != 0 && (!f.moving || column_level[f.lower] != 0); };
-  // the levels: bodies resting on a common body, or carrying a common body, move together
-  // (a support that does not move ties nothing: columns side by side on the ground stay apart)
+  // the levels: bodies carrying a common body move together, where its springs on each are
+  // the stiffest that body has (as support or as load). A tie makes the path through the
+  // common body rigid: where that body's springs are each body's stiffest, the tie is as stiff
+  // as a joint of the body's own chain made rigid, which the chain's margin carries (the
+  // common body rests on both and tilts them alike); a lighter or softer common body barely
+  // holds them, and tied it would clamp a column's top to whatever it also rests on (a light
+  // plank over a column's top and a tall box: the box's footing would hold the column's tilt).
+  // Untied, it rests on two levels: no tree, and the column model judges. Bodies that only rest
+  // on a common body are not tied: what holds their tilts alike is that body's own tilt, held
+  // by its own supports (a column's foot on a slab beside short cubes tilts alone).
   for (const BraceFace& f : brace_face) {
-    if (!f.moving || !counts(f)) continue;
-    BraceBody &lower = brace_body[f.lower], &upper = brace_body[f.upper];
-    if (lower.up == kNoIndex) lower.up = f.upper; else unite(lower.up, f.upper);
+    if (!counts(f)) continue;
+    brace_body[f.upper].stiffest = std::max(brace_body[f.upper].stiffest, f.stiffness);
+    if (f.moving) brace_body[f.lower].stiffest = std::max(brace_body[f.lower].stiffest, f.stiffness);
+  }
+  for (const BraceFace& f : brace_face) {
+    if (!f.moving || !counts(f) || f.stiffness < brace_body[f.lower].stiffest) continue;
+    BraceBody& upper = brace_body[f.upper];
     if (upper.down == kNoIndex) upper.down = f.lower; else unite(upper.down, f.lower);
   }
   // the horizontal directions the chain is tilted in
@@ -376,6 +406,10 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
     brace_level[brace_body[x].level].gravity += std::max(0.0, g / s.inv_mass_[x] * (glm::dot(s.com_[x], up) - base(x)));
   for (const BraceFace& f : brace_face)
     if (f.moving && counts(f)) brace_level[brace_body[f.lower].level].gravity += std::max(0.0, f.load * (f.z - base(f.lower)));
+  // (and the loads of the pairs that are no face pairs: a heavy ball on a column's top)
+  for (const BraceLoad& f : brace_load)
+    if (column_level[f.lower] != 0 && brace_body[f.lower].supports > 0)
+      brace_level[brace_body[f.lower].level].gravity += std::max(0.0, f.load * (f.z - base(f.lower)));
   // the springs: each point of a face pair a spring k_p of the pair's m_eff w^2 over its
   // points. A level's bodies tilt by t each (the lever x_p - x_body), the level turns by psi
   // (each body lifted by psi (x_body - x_level)) and lifts by z: the point's spring is

@@ -472,8 +472,8 @@ struct RigidContacts {
   /// the column model's n^3 g / (w^2 s), under which the pile measured last stands on its
   /// springs (those measure_columns gave its face pairs) with the margin a free column of cubes
   /// has at that load: kGreenhill over the smallest factor on gravity that the tilt chain of
-  /// its levels stands (its levels: bodies joined by a common support or a common load on face
-  /// contacts). Into column_braced; -1 when the levels do not make a tree (a level resting on
+  /// its levels stands (its levels: bodies carrying a common body on face contacts whose
+  /// springs are each the stiffest of the body they rest on). Into column_braced; -1 when the levels do not make a tree (a level resting on
   /// two, or on itself), where the column model's is taken. Needs the loads of a step. O(bodies + face points) per
   /// factor tried; no allocation once the scratch has grown. Needs measure_columns' face pairs.
   double measure_braced(const RigidBodySystem& s, const Vec3& up, double g);
@@ -489,11 +489,20 @@ struct RigidContacts {
     bool moving;  // the lower body moves
   };
   std::vector<BraceFace> brace_face;
-  // by body: its union-find root, the first body seen on it and under it, its level, and the
-  // sums for the height it tilts about (its supports' centroids weighted by their loads)
+  // by touching pair that is no such face pair (a ball's point, an edge, a steep face, a body
+  // that does not move pressing from above) with a moving lower body: the lower body, the
+  // vertical part of the pair's load (N) and the height of its points' centroid along up (m)
+  struct BraceLoad {
+    std::uint32_t lower;
+    double load, z;
+  };
+  std::vector<BraceLoad> brace_load;
+  // by body: its union-find root, the first body under it that its load ties into its level,
+  // its level, the sums for the height it tilts about (its supports' centroids weighted by
+  // their loads), and its stiffest face spring (N/m)
   struct BraceBody {
-    std::uint32_t root, up, down, level;
-    double fz, f, z;
+    std::uint32_t root, down, level;
+    double fz, f, z, stiffest;
     int supports;
   };
   std::vector<BraceBody> brace_body;
