@@ -537,7 +537,7 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     const bool same = c.column_known && settled && c.column_bodies == type_.size() && c.column_up == up;
     if (!same || ++c.column_age >= kMeasureEvery) {
       c.column_need = c.measure_columns(*this, up, c.column_top, least < 0, rate(-1), static_rate(-1));
-      c.column_rate = rate(-1), c.column_static_rate = static_rate(-1);
+      c.column_rate = rate(-1), c.column_static_rate = static_rate(-1), c.column_g = g;
       c.column_bodies = type_.size(), c.column_up = up, c.column_age = 0, c.column_known = true;
       // (before a step has carried loads, as in the first, the springs are not known: the
       // column model judges that measure)
@@ -558,24 +558,31 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   // goes with g and K with the rates squared, so it is scaled to this step's by the larger of
   // the dynamic and the static springs' ratios, which never lowers it for springs that did not
   // soften alike; exactly 1 at a fixed dt and settings)
+  // (the springs' squared ratio at half the substeps, from the measure's to this step's)
+  const double w_half = rate(-1), ws_half = static_rate(-1);
+  const bool rated = w_half > 0 && ws_half > 0 && c.column_rate > 0 && c.column_static_rate > 0;
+  const double soften = rated ? std::max(c.column_rate * c.column_rate / (w_half * w_half),
+                                         c.column_static_rate * c.column_static_rate / (ws_half * ws_half))
+                              : 1;
   auto load = [&](int shift) {
     const double w = rate(shift);
-    const double ws = static_rate(shift);
-    if (shift < 0 && c.column_braced >= 0 && w > 0 && ws > 0 && c.column_rate > 0 && c.column_static_rate > 0 &&
-        c.column_braced_g > 0) {
-      const double rd = c.column_rate / w, rs = c.column_static_rate / ws;
-      return c.column_braced * (g / c.column_braced_g) * std::max(rd * rd, rs * rs);
-    }
+    if (shift < 0 && c.column_braced >= 0 && rated && c.column_braced_g > 0)
+      return c.column_braced * (g / c.column_braced_g) * soften;
     return need * g / (w * w);
   };
+  // the sag predicted likewise (made at the measure's springs, whose loads went with its
+  // gravity): each spring gives with its rate squared, so a halved pile whose springs softened
+  // since (a longer step, a lowered contact_hertz) is judged on them before the next measure,
+  // up to 8 steps on; exactly 1 at a fixed dt and settings
+  const double sag_scale = c.column_g > 0 ? g / c.column_g * soften : soften;
   profile_.half_load = least < 0 ? load(-1) : 0;
   // whether the columns fit 2^shift times the substeps with `margin` of the bounds: their load
   // n^3 g / (w^2 s), and below the setting's substeps the sag predicted at half of them, within
   // each budget that is set (a fraction of the bodies' sizes, metres)
   auto fits = [&](int shift, double margin) {
     if (load(shift) > margin * kColumnLoad) return false;
-    return shift >= 0 || ((budget <= 0 || c.column_sag_top <= margin * budget) &&
-                          (fraction <= 0 || c.column_sag_ratio <= margin * fraction));
+    return shift >= 0 || ((budget <= 0 || c.column_sag_top * sag_scale <= margin * budget) &&
+                          (fraction <= 0 || c.column_sag_ratio * sag_scale <= margin * fraction));
   };
   // every awake dynamic body slower than the sleep tolerances this step: the sag is predicted
   // for bodies at rest, and a body moving on its contacts (a column rocking on its edges, a

@@ -532,6 +532,9 @@ struct RigidContacts {
   // the gravity (m/s^2) of the last measure_braced: its load is scaled to the step's
   // (RigidBodySystem::step_substeps), as a varying dt or a changed contact_hertz moves them
   double column_rate = 0, column_static_rate = 0, column_braced_g = 0;
+  // the gravity (m/s^2) of the last measure_columns: its sag is scaled to the step's as the
+  // braced load is (the loads it was made from went with it)
+  double column_g = 0;
   // the last measure (RigidBodySystem::step_substeps): its result, the bodies and the up it
   // was made for, the steps since, and whether it stands (cleared when a body is destroyed)
   double column_need = 0;

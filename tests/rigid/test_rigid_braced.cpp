@@ -155,4 +155,60 @@ TEST(RigidStacking, AHeavyBallOnACubeRaisesItsLoadAsItsWeightSays) {
   }
 }
 
+// The braced load (and the sag) is made at the measure's springs and carried to each step's
+// (columns.cpp, step_substeps: scaled by the springs' squared ratio), as the measure is made
+// again only when the pairs change or every 8 steps (kMeasureEvery). A halved pile whose
+// springs soften past a bound goes back to the setting's substeps (or more) at the next step,
+// whichever of the 8 steps between measures it softens at:
+// - a column of 12 one-metre cubes on the load alone (by_load: its load at 60 Hz 0.13,
+//   halved a second in): contact_hertz at a quarter (the springs between cubes at 1/16, the
+//   ground's at 1/1.6: w_g = min(2 w, 1 / h)) puts it past 0.5; so does a step twice as long
+//   (the stiffness cap, a quarter of the substep rate, halves: 1/30 s at 8 substeps is 60 Hz
+//   at most, the ground's 1 / h halves too: 4 times the load, 0.52);
+// - the 8-level square pyramid (204 cubes): contact_hertz lowered to 0.8 sqrt(load / 0.5) of
+//   itself puts its braced load at 0.5 / 0.64 at least;
+// - the same pyramid at the defaults (the most sag predicted at 4 substeps 1.1 mm, 0.11% of a
+//   cube, under the halving's 1%; load 7e-4): contact_hertz at a fifth puts the sag between
+//   cubes at 25 times, 2.8% of a cube, past the whole budget of 2%, the load still far under
+//   its bound: back by the sag.
+TEST(RigidStacking, ASofterSpringOrALongerStepSendsAHalvedPileBackAtOnce) {
+  struct Case {
+    const char* name;
+    pba::ContactSettings settings;
+    void (*build)(RigidBodySystem&);
+    void (*soften)(RigidBodySystem&, double& dt);
+  };
+  auto stack = [](RigidBodySystem& s) { pba::rigid_scenes::vertical_stack(s, 12); };
+  auto pyramid = [](RigidBodySystem& s) { pba::rigid_scenes::square_pyramid(s, 8); };
+  const Case cases[] = {
+      {"12 cubes, contact_hertz at a quarter", by_load(), stack,
+       [](RigidBodySystem& s, double&) { s.settings().contact_hertz *= 0.25; }},
+      {"12 cubes, dt doubled", by_load(), stack, [](RigidBodySystem&, double& dt) { dt *= 2; }},
+      {"pyramid of 8, contact_hertz past the load's bound", by_load(), pyramid,
+       [](RigidBodySystem& s, double&) {
+         s.settings().contact_hertz *= 0.8 * std::sqrt(s.profile().half_load / kBound);
+       }},
+      {"pyramid of 8 at the defaults, contact_hertz at a fifth", {.sleep = false}, pyramid,
+       [](RigidBodySystem& s, double&) { s.settings().contact_hertz *= 0.2; }},
+  };
+  for (const Case& c : cases)
+    for (int phase = 0; phase < 8; ++phase) {
+      RigidBodySystem s({.capacity = 256, .contacts = c.settings});
+      c.build(s);
+      double dt = 1.0 / 60;
+      int i = 0;
+      while (i < 300 && s.profile().substeps != 4) s.step(dt, kGravity), ++i;
+      ASSERT_EQ(s.profile().substeps, 4) << c.name;
+      for (int k = 0; k < 8 + phase; ++k) s.step(dt, kGravity);  // (halved, and measured since)
+      ASSERT_EQ(s.profile().substeps, 4) << c.name;
+      const double before = s.profile().half_load;
+      c.soften(s, dt);
+      s.step(dt, kGravity);
+      if (phase == 0)
+        std::printf("%s: halved at step %d (load %.4g), then %d substeps (load %.4g)\n", c.name, i, before,
+                    s.profile().substeps, s.profile().half_load);
+      EXPECT_GE(s.profile().substeps, 8) << c.name << ", softened " << 8 + phase << " steps after the halving";
+    }
+}
+
 }  // namespace
