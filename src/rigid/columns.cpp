@@ -172,41 +172,41 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
   // body that does not move (level 1)
   double ratio = 0;
   for (const ContactPair& c : pairs) {
-    // (with `give`) every touching contact's own deflection under its load, over the size of
-    // the smaller moving body on it: a ball's one point on the ground is no column, yet its
-    // springs sink it g / w^2 (0.17 mm at 4 substeps, a sixth of a 1 mm ball's radius)
-    if (give && c.count > 0 && (moving(c.a) || moving(c.b))) {
-      double deepest = c.points[0].depth;
-      for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.points[p].depth);
-      if (deepest >= -slop_of(s, c.a, c.b)) {
-        const double inv_a = moving(c.a) ? s.inv_mass_[c.a] : 0, inv_b = moving(c.b) ? s.inv_mass_[c.b] : 0;
-        const bool fixed = inv_a == 0 || inv_b == 0;
-        const ColumnSpring k = spring_of(c, inv_a + inv_b, fixed ? w_static : w_dynamic);
-        double side = INFINITY;
-        if (moving(c.a)) side = 2 * s.min_extent_[c.a];
-        if (moving(c.b)) side = std::min(side, 2 * s.min_extent_[c.b]);
-        if (k.stiffness > 0 && side > 0) ratio = std::max(ratio, k.load / (k.stiffness * side));
-        // a touching pair that is no face pair of the columns below (a ball's point, an edge, a
-        // steep face, a body that does not move pressing from above) still loads the body under
-        // it: the vertical part of its load, at its points' height, for the braced model's G
-        const double d = glm::dot(c.normal, up);
-        const std::uint32_t lower = d > 0 ? c.a : c.b, upper = d > 0 ? c.b : c.a;
-        const bool face = c.count >= 3 && std::abs(d) >= kFaceCosine && moving(upper);
-        if (!face && moving(lower) && d != 0 && impulse_h > 0) {
-          double load = 0, z = 0;
-          for (int p = 0; p < c.count; ++p) load += c.normal_impulse[p], z += glm::dot(c.points[p].at, up);
-          if (load > 0) brace_load.push_back({lower, load / impulse_h * std::abs(d), z / c.count});
-        }
-      }
-    }
-    if (c.count < 3) continue;
-    const double d = glm::dot(c.normal, up);
-    if (std::abs(d) < kFaceCosine) continue;
+    // (a pair counts touching: its deepest point within its linear slop, and with a moving
+    // body; what each body is, which is under, read once)
+    if (c.count == 0) continue;
+    const bool moves_a = moving(c.a), moves_b = moving(c.b);
+    if (!moves_a && !moves_b) continue;
     double deepest = c.points[0].depth;
     for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.points[p].depth);
     if (deepest < -slop_of(s, c.a, c.b)) continue;
+    const double d = glm::dot(c.normal, up);
     const std::uint32_t lower = d > 0 ? c.a : c.b, upper = d > 0 ? c.b : c.a;
-    if (!moving(upper)) continue;
+    const bool moves_lower = d > 0 ? moves_a : moves_b, moves_upper = d > 0 ? moves_b : moves_a;
+    // a face pair of the columns: three points or more (one or two are a hinge), within 45
+    // degrees of the vertical, carrying a moving body
+    const bool is_face = c.count >= 3 && std::abs(d) >= kFaceCosine && moves_upper;
+    if (give) {
+      // every touching contact's own deflection under its load, over the size of the smaller
+      // moving body on it: a ball's one point on the ground is no column, yet its springs sink
+      // it g / w^2 (0.17 mm at 4 substeps, a sixth of a 1 mm ball's radius)
+      const double inv_a = moves_a ? s.inv_mass_[c.a] : 0, inv_b = moves_b ? s.inv_mass_[c.b] : 0;
+      const bool fixed = inv_a == 0 || inv_b == 0;
+      const ColumnSpring k = spring_of(c, inv_a + inv_b, fixed ? w_static : w_dynamic);
+      double side = INFINITY;
+      if (moves_a) side = 2 * s.min_extent_[c.a];
+      if (moves_b) side = std::min(side, 2 * s.min_extent_[c.b]);
+      if (k.stiffness > 0 && side > 0) ratio = std::max(ratio, k.load / (k.stiffness * side));
+      // a touching pair that is no face pair of the columns (a ball's point, an edge, a steep
+      // face, a body that does not move pressing from above) still loads the body under it:
+      // the vertical part of its load, at its points' height, for the braced model's G
+      if (!is_face && moves_lower && d != 0 && impulse_h > 0) {
+        double load = 0, z = 0;
+        for (int p = 0; p < c.count; ++p) load += c.normal_impulse[p], z += glm::dot(c.points[p].at, up);
+        if (load > 0) brace_load.push_back({lower, load / impulse_h * std::abs(d), z / c.count});
+      }
+    }
+    if (!is_face) continue;
     // (with `give`) the face pair for the braced model: its spring and its points' height
     auto face = [&](const ColumnSpring& k, bool moves) {
       double z = 0;
@@ -214,7 +214,7 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
       brace_face.push_back({static_cast<std::uint32_t>(&c - pairs.data()), lower, upper, k.load, k.stiffness,
                             z / c.count, moves});
     };
-    if (!moving(lower)) {
+    if (!moves_lower) {
       if (column_level[upper] == 0) column_level[upper] = 1, column_queue.push_back(upper);
       if (give) {
         const ColumnSpring k = spring_of(c, s.inv_mass_[upper], w_static);
@@ -308,7 +308,12 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   };
   // a face pair between bodies on the columns (an upper body reached from the ground, on a
   // support that does not move or that was reached too)
-  auto counts = [&](const BraceFace& f) { return column_level[f.upper] != 0 && (!f.moving || column_level[f.lower] != 0); };
+  // (the others are dropped here, once: what follows reads only these)
+  brace_face.erase(std::remove_if(brace_face.begin(), brace_face.end(),
+                                  [&](const BraceFace& f) {
+                                    return column_level[f.upper] == 0 || (f.moving && column_level[f.lower] == 0);
+                                  }),
+                   brace_face.end());
   // the levels: bodies carrying a common body move together, where its springs on each are
   // the stiffest that body has (as support or as load). A tie makes the path through the
   // common body rigid: where that body's springs are each body's stiffest, the tie is as stiff
@@ -320,12 +325,11 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   // on a common body are not tied: what holds their tilts alike is that body's own tilt, held
   // by its own supports (a column's foot on a slab beside short cubes tilts alone).
   for (const BraceFace& f : brace_face) {
-    if (!counts(f)) continue;
     brace_body[f.upper].stiffest = std::max(brace_body[f.upper].stiffest, f.stiffness);
     if (f.moving) brace_body[f.lower].stiffest = std::max(brace_body[f.lower].stiffest, f.stiffness);
   }
   for (const BraceFace& f : brace_face) {
-    if (!f.moving || !counts(f) || f.stiffness < brace_body[f.lower].stiffest) continue;
+    if (!f.moving || f.stiffness < brace_body[f.lower].stiffest) continue;
     BraceBody& upper = brace_body[f.upper];
     if (upper.down == kNoIndex) upper.down = f.lower; else unite(upper.down, f.lower);
   }
@@ -352,13 +356,14 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   }
   // (a spread under a thousandth of its smallest body's size is a level in line along the
   // direction: it does not turn as a level, and its turn would be a zero pivot)
+  // (and from here on sum is the level's centre, the turn's axis)
   for (BraceLevel& l : brace_level)
-    for (int d = 0; d < 2; ++d) l.psi[d] = l.hi[d] - l.lo[d] > 1e-3 * l.size;
+    for (int d = 0; d < 2; ++d) l.psi[d] = l.hi[d] - l.lo[d] > 1e-3 * l.size, l.sum[d] /= l.count;
   // each level rests on one level at most (or on bodies that do not move): the chain is a
   // tree. Otherwise (a level bridging two, a level resting on itself) the column model rules
   const auto levels = static_cast<std::uint32_t>(brace_level.size());
   for (const BraceFace& f : brace_face) {
-    if (!f.moving || !counts(f)) continue;
+    if (!f.moving) continue;
     const std::uint32_t lu = brace_body[f.upper].level, ll = brace_body[f.lower].level;
     BraceLevel& u = brace_level[lu];
     if (lu == ll || (u.parent != kNoIndex && u.parent != ll)) return -1;
@@ -394,7 +399,6 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   // it by (z - z0) t^2 / 2, and its own weight so from its centre: the chain's geometric
   // stiffness, G = sum F (z - z0) + m g (z_c - z0) over the level's bodies (P-delta)
   for (const BraceFace& f : brace_face) {
-    if (!counts(f)) continue;
     BraceBody& b = brace_body[f.upper];
     b.fz += f.load * f.z, b.f += f.load, b.z += f.z, ++b.supports;
   }
@@ -405,7 +409,7 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   for (const std::uint32_t x : column_queue)
     brace_level[brace_body[x].level].gravity += std::max(0.0, g / s.inv_mass_[x] * (glm::dot(s.com_[x], up) - base(x)));
   for (const BraceFace& f : brace_face)
-    if (f.moving && counts(f)) brace_level[brace_body[f.lower].level].gravity += std::max(0.0, f.load * (f.z - base(f.lower)));
+    if (f.moving) brace_level[brace_body[f.lower].level].gravity += std::max(0.0, f.load * (f.z - base(f.lower)));
   // (and the loads of the pairs that are no face pairs: a heavy ball on a column's top)
   for (const BraceLoad& f : brace_load)
     if (column_level[f.lower] != 0 && brace_body[f.lower].supports > 0)
@@ -418,7 +422,6 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   // k sum a a^T to the upper level's D, k sum b b^T to the lower's, -k sum a b^T to the
   // upper's C: made of the points' sums of du, dl, du^2, dl^2, du dl
   for (const BraceFace& f : brace_face) {
-    if (!counts(f)) continue;
     const ContactPair& c = pairs[f.pair];
     // (made a step after the measure, a pair may have lost points since: no longer a face,
     // the model does not describe it, and the column model judges the pile)
@@ -428,7 +431,7 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
     BraceLevel* l = f.moving ? &brace_level[brace_body[f.lower].level] : nullptr;
     for (int d = 0; d < 2; ++d) {
       const double xu = glm::dot(s.com_[f.upper], dir[d]), xl = f.moving ? glm::dot(s.com_[f.lower], dir[d]) : 0;
-      const double a1 = u.psi[d] ? xu - u.sum[d] / u.count : 0, b1 = l && l->psi[d] ? xl - l->sum[d] / l->count : 0;
+      const double a1 = u.psi[d] ? xu - u.sum[d] : 0, b1 = l && l->psi[d] ? xl - l->sum[d] : 0;
       double su = 0, sl = 0, suu = 0, sll = 0, sul = 0;
       for (int p = 0; p < c.count; ++p) {
         const double x = glm::dot(c.points[p].at, dir[d]), du = x - xu, dl = x - xl;
@@ -436,12 +439,9 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
       }
       // (the blocks are symmetric: both triangles written)
       auto add = [](double* m, double s2, double s1, double one, double nn, double kk) {
-        const double v[6] = {s2, one * s1, s1, one * one * nn, one * nn, nn};
-        const int at[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
-        for (int i = 0; i < 6; ++i) {
-          m[3 * at[i][0] + at[i][1]] += kk * v[i];
-          if (at[i][0] != at[i][1]) m[3 * at[i][1] + at[i][0]] += kk * v[i];
-        }
+        const double m01 = kk * (one * s1), m02 = kk * s1, m12 = kk * (one * nn);
+        m[0] += kk * s2, m[1] += m01, m[2] += m02, m[3] += m01, m[4] += kk * (one * one * nn), m[5] += m12;
+        m[6] += m02, m[7] += m12, m[8] += kk * nn;
       };
       add(u.d[d], suu, su, a1, n, k);
       if (!l) continue;
