@@ -12,14 +12,11 @@
 #include "pba/rigid.h"
 #include "pba/rigid_scenes.h"
 
-using pba::ColliderShape;
-using pba::RigidBodySystem;
-using pba::Vec3;
-
 namespace {
 
+// gravity (m/s^2), down the y axis
 constexpr double kG = 9.81;
-const Vec3 kGravity{0, -kG, 0};
+const pba::Vec3 kGravity{0, -kG, 0};
 // Greenhill's load in the column model's measure (columns.cpp, kGreenhill)
 constexpr double kGreenhill = 7.837 / 8;
 // the halving's bound on the load at half the substeps (columns.cpp: kColumnLoad; back to the
@@ -33,32 +30,32 @@ pba::ContactSettings by_load() { return {.auto_substeps_sag_fraction = 0, .auto_
 
 // The top of `top` after `steps` at exactly `substeps` and 15 Hz a substep (the halved
 // defaults' springs at 4): the most it moved sideways from where it was built (m)
-double sway_at(const std::function<pba::RigidBodyId(RigidBodySystem&)>& build, int substeps, int steps) {
-  RigidBodySystem s({.capacity = 256, .contacts = {.contact_hertz = 15.0 * substeps, .sleep = false}});
+double sway_at(const std::function<pba::RigidBodyId(pba::RigidBodySystem&)>& build, int substeps, int steps) {
+  pba::RigidBodySystem s({.capacity = 256, .contacts = {.contact_hertz = 15.0 * substeps, .sleep = false}});
   const pba::RigidBodyId top = build(s);
   s.set_substeps(substeps);
-  const Vec3 start = s.center_of_mass(top);
+  const pba::Vec3 start = s.center_of_mass(top);
   double most = 0;
   for (int i = 0; i < steps; ++i) {
     s.step(1.0 / 60, kGravity);
-    const Vec3 p = s.center_of_mass(top);
+    const pba::Vec3 p = s.center_of_mass(top);
     most = std::max(most, std::hypot(p.x - start.x, p.z - start.z));
   }
   return most;
 }
 
 // The load at half the substeps two seconds in, sleeping off, at `settings`
-double load_of(const std::function<pba::RigidBodyId(RigidBodySystem&)>& build, const pba::ContactSettings& settings) {
-  RigidBodySystem s({.capacity = 256, .contacts = settings});
+double load_of(const std::function<pba::RigidBodyId(pba::RigidBodySystem&)>& build, const pba::ContactSettings& settings) {
+  pba::RigidBodySystem s({.capacity = 256, .contacts = settings});
   build(s);
   for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
   return s.profile().half_load;
 }
 
 // A column of n one-metre cubes on the ground (its top returned)
-pba::RigidBodyId column(RigidBodySystem& s, int n, double foot = 0) {
+pba::RigidBodyId column(pba::RigidBodySystem& s, int n, double foot = 0) {
   pba::RigidBodyId top{};
-  for (int i = 0; i < n; ++i) top = pba::rigid_scenes::box(s, {0, foot + 0.5 + i, 0}, Vec3(0.5));
+  for (int i = 0; i < n; ++i) top = pba::rigid_scenes::box(s, {0, foot + 0.5 + i, 0}, pba::Vec3(0.5));
   return top;
 }
 
@@ -77,14 +74,14 @@ pba::RigidBodyId column(RigidBodySystem& s, int n, double foot = 0) {
 // plank that does not hold the column cannot make it stronger.
 TEST(RigidStacking, ALightPlankOverAColumnAndATallBoxDoesNotBraceTheColumn) {
   const int n = 26;
-  auto build = [&](RigidBodySystem& s) {
+  auto build = [&](pba::RigidBodySystem& s) {
     pba::rigid_scenes::ground(s, 0.5);
     const pba::RigidBodyId top = column(s, n);
-    pba::rigid_scenes::box(s, {2, 0.5 * n, 0}, Vec3(0.5, 0.5 * n, 2));
-    pba::rigid_scenes::box(s, {1, n + 0.25, 0}, Vec3(1.5, 0.25, 0.5), 0.5, 10);
+    pba::rigid_scenes::box(s, {2, 0.5 * n, 0}, pba::Vec3(0.5, 0.5 * n, 2));
+    pba::rigid_scenes::box(s, {1, n + 0.25, 0}, pba::Vec3(1.5, 0.25, 0.5), 0.5, 10);
     return top;
   };
-  auto free = [&](RigidBodySystem& s) {
+  auto free = [&](pba::RigidBodySystem& s) {
     pba::rigid_scenes::ground(s, 0.5);
     return column(s, n);
   };
@@ -113,13 +110,13 @@ TEST(RigidStacking, ShortCubesBesideAColumnOnASlabDoNotClampItsFoot) {
   for (const int n : {6, 26})
     for (const int beside : {1, 2}) {
       auto build = [&](int stubs) {
-        return [=](RigidBodySystem& s) {
+        return [=](pba::RigidBodySystem& s) {
           pba::rigid_scenes::ground(s, 0.5);
-          pba::rigid_scenes::box(s, {0, 0.25, 0}, Vec3(4, 0.25, 4));
+          pba::rigid_scenes::box(s, {0, 0.25, 0}, pba::Vec3(4, 0.25, 4));
           const pba::RigidBodyId top = column(s, n, 0.5);
           for (const double x : {-2.0, 2.0})
             for (const double z : {-2.0, 2.0})
-              for (int i = 0; i < stubs; ++i) pba::rigid_scenes::box(s, {x, 1.0 + i, z}, Vec3(0.5));
+              for (int i = 0; i < stubs; ++i) pba::rigid_scenes::box(s, {x, 1.0 + i, z}, pba::Vec3(0.5));
           return top;
         };
       };
@@ -140,12 +137,12 @@ TEST(RigidStacking, ShortCubesBesideAColumnOnASlabDoNotClampItsFoot) {
 TEST(RigidStacking, AHeavyBallOnACubeRaisesItsLoadAsItsWeightSays) {
   const double m = 1000, wg = 240, k = m * wg * wg / 4;
   for (const double ratio : {0.0, 10.0}) {
-    RigidBodySystem s({.capacity = 16, .contacts = {.sleep = false}});
+    pba::RigidBodySystem s({.capacity = 16, .contacts = {.sleep = false}});
     pba::rigid_scenes::ground(s, 0.5);
-    pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+    pba::rigid_scenes::box(s, {0, 0.5, 0}, pba::Vec3(0.5));
     if (ratio > 0) {
       const double r = 0.5, density = ratio * m / (4.0 / 3 * pba::kPi * r * r * r);
-      s.create({.pose = {Vec3(0, 1 + r, 0)}, .shapes = {{.shape = ColliderShape::sphere(r), .density = density}}});
+      s.create({.pose = {pba::Vec3(0, 1 + r, 0)}, .shapes = {{.shape = pba::ColliderShape::sphere(r), .density = density}}});
     }
     for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
     const double expected = kGreenhill * (0.5 + ratio) * m * kG / k;
@@ -175,25 +172,25 @@ TEST(RigidStacking, ASofterSpringOrALongerStepSendsAHalvedPileBackAtOnce) {
   struct Case {
     const char* name;
     pba::ContactSettings settings;
-    void (*build)(RigidBodySystem&);
-    void (*soften)(RigidBodySystem&, double& dt);
+    void (*build)(pba::RigidBodySystem&);
+    void (*soften)(pba::RigidBodySystem&, double& dt);
   };
-  auto stack = [](RigidBodySystem& s) { pba::rigid_scenes::vertical_stack(s, 12); };
-  auto pyramid = [](RigidBodySystem& s) { pba::rigid_scenes::square_pyramid(s, 8); };
+  auto stack = [](pba::RigidBodySystem& s) { pba::rigid_scenes::vertical_stack(s, 12); };
+  auto pyramid = [](pba::RigidBodySystem& s) { pba::rigid_scenes::square_pyramid(s, 8); };
   const Case cases[] = {
       {"12 cubes, contact_hertz at a quarter", by_load(), stack,
-       [](RigidBodySystem& s, double&) { s.settings().contact_hertz *= 0.25; }},
-      {"12 cubes, dt doubled", by_load(), stack, [](RigidBodySystem&, double& dt) { dt *= 2; }},
+       [](pba::RigidBodySystem& s, double&) { s.settings().contact_hertz *= 0.25; }},
+      {"12 cubes, dt doubled", by_load(), stack, [](pba::RigidBodySystem&, double& dt) { dt *= 2; }},
       {"pyramid of 8, contact_hertz past the load's bound", by_load(), pyramid,
-       [](RigidBodySystem& s, double&) {
+       [](pba::RigidBodySystem& s, double&) {
          s.settings().contact_hertz *= 0.8 * std::sqrt(s.profile().half_load / kBound);
        }},
       {"pyramid of 8 at the defaults, contact_hertz at a fifth", {.sleep = false}, pyramid,
-       [](RigidBodySystem& s, double&) { s.settings().contact_hertz *= 0.2; }},
+       [](pba::RigidBodySystem& s, double&) { s.settings().contact_hertz *= 0.2; }},
   };
   for (const Case& c : cases)
     for (int phase = 0; phase < 8; ++phase) {
-      RigidBodySystem s({.capacity = 256, .contacts = c.settings});
+      pba::RigidBodySystem s({.capacity = 256, .contacts = c.settings});
       c.build(s);
       double dt = 1.0 / 60;
       int i = 0;
