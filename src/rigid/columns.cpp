@@ -102,7 +102,10 @@
 // pass over each tree of levels per factor tried: one for a tree that carries less than the
 // most found so far, about 20 for one whose load is found. It is made only when the halving
 // can use it (halved, or with the same pairs as the last step): a pile whose pairs change
-// every step (the rain landing) restarts its calm every step whatever the load.
+// every step (the rain landing) restarts its calm every step whatever the load. Halved, a
+// measure made because pairs changed elsewhere (a ball bouncing beside the pile) keeps the
+// braced load of the same face pairs up to kMeasureEvery steps old, the cadence at rest; a face
+// pair gained or lost, or a body made or destroyed, has it made again at once.
 #include <algorithm>
 #include <cmath>
 
@@ -154,7 +157,7 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     column_sink.reserve(n), column_pair_spring.reserve(pairs.capacity()), column_spring.reserve(pairs.capacity());
     column_sink.assign(n, {});
     column_pair_spring.clear();
-    brace_face.reserve(pairs.capacity()), brace_load.reserve(pairs.capacity());
+    brace_face.reserve(pairs.capacity()), brace_load.reserve(pairs.capacity()), brace_key.reserve(pairs.capacity());
     brace_face.clear(), brace_load.clear();
   }
   // a face contact as a spring: its load (the normal impulse it carried in the last step's
@@ -308,6 +311,9 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   };
   // a face pair between bodies on the columns (an upper body reached from the ground, on a
   // support that does not move or that was reached too)
+  // (the face pairs it was made from, for brace_faces_same)
+  brace_key.resize(brace_face.size());
+  for (std::size_t i = 0; i < brace_face.size(); ++i) brace_key[i] = face_key(brace_face[i]);
   // (the others are dropped here, once: what follows reads only these)
   brace_face.erase(std::remove_if(brace_face.begin(), brace_face.end(),
                                   [&](const BraceFace& f) {
@@ -474,6 +480,13 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   return most;
 }
 
+bool RigidContacts::brace_faces_same() const {
+  if (brace_key.size() != brace_face.size()) return false;
+  for (std::size_t i = 0; i < brace_face.size(); ++i)
+    if (brace_key[i] != face_key(brace_face[i])) return false;
+  return true;
+}
+
 bool RigidContacts::braced_stands(double factor, std::uint32_t begin, std::uint32_t end) {
   for (int d = 0; d < 2; ++d) {
     for (std::uint32_t i = begin; i < end; ++i) {
@@ -535,20 +548,30 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     // bodies or gravity's direction did, and otherwise every kMeasureEvery steps
     const Vec3 up = -gravity / g;
     const bool same = c.column_known && settled && c.column_bodies == type_.size() && c.column_up == up;
+    ++c.brace_age;
     if (!same || ++c.column_age >= kMeasureEvery) {
+      // (the same bodies and up as the last measure's: no body was made or destroyed since)
+      const bool same_bodies = c.column_known && c.column_bodies == type_.size() && c.column_up == up;
       c.column_need = c.measure_columns(*this, up, c.column_top, least < 0, rate(-1), static_rate(-1));
       c.column_rate = rate(-1), c.column_static_rate = static_rate(-1), c.column_g = g;
       c.column_bodies = type_.size(), c.column_up = up, c.column_age = 0, c.column_known = true;
       // (before a step has carried loads, as in the first, the springs are not known: the
-      // column model judges that measure)
-      c.column_braced = -1, c.brace_due = least < 0 && c.impulse_h > 0;
+      // column model judges that measure.) The braced model is owed for it, unless this
+      // measure comes of pairs that changed and its face pairs are those of the last braced
+      // model's, made fewer than kMeasureEvery steps ago: the pairs changed elsewhere (a body
+      // bouncing beside a halved pile), and the braced load is kept as at rest, where it is
+      // made again every kMeasureEvery steps (the measures of that cadence always make it)
+      const bool kept = !same && same_bodies && c.column_braced >= 0 && c.brace_age < kMeasureEvery && c.brace_faces_same();
+      if (!kept) c.column_braced = -1, c.brace_due = least < 0 && c.impulse_h > 0;
     }
     // the braced model of that measure, once the halving can use it: halved (the way back),
     // or with the same pairs as the last step (the calm before halving). While the pairs
     // change the calm starts again every step whatever the load, so a pile still landing (the
     // rain) does not pay for it; made later from the same face pairs, their points now
-    if (c.brace_due && (settled || auto_shift_ < 0))
+    if (c.brace_due && (settled || auto_shift_ < 0)) {
       c.column_braced = c.measure_braced(*this, up, g), c.column_braced_g = g, c.brace_due = false;
+      c.brace_rate = c.column_rate, c.brace_static_rate = c.column_static_rate, c.brace_age = 0;
+    }
   }
   const double need = c.column_need;  // n^3 / s (1/m)
   profile_.column = c.column_top;
@@ -558,16 +581,19 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   // goes with g and K with the rates squared, so it is scaled to this step's by the larger of
   // the dynamic and the static springs' ratios, which never lowers it for springs that did not
   // soften alike; exactly 1 at a fixed dt and settings)
-  // (the springs' squared ratio at half the substeps, from the measure's to this step's)
+  // (the springs' squared ratio at half the substeps, from a measure's to this step's: the
+  // larger of the dynamic and the static springs')
   const double w_half = rate(-1), ws_half = static_rate(-1);
-  const bool rated = w_half > 0 && ws_half > 0 && c.column_rate > 0 && c.column_static_rate > 0;
-  const double soften = rated ? std::max(c.column_rate * c.column_rate / (w_half * w_half),
-                                         c.column_static_rate * c.column_static_rate / (ws_half * ws_half))
-                              : 1;
+  auto softened = [&](double w, double ws) {
+    return w > 0 && ws > 0 && w_half > 0 && ws_half > 0 ? std::max(w * w / (w_half * w_half), ws * ws / (ws_half * ws_half))
+                                                        : 1.0;
+  };
+  const bool rated = c.brace_rate > 0 && c.brace_static_rate > 0 && w_half > 0 && ws_half > 0;
+  const double soften = softened(c.column_rate, c.column_static_rate);
   auto load = [&](int shift) {
     const double w = rate(shift);
     if (shift < 0 && c.column_braced >= 0 && rated && c.column_braced_g > 0)
-      return c.column_braced * (g / c.column_braced_g) * soften;
+      return c.column_braced * (g / c.column_braced_g) * softened(c.brace_rate, c.brace_static_rate);
     return need * g / (w * w);
   };
   // the sag predicted likewise (made at the measure's springs, whose loads went with its
