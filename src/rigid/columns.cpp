@@ -61,11 +61,17 @@
 // pile's height in bodies, but a cube in a square pyramid rests on four and carries four: its
 // level is braced by the lattice, not a free column (the 20-level pyramid is 20 cubes high,
 // load 0.55 at the halved rate, and stood 1000 steps at 4 substeps with its top sagging 4.3 mm).
-// The halving is judged by a tilt chain of the pile's levels instead: bodies resting on a
-// common body, or carrying one, on face pairs (those above) move together as a level
-// (union-find; a support that does not move ties nothing, so columns side by side on the
-// ground, touching or not, stay apart: side contacts carry no load, and friction ties
-// nothing). In each horizontal direction a level has three unknowns: its bodies' tilt t, each
+// The halving is judged by a tilt chain of the pile's levels instead: bodies carrying a common
+// body on face pairs (those above) move together as a level (union-find), where that body's
+// springs on each are the stiffest the body has: the tie makes the path through the common
+// body rigid, as stiff as a joint of the body's own chain made rigid, which the margin
+// carries; a lighter or softer common body barely holds them, and tied through it a light
+// plank over a column's top and a tall box would clamp the column's tilt to the box's footing
+// (a column of 26 so tied was called 0.53, where alone it carries 1.2 and falls at 4
+// substeps, as it did). Bodies that only rest on a common body are not tied (what would tilt
+// them alike is its own tilt, held by its own supports: a column's foot on a slab beside short
+// cubes was clamped by their springs). Columns side by side, touching or not, stay apart: side
+// contacts carry no load, and friction ties nothing. In each horizontal direction a level has three unknowns: its bodies' tilt t, each
 // about its own centre; its turn psi, lifting each body by psi (x_body - x_level); and its lift
 // z. Each point p of a face pair is a spring k_p = m_eff w^2 / points (the sag's springs),
 // stretched by a . (t, psi, z) of the upper body's level less b . (t, psi, z) of the lower's,
@@ -74,7 +80,8 @@
 // supports (their centroid at height z0, weighted by their loads) carries each load F on it
 // at height z sideways by (z - z0) t and lowers it by (z - z0) t^2 / 2, its own weight so
 // from its centre: G = sum F (z - z0) + m g (z_centre - z0) on its level's tilt, with the
-// loads the contacts carried. The pile stands gravity times f when K - f G is positive
+// loads the contacts carried: every touching pair's on it, the vertical part of a pair's that
+// is no face pair (a heavy ball's point, an edge, a steep face) at its points' height. The pile stands gravity times f when K - f G is positive
 // definite; with each level on one level at most (a tree) a block LDL^T from the tips down
 // decides it in O(levels). The load is kGreenhill / f at the least f it does not stand
 // (bisected), which for a free column of n cubes is the column's own chain: n^3 g / (w^2 s)
@@ -90,12 +97,15 @@
 // model is (every cube alike): where bodies would tilt unlike each other it overstates what
 // the pile carries; it is held to the same margin. What is not a tree takes the column model
 // for the whole measure: a level resting on two levels (a plank bridging two columns: the
-// columns under it sway as free columns, which a level joined through the plank would not), or
-// resting on itself. Its cost is a union-find, the face points twice (two directions), and a
+// columns under it sway as free columns, which a level joined through the plank would not; a
+// common body not stiff enough to tie what it rests on), or resting on itself. Its cost is a union-find, the face points twice (two directions), and a
 // pass over each tree of levels per factor tried: one for a tree that carries less than the
 // most found so far, about 20 for one whose load is found. It is made only when the halving
 // can use it (halved, or with the same pairs as the last step): a pile whose pairs change
-// every step (the rain landing) restarts its calm every step whatever the load.
+// every step (the rain landing) restarts its calm every step whatever the load. Halved, a
+// measure made because pairs changed elsewhere (a ball bouncing beside the pile) keeps the
+// braced load of the same face pairs up to kMeasureEvery steps old, the cadence at rest; a face
+// pair gained or lost, or a body made or destroyed, has it made again at once.
 #include <algorithm>
 #include <cmath>
 
@@ -147,8 +157,8 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     column_sink.reserve(n), column_pair_spring.reserve(pairs.capacity()), column_spring.reserve(pairs.capacity());
     column_sink.assign(n, {});
     column_pair_spring.clear();
-    brace_face.reserve(pairs.capacity());
-    brace_face.clear();
+    brace_face.reserve(pairs.capacity()), brace_load.reserve(pairs.capacity()), brace_key.reserve(pairs.capacity());
+    brace_face.clear(), brace_load.clear();
   }
   // a face contact as a spring: its load (the normal impulse it carried in the last step's
   // substeps over the substep, impulse_h) and its stiffness m_eff w^2 (the points' springs in
@@ -165,30 +175,41 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
   // body that does not move (level 1)
   double ratio = 0;
   for (const ContactPair& c : pairs) {
-    // (with `give`) every touching contact's own deflection under its load, over the size of
-    // the smaller moving body on it: a ball's one point on the ground is no column, yet its
-    // springs sink it g / w^2 (0.17 mm at 4 substeps, a sixth of a 1 mm ball's radius)
-    if (give && c.count > 0 && (moving(c.a) || moving(c.b))) {
-      double deepest = c.points[0].depth;
-      for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.points[p].depth);
-      if (deepest >= -slop_of(s, c.a, c.b)) {
-        const double inv_a = moving(c.a) ? s.inv_mass_[c.a] : 0, inv_b = moving(c.b) ? s.inv_mass_[c.b] : 0;
-        const bool fixed = inv_a == 0 || inv_b == 0;
-        const ColumnSpring k = spring_of(c, inv_a + inv_b, fixed ? w_static : w_dynamic);
-        double side = INFINITY;
-        if (moving(c.a)) side = 2 * s.min_extent_[c.a];
-        if (moving(c.b)) side = std::min(side, 2 * s.min_extent_[c.b]);
-        if (k.stiffness > 0 && side > 0) ratio = std::max(ratio, k.load / (k.stiffness * side));
-      }
-    }
-    if (c.count < 3) continue;
-    const double d = glm::dot(c.normal, up);
-    if (std::abs(d) < kFaceCosine) continue;
+    // (a pair counts touching: its deepest point within its linear slop, and with a moving
+    // body; what each body is, which is under, read once)
+    if (c.count == 0) continue;
+    const bool moves_a = moving(c.a), moves_b = moving(c.b);
+    if (!moves_a && !moves_b) continue;
     double deepest = c.points[0].depth;
     for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.points[p].depth);
     if (deepest < -slop_of(s, c.a, c.b)) continue;
+    const double d = glm::dot(c.normal, up);
     const std::uint32_t lower = d > 0 ? c.a : c.b, upper = d > 0 ? c.b : c.a;
-    if (!moving(upper)) continue;
+    const bool moves_lower = d > 0 ? moves_a : moves_b, moves_upper = d > 0 ? moves_b : moves_a;
+    // a face pair of the columns: three points or more (one or two are a hinge), within 45
+    // degrees of the vertical, carrying a moving body
+    const bool is_face = c.count >= 3 && std::abs(d) >= kFaceCosine && moves_upper;
+    if (give) {
+      // every touching contact's own deflection under its load, over the size of the smaller
+      // moving body on it: a ball's one point on the ground is no column, yet its springs sink
+      // it g / w^2 (0.17 mm at 4 substeps, a sixth of a 1 mm ball's radius)
+      const double inv_a = moves_a ? s.inv_mass_[c.a] : 0, inv_b = moves_b ? s.inv_mass_[c.b] : 0;
+      const bool fixed = inv_a == 0 || inv_b == 0;
+      const ColumnSpring k = spring_of(c, inv_a + inv_b, fixed ? w_static : w_dynamic);
+      double side = INFINITY;
+      if (moves_a) side = 2 * s.min_extent_[c.a];
+      if (moves_b) side = std::min(side, 2 * s.min_extent_[c.b]);
+      if (k.stiffness > 0 && side > 0) ratio = std::max(ratio, k.load / (k.stiffness * side));
+      // a touching pair that is no face pair of the columns (a ball's point, an edge, a steep
+      // face, a body that does not move pressing from above) still loads the body under it:
+      // the vertical part of its load, at its points' height, for the braced model's G
+      if (!is_face && moves_lower && d != 0 && impulse_h > 0) {
+        double load = 0, z = 0;
+        for (int p = 0; p < c.count; ++p) load += c.normal_impulse[p], z += glm::dot(c.points[p].at, up);
+        if (load > 0) brace_load.push_back({lower, load / impulse_h * std::abs(d), z / c.count});
+      }
+    }
+    if (!is_face) continue;
     // (with `give`) the face pair for the braced model: its spring and its points' height
     auto face = [&](const ColumnSpring& k, bool moves) {
       double z = 0;
@@ -196,7 +217,7 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
       brace_face.push_back({static_cast<std::uint32_t>(&c - pairs.data()), lower, upper, k.load, k.stiffness,
                             z / c.count, moves});
     };
-    if (!moving(lower)) {
+    if (!moves_lower) {
       if (column_level[upper] == 0) column_level[upper] = 1, column_queue.push_back(upper);
       if (give) {
         const ColumnSpring k = spring_of(c, s.inv_mass_[upper], w_static);
@@ -276,7 +297,7 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   const std::size_t n = s.type_.size();
   brace_body.reserve(n), brace_level.reserve(n), brace_order.reserve(n), brace_tree.reserve(n), brace_s.reserve(n);
   brace_count.reserve(n + 1);
-  brace_body.assign(n, {kNoIndex, kNoIndex, kNoIndex, kNoIndex, 0, 0, 0, 0});
+  brace_body.assign(n, {kNoIndex, kNoIndex, kNoIndex, 0, 0, 0, 0, 0});
   for (std::size_t i = 0; i < n; ++i) brace_body[i].root = static_cast<std::uint32_t>(i);
   brace_level.clear(), brace_order.clear();
   auto find = [&](std::uint32_t x) {
@@ -290,13 +311,32 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   };
   // a face pair between bodies on the columns (an upper body reached from the ground, on a
   // support that does not move or that was reached too)
-  auto counts = [&](const BraceFace& f) { return column_level[f.upper] != 0 && (!f.moving || column_level[f.lower] != 0); };
-  // the levels: bodies resting on a common body, or carrying a common body, move together
-  // (a support that does not move ties nothing: columns side by side on the ground stay apart)
+  // (the face pairs it was made from, for brace_faces_same)
+  brace_key.resize(brace_face.size());
+  for (std::size_t i = 0; i < brace_face.size(); ++i) brace_key[i] = face_key(brace_face[i]);
+  // (the others are dropped here, once: what follows reads only these)
+  brace_face.erase(std::remove_if(brace_face.begin(), brace_face.end(),
+                                  [&](const BraceFace& f) {
+                                    return column_level[f.upper] == 0 || (f.moving && column_level[f.lower] == 0);
+                                  }),
+                   brace_face.end());
+  // the levels: bodies carrying a common body move together, where its springs on each are
+  // the stiffest that body has (as support or as load). A tie makes the path through the
+  // common body rigid: where that body's springs are each body's stiffest, the tie is as stiff
+  // as a joint of the body's own chain made rigid, which the chain's margin carries (the
+  // common body rests on both and tilts them alike); a lighter or softer common body barely
+  // holds them, and tied it would clamp a column's top to whatever it also rests on (a light
+  // plank over a column's top and a tall box: the box's footing would hold the column's tilt).
+  // Untied, it rests on two levels: no tree, and the column model judges. Bodies that only rest
+  // on a common body are not tied: what holds their tilts alike is that body's own tilt, held
+  // by its own supports (a column's foot on a slab beside short cubes tilts alone).
   for (const BraceFace& f : brace_face) {
-    if (!f.moving || !counts(f)) continue;
-    BraceBody &lower = brace_body[f.lower], &upper = brace_body[f.upper];
-    if (lower.up == kNoIndex) lower.up = f.upper; else unite(lower.up, f.upper);
+    brace_body[f.upper].stiffest = std::max(brace_body[f.upper].stiffest, f.stiffness);
+    if (f.moving) brace_body[f.lower].stiffest = std::max(brace_body[f.lower].stiffest, f.stiffness);
+  }
+  for (const BraceFace& f : brace_face) {
+    if (!f.moving || f.stiffness < brace_body[f.lower].stiffest) continue;
+    BraceBody& upper = brace_body[f.upper];
     if (upper.down == kNoIndex) upper.down = f.lower; else unite(upper.down, f.lower);
   }
   // the horizontal directions the chain is tilted in
@@ -322,13 +362,14 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   }
   // (a spread under a thousandth of its smallest body's size is a level in line along the
   // direction: it does not turn as a level, and its turn would be a zero pivot)
+  // (and from here on sum is the level's centre, the turn's axis)
   for (BraceLevel& l : brace_level)
-    for (int d = 0; d < 2; ++d) l.psi[d] = l.hi[d] - l.lo[d] > 1e-3 * l.size;
+    for (int d = 0; d < 2; ++d) l.psi[d] = l.hi[d] - l.lo[d] > 1e-3 * l.size, l.sum[d] /= l.count;
   // each level rests on one level at most (or on bodies that do not move): the chain is a
   // tree. Otherwise (a level bridging two, a level resting on itself) the column model rules
   const auto levels = static_cast<std::uint32_t>(brace_level.size());
   for (const BraceFace& f : brace_face) {
-    if (!f.moving || !counts(f)) continue;
+    if (!f.moving) continue;
     const std::uint32_t lu = brace_body[f.upper].level, ll = brace_body[f.lower].level;
     BraceLevel& u = brace_level[lu];
     if (lu == ll || (u.parent != kNoIndex && u.parent != ll)) return -1;
@@ -364,7 +405,6 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   // it by (z - z0) t^2 / 2, and its own weight so from its centre: the chain's geometric
   // stiffness, G = sum F (z - z0) + m g (z_c - z0) over the level's bodies (P-delta)
   for (const BraceFace& f : brace_face) {
-    if (!counts(f)) continue;
     BraceBody& b = brace_body[f.upper];
     b.fz += f.load * f.z, b.f += f.load, b.z += f.z, ++b.supports;
   }
@@ -375,7 +415,11 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   for (const std::uint32_t x : column_queue)
     brace_level[brace_body[x].level].gravity += std::max(0.0, g / s.inv_mass_[x] * (glm::dot(s.com_[x], up) - base(x)));
   for (const BraceFace& f : brace_face)
-    if (f.moving && counts(f)) brace_level[brace_body[f.lower].level].gravity += std::max(0.0, f.load * (f.z - base(f.lower)));
+    if (f.moving) brace_level[brace_body[f.lower].level].gravity += std::max(0.0, f.load * (f.z - base(f.lower)));
+  // (and the loads of the pairs that are no face pairs: a heavy ball on a column's top)
+  for (const BraceLoad& f : brace_load)
+    if (column_level[f.lower] != 0 && brace_body[f.lower].supports > 0)
+      brace_level[brace_body[f.lower].level].gravity += std::max(0.0, f.load * (f.z - base(f.lower)));
   // the springs: each point of a face pair a spring k_p of the pair's m_eff w^2 over its
   // points. A level's bodies tilt by t each (the lever x_p - x_body), the level turns by psi
   // (each body lifted by psi (x_body - x_level)) and lifts by z: the point's spring is
@@ -384,7 +428,6 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   // k sum a a^T to the upper level's D, k sum b b^T to the lower's, -k sum a b^T to the
   // upper's C: made of the points' sums of du, dl, du^2, dl^2, du dl
   for (const BraceFace& f : brace_face) {
-    if (!counts(f)) continue;
     const ContactPair& c = pairs[f.pair];
     // (made a step after the measure, a pair may have lost points since: no longer a face,
     // the model does not describe it, and the column model judges the pile)
@@ -394,7 +437,7 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
     BraceLevel* l = f.moving ? &brace_level[brace_body[f.lower].level] : nullptr;
     for (int d = 0; d < 2; ++d) {
       const double xu = glm::dot(s.com_[f.upper], dir[d]), xl = f.moving ? glm::dot(s.com_[f.lower], dir[d]) : 0;
-      const double a1 = u.psi[d] ? xu - u.sum[d] / u.count : 0, b1 = l && l->psi[d] ? xl - l->sum[d] / l->count : 0;
+      const double a1 = u.psi[d] ? xu - u.sum[d] : 0, b1 = l && l->psi[d] ? xl - l->sum[d] : 0;
       double su = 0, sl = 0, suu = 0, sll = 0, sul = 0;
       for (int p = 0; p < c.count; ++p) {
         const double x = glm::dot(c.points[p].at, dir[d]), du = x - xu, dl = x - xl;
@@ -402,12 +445,9 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
       }
       // (the blocks are symmetric: both triangles written)
       auto add = [](double* m, double s2, double s1, double one, double nn, double kk) {
-        const double v[6] = {s2, one * s1, s1, one * one * nn, one * nn, nn};
-        const int at[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
-        for (int i = 0; i < 6; ++i) {
-          m[3 * at[i][0] + at[i][1]] += kk * v[i];
-          if (at[i][0] != at[i][1]) m[3 * at[i][1] + at[i][0]] += kk * v[i];
-        }
+        const double m01 = kk * (one * s1), m02 = kk * s1, m12 = kk * (one * nn);
+        m[0] += kk * s2, m[1] += m01, m[2] += m02, m[3] += m01, m[4] += kk * (one * one * nn), m[5] += m12;
+        m[6] += m02, m[7] += m12, m[8] += kk * nn;
       };
       add(u.d[d], suu, su, a1, n, k);
       if (!l) continue;
@@ -438,6 +478,13 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
     most = falls;
   }
   return most;
+}
+
+bool RigidContacts::brace_faces_same() const {
+  if (brace_key.size() != brace_face.size()) return false;
+  for (std::size_t i = 0; i < brace_face.size(); ++i)
+    if (brace_key[i] != face_key(brace_face[i])) return false;
+  return true;
 }
 
 bool RigidContacts::braced_stands(double factor, std::uint32_t begin, std::uint32_t end) {
@@ -501,20 +548,30 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     // bodies or gravity's direction did, and otherwise every kMeasureEvery steps
     const Vec3 up = -gravity / g;
     const bool same = c.column_known && settled && c.column_bodies == type_.size() && c.column_up == up;
+    ++c.brace_age;
     if (!same || ++c.column_age >= kMeasureEvery) {
+      // (the same bodies and up as the last measure's: no body was made or destroyed since)
+      const bool same_bodies = c.column_known && c.column_bodies == type_.size() && c.column_up == up;
       c.column_need = c.measure_columns(*this, up, c.column_top, least < 0, rate(-1), static_rate(-1));
-      c.column_rate = rate(-1), c.column_static_rate = static_rate(-1);
+      c.column_rate = rate(-1), c.column_static_rate = static_rate(-1), c.column_g = g;
       c.column_bodies = type_.size(), c.column_up = up, c.column_age = 0, c.column_known = true;
       // (before a step has carried loads, as in the first, the springs are not known: the
-      // column model judges that measure)
-      c.column_braced = -1, c.brace_due = least < 0 && c.impulse_h > 0;
+      // column model judges that measure.) The braced model is owed for it, unless this
+      // measure comes of pairs that changed and its face pairs are those of the last braced
+      // model's, made fewer than kMeasureEvery steps ago: the pairs changed elsewhere (a body
+      // bouncing beside a halved pile), and the braced load is kept as at rest, where it is
+      // made again every kMeasureEvery steps (the measures of that cadence always make it)
+      const bool kept = !same && same_bodies && c.column_braced >= 0 && c.brace_age < kMeasureEvery && c.brace_faces_same();
+      if (!kept) c.column_braced = -1, c.brace_due = least < 0 && c.impulse_h > 0;
     }
     // the braced model of that measure, once the halving can use it: halved (the way back),
     // or with the same pairs as the last step (the calm before halving). While the pairs
     // change the calm starts again every step whatever the load, so a pile still landing (the
     // rain) does not pay for it; made later from the same face pairs, their points now
-    if (c.brace_due && (settled || auto_shift_ < 0))
+    if (c.brace_due && (settled || auto_shift_ < 0)) {
       c.column_braced = c.measure_braced(*this, up, g), c.column_braced_g = g, c.brace_due = false;
+      c.brace_rate = c.column_rate, c.brace_static_rate = c.column_static_rate, c.brace_age = 0;
+    }
   }
   const double need = c.column_need;  // n^3 / s (1/m)
   profile_.column = c.column_top;
@@ -524,24 +581,34 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   // goes with g and K with the rates squared, so it is scaled to this step's by the larger of
   // the dynamic and the static springs' ratios, which never lowers it for springs that did not
   // soften alike; exactly 1 at a fixed dt and settings)
+  // (the springs' squared ratio at half the substeps, from a measure's to this step's: the
+  // larger of the dynamic and the static springs')
+  const double w_half = rate(-1), ws_half = static_rate(-1);
+  auto softened = [&](double w, double ws) {
+    return w > 0 && ws > 0 && w_half > 0 && ws_half > 0 ? std::max(w * w / (w_half * w_half), ws * ws / (ws_half * ws_half))
+                                                        : 1.0;
+  };
+  const bool rated = c.brace_rate > 0 && c.brace_static_rate > 0 && w_half > 0 && ws_half > 0;
+  const double soften = softened(c.column_rate, c.column_static_rate);
   auto load = [&](int shift) {
     const double w = rate(shift);
-    const double ws = static_rate(shift);
-    if (shift < 0 && c.column_braced >= 0 && w > 0 && ws > 0 && c.column_rate > 0 && c.column_static_rate > 0 &&
-        c.column_braced_g > 0) {
-      const double rd = c.column_rate / w, rs = c.column_static_rate / ws;
-      return c.column_braced * (g / c.column_braced_g) * std::max(rd * rd, rs * rs);
-    }
+    if (shift < 0 && c.column_braced >= 0 && rated && c.column_braced_g > 0)
+      return c.column_braced * (g / c.column_braced_g) * softened(c.brace_rate, c.brace_static_rate);
     return need * g / (w * w);
   };
+  // the sag predicted likewise (made at the measure's springs, whose loads went with its
+  // gravity): each spring gives with its rate squared, so a halved pile whose springs softened
+  // since (a longer step, a lowered contact_hertz) is judged on them before the next measure,
+  // up to 8 steps on; exactly 1 at a fixed dt and settings
+  const double sag_scale = c.column_g > 0 ? g / c.column_g * soften : soften;
   profile_.half_load = least < 0 ? load(-1) : 0;
   // whether the columns fit 2^shift times the substeps with `margin` of the bounds: their load
   // n^3 g / (w^2 s), and below the setting's substeps the sag predicted at half of them, within
   // each budget that is set (a fraction of the bodies' sizes, metres)
   auto fits = [&](int shift, double margin) {
     if (load(shift) > margin * kColumnLoad) return false;
-    return shift >= 0 || ((budget <= 0 || c.column_sag_top <= margin * budget) &&
-                          (fraction <= 0 || c.column_sag_ratio <= margin * fraction));
+    return shift >= 0 || ((budget <= 0 || c.column_sag_top * sag_scale <= margin * budget) &&
+                          (fraction <= 0 || c.column_sag_ratio * sag_scale <= margin * fraction));
   };
   // every awake dynamic body slower than the sleep tolerances this step: the sag is predicted
   // for bodies at rest, and a body moving on its contacts (a column rocking on its edges, a

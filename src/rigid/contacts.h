@@ -472,11 +472,14 @@ struct RigidContacts {
   /// the column model's n^3 g / (w^2 s), under which the pile measured last stands on its
   /// springs (those measure_columns gave its face pairs) with the margin a free column of cubes
   /// has at that load: kGreenhill over the smallest factor on gravity that the tilt chain of
-  /// its levels stands (its levels: bodies joined by a common support or a common load on face
-  /// contacts). Into column_braced; -1 when the levels do not make a tree (a level resting on
+  /// its levels stands (its levels: bodies carrying a common body on face contacts whose
+  /// springs are each the stiffest of the body they rest on). Into column_braced; -1 when the levels do not make a tree (a level resting on
   /// two, or on itself), where the column model's is taken. Needs the loads of a step. O(bodies + face points) per
   /// factor tried; no allocation once the scratch has grown. Needs measure_columns' face pairs.
   double measure_braced(const RigidBodySystem& s, const Vec3& up, double g);
+  /// Whether the face pairs of the last measure_columns are those the last measure_braced was
+  /// made from: the same bodies, in the same order, each lower moving or not. O(face pairs).
+  bool brace_faces_same() const;
   /// Whether the trees of levels brace_order[begin, end) (whole trees) stand gravity times
   /// `factor` (K - factor G positive definite) in both horizontal directions.
   bool braced_stands(double factor, std::uint32_t begin, std::uint32_t end);
@@ -489,11 +492,26 @@ struct RigidContacts {
     bool moving;  // the lower body moves
   };
   std::vector<BraceFace> brace_face;
-  // by body: its union-find root, the first body seen on it and under it, its level, and the
-  // sums for the height it tilts about (its supports' centroids weighted by their loads)
+  // a face pair's bodies and whether its lower body moves, as one key; by face pair, the keys
+  // of the last measure_braced's (brace_faces_same)
+  static std::uint64_t face_key(const BraceFace& f) {
+    return std::uint64_t{f.lower} << 33 | std::uint64_t{f.upper} << 1 | static_cast<std::uint64_t>(f.moving);
+  }
+  std::vector<std::uint64_t> brace_key;
+  // by touching pair that is no such face pair (a ball's point, an edge, a steep face, a body
+  // that does not move pressing from above) with a moving lower body: the lower body, the
+  // vertical part of the pair's load (N) and the height of its points' centroid along up (m)
+  struct BraceLoad {
+    std::uint32_t lower;
+    double load, z;
+  };
+  std::vector<BraceLoad> brace_load;
+  // by body: its union-find root, the first body under it that its load ties into its level,
+  // its level, the sums for the height it tilts about (its supports' centroids weighted by
+  // their loads), and its stiffest face spring (N/m)
   struct BraceBody {
-    std::uint32_t root, up, down, level;
-    double fz, f, z;
+    std::uint32_t root, down, level;
+    double fz, f, z, stiffest;
     int supports;
   };
   std::vector<BraceBody> brace_body;
@@ -523,6 +541,13 @@ struct RigidContacts {
   // the gravity (m/s^2) of the last measure_braced: its load is scaled to the step's
   // (RigidBodySystem::step_substeps), as a varying dt or a changed contact_hertz moves them
   double column_rate = 0, column_static_rate = 0, column_braced_g = 0;
+  // the rates (rad/s) of the measure the last measure_braced was made from, and the steps since
+  // it (kept across measures whose face pairs are its, up to kMeasureEvery steps)
+  double brace_rate = 0, brace_static_rate = 0;
+  int brace_age = 0;
+  // the gravity (m/s^2) of the last measure_columns: its sag is scaled to the step's as the
+  // braced load is (the loads it was made from went with it)
+  double column_g = 0;
   // the last measure (RigidBodySystem::step_substeps): its result, the bodies and the up it
   // was made for, the steps since, and whether it stands (cleared when a body is destroyed)
   double column_need = 0;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -24,6 +25,26 @@ inline PileMotion pile_motion(const RigidBodySystem& s, const std::vector<RigidB
     m.fastest = std::max(m.fastest, glm::length(s.linear_velocity(bodies[k])));
   }
   return m;
+}
+
+/// Whether any of `bodies` moves at or over the sleep tolerances (ContactSettings::sleep_linear,
+/// sleep_angular): what keeps the soft step's halving from counting its calm (columns.cpp).
+inline bool any_unsettled(const RigidBodySystem& s, const std::vector<RigidBodyId>& bodies) {
+  const double v = s.settings().sleep_linear, w = s.settings().sleep_angular;
+  for (const RigidBodyId b : bodies) {
+    const Vec3 lv = s.linear_velocity(b), av = s.angular_velocity(b);
+    if (glm::dot(lv, lv) >= v * v || glm::dot(av, av) >= w * w) return true;
+  }
+  return false;
+}
+
+/// The step at which the soft step's halving comes to a pile built at step 0 whose bodies
+/// last moved at or over the sleep tolerances in step `last_unsettled` (-1: never), its pairs
+/// the same from then on: its calm (columns.cpp, kCalmTime: 1 s) counts from the second step
+/// after (the first starts on that motion) and not in the first step (its pairs are new), and
+/// it halves in the step that completes 1 s, the 60th at 60 Hz.
+inline int halving_step(int last_unsettled, double dt = 1.0 / 60) {
+  return std::max(1, last_unsettled + 2) + static_cast<int>(std::lround(1 / dt)) - 1;
 }
 
 }  // namespace pba::test
