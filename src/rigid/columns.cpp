@@ -158,6 +158,7 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     column_sink.assign(n, {});
     column_pair_spring.clear();
     brace_face.reserve(pairs.capacity()), brace_load.reserve(pairs.capacity()), brace_key.reserve(pairs.capacity());
+    brace_load_key.reserve(pairs.capacity());
     brace_face.clear(), brace_load.clear();
   }
   // a face contact as a spring: its load (the normal impulse it carried in the last step's
@@ -314,6 +315,8 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   // (the face pairs it was made from, for brace_faces_same)
   brace_key.resize(brace_face.size());
   for (std::size_t i = 0; i < brace_face.size(); ++i) brace_key[i] = face_key(brace_face[i]);
+  brace_load_key.resize(brace_load.size());
+  for (std::size_t i = 0; i < brace_load.size(); ++i) brace_load_key[i] = brace_load[i].lower;
   // (the others are dropped here, once: what follows reads only these)
   brace_face.erase(std::remove_if(brace_face.begin(), brace_face.end(),
                                   [&](const BraceFace& f) {
@@ -330,9 +333,15 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
   // Untied, it rests on two levels: no tree, and the column model judges. Bodies that only rest
   // on a common body are not tied: what holds their tilts alike is that body's own tilt, held
   // by its own supports (a column's foot on a slab beside short cubes tilts alone).
+  // (Springs between moving bodies only: a spring to a support that does not move runs at the
+  // static rate, min(2 w, 1 / h), whose ratio to the dynamic one changes with dt and
+  // contact_hertz, and a foot held fast is what the chain's clamped limit, Greenhill's, already
+  // takes. Counted, at dt = 1/120 the ground's springs were the bottom row's stiffest, no cube
+  // above tied that row, and a pyramid was judged a free column.)
   for (const BraceFace& f : brace_face) {
+    if (!f.moving) continue;
     brace_body[f.upper].stiffest = std::max(brace_body[f.upper].stiffest, f.stiffness);
-    if (f.moving) brace_body[f.lower].stiffest = std::max(brace_body[f.lower].stiffest, f.stiffness);
+    brace_body[f.lower].stiffest = std::max(brace_body[f.lower].stiffest, f.stiffness);
   }
   for (const BraceFace& f : brace_face) {
     if (!f.moving || f.stiffness < brace_body[f.lower].stiffest) continue;
@@ -481,9 +490,11 @@ double RigidContacts::measure_braced(const RigidBodySystem& s, const Vec3& up, d
 }
 
 bool RigidContacts::brace_faces_same() const {
-  if (brace_key.size() != brace_face.size()) return false;
+  if (brace_key.size() != brace_face.size() || brace_load_key.size() != brace_load.size()) return false;
   for (std::size_t i = 0; i < brace_face.size(); ++i)
     if (brace_key[i] != face_key(brace_face[i])) return false;
+  for (std::size_t i = 0; i < brace_load.size(); ++i)
+    if (brace_load_key[i] != brace_load[i].lower) return false;
   return true;
 }
 
@@ -548,7 +559,7 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     // bodies or gravity's direction did, and otherwise every kMeasureEvery steps
     const Vec3 up = -gravity / g;
     const bool same = c.column_known && settled && c.column_bodies == type_.size() && c.column_up == up;
-    ++c.brace_age;
+    c.brace_age = std::min(c.brace_age + 1, kMeasureEvery);  // (what it is compared with, never past)
     if (!same || ++c.column_age >= kMeasureEvery) {
       // (the same bodies and up as the last measure's: no body was made or destroyed since)
       const bool same_bodies = c.column_known && c.column_bodies == type_.size() && c.column_up == up;

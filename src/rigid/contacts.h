@@ -478,7 +478,8 @@ struct RigidContacts {
   /// factor tried; no allocation once the scratch has grown. Needs measure_columns' face pairs.
   double measure_braced(const RigidBodySystem& s, const Vec3& up, double g);
   /// Whether the face pairs of the last measure_columns are those the last measure_braced was
-  /// made from: the same bodies, in the same order, each lower moving or not. O(face pairs).
+  /// made from (the same bodies, in the same order, each lower moving or not), and the other
+  /// touching pairs' loads fall on the same lower bodies in the same order. O(pairs measured).
   bool brace_faces_same() const;
   /// Whether the trees of levels brace_order[begin, end) (whole trees) stand gravity times
   /// `factor` (K - factor G positive definite) in both horizontal directions.
@@ -498,6 +499,9 @@ struct RigidContacts {
     return std::uint64_t{f.lower} << 33 | std::uint64_t{f.upper} << 1 | static_cast<std::uint64_t>(f.moving);
   }
   std::vector<std::uint64_t> brace_key;
+  // by load of a pair that is no face pair (brace_load), its lower body, at the last
+  // measure_braced (brace_faces_same: a heavy ball landing on a halved pile is measured at once)
+  std::vector<std::uint32_t> brace_load_key;
   // by touching pair that is no such face pair (a ball's point, an edge, a steep face, a body
   // that does not move pressing from above) with a moving lower body: the lower body, the
   // vertical part of the pair's load (N) and the height of its points' centroid along up (m)

@@ -42,9 +42,13 @@ inline bool any_unsettled(const RigidBodySystem& s, const std::vector<RigidBodyI
 /// last moved at or over the sleep tolerances in step `last_unsettled` (-1: never), its pairs
 /// the same from then on: its calm (columns.cpp, kCalmTime: 1 s) counts from the second step
 /// after (the first starts on that motion) and not in the first step (its pairs are new), and
-/// it halves in the step that completes 1 s, the 60th at 60 Hz.
+/// it halves in the step that completes 1 s, the 60th at 60 Hz: the calm is a sum of the
+/// steps' dt, so the step is counted as the sum is made (120 steps of 1/120 s sum to just under
+/// 1 s and the 121st completes it).
 inline int halving_step(int last_unsettled, double dt = 1.0 / 60) {
-  return std::max(1, last_unsettled + 2) + static_cast<int>(std::lround(1 / dt)) - 1;
+  int more = 0;
+  for (double calm = dt; calm < 1; calm += dt) ++more;
+  return std::max(1, last_unsettled + 2) + more;
 }
 
 }  // namespace pba::test

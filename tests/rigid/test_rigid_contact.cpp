@@ -1024,7 +1024,7 @@ TEST(RigidStacking, AtTheDefaultsColumnsOfOneMetreCubesHalveOnlyUnderOneCentimet
 }
 
 // A resting pile of one-metre cubes takes 4 substeps at the defaults: a square pyramid of 8
-// levels (204 cubes, each on four; load at 60 Hz 0.035, predicted sag 3-4 mm, under 1% of a
+// levels (204 cubes, each on four; load at 60 Hz 0.035, predicted sag 1.1 mm at most, under 1% of a
 // cube), sleeping off, 10 s. It halves a second after it came to rest (its cubes all under the
 // sleep tolerances from the first step: at step 60, pile_motion.h's halving_step) and stands:
 // no cube moves more than 1 cm from where it was built or faster than the sleep tolerance at
