@@ -169,8 +169,8 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     // the smaller moving body on it: a ball's one point on the ground is no column, yet its
     // springs sink it g / w^2 (0.17 mm at 4 substeps, a sixth of a 1 mm ball's radius)
     if (give && c.count > 0 && (moving(c.a) || moving(c.b))) {
-      double deepest = c.points[0].depth;
-      for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.points[p].depth);
+      double deepest = c.depth[0];
+      for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.depth[p]);
       if (deepest >= -slop_of(s, c.a, c.b)) {
         const double inv_a = moving(c.a) ? s.inv_mass_[c.a] : 0, inv_b = moving(c.b) ? s.inv_mass_[c.b] : 0;
         const bool fixed = inv_a == 0 || inv_b == 0;
@@ -184,8 +184,8 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     if (c.count < 3) continue;
     const double d = glm::dot(c.normal, up);
     if (std::abs(d) < kFaceCosine) continue;
-    double deepest = c.points[0].depth;
-    for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.points[p].depth);
+    double deepest = c.depth[0];
+    for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.depth[p]);
     if (deepest < -slop_of(s, c.a, c.b)) continue;
     const std::uint32_t lower = d > 0 ? c.a : c.b, upper = d > 0 ? c.b : c.a;
     if (!moving(upper)) continue;
