@@ -487,7 +487,8 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   color(s);
   build(s);
   built = has_colors = lanes_valid = true;
-  if (s.settings_.warm_starting) accumulate_warm(s);
+  // (the coloured blocks' impulses build() added as it filled them)
+  if (s.settings_.warm_starting) accumulate_warm(s, false);
 }
 
 void RigidContacts::finish_velocities(RigidBodySystem& s) {
@@ -771,11 +772,19 @@ void RigidContacts::build(RigidBodySystem& s) {
                        .b = p.b, .write_a = ((k.write_a >> l) & 1) != 0, .write_b = ((k.write_b >> l) & 1) != 0});
     }
   };
+  // the first warm start of a coloured block (with warm starting: accumulate_warm's part for
+  // it), added as soon as the block is filled, while its lines are in L1: the blocks filled in
+  // colour order, a colour's ContactBlocks then its one-point blocks, are the order in which
+  // accumulate_warm adds them, so each body's accumulators sum the same terms in the same order
+  // (the same bits); read again after the fill, the blocks streamed from L3 once more
+  const bool warm_now = s.settings_.warm_starting;
+  const BodyArrays bodies = arrays(s);
   // (colour `colors` is the overflow)
   auto fill_blocks = [&](std::size_t c) {
     for (std::size_t b = color_block[c]; b < color_block[c + 1]; ++b) {
       const std::size_t first = offset[c] + (b - color_block[c]) * kLanes;  // the block's first slot of by_color
       collect_rolls(blocks[b], b, fill_block(s, blocks.data(), anchors.data(), block_count, b, first));
+      if (warm_now && c < colors) warm_colored(simd, blocks.data(), b, b + 1, bodies);
     }
   };
   for (std::size_t c = 0; c < colors; ++c) {
@@ -784,6 +793,7 @@ void RigidContacts::build(RigidBodySystem& s) {
     const std::size_t first_one = offset[c + 1] - ones_of_color[c];
     for (std::size_t b = color_ones[c]; b < color_ones[c + 1]; ++b) {
       fill_block(s, ones.data(), one_anchors.data(), one_blocks, b, first_one + (b - color_ones[c]) * kLanes);
+      if (warm_now) warm_colored(simd, ones.data(), b, b + 1, bodies);
     }
   }
   colored_rolls = rolls.size();
@@ -1098,13 +1108,14 @@ BodyArrays RigidContacts::arrays(RigidBodySystem& s) {
 // ---------------------------------------------------------------------------------------
 // passes
 
-void RigidContacts::accumulate_warm(RigidBodySystem& s) {
+void RigidContacts::accumulate_warm(RigidBodySystem& s, bool colored) {
   const BodyArrays r = arrays(s);
   // colour by colour when there are one-point blocks, so that each body's accumulators add its
-  // manifolds' impulses in colour order, as they do from the ContactBlocks alone
-  if (one_blocks == 0) {
+  // manifolds' impulses in colour order, as they do from the ContactBlocks alone (build() adds
+  // them in the same order as it fills the blocks)
+  if (colored && one_blocks == 0) {
     warm_colored(simd, blocks.data(), 0, colored_blocks, r);
-  } else {
+  } else if (colored) {
     for (std::size_t c = 0; c + 1 < color_ones.size(); ++c) {
       warm_colored(simd, blocks.data(), color_block[c], color_block[c + 1], r);
       warm_colored(simd, ones.data(), color_ones[c], color_ones[c + 1], r);

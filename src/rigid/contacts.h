@@ -639,8 +639,9 @@ struct RigidContacts {
   /// The velocities back from the solver's rows to the system's arrays, and the rolling
   /// impulses to their pairs.
   void finish_velocities(RigidBodySystem& s);
-  /// Adds every manifold's carried impulses to the warm-start accumulators.
-  void accumulate_warm(RigidBodySystem& s);
+  /// Adds every manifold's carried impulses to the warm-start accumulators; colored: also the
+  /// coloured blocks' (false: build() added them as it filled the blocks).
+  void accumulate_warm(RigidBodySystem& s, bool colored = true);
   /// The same for the rolling resistance of a lane that rolls.
   void warm_rolling(const Rolling& x);
   /// Rolling resistance of `x`, lane l of block k.
