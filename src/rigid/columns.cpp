@@ -181,8 +181,8 @@ double RigidContacts::measure_columns(const RigidBodySystem& s, const Vec3& up, 
     if (c.count == 0) continue;
     const bool moves_a = moving(c.a), moves_b = moving(c.b);
     if (!moves_a && !moves_b) continue;
-    double deepest = c.points[0].depth;
-    for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.points[p].depth);
+    double deepest = c.depth[0];
+    for (int p = 1; p < c.count; ++p) deepest = std::max(deepest, c.depth[p]);
     if (deepest < -slop_of(s, c.a, c.b)) continue;
     const double d = glm::dot(c.normal, up);
     const std::uint32_t lower = d > 0 ? c.a : c.b, upper = d > 0 ? c.b : c.a;

@@ -865,16 +865,17 @@ struct PointsInput {
 };
 
 // The points (each its surface points' midpoint, its anchors from the centres, its overlap
-// and its separation's offset from the cores), their centroid (m, in the world) and their mean
-// distance from it (m): one point after another. The reference for emit_points_avx2.
-[[gnu::always_inline]] inline void emit_points_scalar(const PointsInput& in, SolverPoint* out, Vec3& centroid,
+// and its separation's offset from the cores, its feature id) into the pair `out`, their
+// centroid (m, in the world) and their mean distance from it (m): one point after another. The
+// reference for emit_points_avx2.
+[[gnu::always_inline]] inline void emit_points_scalar(const PointsInput& in, ContactPair& out, Vec3& centroid,
                                                        double& twist_radius) {
   const Mat3& qa = *in.qa;
   const Mat3& qb = *in.qb;
   const Vec3& n = in.n;
   Vec3 sum(0), at[Manifold::kMaxPoints];
   for (int k = 0; k < in.count; ++k) {
-    SolverPoint& pt = out[k];
+    SolverPoint& pt = out.points[k];
     // the cores now, the surface points on them, and the overlap between the surfaces
     const Vec3 sa = qa * Vec3(in.core[0][k], in.core[1][k], in.core[2][k]);
     const Vec3 sb = qb * Vec3(in.core[3][k], in.core[4][k], in.core[5][k]);
@@ -885,10 +886,10 @@ struct PointsInput {
     sum += mid;
     at[k] = mid;
     pt.at = mid, pt.sa = sa, pt.sb = sb;
-    pt.depth = depth;
+    out.depth[k] = depth;
     // the separation now is -depth; keep it relative to the cores
     pt.offset = -depth - glm::dot(core_b - core_a, n) - in.preload;
-    pt.id = in.id[k];
+    out.id[k] = in.id[k];
   }
   sum /= static_cast<double>(in.count);
   centroid = sum;
@@ -897,22 +898,22 @@ struct PointsInput {
   twist_radius /= in.count;
 }
 
-static_assert(Manifold::kMaxPoints == 4 && sizeof(SolverPoint) == 96 && offsetof(SolverPoint, sa) == 24 &&
-                  offsetof(SolverPoint, sb) == 48 && offsetof(SolverPoint, offset) == 72 &&
-                  offsetof(SolverPoint, depth) == 80 && offsetof(SolverPoint, id) == 88,
-              "emit_points_avx2 writes a point as three rows of four doubles");
+static_assert(Manifold::kMaxPoints == 4 && sizeof(SolverPoint) == 80 && offsetof(SolverPoint, sa) == 24 &&
+                  offsetof(SolverPoint, sb) == 48 && offsetof(SolverPoint, offset) == 72,
+              "emit_points_avx2 writes a point as two rows of four doubles and one of two");
 
 // emit_points_scalar's arithmetic with the four points in the lanes of AVX2 vectors (the cores
 // loaded a coordinate at a time, CachedManifold::core): each lane does the same operations in
 // the same order as the scalar code does for its point, and the centroid and the mean distance
 // sum the points in their order, so both give the same bits. The lanes past the count compute
-// on whatever the manifold holds there and are neither stored nor summed. The points go out
-// as rows (the 4 x 4 transposes of at, sa, sb, offset, depth and id).
+// on whatever the manifold holds there and are not summed; of them only the overlaps are
+// stored (nothing reads a pair's points past its count). The points go out as rows (the 4 x 4
+// transposes of at, sa, sb and offset), their overlaps and ids as they are.
 #if PBA_EMIT_AVX2
 // x in every lane (a broadcast: `0 + x` would make a -0 +0)
 [[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d all(const double& x) { return _mm256_broadcast_sd(&x); }
 
-__attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, SolverPoint* out, Vec3& centroid,
+__attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, ContactPair& out, Vec3& centroid,
                                                       double& twist_radius) {
   using V = __m256d;
   const double* qa = &(*in.qa)[0][0];  // glm's columns, one after another
@@ -936,10 +937,13 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Sol
   const V depth = gap[0] * n[0] + gap[1] * n[1] + gap[2] * n[2];
   const V apart = (core_b[0] - core_a[0]) * n[0] + (core_b[1] - core_a[1]) * n[1] + (core_b[2] - core_a[2]) * n[2];
   const V offset = -depth - apart - all(in.preload);
-  // (the ids, widened to 64 bits: the row's last element is the id and the padding after it)
-  const V id_bits = _mm256_castsi256_pd(_mm256_cvtepu32_epi64(_mm_loadu_si128(reinterpret_cast<const __m128i*>(in.id))));
-  // the rows of the points: (at, sa.x), (sa.y, sa.z, sb.x, sb.y), (sb.z, offset, depth, id)
-  V rows[3][4] = {{mid[0], mid[1], mid[2], sa[0]}, {sa[1], sa[2], sb[0], sb[1]}, {sb[2], offset, depth, id_bits}};
+  // the overlaps and the ids of the points past the count too (the manifold's, which nothing
+  // reads past it)
+  _mm256_storeu_pd(out.depth, depth);
+  std::memcpy(out.id, in.id, sizeof out.id);
+  // the rows of the points: (at, sa.x), (sa.y, sa.z, sb.x, sb.y), (sb.z, offset; the rest of
+  // the row is not stored)
+  V rows[3][4] = {{mid[0], mid[1], mid[2], sa[0]}, {sa[1], sa[2], sb[0], sb[1]}, {sb[2], offset, depth, depth}};
   for (V(&r)[4] : rows) {
     const V t0 = _mm256_unpacklo_pd(r[0], r[1]), t1 = _mm256_unpackhi_pd(r[0], r[1]);
     const V t2 = _mm256_unpacklo_pd(r[2], r[3]), t3 = _mm256_unpackhi_pd(r[2], r[3]);
@@ -948,8 +952,9 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Sol
   }
   V sum = _mm256_setzero_pd();
   for (int k = 0; k < in.count; ++k) {
-    double* to = reinterpret_cast<double*>(&out[k]);
-    for (int j = 0; j < 3; ++j) _mm256_storeu_pd(to + 4 * j, rows[j][k]);
+    double* to = reinterpret_cast<double*>(&out.points[k]);
+    _mm256_storeu_pd(to, rows[0][k]), _mm256_storeu_pd(to + 4, rows[1][k]);
+    _mm_storeu_pd(to + 8, _mm256_castpd256_pd128(rows[2][k]));
     sum = sum + rows[0][k];  // (its fourth lane, sa.x, is not read)
   }
   sum = sum / _mm256_set1_pd(static_cast<double>(in.count));
@@ -1057,10 +1062,10 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   double twist_radius;
 #if PBA_EMIT_AVX2
   if (simd != SimdPath::Scalar && r.count > 2)
-    emit_points_avx2(in, c.points, centroid, twist_radius);
+    emit_points_avx2(in, c, centroid, twist_radius);
   else
 #endif
-    emit_points_scalar(in, c.points, centroid, twist_radius);
+    emit_points_scalar(in, c, centroid, twist_radius);
   // (in place and warm, the entry holds them already: the copy back was a call of memcpy, 0.7% of
   // the resting 1240 pyramid's instructions; otherwise all four, zeros past the count as store()
   // leaves them: a loop of the count was a call of memcpy too, 1.3 M calls in the rain's first

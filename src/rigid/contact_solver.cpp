@@ -83,13 +83,16 @@ void clear_lane(B& b, AnchorsOf<B::kPoints>& g, int l, std::uint32_t spare) {
 // pairs ahead that build() and store() ask for while they work on one
 constexpr std::size_t kPrefetchAhead = 4;
 
-// the lines of a pair the solver reads and writes: the header and the points a block holds (P:
-// four for a ContactBlock, one for a OnePointBlock, whose pairs' other points are not read)
+// the lines of a pair the fill reads: the header (without the key's line for a kept lane of a
+// ContactBlock, from_frame, which does not read it) and the points a block holds (P: four for
+// a ContactBlock, one for a OnePointBlock, whose pairs' other points are not read); the loop's
+// count known, so it unrolls
 template <int P>
-void prefetch_pair(const ContactPair& c) {
+void prefetch_pair(const ContactPair& c, bool from_frame) {
   const char* p = reinterpret_cast<const char*>(&c);
   constexpr std::size_t kUsed = offsetof(ContactPair, points) + P * sizeof(SolverPoint);
-  for (std::size_t line = 0; line < kUsed; line += 64) __builtin_prefetch(p + line);
+  if (!from_frame) __builtin_prefetch(p);
+  for (std::size_t line = kPairFillStart; line < kUsed; line += 64) __builtin_prefetch(p + line);
 }
 
 }  // namespace
@@ -484,7 +487,8 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   color(s);
   build(s);
   built = has_colors = lanes_valid = true;
-  if (s.settings_.warm_starting) accumulate_warm(s);
+  // (the coloured blocks' impulses build() added as it filled them)
+  if (s.settings_.warm_starting) accumulate_warm(s, false);
 }
 
 void RigidContacts::finish_velocities(RigidBodySystem& s) {
@@ -768,11 +772,19 @@ void RigidContacts::build(RigidBodySystem& s) {
                        .b = p.b, .write_a = ((k.write_a >> l) & 1) != 0, .write_b = ((k.write_b >> l) & 1) != 0});
     }
   };
+  // the first warm start of a coloured block (with warm starting: accumulate_warm's part for
+  // it), added as soon as the block is filled, while its lines are in L1: the blocks filled in
+  // colour order, a colour's ContactBlocks then its one-point blocks, are the order in which
+  // accumulate_warm adds them, so each body's accumulators sum the same terms in the same order
+  // (the same bits); read again after the fill, the blocks streamed from L3 once more
+  const bool warm_now = s.settings_.warm_starting;
+  const BodyArrays bodies = arrays(s);
   // (colour `colors` is the overflow)
   auto fill_blocks = [&](std::size_t c) {
     for (std::size_t b = color_block[c]; b < color_block[c + 1]; ++b) {
       const std::size_t first = offset[c] + (b - color_block[c]) * kLanes;  // the block's first slot of by_color
       collect_rolls(blocks[b], b, fill_block(s, blocks.data(), anchors.data(), block_count, b, first));
+      if (warm_now && c < colors) warm_colored(simd, blocks.data(), b, b + 1, bodies);
     }
   };
   for (std::size_t c = 0; c < colors; ++c) {
@@ -781,6 +793,7 @@ void RigidContacts::build(RigidBodySystem& s) {
     const std::size_t first_one = offset[c + 1] - ones_of_color[c];
     for (std::size_t b = color_ones[c]; b < color_ones[c + 1]; ++b) {
       fill_block(s, ones.data(), one_anchors.data(), one_blocks, b, first_one + (b - color_ones[c]) * kLanes);
+      if (warm_now) warm_colored(simd, ones.data(), b, b + 1, bodies);
     }
   }
   colored_rolls = rolls.size();
@@ -810,6 +823,9 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   // the lanes' bodies, write masks, inverse masses, units and slop: last step's while the
   // layout stands (lanes_kept), else gathered below and kept for the next step
   const bool kept = lanes_kept;
+  // (kept, a lane of more than one point reads its bodies from the block, not the pair's key:
+  // the pair's first line is not read)
+  const bool from_frame = kept && !kOne;
   LaneMasses& masses = (kOne ? one_masses : block_masses)[b];
   if (kept) {
     std::memcpy(in.ma, masses.ma, sizeof in.ma);
@@ -823,7 +839,7 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
       continue;
     }
     const std::uint32_t index = by_color[first + static_cast<std::size_t>(l)];
-    if (first + l + kPrefetchAhead < by_color.size()) prefetch_pair<P>(pairs[by_color[first + l + kPrefetchAhead]]);
+    if (first + l + kPrefetchAhead < by_color.size()) prefetch_pair<P>(pairs[by_color[first + l + kPrefetchAhead]], from_frame);
     // and the next block's lines, to be written (the passes left them in the outer caches),
     // spread over this block's lanes
     if (b + 1 < count_in_use) {
@@ -849,10 +865,11 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
       lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)) | (kOne ? kOneLane : 0u);
     }
     const Vec3 t[3] = {c.t1, c.t2, c.normal};
-    const Mat3& ia = inv_inertia[c.a];
-    const Mat3& ib = inv_inertia[c.b];
-    const Vec3& com_a = s.com_[c.a];
-    const Vec3& com_b = s.com_[c.b];
+    const std::uint32_t body_a = k.a[l], body_b = k.b[l];  // (c.a, c.b: written above when not kept)
+    const Mat3& ia = inv_inertia[body_a];
+    const Mat3& ib = inv_inertia[body_b];
+    const Vec3& com_a = s.com_[body_a];
+    const Vec3& com_b = s.com_[body_b];
     const Vec3 dab = com_a - com_b, dba = com_b - com_a;
     for (int i = 0; i < 3; ++i) {
       for (int r = 0; r < 3; ++r) in.t[r][i][l] = t[r][i], in.ia[3 * i + r][l] = ia[i][r], in.ib[3 * i + r][l] = ib[i][r];
@@ -872,7 +889,9 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
     in.tangent_impulse[0][l] = c.tangent_impulse[0], in.tangent_impulse[1][l] = c.tangent_impulse[1];
     in.twist_impulse[l] = c.twist_impulse;
     in.rolling[l] = c.rolling;
-    for (int i = 0; i < 3; ++i) in.rolling_impulse[i][l] = c.rolling_impulse[i];
+    // (a one-point lane's: fill_lanes reads it for those only, and it sits in the key's line)
+    if constexpr (kOne)
+      for (int i = 0; i < 3; ++i) in.rolling_impulse[i][l] = c.rolling_impulse[i];
     if (c.rolling > 0) rolling_lanes |= 1u << l;
     if (c.restitution != 0)
       restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), c.restitution, kOne});
@@ -1089,13 +1108,14 @@ BodyArrays RigidContacts::arrays(RigidBodySystem& s) {
 // ---------------------------------------------------------------------------------------
 // passes
 
-void RigidContacts::accumulate_warm(RigidBodySystem& s) {
+void RigidContacts::accumulate_warm(RigidBodySystem& s, bool colored) {
   const BodyArrays r = arrays(s);
   // colour by colour when there are one-point blocks, so that each body's accumulators add its
-  // manifolds' impulses in colour order, as they do from the ContactBlocks alone
-  if (one_blocks == 0) {
+  // manifolds' impulses in colour order, as they do from the ContactBlocks alone (build() adds
+  // them in the same order as it fills the blocks)
+  if (colored && one_blocks == 0) {
     warm_colored(simd, blocks.data(), 0, colored_blocks, r);
-  } else {
+  } else if (colored) {
     for (std::size_t c = 0; c + 1 < color_ones.size(); ++c) {
       warm_colored(simd, blocks.data(), color_block[c], color_block[c + 1], r);
       warm_colored(simd, ones.data(), color_ones[c], color_ones[c + 1], r);

@@ -19,7 +19,8 @@ namespace pba::detail {
 /// "None" for the contact pipeline's indices.
 inline constexpr std::uint32_t kNoIndex = 0xffffffffu;
 
-/// One contact point as the solver sees it: where it is, its anchors and its separation.
+/// One contact point as the solver sees it: where it is, its anchors and its separation (what
+/// the fill reads of it: its overlap and feature id are kept apart, ContactPair::depth, id).
 struct SolverPoint {
   // the point (midway between the two surfaces) in the world at the start of the step (m);
   // its anchors from the centres of mass are at - com_a and at - com_b (com at the start of
@@ -31,8 +32,6 @@ struct SolverPoint {
   // turns away from the contact, its centre does not
   Vec3 sa{0, 0, 0}, sb{0, 0, 0};
   double offset = 0;              // (m)
-  double depth = 0;               // overlap at the start of the step (m)
-  std::uint32_t id = 0;           // feature id (warm starting)
 };
 
 /// A touching or speculative pair of shapes of two bodies. Friction acts on the manifold as
@@ -48,30 +47,43 @@ struct SolverPoint {
 /// written by update() (contact_pairs.cpp, emit) or by prepare(). The pairs stream from memory
 /// three times a step (emit writes them, prepare's fill reads them in colour order, store
 /// writes the impulses back), so they hold only what those and the public queries need, in
-/// ten cache lines: the key and the frame, the impulses together in one line (all that
-/// store() writes), the centroid, then the points. A rolling pair's mass is kept apart
-/// (RigidContacts::rolling_mass), as are the solver's per-point approach speeds and largest
-/// impulses, which stay in the blocks (RigidContacts::lane_of).
+/// ten cache lines: the key (with the rolling impulse, which only a one-point lane's fill
+/// reads), what every lane's fill reads (the frame, the material, the impulses together in
+/// one line, all that store() writes, the centroid and the count), the points (what the fill
+/// reads of them), then the points' overlaps and ids. While the blocks' layout stands
+/// (RigidContacts::lanes_kept) a lane keeps its bodies, so the fill of a manifold of four
+/// points reads eight of the ten lines, not the key's nor the overlaps' (the fill waits on the
+/// pairs' lines: docs/benchmarks.md, "A resting pile's step"). A rolling pair's
+/// mass is kept apart (RigidContacts::rolling_mass), as are the solver's per-point approach
+/// speeds and largest impulses, which stay in the blocks (RigidContacts::lane_of).
 struct alignas(64) ContactPair {
+  // ---- line 0: the key, and the rolling impulse
   std::uint32_t slot_a = 0, slot_b = 0;    // body handle slots (stable across removals)
   std::uint32_t shape_a = 0, shape_b = 0;  // shape indices within the bodies
   std::uint32_t sub = 0;                   // the triangle of a mesh shape (0 for other shapes)
   std::uint32_t a = 0, b = 0;              // dense body indices this step
   std::uint32_t record = kNoIndex;         // its CachedManifold (contact_pairs.cpp; impulses go back there)
-  int count = 0;                           // points
+  Vec3 rolling_impulse{0, 0, 0};  // accumulated rolling-resistance angular impulse (N m s)
+  // ---- line 1: the normal, the first tangent and the material
   // from a to b, and the friction basis; (t1, t2, normal) is right-handed (t1 x t2 = normal),
   // which the solver's contact frame relies on (src/rigid/solver.h)
-  Vec3 normal{0, 0, 1}, t1{1, 0, 0}, t2{0, 0, 1};
+  alignas(64) Vec3 normal{0, 0, 1};
+  Vec3 t1{1, 0, 0};
   double friction = 0, restitution = 0;  // mixed coefficients
-  // the accumulated impulses (N s per substep; the twist's N m s), one cache line
+  // ---- line 2: the accumulated impulses (N s per substep; the twist's N m s)
   double normal_impulse[Manifold::kMaxPoints] = {0, 0, 0, 0};  // by point
   double tangent_impulse[2] = {0, 0};  // along t1, t2
   double twist_impulse = 0;            // about the normal
   double rolling = 0;                  // mixed rolling-resistance coefficient times radius (m)
+  // ---- line 3: the second tangent, the centroid and the count
+  Vec3 t2{0, 0, 1};
   Vec3 ca{0, 0, 0};           // friction anchor (the points' centroid) from a's centre of mass (m)
   double twist_radius = 0;    // mean distance of the points from the centroid (m)
-  Vec3 rolling_impulse{0, 0, 0};  // accumulated rolling-resistance angular impulse (N m s)
+  int count = 0;              // points
+  // ---- lines 4-8: the points; line 9: their overlaps and feature ids, which the fill does not read
   SolverPoint points[Manifold::kMaxPoints];
+  double depth[Manifold::kMaxPoints] = {0, 0, 0, 0};  // each point's overlap at the start of the step (m)
+  std::uint32_t id[Manifold::kMaxPoints] = {0, 0, 0, 0};  // each point's feature id (warm starting)
 
   /// The tangential impulse in world axes (N s per substep): what the next step re-projects
   /// onto its tangents (valid until the pair is rewritten).
@@ -89,6 +101,12 @@ struct alignas(64) ContactPair {
 static_assert(offsetof(ContactPair, normal_impulse) % 64 == 0 &&
                   offsetof(ContactPair, twist_impulse) + sizeof(double) <= offsetof(ContactPair, normal_impulse) + 64,
               "store() writes one cache line of a pair");
+/// The first byte of a pair that the fill of a kept lane of more than one point reads (the
+/// lines before it hold the key and the rolling impulse).
+inline constexpr std::size_t kPairFillStart = offsetof(ContactPair, normal);
+static_assert(kPairFillStart == 64 && offsetof(ContactPair, normal_impulse) == 128 && offsetof(ContactPair, count) < 256 &&
+                  offsetof(ContactPair, points) == 256 && offsetof(ContactPair, depth) == 576 && sizeof(ContactPair) == 640,
+              "a pair's lines: the key, the frame and material, the impulses, the centroid, the points, their overlaps");
 
 /// Pointers to one body's solver state (velocities, centre and orientation) and its inverse mass.
 struct BodyView {
@@ -650,8 +668,9 @@ struct RigidContacts {
   /// The velocities back from the solver's rows to the system's arrays, and the rolling
   /// impulses to their pairs.
   void finish_velocities(RigidBodySystem& s);
-  /// Adds every manifold's carried impulses to the warm-start accumulators.
-  void accumulate_warm(RigidBodySystem& s);
+  /// Adds every manifold's carried impulses to the warm-start accumulators; colored: also the
+  /// coloured blocks' (false: build() added them as it filled the blocks).
+  void accumulate_warm(RigidBodySystem& s, bool colored = true);
   /// The same for the rolling resistance of a lane that rolls.
   void warm_rolling(const Rolling& x);
   /// Rolling resistance of `x`, lane l of block k.

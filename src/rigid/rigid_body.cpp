@@ -865,10 +865,10 @@ std::vector<RigidContactPoint> RigidBodySystem::contacts() const {
       r.b = {c.slot_b, ids_.generation(c.slot_b)};
       r.position = p.at;
       r.normal = c.normal;
-      r.depth = p.depth;
+      r.depth = c.depth[k];
       r.normal_impulse = c.normal_impulse[k];
       r.tangent_impulse = std::hypot(c.tangent_impulse[0], c.tangent_impulse[1]) / c.count;
-      r.id = p.id;
+      r.id = c.id[k];
       out.push_back(r);
     }
   return out;
@@ -891,8 +891,7 @@ RigidManifoldInfo RigidBodySystem::manifold(std::size_t k) const {
   m.depth = -INFINITY;
   // the deepest point, the fastest approach (approach < 0 closes) and the largest push
   for (int i = 0; i < c.count; ++i) {
-    const detail::SolverPoint& p = c.points[i];
-    if (p.depth > m.depth) m.depth = p.depth, m.point = p.at;
+    if (c.depth[i] > m.depth) m.depth = c.depth[i], m.point = c.points[i].at;
     double approach = 0, max_impulse = 0;  // (0 when the solver keeps none: XPBD)
     contacts_->solver_report(k, i, approach, max_impulse);
     m.approach_speed = std::max(m.approach_speed, -approach);

@@ -61,7 +61,7 @@ void RigidBodySystem::draw_contacts(DebugDraw& draw, const DrawFlags& flags) con
   for (const detail::ContactPair& cp : contacts_->pairs)
     for (int k = 0; k < cp.count; ++k) {
       const Vec3& at = cp.points[k].at;
-      if (flags.contacts) draw.point(at, 6.0f, cp.points[k].depth > 0 ? colors::red : colors::green);
+      if (flags.contacts) draw.point(at, 6.0f, cp.depth[k] > 0 ? colors::red : colors::green);
       if (flags.normals) draw.arrow(at, at + 0.3 * cp.normal, 0.06, colors::orange);
     }
 }
