@@ -61,51 +61,51 @@
 // pile's height in bodies, but a cube in a square pyramid rests on four and carries four: its
 // level is braced by the lattice, not a free column (the 20-level pyramid is 20 cubes high,
 // load 0.55 at the halved rate, and stood 1000 steps at 4 substeps with its top sagging 4.3 mm).
-// The halving is judged by a tilt chain of the pile's levels instead: bodies carrying a common
-// body on face pairs (those above) move together as a level (union-find), where that body's
-// springs on each are the stiffest the body has: the tie makes the path through the common
-// body rigid, as stiff as a joint of the body's own chain made rigid, which the margin
-// carries; a lighter or softer common body barely holds them, and tied through it a light
-// plank over a column's top and a tall box would clamp the column's tilt to the box's footing
-// (a column of 26 so tied was called 0.53, where alone it carries 1.2 and falls at 4
-// substeps, as it did). Bodies that only rest on a common body are not tied (what would tilt
-// them alike is its own tilt, held by its own supports: a column's foot on a slab beside short
-// cubes was clamped by their springs). Columns side by side, touching or not, stay apart: side
-// contacts carry no load, and friction ties nothing. In each horizontal direction a level has three unknowns: its bodies' tilt t, each
-// about its own centre; its turn psi, lifting each body by psi (x_body - x_level); and its lift
-// z. Each point p of a face pair is a spring k_p = m_eff w^2 / points (the sag's springs),
-// stretched by a . (t, psi, z) of the upper body's level less b . (t, psi, z) of the lower's,
-// a = (x_p - x_upper, x_upper - x_level, 1) (b the same of the lower; none for a support that
-// does not move). Gravity is the chain's geometric stiffness: a body tilted by t about its
-// supports (their centroid at height z0, weighted by their loads) carries each load F on it
-// at height z sideways by (z - z0) t and lowers it by (z - z0) t^2 / 2, its own weight so
-// from its centre: G = sum F (z - z0) + m g (z_centre - z0) on its level's tilt, with the
-// loads the contacts carried: every touching pair's on it, the vertical part of a pair's that
-// is no face pair (a heavy ball's point, an edge, a steep face) at its points' height. The pile stands gravity times f when K - f G is positive
-// definite; with each level on one level at most (a tree) a block LDL^T from the tips down
-// decides it in O(levels). The load is kGreenhill / f at the least f it does not stand
-// (bisected), which for a free column of n cubes is the column's own chain: n^3 g / (w^2 s)
-// times 1.24 at 10 cubes, 1.115 at 20 (the discrete chain and the softer foot carry less than
-// Greenhill's clamped beam, by a part first order in 1 / n; the tallest measured to stand, 37,
-// had 0.87 of the bound and is at 0.93 here), and by the same bound (kColumnLoad / 2). Braced,
-// a cube cannot lean with its level below it: tilting alone it stretches its springs to its
-// supports by their offset (half a cube in the pyramid), so the tilts do not add up the way a
-// column's do, and a level tilting whole (t = psi) stands on the springs of a footing as wide
-// as itself. The 20-level pyramid's load is 1.4e-3 and it halves at rest; 3 x 3 free columns of
-// 20 touching keep their 0.62 (as one column), and a pyramid carrying a column of 20 keeps that
-// column's (0.65). It is a Ritz estimate (every body of a level tilting alike), as the column
-// model is (every cube alike): where bodies would tilt unlike each other it overstates what
-// the pile carries; it is held to the same margin. What is not a tree takes the column model
-// for the whole measure: a level resting on two levels (a plank bridging two columns: the
-// columns under it sway as free columns, which a level joined through the plank would not; a
-// common body not stiff enough to tie what it rests on), or resting on itself. Its cost is a union-find, the face points twice (two directions), and a
-// pass over each tree of levels per factor tried: one for a tree that carries less than the
-// most found so far, about 20 for one whose load is found. It is made only when the halving
-// can use it (halved, or with the same pairs as the last step): a pile whose pairs change
-// every step (the rain landing) restarts its calm every step whatever the load. Halved, a
-// measure made because pairs changed elsewhere (a ball bouncing beside the pile) keeps the
-// braced load of the same face pairs up to kMeasureEvery steps old, the cadence at rest; a face
-// pair gained or lost, or a body made or destroyed, has it made again at once.
+// The halving is judged by a tilt chain of the pile's levels instead: bodies carrying a common body
+// on face pairs (those above) move together as a level (union-find), where that body's springs on
+// each are the stiffest the body has between moving bodies: the tie makes the path through the
+// common body rigid, as stiff as a joint of the body's own chain made rigid, which the margin
+// carries; a lighter or softer common body barely holds them, and tied through it a light plank
+// over a column's top and a tall box would clamp the column's tilt to the box's footing (a column
+// of 26 so tied was called 0.53, where alone it carries 1.2 and falls at 4 substeps, as it did).
+// Bodies that only rest on a common body are not tied (what would tilt them alike is its own tilt,
+// held by its own supports: a column's foot on a slab beside short cubes was clamped by their
+// springs). Columns side by side, touching or not, stay apart: side contacts carry no load, and
+// friction ties nothing. In each horizontal direction a level has three unknowns: its bodies' tilt
+// t, each about its own centre; its turn psi, lifting each body by psi (x_body - x_level); and its
+// lift z. Each point p of a face pair is a spring k_p = m_eff w^2 / points (the sag's springs),
+// stretched by a . (t, psi, z) of the upper body's level less b . (t, psi, z) of the lower's, a =
+// (x_p - x_upper, x_upper - x_level, 1) (b the same of the lower; none for a support that does not
+// move). Gravity is the chain's geometric stiffness: a body tilted by t about its supports (their
+// centroid at height z0, weighted by their loads) carries each load F on it at height z sideways by
+// (z - z0) t and lowers it by (z - z0) t^2 / 2, its own weight so from its centre: G = sum F (z -
+// z0) + m g (z_centre - z0) on its level's tilt, with the loads the contacts carried: every
+// touching pair's on it, the vertical part of a pair's that is no face pair (a heavy ball's point,
+// an edge, a steep face) at its points' height. The pile stands gravity times f when K - f G is
+// positive definite; with each level on one level at most (a tree) a block LDL^T from the tips down
+// decides it in O(levels). The load is kGreenhill / f at the least f it does not stand (bisected),
+// which for a free column of n cubes is the column's own chain: n^3 g / (w^2 s) times 1.24 at 10
+// cubes, 1.115 at 20 (the discrete chain and the softer foot carry less than Greenhill's clamped
+// beam, by a part first order in 1 / n; the tallest measured to stand, 37, had 0.87 of the bound
+// and is at 0.93 here), and by the same bound (kColumnLoad / 2). Braced, a cube cannot lean with
+// its level below it: tilting alone it stretches its springs to its supports by their offset (half
+// a cube in the pyramid), so the tilts do not add up the way a column's do, and a level tilting
+// whole (t = psi) stands on the springs of a footing as wide as itself. The 20-level pyramid's load
+// is 1.4e-3 and it halves at rest; 3 x 3 free columns of 20 touching keep their 0.62 (as one
+// column), and a pyramid carrying a column of 20 keeps that column's (0.65). It is a Ritz estimate
+// (every body of a level tilting alike), as the column model is (every cube alike): where bodies
+// would tilt unlike each other it overstates what the pile carries; it is held to the same margin.
+// What is not a tree takes the column model for the whole measure: a level resting on two levels (a
+// plank bridging two columns: the columns under it sway as free columns, which a level joined
+// through the plank would not; a common body not stiff enough to tie what it rests on), or resting
+// on itself. Its cost is a union-find, the face points twice (two directions), and a pass over each
+// tree of levels per factor tried: one for a tree that carries less than the most found so far,
+// about 20 for one whose load is found. It is made only when the halving can use it (halved, or
+// with the same pairs as the last step): a pile whose pairs change every step (the rain landing)
+// restarts its calm every step whatever the load. Halved, a measure made because pairs changed
+// elsewhere (a ball bouncing beside the pile) keeps the braced load of the same face pairs up to
+// kMeasureEvery steps old, the cadence at rest; a face pair gained or lost, or a body made or
+// destroyed, has it made again at once.
 #include <algorithm>
 #include <cmath>
 

@@ -906,8 +906,8 @@ static_assert(Manifold::kMaxPoints == 4 && sizeof(SolverPoint) == 80 && offsetof
 // loaded a coordinate at a time, CachedManifold::core): each lane does the same operations in
 // the same order as the scalar code does for its point, and the centroid and the mean distance
 // sum the points in their order, so both give the same bits. The lanes past the count compute
-// on whatever the manifold holds there and are not summed; of them only the overlaps are
-// stored (nothing reads a pair's points past its count). The points go out as rows (the 4 x 4
+// on whatever the manifold holds there and are not summed; of them only the overlaps and ids
+// are stored (nothing reads a pair's points past its count). The points go out as rows (the 4 x 4
 // transposes of at, sa, sb and offset), their overlaps and ids as they are.
 #if PBA_EMIT_AVX2
 // x in every lane (a broadcast: `0 + x` would make a -0 +0)

@@ -824,7 +824,7 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   // layout stands (lanes_kept), else gathered below and kept for the next step
   const bool kept = lanes_kept;
   // (kept, a lane of more than one point reads its bodies from the block, not the pair's key:
-  // the pair's first line is not read)
+  // the fill does not read the pair's first line; a rolling lane's roll still does)
   const bool from_frame = kept && !kOne;
   LaneMasses& masses = (kOne ? one_masses : block_masses)[b];
   if (kept) {

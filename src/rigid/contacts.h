@@ -491,7 +491,7 @@ struct RigidContacts {
   /// springs (those measure_columns gave its face pairs) with the margin a free column of cubes
   /// has at that load: kGreenhill over the smallest factor on gravity that the tilt chain of
   /// its levels stands (its levels: bodies carrying a common body on face contacts whose
-  /// springs are each the stiffest of the body they rest on). Into column_braced; -1 when the levels do not make a tree (a level resting on
+  /// springs are each the stiffest between moving bodies of the body they rest on). Into column_braced; -1 when the levels do not make a tree (a level resting on
   /// two, or on itself), where the column model's is taken. Needs the loads of a step. O(bodies + face points) per
   /// factor tried; no allocation once the scratch has grown. Needs measure_columns' face pairs.
   double measure_braced(const RigidBodySystem& s, const Vec3& up, double g);
@@ -517,8 +517,8 @@ struct RigidContacts {
     return std::uint64_t{f.lower} << 33 | std::uint64_t{f.upper} << 1 | static_cast<std::uint64_t>(f.moving);
   }
   std::vector<std::uint64_t> brace_key;
-  // by load of a pair that is no face pair (brace_load), its lower body, at the last
-  // measure_braced (brace_faces_same: a heavy ball landing on a halved pile is measured at once)
+  // by load of a pair that is no face pair (brace_load), its lower body, at the last measure_braced
+  // (brace_faces_same: a load come or gone since counts as a change, from the step after it carried)
   std::vector<std::uint32_t> brace_load_key;
   // by touching pair that is no such face pair (a ball's point, an edge, a steep face, a body
   // that does not move pressing from above) with a moving lower body: the lower body, the
@@ -530,7 +530,7 @@ struct RigidContacts {
   std::vector<BraceLoad> brace_load;
   // by body: its union-find root, the first body under it that its load ties into its level,
   // its level, the sums for the height it tilts about (its supports' centroids weighted by
-  // their loads), and its stiffest face spring (N/m)
+  // their loads), and its stiffest face spring to a moving body (N/m)
   struct BraceBody {
     std::uint32_t root, down, level;
     double fz, f, z, stiffest;
