@@ -558,11 +558,11 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     // measured again when the pairs changed (a body came or went, woke or fell asleep), the
     // bodies or gravity's direction did, and otherwise every kMeasureEvery steps
     const Vec3 up = -gravity / g;
-    const bool same = c.column_known && settled && c.column_bodies == type_.size() && c.column_up == up;
+    // (the same bodies and up as the last measure's: no body was made or destroyed since)
+    const bool same_bodies = c.column_known && c.column_bodies == type_.size() && c.column_up == up;
+    const bool same = same_bodies && settled;
     c.brace_age = std::min(c.brace_age + 1, kMeasureEvery);  // (what it is compared with, never past)
     if (!same || ++c.column_age >= kMeasureEvery) {
-      // (the same bodies and up as the last measure's: no body was made or destroyed since)
-      const bool same_bodies = c.column_known && c.column_bodies == type_.size() && c.column_up == up;
       c.column_need = c.measure_columns(*this, up, c.column_top, least < 0, rate(-1), static_rate(-1));
       c.column_rate = rate(-1), c.column_static_rate = static_rate(-1), c.column_g = g;
       c.column_bodies = type_.size(), c.column_up = up, c.column_age = 0, c.column_known = true;
@@ -587,13 +587,11 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   const double need = c.column_need;  // n^3 / s (1/m)
   profile_.column = c.column_top;
   // the load at half the substeps: the braced model's where the pile's levels make a tree,
-  // the column model's otherwise
-  // (the braced load was made on the springs of the measure's rates and the gravity then: G
-  // goes with g and K with the rates squared, so it is scaled to this step's by the larger of
-  // the dynamic and the static springs' ratios, which never lowers it for springs that did not
-  // soften alike; exactly 1 at a fixed dt and settings)
-  // (the springs' squared ratio at half the substeps, from a measure's to this step's: the
-  // larger of the dynamic and the static springs')
+  // the column model's otherwise. The braced load was made on the springs of its measure's
+  // rates and the gravity then (G goes with g, K with the rates squared), so it is scaled to
+  // this step's by `softened`: the larger of the dynamic and the static springs' squared
+  // ratios, which never lowers it for springs that did not soften alike; exactly 1 at a fixed
+  // dt and settings
   const double w_half = rate(-1), ws_half = static_rate(-1);
   auto softened = [&](double w, double ws) {
     return w > 0 && ws > 0 && w_half > 0 && ws_half > 0 ? std::max(w * w / (w_half * w_half), ws * ws / (ws_half * ws_half))
