@@ -865,8 +865,10 @@ struct PointsInput {
   const std::uint32_t* id;                     // CachedManifold::id
   const Mat3* qa;                              // the bodies' rotations now
   const Mat3* qb;
-  Vec3 com_a, com_b;  // their centres of mass now (m)
-  Vec3 n;             // the normal in the world
+  // their centres of mass now (m) and the normal in the world (referred to, not copied)
+  const Vec3& com_a;
+  const Vec3& com_b;
+  const Vec3& n;
   double radius_a, radius_b;  // the shapes' core radii (m)
   double preload;     // the springs' shifted rest (m)
   int count;          // points, 1 to 4
@@ -987,8 +989,8 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
 // One cached manifold to the solver: its points and normal in the world at the bodies' poses
 // now (the separation of a point is measured between the shapes' cores, which ride with the
 // bodies), the mixed material, and the impulses it carried (when warm starting).
-void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t record, std::uint32_t a,
-                         std::uint32_t b) {
+[[gnu::always_inline]] inline void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t record,
+                                                     std::uint32_t a, std::uint32_t b) {
   const ContactSettings& cs = s.settings_;
   const CachedManifold& r = manifolds[record];
   // in place: last step's entries are overwritten (their impulses saved first when they are
@@ -1016,7 +1018,6 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const bool same_mix = own.friction_mix == cs.friction_mix && own.restitution_mix == cs.restitution_mix;
   Vec3 friction, rolling;
   double twist;
-  double impulse[Manifold::kMaxPoints];
   if (warm && in_place && same_mix) {
     // kept (a pile at rest): the entry holds last step's impulses, and the material, the count
     // and the record's points count (pair_points) that this manifold wrote there last step
@@ -1034,10 +1035,14 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     // or saved in the cached manifold
     const ContactPair& from = own.last == kNoIndex ? c : pairs[own.last];
     const bool held = own.last != kNoIndex;
-    // (all four, the unused ones too: a loop of the points' count was a call of memcpy; none in
-    // place and warm, where the entry keeps them)
+    // (all four, zeros past the count as store() leaves them: a loop of the count was a call of
+    // memcpy, 1.3 M calls in the rain's first 200 steps; none in place and warm, where the entry
+    // holds them already: their copy back was a call of memcpy, 0.7% of the resting 1240
+    // pyramid's instructions) (`from` is another entry, or this one read point by point before
+    // the point is written)
     if (!(warm && in_place))
-      for (int k = 0; k < Manifold::kMaxPoints; ++k) impulse[k] = held ? from.normal_impulse[k] : r.normal_impulse[k];
+      for (int k = 0; k < Manifold::kMaxPoints; ++k)
+        c.normal_impulse[k] = warm && k < r.count ? (held ? from.normal_impulse[k] : r.normal_impulse[k]) : 0;
     friction = held ? from.friction_impulse() : r.friction;
     twist = held ? from.twist_impulse : r.twist;
     rolling = held ? from.rolling_impulse : r.rolling;
@@ -1092,12 +1097,6 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   else
 #endif
     emit_points_scalar(in, c, centroid, twist_radius);
-  // (in place and warm, the entry holds them already: the copy back was a call of memcpy, 0.7% of
-  // the resting 1240 pyramid's instructions; otherwise all four, zeros past the count as store()
-  // leaves them: a loop of the count was a call of memcpy too, 1.3 M calls in the rain's first
-  // 200 steps)
-  if (!(warm && in_place))
-    for (int k = 0; k < Manifold::kMaxPoints; ++k) c.normal_impulse[k] = warm && k < r.count ? impulse[k] : 0;
   c.ca = centroid - com_a;
   c.twist_radius = twist_radius;
   // friction carried over, re-projected onto this step's tangents
