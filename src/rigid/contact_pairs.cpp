@@ -629,7 +629,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       // the pair in place, and moved down to `keep` only when an earlier one ended (a copy on
       // the stack, stored as two overlapping 16-byte halves and read back as two others, did
       // not forward from the store buffer: 17% of make_manifolds' samples on the resting 2870
-      // pyramid waited on that read)
+      // pyramid sat right after that read)
       ShapePair& p = shape_pairs[k];
       auto keep_pair = [&] {
         if (keep != k) shape_pairs[keep] = p;
@@ -1020,7 +1020,7 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
   double twist;
   if (warm && in_place && same_mix) {
     // kept (a pile at rest): the entry holds last step's impulses, and the material, the count
-    // and the record's points count (pair_points) that this manifold wrote there last step
+    // and the entry's points count (pair_points) that this manifold wrote there last step
     // (none of them changes while it is carried over, and only emit writes them), so only what
     // depends on the poses is written (the rolling coefficient's test of pairs_same holds: the
     // entry's is this manifold's)
