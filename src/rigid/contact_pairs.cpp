@@ -989,8 +989,8 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
 // One cached manifold to the solver: its points and normal in the world at the bodies' poses
 // now (the separation of a point is measured between the shapes' cores, which ride with the
 // bodies), the mixed material, and the impulses it carried (when warm starting).
-[[gnu::always_inline]] inline void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t record,
-                                                     std::uint32_t a, std::uint32_t b) {
+void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t record, std::uint32_t a,
+                         std::uint32_t b) {
   const ContactSettings& cs = s.settings_;
   const CachedManifold& r = manifolds[record];
   // in place: last step's entries are overwritten (their impulses saved first when they are
