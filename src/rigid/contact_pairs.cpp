@@ -639,7 +639,15 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
             prefetch_lines<sizeof(MeshQueryCache)>(&mesh_queries[caches[ahead].mesh_query]);
         }
       }
-      ShapePair p = shape_pairs[k];
+      // the pair in place, and moved down to `keep` only when an earlier one ended (a copy on
+      // the stack, stored as two overlapping 16-byte halves and read back as two others, did
+      // not forward from the store buffer: 17% of make_manifolds' samples on the resting 2870
+      // pyramid sat right after that read)
+      ShapePair& p = shape_pairs[k];
+      auto keep_pair = [&] {
+        if (keep != k) shape_pairs[keep] = p;
+        ++keep;
+      };
       if (p.cache != kNoIndex) out_of_order += p.cache != previous_cache + 1, previous_cache = p.cache, ++cached;
       const PairPlan::Fate fate = fates[k - first];
       // a pair whose bodies sleep (or sleep on a static body) is kept as it is, manifolds and
@@ -650,7 +658,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
         if (kinematic && !proxies[p.proxy_a].fat.overlaps(proxies[p.proxy_b].fat))
           free_pair(p);
         else
-          shape_pairs[keep++] = p;
+          keep_pair();
         continue;
       }
       // fat boxes apart: the pair ends
@@ -661,14 +669,14 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       // tight boxes apart: no contact this step (the narrow-phase cache stays)
       if (fate == PairPlan::Fate::Apart) {
         if (p.cache != kNoIndex) free_manifolds(caches[p.cache]), caches[p.cache].margin = -1;
-        shape_pairs[keep++] = p;
+        keep_pair();
         continue;
       }
       const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
       const PairPlan& plan = plans[k - first];
       const bool fresh = p.cache == kNoIndex;
       if (fresh) p.cache = new_cache();
-      shape_pairs[keep++] = p;
+      keep_pair();
       PairCache& c = caches[p.cache];
       if (!plan.same) {
         if (plan.batched != kNoIndex && fresh) c.narrow = fresh_narrow[plan.batched];
@@ -870,8 +878,10 @@ struct PointsInput {
   const std::uint32_t* id;                     // CachedManifold::id
   const Mat3* qa;                              // the bodies' rotations now
   const Mat3* qb;
-  Vec3 com_a, com_b;  // their centres of mass now (m)
-  Vec3 n;             // the normal in the world
+  // their centres of mass now (m) and the normal in the world (referred to, not copied)
+  const Vec3& com_a;
+  const Vec3& com_b;
+  const Vec3& n;
   double radius_a, radius_b;  // the shapes' core radii (m)
   double preload;     // the springs' shifted rest (m)
   int count;          // points, 1 to 4
@@ -971,15 +981,19 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
     sum = sum + rows[0][k];  // (its fourth lane, sa.x, is not read)
   }
   sum = sum / _mm256_set1_pd(static_cast<double>(in.count));
-  alignas(32) double c[4];
-  _mm256_store_pd(c, sum);
-  centroid = Vec3(c[0], c[1], c[2]);
-  const V dx = mid[0] - all(c[0]), dy = mid[1] - all(c[1]), dz = mid[2] - all(c[2]);
-  alignas(32) double distance[4];
-  _mm256_store_pd(distance, _mm256_sqrt_pd(dx * dx + dy * dy + dz * dz));
-  twist_radius = 0;
-  for (int k = 0; k < in.count; ++k) twist_radius += distance[k];
-  twist_radius /= in.count;
+  // (the centroid's coordinates broadcast and the distances summed by lane moves, not through
+  // memory: this chain's latency ends every emit; the sum in point order, as the scalar loop's
+  // 0 + d0 + d1 + ..., where 0 + d0 is d0, a square root being no -0 here)
+  const V cx = _mm256_permute4x64_pd(sum, 0x00), cy = _mm256_permute4x64_pd(sum, 0x55);
+  const V cz = _mm256_permute4x64_pd(sum, 0xaa);
+  centroid = Vec3(_mm256_cvtsd_f64(cx), _mm256_cvtsd_f64(cy), _mm256_cvtsd_f64(cz));
+  const V dx = mid[0] - cx, dy = mid[1] - cy, dz = mid[2] - cz;
+  const V distance = _mm256_sqrt_pd(dx * dx + dy * dy + dz * dz);
+  const __m128d low = _mm256_castpd256_pd128(distance), high = _mm256_extractf128_pd(distance, 1);
+  double twist = _mm_cvtsd_f64(low) + _mm_cvtsd_f64(_mm_unpackhi_pd(low, low));
+  twist += _mm_cvtsd_f64(high);  // (count > 2: emit calls this for three or four points)
+  if (in.count > 3) twist += _mm_cvtsd_f64(_mm_unpackhi_pd(high, high));
+  twist_radius = twist / in.count;
 }
 #endif
 
@@ -1008,32 +1022,63 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   }
   ContactPair& c = pairs[at_index];
   CachedManifold& own = manifolds[record];
-  // the colours' key of last step's entry here (color() keeps the colours while all match)
-  pairs_same = pairs_same && at_index < last_count && c.a == a && c.b == b && (c.rolling != 0) == (r.mixed_rolling != 0);
-  if (c.record != record && c.record != kNoIndex && at_index < last_count && manifolds[c.record].last == at_index)
-    settle(c.record);
-  // this manifold's impulses: in this entry (the same place as last step), in another entry,
-  // or saved in the cached manifold
-  const ContactPair& from = own.last == kNoIndex ? c : pairs[own.last];
-  const bool held = own.last != kNoIndex;
+  const bool warm = cs.warm_starting;
   // the entry is the manifold's own of last step (a pile at rest): its impulses stay where they
   // are, and so does its key (its shape pair's, the triangle and the record: the entry was
-  // written for this manifold, and a record freed and reused starts with no entry)
-  const bool in_place = held && own.last == at_index && c.record == record;
-  const bool warm = cs.warm_starting;
-  double impulse[Manifold::kMaxPoints];
-  // (all four, the unused ones too: a loop of the points' count was a call of memcpy; none in
-  // place and warm, where the entry keeps them)
-  if (!(warm && in_place))
-    for (int k = 0; k < Manifold::kMaxPoints; ++k) impulse[k] = held ? from.normal_impulse[k] : r.normal_impulse[k];
-  const Vec3 friction = held ? from.friction_impulse() : r.friction;
-  const double twist = held ? from.twist_impulse : r.twist;
-  const Vec3 rolling = held ? from.rolling_impulse : r.rolling;
-  if (held && own.last != at_index) pairs[own.last].record = kNoIndex;
-  own.last = static_cast<std::uint32_t>(at_index);
-  if (!in_place) {
-    c.slot_a = p.slot_a, c.slot_b = p.slot_b, c.shape_a = p.shape_a, c.shape_b = p.shape_b, c.sub = r.sub;
-    c.record = record;
+  // written for this manifold, and a record freed and reused starts with no entry; a manifold
+  // made anew is a new record, collide_pair)
+  const bool in_place = own.last == at_index && c.record == record;
+  const bool same_mix = own.friction_mix == cs.friction_mix && own.restitution_mix == cs.restitution_mix;
+  Vec3 friction, rolling;
+  double twist;
+  if (warm && in_place && same_mix) {
+    // kept (a pile at rest): the entry holds last step's impulses, and the material, the count
+    // and the entry's points count (pair_points) that this manifold wrote there last step
+    // (none of them changes while it is carried over, and only emit writes them), so only what
+    // depends on the poses is written (the rolling coefficient's test of pairs_same holds: the
+    // entry's is this manifold's)
+    pairs_same = pairs_same && at_index < last_count && c.a == a && c.b == b;
+    friction = c.friction_impulse(), twist = c.twist_impulse, rolling = c.rolling_impulse;
+  } else {
+    // the colours' key of last step's entry here (color() keeps the colours while all match)
+    pairs_same = pairs_same && at_index < last_count && c.a == a && c.b == b && (c.rolling != 0) == (r.mixed_rolling != 0);
+    if (c.record != record && c.record != kNoIndex && at_index < last_count && manifolds[c.record].last == at_index)
+      settle(c.record);
+    // this manifold's impulses: in this entry (the same place as last step), in another entry,
+    // or saved in the cached manifold
+    const ContactPair& from = own.last == kNoIndex ? c : pairs[own.last];
+    const bool held = own.last != kNoIndex;
+    // (all four, zeros past the count as store() leaves them: a loop of the count was a call of
+    // memcpy, 1.3 M calls in the rain's first 200 steps; none in place and warm, where the entry
+    // holds them already: their copy back was a call of memcpy, 0.7% of the resting 1240
+    // pyramid's instructions) (`from` is another entry, or this one read point by point before
+    // the point is written)
+    if (!(warm && in_place))
+      for (int k = 0; k < Manifold::kMaxPoints; ++k)
+        c.normal_impulse[k] = warm && k < r.count ? (held ? from.normal_impulse[k] : r.normal_impulse[k]) : 0;
+    friction = held ? from.friction_impulse() : r.friction;
+    twist = held ? from.twist_impulse : r.twist;
+    rolling = held ? from.rolling_impulse : r.rolling;
+    if (held && own.last != at_index) pairs[own.last].record = kNoIndex;
+    own.last = static_cast<std::uint32_t>(at_index);
+    if (!in_place) {
+      c.slot_a = p.slot_a, c.slot_b = p.slot_b, c.shape_a = p.shape_a, c.shape_b = p.shape_b, c.sub = r.sub;
+      c.record = record;
+    }
+    // the material, mixed again if the rules changed since
+    if (!same_mix) {
+      const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
+      const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
+      own.friction_mix = cs.friction_mix, own.restitution_mix = cs.restitution_mix;
+      own.mixed_friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
+      own.mixed_restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
+    }
+    c.friction = r.mixed_friction;
+    c.restitution = r.mixed_restitution;
+    c.rolling = r.mixed_rolling;
+    c.count = r.count;
+    if (pair_points.size() <= at_index) pair_points.resize(pairs.capacity());  // (grows with the pairs)
+    pair_points[at_index] = static_cast<std::uint8_t>(r.count);
   }
   c.a = a, c.b = b;
   const Mat3& qa = rotation(s, a);
@@ -1043,20 +1088,6 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const Vec3 n = (r.normal_in_b ? qb : qa) * r.normal;
   c.normal = n;
   tangent_basis(n, c.t1, c.t2);
-  // the material, mixed again if the rules changed since
-  if (own.friction_mix != cs.friction_mix || own.restitution_mix != cs.restitution_mix) {
-    const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
-    const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
-    own.friction_mix = cs.friction_mix, own.restitution_mix = cs.restitution_mix;
-    own.mixed_friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
-    own.mixed_restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
-  }
-  c.friction = r.mixed_friction;
-  c.restitution = r.mixed_restitution;
-  c.rolling = r.mixed_rolling;
-  c.count = r.count;
-  if (pair_points.size() <= at_index) pair_points.resize(pairs.capacity());  // (grows with the pairs)
-  pair_points[at_index] = static_cast<std::uint8_t>(r.count);
   const double radius_a = r.radius_a, radius_b = r.radius_b;
   // the springs' shifted rest (the soft step's; the other solvers drop it)
   if (r.preload != 0 && cs.solver != RigidSolverType::SoftStep) own.preload = 0;
@@ -1079,12 +1110,6 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   else
 #endif
     emit_points_scalar(in, c, centroid, twist_radius);
-  // (in place and warm, the entry holds them already: the copy back was a call of memcpy, 0.7% of
-  // the resting 1240 pyramid's instructions; otherwise all four, zeros past the count as store()
-  // leaves them: a loop of the count was a call of memcpy too, 1.3 M calls in the rain's first
-  // 200 steps)
-  if (!(warm && in_place))
-    for (int k = 0; k < Manifold::kMaxPoints; ++k) c.normal_impulse[k] = warm && k < r.count ? impulse[k] : 0;
   c.ca = centroid - com_a;
   c.twist_radius = twist_radius;
   // friction carried over, re-projected onto this step's tangents
