@@ -407,7 +407,9 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
       use = pa.rotation * P.faces[f].normal;
     }
   }
-  if (ref == Ref::Triangle && poly) f = most_aligned_face(P, pa.rotation, use, &dot);
+  // (a snapped normal is the triangle's now: its face again; an internal feature's or the
+  // triangle's own normal is the one the face above was found for, so it stands)
+  if (ref == Ref::Triangle && poly && snapped) f = most_aligned_face(P, pa.rotation, use, &dot);
   // the triangle's side that faces the shape, its vertices counter-clockwise about it
   WorldFace rf;
   rf.normal = -use;
