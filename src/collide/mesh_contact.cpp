@@ -133,6 +133,7 @@ struct PolyAt {
       ++face_axes;
     }
     bool box_direction[3] = {false, false, false};
+    Vec3 hull_local[kEdges];  // a hull's edges kept so far, in its frame
     for (std::uint32_t e = 0; e < P.edge_count; ++e) {
       const HalfEdge& he = P.edges[e];
       if (he.twin < e) continue;  // each edge once
@@ -142,6 +143,18 @@ struct PolyAt {
         const int i = local.x != 0 ? 0 : local.y != 0 ? 1 : 2;
         if (box_direction[i]) continue;
         box_direction[i] = true;
+      } else {
+        // A hull's edge equal to a kept one, or its exact opposite (a square pyramid's base
+        // has two pairs: 24 edge axes a triangle become 18), gives the same axes or their
+        // exact negations: turning, crossing, projecting and the min and max all commute
+        // with a sign change to the bit, so along -d the gap is the one along d. Its axes
+        // then never end the test first nor win (a later axis wins only when deeper by
+        // kEdgeBias), and the deepest edge of a direction is searched among all parallel
+        // ones below: the same result, to the bit
+        bool seen = false;
+        for (std::uint32_t j = 0; j < edge_dirs && !seen; ++j) seen = hull_local[j] == local || hull_local[j] == -local;
+        if (seen) continue;
+        hull_local[edge_dirs] = local;
       }
       const Vec3 ea = pa.rotation * local;
       edge_d[edge_dirs] = ea;
