@@ -147,10 +147,10 @@ struct PolyAt {
         // A hull's edge equal to a kept one, or its exact opposite (a square pyramid's base
         // has two pairs: 24 edge axes a triangle become 18), gives the same axes or their
         // exact negations: turning, crossing, projecting and the min and max all commute
-        // with a sign change to the bit, so along -d the gap is the one along d. Its axes
-        // then never end the test first nor win (a later axis wins only when deeper by
-        // kEdgeBias), and the deepest edge of a direction is searched among all parallel
-        // ones below: the same result, to the bit
+        // with a sign change (to the bit, but for the signs of zeros), so along -d the gap
+        // is the one along d. Its axes then never end the test first nor win (a later axis
+        // wins only when deeper by kEdgeBias), and the deepest edge of a direction is
+        // searched among all parallel ones below: the same result, to the bit
         bool seen = false;
         for (std::uint32_t j = 0; j < edge_dirs && !seen; ++j) seen = hull_local[j] == local || hull_local[j] == -local;
         if (seen) continue;
