@@ -83,12 +83,12 @@ struct PolyAt {
   std::array<Vec3, 64> v;  // P's vertices at pa (world, m)
   Vec3 half_axes[3];       // a box's: its centre -+ their sum spans it along any axis (m)
   // What the separating axes take from the shape alone, the same for every triangle of the
-  // call, made at its first sat_triangle (`made`): the face axes it tests (a box's three, a
-  // hull's all) turned to the world, the shape's span along each, and the edge directions
-  // (a box's three, a hull's edges once each) turned to the world with the edge each came
-  // from and 1e-20 times its squared length (the parallel test's scale). Before, each
-  // triangle turned them and, on a hull, projected every vertex on every face axis again:
-  // a pyramid on two triangles did it twice. A hull of at most 64 vertices has at most
+  // call, made when a sat_triangle first needs them (`made`): the face axes it tests (a box's
+  // three, a hull's all) turned to the world, the shape's span along each, and the edge
+  // directions (a box's three, a hull's edges once each) turned to the world with the edge
+  // each came from and 1e-20 times its squared length (the parallel test's scale). Before,
+  // each triangle turned them and, on a hull, projected every vertex on every face axis
+  // again: a pyramid on two triangles did it twice. A hull of at most 64 vertices has at most
   // 2 * 64 - 4 faces and 3 * 64 - 6 edges (Euler), so they fit
   static constexpr std::uint32_t kFaces = 124, kEdges = 186;
   bool made = false;
@@ -133,6 +133,7 @@ struct PolyAt {
       ++face_axes;
     }
     bool box_direction[3] = {false, false, false};
+    Vec3 hull_local[kEdges];  // a hull's edges kept so far, in its frame
     for (std::uint32_t e = 0; e < P.edge_count; ++e) {
       const HalfEdge& he = P.edges[e];
       if (he.twin < e) continue;  // each edge once
@@ -142,6 +143,18 @@ struct PolyAt {
         const int i = local.x != 0 ? 0 : local.y != 0 ? 1 : 2;
         if (box_direction[i]) continue;
         box_direction[i] = true;
+      } else {
+        // A hull's edge equal to a kept one, or its exact opposite (a square pyramid's base
+        // has two pairs: 24 edge axes a triangle become 18), gives the same axes or their
+        // exact negations: turning, crossing, projecting and the min and max all commute
+        // with a sign change (to the bit, but for the signs of zeros), so along -d the gap
+        // is the one along d. Its axes then never end the test first nor win (a later axis
+        // wins only when deeper by kEdgeBias), and the deepest edge of a direction is
+        // searched among all parallel ones below: the same result, to the bit
+        bool seen = false;
+        for (std::uint32_t j = 0; j < edge_dirs && !seen; ++j) seen = hull_local[j] == local || hull_local[j] == -local;
+        if (seen) continue;
+        hull_local[edge_dirs] = local;
       }
       const Vec3 ea = pa.rotation * local;
       edge_d[edge_dirs] = ea;
@@ -157,7 +170,6 @@ int sat_triangle(const Poly& P, PolyAt& at, const Pose& pa, const Vec3 tri[3], c
                  std::uint8_t& on, Axis& kind) {
   const std::array<Vec3, 64>& v = at.v;
   const std::uint32_t nv = P.vertex_count;
-  if (!at.made) at.make(P, pa);
   // the gap along the unit axis d given the shape's span [lo, hi] along it, and whether the
   // shape lies on its positive side
   auto gap_of = [&](const Vec3& d, double lo, double hi, bool& above) {
@@ -211,6 +223,8 @@ int sat_triangle(const Poly& P, PolyAt& at, const Pose& pa, const Vec3 tri[3], c
   // terrain a fifth of these runs were saved so, for a tenth of their cost (scanning all the
   // remaining axes as well saved half the runs, but cost about as much as it saved)
   if (best > 0) return beyond_sides() ? 0 : 2;
+  // (the shape's axes made only now: the tests above need its placed vertices alone)
+  if (!at.made) at.make(P, pa);
   Vec3 axis = face_normal;
   bool best_above = above;
   std::uint32_t edge_a = 0, edge_b = 0;
@@ -407,7 +421,9 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
       use = pa.rotation * P.faces[f].normal;
     }
   }
-  if (ref == Ref::Triangle && poly) f = most_aligned_face(P, pa.rotation, use, &dot);
+  // (a snapped normal is the triangle's now: its face again; an internal feature's or the
+  // triangle's own normal is the one the face above was found for, so it stands)
+  if (ref == Ref::Triangle && poly && snapped) f = most_aligned_face(P, pa.rotation, use, &dot);
   // the triangle's side that faces the shape, its vertices counter-clockwise about it
   WorldFace rf;
   rf.normal = -use;

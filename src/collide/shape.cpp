@@ -171,9 +171,24 @@ Aabb bounds(const ColliderShape& s, const Pose& p) {
       return {p.position - h, p.position + h};
     }
     case ShapeType::Hull: {
-      // exact: the support point along each world axis, climbing from the last one
-      const Quat qi = glm::conjugate(p.rotation);
+      // exact: the support point along each world axis. A hull of up to 64 vertices (a
+      // pyramid's five) places them all and keeps each coordinate's extremes: the vertex a
+      // climb along an axis finds is among them, placed the same way, so the box is the
+      // climbs' to the bit unless two vertices tie along the axis to rounding (then it is
+      // the larger of the two), for less than half the instructions: six climbs, each with
+      // its axis turned into the hull's frame, made `bounds` 1.7% of the terrain scene's
+      // resting steps (0.8% now)
       const ConvexHull& h = *s.hull;
+      if (const std::span<const Vec3> v = h.vertices(); v.size() <= 64) {
+        Vec3 lo = apply(p, v[0]), hi = lo;
+        for (std::size_t i = 1; i < v.size(); ++i) {
+          const Vec3 x = apply(p, v[i]);
+          lo = glm::min(lo, x), hi = glm::max(hi, x);
+        }
+        return {lo, hi};
+      }
+      // larger: climbing from the last one
+      const Quat qi = glm::conjugate(p.rotation);
       Aabb b;
       std::uint32_t hint = 0;
       for (int i = 0; i < 3; ++i) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "error_of.h"
 #include "pba/collide/shape.h"
@@ -143,6 +144,37 @@ TEST(CollideShapes, BoundsContainTheShapeAndTouchIt) {
         const Vec3 lo = apply(p, support(s, glm::conjugate(p.rotation) * -axis));
         EXPECT_NEAR(b.hi[i], hi[i], 1e-12) << to_string(s.type);
         EXPECT_NEAR(b.lo[i], lo[i], 1e-12) << to_string(s.type);
+      }
+    }
+  }
+  // hulls of up to 64 vertices take every placed vertex's extremes, larger ones climb: both
+  // hold every vertex (placed as the narrow phase places it) and touch one along each axis
+  // (a pyramid of five; 100 points on a sphere, every one a vertex)
+  std::vector<Vec3> ball;
+  for (int k = 0; k < 100; ++k) {
+    const double z = 1 - (2 * k + 1) / 100.0, phi = 2.399963229728653 * k;
+    ball.push_back(0.7 * Vec3(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z));
+  }
+  const std::vector<Vec3> pyramid{{-0.5, 0, -0.5}, {0.5, 0, -0.5}, {0.5, 0, 0.5}, {-0.5, 0, 0.5}, {0, 0.8, 0}};
+  for (const auto& points : {pyramid, ball}) {
+    const auto h = ConvexHull::build(points);
+    ASSERT_EQ(h->vertices().size(), points.size());
+    const ColliderShape s = ColliderShape::convex(h);
+    for (int k = 0; k < 50; ++k) {
+      const Pose p{Vec3(std::uniform_real_distribution<double>(-5, 5)(rng), 1, -2), random_rotation(rng)};
+      const Aabb b = bounds(s, p);
+      Vec3 lo(INFINITY), hi(-INFINITY);
+      for (const Vec3& v : h->vertices()) {
+        const Vec3 x = apply(p, v);
+        lo = glm::min(lo, x), hi = glm::max(hi, x);
+        for (int i = 0; i < 3; ++i) EXPECT_TRUE(b.lo[i] <= x[i] && x[i] <= b.hi[i]) << h->vertices().size();
+      }
+      // (the climb picks its vertex by a dot product in the hull's frame: a tie to rounding
+      // may pick the other vertex, one rounding of the world coordinate away)
+      const double tie = h->vertices().size() <= 64 ? 0.0 : 1e-12;
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(b.lo[i], lo[i], tie) << h->vertices().size();
+        EXPECT_NEAR(b.hi[i], hi[i], tie) << h->vertices().size();
       }
     }
   }
