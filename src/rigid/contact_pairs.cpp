@@ -1044,19 +1044,20 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   // made anew is a new record, collide_pair)
   const bool in_place = own.last == at_index && c.record == record;
   const bool same_mix = own.friction_mix == cs.friction_mix && own.restitution_mix == cs.restitution_mix;
+  // kept (a pile at rest): the entry holds last step's impulses, and the material, the count
+  // and the entry's points count (pair_points) that this manifold wrote there last step (none
+  // of them changes while it is carried over, and only emit writes them), so only what depends
+  // on the poses is written
+  const bool kept = warm && in_place && same_mix;
+  // the colours' key of last step's entry here (color() keeps the colours while all match;
+  // kept, the entry's rolling coefficient is this manifold's)
+  pairs_same = pairs_same && at_index < last_count && c.a == a && c.b == b &&
+               (kept || (c.rolling != 0) == (r.mixed_rolling != 0));
   Vec3 friction, rolling;
   double twist;
-  if (warm && in_place && same_mix) {
-    // kept (a pile at rest): the entry holds last step's impulses, and the material, the count
-    // and the entry's points count (pair_points) that this manifold wrote there last step
-    // (none of them changes while it is carried over, and only emit writes them), so only what
-    // depends on the poses is written (the rolling coefficient's test of pairs_same holds: the
-    // entry's is this manifold's)
-    pairs_same = pairs_same && at_index < last_count && c.a == a && c.b == b;
+  if (kept) {
     friction = c.friction_impulse(), twist = c.twist_impulse, rolling = c.rolling_impulse;
   } else {
-    // the colours' key of last step's entry here (color() keeps the colours while all match)
-    pairs_same = pairs_same && at_index < last_count && c.a == a && c.b == b && (c.rolling != 0) == (r.mixed_rolling != 0);
     if (c.record != record && c.record != kNoIndex && at_index < last_count && manifolds[c.record].last == at_index)
       settle(c.record);
     // this manifold's impulses: in this entry (the same place as last step), in another entry,
