@@ -185,6 +185,7 @@ struct Options {
   int substeps = 0;      // the solver's substeps, exactly (auto off; sequential impulses: ignored); 0: the default
   double down_sag = -1;  // ContactSettings::auto_substeps_sag (m): fewer substeps where the columns allow; < 0: the default
   double down_fraction = -1;  // ContactSettings::auto_substeps_sag_fraction (of a body's size); < 0: the default
+  int least = 0;  // ContactSettings::auto_substeps_least: the fewest substeps the lowering takes; 0: the default
   std::vector<pba::RigidSolverType> solvers{pba::kRigidSolvers.begin(), pba::kRigidSolvers.end()};
 };
 
@@ -248,6 +249,7 @@ void run_scene(const BenchScene& scene, const Options& o) {
     if (o.substeps > 0) settings.substeps = o.substeps, settings.auto_substeps = false;  // (exactly N)
     if (o.down_sag >= 0) settings.auto_substeps_sag = o.down_sag;
     if (o.down_fraction >= 0) settings.auto_substeps_sag_fraction = o.down_fraction;
+    if (o.least > 0) settings.auto_substeps_least = o.least;
     const PbaResult r = median_run(o.repeat, [&] { return run_pba(scene, steps, settings); });
     // a mesh scene pba cannot collide with yet: say so instead of a figure
     if (scene.has_mesh && (!r.ran || r.escapes > 0)) {
@@ -276,7 +278,7 @@ int usage(const char* why) {
   if (why) std::fprintf(stderr, "bench_rigid: %s\n", why);
   std::fprintf(stderr,
                "usage: bench_rigid [--scene KEY|all] [--steps N] [--repeat K] [--peer all|bullet|ode|none]\n"
-               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--reuse-angle DEG] [--substeps N] [--down M] [--down-fraction F] [--profile]\n"
+               "                   [--solver all|soft-step|sequential-impulse|tgs|xpbd] [--reuse M] [--reuse-angle DEG] [--substeps N] [--down M] [--down-fraction F] [--least N] [--profile]\n"
                "                   [--trace MS] | --quick | --budget\n"
                "scenes:");
   for (const BenchScene& s : pba::bench::bench_scenes()) std::fprintf(stderr, " %s", s.key.c_str());
@@ -350,6 +352,9 @@ int main(int argc, char** argv) {
       o.down_fraction = std::strtod(v.c_str(), &end);
       if (v.empty() || *end || !(o.down_fraction >= 0 && o.down_fraction <= 1))
         return usage(("--down-fraction '" + v + "': expected a sag budget in [0, 1] of a body's size").c_str());
+    } else if (a == "--least") {
+      if (!count_arg(need().c_str(), &o.least) || o.least > 64)
+        return usage(("--least '" + std::string(value) + "': expected a count in [1, 64]").c_str());
     } else if (a == "--peer") {
       const std::string p = need();
       if (p != "all" && p != "bullet" && p != "ode" && p != "none")

@@ -170,7 +170,8 @@ struct ContactSettings {
   /// set_substeps()), the soft step takes exactly `substeps` and `contact_hertz`.
   bool auto_substeps = true;
   /// Soft step with `auto_substeps`: where the bodies allow it, also HALVE the substeps and
-  /// `contact_hertz` (8 -> 4 and 120 -> 60 Hz at the defaults), a budget on the static sag
+  /// `contact_hertz` (8 -> 4 and 120 -> 60 Hz at the defaults; then lower, a rung at a time
+  /// down to `auto_substeps_least`, on the same conditions: 3 and 45 Hz), a budget on the static sag
   /// that the halving may give, as a fraction of each body's size (twice its smallest half
   /// size), finite and in [0, 1]; 0: no such budget. Halved once, for a second, the columns
   /// have carried at most half the buckling bound that raises the substeps, every awake
@@ -190,6 +191,16 @@ struct ContactSettings {
   /// budgets the halving needs both; with neither (`auto_substeps_sag_fraction` 0 too) the
   /// soft step never lowers the substeps.
   double auto_substeps_sag = 0;
+  /// Soft step with a sag budget above: the fewest substeps the lowering takes, in [1, 64].
+  /// Below the halving the substeps come down a rung at a time, each three quarters of the
+  /// last, rounded down (8 -> 4 -> 3 -> 2 -> 1, `contact_hertz` with them: 45 Hz at 3), each
+  /// rung on the halving's conditions judged at its own rate and after kCalmTime (a second) at
+  /// the rung above; none under this. The default 3 is the fewest at which the pyramids of the
+  /// benchmarks sag no more than Bullet's (at 2 the Jolt pyramid of 2 m cubes sags 8.5 mm against
+  /// Bullet's 8.0, at 3 4.8 mm: docs/rigid-bodies.md, "A ladder below the halving"); 4 keeps the
+  /// halving alone, as before 2026-12-05, and a `substeps` whose half is under it is not lowered
+  /// at all (4 at the default 3: halved to 2 before).
+  int auto_substeps_least = 3;
   int iterations = 10;  ///< sequential impulses: velocity iterations per step, in [1, 1000]
   /// TGS: biased contact iterations per substep; XPBD: position iterations per substep; in
   /// [1, 100]. TGS and XPBD take many substeps of few iterations (Macklin et al. 2019).
@@ -560,8 +571,9 @@ class RigidBodySystem {
   std::vector<Vec3> com0_;
   std::vector<Quat> q0_;
   // ContactSettings::auto_substeps: the factor on the substeps and contact_hertz now, as a
-  // power of two (-1 when halved by a sag budget, 0, 1 or 2), and how long (s) the columns have
-  // fitted half of it
+  // power of two (0, 1 or 2), or -k at the k-th rung below `substeps` that a sag budget allows
+  // (-1 halved, -2 three eighths at the defaults: columns.cpp), and how long (s) the columns
+  // have fitted the next count down
   int auto_shift_ = 0;
   double auto_calm_ = 0;
   // the soft step's substeps this step (auto_substeps) and its factor on contact_hertz

@@ -57,6 +57,16 @@
 // times the energy, which halving under a body moving on them feeds into its motion: a column
 // rocking on its edges, docs/rigid-bodies.md, "Why rest").
 //
+// Below the halving, a ladder (2026-12-05): each rung three quarters of the last, rounded down
+// (8 -> 4 -> 3 -> 2 -> 1), none under ContactSettings::auto_substeps_least (3 by default), with
+// contact_hertz at the same fraction of the setting's (45 Hz at 3), so the springs' sag and the
+// columns' load go as 1 / count^2: (4/3)^2 = 1.78 times the halving's at 3. Each rung is taken on
+// the same three conditions judged at its own rate (the load and the sag measured at the
+// halving's springs, scaled by the springs' squared ratio), after kCalmTime at the rung above,
+// and back up at once to the fewest substeps whose whole bounds fit. At 3 the contact passes
+// cost 3/4 of the halving's. The floor is the issue's: at 2 the Jolt pyramid of 2 m cubes sags
+// 8.5 mm, past Bullet's 8.0, and at 3 4.8 mm (docs/rigid-bodies.md, "A ladder below the halving").
+//
 // Braced piles (measure_braced; with the halving's budgets). The column model counts a
 // pile's height in bodies, but a cube in a square pyramid rests on four and carries four: its
 // level is braced by the lattice, not a free column (the 20-level pyramid is 20 cubes high,
@@ -107,6 +117,7 @@
 // kMeasureEvery steps old, the cadence at rest; a face pair gained or lost, or a body made or
 // destroyed, has it made again at once.
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "contacts.h"
@@ -129,6 +140,9 @@ constexpr double kFaceCosine = 0.7071067811865476;
 // the substeps (and contact_hertz) are raised by up to 2^this (8 -> 32 at the defaults:
 // columns up to 4^(2/3) = 2.5 times as tall, at up to four times the solver's cost)
 constexpr int kMostShift = 2;
+// the most rungs below the setting's substeps (64 -> 32 -> 24 -> 18 -> 13 -> 9 -> 6 -> 4 -> 3
+// -> 2 -> 1 is the longest ladder: the setting's floor, auto_substeps_least, ends it sooner)
+constexpr int kMostRungs = 10;
 // how long (s) the columns must fit half the factor before it is halved: a second is a
 // period of a column's sway on its contacts (1.37 Hz for a 10-stack at the defaults), so a
 // rocking column or a box sliding over it does not switch the substeps back and forth
@@ -539,15 +553,26 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     c.column_known = false;
     return settings_.solver == RigidSolverType::SequentialImpulse ? 1 : base;
   }
-  // the contacts' angular rate (rad/s) at 2^shift times the substeps and contact_hertz (the
-  // stiffness capped at a quarter of the substep rate, as the passes take it), and a static
-  // contact's (twice that, at most one radian a substep)
-  auto rate = [&](int shift) { return 2 * kPi * std::ldexp(std::min(settings_.contact_hertz, 0.25 * base / dt), shift); };
-  auto static_rate = [&](int shift) { return std::min(2 * rate(shift), detail::kStaticStepAngle * std::ldexp(base / dt, shift)); };
-  // halving (a sag budget: relative to the bodies' sizes, auto_substeps_sag_fraction, and
-  // in metres, auto_substeps_sag) needs whole substeps
+  // the counts below the setting's (with a sag budget: relative to the bodies' sizes,
+  // auto_substeps_sag_fraction, and in metres, auto_substeps_sag), the ladder's rungs: half of
+  // an even `substeps` (8 -> 4), then three quarters of the last, rounded down (4 -> 3 -> 2 ->
+  // 1), none under auto_substeps_least (3 by default: 8 -> 4 -> 3). Shift -k is the k-th rung
   const double budget = settings_.auto_substeps_sag, fraction = settings_.auto_substeps_sag_fraction;
-  const int least = (budget > 0 || fraction > 0) && base % 2 == 0 ? -1 : 0;
+  std::array<int, kMostRungs> rung{};
+  int rungs = 0;
+  if ((budget > 0 || fraction > 0) && base % 2 == 0)
+    for (int n = base / 2; n >= std::max(settings_.auto_substeps_least, 1) && rungs < kMostRungs; n = 3 * n / 4)
+      rung[static_cast<std::size_t>(rungs++)] = n;
+  const int least = -rungs;
+  // the substeps at `shift` (2^shift times `substeps`, or a rung below it), and the factor on
+  // the substeps and contact_hertz there (exactly 2^shift for the powers of two)
+  auto count = [&](int shift) { return shift >= 0 ? base << shift : rung[static_cast<std::size_t>(-shift - 1)]; };
+  auto scale = [&](int shift) { return shift >= 0 ? std::ldexp(1.0, shift) : static_cast<double>(count(shift)) / base; };
+  // the contacts' angular rate (rad/s) at `shift` (the stiffness capped at a quarter of the
+  // substep rate, as the passes take it), and a static contact's (twice that, at most one
+  // radian a substep)
+  auto rate = [&](int shift) { return 2 * kPi * (std::min(settings_.contact_hertz, 0.25 * base / dt) * scale(shift)); };
+  auto static_rate = [&](int shift) { return std::min(2 * rate(shift), detail::kStaticStepAngle * (base / dt * scale(shift))); };
   const double g = glm::length(gravity);
   // the same contact pairs as the last step
   const bool settled = c.pairs_same && c.pairs.size() == c.last_count;
@@ -563,8 +588,11 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     const bool same = same_bodies && settled;
     c.brace_age = std::min(c.brace_age + 1, kMeasureEvery);  // (what it is compared with, never past)
     if (!same || ++c.column_age >= kMeasureEvery) {
-      c.column_need = c.measure_columns(*this, up, c.column_top, least < 0, rate(-1), static_rate(-1));
-      c.column_rate = rate(-1), c.column_static_rate = static_rate(-1), c.column_g = g;
+      // (the springs and sag of the first rung, the halving's: a lower rung's are scaled from
+      // them below; with no rung, those of half the substeps, which go unused)
+      const double w = least < 0 ? rate(-1) : 0.5 * rate(0), ws = least < 0 ? static_rate(-1) : 0.5 * static_rate(0);
+      c.column_need = c.measure_columns(*this, up, c.column_top, least < 0, w, ws);
+      c.column_rate = w, c.column_static_rate = ws, c.column_g = g;
       c.column_bodies = type_.size(), c.column_up = up, c.column_age = 0, c.column_known = true;
       // (before a step has carried loads, as in the first, the springs are not known: the
       // column model judges that measure.) The braced model is owed for it, unless this
@@ -592,17 +620,26 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   // this step's by `softened`: the larger of the dynamic and the static springs' squared
   // ratios, which never lowers it for springs that did not soften alike; exactly 1 at a fixed
   // dt and settings
-  const double w_half = rate(-1), ws_half = static_rate(-1);
+  const double w_half = least < 0 ? rate(-1) : 0.5 * rate(0), ws_half = least < 0 ? static_rate(-1) : 0.5 * static_rate(0);
   auto softened = [&](double w, double ws) {
     return w > 0 && ws > 0 && w_half > 0 && ws_half > 0 ? std::max(w * w / (w_half * w_half), ws * ws / (ws_half * ws_half))
                                                         : 1.0;
   };
   const bool rated = c.brace_rate > 0 && c.brace_static_rate > 0 && w_half > 0 && ws_half > 0;
   const double soften = softened(c.column_rate, c.column_static_rate);
+  // and from the first rung's springs to a lower rung's: the load and the sag go as 1 / w^2
+  // (K with w^2, G and the loads with g), the larger of the two ratios for springs that do not
+  // go alike (both go with the count at the defaults: (4/3)^2 = 1.78 from 4 to 3 substeps);
+  // exactly 1 at the first rung, whose bits are the halving's
+  auto lowered = [&](int shift) {
+    if (shift >= -1) return 1.0;
+    const double w = rate(shift), ws = static_rate(shift);
+    return std::max(w_half * w_half / (w * w), ws_half * ws_half / (ws * ws));
+  };
   auto load = [&](int shift) {
     const double w = rate(shift);
     if (shift < 0 && c.column_braced >= 0 && rated && c.column_braced_g > 0)
-      return c.column_braced * (g / c.column_braced_g) * softened(c.brace_rate, c.brace_static_rate);
+      return c.column_braced * (g / c.column_braced_g) * softened(c.brace_rate, c.brace_static_rate) * lowered(shift);
     return need * g / (w * w);
   };
   // the sag predicted likewise (made at the measure's springs, whose loads went with its
@@ -611,13 +648,16 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   // up to 8 steps on; exactly 1 at a fixed dt and settings
   const double sag_scale = c.column_g > 0 ? g / c.column_g * soften : soften;
   profile_.half_load = least < 0 ? load(-1) : 0;
-  // whether the columns fit 2^shift times the substeps with `margin` of the bounds: their load
-  // n^3 g / (w^2 s), and below the setting's substeps the sag predicted at half of them, within
-  // each budget that is set (a fraction of the bodies' sizes, metres)
+  // whether the columns fit the substeps at `shift` with `margin` of the bounds: their load
+  // n^3 g / (w^2 s), and below the setting's substeps the sag predicted at that rung, within
+  // each budget that is set (a fraction of the bodies' sizes, metres); nothing fits under the
+  // last rung
   auto fits = [&](int shift, double margin) {
-    if (load(shift) > margin * kColumnLoad) return false;
-    return shift >= 0 || ((budget <= 0 || c.column_sag_top * sag_scale <= margin * budget) &&
-                          (fraction <= 0 || c.column_sag_ratio * sag_scale <= margin * fraction));
+    if (shift < least || load(shift) > margin * kColumnLoad) return false;
+    if (shift >= 0) return true;
+    const double give = sag_scale * lowered(shift);
+    return (budget <= 0 || c.column_sag_top * give <= margin * budget) &&
+           (fraction <= 0 || c.column_sag_ratio * give <= margin * fraction);
   };
   // every awake dynamic body slower than the sleep tolerances this step: the sag is predicted
   // for bodies at rest, and a body moving on its contacts (a column rocking on its edges, a
@@ -633,15 +673,17 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   while (most < kMostShift && (base << (most + 1)) <= 64) ++most;
   int shift = least;
   while (shift < most && !fits(shift, 1)) ++shift;
-  // raised at once; lowered a halving at a time, once the columns have fitted half the bounds
-  // at half the factor (each 0.79 of the height that would raise it) for kCalmTime; below the
-  // setting's substeps also only once the pairs have stayed the same and every body has been
-  // still that long, so that neither a pile still landing (its contacts' loads not yet those of
-  // its rest) nor a body moving on its contacts is halved: the Jolt pyramid halved while its
-  // upper levels landed settled with its top 3.6 cm aside, against 1.0 cm at 8 substeps (and
-  // halved at rest its top stays where it was), and a column of five cubes halved while it
-  // rocked on its edges rocked on with the springs' 82 J more (docs/rigid-bodies.md, "Why rest")
-  if (shift >= auto_shift_ || !fits(auto_shift_ - 1, 0.5) || (auto_shift_ == 0 && (!settled || !still()))) {
+  // raised at once (to the fewest substeps that fit the whole bounds); lowered a step at a
+  // time, once the columns have fitted half the bounds at the next count down (a halving above
+  // the setting's: each 0.79 of the height that would raise it) for kCalmTime; to each rung
+  // below the setting's substeps also only once the pairs have stayed the same and every body
+  // has been still that long, so that neither a pile still landing (its contacts' loads not yet
+  // those of its rest) nor a body moving on its contacts is lowered: the Jolt pyramid halved
+  // while its upper levels landed settled with its top 3.6 cm aside, against 1.0 cm at 8
+  // substeps (and halved at rest its top stays where it was), and a column of five cubes halved
+  // while it rocked on its edges rocked on with the springs' 82 J more (docs/rigid-bodies.md,
+  // "Why rest")
+  if (shift >= auto_shift_ || !fits(auto_shift_ - 1, 0.5) || (auto_shift_ <= 0 && (!settled || !still()))) {
     auto_shift_ = std::max(shift, auto_shift_);
     auto_calm_ = 0;
   } else if ((auto_calm_ += dt) >= kCalmTime) {
@@ -649,8 +691,8 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
     auto_calm_ = 0;
   }
   auto_shift_ = std::clamp(auto_shift_, least, most);  // (the settings may have changed)
-  c.hertz_scale = std::ldexp(1.0, auto_shift_);
-  return auto_shift_ >= 0 ? base << auto_shift_ : base >> 1;
+  c.hertz_scale = scale(auto_shift_);
+  return count(auto_shift_);
 }
 
 }  // namespace pba

@@ -106,6 +106,7 @@ void ContactSettings::validate(std::string_view where) const {
   require_positive(contact_hertz, field_path(where, "contact_hertz"));
   require_non_negative(auto_substeps_sag, field_path(where, "auto_substeps_sag"));
   require_in_range(auto_substeps_sag_fraction, 0, 1, field_path(where, "auto_substeps_sag_fraction"));
+  require_count(auto_substeps_least, 1, 64, field_path(where, "auto_substeps_least"));
   require_non_negative(damping_ratio, field_path(where, "damping_ratio"));
   require_positive(push_out_speed, field_path(where, "push_out_speed"));
   require_in_range(baumgarte, 0, 1, field_path(where, "baumgarte"));

@@ -7,7 +7,7 @@
 namespace pba::scene_detail {
 
 void read_rigid_settings(const Node& n, RigidSystemDef& def) {
-  n.allow_only({"solver", "substeps", "auto_substeps", "auto_substeps_sag", "auto_substeps_sag_fraction", "iterations", "substep_iterations", "relax_iterations", "manifold_iterations",
+  n.allow_only({"solver", "substeps", "auto_substeps", "auto_substeps_sag", "auto_substeps_sag_fraction", "auto_substeps_least", "iterations", "substep_iterations", "relax_iterations", "manifold_iterations",
                 "contact_hertz", "damping_ratio", "push_out_speed", "baumgarte", "contact_compliance", "linear_slop", "speculative_distance", "restitution_threshold",
                 "friction_mix", "restitution_mix", "warm_starting", "sleep", "sleep_linear", "sleep_angular",
                 "time_to_sleep", "capacity"});
@@ -26,6 +26,8 @@ void read_rigid_settings(const Node& n, RigidSystemDef& def) {
   // with both 0 the substeps are never lowered
   c.auto_substeps_sag = n.non_negative("auto_substeps_sag", c.auto_substeps_sag);
   c.auto_substeps_sag_fraction = n.in_range("auto_substeps_sag_fraction", 0, 1, c.auto_substeps_sag_fraction);
+  // the fewest substeps the lowering takes (its ladder's floor)
+  if (n.has("auto_substeps_least")) c.auto_substeps_least = static_cast<int>(n.at("auto_substeps_least").integer(1, 64));
   if (n.has("iterations")) c.iterations = static_cast<int>(n.at("iterations").integer(1, 1000));
   if (n.has("substep_iterations"))
     c.substep_iterations = static_cast<int>(n.at("substep_iterations").integer(1, 100));

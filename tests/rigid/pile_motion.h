@@ -51,4 +51,27 @@ inline int halving_step(int last_unsettled, double dt = 1.0 / 60) {
   return std::max(1, last_unsettled + 2) + more;
 }
 
+/// The step at which the soft step takes the next rung down (4 -> 3 at the defaults) after
+/// taking a rung in step `taken`, the pile's bodies having last moved at or over the sleep
+/// tolerances in step `last_unsettled` (-1 or before `taken`: not since), its pairs the same:
+/// the calm starts again in the step a rung is taken and counts from the step after it, or
+/// from the second step after the last motion, whichever is later (halving_step's rule).
+inline int next_rung_step(int taken, int last_unsettled, double dt = 1.0 / 60) {
+  return halving_step(std::max(last_unsettled, taken - 1), dt);
+}
+
+/// The soft step's lowering over a run from a pile's building (8 -> 4 -> 3 at the defaults):
+/// the step each rung was first taken and the last step before it in which a body moved at or
+/// over the sleep tolerances, for halving_step and next_rung_step.
+struct Lowering {
+  int halved = -1, third = -1;              // the first step at 4 and at 3 substeps after it (-1: none)
+  int unsettled = -1, unsettled_at_4 = -1;  // the last step with a body moving before each (-1: none)
+  void record(int step, int substeps, bool moving) {
+    if (halved < 0 && substeps == 4) halved = step;
+    if (halved >= 0 && third < 0 && substeps == 3) third = step;
+    if (halved < 0 && moving) unsettled = step;
+    if (halved >= 0 && third < 0 && moving) unsettled_at_4 = step;
+  }
+};
+
 }  // namespace pba::test

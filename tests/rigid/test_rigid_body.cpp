@@ -429,6 +429,11 @@ TEST(RigidBadInput, NamesTheFieldAndTheBody) {
     EXPECT_NE(error_of([&] { s.step(0.01, kG); }).find("settings.auto_substeps_sag_fraction"), std::string::npos)
         << fraction;
   }
+  s.settings().auto_substeps_sag_fraction = 0.02;
+  for (const int least : {0, -3, 65}) {
+    s.settings().auto_substeps_least = least;
+    EXPECT_NE(error_of([&] { s.step(0.01, kG); }).find("settings.auto_substeps_least"), std::string::npos) << least;
+  }
 }
 
 // The contact solver's blocks hold masses, inertias and their inverses as floats: a mass or

@@ -153,9 +153,10 @@ TEST(RigidMesh, ABoxRestsInATenDegreeValley) {
     const Vec3 p0{0, 0.25 + 0.5 * slope, 0.1};
     const auto box = s.create({.pose = {p0}, .shapes = {{.shape = ColliderShape::box(Vec3(0.5, 0.25, 0.5)),
                                                          .material = {.friction = 0.6}}}});
-    // settled after 2 s (the soft step halves its substeps a second in, and its springs, a
-    // quarter as stiff, let the box sink from 0.17 to 0.68 mm), then 5 s
-    for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+    // settled after 3 s (the soft step halves its substeps a second in, and its springs, a
+    // quarter as stiff, let the box sink from 0.17 to 0.68 mm; it takes 3 a second later,
+    // 1.2 mm), then 5 s
+    for (int i = 0; i < 180; ++i) s.step(1.0 / 60, kGravity);
     const Vec3 p1 = s.center_of_mass(box);
     double speed = 0;
     for (int i = 0; i < 300; ++i) {

@@ -168,6 +168,8 @@ TEST(RigidScenes, BadFieldsAreNamedByPath) {
             "scenes/x.json: /settings/rigid/auto_substeps_sag: must be >= 0, got -0.01");
   EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"auto_substeps_sag_fraction": 1.5}}})"),
             "scenes/x.json: /settings/rigid/auto_substeps_sag_fraction: must be in [0, 1], got 1.5");
+  EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"auto_substeps_least": 0}}})"),
+            "scenes/x.json: /settings/rigid/auto_substeps_least: must be an integer in [1, 64], got 0");
   EXPECT_EQ(error_of(R"({"version": 1, "settings": {"rigid": {"substeps": 0}}})"),
             "scenes/x.json: /settings/rigid/substeps: must be an integer in [1, 64], got 0");
   EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"type": "static", "linear_velocity": [1, 0, 0], "shapes": [{"type": "box"}]}]})"),
@@ -252,6 +254,9 @@ TEST(RigidScenes, TgsAndXpbdAreReadWithTheirSettings) {
                 .auto_substeps_sag_fraction,
             0);
   EXPECT_EQ(settings_of(R"({"version": 1})").auto_substeps_sag, 0);
+  // the lowering's floor: 3 substeps unless given
+  EXPECT_EQ(settings_of(R"({"version": 1})").auto_substeps_least, 3);
+  EXPECT_EQ(settings_of(R"({"version": 1, "settings": {"rigid": {"auto_substeps_least": 4}}})").auto_substeps_least, 4);
   EXPECT_EQ(settings_of(R"({"version": 1, "settings": {"rigid": {"auto_substeps_sag": 0.01}}})").auto_substeps_sag, 0.01);
   pba::Scene x = pba::parse_scene(
       R"({"version": 1, "settings": {"rigid": {"solver": "xpbd", "contact_compliance": 1e-7}}})", "x.json");
