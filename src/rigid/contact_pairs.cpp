@@ -874,9 +874,10 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       if (merged.count > 0) keep(merged, mesh_a);
     }
   } else {
-    const Manifold m = collide(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape,
-                               shape_pose(s, p.proxy_b, b, p.shape_b), ns, &c.narrow);
-    if (m.count > 0) keep(m, false);
+    // (into the scratch, not zeroed first: keep reads only its first `count` points)
+    narrow::collide_into(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape, shape_pose(s, p.proxy_b, b, p.shape_b),
+                         ns, &c.narrow, pair_manifold);
+    if (pair_manifold.count > 0) keep(pair_manifold, false);
   }
   // the old chain goes back to the pool
   PairCache old_chain;
