@@ -129,7 +129,7 @@ void sphere_box(const ColliderShape& a, const Pose& pa, const ColliderShape& b, 
 // the quaternion as glm turns a vector, moved to the box, its depth below the plane), two
 // corners at a time in the lanes of SSE2 vectors, each lane the same operations in the same
 // order as the scalar code does for its corner, so the same bits (the rain's ground made some
-// 2,700 box manifolds a step at about 900 instructions each, three quarters of them the turns).
+// 2,700 box manifolds a step at about 900 instructions each, over half of them the turns).
 // `rn`: the core radius times np (a box's core is the box: r = 0).
 void box_plane_corners(const Vec3& h, const Pose& pa, const Vec3& np, double off, const Vec3& rn, double margin,
                        Candidate* cand, int& n) {

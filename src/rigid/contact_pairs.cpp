@@ -739,7 +739,8 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     radius_a = core_radius(sa.shape), radius_b = core_radius(sb.shape);
     mixed_friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
     mixed_restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
-    mixed_rolling = std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
+    mixed_rolling =
+        std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
   }
   // the normal is kept in the frame of the body that does not move, else in a's
   const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;
@@ -890,8 +891,8 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     }
   } else {
     // (into the scratch, not zeroed first: keep reads only its first `count` points)
-    narrow::collide_into(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape, shape_pose(s, p.proxy_b, b, p.shape_b),
-                         ns, &c.narrow, pair_manifold);
+    narrow::collide_into(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape,
+                         shape_pose(s, p.proxy_b, b, p.shape_b), ns, &c.narrow, pair_manifold);
     if (pair_manifold.count > 0) keep(pair_manifold, false);
   }
   // the old chain goes back to the pool

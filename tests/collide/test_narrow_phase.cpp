@@ -172,7 +172,8 @@ TEST(Plane, BoxCornersAndABallsLowestPointOnAPlaneToTheBit) {
       a[n] = c, b[n] = c + d * np, depth[n] = d, taken[n++] = i;
     }
     for (const bool plane_first : {false, true}) {
-      const Manifold m = plane_first ? collide(ground, pg, box(h), pb, settings) : collide(box(h), pb, ground, pg, settings);
+      const Manifold m =
+          plane_first ? collide(ground, pg, box(h), pb, settings) : collide(box(h), pb, ground, pg, settings);
       // (more than four: reduce() keeps the deepest, the farthest from it, the largest triangle
       // and the point adding most area, so three or four)
       if (n <= 4) ASSERT_EQ(m.count, n) << trial;
