@@ -124,11 +124,62 @@ void sphere_box(const ColliderShape& a, const Pose& pa, const ColliderShape& b, 
   m.count = 1;
 }
 
+// A box's eight corners against a plane (np, off: its world normal and offset), into `cand`
+// from n on in corner order: convex_plane's arithmetic for each corner (the corner turned by
+// the quaternion as glm turns a vector, moved to the box, its depth below the plane), two
+// corners at a time in the lanes of SSE2 vectors, each lane the same operations in the same
+// order as the scalar code does for its corner, so the same bits (the rain's ground made some
+// 2,700 box manifolds a step at about 900 instructions each, over half of them the turns).
+// `rn`: the core radius times np (a box's core is the box: r = 0).
+void box_plane_corners(const Vec3& h, const Pose& pa, const Vec3& np, double off, const Vec3& rn, double margin,
+                       Candidate* cand, int& n) {
+  using v2d = double __attribute__((vector_size(16)));
+  auto all = [](double x) { return v2d{x, x}; };
+  const Quat& q = pa.rotation;
+  const v2d qx = all(q.x), qy = all(q.y), qz = all(q.z), qw = all(q.w), two = all(2.0);
+  const v2d vx = {-h.x, h.x};
+  double pax[8], pay[8], paz[8], pbx[8], pby[8], pbz[8], depth[8];
+  for (int k = 0; k < 4; ++k) {
+    // corners 2k and 2k + 1: x of both signs, y and z by k's bits (i & 2, i & 4 of corner i)
+    const v2d vy = all((k & 1) ? h.y : -h.y), vz = all((k & 2) ? h.z : -h.z);
+    // uv = cross(q.xyz, v), uuv = cross(q.xyz, uv), turned = v + ((uv * w) + uuv) * 2
+    const v2d uvx = qy * vz - vy * qz, uvy = qz * vx - vz * qx, uvz = qx * vy - vx * qy;
+    const v2d uuvx = qy * uvz - uvy * qz, uuvy = qz * uvx - uvz * qx, uuvz = qx * uvy - uvx * qy;
+    const v2d tx = vx + ((uvx * qw) + uuvx) * two, ty = vy + ((uvy * qw) + uuvy) * two,
+              tz = vz + ((uvz * qw) + uuvz) * two;
+    // apply(): the position plus the turned corner; then the core's point on the surface
+    const v2d ax = (all(pa.position.x) + tx) - all(rn.x), ay = (all(pa.position.y) + ty) - all(rn.y),
+              az = (all(pa.position.z) + tz) - all(rn.z);
+    // off - dot(np, a), the dot summed as glm sums it: (x + y) + z
+    const v2d d = all(off) - ((all(np.x) * ax + all(np.y) * ay) + all(np.z) * az);
+    const v2d bx = ax + d * all(np.x), by = ay + d * all(np.y), bz = az + d * all(np.z);
+    for (int l = 0; l < 2; ++l) {
+      const int i = 2 * k + l;
+      pax[i] = ax[l], pay[i] = ay[l], paz[i] = az[l], pbx[i] = bx[l], pby[i] = by[l], pbz[i] = bz[l], depth[i] = d[l];
+    }
+  }
+  for (int i = 0; i < 8; ++i) {
+    if (depth[i] < -margin || n >= kMaxPolygon) continue;
+    cand[std::size_t(n++)] = {Vec3(pax[i], pay[i], paz[i]), Vec3(pbx[i], pby[i], pbz[i]), depth[i], std::uint32_t(i)};
+  }
+}
+
 // any convex shape (A) against a plane (B): the core's vertices below plane + margin
 void convex_plane(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb, double margin,
                   Manifold& m) {
   const Vec3 np = pb.rotation * b.normal;
   const double off = b.offset + glm::dot(np, pb.position);
+  if (a.type == ShapeType::Sphere) {
+    // one point: what reduce() makes of the one candidate, without the list
+    const Vec3 pa_s = pa.position - a.radius * np;
+    const double depth = off - glm::dot(np, pa_s);
+    m.normal = -np;
+    m.count = 0;
+    if (depth < -margin) return;
+    m.points[0] = {pa_s, pa_s + depth * np, depth, 0};
+    m.count = 1;
+    return;
+  }
   std::array<Candidate, kMaxPolygon> cand;
   int n = 0;
   double r = 0;
@@ -139,10 +190,6 @@ void convex_plane(const ColliderShape& a, const Pose& pa, const ColliderShape& b
     cand[std::size_t(n++)] = {pa_s, pa_s + depth * np, depth, id};
   };
   switch (a.type) {
-    case ShapeType::Sphere:
-      r = a.radius;
-      add(pa.position, 0);
-      break;
     case ShapeType::Capsule: {
       r = a.radius;
       const Segment s = capsule_core(a, pa);
@@ -151,10 +198,7 @@ void convex_plane(const ColliderShape& a, const Pose& pa, const ColliderShape& b
       break;
     }
     case ShapeType::Box:
-      for (std::uint32_t i = 0; i < 8; ++i) {
-        const Vec3 h = a.half_extents;
-        add(apply(pa, Vec3((i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z)), i);
-      }
+      box_plane_corners(a.half_extents, pa, np, off, r * np, margin, cand.data(), n);
       break;
     default: {
       const auto v = a.hull->vertices();
@@ -439,6 +483,13 @@ void narrow::manifold_from_normal(const ColliderShape& sa, const Pose& pa, const
 
 Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
                  const NarrowPhaseSettings& settings, NarrowPhaseCache* cache) {
+  Manifold m;
+  collide_into(a, pose_a, b, pose_b, settings, cache, m);
+  return m;
+}
+
+void narrow::collide_into(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
+                          const NarrowPhaseSettings& settings, NarrowPhaseCache* cache, Manifold& m) {
   // bad input is reported before any geometry runs: quick tests first (this is every pair's
   // fixed cost), the full checks in order (poses, shapes, margin, then the pair) when one fails
   const double margin = settings.speculative_margin;
@@ -455,9 +506,8 @@ Manifold collide(const ColliderShape& a, const Pose& pose_a, const ColliderShape
       throw Error("collide: no narrow phase for the pair " + std::string(to_string(a.type)) + "-" +
                   std::string(to_string(b.type)) + " (meshes and compounds are traversed by their callers)");
   }
-  Manifold m;
+  m.sub_shape_b = 0;
   fn(a, pose_a, b, pose_b, settings, cache, m);
-  return m;
 }
 
 

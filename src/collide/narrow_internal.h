@@ -303,6 +303,14 @@ int clip_faces(const WorldFace& ref, const ClipPoint* incident, int incident_cou
 /// writes them into m with normal n.
 void reduce(const Candidate* c, int count, const Vec3& n, Manifold& m);
 
+/// collide() into `m`: writes its count, sub_shape_b (0), and when count > 0 its normal and
+/// points [0, count); the rest of `m` is left as it was (collide() starts from Manifold{}:
+/// zeroing its 288 bytes was a third of collide()'s own instructions, and a caller that
+/// reads only the first `count` points, as the rigid contacts' do, need not pay it). Checks
+/// and throws as collide() does.
+void collide_into(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
+                  const NarrowPhaseSettings& settings, NarrowPhaseCache* cache, Manifold& m);
+
 /// The manifold with A and B exchanged (normal flipped, points swapped).
 inline void flip(Manifold& m) {
   m.normal = -m.normal;

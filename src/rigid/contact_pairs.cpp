@@ -725,7 +725,23 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
   const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
   const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
   const NarrowPhaseSettings ns{.speculative_margin = reach};
-  const double radius_a = core_radius(sa.shape), radius_b = core_radius(sb.shape);
+  const std::uint32_t old = c.first;
+  // the shapes' core radii and mixed material (the same for every manifold of the pair): the old
+  // manifold's when it has one mixed by the rules in force (they are the shapes', which do not
+  // change while the pair lasts; emit mixes a manifold again when the rules change), else made
+  double radius_a, radius_b, mixed_friction, mixed_restitution, mixed_rolling;
+  if (old != kNoIndex && manifolds[old].friction_mix == cs.friction_mix &&
+      manifolds[old].restitution_mix == cs.restitution_mix) {
+    const CachedManifold& o = manifolds[old];
+    radius_a = o.radius_a, radius_b = o.radius_b;
+    mixed_friction = o.mixed_friction, mixed_restitution = o.mixed_restitution, mixed_rolling = o.mixed_rolling;
+  } else {
+    radius_a = core_radius(sa.shape), radius_b = core_radius(sb.shape);
+    mixed_friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
+    mixed_restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
+    mixed_rolling =
+        std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
+  }
   // the normal is kept in the frame of the body that does not move, else in a's
   const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;
   const Quat qa_inv = glm::conjugate(s.q_[a]), qb_inv = glm::conjugate(s.q_[b]);
@@ -733,12 +749,14 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
   const bool mesh_pair = sa.shape.type == ShapeType::Mesh || sb.shape.type == ShapeType::Mesh;
   // old points are matched within the pair's slop (less for a small body: pair_slop)
   const double slop = slop_of(s, a, b), slop2 = slop * slop;
-  const std::uint32_t old = c.first;
   for (std::uint32_t o = old; o != kNoIndex; o = manifolds[o].next) settle(o);
   std::uint32_t tail = kNoIndex;
   c.first = kNoIndex;
   // one manifold (flipped when the mesh is a's shape) into the new chain
-  auto keep = [&](const Manifold& m, bool flip) {
+  // (inlined where it is called: as a call, its closure of some twenty references was stored
+  // for every pair, 28 instructions a pair, and its locals went through memory; 0.98 M of the
+  // rain's landing step's instructions)
+  auto keep = [&](const Manifold& m, bool flip) __attribute__((always_inline)) {
     const std::uint32_t idx = new_manifold();
     CachedManifold& r = manifolds[idx];
     const Vec3 n = flip ? -m.normal : m.normal;
@@ -749,9 +767,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     r.normal = q_ref_inv * n;
     r.radius_a = radius_a, r.radius_b = radius_b;
     r.friction_mix = cs.friction_mix, r.restitution_mix = cs.restitution_mix;
-    r.mixed_friction = mix(cs.friction_mix, sa.material.friction, sb.material.friction);
-    r.mixed_restitution = mix(cs.restitution_mix, sa.material.restitution, sb.material.restitution);
-    r.mixed_rolling = std::max(sa.rolling_resistance * rolling_radius(sa.shape), sb.rolling_resistance * rolling_radius(sb.shape));
+    r.mixed_friction = mixed_friction, r.mixed_restitution = mixed_restitution, r.mixed_rolling = mixed_rolling;
     // the old manifold, for its impulses: a convex pair's only one, or of a mesh pair the one
     // whose normal is closest to this one's (within the merge angle)
     // (the normals compared only for a mesh pair: a convex pair's old chain is one manifold)
@@ -874,9 +890,10 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       if (merged.count > 0) keep(merged, mesh_a);
     }
   } else {
-    const Manifold m = collide(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape,
-                               shape_pose(s, p.proxy_b, b, p.shape_b), ns, &c.narrow);
-    if (m.count > 0) keep(m, false);
+    // (into the scratch, not zeroed first: keep reads only its first `count` points)
+    narrow::collide_into(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape,
+                         shape_pose(s, p.proxy_b, b, p.shape_b), ns, &c.narrow, pair_manifold);
+    if (pair_manifold.count > 0) keep(pair_manifold, false);
   }
   // the old chain goes back to the pool
   PairCache old_chain;

@@ -333,6 +333,7 @@ struct RigidContacts {
   std::vector<PairCache> caches_spare;        // scratch: the pool in pair order (reorder_caches), as large
   std::vector<CachedManifold> manifolds;      // pool
   std::vector<Manifold> mesh_scratch;         // collide_mesh output
+  Manifold pair_manifold;                     // scratch: a convex pair's manifold (collide_into)
   std::vector<MeshQueryCache> mesh_queries;   // pool: mesh pairs' triangles near the shape
   std::vector<std::uint32_t> free_mesh_queries;  // its free entries
   std::vector<int> group_of, group_first;     // scratch: the mesh manifolds' groups of one normal

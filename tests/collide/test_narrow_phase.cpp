@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <limits>
 #include <random>
 #include <set>
@@ -130,6 +131,85 @@ TEST(Plane, BoxOnPlaneGivesFourDeepestCornersAndSphereOne) {
   ASSERT_EQ(r.count, 2);
   EXPECT_NEAR(glm::length(r.normal - Vec3(0, 1, 0)), 0.0, kClosed);
   for (int i = 0; i < 2; ++i) EXPECT_NEAR(r.points[std::size_t(i)].depth, 0.05, kClosed);
+}
+
+// A box's points on a plane are its corners turned by its rotation (apply()) and their depths
+// below the plane, to the bit: convex_plane turns the eight corners two at a time in vector
+// lanes, each lane doing the scalar turn's operations in its order. Random boxes, rotations and
+// planes, straddling the plane within a margin that takes some of the corners: where at most
+// four are taken the manifold is those corners in order, else three or four of them. A ball
+// (made without the candidate list) has its lowest point, to the bit.
+TEST(Plane, BoxCornersAndABallsLowestPointOnAPlaneToTheBit) {
+  std::mt19937_64 rng(20261205);
+  std::uniform_real_distribution<double> u(0, 1);
+  auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  auto same = [&](const Vec3& x, const Vec3& y) {
+    return bits(x.x) == bits(y.x) && bits(x.y) == bits(y.y) && bits(x.z) == bits(y.z);
+  };
+  NarrowPhaseSettings settings;
+  settings.speculative_margin = 0.3;
+  int fewer = 0, more = 0, balls = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Vec3 h(0.05 + u(rng), 0.05 + u(rng), 0.05 + u(rng));
+    const Vec3 normal = glm::normalize(random_vec(rng, 1) + Vec3(0, 1e-3, 0));
+    const ColliderShape ground = plane(normal, 2 * u(rng) - 1);
+    const Pose pg = at(random_vec(rng, 2), random_rotation(rng));
+    const Vec3 np = pg.rotation * normal;
+    const double off = ground.offset + glm::dot(np, pg.position);
+    // the box's centre over a point of the plane, within its half diagonal of it
+    const double lift = (2 * u(rng) - 1) * glm::length(h);
+    const Vec3 along = random_vec(rng, 1);
+    const Pose pb = at(along - glm::dot(along, np) * np + (off + lift) * np, random_rotation(rng));
+    // the reference: each corner (its core point: a box's radius is 0) and its depth, in corner order
+    Vec3 a[8], b[8];
+    double depth[8];
+    int taken[8], n = 0;
+    const std::array<Vec3, 8> corners = box_corners(h, pb);
+    for (int i = 0; i < 8; ++i) {
+      const Vec3 c = corners[std::size_t(i)] - 0.0 * np;
+      const double d = off - glm::dot(np, c);
+      if (d < -settings.speculative_margin) continue;
+      a[n] = c, b[n] = c + d * np, depth[n] = d, taken[n++] = i;
+    }
+    for (const bool plane_first : {false, true}) {
+      const Manifold m =
+          plane_first ? collide(ground, pg, box(h), pb, settings) : collide(box(h), pb, ground, pg, settings);
+      // (more than four: reduce() keeps the deepest, the farthest from it, the largest triangle
+      // and the point adding most area, so three or four)
+      if (n <= 4) ASSERT_EQ(m.count, n) << trial;
+      else ASSERT_GE(m.count, 3) << trial;
+      EXPECT_TRUE(same(m.normal, plane_first ? np : -np)) << trial;
+      for (int k = 0; k < m.count; ++k) {
+        const ContactPoint& p = m.points[std::size_t(k)];
+        // the corner it is: in order when all are kept, else by its id
+        int j = k;
+        if (n > 4) j = int(std::find(taken, taken + n, int(p.id)) - taken);
+        ASSERT_LT(j, n) << trial;
+        EXPECT_EQ(p.id, std::uint32_t(taken[j])) << trial;
+        EXPECT_TRUE(same(plane_first ? p.point_b : p.point_a, a[j])) << trial << " corner " << taken[j];
+        EXPECT_TRUE(same(plane_first ? p.point_a : p.point_b, b[j])) << trial << " corner " << taken[j];
+        EXPECT_EQ(bits(p.depth), bits(depth[j])) << trial;
+      }
+    }
+    (n > 4 ? more : fewer) += n > 0;
+    // a ball there: its lowest point (its centre less the radius along the plane's normal), alone
+    const double radius = h.x;
+    const Vec3 low = pb.position - radius * np;
+    const double d = off - glm::dot(np, low);
+    const Manifold m = collide(sphere(radius), pb, ground, pg, settings);
+    ASSERT_EQ(m.count, d < -settings.speculative_margin ? 0 : 1) << trial;
+    EXPECT_TRUE(same(m.normal, -np)) << trial;
+    if (m.count == 0) continue;
+    ++balls;
+    EXPECT_TRUE(same(m.points[0].point_a, low)) << trial;
+    EXPECT_TRUE(same(m.points[0].point_b, low + d * np)) << trial;
+    EXPECT_EQ(bits(m.points[0].depth), bits(d)) << trial;
+    EXPECT_EQ(m.points[0].id, 0u) << trial;
+  }
+  // both kinds were met, many times
+  EXPECT_GT(fewer, 300);
+  EXPECT_GT(more, 300);
+  EXPECT_GT(balls, 300);
 }
 
 TEST(Margin, SeparatedBeyondTheMarginGivesNothingWithinItNegativeDepths) {
