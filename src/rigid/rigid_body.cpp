@@ -490,17 +490,19 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   const bool fixed = type_[i] != BodyType::Dynamic;
   Aabb reach{Vec3(std::numeric_limits<double>::infinity()), Vec3(-std::numeric_limits<double>::infinity())};
   if (fixed)
-    for (const RigidShapeDef& d : shapes_[i]) reach = reach.merged(bounds(d.shape, compose(body_pose(i), d.local)));
+    for (const RigidShapeDef& d : shapes_[i])
+      reach = reach.merged(bounds(d.shape, detail::shape_frame(body_pose(i), d.local)));
   com_[i] = apply(pose, com_local_[i]);
   q_[i] = glm::normalize(pose.rotation * principal_[i]);
   wake_island(i);
   if (!fixed) return;
-  for (const RigidShapeDef& d : shapes_[i]) reach = reach.merged(bounds(d.shape, compose(body_pose(i), d.local)));
+  for (const RigidShapeDef& d : shapes_[i])
+    reach = reach.merged(bounds(d.shape, detail::shape_frame(body_pose(i), d.local)));
   reach = reach.grown(settings_.speculative_distance);
   for (std::size_t k = 0; k < type_.size(); ++k) {
     if (!asleep_[k]) continue;
     for (const RigidShapeDef& d : shapes_[k])
-      if (reach.overlaps(bounds(d.shape, compose(body_pose(k), d.local)))) {
+      if (reach.overlaps(bounds(d.shape, detail::shape_frame(body_pose(k), d.local)))) {
         wake_island(k);
         break;
       }
@@ -905,7 +907,7 @@ std::vector<Aabb> RigidBodySystem::shape_bounds(RigidBodyId id) const {
   const Pose body = body_pose(i);
   std::vector<Aabb> out;
   for (const RigidShapeDef& d : shapes_[i])
-    out.push_back(bounds(d.shape, compose(body, d.local)));
+    out.push_back(bounds(d.shape, detail::shape_frame(body, d.local)));
   return out;
 }
 
