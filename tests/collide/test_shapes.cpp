@@ -148,8 +148,14 @@ TEST(CollideShapes, BoundsContainTheShapeAndTouchIt) {
     }
   }
   // hulls of up to 64 vertices take every placed vertex's extremes, larger ones climb: both
-  // hold every vertex (placed as the narrow phase places it) and touch one along each axis
-  // (a pyramid of five; 100 points on a sphere, every one a vertex)
+  // hold every vertex placed as the narrow phase places it (apply(), to the bit), and touch
+  // the farthest vertex along each axis placed by another route, brute force over the vertices
+  // turned by the rotation's matrix (a pyramid of five; 100 points on a sphere, every one a
+  // vertex). The two routes round differently: each world coordinate (under 8 m here) is a few
+  // roundings from the exact one either way, each at most half an ulp (2 eps at 4-8 m), so 16
+  // roundings, 64 eps, bound their difference (seen: under 6 eps); a bound off by a rounding
+  // of its own would still pass, one grown or shrunk by 1e-13 m would not
+  const double tol = 64 * std::numeric_limits<double>::epsilon();
   std::vector<Vec3> ball;
   for (int k = 0; k < 100; ++k) {
     const double z = 1 - (2 * k + 1) / 100.0, phi = 2.399963229728653 * k;
@@ -163,18 +169,17 @@ TEST(CollideShapes, BoundsContainTheShapeAndTouchIt) {
     for (int k = 0; k < 50; ++k) {
       const Pose p{Vec3(std::uniform_real_distribution<double>(-5, 5)(rng), 1, -2), random_rotation(rng)};
       const Aabb b = bounds(s, p);
+      const Mat3 turn = glm::mat3_cast(p.rotation);
       Vec3 lo(INFINITY), hi(-INFINITY);
       for (const Vec3& v : h->vertices()) {
         const Vec3 x = apply(p, v);
-        lo = glm::min(lo, x), hi = glm::max(hi, x);
         for (int i = 0; i < 3; ++i) EXPECT_TRUE(b.lo[i] <= x[i] && x[i] <= b.hi[i]) << h->vertices().size();
+        const Vec3 y = turn * v + p.position;
+        lo = glm::min(lo, y), hi = glm::max(hi, y);
       }
-      // (the climb picks its vertex by a dot product in the hull's frame: a tie to rounding
-      // may pick the other vertex, one rounding of the world coordinate away)
-      const double tie = h->vertices().size() <= 64 ? 0.0 : 1e-12;
       for (int i = 0; i < 3; ++i) {
-        EXPECT_NEAR(b.lo[i], lo[i], tie) << h->vertices().size();
-        EXPECT_NEAR(b.hi[i], hi[i], tie) << h->vertices().size();
+        EXPECT_NEAR(b.lo[i], lo[i], tol) << h->vertices().size();
+        EXPECT_NEAR(b.hi[i], hi[i], tol) << h->vertices().size();
       }
     }
   }
