@@ -553,7 +553,8 @@ class RigidBodySystem {
   Pose body_pose(std::size_t i) const { return detail::body_frame(com_[i], q_[i], com_local_[i], principal_[i]); }
   std::string describe(std::size_t i) const;
   // dense body i's shapes in colour c (draw, draw_body)
-  void draw_shapes(DebugDraw& draw, std::size_t i, Color c, const DrawFlags& flags, const RigidDrawOptions& options) const;
+  void draw_shapes(DebugDraw& draw, std::size_t i, Color c, const DrawFlags& flags,
+                   const RigidDrawOptions& options) const;
   // the free motion's arrays (velocities in `rows` when given, else in v_ and w_)
   detail::FreeMotionArrays free_motion(detail::SolverBody* rows, detail::SolverBody* warm, double* motion);
   // rows (optional): the contact solver's velocity rows, used instead of v_ and w_; warm

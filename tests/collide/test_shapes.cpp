@@ -24,8 +24,10 @@ const double kInf = std::numeric_limits<double>::infinity();
 
 TEST(CollideShapes, FactoriesRefuseBadValuesByName) {
   EXPECT_EQ(error_of([] { ColliderShape::sphere(0); }), "ColliderShape::sphere.radius: must be finite and > 0, got 0");
-  EXPECT_EQ(error_of([] { ColliderShape::sphere(-1); }), "ColliderShape::sphere.radius: must be finite and > 0, got -1");
-  EXPECT_EQ(error_of([] { ColliderShape::sphere(kNaN); }), "ColliderShape::sphere.radius: must be finite and > 0, got nan");
+  EXPECT_EQ(error_of([] { ColliderShape::sphere(-1); }),
+            "ColliderShape::sphere.radius: must be finite and > 0, got -1");
+  EXPECT_EQ(error_of([] { ColliderShape::sphere(kNaN); }),
+            "ColliderShape::sphere.radius: must be finite and > 0, got nan");
   EXPECT_EQ(error_of([] { ColliderShape::box({1, 0, 1}); }),
             "ColliderShape::box.half_extents.y: must be finite and > 0, got 0");
   EXPECT_EQ(error_of([] { ColliderShape::box({1, 1, -2}); }),
@@ -52,8 +54,10 @@ TEST(CollideShapes, FactoriesRefuseBadValuesByName) {
   EXPECT_EQ(error_of([] { ColliderShape::capsule(0, 1); }), "");
   ColliderShape c;
   c.type = ShapeType::Compound;
-  EXPECT_EQ(error_of([&] { c.validate("collider[3]"); }), "collider[3].compound: must not be null for a compound shape");
-  EXPECT_EQ(error_of([] { ConvexHull::box({1, 1, 0}); }), "ConvexHull::box half_extents.z: must be finite and > 0, got 0");
+  EXPECT_EQ(error_of([&] { c.validate("collider[3]"); }),
+            "collider[3].compound: must not be null for a compound shape");
+  EXPECT_EQ(error_of([] { ConvexHull::box({1, 1, 0}); }),
+            "ConvexHull::box half_extents.z: must be finite and > 0, got 0");
 }
 
 TEST(CollideShapes, PlaneIsNormalised) {
@@ -66,7 +70,8 @@ TEST(CollideShapes, CompoundRefusesPlanesMeshesAndEmptyLists) {
   EXPECT_EQ(error_of([] { CompoundShape::build({}, "table"); }),
             "table.children: a compound needs at least one child, got 0");
   EXPECT_EQ(error_of([] { CompoundShape::build({{ColliderShape::plane({0, 1, 0}, 0), {}}}, "table"); }),
-            "table.children[0].shape.type: a compound child must be a sphere, box, capsule, hull or compound, got a plane");
+            "table.children[0].shape.type: a compound child must be a sphere, box, capsule, hull or compound, "
+            "got a plane");
   ColliderShape bad_sphere;
   bad_sphere.type = ShapeType::Sphere;
   bad_sphere.radius = -1;
@@ -285,7 +290,8 @@ TEST(CollideMass, CompoundRotatesItsChildren) {
     c.type = ShapeType::Compound;
     c.compound = CompoundShape::build({{ColliderShape::box(h), p}});
     std::vector<Vec3> corners;
-    for (int i = 0; i < 8; ++i) corners.push_back(apply(p, Vec3(i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z)));
+    for (int i = 0; i < 8; ++i)
+      corners.push_back(apply(p, Vec3(i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z)));
     const MassProperties a = mass_properties(c, 7), b = ConvexHull::build(corners)->mass_properties(7);
     EXPECT_NEAR(a.mass, b.mass, 1e-12 * b.mass);
     EXPECT_NEAR(glm::length(a.center - b.center), 0, 1e-12 * glm::length(b.center) + 1e-15);

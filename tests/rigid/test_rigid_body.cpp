@@ -170,7 +170,8 @@ TEST(RigidFreeFall, MatchesTheDiscreteSolutionAndConvergesToTheParabola) {
     for (const int substeps : {1, 4}) {
       RigidBodySystem s({.contacts = {.solver = solver, .substeps = substeps, .auto_substeps = false}});
       const Vec3 x0{0, 100, 0}, v0{2, 5, -1};
-      auto b = s.create({.pose = {x0}, .linear_velocity = v0, .shapes = kBall, .mass = RigidMass::box(3, {0.5, 0.5, 0.5})});
+      auto b =
+          s.create({.pose = {x0}, .linear_velocity = v0, .shapes = kBall, .mass = RigidMass::box(3, {0.5, 0.5, 0.5})});
       const int steps = static_cast<int>(std::lround(2.0 / dt));
       for (int i = 0; i < steps; ++i) s.step(dt, kG);
       const int per_step = solver == pba::RigidSolverType::SequentialImpulse ? 1 : substeps;
@@ -178,7 +179,8 @@ TEST(RigidFreeFall, MatchesTheDiscreteSolutionAndConvergesToTheParabola) {
       const double n = static_cast<double>(steps) * per_step, t = n * h;
       const Vec3 x_discrete = x0 + v0 * t + kG * (h * h * n * (n + 1) / 2);
       const Vec3 x_exact = x0 + v0 * t + 0.5 * kG * t * t;
-      EXPECT_LT(glm::length(s.center_of_mass(b) - x_discrete), 1e-10) << to_string(solver) << " " << dt << " " << substeps;
+      EXPECT_LT(glm::length(s.center_of_mass(b) - x_discrete), 1e-10)
+          << to_string(solver) << " " << dt << " " << substeps;
       EXPECT_LT(glm::length(s.linear_velocity(b) - (v0 + kG * t)), 1e-11);
       // the error of the scheme is exactly g h t / 2 below the parabola
       EXPECT_NEAR(glm::length(s.center_of_mass(b) - x_exact), 9.81 * h * t / 2, 1e-9);
@@ -192,7 +194,8 @@ TEST(RigidFreeFall, GravityScaleAndStaticBodies) {
   auto floating = s.create({.pose = {{0, 1, 0}}, .shapes = kBall, .gravity_scale = 0});
   auto half = s.create({.pose = {{1, 1, 0}}, .shapes = kBall, .gravity_scale = 0.5});
   auto full = s.create({.pose = {{2, 1, 0}}, .shapes = kBall});
-  auto ground = s.create({.type = BodyType::Static, .pose = {{0, -1, 0}}, .linear_velocity = {1, 0, 0}, .shapes = kBall});
+  auto ground =
+      s.create({.type = BodyType::Static, .pose = {{0, -1, 0}}, .linear_velocity = {1, 0, 0}, .shapes = kBall});
   for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kG);
   EXPECT_EQ(s.center_of_mass(floating), Vec3(0, 1, 0));
   EXPECT_NEAR(s.linear_velocity(half).y, -9.81 / 2, 1e-12);
@@ -207,8 +210,12 @@ TEST(RigidFreeFall, GravityScaleAndStaticBodies) {
 TEST(RigidDamping, FollowsItsDiscreteLawAndTheExponential) {
   for (const int substeps : {1, 8, 64}) {
     RigidBodySystem s({.contacts = {.substeps = substeps, .auto_substeps = false}});
-    auto b = s.create({.linear_velocity = {4, 0, 0}, .angular_velocity = {0, 0, 3},
-                       .shapes = kBall, .mass = RigidMass::sphere(1, 0.5), .linear_damping = 2, .angular_damping = 0.5});
+    auto b = s.create({.linear_velocity = {4, 0, 0},
+                       .angular_velocity = {0, 0, 3},
+                       .shapes = kBall,
+                       .mass = RigidMass::sphere(1, 0.5),
+                       .linear_damping = 2,
+                       .angular_damping = 0.5});
     for (int i = 0; i < 60; ++i) s.step(1.0 / 60, Vec3(0));
     const double h = 1.0 / 60 / substeps, n = 60.0 * substeps;
     EXPECT_NEAR(s.linear_velocity(b).x, 4 / std::pow(1 + 2 * h, n), 1e-12);
@@ -220,7 +227,10 @@ TEST(RigidDamping, FollowsItsDiscreteLawAndTheExponential) {
 
 TEST(RigidKinematic, MovesAtItsVelocityAndTurnsExactly) {
   RigidBodySystem s;
-  auto k = s.create({.type = BodyType::Kinematic, .linear_velocity = {1, 2, 0}, .angular_velocity = {0, 0, pba::kPi}, .shapes = kBall});
+  auto k = s.create({.type = BodyType::Kinematic,
+                     .linear_velocity = {1, 2, 0},
+                     .angular_velocity = {0, 0, pba::kPi},
+                     .shapes = kBall});
   for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kG);  // gravity ignored
   const pba::Pose p = s.pose(k);
   EXPECT_LT(glm::length(p.position - Vec3(1, 2, 0)), 1e-12);
@@ -583,7 +593,8 @@ TEST(RigidBadInput, MassesAndMomentsOutsideTheFloatRangeAreRefusedByName) {
   EXPECT_NE(f.find("the shapes' sizes and densities make the body too small or light"), std::string::npos) << f;
   // a 1 nm ball of water: its mass is a normal float's inverse, its moment (4e-42) is not
   const std::string g = msg({.name = "mote", .shapes = {{.shape = pba::ColliderShape::sphere(1e-9)}}});
-  EXPECT_NE(g.find("'mote'.mass (from the shapes).principal moment 0 (kg m^2): must be in [2.9"), std::string::npos) << g;
+  EXPECT_NE(g.find("'mote'.mass (from the shapes).principal moment 0 (kg m^2): must be in [2.9"), std::string::npos)
+      << g;
   EXPECT_NE(g.find("scale the shapes or the density, or give the mass and inertia"), std::string::npos) << g;
   EXPECT_EQ(msg(given(8e37)), "");
   EXPECT_EQ(msg(given(3e-39 * 6)), "");
@@ -595,7 +606,8 @@ TEST(RigidBadInput, MassesAndMomentsOutsideTheFloatRangeAreRefusedByName) {
 // given, as scene files refuse such positions; the largest float position still steps.
 TEST(RigidBadInput, PositionsOutsideTheFloatRangeAreRefusedWhereTheyAreGiven) {
   RigidBodySystem s;
-  s.create({.name = "ground", .type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+  s.create(
+      {.name = "ground", .type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
   const std::vector<pba::RigidShapeDef> cube{{.shape = pba::ColliderShape::box({0.5, 0.5, 0.5})}};
   std::string m = error_of([&] { s.create({.name = "far", .pose = {{1e39, 0.5, 0}}, .shapes = cube}); });
   EXPECT_NE(m.find("'far'.pose.position: must fit a float"), std::string::npos) << m;
@@ -625,9 +637,10 @@ TEST(RigidMassRange, ABoxSettlesTheSameAtTheEndsOfTheMassRange) {
     const double ixx = m * (0.25 * 0.25 + 0.5 * 0.5) / 3, iyy = m * (0.5 * 0.5 + 0.5 * 0.5) / 3;
     Mat3 inertia(0.0);
     inertia[0][0] = ixx, inertia[1][1] = iyy, inertia[2][2] = ixx;
-    const auto b = s.create({.pose = {{0, 0.6, 0}, glm::angleAxis(0.2, glm::normalize(Vec3(1, 0, 1)))},
-                             .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.25, 0.5}), .material = {.friction = 0.5}}},
-                             .mass = RigidMass{m, Vec3(0), inertia}});
+    const auto b =
+        s.create({.pose = {{0, 0.6, 0}, glm::angleAxis(0.2, glm::normalize(Vec3(1, 0, 1)))},
+                  .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.25, 0.5}), .material = {.friction = 0.5}}},
+                  .mass = RigidMass{m, Vec3(0), inertia}});
     for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kG);
     return s.pose(b);
   };
