@@ -72,7 +72,8 @@ struct EffectorDef {
 struct SkeletonDrawOptions {
   bool bones = true;                ///< capsules for bones
   double bone_radius = 0;           ///< capsule radius (m), >= 0; 0: each bone's BoneDef::radius, or 8% of its length
-  double min_radius = 0;            ///< smallest capsule radius (m), >= 0, so that the many short bones of a long chain stay visible
+  double min_radius = 0;            ///< smallest capsule radius (m), >= 0, so that the many short bones of a long
+                                    ///< chain stay visible
   bool joints = true;               ///< spheres at joints, coloured by type
   bool limits = false;              ///< hinge arcs and ball cones
   bool targets = true;              ///< effector targets and their error lines
@@ -226,7 +227,8 @@ class Skeleton {
 /// PascalCase like pba::Method's (the integrators); the names users type (scene files,
 /// --option solver=...) are name()'s: "analytic_1dof", ..., "fabrik".
 enum class Method : std::uint8_t {
-  Analytic1Dof,       ///< "analytic_1dof": one hinge aims its bone at the target with a dot and a cross product (workbook 2.3)
+  Analytic1Dof,       ///< "analytic_1dof": one hinge aims its bone at the target with a dot and a cross product
+                      ///< (workbook 2.3)
   Analytic3Dof,       ///< "analytic_3dof": one ball joint aims its bone at the target (shortest-arc rotation)
   TwoBone,            ///< "two_bone": law of cosines on a ball + hinge limb, with a pole vector (TwoBoneJob)
   Ccd,                ///< "ccd": cyclic coordinate descent, workbook Algorithm 1
@@ -264,8 +266,9 @@ struct SolverSettings {
   bool warm_start = true;           ///< start from the current pose; false starts from the rest pose
   double stall_ratio = 1e-9;        ///< in [0, 1]: stop (StopReason::Stalled) when an accepted step changes the error
                                     ///< by less than this fraction of it, a stationary pose (the closest reachable
-                                    ///< pose of an unreachable target); slow progress never stops a solve (docs/ik.md,
-                                    ///< "Stopping"): the transpose, the pseudo-inverse, SDLS and FABRIK hand over to DLS
+                                    ///< pose of an unreachable target); slow progress never stops a solve
+                                    ///< (docs/ik.md, "Stopping"): the transpose, the pseudo-inverse, SDLS and
+                                    ///< FABRIK hand over to DLS
   double max_seconds = 0.0;         ///< time budget per solve (s), >= 0; 0: none. The iterative methods stop
                                     ///< once it is spent (checked every iteration from 64 bones on, every 8
                                     ///< below; one check costs about 60 ns). With a budget, results depend
@@ -405,7 +408,8 @@ struct TwoBoneJob {
   double max_mid_angle = kPi; ///< largest interior elbow angle (rad), in (min, pi]
   // outputs (written by run)
   Quat start_correction{1, 0, 0, 0};  ///< world rotation to pre-multiply onto the start bone
-  Quat mid_correction{1, 0, 0, 0};    ///< world rotation about mid_axis to pre-multiply onto the mid bone (applied before start_correction)
+  Quat mid_correction{1, 0, 0, 0};    ///< world rotation about mid_axis to pre-multiply onto the mid bone (applied
+                                      ///< before start_correction)
   bool reached = false;               ///< true when the target is within reach (to 1e-9 of the limb)
 
   /// True when all inputs are finite (and below about 1e150 m, so that their squares are),

@@ -292,7 +292,8 @@ struct Reach {
   double n[3], d;         // plane: at the end of the step (the exact test uses only that)
   double n1;              // plane: |n_x| + |n_y| + |n_z|
   double lo[3], hi[3];    // sphere, box: box around the centre's path (start and end)
-  double radius;          // sphere radius, or the circumradius: |half extents| (box), hh + R (capsule), FlatShape::reach (hull, mesh, compound)
+  double radius;          // sphere radius, or the circumradius: |half extents| (box), hh + R (capsule),
+                          // FlatShape::reach (hull, mesh, compound)
   double spin;            // all but spheres and planes: ||R1 - R0|| (Frobenius), bounds the turn of its frame
   double path;            // |c1 - c0|
   double maxabs;          // largest |coordinate| of the centre's path

@@ -16,8 +16,10 @@ namespace pba::rigid_scenes {
 
 /// A static ground plane y = 0 with friction `mu` and restitution `e`.
 inline RigidBodyId ground(RigidBodySystem& s, double mu = 0.5, double e = 0) {
-  return s.create({.name = "ground", .type = BodyType::Static,
-                   .shapes = {{.shape = ColliderShape::plane({0, 1, 0}, 0), .material = {.restitution = e, .friction = mu}}}});
+  return s.create(
+      {.name = "ground",
+       .type = BodyType::Static,
+       .shapes = {{.shape = ColliderShape::plane({0, 1, 0}, 0), .material = {.restitution = e, .friction = mu}}}});
 }
 
 /// A dynamic box of half extents `h` at `p` (density 1000 kg/m^3 unless given).
@@ -187,7 +189,8 @@ inline std::vector<RigidBodyId> rain(RigidBodySystem& s, int n = 10000) {
                  2.0 * (column / c - 0.5 * (c - 1)) + jitter()};
     if (i % 2 == 0) {
       const Vec3 h{0.15 + 0.25 * r.next(), 0.15 + 0.25 * r.next(), 0.15 + 0.25 * r.next()};
-      const Quat q = glm::normalize(Quat(r.next() - 0.5, r.next() - 0.5, r.next() - 0.5, r.next() - 0.5) + Quat(0.05, 0, 0, 0));
+      const Quat q =
+          glm::normalize(Quat(r.next() - 0.5, r.next() - 0.5, r.next() - 0.5, r.next() - 0.5) + Quat(0.05, 0, 0, 0));
       out.push_back(box(s, p, h, 0.5, 1000, q));
     } else {
       out.push_back(s.create({.pose = {p}, .shapes = {{.shape = ColliderShape::sphere(0.15 + 0.25 * r.next()),
@@ -206,7 +209,8 @@ inline std::shared_ptr<const TriangleMesh> sine_terrain_mesh(int n = 100, double
   std::vector<Vec3> v(static_cast<std::size_t>((n + 1) * (n + 1)));
   for (int x = 0; x <= n; ++x)
     for (int z = 0; z <= n; ++z)
-      v[static_cast<std::size_t>(z * (n + 1) + x)] = {cell * x, height * std::sin(x * 50.0 / n) * std::cos(z * 50.0 / n), cell * z};
+      v[static_cast<std::size_t>(z * (n + 1) + x)] = {
+          cell * x, height * std::sin(x * 50.0 / n) * std::cos(z * 50.0 / n), cell * z};
   std::vector<std::array<std::uint32_t, 3>> t;
   t.reserve(static_cast<std::size_t>(2 * n * n));
   for (int x = 0; x < n; ++x)
@@ -231,12 +235,14 @@ inline std::vector<RigidBodyId> convex_vs_mesh(RigidBodySystem& s, int n = 100, 
             .shapes = {{.shape = ColliderShape::triangles(sine_terrain_mesh(n, cell, height)), .material = m}}});
   const Vec3 apex[5] = {{0, 1, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 0, 1}, {0, 0, -1}};
   const ColliderShape kinds[4] = {ColliderShape::box({0.5, 0.75, 1.0}), ColliderShape::sphere(0.5),
-                                  ColliderShape::capsule(0.75, 0.5), ColliderShape::convex(ConvexHull::build(apex, "pyramid"))};
+                                  ColliderShape::capsule(0.75, 0.5),
+                                  ColliderShape::convex(ConvexHull::build(apex, "pyramid"))};
   std::vector<RigidBodyId> out;
   for (int x = -10; x <= 10; ++x)
     for (int y = 0; y < 4; ++y)
       for (int z = -10; z <= 10; ++z)
-        out.push_back(s.create({.pose = {{7.5 * x, 15.0 + 2 * y, 7.5 * z}}, .shapes = {{.shape = kinds[y], .material = m}}}));
+        out.push_back(
+            s.create({.pose = {{7.5 * x, 15.0 + 2 * y, 7.5 * z}}, .shapes = {{.shape = kinds[y], .material = m}}}));
   return out;
 }
 
@@ -248,8 +254,10 @@ inline std::vector<RigidBodyId> restitution_row(RigidBodySystem& s, int n = 6) {
   std::vector<RigidBodyId> out;
   for (int i = 0; i < n; ++i) {
     const double e = n > 1 ? static_cast<double>(i) / (n - 1) : 1.0;
-    out.push_back(s.create({.name = "ball e=" + std::to_string(e).substr(0, 4), .pose = {{(i - 0.5 * (n - 1)) * 0.8, 2.2, 0}},
-                            .shapes = {{.shape = ColliderShape::sphere(0.2), .material = {.restitution = e, .friction = 0}}}}));
+    out.push_back(
+        s.create({.name = "ball e=" + std::to_string(e).substr(0, 4),
+                  .pose = {{(i - 0.5 * (n - 1)) * 0.8, 2.2, 0}},
+                  .shapes = {{.shape = ColliderShape::sphere(0.2), .material = {.restitution = e, .friction = 0}}}}));
   }
   return out;
 }
@@ -265,7 +273,8 @@ inline std::vector<RigidBodyId> friction_ramp(RigidBodySystem& s, double angle =
   for (int i = 0; i < n; ++i) {
     const double mu = 0.1 + 0.2 * i;
     // along the slope's upper part, side by side in z; friction mixes as sqrt(1 * mu^2) = mu
-    const Vec3 p = 0.25 * normal + Vec3(std::cos(angle), std::sin(angle), 0) * 3.0 + Vec3(0, 0, (i - 0.5 * (n - 1)) * 0.9);
+    const Vec3 p =
+        0.25 * normal + Vec3(std::cos(angle), std::sin(angle), 0) * 3.0 + Vec3(0, 0, (i - 0.5 * (n - 1)) * 0.9);
     out.push_back(s.create({.name = "box mu=" + std::to_string(mu).substr(0, 4),
                             .pose = {p, q},
                             .shapes = {{.shape = ColliderShape::box(Vec3(0.25)),

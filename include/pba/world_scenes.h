@@ -34,8 +34,8 @@ struct ClothOnBox {
 inline ClothOnBox cloth_on_falling_box(World& w, const ClothOnBoxDef& def = {}) {
   ClothOnBox out;
   out.ground = w.create_entity({.name = "ground"});
-  w.add_collider(out.ground,
-                 {.shape = ColliderShape::plane({0, 1, 0}, 0), .material = {.restitution = 0, .friction = def.friction}});
+  w.add_collider(out.ground, {.shape = ColliderShape::plane({0, 1, 0}, 0),
+                              .material = {.restitution = 0, .friction = def.friction}});
   out.box = w.create_entity({.name = "box", .pose = {{0, def.box_height, 0}, Quat(1, 0, 0, 0)}});
   w.add_rigid_body(out.box, {.shapes = {{.shape = ColliderShape::box(Vec3(def.box_half))}}});
   out.cloth = w.create_entity({.name = "cloth"});

@@ -118,7 +118,8 @@ struct BroadPhaseMethods {
                  z1 = static_cast<std::int64_t>(c1.z);
       for (std::int64_t x = x0; x <= x1; ++x)
         for (std::int64_t y = y0; y <= y1; ++y)
-          for (std::int64_t z = z0; z <= z1; ++z) m.entries.push_back({cell_key(x, y, z), static_cast<std::uint32_t>(p)});
+          for (std::int64_t z = z0; z <= z1; ++z)
+            m.entries.push_back({cell_key(x, y, z), static_cast<std::uint32_t>(p)});
     }
 
     // counting sort of the entries into 2^bits buckets (at least twice as many as entries)

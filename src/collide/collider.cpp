@@ -80,26 +80,37 @@ void Collider::validate(std::string_view where) const {
   switch (shape.type) {
     case ShapeType::Plane:
       if (!is_finite(shape.normal)) require_finite(shape.normal, field_path(where, "normal"));
-      if (glm::length(shape.normal) == 0) throw Error(field_path(where, "normal") + ": must be non-zero, got (0, 0, 0)");
+      if (glm::length(shape.normal) == 0)
+        throw Error(field_path(where, "normal") + ": must be non-zero, got (0, 0, 0)");
       if (!std::isfinite(shape.offset)) require_finite(shape.offset, field_path(where, "offset"));
       break;
-    case ShapeType::Sphere: if (!(std::isfinite(shape.radius) && (shape.radius) > 0)) require_positive(shape.radius, field_path(where, "radius")); break;
+    case ShapeType::Sphere:
+      if (!(std::isfinite(shape.radius) && (shape.radius) > 0))
+        require_positive(shape.radius, field_path(where, "radius"));
+      break;
     case ShapeType::Box:
-      if (!(std::isfinite(shape.half_extents.x) && (shape.half_extents.x) > 0)) require_positive(shape.half_extents.x, field_path(where, "half_extents.x"));
-      if (!(std::isfinite(shape.half_extents.y) && (shape.half_extents.y) > 0)) require_positive(shape.half_extents.y, field_path(where, "half_extents.y"));
-      if (!(std::isfinite(shape.half_extents.z) && (shape.half_extents.z) > 0)) require_positive(shape.half_extents.z, field_path(where, "half_extents.z"));
+      if (!(std::isfinite(shape.half_extents.x) && (shape.half_extents.x) > 0))
+        require_positive(shape.half_extents.x, field_path(where, "half_extents.x"));
+      if (!(std::isfinite(shape.half_extents.y) && (shape.half_extents.y) > 0))
+        require_positive(shape.half_extents.y, field_path(where, "half_extents.y"));
+      if (!(std::isfinite(shape.half_extents.z) && (shape.half_extents.z) > 0))
+        require_positive(shape.half_extents.z, field_path(where, "half_extents.z"));
       break;
     case ShapeType::Capsule:
-      if (!(std::isfinite(shape.radius) && (shape.radius) > 0)) require_positive(shape.radius, field_path(where, "radius"));
-      if (!(std::isfinite(shape.half_height) && shape.half_height >= 0)) require_non_negative(shape.half_height, field_path(where, "half_height"));
+      if (!(std::isfinite(shape.radius) && (shape.radius) > 0))
+        require_positive(shape.radius, field_path(where, "radius"));
+      if (!(std::isfinite(shape.half_height) && shape.half_height >= 0))
+        require_non_negative(shape.half_height, field_path(where, "half_height"));
       break;
     case ShapeType::Hull:
     case ShapeType::Mesh:
     case ShapeType::Compound: shape.validate(where); break;  // the body is there
   }
   // material and motion
-  if (!((material.restitution) >= (0) && (material.restitution) <= (1))) require_in_range(material.restitution, 0, 1, field_path(where, "restitution"));
-  if (!(std::isfinite(material.friction) && (material.friction) >= 0)) require_non_negative(material.friction, field_path(where, "friction"));
+  if (!((material.restitution) >= (0) && (material.restitution) <= (1)))
+    require_in_range(material.restitution, 0, 1, field_path(where, "restitution"));
+  if (!(std::isfinite(material.friction) && (material.friction) >= 0))
+    require_non_negative(material.friction, field_path(where, "friction"));
   if (!is_finite(begin.position)) require_finite(begin.position, field_path(where, "position"));
   if (!is_finite(end.position)) require_finite(end.position, field_path(where, "position"));
   require_unit_quat(begin.rotation, field_path(where, "rotation"));
@@ -140,7 +151,8 @@ void draw_body(DebugDraw& draw, const ColliderShape& s, const Pose& p, Color c) 
         for (std::uint32_t k = e[f.edge].next; e[k].next != f.edge; k = e[k].next)
           draw.triangle(a, apply(p, v[e[k].origin]), apply(p, v[e[e[k].next].origin]), c);
       }
-      for (std::size_t i = 0; i < e.size(); i += 2) draw.line(apply(p, v[e[i].origin]), apply(p, v[e[i + 1].origin]), edge);
+      for (std::size_t i = 0; i < e.size(); i += 2)
+        draw.line(apply(p, v[e[i].origin]), apply(p, v[e[i + 1].origin]), edge);
       break;
     }
     case ShapeType::Mesh: {

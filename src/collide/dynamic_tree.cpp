@@ -323,7 +323,8 @@ std::int32_t DynamicTree::build_range(std::int32_t* leaves, std::int32_t count, 
       }
     }
     if (best_plane > 0) {
-      std::int32_t* mid = std::partition(leaves, leaves + count, [&](std::int32_t x) { return bin_of(x) < best_plane; });
+      std::int32_t* mid =
+          std::partition(leaves, leaves + count, [&](std::int32_t x) { return bin_of(x) < best_plane; });
       split = static_cast<std::int32_t>(mid - leaves);
     }
   }
@@ -399,7 +400,8 @@ void DynamicTree::validate() const {
   }
   if (height() > height_limit())
     fail(root_, "height " + std::to_string(height()) + " above the limit " + std::to_string(height_limit()));
-  if (leaves != leaves_) fail(root_, std::to_string(leaves) + " leaves reached, " + std::to_string(leaves_) + " expected");
+  if (leaves != leaves_)
+    fail(root_, std::to_string(leaves) + " leaves reached, " + std::to_string(leaves_) + " expected");
   if (reached + free_count != nodes_.size())
     fail(root_, std::to_string(reached) + " nodes reached and " + std::to_string(free_count) + " free of " +
                     std::to_string(nodes_.size()));

@@ -66,7 +66,8 @@ MassProperties mass_properties(const ColliderShape& s, double density, std::stri
       parts.reserve(ch.size());
       Vec3 first(0.0);
       for (std::size_t i = 0; i < ch.size(); ++i) {
-        MassProperties c = mass_properties(ch[i].shape, density, field_path(where, "children[" + std::to_string(i) + "]"));
+        MassProperties c =
+            mass_properties(ch[i].shape, density, field_path(where, "children[" + std::to_string(i) + "]"));
         const Mat3 r = glm::mat3_cast(ch[i].pose.rotation);
         c.center = apply(ch[i].pose, c.center);
         c.inertia = r * c.inertia * glm::transpose(r);

@@ -170,7 +170,9 @@ PointDistance point_distance(const ColliderShape& s, const Pose& p, const Vec3& 
       break;
     }
     case ShapeType::Sphere: r = ball_distance(x, Vec3(0.0), s.radius); break;
-    case ShapeType::Capsule: r = ball_distance(x, Vec3(0, std::clamp(x.y, -s.half_height, s.half_height), 0), s.radius); break;
+    case ShapeType::Capsule:
+      r = ball_distance(x, Vec3(0, std::clamp(x.y, -s.half_height, s.half_height), 0), s.radius);
+      break;
     case ShapeType::Box: r = box_distance(x, s.half_extents); break;
     case ShapeType::Hull: r = hull_distance(x, *s.hull); break;
     case ShapeType::Mesh: r = mesh_distance(x, *s.mesh); break;

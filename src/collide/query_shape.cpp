@@ -192,7 +192,8 @@ double plane_gap(const ConvexProxy& a, const ColliderShape& s, const Pose& p, Ve
 Aabb local_box(const Pose& p, const Aabb& world) {
   Aabb b{Vec3(kInf), Vec3(-kInf)};
   for (int k = 0; k < 8; ++k) {
-    const Vec3 c((k & 1) ? world.hi.x : world.lo.x, (k & 2) ? world.hi.y : world.lo.y, (k & 4) ? world.hi.z : world.lo.z);
+    const Vec3 c((k & 1) ? world.hi.x : world.lo.x, (k & 2) ? world.hi.y : world.lo.y,
+                 (k & 4) ? world.hi.z : world.lo.z);
     const Vec3 l = apply_inverse(p, c);
     b.lo = glm::min(b.lo, l);
     b.hi = glm::max(b.hi, l);
@@ -302,7 +303,8 @@ ShapeCastHit QueryWorld::sphere_cast(const Ray& path_in, double radius, const Qu
   ball.radius = radius;
   ball.pose.position = path.origin;
   const Aabb start{path.origin - Vec3(radius), path.origin + Vec3(radius)};
-  const Aabb swept = start.merged({start.lo + path.max_distance * path.direction, start.hi + path.max_distance * path.direction});
+  const Aabb swept =
+      start.merged({start.lo + path.max_distance * path.direction, start.hi + path.max_distance * path.direction});
   // each candidate up to the best time so far; closed forms where they exist
   auto test = [&](std::uint32_t i, double max_t) {
     if (!accepts(filter, i)) return max_t;

@@ -179,7 +179,7 @@ Reach make_reach(const ColliderParams& c) {
   if (c.type != ShapeType::Plane && c.type != ShapeType::Sphere) {
     // the circumradius about the frame origin: the box's corners, the capsule's end caps,
     // the farthest corner of a hull's, mesh's or compound's local bounds
-    r.radius = c.type == ShapeType::Box       ? std::sqrt(double(c.hx) * c.hx + double(c.hy) * c.hy + double(c.hz) * c.hz)
+    r.radius = c.type == ShapeType::Box ? std::sqrt(double(c.hx) * c.hx + double(c.hy) * c.hy + double(c.hz) * c.hz)
                : c.type == ShapeType::Capsule ? double(c.hh) + double(c.radius)
                                               : double(c.reach);
     double s2 = 0;

@@ -222,7 +222,8 @@ void ParticleDef::validate(std::string_view where) const {
     throw Error(field_path(where, "lifetime") + ": must be > 0 (infinity for immortal), got " + format_value(lifetime));
   require_float_particle(position, mass, radius, where);
   if (!is_finite(Vec3f(velocity))) require_float(velocity, field_path(where, "velocity"));
-  if (glm::length(velocity) > kMaxParticleSpeed) require_particle_speed(glm::length(velocity), field_path(where, "velocity"));
+  if (glm::length(velocity) > kMaxParticleSpeed)
+    require_particle_speed(glm::length(velocity), field_path(where, "velocity"));
 }
 
 void EmitterDef::validate(std::string_view where) const {
@@ -231,10 +232,12 @@ void EmitterDef::validate(std::string_view where) const {
   if (glm::length(direction) == 0) throw Error(field_path(where, "direction") + ": must be non-zero, got (0, 0, 0)");
   if (!((spread) >= (0) && (spread) <= (kPi))) require_in_range(spread, 0, kPi, field_path(where, "spread"));
   if (!(std::isfinite(speed) && (speed) >= 0)) require_non_negative(speed, field_path(where, "speed"));
-  if (!((speed_jitter) >= (0) && (speed_jitter) <= (1))) require_in_range(speed_jitter, 0, 1, field_path(where, "speed_jitter"));
+  if (!((speed_jitter) >= (0) && (speed_jitter) <= (1)))
+    require_in_range(speed_jitter, 0, 1, field_path(where, "speed_jitter"));
   if (!(std::isfinite(rate) && (rate) >= 0)) require_non_negative(rate, field_path(where, "rate"));
   if (!(std::isfinite(lifetime) && (lifetime) > 0)) require_positive(lifetime, field_path(where, "lifetime"));
-  if (!((lifetime_jitter) >= (0) && (lifetime_jitter) <= (0.999))) require_in_range(lifetime_jitter, 0, 0.999, field_path(where, "lifetime_jitter"));
+  if (!((lifetime_jitter) >= (0) && (lifetime_jitter) <= (0.999)))
+    require_in_range(lifetime_jitter, 0, 0.999, field_path(where, "lifetime_jitter"));
   if (!(std::isfinite(mass) && (mass) > 0)) require_positive(mass, field_path(where, "mass"));
   if (!(std::isfinite(radius) && (radius) > 0)) require_positive(radius, field_path(where, "radius"));
   // the particles' float state, the fastest launch included
@@ -254,11 +257,14 @@ double EmitterDef::max_live() const {
 
 void Forces::validate(std::string_view where) const {
   if (!is_finite(gravity)) require_finite(gravity, field_path(where, "gravity"));
-  if (!(std::isfinite(linear_drag) && (linear_drag) >= 0)) require_non_negative(linear_drag, field_path(where, "linear_drag"));
-  if (!(std::isfinite(quadratic_drag) && (quadratic_drag) >= 0)) require_non_negative(quadratic_drag, field_path(where, "quadratic_drag"));
+  if (!(std::isfinite(linear_drag) && (linear_drag) >= 0))
+    require_non_negative(linear_drag, field_path(where, "linear_drag"));
+  if (!(std::isfinite(quadratic_drag) && (quadratic_drag) >= 0))
+    require_non_negative(quadratic_drag, field_path(where, "quadratic_drag"));
   if (!is_finite(wind.velocity)) require_finite(wind.velocity, field_path(where, "wind.velocity"));
   if (!(std::isfinite(wind.gust) && (wind.gust) >= 0)) require_non_negative(wind.gust, field_path(where, "wind.gust"));
-  if (!(std::isfinite(wind.gust_period) && (wind.gust_period) > 0)) require_positive(wind.gust_period, field_path(where, "wind.gust_period"));
+  if (!(std::isfinite(wind.gust_period) && (wind.gust_period) > 0))
+    require_positive(wind.gust_period, field_path(where, "wind.gust_period"));
   // the kernels read these as floats
   if (!is_finite(Vec3f(gravity))) require_float(gravity, field_path(where, "gravity"));
   if (!std::isfinite(static_cast<float>(linear_drag))) require_float(linear_drag, field_path(where, "linear_drag"));
@@ -287,7 +293,8 @@ Vec3 Wind::at(double t) const {
   };
   Vec3 g;
   for (int c = 0; c < 3; ++c) {
-    const double a = lattice(k, static_cast<std::uint64_t>(c) + 1), b = lattice(k + 1, static_cast<std::uint64_t>(c) + 1);
+    const double a = lattice(k, static_cast<std::uint64_t>(c) + 1),
+                 b = lattice(k + 1, static_cast<std::uint64_t>(c) + 1);
     g[c] = a + (b - a) * s;
   }
   return velocity + gust * g;
@@ -347,7 +354,8 @@ std::size_t ParticleSystem::push_particle(const ParticleDef& d, std::uint32_t ow
   if (hot_.size() == hot_.capacity()) {
     // grow geometrically up to the budget, and no further
     if (hot_.size() >= max_particles_)
-      require_particle_memory(static_cast<double>(hot_.size()) + 1, memory_budget_, "ParticleSystem: adding a particle");
+      require_particle_memory(static_cast<double>(hot_.size()) + 1, memory_budget_,
+                              "ParticleSystem: adding a particle");
     reserve_rows(std::min(2 * hot_.capacity(), max_particles_));
   }
   count_uniform(inv_mass, radius, +1);

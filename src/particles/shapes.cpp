@@ -11,12 +11,17 @@ void Forcer::validate(std::string_view where) const {
   if (!is_finite(pose.position)) require_finite(pose.position, field_path(where, "position"));
   require_unit_quat(pose.rotation, field_path(where, "rotation"));
   if (shape == ForcerShape::Box) {
-    if (!(std::isfinite(half_extents.x) && (half_extents.x) > 0)) require_positive(half_extents.x, field_path(where, "half_extents.x"));
-    if (!(std::isfinite(half_extents.y) && (half_extents.y) > 0)) require_positive(half_extents.y, field_path(where, "half_extents.y"));
-    if (!(std::isfinite(half_extents.z) && (half_extents.z) > 0)) require_positive(half_extents.z, field_path(where, "half_extents.z"));
+    if (!(std::isfinite(half_extents.x) && (half_extents.x) > 0))
+      require_positive(half_extents.x, field_path(where, "half_extents.x"));
+    if (!(std::isfinite(half_extents.y) && (half_extents.y) > 0))
+      require_positive(half_extents.y, field_path(where, "half_extents.y"));
+    if (!(std::isfinite(half_extents.z) && (half_extents.z) > 0))
+      require_positive(half_extents.z, field_path(where, "half_extents.z"));
   } else {
     if (!(std::isfinite(radius) && (radius) > 0)) require_positive(radius, field_path(where, "radius"));
-    if (shape == ForcerShape::Cylinder) if (!(std::isfinite(half_height) && (half_height) > 0)) require_positive(half_height, field_path(where, "half_height"));
+    if (shape == ForcerShape::Cylinder)
+      if (!(std::isfinite(half_height) && (half_height) > 0))
+        require_positive(half_height, field_path(where, "half_height"));
   }
   if (!is_finite(direction)) require_finite(direction, field_path(where, "direction"));
   if (kind == ForcerKind::Fan && glm::length(direction) == 0)
@@ -24,8 +29,10 @@ void Forcer::validate(std::string_view where) const {
   if (!std::isfinite(strength)) require_finite(strength, field_path(where, "strength"));
   if (!std::isfinite(pull)) require_finite(pull, field_path(where, "pull"));
   if (!(std::isfinite(softening) && (softening) > 0)) require_positive(softening, field_path(where, "softening"));
-  if (!(std::isfinite(pulse_period) && (pulse_period) >= 0)) require_non_negative(pulse_period, field_path(where, "pulse_period"));
-  if (!((pulse_duration) >= (0) && (pulse_duration) <= (pulse_period > 0 ? pulse_period : 1e300))) require_in_range(pulse_duration, 0, pulse_period > 0 ? pulse_period : 1e300, field_path(where, "pulse_duration"));
+  if (!(std::isfinite(pulse_period) && (pulse_period) >= 0))
+    require_non_negative(pulse_period, field_path(where, "pulse_period"));
+  if (!((pulse_duration) >= (0) && (pulse_duration) <= (pulse_period > 0 ? pulse_period : 1e300)))
+    require_in_range(pulse_duration, 0, pulse_period > 0 ? pulse_period : 1e300, field_path(where, "pulse_duration"));
   // the forcer kernels work in floats: finite doubles a float cannot hold are refused too
   require_float(pose.position, field_path(where, "position"));
   require_float(half_extents, field_path(where, "half_extents"));
@@ -55,7 +62,9 @@ Vec3 Forcer::force_at(const Vec3& p, double t) const {
     case ForcerShape::Box:
       inside = std::abs(l.x) <= half_extents.x && std::abs(l.y) <= half_extents.y && std::abs(l.z) <= half_extents.z;
       break;
-    case ForcerShape::Cylinder: inside = l.x * l.x + l.z * l.z <= radius * radius && std::abs(l.y) <= half_height; break;
+    case ForcerShape::Cylinder:
+      inside = l.x * l.x + l.z * l.z <= radius * radius && std::abs(l.y) <= half_height;
+      break;
     case ForcerShape::Sphere: inside = glm::dot(l, l) <= radius * radius; break;
   }
   if (!inside) return Vec3(0);

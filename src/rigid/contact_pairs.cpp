@@ -68,18 +68,6 @@ double rolling_radius(const ColliderShape& s) {
   }
 }
 
-// (+0, +0, +0) to the bit (a -0 compares equal to 0 but changes the signs of sums)
-bool positive_zero(const Vec3& v) {
-  return v == Vec3(0) && !std::signbit(v.x) && !std::signbit(v.y) && !std::signbit(v.z);
-}
-
-// whether q times a unit quaternion (1, +-0, +-0, +-0) is q to the bit: each component of the
-// product is one of q's plus signed zeros, which leave a finite non-zero number as it is
-bool exact_times_identity(const Quat& q) {
-  auto plain = [](double x) { return std::abs(x) > 0 && std::abs(x) < std::numeric_limits<double>::infinity(); };
-  return plain(q.w) && plain(q.x) && plain(q.y) && plain(q.z);
-}
-
 // the box a fat box is made from: the tight one, stretched by `ahead` (m) along the motion
 // (inlined: update_proxies calls it twice for every awake body; as a call it was 0.7 M
 // instructions of the rain's landing step)
@@ -286,14 +274,8 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
     // a sleeping body does not move, nor does a static one that was not put elsewhere (its
     // pose, a normalised product, is made only past the sleepers)
     if (!fresh && type == BodyType::Dynamic && s.asleep_[i]) continue;
-    // (a body whose principal frame is its own and whose centre of mass is its origin, as
-    // a ball or a box made alone, skips the products by those identities, where they give
-    // the same bits: q conjugate(identity) is q to the bit when every component of q is finite
-    // and non-zero (each is then itself plus signed zeros; a zero component's sign could
-    // flip), and com - r (+0, +0, +0) is com (r turns +0 into +0 in glm), a -0 in the offset
-    // taking the full product)
-    const bool centred = s.principal_[i] == Quat(1, 0, 0, 0) && positive_zero(s.com_local_[i]) && exact_times_identity(s.q_[i]);
-    const Pose body = centred ? Pose{s.com_[i], glm::normalize(s.q_[i])} : s.body_pose(i);
+    // (body_pose and shape_frame skip the products by identities where they give the same bits)
+    const Pose body = s.body_pose(i);
     if (type == BodyType::Static) {
       const Pose& was = static_pose[slot];
       if (!fresh && was.position == body.position && was.rotation == body.rotation) continue;
@@ -320,12 +302,7 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
       ShapeProxy& p = proxies[q];
       if (shape_poses.size() < proxies.size())  // (grows with the proxies)
         shape_poses.resize(proxies.capacity()), shape_pose_stamp.resize(proxies.capacity(), 0);
-      // (a shape at the body's origin likewise, where it gives compose()'s bits: the
-      // position plus +0, which makes a -0 coordinate +0 as the product's sum does)
-      const Pose& local = s.shapes_[i][k].local;
-      shape_poses[q] = positive_zero(local.position) && local.rotation == Quat(1, 0, 0, 0) && exact_times_identity(body.rotation)
-                           ? Pose{body.position + Vec3(0), glm::normalize(body.rotation)}
-                           : compose(body, local);
+      shape_poses[q] = shape_frame(body, s.shapes_[i][k].local);
       shape_pose_stamp[q] = stamp;
       p.box = bounds(s.shapes_[i][k].shape, shape_poses[q]).grown(reach);
       p.body = static_cast<std::uint32_t>(i), p.shape = k, p.slot = slot;

@@ -212,7 +212,8 @@ PBA_LANES void in_frame(const double (&world)[9][kLanes], const V t[3][3], int l
   V it[3][3];
   for (int j = 0; j < 3; ++j)
     for (int r = 0; r < 3; ++r)
-      it[j][r] = from<V>(world[r], l0) * t[j][0] + from<V>(world[3 + r], l0) * t[j][1] + from<V>(world[6 + r], l0) * t[j][2];
+      it[j][r] =
+          from<V>(world[r], l0) * t[j][0] + from<V>(world[3 + r], l0) * t[j][1] + from<V>(world[6 + r], l0) * t[j][2];
   constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kCol[6] = {0, 1, 2, 1, 2, 2};
   for (int e = 0; e < 6; ++e) out[e] = dot3(t[kRow[e]], it[kCol[e]]);
 }
@@ -255,7 +256,9 @@ PBA_LANES void inertia_rows(Rows& k, int l0, const V (&ia)[6], const V (&ib)[6],
   auto form1 = [](const V m[6], V u1, V u2) { return u1 * (m[3] * u1 + m[4] * u2) + u2 * (m[4] * u1 + m[5] * u2); };
   auto form2 = [](const V m[6], V u0, V u2) { return u0 * (m[0] * u0 + m[2] * u2) + u2 * (m[2] * u0 + m[5] * u2); };
   // (c x t1)^T m (c x t2), the off-diagonal entry (no linear part: t1 . t2 = 0)
-  auto form12 = [](const V m[6], V u1, V u2, V w0, V w2) { return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2); };
+  auto form12 = [](const V m[6], V u1, V u2, V w0, V w2) {
+    return u1 * (m[1] * w0 + m[4] * w2) + u2 * (m[2] * w0 + m[5] * w2);
+  };
   const V k11 = ma + mb + form1(ia, ca[2], -ca[1]) + form1(ib, cb[2], -cb[1]);
   const V k22 = ma + mb + form2(ia, -ca[2], ca[0]) + form2(ib, -cb[2], cb[0]);
   const V k12 = form12(ia, ca[2], -ca[1], -ca[2], ca[0]) + form12(ib, cb[2], -cb[1], -cb[2], cb[0]);
@@ -292,7 +295,8 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
   for (int e = 0; e < 6; ++e) put(k.ia[e], l0, ia[e] * unit), put(k.ib[e], l0, ib[e] * unit);
   // the centres' offset d and the centroid in the frame (b's centroid is ca + d)
   V dab[3], dba[3], cw[3], d[3], ca[3];
-  for (int i = 0; i < 3; ++i) dab[i] = from<V>(in.dab[i], l0), dba[i] = from<V>(in.dba[i], l0), cw[i] = from<V>(in.ca[i], l0);
+  for (int i = 0; i < 3; ++i)
+    dab[i] = from<V>(in.dab[i], l0), dba[i] = from<V>(in.dba[i], l0), cw[i] = from<V>(in.ca[i], l0);
   for (int i = 0; i < 3; ++i) d[i] = dot3(dab, t[i]), ca[i] = dot3(cw, t[i]);
   for (int i = 0; i < 3; ++i) put(k.ca[i], l0, ca[i]), put(k.cb[i], l0, ca[i] + d[i]);
   // the points (their arms, anchors, separations and carried impulses), then the rows their
@@ -337,7 +341,8 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
     const V coefficient = from<V>(in.rolling, l0);
     const auto rolls = coefficient > zero;
     put(k.rolling, l0, keep(rolls, coefficient));
-    const V a = ia[0] + ib[0], b = ia[1] + ib[1], c = ia[2] + ib[2], d = ia[3] + ib[3], e = ia[4] + ib[4], f = ia[5] + ib[5];
+    const V a = ia[0] + ib[0], b = ia[1] + ib[1], c = ia[2] + ib[2], d = ia[3] + ib[3], e = ia[4] + ib[4],
+            f = ia[5] + ib[5];
     const V adj[6] = {d * f - e * e, c * e - b * f, b * e - c * d, a * f - c * c, b * c - a * e, a * d - b * b};
     const V det = a * adj[0] + b * adj[1] + c * adj[2];
     const auto invertible = rolls & (det > zero);
@@ -398,7 +403,8 @@ PBA_LANES void world_inertia_lanes(const InertiaInput& in, double (&out)[9][kLan
       lanes::store(out[3 * j + i] + l0, rd[0][i] * r[0][j] + rd[1][i] * r[1][j] + rd[2][i] * r[2][j]);
 }
 
-__attribute__((target("avx512f"))) void world_inertia_avx512(const InertiaInput& in, double (&out)[9][kLanes], int lanes) {
+__attribute__((target("avx512f"))) void world_inertia_avx512(const InertiaInput& in, double (&out)[9][kLanes],
+                                                             int lanes) {
   for (int l0 = 0; l0 < lanes; l0 += 8) world_inertia_lanes<v8d>(in, out, l0);
 }
 __attribute__((target("avx2"))) void world_inertia_avx2(const InertiaInput& in, double (&out)[9][kLanes], int lanes) {
@@ -839,7 +845,8 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
       continue;
     }
     const std::uint32_t index = by_color[first + static_cast<std::size_t>(l)];
-    if (first + l + kPrefetchAhead < by_color.size()) prefetch_pair<P>(pairs[by_color[first + l + kPrefetchAhead]], from_frame);
+    if (first + l + kPrefetchAhead < by_color.size())
+      prefetch_pair<P>(pairs[by_color[first + l + kPrefetchAhead]], from_frame);
     // and the next block's lines, to be written (the passes left them in the outer caches),
     // spread over this block's lanes
     if (b + 1 < count_in_use) {
@@ -872,7 +879,8 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
     const Vec3& com_b = s.com_[body_b];
     const Vec3 dab = com_a - com_b, dba = com_b - com_a;
     for (int i = 0; i < 3; ++i) {
-      for (int r = 0; r < 3; ++r) in.t[r][i][l] = t[r][i], in.ia[3 * i + r][l] = ia[i][r], in.ib[3 * i + r][l] = ib[i][r];
+      for (int r = 0; r < 3; ++r)
+        in.t[r][i][l] = t[r][i], in.ia[3 * i + r][l] = ia[i][r], in.ib[3 * i + r][l] = ib[i][r];
       in.dab[i][l] = dab[i], in.dba[i][l] = dba[i], in.ca[i][l] = c.ca[i];
     }
     count[l] = c.count;
@@ -881,7 +889,8 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
       const SolverPoint& q = c.points[p];
       const Vec3 arm = on ? q.at - com_a : Vec3(0);
       in.active[p][l] = on ? 1 : 0;
-      for (int i = 0; i < 3; ++i) in.arm[p][i][l] = arm[i], in.sa[p][i][l] = on ? q.sa[i] : 0, in.sb[p][i][l] = on ? q.sb[i] : 0;
+      for (int i = 0; i < 3; ++i)
+        in.arm[p][i][l] = arm[i], in.sa[p][i][l] = on ? q.sa[i] : 0, in.sb[p][i][l] = on ? q.sb[i] : 0;
       in.offset[p][l] = on ? q.offset : 0;
       in.impulse[p][l] = on ? c.normal_impulse[p] : 0;
     }
@@ -976,7 +985,8 @@ PBA_LANES void refresh_lanes(const RefreshInput& in, RefreshOutput& out, int l0)
   inertia_rows<V, P>(out, l0, ia, ib, ma, mb, unit, x, y, on, d, ca, cb);
   // a one-point lane's rolling mass
   if constexpr (P == 1) {
-    const V a = ia[0] + ib[0], b = ia[1] + ib[1], c = ia[2] + ib[2], dd = ia[3] + ib[3], e = ia[4] + ib[4], f = ia[5] + ib[5];
+    const V a = ia[0] + ib[0], b = ia[1] + ib[1], c = ia[2] + ib[2], dd = ia[3] + ib[3], e = ia[4] + ib[4],
+            f = ia[5] + ib[5];
     const V adj[6] = {dd * f - e * e, c * e - b * f, b * e - c * dd, a * f - c * c, b * c - a * e, a * dd - b * b};
     const V det = a * adj[0] + b * adj[1] + c * adj[2];
     for (int i = 0; i < 6; ++i) put(out.rolling_mass[i], l0, keep(det > zero, adj[i] / det / unit));
@@ -1000,7 +1010,8 @@ void refresh_scalar(const RefreshInput& in, RefreshOutput& out, int lanes) {
 // by body) made again from the world inverse inertias `inv_inertia` (by body): up to kLanes
 // of them at a time gathered into a RefreshInput, computed, and put back lane by lane.
 template <class B>
-void refresh_blocks(SimdPath simd, B* blocks, std::size_t count, const std::uint8_t* refreshed, const Mat3* inv_inertia) {
+void refresh_blocks(SimdPath simd, B* blocks, std::size_t count, const std::uint8_t* refreshed,
+                    const Mat3* inv_inertia) {
   constexpr int P = B::kPoints;
   RefreshInput in{};  // (zeros in the lanes past the last gathered: their results are not put back)
   RefreshOutput out;

@@ -205,8 +205,10 @@ PBA_LANES void transpose(v8f r[8]) { pba::detail::lanes::transpose8x8(r); }
 PBA_LANES void transpose(v16f r[8]) {
   v16f t[8], u[8];
   for (int i = 0; i < 4; ++i) {
-    t[2 * i] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v16i{0, 16, 2, 18, 4, 20, 6, 22, 8, 24, 10, 26, 12, 28, 14, 30});
-    t[2 * i + 1] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v16i{1, 17, 3, 19, 5, 21, 7, 23, 9, 25, 11, 27, 13, 29, 15, 31});
+    t[2 * i] =
+        __builtin_shuffle(r[2 * i], r[2 * i + 1], v16i{0, 16, 2, 18, 4, 20, 6, 22, 8, 24, 10, 26, 12, 28, 14, 30});
+    t[2 * i + 1] =
+        __builtin_shuffle(r[2 * i], r[2 * i + 1], v16i{1, 17, 3, 19, 5, 21, 7, 23, 9, 25, 11, 27, 13, 29, 15, 31});
   }
   constexpr int kFirst[4] = {0, 1, 4, 5};
   for (const int i : kFirst) {
@@ -257,8 +259,8 @@ PBA_LANES void load_rows(const double* base, const std::uint32_t* index, V out[8
     transpose(out);
   } else {
     for (int i = 0; i < 8; ++i)
-      out[i] = __builtin_shufflevector(row_floats(base, index[i]), row_floats(base, index[i + 8]), 0, 1, 2, 3, 4, 5, 6, 7,
-                                       8, 9, 10, 11, 12, 13, 14, 15);
+      out[i] = __builtin_shufflevector(row_floats(base, index[i]), row_floats(base, index[i + 8]), 0, 1, 2, 3, 4, 5, 6,
+                                       7, 8, 9, 10, 11, 12, 13, 14, 15);
     transpose(out);
   }
 }
@@ -438,7 +440,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     L.again().inertias(ia, ib);
     sym_mul2(ia, ta0, ta1, da);
     sym_mul2(ib, tb0, tb1, db);
-    for (int i = 0; i < 3; ++i) oa[i] = oa[i] - da[i], dwa[i] = dwa[i] - da[i], ob[i] = ob[i] + db[i], dwb[i] = dwb[i] + db[i];
+    for (int i = 0; i < 3; ++i)
+      oa[i] = oa[i] - da[i], dwa[i] = dwa[i] - da[i], ob[i] = ob[i] + db[i], dwb[i] = dwb[i] + db[i];
   };
 
   // each point's bias, mass scale and impulse scale for this pass: speculative points (apart)
@@ -539,7 +542,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     else turn2(ca[1] * sl, -(ca[0] * sl), cb[1] * sl, -(cb[0] * sl));
   };
   V before[P];
-  for (int k = 0; k < P; ++k) before[k] = L(c.impulse[k]);  // (the block's impulses are the pass's start's until the end)
+  for (int k = 0; k < P; ++k)
+    before[k] = L(c.impulse[k]);  // (the block's impulses are the pass's start's until the end)
   push(before);
   V total = zero;
   for (int k = 0; k < P; ++k) total = total + lambda[k];
@@ -590,7 +594,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     L.again().inertias(ia, ib);
     sym_mul(ia, ta, da);
     sym_mul(ib, tb, db);
-    for (int i = 0; i < 3; ++i) oa[i] = oa[i] - da[i], dwa[i] = dwa[i] - da[i], ob[i] = ob[i] + db[i], dwb[i] = dwb[i] + db[i];
+    for (int i = 0; i < 3; ++i)
+      oa[i] = oa[i] - da[i], dwa[i] = dwa[i] - da[i], ob[i] = ob[i] + db[i], dwb[i] = dwb[i] + db[i];
     // (whether the friction's change moved the bodies more than gravity does in a substep)
     const V dv = msum * msum * (e0 * e0 + e1 * e1);
     return dv > splat<V>(p.carry_speed) * splat<V>(p.carry_speed);
@@ -646,7 +651,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       for (int k = 0; k < P; ++k) total = total + lambda[k];
       if (it < p.sweeps) friction();
     }
-    for (int k = 0; k < P; ++k) lambda[k] = impact ? lambda[k] : keep_l[k], largest[k] = impact ? largest[k] : keep_big[k];
+    for (int k = 0; k < P; ++k)
+      lambda[k] = impact ? lambda[k] : keep_l[k], largest[k] = impact ? largest[k] : keep_big[k];
     for (int i = 0; i < 3; ++i) {
       oa[i] = impact ? oa[i] : keep_o[i], ob[i] = impact ? ob[i] : keep_o[3 + i];
       dwa[i] = impact ? dwa[i] : keep_o[6 + i], dwb[i] = impact ? dwb[i] : keep_o[9 + i];
@@ -668,7 +674,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     const V e = j - old;
     constexpr int kColumn[3] = {2, 4, 5};
     const auto F = L.again();
-    for (int i = 0; i < 3; ++i) dwa[i] = dwa[i] - e * F(F.c.ia[kColumn[i]]), dwb[i] = dwb[i] + e * F(F.c.ib[kColumn[i]]);
+    for (int i = 0; i < 3; ++i)
+      dwa[i] = dwa[i] - e * F(F.c.ia[kColumn[i]]), dwb[i] = dwb[i] + e * F(F.c.ib[kColumn[i]]);
   }
   // a one-point lane's rolling resistance, right after its friction (RigidContacts::roll's
   // arithmetic in the frame): an angular impulse against the relative turning, up to rolling *
@@ -732,7 +739,8 @@ template <class V, int kMode, bool kZmm, class B>
   solve<V, kMode, kZmm, B, true>(L, p, r);
 }
 template <class V, int kMode, bool kZmm, class B>
-[[gnu::noinline]] __attribute__((target("avx512f"))) void solve_rounds_avx512(const Lanes<V, B>& L, const FloatParams& p,
+[[gnu::noinline]] __attribute__((target("avx512f"))) void solve_rounds_avx512(const Lanes<V, B>& L,
+                                                                              const FloatParams& p,
                                                                               const BodyArrays& r) {
   solve<V, kMode, kZmm, B, true>(L, p, r);
 }
@@ -923,7 +931,8 @@ __attribute__((target("avx2"))) void pass_avx2(B* blocks, const AnchorsOf<B::kPo
   pass_any<v8f, v4d>(blocks, anchors, first, last, p, r);
 }
 template <class B>
-__attribute__((target("avx512f"))) void warm_avx512(B* blocks, std::size_t first, std::size_t last, const BodyArrays& r) {
+__attribute__((target("avx512f"))) void warm_avx512(B* blocks, std::size_t first, std::size_t last,
+                                                    const BodyArrays& r) {
   warm_blocks<v16f>(blocks, first, last, r);
 }
 template <class B>
@@ -1111,7 +1120,8 @@ void solve_colored(SimdPath path, OnePointBlock* blocks, OnePointAnchors* anchor
   solve_colored_of(path, blocks, anchors, first, last, p, bodies);
 }
 
-void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p, const BodyArrays& bodies) {
+void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p,
+                const BodyArrays& bodies) {
   const FloatParams q(p);
   if (!p.bias) pass<float, double, kRelax>(block, anchors, lane, q, bodies);
   else if (p.soft) pass<float, double, kSoft>(block, anchors, lane, q, bodies);
@@ -1125,7 +1135,9 @@ void warm_colored(SimdPath path, OnePointBlock* blocks, std::size_t first, std::
   warm_colored_of(path, blocks, first, last, bodies);
 }
 
-void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies) { warm<float, false>(Lanes<float>{block, lane}, bodies); }
+void warm_lane(ContactBlock& block, int lane, const BodyArrays& bodies) {
+  warm<float, false>(Lanes<float>{block, lane}, bodies);
+}
 
 void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* anchors, std::size_t first,
                         std::size_t last, const BodyArrays& bodies) {

@@ -393,7 +393,8 @@ struct RigidContacts {
   /// Proxy q's shape's world pose (m, unit quaternion) at the poses of this step's start: shape
   /// k of dense body i (q's). Poses that change after update() (the solver's) are not seen.
   const Pose& shape_pose(const RigidBodySystem& s, std::uint32_t q, std::uint32_t i, std::uint32_t k) {
-    if (shape_pose_stamp[q] != stamp) shape_poses[q] = compose(s.body_pose(i), s.shapes_[i][k].local), shape_pose_stamp[q] = stamp;
+    if (shape_pose_stamp[q] != stamp)
+      shape_poses[q] = shape_frame(s.body_pose(i), s.shapes_[i][k].local), shape_pose_stamp[q] = stamp;
     return shape_poses[q];
   }
   void settle(std::uint32_t record);

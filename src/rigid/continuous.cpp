@@ -221,7 +221,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     };
     // the path's bounds in the frame of a mesh posed at pb
     auto mesh_box = [&](const Pose& pb) {
-      return bounds(ColliderShape::box(0.5 * (path.hi - path.lo)), compose(inverse(pb), Pose{0.5 * (path.hi + path.lo)}));
+      return bounds(ColliderShape::box(0.5 * (path.hi - path.lo)),
+                    compose(inverse(pb), Pose{0.5 * (path.hi + path.lo)}));
     };
     for (const std::uint32_t k : statics) {
       const ShapeProxy& other = proxies[k];
@@ -257,7 +258,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       } else if (sb.shape.is_convex()) {
         const ConvexProxy pbx = ConvexProxy::of(sb.shape, pb);
         auto gap_at = [&](double t) {
-          const DistanceResult r = gjk_distance(ConvexProxy::of(core_ball, Pose{core.c0 + t * (core.c1 - core.c0)}), pbx);
+          const DistanceResult r =
+              gjk_distance(ConvexProxy::of(core_ball, Pose{core.c0 + t * (core.c1 - core.c0)}), pbx);
           return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
         };
         core_against(gap_at);
@@ -275,7 +277,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
           if ((h0 > clear && h1 > clear) || (h0 < -clear && h1 < -clear)) return;
           const ConvexProxy piece{.type = ShapeType::Mesh, .triangle = corners, .pose = pb};
           core_against([&](double t) {
-            const DistanceResult r = gjk_distance(ConvexProxy::of(core_ball, Pose{core.c0 + t * (core.c1 - core.c0)}), piece);
+            const DistanceResult r =
+                gjk_distance(ConvexProxy::of(core_ball, Pose{core.c0 + t * (core.c1 - core.c0)}), piece);
             return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
           });
         });
@@ -333,7 +336,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
               // edge between its triangles. The plane is never farther than the triangle, so
               // the advance stays safe
               if (internal_feature(corners, apply_inverse(pb, r.point_b), flags)) {
-                const Vec3 centre = sa.shape.type == ShapeType::Hull ? apply(pa, sa.shape.hull->centroid()) : pa.position;
+                const Vec3 centre =
+                    sa.shape.type == ShapeType::Hull ? apply(pa, sa.shape.hull->centroid()) : pa.position;
                 const Vec3 n = glm::dot(centre - corner, face) >= 0 ? face : -face;
                 const Vec3 low = apply(pa, support(sa.shape, glm::conjugate(pa.rotation) * -n));
                 return Gap{glm::dot(n, low - corner), -n};

@@ -143,7 +143,8 @@ PBA_LANES void rows4(const double* p, const int m[4], v8d out[4]) {
   for (int k = 0; k < 4; ++k) {
     const long j = m[k];
     const v8l pick{j, j + 4, j + 8, j + 12, 0, 0, 0, 0};
-    out[k] = __builtin_shuffle(__builtin_shuffle(a, b, pick), __builtin_shuffle(c, d, pick), v8l{0, 1, 2, 3, 8, 9, 10, 11});
+    out[k] =
+        __builtin_shuffle(__builtin_shuffle(a, b, pick), __builtin_shuffle(c, d, pick), v8l{0, 1, 2, 3, 8, 9, 10, 11});
   }
 }
 
@@ -158,9 +159,12 @@ constexpr int kQuatAt[4] = {3, 0, 1, 2};
 // ... and back: 8 consecutive Vec3 from their x, y, z
 PBA_LANES void unrows3(double* p, const v8d in[3]) {
   const v8d &x = in[0], &y = in[1], &z = in[2];
-  store<v8d>(p, __builtin_shuffle(__builtin_shuffle(x, y, v8l{0, 8, 0, 1, 9, 0, 2, 10}), z, v8l{0, 1, 8, 3, 4, 9, 6, 7}));
-  store<v8d>(p + 8, __builtin_shuffle(__builtin_shuffle(x, y, v8l{0, 3, 11, 0, 4, 12, 0, 5}), z, v8l{10, 1, 2, 11, 4, 5, 12, 7}));
-  store<v8d>(p + 16, __builtin_shuffle(__builtin_shuffle(x, y, v8l{13, 0, 6, 14, 0, 7, 15, 0}), z, v8l{0, 13, 2, 3, 14, 5, 6, 15}));
+  store<v8d>(p,
+             __builtin_shuffle(__builtin_shuffle(x, y, v8l{0, 8, 0, 1, 9, 0, 2, 10}), z, v8l{0, 1, 8, 3, 4, 9, 6, 7}));
+  store<v8d>(p + 8, __builtin_shuffle(__builtin_shuffle(x, y, v8l{0, 3, 11, 0, 4, 12, 0, 5}), z,
+                                      v8l{10, 1, 2, 11, 4, 5, 12, 7}));
+  store<v8d>(p + 16, __builtin_shuffle(__builtin_shuffle(x, y, v8l{13, 0, 6, 14, 0, 7, 15, 0}), z,
+                                       v8l{0, 13, 2, 3, 14, 5, 6, 15}));
 }
 
 // 8 consecutive 4-double records whose memory offset m[k] holds in[k]
@@ -181,8 +185,10 @@ PBA_LANES void unrows4(double* p, const int m[4], const v8d in[4]) {
 template <class Store>
 PBA_LANES void store_twice(const std::uint32_t* idx, int n, const v16d* in, Store store8) {
   v8d lo[8], hi[8];
-  for (int k = 0; k < n; ++k)
-    std::memcpy(&lo[k], &in[k], sizeof(v8d)), std::memcpy(&hi[k], reinterpret_cast<const char*>(&in[k]) + sizeof(v8d), sizeof(v8d));
+  for (int k = 0; k < n; ++k) {
+    std::memcpy(&lo[k], &in[k], sizeof(v8d));
+    std::memcpy(&hi[k], reinterpret_cast<const char*>(&in[k]) + sizeof(v8d), sizeof(v8d));
+  }
   store8(idx, lo);
   store8(idx + 8, hi);
 }
@@ -193,8 +199,10 @@ PBA_LANES void load_twice(const std::uint32_t* idx, int n, v16d* out, Load load8
   v8d lo[8], hi[8];
   load8(idx, lo);
   load8(idx + 8, hi);
-  for (int k = 0; k < n; ++k)
-    std::memcpy(&out[k], &lo[k], sizeof(v8d)), std::memcpy(reinterpret_cast<char*>(&out[k]) + sizeof(v8d), &hi[k], sizeof(v8d));
+  for (int k = 0; k < n; ++k) {
+    std::memcpy(&out[k], &lo[k], sizeof(v8d));
+    std::memcpy(reinterpret_cast<char*>(&out[k]) + sizeof(v8d), &hi[k], sizeof(v8d));
+  }
 }
 
 template <class V>
@@ -379,9 +387,12 @@ PBA_LANES void subflow(double half_time, const V inv[3], V q[4], V pi[3]) {
   const V c = 1.0 - 2.0 * hs * hs, sn = 2.0 * hs * hc;
   // the body turns by +angle about its axis K: q (cos(angle/2), sin(angle/2) e_K)
   const V qw = q[0], qx = q[1], qy = q[2], qz = q[3];
-  if constexpr (K == 0) q[0] = qw * hc - qx * hs, q[1] = qw * hs + qx * hc, q[2] = qy * hc + qz * hs, q[3] = qz * hc - qy * hs;
-  if constexpr (K == 1) q[0] = qw * hc - qy * hs, q[1] = qx * hc - qz * hs, q[2] = qw * hs + qy * hc, q[3] = qz * hc + qx * hs;
-  if constexpr (K == 2) q[0] = qw * hc - qz * hs, q[1] = qx * hc + qy * hs, q[2] = qy * hc - qx * hs, q[3] = qw * hs + qz * hc;
+  if constexpr (K == 0)
+    q[0] = qw * hc - qx * hs, q[1] = qw * hs + qx * hc, q[2] = qy * hc + qz * hs, q[3] = qz * hc - qy * hs;
+  if constexpr (K == 1)
+    q[0] = qw * hc - qy * hs, q[1] = qx * hc - qz * hs, q[2] = qw * hs + qy * hc, q[3] = qz * hc + qx * hs;
+  if constexpr (K == 2)
+    q[0] = qw * hc - qz * hs, q[1] = qx * hc + qy * hs, q[2] = qy * hc - qx * hs, q[3] = qw * hs + qz * hc;
   // its momentum, seen from the body, by -angle
   constexpr int a = (K + 1) % 3, b = (K + 2) % 3;
   const V pa = pi[a], pb = pi[b];
@@ -558,12 +569,14 @@ PBA_LANES void positions_kind(FreeRotation kind, const std::uint32_t* idx, std::
 __attribute__((target("avx512f"))) bool velocities_avx512(bool round, const std::uint32_t* idx, std::size_t count,
                                                          const FreeMotionArrays& f, double h, const Vec3& g,
                                                          std::uint32_t* bad) {
-  return round ? velocities_all<v8d, true>(idx, count, f, h, g, bad) : velocities_all<v8d, false>(idx, count, f, h, g, bad);
+  return round ? velocities_all<v8d, true>(idx, count, f, h, g, bad)
+               : velocities_all<v8d, false>(idx, count, f, h, g, bad);
 }
 __attribute__((target("avx2"))) bool velocities_avx2(bool round, const std::uint32_t* idx, std::size_t count,
                                                     const FreeMotionArrays& f, double h, const Vec3& g,
                                                     std::uint32_t* bad) {
-  return round ? velocities_all<v4d, true>(idx, count, f, h, g, bad) : velocities_all<v4d, false>(idx, count, f, h, g, bad);
+  return round ? velocities_all<v4d, true>(idx, count, f, h, g, bad)
+               : velocities_all<v4d, false>(idx, count, f, h, g, bad);
 }
 __attribute__((target("avx512f"))) void positions_avx512(FreeRotation kind, const std::uint32_t* idx,
                                                         std::size_t count, const FreeMotionArrays& f, double h) {

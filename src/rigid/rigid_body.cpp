@@ -243,7 +243,8 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
   for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_, &rest_com_})
     v->reserve(n);
   for (auto* v : {&q_, &principal_, &q0_, &rest_q_}) v->reserve(n);
-  for (auto* v : {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_, &sleep_time_, &island_slow_, &extent_, &min_extent_})
+  for (auto* v :
+       {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_, &sleep_time_, &island_slow_, &extent_, &min_extent_})
     v->reserve(n);
   for (auto* v : {&island_, &parent_}) v->reserve(n);
   asleep_.reserve(n);
@@ -338,9 +339,10 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
       if (def.mass) throw;
       // from the shapes, the number alone does not say what to change (a 1e-9 m ball's
       // moment, 7e-43 kg m^2, named no size): say it is the shapes' size or density
-      throw Error(std::string(e.what()) +
-                  ": the shapes' sizes and densities make the body too small or light, or too large or heavy, "
-                  "for the contact solver's float rows (scale the shapes or the density, or give the mass and inertia)");
+      throw Error(
+          std::string(e.what()) +
+          ": the shapes' sizes and densities make the body too small or light, or too large or heavy, "
+          "for the contact solver's float rows (scale the shapes or the density, or give the mass and inertia)");
     }
     inv = 1.0 / moments;
     inv_mass = 1.0 / m.mass;
@@ -407,7 +409,8 @@ void RigidBodySystem::destroy(RigidBodyId id) {
   };
   fill(type_), fill(com_), fill(q_), fill(v_), fill(w_), fill(force_), fill(torque_), fill(inv_mass_);
   fill(inv_inertia_), fill(inertia_), fill(lin_damp_), fill(ang_damp_), fill(gravity_scale_);
-  fill(com_local_), fill(principal_), fill(name_), fill(bullet_), fill(extent_), fill(min_extent_), fill(shapes_), fill(com0_), fill(q0_);
+  fill(com_local_), fill(principal_), fill(name_), fill(bullet_), fill(extent_), fill(min_extent_), fill(shapes_);
+  fill(com0_), fill(q0_);
   fill(asleep_), fill(sleep_time_), fill(island_), fill(parent_), fill(island_slow_), fill(rest_com_), fill(rest_q_);
   const std::uint32_t moved = owner_[last];
   owner_[i] = moved;
@@ -440,9 +443,15 @@ Pose RigidBodySystem::pose(RigidBodyId id) const {
   return body_pose(index(id, "RigidBodySystem::pose"));
 }
 
-Vec3 RigidBodySystem::center_of_mass(RigidBodyId id) const { return com_[index(id, "RigidBodySystem::center_of_mass")]; }
-Vec3 RigidBodySystem::linear_velocity(RigidBodyId id) const { return v_[index(id, "RigidBodySystem::linear_velocity")]; }
-Vec3 RigidBodySystem::angular_velocity(RigidBodyId id) const { return w_[index(id, "RigidBodySystem::angular_velocity")]; }
+Vec3 RigidBodySystem::center_of_mass(RigidBodyId id) const {
+  return com_[index(id, "RigidBodySystem::center_of_mass")];
+}
+Vec3 RigidBodySystem::linear_velocity(RigidBodyId id) const {
+  return v_[index(id, "RigidBodySystem::linear_velocity")];
+}
+Vec3 RigidBodySystem::angular_velocity(RigidBodyId id) const {
+  return w_[index(id, "RigidBodySystem::angular_velocity")];
+}
 BodyType RigidBodySystem::type(RigidBodyId id) const { return type_[index(id, "RigidBodySystem::type")]; }
 const std::string& RigidBodySystem::name(RigidBodyId id) const { return name_[index(id, "RigidBodySystem::name")]; }
 
@@ -491,17 +500,19 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   const bool fixed = type_[i] != BodyType::Dynamic;
   Aabb reach{Vec3(std::numeric_limits<double>::infinity()), Vec3(-std::numeric_limits<double>::infinity())};
   if (fixed)
-    for (const RigidShapeDef& d : shapes_[i]) reach = reach.merged(bounds(d.shape, compose(body_pose(i), d.local)));
+    for (const RigidShapeDef& d : shapes_[i])
+      reach = reach.merged(bounds(d.shape, detail::shape_frame(body_pose(i), d.local)));
   com_[i] = apply(pose, com_local_[i]);
   q_[i] = glm::normalize(pose.rotation * principal_[i]);
   wake_island(i);
   if (!fixed) return;
-  for (const RigidShapeDef& d : shapes_[i]) reach = reach.merged(bounds(d.shape, compose(body_pose(i), d.local)));
+  for (const RigidShapeDef& d : shapes_[i])
+    reach = reach.merged(bounds(d.shape, detail::shape_frame(body_pose(i), d.local)));
   reach = reach.grown(settings_.speculative_distance);
   for (std::size_t k = 0; k < type_.size(); ++k) {
     if (!asleep_[k]) continue;
     for (const RigidShapeDef& d : shapes_[k])
-      if (reach.overlaps(bounds(d.shape, compose(body_pose(k), d.local)))) {
+      if (reach.overlaps(bounds(d.shape, detail::shape_frame(body_pose(k), d.local)))) {
         wake_island(k);
         break;
       }
@@ -613,7 +624,8 @@ void RigidBodySystem::integrate_positions(double h, detail::SolverBody* rows, do
   const detail::RigidContacts& c = *contacts_;
   const detail::FreeMotionArrays f = free_motion(rows, nullptr, motion);
   for (std::size_t k = 0; k < c.moving.size(); ++k)
-    detail::integrate_positions_wide(c.simd, static_cast<detail::FreeRotation>(k), c.moving[k].data(), c.moving[k].size(), f, h);
+    detail::integrate_positions_wide(c.simd, static_cast<detail::FreeRotation>(k), c.moving[k].data(),
+                                     c.moving[k].size(), f, h);
   // kinematic bodies (listed by step()): constant velocities, exact translation and rotation
   for (const std::uint32_t i : c.kinematic) {
     const Vec3 v = rows ? get3(rows[i].v) : v_[i], w = rows ? get3(rows[i].w) : w_[i];
@@ -663,7 +675,8 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   for (std::size_t i = 0; i < n; ++i) {
     if (type_[i] == BodyType::Kinematic) contacts_->kinematic.push_back(static_cast<std::uint32_t>(i));
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
-    contacts_->moving[static_cast<std::size_t>(detail::free_rotation(inertia_[i]))].push_back(static_cast<std::uint32_t>(i));
+    contacts_->moving[static_cast<std::size_t>(detail::free_rotation(inertia_[i]))].push_back(
+        static_cast<std::uint32_t>(i));
     damped = damped || lin_damp_[i] != 0 || ang_damp_[i] != 0;
   }
   contacts_->moving_damped = damped;
@@ -906,7 +919,7 @@ std::vector<Aabb> RigidBodySystem::shape_bounds(RigidBodyId id) const {
   const Pose body = body_pose(i);
   std::vector<Aabb> out;
   for (const RigidShapeDef& d : shapes_[i])
-    out.push_back(bounds(d.shape, compose(body, d.local)));
+    out.push_back(bounds(d.shape, detail::shape_frame(body, d.local)));
   return out;
 }
 

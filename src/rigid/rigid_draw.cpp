@@ -41,7 +41,7 @@ void RigidBodySystem::draw_shapes(DebugDraw& draw, std::size_t i, Color c, const
   for (const RigidShapeDef& d : shapes_[i]) {
     Collider shape;
     shape.shape = d.shape;
-    shape.begin = shape.end = compose(body, d.local);
+    shape.begin = shape.end = detail::shape_frame(body, d.local);
     if (d.shape.type == ShapeType::Plane) {
       // a plane through the body's frame, drawn `plane_half_size` wide
       if (!flags.shapes) continue;

@@ -171,7 +171,8 @@ struct PassParams {
   bool soft = true;          // soft contacts (false: rigid, Baumgarte)
   bool update_sep = false;   // first measure the separations at the poses now (a relax pass after the positions moved)
   bool warm_next = false;    // then add the impulses to the warm-start accumulators for the next substep
-  double carry_speed = 0;    // |g| h (m/s), the velocity gravity gives in a substep: cap_carry, and a landing while sliding
+  double carry_speed = 0;    // |g| h (m/s), the velocity gravity gives in a substep: cap_carry, and a landing
+                             // while sliding
   bool cap_carry = false;    // with update_sep: cap each point's carried impulse (contact_wide.cpp, pass())
 };
 
@@ -222,12 +223,13 @@ enum class SimdPath : std::uint8_t { Scalar, Avx2, Avx512 };
 SimdPath best_simd_path();
 
 /// One pass over the coloured blocks [first, last) on `path`: each block's lanes together (no
-/// lane shares a dynamic body with another; anchors[i] goes with blocks[i]). With p.update_sep the separations are measured
-/// first, with p.warm_next the impulses are added to the warm-start accumulators after.
+/// lane shares a dynamic body with another; anchors[i] goes with blocks[i]). With p.update_sep the separations are
+/// measured first, with p.warm_next the impulses are added to the warm-start accumulators after.
 void solve_colored(SimdPath path, ContactBlock* blocks, AnchorBlock* anchors, std::size_t first, std::size_t last,
                    const PassParams& p, const BodyArrays& bodies);
 /// The same for one lane (scalar): the overflow, lane by lane in order.
-void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p, const BodyArrays& bodies);
+void solve_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const PassParams& p,
+                const BodyArrays& bodies);
 /// Adds the accumulated impulses of the coloured blocks [first, last) to the warm-start accumulators.
 void warm_colored(SimdPath path, ContactBlock* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies);
 /// The same for one lane (scalar).

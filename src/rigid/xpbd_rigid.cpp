@@ -157,8 +157,9 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
   // static friction: the tangential motion in the substep of the material points at the
   // centroid (material_motion); twist: the relative turn about the normal since the substep
   // began
-  const Vec3 moved = material_motion(*b.com, x_start[c.b], *b.q, q_start[c.b], *b.w, q_free[c.b], h, core_b, cb - core_b) -
-                     material_motion(*a.com, x_start[c.a], *a.q, q_start[c.a], *a.w, q_free[c.a], h, core_a, ca - core_a);
+  const Vec3 moved =
+      material_motion(*b.com, x_start[c.b], *b.q, q_start[c.b], *b.w, q_free[c.b], h, core_b, cb - core_b) -
+      material_motion(*a.com, x_start[c.a], *a.q, q_start[c.a], *a.w, q_free[c.a], h, core_a, ca - core_a);
   const Vec3 tangent[2] = {c.t1, c.t2};
   for (int d = 0; d < 2; ++d) {
     la[n + d] = lb[n + d] = tangent[d];
@@ -199,7 +200,8 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
     for (int j = 0; j < n; ++j) {
       // a point apart (C > 0) stays at its lower bound unless the others would push it in
       const double kk = k[j][j] + alpha;
-      if (kk > 0) lambda[j] = std::max(lambda[j] - (residual(j) + alpha * (x.normal[j] + lambda[j])) / kk, -x.normal[j]);
+      if (kk > 0)
+        lambda[j] = std::max(lambda[j] - (residual(j) + alpha * (x.normal[j] + lambda[j])) / kk, -x.normal[j]);
       total += x.normal[j] + lambda[j];
     }
     if (!friction || total == 0) continue;
@@ -370,7 +372,8 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
         const Vec3 vt = dv - glm::dot(dv, c.normal) * c.normal;
         const double speed = glm::length(vt);
         Vec3 next = sliding;
-        if (speed > 0) next -= (speed * effective_mass(a.inv_mass, b.inv_mass, ia, ib, ca, cb, vt / speed)) * (vt / speed);
+        if (speed > 0)
+          next -= (speed * effective_mass(a.inv_mass, b.inv_mass, ia, ib, ca, cb, vt / speed)) * (vt / speed);
         const double len = glm::length(next);
         if (len > limit) next *= limit / len;
         apply(a, b, ia, ib, ca, cb, next - sliding);

@@ -66,7 +66,8 @@ class Node {
     std::string name = str("name", "");
     if (name.empty()) return name;
     const auto [it, fresh] = ctx_.names.try_emplace(name, path_);
-    if (!fresh) at("name").fail("\"" + name + "\" is already the name of " + it->second + " (entity names must be unique)");
+    if (!fresh)
+      at("name").fail("\"" + name + "\" is already the name of " + it->second + " (entity names must be unique)");
     return name;
   }
   Node at(const char* key) const {

@@ -29,10 +29,12 @@ void read_emitter(const Node& n, World& w) {
   EmitterDef d;
   d.direction = n.nonzero_vec("direction", d.direction);
   if (n.has("spread") && n.has("spread_deg")) n.at("spread").fail("give either spread or spread_deg");
-  d.spread = n.has("spread_deg") ? n.in_range("spread_deg", 0, 180, 0) * kPi / 180 : n.in_range("spread", 0, kPi, d.spread);
+  d.spread =
+      n.has("spread_deg") ? n.in_range("spread_deg", 0, 180, 0) * kPi / 180 : n.in_range("spread", 0, kPi, d.spread);
   d.speed = n.float_non_negative("speed", d.speed);
   d.speed_jitter = n.in_range("speed_jitter", 0, 1, d.speed_jitter);
-  if (n.has("speed")) require_particle_speed(d.speed * (1 + d.speed_jitter), n.at("speed").where() + " (with its jitter)");
+  if (n.has("speed"))
+    require_particle_speed(d.speed * (1 + d.speed_jitter), n.at("speed").where() + " (with its jitter)");
   d.rate = n.non_negative("rate", d.rate);
   d.lifetime = n.positive("lifetime", d.lifetime);
   d.lifetime_jitter = n.in_range("lifetime_jitter", 0, 0.999, d.lifetime_jitter);
@@ -63,7 +65,8 @@ void read_forcer(const Node& n, World& w) {
   if (n.has("half_extents")) {
     f.half_extents = n.at("half_extents").vec3();
     for (int i = 0; i < 3; ++i)
-      if (!(f.half_extents[i] > 0)) n.at("half_extents").item(i).fail("must be > 0, got " + format_value(f.half_extents[i]));
+      if (!(f.half_extents[i] > 0))
+        n.at("half_extents").item(i).fail("must be > 0, got " + format_value(f.half_extents[i]));
   }
   f.radius = n.positive("radius", f.radius);
   f.half_height = n.positive("half_height", f.half_height);

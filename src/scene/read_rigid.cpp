@@ -7,10 +7,11 @@
 namespace pba::scene_detail {
 
 void read_rigid_settings(const Node& n, RigidSystemDef& def) {
-  n.allow_only({"solver", "substeps", "auto_substeps", "auto_substeps_sag", "auto_substeps_sag_fraction", "auto_substeps_least", "iterations", "substep_iterations", "relax_iterations", "manifold_iterations",
-                "contact_hertz", "damping_ratio", "push_out_speed", "baumgarte", "contact_compliance", "linear_slop", "speculative_distance", "restitution_threshold",
-                "friction_mix", "restitution_mix", "warm_starting", "sleep", "sleep_linear", "sleep_angular",
-                "time_to_sleep", "capacity"});
+  n.allow_only({"solver", "substeps", "auto_substeps", "auto_substeps_sag", "auto_substeps_sag_fraction",
+                "auto_substeps_least", "iterations", "substep_iterations", "relax_iterations", "manifold_iterations",
+                "contact_hertz", "damping_ratio", "push_out_speed", "baumgarte", "contact_compliance", "linear_slop",
+                "speculative_distance", "restitution_threshold", "friction_mix", "restitution_mix", "warm_starting",
+                "sleep", "sleep_linear", "sleep_angular", "time_to_sleep", "capacity"});
   ContactSettings& c = def.contacts;
   c.solver = n.choice<RigidSolverType>(
       "solver",
@@ -32,7 +33,8 @@ void read_rigid_settings(const Node& n, RigidSystemDef& def) {
   if (n.has("substep_iterations"))
     c.substep_iterations = static_cast<int>(n.at("substep_iterations").integer(1, 100));
   if (n.has("relax_iterations")) c.relax_iterations = static_cast<int>(n.at("relax_iterations").integer(0, 100));
-  if (n.has("manifold_iterations")) c.manifold_iterations = static_cast<int>(n.at("manifold_iterations").integer(1, 16));
+  if (n.has("manifold_iterations"))
+    c.manifold_iterations = static_cast<int>(n.at("manifold_iterations").integer(1, 16));
   c.contact_hertz = n.positive("contact_hertz", c.contact_hertz);
   c.damping_ratio = n.non_negative("damping_ratio", c.damping_ratio);
   c.push_out_speed = n.positive("push_out_speed", c.push_out_speed);

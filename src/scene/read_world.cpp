@@ -159,7 +159,8 @@ void read_settings(const Node& n, WorldDef& def) {
     d.allow_only({"velocity", "gust", "gust_period", "seed"});
     f.wind.velocity = d.float_vec("velocity", f.wind.velocity);
     f.wind.gust = d.float_non_negative("gust", f.wind.gust);
-    require_particle_speed(glm::length(glm::abs(f.wind.velocity) + Vec3(f.wind.gust)), d.where() + " (velocity + gust)");
+    require_particle_speed(glm::length(glm::abs(f.wind.velocity) + Vec3(f.wind.gust)),
+                           d.where() + " (velocity + gust)");
     f.wind.gust_period = d.positive("gust_period", f.wind.gust_period);
     if (d.has("seed")) f.wind.seed = static_cast<std::uint32_t>(d.at("seed").integer(0, 0xffffffffLL));
   }

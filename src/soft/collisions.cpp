@@ -67,7 +67,8 @@ std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double) {
     for (std::size_t i = 0; i < n; ++i) {
       if (s.w[i] == 0.f) continue;
       if (c.type == ShapeType::Plane) {
-        if (nx * s.x[i] + ny * s.y[i] + nz * s.z[i] > plane_d + 1e-5f * (std::abs(s.x[i]) + std::abs(s.y[i]) + std::abs(s.z[i])))
+        if (nx * s.x[i] + ny * s.y[i] + nz * s.z[i] >
+            plane_d + 1e-5f * (std::abs(s.x[i]) + std::abs(s.y[i]) + std::abs(s.z[i])))
           continue;
       } else {
         const float dx = s.x[i] - cx, dy = s.y[i] - cy, dz = s.z[i] - cz;

@@ -184,13 +184,17 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
   // particles
   // the state is float columns: positions, velocities and inverse masses must fit a float
   constexpr double kFloatMax = std::numeric_limits<float>::max();
-  auto fits = [&](const Vec3& v) { return std::abs(v.x) <= kFloatMax && std::abs(v.y) <= kFloatMax && std::abs(v.z) <= kFloatMax; };
+  auto fits = [&](const Vec3& v) {
+    return std::abs(v.x) <= kFloatMax && std::abs(v.y) <= kFloatMax && std::abs(v.z) <= kFloatMax;
+  };
   for (std::size_t i = 0; i < n; ++i) {
     if (!is_finite(m.positions[i])) require_finite(m.positions[i], idx(where, "positions", i));
     if (!fits(m.positions[i])) require_float(m.positions[i], idx(where, "positions", i));
     if (!(std::isfinite(m.masses[i]) && m.masses[i] > 0)) require_positive(m.masses[i], idx(where, "masses", i));
-    if (!std::isnormal(static_cast<float>(1 / m.masses[i]))) require_float_inverse(m.masses[i], idx(where, "masses", i));
-    if (!m.velocities.empty() && !is_finite(m.velocities[i])) require_finite(m.velocities[i], idx(where, "velocities", i));
+    if (!std::isnormal(static_cast<float>(1 / m.masses[i])))
+      require_float_inverse(m.masses[i], idx(where, "masses", i));
+    if (!m.velocities.empty() && !is_finite(m.velocities[i]))
+      require_finite(m.velocities[i], idx(where, "velocities", i));
     if (!m.velocities.empty() && !fits(m.velocities[i])) require_float(m.velocities[i], idx(where, "velocities", i));
   }
   auto check_index = [&](std::uint32_t p, std::string_view field, std::size_t k, std::string_view end) {
@@ -299,7 +303,8 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
   s.w.resize(n), s.mass.resize(n), s.pinned.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     s.x[i] = f(m.positions[i].x), s.y[i] = f(m.positions[i].y), s.z[i] = f(m.positions[i].z);
-    if (!m.velocities.empty()) s.vx[i] = f(m.velocities[i].x), s.vy[i] = f(m.velocities[i].y), s.vz[i] = f(m.velocities[i].z);
+    if (!m.velocities.empty())
+      s.vx[i] = f(m.velocities[i].x), s.vy[i] = f(m.velocities[i].y), s.vz[i] = f(m.velocities[i].z);
     s.mass[i] = m.masses[i];
     s.w[i] = f(1.0 / m.masses[i]);
   }
@@ -819,7 +824,8 @@ Vec3 SoftBody::center_of_mass() const {
 std::uint64_t SoftBody::hash(std::uint64_t seed) const {
   const Impl& s = *impl_;
   std::uint64_t h = seed;
-  for (const auto* col : {&s.x, &s.y, &s.z, &s.vx, &s.vy, &s.vz}) h = hash_span(std::span<const float>(col->data(), s.n), h);
+  for (const auto* col : {&s.x, &s.y, &s.z, &s.vx, &s.vy, &s.vz})
+    h = hash_span(std::span<const float>(col->data(), s.n), h);
   return hash_span(std::span<const std::uint8_t>(s.broken), h);
 }
 

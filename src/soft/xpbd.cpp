@@ -129,9 +129,10 @@ PBA_SOFT_INLINE void run_interleaved(int groups, float* PBA_SOFT_RESTRICT x, flo
     for (int j = 0; j < L; ++j) {
       const int a = g * 2 * L + j, b = a + L, c = g * L + j;
       float dummy = 0;
-      project<kLambda, kDamp, kRigid>(x[a], y[a], z[a], x[b], y[b], z[b], w[a], w[b], kUniform ? ru : rest[c], kLambda ? lam + c : &dummy,
-                              kDamp ? px[a] : 0.f, kDamp ? py[a] : 0.f, kDamp ? pz[a] : 0.f, kDamp ? px[b] : 0.f,
-                              kDamp ? py[b] : 0.f, kDamp ? pz[b] : 0.f, at, gamma);
+      project<kLambda, kDamp, kRigid>(x[a], y[a], z[a], x[b], y[b], z[b], w[a], w[b], kUniform ? ru : rest[c],
+                                      kLambda ? lam + c : &dummy, kDamp ? px[a] : 0.f, kDamp ? py[a] : 0.f,
+                                      kDamp ? pz[a] : 0.f, kDamp ? px[b] : 0.f, kDamp ? py[b] : 0.f,
+                                      kDamp ? pz[b] : 0.f, at, gamma);
     }
   }
 }

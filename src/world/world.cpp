@@ -22,10 +22,10 @@ RigidSystemDef validated_rigid(const RigidSystemDef& d) {
 // true when two collider definitions make the same body (shape fields and material)
 bool same_collider(const ColliderDef& a, const ColliderDef& b) {
   const ColliderShape &x = a.shape, &y = b.shape;
-  return a.sensor == b.sensor && x.type == y.type && x.normal == y.normal && x.offset == y.offset && x.radius == y.radius &&
-         x.half_extents == y.half_extents && x.half_height == y.half_height && x.hull == y.hull && x.mesh == y.mesh &&
-         x.compound == y.compound && a.material.restitution == b.material.restitution &&
-         a.material.friction == b.material.friction;
+  return a.sensor == b.sensor && x.type == y.type && x.normal == y.normal && x.offset == y.offset &&
+         x.radius == y.radius && x.half_extents == y.half_extents && x.half_height == y.half_height &&
+         x.hull == y.hull && x.mesh == y.mesh && x.compound == y.compound &&
+         a.material.restitution == b.material.restitution && a.material.friction == b.material.friction;
 }
 
 bool same_pose(const Pose& a, const Pose& b) { return a.position == b.position && a.rotation == b.rotation; }
@@ -99,7 +99,8 @@ void KinematicDef::validate(std::string_view where) const {
       break;
     case PathType::Waypoints:
       if (waypoints.size() < 2)
-        throw Error(field_path(where, "waypoints") + ": needs at least 2 points, got " + std::to_string(waypoints.size()));
+        throw Error(field_path(where, "waypoints") + ": needs at least 2 points, got " +
+                    std::to_string(waypoints.size()));
       for (std::size_t i = 0; i < waypoints.size(); ++i)
         require_finite(waypoints[i], field_path(where, "waypoints[" + std::to_string(i) + "]"));
       if (!(std::isfinite(speed) && (speed) > 0)) require_positive(speed, field_path(where, "speed"));
@@ -343,8 +344,9 @@ ParticleId World::add_particle(EntityId e, const ParticleDef& def) {
     throw Error("World::add_particle: " + describe(e) + " already has a particle");
   // the body and the particle would both simulate the entity, each writing its pose
   if (rigid_.valid(r.body))
-    throw Error("World::add_particle: " + describe(e) +
-                " has a rigid body, which moves it; a particle would move it too (give the particle an entity of its own)");
+    throw Error(
+        "World::add_particle: " + describe(e) +
+        " has a rigid body, which moves it; a particle would move it too (give the particle an entity of its own)");
   ParticleDef d = def;
   d.position = r.pose.position + r.pose.rotation * def.position;
   r.particle = particles_.create(d, "particle of " + describe(e));
@@ -407,7 +409,8 @@ KinematicId World::add_kinematic(EntityId e, const KinematicDef& def) {
                 " rigid body, which a Kinematic cannot drive (only a kinematic body follows a path)");
   def.validate("kinematic of " + describe(e));
   r.kinematic = static_cast<std::uint32_t>(kinematics_.size());
-  KinematicEntry k{e, kinematic_ids_.create(e), def, time_, r.pose, def.path == PathType::Waypoints ? waypoint_length(def) : 0.0};
+  KinematicEntry k{
+      e, kinematic_ids_.create(e), def, time_, r.pose, def.path == PathType::Waypoints ? waypoint_length(def) : 0.0};
   // waypoint and circular paths start on the path
   Vec3 v;
   const Pose p = kinematic_pose(def, r.pose, 0, &v, k.length);
@@ -768,7 +771,8 @@ void World::collide_colliders() {
   ++build_counts_.collision_builds;
   collision_.clear();
   for (std::size_t i = 0; i < world_colliders_.size(); ++i)
-    if (!colliders_[i].def.sensor) collision_.add(world_colliders_[i], colliders_[i].owner.index);  // a sensor pushes nothing
+    if (!colliders_[i].def.sensor)
+      collision_.add(world_colliders_[i], colliders_[i].owner.index);  // a sensor pushes nothing
 }
 
 bool World::systems_at(WorldStage stage) const {
@@ -955,7 +959,8 @@ void World::update_particle_touches() {
 // swap each tick, so both of a pair of sets get the same room.
 void World::reserve_touch_sets() {
   constexpr std::size_t kTouchesPerBody = 8;  // a box in a pyramid touches about 8 others and 2 share a pair
-  const std::size_t bodies = entity_bodies_ * kTouchesPerBody, particles = particle_entities_added_ * kMaxParticleContacts;
+  const std::size_t bodies = entity_bodies_ * kTouchesPerBody,
+                    particles = particle_entities_added_ * kMaxParticleContacts;
   room(bodies, touching_, touching_prev_);
   room(particles, particle_touching_);
   room(bodies + particles, touched_, touched_prev_, touch_begin_, touch_end_);
@@ -989,8 +994,8 @@ void World::update_touch_events() {
   while (i < touched_.size() || j < touched_prev_.size()) {
     if (j == touched_prev_.size() || (i < touched_.size() && touched_[i].key < touched_prev_[j].key)) {
       const TouchRecord& r = touched_[i++];
-      touch_begin_.push_back({entity(static_cast<std::uint32_t>(r.key >> 32)), entity(static_cast<std::uint32_t>(r.key)),
-                              r.normal, r.point, r.approach});
+      touch_begin_.push_back({entity(static_cast<std::uint32_t>(r.key >> 32)),
+                              entity(static_cast<std::uint32_t>(r.key)), r.normal, r.point, r.approach});
     } else if (i == touched_.size() || touched_prev_[j].key < touched_[i].key) {
       const std::uint64_t k = touched_prev_[j++].key;
       touch_end_.push_back({entity(static_cast<std::uint32_t>(k >> 32)), entity(static_cast<std::uint32_t>(k))});
@@ -1212,7 +1217,8 @@ void World::draw(DebugDraw& draw, const DrawFlags& flags) const {
   if (flags.constraints)
     for (const ConstraintEntry& c : constraints_) {
       const ParticleId pa = records_[c.owner.index].particle, pb = records_[c.def.other.index].particle;
-      if (particles_.valid(pa) && particles_.valid(pb)) draw.line(particles_.position(pa), particles_.position(pb), colors::yellow);
+      if (particles_.valid(pa) && particles_.valid(pb))
+        draw.line(particles_.position(pa), particles_.position(pb), colors::yellow);
     }
   for (const auto& s : systems_) s->draw(*this, draw, flags);
 }

@@ -24,8 +24,10 @@ const double kInf = std::numeric_limits<double>::infinity();
 
 TEST(CollideShapes, FactoriesRefuseBadValuesByName) {
   EXPECT_EQ(error_of([] { ColliderShape::sphere(0); }), "ColliderShape::sphere.radius: must be finite and > 0, got 0");
-  EXPECT_EQ(error_of([] { ColliderShape::sphere(-1); }), "ColliderShape::sphere.radius: must be finite and > 0, got -1");
-  EXPECT_EQ(error_of([] { ColliderShape::sphere(kNaN); }), "ColliderShape::sphere.radius: must be finite and > 0, got nan");
+  EXPECT_EQ(error_of([] { ColliderShape::sphere(-1); }),
+            "ColliderShape::sphere.radius: must be finite and > 0, got -1");
+  EXPECT_EQ(error_of([] { ColliderShape::sphere(kNaN); }),
+            "ColliderShape::sphere.radius: must be finite and > 0, got nan");
   EXPECT_EQ(error_of([] { ColliderShape::box({1, 0, 1}); }),
             "ColliderShape::box.half_extents.y: must be finite and > 0, got 0");
   EXPECT_EQ(error_of([] { ColliderShape::box({1, 1, -2}); }),
@@ -52,8 +54,10 @@ TEST(CollideShapes, FactoriesRefuseBadValuesByName) {
   EXPECT_EQ(error_of([] { ColliderShape::capsule(0, 1); }), "");
   ColliderShape c;
   c.type = ShapeType::Compound;
-  EXPECT_EQ(error_of([&] { c.validate("collider[3]"); }), "collider[3].compound: must not be null for a compound shape");
-  EXPECT_EQ(error_of([] { ConvexHull::box({1, 1, 0}); }), "ConvexHull::box half_extents.z: must be finite and > 0, got 0");
+  EXPECT_EQ(error_of([&] { c.validate("collider[3]"); }),
+            "collider[3].compound: must not be null for a compound shape");
+  EXPECT_EQ(error_of([] { ConvexHull::box({1, 1, 0}); }),
+            "ConvexHull::box half_extents.z: must be finite and > 0, got 0");
 }
 
 TEST(CollideShapes, PlaneIsNormalised) {
@@ -66,7 +70,8 @@ TEST(CollideShapes, CompoundRefusesPlanesMeshesAndEmptyLists) {
   EXPECT_EQ(error_of([] { CompoundShape::build({}, "table"); }),
             "table.children: a compound needs at least one child, got 0");
   EXPECT_EQ(error_of([] { CompoundShape::build({{ColliderShape::plane({0, 1, 0}, 0), {}}}, "table"); }),
-            "table.children[0].shape.type: a compound child must be a sphere, box, capsule, hull or compound, got a plane");
+            "table.children[0].shape.type: a compound child must be a sphere, box, capsule, hull or compound, "
+            "got a plane");
   ColliderShape bad_sphere;
   bad_sphere.type = ShapeType::Sphere;
   bad_sphere.radius = -1;
@@ -148,8 +153,14 @@ TEST(CollideShapes, BoundsContainTheShapeAndTouchIt) {
     }
   }
   // hulls of up to 64 vertices take every placed vertex's extremes, larger ones climb: both
-  // hold every vertex (placed as the narrow phase places it) and touch one along each axis
-  // (a pyramid of five; 100 points on a sphere, every one a vertex)
+  // hold every vertex placed as the narrow phase places it (apply(), to the bit), and touch
+  // the farthest vertex along each axis placed by another route, brute force over the vertices
+  // turned by the rotation's matrix (a pyramid of five; 100 points on a sphere, every one a
+  // vertex). The two routes round differently: each world coordinate (under 8 m here) is a few
+  // roundings from the exact one either way, each at most half an ulp (2 eps at 4-8 m), so 16
+  // roundings, 64 eps, bound their difference (seen: under 6 eps); a bound off by a rounding
+  // of its own would still pass, one grown or shrunk by 1e-13 m would not
+  const double tol = 64 * std::numeric_limits<double>::epsilon();
   std::vector<Vec3> ball;
   for (int k = 0; k < 100; ++k) {
     const double z = 1 - (2 * k + 1) / 100.0, phi = 2.399963229728653 * k;
@@ -163,18 +174,17 @@ TEST(CollideShapes, BoundsContainTheShapeAndTouchIt) {
     for (int k = 0; k < 50; ++k) {
       const Pose p{Vec3(std::uniform_real_distribution<double>(-5, 5)(rng), 1, -2), random_rotation(rng)};
       const Aabb b = bounds(s, p);
+      const Mat3 turn = glm::mat3_cast(p.rotation);
       Vec3 lo(INFINITY), hi(-INFINITY);
       for (const Vec3& v : h->vertices()) {
         const Vec3 x = apply(p, v);
-        lo = glm::min(lo, x), hi = glm::max(hi, x);
         for (int i = 0; i < 3; ++i) EXPECT_TRUE(b.lo[i] <= x[i] && x[i] <= b.hi[i]) << h->vertices().size();
+        const Vec3 y = turn * v + p.position;
+        lo = glm::min(lo, y), hi = glm::max(hi, y);
       }
-      // (the climb picks its vertex by a dot product in the hull's frame: a tie to rounding
-      // may pick the other vertex, one rounding of the world coordinate away)
-      const double tie = h->vertices().size() <= 64 ? 0.0 : 1e-12;
       for (int i = 0; i < 3; ++i) {
-        EXPECT_NEAR(b.lo[i], lo[i], tie) << h->vertices().size();
-        EXPECT_NEAR(b.hi[i], hi[i], tie) << h->vertices().size();
+        EXPECT_NEAR(b.lo[i], lo[i], tol) << h->vertices().size();
+        EXPECT_NEAR(b.hi[i], hi[i], tol) << h->vertices().size();
       }
     }
   }
@@ -280,7 +290,8 @@ TEST(CollideMass, CompoundRotatesItsChildren) {
     c.type = ShapeType::Compound;
     c.compound = CompoundShape::build({{ColliderShape::box(h), p}});
     std::vector<Vec3> corners;
-    for (int i = 0; i < 8; ++i) corners.push_back(apply(p, Vec3(i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z)));
+    for (int i = 0; i < 8; ++i)
+      corners.push_back(apply(p, Vec3(i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z)));
     const MassProperties a = mass_properties(c, 7), b = ConvexHull::build(corners)->mass_properties(7);
     EXPECT_NEAR(a.mass, b.mass, 1e-12 * b.mass);
     EXPECT_NEAR(glm::length(a.center - b.center), 0, 1e-12 * glm::length(b.center) + 1e-15);

@@ -4,6 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "pba/rigid.h"
@@ -30,6 +35,127 @@ const std::vector<pba::RigidShapeDef> kBox{{.shape = pba::ColliderShape::box(Vec
 double rel(const Vec3& a, const Vec3& b) { return glm::length(a - b) / glm::length(b); }
 
 // ---------------------------------------------------------------------------------------
+// the body and shape poses' shortcuts by identities
+
+// the bits of a pose, every component's sign of zero included
+bool same_bits(const pba::Pose& a, const pba::Pose& b) {
+  const double x[7] = {a.position.x, a.position.y, a.position.z, a.rotation.w,
+                       a.rotation.x, a.rotation.y, a.rotation.z};
+  const double y[7] = {b.position.x, b.position.y, b.position.z, b.rotation.w,
+                       b.rotation.x, b.rotation.y, b.rotation.z};
+  return std::memcmp(x, y, sizeof x) == 0;
+}
+
+// the body frame by its definition: the principal frame (com, q) times the inverse of the
+// principal frame's placement in the body frame (com_local, principal)
+pba::Pose full_body_frame(const Vec3& com, const Quat& q, const Vec3& com_local, const Quat& principal) {
+  const Quat r = glm::normalize(q * glm::conjugate(principal));
+  return {com - r * com_local, r};
+}
+
+std::string describe(const pba::Pose& p) {
+  std::ostringstream o;
+  o << std::showpos << p.position.x << ' ' << p.position.y << ' ' << p.position.z << " | " << p.rotation.w << ' '
+    << p.rotation.x << ' ' << p.rotation.y << ' ' << p.rotation.z;
+  return o.str();
+}
+
+TEST(RigidBodyPose, TheIdentityShortcutsGiveTheFullProductsBits) {
+  using pba::Pose;
+  using pba::detail::body_frame;
+  using pba::detail::shape_frame;
+  const double z[2] = {0.0, -0.0};
+  // the identity, with each sign of zero in its vector part, and a centre at (+-0, +-0, +-0)
+  std::vector<Quat> identities;
+  std::vector<Vec3> origins;
+  for (int m = 0; m < 8; ++m) {
+    identities.emplace_back(1, z[m & 1], z[(m >> 1) & 1], z[(m >> 2) & 1]);
+    origins.emplace_back(z[m & 1], z[(m >> 1) & 1], z[(m >> 2) & 1]);
+  }
+  // rotations: random ones (no zero component), turns about one axis with each sign of zero
+  // and of the cosine in the other components (a body turning about a world axis), the
+  // identity, and a half turn (w = +-0)
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal;
+  std::vector<Quat> turns;
+  for (int k = 0; k < 40; ++k)
+    turns.push_back(glm::normalize(Quat(normal(rng), normal(rng), normal(rng), normal(rng))));
+  for (const double c : {0.8, -0.8})
+    for (int axis = 0; axis < 3; ++axis)
+      for (int m = 0; m < 4; ++m) {
+        double v[3];
+        for (int i = 0, j = 0; i < 3; ++i) v[i] = i == axis ? 0.6 : z[(m >> j++) & 1];
+        turns.emplace_back(c, v[0], v[1], v[2]);
+      }
+  turns.insert(turns.end(), identities.begin(), identities.end());
+  turns.emplace_back(0.0, 0.0, 1.0, 0.0), turns.emplace_back(-0.0, 0.0, -1.0, -0.0);
+  // centres of mass: at signed zeros (a body at the origin or on a coordinate plane) and
+  // anywhere; offsets of the centre in the body frame: signed zeros and a real one
+  std::vector<Vec3> places = origins;
+  places.emplace_back(-0.0, 1.5, -0.0), places.emplace_back(3.25, -2, 0.125);
+  std::vector<Vec3> offsets = origins;
+  offsets.emplace_back(0.1, -0.2, 0.05);
+  const Quat tilted = glm::normalize(Quat(0.9, 0.1, -0.3, 0.2));
+  std::vector<Quat> principals = identities;
+  principals.push_back(tilted);
+  // (how many cases each shortcut takes: most, but not all)
+  int cases = 0, bodies_short = 0, shapes_short = 0;
+  for (const Quat& q : turns)
+    for (const Vec3& com : places)
+      for (const Vec3& off : offsets)
+        for (const Quat& pr : principals) {
+          const Pose body = body_frame(com, q, off, pr);
+          bodies_short +=
+              pr == Quat(1, 0, 0, 0) && pba::detail::positive_zero(off) && pba::detail::exact_times_identity(q);
+          ASSERT_TRUE(same_bits(body, full_body_frame(com, q, off, pr)))
+              << describe(body) << " against " << describe(full_body_frame(com, q, off, pr));
+          // a shape at the body's origin (each signed zero, turned by an identity) and one elsewhere
+          for (std::size_t m = 0; m < 10; ++m) {
+            const Pose local = m < 8 ? Pose{origins[m], identities[7 - m]}
+                                     : Pose{offsets[8], m == 8 ? Quat(1, 0, 0, 0) : tilted};
+            shapes_short += pba::detail::positive_zero(local.position) && local.rotation == Quat(1, 0, 0, 0) &&
+                            pba::detail::exact_times_identity(body.rotation);
+            ASSERT_TRUE(same_bits(shape_frame(body, local), pba::compose(body, local)))
+                << describe(shape_frame(body, local)) << " against " << describe(pba::compose(body, local));
+            ++cases;
+          }
+        }
+  EXPECT_EQ(cases, 74 * 10 * 9 * 9 * 10);
+  EXPECT_EQ(bodies_short, 40 * 10 * 8);  // the random turns, any centre, a +0 offset, an identity
+  EXPECT_GT(shapes_short, 0);
+  EXPECT_LT(shapes_short, cases / 10);
+  // the bit tests read what they say: the identity with either zero, no other quaternion; every
+  // component finite and non-zero (a subnormal refused too: it takes the full product); +0 only
+  for (const Quat& q : identities) EXPECT_TRUE(pba::detail::is_identity(q));
+  for (const Quat& q : {Quat(-1, 0, 0, 0), Quat(1, 4.9e-324, 0, 0), Quat(1, 0, 0, -1e-300), tilted})
+    EXPECT_FALSE(pba::detail::is_identity(q));
+  EXPECT_TRUE(pba::detail::exact_times_identity(Quat(-0.5, 0.5, 1e-300, -1e300)));
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  for (const double x : {0.0, -0.0, 4.9e-324, inf, -inf, nan})
+    EXPECT_FALSE(pba::detail::exact_times_identity(Quat(0.5, 0.5, x, 0.5))) << x;
+  EXPECT_TRUE(pba::detail::positive_zero(Vec3(0)));
+  for (const Vec3& v : {Vec3(-0.0, 0, 0), Vec3(0, -0.0, 0), Vec3(0, 0, -0.0), Vec3(0, 4.9e-324, 0)})
+    EXPECT_FALSE(pba::detail::positive_zero(v));
+  // the cases the shortcuts must refuse are among them; each takes another bit than the shortcut would:
+  // a turn about one axis whose zero components change sign in the product by the identity,
+  const Quat about_x(0.8, 0.6, -0.0, 0.0);
+  EXPECT_FALSE(same_bits(Pose{{}, glm::normalize(about_x)}, full_body_frame({}, about_x, Vec3(0), Quat(1, 0, 0, 0))));
+  // a centre at -0 moved to +0 by a -0 offset,
+  const Quat spun = glm::normalize(Quat(-0.5, 0.3, 0.2, -0.7));
+  const Vec3 at(-0.0, -0.0, -0.0), off(-0.0, -0.0, 0.0);
+  EXPECT_FALSE(same_bits(Pose{at, glm::normalize(spun)}, full_body_frame(at, spun, off, Quat(1, 0, 0, 0))));
+  // a body at -0 whose shape at its origin is at +0
+  const Pose body{at, spun};
+  EXPECT_FALSE(same_bits(Pose{body.position, glm::normalize(spun)}, pba::compose(body, Pose{})));
+  // and the system's shape bounds are those at compose()'s pose (a box at -0 turning about y)
+  RigidBodySystem s;
+  const auto id = s.create({.pose = {Vec3(-0.0, 2, -0.0), Quat(0.8, -0.0, 0.6, -0.0)}, .shapes = kBox});
+  const pba::Aabb made = s.shape_bounds(id)[0];
+  const pba::Aabb full = pba::bounds(kBox[0].shape, pba::compose(s.pose(id), kBox[0].local));
+  EXPECT_TRUE(std::memcmp(&made.lo, &full.lo, sizeof(Vec3)) == 0 && std::memcmp(&made.hi, &full.hi, sizeof(Vec3)) == 0);
+}
+
+// ---------------------------------------------------------------------------------------
 // gravity, damping, kinematic bodies
 
 // Semi-implicit Euler with substep h has the closed form v_n = v0 + g n h,
@@ -44,7 +170,8 @@ TEST(RigidFreeFall, MatchesTheDiscreteSolutionAndConvergesToTheParabola) {
     for (const int substeps : {1, 4}) {
       RigidBodySystem s({.contacts = {.solver = solver, .substeps = substeps, .auto_substeps = false}});
       const Vec3 x0{0, 100, 0}, v0{2, 5, -1};
-      auto b = s.create({.pose = {x0}, .linear_velocity = v0, .shapes = kBall, .mass = RigidMass::box(3, {0.5, 0.5, 0.5})});
+      auto b =
+          s.create({.pose = {x0}, .linear_velocity = v0, .shapes = kBall, .mass = RigidMass::box(3, {0.5, 0.5, 0.5})});
       const int steps = static_cast<int>(std::lround(2.0 / dt));
       for (int i = 0; i < steps; ++i) s.step(dt, kG);
       const int per_step = solver == pba::RigidSolverType::SequentialImpulse ? 1 : substeps;
@@ -52,7 +179,8 @@ TEST(RigidFreeFall, MatchesTheDiscreteSolutionAndConvergesToTheParabola) {
       const double n = static_cast<double>(steps) * per_step, t = n * h;
       const Vec3 x_discrete = x0 + v0 * t + kG * (h * h * n * (n + 1) / 2);
       const Vec3 x_exact = x0 + v0 * t + 0.5 * kG * t * t;
-      EXPECT_LT(glm::length(s.center_of_mass(b) - x_discrete), 1e-10) << to_string(solver) << " " << dt << " " << substeps;
+      EXPECT_LT(glm::length(s.center_of_mass(b) - x_discrete), 1e-10)
+          << to_string(solver) << " " << dt << " " << substeps;
       EXPECT_LT(glm::length(s.linear_velocity(b) - (v0 + kG * t)), 1e-11);
       // the error of the scheme is exactly g h t / 2 below the parabola
       EXPECT_NEAR(glm::length(s.center_of_mass(b) - x_exact), 9.81 * h * t / 2, 1e-9);
@@ -66,7 +194,8 @@ TEST(RigidFreeFall, GravityScaleAndStaticBodies) {
   auto floating = s.create({.pose = {{0, 1, 0}}, .shapes = kBall, .gravity_scale = 0});
   auto half = s.create({.pose = {{1, 1, 0}}, .shapes = kBall, .gravity_scale = 0.5});
   auto full = s.create({.pose = {{2, 1, 0}}, .shapes = kBall});
-  auto ground = s.create({.type = BodyType::Static, .pose = {{0, -1, 0}}, .linear_velocity = {1, 0, 0}, .shapes = kBall});
+  auto ground =
+      s.create({.type = BodyType::Static, .pose = {{0, -1, 0}}, .linear_velocity = {1, 0, 0}, .shapes = kBall});
   for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kG);
   EXPECT_EQ(s.center_of_mass(floating), Vec3(0, 1, 0));
   EXPECT_NEAR(s.linear_velocity(half).y, -9.81 / 2, 1e-12);
@@ -81,8 +210,12 @@ TEST(RigidFreeFall, GravityScaleAndStaticBodies) {
 TEST(RigidDamping, FollowsItsDiscreteLawAndTheExponential) {
   for (const int substeps : {1, 8, 64}) {
     RigidBodySystem s({.contacts = {.substeps = substeps, .auto_substeps = false}});
-    auto b = s.create({.linear_velocity = {4, 0, 0}, .angular_velocity = {0, 0, 3},
-                       .shapes = kBall, .mass = RigidMass::sphere(1, 0.5), .linear_damping = 2, .angular_damping = 0.5});
+    auto b = s.create({.linear_velocity = {4, 0, 0},
+                       .angular_velocity = {0, 0, 3},
+                       .shapes = kBall,
+                       .mass = RigidMass::sphere(1, 0.5),
+                       .linear_damping = 2,
+                       .angular_damping = 0.5});
     for (int i = 0; i < 60; ++i) s.step(1.0 / 60, Vec3(0));
     const double h = 1.0 / 60 / substeps, n = 60.0 * substeps;
     EXPECT_NEAR(s.linear_velocity(b).x, 4 / std::pow(1 + 2 * h, n), 1e-12);
@@ -94,7 +227,10 @@ TEST(RigidDamping, FollowsItsDiscreteLawAndTheExponential) {
 
 TEST(RigidKinematic, MovesAtItsVelocityAndTurnsExactly) {
   RigidBodySystem s;
-  auto k = s.create({.type = BodyType::Kinematic, .linear_velocity = {1, 2, 0}, .angular_velocity = {0, 0, pba::kPi}, .shapes = kBall});
+  auto k = s.create({.type = BodyType::Kinematic,
+                     .linear_velocity = {1, 2, 0},
+                     .angular_velocity = {0, 0, pba::kPi},
+                     .shapes = kBall});
   for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kG);  // gravity ignored
   const pba::Pose p = s.pose(k);
   EXPECT_LT(glm::length(p.position - Vec3(1, 2, 0)), 1e-12);
@@ -462,7 +598,8 @@ TEST(RigidBadInput, MassesAndMomentsOutsideTheFloatRangeAreRefusedByName) {
   EXPECT_NE(f.find("the shapes' sizes and densities make the body too small or light"), std::string::npos) << f;
   // a 1 nm ball of water: its mass is a normal float's inverse, its moment (4e-42) is not
   const std::string g = msg({.name = "mote", .shapes = {{.shape = pba::ColliderShape::sphere(1e-9)}}});
-  EXPECT_NE(g.find("'mote'.mass (from the shapes).principal moment 0 (kg m^2): must be in [2.9"), std::string::npos) << g;
+  EXPECT_NE(g.find("'mote'.mass (from the shapes).principal moment 0 (kg m^2): must be in [2.9"), std::string::npos)
+      << g;
   EXPECT_NE(g.find("scale the shapes or the density, or give the mass and inertia"), std::string::npos) << g;
   EXPECT_EQ(msg(given(8e37)), "");
   EXPECT_EQ(msg(given(3e-39 * 6)), "");
@@ -474,7 +611,8 @@ TEST(RigidBadInput, MassesAndMomentsOutsideTheFloatRangeAreRefusedByName) {
 // given, as scene files refuse such positions; the largest float position still steps.
 TEST(RigidBadInput, PositionsOutsideTheFloatRangeAreRefusedWhereTheyAreGiven) {
   RigidBodySystem s;
-  s.create({.name = "ground", .type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+  s.create(
+      {.name = "ground", .type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
   const std::vector<pba::RigidShapeDef> cube{{.shape = pba::ColliderShape::box({0.5, 0.5, 0.5})}};
   std::string m = error_of([&] { s.create({.name = "far", .pose = {{1e39, 0.5, 0}}, .shapes = cube}); });
   EXPECT_NE(m.find("'far'.pose.position: must fit a float"), std::string::npos) << m;
@@ -504,9 +642,10 @@ TEST(RigidMassRange, ABoxSettlesTheSameAtTheEndsOfTheMassRange) {
     const double ixx = m * (0.25 * 0.25 + 0.5 * 0.5) / 3, iyy = m * (0.5 * 0.5 + 0.5 * 0.5) / 3;
     Mat3 inertia(0.0);
     inertia[0][0] = ixx, inertia[1][1] = iyy, inertia[2][2] = ixx;
-    const auto b = s.create({.pose = {{0, 0.6, 0}, glm::angleAxis(0.2, glm::normalize(Vec3(1, 0, 1)))},
-                             .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.25, 0.5}), .material = {.friction = 0.5}}},
-                             .mass = RigidMass{m, Vec3(0), inertia}});
+    const auto b =
+        s.create({.pose = {{0, 0.6, 0}, glm::angleAxis(0.2, glm::normalize(Vec3(1, 0, 1)))},
+                  .shapes = {{.shape = pba::ColliderShape::box({0.5, 0.25, 0.5}), .material = {.friction = 0.5}}},
+                  .mass = RigidMass{m, Vec3(0), inertia}});
     for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kG);
     return s.pose(b);
   };

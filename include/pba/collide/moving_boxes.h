@@ -15,7 +15,8 @@ namespace pba {
 /// Settings of a MovingBoxes scene. Lengths in metres, speeds in m/s.
 struct MovingBoxesDef {
   int count = 1000;            ///< boxes, in [1, 10^7]
-  double side = 0;             ///< container edge (m); 0 picks 1.6 cbrt(count), as Bullet's collision benchmark does; else finite > 0
+  double side = 0;             ///< container edge (m); 0 picks 1.6 cbrt(count), as Bullet's collision benchmark
+                               ///< does; else finite > 0
   double min_half = 0.2;       ///< smallest half extent (m), finite, > 0
   double max_half = 0.5;       ///< largest half extent (m), finite, >= min_half and < side / 2
   double speed = 1.0;          ///< largest speed of a slow box per axis (m/s), finite, >= 0

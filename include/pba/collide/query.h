@@ -45,7 +45,9 @@ struct QueryPredicate {
   /// A predicate that calls `f(collider, owner)`; `f` must outlive the query.
   template <class F>
   static QueryPredicate of(const F& f) {
-    return {[](const void* c, std::uint32_t i, std::uint32_t o) { return static_cast<bool>((*static_cast<const F*>(c))(i, o)); },
+    return {[](const void* c, std::uint32_t i, std::uint32_t o) {
+              return static_cast<bool>((*static_cast<const F*>(c))(i, o));
+            },
             &f};
   }
 };
