@@ -28,7 +28,8 @@ void read_rigid_settings(const Node& n, RigidSystemDef& def) {
   c.auto_substeps_sag = n.non_negative("auto_substeps_sag", c.auto_substeps_sag);
   c.auto_substeps_sag_fraction = n.in_range("auto_substeps_sag_fraction", 0, 1, c.auto_substeps_sag_fraction);
   // the fewest substeps the lowering takes (its ladder's floor)
-  if (n.has("auto_substeps_least")) c.auto_substeps_least = static_cast<int>(n.at("auto_substeps_least").integer(1, 64));
+  if (n.has("auto_substeps_least"))
+    c.auto_substeps_least = static_cast<int>(n.at("auto_substeps_least").integer(1, 64));
   if (n.has("iterations")) c.iterations = static_cast<int>(n.at("iterations").integer(1, 1000));
   if (n.has("substep_iterations"))
     c.substep_iterations = static_cast<int>(n.at("substep_iterations").integer(1, 100));
