@@ -9,6 +9,15 @@
 
 #include "narrow_internal.h"
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+
+#include "core/lanes.h"
+#define PBA_MESH_LANES_X86 1
+#else
+#define PBA_MESH_LANES_X86 0
+#endif
+
 namespace pba {
 
 using namespace narrow;
@@ -92,12 +101,20 @@ struct PolyAt {
   // 2 * 64 - 4 faces and 3 * 64 - 6 edges (Euler), so they fit
   static constexpr std::uint32_t kFaces = 124, kEdges = 186;
   bool made = false;
+  // the edge axes four at a time in AVX2 lanes (sat_edges_avx2; the caller's choice, on a
+  // processor that has it); their inputs below are then made too
+  bool wide = false;
   std::uint32_t face_axes = 0, edge_dirs = 0;
   Vec3 face_d[kFaces];
   double face_lo[kFaces], face_hi[kFaces];
   Vec3 edge_d[kEdges];
   double edge_scale[kEdges];
   std::uint32_t edge_of[kEdges];
+  // For the lanes: edge axis q (edge direction q / 3 crossed with the triangle's edge q % 3,
+  // the scalar loop's order) takes the direction's x, y, z and scale at index q; zeros past
+  // the last axis up to a multiple of four (never read as an axis)
+  static constexpr std::uint32_t kAxes = 3 * kEdges + 2;
+  double axis_x[kAxes], axis_y[kAxes], axis_z[kAxes], axis_scale[kAxes];
 
   void set(const Poly& P, const Pose& pa) {
     for (std::uint32_t i = 0; i < P.vertex_count; ++i) v[i] = apply(pa, P.vertices[i]);
@@ -132,38 +149,125 @@ struct PolyAt {
       span(P, pa, d, face_lo[face_axes], face_hi[face_axes]);
       ++face_axes;
     }
-    bool box_direction[3] = {false, false, false};
-    Vec3 hull_local[kEdges];  // a hull's edges kept so far, in its frame
-    for (std::uint32_t e = 0; e < P.edge_count; ++e) {
+    auto add_edge = [&](std::uint32_t e) {
       const HalfEdge& he = P.edges[e];
-      if (he.twin < e) continue;  // each edge once
-      const Vec3 local = P.vertices[P.edges[he.next].origin] - P.vertices[he.origin];
-      if (P.is_box) {
-        // a box's edges run along its three axes: one of each
-        const int i = local.x != 0 ? 0 : local.y != 0 ? 1 : 2;
-        if (box_direction[i]) continue;
-        box_direction[i] = true;
-      } else {
-        // A hull's edge equal to a kept one, or its exact opposite (a square pyramid's base
-        // has two pairs: 24 edge axes a triangle become 18), gives the same axes or their
-        // exact negations: turning, crossing, projecting and the min and max all commute
-        // with a sign change (to the bit, but for the signs of zeros), so along -d the gap
-        // is the one along d. Its axes then never end the test first nor win (a later axis
-        // wins only when deeper by kEdgeBias), and the deepest edge of a direction is
-        // searched among all parallel ones below: the same result, to the bit
-        bool seen = false;
-        for (std::uint32_t j = 0; j < edge_dirs && !seen; ++j) seen = hull_local[j] == local || hull_local[j] == -local;
-        if (seen) continue;
-        hull_local[edge_dirs] = local;
-      }
-      const Vec3 ea = pa.rotation * local;
+      const Vec3 ea = pa.rotation * (P.vertices[P.edges[he.next].origin] - P.vertices[he.origin]);
       edge_d[edge_dirs] = ea;
       edge_scale[edge_dirs] = 1e-20 * glm::dot(ea, ea);
       edge_of[edge_dirs] = e;
       ++edge_dirs;
+    };
+    if (P.is_box) {
+      // a box's edges run along its three axes: the first of each
+      bool box_direction[3] = {false, false, false};
+      for (std::uint32_t e = 0; e < P.edge_count; ++e) {
+        const HalfEdge& he = P.edges[e];
+        if (he.twin < e) continue;  // each edge once
+        const Vec3 local = P.vertices[P.edges[he.next].origin] - P.vertices[he.origin];
+        const int i = local.x != 0 ? 0 : local.y != 0 ? 1 : 2;
+        if (box_direction[i]) continue;
+        box_direction[i] = true;
+        add_edge(e);
+      }
+    } else {
+      // A hull's edge equal to a kept one, or its exact opposite (a square pyramid's base
+      // has two pairs: 24 edge axes a triangle become 18), gives the same axes or their
+      // exact negations: turning, crossing, projecting and the min and max all commute
+      // with a sign change (to the bit, but for the signs of zeros), so along -d the gap
+      // is the one along d. Its axes then never end the test first nor win (a later axis
+      // wins only when deeper by kEdgeBias), and the deepest edge of a direction is
+      // searched among all parallel ones (sat_triangle's end): the same result, to the
+      // bit. The hull's setup keeps the first edge of each direction
+      // (ConvexHull::edge_directions); here a call compared each edge with those kept
+      for (const std::uint32_t e : P.hull->edge_directions()) add_edge(e);
+    }
+    if (wide) {
+      std::uint32_t q = 0;
+      for (std::uint32_t j = 0; j < edge_dirs; ++j)
+        for (int k = 0; k < 3; ++k, ++q)
+          axis_x[q] = edge_d[j].x, axis_y[q] = edge_d[j].y, axis_z[q] = edge_d[j].z, axis_scale[q] = edge_scale[j];
+      for (; q % 4 != 0; ++q) axis_x[q] = axis_y[q] = axis_z[q] = axis_scale[q] = 0;
     }
   }
 };
+
+// edge pairs win over faces only by more than rounding, so a face resting on a face keeps
+// the face's normal
+constexpr double kEdgeBias = 1e-9;
+
+// The edge axes' part of sat_triangle (its loop over at.edge_dirs and the triangle's three
+// edges) four axes at a time: every lane makes its axis, the shape's span and the gap along
+// it with the scalar loop's operations in its order (the same bits), then the lanes are
+// judged one by one in the loop's order, as it judges its axes. Returns 0 when an axis
+// separates them by more than the margin, 2 when one separates them by no more (the first
+// such axis, as the loop meets them), else 1 with the deepest axis kept in best, axis,
+// best_above, kind, edge_a and edge_b. An early end wastes the rest of its group (up to
+// three axes), which the scalar loop would not make.
+#if PBA_MESH_LANES_X86
+[[gnu::target("avx2")]] [[gnu::noinline]] int sat_edges_avx2(const Poly& P, const PolyAt& at, const Pose& pa,
+                                                             const Vec3 tri[3], const Vec3 te[3], const double tt[3],
+                                                             double margin, double& best, Vec3& axis, bool& best_above,
+                                                             Axis& kind, std::uint32_t& edge_a, std::uint32_t& edge_b) {
+  using V = detail::lanes::v4d;
+  using L = detail::lanes::v4l;
+  using detail::lanes::load;
+  using detail::lanes::splat;
+  using detail::lanes::vmax;
+  using detail::lanes::vmin;
+  // the triangle's edge k = q % 3 of axis q, for the four lanes of groups starting at q = 0,
+  // 4 and 8 (the pattern's period is 12)
+  double tx[12], ty[12], tz[12], tq[12];
+  for (int q = 0; q < 12; ++q) tx[q] = te[q % 3].x, ty[q] = te[q % 3].y, tz[q] = te[q % 3].z, tq[q] = tt[q % 3];
+  const V ax = splat<V>(tri[0].x), ay = splat<V>(tri[0].y), az = splat<V>(tri[0].z);
+  const V bx = splat<V>(tri[1].x), by = splat<V>(tri[1].y), bz = splat<V>(tri[1].z);
+  const V cx = splat<V>(tri[2].x), cy = splat<V>(tri[2].y), cz = splat<V>(tri[2].z);
+  const L no_sign = L{} + 0x7fffffffffffffffL;
+  auto vabs = [&](V x) { return reinterpret_cast<V>(reinterpret_cast<L>(x) & no_sign); };
+  const std::uint32_t count = 3 * at.edge_dirs, nv = P.vertex_count;
+  for (std::uint32_t q = 0; q < count; q += 4) {
+    const std::uint32_t r = q % 12;
+    const V ex = load<V>(at.axis_x + q), ey = load<V>(at.axis_y + q), ez = load<V>(at.axis_z + q);
+    const V gx = load<V>(tx + r), gy = load<V>(ty + r), gz = load<V>(tz + r);
+    // glm::cross(ea, te[k]), glm::dot(c, c), the parallel test, c / sqrt(cc)
+    const V kx = ey * gz - gy * ez, ky = ez * gx - gz * ex, kz = ex * gy - gx * ey;
+    const V cc = (kx * kx + ky * ky) + kz * kz;
+    const L parallel = cc <= load<V>(at.axis_scale + q) * load<V>(tq + r);
+    const V root = _mm256_sqrt_pd(cc);
+    const V dx = kx / root, dy = ky / root, dz = kz / root;
+    // the shape's span along d (PolyAt::span)
+    V lo, hi;
+    if (P.is_box) {
+      const V c = (dx * pa.position.x + dy * pa.position.y) + dz * pa.position.z;
+      const Vec3* h = at.half_axes;
+      const V w = (vabs((dx * h[0].x + dy * h[0].y) + dz * h[0].z) + vabs((dx * h[1].x + dy * h[1].y) + dz * h[1].z)) +
+                  vabs((dx * h[2].x + dy * h[2].y) + dz * h[2].z);
+      lo = c - w, hi = c + w;
+    } else {
+      lo = splat<V>(INFINITY), hi = splat<V>(-INFINITY);
+      for (std::uint32_t i = 0; i < nv; ++i) {
+        const V x = (dx * at.v[i].x + dy * at.v[i].y) + dz * at.v[i].z;
+        lo = vmin(lo, x), hi = vmax(hi, x);
+      }
+    }
+    // the gap (sat_triangle's gap_of)
+    const V t0 = (dx * ax + dy * ay) + dz * az, t1 = (dx * bx + dy * by) + dz * bz, t2 = (dx * cx + dy * cy) + dz * cz;
+    const V tlo = vmin(t0, vmin(t1, t2)), thi = vmax(t0, vmax(t1, t2));
+    const V up = lo - thi, down = tlo - hi;
+    const L above = up >= down;
+    const V g = above ? up : down;
+    const std::uint32_t lanes = std::min(4u, count - q);
+    for (std::uint32_t l = 0; l < lanes; ++l) {
+      if (parallel[l]) continue;
+      if (g[l] > margin) return 0;
+      if (g[l] > 0) return 2;
+      if (g[l] > best + kEdgeBias)
+        best = g[l], axis = Vec3(dx[l], dy[l], dz[l]), best_above = above[l] != 0, kind = Axis::Edges,
+        edge_a = at.edge_of[(q + l) / 3], edge_b = (q + l) % 3;
+    }
+  }
+  return 1;
+}
+#endif
 
 int sat_triangle(const Poly& P, PolyAt& at, const Pose& pa, const Vec3 tri[3], const Vec3& face_normal,
                  double normal_lo, double normal_hi, double margin, Vec3& n, Vec3& point_a, Vec3& point_b,
@@ -235,12 +339,16 @@ int sat_triangle(const Poly& P, PolyAt& at, const Pose& pa, const Vec3 tri[3], c
     if (g > 0) return beyond_sides() ? 0 : 2;
     if (g > best) best = g, axis = d, best_above = above, kind = Axis::Face;
   }
-  // edge pairs win over faces only by more than rounding, so a face resting on a face keeps
-  // the face's normal
-  constexpr double kEdgeBias = 1e-9;
   const Vec3 te[3] = {tri[1] - tri[0], tri[2] - tri[1], tri[0] - tri[2]};
   const double tt[3] = {glm::dot(te[0], te[0]), glm::dot(te[1], te[1]), glm::dot(te[2], te[2])};
-  for (std::uint32_t j = 0; j < at.edge_dirs; ++j) {
+#if PBA_MESH_LANES_X86
+  if (at.wide) {
+    const int r = sat_edges_avx2(P, at, pa, tri, te, tt, margin, best, axis, best_above, kind, edge_a, edge_b);
+    if (r == 0) return 0;
+    if (r == 2) return beyond_sides() ? 0 : 2;
+  }
+#endif
+  for (std::uint32_t j = 0; j < at.edge_dirs && !at.wide; ++j) {
     const Vec3& ea = at.edge_d[j];
     for (std::uint32_t k = 0; k < 3; ++k) {
       const Vec3 c = glm::cross(ea, te[k]);
@@ -539,7 +647,8 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
 }  // namespace
 
 int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
-                 std::span<Manifold> out, const NarrowPhaseSettings& settings, MeshQueryCache* cache) {
+                 std::span<Manifold> out, const NarrowPhaseSettings& settings, MeshQueryCache* cache,
+                 BatchPath path) {
   check_pose(pose_a, "collide_mesh: pose_a");
   check_pose(pose_mesh, "collide_mesh: pose_mesh");
   check_shape(a, "collide_mesh: shape_a");
@@ -570,6 +679,14 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
   if (poly) poly_of(a, P);
   if (poly && P.vertex_count <= 64) at.set(P, local);
+#if PBA_MESH_LANES_X86
+  // the edge axes in AVX2 lanes where the processor has them (AVX-512's eight lanes are not
+  // offered: a box has 9 edge axes, a square pyramid 18)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  at.wide = avx2 && path != BatchPath::Scalar;
+#else
+  (void)path;
+#endif
   const bool hull_placed = hull && P.vertex_count <= 64;
   int written = 0;
   auto visit = [&](std::uint32_t t) {
