@@ -75,6 +75,36 @@ bool core_triangle_closest(const Vec3& p, const Vec3& q, const Vec3 tri[3], cons
 // each (separating axes), or elsewhere (closed forms, GJK, EPA)
 enum class Axis { Triangle, Face, Edges, Other };
 
+// out[i] = q * in[i] for i < n, plus *at when given (apply()'s position): glm's quaternion
+// rotation (v + 2 (w (u x v) + u x (u x v)), u the quaternion's vector part), lane by lane in
+// the same operations and order, four vectors at a time, so the bits are the scalar ones
+#if PBA_MESH_LANES_X86
+[[gnu::target("avx2")]] [[gnu::noinline]] void turn_avx2(const Quat& q, const Vec3* in, std::uint32_t n,
+                                                         const Vec3* at, Vec3* out) {
+  using V = detail::lanes::v4d;
+  using detail::lanes::splat;
+  const V qx = splat<V>(q.x), qy = splat<V>(q.y), qz = splat<V>(q.z), qw = splat<V>(q.w);
+  for (std::uint32_t i = 0; i < n; i += 4) {
+    // (lanes past n repeat the last vector and are not stored)
+    const std::uint32_t i1 = std::min(i + 1, n - 1), i2 = std::min(i + 2, n - 1), i3 = std::min(i + 3, n - 1);
+    const V vx = {in[i].x, in[i1].x, in[i2].x, in[i3].x}, vy = {in[i].y, in[i1].y, in[i2].y, in[i3].y},
+            vz = {in[i].z, in[i1].z, in[i2].z, in[i3].z};
+    const V ux = qy * vz - vy * qz, uy = qz * vx - vz * qx, uz = qx * vy - vx * qy;
+    const V uux = qy * uz - uy * qz, uuy = qz * ux - uz * qx, uuz = qx * uy - ux * qy;
+    V rx = vx + ((ux * qw) + uux) * 2.0, ry = vy + ((uy * qw) + uuy) * 2.0, rz = vz + ((uz * qw) + uuz) * 2.0;
+    if (at) rx = at->x + rx, ry = at->y + ry, rz = at->z + rz;
+    for (std::uint32_t l = 0; l < 4 && i + l < n; ++l) out[i + l] = Vec3(rx[l], ry[l], rz[l]);
+  }
+}
+#endif
+void turn(bool wide, const Quat& q, const Vec3* in, std::uint32_t n, const Vec3* at, Vec3* out) {
+#if PBA_MESH_LANES_X86
+  if (wide) return turn_avx2(q, in, n, at, out);
+#endif
+  (void)wide;
+  for (std::uint32_t i = 0; i < n; ++i) out[i] = at ? *at + q * in[i] : q * in[i];
+}
+
 // A box or hull (P at pose pa, at most 64 vertices) against a triangle by separating axes:
 // the triangle's normal, the shape's face normals and the crosses of their edges. Along
 // each axis the shape and the triangle project to intervals; the largest gap between them
@@ -101,8 +131,9 @@ struct PolyAt {
   // 2 * 64 - 4 faces and 3 * 64 - 6 edges (Euler), so they fit
   static constexpr std::uint32_t kFaces = 124, kEdges = 186;
   bool made = false;
-  // the edge axes four at a time in AVX2 lanes (sat_edges_avx2; the caller's choice, on a
-  // processor that has it); their inputs below are then made too
+  // the vertices, face axes and edge directions turned, and the edge axes tested, four at a
+  // time in AVX2 lanes (turn_avx2, sat_edges_avx2; the caller's choice, on a processor that
+  // has them); the edge axes' inputs below are then made too
   bool wide = false;
   std::uint32_t face_axes = 0, edge_dirs = 0;
   Vec3 face_d[kFaces];
@@ -116,10 +147,10 @@ struct PolyAt {
   static constexpr std::uint32_t kAxes = 3 * kEdges + 2;
   double axis_x[kAxes], axis_y[kAxes], axis_z[kAxes], axis_scale[kAxes];
 
-  void set(const Poly& P, const Pose& pa) {
-    for (std::uint32_t i = 0; i < P.vertex_count; ++i) v[i] = apply(pa, P.vertices[i]);
-    const Mat3 r = glm::mat3_cast(pa.rotation);
-    half_axes[0] = r[0] * P.half.x, half_axes[1] = r[1] * P.half.y, half_axes[2] = r[2] * P.half.z;
+  // (r: pa.rotation as a matrix; `wide` set before)
+  void set(const Poly& P, const Pose& pa, const Mat3& r) {
+    turn(wide, pa.rotation, P.vertices, P.vertex_count, &pa.position, v.data());  // apply(pa, vertex)
+    if (P.is_box) half_axes[0] = r[0] * P.half.x, half_axes[1] = r[1] * P.half.y, half_axes[2] = r[2] * P.half.z;
     made = false;
   }
 
@@ -142,18 +173,17 @@ struct PolyAt {
   void make(const Poly& P, const Pose& pa) {
     made = true;
     face_axes = 0, edge_dirs = 0;
+    // the local face normals and edges gathered here, then turned to the world together
+    Vec3 local[kEdges];
     for (std::uint32_t f = 0; f < P.face_count; ++f) {
       if (P.is_box && (f & 1) == 0) continue;  // a box's opposite faces share their axis
-      const Vec3 d = pa.rotation * P.faces[f].normal;
-      face_d[face_axes] = d;
-      span(P, pa, d, face_lo[face_axes], face_hi[face_axes]);
-      ++face_axes;
+      local[face_axes++] = P.faces[f].normal;
     }
+    turn(wide, pa.rotation, local, face_axes, nullptr, face_d);
+    for (std::uint32_t f = 0; f < face_axes; ++f) span(P, pa, face_d[f], face_lo[f], face_hi[f]);
     auto add_edge = [&](std::uint32_t e) {
       const HalfEdge& he = P.edges[e];
-      const Vec3 ea = pa.rotation * (P.vertices[P.edges[he.next].origin] - P.vertices[he.origin]);
-      edge_d[edge_dirs] = ea;
-      edge_scale[edge_dirs] = 1e-20 * glm::dot(ea, ea);
+      local[edge_dirs] = P.vertices[P.edges[he.next].origin] - P.vertices[he.origin];
       edge_of[edge_dirs] = e;
       ++edge_dirs;
     };
@@ -181,6 +211,8 @@ struct PolyAt {
       // (ConvexHull::edge_directions); here a call compared each edge with those kept
       for (const std::uint32_t e : P.hull->edge_directions()) add_edge(e);
     }
+    turn(wide, pa.rotation, local, edge_dirs, nullptr, edge_d);
+    for (std::uint32_t j = 0; j < edge_dirs; ++j) edge_scale[j] = 1e-20 * glm::dot(edge_d[j], edge_d[j]);
     if (wide) {
       std::uint32_t q = 0;
       for (std::uint32_t j = 0; j < edge_dirs; ++j)
@@ -214,24 +246,29 @@ constexpr double kEdgeBias = 1e-9;
   using detail::lanes::splat;
   using detail::lanes::vmax;
   using detail::lanes::vmin;
-  // the triangle's edge k = q % 3 of axis q, for the four lanes of groups starting at q = 0,
-  // 4 and 8 (the pattern's period is 12)
-  double tx[12], ty[12], tz[12], tq[12];
-  for (int q = 0; q < 12; ++q) tx[q] = te[q % 3].x, ty[q] = te[q % 3].y, tz[q] = te[q % 3].z, tq[q] = tt[q % 3];
+  // the triangle's edge k = q % 3 of axis q, for the four lanes of the groups starting at
+  // q % 12 = 0, 4 and 8 (the pattern's period is 12): edges 0 1 2 0, 1 2 0 1, 2 0 1 2
+  const V tx[3] = {V{te[0].x, te[1].x, te[2].x, te[0].x}, V{te[1].x, te[2].x, te[0].x, te[1].x},
+                   V{te[2].x, te[0].x, te[1].x, te[2].x}};
+  const V ty[3] = {V{te[0].y, te[1].y, te[2].y, te[0].y}, V{te[1].y, te[2].y, te[0].y, te[1].y},
+                   V{te[2].y, te[0].y, te[1].y, te[2].y}};
+  const V tz[3] = {V{te[0].z, te[1].z, te[2].z, te[0].z}, V{te[1].z, te[2].z, te[0].z, te[1].z},
+                   V{te[2].z, te[0].z, te[1].z, te[2].z}};
+  const V tq[3] = {V{tt[0], tt[1], tt[2], tt[0]}, V{tt[1], tt[2], tt[0], tt[1]}, V{tt[2], tt[0], tt[1], tt[2]}};
   const V ax = splat<V>(tri[0].x), ay = splat<V>(tri[0].y), az = splat<V>(tri[0].z);
   const V bx = splat<V>(tri[1].x), by = splat<V>(tri[1].y), bz = splat<V>(tri[1].z);
   const V cx = splat<V>(tri[2].x), cy = splat<V>(tri[2].y), cz = splat<V>(tri[2].z);
   const L no_sign = L{} + 0x7fffffffffffffffL;
-  auto vabs = [&](V x) { return reinterpret_cast<V>(reinterpret_cast<L>(x) & no_sign); };
+  auto vabs = [&](const V& x) { return reinterpret_cast<V>(reinterpret_cast<L>(x) & no_sign); };  // std::abs
   const std::uint32_t count = 3 * at.edge_dirs, nv = P.vertex_count;
-  for (std::uint32_t q = 0; q < count; q += 4) {
-    const std::uint32_t r = q % 12;
+  const L lane = {0, 1, 2, 3};
+  for (std::uint32_t q = 0, r = 0; q < count; q += 4, r = r == 2 ? 0 : r + 1) {
     const V ex = load<V>(at.axis_x + q), ey = load<V>(at.axis_y + q), ez = load<V>(at.axis_z + q);
-    const V gx = load<V>(tx + r), gy = load<V>(ty + r), gz = load<V>(tz + r);
+    const V gx = tx[r], gy = ty[r], gz = tz[r];
     // glm::cross(ea, te[k]), glm::dot(c, c), the parallel test, c / sqrt(cc)
     const V kx = ey * gz - gy * ez, ky = ez * gx - gz * ex, kz = ex * gy - gx * ey;
     const V cc = (kx * kx + ky * ky) + kz * kz;
-    const L parallel = cc <= load<V>(at.axis_scale + q) * load<V>(tq + r);
+    const L parallel = cc <= load<V>(at.axis_scale + q) * tq[r];
     const V root = _mm256_sqrt_pd(cc);
     const V dx = kx / root, dy = ky / root, dz = kz / root;
     // the shape's span along d (PolyAt::span)
@@ -255,6 +292,12 @@ constexpr double kEdgeBias = 1e-9;
     const V up = lo - thi, down = tlo - hi;
     const L above = up >= down;
     const V g = above ? up : down;
+    // the lanes judged one by one only where one is apart or deeper than the best so far
+    // (the best only grows within the group, and with it best + kEdgeBias: a lane not
+    // deeper than the group's first best + kEdgeBias is not deeper than a later one's)
+    const L counted = (lane < L{} + std::int64_t(count - q)) & ~parallel;
+    const L judged = counted & ((g > 0) | (g > best + kEdgeBias));
+    if (_mm256_movemask_pd(reinterpret_cast<__m256d>(judged)) == 0) continue;
     const std::uint32_t lanes = std::min(4u, count - q);
     for (std::uint32_t l = 0; l < lanes; ++l) {
       if (parallel[l]) continue;
@@ -658,8 +701,25 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   if (!(margin >= 0 && std::isfinite(margin)))
     require_non_negative(margin, "collide_mesh: NarrowPhaseSettings.speculative_margin");
 
-  // the shape in the mesh's frame, and its bounds there grown by the margin
-  const Pose local = compose(inverse(pose_mesh), pose_a);
+  // A mesh that is only moved (its rotation (1, 0, 0, 0) to the bit but for the signs of the
+  // zeros; the terrain's): every product with the rotation's vector part is a zero, and x + 0
+  // = x for x != 0, so a turn by it gives each non-zero coordinate back to the bit (a quaternion
+  // product the other's non-zero components) and a zero a zero of either sign. Where nothing
+  // that sign could reach is a zero, the turns are left out below: the same bits
+  // (BatchPath::Scalar, the plain path, makes every turn)
+  const Quat& qm = pose_mesh.rotation;
+  const bool moved_only = path != BatchPath::Scalar && qm.w == 1 && qm.x == 0 && qm.y == 0 && qm.z == 0;
+  // (x + y with x or y a signed zero where the other is 0: the sum's sign would depend on it)
+  auto no_shared_zero = [](const Vec3& x, const Vec3& y) {
+    return (x.x != 0 || y.x != 0) && (x.y != 0 || y.y != 0) && (x.z != 0 || y.z != 0);
+  };
+  const Quat& qa = pose_a.rotation;
+  // the shape in the mesh's frame (compose(inverse(pose_mesh), pose_a)), and its bounds there
+  // grown by the margin
+  const Pose local = moved_only && qa.w != 0 && qa.x != 0 && qa.y != 0 && qa.z != 0 &&
+                             no_shared_zero(pose_mesh.position, pose_a.position)
+                         ? Pose{-pose_mesh.position + pose_a.position, glm::normalize(qa)}
+                         : compose(inverse(pose_mesh), pose_a);
   const Aabb box = bounds(a, local).grown(margin);
   const TriangleMesh& M = *mesh.mesh;
   const ConvexProxy A = ConvexProxy::of(a, local);
@@ -678,15 +738,15 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   PolyAt at;
   const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
   if (poly) poly_of(a, P);
-  if (poly && P.vertex_count <= 64) at.set(P, local);
 #if PBA_MESH_LANES_X86
-  // the edge axes in AVX2 lanes where the processor has them (AVX-512's eight lanes are not
-  // offered: a box has 9 edge axes, a square pyramid 18)
+  // the shape's turns and edge axes in AVX2 lanes where the processor has them (AVX-512's
+  // eight lanes are not offered: a box has 9 edge axes, a square pyramid 18)
   static const bool avx2 = __builtin_cpu_supports("avx2");
   at.wide = avx2 && path != BatchPath::Scalar;
 #else
   (void)path;
 #endif
+  if (poly && P.vertex_count <= 64) at.set(P, local, r);
   const bool hull_placed = hull && P.vertex_count <= 64;
   int written = 0;
   auto visit = [&](std::uint32_t t) {
@@ -721,11 +781,13 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     if (above > slack || below > slack) return;
     Manifold& m = out[std::size_t(written)];
     if (!collide_triangle(a, local, A, P, poly, at, M, tri, nf, lo, hi, M.edge_flags()[t], margin, t, m)) return;
-    // back to the world
-    m.normal = pose_mesh.rotation * m.normal;
+    // back to the world (apply(pose_mesh, x): its position plus the turned x)
+    if (!moved_only || m.normal.x == 0 || m.normal.y == 0 || m.normal.z == 0) m.normal = qm * m.normal;
     for (int i = 0; i < m.count; ++i) {
-      m.points[std::size_t(i)].point_a = apply(pose_mesh, m.points[std::size_t(i)].point_a);
-      m.points[std::size_t(i)].point_b = apply(pose_mesh, m.points[std::size_t(i)].point_b);
+      Vec3& pa = m.points[std::size_t(i)].point_a;
+      Vec3& pb = m.points[std::size_t(i)].point_b;
+      pa = moved_only && no_shared_zero(pose_mesh.position, pa) ? pose_mesh.position + pa : apply(pose_mesh, pa);
+      pb = moved_only && no_shared_zero(pose_mesh.position, pb) ? pose_mesh.position + pb : apply(pose_mesh, pb);
     }
     ++written;
   };

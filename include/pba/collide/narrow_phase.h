@@ -147,8 +147,11 @@ struct MeshQueryCache {
 /// flat mesh gets no ghost contacts from the edges between its triangles. Writes at most
 /// out.size() manifolds and returns how many; never allocates. Throws Error like collide().
 /// `cache` (may be null): the triangles near the shape, kept between calls; the same
-/// manifolds, to the bit, with or without it. `path`: the lanes a box's or hull's edge axes
-/// take against a triangle, four at a time in AVX2 or one at a time; the same bits on each.
+/// manifolds, to the bit, with or without it. `path`: Scalar runs the plain path (a box's
+/// or hull's axes one at a time, every turn by the mesh's rotation made); the others turn the
+/// shape and test its edge axes four at a time in AVX2 lanes where the processor has them,
+/// and leave out the turns of a mesh that is only moved where they give the same bits. The
+/// same manifolds, to the bit, on every path.
 int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
                  std::span<Manifold> out, const NarrowPhaseSettings& settings = {}, MeshQueryCache* cache = nullptr,
                  BatchPath path = BatchPath::Best);
