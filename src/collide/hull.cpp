@@ -153,6 +153,24 @@ struct HullBuilder {
       const double col[10] = {u.x, u.y, u.z, w.x, w.y, w.z, p.x, p.y, p.z, c > 0 ? std::sqrt(2 / c) : INFINITY};
       for (std::size_t j = 0; j < 10; ++j) h->edge_soa_[j * pe + i] = col[j];
     }
+    // the edge directions: each edge's vector with its first non-zero coordinate made
+    // positive (and zeros +0, as == holds -0 equal to +0) is the same for two edges exactly
+    // when one's vector equals the other's or its negation; sorted by that key (ties by
+    // index), the first of each run is the first such edge in index order
+    std::vector<std::pair<Vec3, std::uint32_t>> keys(ne);
+    for (std::uint32_t i = 0; i < ne; ++i) {
+      Vec3 d = v[h->edges_[h->edges_[2 * i].next].origin] - v[h->edges_[2 * i].origin];
+      const double first = d.x != 0 ? d.x : d.y != 0 ? d.y : d.z;
+      if (first < 0) d = -d;
+      keys[i] = {d + Vec3(0.0), 2 * i};
+    }
+    auto less = [](const Vec3& a, const Vec3& b) { return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z; };
+    std::sort(keys.begin(), keys.end(), [&](const auto& a, const auto& b) {
+      return less(a.first, b.first) || (a.first == b.first && a.second < b.second);
+    });
+    for (std::size_t i = 0; i < ne; ++i)
+      if (i == 0 || keys[i].first != keys[i - 1].first) h->edge_directions_.push_back(keys[i].second);
+    std::sort(h->edge_directions_.begin(), h->edge_directions_.end());
     return h;
   }
 

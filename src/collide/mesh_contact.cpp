@@ -9,6 +9,15 @@
 
 #include "narrow_internal.h"
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+
+#include "core/lanes.h"
+#define PBA_MESH_LANES_X86 1
+#else
+#define PBA_MESH_LANES_X86 0
+#endif
+
 namespace pba {
 
 using namespace narrow;
@@ -66,6 +75,36 @@ bool core_triangle_closest(const Vec3& p, const Vec3& q, const Vec3 tri[3], cons
 // each (separating axes), or elsewhere (closed forms, GJK, EPA)
 enum class Axis { Triangle, Face, Edges, Other };
 
+// out[i] = q * in[i] for i < n, plus *at when given (apply()'s position): glm's quaternion
+// rotation (v + 2 (w (u x v) + u x (u x v)), u the quaternion's vector part), lane by lane in
+// the same operations and order, four vectors at a time, so the bits are the scalar ones
+#if PBA_MESH_LANES_X86
+[[gnu::target("avx2")]] [[gnu::noinline]] void turn_avx2(const Quat& q, const Vec3* in, std::uint32_t n,
+                                                         const Vec3* at, Vec3* out) {
+  using V = detail::lanes::v4d;
+  using detail::lanes::splat;
+  const V qx = splat<V>(q.x), qy = splat<V>(q.y), qz = splat<V>(q.z), qw = splat<V>(q.w);
+  for (std::uint32_t i = 0; i < n; i += 4) {
+    // (lanes past n repeat the last vector and are not stored)
+    const std::uint32_t i1 = std::min(i + 1, n - 1), i2 = std::min(i + 2, n - 1), i3 = std::min(i + 3, n - 1);
+    const V vx = {in[i].x, in[i1].x, in[i2].x, in[i3].x}, vy = {in[i].y, in[i1].y, in[i2].y, in[i3].y},
+            vz = {in[i].z, in[i1].z, in[i2].z, in[i3].z};
+    const V ux = qy * vz - vy * qz, uy = qz * vx - vz * qx, uz = qx * vy - vx * qy;
+    const V uux = qy * uz - uy * qz, uuy = qz * ux - uz * qx, uuz = qx * uy - ux * qy;
+    V rx = vx + ((ux * qw) + uux) * 2.0, ry = vy + ((uy * qw) + uuy) * 2.0, rz = vz + ((uz * qw) + uuz) * 2.0;
+    if (at) rx = at->x + rx, ry = at->y + ry, rz = at->z + rz;
+    for (std::uint32_t l = 0; l < 4 && i + l < n; ++l) out[i + l] = Vec3(rx[l], ry[l], rz[l]);
+  }
+}
+#endif
+void turn(bool wide, const Quat& q, const Vec3* in, std::uint32_t n, const Vec3* at, Vec3* out) {
+#if PBA_MESH_LANES_X86
+  if (wide) return turn_avx2(q, in, n, at, out);
+#endif
+  (void)wide;
+  for (std::uint32_t i = 0; i < n; ++i) out[i] = at ? *at + q * in[i] : q * in[i];
+}
+
 // A box or hull (P at pose pa, at most 64 vertices) against a triangle by separating axes:
 // the triangle's normal, the shape's face normals and the crosses of their edges. Along
 // each axis the shape and the triangle project to intervals; the largest gap between them
@@ -92,17 +131,26 @@ struct PolyAt {
   // 2 * 64 - 4 faces and 3 * 64 - 6 edges (Euler), so they fit
   static constexpr std::uint32_t kFaces = 124, kEdges = 186;
   bool made = false;
+  // the vertices, face axes and edge directions turned, and the edge axes tested, four at a
+  // time in AVX2 lanes (turn_avx2, sat_edges_avx2; the caller's choice, on a processor that
+  // has them); the edge axes' inputs below are then made too
+  bool wide = false;
   std::uint32_t face_axes = 0, edge_dirs = 0;
   Vec3 face_d[kFaces];
   double face_lo[kFaces], face_hi[kFaces];
   Vec3 edge_d[kEdges];
   double edge_scale[kEdges];
   std::uint32_t edge_of[kEdges];
+  // For the lanes: edge axis q (edge direction q / 3 crossed with the triangle's edge q % 3,
+  // the scalar loop's order) takes the direction's x, y, z and scale at index q; zeros past
+  // the last axis up to a multiple of four (never read as an axis)
+  static constexpr std::uint32_t kAxes = 3 * kEdges + 2;
+  double axis_x[kAxes], axis_y[kAxes], axis_z[kAxes], axis_scale[kAxes];
 
-  void set(const Poly& P, const Pose& pa) {
-    for (std::uint32_t i = 0; i < P.vertex_count; ++i) v[i] = apply(pa, P.vertices[i]);
-    const Mat3 r = glm::mat3_cast(pa.rotation);
-    half_axes[0] = r[0] * P.half.x, half_axes[1] = r[1] * P.half.y, half_axes[2] = r[2] * P.half.z;
+  // (r: pa.rotation as a matrix; `wide` set before)
+  void set(const Poly& P, const Pose& pa, const Mat3& r) {
+    turn(wide, pa.rotation, P.vertices, P.vertex_count, &pa.position, v.data());  // apply(pa, vertex)
+    if (P.is_box) half_axes[0] = r[0] * P.half.x, half_axes[1] = r[1] * P.half.y, half_axes[2] = r[2] * P.half.z;
     made = false;
   }
 
@@ -125,45 +173,144 @@ struct PolyAt {
   void make(const Poly& P, const Pose& pa) {
     made = true;
     face_axes = 0, edge_dirs = 0;
+    // the local face normals and edges gathered here, then turned to the world together
+    Vec3 local[kEdges];
     for (std::uint32_t f = 0; f < P.face_count; ++f) {
       if (P.is_box && (f & 1) == 0) continue;  // a box's opposite faces share their axis
-      const Vec3 d = pa.rotation * P.faces[f].normal;
-      face_d[face_axes] = d;
-      span(P, pa, d, face_lo[face_axes], face_hi[face_axes]);
-      ++face_axes;
+      local[face_axes++] = P.faces[f].normal;
     }
-    bool box_direction[3] = {false, false, false};
-    Vec3 hull_local[kEdges];  // a hull's edges kept so far, in its frame
-    for (std::uint32_t e = 0; e < P.edge_count; ++e) {
+    turn(wide, pa.rotation, local, face_axes, nullptr, face_d);
+    for (std::uint32_t f = 0; f < face_axes; ++f) span(P, pa, face_d[f], face_lo[f], face_hi[f]);
+    auto add_edge = [&](std::uint32_t e) {
       const HalfEdge& he = P.edges[e];
-      if (he.twin < e) continue;  // each edge once
-      const Vec3 local = P.vertices[P.edges[he.next].origin] - P.vertices[he.origin];
-      if (P.is_box) {
-        // a box's edges run along its three axes: one of each
+      local[edge_dirs] = P.vertices[P.edges[he.next].origin] - P.vertices[he.origin];
+      edge_of[edge_dirs] = e;
+      ++edge_dirs;
+    };
+    if (P.is_box) {
+      // a box's edges run along its three axes: the first of each
+      bool box_direction[3] = {false, false, false};
+      for (std::uint32_t e = 0; e < P.edge_count; ++e) {
+        const HalfEdge& he = P.edges[e];
+        if (he.twin < e) continue;  // each edge once
+        const Vec3 local = P.vertices[P.edges[he.next].origin] - P.vertices[he.origin];
         const int i = local.x != 0 ? 0 : local.y != 0 ? 1 : 2;
         if (box_direction[i]) continue;
         box_direction[i] = true;
-      } else {
-        // A hull's edge equal to a kept one, or its exact opposite (a square pyramid's base
-        // has two pairs: 24 edge axes a triangle become 18), gives the same axes or their
-        // exact negations: turning, crossing, projecting and the min and max all commute
-        // with a sign change (to the bit, but for the signs of zeros), so along -d the gap
-        // is the one along d. Its axes then never end the test first nor win (a later axis
-        // wins only when deeper by kEdgeBias), and the deepest edge of a direction is
-        // searched among all parallel ones below: the same result, to the bit
-        bool seen = false;
-        for (std::uint32_t j = 0; j < edge_dirs && !seen; ++j) seen = hull_local[j] == local || hull_local[j] == -local;
-        if (seen) continue;
-        hull_local[edge_dirs] = local;
+        add_edge(e);
       }
-      const Vec3 ea = pa.rotation * local;
-      edge_d[edge_dirs] = ea;
-      edge_scale[edge_dirs] = 1e-20 * glm::dot(ea, ea);
-      edge_of[edge_dirs] = e;
-      ++edge_dirs;
+    } else {
+      // A hull's edge equal to a kept one, or its exact opposite (a square pyramid's base
+      // has two pairs: 24 edge axes a triangle become 18), gives the same axes or their
+      // exact negations: turning, crossing, projecting and the min and max all commute
+      // with a sign change (to the bit, but for the signs of zeros), so along -d the gap
+      // is the one along d. Its axes then never end the test first nor win (a later axis
+      // wins only when deeper by kEdgeBias), and the deepest edge of a direction is
+      // searched among all parallel ones (sat_triangle's end): the same result, to the
+      // bit. The hull's setup keeps the first edge of each direction
+      // (ConvexHull::edge_directions); here a call compared each edge with those kept
+      for (const std::uint32_t e : P.hull->edge_directions()) add_edge(e);
+    }
+    turn(wide, pa.rotation, local, edge_dirs, nullptr, edge_d);
+    for (std::uint32_t j = 0; j < edge_dirs; ++j) edge_scale[j] = 1e-20 * glm::dot(edge_d[j], edge_d[j]);
+    if (wide) {
+      std::uint32_t q = 0;
+      for (std::uint32_t j = 0; j < edge_dirs; ++j)
+        for (int k = 0; k < 3; ++k, ++q)
+          axis_x[q] = edge_d[j].x, axis_y[q] = edge_d[j].y, axis_z[q] = edge_d[j].z, axis_scale[q] = edge_scale[j];
+      for (; q % 4 != 0; ++q) axis_x[q] = axis_y[q] = axis_z[q] = axis_scale[q] = 0;
     }
   }
 };
+
+// edge pairs win over faces only by more than rounding, so a face resting on a face keeps
+// the face's normal
+constexpr double kEdgeBias = 1e-9;
+
+// The edge axes' part of sat_triangle (its loop over at.edge_dirs and the triangle's three
+// edges) four axes at a time: every lane makes its axis, the shape's span and the gap along
+// it with the scalar loop's operations in its order (the same bits), then the lanes are
+// judged one by one in the loop's order, as it judges its axes. Returns 0 when an axis
+// separates them by more than the margin, 2 when one separates them by no more (the first
+// such axis, as the loop meets them), else 1 with the deepest axis kept in best, axis,
+// best_above, kind, edge_a and edge_b. An early end wastes the rest of its group (up to
+// three axes), which the scalar loop would not make.
+#if PBA_MESH_LANES_X86
+[[gnu::target("avx2")]] [[gnu::noinline]] int sat_edges_avx2(const Poly& P, const PolyAt& at, const Pose& pa,
+                                                             const Vec3 tri[3], const Vec3 te[3], const double tt[3],
+                                                             double margin, double& best, Vec3& axis, bool& best_above,
+                                                             Axis& kind, std::uint32_t& edge_a, std::uint32_t& edge_b) {
+  using V = detail::lanes::v4d;
+  using L = detail::lanes::v4l;
+  using detail::lanes::load;
+  using detail::lanes::splat;
+  using detail::lanes::vmax;
+  using detail::lanes::vmin;
+  // the triangle's edge k = q % 3 of axis q, for the four lanes of the groups starting at
+  // q % 12 = 0, 4 and 8 (the pattern's period is 12): edges 0 1 2 0, 1 2 0 1, 2 0 1 2
+  const V tx[3] = {V{te[0].x, te[1].x, te[2].x, te[0].x}, V{te[1].x, te[2].x, te[0].x, te[1].x},
+                   V{te[2].x, te[0].x, te[1].x, te[2].x}};
+  const V ty[3] = {V{te[0].y, te[1].y, te[2].y, te[0].y}, V{te[1].y, te[2].y, te[0].y, te[1].y},
+                   V{te[2].y, te[0].y, te[1].y, te[2].y}};
+  const V tz[3] = {V{te[0].z, te[1].z, te[2].z, te[0].z}, V{te[1].z, te[2].z, te[0].z, te[1].z},
+                   V{te[2].z, te[0].z, te[1].z, te[2].z}};
+  const V tq[3] = {V{tt[0], tt[1], tt[2], tt[0]}, V{tt[1], tt[2], tt[0], tt[1]}, V{tt[2], tt[0], tt[1], tt[2]}};
+  const V ax = splat<V>(tri[0].x), ay = splat<V>(tri[0].y), az = splat<V>(tri[0].z);
+  const V bx = splat<V>(tri[1].x), by = splat<V>(tri[1].y), bz = splat<V>(tri[1].z);
+  const V cx = splat<V>(tri[2].x), cy = splat<V>(tri[2].y), cz = splat<V>(tri[2].z);
+  const L no_sign = L{} + 0x7fffffffffffffffL;
+  auto vabs = [&](const V& x) { return reinterpret_cast<V>(reinterpret_cast<L>(x) & no_sign); };  // std::abs
+  const std::uint32_t count = 3 * at.edge_dirs, nv = P.vertex_count;
+  const L lane = {0, 1, 2, 3};
+  for (std::uint32_t q = 0, r = 0; q < count; q += 4, r = r == 2 ? 0 : r + 1) {
+    const V ex = load<V>(at.axis_x + q), ey = load<V>(at.axis_y + q), ez = load<V>(at.axis_z + q);
+    const V gx = tx[r], gy = ty[r], gz = tz[r];
+    // glm::cross(ea, te[k]), glm::dot(c, c), the parallel test, c / sqrt(cc)
+    const V kx = ey * gz - gy * ez, ky = ez * gx - gz * ex, kz = ex * gy - gx * ey;
+    const V cc = (kx * kx + ky * ky) + kz * kz;
+    const L parallel = cc <= load<V>(at.axis_scale + q) * tq[r];
+    const V root = _mm256_sqrt_pd(cc);
+    const V dx = kx / root, dy = ky / root, dz = kz / root;
+    // the shape's span along d (PolyAt::span)
+    V lo, hi;
+    if (P.is_box) {
+      const V c = (dx * pa.position.x + dy * pa.position.y) + dz * pa.position.z;
+      const Vec3* h = at.half_axes;
+      const V w = (vabs((dx * h[0].x + dy * h[0].y) + dz * h[0].z) + vabs((dx * h[1].x + dy * h[1].y) + dz * h[1].z)) +
+                  vabs((dx * h[2].x + dy * h[2].y) + dz * h[2].z);
+      lo = c - w, hi = c + w;
+    } else {
+      lo = splat<V>(INFINITY), hi = splat<V>(-INFINITY);
+      for (std::uint32_t i = 0; i < nv; ++i) {
+        const V x = (dx * at.v[i].x + dy * at.v[i].y) + dz * at.v[i].z;
+        lo = vmin(lo, x), hi = vmax(hi, x);
+      }
+    }
+    // the gap (sat_triangle's gap_of)
+    const V t0 = (dx * ax + dy * ay) + dz * az, t1 = (dx * bx + dy * by) + dz * bz, t2 = (dx * cx + dy * cy) + dz * cz;
+    const V tlo = vmin(t0, vmin(t1, t2)), thi = vmax(t0, vmax(t1, t2));
+    const V up = lo - thi, down = tlo - hi;
+    const L above = up >= down;
+    const V g = above ? up : down;
+    // the lanes judged one by one only where one is apart or deeper than the best so far
+    // (the best only grows within the group, and with it best + kEdgeBias: a lane not
+    // deeper than the group's first best + kEdgeBias is not deeper than a later one's)
+    const L counted = (lane < L{} + std::int64_t(count - q)) & ~parallel;
+    const L judged = counted & ((g > 0) | (g > best + kEdgeBias));
+    if (_mm256_movemask_pd(reinterpret_cast<__m256d>(judged)) == 0) continue;
+    const std::uint32_t lanes = std::min(4u, count - q);
+    for (std::uint32_t l = 0; l < lanes; ++l) {
+      if (parallel[l]) continue;
+      if (g[l] > margin) return 0;
+      if (g[l] > 0) return 2;
+      if (g[l] > best + kEdgeBias)
+        best = g[l], axis = Vec3(dx[l], dy[l], dz[l]), best_above = above[l] != 0, kind = Axis::Edges,
+        edge_a = at.edge_of[(q + l) / 3], edge_b = (q + l) % 3;
+    }
+  }
+  return 1;
+}
+#endif
 
 int sat_triangle(const Poly& P, PolyAt& at, const Pose& pa, const Vec3 tri[3], const Vec3& face_normal,
                  double normal_lo, double normal_hi, double margin, Vec3& n, Vec3& point_a, Vec3& point_b,
@@ -235,12 +382,16 @@ int sat_triangle(const Poly& P, PolyAt& at, const Pose& pa, const Vec3 tri[3], c
     if (g > 0) return beyond_sides() ? 0 : 2;
     if (g > best) best = g, axis = d, best_above = above, kind = Axis::Face;
   }
-  // edge pairs win over faces only by more than rounding, so a face resting on a face keeps
-  // the face's normal
-  constexpr double kEdgeBias = 1e-9;
   const Vec3 te[3] = {tri[1] - tri[0], tri[2] - tri[1], tri[0] - tri[2]};
   const double tt[3] = {glm::dot(te[0], te[0]), glm::dot(te[1], te[1]), glm::dot(te[2], te[2])};
-  for (std::uint32_t j = 0; j < at.edge_dirs; ++j) {
+#if PBA_MESH_LANES_X86
+  if (at.wide) {
+    const int r = sat_edges_avx2(P, at, pa, tri, te, tt, margin, best, axis, best_above, kind, edge_a, edge_b);
+    if (r == 0) return 0;
+    if (r == 2) return beyond_sides() ? 0 : 2;
+  }
+#endif
+  for (std::uint32_t j = 0; j < at.edge_dirs && !at.wide; ++j) {
     const Vec3& ea = at.edge_d[j];
     for (std::uint32_t k = 0; k < 3; ++k) {
       const Vec3 c = glm::cross(ea, te[k]);
@@ -539,7 +690,8 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
 }  // namespace
 
 int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
-                 std::span<Manifold> out, const NarrowPhaseSettings& settings, MeshQueryCache* cache) {
+                 std::span<Manifold> out, const NarrowPhaseSettings& settings, MeshQueryCache* cache,
+                 BatchPath path) {
   check_pose(pose_a, "collide_mesh: pose_a");
   check_pose(pose_mesh, "collide_mesh: pose_mesh");
   check_shape(a, "collide_mesh: shape_a");
@@ -549,8 +701,25 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   if (!(margin >= 0 && std::isfinite(margin)))
     require_non_negative(margin, "collide_mesh: NarrowPhaseSettings.speculative_margin");
 
-  // the shape in the mesh's frame, and its bounds there grown by the margin
-  const Pose local = compose(inverse(pose_mesh), pose_a);
+  // A mesh that is only moved (its rotation (1, 0, 0, 0) to the bit but for the signs of the
+  // zeros; the terrain's): every product with the rotation's vector part is a zero, and x + 0
+  // = x for x != 0, so a turn by it gives each non-zero coordinate back to the bit (a quaternion
+  // product the other's non-zero components) and a zero a zero of either sign. Where nothing
+  // that sign could reach is a zero, the turns are left out below: the same bits
+  // (BatchPath::Scalar, the plain path, makes every turn)
+  const Quat& qm = pose_mesh.rotation;
+  const bool moved_only = path != BatchPath::Scalar && qm.w == 1 && qm.x == 0 && qm.y == 0 && qm.z == 0;
+  // (x + y with x or y a signed zero where the other is 0: the sum's sign would depend on it)
+  auto no_shared_zero = [](const Vec3& x, const Vec3& y) {
+    return (x.x != 0 || y.x != 0) && (x.y != 0 || y.y != 0) && (x.z != 0 || y.z != 0);
+  };
+  const Quat& qa = pose_a.rotation;
+  // the shape in the mesh's frame (compose(inverse(pose_mesh), pose_a)), and its bounds there
+  // grown by the margin
+  const Pose local = moved_only && qa.w != 0 && qa.x != 0 && qa.y != 0 && qa.z != 0 &&
+                             no_shared_zero(pose_mesh.position, pose_a.position)
+                         ? Pose{-pose_mesh.position + pose_a.position, glm::normalize(qa)}
+                         : compose(inverse(pose_mesh), pose_a);
   const Aabb box = bounds(a, local).grown(margin);
   const TriangleMesh& M = *mesh.mesh;
   const ConvexProxy A = ConvexProxy::of(a, local);
@@ -569,7 +738,15 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   PolyAt at;
   const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
   if (poly) poly_of(a, P);
-  if (poly && P.vertex_count <= 64) at.set(P, local);
+#if PBA_MESH_LANES_X86
+  // the shape's turns and edge axes in AVX2 lanes where the processor has them (AVX-512's
+  // eight lanes are not offered: a box has 9 edge axes, a square pyramid 18)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  at.wide = avx2 && path != BatchPath::Scalar;
+#else
+  (void)path;
+#endif
+  if (poly && P.vertex_count <= 64) at.set(P, local, r);
   const bool hull_placed = hull && P.vertex_count <= 64;
   int written = 0;
   auto visit = [&](std::uint32_t t) {
@@ -604,11 +781,13 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
     if (above > slack || below > slack) return;
     Manifold& m = out[std::size_t(written)];
     if (!collide_triangle(a, local, A, P, poly, at, M, tri, nf, lo, hi, M.edge_flags()[t], margin, t, m)) return;
-    // back to the world
-    m.normal = pose_mesh.rotation * m.normal;
+    // back to the world (apply(pose_mesh, x): its position plus the turned x)
+    if (!moved_only || m.normal.x == 0 || m.normal.y == 0 || m.normal.z == 0) m.normal = qm * m.normal;
     for (int i = 0; i < m.count; ++i) {
-      m.points[std::size_t(i)].point_a = apply(pose_mesh, m.points[std::size_t(i)].point_a);
-      m.points[std::size_t(i)].point_b = apply(pose_mesh, m.points[std::size_t(i)].point_b);
+      Vec3& pa = m.points[std::size_t(i)].point_a;
+      Vec3& pb = m.points[std::size_t(i)].point_b;
+      pa = moved_only && no_shared_zero(pose_mesh.position, pa) ? pose_mesh.position + pa : apply(pose_mesh, pa);
+      pb = moved_only && no_shared_zero(pose_mesh.position, pb) ? pose_mesh.position + pb : apply(pose_mesh, pb);
     }
     ++written;
   };

@@ -145,6 +145,51 @@ TEST(CollideHull, RandomCloudsGiveValidHullsThatContainThem) {
   }
 }
 
+// ConvexHull::edge_directions: the first edge of each direction, as comparing every edge
+// with those kept before it (exact equality of the vectors or of one and the other's
+// negation) finds them, in index order; a square pyramid's diamond base has two pairs of
+// opposite edges (8 edges, 6 directions), a cube three directions, a prism's sides one.
+TEST(CollideHull, EdgeDirectionsAreTheFirstEdgeOfEachDirection) {
+  std::vector<std::vector<Vec3>> clouds;
+  clouds.push_back({{0, 0.6, 0}, {0.5, 0, 0}, {-0.5, 0, 0}, {0, 0, 0.5}, {0, 0, -0.5}});
+  clouds.push_back({});
+  for (int i = 0; i < 8; ++i) clouds.back().push_back(Vec3(i & 1 ? 0.5 : -0.5, i & 2 ? 0.25 : -0.25, i & 4 ? 1 : -1));
+  clouds.push_back({});
+  for (int k = 0; k < 12; ++k) {
+    const double a = 2 * kPi * k / 12;
+    clouds.back().push_back({std::cos(a), -1, std::sin(a)});
+    clouds.back().push_back({std::cos(a), 1, std::sin(a)});
+  }
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::uniform_int_distribution<int> lattice(-2, 2);
+  clouds.push_back({});
+  for (int i = 0; i < 40; ++i) clouds.back().push_back(Vec3(u(rng), u(rng), u(rng)));
+  clouds.push_back({});
+  for (int i = 0; i < 200; ++i) clouds.back().push_back(0.5 * Vec3(lattice(rng), lattice(rng), lattice(rng)));
+  std::vector<std::size_t> counts, edges;
+  for (const auto& c : clouds) {
+    const auto hull = ConvexHull::build(c);
+    const auto e = hull->edges();
+    const auto vs = hull->vertices();
+    std::vector<std::uint32_t> expect;
+    std::vector<Vec3> kept;
+    for (std::uint32_t i = 0; i < e.size(); i += 2) {
+      const Vec3 d = vs[e[e[i].next].origin] - vs[e[i].origin];
+      bool seen = false;
+      for (const Vec3& k : kept) seen = seen || k == d || k == -d;
+      if (!seen) kept.push_back(d), expect.push_back(i);
+    }
+    const auto got = hull->edge_directions();
+    EXPECT_EQ(std::vector<std::uint32_t>(got.begin(), got.end()), expect);
+    counts.push_back(got.size()), edges.push_back(e.size() / 2);
+  }
+  EXPECT_EQ(counts[0], 6u);
+  EXPECT_EQ(counts[1], 3u);
+  EXPECT_LE(counts[2], 1 + 12u);  // the sides' one; the caps' edges in 12 equal pairs
+  EXPECT_LT(counts[4], edges[4]);  // a lattice's hull has parallel edges
+}
+
 TEST(CollideHull, FullLatticeGivesTheCube) {
   std::vector<Vec3> pts;
   for (int i = 0; i < 6; ++i)

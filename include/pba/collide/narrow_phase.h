@@ -99,8 +99,9 @@ struct PairQuery {
   NarrowPhaseCache* cache = nullptr;  ///< the pair's cache (may be null), read and updated as collide() does
 };
 
-/// Which SIMD path collide_batch() runs box-box pairs on. Every path gives the same bits;
-/// a path the processor lacks falls back to the best one it has.
+/// Which SIMD path collide_batch() runs box-box pairs on, and collide_mesh() a box's or
+/// hull's edge axes against a triangle (Avx512 there runs the AVX2 lanes). Every path gives
+/// the same bits; a path the processor lacks falls back to the best one it has.
 enum class BatchPath : std::uint8_t {
   Best,    ///< the fastest the processor has (AVX2 where present: measured faster than AVX-512)
   Scalar,  ///< one pair at a time (collide()'s own path)
@@ -146,9 +147,14 @@ struct MeshQueryCache {
 /// flat mesh gets no ghost contacts from the edges between its triangles. Writes at most
 /// out.size() manifolds and returns how many; never allocates. Throws Error like collide().
 /// `cache` (may be null): the triangles near the shape, kept between calls; the same
-/// manifolds, to the bit, with or without it.
+/// manifolds, to the bit, with or without it. `path`: Scalar runs the plain path (a box's
+/// or hull's axes one at a time, every turn by the mesh's rotation made); the others turn the
+/// shape and test its edge axes four at a time in AVX2 lanes where the processor has them,
+/// and leave out the turns of a mesh that is only moved where they give the same bits. The
+/// same manifolds, to the bit, on every path.
 int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
-                 std::span<Manifold> out, const NarrowPhaseSettings& settings = {}, MeshQueryCache* cache = nullptr);
+                 std::span<Manifold> out, const NarrowPhaseSettings& settings = {}, MeshQueryCache* cache = nullptr,
+                 BatchPath path = BatchPath::Best);
 
 // --- GJK and EPA --------------------------------------------------------------------
 

@@ -164,6 +164,13 @@ class ConvexHull {
   /// the arc from u to v can exceed, along any vector, the larger of u's and v's
   /// components. The layout of the narrow phase's vectorised edge bounds.
   std::span<const double> edge_soa() const { return edge_soa_; }
+  /// One half edge (the even one, 2i) of each edge direction, ascending: edge i is left out
+  /// when its vector (the end of half edge 2i less its origin, m) equals an earlier kept
+  /// edge's exactly or is its exact negation (a square pyramid's base: 8 edges, 6
+  /// directions). The narrow phase's edge axes against triangles: parallel edges give the
+  /// same axes to the bit, or their exact negations. Made at build, so a contact need not
+  /// compare its edges pairwise.
+  std::span<const std::uint32_t> edge_directions() const { return edge_directions_; }
   /// Local bounds.
   Aabb bounds() const { return bounds_; }
   /// Mass properties at `density` (kg/m^3), exact for the polyhedron (Mirtich 1996 or
@@ -179,6 +186,7 @@ class ConvexHull {
   std::vector<double> vertex_soa_;          // see vertex_soa()
   std::vector<double> face_soa_;            // see face_soa()
   std::vector<double> edge_soa_;            // see edge_soa()
+  std::vector<std::uint32_t> edge_directions_;  // see edge_directions()
   Vec3 centroid_{0, 0, 0};
   double volume_ = 0;
   double inner_radius_ = 0;
