@@ -20,6 +20,7 @@
 #include "contacts.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -492,6 +493,109 @@ double carried_points_moved(bool in_b, double reach, const PairCache& c, const V
   return glm::length(shift) + (sin_half > 0 ? 2 * reach * sin_half : 0.0);
 }
 
+// Whether a touching pair's manifolds are carried over: its cache's margin still covers this
+// step's, and its bodies' relative pose moved within the reuse thresholds since the cache's
+// (the angle's cosine `cos_half`, the points' travel `reuse`, m). `rel_position`,
+// `rel_rotation`: b's centre and frame in a's frame now, as the plan keeps them.
+bool carried_over(const PairCache& c, double margin, double reuse, double cos_half, bool in_b, double reach,
+                  const Vec3& rel_position, const Quat& rel_rotation) {
+  return c.margin >= margin && std::abs(glm::dot(rel_rotation, c.rel_rotation)) >= cos_half &&
+         carried_points_moved(in_b, reach, c, rel_position, rel_rotation) <= reuse;
+}
+
+// A touching pair's reuse test in a lane (make_manifolds): the bodies (dense indices), its cache
+// (or a blank one), this step's margin and reuse distance (m), and the reach of the body whose
+// points move against the normal's (m).
+struct ReuseLane {
+  std::uint32_t a, b;
+  const PairCache* cache;
+  double margin, reuse, reach;
+};
+
+static_assert(offsetof(PairCache, rel_position) == 0 && offsetof(PairCache, rel_rotation) == 24 &&
+                  offsetof(PairCache, margin) == 56 && sizeof(Quat) == 32 && offsetof(Quat, x) == 0 && offsetof(Quat, w) == 24,
+              "reuse_lanes_avx2 loads a cache's relative pose and margin as two rows of four doubles, a quaternion as one");
+
+#if PBA_EMIT_AVX2
+// four rows of four doubles to four columns (column i's lane k is row k's i-th)
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline void columns4(__m256d r0, __m256d r1, __m256d r2, __m256d r3,
+                                                                           __m256d out[4]) {
+  const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+  const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+  out[0] = _mm256_permute2f128_pd(t0, t2, 0x20), out[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+  out[2] = _mm256_permute2f128_pd(t0, t2, 0x31), out[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+}
+// a Vec3 as a row (its fourth lane 0)
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d row3(const Vec3& v) {
+  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&v.x)), _mm_load_sd(&v.z), 1);
+}
+
+// carried_over() for four lanes at once, in_b false (the normal in a's frame): the plan's
+// relative pose (glm's conjugate, quaternion product and rotation of a vector) and the test,
+// each lane the scalar code's operations in its order, so the same bits and the same outcome;
+// `same` gets 1 or 0 a lane, and `rel` the relative pose a coordinate a row (rel_position's x,
+// y, z, rel_rotation's x, y, z, w; rows of `stride`), for the pairs made anew
+__attribute__((target("avx2"))) void reuse_lanes_avx2(const ReuseLane* lane, const Quat* q, const Vec3* com,
+                                                      double cos_half, std::uint8_t* same, double* rel,
+                                                      std::size_t stride) {
+  using V = __m256d;
+  V qa[4], qb[4], ca[4], cb[4], cp[4], cr[4];  // (x, y, z, w) / (x, y, z, -) / the cache's
+  columns4(_mm256_loadu_pd(&q[lane[0].a].x), _mm256_loadu_pd(&q[lane[1].a].x), _mm256_loadu_pd(&q[lane[2].a].x),
+           _mm256_loadu_pd(&q[lane[3].a].x), qa);
+  columns4(_mm256_loadu_pd(&q[lane[0].b].x), _mm256_loadu_pd(&q[lane[1].b].x), _mm256_loadu_pd(&q[lane[2].b].x),
+           _mm256_loadu_pd(&q[lane[3].b].x), qb);
+  columns4(row3(com[lane[0].a]), row3(com[lane[1].a]), row3(com[lane[2].a]), row3(com[lane[3].a]), ca);
+  columns4(row3(com[lane[0].b]), row3(com[lane[1].b]), row3(com[lane[2].b]), row3(com[lane[3].b]), cb);
+  {
+    const double* c0 = &lane[0].cache->rel_position.x;
+    const double* c1 = &lane[1].cache->rel_position.x;
+    const double* c2 = &lane[2].cache->rel_position.x;
+    const double* c3 = &lane[3].cache->rel_position.x;
+    // (rel_position x y z, rel_rotation x) and (rel_rotation y z w, margin)
+    columns4(_mm256_loadu_pd(c0), _mm256_loadu_pd(c1), _mm256_loadu_pd(c2), _mm256_loadu_pd(c3), cp);
+    columns4(_mm256_loadu_pd(c0 + 4), _mm256_loadu_pd(c1 + 4), _mm256_loadu_pd(c2 + 4), _mm256_loadu_pd(c3 + 4), cr);
+  }
+  const V sign = _mm256_set1_pd(-0.0);
+  const V c_rx = cp[3], c_ry = cr[0], c_rz = cr[1], c_rw = cr[2], c_margin = cr[3];
+  const V margin = _mm256_set_pd(lane[3].margin, lane[2].margin, lane[1].margin, lane[0].margin);
+  const V reuse = _mm256_set_pd(lane[3].reuse, lane[2].reuse, lane[1].reuse, lane[0].reuse);
+  const V reach = _mm256_set_pd(lane[3].reach, lane[2].reach, lane[1].reach, lane[0].reach);
+  // qa_inv = conjugate(q_a): (w, -x, -y, -z)
+  const V iw = qa[3], ix = _mm256_xor_pd(qa[0], sign), iy = _mm256_xor_pd(qa[1], sign), iz = _mm256_xor_pd(qa[2], sign);
+  // rel_position = qa_inv * (com_b - com_a): glm's v + ((u x v) w + u x (u x v)) 2, u = (ix, iy, iz)
+  const V dx = cb[0] - ca[0], dy = cb[1] - ca[1], dz = cb[2] - ca[2];
+  const V uvx = iy * dz - dy * iz, uvy = iz * dx - dz * ix, uvz = ix * dy - dx * iy;
+  const V uuvx = iy * uvz - uvy * iz, uuvy = iz * uvx - uvz * ix, uuvz = ix * uvy - uvx * iy;
+  const V two = _mm256_set1_pd(2.0);
+  const V px = dx + (uvx * iw + uuvx) * two, py = dy + (uvy * iw + uuvy) * two, pz = dz + (uvz * iw + uuvz) * two;
+  // rel_rotation = qa_inv * q_b (glm's product, p = qa_inv, q = q_b)
+  const V bx = qb[0], by = qb[1], bz = qb[2], bw = qb[3];
+  const V rw = iw * bw - ix * bx - iy * by - iz * bz;
+  const V rx = iw * bx + ix * bw + iy * bz - iz * by;
+  const V ry = iw * by + iy * bw + iz * bx - ix * bz;
+  const V rz = iw * bz + iz * bw + ix * by - iy * bx;
+  // |dot(rel_rotation, c.rel_rotation)|: (w w' + x x') + (y y' + z z')
+  const V along = _mm256_andnot_pd(sign, (rw * c_rw + rx * c_rx) + (ry * c_ry + rz * c_rz));
+  // carried_points_moved: turn = conjugate(c.rel_rotation) * rel_rotation (its vector part)
+  const V jw = c_rw, jx = _mm256_xor_pd(c_rx, sign), jy = _mm256_xor_pd(c_ry, sign), jz = _mm256_xor_pd(c_rz, sign);
+  const V tx = jw * rx + jx * rw + jy * rz - jz * ry;
+  const V ty = jw * ry + jy * rw + jz * rx - jx * rz;
+  const V tz = jw * rz + jz * rw + jx * ry - jy * rx;
+  const V sin_half = _mm256_sqrt_pd(tx * tx + ty * ty + tz * tz);
+  const V sx = px - cp[0], sy = py - cp[1], sz = pz - cp[2];
+  const V length = _mm256_sqrt_pd(sx * sx + sy * sy + sz * sz);
+  const V turned = _mm256_and_pd(_mm256_cmp_pd(sin_half, _mm256_setzero_pd(), _CMP_GT_OQ), two * reach * sin_half);
+  const V moved = length + turned;
+  const V ok = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(c_margin, margin, _CMP_GE_OQ),
+                                           _mm256_cmp_pd(along, _mm256_set1_pd(cos_half), _CMP_GE_OQ)),
+                             _mm256_cmp_pd(moved, reuse, _CMP_LE_OQ));
+  const int bits = _mm256_movemask_pd(ok);
+  for (int k = 0; k < 4; ++k) same[k] = static_cast<std::uint8_t>(bits >> k & 1);
+  const V out[7] = {px, py, pz, rx, ry, rz, rw};
+  for (int i = 0; i < 7; ++i) _mm256_storeu_pd(rel + i * stride, out[i]);
+}
+#endif
+
 }  // namespace
 
 void RigidContacts::make_manifolds(RigidBodySystem& s) {
@@ -556,16 +660,34 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       }
     }
   };
+  // the reuse tests' lanes (make_manifolds' scratch, on the stack): by touching pair of the
+  // span, its inputs, its place in the span, whether the normal is b's, and the outcome (the
+  // lanes padded to a multiple of four with the last pair's)
+  std::array<ReuseLane, kSpan + 3> lanes;
+  std::array<std::uint8_t, kSpan + 3> lane_same;
+  std::array<std::uint8_t, kSpan> lane_pair, lane_in_b;
+  // and on the SIMD paths their relative poses, a coordinate a row (reuse_lanes_avx2)
+  constexpr std::size_t kRelStride = kSpan + 4;
+  std::array<double, 7 * kRelStride> lane_rel;
+  bool rel_made = false;
+  // the scalar reuse test of a lane (the lanes' arithmetic, one pair)
+  auto carried_scalar = [&](const ReuseLane& l, bool in_b) {
+    const Quat qa_inv = glm::conjugate(s.q_[l.a]);
+    return carried_over(*l.cache, l.margin, l.reuse, cos_half, in_b, l.reach, qa_inv * (s.com_[l.b] - s.com_[l.a]),
+                        qa_inv * s.q_[l.b]);
+  };
   for (std::size_t first = 0; first < shape_pairs.size();) {
     box_queries.clear();
-    std::size_t last = first;
-    for (; last < shape_pairs.size() && last - first < kSpan && box_queries.size() < kBoxes; ++last) {
-      prefetch_ahead(last);
-      const ShapePair& p = shape_pairs[last];
+    // the span's fates, and its touching pairs' margins and reuse distances into the lanes
+    const std::size_t end = std::min(shape_pairs.size(), first + kSpan);
+    std::size_t touching = 0;
+    for (std::size_t k = first; k < end; ++k) {
+      prefetch_ahead(k);
+      const ShapePair& p = shape_pairs[k];
       const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
-      fates[last - first] = fate_of(p, a, b);
-      if (fates[last - first] != PairPlan::Fate::Touching) continue;
-      PairPlan& plan = plans[last - first];
+      fates[k - first] = fate_of(p, a, b);
+      if (fates[k - first] != PairPlan::Fate::Touching) continue;
+      PairPlan& plan = plans[k - first];
       // points are made as far out as the two bodies can close in one step (speculative
       // contacts) (up to each body's size: faster ones are caught by the continuous pass)
       // (the setting's reach, or less for a small body: pair_speculative, with how far the
@@ -583,26 +705,66 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
         plan.reuse = pair_reuse(cs, thin);
       }
       plan.margin = reach + travel[a] + travel[b];
-      // b's centre and frame in a's frame, against where they were when the manifolds were made
-      const Quat qa_inv = glm::conjugate(s.q_[a]);
-      plan.rel_position = qa_inv * (s.com_[b] - s.com_[a]);
-      plan.rel_rotation = qa_inv * s.q_[b];
-      const PairCache& c = p.cache == kNoIndex ? blank : caches[p.cache];
       const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;  // as collide_pair keeps it
-      plan.same = reuse && c.margin >= plan.margin &&
-                  std::abs(glm::dot(plan.rel_rotation, c.rel_rotation)) >= cos_half &&
-                  carried_points_moved(in_b, in_b ? s.extent_[a] : s.extent_[b], c, plan.rel_position,
-                                       plan.rel_rotation) <= plan.reuse;
+      lanes[touching] = {a, b, p.cache == kNoIndex ? &blank : &caches[p.cache], plan.margin, plan.reuse,
+                         in_b ? s.extent_[a] : s.extent_[b]};
+      lane_pair[touching] = static_cast<std::uint8_t>(k - first), lane_in_b[touching] = in_b;
+      ++touching;
+    }
+    // the reuse tests: b's centre and frame in a's frame against where they were when the
+    // manifolds were made, four pairs at a time on the SIMD paths (the same bits; one pair at
+    // a time, the plan's glm arithmetic was a third of the resting 2870 pyramid's
+    // make_manifolds, some 170 instructions a pair: docs/benchmarks.md, "The reuse test in lanes")
+    rel_made = false;
+    if (reuse) {
+      std::size_t t = 0;
+#if PBA_EMIT_AVX2
+      if (simd != SimdPath::Scalar && touching > 0) {
+        for (std::size_t k = touching; k % 4 != 0; ++k) lanes[k] = lanes[touching - 1];
+        for (; t < touching; t += 4)
+          reuse_lanes_avx2(&lanes[t], s.q_.data(), s.com_.data(), cos_half, &lane_same[t], &lane_rel[t], kRelStride);
+        rel_made = true;
+        // (the lanes hold the normal in a's frame; a dynamic body on a static or kinematic
+        // one that comes first in the pair holds it in b's)
+        for (std::size_t k = 0; k < touching; ++k)
+          if (lane_in_b[k]) lane_same[k] = carried_scalar(lanes[k], true);
+      }
+#endif
+      for (; t < touching; ++t) lane_same[t] = carried_scalar(lanes[t], lane_in_b[t]);
+    }
+    // the pairs made anew: their relative pose for the cache, and the span's box-box ones to
+    // the batch (the span ends at the kBoxes-th)
+    std::size_t last = end;
+    for (std::size_t t = 0; t < touching; ++t) {
+      const std::size_t k = first + lane_pair[t];
+      PairPlan& plan = plans[lane_pair[t]];
+      plan.same = reuse && lane_same[t];
       plan.batched = kNoIndex;
+      if (plan.same) continue;
+      const ShapePair& p = shape_pairs[k];
+      const std::uint32_t a = lanes[t].a, b = lanes[t].b;
+      if (rel_made) {
+        const double* r = &lane_rel[t];
+        plan.rel_position = Vec3(r[0], r[kRelStride], r[2 * kRelStride]);
+        plan.rel_rotation = Quat(r[6 * kRelStride], r[3 * kRelStride], r[4 * kRelStride], r[5 * kRelStride]);
+      } else {
+        const Quat qa_inv = glm::conjugate(s.q_[a]);
+        plan.rel_position = qa_inv * (s.com_[b] - s.com_[a]);
+        plan.rel_rotation = qa_inv * s.q_[b];
+      }
       const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
       const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
-      if (plan.same || sa.shape.type != ShapeType::Box || sb.shape.type != ShapeType::Box) continue;
+      if (sa.shape.type != ShapeType::Box || sb.shape.type != ShapeType::Box) continue;
       plan.batched = static_cast<std::uint32_t>(box_queries.size());
       NarrowPhaseCache* narrow = &fresh_narrow[plan.batched];
       if (p.cache == kNoIndex) *narrow = NarrowPhaseCache{};
       else narrow = &caches[p.cache].narrow;
       box_queries.push_back({&sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), &sb.shape,
                              shape_pose(s, p.proxy_b, b, p.shape_b), plan.margin + plan.reuse, narrow});
+      if (box_queries.size() == kBoxes) {
+        last = k + 1;
+        break;
+      }
     }
     collide_batch(box_queries, {box_manifolds.data(), box_queries.size()}, ConvexMethod::Sat, path);
 
