@@ -198,9 +198,10 @@ struct ContactSettings {
   /// rung on the halving's conditions judged at its own rate and after kCalmTime (a second) at
   /// the rung above; none under this. The default 3 is the fewest at which the pyramids of the
   /// benchmarks sag no more than Bullet's (at 2 the Jolt pyramid of 2 m cubes sags 8.5 mm against
-  /// Bullet's 8.0, at 3 4.8 mm: docs/rigid-bodies.md, "A ladder below the halving"); 4 keeps the
-  /// halving alone, as before 2026-12-05, and a `substeps` whose half is under it is not lowered
-  /// at all (4 at the default 3: halved to 2 before).
+  /// Bullet's 8.0, at 3 4.8 mm: docs/rigid-bodies.md, "A ladder below the halving"). Half of
+  /// `substeps` keeps the halving alone, as before 2026-12-05 (4 at the default 8; 3 for 6);
+  /// a `substeps` whose half is under it is not lowered at all (4 or 2 at the default 3: halved
+  /// to 2 and 1 before).
   int auto_substeps_least = 3;
   int iterations = 10;  ///< sequential impulses: velocity iterations per step, in [1, 1000]
   /// TGS: biased contact iterations per substep; XPBD: position iterations per substep; in

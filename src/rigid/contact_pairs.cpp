@@ -973,7 +973,9 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     MeshQueryCache* const near = &mesh_queries[c.mesh_query];
     int count = 0;
     for (;;) {
-      count = collide_mesh(convex, mesh_a ? pose_b : pose_a, mesh, mesh_a ? pose_a : pose_b, mesh_scratch, ns, near);
+      // (the system's scalar path reaches the mesh's lanes too: the same bits, tested both ways)
+      count = collide_mesh(convex, mesh_a ? pose_b : pose_a, mesh, mesh_a ? pose_a : pose_b, mesh_scratch, ns, near,
+                           simd == SimdPath::Scalar ? BatchPath::Scalar : BatchPath::Best);
       if (count < static_cast<int>(mesh_scratch.size())) break;
       mesh_scratch.resize(2 * mesh_scratch.size());
     }
