@@ -100,8 +100,10 @@ void LinePlot(const char* id, const std::vector<PlotSeries>& series, const PlotA
       const float c = 0.5f * (y_lo + y_hi);
       y_lo = c - 0.5f * axes.y_min_span, y_hi = c + 0.5f * axes.y_min_span;
     }
+    // padded, but not past the clamps: a count's axis clamped at 0 padded below read as less
+    // than none (-80 bodies under the rain's 1000)
     const float pad = 0.08f * (y_hi - y_lo);
-    y_lo -= pad, y_hi += pad;
+    y_lo = std::max(y_lo - pad, axes.y_clamp_lo), y_hi = std::min(y_hi + pad, axes.y_clamp_hi);
   }
 
   // frame: room on the left for the widest tick label, below for the x label (and log x's

@@ -239,7 +239,9 @@ std::string integrators(const pba::World& w) {
         std::snprintf(part, sizeof part, "%g mm", 1e3 * c.auto_substeps_sag);
         sag += (sag.empty() ? "" : " and ") + std::string(part);
       }
-      s += " (more for tall columns" + (sag.empty() ? "" : ", halved under a sag of " + sag) + ")";
+      // (below the setting: 8 -> 4 -> 3 at the defaults, none under auto_substeps_least)
+      const std::string fewer = ", fewer at rest (at least " + std::to_string(c.auto_substeps_least) + ") under a sag of ";
+      s += " (more for tall columns" + (sag.empty() ? "" : fewer + sag) + ")";
     }
   }
   return s.empty() ? "none (nothing to integrate)" : s;

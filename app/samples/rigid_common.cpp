@@ -36,9 +36,9 @@ void RigidSolverKnobs(ContactSettings& s, int in_use) {
     // a line in a narrow panel (a blank block at 640x360)
     char label[64];
     if (in_use > 0)
-      std::snprintf(label, sizeof label, "more for tall columns (%d in use)###auto_substeps", in_use);
+      std::snprintf(label, sizeof label, "adapt to the pile (%d in use)###auto_substeps", in_use);
     else
-      std::snprintf(label, sizeof label, "more for tall columns###auto_substeps");
+      std::snprintf(label, sizeof label, "adapt to the pile###auto_substeps");
     ImGui::Checkbox(label, &s.auto_substeps);
     if (s.auto_substeps) {
       // the halving where the bodies allow it: its sag budgets, a percentage of each body's
@@ -52,6 +52,10 @@ void RigidSolverKnobs(ContactSettings& s, int in_use) {
       ImGui::SetNextItemWidth(-110);
       if (ImGui::SliderFloat("halve: sag mm", &mm, 0, 20, mm > 0 ? "%.1f mm" : "off"))
         s.auto_substeps_sag = 1e-3 * std::max(0.0f, mm);
+      // the ladder's floor below the halving (8 -> 4 -> 3 at the default 3)
+      ImGui::SetNextItemWidth(-110);
+      ImGui::SliderInt("fewest substeps", &s.auto_substeps_least, 1, 64);
+      s.auto_substeps_least = std::clamp(s.auto_substeps_least, 1, 64);
     }
   }
   if (s.solver == RigidSolverType::SoftStep) {

@@ -62,7 +62,10 @@ struct Trace {
     t.clear();
     for (auto& s : y) s.clear();
   }
-  void plot(const char* id, std::initializer_list<Color> colours, const char* y_label, float height = 110) const {
+  // `counts`: the series are counts, never negative, so the fitted y range starts at 0 (a
+  // count's axis reaching below zero read as bodies less than none)
+  void plot(const char* id, std::initializer_list<Color> colours, const char* y_label, float height = 110,
+            bool counts = false) const {
     if (t.empty()) return;
     std::vector<PlotSeries> s;
     std::size_t k = 0;
@@ -70,6 +73,7 @@ struct Trace {
     PlotAxes ax;
     ax.x_label = "t (s)";
     ax.y_label = y_label;
+    if (counts) ax.y_include_zero = true, ax.y_clamp_lo = 0;
     LinePlot(id, s, ax, height);
   }
 };
@@ -283,7 +287,7 @@ class Rain final : public RigidSample {
     ImGui::SetNextItemWidth(-110);
     if (ImGui::SliderInt("bodies", &count_, 1, 20000, "%d", ImGuiSliderFlags_Logarithmic)) count_ = std::max(count_, 1);
     Readout();
-    trace_.plot("sleep", {colors::blue, colors::grey}, "bodies awake (blue), asleep (grey)");
+    trace_.plot("sleep", {colors::blue, colors::grey}, "bodies awake (blue), asleep (grey)", 110, true);
     ImGui::TextWrapped(
         "Bodies touching each other form islands; an island whose bodies have all been slower than the sleep "
         "tolerances for half a second falls asleep (drawn faded) and costs nothing until something fast comes "

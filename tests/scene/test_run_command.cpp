@@ -242,12 +242,13 @@ TEST(RunCommand, SummarySaysWhenTheSoftStepPicksItsSubsteps) {
   const std::string grows = summary("pba_run_auto.json", R"({"auto_substeps_sag_fraction": 0})");
   EXPECT_NE(grows.find("soft-step x8 substeps (more for tall columns)\n"), std::string::npos) << grows;
   const std::string defaults = summary("pba_run_default.json", "{}");
-  EXPECT_NE(defaults.find("soft-step x8 substeps (more for tall columns, halved under a sag of 2% of each body's size)\n"),
+  EXPECT_NE(defaults.find("soft-step x8 substeps (more for tall columns, fewer at rest (at least 3) under a sag of 2% "
+                          "of each body's size)\n"),
             std::string::npos)
       << defaults;
-  const std::string halves = summary("pba_run_halve.json", R"({"auto_substeps_sag": 0.01})");
-  EXPECT_NE(halves.find("soft-step x8 substeps (more for tall columns, halved under a sag of 2% of each body's size and "
-                        "10 mm)\n"),
+  const std::string halves = summary("pba_run_halve.json", R"({"auto_substeps_sag": 0.01, "auto_substeps_least": 4})");
+  EXPECT_NE(halves.find("soft-step x8 substeps (more for tall columns, fewer at rest (at least 4) under a sag of 2% of "
+                        "each body's size and 10 mm)\n"),
             std::string::npos)
       << halves;
 }
