@@ -164,7 +164,9 @@ struct HullBuilder {
       if (first < 0) d = -d;
       keys[i] = {d + Vec3(0.0), 2 * i};
     }
-    auto less = [](const Vec3& a, const Vec3& b) { return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z; };
+    auto less = [](const Vec3& a, const Vec3& b) {
+      return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+    };
     std::sort(keys.begin(), keys.end(), [&](const auto& a, const auto& b) {
       return less(a.first, b.first) || (a.first == b.first && a.second < b.second);
     });

@@ -567,12 +567,16 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   // the substeps at `shift` (2^shift times `substeps`, or a rung below it), and the factor on
   // the substeps and contact_hertz there (exactly 2^shift for the powers of two)
   auto count = [&](int shift) { return shift >= 0 ? base << shift : rung[static_cast<std::size_t>(-shift - 1)]; };
-  auto scale = [&](int shift) { return shift >= 0 ? std::ldexp(1.0, shift) : static_cast<double>(count(shift)) / base; };
+  auto scale = [&](int shift) {
+    return shift >= 0 ? std::ldexp(1.0, shift) : static_cast<double>(count(shift)) / base;
+  };
   // the contacts' angular rate (rad/s) at `shift` (the stiffness capped at a quarter of the
   // substep rate, as the passes take it), and a static contact's (twice that, at most one
   // radian a substep)
   auto rate = [&](int shift) { return 2 * kPi * (std::min(settings_.contact_hertz, 0.25 * base / dt) * scale(shift)); };
-  auto static_rate = [&](int shift) { return std::min(2 * rate(shift), detail::kStaticStepAngle * (base / dt * scale(shift))); };
+  auto static_rate = [&](int shift) {
+    return std::min(2 * rate(shift), detail::kStaticStepAngle * (base / dt * scale(shift)));
+  };
   const double g = glm::length(gravity);
   // the same contact pairs as the last step
   const bool settled = c.pairs_same && c.pairs.size() == c.last_count;
@@ -620,7 +624,8 @@ int RigidBodySystem::step_substeps(double dt, const Vec3& gravity) {
   // this step's by `softened`: the larger of the dynamic and the static springs' squared
   // ratios, which never lowers it for springs that did not soften alike; exactly 1 at a fixed
   // dt and settings
-  const double w_half = least < 0 ? rate(-1) : 0.5 * rate(0), ws_half = least < 0 ? static_rate(-1) : 0.5 * static_rate(0);
+  const double w_half = least < 0 ? rate(-1) : 0.5 * rate(0),
+               ws_half = least < 0 ? static_rate(-1) : 0.5 * static_rate(0);
   auto softened = [&](double w, double ws) {
     return w > 0 && ws > 0 && w_half > 0 && ws_half > 0 ? std::max(w * w / (w_half * w_half), ws * ws / (ws_half * ws_half))
                                                         : 1.0;

@@ -993,7 +993,8 @@ TEST(RigidStacking, APileStillLandingIsNotHalved) {
   pba::test::Lowering lowering;
   for (int i = 0; i < 420; ++i) {
     if (i % 30 == 0 && i < 180)
-      bodies.push_back(s.create({.pose = {{3 + 0.5 * (i / 30), 1, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.2)}}}));
+      bodies.push_back(
+          s.create({.pose = {{3 + 0.5 * (i / 30), 1, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.2)}}}));
     s.step(1.0 / 60, kGravity);
     taken.push_back(s.profile().substeps);
     lowering.record(i, s.profile().substeps, pba::test::any_unsettled(s, bodies));
@@ -1089,7 +1090,8 @@ TEST(RigidStacking, AtTheDefaultsARestingPileOfOneMetreCubesTakesFourSubstepsThe
   for (auto i = static_cast<std::size_t>(lowering.halved); i < taken.size(); ++i)
     ASSERT_EQ(taken[i], static_cast<int>(i) < lowering.third ? 4 : 3) << "step " << i;
   // a second after it came to rest (kCalmTime), to the step, at each rung
-  EXPECT_EQ(lowering.halved, pba::test::halving_step(lowering.unsettled)) << "last unsettled at step " << lowering.unsettled;
+  EXPECT_EQ(lowering.halved, pba::test::halving_step(lowering.unsettled))
+      << "last unsettled at step " << lowering.unsettled;
   EXPECT_EQ(lowering.third, pba::test::next_rung_step(lowering.halved, lowering.unsettled_at_4))
       << "last unsettled at 4 at step " << lowering.unsettled_at_4;
   // the sag at rest on each rung's springs: the last step before the next rung, and the end
@@ -1289,7 +1291,8 @@ TEST(RigidSmallBodies, BallsOfAFewMillimetresKeepEightSubstepsAtTheDefaults) {
         ASSERT_EQ(s.profile().substeps, expected) << "r = " << r << " on " << theta << " rad at step " << i;
       }
       if (i > 121) {
-        ASSERT_EQ(s.profile().substeps, expected == 4 ? 3 : 8) << "r = " << r << " on " << theta << " rad at step " << i;
+        ASSERT_EQ(s.profile().substeps, expected == 4 ? 3 : 8)
+            << "r = " << r << " on " << theta << " rad at step " << i;
       }
     }
   }
