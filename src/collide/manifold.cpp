@@ -3,6 +3,7 @@
 // ManifoldBetweenTwoFaces builds a manifold from one penetration axis).
 #include <cmath>
 
+#include "core/lanes.h"
 #include "narrow_internal.h"
 
 namespace pba {
@@ -136,17 +137,15 @@ void box_plane_corners(const Vec3& h, const Pose& pa, const Vec3& np, double off
   using v2d = double __attribute__((vector_size(16)));
   auto all = [](double x) { return v2d{x, x}; };
   const Quat& q = pa.rotation;
-  const v2d qx = all(q.x), qy = all(q.y), qz = all(q.z), qw = all(q.w), two = all(2.0);
+  const v2d qx = all(q.x), qy = all(q.y), qz = all(q.z), qw = all(q.w);
   const v2d vx = {-h.x, h.x};
   double pax[8], pay[8], paz[8], pbx[8], pby[8], pbz[8], depth[8];
   for (int k = 0; k < 4; ++k) {
     // corners 2k and 2k + 1: x of both signs, y and z by k's bits (i & 2, i & 4 of corner i)
     const v2d vy = all((k & 1) ? h.y : -h.y), vz = all((k & 2) ? h.z : -h.z);
-    // uv = cross(q.xyz, v), uuv = cross(q.xyz, uv), turned = v + ((uv * w) + uuv) * 2
-    const v2d uvx = qy * vz - vy * qz, uvy = qz * vx - vz * qx, uvz = qx * vy - vx * qy;
-    const v2d uuvx = qy * uvz - uvy * qz, uuvy = qz * uvx - uvz * qx, uuvz = qx * uvy - uvx * qy;
-    const v2d tx = vx + ((uvx * qw) + uuvx) * two, ty = vy + ((uvy * qw) + uuvy) * two,
-              tz = vz + ((uvz * qw) + uuvz) * two;
+    // the corner turned as glm turns a vector
+    v2d tx, ty, tz;
+    detail::lanes::quat_turn(qx, qy, qz, qw, vx, vy, vz, tx, ty, tz);
     // apply(): the position plus the turned corner; then the core's point on the surface
     const v2d ax = (all(pa.position.x) + tx) - all(rn.x), ay = (all(pa.position.y) + ty) - all(rn.y),
               az = (all(pa.position.z) + tz) - all(rn.z);

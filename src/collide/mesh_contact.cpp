@@ -89,9 +89,8 @@ enum class Axis { Triangle, Face, Edges, Other };
     const std::uint32_t i1 = std::min(i + 1, n - 1), i2 = std::min(i + 2, n - 1), i3 = std::min(i + 3, n - 1);
     const V vx = {in[i].x, in[i1].x, in[i2].x, in[i3].x}, vy = {in[i].y, in[i1].y, in[i2].y, in[i3].y},
             vz = {in[i].z, in[i1].z, in[i2].z, in[i3].z};
-    const V ux = qy * vz - vy * qz, uy = qz * vx - vz * qx, uz = qx * vy - vx * qy;
-    const V uux = qy * uz - uy * qz, uuy = qz * ux - uz * qx, uuz = qx * uy - ux * qy;
-    V rx = vx + ((ux * qw) + uux) * 2.0, ry = vy + ((uy * qw) + uuy) * 2.0, rz = vz + ((uz * qw) + uuz) * 2.0;
+    V rx, ry, rz;
+    detail::lanes::quat_turn(qx, qy, qz, qw, vx, vy, vz, rx, ry, rz);
     if (at) rx = at->x + rx, ry = at->y + ry, rz = at->z + rz;
     for (std::uint32_t l = 0; l < 4 && i + l < n; ++l) out[i + l] = Vec3(rx[l], ry[l], rz[l]);
   }

@@ -1,6 +1,7 @@
 // Private to the library: the lane arithmetic shared by the rigid contact kernels
-// (rigid/contact_wide.cpp), the rigid free motion (rigid/integrate_wide.cpp) and the batched
-// box-box narrow phase (collide/sat_box.cpp). One template over the lane type runs every SIMD
+// (rigid/contact_wide.cpp), the rigid free motion (rigid/integrate_wide.cpp), the batched
+// box-box narrow phase (collide/sat_box.cpp), the mesh contacts' and a box's corners on a plane
+// (collide/mesh_contact.cpp, collide/manifold.cpp) and the reuse test (rigid/contact_pairs.cpp). One template over the lane type runs every SIMD
 // path: a double (scalar), 4 doubles (AVX2) or 8 (AVX-512), as GCC vector extensions; each
 // lane does the same operations in the same order on every path, so all give the same bits.
 // Include it only in files whose wide functions are compiled with per-function targets.
@@ -75,6 +76,17 @@ PBA_LANES V vsqrt(V x) {
     for (int i = 0; i < static_cast<int>(sizeof(V) / sizeof(x[0])); ++i) r[i] = std::sqrt(x[i]);
     return r;
   }
+}
+
+/// r = v turned by the unit quaternion (qx, qy, qz, qw), lane by lane in glm's operations and
+/// order (v + ((u x v) w + u x (u x v)) 2, u = (qx, qy, qz)): the bits of glm's q * v on every
+/// path. Any lane type (GCC vectors of 2, 4 or 8 doubles, __m256d, a double).
+template <class V>
+PBA_LANES void quat_turn(V qx, V qy, V qz, V qw, V vx, V vy, V vz, V& rx, V& ry, V& rz) {
+  const V uvx = qy * vz - vy * qz, uvy = qz * vx - vz * qx, uvz = qx * vy - vx * qy;
+  const V uuvx = qy * uvz - uvy * qz, uuvy = qz * uvx - uvz * qx, uuvz = qx * uvy - uvx * qy;
+  const V two = splat<V>(2.0);
+  rx = vx + ((uvx * qw) + uuvx) * two, ry = vy + ((uvy * qw) + uuvy) * two, rz = vz + ((uvz * qw) + uuvz) * two;
 }
 
 /// Lane i.

@@ -35,6 +35,7 @@
 #endif
 
 #include "collide/narrow_internal.h"
+#include "core/lanes.h"
 
 namespace pba::detail {
 
@@ -562,12 +563,11 @@ __attribute__((target("avx2"))) void reuse_lanes_avx2(const ReuseLane* lane, con
   const V reach = _mm256_set_pd(lane[3].reach, lane[2].reach, lane[1].reach, lane[0].reach);
   // qa_inv = conjugate(q_a): (w, -x, -y, -z)
   const V iw = qa[3], ix = _mm256_xor_pd(qa[0], sign), iy = _mm256_xor_pd(qa[1], sign), iz = _mm256_xor_pd(qa[2], sign);
-  // rel_position = qa_inv * (com_b - com_a): glm's v + ((u x v) w + u x (u x v)) 2, u = (ix, iy, iz)
+  // rel_position = qa_inv * (com_b - com_a), as glm turns a vector
   const V dx = cb[0] - ca[0], dy = cb[1] - ca[1], dz = cb[2] - ca[2];
-  const V uvx = iy * dz - dy * iz, uvy = iz * dx - dz * ix, uvz = ix * dy - dx * iy;
-  const V uuvx = iy * uvz - uvy * iz, uuvy = iz * uvx - uvz * ix, uuvz = ix * uvy - uvx * iy;
+  V px, py, pz;
+  detail::lanes::quat_turn(ix, iy, iz, iw, dx, dy, dz, px, py, pz);
   const V two = _mm256_set1_pd(2.0);
-  const V px = dx + (uvx * iw + uuvx) * two, py = dy + (uvy * iw + uuvy) * two, pz = dz + (uvz * iw + uuvz) * two;
   // rel_rotation = qa_inv * q_b (glm's product, p = qa_inv, q = q_b)
   const V bx = qb[0], by = qb[1], bz = qb[2], bw = qb[3];
   const V rw = iw * bw - ix * bx - iy * by - iz * bz;
