@@ -1070,15 +1070,30 @@ void RigidContacts::refresh_inertia(RigidBodySystem& s) {
   // the bodies that turned too far from their inverse inertia's orientation: (r - 1) a >
   // kInertiaTurn, a the angle between the orientations, cos(a / 2) = |q . q_ref|, taken as
   // 8 (1 - cos(a / 2)) = a^2 (its small-angle form; larger angles only refresh sooner)
+  // (in the soft step's substeps the frames now are in the free motion's lanes: a refreshed
+  // body's is put into q_, where world_inv_inertias reads it)
   refresh_list.clear();
   for (std::size_t kind = 0; kind < moving.size(); ++kind) {
     if (static_cast<FreeRotation>(kind) == FreeRotation::Round) continue;
-    for (const std::uint32_t i : moving[kind]) {
-      const Vec3& m = s.inv_inertia_[i];
-      const double least = std::min({m.x, m.y, m.z});
-      const double spread = std::min(std::max({m.x, m.y, m.z}), kSolverInertiaRatio * least) / least - 1;
-      const double c = std::abs(glm::dot(s.q_[i], inertia_q[i]));
+    const double* lanes = free_lanes_of(kind);
+    for (std::size_t j = 0; j < moving[kind].size(); ++j) {
+      const std::uint32_t i = moving[kind][j];
+      double spread;
+      Quat q;
+      if (lanes) {  // (the spread formed once a step by the arithmetic below, integrate_wide.cpp's gather)
+        const double* at = lanes + free_lane_at(j);
+        spread = at[kLineSpread * kFreeLaneWidth];
+        at += kLineQ * kFreeLaneWidth;
+        q = Quat(at[0], at[kFreeLaneWidth], at[2 * kFreeLaneWidth], at[3 * kFreeLaneWidth]);
+      } else {
+        const Vec3& m = s.inv_inertia_[i];
+        const double least = std::min({m.x, m.y, m.z});
+        spread = std::min(std::max({m.x, m.y, m.z}), kSolverInertiaRatio * least) / least - 1;
+        q = s.q_[i];
+      }
+      const double c = std::abs(glm::dot(q, inertia_q[i]));
       if (8 * (1 - c) * spread * spread <= kInertiaTurn * kInertiaTurn) continue;
+      s.q_[i] = q;
       refreshed[i] = 1;
       refresh_list.push_back(i);
     }

@@ -624,6 +624,13 @@ struct RigidContacts {
   // rotation (FreeRotation, integrate_wide.cpp)
   std::array<std::vector<std::uint32_t>, kFreeRotations> moving;
   bool moving_damped = true;  // some of them have linear or angular damping
+  // the free motion's lanes over the soft step's substeps (solver.h, FreeLine): kind k's blocks
+  // from free_lanes.data() + free_lanes_at[k] (64-byte aligned). While live (from
+  // gather_free_motion to scatter_free_motion) the moving bodies' centres and frames are the
+  // lanes', not the system's arrays'
+  std::vector<double> free_lanes;
+  std::array<std::size_t, kFreeRotations> free_lanes_at{};
+  bool free_lanes_live = false;
   std::vector<std::uint32_t> kinematic;  // this step's kinematic bodies, in index order (their exact motion)
   bool built = false;       // the blocks hold this step's manifolds (cleared by store())
   bool has_colors = false;  // color_of holds the last step's colours
@@ -641,6 +648,13 @@ struct RigidContacts {
   /// masses); their frames, arms and impulses stay. A body of three equal moments never needs
   /// it (its inverse inertia is the same in every frame).
   void refresh_inertia(RigidBodySystem& s);
+  /// The free motion's lanes of kind k (FreeRotation) while they are live, else nullptr.
+  double* free_lanes_of(std::size_t k) { return free_lanes_live ? free_lanes.data() + free_lanes_at[k] : nullptr; }
+  /// Fills the free motion's lanes of this step's moving bodies for substeps of h (s) under
+  /// gravity (m/s^2), and makes them live (rigid_body.cpp).
+  void gather_free_motion(RigidBodySystem& s, double h, const Vec3& gravity);
+  /// Puts the lanes' centres and frames back into the bodies' arrays; the lanes are no longer live.
+  void scatter_free_motion(RigidBodySystem& s);
   /// World inverse inertias; for the velocity solvers, the colours, the blocks and the
   /// carried impulses in the warm-start accumulators.
   void prepare(RigidBodySystem& s);

@@ -23,6 +23,14 @@
 // motion by whole rows and a transpose on AVX-512; the all-lanes tests use the targets'
 // compare-to-mask instructions; on AVX-512 the positions run two blocks of 8 at once, as the
 // splitting's five sub-flows are one long chain of dependent operations per block.
+//
+// The soft step's substeps read and write the bodies' own fields in the free motion's lanes
+// (solver.h, FreeLine): copied once a step into blocks of 8 of each kind's list (gather), what
+// stays the same over the substeps formed there once, the centres and frames put back after
+// the last substep (scatter). The rain's boxes and balls alternate, so each kind's list steps
+// by 2 and every block's fields went lane by lane, eight substeps a step; in lanes they are
+// whole vectors (docs/benchmarks.md, "The free motion in lanes"). Only where the numbers live
+// changes: the same bits.
 #include "solver.h"
 
 #include <cmath>
@@ -276,6 +284,37 @@ PBA_LANES V load1(const double* a, const std::uint32_t* idx) {
   return out;
 }
 
+// The free motion's lanes (solver.h, FreeLine): n fields from line `line` on of the block
+// whose lanes start at `at` (a v16d's 16 lanes are two blocks), each a whole vector
+template <class V>
+PBA_LANES void load_lines(const double* at, int line, int n, V out[]) {
+  for (int k = 0; k < n; ++k) {
+    const double* p = at + static_cast<std::size_t>(line + k) * kFreeLaneWidth;
+    if constexpr (std::is_same_v<V, v16d>) {
+      const v8d lo = load<v8d>(p), hi = load<v8d>(p + kFreeBlock);
+      std::memcpy(&out[k], &lo, sizeof lo);
+      std::memcpy(reinterpret_cast<char*>(&out[k]) + sizeof lo, &hi, sizeof hi);
+    } else {
+      out[k] = load<V>(p);
+    }
+  }
+}
+
+template <class V>
+PBA_LANES void store_lines(double* at, int line, int n, const V in[]) {
+  for (int k = 0; k < n; ++k) {
+    double* p = at + static_cast<std::size_t>(line + k) * kFreeLaneWidth;
+    if constexpr (std::is_same_v<V, v16d>) {
+      v8d lo, hi;
+      std::memcpy(&lo, &in[k], sizeof lo);
+      std::memcpy(&hi, reinterpret_cast<const char*>(&in[k]) + sizeof lo, sizeof hi);
+      store<v8d>(p, lo), store<v8d>(p + kFreeBlock, hi);
+    } else {
+      store<V>(p, in[k]);
+    }
+  }
+}
+
 // Rows of 8 doubles a body (the contact solver's velocities and warm-start accumulators, the
 // motion): the lanes' rows at base + 8 idx as 8 vectors of one number a lane. On AVX-512 a
 // block loads and stores whole rows and transposes them; the other paths go lane by lane and
@@ -326,36 +365,63 @@ PBA_LANES void store_velocities(const FreeMotionArrays& f, const std::uint32_t* 
   store_strided(f.w, f.stride, idx, r + 3);
 }
 
-// The lanes' velocities; false (and the first bad body in *bad) when one is not finite. Round
-// bodies (Round: all three principal moments equal) take the torque's change of w as h torque
-// / I, without turning it into the principal frame and back.
+// What stays the same over a step's substeps of h (s): the change of v, h (gravity scale g +
+// inverse mass force); a round body's change of w, h I^-1 torque (Round), else the torque and
+// h I^-1 per principal axis; the damping's divisors 1 + h c. Formed once a step for the free
+// motion's lanes (gather), or in each substep's velocities without them: the same expressions,
+// so the same bits.
 template <class V, bool Round>
-PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, double h, const Vec3& g,
-                          std::uint32_t* bad) {
-  V r[8], force[3], torque[3], inv[3];
-  load_velocities(f, idx, r);
+PBA_LANES void step_changes(const std::uint32_t* idx, const FreeMotionArrays& f, double h, const Vec3& g,
+                            V linear[3], V angular[3], V hinv[3], V damp[2]) {
+  V force[3], inv[3];
   load3(f.force, idx, force);
-  load3(f.torque, idx, torque);
+  load3(f.torque, idx, angular);
   load3(f.inv_inertia, idx, inv);
   const V m = load1<V>(f.inv_mass, idx), gs = load1<V>(f.gravity_scale, idx);
-  const V cl = load1<V>(f.lin_damp, idx), ca = load1<V>(f.ang_damp, idx);
+  const double gk[3] = {g.x, g.y, g.z};
+  for (int k = 0; k < 3; ++k) linear[k] = h * (gs * gk[k] + m * force[k]);
+  if constexpr (Round) {
+    for (int k = 0; k < 3; ++k) angular[k] = h * inv[0] * angular[k];
+  } else {
+    for (int k = 0; k < 3; ++k) hinv[k] = h * inv[k];
+  }
+  if (f.damped) damp[0] = 1.0 + h * load1<V>(f.lin_damp, idx), damp[1] = 1.0 + h * load1<V>(f.ang_damp, idx);
+}
+
+// The lanes' velocities; false (and the first bad body in *bad) when one is not finite. Round
+// bodies (Round: all three principal moments equal) take the torque's change of w as h torque
+// / I, without turning it into the principal frame and back. Lanes: what stays the same over
+// the substeps (step_changes) and the frames from the free motion's lanes at `at`, else from
+// the bodies' arrays.
+template <class V, bool Round, bool Lanes>
+PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, const double* at, double h,
+                          const Vec3& g, std::uint32_t* bad) {
+  V r[8], linear[3], angular[3], hinv[3], damp[2], q[4];
+  load_velocities(f, idx, r);
+  if constexpr (Lanes) {
+    load_lines(at, kLineLinear, 3, linear);
+    load_lines(at, kLineAngular, 3, angular);
+    if constexpr (!Round) load_lines(at, kLineHInv, 3, hinv), load_lines(at, kLineQ, 4, q);
+    if (f.damped) load_lines(at, kLineDamp, 2, damp);
+  } else {
+    step_changes<V, Round>(idx, f, h, g, linear, angular, hinv, damp);
+    if constexpr (!Round) load_quat(f.q, idx, q);
+  }
   // gravity, applied force and torque (in the principal frame), then implicit damping
   V dw[3];
   if constexpr (Round) {
-    for (int k = 0; k < 3; ++k) dw[k] = h * inv[0] * torque[k];
+    for (int k = 0; k < 3; ++k) dw[k] = angular[k];
   } else {
-    V q[4], tb[3];
-    load_quat(f.q, idx, q);
-    rotate(q, -1, torque, tb);
-    for (int k = 0; k < 3; ++k) tb[k] = h * inv[k] * tb[k];
+    V tb[3];
+    rotate(q, -1, angular, tb);
+    for (int k = 0; k < 3; ++k) tb[k] = hinv[k] * tb[k];
     rotate(q, 1, tb, dw);
   }
-  const double gk[3] = {g.x, g.y, g.z};
-  for (int k = 0; k < 3; ++k) r[k] = r[k] + h * (gs * gk[k] + m * force[k]), r[3 + k] = r[3 + k] + dw[k];
+  for (int k = 0; k < 3; ++k) r[k] = r[k] + linear[k], r[3 + k] = r[3 + k] + dw[k];
   // (x / (1 + h c) is x when c = 0: the divisions, the costliest operations here, only when
   // some body is damped)
   if (f.damped) {
-    for (int k = 0; k < 3; ++k) r[k] = r[k] / (1.0 + h * cl), r[3 + k] = r[3 + k] / (1.0 + h * ca);
+    for (int k = 0; k < 3; ++k) r[k] = r[k] / damp[0], r[3 + k] = r[3 + k] / damp[1];
   }
   // the contacts' carried impulses (the warm start), taken once
   if (f.warm) {
@@ -375,6 +441,37 @@ PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, d
   for (int i = 0; i < kWidth<V>; ++i)
     if (!(get(v2, i) <= limit2 && get(w2, i) <= limit2)) return *bad = idx[i], false;
   return true;
+}
+
+// The lanes of a kind from the bodies' arrays, once a step
+template <class V, bool Round>
+PBA_LANES void gather(const std::uint32_t* idx, const FreeMotionArrays& f, double h, const Vec3& g, double* at) {
+  V x[4], inv[3], linear[3], angular[3], hinv[3], damp[2];
+  load3(f.com, idx, x), store_lines(at, kLineCom, 3, x);
+  load_quat(f.q, idx, x), store_lines(at, kLineQ, 4, x);
+  load3(f.com0, idx, x), store_lines(at, kLineCom0, 3, x);
+  load_quat(f.q0, idx, x), store_lines(at, kLineQ0, 4, x);
+  step_changes<V, Round>(idx, f, h, g, linear, angular, hinv, damp);
+  store_lines(at, kLineLinear, 3, linear), store_lines(at, kLineAngular, 3, angular);
+  // (a round body's turn and velocities read neither its moments nor its spread)
+  if constexpr (!Round) {
+    load3(f.inertia, idx, x), store_lines(at, kLineInertia, 3, x);
+    load3(f.inv_inertia, idx, inv), store_lines(at, kLineInv, 3, inv);
+    store_lines(at, kLineHInv, 3, hinv);
+    // (refresh_inertia's std::min and std::max of three positive moments: the same values)
+    const V least = vmin(vmin(inv[0], inv[1]), inv[2]), most = vmax(vmax(inv[0], inv[1]), inv[2]);
+    const V spread = vmin(most, kSolverInertiaRatio * least) / least - 1.0;
+    store_lines(at, kLineSpread, 1, &spread);
+  }
+  if (f.damped) store_lines(at, kLineDamp, 2, damp);
+}
+
+// ... and the centres and frames back
+template <class V>
+PBA_LANES void scatter(const std::uint32_t* idx, const FreeMotionArrays& f, const double* at) {
+  V x[4];
+  load_lines(at, kLineCom, 3, x), store3(f.com, idx, x);
+  load_lines(at, kLineQ, 4, x), store_quat(f.q, idx, x);
 }
 
 // One exact sub-flow of the splitting: the turn about principal axis K for the time whose
@@ -408,14 +505,32 @@ PBA_LANES void normalize(V q[4]) {
   for (int k = 0; k < 4; ++k) q[k] = q[k] * one_over;
 }
 
+// The lanes' centres and frames (now, or at the start of the step: line kLineCom or
+// kLineCom0, each with its frame 3 lines on), from the free motion's lanes (Lanes) or the
+// bodies' arrays
+static_assert(kLineQ == kLineCom + 3 && kLineQ0 == kLineCom0 + 3);
+template <bool Lanes, class V>
+PBA_LANES void load_vec3(const Vec3* a, const std::uint32_t* idx, const double* at, int line, V out[3]) {
+  if constexpr (Lanes) load_lines(at, line, 3, out);
+  else load3(a, idx, out);
+}
+
+template <bool Lanes, class V>
+PBA_LANES void load_pose(const Vec3* com, const Quat* frame, const std::uint32_t* idx, const double* at, int line,
+                         V x[3], V q[4]) {
+  load_vec3<Lanes>(com, idx, at, line, x);
+  if constexpr (Lanes) load_lines(at, line + 3, 4, q);
+  else load_quat(frame, idx, q);
+}
+
 // the lanes' motion since the start of the step, for the contacts' separations: dp, and the
 // turn q q0^-1 (glm's product with the conjugate), a row of 8 a body (the last zero)
-template <class V>
-PBA_LANES void store_motion(const std::uint32_t* idx, const FreeMotionArrays& f, const V x[3], const V q[4]) {
+template <class V, bool Lanes>
+PBA_LANES void store_motion(const std::uint32_t* idx, const FreeMotionArrays& f, const double* at, const V x[3],
+                            const V q[4]) {
   if (!f.motion) return;
   V x0[3], q0[4];
-  load3(f.com0, idx, x0);
-  load_quat(f.q0, idx, q0);
+  load_pose<Lanes>(f.com0, f.q0, idx, at, kLineCom0, x0, q0);
   const V bw = q0[0], bx = -q0[1], by = -q0[2], bz = -q0[3];
   const V m[8] = {x[0] - x0[0],
                   x[1] - x0[1],
@@ -426,6 +541,20 @@ PBA_LANES void store_motion(const std::uint32_t* idx, const FreeMotionArrays& f,
                   q[0] * bz + q[3] * bw + q[1] * by - q[2] * bx,
                   splat<V>(0)};
   store_rows(f.motion, idx, m, 7);
+}
+
+// ... and back, with the motion since the start of the step
+template <bool Lanes, class V>
+PBA_LANES void store_pose(const FreeMotionArrays& f, const std::uint32_t* idx, double* at, const V x[3],
+                          const V q[4]) {
+  if constexpr (Lanes) {
+    store_lines(at, kLineCom, 3, x);
+    store_lines(at, kLineQ, 4, q);
+  } else {
+    store3(f.com, idx, x);
+    store_quat(f.q, idx, q);
+  }
+  store_motion<V, Lanes>(idx, f, at, x, q);
 }
 
 // the product a b of quaternions (w, x, y, z)
@@ -459,14 +588,13 @@ PBA_LANES void turn_of(const V a[3], V t[4]) {
 // commute (each keeps |pi| and pi_K), both exact turns: the body about its momentum by h |pi| /
 // I1 (pi stays as it is), and the splitting's sub-flow about axis K by h pi_K (1/I3 - 1/I1)
 // (pi turns by minus that); two turns instead of five.
-template <FreeRotation R, class V>
-PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
+template <FreeRotation R, class V, bool Lanes>
+PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, double* at, double h) {
   V r[8], x[3], q[4], inertia[3], inv[3];
   load_velocities(f, idx, r);
-  load3(f.com, idx, x);
-  load_quat(f.q, idx, q);
-  load3(f.inertia, idx, inertia);
-  load3(f.inv_inertia, idx, inv);
+  load_pose<Lanes>(f.com, f.q, idx, at, kLineCom, x, q);
+  load_vec3<Lanes>(f.inertia, idx, at, kLineInertia, inertia);
+  load_vec3<Lanes>(f.inv_inertia, idx, at, kLineInv, inv);
   // symplectic Euler for the centre
   for (int k = 0; k < 3; ++k) x[k] = x[k] + h * r[k];
   // body-frame angular momentum pi = I w_body, then the exact turns
@@ -498,21 +626,18 @@ PBA_LANES void positions(const std::uint32_t* idx, const FreeMotionArrays& f, do
   for (int k = 0; k < 3; ++k) pi[k] = pi[k] * inv[k];
   rotate(q, 1, pi, r + 3);
   store_velocities(f, idx, r);
-  store3(f.com, idx, x);
-  store_quat(f.q, idx, q);
-  store_motion(idx, f, x, q);
+  store_pose<Lanes>(f, idx, at, x, q);
 }
 
 // The same for round bodies (all three principal moments equal, I): the momentum is I w, so
 // there is no gyroscopic term, the world angular velocity w stays as it is, and the free
 // rotation over h is exactly the turn by the angle h |w| about w: q <- (cos(|a|), sin(|a|) a /
 // |a|) q with a = h w / 2 (turn_of).
-template <class V>
-PBA_LANES void positions_round(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
+template <class V, bool Lanes>
+PBA_LANES void positions_round(const std::uint32_t* idx, const FreeMotionArrays& f, double* at, double h) {
   V r[8], x[3], q[4];
   load_velocities(f, idx, r);
-  load3(f.com, idx, x);
-  load_quat(f.q, idx, q);
+  load_pose<Lanes>(f.com, f.q, idx, at, kLineCom, x, q);
   for (int k = 0; k < 3; ++k) x[k] = x[k] + h * r[k];
   const double hh = 0.5 * h;
   const V a[3] = {hh * r[3], hh * r[4], hh * r[5]};
@@ -521,70 +646,134 @@ PBA_LANES void positions_round(const std::uint32_t* idx, const FreeMotionArrays&
   const V was[4] = {q[0], q[1], q[2], q[3]};
   multiply(t, was, q);
   normalize(q);
-  store3(f.com, idx, x);
-  store_quat(f.q, idx, q);
-  store_motion(idx, f, x, q);
+  store_pose<Lanes>(f, idx, at, x, q);
 }
 
-template <class V, bool Round>
-PBA_LANES bool velocities_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double h,
-                              const Vec3& g, std::uint32_t* bad) {
+// where position i of a kind's list keeps its lanes (nullptr without them)
+template <bool Lanes, class P>
+PBA_LANES P* lane_at(P* lanes, std::size_t i) {
+  if constexpr (Lanes) return lanes + free_lane_at(i);
+  else return (void)lanes, (void)i, nullptr;
+}
+
+template <class V, bool Round, bool Lanes>
+PBA_LANES bool velocities_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f,
+                              const double* lanes, double h, const Vec3& g, std::uint32_t* bad) {
   std::size_t i = 0;
   for (; i + kWidth<V> <= count; i += kWidth<V>)
-    if (!velocities<V, Round>(idx + i, f, h, g, bad)) return false;
+    if (!velocities<V, Round, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h, g, bad)) return false;
   for (; i < count; ++i)
-    if (!velocities<double, Round>(idx + i, f, h, g, bad)) return false;
+    if (!velocities<double, Round, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h, g, bad)) return false;
   return true;
 }
 
-template <FreeRotation R, class V>
-PBA_LANES void positions_of(const std::uint32_t* idx, const FreeMotionArrays& f, double h) {
-  if constexpr (R == FreeRotation::Round) positions_round<V>(idx, f, h);
-  else positions<R, V>(idx, f, h);
+template <class V>
+PBA_LANES bool velocities_kind(bool round, const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f,
+                               const double* lanes, double h, const Vec3& g, std::uint32_t* bad) {
+  if (lanes) {
+    return round ? velocities_all<V, true, true>(idx, count, f, lanes, h, g, bad)
+                 : velocities_all<V, false, true>(idx, count, f, lanes, h, g, bad);
+  }
+  return round ? velocities_all<V, true, false>(idx, count, f, nullptr, h, g, bad)
+               : velocities_all<V, false, false>(idx, count, f, nullptr, h, g, bad);
+}
+
+template <FreeRotation R, class V, bool Lanes>
+PBA_LANES void positions_of(const std::uint32_t* idx, const FreeMotionArrays& f, double* at, double h) {
+  if constexpr (R == FreeRotation::Round) positions_round<V, Lanes>(idx, f, at, h);
+  else positions<R, V, Lanes>(idx, f, at, h);
+}
+
+template <FreeRotation R, class V, class W, bool Lanes>
+PBA_LANES void positions_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double* lanes,
+                             double h) {
+  std::size_t i = 0;
+  for (; i + kWidth<W> <= count; i += kWidth<W>) positions_of<R, W, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
+  for (; i + kWidth<V> <= count; i += kWidth<V>) positions_of<R, V, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
+  for (; i < count; ++i) positions_of<R, double, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
 }
 
 template <FreeRotation R, class V, class W = V>
-PBA_LANES void positions_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double h) {
-  std::size_t i = 0;
-  for (; i + kWidth<W> <= count; i += kWidth<W>) positions_of<R, W>(idx + i, f, h);
-  for (; i + kWidth<V> <= count; i += kWidth<V>) positions_of<R, V>(idx + i, f, h);
-  for (; i < count; ++i) positions_of<R, double>(idx + i, f, h);
+PBA_LANES void positions_lanes(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double* lanes,
+                               double h) {
+  if (lanes) positions_all<R, V, W, true>(idx, count, f, lanes, h);
+  else positions_all<R, V, W, false>(idx, count, f, nullptr, h);
 }
 
 // the kinds' kernels on a path: two blocks at once where W is wider (the splitting's long chain)
 template <class V, class W>
 PBA_LANES void positions_kind(FreeRotation kind, const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f,
-                              double h) {
+                              double h, double* lanes) {
   switch (kind) {
-    case FreeRotation::Triaxial: return positions_all<FreeRotation::Triaxial, V, W>(idx, count, f, h);
-    case FreeRotation::Round: return positions_all<FreeRotation::Round, V>(idx, count, f, h);
-    case FreeRotation::AxialX: return positions_all<FreeRotation::AxialX, V>(idx, count, f, h);
-    case FreeRotation::AxialY: return positions_all<FreeRotation::AxialY, V>(idx, count, f, h);
-    case FreeRotation::AxialZ: return positions_all<FreeRotation::AxialZ, V>(idx, count, f, h);
+    case FreeRotation::Triaxial: return positions_lanes<FreeRotation::Triaxial, V, W>(idx, count, f, lanes, h);
+    case FreeRotation::Round: return positions_lanes<FreeRotation::Round, V>(idx, count, f, lanes, h);
+    case FreeRotation::AxialX: return positions_lanes<FreeRotation::AxialX, V>(idx, count, f, lanes, h);
+    case FreeRotation::AxialY: return positions_lanes<FreeRotation::AxialY, V>(idx, count, f, lanes, h);
+    case FreeRotation::AxialZ: return positions_lanes<FreeRotation::AxialZ, V>(idx, count, f, lanes, h);
   }
+}
+
+// the lanes of a kind filled and emptied a block at a time, the last few bodies one by one
+template <class V, bool Round>
+PBA_LANES void gather_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double h,
+                          const Vec3& g, double* lanes) {
+  std::size_t i = 0;
+  for (; i + kWidth<V> <= count; i += kWidth<V>) gather<V, Round>(idx + i, f, h, g, lanes + free_lane_at(i));
+  for (; i < count; ++i) gather<double, Round>(idx + i, f, h, g, lanes + free_lane_at(i));
+}
+
+template <class V>
+PBA_LANES void gather_kind(bool round, const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double h,
+                           const Vec3& g, double* lanes) {
+  if (round) gather_all<V, true>(idx, count, f, h, g, lanes);
+  else gather_all<V, false>(idx, count, f, h, g, lanes);
+}
+
+template <class V>
+PBA_LANES void scatter_kind(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f,
+                            const double* lanes) {
+  std::size_t i = 0;
+  for (; i + kWidth<V> <= count; i += kWidth<V>) scatter<V>(idx + i, f, lanes + free_lane_at(i));
+  for (; i < count; ++i) scatter<double>(idx + i, f, lanes + free_lane_at(i));
 }
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #define PBA_RIGID_HAVE_X86 1
 __attribute__((target("avx512f"))) bool velocities_avx512(bool round, const std::uint32_t* idx, std::size_t count,
                                                          const FreeMotionArrays& f, double h, const Vec3& g,
-                                                         std::uint32_t* bad) {
-  return round ? velocities_all<v8d, true>(idx, count, f, h, g, bad)
-               : velocities_all<v8d, false>(idx, count, f, h, g, bad);
+                                                         const double* lanes, std::uint32_t* bad) {
+  return velocities_kind<v8d>(round, idx, count, f, lanes, h, g, bad);
 }
 __attribute__((target("avx2"))) bool velocities_avx2(bool round, const std::uint32_t* idx, std::size_t count,
                                                     const FreeMotionArrays& f, double h, const Vec3& g,
-                                                    std::uint32_t* bad) {
-  return round ? velocities_all<v4d, true>(idx, count, f, h, g, bad)
-               : velocities_all<v4d, false>(idx, count, f, h, g, bad);
+                                                    const double* lanes, std::uint32_t* bad) {
+  return velocities_kind<v4d>(round, idx, count, f, lanes, h, g, bad);
 }
 __attribute__((target("avx512f"))) void positions_avx512(FreeRotation kind, const std::uint32_t* idx,
-                                                        std::size_t count, const FreeMotionArrays& f, double h) {
-  positions_kind<v8d, v16d>(kind, idx, count, f, h);
+                                                        std::size_t count, const FreeMotionArrays& f, double h,
+                                                        double* lanes) {
+  positions_kind<v8d, v16d>(kind, idx, count, f, h, lanes);
 }
 __attribute__((target("avx2"))) void positions_avx2(FreeRotation kind, const std::uint32_t* idx, std::size_t count,
-                                                   const FreeMotionArrays& f, double h) {
-  positions_kind<v4d, v4d>(kind, idx, count, f, h);
+                                                   const FreeMotionArrays& f, double h, double* lanes) {
+  positions_kind<v4d, v4d>(kind, idx, count, f, h, lanes);
+}
+__attribute__((target("avx512f"))) void gather_avx512(bool round, const std::uint32_t* idx, std::size_t count,
+                                                     const FreeMotionArrays& f, double h, const Vec3& g,
+                                                     double* lanes) {
+  gather_kind<v8d>(round, idx, count, f, h, g, lanes);
+}
+__attribute__((target("avx2"))) void gather_avx2(bool round, const std::uint32_t* idx, std::size_t count,
+                                                const FreeMotionArrays& f, double h, const Vec3& g, double* lanes) {
+  gather_kind<v4d>(round, idx, count, f, h, g, lanes);
+}
+__attribute__((target("avx512f"))) void scatter_avx512(const std::uint32_t* idx, std::size_t count,
+                                                      const FreeMotionArrays& f, const double* lanes) {
+  scatter_kind<v8d>(idx, count, f, lanes);
+}
+__attribute__((target("avx2"))) void scatter_avx2(const std::uint32_t* idx, std::size_t count,
+                                                 const FreeMotionArrays& f, const double* lanes) {
+  scatter_kind<v4d>(idx, count, f, lanes);
 }
 #else
 #define PBA_RIGID_HAVE_X86 0
@@ -593,24 +782,45 @@ __attribute__((target("avx2"))) void positions_avx2(FreeRotation kind, const std
 }  // namespace
 
 bool integrate_velocities_wide(SimdPath path, bool round, const std::uint32_t* bodies, std::size_t count,
-                               const FreeMotionArrays& f, double h, const Vec3& gravity, std::uint32_t* bad) {
+                               const FreeMotionArrays& f, double h, const Vec3& gravity, const double* lanes,
+                               std::uint32_t* bad) {
 #if PBA_RIGID_HAVE_X86
-  if (path == SimdPath::Avx512) return velocities_avx512(round, bodies, count, f, h, gravity, bad);
-  if (path == SimdPath::Avx2) return velocities_avx2(round, bodies, count, f, h, gravity, bad);
+  if (path == SimdPath::Avx512) return velocities_avx512(round, bodies, count, f, h, gravity, lanes, bad);
+  if (path == SimdPath::Avx2) return velocities_avx2(round, bodies, count, f, h, gravity, lanes, bad);
 #endif
   (void)path;
-  return round ? velocities_all<double, true>(bodies, count, f, h, gravity, bad)
-               : velocities_all<double, false>(bodies, count, f, h, gravity, bad);
+  return velocities_kind<double>(round, bodies, count, f, lanes, h, gravity, bad);
 }
 
 void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
-                              const FreeMotionArrays& f, double h) {
+                              const FreeMotionArrays& f, double h, double* lanes) {
 #if PBA_RIGID_HAVE_X86
-  if (path == SimdPath::Avx512) return positions_avx512(kind, bodies, count, f, h);
-  if (path == SimdPath::Avx2) return positions_avx2(kind, bodies, count, f, h);
+  if (path == SimdPath::Avx512) return positions_avx512(kind, bodies, count, f, h, lanes);
+  if (path == SimdPath::Avx2) return positions_avx2(kind, bodies, count, f, h, lanes);
 #endif
   (void)path;
-  positions_kind<double, double>(kind, bodies, count, f, h);
+  positions_kind<double, double>(kind, bodies, count, f, h, lanes);
+}
+
+void gather_free_motion_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
+                             const FreeMotionArrays& f, double h, const Vec3& gravity, double* lanes) {
+  const bool round = kind == FreeRotation::Round;
+#if PBA_RIGID_HAVE_X86
+  if (path == SimdPath::Avx512) return gather_avx512(round, bodies, count, f, h, gravity, lanes);
+  if (path == SimdPath::Avx2) return gather_avx2(round, bodies, count, f, h, gravity, lanes);
+#endif
+  (void)path;
+  gather_kind<double>(round, bodies, count, f, h, gravity, lanes);
+}
+
+void scatter_free_motion_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count, const FreeMotionArrays& f,
+                              const double* lanes) {
+#if PBA_RIGID_HAVE_X86
+  if (path == SimdPath::Avx512) return scatter_avx512(bodies, count, f, lanes);
+  if (path == SimdPath::Avx2) return scatter_avx2(bodies, count, f, lanes);
+#endif
+  (void)path;
+  scatter_kind<double>(bodies, count, f, lanes);
 }
 
 }  // namespace pba::detail

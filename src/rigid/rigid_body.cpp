@@ -609,9 +609,11 @@ void RigidBodySystem::integrate_velocities(double h, const Vec3& gravity, detail
   std::uint32_t bad = 0;
   for (std::size_t k = 0; k < c.moving.size(); ++k) {
     const bool round = static_cast<detail::FreeRotation>(k) == detail::FreeRotation::Round;
-    if (detail::integrate_velocities_wide(c.simd, round, c.moving[k].data(), c.moving[k].size(), f, h, gravity, &bad))
+    if (detail::integrate_velocities_wide(c.simd, round, c.moving[k].data(), c.moving[k].size(), f, h, gravity,
+                                          contacts_->free_lanes_of(k), &bad))
       continue;
     if (rows) v_[bad] = get3(rows[bad].v), w_[bad] = get3(rows[bad].w);
+    if (c.free_lanes_live) contacts_->scatter_free_motion(*this);  // (the message shows the pose now)
     fail(bad);  // throws
   }
   profile_.integrate += clock.seconds();
@@ -625,7 +627,7 @@ void RigidBodySystem::integrate_positions(double h, detail::SolverBody* rows, do
   const detail::FreeMotionArrays f = free_motion(rows, nullptr, motion);
   for (std::size_t k = 0; k < c.moving.size(); ++k)
     detail::integrate_positions_wide(c.simd, static_cast<detail::FreeRotation>(k), c.moving[k].data(),
-                                     c.moving[k].size(), f, h);
+                                     c.moving[k].size(), f, h, contacts_->free_lanes_of(k));
   // kinematic bodies (listed by step()): constant velocities, exact translation and rotation
   for (const std::uint32_t i : c.kinematic) {
     const Vec3 v = rows ? get3(rows[i].v) : v_[i], w = rows ? get3(rows[i].w) : w_[i];
@@ -640,6 +642,38 @@ void RigidBodySystem::integrate_positions(double h, detail::SolverBody* rows, do
     }
   }
   profile_.integrate += clock.seconds();
+}
+
+void detail::RigidContacts::gather_free_motion(RigidBodySystem& s, double h, const Vec3& gravity) {
+  const Stopwatch clock;
+  // each kind's blocks after the last's, from the first 64-byte line of the storage (grown,
+  // never shrunk)
+  std::size_t blocks = 0;
+  for (std::size_t k = 0; k < moving.size(); ++k) {
+    free_lanes_at[k] = blocks * kFreeBlock;
+    blocks += (moving[k].size() + kFreeLaneWidth - 1) / kFreeLaneWidth;
+  }
+  constexpr std::size_t kLine = 64 / sizeof(double);
+  if (free_lanes.size() < blocks * kFreeBlock + kLine) free_lanes.resize(blocks * kFreeBlock + kLine);
+  const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(free_lanes.data()) / sizeof(double);
+  const std::size_t skip = (kLine - at % kLine) % kLine;
+  const FreeMotionArrays f = s.free_motion(nullptr, nullptr, nullptr);
+  for (std::size_t k = 0; k < moving.size(); ++k) {
+    free_lanes_at[k] += skip;
+    gather_free_motion_wide(simd, static_cast<FreeRotation>(k), moving[k].data(), moving[k].size(), f, h, gravity,
+                            free_lanes.data() + free_lanes_at[k]);
+  }
+  free_lanes_live = true;
+  s.profile_.integrate += clock.seconds();
+}
+
+void detail::RigidContacts::scatter_free_motion(RigidBodySystem& s) {
+  const Stopwatch clock;
+  const FreeMotionArrays f = s.free_motion(nullptr, nullptr, nullptr);
+  for (std::size_t k = 0; k < moving.size(); ++k)
+    scatter_free_motion_wide(simd, moving[k].data(), moving[k].size(), f, free_lanes_of(k));
+  free_lanes_live = false;
+  s.profile_.integrate += clock.seconds();
 }
 
 void RigidBodySystem::step(double dt, const Vec3& gravity) {
@@ -702,7 +736,10 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   } else if (soft) {
     // substeps: velocities with the carried impulses, soft solve, positions, relax (which
     // measures the separations at the new poses and carries the impulses to the next substep)
+    // The free motion's fields live in lanes for the substeps (RigidContacts::free_lanes):
+    // gathered once here, the centres and frames put back after the last
     const double h = dt / substeps;
+    c.gather_free_motion(*this, h, gravity);
     for (int s = 0; s < substeps; ++s) {
       integrate_velocities(h, gravity, c.rows.data(), c.warm.data());
       c.pass(*this, h, true, true, false, false);
@@ -710,6 +747,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
       c.refresh_inertia(*this);  // (the inverse inertias of bodies that turned far, at their poses now)
       c.pass(*this, h, false, true, true, warm && s + 1 < substeps);
     }
+    c.scatter_free_motion(*this);
   } else {
     // one step: velocities with the carried impulses, iterated rigid solve with Baumgarte, positions
     integrate_velocities(dt, gravity, c.rows.data(), c.warm.data());

@@ -247,8 +247,11 @@ void restitution_lane(ContactBlock& block, int lane, double restitution, double 
 /// Gravity, forces, torques, damping and the warm start for `count` awake dynamic bodies
 /// (integrate_wide.cpp); `round`: every one of them has three equal principal moments. False,
 /// with the body in *bad, when a velocity became non-finite.
+/// `lanes` (or nullptr: the bodies' arrays): the kind's free motion lanes, gathered for this h
+/// and gravity (gather_free_motion_wide).
 bool integrate_velocities_wide(SimdPath path, bool round, const std::uint32_t* bodies, std::size_t count,
-                               const FreeMotionArrays& f, double h, const Vec3& gravity, std::uint32_t* bad);
+                               const FreeMotionArrays& f, double h, const Vec3& gravity, const double* lanes,
+                               std::uint32_t* bad);
 /// How a body's free rotation is integrated, by its principal moments (integrate_wide.cpp).
 enum class FreeRotation : std::uint8_t {
   Triaxial,                 ///< all different: the Dullweber-Leimkuhler-McLachlan splitting
@@ -264,9 +267,43 @@ inline FreeRotation free_rotation(const Vec3& m) {
   return m.x == m.z ? FreeRotation::AxialY : FreeRotation::Triaxial;
 }
 /// Positions and rotations over h of `count` awake dynamic bodies, all of the rotation `kind`,
-/// and their motion since the start of the step.
+/// and their motion since the start of the step. `lanes` (or nullptr: the bodies' arrays): the
+/// kind's free motion lanes, whose centres and frames it moves (the bodies' arrays keep theirs).
 void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
-                              const FreeMotionArrays& f, double h);
+                              const FreeMotionArrays& f, double h, double* lanes);
+
+/// The free motion's lanes (integrate_wide.cpp): for the soft step's substeps, the fields the
+/// free motion reads and writes, copied once a step from the bodies' arrays into blocks of 8
+/// bodies of one kind's list (in its order), each field one 64-byte line of 8 numbers, so that
+/// the substeps load and store whole vectors whatever the bodies' indices (the rain's boxes and
+/// balls alternate: each kind's list steps by 2). The lines of a block, by field:
+enum FreeLine : int {
+  kLineCom = 0,       ///< x, y, z: the centre of mass now (m)
+  kLineQ = 3,         ///< w, x, y, z: the principal frame now
+  kLineCom0 = 7,      ///< x, y, z: the centre at the step's start (m)
+  kLineQ0 = 10,       ///< w, x, y, z: the frame at the step's start
+  kLineInertia = 14,  ///< the principal moments (kg m^2; not round bodies)
+  kLineInv = 17,      ///< their inverses (1/(kg m^2); not round bodies)
+  kLineLinear = 20,   ///< h (gravity scale g + inverse mass force): a substep's change of v (m/s)
+  kLineAngular = 23,  ///< round bodies: h I^-1 torque, a substep's change of w (rad/s); others: the torque (N m)
+  kLineHInv = 26,     ///< h / I per principal axis (s/(kg m^2); not round bodies)
+  kLineDamp = 29,     ///< 1 + h c for the linear, then the angular damping c (when some body is damped)
+  kLineSpread = 31,   ///< the solvers' largest (capped) over least inverse moment, less 1 (not round bodies)
+  kFreeLines = 32,    ///< lines a block
+};
+/// Bodies in a block of the free motion's lanes.
+inline constexpr std::size_t kFreeLaneWidth = 8;
+/// Doubles in a block of the free motion's lanes.
+inline constexpr std::size_t kFreeBlock = kFreeLines * kFreeLaneWidth;
+/// Where position j of a kind's list lives in its lanes (the kind's first block at `lanes`).
+inline std::size_t free_lane_at(std::size_t j) { return j / kFreeLaneWidth * kFreeBlock + j % kFreeLaneWidth; }
+/// Fills the lanes (the kind's first block at `lanes`, 64-byte aligned) of `count` awake bodies
+/// of rotation `kind` from the bodies' arrays, for substeps of h (s) under gravity (m/s^2).
+void gather_free_motion_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
+                             const FreeMotionArrays& f, double h, const Vec3& gravity, double* lanes);
+/// Puts the lanes' centres and frames back into the bodies' arrays.
+void scatter_free_motion_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
+                              const FreeMotionArrays& f, const double* lanes);
 /// The approach speeds before the solve (m/s): the normal relative velocity of each point of
 /// the block's lanes at the velocities now, for the points below each lane's `count` (0 past it).
 void approaches(SimdPath path, ContactBlock& block, const int* count, const BodyArrays& bodies);

@@ -763,6 +763,24 @@ TEST(RigidDivergence, AForceBeyondTheSpeedLimitStopsTheStepNamingTheForcedBody) 
   EXPECT_TRUE(pba::is_finite(s.linear_velocity(calm)));
 }
 
+// The soft step keeps the moving bodies' centres and frames in the free motion's lanes over
+// its substeps (integrate_wide.cpp) and puts them back at the end: a body that passes the
+// speed limit in its second substep is reported, and left, where its first substep took it,
+// not where the step began. A force of a = 0.75 limit / h from rest: after the first substep
+// v = h a (0.75 of the limit) and x = h v; the second's 1.5 of the limit stops the step.
+TEST(RigidDivergence, ABodyPastTheSpeedLimitInALaterSubstepIsLeftWhereItGot) {
+  RigidBodySystem s({.contacts = {.substeps = 8, .auto_substeps = false}});
+  const auto b = s.create({.name = "rocket", .shapes = kBall});
+  const double h = 1.0 / 60 / 8, a = 0.75 * pba::kMaxRigidSpeed / h;
+  s.apply_force(b, {a * s.mass(b), 0, 0});
+  const std::string m = error_of([&] { s.step(1.0 / 60, kG); });
+  EXPECT_NE(m.find("'rocket' went faster than kMaxRigidSpeed"), std::string::npos) << m;
+  // (to the products' rounding: a few ulps of each)
+  const double x = h * (h * a);
+  EXPECT_NEAR(s.pose(b).position.x, x, 1e-14 * x);
+  EXPECT_NEAR(s.linear_velocity(b).x, 2 * h * a, 1e-14 * h * a);
+}
+
 // A pile of tumbling boxes and balls on the ground, and a free-flying T-handle: the same
 // inputs give the same bits, and each solver's hash is pinned (glibc's sin/cos,
 // -ffp-contract=off; a change of these numbers is a change of behaviour).
