@@ -777,9 +777,7 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
     const V y = pw * qb[2] + py * qb[0] + pz * qb[1] - px * qb[3];
     const V z = pw * qb[3] + pz * qb[0] + px * qb[2] - py * qb[1];
     mat3_of(w, x, y, z, R);
-    const V uv[3] = {py * d[2] - d[1] * pz, pz * d[0] - d[2] * px, px * d[1] - d[0] * py};
-    const V uuv[3] = {py * uv[2] - uv[1] * pz, pz * uv[0] - uv[2] * px, px * uv[1] - uv[0] * py};
-    for (int k = 0; k < 3; ++k) t[k] = d[k] + ((uv[k] * pw) + uuv[k]) * two;
+    detail::lanes::quat_turn(px, py, pz, pw, d[0], d[1], d[2], t[0], t[1], t[2]);
   }
   for (int j = 0; j < 3; ++j)
     for (int i = 0; i < 3; ++i) AR[j][i] = vabs(R[j][i]) + 1e-12;
