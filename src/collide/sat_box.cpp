@@ -715,81 +715,96 @@ PBA_LANES void clip_lanes(const V (&corner)[4][3], const V* c, const V* a1, cons
   detail::lanes::store(reinterpret_cast<double*>(o.bits), reinterpret_cast<V>(bits));
 }
 
-// The lanes' part of up to W pairs (lanes past n repeat the last pair).
+// The pairs of a batch, one a lane: the boxes' half extents, centres and orientations (w, x,
+// y, z) and the margin (m).
 template <class V>
-PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& o) {
-  constexpr int W = kWidth<V>;
-  using M = LaneMask<V>;
-  // the pairs, one per lane
+struct PairLanes {
   V ha[3], hb[3], xa[3], xb[3], qa[4], qb[4], margin;
-  {
-    const PairQuery* p[W];
-    for (int l = 0; l < W; ++l) p[l] = q[l < n ? l : n - 1];
-    // one lane per pair, each vector built from its lanes' values (no stores to reload)
-    auto gather = [&]<std::size_t... L>(V& to, auto&& field, std::index_sequence<L...>) { to = V{field(*p[L])...}; };
-    const auto lanes = std::make_index_sequence<std::size_t(W)>{};
-    for (int k = 0; k < 3; ++k) {
-      gather(ha[k], [k](const PairQuery& x) { return x.a->half_extents[k]; }, lanes);
-      gather(hb[k], [k](const PairQuery& x) { return x.b->half_extents[k]; }, lanes);
-      gather(xa[k], [k](const PairQuery& x) { return x.pose_a.position[k]; }, lanes);
-      gather(xb[k], [k](const PairQuery& x) { return x.pose_b.position[k]; }, lanes);
-    }
-    gather(qa[0], [](const PairQuery& x) { return x.pose_a.rotation.w; }, lanes);
-    gather(qa[1], [](const PairQuery& x) { return x.pose_a.rotation.x; }, lanes);
-    gather(qa[2], [](const PairQuery& x) { return x.pose_a.rotation.y; }, lanes);
-    gather(qa[3], [](const PairQuery& x) { return x.pose_a.rotation.z; }, lanes);
-    gather(qb[0], [](const PairQuery& x) { return x.pose_b.rotation.w; }, lanes);
-    gather(qb[1], [](const PairQuery& x) { return x.pose_b.rotation.x; }, lanes);
-    gather(qb[2], [](const PairQuery& x) { return x.pose_b.rotation.y; }, lanes);
-    gather(qb[3], [](const PairQuery& x) { return x.pose_b.rotation.z; }, lanes);
-    gather(margin, [](const PairQuery& x) { return x.margin; }, lanes);
+};
+
+// up to W pairs into P, one a lane (lanes past n repeat the last pair)
+template <class V>
+PBA_LANES void gather_pairs(const PairQuery* const* q, int n, PairLanes<V>& P) {
+  constexpr int W = kWidth<V>;
+  const PairQuery* p[W];
+  for (int l = 0; l < W; ++l) p[l] = q[l < n ? l : n - 1];
+  // one lane per pair, each vector built from its lanes' values (no stores to reload)
+  auto gather = [&]<std::size_t... L>(V& to, auto&& field, std::index_sequence<L...>) { to = V{field(*p[L])...}; };
+  const auto lanes = std::make_index_sequence<std::size_t(W)>{};
+  for (int k = 0; k < 3; ++k) {
+    gather(P.ha[k], [k](const PairQuery& x) { return x.a->half_extents[k]; }, lanes);
+    gather(P.hb[k], [k](const PairQuery& x) { return x.b->half_extents[k]; }, lanes);
+    gather(P.xa[k], [k](const PairQuery& x) { return x.pose_a.position[k]; }, lanes);
+    gather(P.xb[k], [k](const PairQuery& x) { return x.pose_b.position[k]; }, lanes);
   }
-  const V zero = splat<V>(0), one = splat<V>(1), two = splat<V>(2), inf = splat<V>(INFINITY);
-  // collide()'s quick input checks (manifold.cpp): unit quaternions to within 0.9e-6, finite
-  // positions, a finite margin >= 0, finite half extents > 0; a pair that fails them takes
-  // collide(), whose full checks throw or pass it
+  gather(P.qa[0], [](const PairQuery& x) { return x.pose_a.rotation.w; }, lanes);
+  gather(P.qa[1], [](const PairQuery& x) { return x.pose_a.rotation.x; }, lanes);
+  gather(P.qa[2], [](const PairQuery& x) { return x.pose_a.rotation.y; }, lanes);
+  gather(P.qa[3], [](const PairQuery& x) { return x.pose_a.rotation.z; }, lanes);
+  gather(P.qb[0], [](const PairQuery& x) { return x.pose_b.rotation.w; }, lanes);
+  gather(P.qb[1], [](const PairQuery& x) { return x.pose_b.rotation.x; }, lanes);
+  gather(P.qb[2], [](const PairQuery& x) { return x.pose_b.rotation.y; }, lanes);
+  gather(P.qb[3], [](const PairQuery& x) { return x.pose_b.rotation.z; }, lanes);
+  gather(P.margin, [](const PairQuery& x) { return x.margin; }, lanes);
+}
+
+// collide()'s quick input checks (manifold.cpp) into o.valid: unit quaternions to within
+// 0.9e-6, finite positions, a finite margin >= 0, finite half extents > 0; a pair that fails
+// them takes collide(), whose full checks throw or pass it. And the bounding spheres apart
+// into o.far (d: xb - xa)
+template <class V>
+PBA_LANES void checks_and_spheres(const PairLanes<V>& P, const V (&d)[3], BoxLanes<kWidth<V>>& o) {
+  using M = LaneMask<V>;
+  const V zero = splat<V>(0), one = splat<V>(1);
   {
     constexpr double kHuge = std::numeric_limits<double>::max();
     constexpr double kLo = (1 - 0.9e-6) * (1 - 0.9e-6), kHi = (1 + 0.9e-6) * (1 + 0.9e-6);
-    const V qa2 = qa[0] * qa[0] + qa[1] * qa[1] + qa[2] * qa[2] + qa[3] * qa[3];
-    const V qb2 = qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3];
-    M ok = (qa2 >= kLo) & (qa2 <= kHi) & (qb2 >= kLo) & (qb2 <= kHi) & (margin >= 0) & (margin <= kHuge);
+    const V qa2 = P.qa[0] * P.qa[0] + P.qa[1] * P.qa[1] + P.qa[2] * P.qa[2] + P.qa[3] * P.qa[3];
+    const V qb2 = P.qb[0] * P.qb[0] + P.qb[1] * P.qb[1] + P.qb[2] * P.qb[2] + P.qb[3] * P.qb[3];
+    M ok = (qa2 >= kLo) & (qa2 <= kHi) & (qb2 >= kLo) & (qb2 <= kHi) & (P.margin >= 0) & (P.margin <= kHuge);
     for (int k = 0; k < 3; ++k)
-      ok &= (vabs(xa[k]) <= kHuge) & (vabs(xb[k]) <= kHuge) & (ha[k] > 0) & (ha[k] <= kHuge) & (hb[k] > 0) &
-            (hb[k] <= kHuge);
+      ok &= (vabs(P.xa[k]) <= kHuge) & (vabs(P.xb[k]) <= kHuge) & (P.ha[k] > 0) & (P.ha[k] <= kHuge) &
+            (P.hb[k] > 0) & (P.hb[k] <= kHuge);
     store(o.valid, ok ? one : zero);
   }
-  // the bounding spheres
-  V d[3];
-  for (int k = 0; k < 3; ++k) d[k] = xb[k] - xa[k];
-  {
-    const V r = vsqrt(ha[0] * ha[0] + ha[1] * ha[1] + ha[2] * ha[2]) + vsqrt(hb[0] * hb[0] + hb[1] * hb[1] + hb[2] * hb[2]) +
-                margin;
-    const M far = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > r * r * (1 + 1e-12);
-    store(o.far, far ? one : zero);
-  }
-  // the relative pose: R = mat3_cast(conj(qa) qb), t = conj(qa) (xb - xa), as glm computes them
-  V R[3][3], AR[3][3], t[3], tb[3];
-  {
-    const V pw = qa[0], px = -qa[1], py = -qa[2], pz = -qa[3];
-    const V w = pw * qb[0] - px * qb[1] - py * qb[2] - pz * qb[3];
-    const V x = pw * qb[1] + px * qb[0] + py * qb[3] - pz * qb[2];
-    const V y = pw * qb[2] + py * qb[0] + pz * qb[1] - px * qb[3];
-    const V z = pw * qb[3] + pz * qb[0] + px * qb[2] - py * qb[1];
-    mat3_of(w, x, y, z, R);
-    const V uv[3] = {py * d[2] - d[1] * pz, pz * d[0] - d[2] * px, px * d[1] - d[0] * py};
-    const V uuv[3] = {py * uv[2] - uv[1] * pz, pz * uv[0] - uv[2] * px, px * uv[1] - uv[0] * py};
-    for (int k = 0; k < 3; ++k) t[k] = d[k] + ((uv[k] * pw) + uuv[k]) * two;
-  }
-  for (int j = 0; j < 3; ++j)
-    for (int i = 0; i < 3; ++i) AR[j][i] = vabs(R[j][i]) + 1e-12;
-  for (int j = 0; j < 3; ++j) tb[j] = R[j][0] * t[0] + R[j][1] * t[1] + R[j][2] * t[2];
-  for (int j = 0; j < 3; ++j) {
-    store(o.t[j], t[j]), store(o.tb[j], tb[j]), store(o.ha[j], ha[j]), store(o.hb[j], hb[j]);
-    for (int i = 0; i < 3; ++i) store(o.R[j][i], R[j][i]), store(o.AR[j][i], AR[j][i]);
-  }
-  store(o.margin, margin);
+  const V r = vsqrt(P.ha[0] * P.ha[0] + P.ha[1] * P.ha[1] + P.ha[2] * P.ha[2]) +
+              vsqrt(P.hb[0] * P.hb[0] + P.hb[1] * P.hb[1] + P.hb[2] * P.hb[2]) + P.margin;
+  const M far = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > r * r * (1 + 1e-12);
+  store(o.far, far ? one : zero);
+}
 
+// b in a's frame: R = mat3_cast(conj(qa) qb) (R[column][row]) and t = conj(qa) (xb - xa), as
+// glm computes them (relative_pose, d: xb - xa), and tb = R^T t (box_lanes)
+template <class V>
+struct Relative {
+  V R[3][3], t[3], tb[3];
+};
+
+template <class V>
+PBA_LANES void relative_pose(const PairLanes<V>& P, const V (&d)[3], Relative<V>& rel) {
+  const V pw = P.qa[0], px = -P.qa[1], py = -P.qa[2], pz = -P.qa[3];
+  const V* qb = P.qb;
+  const V w = pw * qb[0] - px * qb[1] - py * qb[2] - pz * qb[3];
+  const V x = pw * qb[1] + px * qb[0] + py * qb[3] - pz * qb[2];
+  const V y = pw * qb[2] + py * qb[0] + pz * qb[1] - px * qb[3];
+  const V z = pw * qb[3] + pz * qb[0] + px * qb[2] - py * qb[1];
+  mat3_of(w, x, y, z, rel.R);
+  detail::lanes::quat_turn(px, py, pz, pw, d[0], d[1], d[2], rel.t[0], rel.t[1], rel.t[2]);
+}
+
+// The separating axes (the single pair's face_a_sep, face_b_sep and edge_sep): every axis's
+// separation into o, the deepest face of each box (fa, fb; its face index face_a, face_b) and
+// the deepest edge axis (ee, ek), whether an edge contact is made (o.edge) and whether a's
+// face is the reference (returned); AR: |R| + 1e-12
+template <class V>
+PBA_LANES LaneMask<V> separating_axes(const PairLanes<V>& P, const Relative<V>& rel, const V (&AR)[3][3], V& face_a,
+                                      V& face_b, BoxLanes<kWidth<V>>& o) {
+  using M = LaneMask<V>;
+  const V zero = splat<V>(0), one = splat<V>(1), two = splat<V>(2), inf = splat<V>(INFINITY);
+  const V(&R)[3][3] = rel.R;
+  const V* t = rel.t;
+  const V* ha = P.ha;
+  const V* hb = P.hb;
   // faces of A, faces of B (keep_max: the first maximum)
   V fa = -inf, fb = -inf, ia = zero, ib = zero;
   for (int i = 0; i < 3; ++i) {
@@ -802,7 +817,7 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
   }
   for (int j = 0; j < 3; ++j) {
     const V ra = ha[0] * AR[j][0] + ha[1] * AR[j][1] + ha[2] * AR[j][2];
-    const V s = vabs(tb[j]) - hb[j] - ra;
+    const V s = vabs(rel.tb[j]) - hb[j] - ra;
     store(o.face_sep_b[j], s);
     const M more = s > fb;
     ib = more ? splat<V>(j) : ib;
@@ -810,9 +825,9 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
   }
   V t_ia[3], tb_ib[3];
   rotate3(ia, t, t_ia);
-  rotate3(ib, tb, tb_ib);
-  const V face_a = two * ia + (t_ia[0] > 0 ? one : zero);
-  const V face_b = two * ib + (tb_ib[0] < 0 ? one : zero);
+  rotate3(ib, rel.tb, tb_ib);
+  face_a = two * ia + (t_ia[0] > 0 ? one : zero);
+  face_b = two * ib + (tb_ib[0] < 0 ? one : zero);
   store(o.fa, fa), store(o.fb, fb), store(o.face_a, face_a), store(o.face_b, face_b);
 
   // the nine edge axes (edge_axis, edge_sep)
@@ -835,19 +850,27 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
   store(o.ee, ee), store(o.ek, ek);
   constexpr double kRelEdge = 0.90, kRelFace = 0.98, kAbs = 0.5 * 0.005;
   const V face = vmax(fa, fb);
-  const V relevant = vmin(margin, (face > 0 ? (2 - kRelEdge) * face : kRelEdge * face) + kAbs);
+  const V relevant = vmin(P.margin, (face > 0 ? (2 - kRelEdge) * face : kRelEdge * face) + kAbs);
   store(o.edge, ee > relevant ? one : zero);
   const M ref_a = !(fb > kRelFace * fa + kAbs);
   store(o.ref_a, ref_a ? one : zero);
+  return ref_a;
+}
 
-  // the reference face fr (axis k0, side s0) and, in its coordinates (u, v, w) = (x[k1],
-  // x[k2], x[k0]), the incident face's centre, half axes and corners
+// The face contact: the reference face fr (axis k0, side s0) and, in its coordinates (u, v,
+// w) = (x[k1], x[k2], x[k0]), the incident face's centre, half axes and corners, clipped
+// (clip_lanes); the deepest incident vertex; the reference box's world frame
+template <class V>
+PBA_LANES void face_contact(const PairLanes<V>& P, const Relative<V>& rel, LaneMask<V> ref_a, V face_a, V face_b,
+                            BoxLanes<kWidth<V>>& o) {
+  using M = LaneMask<V>;
+  const V zero = splat<V>(0), one = splat<V>(1), two = splat<V>(2);
   V Rri[3][3], tri[3], hr[3], hi[3];
   for (int c = 0; c < 3; ++c) {
-    for (int r = 0; r < 3; ++r) Rri[c][r] = ref_a ? R[c][r] : R[r][c];
-    tri[c] = ref_a ? t[c] : -tb[c];
-    hr[c] = ref_a ? ha[c] : hb[c];
-    hi[c] = ref_a ? hb[c] : ha[c];
+    for (int r = 0; r < 3; ++r) Rri[c][r] = ref_a ? rel.R[c][r] : rel.R[r][c];
+    tri[c] = ref_a ? rel.t[c] : -rel.tb[c];
+    hr[c] = ref_a ? P.ha[c] : P.hb[c];
+    hi[c] = ref_a ? P.hb[c] : P.ha[c];
   }
   const V fr = ref_a ? face_a : face_b;
   const V k0 = fr >= 4 ? two : (fr >= 2 ? one : zero);
@@ -894,7 +917,7 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
   }
   const V w_ref = s0 * hf[2], incident = ref_a ? one : zero;
   store(o.fr, fr), store(o.fi, fi), store(o.s0, s0), store(o.w_ref, w_ref);
-  clip_lanes<V>(corner, c, a1, a2, fi, hf[0], hf[1], hf[2], s0, margin, incident, w_ref, o);
+  clip_lanes<V>(corner, c, a1, a2, fi, hf[0], hf[1], hf[2], s0, P.margin, incident, w_ref, o);
   // the deepest incident vertex (the incident corner farthest along -normal)
   {
     V qv[3] = {tri[0], tri[1], tri[2]}, bits = zero;
@@ -912,15 +935,42 @@ PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& 
   // the reference box's frame in the world: its axes (k1, k2, k0) and centre
   {
     V W3[3][3];
-    mat3_of(ref_a ? qa[0] : qb[0], ref_a ? qa[1] : qb[1], ref_a ? qa[2] : qb[2], ref_a ? qa[3] : qb[3], W3);
+    mat3_of(ref_a ? P.qa[0] : P.qb[0], ref_a ? P.qa[1] : P.qb[1], ref_a ? P.qa[2] : P.qb[2],
+            ref_a ? P.qa[3] : P.qb[3], W3);
     for (int r = 0; r < 3; ++r) {
       const V col[3] = {W3[0][r], W3[1][r], W3[2][r]};
       V x[3];
       rotate3(perm, col, x);
       store(o.wu[r], x[0]), store(o.wv[r], x[1]), store(o.ww[r], x[2]);
-      store(o.origin[r], ref_a ? xa[r] : xb[r]);
+      store(o.origin[r], ref_a ? P.xa[r] : P.xb[r]);
     }
   }
+}
+
+
+// The lanes' part of up to W pairs (lanes past n repeat the last pair): the input checks, the
+// relative pose, the separating axes and the face contact.
+template <class V>
+PBA_LANES void box_lanes(const PairQuery* const* q, int n, BoxLanes<kWidth<V>>& o) {
+  PairLanes<V> P;
+  gather_pairs<V>(q, n, P);
+  V d[3];
+  for (int k = 0; k < 3; ++k) d[k] = P.xb[k] - P.xa[k];
+  checks_and_spheres(P, d, o);
+  Relative<V> rel;
+  relative_pose(P, d, rel);
+  V AR[3][3];
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) AR[j][i] = vabs(rel.R[j][i]) + 1e-12;
+  for (int j = 0; j < 3; ++j) rel.tb[j] = rel.R[j][0] * rel.t[0] + rel.R[j][1] * rel.t[1] + rel.R[j][2] * rel.t[2];
+  for (int j = 0; j < 3; ++j) {
+    store(o.t[j], rel.t[j]), store(o.tb[j], rel.tb[j]), store(o.ha[j], P.ha[j]), store(o.hb[j], P.hb[j]);
+    for (int i = 0; i < 3; ++i) store(o.R[j][i], rel.R[j][i]), store(o.AR[j][i], AR[j][i]);
+  }
+  store(o.margin, P.margin);
+  V face_a, face_b;
+  const LaneMask<V> ref_a = separating_axes(P, rel, AR, face_a, face_b, o);
+  face_contact(P, rel, ref_a, face_a, face_b, o);
 }
 
 }  // namespace

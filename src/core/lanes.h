@@ -1,8 +1,9 @@
 // Private to the library: the lane arithmetic shared by the rigid contact kernels
 // (rigid/contact_wide.cpp), the rigid free motion (rigid/integrate_wide.cpp), the batched
 // box-box narrow phase (collide/sat_box.cpp), the mesh contacts' and a box's corners on a plane
-// (collide/mesh_contact.cpp, collide/manifold.cpp) and the reuse test (rigid/contact_pairs.cpp). One template over the lane type runs every SIMD
-// path: a double (scalar), 4 doubles (AVX2) or 8 (AVX-512), as GCC vector extensions; each
+// (collide/mesh_contact.cpp, collide/manifold.cpp) and the reuse test (rigid/contact_pairs.cpp).
+// One template over the lane type runs every SIMD path: a double (scalar), 4 doubles (AVX2) or
+// 8 (AVX-512), as GCC vector extensions (the contact kernels' lanes of floats too); each
 // lane does the same operations in the same order on every path, so all give the same bits.
 // Include it only in files whose wide functions are compiled with per-function targets.
 #pragma once
@@ -78,15 +79,26 @@ PBA_LANES V vsqrt(V x) {
   }
 }
 
-/// r = v turned by the unit quaternion (qx, qy, qz, qw), lane by lane in glm's operations and
-/// order (v + ((u x v) w + u x (u x v)) 2, u = (qx, qy, qz)): the bits of glm's q * v on every
-/// path. Any lane type (GCC vectors of 2, 4 or 8 doubles, __m256d, a double).
+/// The change r - v of v turned by the unit quaternion (qx, qy, qz, qw), lane by lane in glm's
+/// operations and order: ((u x v) w + u x (u x v)) 2, u = (qx, qy, qz) (quat_turn adds v to
+/// it). Any lane type (GCC vectors of 2, 4, 8 or 16 doubles or floats, __m256d, a double or a
+/// float).
 template <class V>
-PBA_LANES void quat_turn(V qx, V qy, V qz, V qw, V vx, V vy, V vz, V& rx, V& ry, V& rz) {
+PBA_LANES void quat_turn_change(V qx, V qy, V qz, V qw, V vx, V vy, V vz, V& cx, V& cy, V& cz) {
   const V uvx = qy * vz - vy * qz, uvy = qz * vx - vz * qx, uvz = qx * vy - vx * qy;
   const V uuvx = qy * uvz - uvy * qz, uuvy = qz * uvx - uvz * qx, uuvz = qx * uvy - uvx * qy;
-  const V two = splat<V>(2.0);
-  rx = vx + ((uvx * qw) + uuvx) * two, ry = vy + ((uvy * qw) + uuvy) * two, rz = vz + ((uvz * qw) + uuvz) * two;
+  const V two = V{} + 2;  // (2 exactly, in lanes of doubles or floats)
+  cx = ((uvx * qw) + uuvx) * two, cy = ((uvy * qw) + uuvy) * two, cz = ((uvz * qw) + uuvz) * two;
+}
+
+/// r = v turned by the unit quaternion (qx, qy, qz, qw), lane by lane in glm's operations and
+/// order (v + ((u x v) w + u x (u x v)) 2, u = (qx, qy, qz)): the bits of glm's q * v on every
+/// path. Any lane type (as quat_turn_change).
+template <class V>
+PBA_LANES void quat_turn(V qx, V qy, V qz, V qw, V vx, V vy, V vz, V& rx, V& ry, V& rz) {
+  V cx, cy, cz;
+  quat_turn_change(qx, qy, qz, qw, vx, vy, vz, cx, cy, cz);
+  rx = vx + cx, ry = vy + cy, rz = vz + cz;
 }
 
 /// Lane i.

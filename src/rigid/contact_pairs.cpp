@@ -535,7 +535,8 @@ static_assert(offsetof(PairCache, rel_position) == 0 && offsetof(PairCache, rel_
 // relative pose (glm's conjugate, quaternion product and rotation of a vector) and the test,
 // each lane the scalar code's operations in its order, so the same bits and the same outcome;
 // `same` gets 1 or 0 a lane, and `rel` the relative pose a coordinate a row (rel_position's x,
-// y, z, rel_rotation's x, y, z, w; rows of `stride`), for the pairs made anew
+// y, z, rel_rotation's x, y, z, w; rows of `stride`), for the pairs made anew and the test of
+// those whose normal is in b's frame
 __attribute__((target("avx2"))) void reuse_lanes_avx2(const ReuseLane* lane, const Quat* q, const Vec3* com,
                                                       double cos_half, std::uint8_t* same, double* rel,
                                                       std::size_t stride) {
@@ -670,11 +671,16 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
   constexpr std::size_t kRelStride = kSpan + 4;
   std::array<double, 7 * kRelStride> lane_rel;
   bool rel_made = false;
-  // the scalar reuse test of a lane (the lanes' arithmetic, one pair)
-  auto carried_scalar = [&](const ReuseLane& l, bool in_b) {
-    const Quat qa_inv = glm::conjugate(s.q_[l.a]);
-    return carried_over(*l.cache, l.margin, l.reuse, cos_half, in_b, l.reach, qa_inv * (s.com_[l.b] - s.com_[l.a]),
-                        qa_inv * s.q_[l.b]);
+  // lane t's relative pose as reuse_lanes_avx2 left it
+  auto lane_pose = [&](std::size_t t, Vec3& position, Quat& rotation) {
+    const double* r = &lane_rel[t];
+    position = Vec3(r[0], r[kRelStride], r[2 * kRelStride]);
+    rotation = Quat(r[6 * kRelStride], r[3 * kRelStride], r[4 * kRelStride], r[5 * kRelStride]);
+  };
+  // lane t's reuse test on its relative pose (the plan's, or the lanes')
+  auto carried = [&](std::size_t t, const Vec3& position, const Quat& rotation) {
+    const ReuseLane& l = lanes[t];
+    return carried_over(*l.cache, l.margin, l.reuse, cos_half, lane_in_b[t], l.reach, position, rotation);
   };
   for (std::size_t first = 0; first < shape_pairs.size();) {
     box_queries.clear();
@@ -715,25 +721,38 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
     // manifolds were made, four pairs at a time on the SIMD paths (the same bits; one pair at
     // a time, the plan's glm arithmetic was a third of the resting 2870 pyramid's
     // make_manifolds, some 170 instructions a pair: docs/benchmarks.md, "The reuse test in lanes")
+    // (each pair's relative pose is made once: by the lanes, or here into its plan, for its
+    // test and, made anew, its cache)
     rel_made = false;
-    if (reuse) {
-      std::size_t t = 0;
 #if PBA_EMIT_AVX2
-      if (simd != SimdPath::Scalar && touching > 0) {
-        for (std::size_t k = touching; k % 4 != 0; ++k) lanes[k] = lanes[touching - 1];
-        for (; t < touching; t += 4)
-          reuse_lanes_avx2(&lanes[t], s.q_.data(), s.com_.data(), cos_half, &lane_same[t], &lane_rel[t], kRelStride);
-        rel_made = true;
-        // (the lanes hold the normal in a's frame; a dynamic body on a static or kinematic
-        // one that comes first in the pair holds it in b's)
-        for (std::size_t k = 0; k < touching; ++k)
-          if (lane_in_b[k]) lane_same[k] = carried_scalar(lanes[k], true);
+    if (reuse && simd != SimdPath::Scalar && touching > 0) {
+      for (std::size_t k = touching; k % 4 != 0; ++k) lanes[k] = lanes[touching - 1];
+      for (std::size_t t = 0; t < touching; t += 4)
+        reuse_lanes_avx2(&lanes[t], s.q_.data(), s.com_.data(), cos_half, &lane_same[t], &lane_rel[t], kRelStride);
+      rel_made = true;
+      // (the lanes hold the normal in a's frame; a dynamic body on a static or kinematic
+      // one that comes first in the pair holds it in b's: tested again on the lanes' pose)
+      for (std::size_t k = 0; k < touching; ++k) {
+        if (!lane_in_b[k]) continue;
+        Vec3 position;
+        Quat rotation;
+        lane_pose(k, position, rotation);
+        lane_same[k] = carried(k, position, rotation);
       }
-#endif
-      for (; t < touching; ++t) lane_same[t] = carried_scalar(lanes[t], lane_in_b[t]);
     }
-    // the pairs made anew: their relative pose for the cache, and the span's box-box ones to
-    // the batch (the span ends at the kBoxes-th)
+#endif
+    if (!rel_made) {
+      for (std::size_t t = 0; t < touching; ++t) {
+        PairPlan& plan = plans[lane_pair[t]];
+        const ReuseLane& l = lanes[t];
+        const Quat qa_inv = glm::conjugate(s.q_[l.a]);
+        plan.rel_position = qa_inv * (s.com_[l.b] - s.com_[l.a]);
+        plan.rel_rotation = qa_inv * s.q_[l.b];
+        if (reuse) lane_same[t] = carried(t, plan.rel_position, plan.rel_rotation);
+      }
+    }
+    // the pairs made anew: their relative pose for the cache (from the lanes), and the span's
+    // box-box ones to the batch (the span ends at the kBoxes-th)
     std::size_t last = end;
     for (std::size_t t = 0; t < touching; ++t) {
       const std::size_t k = first + lane_pair[t];
@@ -743,15 +762,7 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       if (plan.same) continue;
       const ShapePair& p = shape_pairs[k];
       const std::uint32_t a = lanes[t].a, b = lanes[t].b;
-      if (rel_made) {
-        const double* r = &lane_rel[t];
-        plan.rel_position = Vec3(r[0], r[kRelStride], r[2 * kRelStride]);
-        plan.rel_rotation = Quat(r[6 * kRelStride], r[3 * kRelStride], r[4 * kRelStride], r[5 * kRelStride]);
-      } else {
-        const Quat qa_inv = glm::conjugate(s.q_[a]);
-        plan.rel_position = qa_inv * (s.com_[b] - s.com_[a]);
-        plan.rel_rotation = qa_inv * s.q_[b];
-      }
+      if (rel_made) lane_pose(t, plan.rel_position, plan.rel_rotation);
       const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
       const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
       if (sa.shape.type != ShapeType::Box || sb.shape.type != ShapeType::Box) continue;

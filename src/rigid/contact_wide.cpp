@@ -362,13 +362,11 @@ PBA_LANES void separations(const Lanes<V, B>& L, const AnchorsOf<B::kPoints>& g,
   load_rows(r.motion, c.b + L.l0, mb);
   const V dp[3] = {mb[0] - ma[0], mb[1] - ma[1], mb[2] - ma[2]};
   const V dpn = dot(dp, n);
-  // turn^-1 n - n = 2 (w (-u x n) + (-u) x ((-u) x n)), in the frame
+  // turn^-1 n - n = 2 (w (-u x n) + (-u) x ((-u) x n)) (the conjugate's quat_turn_change), in
+  // the frame
   auto turned_normal = [&](const V* m, V out[3]) {
-    const V u[3] = {-m[4], -m[5], -m[6]};
-    const V uv[3] = {u[1] * n[2] - u[2] * n[1], u[2] * n[0] - u[0] * n[2], u[0] * n[1] - u[1] * n[0]};
-    const V uuv[3] = {u[1] * uv[2] - u[2] * uv[1], u[2] * uv[0] - u[0] * uv[2], u[0] * uv[1] - u[1] * uv[0]};
     V w[3];
-    for (int i = 0; i < 3; ++i) w[i] = (uv[i] * m[3] + uuv[i]) * splat<V>(2);
+    lanes::quat_turn_change(-m[4], -m[5], -m[6], m[3], n[0], n[1], n[2], w[0], w[1], w[2]);
     to_frame(t1, t2, n, w, out);
   };
   V na[3], nb[3];

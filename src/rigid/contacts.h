@@ -8,6 +8,7 @@
 #include <limits>
 #include <vector>
 
+#include "body_frame.h"
 #include "collide/narrow_internal.h"
 #include "pba/collide/broad_phase.h"
 #include "pba/collide/narrow_phase.h"

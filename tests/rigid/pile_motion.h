@@ -28,7 +28,9 @@ inline PileMotion pile_motion(const RigidBodySystem& s, const std::vector<RigidB
 }
 
 /// Whether any of `bodies` moves at or over the sleep tolerances (ContactSettings::sleep_linear,
-/// sleep_angular): what keeps the soft step's halving from counting its calm (columns.cpp).
+/// sleep_angular): what keeps the soft step's halving from counting its calm (columns.cpp's
+/// still(), over every awake dynamic body). Read here through the public API over the pile's
+/// bodies on purpose: the tests' own statement of the rule, which the library's is checked by.
 inline bool any_unsettled(const RigidBodySystem& s, const std::vector<RigidBodyId>& bodies) {
   const double v = s.settings().sleep_linear, w = s.settings().sleep_angular;
   for (const RigidBodyId b : bodies) {

@@ -64,15 +64,13 @@ TEST(RigidSoak, TheSquarePyramidOf2870CubesHalvesAndStandsAMinute) {
   const auto boxes = pba::rigid_scenes::square_pyramid(s, 20);
   std::vector<pba::Vec3> start;
   for (const auto b : boxes) start.push_back(s.center_of_mass(b));
-  int first = -1, unsettled = -1, third = -1, unsettled_at_4 = -1;
+  pba::test::Lowering lowering;
   for (int i = 0; i < 3600; ++i) {
     s.step(1.0 / 60, {0, -9.81, 0});
-    if (first < 0 && s.profile().substeps == 4) first = i;
-    if (first >= 0 && third < 0 && s.profile().substeps == 3) third = i;
-    if (first < 0 && pba::test::any_unsettled(s, boxes)) unsettled = i;
-    if (first >= 0 && third < 0 && pba::test::any_unsettled(s, boxes)) unsettled_at_4 = i;
-    if (first >= 0) {
-      ASSERT_EQ(s.profile().substeps, third < 0 ? 4 : 3) << "at step " << i << ", halved at " << first;
+    lowering.record(i, s.profile().substeps, pba::test::any_unsettled(s, boxes));
+    if (lowering.halved >= 0) {
+      ASSERT_EQ(s.profile().substeps, lowering.third < 0 ? 4 : 3) << "at step " << i << ", halved at "
+                                                                   << lowering.halved;
     }
     if (i % 600 == 599) {
       const pba::Vec3 top = s.center_of_mass(boxes.back());
@@ -81,18 +79,21 @@ TEST(RigidSoak, TheSquarePyramidOf2870CubesHalvesAndStandsAMinute) {
                   s.profile().half_load);
     }
   }
+  const int first = lowering.halved, third = lowering.third;
   EXPECT_GE(first, 0);
   EXPECT_GE(third, 0);
   // a second after it came to rest (kCalmTime; its cubes settle under the sleep tolerances
-  // by step 22 of the 8 substeps' start), to the step; and at 4 not before a second at rest
+  // by step 22 of the 8 substeps' start), to the step
+  EXPECT_EQ(first, pba::test::halving_step(lowering.unsettled)) << "last unsettled at step " << lowering.unsettled;
+  // and at 4 not before a second at rest
   // (next_rung_step), nor later than two measures (kMeasureEvery, 8 steps each) after it: the
   // sag predicted at 3 from the loads the contacts carry rings down as the pile sinks onto the
   // halved springs (10.9 and 10.5 mm at the first two measures after the halving, past half
   // the budget, 1 cm; 9.7 mm at the third, then 8.9-9.0 at rest), so the calm at 4 counts from
   // the first measure within it, unseen from outside (measured: step 155, the rule at rest 142)
-  const int rule = pba::test::next_rung_step(first, unsettled_at_4);
-  EXPECT_GE(third, rule) << "last unsettled at 4 at step " << unsettled_at_4;
-  EXPECT_LE(third, rule + 2 * 8) << "last unsettled at 4 at step " << unsettled_at_4;
+  const int rule = pba::test::next_rung_step(first, lowering.unsettled_at_4);
+  EXPECT_GE(third, rule) << "last unsettled at 4 at step " << lowering.unsettled_at_4;
+  EXPECT_LE(third, rule + 2 * 8) << "last unsettled at 4 at step " << lowering.unsettled_at_4;
   const pba::Vec3 top = s.center_of_mass(boxes.back());
   const double sag = start.back().y - top.y, drift = std::hypot(top.x - start.back().x, top.z - start.back().z);
   EXPECT_LT(sag, 0.01);  // the bound, under Bullet's 16 mm (above)

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "pba/rigid.h"
+#include "rigid/body_frame.h"  // the identity shortcuts, tested directly
 
 #include "error_of.h"
 
