@@ -87,6 +87,8 @@ constexpr double kSamePoint = 1e-6;
 
 // how many pairs ahead make_manifolds() and emit() fetch the pool entries they will read
 constexpr std::size_t kPairsAhead = 4;
+// how many bodies ahead update_proxies() fetches the shapes it will read
+constexpr std::size_t kBodiesAhead = 8;
 
 // asks for every cache line that the `Bytes` from `at` touch (a prefetch: no effect on the
 // results); from the line `at` is in, so an object that starts mid-line gets its last line
@@ -266,6 +268,9 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
   moved.clear(), moved_box.clear(), moved_keys.clear();
   std::size_t created = 0;
   for (std::size_t i = 0; i < n; ++i) {
+    // a body's shapes sit in a block of their own (a vector per body): the first one's lines
+    // asked for some bodies ahead (its type, size and local pose: 216 bytes)
+    if (i + kBodiesAhead < n) prefetch_lines<sizeof(RigidShapeDef)>(s.shapes_[i + kBodiesAhead].data());
     const std::uint32_t slot = s.owner_[i];
     if (slot >= body_proxies.size()) body_proxies.resize(slot + 1), static_pose.resize(slot + 1);
     std::vector<std::uint32_t>& mine = body_proxies[slot];
