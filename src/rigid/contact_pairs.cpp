@@ -406,7 +406,7 @@ void RigidContacts::tree_order(bool set_boxes) {
   }
   // least digit first, 8 bits a pass (two for the rain's 20,000 nodes), each pass stable
   moved_keys_spare.resize(m);
-  for (int shift = 32; shift < 32 + std::bit_width(last); shift += 8) {
+  for (int shift = 32; shift < 32 + static_cast<int>(std::bit_width(last)); shift += 8) {
     std::array<std::uint32_t, 257> start{};
     for (const std::uint64_t k : moved_keys) ++start[((k >> shift) & 0xff) + 1];
     for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
