@@ -573,7 +573,8 @@ TEST(DynamicTree, LeafBoxesSetInAnyOrderGiveTheSameTree) {
     for (std::size_t k = 0; k < movers.size(); ++k) trees[0].set_leaf_box(node[movers[k]], box[movers[k]]);
     for (std::size_t k = movers.size(); k-- > 0;) trees[1].set_leaf_box(node[movers[k]], box[movers[k]]);
     std::vector<std::size_t> shuffled = movers;
-    for (std::size_t k = shuffled.size(); k > 1; --k) std::swap(shuffled[k - 1], shuffled[rng.below(static_cast<std::uint32_t>(k))]);
+    for (std::size_t k = shuffled.size(); k > 1; --k)
+      std::swap(shuffled[k - 1], shuffled[rng.below(static_cast<std::uint32_t>(k))]);
     for (const std::size_t i : shuffled) trees[2].set_leaf_box(node[i], box[i]);
     for (int t = 1; t < 3; ++t) {
       trees[t].validate();
