@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -86,6 +87,8 @@ constexpr double kSamePoint = 1e-6;
 
 // how many pairs ahead make_manifolds() and emit() fetch the pool entries they will read
 constexpr std::size_t kPairsAhead = 4;
+// how many bodies ahead update_proxies() fetches the shapes it will read
+constexpr std::size_t kBodiesAhead = 8;
 
 // asks for every cache line that the `Bytes` from `at` touch (a prefetch: no effect on the
 // results); from the line `at` is in, so an object that starts mid-line gets its last line
@@ -262,9 +265,12 @@ void RigidContacts::free_pair(ShapePair& p) {
 void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
   const ContactSettings& cs = s.settings_;
   const std::size_t n = s.type_.size();
-  moved.clear();
+  moved.clear(), moved_box.clear(), moved_keys.clear();
   std::size_t created = 0;
   for (std::size_t i = 0; i < n; ++i) {
+    // a body's shapes sit in a block of their own (a vector per body): the first one's lines
+    // asked for some bodies ahead (its type, size and local pose: 216 bytes)
+    if (i + kBodiesAhead < n) prefetch_lines<sizeof(RigidShapeDef)>(s.shapes_[i + kBodiesAhead].data());
     const std::uint32_t slot = s.owner_[i];
     if (slot >= body_proxies.size()) body_proxies.resize(slot + 1), static_pose.resize(slot + 1);
     std::vector<std::uint32_t>& mine = body_proxies[slot];
@@ -319,6 +325,8 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
           unbounded.push_back(q);
         }
         if (type == BodyType::Static) statics.push_back(q);
+        moved_keys.push_back(moved.size());
+        moved_box.push_back(p.fat);
         moved.push_back(q);
         ++created;
       } else if (p.node >= 0) {
@@ -332,33 +340,91 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
         // search for a new place, with the removal and the rotations on both walks, cost the
         // rain 1,900 re-insertions a step, all 10,000 every third step of its fall; the tree's
         // quality is watched below)
+        // (the leaf's new box is set below, with the others', in the tree's order: a new shape
+        // inserted meanwhile finds its place among the old boxes, which moves no pair)
         const Aabb want = stretched(p.box, ahead);
         if (p.fat.contains(p.box) && stretched(want, -ahead).grown(2 * tree.margin()).contains(p.fat)) continue;
-        tree.set_leaf_box(p.node, want);
-        p.fat = tree.fat_box(p.node);
+        moved_keys.push_back(std::uint64_t{1} << 31 | moved.size());
+        moved_box.push_back(want);
         moved.push_back(q);
       } else {
         // a plane put elsewhere
         p.fat = p.box;
+        moved_keys.push_back(moved.size());
+        moved_box.push_back(p.fat);
         moved.push_back(q);
       }
     }
   }
+  // the leaves' new boxes, in the tree's order
+  tree_order(true);
   // many insertions at once (the first step of a scene) are better rebuilt than kept; moves
   // wear the tree down, so its quality is checked now and then (BroadPhase does the same)
   reinserted_since_check += moved.size();
+  bool rebuilt = false;
   if (created > 16) {
     tree.rebuild();
     tree_ratio = tree.area_ratio();
     reinserted_since_check = 0;
+    rebuilt = true;
   } else if (reinserted_since_check > tree.proxy_count() && tree.proxy_count() > 2) {
     const double ratio = tree.area_ratio();
     if (ratio > 1.5 * tree_ratio) {
       tree.rebuild();
       tree_ratio = tree.area_ratio();
+      rebuilt = true;
     }
     reinserted_since_check = 0;
   }
+  // (the queries go in the order of the tree they walk)
+  if (rebuilt) {
+    for (std::size_t i = 0; i < moved.size(); ++i) moved_keys[i] = i;
+    tree_order(false);
+  }
+}
+
+// Puts `moved` in the order of its leaves' parents' indices, stably (`moved_keys[i]`: entry
+// i, with bit 31 set when its leaf is to get the fat box of `moved_box[i]`, which is set on
+// the way when `set_boxes`; planes go last). A rebuild allocates a subtree's inner nodes one
+// after the other (build_range: children before their parent), so leaves close in this order
+// are close in the tree, and the moved proxies' leaf updates and queries walk the same few
+// nodes one after another instead of the whole tree each (in body order, the rain's
+// neighbours in a heap are its columns' four layers, 2,500 bodies apart). Nothing the tree
+// or the queries find depends on the order (each inner box is the union of its children's
+// whatever order its leaves are set in; the pair set and the sorted new pairs do not depend on
+// the order of the queries): only where the waits fall does.
+void RigidContacts::tree_order(bool set_boxes) {
+  const std::size_t m = moved.size();
+  if (m == 0) return;
+  const std::span<const DynamicTree::Node> nodes = tree.nodes();
+  const auto last = static_cast<std::uint32_t>(nodes.size());
+  for (std::size_t i = 0; i < m; ++i) {
+    const std::int32_t leaf = proxies[moved[i]].node;
+    const std::int32_t parent = leaf >= 0 ? nodes[static_cast<std::size_t>(leaf)].parent : DynamicTree::kNull;
+    const std::uint32_t key = parent >= 0 ? static_cast<std::uint32_t>(parent) : last;
+    moved_keys[i] |= std::uint64_t{key} << 32;
+  }
+  // least digit first, 8 bits a pass (two for the rain's 20,000 nodes), each pass stable
+  moved_keys_spare.resize(m);
+  for (int shift = 32; shift < 32 + static_cast<int>(std::bit_width(last)); shift += 8) {
+    std::array<std::uint32_t, 257> start{};
+    for (const std::uint64_t k : moved_keys) ++start[((k >> shift) & 0xff) + 1];
+    for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
+    for (const std::uint64_t k : moved_keys) moved_keys_spare[start[(k >> shift) & 0xff]++] = k;
+    moved_keys.swap(moved_keys_spare);
+  }
+  moved_spare.clear();
+  for (const std::uint64_t k : moved_keys) {
+    const std::size_t i = k & 0x7fffffffu;
+    const std::uint32_t q = moved[i];
+    if (set_boxes && (k >> 31 & 1)) {
+      ShapeProxy& p = proxies[q];
+      tree.set_leaf_box(p.node, moved_box[i]);
+      p.fat = tree.fat_box(p.node);
+    }
+    moved_spare.push_back(q);
+  }
+  moved.swap(moved_spare);
 }
 
 void RigidContacts::find_new_pairs(RigidBodySystem& s) {

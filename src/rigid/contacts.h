@@ -328,7 +328,12 @@ struct RigidContacts {
   std::vector<ShapePair> found;               // scratch: pairs of the moved proxies this step
   std::vector<std::uint64_t> hits;            // scratch: the moved proxies' query hits (proxy << 32 | other)
   std::vector<ShapePair> candidates;          // scratch: the hits that may pair, in the hits' order
-  std::vector<std::uint32_t> moved;           // scratch: proxies re-inserted this step
+  std::vector<std::uint32_t> moved;           // scratch: proxies re-inserted this step (in the tree's order)
+  // scratch of update_proxies, by entry of `moved` as first listed: the fat box a leaf is to
+  // get (grown by the margin when set), and the entries' sort keys (tree_order)
+  std::vector<Aabb> moved_box;
+  std::vector<std::uint64_t> moved_keys, moved_keys_spare;
+  std::vector<std::uint32_t> moved_spare;
   std::vector<std::uint8_t> was_moved;        // scratch: 1 for the proxies in `moved`
   std::vector<PairCache> caches;              // pool
   std::vector<PairCache> caches_spare;        // scratch: the pool in pair order (reorder_caches), as large
@@ -381,6 +386,7 @@ struct RigidContacts {
   // update()'s parts
   void update_proxies(RigidBodySystem& s, double dt);
   void find_new_pairs(RigidBodySystem& s);
+  void tree_order(bool set_boxes);
   void wake_touched(RigidBodySystem& s);
   void make_manifolds(RigidBodySystem& s);
   void collide_pair(RigidBodySystem& s, const ShapePair& p, PairCache& c, std::uint32_t a, std::uint32_t b,

@@ -539,6 +539,66 @@ TEST(DynamicTree, LeafBoxesSetInPlaceKeepTheTreeExact) {
   EXPECT_EQ(tree.proxy_count(), box.size());
 }
 
+// leaves given new boxes in place in any order end in the same tree to the bit (the rigid
+// bodies' pair phase sets them in the order of their parents' indices, not the bodies'):
+// each inner box is the union of its children's whichever leaf below it was set last, and a
+// walk up stops only where nothing above can change. The same moves, set in three orders
+// (as listed, backwards, by a shuffle), leave every node's box and link equal, round after
+// round, and queries find the same leaves
+TEST(DynamicTree, LeafBoxesSetInAnyOrderGiveTheSameTree) {
+  Rng rng{71};
+  const double side = 25;
+  std::vector<Aabb> box;
+  for (std::uint32_t i = 0; i < 2000; ++i) box.push_back(random_box(rng, side));
+  DynamicTree trees[3] = {DynamicTree(0.1), DynamicTree(0.1), DynamicTree(0.1)};
+  std::vector<std::int32_t> node;
+  for (DynamicTree& t : trees) {
+    node.clear();
+    for (std::uint32_t i = 0; i < box.size(); ++i) node.push_back(t.create_proxy(box[i], i));
+    t.rebuild();
+  }
+  std::vector<std::size_t> order(box.size());
+  for (int round = 0; round < 20; ++round) {
+    // a third of the leaves move: most a little, some far, some shrink
+    std::vector<std::size_t> movers;
+    for (std::size_t i = 0; i < box.size(); ++i) {
+      const std::uint32_t r = rng.below(100);
+      if (r >= 33) continue;
+      const Vec3 d = r < 2 ? Vec3(rng.uniform(-side, side), rng.uniform(-side, side), rng.uniform(-side, side)) * 0.5
+                           : Vec3(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3));
+      const Vec3 shrink = r % 5 == 0 ? Vec3(0.002) : Vec3(0);
+      box[i] = {box[i].lo + d + shrink, box[i].hi + d - shrink};
+      movers.push_back(i);
+    }
+    for (std::size_t k = 0; k < movers.size(); ++k) trees[0].set_leaf_box(node[movers[k]], box[movers[k]]);
+    for (std::size_t k = movers.size(); k-- > 0;) trees[1].set_leaf_box(node[movers[k]], box[movers[k]]);
+    std::vector<std::size_t> shuffled = movers;
+    for (std::size_t k = shuffled.size(); k > 1; --k)
+      std::swap(shuffled[k - 1], shuffled[rng.below(static_cast<std::uint32_t>(k))]);
+    for (const std::size_t i : shuffled) trees[2].set_leaf_box(node[i], box[i]);
+    for (int t = 1; t < 3; ++t) {
+      trees[t].validate();
+      ASSERT_EQ(trees[t].nodes().size(), trees[0].nodes().size());
+      for (std::size_t n = 0; n < trees[0].nodes().size(); ++n) {
+        const DynamicTree::Node &a = trees[0].nodes()[n], &b = trees[t].nodes()[n];
+        ASSERT_TRUE(a.box.lo == b.box.lo && a.box.hi == b.box.hi && a.parent == b.parent && a.child1 == b.child1 &&
+                    a.child2 == b.child2 && a.height == b.height)
+            << "round " << round << ", order " << t << ", node " << n;
+      }
+    }
+    for (int q = 0; q < 20; ++q) {
+      const Aabb b = random_box(rng, side);
+      std::vector<std::uint32_t> got[3];
+      for (int t = 0; t < 3; ++t) {
+        trees[t].query(b, [&](std::uint32_t u) { return got[t].push_back(u), true; });
+        std::sort(got[t].begin(), got[t].end());
+      }
+      ASSERT_EQ(got[1], got[0]) << "round " << round << ", query " << q;
+      ASSERT_EQ(got[2], got[0]) << "round " << round << ", query " << q;
+    }
+  }
+}
+
 // the slab test against closed forms
 TEST(DynamicTree, SlabTestMatchesClosedForms) {
   const Aabb unit{{0, 0, 0}, {1, 1, 1}};
