@@ -133,8 +133,7 @@ bool complete_tetrahedron(const ConvexProxy& a, const ConvexProxy& b, std::array
 PenetrationResult epa_penetration(const ConvexProxy& a, const ConvexProxy& b) {
   // GJK first: separated cores have no penetration
   GjkStepper g(a, b);
-  while (g.step()) {
-  }
+  g.run();
   return narrow::epa_from_gjk(g);
 }
 

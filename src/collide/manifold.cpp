@@ -231,8 +231,7 @@ void convex_gjk(const ColliderShape& a, const Pose& pa, const ColliderShape& b, 
 bool narrow::contact_normal(const ConvexProxy& A, const ConvexProxy& B, double margin, Vec3& n, Vec3& point_a,
                             Vec3& point_b) {
   GjkStepper g(A, B);
-  while (g.step()) {
-  }
+  g.run();
   if (!g.overlap()) {
     // apart: the closest points, the radii along their direction
     Vec3 ca, cb;

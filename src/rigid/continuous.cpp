@@ -233,6 +233,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       const bool plane = sb.shape.type == ShapeType::Plane;
       const Vec3 nw = plane ? glm::normalize(pb.rotation * sb.shape.normal) : Vec3(0.0);
       const double off = plane ? sb.shape.offset / glm::length(sb.shape.normal) + glm::dot(nw, pb.position) : 0.0;
+      // a mesh's: the path's bounds in its frame (the core's sweep and the shapes' query the same box)
+      const Aabb in_mesh = sb.shape.type == ShapeType::Mesh ? mesh_box(pb) : Aabb{};
       // A body that starts the step touching a static shape is left to the discrete contact
       // (advance() returns 1 for it). Turning fast, the manifold made at the start of the step
       // holds corners that turn away within a substep while others come in, and the contact
@@ -267,7 +269,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
         // each triangle the path reaches, as for the shapes below; one whose plane the core
         // stays farther from, on one side, than its radius and the slop is skipped
         const TriangleMesh& mesh = *sb.shape.mesh;
-        mesh.query(mesh_box(pb), [&](std::uint32_t tri) {
+        mesh.query(in_mesh, [&](std::uint32_t tri) {
           Vec3 corners[3];
           for (int c = 0; c < 3; ++c) corners[c] = mesh.vertices()[mesh.triangles()[tri][c]];
           const Vec3 face = pb.rotation * mesh.normal(tri);
@@ -308,12 +310,11 @@ void RigidContacts::continuous(RigidBodySystem& s) {
         } else if (sb.shape.type == ShapeType::Mesh) {
           // each triangle the path reaches, as a convex piece in the mesh frame
           const TriangleMesh& mesh = *sb.shape.mesh;
-          const Aabb local = mesh_box(pb);
           // the shape at the step's start, once for all the triangles (the advances' first gap too)
           const Pose p0 = pose_a(0.0), p1 = pose_a(1.0);
           const Quat p0_inv = glm::conjugate(p0.rotation);
           const Vec3 centre0 = sa.shape.type == ShapeType::Hull ? apply(p0, sa.shape.hull->centroid()) : p0.position;
-          mesh.query(local, [&](std::uint32_t tri) {
+          mesh.query(in_mesh, [&](std::uint32_t tri) {
             Vec3 corners[3];
             for (int c = 0; c < 3; ++c) corners[c] = mesh.vertices()[mesh.triangles()[tri][c]];
             ConvexProxy piece{.type = ShapeType::Mesh, .triangle = corners, .pose = pb};

@@ -3,7 +3,10 @@
 // the fifteen-axis separating-axis test, and the stepper's invariants.
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cmath>
 #include <random>
+#include <vector>
 
 #include "narrow_reference.h"
 #include "pba/collide/narrow_phase.h"
@@ -109,6 +112,104 @@ TEST(Gjk, StepperDescendsMonotonicallyAndMatchesTheSolver) {
       EXPECT_EQ(glm::length(g.closest()), r.core_distance);
     }
   }
+}
+
+// GjkStepper::run() inlines each proxy kind's support (and keeps the world points of the
+// vertices it found), as the constructor does for the first vertex, and must give the plain
+// step() loop's run (ConvexProxy::support each iteration) to the bit: the same iterations,
+// simplex (support points, weights, vertex indices), closest point and bounds. Every pair of
+// kinds, at random poses and at axis-aligned ones on a grid (directions with zero coordinates,
+// whose signs a turn by the identity may flip), with triangles in the mesh's own frame, only
+// moved (a position with and without a zero coordinate) and turned; hulls of 5 and 12 vertices
+// (a vertex index past the 8 the run keeps).
+TEST(Gjk, RunGivesTheStepLoopsBitsForEveryKind) {
+  std::mt19937_64 rng(29);
+  std::uniform_real_distribution<double> size(0.2, 1.0), unit(0.0, 1.0);
+  const Vec3 apex[5] = {{0, 1, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 0, 1}, {0, 0, -1}};
+  const auto pyramid = ConvexHull::build(apex, "pyramid");
+  std::vector<Vec3> ring;
+  for (int k = 0; k < 6; ++k) {
+    const double t = k * 3.14159265358979 / 3;
+    ring.push_back({0.6 * std::cos(t), -0.4, 0.6 * std::sin(t)});
+    ring.push_back({0.4 * std::cos(t + 0.5), 0.4, 0.4 * std::sin(t + 0.5)});
+  }
+  const auto prism = ConvexHull::build(ring, "prism");
+  ASSERT_EQ(prism->vertices().size(), 12u);
+  const Vec3 tri[3] = {{-0.7, 0.1, -0.4}, {0.8, -0.2, 0.0}, {0.1, 0.3, 0.9}};
+  auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  auto same = [&](const Vec3& a, const Vec3& b) {
+    return bits(a.x) == bits(b.x) && bits(a.y) == bits(b.y) && bits(a.z) == bits(b.z);
+  };
+  constexpr int kKinds = 9;  // sphere, capsule, box, pyramid, prism, triangle at 0 / moved / moved to a 0 / turned
+  auto proxy = [&](int kind, const Pose& pose) {
+    ConvexProxy c;
+    c.pose = pose;
+    switch (kind) {
+      case 0: c = sphere_proxy(size(rng), pose); break;
+      case 1: c = capsule_proxy(size(rng), 0.3 * size(rng), pose); break;
+      case 2: c = box_proxy(Vec3(size(rng), size(rng), size(rng)), pose); break;
+      case 3: c.type = ShapeType::Hull, c.hull = pyramid.get(); break;
+      case 4: c.type = ShapeType::Hull, c.hull = prism.get(); break;
+      default:
+        c.type = ShapeType::Mesh;
+        c.triangle = tri;
+        if (kind == 5) c.pose = Pose{};
+        else if (kind == 6 || kind == 7) c.pose.rotation = Quat(1, 0, 0, 0);
+        if (kind == 7) c.pose.position.y = 0;
+        break;
+    }
+    return c;
+  };
+  int runs = 0, overlaps = 0, zeros = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int ka = int(trial % kKinds), kb = int((trial / kKinds) % kKinds);
+    // a third of the trials on a grid, unturned: supports along directions with zero coordinates
+    const bool grid = unit(rng) < 0.33;
+    auto pose = [&](double s) {
+      if (!grid) return Pose{random_vec(rng, s), random_rotation(rng)};
+      return Pose{glm::round(random_vec(rng, s)), Quat(1, 0, 0, 0)};
+    };
+    const ConvexProxy a = proxy(ka, pose(1.0)), b = proxy(kb, pose(2.5));
+    GjkStepper stepped(a, b), ran(a, b);
+    {
+      // the first vertex (the constructor's, kinds inlined too): support() along the line
+      // between the centres
+      Vec3 d = a.pose.position - b.pose.position;
+      if (glm::dot(d, d) == 0) d = Vec3(1, 0, 0);
+      std::uint32_t ia = 0, ib = 0;
+      const Vec3 sa = a.support(-d, &ia), sb = b.support(d, &ib);
+      const SimplexVertex& first = stepped.simplex()[0];
+      ASSERT_TRUE(same(first.a, sa) && same(first.b, sb)) << "trial " << trial << ", kinds " << ka << " " << kb;
+      ASSERT_EQ(first.index_a, ia);
+      ASSERT_EQ(first.index_b, ib);
+    }
+    while (stepped.step()) {
+    }
+    ran.run();
+    ++runs;
+    overlaps += stepped.overlap();
+    const Vec3 v = stepped.closest();
+    zeros += v.x == 0 || v.y == 0 || v.z == 0;
+    ASSERT_EQ(ran.iterations(), stepped.iterations()) << "trial " << trial << ", kinds " << ka << " " << kb;
+    ASSERT_EQ(ran.overlap(), stepped.overlap()) << "trial " << trial;
+    ASSERT_TRUE(ran.done());
+    ASSERT_TRUE(same(ran.closest(), stepped.closest())) << "trial " << trial << ", kinds " << ka << " " << kb;
+    ASSERT_EQ(bits(ran.gap()), bits(stepped.gap())) << "trial " << trial;
+    ASSERT_EQ(ran.simplex().size(), stepped.simplex().size()) << "trial " << trial;
+    for (std::size_t i = 0; i < ran.simplex().size(); ++i) {
+      const SimplexVertex &p = ran.simplex()[i], &q = stepped.simplex()[i];
+      ASSERT_TRUE(same(p.a, q.a) && same(p.b, q.b) && same(p.w, q.w)) << "trial " << trial << ", vertex " << i;
+      ASSERT_EQ(bits(p.weight), bits(q.weight)) << "trial " << trial;
+      ASSERT_EQ(p.index_a, q.index_a) << "trial " << trial;
+      ASSERT_EQ(p.index_b, q.index_b) << "trial " << trial;
+    }
+    const SimplexVertex &p = ran.last_support(), &q = stepped.last_support();
+    ASSERT_TRUE(same(p.a, q.a) && same(p.b, q.b)) << "trial " << trial;
+  }
+  EXPECT_EQ(runs, 3000);
+  EXPECT_GT(overlaps, 100);  // both ends of the run: touching cores ...
+  EXPECT_LT(overlaps, 2500);  // ... and apart
+  EXPECT_GT(zeros, 100);      // directions with zero coordinates
 }
 
 // EPA stops when the support distance along the nearest face's normal exceeds the face

@@ -212,6 +212,9 @@ class GjkStepper {
   /// One iteration: a support point along -v, then the simplex reduced to the smallest
   /// sub-simplex whose hull holds the point closest to the origin. Returns false once done.
   bool step();
+  /// Runs to the end: the same as calling step() until it returns false, to the bit, with
+  /// the support of each proxy's kind inlined into the run (contact_normal, gjk_distance).
+  void run();
   /// True when the run has stopped (converged, overlapping or out of iterations).
   bool done() const { return done_; }
   /// True when the origin lies inside the simplex (the cores overlap).
@@ -239,6 +242,10 @@ class GjkStepper {
   static constexpr int kMaxIterations = 64;
 
  private:
+  // step() with the supports of A and B given (step(): ConvexProxy::support; run(): a kind's)
+  template <class SupportA, class SupportB>
+  bool step_with(SupportA& support_a, SupportB& support_b);
+
   ConvexProxy a_, b_;
   std::array<SimplexVertex, 4> simplex_{};
   int count_ = 0;
