@@ -653,8 +653,11 @@ struct RigidContacts {
   /// kInertiaTurn / (its ratio of moments - 1) or more away gets it at its pose now, and so do
   /// the rows of its lanes that depend on it (inverse inertias, K, effective masses, rolling
   /// masses); their frames, arms and impulses stay. A body of three equal moments never needs
-  /// it (its inverse inertia is the same in every frame).
-  void refresh_inertia(RigidBodySystem& s);
+  /// it (its inverse inertia is the same in every frame). `from_lanes` (the soft step's
+  /// substeps, while the free motion's lanes are live): the frames now and the spreads are read
+  /// from the lanes, and a refreshed body's frame is written into the system's q_ (where
+  /// world_inv_inertias reads it); else both come from the system's arrays.
+  void refresh_inertia(RigidBodySystem& s, bool from_lanes = false);
   /// The free motion's lanes of kind k (FreeRotation) while they are live, else nullptr.
   double* free_lanes_of(std::size_t k) { return free_lanes_live ? free_lanes.data() + free_lanes_at[k] : nullptr; }
   /// Fills the free motion's lanes of this step's moving bodies for substeps of h (s) under

@@ -740,11 +740,17 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
     // gathered once here, the centres and frames put back after the last
     const double h = dt / substeps;
     c.gather_free_motion(*this, h, gravity);
+    // (put back on an unwind too: no lanes stay live past the step to stale a later one)
+    struct PutBack {
+      detail::RigidContacts& c;
+      RigidBodySystem& s;
+      ~PutBack() { if (c.free_lanes_live) c.scatter_free_motion(s); }
+    } put_back{c, *this};
     for (int s = 0; s < substeps; ++s) {
       integrate_velocities(h, gravity, c.rows.data(), c.warm.data());
       c.pass(*this, h, true, true, false, false);
       integrate_positions(h, c.rows.data(), c.motion.data());
-      c.refresh_inertia(*this);  // (the inverse inertias of bodies that turned far, at their poses now)
+      c.refresh_inertia(*this, true);  // (the inverse inertias of bodies that turned far, at their poses now)
       c.pass(*this, h, false, true, true, warm && s + 1 < substeps);
     }
     c.scatter_free_motion(*this);
