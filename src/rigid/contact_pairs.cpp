@@ -326,7 +326,7 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
         }
         if (type == BodyType::Static) statics.push_back(q);
         moved_keys.push_back(moved.size());
-        moved_box.push_back(p.fat);
+        moved_box.push_back(p.fat);  // (never read: lines up with moved)
         moved.push_back(q);
         ++created;
       } else if (p.node >= 0) {
@@ -351,13 +351,23 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
         // a plane put elsewhere
         p.fat = p.box;
         moved_keys.push_back(moved.size());
-        moved_box.push_back(p.fat);
+        moved_box.push_back(p.fat);  // (never read: lines up with moved)
         moved.push_back(q);
       }
     }
   }
-  // the leaves' new boxes, in the tree's order
-  tree_order(true);
+  // the leaves' new boxes, in the tree's order (but for a rebuild below: in any order, as the
+  // inner boxes are unions, and the entries are put in the rebuilt tree's order after it)
+  if (created > 16) {
+    for (std::size_t i = 0; i < moved.size(); ++i) {
+      if (!(moved_keys[i] >> 31 & 1)) continue;
+      ShapeProxy& p = proxies[moved[i]];
+      tree.set_leaf_box(p.node, moved_box[i]);
+      p.fat = tree.fat_box(p.node);
+    }
+  } else {
+    tree_order(true);
+  }
   // many insertions at once (the first step of a scene) are better rebuilt than kept; moves
   // wear the tree down, so its quality is checked now and then (BroadPhase does the same)
   reinserted_since_check += moved.size();
@@ -404,15 +414,8 @@ void RigidContacts::tree_order(bool set_boxes) {
     const std::uint32_t key = parent >= 0 ? static_cast<std::uint32_t>(parent) : last;
     moved_keys[i] |= std::uint64_t{key} << 32;
   }
-  // least digit first, 8 bits a pass (two for the rain's 20,000 nodes), each pass stable
-  moved_keys_spare.resize(m);
-  for (int shift = 32; shift < 32 + static_cast<int>(std::bit_width(last)); shift += 8) {
-    std::array<std::uint32_t, 257> start{};
-    for (const std::uint64_t k : moved_keys) ++start[((k >> shift) & 0xff) + 1];
-    for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
-    for (const std::uint64_t k : moved_keys) moved_keys_spare[start[(k >> shift) & 0xff]++] = k;
-    moved_keys.swap(moved_keys_spare);
-  }
+  // (two passes for the rain's 20,000 nodes)
+  sort_by_high_word(moved_keys, moved_keys_spare, static_cast<int>(std::bit_width(last)));
   moved_spare.clear();
   for (const std::uint64_t k : moved_keys) {
     const std::size_t i = k & 0x7fffffffu;

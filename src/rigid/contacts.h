@@ -293,6 +293,20 @@ inline double pair_reuse(const ContactSettings& cs, double thin) {
 /// The contact state of a RigidBodySystem: this step's contact pairs for the solver, the
 /// broad phase and the pair cache behind them (contact_pairs.cpp), and the solver passes.
 /// Grown, never shrunk: steady state does not allocate.
+/// Sorts `keys` stably by their high 32 bits, of which only the lowest `bits` (<= 32) may be
+/// set: least digit first, 8 bits a pass (ceil(bits / 8) passes, each stable, so the sort is),
+/// through `spare` (resized to keys'). RigidContacts::tree_order's sort.
+inline void sort_by_high_word(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& spare, int bits) {
+  spare.resize(keys.size());
+  for (int shift = 32; shift < 32 + bits; shift += 8) {
+    std::array<std::uint32_t, 257> start{};
+    for (const std::uint64_t k : keys) ++start[((k >> shift) & 0xff) + 1];
+    for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
+    for (const std::uint64_t k : keys) spare[start[(k >> shift) & 0xff]++] = k;
+    keys.swap(spare);
+  }
+}
+
 struct RigidContacts {
   std::vector<ContactPair> pairs;  // this step's manifolds, for the solver (sorted by key)
   std::size_t emitted = 0;         // pairs written so far this step
@@ -328,9 +342,11 @@ struct RigidContacts {
   std::vector<ShapePair> found;               // scratch: pairs of the moved proxies this step
   std::vector<std::uint64_t> hits;            // scratch: the moved proxies' query hits (proxy << 32 | other)
   std::vector<ShapePair> candidates;          // scratch: the hits that may pair, in the hits' order
-  std::vector<std::uint32_t> moved;           // scratch: proxies re-inserted this step (in the tree's order)
+  std::vector<std::uint32_t> moved;           // scratch: proxies new or moved this step (in the tree's order)
   // scratch of update_proxies, by entry of `moved` as first listed: the fat box a leaf is to
-  // get (grown by the margin when set), and the entries' sort keys (tree_order)
+  // get (grown by the margin when set; a leaf keeps its place, only its box changes; a new
+  // proxy's and a plane's entry is kept only to line up with `moved`, never read), and the
+  // entries' sort keys (tree_order)
   std::vector<Aabb> moved_box;
   std::vector<std::uint64_t> moved_keys, moved_keys_spare;
   std::vector<std::uint32_t> moved_spare;
@@ -386,6 +402,9 @@ struct RigidContacts {
   // update()'s parts
   void update_proxies(RigidBodySystem& s, double dt);
   void find_new_pairs(RigidBodySystem& s);
+  /// Puts `moved` in the tree's order (contact_pairs.cpp): by its leaves' parents' node
+  /// indices, stably, planes last; `set_boxes`: the leaves flagged in moved_keys get their
+  /// moved_box on the way.
   void tree_order(bool set_boxes);
   void wake_touched(RigidBodySystem& s);
   void make_manifolds(RigidBodySystem& s);

@@ -4,14 +4,18 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "pba/rigid.h"
 #include "pba/rigid_scenes.h"
+#include "rigid/contacts.h"  // the tree order's sort, tested directly
 #include "pile_motion.h"
 #include "rod_drops.h"
 
@@ -2360,4 +2364,29 @@ TEST(RigidSmallBodies, XpbdBallsRollAtTheirClosedFormAtAnySubsteps) {
     const double expected = 5.0 / 7 * kG * std::sin(theta);
     EXPECT_NEAR(a, expected, 1e-3 * expected) << substeps << " substeps, r = " << r;
   }
+}
+
+// RigidContacts::tree_order's sort (sort_by_high_word): the moved proxies by their leaves'
+// parents' node indices, the entries in the low word (bit 31: a leaf to get a new box), planes
+// under the key `last` (the node count, above every parent). 70,000 entries, keys below
+// 100,000 (17 bits: three 8-bit passes), about 23 entries a key and 300 planes: the order is
+// std::stable_sort's by key (entries of one key in their first order), the planes last in
+// theirs, the flags carried.
+TEST(RigidPairs, TheTreeOrdersSortIsStableOverThreePassesWithThePlanesLast) {
+  constexpr std::uint64_t kLast = 100'000;
+  std::mt19937_64 rng(11);
+  std::vector<std::uint64_t> keys;
+  for (std::uint64_t i = 0; i < 70'000; ++i) {
+    const std::uint64_t parent = i % 233 == 0 ? kLast : rng() % 3'000 * 33;  // (33 x 2,999 < kLast)
+    keys.push_back(parent << 32 | (rng() % 2) << 31 | i);
+  }
+  std::vector<std::uint64_t> expected = keys, spare;
+  std::stable_sort(expected.begin(), expected.end(), [](std::uint64_t a, std::uint64_t b) { return a >> 32 < b >> 32; });
+  pba::detail::sort_by_high_word(keys, spare, static_cast<int>(std::bit_width(kLast)));
+  EXPECT_EQ(std::bit_width(kLast), 17);
+  EXPECT_TRUE(keys == expected);
+  const std::size_t planes = 70'000 / 233 + 1;
+  for (std::size_t k = 0; k < keys.size(); ++k) EXPECT_EQ(keys[k] >> 32 == kLast, k >= keys.size() - planes) << k;
+  for (std::size_t k = keys.size() - planes + 1; k < keys.size(); ++k)
+    EXPECT_LT(keys[k - 1] & 0x7fffffffu, keys[k] & 0x7fffffffu);
 }
