@@ -947,7 +947,6 @@ PBA_LANES void face_contact(const PairLanes<V>& P, const Relative<V>& rel, LaneM
   }
 }
 
-
 // The lanes' part of up to W pairs (lanes past n repeat the last pair): the input checks, the
 // relative pose, the separating axes and the face contact.
 template <class V>

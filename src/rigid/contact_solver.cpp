@@ -1087,8 +1087,7 @@ void RigidContacts::refresh_inertia(RigidBodySystem& s, bool from_lanes) {
         q = Quat(at[0], at[kFreeLaneWidth], at[2 * kFreeLaneWidth], at[3 * kFreeLaneWidth]);
       } else {
         const Vec3& m = s.inv_inertia_[i];
-        const double least = std::min({m.x, m.y, m.z});
-        spread = std::min(std::max({m.x, m.y, m.z}), kSolverInertiaRatio * least) / least - 1;
+        spread = solver_inertia_spread(m.x, m.y, m.z);
         q = s.q_[i];
       }
       const double c = std::abs(glm::dot(q, inertia_q[i]));

@@ -288,6 +288,9 @@ PBA_LANES V load1(const double* a, const std::uint32_t* idx) {
 // whose lanes start at `at` (a v16d's 16 lanes are two blocks), each a whole vector
 template <class V>
 PBA_LANES void load_lines(const double* at, int line, int n, V out[]) {
+  // a vector fills part of one block's line, whole (never two blocks'), or v16d: two blocks' lines
+  static_assert(std::is_same_v<V, v16d> ? sizeof(V) == 2 * kFreeLaneWidth * sizeof(double)
+                                        : kFreeLaneWidth * sizeof(double) % sizeof(V) == 0);
   for (int k = 0; k < n; ++k) {
     const double* p = at + static_cast<std::size_t>(line + k) * kFreeLaneWidth;
     if constexpr (std::is_same_v<V, v16d>) {
@@ -302,6 +305,9 @@ PBA_LANES void load_lines(const double* at, int line, int n, V out[]) {
 
 template <class V>
 PBA_LANES void store_lines(double* at, int line, int n, const V in[]) {
+  // a vector fills part of one block's line, whole (never two blocks'), or v16d: two blocks' lines
+  static_assert(std::is_same_v<V, v16d> ? sizeof(V) == 2 * kFreeLaneWidth * sizeof(double)
+                                        : kFreeLaneWidth * sizeof(double) % sizeof(V) == 0);
   for (int k = 0; k < n; ++k) {
     double* p = at + static_cast<std::size_t>(line + k) * kFreeLaneWidth;
     if constexpr (std::is_same_v<V, v16d>) {
@@ -458,9 +464,8 @@ PBA_LANES void gather(const std::uint32_t* idx, const FreeMotionArrays& f, doubl
     load3(f.inertia, idx, x), store_lines(at, kLineInertia, 3, x);
     load3(f.inv_inertia, idx, inv), store_lines(at, kLineInv, 3, inv);
     store_lines(at, kLineHInv, 3, hinv);
-    // (refresh_inertia's std::min and std::max of three positive moments: the same values)
-    const V least = vmin(vmin(inv[0], inv[1]), inv[2]), most = vmax(vmax(inv[0], inv[1]), inv[2]);
-    const V spread = vmin(most, kSolverInertiaRatio * least) / least - 1.0;
+    // (refresh_inertia's measure, by the same template off the lanes)
+    const V spread = solver_inertia_spread(inv[0], inv[1], inv[2]);
     store_lines(at, kLineSpread, 1, &spread);
   }
   if (f.damped) store_lines(at, kLineDamp, 2, damp);

@@ -19,6 +19,7 @@
 #include <limits>
 #include <vector>
 
+#include "core/lanes.h"
 #include "pba/rigid.h"
 
 namespace pba::detail {
@@ -34,6 +35,16 @@ inline constexpr int kBandColors = 64;
 /// raised), which keeps the rounding of the frame's inverse inertia (2^-24 of its largest
 /// entry) under 1e-3 of its smallest inverse moment.
 inline constexpr double kSolverInertiaRatio = 1e4;
+/// The spread of a body's principal inverse moments x, y, z > 0 (1/(kg m^2)) as the float
+/// solvers see them: the largest, capped at kSolverInertiaRatio times the least, over the least,
+/// less 1 (dimensionless; refresh_inertia's measure). A number or a lane type (vmin and vmax:
+/// std::min's and std::max's values, so every path gives the same bits).
+template <class V>
+PBA_LANES V solver_inertia_spread(V x, V y, V z) {
+  using lanes::vmax, lanes::vmin;
+  const V least = vmin(vmin(x, y), z), most = vmax(vmax(x, y), z);
+  return vmin(most, kSolverInertiaRatio * least) / least - 1.0;
+}
 /// A body's inverse inertia in the blocks is taken again at its pose now (after a substep's
 /// positions: RigidContacts::refresh_inertia) once it has turned by this over (its ratio of
 /// principal moments - 1) radians from the orientation the blocks hold it at (rad). An
