@@ -6,6 +6,8 @@
 #include <limits>
 #include <string>
 
+#include "shape_bounds.h"
+
 namespace pba {
 
 std::string_view to_string(ShapeType t) {
@@ -132,19 +134,6 @@ std::shared_ptr<const CompoundShape> CompoundShape::build(std::vector<CompoundCh
   return c;
 }
 
-namespace {
-
-// world half-widths of a local box of half extents h under rotation q: |R| h
-Vec3 rotated_half(const Quat& q, const Vec3& h) {
-  const Mat3 r = glm::mat3_cast(q);
-  Vec3 out(0.0);
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) out[i] += std::abs(r[j][i]) * h[j];
-  return out;
-}
-
-}  // namespace
-
 Aabb bounds(const ColliderShape& s, const Pose& p) {
   switch (s.type) {
     case ShapeType::Plane: {
@@ -160,11 +149,8 @@ Aabb bounds(const ColliderShape& s, const Pose& p) {
       }
       return b;
     }
-    case ShapeType::Sphere: return {p.position - Vec3(s.radius), p.position + Vec3(s.radius)};
-    case ShapeType::Box: {
-      const Vec3 h = rotated_half(p.rotation, s.half_extents);
-      return {p.position - h, p.position + h};
-    }
+    case ShapeType::Sphere:
+    case ShapeType::Box: return detail::shape_bounds(s, p);
     case ShapeType::Capsule: {
       const Vec3 axis = p.rotation * Vec3(0, s.half_height, 0);
       const Vec3 h = glm::abs(axis) + Vec3(s.radius);
@@ -204,7 +190,7 @@ Aabb bounds(const ColliderShape& s, const Pose& p) {
     case ShapeType::Mesh: {
       const Aabb l = s.mesh->bounds();
       const Vec3 c = apply(p, l.center());
-      const Vec3 h = rotated_half(p.rotation, 0.5 * (l.hi - l.lo));
+      const Vec3 h = detail::rotated_half(p.rotation, 0.5 * (l.hi - l.lo));
       return {c - h, c + h};
     }
     case ShapeType::Compound: {
