@@ -631,7 +631,7 @@ struct RigidContacts {
   // rotation (FreeRotation, integrate_wide.cpp)
   std::array<std::vector<std::uint32_t>, kFreeRotations> moving;
   bool moving_damped = true;  // some of them have linear or angular damping
-  // the free motion's lanes over the soft step's substeps (solver.h, FreeLine): kind k's blocks
+  // the free motion's lanes over the soft step's and TGS's substeps (solver.h, FreeLine): kind k's blocks
   // from free_lanes.data() + free_lanes_at[k] (64-byte aligned). While live (from
   // gather_free_motion to scatter_free_motion) the moving bodies' centres and frames are the
   // lanes', not the system's arrays'

@@ -24,7 +24,7 @@
 // compare-to-mask instructions; on AVX-512 the positions run two blocks of 8 at once, as the
 // splitting's five sub-flows are one long chain of dependent operations per block.
 //
-// The soft step's substeps read and write the bodies' own fields in the free motion's lanes
+// The soft step's and TGS's substeps read and write the bodies' own fields in the free motion's lanes
 // (solver.h, FreeLine): copied once a step into blocks of 8 of each kind's list (gather), what
 // stays the same over the substeps formed there once, the centres and frames put back after
 // the last substep (scatter). The rain's boxes and balls alternate, so each kind's list steps

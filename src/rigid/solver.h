@@ -272,7 +272,7 @@ inline FreeRotation free_rotation(const Vec3& m) {
 void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, double h, double* lanes);
 
-/// The free motion's lanes (integrate_wide.cpp): for the soft step's substeps, the fields the
+/// The free motion's lanes (integrate_wide.cpp): for the soft step's and TGS's substeps, the fields the
 /// free motion reads and writes, copied once a step from the bodies' arrays into blocks of 8
 /// bodies of one kind's list (in its order), each field one 64-byte line of 8 numbers, so that
 /// the substeps load and store whole vectors whatever the bodies' indices (the rain's boxes and
