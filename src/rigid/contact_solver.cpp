@@ -1070,7 +1070,7 @@ void RigidContacts::refresh_inertia(RigidBodySystem& s, bool from_lanes) {
   // the bodies that turned too far from their inverse inertia's orientation: (r - 1) a >
   // kInertiaTurn, a the angle between the orientations, cos(a / 2) = |q . q_ref|, taken as
   // 8 (1 - cos(a / 2)) = a^2 (its small-angle form; larger angles only refresh sooner)
-  // (in the soft step's substeps the frames now are in the free motion's lanes: a refreshed
+  // (in the soft step's and TGS's substeps the frames now are in the free motion's lanes: a refreshed
   // body's is put into q_, where world_inv_inertias reads it)
   refresh_list.clear();
   for (std::size_t kind = 0; kind < moving.size(); ++kind) {

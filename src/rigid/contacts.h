@@ -650,7 +650,7 @@ struct RigidContacts {
   // rotation (FreeRotation, integrate_wide.cpp)
   std::array<std::vector<std::uint32_t>, kFreeRotations> moving;
   bool moving_damped = true;  // some of them have linear or angular damping
-  // the free motion's lanes over the soft step's substeps (solver.h, FreeLine): kind k's blocks
+  // the free motion's lanes over the soft step's and TGS's substeps (solver.h, FreeLine): kind k's blocks
   // from free_lanes.data() + free_lanes_at[k] (64-byte aligned). While live (from
   // gather_free_motion to scatter_free_motion) the moving bodies' centres and frames are the
   // lanes', not the system's arrays'
@@ -680,7 +680,9 @@ struct RigidContacts {
   /// The free motion's lanes of kind k (FreeRotation) while they are live, else nullptr.
   double* free_lanes_of(std::size_t k) { return free_lanes_live ? free_lanes.data() + free_lanes_at[k] : nullptr; }
   /// Fills the free motion's lanes of this step's moving bodies for substeps of h (s) under
-  /// gravity (m/s^2), and makes them live (rigid_body.cpp).
+  /// gravity (m/s^2), and makes them live (rigid_body.cpp). Only before the step's first
+  /// substep: the lanes' start-of-step pose is taken from the pose now (com_, q_), which is
+  /// com0_ and q0_ until the first substep moves a body.
   void gather_free_motion(RigidBodySystem& s, double h, const Vec3& gravity);
   /// Puts the lanes' centres and frames back into the bodies' arrays; the lanes are no longer live.
   void scatter_free_motion(RigidBodySystem& s);

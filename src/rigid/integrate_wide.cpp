@@ -24,7 +24,7 @@
 // compare-to-mask instructions; on AVX-512 the positions run two blocks of 8 at once, as the
 // splitting's five sub-flows are one long chain of dependent operations per block.
 //
-// The soft step's substeps read and write the bodies' own fields in the free motion's lanes
+// The soft step's and TGS's substeps read and write the bodies' own fields in the free motion's lanes
 // (solver.h, FreeLine): copied once a step into blocks of 8 of each kind's list (gather), what
 // stays the same over the substeps formed there once, the centres and frames put back after
 // the last substep (scatter). The rain's boxes and balls alternate, so each kind's list steps
@@ -453,10 +453,11 @@ PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, c
 template <class V, bool Round>
 PBA_LANES void gather(const std::uint32_t* idx, const FreeMotionArrays& f, double h, const Vec3& g, double* at) {
   V x[4], inv[3], linear[3], angular[3], hinv[3], damp[2];
-  load3(f.com, idx, x), store_lines(at, kLineCom, 3, x);
-  load_quat(f.q, idx, x), store_lines(at, kLineQ, 4, x);
-  load3(f.com0, idx, x), store_lines(at, kLineCom0, 3, x);
-  load_quat(f.q0, idx, x), store_lines(at, kLineQ0, 4, x);
+  // the pose now is the step's start too: step() copies com_ and q_ into com0_ and q0_ and
+  // nothing moves a body before the substeps (the pairs, manifolds and prepare() read poses
+  // only), so its lines are filled from the same registers, not loaded again lane by lane
+  load3(f.com, idx, x), store_lines(at, kLineCom, 3, x), store_lines(at, kLineCom0, 3, x);
+  load_quat(f.q, idx, x), store_lines(at, kLineQ, 4, x), store_lines(at, kLineQ0, 4, x);
   step_changes<V, Round>(idx, f, h, g, linear, angular, hinv, damp);
   store_lines(at, kLineLinear, 3, linear), store_lines(at, kLineAngular, 3, angular);
   // (a round body's turn and velocities read neither its moments nor its spread)

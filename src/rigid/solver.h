@@ -283,7 +283,7 @@ inline FreeRotation free_rotation(const Vec3& m) {
 void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, double h, double* lanes);
 
-/// The free motion's lanes (integrate_wide.cpp): for the soft step's substeps, the fields the
+/// The free motion's lanes (integrate_wide.cpp): for the soft step's and TGS's substeps, the fields the
 /// free motion reads and writes, copied once a step from the bodies' arrays into blocks of 8
 /// bodies of one kind's list (in its order), each field one 64-byte line of 8 numbers, so that
 /// the substeps load and store whole vectors whatever the bodies' indices (the rain's boxes and
@@ -309,7 +309,8 @@ inline constexpr std::size_t kFreeBlock = kFreeLines * kFreeLaneWidth;
 /// Where position j of a kind's list lives in its lanes (the kind's first block at `lanes`).
 inline std::size_t free_lane_at(std::size_t j) { return j / kFreeLaneWidth * kFreeBlock + j % kFreeLaneWidth; }
 /// Fills the lanes (the kind's first block at `lanes`, 64-byte aligned) of `count` awake bodies
-/// of rotation `kind` from the bodies' arrays, for substeps of h (s) under gravity (m/s^2).
+/// of rotation `kind` from the bodies' arrays, for substeps of h (s) under gravity (m/s^2); the
+/// start-of-step lines from f.com and f.q (the caller's bodies have not moved since the start).
 void gather_free_motion_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
                              const FreeMotionArrays& f, double h, const Vec3& gravity, double* lanes);
 /// Puts the lanes' centres and frames back into the bodies' arrays.
