@@ -1066,7 +1066,7 @@ void refresh_blocks(SimdPath simd, B* blocks, std::size_t count, const std::uint
 
 }  // namespace
 
-void RigidContacts::refresh_inertia(RigidBodySystem& s, bool from_lanes) {
+void RigidContacts::refresh_inertia(RigidBodySystem& s) {
   // the bodies that turned too far from their inverse inertia's orientation: (r - 1) a >
   // kInertiaTurn, a the angle between the orientations, cos(a / 2) = |q . q_ref|, taken as
   // 8 (1 - cos(a / 2)) = a^2 (its small-angle form; larger angles only refresh sooner)
@@ -1075,7 +1075,7 @@ void RigidContacts::refresh_inertia(RigidBodySystem& s, bool from_lanes) {
   refresh_list.clear();
   for (std::size_t kind = 0; kind < moving.size(); ++kind) {
     if (static_cast<FreeRotation>(kind) == FreeRotation::Round) continue;
-    const double* lanes = from_lanes ? free_lanes_of(kind) : nullptr;
+    const double* lanes = free_lanes_of(kind);  // (nullptr unless live)
     for (std::size_t j = 0; j < moving[kind].size(); ++j) {
       const std::uint32_t i = moving[kind][j];
       double spread;

@@ -672,11 +672,11 @@ struct RigidContacts {
   /// kInertiaTurn / (its ratio of moments - 1) or more away gets it at its pose now, and so do
   /// the rows of its lanes that depend on it (inverse inertias, K, effective masses, rolling
   /// masses); their frames, arms and impulses stay. A body of three equal moments never needs
-  /// it (its inverse inertia is the same in every frame). `from_lanes` (the soft step's
-  /// substeps, while the free motion's lanes are live): the frames now and the spreads are read
-  /// from the lanes, and a refreshed body's frame is written into the system's q_ (where
-  /// world_inv_inertias reads it); else both come from the system's arrays.
-  void refresh_inertia(RigidBodySystem& s, bool from_lanes = false);
+  /// it (its inverse inertia is the same in every frame). While the free motion's lanes are
+  /// live (the soft step's and TGS's substeps, FreeLanesScope) the frames now and the spreads
+  /// are read from the lanes, and a refreshed body's frame is written into the system's q_
+  /// (where world_inv_inertias reads it); else both come from the system's arrays.
+  void refresh_inertia(RigidBodySystem& s);
   /// The free motion's lanes of kind k (FreeRotation) while they are live, else nullptr.
   double* free_lanes_of(std::size_t k) { return free_lanes_live ? free_lanes.data() + free_lanes_at[k] : nullptr; }
   /// Fills the free motion's lanes of this step's moving bodies for substeps of h (s) under
@@ -686,6 +686,22 @@ struct RigidContacts {
   void gather_free_motion(RigidBodySystem& s, double h, const Vec3& gravity);
   /// Puts the lanes' centres and frames back into the bodies' arrays; the lanes are no longer live.
   void scatter_free_motion(RigidBodySystem& s);
+  /// The free motion's lanes live over a solver's substeps: gathered when made, the centres and
+  /// frames put back when it ends, on an unwind too (the soft step and TGS share it, so no
+  /// solver can leave the lanes live past its step, where a later step would read them stale).
+  struct FreeLanesScope {
+    RigidContacts& c;
+    RigidBodySystem& s;
+    FreeLanesScope(RigidContacts& contacts, RigidBodySystem& system, double h, const Vec3& gravity)
+        : c(contacts), s(system) {
+      c.gather_free_motion(s, h, gravity);
+    }
+    ~FreeLanesScope() {
+      if (c.free_lanes_live) c.scatter_free_motion(s);
+    }
+    FreeLanesScope(const FreeLanesScope&) = delete;
+    FreeLanesScope& operator=(const FreeLanesScope&) = delete;
+  };
   /// World inverse inertias; for the velocity solvers, the colours, the blocks and the
   /// carried impulses in the warm-start accumulators.
   void prepare(RigidBodySystem& s);

@@ -737,23 +737,16 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
     // substeps: velocities with the carried impulses, soft solve, positions, relax (which
     // measures the separations at the new poses and carries the impulses to the next substep)
     // The free motion's fields live in lanes for the substeps (RigidContacts::free_lanes):
-    // gathered once here, the centres and frames put back after the last
+    // gathered once here, the centres and frames put back after the last (on an unwind too)
     const double h = dt / substeps;
-    c.gather_free_motion(*this, h, gravity);
-    // (put back on an unwind too: no lanes stay live past the step to stale a later one)
-    struct PutBack {
-      detail::RigidContacts& c;
-      RigidBodySystem& s;
-      ~PutBack() { if (c.free_lanes_live) c.scatter_free_motion(s); }
-    } put_back{c, *this};
+    const detail::RigidContacts::FreeLanesScope lanes(c, *this, h, gravity);
     for (int s = 0; s < substeps; ++s) {
       integrate_velocities(h, gravity, c.rows.data(), c.warm.data());
       c.pass(*this, h, true, true, false, false);
       integrate_positions(h, c.rows.data(), c.motion.data());
-      c.refresh_inertia(*this, true);  // (the inverse inertias of bodies that turned far, at their poses now)
+      c.refresh_inertia(*this);  // (the inverse inertias of bodies that turned far, at their poses now)
       c.pass(*this, h, false, true, true, warm && s + 1 < substeps);
     }
-    c.scatter_free_motion(*this);
   } else {
     // one step: velocities with the carried impulses, iterated rigid solve with Baumgarte, positions
     integrate_velocities(dt, gravity, c.rows.data(), c.warm.data());

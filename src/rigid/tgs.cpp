@@ -26,7 +26,7 @@ void RigidContacts::step_tgs(RigidBodySystem& s, double dt, const Vec3& gravity)
   // the centres and frames put back after the last): between them the passes, the
   // separations and the warm starts read the velocity, motion and warm rows only, and
   // refresh_inertia the lanes' frames (rigid_body.cpp, RigidContacts::free_lanes)
-  gather_free_motion(s, h, gravity);
+  const FreeLanesScope lanes(*this, s, h, gravity);
   for (int k = 0; k < substeps; ++k) {
     // velocities with the carried impulses
     s.integrate_velocities(h, gravity, rows.data(), warm.data());
@@ -45,7 +45,6 @@ void RigidContacts::step_tgs(RigidBodySystem& s, double dt, const Vec3& gravity)
       if (carry) accumulate_warm(s);
     }
   }
-  scatter_free_motion(s);
 }
 
 }  // namespace pba::detail
