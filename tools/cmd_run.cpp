@@ -240,7 +240,8 @@ std::string integrators(const pba::World& w) {
         sag += (sag.empty() ? "" : " and ") + std::string(part);
       }
       // (below the setting: 8 -> 4 -> 3 at the defaults, none under auto_substeps_least)
-      const std::string fewer = ", fewer at rest (at least " + std::to_string(c.auto_substeps_least) + ") under a sag of ";
+      const std::string fewer =
+          ", fewer at rest (at least " + std::to_string(c.auto_substeps_least) + ") under a sag of ";
       s += " (more for tall columns" + (sag.empty() ? "" : fewer + sag) + ")";
     }
   }

@@ -360,23 +360,20 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
       }
     }
   }
+  // many insertions at once (the first step of a scene) are better rebuilt than kept; moves
+  // wear the tree down, so its quality is checked now and then (BroadPhase does the same)
+  const bool rebuild_all = created > 16;
   // the leaves' new boxes, in the tree's order (but for a rebuild below: in any order, as the
   // inner boxes are unions, and the entries are put in the rebuilt tree's order after it)
-  if (created > 16) {
-    for (std::size_t i = 0; i < moved.size(); ++i) {
-      if (!(moved_keys[i] >> 31 & 1)) continue;
-      ShapeProxy& p = proxies[moved[i]];
-      tree.set_leaf_box(p.node, moved_box[i]);
-      p.fat = tree.fat_box(p.node);
-    }
+  if (rebuild_all) {
+    for (std::size_t i = 0; i < moved.size(); ++i)
+      if (moved_keys[i] >> 31 & 1) set_moved_box(i);
   } else {
     tree_order(true);
   }
-  // many insertions at once (the first step of a scene) are better rebuilt than kept; moves
-  // wear the tree down, so its quality is checked now and then (BroadPhase does the same)
   reinserted_since_check += moved.size();
   bool rebuilt = false;
-  if (created > 16) {
+  if (rebuild_all) {
     tree.rebuild();
     tree_ratio = tree.area_ratio();
     reinserted_since_check = 0;
@@ -423,13 +420,8 @@ void RigidContacts::tree_order(bool set_boxes) {
   moved_spare.clear();
   for (const std::uint64_t k : moved_keys) {
     const std::size_t i = k & 0x7fffffffu;
-    const std::uint32_t q = moved[i];
-    if (set_boxes && (k >> 31 & 1)) {
-      ShapeProxy& p = proxies[q];
-      tree.set_leaf_box(p.node, moved_box[i]);
-      p.fat = tree.fat_box(p.node);
-    }
-    moved_spare.push_back(q);
+    if (set_boxes && (k >> 31 & 1)) set_moved_box(i);
+    moved_spare.push_back(moved[i]);
   }
   moved.swap(moved_spare);
 }

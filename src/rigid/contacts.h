@@ -406,6 +406,13 @@ struct RigidContacts {
   /// indices, stably, planes last; `set_boxes`: the leaves flagged in moved_keys get their
   /// moved_box on the way.
   void tree_order(bool set_boxes);
+  /// Moved entry i's leaf gets its new fat box moved_box[i], and its proxy the box the tree
+  /// keeps (for the entries whose key, moved_keys before tree_order's sort, has bit 31 set).
+  void set_moved_box(std::size_t i) {
+    ShapeProxy& p = proxies[moved[i]];
+    tree.set_leaf_box(p.node, moved_box[i]);
+    p.fat = tree.fat_box(p.node);
+  }
   void wake_touched(RigidBodySystem& s);
   void make_manifolds(RigidBodySystem& s);
   void collide_pair(RigidBodySystem& s, const ShapePair& p, PairCache& c, std::uint32_t a, std::uint32_t b,

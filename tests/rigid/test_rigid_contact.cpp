@@ -2381,7 +2381,8 @@ TEST(RigidPairs, TheTreeOrdersSortIsStableOverThreePassesWithThePlanesLast) {
     keys.push_back(parent << 32 | (rng() % 2) << 31 | i);
   }
   std::vector<std::uint64_t> expected = keys, spare;
-  std::stable_sort(expected.begin(), expected.end(), [](std::uint64_t a, std::uint64_t b) { return a >> 32 < b >> 32; });
+  std::stable_sort(expected.begin(), expected.end(),
+                   [](std::uint64_t a, std::uint64_t b) { return a >> 32 < b >> 32; });
   pba::detail::sort_by_high_word(keys, spare, static_cast<int>(std::bit_width(kLast)));
   EXPECT_EQ(std::bit_width(kLast), 17);
   EXPECT_TRUE(keys == expected);

@@ -428,10 +428,11 @@ TEST(RigidSimd, ManifoldsAreCarriedOverAlikeOnEveryPath) {
 
 // The free motion's double blocks (AVX-512 runs a kind's bodies 16 at a time, two blocks of
 // its lanes, and the rest 8 at a time, then one by one): a rain of 48 bodies, 24 triaxial boxes
-// (three half extents drawn apart) and 24 balls, each kind one double block and a block of 8, released at rest (all awake
-// through their fall: 16 or more moving bodies of each kind every step) and run through their
-// landing (from 10 to 14 m up: 1.43 to 1.69 s) under the soft step. Every path gives the same
-// bits, pinned (so a change of the double block's offsets shows on a CPU that runs it).
+// (three half extents drawn apart) and 24 balls, each kind one double block and a block of 8,
+// released at rest (all awake through their fall: 16 or more moving bodies of each kind every
+// step) and run through their landing (from 10 to 14 m up: 1.43 to 1.69 s) under the soft
+// step. Every path gives the same bits, pinned (so a change of the double block's offsets shows
+// on a CPU that runs it).
 TEST(RigidSimd, DoubleBlocksOfTheFreeMotionGiveTheSameBitsOnEveryPath) {
   std::vector<std::uint64_t> hashes;
   for (const RigidSimd p : paths()) {
