@@ -156,6 +156,25 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
                  std::span<Manifold> out, const NarrowPhaseSettings& settings = {}, MeshQueryCache* cache = nullptr,
                  BatchPath path = BatchPath::Best);
 
+// --- a segment and a box in closed form -------------------------------------------------
+
+/// The closest points of a segment and a solid box, both given in the box's frame (the box
+/// centred at the origin, its faces at +-half_extents). Where the closest points are not
+/// unique (a segment parallel to a face or an edge) the segment's point is the one nearest
+/// its start.
+struct SegmentBoxClosest {
+  double t = 0;                  ///< the segment's point is p + t (q - p), t in [0, 1] (1)
+  Vec3 on_segment{0, 0, 0};      ///< the segment's closest point (box frame, m)
+  Vec3 on_box{0, 0, 0};          ///< the box's point nearest it: on_segment clamped to the box (box frame, m)
+  double distance2 = 0;          ///< |on_segment - on_box|^2 (m^2): 0 when the segment meets the box
+};
+
+/// The closest points of segment p-q and the box of half extents h (all in the box's frame,
+/// m; h > 0), exact up to rounding: the squared distance along the segment is a convex piecewise
+/// quadratic with at most six breakpoints (a coordinate crossing a slab face), minimised on the
+/// piece where its slope changes sign. Never allocates; no input checks.
+SegmentBoxClosest segment_box_closest(const Vec3& p, const Vec3& q, const Vec3& h);
+
 // --- GJK and EPA --------------------------------------------------------------------
 
 /// A convex shape's core at a pose, as GJK sees it: the support function of a point,
