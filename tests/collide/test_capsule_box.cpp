@@ -1,6 +1,6 @@
 // The capsule-box pair's closed form (segment_box_closest): against the brute-force
 // feature enumeration and its own separating-plane certificate over random segments in every
-// region, and exact cases.
+// region, exact cases, and collide()'s capsule-box manifolds against GJK and EPA.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,6 +14,9 @@ namespace {
 
 using namespace pba;
 using namespace pba::test_support;
+
+ConvexProxy proxy(const ColliderShape& s, const Pose& p) { return ConvexProxy::of(s, p); }
+Quat about(const Vec3& axis, double angle) { return glm::angleAxis(angle, glm::normalize(axis)); }
 
 // Rounding room: the answers are a few dozen operations on coordinates of size L (the
 // segment's and the box's reach), each off by half an ulp, so 1e-12 L leaves ~1e3 ulps.
@@ -138,6 +141,88 @@ TEST(SegmentBox, ExactCases) {
   EXPECT_EQ(c.t, 1.0);
   EXPECT_EQ(c.on_segment, Vec3(1.5, 0.5, 0));
   EXPECT_EQ(c.distance2, 0.25);
+}
+
+// collide()'s capsule-box manifold over random poses (cores apart within a large margin, and
+// overlapping): its normal is GJK's to GJK's own bound (GJK stops with its estimate v at most
+// kTolerance longer than the distance d; v lies in the Minkowski difference, so it is within
+// sqrt(|v|^2 - d^2) of the unique closest point and its direction within that over d), every
+// point is no deeper than the radius less the core distance, a one-point manifold's depth is
+// exactly that, the box first gives the flipped manifold, and overlapping cores give EPA's
+// normal to the bit.
+TEST(CapsuleBox, ManifoldsAgreeWithGjkAndEpa) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> size(0.05, 1.2);
+  NarrowPhaseSettings wide;
+  wide.speculative_margin = 5.0;
+  int apart = 0, two = 0, overlapping = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const ColliderShape a = ColliderShape::capsule(size(rng), 0.5 * size(rng)),
+                        b = ColliderShape::box(Vec3(size(rng), size(rng), size(rng)));
+    // (a quarter of them near the box, most of those with the cores overlapping)
+    const Pose pa{random_vec(rng, trial % 4 ? 2.5 : 0.5), random_rotation(rng)};
+    const Pose pb{random_vec(rng, 0.5), random_rotation(rng)};
+    const Manifold m = collide(a, pa, b, pb, wide);
+    const Manifold f = collide(b, pb, a, pa, wide);
+    ASSERT_EQ(f.count, m.count);
+    EXPECT_EQ(f.normal, -m.normal);
+    const Vec3 u = pa.rotation * Vec3(0, a.half_height, 0);
+    const double core = segment_box_distance(pa.position - u, pa.position + u, b.half_extents, pb);
+    const double tol = 1e-12 * (3 + glm::length(pa.position));
+    if (core == 0) {
+      const PenetrationResult e = epa_penetration(proxy(a, pa), proxy(b, pb));
+      if (!e.ok) continue;
+      ++overlapping;
+      ASSERT_GE(m.count, 1);
+      EXPECT_EQ(m.normal, e.normal) << "trial " << trial;
+      continue;
+    }
+    if (core - a.radius > wide.speculative_margin) continue;
+    ++apart;
+    ASSERT_GE(m.count, 1) << "trial " << trial;
+    const DistanceResult g = gjk_distance(proxy(a, pa), proxy(b, pb));
+    ASSERT_FALSE(g.cores_overlap);
+    const double bound = std::sqrt(std::max(0.0, g.core_distance * g.core_distance - core * core)) / core;
+    EXPECT_LE(glm::length(m.normal - g.normal), bound + tol / core) << "trial " << trial;
+    for (int i = 0; i < m.count; ++i) EXPECT_LE(m.points[std::size_t(i)].depth, a.radius - core + tol);
+    if (m.count == 1) {
+      EXPECT_NEAR(m.points[0].depth, a.radius - core, tol) << "trial " << trial;
+    }
+    two += m.count == 2;
+  }
+  EXPECT_GT(apart, 2000);
+  EXPECT_GT(overlapping, 400);
+  EXPECT_GT(two, 10);
+}
+
+// A capsule lying on a turned box's top face, level and tilted by about one degree: two points
+// at its core's ends, the normal the face's (down from the capsule into the box), the depths
+// the radius less each end's height over the face, the box's points on the face.
+TEST(CapsuleBox, LyingOnAFaceGivesTwoPointsAtTheEnds) {
+  const Vec3 h(1, 0.5, 0.8);
+  const Pose pb{Vec3(0.3, -0.2, 1.1), about(Vec3(1, 2, 3), 0.7)};
+  const double r = 0.2;
+  // the core's ends in the box's frame: (-0.4, y0, 0.2) and (0.6, y1, 0.2)
+  for (const auto& [y0, y1] : {std::pair{0.69, 0.69}, std::pair{0.68, 0.70}}) {
+    const Vec3 e0(-0.4, y0, 0.2), e1(0.6, y1, 0.2);
+    const Vec3 axis = e1 - e0;
+    const double hh = 0.5 * glm::length(axis);
+    const Quat local = about(Vec3(0, 0, 1), std::atan2(-axis.x, axis.y));  // +y onto the axis
+    const Pose pa{apply(pb, 0.5 * (e0 + e1)), pb.rotation * local};
+    const Manifold m = collide(ColliderShape::capsule(hh, r), pa, ColliderShape::box(h), pb);
+    ASSERT_EQ(m.count, 2);
+    EXPECT_NEAR(glm::length(m.normal - pb.rotation * Vec3(0, -1, 0)), 0.0, 1e-12);
+    for (int i = 0; i < 2; ++i) {
+      const ContactPoint& c = m.points[std::size_t(i)];
+      const Vec3 lb = apply_inverse(pb, c.point_b);
+      const bool first = lb.x < 0.1;
+      const Vec3 end = first ? e0 : e1;
+      EXPECT_NEAR(glm::length(lb - Vec3(end.x, h.y, end.z)), 0.0, 1e-12);
+      EXPECT_NEAR(glm::length(apply_inverse(pb, c.point_a) - (end - Vec3(0, r, 0))), 0.0, 1e-12);
+      EXPECT_NEAR(c.depth, r - (end.y - h.y), 1e-12);
+    }
+    EXPECT_NE(m.points[0].id, m.points[1].id);
+  }
 }
 
 }  // namespace

@@ -12,7 +12,9 @@
 //   convex vs plane                         the support feature's vertices below the plane
 //   box-box, box-hull, hull-hull            separating axes (Gregorius 2013) and face clipping,
 //                                           or GJK/EPA and clipping of the normal's faces
-//   capsule vs box or hull, sphere-hull     GJK on the cores (van den Bergen 2003), EPA when
+//   capsule-box                             the closest points of the core segment and the box in
+//                                           closed form, GJK/EPA when they meet; then clipping
+//   capsule-hull, sphere-hull               GJK on the cores (van den Bergen 2003), EPA when
 //                                           the cores overlap, then feature clipping
 // GJK and EPA are also public for distance queries and for the student stepper sample.
 //
@@ -172,7 +174,8 @@ struct SegmentBoxClosest {
 /// The closest points of segment p-q and the box of half extents h (all in the box's frame,
 /// m; h > 0), exact up to rounding: the squared distance along the segment is a convex piecewise
 /// quadratic with at most six breakpoints (a coordinate crossing a slab face), minimised on the
-/// piece where its slope changes sign. Never allocates; no input checks.
+/// piece where its slope changes sign. Collide's capsule-box pairs use it for the apart case
+/// (GJK and EPA where the core segment meets the box). Never allocates; no input checks.
 SegmentBoxClosest segment_box_closest(const Vec3& p, const Vec3& q, const Vec3& h);
 
 // --- GJK and EPA --------------------------------------------------------------------
