@@ -12,7 +12,9 @@
 //   convex vs plane                         the support feature's vertices below the plane
 //   box-box, box-hull, hull-hull            separating axes (Gregorius 2013) and face clipping,
 //                                           or GJK/EPA and clipping of the normal's faces
-//   capsule vs box or hull, sphere-hull     GJK on the cores (van den Bergen 2003), EPA when
+//   capsule-box                             the closest points of the core segment and the box in
+//                                           closed form, GJK/EPA when they meet; then clipping
+//   capsule-hull, sphere-hull               GJK on the cores (van den Bergen 2003), EPA when
 //                                           the cores overlap, then feature clipping
 // GJK and EPA are also public for distance queries and for the student stepper sample.
 //
@@ -155,6 +157,26 @@ struct MeshQueryCache {
 int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
                  std::span<Manifold> out, const NarrowPhaseSettings& settings = {}, MeshQueryCache* cache = nullptr,
                  BatchPath path = BatchPath::Best);
+
+// --- a segment and a box in closed form -------------------------------------------------
+
+/// The closest points of a segment and a solid box, both given in the box's frame (the box
+/// centred at the origin, its faces at +-half_extents). Where the closest points are not
+/// unique (a segment parallel to a face or an edge) the segment's point is the one nearest
+/// its start.
+struct SegmentBoxClosest {
+  double t = 0;                  ///< the segment's point is p + t (q - p), t in [0, 1] (1)
+  Vec3 on_segment{0, 0, 0};      ///< the segment's closest point (box frame, m)
+  Vec3 on_box{0, 0, 0};          ///< the box's point nearest it: on_segment clamped to the box (box frame, m)
+  double distance2 = 0;          ///< |on_segment - on_box|^2 (m^2): 0 when the segment meets the box
+};
+
+/// The closest points of segment p-q and the box of half extents h (all in the box's frame,
+/// m; h > 0), exact up to rounding: the squared distance along the segment is a convex piecewise
+/// quadratic with at most six breakpoints (a coordinate crossing a slab face), minimised on the
+/// piece where its slope changes sign. Collide's capsule-box pairs use it for the apart case
+/// (GJK and EPA where the core segment meets the box). Never allocates; no input checks.
+SegmentBoxClosest segment_box_closest(const Vec3& p, const Vec3& q, const Vec3& h);
 
 // --- GJK and EPA --------------------------------------------------------------------
 
