@@ -87,11 +87,14 @@ struct RigidShapeDef {
   double rolling_resistance = 0;
 };
 
-/// The fastest a rigid body may move, 1e20 m/s, and turn, 1e20 rad/s. The contact rows carry
-/// speeds and impulses in float (at most 3.4e38): a body far faster would overflow them and
-/// turn the bodies it touches non-finite. A velocity beyond it is refused where it is given
-/// (create, set_velocity, impulses); a body a force takes beyond it stops the step, named.
-inline constexpr double kMaxRigidSpeed = 1e20;
+/// The fastest a rigid body may move, 1e18 m/s, and turn, 1e18 rad/s. The contact rows carry
+/// speeds and impulses in float (at most 3.4e38) and square the relative speed of a contact's
+/// bodies (so at most 1.8e19 m/s): a box sliding on the ground at 2e19 m/s, or spun at 3e19
+/// rad/s against another, turned non-finite (within the 1e20 this was before). A point's speed
+/// is |v| + |w| r at r from the centre of mass, so two bodies reaching up to 8 m from their
+/// centres may meet with both speeds at the limit. A velocity beyond it is refused where it is
+/// given (create, set_velocity, impulses); a body a force takes beyond it stops the step, named.
+inline constexpr double kMaxRigidSpeed = 1e18;
 
 /// Throws an Error naming `where` unless |v| <= kMaxRigidSpeed (a NaN fails too); `unit` is
 /// the value's unit for the message ("m/s" or "rad/s").

@@ -180,7 +180,7 @@ TEST(RigidScenes, BadFieldsAreNamedByPath) {
   // a speed beyond kMaxRigidSpeed (the contact rows' float range) is refused at its field
   const std::string fast = error_of(R"({"version": 1, "rigid_bodies": [{"angular_velocity": [0, 3e20, 0], "shapes": [{"type": "box"}]}]})");
   EXPECT_EQ(fast.rfind("scenes/x.json: /rigid_bodies/0/angular_velocity: (0, 3e+20, 0) has a magnitude of 3e+20 rad/s, "
-                       "above the rigid bodies' limit of 1e+20 rad/s", 0), 0u) << fast;
+                       "above the rigid bodies' limit of 1e+18 rad/s", 0), 0u) << fast;
   // a mass whose inverse is no normal float (the contact solver's blocks are floats) is refused
   // before it can turn the first contact into NaN, by its field's path (it was named as the
   // library's "/rigid_bodies/0: rigid body of entity 0 'b'.mass.mass", not by its pointer)
