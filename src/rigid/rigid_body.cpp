@@ -316,6 +316,15 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   Vec3 com_local(0);
   double inv_mass = 0;
   if (def.type == BodyType::Dynamic) {
+    // from the shapes, the number alone does not say what to change (a 1e-9 m ball's moment,
+    // 7e-43 kg m^2, named no size; a 1e-300 m ball's mass of 0 kg no shape): say it is the
+    // shapes' size or density
+    const auto from_shapes = [](const Error& e) {
+      return Error(
+          std::string(e.what()) +
+          ": the shapes' sizes and densities make the body too small or light, or too large or heavy, "
+          "for the contact solver's float rows (scale the shapes or the density, or give the mass and inertia)");
+    };
     RigidMass m;
     if (def.mass) {
       m = *def.mass;
@@ -325,7 +334,11 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
                                                    field_path(w, "shapes[" + std::to_string(k) + "]"));
         m = k == 0 ? part : m + part;
       }
-      m.validate(field_path(w, "mass (from the shapes)"));
+      try {
+        m.validate(field_path(w, "mass (from the shapes)"));
+      } catch (const Error& e) {
+        throw from_shapes(e);  // (a mass of 0 or inf, or a NaN inertia: sizes past the doubles)
+      }
     }
     principal_axes(m.inertia, moments, principal);
     // the contact solver's blocks hold inverse masses and inertias, and effective masses, as
@@ -337,12 +350,7 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
         require_float_inverse(moments[a], field_path(mw, "principal moment " + std::to_string(a) + " (kg m^2)"));
     } catch (const Error& e) {
       if (def.mass) throw;
-      // from the shapes, the number alone does not say what to change (a 1e-9 m ball's
-      // moment, 7e-43 kg m^2, named no size): say it is the shapes' size or density
-      throw Error(
-          std::string(e.what()) +
-          ": the shapes' sizes and densities make the body too small or light, or too large or heavy, "
-          "for the contact solver's float rows (scale the shapes or the density, or give the mass and inertia)");
+      throw from_shapes(e);
     }
     inv = 1.0 / moments;
     inv_mass = 1.0 / m.mass;

@@ -606,6 +606,27 @@ TEST(RigidBadInput, MassesAndMomentsOutsideTheFloatRangeAreRefusedByName) {
   EXPECT_EQ(msg(given(3e-39 * 6)), "");
 }
 
+// Shapes whose mass properties leave the doubles' range: a 1e-300 m ball weighs 0 kg, a box of
+// 1e300 m half extents an infinite mass, a capsule 1e300 m long a NaN inertia. Each was refused
+// as "'b'.mass (from the shapes).mass: must be finite and > 0, got 0" (or inf, or a NaN inertia)
+// with nothing to say that the shapes' size made it; now with the float range's hint.
+TEST(RigidBadInput, ShapesTooSmallOrLargeForAMassSayWhatToChange) {
+  RigidBodySystem s;
+  const std::string hint = "the shapes' sizes and densities make the body too small or light, or too large or heavy";
+  for (const pba::ColliderShape& shape :
+       {pba::ColliderShape::sphere(1e-300), pba::ColliderShape::box({1e300, 1, 1}), pba::ColliderShape::sphere(1e300),
+        pba::ColliderShape::capsule(1e300, 0.2)}) {
+    const std::string m = error_of([&] { s.create({.name = "b", .shapes = {{.shape = shape}}}); });
+    const std::string what = std::string(to_string(shape.type)) + ": " + m;
+    EXPECT_NE(m.find("'b'.mass (from the shapes)."), std::string::npos) << what;
+    EXPECT_NE(m.find(hint), std::string::npos) << what;
+  }
+  // a density that overflows the mass gets the hint too
+  const std::string m = error_of(
+      [&] { s.create({.name = "b", .shapes = {{.shape = pba::ColliderShape::sphere(1), .density = 1e308}}}); });
+  EXPECT_NE(m.find(hint), std::string::npos) << m;
+}
+
 // The shapes' bounds and the contact rows hold positions as floats: a body set beyond the
 // float range (1e39 m, finite as a double) was accepted by create and set_pose, and the next
 // step against a ground plane turned it to NaN and stopped the system. Refused where it is
