@@ -107,11 +107,15 @@ struct RigidBodyDef {
   /// Body frame in the world: a unit rotation, and a position within the float range
   /// (|component| <= 3.4e38 m: the shapes' bounds and the contact rows hold it as floats).
   Pose pose{};
-  Vec3 linear_velocity{0, 0, 0};    ///< velocity of the centre of mass (m/s), |v| <= kMaxRigidSpeed
-  Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), |w| <= kMaxRigidSpeed
+  /// velocity of the centre of mass (m/s), |v| <= kMaxRigidSpeed; validated but not used on a
+  /// static body, which never moves (as set_velocity; scene files refuse a non-zero one)
+  Vec3 linear_velocity{0, 0, 0};
+  Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), |w| <= kMaxRigidSpeed; as linear_velocity
   std::vector<RigidShapeDef> shapes{};  ///< at least one
   /// Dynamic bodies: mass properties; unset means from the shapes' densities. The mass (kg)
-  /// and the principal moments (kg m^2) must each be in [2.9e-39, 8.5e37] (create()).
+  /// and the principal moments (kg m^2) must each be in [2.9e-39, 8.5e37] (create()). Static
+  /// and kinematic bodies have infinite mass: they neither read nor validate it (scene files
+  /// refuse a "mass" on them).
   std::optional<RigidMass> mass{};
   double linear_damping = 0;        ///< 1/s, finite and >= 0: dv/dt = -c v
   double angular_damping = 0;       ///< 1/s, finite and >= 0: dw/dt = -c w
@@ -467,7 +471,11 @@ class RigidBodySystem {
   /// Advances every body from t to t + dt (s; finite and > 0) under `gravity` (m/s^2). A
   /// gravity other than the last step's wakes the sleeping bodies (gravity_scale != 0).
   /// Throws Error if a body's state becomes non-finite, naming the body and the step's end
-  /// time; the system then refuses to step again.
+  /// time; the system then refuses to step again. A step stopped so leaves the bodies partway:
+  /// each where its last whole substep took it (the step's start under sequential impulses,
+  /// which had not moved them), the failed body with the velocity that stopped it, and the
+  /// others' velocities not those of their positions (the soft step and TGS leave them at the
+  /// step's start, XPBD a substep ahead of the positions).
   void step(double dt, const Vec3& gravity);
   /// Simulated time (s).
   double time() const { return time_; }
