@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <new>
 #include <string>
 
 #include <Eigen/Eigenvalues>
@@ -237,21 +238,29 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
   def.contacts.validate("RigidSystemDef.contacts");
   settings_ = validated_ = def.contacts;
   const std::size_t n = def.capacity;
-  ids_.reserve(n);
-  for (auto* v : {&slot_, &owner_}) v->reserve(n);
-  type_.reserve(n);
-  for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_, &rest_com_})
-    v->reserve(n);
-  for (auto* v : {&q_, &principal_, &q0_, &rest_q_}) v->reserve(n);
-  for (auto* v :
-       {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_, &sleep_time_, &island_slow_, &extent_, &min_extent_})
-    v->reserve(n);
-  for (auto* v : {&island_, &parent_}) v->reserve(n);
-  asleep_.reserve(n);
-  for (auto& list : contacts_->moving) list.reserve(n);
-  name_.reserve(n);
-  bullet_.reserve(n);
-  shapes_.reserve(n);
+  try {
+    ids_.reserve(n);
+    for (auto* v : {&slot_, &owner_}) v->reserve(n);
+    type_.reserve(n);
+    for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_, &rest_com_})
+      v->reserve(n);
+    for (auto* v : {&q_, &principal_, &q0_, &rest_q_}) v->reserve(n);
+    for (auto* v :
+         {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_, &sleep_time_, &island_slow_, &extent_, &min_extent_})
+      v->reserve(n);
+    for (auto* v : {&island_, &parent_}) v->reserve(n);
+    asleep_.reserve(n);
+    for (auto& list : contacts_->moving) list.reserve(n);
+    name_.reserve(n);
+    bullet_.reserve(n);
+    shapes_.reserve(n);
+  } catch (const std::bad_alloc&) {
+    // the largest capacity, 2^26 bodies, reserves some 36 GB of address space: where the
+    // memory (or a limit on it) cannot give that, say which value asked for it
+    throw Error("RigidSystemDef.capacity: cannot reserve room for " + std::to_string(n) +
+                " bodies (about 540 B each): out of memory; give a smaller capacity (the arrays grow "
+                "past it as bodies are created)");
+  }
 }
 
 RigidBodySystem::~RigidBodySystem() = default;
