@@ -804,7 +804,8 @@ void RigidBodySystem::fail(std::size_t i) {
   failed_ = id_at(i);
   failure_ = describe(i) +
              (finite ? " went faster than kMaxRigidSpeed (" + format_value(kMaxRigidSpeed) +
-                           " m/s or rad/s: a force too large for the contacts' float rows)"
+                           " m/s or rad/s, the contacts' float rows' limit: a force or torque, the gravity "
+                           "times the body's gravity_scale, or the time step too large)"
                      : std::string(" became non-finite")) +
              " in the step to t = " + format_value(time_ + last_dt_) + " s: position " + format_vec3(com_[i]) +
              ", velocity " + format_vec3(v_[i]) + ", angular velocity " + format_vec3(w_[i]);

@@ -851,6 +851,22 @@ TEST(RigidDivergence, AForceBeyondTheSpeedLimitStopsTheStepNamingTheForcedBody) 
   EXPECT_TRUE(pba::is_finite(s.linear_velocity(calm)));
 }
 
+// What takes a body past the limit in a step is not always a force: a gravity_scale of 1e300,
+// or a step of 1e300 s under plain gravity, were both reported as "a force too large for the
+// contacts' float rows". The message names each cause it may be.
+TEST(RigidDivergence, TheSpeedLimitsMessageNamesGravityAndTheTimeStepToo) {
+  RigidBodySystem scaled;
+  scaled.create({.name = "heavy", .shapes = kBall, .gravity_scale = 1e300});
+  std::string m = error_of([&] { scaled.step(1.0 / 60, kG); });
+  EXPECT_NE(m.find("'heavy' went faster than kMaxRigidSpeed"), std::string::npos) << m;
+  EXPECT_NE(m.find("the gravity times the body's gravity_scale"), std::string::npos) << m;
+  RigidBodySystem slow;
+  slow.create({.name = "slow", .shapes = kBall});
+  m = error_of([&] { slow.step(1e300, kG); });
+  EXPECT_NE(m.find("'slow' went faster than kMaxRigidSpeed"), std::string::npos) << m;
+  EXPECT_NE(m.find("or the time step too large"), std::string::npos) << m;
+}
+
 // The soft step keeps the moving bodies' centres and frames in the free motion's lanes over
 // its substeps (integrate_wide.cpp) and puts them back at the end: a body that passes the
 // speed limit in its second substep is reported, and left, where its first substep took it,
