@@ -339,7 +339,10 @@ int pba_run_command(int argc, char** argv) {
     }
     progress.finish();
     const double seconds = wall.seconds();
-    if (csv && std::fclose(csv) != 0) {
+    // a buffered write that failed on the way (a full disk) is kept in the stream's error
+    // flag: fclose returns 0 when its own last flush had nothing left to write
+    const bool csv_failed = csv && std::ferror(csv) != 0;
+    if (csv && (std::fclose(csv) != 0 || csv_failed)) {
       std::fprintf(stderr, "pba run: --csv: error writing '%s'\n", o.csv.c_str());
       return 1;
     }

@@ -87,11 +87,14 @@ struct RigidShapeDef {
   double rolling_resistance = 0;
 };
 
-/// The fastest a rigid body may move, 1e20 m/s, and turn, 1e20 rad/s. The contact rows carry
-/// speeds and impulses in float (at most 3.4e38): a body far faster would overflow them and
-/// turn the bodies it touches non-finite. A velocity beyond it is refused where it is given
-/// (create, set_velocity, impulses); a body a force takes beyond it stops the step, named.
-inline constexpr double kMaxRigidSpeed = 1e20;
+/// The fastest a rigid body may move, 1e18 m/s, and turn, 1e18 rad/s. The contact rows carry
+/// speeds and impulses in float (at most 3.4e38) and square the relative speed of a contact's
+/// bodies (so at most 1.8e19 m/s): a box sliding on the ground at 2e19 m/s, or spun at 3e19
+/// rad/s against another, turned non-finite (within the 1e20 this was before). A point's speed
+/// is |v| + |w| r at r from the centre of mass, so two bodies reaching up to 8 m from their
+/// centres may meet with both speeds at the limit. A velocity beyond it is refused where it is
+/// given (create, set_velocity, impulses); a body a force takes beyond it stops the step, named.
+inline constexpr double kMaxRigidSpeed = 1e18;
 
 /// Throws an Error naming `where` unless |v| <= kMaxRigidSpeed (a NaN fails too); `unit` is
 /// the value's unit for the message ("m/s" or "rad/s").
@@ -104,11 +107,15 @@ struct RigidBodyDef {
   /// Body frame in the world: a unit rotation, and a position within the float range
   /// (|component| <= 3.4e38 m: the shapes' bounds and the contact rows hold it as floats).
   Pose pose{};
-  Vec3 linear_velocity{0, 0, 0};    ///< velocity of the centre of mass (m/s), |v| <= kMaxRigidSpeed
-  Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), |w| <= kMaxRigidSpeed
+  /// velocity of the centre of mass (m/s), |v| <= kMaxRigidSpeed; validated but not used on a
+  /// static body, which never moves (as set_velocity; scene files refuse a non-zero one)
+  Vec3 linear_velocity{0, 0, 0};
+  Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), |w| <= kMaxRigidSpeed; as linear_velocity
   std::vector<RigidShapeDef> shapes{};  ///< at least one
   /// Dynamic bodies: mass properties; unset means from the shapes' densities. The mass (kg)
-  /// and the principal moments (kg m^2) must each be in [2.9e-39, 8.5e37] (create()).
+  /// and the principal moments (kg m^2) must each be in [2.9e-39, 8.5e37] (create()). Static
+  /// and kinematic bodies have infinite mass: they neither read nor validate it (scene files
+  /// refuse a "mass" on them).
   std::optional<RigidMass> mass{};
   double linear_damping = 0;        ///< 1/s, finite and >= 0: dv/dt = -c v
   double angular_damping = 0;       ///< 1/s, finite and >= 0: dw/dt = -c w
@@ -464,7 +471,11 @@ class RigidBodySystem {
   /// Advances every body from t to t + dt (s; finite and > 0) under `gravity` (m/s^2). A
   /// gravity other than the last step's wakes the sleeping bodies (gravity_scale != 0).
   /// Throws Error if a body's state becomes non-finite, naming the body and the step's end
-  /// time; the system then refuses to step again.
+  /// time; the system then refuses to step again. A step stopped so leaves the bodies partway:
+  /// each where its last whole substep took it (the step's start under sequential impulses,
+  /// which had not moved them), the failed body with the velocity that stopped it, and the
+  /// others' velocities not those of their positions (the soft step and TGS leave them at the
+  /// step's start, XPBD a substep ahead of the positions).
   void step(double dt, const Vec3& gravity);
   /// Simulated time (s).
   double time() const { return time_; }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <new>
 #include <string>
 
 #include <Eigen/Eigenvalues>
@@ -237,21 +238,29 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
   def.contacts.validate("RigidSystemDef.contacts");
   settings_ = validated_ = def.contacts;
   const std::size_t n = def.capacity;
-  ids_.reserve(n);
-  for (auto* v : {&slot_, &owner_}) v->reserve(n);
-  type_.reserve(n);
-  for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_, &rest_com_})
-    v->reserve(n);
-  for (auto* v : {&q_, &principal_, &q0_, &rest_q_}) v->reserve(n);
-  for (auto* v :
-       {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_, &sleep_time_, &island_slow_, &extent_, &min_extent_})
-    v->reserve(n);
-  for (auto* v : {&island_, &parent_}) v->reserve(n);
-  asleep_.reserve(n);
-  for (auto& list : contacts_->moving) list.reserve(n);
-  name_.reserve(n);
-  bullet_.reserve(n);
-  shapes_.reserve(n);
+  try {
+    ids_.reserve(n);
+    for (auto* v : {&slot_, &owner_}) v->reserve(n);
+    type_.reserve(n);
+    for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_, &rest_com_})
+      v->reserve(n);
+    for (auto* v : {&q_, &principal_, &q0_, &rest_q_}) v->reserve(n);
+    for (auto* v :
+         {&inv_mass_, &lin_damp_, &ang_damp_, &gravity_scale_, &sleep_time_, &island_slow_, &extent_, &min_extent_})
+      v->reserve(n);
+    for (auto* v : {&island_, &parent_}) v->reserve(n);
+    asleep_.reserve(n);
+    for (auto& list : contacts_->moving) list.reserve(n);
+    name_.reserve(n);
+    bullet_.reserve(n);
+    shapes_.reserve(n);
+  } catch (const std::bad_alloc&) {
+    // the largest capacity, 2^26 bodies, reserves some 36 GB of address space: where the
+    // memory (or a limit on it) cannot give that, say which value asked for it
+    throw Error("RigidSystemDef.capacity: cannot reserve room for " + std::to_string(n) +
+                " bodies (about 540 B each): out of memory; give a smaller capacity (the arrays grow "
+                "past it as bodies are created)");
+  }
 }
 
 RigidBodySystem::~RigidBodySystem() = default;
@@ -316,6 +325,15 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   Vec3 com_local(0);
   double inv_mass = 0;
   if (def.type == BodyType::Dynamic) {
+    // from the shapes, the number alone does not say what to change (a 1e-9 m ball's moment,
+    // 7e-43 kg m^2, named no size; a 1e-300 m ball's mass of 0 kg no shape): say it is the
+    // shapes' size or density
+    const auto from_shapes = [](const Error& e) {
+      return Error(
+          std::string(e.what()) +
+          ": the shapes' sizes and densities make the body too small or light, or too large or heavy, "
+          "for the contact solver's float rows (scale the shapes or the density, or give the mass and inertia)");
+    };
     RigidMass m;
     if (def.mass) {
       m = *def.mass;
@@ -325,7 +343,11 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
                                                    field_path(w, "shapes[" + std::to_string(k) + "]"));
         m = k == 0 ? part : m + part;
       }
-      m.validate(field_path(w, "mass (from the shapes)"));
+      try {
+        m.validate(field_path(w, "mass (from the shapes)"));
+      } catch (const Error& e) {
+        throw from_shapes(e);  // (a mass of 0 or inf, or a NaN inertia: sizes past the doubles)
+      }
     }
     principal_axes(m.inertia, moments, principal);
     // the contact solver's blocks hold inverse masses and inertias, and effective masses, as
@@ -337,12 +359,7 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
         require_float_inverse(moments[a], field_path(mw, "principal moment " + std::to_string(a) + " (kg m^2)"));
     } catch (const Error& e) {
       if (def.mass) throw;
-      // from the shapes, the number alone does not say what to change (a 1e-9 m ball's
-      // moment, 7e-43 kg m^2, named no size): say it is the shapes' size or density
-      throw Error(
-          std::string(e.what()) +
-          ": the shapes' sizes and densities make the body too small or light, or too large or heavy, "
-          "for the contact solver's float rows (scale the shapes or the density, or give the mass and inertia)");
+      throw from_shapes(e);
     }
     inv = 1.0 / moments;
     inv_mass = 1.0 / m.mass;
@@ -787,7 +804,8 @@ void RigidBodySystem::fail(std::size_t i) {
   failed_ = id_at(i);
   failure_ = describe(i) +
              (finite ? " went faster than kMaxRigidSpeed (" + format_value(kMaxRigidSpeed) +
-                           " m/s or rad/s: a force too large for the contacts' float rows)"
+                           " m/s or rad/s, the contacts' float rows' limit: a force or torque, the gravity "
+                           "times the body's gravity_scale, or the time step too large)"
                      : std::string(" became non-finite")) +
              " in the step to t = " + format_value(time_ + last_dt_) + " s: position " + format_vec3(com_[i]) +
              ", velocity " + format_vec3(v_[i]) + ", angular velocity " + format_vec3(w_[i]);

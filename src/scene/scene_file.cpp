@@ -174,7 +174,17 @@ Scene parse_scene(std::string_view text, std::string_view source) {
   if (root.has("settings")) scene_detail::read_settings(root.at("settings"), def);
   std::string name = root.str("name", "");
   if (name.empty()) name = std::filesystem::path(std::string(source)).stem().string();
-  Scene scene{name, root.str("description", ""), World(def)};
+  // the World reserves what the settings ask for (settings.rigid.capacity: up to 2^26 bodies,
+  // some 36 GB): an Error there (out of memory) is named as the settings'
+  const auto make_world = [&] {
+    try {
+      return World(def);
+    } catch (const Error& e) {
+      if (!root.has("settings")) throw;
+      root.at("settings").fail(e.what());
+    }
+  };
+  Scene scene{name, root.str("description", ""), make_world()};
   for (const Section& s : kSections) {
     if (!root.has(s.name)) continue;
     const Node arr = root.at(s.name);

@@ -5,6 +5,7 @@
 
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -252,6 +253,42 @@ TEST(Epa, SphereAndCapsuleCoresAddTheirRadii) {
   ASSERT_TRUE(e.ok);
   EXPECT_NEAR(e.depth, 0.35, 1e-9);
   EXPECT_NEAR(glm::length(e.normal - Vec3(0, -1, 0)), 0.0, 1e-9);
+}
+
+// GJK and EPA do not check their input for finiteness (shapes and poses are checked where
+// they are made: ColliderShape, ConvexHull::build, the bodies' and colliders' poses). What
+// they must not do with a NaN is hang: a triangle of NaN points (every support point NaN, so
+// the simplex grows to a tetrahedron of NaN points), a box at a NaN pose, and cores far past
+// the doubles' range (1e300 m, whose differences are infinite) each end within the iteration
+// caps, stepped one iteration at a time or run, and EPA after them within its vertex cap
+// (128); the answer is documented as meaningless (narrow_phase.h, gjk_distance).
+TEST(Gjk, NonFiniteCoresEndWithinTheIterationCaps) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Vec3 nan_tri[3] = {{nan, 0, 0}, {0, nan, 0}, {0, 0, nan}};
+  const Vec3 far_tri[3] = {{1e300, 0, 0}, {-1e300, 1e300, 0}, {0, -1e300, 1e300}};
+  ConvexProxy nan_triangle, far_triangle;
+  nan_triangle.type = far_triangle.type = ShapeType::Mesh;
+  nan_triangle.triangle = nan_tri, far_triangle.triangle = far_tri;
+  const ConvexProxy box = box_proxy(Vec3(0.5), Pose{});
+  const ConvexProxy cases[] = {nan_triangle, far_triangle, box_proxy(Vec3(0.5), Pose{Vec3(nan, 0, 0)}),
+                               box_proxy(Vec3(1e300), Pose{Vec3(1e300, 0, 0)}), sphere_proxy(0.5, Pose{Vec3(0, nan, 0)})};
+  int k = 0;
+  for (const ConvexProxy& other : cases) {
+    for (const bool swap : {false, true}) {
+      const ConvexProxy& a = swap ? other : box;
+      const ConvexProxy& b = swap ? box : other;
+      const DistanceResult d = gjk_distance(a, b);
+      EXPECT_LE(d.iterations, GjkStepper::kMaxIterations) << "case " << k << (swap ? " swapped" : "");
+      GjkStepper g(a, b);
+      int steps = 0;
+      while (steps <= GjkStepper::kMaxIterations && g.step()) ++steps;
+      EXPECT_TRUE(g.done()) << "case " << k << (swap ? " swapped" : "");
+      EXPECT_LE(g.iterations(), GjkStepper::kMaxIterations) << "case " << k;
+      const PenetrationResult e = epa_penetration(a, b);
+      EXPECT_LE(e.iterations, 128) << "case " << k << (swap ? " swapped" : "");
+    }
+    ++k;
+  }
 }
 
 }  // namespace

@@ -285,6 +285,25 @@ TEST(RunCommand, BadSceneExitsOneNamingTheFile) {
   EXPECT_NE(err.find(bad.string() + ": /emitters/0/rate: must be >= 0, got -5"), std::string::npos) << err;
 }
 
+// A CSV that cannot be written (a full disk, here /dev/full, where every write fails with
+// ENOSPC) is a failed run: exit 1 naming the file, whatever the CSV's length. stdio keeps a
+// failed buffered write in the stream's error flag, and fclose returns 0 when its own last
+// flush has nothing left to write: the two steps of the rigid stack, whose rows end on a
+// buffer's boundary, lost their CSV and exited 0 with the hash.
+TEST(RunCommand, ACsvThatCannotBeWrittenExitsOneNamingTheFile) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
+  const std::string stack = std::string(PBA_SCENES_DIR) + "/rigid_stack.json";
+  for (int steps = 1; steps <= 12; ++steps) {
+    testing::internal::CaptureStdout();
+    testing::internal::CaptureStderr();
+    const int code = run({stack, "--steps", std::to_string(steps), "--csv", "/dev/full", "--quiet"});
+    const std::string out = testing::internal::GetCapturedStdout();
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(code, 1) << steps << " steps: " << out << err;
+    EXPECT_NE(err.find("pba run: --csv: error writing '/dev/full'"), std::string::npos) << steps << " steps: " << err;
+  }
+}
+
 // The CSV ends with the final state whatever the interval: 25 steps every 10 write steps 0,
 // 10, 20 and 25 (before, the last snapshot was step 20, 5 steps short of the state whose hash
 // the command printed), each step once (100 steps every 10, or 7 every 1, add no repeat).

@@ -532,14 +532,14 @@ TEST(RigidStage, ABodyForcedPastTheSpeedLimitIsTheOneNamed) {
 
 // A body put beyond what the collision world holds (its bounds are floats, |x| <= 3.4e38 m)
 // while its state is still finite stops the world the same way: its entity, the tick, the value.
-// (No velocity within kMaxRigidSpeed carries a body there: 1e21 m a tick at most. A pose or a
+// (No velocity within kMaxRigidSpeed carries a body there: 1e19 m a tick at most. A pose or a
 // shape's placement beyond it is refused where it is given, RigidBodySystem::set_pose; each
 // within the range, they can still add up beyond it.)
 TEST(RigidStage, ABodyBeyondTheFloatRangeStopsTheWorld) {
   World w;
   const EntityId e = w.create_entity({.name = "comet"});
   RigidBodyDef d = box_def({0.5, 0.5, 0.5});
-  d.linear_velocity = {1e20, 0, 0};
+  d.linear_velocity = {pba::kMaxRigidSpeed, 0, 0};
   d.shapes[0].local.position = {3e38, 0, 0};
   const RigidBodyId b = w.add_rigid_body(e, d);
   EXPECT_NE(error_of([&] { w.rigid().set_pose(b, {{1.6666666666666666e306, 0, 0}}); }).find("must fit a float"),

@@ -280,7 +280,11 @@ class GjkStepper {
 };
 
 /// Distance and closest points of two convex shapes by GJK on their cores (van den Bergen
-/// 2003), the core radii subtracted afterwards.
+/// 2003), the core radii subtracted afterwards. The proxies are not checked for finiteness
+/// (shapes and poses are checked where they are made): a NaN or infinite support point ends
+/// the run within kMaxIterations, as EPA after it ends within its caps, with no meaningful
+/// answer (a triangle of NaN points reads as overlapping cores at distance 0;
+/// Gjk.NonFiniteCoresEndWithinTheIterationCaps).
 DistanceResult gjk_distance(const ConvexProxy& a, const ConvexProxy& b);
 
 /// Result of epa_penetration().
