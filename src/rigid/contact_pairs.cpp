@@ -1170,6 +1170,31 @@ struct PointsInput {
   twist_radius /= in.count;
 }
 
+// emit_points_scalar for a manifold of one point (most of the terrain's and the rain's), the
+// same operations in the same order on that point, without the loops, the points' copies and the
+// centroid's and twist radius's divisions and square root: the centroid is 0 + the point (the
+// scalar code's sum; divided by one it is itself) and the twist radius 0 (the point's distance
+// from itself; for a point not finite the scalar code gives NaN, which nothing tells from 0: the
+// twist acts, and its impulse is carried, only past a radius > 0, and one-point lanes do not
+// read it)
+[[gnu::always_inline]] inline void emit_point_one(const PointsInput& in, ContactPair& out, Vec3& centroid,
+                                                   double& twist_radius) {
+  const Vec3& n = in.n;
+  SolverPoint& pt = out.points[0];
+  const Vec3 sa = *in.qa * Vec3(in.core[0][0], in.core[1][0], in.core[2][0]);
+  const Vec3 sb = *in.qb * Vec3(in.core[3][0], in.core[4][0], in.core[5][0]);
+  const Vec3 core_a = in.com_a + sa, core_b = in.com_b + sb;
+  const Vec3 on_a = core_a + in.radius_a * n, on_b = core_b - in.radius_b * n;
+  const double depth = glm::dot(on_a - on_b, n);
+  const Vec3 mid = 0.5 * (on_a + on_b);
+  pt.at = mid, pt.sa = sa, pt.sb = sb;
+  out.depth[0] = depth;
+  pt.offset = -depth - glm::dot(core_b - core_a, n) - in.preload;
+  out.id[0] = in.id[0];
+  centroid = Vec3(0) + mid;
+  twist_radius = 0;
+}
+
 static_assert(Manifold::kMaxPoints == 4 && sizeof(SolverPoint) == 80 && offsetof(SolverPoint, sa) == 24 &&
                   offsetof(SolverPoint, sb) == 48 && offsetof(SolverPoint, offset) == 72,
               "emit_points_avx2 writes a point as two rows of four doubles and one of two");
@@ -1354,11 +1379,13 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
                        .radius_a = radius_a, .radius_b = radius_b, .preload = preload, .count = r.count};
   Vec3 centroid;
   double twist_radius;
+  if (r.count == 1)
+    emit_point_one(in, c, centroid, twist_radius);
 #if PBA_EMIT_AVX2
-  if (simd != SimdPath::Scalar && r.count > 2)
+  else if (simd != SimdPath::Scalar && r.count > 2)
     emit_points_avx2(in, c, centroid, twist_radius);
-  else
 #endif
+  else
     emit_points_scalar(in, c, centroid, twist_radius);
   c.ca = centroid - com_a;
   c.twist_radius = twist_radius;
