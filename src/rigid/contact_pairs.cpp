@@ -1265,7 +1265,7 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
   const V distance = _mm256_sqrt_pd(dx * dx + dy * dy + dz * dz);
   const __m128d low = _mm256_castpd256_pd128(distance), high = _mm256_extractf128_pd(distance, 1);
   double twist = _mm_cvtsd_f64(low) + _mm_cvtsd_f64(_mm_unpackhi_pd(low, low));
-  twist += _mm_cvtsd_f64(high);  // (count > 2: emit calls this for three or four points)
+  if (in.count > 2) twist += _mm_cvtsd_f64(high);  // (count > 1: emit calls this for two to four points)
   if (in.count > 3) twist += _mm_cvtsd_f64(_mm_unpackhi_pd(high, high));
   twist_radius = twist / in.count;
 }
@@ -1371,22 +1371,34 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     if (preloaded.size() == preloaded.capacity()) preloaded.reserve(pairs.capacity() + 1);
     preloaded.push_back(static_cast<std::uint32_t>(at_index));
   }
-  // the points, on the SIMD paths four at a time when there are three or four (the same bits;
-  // the lanes cost what four points do, and one point alone is about half as dear in scalar code)
+  // the points: one alone in scalar code without the centroid's machinery, more on the SIMD
+  // paths four at a time (the same bits; the lanes cost what four points do, and are dearer
+  // than scalar code only for one point: two in scalar code, a loop, the centroid's sums, two
+  // square roots and two divisions, took about 325 instructions on the terrain, in the lanes
+  // about 250 with the call)
   // (each value is computed into a local and stored from there: stored piecewise and read back
   // whole, a Vec3 waited on the store buffer)
-  const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
-                       .radius_a = radius_a, .radius_b = radius_b, .preload = preload, .count = r.count};
   Vec3 centroid;
   double twist_radius;
-  if (r.count == 1)
-    emit_point_one(in, c, centroid, twist_radius);
+  {
+    // (made in each branch: the one that escapes to emit_points_avx2 was stored to the stack
+    // for every manifold, the one-point ones too)
+    auto input = [&] {
+      return PointsInput{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
+                         .radius_a = radius_a, .radius_b = radius_b, .preload = preload, .count = r.count};
+    };
+    if (r.count == 1) {
+      emit_point_one(input(), c, centroid, twist_radius);
+    } else {
+      const PointsInput in = input();
 #if PBA_EMIT_AVX2
-  else if (simd != SimdPath::Scalar && r.count > 2)
-    emit_points_avx2(in, c, centroid, twist_radius);
+      if (simd != SimdPath::Scalar)
+        emit_points_avx2(in, c, centroid, twist_radius);
+      else
 #endif
-  else
-    emit_points_scalar(in, c, centroid, twist_radius);
+        emit_points_scalar(in, c, centroid, twist_radius);
+    }
+  }
   c.ca = centroid - com_a;
   c.twist_radius = twist_radius;
   // friction carried over, re-projected onto this step's tangents
