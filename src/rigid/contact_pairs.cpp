@@ -1280,12 +1280,17 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
 [[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d load3(const Vec3& v) {
   return _mm256_maskload_pd(&v[0], _mm256_setr_epi64x(-1, -1, -1, 0));
 }
-// a matrix's columns (glm's, one after another; the last loaded from one double back and shifted
-// down, not read past the matrix)
+// a matrix's columns (glm's, one after another), loaded as the halves and the last double that
+// rotation() stores it as: a body's matrix is often made by the emit that reads it, and a load
+// that spans two stores still in flight waits for both to leave (whole columns loaded at once,
+// half of this function's samples on the terrain sat after the matrix's loads)
 [[gnu::always_inline]] __attribute__((target("avx2"))) inline void columns(const Mat3& m, __m256d (&c)[3]) {
   const double* q = &m[0][0];
-  c[0] = _mm256_loadu_pd(q), c[1] = _mm256_loadu_pd(q + 3);
-  c[2] = _mm256_permute4x64_pd(_mm256_loadu_pd(q + 5), 0xf9);  // (q6, q7, q8, q8)
+  const __m128d q01 = _mm_loadu_pd(q), q23 = _mm_loadu_pd(q + 2), q45 = _mm_loadu_pd(q + 4);
+  const __m128d q67 = _mm_loadu_pd(q + 6), q8 = _mm_load_sd(q + 8);
+  c[0] = _mm256_insertf128_pd(_mm256_castpd128_pd256(q01), q23, 1);                                // (q0, q1, q2, q3)
+  c[1] = _mm256_permute4x64_pd(_mm256_insertf128_pd(_mm256_castpd128_pd256(q23), q45, 1), 0xf9);  // (q3, q4, q5, q5)
+  c[2] = _mm256_insertf128_pd(_mm256_castpd128_pd256(q67), q8, 1);                                 // (q6, q7, q8, 0)
 }
 // (x + y) + z of the first three lanes, as glm's dot sums a product
 [[gnu::always_inline]] __attribute__((target("avx2"))) inline __m128d sum3(__m256d v) {
