@@ -1170,6 +1170,31 @@ struct PointsInput {
   twist_radius /= in.count;
 }
 
+// emit_points_scalar for a manifold of one point (most of the terrain's and the rain's), the
+// same operations in the same order on that point, without the loops, the points' copies and the
+// centroid's and twist radius's divisions and square root: the centroid is 0 + the point (the
+// scalar code's sum; divided by one it is itself) and the twist radius 0 (the point's distance
+// from itself; for a point not finite the scalar code gives NaN, which nothing tells from 0: the
+// twist acts, and its impulse is carried, only past a radius > 0, and one-point lanes do not
+// read it)
+[[gnu::always_inline]] inline void emit_point_one(const PointsInput& in, ContactPair& out, Vec3& centroid,
+                                                   double& twist_radius) {
+  const Vec3& n = in.n;
+  SolverPoint& pt = out.points[0];
+  const Vec3 sa = *in.qa * Vec3(in.core[0][0], in.core[1][0], in.core[2][0]);
+  const Vec3 sb = *in.qb * Vec3(in.core[3][0], in.core[4][0], in.core[5][0]);
+  const Vec3 core_a = in.com_a + sa, core_b = in.com_b + sb;
+  const Vec3 on_a = core_a + in.radius_a * n, on_b = core_b - in.radius_b * n;
+  const double depth = glm::dot(on_a - on_b, n);
+  const Vec3 mid = 0.5 * (on_a + on_b);
+  pt.at = mid, pt.sa = sa, pt.sb = sb;
+  out.depth[0] = depth;
+  pt.offset = -depth - glm::dot(core_b - core_a, n) - in.preload;
+  out.id[0] = in.id[0];
+  centroid = Vec3(0) + mid;
+  twist_radius = 0;
+}
+
 static_assert(Manifold::kMaxPoints == 4 && sizeof(SolverPoint) == 80 && offsetof(SolverPoint, sa) == 24 &&
                   offsetof(SolverPoint, sb) == 48 && offsetof(SolverPoint, offset) == 72,
               "emit_points_avx2 writes a point as two rows of four doubles and one of two");
@@ -1240,9 +1265,70 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
   const V distance = _mm256_sqrt_pd(dx * dx + dy * dy + dz * dz);
   const __m128d low = _mm256_castpd256_pd128(distance), high = _mm256_extractf128_pd(distance, 1);
   double twist = _mm_cvtsd_f64(low) + _mm_cvtsd_f64(_mm_unpackhi_pd(low, low));
-  twist += _mm_cvtsd_f64(high);  // (count > 2: emit calls this for three or four points)
+  if (in.count > 2) twist += _mm_cvtsd_f64(high);  // (count > 1: emit calls this for two to four points)
   if (in.count > 3) twist += _mm_cvtsd_f64(_mm_unpackhi_pd(high, high));
   twist_radius = twist / in.count;
+}
+
+// emit_point_one in the lanes of one AVX2 vector (x, y, z and a fourth lane that is not kept):
+// each lane does the scalar code's operations on its coordinate in the same order, and the dot
+// products sum x, y, z in that order, so the same bits; the point's at, sa, sb and offset go out
+// as three overlapping rows of four and one double, the anchor of friction (the centroid from
+// a's centre) with the twist radius 0 as one row. A call (emit is built for SSE2) of about 83
+// instructions, against about 130 of the scalar code's halves, broadcasts and spills inline.
+// three doubles of a Vec3, the fourth lane 0 (a masked load reads nothing past the vector)
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d load3(const Vec3& v) {
+  return _mm256_maskload_pd(&v[0], _mm256_setr_epi64x(-1, -1, -1, 0));
+}
+// a matrix's columns (glm's, one after another), loaded as the halves and the last double that
+// rotation() stores it as: a body's matrix is often made by the emit that reads it, and a load
+// that spans two stores still in flight waits for both to leave (whole columns loaded at once,
+// half of this function's samples on the terrain sat after the matrix's loads)
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline void columns(const Mat3& m, __m256d (&c)[3]) {
+  const double* q = &m[0][0];
+  const __m128d q01 = _mm_loadu_pd(q), q23 = _mm_loadu_pd(q + 2), q45 = _mm_loadu_pd(q + 4);
+  const __m128d q67 = _mm_loadu_pd(q + 6), q8 = _mm_load_sd(q + 8);
+  c[0] = _mm256_insertf128_pd(_mm256_castpd128_pd256(q01), q23, 1);                                // (q0, q1, q2, q3)
+  c[1] = _mm256_permute4x64_pd(_mm256_insertf128_pd(_mm256_castpd128_pd256(q23), q45, 1), 0xf9);  // (q3, q4, q5, q5)
+  c[2] = _mm256_insertf128_pd(_mm256_castpd128_pd256(q67), q8, 1);                                 // (q6, q7, q8, 0)
+}
+// (x + y) + z of the first three lanes, as glm's dot sums a product
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline __m128d sum3(__m256d v) {
+  const __m128d low = _mm256_castpd256_pd128(v);
+  return _mm_add_sd(_mm_add_sd(low, _mm_unpackhi_pd(low, low)), _mm256_extractf128_pd(v, 1));
+}
+
+static_assert(offsetof(ContactPair, twist_radius) == offsetof(ContactPair, ca) + sizeof(Vec3) &&
+                  offsetof(SolverPoint, offset) == 9 * sizeof(double) && sizeof(Mat3) == 9 * sizeof(double),
+              "emit_point_one_avx2 writes the anchor and twist radius as one row, a point as 4 + 4 + 4 + 1 doubles");
+__attribute__((target("avx2"))) void emit_point_one_avx2(const CachedManifold& r, const Mat3& qa, const Mat3& qb,
+                                                         const Vec3& com_a, const Vec3& com_b, double nx, double ny,
+                                                         double nz, ContactPair& out) {
+  using V = __m256d;
+  V ca[3], cb[3];
+  columns(qa, ca), columns(qb, cb);
+  // glm's mat3 * vec3: the columns times the vector's x, y, z, summed in that order
+  const V sa = ca[0] * all(r.core[0][0]) + ca[1] * all(r.core[1][0]) + ca[2] * all(r.core[2][0]);
+  const V sb = cb[0] * all(r.core[3][0]) + cb[1] * all(r.core[4][0]) + cb[2] * all(r.core[5][0]);
+  const V n = _mm256_setr_pd(nx, ny, nz, 0);
+  const V com_av = load3(com_a);
+  const V core_a = com_av + sa, core_b = load3(com_b) + sb;
+  const V on_a = core_a + all(r.radius_a) * n, on_b = core_b - all(r.radius_b) * n;
+  const __m128d depth = sum3((on_a - on_b) * n);
+  const __m128d apart = sum3((core_b - core_a) * n);
+  const V mid = all(0.5) * (on_a + on_b);
+  const double preload = r.preload;
+  const __m128d offset = _mm_sub_sd(_mm_sub_sd(_mm_xor_pd(depth, _mm_set_sd(-0.0)), apart), _mm_set_sd(preload));
+  // the rows: at (with sa.x after it), sa (with sb.x), sb (with offset), each written over the
+  // last one's fourth lane, then the offset
+  double* to = reinterpret_cast<double*>(&out.points[0]);
+  _mm256_storeu_pd(to, mid), _mm256_storeu_pd(to + 3, sa), _mm256_storeu_pd(to + 6, sb);
+  _mm_store_sd(to + 9, offset);
+  _mm_store_sd(&out.depth[0], depth);
+  out.id[0] = r.id[0];
+  // the centroid 0 + the point (as the scalar sum) from a's centre, and after it the twist radius 0
+  const V anchor = (_mm256_setzero_pd() + mid) - com_av;
+  _mm256_storeu_pd(&out.ca[0], _mm256_blend_pd(anchor, _mm256_setzero_pd(), 0x8));
 }
 #endif
 
@@ -1346,22 +1432,37 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     if (preloaded.size() == preloaded.capacity()) preloaded.reserve(pairs.capacity() + 1);
     preloaded.push_back(static_cast<std::uint32_t>(at_index));
   }
-  // the points, on the SIMD paths four at a time when there are three or four (the same bits;
-  // the lanes cost what four points do, and one point alone is about half as dear in scalar code)
+  // the points: one alone without the centroid's machinery (in the lanes of one AVX2 vector on
+  // the SIMD paths, which writes the anchor of friction and twist radius too), more on the SIMD
+  // paths four at a time (the same bits; the lanes cost what four points do, and are dearer
+  // than scalar code only for one point: two in scalar code, a loop, the centroid's sums, two
+  // square roots and two divisions, took about 325 instructions on the terrain, in the lanes
+  // about 250 with the call)
   // (each value is computed into a local and stored from there: stored piecewise and read back
   // whole, a Vec3 waited on the store buffer)
-  const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
-                       .radius_a = radius_a, .radius_b = radius_b, .preload = preload, .count = r.count};
-  Vec3 centroid;
-  double twist_radius;
 #if PBA_EMIT_AVX2
-  if (simd != SimdPath::Scalar && r.count > 2)
-    emit_points_avx2(in, c, centroid, twist_radius);
-  else
+  if (r.count == 1 && simd != SimdPath::Scalar) {
+    emit_point_one_avx2(r, qa, qb, com_a, com_b, n.x, n.y, n.z, c);
+  } else
 #endif
-    emit_points_scalar(in, c, centroid, twist_radius);
-  c.ca = centroid - com_a;
-  c.twist_radius = twist_radius;
+  {
+    // (made here: the one that escapes to emit_points_avx2 was stored to the stack for every
+    // manifold, the one-point ones too)
+    const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
+                         .radius_a = radius_a, .radius_b = radius_b, .preload = preload, .count = r.count};
+    Vec3 centroid;
+    double twist_radius;
+    if (r.count == 1)
+      emit_point_one(in, c, centroid, twist_radius);
+#if PBA_EMIT_AVX2
+    else if (simd != SimdPath::Scalar)
+      emit_points_avx2(in, c, centroid, twist_radius);
+#endif
+    else
+      emit_points_scalar(in, c, centroid, twist_radius);
+    c.ca = centroid - com_a;
+    c.twist_radius = twist_radius;
+  }
   // friction carried over, re-projected onto this step's tangents
   c.tangent_impulse[0] = warm ? glm::dot(friction, c.t1) : 0;
   c.tangent_impulse[1] = warm ? glm::dot(friction, c.t2) : 0;
