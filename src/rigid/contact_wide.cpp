@@ -899,26 +899,24 @@ PBA_LANES void warm(const Lanes<V, B>& L, const BodyArrays& r) {
   V pw[3];
   const V pf[3] = {j0, j1, sl};
   to_world(t1, t2, n, pf, pw);
-  // each side that a lane writes (a static body's is not formed)
+  // each side that a lane writes (a static body's is not formed): a's changes negated
   constexpr std::uint32_t kAll = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
-  if ((c.write_a >> l0) & kAll) {
-    V ia[6], da[3], daw[3], na[6];
-    for (int i = 0; i < 6; ++i) ia[i] = L(c.ia[i]);
-    sym_mul(ia, ta, da);
-    to_world(t1, t2, n, da, daw);
-    const V ma = L(c.ma);
-    for (int i = 0; i < 3; ++i) na[i] = -(ma * pw[i]), na[3 + i] = -daw[i];
-    add_rows<V, kZmm>(r.warm[0].v, c.a + l0, c.write_a >> l0, na);
-  }
-  if ((c.write_b >> l0) & kAll) {
-    V ib[6], db[3], dbw[3], nb[6];
-    for (int i = 0; i < 6; ++i) ib[i] = L(c.ib[i]);
-    sym_mul(ib, tb, db);
-    to_world(t1, t2, n, db, dbw);
-    const V mb = L(c.mb);
-    for (int i = 0; i < 3; ++i) nb[i] = mb * pw[i], nb[3 + i] = dbw[i];
-    add_rows<V, kZmm>(r.warm[0].v, c.b + l0, c.write_b >> l0, nb);
-  }
+  auto side = [&](const Real (&inertia)[6][kLanes], const V t[3], const Real (&inv_mass)[kLanes], auto negated,
+                  const std::uint32_t* index, std::uint32_t bits) __attribute__((always_inline)) {
+    if (!(bits & kAll)) return;
+    V inv[6], d[3], dw[3], rows[6];
+    for (int i = 0; i < 6; ++i) inv[i] = L(inertia[i]);
+    sym_mul(inv, t, d);
+    to_world(t1, t2, n, d, dw);
+    const V m = L(inv_mass);
+    for (int i = 0; i < 3; ++i) {
+      if constexpr (decltype(negated)::value) rows[i] = -(m * pw[i]), rows[3 + i] = -dw[i];
+      else rows[i] = m * pw[i], rows[3 + i] = dw[i];
+    }
+    add_rows<V, kZmm>(r.warm[0].v, index, bits, rows);
+  };
+  side(c.ia, ta, c.ma, std::true_type{}, c.a + l0, c.write_a >> l0);
+  side(c.ib, tb, c.mb, std::false_type{}, c.b + l0, c.write_b >> l0);
 }
 
 // the separations of the block's lanes [l0, l0 + width) in lanes of doubles D (outside the
