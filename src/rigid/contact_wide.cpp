@@ -265,45 +265,6 @@ PBA_LANES void load_rows(const double* base, const std::uint32_t* index, V out[8
   }
 }
 
-// whether the kWidth<V> lanes from `index` name one body (a static body on that side of every
-// lane: a mesh under the balls on its triangles, half the terrain's one-point blocks)
-template <class V>
-PBA_LANES bool one_body(const std::uint32_t* index) {
-  if constexpr (std::is_arithmetic_v<V>) {
-    return true;
-  } else {
-    typedef std::uint32_t U4 __attribute__((vector_size(16)));
-    typedef std::uint32_t U8 __attribute__((vector_size(32)));
-    typedef std::uint32_t U16 __attribute__((vector_size(64)));
-    using U = std::conditional_t<kWidth<V> == 4, U4, std::conditional_t<kWidth<V> == 8, U8, U16>>;
-    static_assert(sizeof(U) == 4 * kWidth<V>);
-    U u;
-    std::memcpy(&u, index, sizeof u);
-    const U d = u ^ index[0];
-    std::uint64_t w[sizeof(U) / 8], any = 0;
-    std::memcpy(w, &d, sizeof d);
-    for (std::size_t i = 0; i < sizeof(U) / 8; ++i) any |= w[i];
-    return any == 0;
-  }
-}
-
-// load_rows for a side of the lanes that no lane writes (bits: the lanes' write bits from the
-// first): when every lane names the same body, its one row, each number in every lane (the
-// numbers load_rows gives: each rounded alone, and x - 0 keeps a -0), not a gather of the same
-// row kWidth<V> times and its transpose
-template <class V>
-PBA_LANES void load_side(const double* base, const std::uint32_t* index, std::uint32_t bits, V out[8]) {
-  constexpr std::uint32_t kAll = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
-  if constexpr (!std::is_arithmetic_v<V>) {
-    if ((bits & kAll) == 0 && one_body<V>(index)) {
-      const double* p = base + 8 * static_cast<std::size_t>(index[0]);
-      for (int k = 0; k < 8; ++k) out[k] = static_cast<Element<V>>(p[k]) - V{};
-      return;
-    }
-  }
-  load_rows(base, index, out);
-}
-
 // a lane's changes (8 floats) added to its body's row of doubles
 template <bool kZmm>
 PBA_LANES void add_row(double* base, std::uint32_t index, v8f change) {
@@ -397,8 +358,8 @@ PBA_LANES void separations(const Lanes<V, B>& L, const AnchorsOf<B::kPoints>& g,
   V t1[3], t2[3], n[3];
   L.frame(t1, t2, n);
   V ma[8], mb[8];  // dp, then the turn (w, x, y, z)
-  load_side(r.motion, c.a + L.l0, c.write_a >> L.l0, ma);
-  load_side(r.motion, c.b + L.l0, c.write_b >> L.l0, mb);
+  load_rows(r.motion, c.a + L.l0, ma);
+  load_rows(r.motion, c.b + L.l0, mb);
   const V dp[3] = {mb[0] - ma[0], mb[1] - ma[1], mb[2] - ma[2]};
   const V dpn = dot(dp, n);
   // turn^-1 n - n = 2 (w (-u x n) + (-u) x ((-u) x n)) (the conjugate's quat_turn_change), in
@@ -472,8 +433,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   if constexpr (!kRounds) {
     // the bodies, and their velocities in the frame: the relative linear one, each angular one
     V rowa[8], rowb[8];
-    load_side(base, c.a + l0, c.write_a >> l0, rowa);
-    load_side(base, c.b + l0, c.write_b >> l0, rowb);
+    load_rows(base, c.a + l0, rowa);
+    load_rows(base, c.b + l0, rowb);
     V* const va = rowa;
     V* const wa = rowa + 3;
     V* const vb = rowb;
@@ -804,27 +765,18 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     L.put(c.impulse[k], lambda[k]);
     L.put(c.max_impulse[k], largest[k]);
   }
-  // the change back to the bodies, in world axes (a side that no lane writes, a static
-  // body's, is not formed)
-  V pw[3];
+  // the change back to the bodies, in world axes
+  V pw[3], dwaw[3], dwbw[3];
   const auto F = L.again();
   F.frame(t1, t2, n);
   to_world(t1, t2, n, impulse, pw);
-  constexpr std::uint32_t kAll = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
-  if ((c.write_a >> l0) & kAll) {
-    V dwaw[3], na[6];
-    to_world(t1, t2, n, dwa, dwaw);
-    const V ma2 = F(F.c.ma);
-    for (int i = 0; i < 3; ++i) na[i] = -(ma2 * pw[i]), na[3 + i] = dwaw[i];
-    add_rows<V, kZmm>(base, c.a + l0, c.write_a >> l0, na);
-  }
-  if ((c.write_b >> l0) & kAll) {
-    V dwbw[3], nb[6];
-    to_world(t1, t2, n, dwb, dwbw);
-    const V mb2 = F(F.c.mb);
-    for (int i = 0; i < 3; ++i) nb[i] = mb2 * pw[i], nb[3 + i] = dwbw[i];
-    add_rows<V, kZmm>(base, c.b + l0, c.write_b >> l0, nb);
-  }
+  to_world(t1, t2, n, dwa, dwaw);
+  to_world(t1, t2, n, dwb, dwbw);
+  V na[6], nb[6];
+  const V ma2 = F(F.c.ma), mb2 = F(F.c.mb);
+  for (int i = 0; i < 3; ++i) na[i] = -(ma2 * pw[i]), na[3 + i] = dwaw[i], nb[i] = mb2 * pw[i], nb[3 + i] = dwbw[i];
+  add_rows<V, kZmm>(base, c.a + l0, c.write_a >> l0, na);
+  add_rows<V, kZmm>(base, c.b + l0, c.write_b >> l0, nb);
 }
 
 template <class V, int kMode, bool kZmm, class B>
@@ -896,27 +848,20 @@ PBA_LANES void warm(const Lanes<V, B>& L, const BodyArrays& r) {
       ta[i] = on ? ta[i] + roll : ta[i], tb[i] = on ? tb[i] + roll : tb[i];
     }
   }
-  V pw[3];
+  V ia[6], ib[6];
+  for (int i = 0; i < 6; ++i) ia[i] = L(c.ia[i]), ib[i] = L(c.ib[i]);
+  V da[3], db[3], daw[3], dbw[3], pw[3];
+  sym_mul(ia, ta, da);
+  sym_mul(ib, tb, db);
+  to_world(t1, t2, n, da, daw);
+  to_world(t1, t2, n, db, dbw);
   const V pf[3] = {j0, j1, sl};
   to_world(t1, t2, n, pf, pw);
-  // each side that a lane writes (a static body's is not formed): a's changes negated
-  constexpr std::uint32_t kAll = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
-  auto side = [&](const Real (&inertia)[6][kLanes], const V t[3], const Real (&inv_mass)[kLanes], auto negated,
-                  const std::uint32_t* index, std::uint32_t bits) __attribute__((always_inline)) {
-    if (!(bits & kAll)) return;
-    V inv[6], d[3], dw[3], rows[6];
-    for (int i = 0; i < 6; ++i) inv[i] = L(inertia[i]);
-    sym_mul(inv, t, d);
-    to_world(t1, t2, n, d, dw);
-    const V m = L(inv_mass);
-    for (int i = 0; i < 3; ++i) {
-      if constexpr (decltype(negated)::value) rows[i] = -(m * pw[i]), rows[3 + i] = -dw[i];
-      else rows[i] = m * pw[i], rows[3 + i] = dw[i];
-    }
-    add_rows<V, kZmm>(r.warm[0].v, index, bits, rows);
-  };
-  side(c.ia, ta, c.ma, std::true_type{}, c.a + l0, c.write_a >> l0);
-  side(c.ib, tb, c.mb, std::false_type{}, c.b + l0, c.write_b >> l0);
+  const V ma = L(c.ma), mb = L(c.mb);
+  V na[6], nb[6];
+  for (int i = 0; i < 3; ++i) na[i] = -(ma * pw[i]), na[3 + i] = -daw[i], nb[i] = mb * pw[i], nb[3 + i] = dbw[i];
+  add_rows<V, kZmm>(r.warm[0].v, c.a + l0, c.write_a >> l0, na);
+  add_rows<V, kZmm>(r.warm[0].v, c.b + l0, c.write_b >> l0, nb);
 }
 
 // the separations of the block's lanes [l0, l0 + width) in lanes of doubles D (outside the

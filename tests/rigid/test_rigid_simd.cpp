@@ -451,12 +451,11 @@ TEST(RigidSimd, DoubleBlocksOfTheFreeMotionGiveTheSameBitsOnEveryPath) {
 }
 
 // One-point blocks whose one side is a single body that no lane writes (a static ground, and
-// a kinematic plate moving at 1 m/s and turning at 0.5 rad/s: its velocity rows are not zero):
-// the kernels load that body's row once for the block instead of gathering it per lane, and
-// leave that side's write-back out; 32 balls land on it sliding at 3 m/s, so that the rounds
-// of a landing while sliding run (they go on from the pass's state). Each path gives the
-// scalar path's bits after a second, with the 32 balls on the plate (32 one-point manifolds
-// against it, two whole one-point blocks), none sunk into it by more than the slop.
+// a kinematic plate moving at 1 m/s and turning at 0.5 rad/s: its velocity rows are not zero,
+// and the same in every lane); 32 balls land on it sliding at 3 m/s, so that the rounds of a
+// landing while sliding run on one-point blocks (they go on from the pass's state). Each path
+// gives the scalar path's bits after a second, with the 32 balls on the plate (32 one-point
+// manifolds against it, two whole one-point blocks), none sunk into it by more than the slop.
 TEST(RigidSimd, OnePointBlocksAgainstOneUnwrittenBodyGiveTheSameBitsOnEveryPath) {
   constexpr double kRadius = 0.2, kTop = 0.1;  // (m; the plate's top face at y = kTop)
   const double slop = pba::ContactSettings{}.linear_slop;
