@@ -392,18 +392,14 @@ PBA_LANES void separations(const Lanes<V, B>& L, const AnchorsOf<B::kPoints>& g,
 // and Baumgarte (sequential impulses, TGS), a relax pass without bias
 enum Mode : int { kSoft, kRigid, kRelax };
 
-// one pass of the block's lanes: normal points, friction, twist
-// solve() again from the start for lanes of which one lands sliding, with the rounds (below):
-// out of line, in a function of its path's target, so that the common pass keeps its registers
-// (inline, with the mask's lanes tested one by one, the passes of the 1240 pyramid's first 100
-// steps took 9.6% more instructions with the rounds never run; out of line, 1.9%)
 // a lane mask of V (bool for a single float)
 template <class V>
 using MaskOf = decltype(std::declval<V>() == std::declval<V>());
 
 // what solve() hands the rounds when a lane lands sliding: its state after the pass's sweeps
 // and friction (in the frame), from which the rounds go on (they solved the pass again from
-// the block, to the same numbers, before: 40% of their instructions on the terrain)
+// the block, to the same numbers, before: a quarter of their instructions on the terrain and
+// the 1240 pyramid)
 template <class V, int P>
 struct Carried {
   V rel[3], oa[3], ob[3], dwa[3], dwb[3], impulse[3];
@@ -411,6 +407,11 @@ struct Carried {
   MaskOf<V> skip[P], impact;
 };
 
+// one pass of the block's lanes: normal points, friction, twist
+// the rounds (below), for lanes of which one lands sliding, from the pass's state: out of
+// line, in a function of its path's target, so that the common pass keeps its registers
+// (inline, with the mask's lanes tested one by one, the passes of the 1240 pyramid's first 100
+// steps took 9.6% more instructions with the rounds never run; out of line, 1.9%)
 template <class V, int kMode, bool kZmm, class B>
 void solve_rounds(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r, const Carried<V, B::kPoints>& from);
 
