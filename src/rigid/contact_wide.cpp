@@ -392,16 +392,34 @@ PBA_LANES void separations(const Lanes<V, B>& L, const AnchorsOf<B::kPoints>& g,
 // and Baumgarte (sequential impulses, TGS), a relax pass without bias
 enum Mode : int { kSoft, kRigid, kRelax };
 
+// a lane mask of V (bool for a single float)
+template <class V>
+using MaskOf = decltype(std::declval<V>() == std::declval<V>());
+
+// what solve() hands the rounds when a lane lands sliding: its state after the pass's sweeps
+// and friction (in the frame), from which the rounds go on (they solved the pass again from
+// the block, to the same numbers, before: a quarter of their instructions on the terrain and
+// the 1240 pyramid)
+template <class V, int P>
+struct Carried {
+  V rel[3], oa[3], ob[3], dwa[3], dwb[3], impulse[3];
+  V lambda[P], largest[P], bias[P], iscale[P], negm[P], tj[2], total;
+  MaskOf<V> skip[P], impact;
+};
+
 // one pass of the block's lanes: normal points, friction, twist
-// solve() again from the start for lanes of which one lands sliding, with the rounds (below):
-// out of line, in a function of its path's target, so that the common pass keeps its registers
+// the rounds (below), for lanes of which one lands sliding, from the pass's state: out of
+// line, in a function of its path's target, so that the common pass keeps its registers
 // (inline, with the mask's lanes tested one by one, the passes of the 1240 pyramid's first 100
 // steps took 9.6% more instructions with the rounds never run; out of line, 1.9%)
 template <class V, int kMode, bool kZmm, class B>
-void solve_rounds(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r);
+void solve_rounds(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r, const Carried<V, B::kPoints>& from);
 
+// kRounds: the rounds' instance, which starts from `from` (the pass's state when a lane lands
+// sliding) instead of from the block
 template <class V, int kMode, bool kZmm, class B, bool kRounds = false>
-PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r) {
+PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r,
+                     const Carried<V, B::kPoints>* from = nullptr) {
   constexpr bool kBias = kMode != kRelax;
   // the points of a lane: a one-point lane's is its centroid (x = y = 0), and it has no twist;
   // what the four-point kernel adds or multiplies by those zeros is left out (it changes at
@@ -410,28 +428,34 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   B& c = L.c;
   const int l0 = L.l0;
   const V zero = splat<V>(0), one = splat<V>(1);
-  // the bodies, and their velocities in the frame: the relative linear one, each angular one
   double* const base = r.bodies[0].v;
-  V rowa[8], rowb[8];
-  load_rows(base, c.a + l0, rowa);
-  load_rows(base, c.b + l0, rowb);
-  V* const va = rowa;
-  V* const wa = rowa + 3;
-  V* const vb = rowb;
-  V* const wb = rowb + 3;
   V t1[3], t2[3], n[3];
-  L.frame(t1, t2, n);
-  V rel[3], oa[3], ob[3];
-  {
-    const V dv[3] = {vb[0] - va[0], vb[1] - va[1], vb[2] - va[2]};
-    to_frame(t1, t2, n, dv, rel);
+  V rel[3], oa[3], ob[3], dwa[3], dwb[3], impulse[3];
+  if constexpr (!kRounds) {
+    // the bodies, and their velocities in the frame: the relative linear one, each angular one
+    V rowa[8], rowb[8];
+    load_rows(base, c.a + l0, rowa);
+    load_rows(base, c.b + l0, rowb);
+    V* const va = rowa;
+    V* const wa = rowa + 3;
+    V* const vb = rowb;
+    V* const wb = rowb + 3;
+    L.frame(t1, t2, n);
+    {
+      const V dv[3] = {vb[0] - va[0], vb[1] - va[1], vb[2] - va[2]};
+      to_frame(t1, t2, n, dv, rel);
+    }
+    to_frame(t1, t2, n, wa, oa);
+    to_frame(t1, t2, n, wb, ob);
+    for (int i = 0; i < 3; ++i) dwa[i] = zero, dwb[i] = zero, impulse[i] = zero;
+  } else {
+    for (int i = 0; i < 3; ++i) {
+      rel[i] = from->rel[i], oa[i] = from->oa[i], ob[i] = from->ob[i];
+      dwa[i] = from->dwa[i], dwb[i] = from->dwb[i], impulse[i] = from->impulse[i];
+    }
   }
-  to_frame(t1, t2, n, wa, oa);
-  to_frame(t1, t2, n, wb, ob);
-  V dwa[3] = {zero, zero, zero}, dwb[3] = {zero, zero, zero}, impulse[3] = {zero, zero, zero};
   // (the inverse masses and inertias, the arms, the points, K and the frame are read from the
   // block again where they are used: Lanes::again)
-  const V ma = L(c.ma), mb = L(c.mb);
   // turning a by -Ia ta and b by Ib tb (frame torques with no third component)
   auto turn2 = [&](const V ta0, const V ta1, const V tb0, const V tb1) __attribute__((always_inline)) {
     V da[3], db[3], ia[6], ib[6];
@@ -451,9 +475,18 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // meeting a face), and that rounding must not pick between the two (with `sep > 0` a body
   // passed a wall of the 250 m/s closed box in 28 of 29 slightly perturbed runs, the double
   // kernels before in 9 of 34; with this margin in none of 13: docs/benchmarks.md)
+  V lambda[P], vn[P], bias[P], iscale[P], largest[P], negm[P];
+  MaskOf<V> skip[P];
+  if constexpr (kRounds) {
+    for (int k = 0; k < P; ++k) {
+      lambda[k] = from->lambda[k], largest[k] = from->largest[k], bias[k] = from->bias[k];
+      iscale[k] = from->iscale[k], negm[k] = from->negm[k], skip[k] = from->skip[k];
+    }
+  }
+  V mscale[P];
+  const V ma = L(c.ma), mb = L(c.mb);
   const auto fixed = (ma == zero) | (mb == zero);
-  V lambda[P], vn[P], bias[P], mscale[P], iscale[P], largest[P];
-  std::remove_const_t<decltype(fixed)> skip[P];
+  if constexpr (!kRounds)
   for (int k = 0; k < P; ++k) {
     lambda[k] = L(c.impulse[k]);
     largest[k] = L(c.max_impulse[k]);
@@ -492,9 +525,11 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // sweep, a point's took the turn the points before it gave the body, and a box landing flat
   // recorded corners approaching at 7.0 to 7.7 m/s, which the restitution pass bounced unevenly
   // (written now: nothing below reads them, and held to the end they took four registers)
-  normal_speeds();
-  if constexpr (kBias)
-    for (int k = 0; k < P; ++k) L.put(c.approach[k], vmin(L(c.approach[k]), vn[k]));
+  if constexpr (!kRounds) {
+    normal_speeds();
+    if constexpr (kBias)
+      for (int k = 0; k < P; ++k) L.put(c.approach[k], vmin(L(c.approach[k]), vn[k]));
+  }
   // non-penetration, swept over the points `sweeps` times (Gauss-Seidel on the manifold's
   // problem: one sweep leaves a torque imbalance between the points that rocks tall stacks)
   // (a sweep's last point updates no normal velocity: the sweeps after the friction start
@@ -503,8 +538,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // formed before. The rigid and relax passes' impulse scale is zero and their mass scale one:
   // their `- 0 * lambda` is left out, which changes no bit, since no impulse is ever -0: they
   // start at +0 or above, and vmax(lambda + j, 0) gives -0 only from -0 + -0)
-  V negm[P];
-  for (int k = 0; k < P; ++k) negm[k] = kMode == kSoft ? -L(c.mass[k]) * mscale[k] : -L(c.mass[k]);
+  if constexpr (!kRounds)
+    for (int k = 0; k < P; ++k) negm[k] = kMode == kSoft ? -L(c.mass[k]) * mscale[k] : -L(c.mass[k]);
   auto sweep = [&](auto last) __attribute__((always_inline)) {
     const auto F = L.again();
     for (int k = 0; k < P; ++k) {
@@ -520,8 +555,10 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       for (int m = last ? k + 1 : 0; m < P; ++m) vn[m] = vn[m] + F(F.c.k[kK[m][k]]) * dl;
     }
   };
-  for (int it = 1; it < p.sweeps; ++it) sweep(std::false_type{});
-  sweep(std::true_type{});
+  if constexpr (!kRounds) {
+    for (int it = 1; it < p.sweeps; ++it) sweep(std::false_type{});
+    sweep(std::true_type{});
+  }
   // the points' impulses since `from` to the bodies: along n, and the moments sum dl (ca1 + y,
   // -(ca0 + x), 0) on a, the same with cb on b
   auto push = [&](const V (&from)[P]) __attribute__((always_inline)) {
@@ -539,12 +576,15 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     if constexpr (P > 1) turn2(ca[1] * sl + sy, -(ca[0] * sl + sx), cb[1] * sl + sy, -(cb[0] * sl + sx));
     else turn2(ca[1] * sl, -(ca[0] * sl), cb[1] * sl, -(cb[0] * sl));
   };
-  V before[P];
-  for (int k = 0; k < P; ++k)
-    before[k] = L(c.impulse[k]);  // (the block's impulses are the pass's start's until the end)
-  push(before);
-  V total = zero;
-  for (int k = 0; k < P; ++k) total = total + lambda[k];
+  V before[P], total = zero;
+  if constexpr (!kRounds) {
+    for (int k = 0; k < P; ++k)
+      before[k] = L(c.impulse[k]);  // (the block's impulses are the pass's start's until the end)
+    push(before);
+    for (int k = 0; k < P; ++k) total = total + lambda[k];
+  } else {
+    total = from->total;
+  }
   // Coulomb friction at the centroid: the tangential impulse stays inside the disc of radius
   // mu * (total normal impulse). Sticking (the rows' step stays in the disc), each row with its
   // own mass. Sliding (beyond it), the step is along the slip r with the effective mass along
@@ -554,7 +594,9 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // box whose footprint is not square curved off its line (1 x 0.5 x 0.6 m sent at 45 degrees
   // over mu = 0.5: 3.6-4.7 degrees, 0.2-0.3 m aside in 3.7 m)
   const V mu = L(c.friction);
-  V tj[2] = {L(c.tangent_impulse[0]), L(c.tangent_impulse[1])};
+  V tj[2];
+  if constexpr (!kRounds) tj[0] = L(c.tangent_impulse[0]), tj[1] = L(c.tangent_impulse[1]);
+  else tj[0] = from->tj[0], tj[1] = from->tj[1];
   auto friction = [&]() __attribute__((always_inline)) {
     V ca[3], cb[3], ia[6], ib[6];
     const auto F = L.again();
@@ -598,41 +640,53 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     const V dv = msum * msum * (e0 * e0 + e1 * e1);
     return dv > splat<V>(p.carry_speed) * splat<V>(p.carry_speed);
   };
-  auto impact = friction();
-  // A landing while sliding: a manifold that comes into the pass sliding, whose friction then
-  // changed the bodies' velocity by more than gravity does in a substep, is swept again
-  // `sweeps` times, its points then its friction, and its points last (Gauss-Seidel over all
-  // its rows, as sequential impulses iterate them; the disc each time mu times the points'
-  // impulse then). The friction acts at the contact plane, below the body's centre: its moment
-  // must be held by the points (the front ones taking more of the load), and friction and
-  // points solved once each, in either order, left it to the positions: a 1 m box landing
-  // flat at 7.4 m/s while sliding at 6 m/s tipped onto its leading edge, hopped at up to 1.8
-  // m/s (TGS: 3.1) and slid 0.41 m (0.48) beyond Coulomb's bound, and with the friction first
-  // (the disc of the impulse the pass starts from) it missed the part of the landing the relax
-  // pass takes (RigidFriction.ABoxLandingFlatWhileSlidingStopsWhereCoulombSays). Sweeping
-  // every manifold so cost 16% of fall1000's and 24% of pyramid1240's instructions, and a
-  // cube landing straight on the corner of four (no slip: the friction only answers the
-  // points' turn) went 7 mm aside: the manifolds' own problems solved further each, the
-  // colour solved first took more of the landing. Lanes that do not land sliding keep the
-  // one pass's values (selected), so that every path gives the same bits
-  if (any_lane(impact)) {
-    // the slip the pass started from: the velocities now less the pass's changes so far
-    V ca[3], cb[3], va[3], vb[3];
-    const auto F = L.again();
-    F.arms(ca, cb);
-    const V msum = F(F.c.ma) + F(F.c.mb);
-    for (int i = 0; i < 3; ++i) va[i] = oa[i] - dwa[i], vb[i] = ob[i] - dwb[i];
-    const V s0 = rel[0] - msum * impulse[0] + (vb[1] * cb[2] - vb[2] * cb[1]) - (va[1] * ca[2] - va[2] * ca[1]);
-    const V s1 = rel[1] - msum * impulse[1] + (vb[2] * cb[0] - vb[0] * cb[2]) - (va[2] * ca[0] - va[0] * ca[2]);
-    impact = impact & (s0 * s0 + s1 * s1 > splat<V>(p.carry_speed) * splat<V>(p.carry_speed));
-  }
+  MaskOf<V> impact;
   if constexpr (!kRounds) {
+    impact = friction();
+    // A landing while sliding: a manifold that comes into the pass sliding, whose friction then
+    // changed the bodies' velocity by more than gravity does in a substep, is swept again
+    // `sweeps` times, its points then its friction, and its points last (Gauss-Seidel over all
+    // its rows, as sequential impulses iterate them; the disc each time mu times the points'
+    // impulse then). The friction acts at the contact plane, below the body's centre: its moment
+    // must be held by the points (the front ones taking more of the load), and friction and
+    // points solved once each, in either order, left it to the positions: a 1 m box landing
+    // flat at 7.4 m/s while sliding at 6 m/s tipped onto its leading edge, hopped at up to 1.8
+    // m/s (TGS: 3.1) and slid 0.41 m (0.48) beyond Coulomb's bound, and with the friction first
+    // (the disc of the impulse the pass starts from) it missed the part of the landing the relax
+    // pass takes (RigidFriction.ABoxLandingFlatWhileSlidingStopsWhereCoulombSays). Sweeping
+    // every manifold so cost 16% of fall1000's and 24% of pyramid1240's instructions, and a
+    // cube landing straight on the corner of four (no slip: the friction only answers the
+    // points' turn) went 7 mm aside: the manifolds' own problems solved further each, the
+    // colour solved first took more of the landing. Lanes that do not land sliding keep the
+    // one pass's values (selected), so that every path gives the same bits
     if (any_lane(impact)) {
-      // (nothing is written yet that a pass from the start would not write the same)
-      solve_rounds<V, kMode, kZmm>(L, p, r);
+      // the slip the pass started from: the velocities now less the pass's changes so far
+      V ca[3], cb[3], va[3], vb[3];
+      const auto F = L.again();
+      F.arms(ca, cb);
+      const V msum = F(F.c.ma) + F(F.c.mb);
+      for (int i = 0; i < 3; ++i) va[i] = oa[i] - dwa[i], vb[i] = ob[i] - dwb[i];
+      const V s0 = rel[0] - msum * impulse[0] + (vb[1] * cb[2] - vb[2] * cb[1]) - (va[1] * ca[2] - va[2] * ca[1]);
+      const V s1 = rel[1] - msum * impulse[1] + (vb[2] * cb[0] - vb[0] * cb[2]) - (va[2] * ca[0] - va[0] * ca[2]);
+      impact = impact & (s0 * s0 + s1 * s1 > splat<V>(p.carry_speed) * splat<V>(p.carry_speed));
+    }
+    if (any_lane(impact)) {
+      // (nothing is written yet that the rounds, from this state, would not write the same)
+      Carried<V, P> state;
+      for (int i = 0; i < 3; ++i) {
+        state.rel[i] = rel[i], state.oa[i] = oa[i], state.ob[i] = ob[i];
+        state.dwa[i] = dwa[i], state.dwb[i] = dwb[i], state.impulse[i] = impulse[i];
+      }
+      for (int k = 0; k < P; ++k) {
+        state.lambda[k] = lambda[k], state.largest[k] = largest[k], state.bias[k] = bias[k];
+        state.iscale[k] = iscale[k], state.negm[k] = negm[k], state.skip[k] = skip[k];
+      }
+      state.tj[0] = tj[0], state.tj[1] = tj[1], state.total = total, state.impact = impact;
+      solve_rounds<V, kMode, kZmm>(L, p, r, state);
       return;
     }
-  } else if (any_lane(impact)) {
+  } else {
+    impact = from->impact;
     V keep_l[P], keep_big[P], keep_o[12], keep_rel[3], keep_imp[3], keep_tj[2] = {tj[0], tj[1]};
     const V keep_total = total;
     for (int k = 0; k < P; ++k) keep_l[k] = lambda[k], keep_big[k] = largest[k];
@@ -727,35 +781,38 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
 }
 
 template <class V, int kMode, bool kZmm, class B>
-[[gnu::noinline]] void solve_rounds_plain(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r) {
-  solve<V, kMode, kZmm, B, true>(L, p, r);
+[[gnu::noinline]] void solve_rounds_plain(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r,
+                                          const Carried<V, B::kPoints>& from) {
+  solve<V, kMode, kZmm, B, true>(L, p, r, &from);
 }
 #if defined(__GNUC__) && defined(__x86_64__)
 template <class V, int kMode, bool kZmm, class B>
 [[gnu::noinline]] __attribute__((target("avx2"))) void solve_rounds_avx2(const Lanes<V, B>& L, const FloatParams& p,
-                                                                          const BodyArrays& r) {
-  solve<V, kMode, kZmm, B, true>(L, p, r);
+                                                                          const BodyArrays& r,
+                                                                          const Carried<V, B::kPoints>& from) {
+  solve<V, kMode, kZmm, B, true>(L, p, r, &from);
 }
 template <class V, int kMode, bool kZmm, class B>
 [[gnu::noinline]] __attribute__((target("avx512f"))) void solve_rounds_avx512(const Lanes<V, B>& L,
                                                                               const FloatParams& p,
-                                                                              const BodyArrays& r) {
-  solve<V, kMode, kZmm, B, true>(L, p, r);
+                                                                              const BodyArrays& r,
+                                                                              const Carried<V, B::kPoints>& from) {
+  solve<V, kMode, kZmm, B, true>(L, p, r, &from);
 }
 #endif
 
 template <class V, int kMode, bool kZmm, class B>
-void solve_rounds(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r) {
+void solve_rounds(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r, const Carried<V, B::kPoints>& from) {
 #if defined(__GNUC__) && defined(__x86_64__)
   if constexpr (kZmm || std::is_same_v<V, v16f>) {
-    solve_rounds_avx512<V, kMode, kZmm>(L, p, r);
+    solve_rounds_avx512<V, kMode, kZmm>(L, p, r, from);
     return;
   } else if constexpr (!std::is_arithmetic_v<V>) {
-    solve_rounds_avx2<V, kMode, kZmm>(L, p, r);
+    solve_rounds_avx2<V, kMode, kZmm>(L, p, r, from);
     return;
   }
 #endif
-  solve_rounds_plain<V, kMode, kZmm>(L, p, r);
+  solve_rounds_plain<V, kMode, kZmm>(L, p, r, from);
 }
 
 // the lanes' accumulated impulses added to the warm-start accumulators

@@ -449,3 +449,45 @@ TEST(RigidSimd, DoubleBlocksOfTheFreeMotionGiveTheSameBitsOnEveryPath) {
   for (std::size_t k = 1; k < hashes.size(); ++k) EXPECT_EQ(hashes[k], hashes[0]) << to_string(paths()[k]);
   EXPECT_EQ(hashes[0], 0xeb05e484d6df4409ull);
 }
+
+// One-point blocks whose one side is a single body that no lane writes (a static ground, and
+// a kinematic plate moving at 1 m/s and turning at 0.5 rad/s: its velocity rows are not zero,
+// and the same in every lane); 32 balls land on it sliding at 3 m/s, so that the rounds of a
+// landing while sliding run on one-point blocks (they go on from the pass's state). Each path
+// gives the scalar path's bits after a second, with the 32 balls on the plate (32 one-point
+// manifolds against it, two whole one-point blocks), none sunk into it by more than the slop.
+TEST(RigidSimd, OnePointBlocksAgainstOneUnwrittenBodyGiveTheSameBitsOnEveryPath) {
+  constexpr double kRadius = 0.2, kTop = 0.1;  // (m; the plate's top face at y = kTop)
+  const double slop = pba::ContactSettings{}.linear_slop;
+  auto run = [&](RigidSimd path, BodyType under, int& touching) {
+    RigidBodySystem s({.contacts = {.sleep = false}});
+    s.set_simd(path);
+    const bool moving = under == BodyType::Kinematic;
+    const auto plate = s.create({.type = under, .pose = {{0, 0, 0}}, .linear_velocity = moving ? Vec3(1, 0, 0) : Vec3(0),
+                                 .angular_velocity = moving ? Vec3(0, 0.5, 0) : Vec3(0),
+                                 .shapes = {{.shape = ColliderShape::box({8, kTop, 8}), .material = {.friction = 0.5}}}});
+    std::vector<pba::RigidBodyId> balls;
+    for (int i = 0; i < 8; ++i)
+      for (int j = 0; j < 4; ++j)
+        balls.push_back(s.create({.pose = {{-3.5 + i, kTop + kRadius + 0.05, -1.5 + j}}, .linear_velocity = {3, -1, 0},
+                                  .shapes = {{.shape = ColliderShape::sphere(kRadius), .material = {.friction = 0.5}}}}));
+    for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kGravity);
+    touching = 0;
+    for (std::size_t k = 0; k < s.manifold_count(); ++k) {
+      const pba::RigidManifoldInfo m = s.manifold(k);
+      if (m.points == 1 && (m.a == plate || m.b == plate)) ++touching;
+    }
+    for (const auto b : balls) EXPECT_GT(s.pose(b).position.y, kTop + kRadius - slop) << to_string(path);
+    return s.hash();
+  };
+  for (const BodyType under : {BodyType::Static, BodyType::Kinematic}) {
+    const char* name = under == BodyType::Static ? "static" : "kinematic";
+    int touching = 0;
+    const std::uint64_t scalar = run(RigidSimd::Scalar, under, touching);
+    EXPECT_EQ(touching, 32) << name;
+    for (const RigidSimd p : paths()) {
+      EXPECT_EQ(run(p, under, touching), scalar) << to_string(p) << ", " << name;
+      EXPECT_EQ(touching, 32) << to_string(p) << ", " << name;
+    }
+  }
+}
