@@ -10,8 +10,10 @@
 // For each scene a table: per engine the median, mean and slowest ms per 60 Hz step, the top
 // box's sag and drift from where it rests (stacks and pyramids), the bodies that left the
 // scene (escapes), the bodies awake at the end, each peer's time over the row's (how many
-// times faster than the peer the row is) and pba's state hash. With --repeat K each engine
-// runs K times and the run of median ms is shown. --profile adds under each pba row the medians
+// times faster than the peer the row is) and pba's state hash. With --repeat K the engines run
+// in K rounds, each once a round (the peers, then pba's solvers), and each engine's run of
+// median ms is shown: a shared host whose speed drifts over the minute a scene takes slows
+// every engine's runs alike, so the ratios compare runs made at the same time. --profile adds under each pba row the medians
 // of its step's phases (RigidProfile: collide with pairs and manifolds; solve with prepare, integrate, contacts,
 // finish, and islands and sleep within finish), the
 // manifolds built and reused in the last step, when every body first slept, and the deepest
@@ -189,15 +191,11 @@ struct Options {
   std::vector<pba::RigidSolverType> solvers{pba::kRigidSolvers.begin(), pba::kRigidSolvers.end()};
 };
 
-// K runs of `run`; the one of median ms
-template <class F>
-auto median_run(int k, F&& run) {
-  using Result = decltype(run());
-  std::vector<Result> runs;
-  for (int i = 0; i < k; ++i) {
-    runs.push_back(run());
-    if (!runs.back().ran) return runs.back();
-  }
+// of an engine's runs, the one of median ms (a run that failed, if any: its note says why)
+template <class Result>
+Result median_of(std::vector<Result> runs) {
+  for (const Result& r : runs)
+    if (!r.ran) return r;
   std::sort(runs.begin(), runs.end(), [](const Result& a, const Result& b) { return a.ms < b.ms; });
   return runs[runs.size() / 2];
 }
@@ -233,24 +231,36 @@ void run_scene(const BenchScene& scene, const Options& o) {
   std::printf("  %-24s %9s %9s %9s %9s %9s %7s %6s %9s %9s  %s\n", "engine", "ms/step", "mean", "max", "sag m",
               "drift m", "escapes", "awake", "Bullet/", "ODE/", "hash");
   std::fflush(stdout);
-  // the peers first, so each pba row shows its ratios as it comes
-  BenchResult bullet, ode;
+  // each solver's settings at the default budget and the options
+  std::vector<pba::ContactSettings> settings;
+  for (const pba::RigidSolverType t : o.solvers) {
+    pba::ContactSettings c = at_budget(t, 0, scene.sleep);
+    if (o.reuse >= 0) c.reuse_distance = o.reuse;
+    if (o.reuse_angle >= 0) c.reuse_angle = o.reuse_angle * (std::numbers::pi / 180);
+    if (o.substeps > 0) c.substeps = o.substeps, c.auto_substeps = false;  // (exactly N)
+    if (o.down_sag >= 0) c.auto_substeps_sag = o.down_sag;
+    if (o.down_fraction >= 0) c.auto_substeps_sag_fraction = o.down_fraction;
+    if (o.least > 0) c.auto_substeps_least = o.least;
+    settings.push_back(c);
+  }
+  // the rounds: each engine once a round, the peers first (copied from the scene's pba system)
+  std::vector<BenchResult> bullet_runs, ode_runs;
+  std::vector<std::vector<PbaResult>> pba_runs(o.solvers.size());
   {
     pba::RigidBodySystem s({.capacity = 16384});
     const std::vector<pba::RigidBodyId> tracked = scene.build(s);
-    if (o.bullet) bullet = median_run(o.repeat, [&] { return pba::bench::run_bullet(scene, s, tracked, steps); });
-    if (o.ode) ode = median_run(o.repeat, [&] { return pba::bench::run_ode(scene, s, tracked, steps); });
+    for (int k = 0; k < o.repeat; ++k) {
+      if (o.bullet) bullet_runs.push_back(pba::bench::run_bullet(scene, s, tracked, steps));
+      if (o.ode) ode_runs.push_back(pba::bench::run_ode(scene, s, tracked, steps));
+      for (std::size_t i = 0; i < o.solvers.size(); ++i) pba_runs[i].push_back(run_pba(scene, steps, settings[i]));
+    }
   }
-  for (const pba::RigidSolverType t : o.solvers) {
-    const std::string name = "pba " + std::string(pba::to_string(t));
-    pba::ContactSettings settings = at_budget(t, 0, scene.sleep);
-    if (o.reuse >= 0) settings.reuse_distance = o.reuse;
-    if (o.reuse_angle >= 0) settings.reuse_angle = o.reuse_angle * (std::numbers::pi / 180);
-    if (o.substeps > 0) settings.substeps = o.substeps, settings.auto_substeps = false;  // (exactly N)
-    if (o.down_sag >= 0) settings.auto_substeps_sag = o.down_sag;
-    if (o.down_fraction >= 0) settings.auto_substeps_sag_fraction = o.down_fraction;
-    if (o.least > 0) settings.auto_substeps_least = o.least;
-    const PbaResult r = median_run(o.repeat, [&] { return run_pba(scene, steps, settings); });
+  BenchResult bullet, ode;
+  if (o.bullet) bullet = median_of(bullet_runs);
+  if (o.ode) ode = median_of(ode_runs);
+  for (std::size_t i = 0; i < o.solvers.size(); ++i) {
+    const std::string name = "pba " + std::string(pba::to_string(o.solvers[i]));
+    const PbaResult r = median_of(pba_runs[i]);
     // a mesh scene pba cannot collide with yet: say so instead of a figure
     if (scene.has_mesh && (!r.ran || r.escapes > 0)) {
       std::printf("  %-24s pba: mesh contacts not supported yet (%s)\n", name.c_str(),
