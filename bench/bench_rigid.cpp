@@ -12,8 +12,9 @@
 // scene (escapes), the bodies awake at the end, each peer's time over the row's (how many
 // times faster than the peer the row is) and pba's state hash. With --repeat K the engines run
 // in K rounds, each once a round (the peers, then pba's solvers), and each engine's run of
-// median ms is shown: a shared host whose speed drifts over the minute a scene takes slows
-// every engine's runs alike, so the ratios compare runs made at the same time. --profile adds under each pba row the medians
+// median ms is shown: a shared host whose speed drifts over the minute a scene takes then
+// touches every engine's runs alike (the ratios are of the engines' medians, whose runs may
+// come from different rounds). --profile adds under each pba row the medians
 // of its step's phases (RigidProfile: collide with pairs and manifolds; solve with prepare, integrate, contacts,
 // finish, and islands and sleep within finish), the
 // manifolds built and reused in the last step, when every body first slept, and the deepest

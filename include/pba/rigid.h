@@ -92,8 +92,10 @@ struct RigidShapeDef {
 /// bodies (so at most 1.8e19 m/s): a box sliding on the ground at 2e19 m/s, or spun at 3e19
 /// rad/s against another, turned non-finite (within the 1e20 this was before). A point's speed
 /// is |v| + |w| r at r from the centre of mass, so two bodies reaching up to 8 m from their
-/// centres may meet with both speeds at the limit. A velocity beyond it is refused where it is
-/// given (create, set_velocity, impulses); a body a force takes beyond it stops the step, named.
+/// centres may meet with both speeds at the limit and stay finite (their impact may throw one
+/// past the limit, which stops the step naming it). A velocity beyond it is refused where it is
+/// given (create, set_velocity, impulses); a body a force or a contact takes beyond it stops the
+/// step, named.
 inline constexpr double kMaxRigidSpeed = 1e18;
 
 /// Throws an Error naming `where` unless |v| <= kMaxRigidSpeed (a NaN fails too); `unit` is

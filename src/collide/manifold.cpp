@@ -235,7 +235,8 @@ void capsule_box(const ColliderShape& a, const Pose& pa, const ColliderShape& b,
                  Manifold& m) {
   m.count = 0;
   const Segment s = capsule_core(a, pa);
-  const SegmentBoxClosest c = segment_box_closest(apply_inverse(pb, s.p), apply_inverse(pb, s.q), b.half_extents);
+  const SegmentBoxClosest c =
+      segment_box_closest_unchecked(apply_inverse(pb, s.p), apply_inverse(pb, s.q), b.half_extents);
   const Vec3& h = b.half_extents;
   const double touch = 1e-9 * std::max({1.0, h.x, h.y, h.z, a.half_height});
   if (!(c.distance2 > touch * touch)) {

@@ -11,6 +11,10 @@
 
 namespace pba::narrow {
 
+/// segment_box_closest without its input checks (the capsule-box pair's: its poses and box
+/// were checked by collide()); NaN coordinates give a NaN distance2.
+SegmentBoxClosest segment_box_closest_unchecked(const Vec3& p, const Vec3& q, const Vec3& h);
+
 using HalfEdge = ConvexHull::HalfEdge;
 using HullFace = ConvexHull::Face;
 

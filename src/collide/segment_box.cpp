@@ -9,12 +9,14 @@
 // where g < 0 and the first where g >= 0 (g is monotone, so no breakpoint lies between
 // them): there the coordinates outside their slabs are fixed and g's root is a division.
 #include <algorithm>
+#include <cmath>
 
-#include "pba/collide/narrow_phase.h"
+#include "narrow_internal.h"
+#include "pba/core.h"
 
 namespace pba {
 
-SegmentBoxClosest segment_box_closest(const Vec3& p, const Vec3& q, const Vec3& h) {
+SegmentBoxClosest narrow::segment_box_closest_unchecked(const Vec3& p, const Vec3& q, const Vec3& h) {
   const Vec3 d = q - p;
   // half the slope of f at t
   auto slope = [&](double t) {
@@ -27,7 +29,9 @@ SegmentBoxClosest segment_box_closest(const Vec3& p, const Vec3& q, const Vec3& 
   };
   double t = 0;
   if (slope(0) < 0) {
-    if (slope(1) <= 0) {
+    // (g(1) = 0 exactly: a flat stretch ending at q, whose start the bracket below finds, as
+    // the header's rule asks of points that are not unique)
+    if (slope(1) < 0) {
       t = 1;
     } else {
       // narrow [lo, hi] to the piece holding g's root: a breakpoint inside the bracket
@@ -65,6 +69,21 @@ SegmentBoxClosest segment_box_closest(const Vec3& p, const Vec3& q, const Vec3& 
   const Vec3 e = r.on_segment - r.on_box;
   r.distance2 = glm::dot(e, e);
   return r;
+}
+
+SegmentBoxClosest segment_box_closest(const Vec3& p, const Vec3& q, const Vec3& h) {
+  // one test for the usual input; the named checks only when it fails
+  const bool ok = std::isfinite(p.x + p.y + p.z + q.x + q.y + q.z) && h.x > 0 && h.y > 0 && h.z > 0 &&
+                  std::isfinite(h.x + h.y + h.z);
+  if (!ok) {
+    require_finite(p, "segment_box_closest: p");
+    require_finite(q, "segment_box_closest: q");
+    for (int k = 0; k < 3; ++k) {
+      require_finite(h[k], "segment_box_closest: half_extents");
+      require_positive(h[k], "segment_box_closest: half_extents");
+    }
+  }
+  return narrow::segment_box_closest_unchecked(p, q, h);
 }
 
 }  // namespace pba

@@ -1136,32 +1136,36 @@ struct PointsInput {
   int count;          // points, 1 to 4
 };
 
-// The points (each its surface points' midpoint, its anchors from the centres, its overlap
-// and its separation's offset from the cores, its feature id) into the pair `out`, their
-// centroid (m, in the world) and their mean distance from it (m): one point after another. The
-// reference for emit_points_avx2.
+// Point k of the manifold into the pair `out`: the cores at the poses now, the surface points
+// on them, its midpoint (returned, m, in the world), its anchors from the centres, its overlap
+// and its separation's offset from the cores, its feature id. One body for emit_points_scalar
+// and emit_point_one, so the two cannot drift apart.
+[[gnu::always_inline]] inline Vec3 emit_point(const PointsInput& in, int k, ContactPair& out) {
+  const Vec3& n = in.n;
+  SolverPoint& pt = out.points[k];
+  // the cores now, the surface points on them, and the overlap between the surfaces
+  const Vec3 sa = *in.qa * Vec3(in.core[0][k], in.core[1][k], in.core[2][k]);
+  const Vec3 sb = *in.qb * Vec3(in.core[3][k], in.core[4][k], in.core[5][k]);
+  const Vec3 core_a = in.com_a + sa, core_b = in.com_b + sb;
+  const Vec3 on_a = core_a + in.radius_a * n, on_b = core_b - in.radius_b * n;
+  const double depth = glm::dot(on_a - on_b, n);
+  const Vec3 mid = 0.5 * (on_a + on_b);
+  pt.at = mid, pt.sa = sa, pt.sb = sb;
+  out.depth[k] = depth;
+  // the separation now is -depth; keep it relative to the cores
+  pt.offset = -depth - glm::dot(core_b - core_a, n) - in.preload;
+  out.id[k] = in.id[k];
+  return mid;
+}
+
+// The points (emit_point, one after another) into the pair `out`, their centroid (m, in the
+// world) and their mean distance from it (m). The reference for emit_points_avx2.
 [[gnu::always_inline]] inline void emit_points_scalar(const PointsInput& in, ContactPair& out, Vec3& centroid,
                                                        double& twist_radius) {
-  const Mat3& qa = *in.qa;
-  const Mat3& qb = *in.qb;
-  const Vec3& n = in.n;
   Vec3 sum(0), at[Manifold::kMaxPoints];
   for (int k = 0; k < in.count; ++k) {
-    SolverPoint& pt = out.points[k];
-    // the cores now, the surface points on them, and the overlap between the surfaces
-    const Vec3 sa = qa * Vec3(in.core[0][k], in.core[1][k], in.core[2][k]);
-    const Vec3 sb = qb * Vec3(in.core[3][k], in.core[4][k], in.core[5][k]);
-    const Vec3 core_a = in.com_a + sa, core_b = in.com_b + sb;
-    const Vec3 on_a = core_a + in.radius_a * n, on_b = core_b - in.radius_b * n;
-    const double depth = glm::dot(on_a - on_b, n);
-    const Vec3 mid = 0.5 * (on_a + on_b);
-    sum += mid;
-    at[k] = mid;
-    pt.at = mid, pt.sa = sa, pt.sb = sb;
-    out.depth[k] = depth;
-    // the separation now is -depth; keep it relative to the cores
-    pt.offset = -depth - glm::dot(core_b - core_a, n) - in.preload;
-    out.id[k] = in.id[k];
+    at[k] = emit_point(in, k, out);
+    sum += at[k];
   }
   sum /= static_cast<double>(in.count);
   centroid = sum;
@@ -1179,19 +1183,7 @@ struct PointsInput {
 // read it)
 [[gnu::always_inline]] inline void emit_point_one(const PointsInput& in, ContactPair& out, Vec3& centroid,
                                                    double& twist_radius) {
-  const Vec3& n = in.n;
-  SolverPoint& pt = out.points[0];
-  const Vec3 sa = *in.qa * Vec3(in.core[0][0], in.core[1][0], in.core[2][0]);
-  const Vec3 sb = *in.qb * Vec3(in.core[3][0], in.core[4][0], in.core[5][0]);
-  const Vec3 core_a = in.com_a + sa, core_b = in.com_b + sb;
-  const Vec3 on_a = core_a + in.radius_a * n, on_b = core_b - in.radius_b * n;
-  const double depth = glm::dot(on_a - on_b, n);
-  const Vec3 mid = 0.5 * (on_a + on_b);
-  pt.at = mid, pt.sa = sa, pt.sb = sb;
-  out.depth[0] = depth;
-  pt.offset = -depth - glm::dot(core_b - core_a, n) - in.preload;
-  out.id[0] = in.id[0];
-  centroid = Vec3(0) + mid;
+  centroid = Vec3(0) + emit_point(in, 0, out);
   twist_radius = 0;
 }
 

@@ -258,7 +258,7 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
     // the largest capacity, 2^26 bodies, reserves some 36 GB of address space: where the
     // memory (or a limit on it) cannot give that, say which value asked for it
     throw Error("RigidSystemDef.capacity: cannot reserve room for " + std::to_string(n) +
-                " bodies (about 540 B each): out of memory; give a smaller capacity (the arrays grow "
+                " bodies: out of memory; give a smaller capacity (the arrays grow "
                 "past it as bodies are created)");
   }
 }

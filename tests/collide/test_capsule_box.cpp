@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "narrow_reference.h"
@@ -19,7 +20,8 @@ ConvexProxy proxy(const ColliderShape& s, const Pose& p) { return ConvexProxy::o
 Quat about(const Vec3& axis, double angle) { return glm::angleAxis(angle, glm::normalize(axis)); }
 
 // Rounding room: the answers are a few dozen operations on coordinates of size L (the
-// segment's and the box's reach), each off by half an ulp, so 1e-12 L leaves ~1e3 ulps.
+// segment's and the box's reach), each off by half an ulp of L (1.1e-16 L), so 1e-12 L leaves
+// some 9,000 ulps: room for the operations' errors and the reference's, none for a wrong piece.
 double room(const Vec3& p, const Vec3& q, const Vec3& h) {
   const double l = std::max({glm::length(p), glm::length(q), glm::length(h), 1e-3});
   return 1e-12 * l;
@@ -82,6 +84,7 @@ TEST(SegmentBox, MatchesTheFeatureEnumerationAndItsCertificateEverywhere) {
     ASSERT_GE(c.t, 0.0);
     ASSERT_LE(c.t, 1.0);
     EXPECT_LE(glm::length(c.on_segment - (p + c.t * (q - p))), tol) << "trial " << trial;
+    // (the two fields' definitions, as the header states them: what the checks below read)
     EXPECT_EQ(c.on_box, glm::clamp(c.on_segment, -h, h));
     const double dist = std::sqrt(c.distance2);
     EXPECT_EQ(c.distance2, glm::dot(c.on_segment - c.on_box, c.on_segment - c.on_box));
@@ -141,6 +144,36 @@ TEST(SegmentBox, ExactCases) {
   EXPECT_EQ(c.t, 1.0);
   EXPECT_EQ(c.on_segment, Vec3(1.5, 0.5, 0));
   EXPECT_EQ(c.distance2, 0.25);
+  // parallel to the +y face from outside its x slab into it, the slope 0 from x = -1 to the
+  // end: every point of x in [-1, 0.5] is 0.25 away, and the rule takes the first, t = 0.4
+  // (a review found t = 1: the end's zero slope taken as "still falling")
+  c = segment_box_closest(Vec3(-2, 1.25, 0.25), Vec3(0.5, 1.25, 0.25), h);
+  EXPECT_EQ(c.distance2, 0.0625);
+  EXPECT_NEAR(c.t, 0.4, 1e-15);
+  EXPECT_NEAR(c.on_segment.x, -1.0, 1e-15);
+  EXPECT_EQ(c.on_box.y, 1.0);
+}
+
+TEST(SegmentBox, BadInputIsNamed) {
+  const Vec3 h(1, 1, 1), p(2, 0, 0), q(3, 0, 0);
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message([&] { segment_box_closest(Vec3(nan, 0, 0), q, h); }).find("segment_box_closest: p"),
+            std::string::npos);
+  EXPECT_NE(message([&] { segment_box_closest(p, Vec3(0, inf, 0), h); }).find("segment_box_closest: q"),
+            std::string::npos);
+  for (const Vec3 bad : {Vec3(-1, 1, 1), Vec3(1, 0, 1), Vec3(1, 1, nan), Vec3(inf, 1, 1)})
+    EXPECT_NE(message([&] { segment_box_closest(p, q, bad); }).find("segment_box_closest: half_extents"),
+              std::string::npos)
+        << bad.x << " " << bad.y << " " << bad.z;
+  EXPECT_EQ(segment_box_closest(p, q, h).distance2, 1.0);
 }
 
 // collide()'s capsule-box manifold over random poses (cores apart within a large margin, and

@@ -175,7 +175,8 @@ struct SegmentBoxClosest {
 /// m; h > 0), exact up to rounding: the squared distance along the segment is a convex piecewise
 /// quadratic with at most six breakpoints (a coordinate crossing a slab face), minimised on the
 /// piece where its slope changes sign. Collide's capsule-box pairs use it for the apart case
-/// (GJK and EPA where the core segment meets the box). Never allocates; no input checks.
+/// (GJK and EPA where the core segment meets the box). Never allocates. Throws Error naming
+/// the value for a non-finite p or q or a half extent that is not finite and > 0.
 SegmentBoxClosest segment_box_closest(const Vec3& p, const Vec3& q, const Vec3& h);
 
 // --- GJK and EPA --------------------------------------------------------------------
