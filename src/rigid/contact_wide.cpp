@@ -265,6 +265,49 @@ PBA_LANES void load_rows(const double* base, const std::uint32_t* index, V out[8
   }
 }
 
+// whether the kWidth<V> lanes from `index` name one body (on a one-point block's side a, the
+// terrain's mesh under the 16 balls on its triangles: half the terrain's one-point blocks)
+template <class V>
+PBA_LANES bool one_body(const std::uint32_t* index) {
+  if constexpr (std::is_arithmetic_v<V>) {
+    return true;
+  } else {
+    typedef std::uint32_t U4 __attribute__((vector_size(16)));
+    typedef std::uint32_t U8 __attribute__((vector_size(32)));
+    typedef std::uint32_t U16 __attribute__((vector_size(64)));
+    using U = std::conditional_t<kWidth<V> == 4, U4, std::conditional_t<kWidth<V> == 8, U8, U16>>;
+    static_assert(sizeof(U) == 4 * kWidth<V>);
+    U u;
+    std::memcpy(&u, index, sizeof u);
+    const U d = u ^ index[0];
+    std::uint64_t w[sizeof(U) / 8], any = 0;
+    std::memcpy(w, &d, sizeof d);
+    for (std::size_t i = 0; i < sizeof(U) / 8; ++i) any |= w[i];
+    return any == 0;
+  }
+}
+
+// load_rows for a one-point block's side a (bits: the lanes' write bits from the first): when
+// no lane writes it and every lane names the same body (a static or kinematic one), that body's
+// one row, each number in every lane (the numbers load_rows gives: each rounded alone, and
+// x - 0 keeps a -0), not a gather of the same row kWidth<V> times and its transpose. Side a is
+// the shape of the lower slot, so a ground or mesh made before the bodies on it (the terrain's
+// mesh) is there; side b is not tested. Only the one-point kernels call it (`if constexpr`, so
+// that the four-point kernel compiles to the same code without it): in the four-point kernel
+// the tests cost the piles more than they saved (fall1000's pass +3%, pyramid1240's +5%)
+template <class V>
+PBA_LANES void load_side(const double* base, const std::uint32_t* index, std::uint32_t bits, V out[8]) {
+  constexpr std::uint32_t kAll = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
+  if constexpr (!std::is_arithmetic_v<V>) {
+    if ((bits & kAll) == 0 && one_body<V>(index)) {
+      const double* p = base + 8 * static_cast<std::size_t>(index[0]);
+      for (int k = 0; k < 8; ++k) out[k] = static_cast<Element<V>>(p[k]) - V{};
+      return;
+    }
+  }
+  load_rows(base, index, out);
+}
+
 // a lane's changes (8 floats) added to its body's row of doubles
 template <bool kZmm>
 PBA_LANES void add_row(double* base, std::uint32_t index, v8f change) {
@@ -358,8 +401,13 @@ PBA_LANES void separations(const Lanes<V, B>& L, const AnchorsOf<B::kPoints>& g,
   V t1[3], t2[3], n[3];
   L.frame(t1, t2, n);
   V ma[8], mb[8];  // dp, then the turn (w, x, y, z)
-  load_rows(r.motion, c.a + L.l0, ma);
-  load_rows(r.motion, c.b + L.l0, mb);
+  if constexpr (P == 1) {  // a static or kinematic side a's row loaded once (see load_side)
+    load_side(r.motion, c.a + L.l0, c.write_a >> L.l0, ma);
+    load_rows(r.motion, c.b + L.l0, mb);
+  } else {
+    load_rows(r.motion, c.a + L.l0, ma);
+    load_rows(r.motion, c.b + L.l0, mb);
+  }
   const V dp[3] = {mb[0] - ma[0], mb[1] - ma[1], mb[2] - ma[2]};
   const V dpn = dot(dp, n);
   // turn^-1 n - n = 2 (w (-u x n) + (-u) x ((-u) x n)) (the conjugate's quat_turn_change), in
@@ -434,8 +482,13 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   if constexpr (!kRounds) {
     // the bodies, and their velocities in the frame: the relative linear one, each angular one
     V rowa[8], rowb[8];
-    load_rows(base, c.a + l0, rowa);
-    load_rows(base, c.b + l0, rowb);
+    if constexpr (P == 1) {  // a static or kinematic side a's row loaded once (see load_side)
+      load_side(base, c.a + l0, c.write_a >> l0, rowa);
+      load_rows(base, c.b + l0, rowb);
+    } else {
+      load_rows(base, c.a + l0, rowa);
+      load_rows(base, c.b + l0, rowb);
+    }
     V* const va = rowa;
     V* const wa = rowa + 3;
     V* const vb = rowb;
@@ -766,6 +819,23 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     L.put(c.impulse[k], lambda[k]);
     L.put(c.max_impulse[k], largest[k]);
   }
+  if constexpr (P == 1) {
+    constexpr std::uint32_t kAll = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
+    if (((c.write_a >> l0) & kAll) == 0) {
+      // side a, which no lane writes (a static or kinematic body's), not formed: the
+      // write-back below is left whole for the blocks that write both sides (a branch inside
+      // it made the one-point kernel's registers worse: pyramid1240's one-point pass +4%)
+      V pw[3], dwbw[3], nb[6];
+      const auto F = L.again();
+      F.frame(t1, t2, n);
+      to_world(t1, t2, n, impulse, pw);
+      to_world(t1, t2, n, dwb, dwbw);
+      const V mb2 = F(F.c.mb);
+      for (int i = 0; i < 3; ++i) nb[i] = mb2 * pw[i], nb[3 + i] = dwbw[i];
+      add_rows<V, kZmm>(base, c.b + l0, c.write_b >> l0, nb);
+      return;
+    }
+  }
   // the change back to the bodies, in world axes
   V pw[3], dwaw[3], dwbw[3];
   const auto F = L.again();
@@ -847,6 +917,23 @@ PBA_LANES void warm(const Lanes<V, B>& L, const BodyArrays& r) {
     for (int i = 0; i < 3; ++i) {
       const V roll = L(c.rolling_impulse[i]);
       ta[i] = on ? ta[i] + roll : ta[i], tb[i] = on ? tb[i] + roll : tb[i];
+    }
+  }
+  if constexpr (P == 1) {
+    constexpr std::uint32_t kAll = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
+    if (((c.write_a >> l0) & kAll) == 0) {
+      // side a, which no lane writes (a static or kinematic body's), not formed
+      V ib[6], db[3], dbw[3], pw[3];
+      for (int i = 0; i < 6; ++i) ib[i] = L(c.ib[i]);
+      sym_mul(ib, tb, db);
+      to_world(t1, t2, n, db, dbw);
+      const V pf[3] = {j0, j1, sl};
+      to_world(t1, t2, n, pf, pw);
+      const V mb = L(c.mb);
+      V nb[6];
+      for (int i = 0; i < 3; ++i) nb[i] = mb * pw[i], nb[3 + i] = dbw[i];
+      add_rows<V, kZmm>(r.warm[0].v, c.b + l0, c.write_b >> l0, nb);
+      return;
     }
   }
   V ia[6], ib[6];
