@@ -1262,12 +1262,6 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
   twist_radius = twist / in.count;
 }
 
-// emit_point_one in the lanes of one AVX2 vector (x, y, z and a fourth lane that is not kept):
-// each lane does the scalar code's operations on its coordinate in the same order, and the dot
-// products sum x, y, z in that order, so the same bits; the point's at, sa, sb and offset go out
-// as three overlapping rows of four and one double, the anchor of friction (the centroid from
-// a's centre) with the twist radius 0 as one row. A call (emit is built for SSE2) of about 83
-// instructions, against about 130 of the scalar code's halves, broadcasts and spills inline.
 // three doubles of a Vec3, the fourth lane 0 (a masked load reads nothing past the vector)
 [[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d load3(const Vec3& v) {
   return _mm256_maskload_pd(&v[0], _mm256_setr_epi64x(-1, -1, -1, 0));
@@ -1293,6 +1287,13 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
 static_assert(offsetof(ContactPair, twist_radius) == offsetof(ContactPair, ca) + sizeof(Vec3) &&
                   offsetof(SolverPoint, offset) == 9 * sizeof(double) && sizeof(Mat3) == 9 * sizeof(double),
               "emit_point_one_avx2 writes the anchor and twist radius as one row, a point as 4 + 4 + 4 + 1 doubles");
+
+// emit_point_one in the lanes of one AVX2 vector (x, y, z and a fourth lane that is not kept):
+// each lane does the scalar code's operations on its coordinate in the same order, and the dot
+// products sum x, y, z in that order, so the same bits; the point's at, sa, sb and offset go out
+// as three overlapping rows of four and one double, the anchor of friction (the centroid from
+// a's centre) with the twist radius 0 as one row. A call (emit is built for SSE2) of about 83
+// instructions, against about 130 of the scalar code's halves, broadcasts and spills inline.
 __attribute__((target("avx2"))) void emit_point_one_avx2(const CachedManifold& r, const Mat3& qa, const Mat3& qb,
                                                          const Vec3& com_a, const Vec3& com_b, double nx, double ny,
                                                          double nz, ContactPair& out) {

@@ -63,6 +63,9 @@ using Element = typename ElementOf<V>::type;
 // lanes in a lane type
 template <class V>
 constexpr int kWidth = static_cast<int>(sizeof(V) / sizeof(Element<V>));
+// a bit for each lane of a lane type (a block's masks, e.g. write_a, shifted to its first lane)
+template <class V>
+constexpr std::uint32_t kLaneBits = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
 
 #define PBA_LANES [[gnu::always_inline]] inline
 
@@ -297,9 +300,8 @@ PBA_LANES bool one_body(const std::uint32_t* index) {
 // the tests cost the piles more than they saved (fall1000's pass +3%, pyramid1240's +5%)
 template <class V>
 PBA_LANES void load_side(const double* base, const std::uint32_t* index, std::uint32_t bits, V out[8]) {
-  constexpr std::uint32_t kAll = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
   if constexpr (!std::is_arithmetic_v<V>) {
-    if ((bits & kAll) == 0 && one_body<V>(index)) {
+    if ((bits & kLaneBits<V>) == 0 && one_body<V>(index)) {
       const double* p = base + 8 * static_cast<std::size_t>(index[0]);
       for (int k = 0; k < 8; ++k) out[k] = static_cast<Element<V>>(p[k]) - V{};
       return;
@@ -344,8 +346,7 @@ PBA_LANES void add_rows(double* base, const std::uint32_t* index, std::uint32_t 
         }
       }
     };
-    constexpr std::uint32_t kAll = (1u << kWidth<V>) - 1;
-    if ((bits & kAll) == kAll) rows(std::true_type{});
+    if ((bits & kLaneBits<V>) == kLaneBits<V>) rows(std::true_type{});
     else rows(std::false_type{});
   }
 }
@@ -539,25 +540,26 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   V mscale[P];
   const V ma = L(c.ma), mb = L(c.mb);
   const auto fixed = (ma == zero) | (mb == zero);
-  if constexpr (!kRounds)
-  for (int k = 0; k < P; ++k) {
-    lambda[k] = L(c.impulse[k]);
-    largest[k] = L(c.max_impulse[k]);
-    const V sep = L(c.sep[k]);
-    const auto apart = sep > splat<V>(kTouching);
-    skip[k] = fixed != fixed;  // none
-    if constexpr (kMode == kSoft) {
-      const V rate = fixed ? splat<V>(p.bias_rate[1]) : splat<V>(p.bias_rate[0]);
-      bias[k] = apart ? sep * splat<V>(p.inv_h) : vmax(rate * sep, splat<V>(-p.push_out));
-      mscale[k] = apart ? one : (fixed ? splat<V>(p.mass_scale[1]) : splat<V>(p.mass_scale[0]));
-      iscale[k] = apart ? zero : (fixed ? splat<V>(p.impulse_scale[1]) : splat<V>(p.impulse_scale[0]));
-    } else if constexpr (kMode == kRigid) {
-      bias[k] = apart ? sep * splat<V>(p.inv_h)
-                      : vmax(splat<V>(p.baumgarte_h) * vmin(zero, sep + L(c.slop)), splat<V>(-p.push_out));
-      mscale[k] = one, iscale[k] = zero;
-    } else {
-      bias[k] = zero, mscale[k] = one, iscale[k] = zero;
-      skip[k] = apart;
+  if constexpr (!kRounds) {
+    for (int k = 0; k < P; ++k) {
+      lambda[k] = L(c.impulse[k]);
+      largest[k] = L(c.max_impulse[k]);
+      const V sep = L(c.sep[k]);
+      const auto apart = sep > splat<V>(kTouching);
+      skip[k] = fixed != fixed;  // none
+      if constexpr (kMode == kSoft) {
+        const V rate = fixed ? splat<V>(p.bias_rate[1]) : splat<V>(p.bias_rate[0]);
+        bias[k] = apart ? sep * splat<V>(p.inv_h) : vmax(rate * sep, splat<V>(-p.push_out));
+        mscale[k] = apart ? one : (fixed ? splat<V>(p.mass_scale[1]) : splat<V>(p.mass_scale[0]));
+        iscale[k] = apart ? zero : (fixed ? splat<V>(p.impulse_scale[1]) : splat<V>(p.impulse_scale[0]));
+      } else if constexpr (kMode == kRigid) {
+        bias[k] = apart ? sep * splat<V>(p.inv_h)
+                        : vmax(splat<V>(p.baumgarte_h) * vmin(zero, sep + L(c.slop)), splat<V>(-p.push_out));
+        mscale[k] = one, iscale[k] = zero;
+      } else {
+        bias[k] = zero, mscale[k] = one, iscale[k] = zero;
+        skip[k] = apart;
+      }
     }
   }
   // the normal velocities: (vb + wb x rb - va - wa x ra).n with (w x r).n = w.(r x n), and
@@ -787,8 +789,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // total normal. Lanes that do not roll keep their velocities (selected, so that skipping
   // blocks in which no lane rolls changes no bits)
   if constexpr (P == 1) {
-    constexpr std::uint32_t kMask = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
-    if ((c.rolls >> l0) & kMask) {
+    if ((c.rolls >> l0) & kLaneBits<V>) {
       const V coefficient = L(c.rolling);
       const auto on = coefficient > zero;
       V m[6], old[3], rel[3], j[3];
@@ -820,8 +821,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     L.put(c.max_impulse[k], largest[k]);
   }
   if constexpr (P == 1) {
-    constexpr std::uint32_t kAll = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
-    if (((c.write_a >> l0) & kAll) == 0) {
+    if (((c.write_a >> l0) & kLaneBits<V>) == 0) {
       // side a, which no lane writes (a static or kinematic body's), not formed: the
       // write-back below is left whole for the blocks that write both sides (a branch inside
       // it made the one-point kernel's registers worse: pyramid1240's one-point pass +4%)
@@ -920,8 +920,7 @@ PBA_LANES void warm(const Lanes<V, B>& L, const BodyArrays& r) {
     }
   }
   if constexpr (P == 1) {
-    constexpr std::uint32_t kAll = kWidth<V> >= 32 ? ~0u : (1u << kWidth<V>) - 1;
-    if (((c.write_a >> l0) & kAll) == 0) {
+    if (((c.write_a >> l0) & kLaneBits<V>) == 0) {
       // side a, which no lane writes (a static or kinematic body's), not formed
       V ib[6], db[3], dbw[3], pw[3];
       for (int i = 0; i < 6; ++i) ib[i] = L(c.ib[i]);

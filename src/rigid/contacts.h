@@ -290,9 +290,6 @@ inline double pair_reuse(const ContactSettings& cs, double thin) {
   return std::min(cs.reuse_distance, kReusePerHalfSize * thin);
 }
 
-/// The contact state of a RigidBodySystem: this step's contact pairs for the solver, the
-/// broad phase and the pair cache behind them (contact_pairs.cpp), and the solver passes.
-/// Grown, never shrunk: steady state does not allocate.
 /// Sorts `keys` stably by their high 32 bits, of which only the lowest `bits` (<= 32) may be
 /// set: least digit first, 8 bits a pass (ceil(bits / 8) passes, each stable, so the sort is),
 /// through `spare` (resized to keys'). RigidContacts::tree_order's sort.
@@ -307,6 +304,9 @@ inline void sort_by_high_word(std::vector<std::uint64_t>& keys, std::vector<std:
   }
 }
 
+/// The contact state of a RigidBodySystem: this step's contact pairs for the solver, the
+/// broad phase and the pair cache behind them (contact_pairs.cpp), and the solver passes.
+/// Grown, never shrunk: steady state does not allocate.
 struct RigidContacts {
   std::vector<ContactPair> pairs;  // this step's manifolds, for the solver (sorted by key)
   std::size_t emitted = 0;         // pairs written so far this step

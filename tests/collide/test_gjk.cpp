@@ -271,7 +271,8 @@ TEST(Gjk, NonFiniteCoresEndWithinTheIterationCaps) {
   nan_triangle.triangle = nan_tri, far_triangle.triangle = far_tri;
   const ConvexProxy box = box_proxy(Vec3(0.5), Pose{});
   const ConvexProxy cases[] = {nan_triangle, far_triangle, box_proxy(Vec3(0.5), Pose{Vec3(nan, 0, 0)}),
-                               box_proxy(Vec3(1e300), Pose{Vec3(1e300, 0, 0)}), sphere_proxy(0.5, Pose{Vec3(0, nan, 0)})};
+                               box_proxy(Vec3(1e300), Pose{Vec3(1e300, 0, 0)}),
+                               sphere_proxy(0.5, Pose{Vec3(0, nan, 0)})};
   int k = 0;
   for (const ConvexProxy& other : cases) {
     for (const bool swap : {false, true}) {

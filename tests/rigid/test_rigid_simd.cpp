@@ -463,14 +463,17 @@ TEST(RigidSimd, OnePointBlocksAgainstOneUnwrittenBodyGiveTheSameBitsOnEveryPath)
     RigidBodySystem s({.contacts = {.sleep = false}});
     s.set_simd(path);
     const bool moving = under == BodyType::Kinematic;
-    const auto plate = s.create({.type = under, .pose = {{0, 0, 0}}, .linear_velocity = moving ? Vec3(1, 0, 0) : Vec3(0),
+    const ColliderShape slab = ColliderShape::box({8, kTop, 8}), ball = ColliderShape::sphere(kRadius);
+    const auto plate = s.create({.type = under,
+                                 .pose = {{0, 0, 0}},
+                                 .linear_velocity = moving ? Vec3(1, 0, 0) : Vec3(0),
                                  .angular_velocity = moving ? Vec3(0, 0.5, 0) : Vec3(0),
-                                 .shapes = {{.shape = ColliderShape::box({8, kTop, 8}), .material = {.friction = 0.5}}}});
+                                 .shapes = {{.shape = slab, .material = {.friction = 0.5}}}});
     std::vector<pba::RigidBodyId> balls;
     for (int i = 0; i < 8; ++i)
       for (int j = 0; j < 4; ++j)
         balls.push_back(s.create({.pose = {{-3.5 + i, kTop + kRadius + 0.05, -1.5 + j}}, .linear_velocity = {3, -1, 0},
-                                  .shapes = {{.shape = ColliderShape::sphere(kRadius), .material = {.friction = 0.5}}}}));
+                                  .shapes = {{.shape = ball, .material = {.friction = 0.5}}}}));
     for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kGravity);
     touching = 0;
     for (std::size_t k = 0; k < s.manifold_count(); ++k) {
