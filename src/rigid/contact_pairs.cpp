@@ -38,6 +38,7 @@
 #include "collide/narrow_internal.h"
 #include "collide/shape_bounds.h"
 #include "core/lanes.h"
+#include "rows_avx2.h"
 
 namespace pba::detail {
 
@@ -583,19 +584,6 @@ static_assert(offsetof(PairCache, rel_position) == 0 && offsetof(PairCache, rel_
               "reuse_lanes_avx2 loads a cache's relative pose and margin as two rows of four doubles, a quaternion as one");
 
 #if PBA_EMIT_AVX2
-// four rows of four doubles to four columns (column i's lane k is row k's i-th)
-[[gnu::always_inline]] __attribute__((target("avx2"))) inline void columns4(__m256d r0, __m256d r1, __m256d r2, __m256d r3,
-                                                                           __m256d out[4]) {
-  const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
-  const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
-  out[0] = _mm256_permute2f128_pd(t0, t2, 0x20), out[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
-  out[2] = _mm256_permute2f128_pd(t0, t2, 0x31), out[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
-}
-// a Vec3 as a row (its fourth lane 0)
-[[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d row3(const Vec3& v) {
-  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&v.x)), _mm_load_sd(&v.z), 1);
-}
-
 // carried_over() for four lanes at once, in_b false (the normal in a's frame): the plan's
 // relative pose (glm's conjugate, quaternion product and rotation of a vector) and the test,
 // each lane the scalar code's operations in its order, so the same bits and the same outcome;

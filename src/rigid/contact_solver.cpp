@@ -29,6 +29,7 @@
 #include <type_traits>
 
 #include "core/lanes.h"
+#include "rows_avx2.h"
 
 namespace pba::detail {
 
@@ -365,6 +366,90 @@ template <class B>
 void fill_scalar(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes) {
   for (int l = 0; l < lanes; ++l) fill_lanes<double>(in, k, g, l);
 }
+
+#if PBA_ROWS_AVX2
+static_assert(offsetof(ContactPair, t1) == 88 && offsetof(ContactPair, friction) == 112 &&
+                  offsetof(ContactPair, tangent_impulse) == 160 && offsetof(ContactPair, twist_impulse) == 176 &&
+                  offsetof(ContactPair, rolling) == 184 && offsetof(ContactPair, t2) == 192 &&
+                  offsetof(ContactPair, ca) == 216 && offsetof(ContactPair, twist_radius) == 240 &&
+                  sizeof(Mat3) == 9 * sizeof(double),
+              "gather_avx2 reads a pair's header as six rows of four doubles from its normal, a point as 4 + 4 + 2");
+
+// What fill_block's lane loop copies into `in` for a ContactBlock's lanes [0, lanes) (a multiple
+// of four), four lanes at a time: rows of four doubles from the four pairs (by_color's `index`),
+// their bodies' centres and inverse inertias (`body_a`, `body_b`), turned into columns, the
+// points past a pair's count (in.active[p] 0, as the loop wrote it) masked to +0 as the loop's
+// `on ? x : 0` makes them, and
+// the centres' differences and the arms by the same subtractions: the same values, so the same
+// bits. Gathered a double at a time, the loop took about 250 instructions a lane (the pyramids'
+// fill_block, half its samples).
+__attribute__((target("avx2"))) void gather_avx2(FillInput& in, const ContactPair* pairs, const std::uint32_t* index,
+                                                 const std::uint32_t* body_a, const std::uint32_t* body_b,
+                                                 const Mat3* inv_inertia, const Vec3* com, int lanes) {
+  using V = __m256d;
+  for (int l0 = 0; l0 < lanes; l0 += 4) {
+    const char* p[4];
+    for (int j = 0; j < 4; ++j) p[j] = reinterpret_cast<const char*>(&pairs[index[l0 + j]]);
+    auto put = [&](double (&row)[kLanes], V v) __attribute__((target("avx2"))) { _mm256_storeu_pd(row + l0, v); };
+    // the four pairs' rows of four doubles at byte `at`, as columns
+    auto rows = [&](std::size_t at, V (&out)[4]) __attribute__((target("avx2"))) {
+      columns4(_mm256_loadu_pd(reinterpret_cast<const double*>(p[0] + at)),
+               _mm256_loadu_pd(reinterpret_cast<const double*>(p[1] + at)),
+               _mm256_loadu_pd(reinterpret_cast<const double*>(p[2] + at)),
+               _mm256_loadu_pd(reinterpret_cast<const double*>(p[3] + at)), out);
+    };
+    V r[4], impulse[4];
+    rows(offsetof(ContactPair, normal), r);  // n, t1.x
+    put(in.t[2][0], r[0]), put(in.t[2][1], r[1]), put(in.t[2][2], r[2]), put(in.t[0][0], r[3]);
+    rows(offsetof(ContactPair, normal) + 32, r);  // t1.y, t1.z, friction, restitution
+    put(in.t[0][1], r[0]), put(in.t[0][2], r[1]), put(in.friction, r[2]);
+    rows(offsetof(ContactPair, normal_impulse), impulse);
+    rows(offsetof(ContactPair, tangent_impulse), r);  // the tangents', the twist's, rolling
+    put(in.tangent_impulse[0], r[0]), put(in.tangent_impulse[1], r[1]), put(in.twist_impulse, r[2]);
+    put(in.rolling, r[3]);
+    rows(offsetof(ContactPair, t2), r);  // t2, ca.x
+    put(in.t[1][0], r[0]), put(in.t[1][1], r[1]), put(in.t[1][2], r[2]), put(in.ca[0], r[3]);
+    rows(offsetof(ContactPair, ca) + 8, r);  // ca.y, ca.z, twist_radius, count
+    put(in.ca[1], r[0]), put(in.ca[2], r[1]), put(in.twist_radius, r[2]);
+    // the bodies: centres, their differences, and the inverse inertias column by column (glm's
+    // order: 4 + 4 + 1 doubles)
+    V ca[4], cb[4];
+    columns4(row3(com[body_a[l0]]), row3(com[body_a[l0 + 1]]), row3(com[body_a[l0 + 2]]), row3(com[body_a[l0 + 3]]), ca);
+    columns4(row3(com[body_b[l0]]), row3(com[body_b[l0 + 1]]), row3(com[body_b[l0 + 2]]), row3(com[body_b[l0 + 3]]), cb);
+    for (int i = 0; i < 3; ++i) put(in.dab[i], ca[i] - cb[i]), put(in.dba[i], cb[i] - ca[i]);
+    auto inertia = [&](const std::uint32_t* body, double (&out)[9][kLanes]) __attribute__((target("avx2"))) {
+      const double* m[4];
+      for (int j = 0; j < 4; ++j) m[j] = &inv_inertia[body[l0 + j]][0][0];
+      for (int half = 0; half < 2; ++half) {
+        columns4(_mm256_loadu_pd(m[0] + 4 * half), _mm256_loadu_pd(m[1] + 4 * half), _mm256_loadu_pd(m[2] + 4 * half),
+                 _mm256_loadu_pd(m[3] + 4 * half), r);
+        for (int i = 0; i < 4; ++i) put(out[4 * half + i], r[i]);
+      }
+      put(out[8], _mm256_setr_pd(m[0][8], m[1][8], m[2][8], m[3][8]));
+    };
+    inertia(body_a, in.ia), inertia(body_b, in.ib);
+    // the points: (at, sa.x), (sa.y, sa.z, sb.x, sb.y), (sb.z, offset), past the count +0
+    // (the masks from `active`, which the lane loop wrote: no vector constants, whose new entries
+    // in the merged read-only data would move the AVX-512 kernels' constants' addresses)
+    for (int k = 0; k < Manifold::kMaxPoints; ++k) {
+      const V on = _mm256_cmp_pd(_mm256_loadu_pd(in.active[k] + l0), _mm256_setzero_pd(), _CMP_GT_OQ);
+      const std::size_t at = offsetof(ContactPair, points) + static_cast<std::size_t>(k) * sizeof(SolverPoint);
+      rows(at, r);
+      for (int i = 0; i < 3; ++i) put(in.arm[k][i], _mm256_and_pd(on, r[i] - ca[i]));
+      put(in.sa[k][0], _mm256_and_pd(on, r[3]));
+      rows(at + 32, r);
+      put(in.sa[k][1], _mm256_and_pd(on, r[0])), put(in.sa[k][2], _mm256_and_pd(on, r[1]));
+      put(in.sb[k][0], _mm256_and_pd(on, r[2])), put(in.sb[k][1], _mm256_and_pd(on, r[3]));
+      auto half = [&](int j) __attribute__((target("avx2"))) { return _mm_loadu_pd(reinterpret_cast<const double*>(p[j] + at + 64)); };
+      const V even = _mm256_insertf128_pd(_mm256_castpd128_pd256(half(0)), half(2), 1);  // lanes 0, 2
+      const V odd = _mm256_insertf128_pd(_mm256_castpd128_pd256(half(1)), half(3), 1);   // lanes 1, 3
+      put(in.sb[k][2], _mm256_and_pd(on, _mm256_unpacklo_pd(even, odd)));
+      put(in.offset[k], _mm256_and_pd(on, _mm256_unpackhi_pd(even, odd)));
+      put(in.impulse[k], _mm256_and_pd(on, impulse[k]));
+    }
+  }
+}
+#endif
 
 }  // namespace
 
@@ -832,6 +917,13 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   // (kept, a lane of more than one point reads its bodies from the block, not the pair's key:
   // the fill does not read the pair's first line; a rolling lane's roll still does)
   const bool from_frame = kept && !kOne;
+  // the lanes [0, gathered) whose copies gather_avx2 makes four at a time (a ContactBlock's whole
+  // fours on the AVX2 path; the AVX-512 path's fill_block is as it was)
+  int gathered = 0;
+#if PBA_ROWS_AVX2
+  if constexpr (!kOne)
+    if (simd == SimdPath::Avx2) gathered = k.lanes / 4 * 4;
+#endif
   LaneMasses& masses = (kOne ? one_masses : block_masses)[b];
   if (kept) {
     std::memcpy(in.ma, masses.ma, sizeof in.ma);
@@ -871,33 +963,37 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
       k.slop[l] = static_cast<Real>(slop_of(s, c.a, c.b));
       lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)) | (kOne ? kOneLane : 0u);
     }
-    const Vec3 t[3] = {c.t1, c.t2, c.normal};
-    const std::uint32_t body_a = k.a[l], body_b = k.b[l];  // (c.a, c.b: written above when not kept)
-    const Mat3& ia = inv_inertia[body_a];
-    const Mat3& ib = inv_inertia[body_b];
-    const Vec3& com_a = s.com_[body_a];
-    const Vec3& com_b = s.com_[body_b];
-    const Vec3 dab = com_a - com_b, dba = com_b - com_a;
-    for (int i = 0; i < 3; ++i) {
-      for (int r = 0; r < 3; ++r)
-        in.t[r][i][l] = t[r][i], in.ia[3 * i + r][l] = ia[i][r], in.ib[3 * i + r][l] = ib[i][r];
-      in.dab[i][l] = dab[i], in.dba[i][l] = dba[i], in.ca[i][l] = c.ca[i];
-    }
     count[l] = c.count;
-    for (int p = 0; p < P; ++p) {
-      const bool on = p < c.count;
-      const SolverPoint& q = c.points[p];
-      const Vec3 arm = on ? q.at - com_a : Vec3(0);
-      in.active[p][l] = on ? 1 : 0;
-      for (int i = 0; i < 3; ++i)
-        in.arm[p][i][l] = arm[i], in.sa[p][i][l] = on ? q.sa[i] : 0, in.sb[p][i][l] = on ? q.sb[i] : 0;
-      in.offset[p][l] = on ? q.offset : 0;
-      in.impulse[p][l] = on ? c.normal_impulse[p] : 0;
+    if (l < gathered)  // (the rest of the lane's copies: gather_avx2's, after this loop)
+      for (int p = 0; p < P; ++p) in.active[p][l] = p < c.count ? 1 : 0;
+    else {
+      const Vec3 t[3] = {c.t1, c.t2, c.normal};
+      const std::uint32_t body_a = k.a[l], body_b = k.b[l];  // (c.a, c.b: written above when not kept)
+      const Mat3& ia = inv_inertia[body_a];
+      const Mat3& ib = inv_inertia[body_b];
+      const Vec3& com_a = s.com_[body_a];
+      const Vec3& com_b = s.com_[body_b];
+      const Vec3 dab = com_a - com_b, dba = com_b - com_a;
+      for (int i = 0; i < 3; ++i) {
+        for (int r = 0; r < 3; ++r)
+          in.t[r][i][l] = t[r][i], in.ia[3 * i + r][l] = ia[i][r], in.ib[3 * i + r][l] = ib[i][r];
+        in.dab[i][l] = dab[i], in.dba[i][l] = dba[i], in.ca[i][l] = c.ca[i];
+      }
+      for (int p = 0; p < P; ++p) {
+        const bool on = p < c.count;
+        const SolverPoint& q = c.points[p];
+        const Vec3 arm = on ? q.at - com_a : Vec3(0);
+        in.active[p][l] = on ? 1 : 0;
+        for (int i = 0; i < 3; ++i)
+          in.arm[p][i][l] = arm[i], in.sa[p][i][l] = on ? q.sa[i] : 0, in.sb[p][i][l] = on ? q.sb[i] : 0;
+        in.offset[p][l] = on ? q.offset : 0;
+        in.impulse[p][l] = on ? c.normal_impulse[p] : 0;
+      }
+      in.friction[l] = c.friction, in.twist_radius[l] = c.twist_radius;
+      in.tangent_impulse[0][l] = c.tangent_impulse[0], in.tangent_impulse[1][l] = c.tangent_impulse[1];
+      in.twist_impulse[l] = c.twist_impulse;
+      in.rolling[l] = c.rolling;
     }
-    in.friction[l] = c.friction, in.twist_radius[l] = c.twist_radius;
-    in.tangent_impulse[0][l] = c.tangent_impulse[0], in.tangent_impulse[1][l] = c.tangent_impulse[1];
-    in.twist_impulse[l] = c.twist_impulse;
-    in.rolling[l] = c.rolling;
     // (a one-point lane's: fill_lanes reads it for those only, and it sits in the key's line)
     if constexpr (kOne)
       for (int i = 0; i < 3; ++i) in.rolling_impulse[i][l] = c.rolling_impulse[i];
@@ -906,6 +1002,10 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
       restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), c.restitution, kOne});
   }
   if constexpr (kOne) k.rolls = rolling_lanes;
+#if PBA_ROWS_AVX2
+  if (gathered > 0)
+    gather_avx2(in, pairs.data(), &by_color[first], k.a, k.b, inv_inertia.data(), s.com_.data(), gathered);
+#endif
   if (!kept) {
     std::memcpy(masses.ma, in.ma, sizeof in.ma);
     std::memcpy(masses.mb, in.mb, sizeof in.mb);
