@@ -391,12 +391,11 @@ static_assert(offsetof(ContactPair, t1) == 88 && offsetof(ContactPair, friction)
 
 // What fill_block's lane loop copies into `in` for a ContactBlock's lanes [0, lanes) (a multiple
 // of four), four lanes at a time: rows of four doubles from the four pairs (by_color's `index`),
-// their bodies' centres and inverse inertias (`body_a`, `body_b`), turned into columns, the
-// points past a pair's count (in.active[p] 0, as the loop wrote it) masked to +0 as the loop's
-// `on ? x : 0` makes them, and
-// the centres' differences and the arms by the same subtractions: the same values, so the same
-// bits. Gathered a double at a time, the loop took about 250 instructions a lane (the pyramids'
-// fill_block, half its samples).
+// their bodies' centres and inverse inertias (`body_a`, `body_b`), turned into columns; the
+// points past a pair's count (in.active 0, as the lane loop wrote it) masked to +0, as the loop's
+// `on ? x : 0` makes them; the centres' differences and the arms by the same subtractions. The
+// same values, so the same bits. A double at a time, the loop's copies took about 250
+// instructions a lane (the pyramids' fill_block), these about 110.
 __attribute__((target("avx2"))) void gather_avx2(FillInput& in, const ContactPair* pairs, const std::uint32_t* index,
                                                  const std::uint32_t* body_a, const std::uint32_t* body_b,
                                                  const Mat3* inv_inertia, const Vec3* com, int lanes) {
@@ -428,8 +427,10 @@ __attribute__((target("avx2"))) void gather_avx2(FillInput& in, const ContactPai
     // the bodies: centres, their differences, and the inverse inertias column by column (glm's
     // order: 4 + 4 + 1 doubles)
     V ca[4], cb[4];
-    columns4(row3(com[body_a[l0]]), row3(com[body_a[l0 + 1]]), row3(com[body_a[l0 + 2]]), row3(com[body_a[l0 + 3]]), ca);
-    columns4(row3(com[body_b[l0]]), row3(com[body_b[l0 + 1]]), row3(com[body_b[l0 + 2]]), row3(com[body_b[l0 + 3]]), cb);
+    auto centres = [&](const std::uint32_t* body, V (&out)[4]) __attribute__((target("avx2"))) {
+      columns4(row3(com[body[l0]]), row3(com[body[l0 + 1]]), row3(com[body[l0 + 2]]), row3(com[body[l0 + 3]]), out);
+    };
+    centres(body_a, ca), centres(body_b, cb);
     for (int i = 0; i < 3; ++i) put(in.dab[i], ca[i] - cb[i]), put(in.dba[i], cb[i] - ca[i]);
     auto inertia = [&](const std::uint32_t* body, double (&out)[9][kLanes]) __attribute__((target("avx2"))) {
       const double* m[4];
@@ -442,9 +443,8 @@ __attribute__((target("avx2"))) void gather_avx2(FillInput& in, const ContactPai
       put(out[8], _mm256_setr_pd(m[0][8], m[1][8], m[2][8], m[3][8]));
     };
     inertia(body_a, in.ia), inertia(body_b, in.ib);
-    // the points: (at, sa.x), (sa.y, sa.z, sb.x, sb.y), (sb.z, offset), past the count +0
-    // (the masks from `active`, which the lane loop wrote: no vector constants, whose new entries
-    // in the merged read-only data would move the AVX-512 kernels' constants' addresses)
+    // the points: (at, sa.x), (sa.y, sa.z, sb.x, sb.y), (sb.z, offset), past the count +0 (the
+    // masks from in.active, one comparison a point)
     for (int k = 0; k < Manifold::kMaxPoints; ++k) {
       const V on = _mm256_cmp_pd(_mm256_loadu_pd(in.active[k] + l0), _mm256_setzero_pd(), _CMP_GT_OQ);
       const std::size_t at = offsetof(ContactPair, points) + static_cast<std::size_t>(k) * sizeof(SolverPoint);
@@ -454,7 +454,9 @@ __attribute__((target("avx2"))) void gather_avx2(FillInput& in, const ContactPai
       rows(at + 32, r);
       put(in.sa[k][1], _mm256_and_pd(on, r[0])), put(in.sa[k][2], _mm256_and_pd(on, r[1]));
       put(in.sb[k][0], _mm256_and_pd(on, r[2])), put(in.sb[k][1], _mm256_and_pd(on, r[3]));
-      auto half = [&](int j) __attribute__((target("avx2"))) { return _mm_loadu_pd(reinterpret_cast<const double*>(p[j] + at + 64)); };
+      auto half = [&](int j) __attribute__((target("avx2"))) {
+        return _mm_loadu_pd(reinterpret_cast<const double*>(p[j] + at + 64));
+      };
       const V even = _mm256_insertf128_pd(_mm256_castpd128_pd256(half(0)), half(2), 1);  // lanes 0, 2
       const V odd = _mm256_insertf128_pd(_mm256_castpd128_pd256(half(1)), half(3), 1);   // lanes 1, 3
       put(in.sb[k][2], _mm256_and_pd(on, _mm256_unpacklo_pd(even, odd)));
