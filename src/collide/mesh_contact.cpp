@@ -736,8 +736,8 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   const bool hull = a.type == ShapeType::Hull;
   // a box's or hull's polyhedron and its vertices in the mesh frame, for every triangle.
   // (Made in place only for them: a Poly is some 600 bytes of initialised members, zeroed for
-  // every call before, two thirds of them a sphere's or capsule's, which no path reads it
-  // for: they are handed an empty one made once. A std::optional zeroed it on every path)
+  // every call before, half or more of the terrain's a sphere's or capsule's, which no path
+  // reads it for: they are handed an empty one made once. A std::optional zeroed it always)
   const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
   static_assert(std::is_trivially_destructible_v<Poly>);
   static const Poly kNoPoly;
