@@ -137,7 +137,10 @@ Closest closest_on_tetrahedron(const Vec3& a, const Vec3& b, const Vec3& c, cons
   const double scale = glm::length(b - a) * glm::length(c - a) * glm::length(d - a);
   const bool flat = std::abs(vol) <= 1e-14 * scale;
   double best = INFINITY;
-  Closest out{Vec3(0.0), 0, {}, {}, false};
+  // (what is read when no face is closer than INFINITY, every distance NaN: the kept vertices'
+  // places and weights past n are never read, so not zeroed)
+  Closest out;
+  out.p = Vec3(0.0), out.n = 0, out.inside = false;
   bool any = false;
   for (const auto& f : faces) {
     // is the origin on the far side of this face from the fourth vertex?
@@ -271,7 +274,7 @@ GjkStepper::GjkStepper(const ConvexProxy& a, const ConvexProxy& b) : a_(a), b_(b
   // first vertex: the support along the line between the centres
   Vec3 d = a_.pose.position - b_.pose.position;
   if (glm::dot(d, d) == 0) d = Vec3(1, 0, 0);
-  SimplexVertex s{};
+  SimplexVertex s;  // (every field written below)
   // (each kind's support inlined, as run() has them; the hint 0 is support()'s default)
   with_support(a_, [&](auto&& sa) { s.a = sa(-d, s.index_a, 0); });
   with_support(b_, [&](auto&& sb) { s.b = sb(d, s.index_b, 0); });
@@ -307,10 +310,11 @@ bool GjkStepper::step_with(SupportA& support_a, SupportB& support_b) {
   ++iterations_;
   // new support point of A - B along -v
   // (the last support vertices start the hill climbs)
-  SimplexVertex s{};
+  SimplexVertex s;  // (every field written here: not zeroed first)
   s.a = support_a(-v_, s.index_a, last_.index_a);
   s.b = support_b(v_, s.index_b, last_.index_b);
   s.w = s.a - s.b;
+  s.weight = 0;
   last_ = s;
   // van den Bergen's bounds: |v| >= distance >= v.w / |v|
   const double vn = std::sqrt(vv);

@@ -6,6 +6,8 @@
 // "internal edge" cure of Jolt's ActiveEdges and Box2D's smooth segments: such an edge
 // lies flat or concave between two faces, so its own normal would be a ghost contact).
 #include <cmath>
+#include <new>
+#include <type_traits>
 
 #include "narrow_internal.h"
 
@@ -732,11 +734,18 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   else if (a.type == ShapeType::Capsule)
     axes[0] = r[1] * a.half_height;
   const bool hull = a.type == ShapeType::Hull;
-  // a box's or hull's polyhedron and its vertices in the mesh frame, for every triangle
-  Poly P;
-  PolyAt at;
+  // a box's or hull's polyhedron and its vertices in the mesh frame, for every triangle.
+  // (Made in place only for them: a Poly is some 600 bytes of initialised members, zeroed for
+  // every call before, half or more of the terrain's a sphere's or capsule's, which no path
+  // reads it for: they are handed an empty one made once. A std::optional zeroed it always)
   const bool poly = a.type == ShapeType::Box || a.type == ShapeType::Hull;
-  if (poly) poly_of(a, P);
+  static_assert(std::is_trivially_destructible_v<Poly>);
+  static const Poly kNoPoly;
+  alignas(Poly) unsigned char poly_room[sizeof(Poly)];
+  Poly* const made = poly ? new (poly_room) Poly : nullptr;
+  if (made) poly_of(a, *made);
+  const Poly& P = made ? *made : kNoPoly;
+  PolyAt at;
 #if PBA_MESH_LANES_X86
   // the shape's turns and edge axes in AVX2 lanes where the processor has them (AVX-512's
   // eight lanes are not offered: a box has 9 edge axes, a square pyramid 18)

@@ -1089,7 +1089,9 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
             *same = {cp.point_a, cp.point_b, depth, cp.id ^ (m.sub_shape_b * 0x9e3779b1u)};
         }
       }
-      Manifold merged;
+      // (into the convex pairs' scratch, not a Manifold zeroed a group: reduce writes the
+      // normal, the count and the points keep reads)
+      Manifold& merged = pair_manifold;
       narrow::reduce(merge_scratch.data(), static_cast<int>(merge_scratch.size()), first.normal, merged);
       merged.sub_shape_b = deepest_triangle;
       if (merged.count > 0) keep(merged, mesh_a);

@@ -270,10 +270,13 @@ class GjkStepper {
   bool step_with(SupportA& support_a, SupportB& support_b);
 
   ConvexProxy a_, b_;
-  std::array<SimplexVertex, 4> simplex_{};
+  // (not zeroed: the constructor writes the first vertex and last_, a step each vertex it
+  // adds, and no one reads past count_; the zeroing was a quarter of the constructor's
+  // instructions, a run made for every mesh triangle GJK takes)
+  std::array<SimplexVertex, 4> simplex_;
   int count_ = 0;
   Vec3 v_{0, 0, 0};
-  SimplexVertex last_{};
+  SimplexVertex last_;
   int iterations_ = 0;
   double gap_ = 0;
   bool done_ = false;
