@@ -129,6 +129,17 @@ PBA_LANES V vclamp(V v, V lo, V hi) {
   return v < lo ? lo : (hi < v ? hi : v);
 }
 
+// vmax(x, 0), the same bits on every path; on the AVX2 path (kYmm) one vmaxps: max(0, x)
+// returns x unless 0 > x, the lanes of x < 0 ? 0 : x with -0 and NaN, where GCC makes a
+// compare and an and-not, a cycle longer in the sweep's chain from point to point
+template <bool kYmm, class V>
+PBA_LANES V vmax0(V x, V zero) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if constexpr (kYmm) return __builtin_ia32_maxps256(zero, x);
+#endif
+  return lanes::vmax(x, zero);
+}
+
 // whether any lane of a comparison's mask is set
 template <class M>
 PBA_LANES bool any_lane(const M& m) {
@@ -470,6 +481,9 @@ template <class V, int kMode, bool kZmm, class B, bool kRounds = false>
 PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r,
                      const Carried<V, B::kPoints>* from = nullptr) {
   constexpr bool kBias = kMode != kRelax;
+  // the AVX2 path (8 floats on 16 ymm registers): its own scheduling where the AVX-512 code
+  // must stay as it is
+  constexpr bool kYmm = std::is_same_v<V, v8f> && !kZmm;
   // the points of a lane: a one-point lane's is its centroid (x = y = 0), and it has no twist;
   // what the four-point kernel adds or multiplies by those zeros is left out (it changes at
   // most a zero's sign)
@@ -602,7 +616,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       if constexpr (kMode == kSoft) j = negm[k] * (vn[k] + bias[k]) - iscale[k] * lambda[k];
       else if constexpr (kMode == kRigid) j = negm[k] * (vn[k] + bias[k]);
       else j = negm[k] * (vn[k] + zero);
-      V next = vmax(lambda[k] + j, zero);
+      V next = vmax0<kYmm>(lambda[k] + j, zero);
       if constexpr (!kBias) next = skip[k] ? lambda[k] : next;
       const V dl = next - lambda[k];
       lambda[k] = next;
@@ -670,9 +684,19 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       const V rkr = r0 * (k11 * r0 + k12 * r1) + r1 * (k12 * r0 + k22 * r1);
       const V m = rkr > zero ? rr / rkr : zero;  // (no slip: no step)
       const auto sliding = len > limit;
-      j0 = sliding ? old0 - m * r0 : j0;
-      j1 = sliding ? old1 - m * r1 : j1;
-      len = sliding ? vsqrt(j0 * j0 + j1 * j1) : len;
+      if constexpr (kYmm) {
+        // (the sliding step's length from the step itself, not from the selection: the same
+        // lanes, and its square root no longer waits for the first one and the compare)
+        const V s0 = old0 - m * r0, s1 = old1 - m * r1;
+        const V slen = vsqrt(s0 * s0 + s1 * s1);
+        j0 = sliding ? s0 : j0;
+        j1 = sliding ? s1 : j1;
+        len = sliding ? slen : len;
+      } else {
+        j0 = sliding ? old0 - m * r0 : j0;
+        j1 = sliding ? old1 - m * r1 : j1;
+        len = sliding ? vsqrt(j0 * j0 + j1 * j1) : len;
+      }
     }
     const auto over = len > limit;
     const V scale = over ? limit / len : one;
