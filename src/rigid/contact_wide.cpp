@@ -606,7 +606,9 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // (each point's -mass * mass scale formed once for the sweeps: the same product each sweep
   // formed before. The rigid and relax passes' impulse scale is zero and their mass scale one:
   // their `- 0 * lambda` is left out, which changes no bit, since no impulse is ever -0: they
-  // start at +0 or above, and vmax(lambda + j, 0) gives -0 only from -0 + -0)
+  // start at +0 or above, and vmax(lambda + j, 0) gives -0 only from -0 + -0. For the same
+  // reason the AVX2 relax pass leaves out its + 0, which turns a -0 speed into +0 and so flips
+  // the sign of a zero j, which lambda + j then drops: an add less a point in its chain)
   if constexpr (!kRounds)
     for (int k = 0; k < P; ++k) negm[k] = kMode == kSoft ? -L(c.mass[k]) * mscale[k] : -L(c.mass[k]);
   auto sweep = [&](auto last) __attribute__((always_inline)) {
@@ -615,6 +617,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       V j;
       if constexpr (kMode == kSoft) j = negm[k] * (vn[k] + bias[k]) - iscale[k] * lambda[k];
       else if constexpr (kMode == kRigid) j = negm[k] * (vn[k] + bias[k]);
+      else if constexpr (kYmm) j = negm[k] * vn[k];  // (the + 0 left out: above)
       else j = negm[k] * (vn[k] + zero);
       V next = vmax0<kYmm>(lambda[k] + j, zero);
       if constexpr (!kBias) next = skip[k] ? lambda[k] : next;
