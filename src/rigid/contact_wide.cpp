@@ -129,6 +129,17 @@ PBA_LANES V vclamp(V v, V lo, V hi) {
   return v < lo ? lo : (hi < v ? hi : v);
 }
 
+// vmax(x, 0), the same bits on every path; on the AVX2 path (kYmm) one vmaxps: max(0, x)
+// returns x unless 0 > x, the lanes of x < 0 ? 0 : x with -0 and NaN, where GCC makes a
+// compare and an and-not, a cycle longer in the sweep's chain from point to point
+template <bool kYmm, class V>
+PBA_LANES V vmax0(V x, V zero) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if constexpr (kYmm) return __builtin_ia32_maxps256(zero, x);
+#endif
+  return lanes::vmax(x, zero);
+}
+
 // whether any lane of a comparison's mask is set
 template <class M>
 PBA_LANES bool any_lane(const M& m) {
@@ -470,6 +481,9 @@ template <class V, int kMode, bool kZmm, class B, bool kRounds = false>
 PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r,
                      const Carried<V, B::kPoints>* from = nullptr) {
   constexpr bool kBias = kMode != kRelax;
+  // the AVX2 path (8 floats on 16 ymm registers): its own scheduling where the AVX-512 code
+  // must stay as it is
+  constexpr bool kYmm = std::is_same_v<V, v8f> && !kZmm;
   // the points of a lane: a one-point lane's is its centroid (x = y = 0), and it has no twist;
   // what the four-point kernel adds or multiplies by those zeros is left out (it changes at
   // most a zero's sign)
@@ -592,7 +606,9 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // (each point's -mass * mass scale formed once for the sweeps: the same product each sweep
   // formed before. The rigid and relax passes' impulse scale is zero and their mass scale one:
   // their `- 0 * lambda` is left out, which changes no bit, since no impulse is ever -0: they
-  // start at +0 or above, and vmax(lambda + j, 0) gives -0 only from -0 + -0)
+  // start at +0 or above, and vmax(lambda + j, 0) gives -0 only from -0 + -0. For the same
+  // reason the AVX2 relax pass leaves out its + 0, which turns a -0 speed into +0 and so flips
+  // the sign of a zero j, which lambda + j then drops: an add less a point in its chain)
   if constexpr (!kRounds)
     for (int k = 0; k < P; ++k) negm[k] = kMode == kSoft ? -L(c.mass[k]) * mscale[k] : -L(c.mass[k]);
   auto sweep = [&](auto last) __attribute__((always_inline)) {
@@ -601,8 +617,9 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       V j;
       if constexpr (kMode == kSoft) j = negm[k] * (vn[k] + bias[k]) - iscale[k] * lambda[k];
       else if constexpr (kMode == kRigid) j = negm[k] * (vn[k] + bias[k]);
+      else if constexpr (kYmm) j = negm[k] * vn[k];  // (the + 0 left out: above)
       else j = negm[k] * (vn[k] + zero);
-      V next = vmax(lambda[k] + j, zero);
+      V next = vmax0<kYmm>(lambda[k] + j, zero);
       if constexpr (!kBias) next = skip[k] ? lambda[k] : next;
       const V dl = next - lambda[k];
       lambda[k] = next;
@@ -670,9 +687,19 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       const V rkr = r0 * (k11 * r0 + k12 * r1) + r1 * (k12 * r0 + k22 * r1);
       const V m = rkr > zero ? rr / rkr : zero;  // (no slip: no step)
       const auto sliding = len > limit;
-      j0 = sliding ? old0 - m * r0 : j0;
-      j1 = sliding ? old1 - m * r1 : j1;
-      len = sliding ? vsqrt(j0 * j0 + j1 * j1) : len;
+      if constexpr (kYmm) {
+        // (the sliding step's length from the step itself, not from the selection: the same
+        // lanes, and its square root no longer waits for the first one and the compare)
+        const V s0 = old0 - m * r0, s1 = old1 - m * r1;
+        const V slen = vsqrt(s0 * s0 + s1 * s1);
+        j0 = sliding ? s0 : j0;
+        j1 = sliding ? s1 : j1;
+        len = sliding ? slen : len;
+      } else {
+        j0 = sliding ? old0 - m * r0 : j0;
+        j1 = sliding ? old1 - m * r1 : j1;
+        len = sliding ? vsqrt(j0 * j0 + j1 * j1) : len;
+      }
     }
     const auto over = len > limit;
     const V scale = over ? limit / len : one;
@@ -1005,7 +1032,7 @@ PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatPar
 // when they are narrower). No software prefetch: the blocks of a colour lie one after another
 // and the hardware's streamer fetches them; asking for all the lines of the next block at once
 // stalled the loop on the full fill buffers (measured on the 2870-box pyramid: the whole run
-// 7-8% faster without)
+// 7-8% faster without; the AVX2 path asks for one line of the next block only, below)
 template <class V, class D, int kMode, class B>
 PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first, std::size_t last,
                            const FloatParams& p, const BodyArrays& r) {
@@ -1013,6 +1040,11 @@ PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std:
     // a block of one lane (a colour of one manifold: a stack's) by the scalar lane, one of up
     // to eight by 8 floats (the same arithmetic in every lane, so the same bits)
     const int lanes = blocks[i].lanes;
+    // (AVX2: the next block's count of lanes asked for, the one line read before the block's
+    // fields from its start: the wait for it held 3.7% of the four-point kernel's samples on
+    // pyramid1240, 0.7% with this)
+    if constexpr (std::is_same_v<V, v8f>)
+      if (i + 1 < last) __builtin_prefetch(&blocks[i + 1].lanes);
     if constexpr (std::is_same_v<V, float>) {
       for (int l = 0; l < lanes; ++l) pass<float, double, kMode>(blocks[i], anchors[i], l, p, r);
     } else if (lanes == 1) {
