@@ -53,20 +53,22 @@ constexpr double kSmall = 0.39269908169872414;  // pi / 8
 typedef double v16d __attribute__((vector_size(128)));
 
 // Tests and square roots over all lanes, by the targets' instructions (GCC's generic vectors
-// compare into a mask that plain AVX-512F turns back into a vector lane by lane). The wide
-// ones are out of line: GCC does not inline a target's intrinsics into a template.
+// compare into a mask that plain AVX-512F turns back into a vector lane by lane). The
+// AVX-512 ones are out of line: GCC does not inline a target's intrinsics into a template.
 
 // true when every lane of x is within [-limit, limit] (false for a NaN lane)
 PBA_LANES bool all_within(double x, double limit) { return std::abs(x) <= limit; }
 // the square root of each lane (IEEE: correctly rounded, the same bits as std::sqrt)
 PBA_LANES double sqrt_lanes(double x) { return std::sqrt(x); }
 #if defined(__GNUC__) && defined(__x86_64__)
-[[gnu::target("avx2")]] [[gnu::noinline]] bool all_within(v4d x, double limit) {
-  const __m256d in = _mm256_and_pd(_mm256_cmp_pd(x, _mm256_set1_pd(limit), _CMP_LE_OQ),
-                                   _mm256_cmp_pd(x, _mm256_set1_pd(-limit), _CMP_GE_OQ));
-  return _mm256_movemask_pd(in) == 0xf;
+// (AVX2's by the builtins under the intrinsics, which do inline into the templates: out of
+// line, their bodies alone were 7.0 M of fall1000's 908 M instructions in 120 steps)
+PBA_LANES bool all_within(v4d x, double limit) {
+  const v4l le = reinterpret_cast<v4l>(__builtin_ia32_cmppd256(x, splat<v4d>(limit), _CMP_LE_OQ));
+  const v4l ge = reinterpret_cast<v4l>(__builtin_ia32_cmppd256(x, splat<v4d>(-limit), _CMP_GE_OQ));
+  return __builtin_ia32_movmskpd256(reinterpret_cast<v4d>(le & ge)) == 0xf;
 }
-[[gnu::target("avx2")]] [[gnu::noinline]] v4d sqrt_lanes(v4d x) { return _mm256_sqrt_pd(x); }
+PBA_LANES v4d sqrt_lanes(v4d x) { return __builtin_ia32_sqrtpd256(x); }
 [[gnu::target("avx512f")]] [[gnu::noinline]] bool all_within(v8d x, double limit) {
   return (_mm512_cmp_pd_mask(x, _mm512_set1_pd(limit), _CMP_LE_OQ) &
           _mm512_cmp_pd_mask(x, _mm512_set1_pd(-limit), _CMP_GE_OQ)) == 0xff;
@@ -308,6 +310,12 @@ PBA_LANES void store_lines(double* at, int line, int n, const V in[]) {
   // a vector fills part of one block's line, whole (never two blocks'), or v16d: two blocks' lines
   static_assert(std::is_same_v<V, v16d> ? sizeof(V) == 2 * kFreeLaneWidth * sizeof(double)
                                         : kFreeLaneWidth * sizeof(double) % sizeof(V) == 0);
+  if constexpr (std::is_same_v<V, v4d>) {
+    // (unrolled: the positions' frame, 4 lines, went through the stack, a loop of 16-byte copies)
+#pragma GCC unroll 4
+    for (int k = 0; k < n; ++k) store<v4d>(at + static_cast<std::size_t>(line + k) * kFreeLaneWidth, in[k]);
+    return;
+  }
   for (int k = 0; k < n; ++k) {
     double* p = at + static_cast<std::size_t>(line + k) * kFreeLaneWidth;
     if constexpr (std::is_same_v<V, v16d>) {
@@ -321,11 +329,21 @@ PBA_LANES void store_lines(double* at, int line, int n, const V in[]) {
   }
 }
 
+// the transpose of 4 rows of 4 doubles (its own inverse): two rounds of two-vector shuffles
+PBA_LANES void transpose4x4(v4d r[4]) {
+  const v4d t0 = __builtin_shuffle(r[0], r[1], v4l{0, 4, 2, 6}), t1 = __builtin_shuffle(r[0], r[1], v4l{1, 5, 3, 7});
+  const v4d t2 = __builtin_shuffle(r[2], r[3], v4l{0, 4, 2, 6}), t3 = __builtin_shuffle(r[2], r[3], v4l{1, 5, 3, 7});
+  r[0] = __builtin_shuffle(t0, t2, v4l{0, 1, 4, 5}), r[2] = __builtin_shuffle(t0, t2, v4l{2, 3, 6, 7});
+  r[1] = __builtin_shuffle(t1, t3, v4l{0, 1, 4, 5}), r[3] = __builtin_shuffle(t1, t3, v4l{2, 3, 6, 7});
+}
+
 // Rows of 8 doubles a body (the contact solver's velocities and warm-start accumulators, the
 // motion): the lanes' rows at base + 8 idx as 8 vectors of one number a lane. On AVX-512 a
-// block loads and stores whole rows and transposes them; the other paths go lane by lane and
-// store only the first n numbers of a row (the whole-row store writes in[n..7] back too, so
-// they must hold what the rows hold).
+// block loads and stores whole rows and transposes them; on AVX2 each half row (4 numbers) of
+// its 4 bodies, two 4 by 4 transposes (lane by lane, GCC made each number a load and an insert,
+// and kept the vectors it merged them into on the stack); the plain path goes lane by lane.
+// Only the first n numbers of a row are stored but on AVX-512 (the whole-row store writes
+// in[n..7] back too, so they must hold what the rows hold).
 template <class V>
 PBA_LANES void load_rows(const double* base, const std::uint32_t* idx, V out[8]) {
   if constexpr (std::is_same_v<V, v16d>) {
@@ -333,6 +351,13 @@ PBA_LANES void load_rows(const double* base, const std::uint32_t* idx, V out[8])
   } else if constexpr (std::is_same_v<V, v8d>) {
     for (int i = 0; i < 8; ++i) out[i] = load<v8d>(base + 8 * static_cast<std::size_t>(idx[i]));
     return transpose8x8(out);
+  } else if constexpr (std::is_same_v<V, v4d>) {
+#pragma GCC unroll 4
+    for (int i = 0; i < 4; ++i) {
+      const double* row = base + 8 * static_cast<std::size_t>(idx[i]);
+      out[i] = load<v4d>(row), out[4 + i] = load<v4d>(row + 4);
+    }
+    return transpose4x4(out), transpose4x4(out + 4);
   }
   for (int k = 0; k < 8; ++k) out[k] = splat<V>(0);
   for (int i = 0; i < kWidth<V>; ++i)
@@ -348,6 +373,19 @@ PBA_LANES void store_rows(double* base, const std::uint32_t* idx, const V in[8],
     for (int k = 0; k < 8; ++k) r[k] = in[k];
     transpose8x8(r);
     for (int i = 0; i < 8; ++i) store<v8d>(base + 8 * static_cast<std::size_t>(idx[i]), r[i]);
+    return;
+  } else if constexpr (std::is_same_v<V, v4d>) {
+    v4d r[8];
+    for (int k = 0; k < 8; ++k) r[k] = in[k];
+    transpose4x4(r), transpose4x4(r + 4);
+    // (n is a constant where this is inlined, 6 to 8: whole first halves, the second's first n -
+    // 4; unrolled, or GCC stored the transposed rows on the stack and copied them from there)
+#pragma GCC unroll 4
+    for (int i = 0; i < 4; ++i) {
+      double* row = base + 8 * static_cast<std::size_t>(idx[i]);
+      store<v4d>(row, r[i]);
+      std::memcpy(row + 4, &r[4 + i], static_cast<std::size_t>(n - 4) * sizeof(double));
+    }
     return;
   }
   for (int i = 0; i < kWidth<V>; ++i)
@@ -546,7 +584,9 @@ PBA_LANES void store_motion(const std::uint32_t* idx, const FreeMotionArrays& f,
                   q[0] * by + q[2] * bw + q[3] * bx - q[1] * bz,
                   q[0] * bz + q[3] * bw + q[1] * by - q[2] * bx,
                   splat<V>(0)};
-  store_rows(f.motion, idx, m, 7);
+  // (on AVX2 all 8, a whole half row one store, not a pair and a single: the last is zero in
+  // every row, as prepare() makes them and AVX-512's whole rows store it)
+  store_rows(f.motion, idx, m, std::is_same_v<V, v4d> ? 8 : 7);
 }
 
 // ... and back, with the motion since the start of the step
