@@ -825,6 +825,10 @@ __attribute__((target("avx512f"))) void scatter_avx512(const std::uint32_t* idx,
                                                       const FreeMotionArrays& f, const double* lanes) {
   scatter_kind<v8d>(idx, count, f, lanes);
 }
+__attribute__((target("avx2"))) void scatter_avx2(const std::uint32_t* idx, std::size_t count,
+                                                 const FreeMotionArrays& f, const double* lanes) {
+  scatter_kind<v4d>(idx, count, f, lanes);
+}
 // refresh_inertia's test (contact_solver.cpp) over 4 lanes at a time, its arithmetic lane by
 // lane (glm::dot's order for quaternions: (w w' + x x') + (y y' + z z'))
 __attribute__((target("avx2"))) std::size_t turned_far_avx2(const std::uint32_t* idx, std::size_t count,
@@ -843,14 +847,13 @@ __attribute__((target("avx2"))) std::size_t turned_far_avx2(const std::uint32_t*
     const v4d turn = 8.0 * (1.0 - c) * spread * spread;
     // (a NaN is not within, as in the scalar test)
     int out = ~__builtin_ia32_movmskpd256(__builtin_ia32_cmppd256(turn, splat<v4d>(limit), _CMP_LE_OQ)) & 0xf;
-    for (; out != 0; out &= out - 1) far[n++] = static_cast<std::uint32_t>(j) + std::countr_zero(static_cast<unsigned>(out));
+    for (; out != 0; out &= out - 1) {
+      const auto lane = static_cast<std::uint32_t>(std::countr_zero(static_cast<unsigned>(out)));
+      far[n++] = static_cast<std::uint32_t>(j) + lane;
+    }
   }
   tested = j;
   return n;
-}
-__attribute__((target("avx2"))) void scatter_avx2(const std::uint32_t* idx, std::size_t count,
-                                                 const FreeMotionArrays& f, const double* lanes) {
-  scatter_kind<v4d>(idx, count, f, lanes);
 }
 #else
 #define PBA_RIGID_HAVE_X86 0
