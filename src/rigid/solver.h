@@ -316,6 +316,13 @@ void gather_free_motion_wide(SimdPath path, FreeRotation kind, const std::uint32
 /// Puts the lanes' centres and frames back into the bodies' arrays.
 void scatter_free_motion_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, const double* lanes);
+/// refresh_inertia's test over a kind's free motion lanes (not round bodies; the kind's first
+/// block at `lanes`), several bodies at a time where `path` has a kernel for it (AVX2): the
+/// positions j (ascending) of the bodies bodies[j] whose frame in the lanes q is turned from
+/// inertia_q[bodies[j]] so far that 8 (1 - |q . q_ref|) spread^2 > kInertiaTurn^2, into `far`
+/// (room for count); returns how many. Positions from `tested` on are the caller's to test.
+std::size_t turned_far_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count, const double* lanes,
+                            const Quat* inertia_q, std::uint32_t* far, std::size_t& tested);
 /// The approach speeds before the solve (m/s): the normal relative velocity of each point of
 /// the block's lanes at the velocities now, for the points below each lane's `count` (0 past it).
 void approaches(SimdPath path, ContactBlock& block, const int* count, const BodyArrays& bodies);
