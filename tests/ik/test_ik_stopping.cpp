@@ -5,7 +5,6 @@
 // optimiser); CCD reaches the reachable targets of a long limited chain; SolveResult says
 // why it stopped.
 #include <gtest/gtest.h>
-#include <time.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +14,7 @@
 
 #include "pba/ik.h"
 #include "pba/ik_scenes.h"
+#include "cpu_time.h"
 
 namespace {
 
@@ -384,14 +384,6 @@ TEST(IkClosestPose, LimitedMixedChainsEndAtAStationaryPose) {
   }
 }
 
-// This thread's CPU time in seconds: unlike the wall clock, it does not count the time a
-// loaded machine keeps the test waiting.
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
 // Faults 3 and 4 at 333 bones: a limited mixed chain toward a target outside its root's cone
 // has a curved closest pose pressed on the limits, which damped least squares (and every
 // method that hands over to it) approaches only linearly, so a solve can spend its
@@ -446,9 +438,9 @@ TEST(IkBudget, LongLimitedMixedChainsSayWhichBudgetStoppedThem) {
   st.method = Method::Dls;
   st.max_seconds = 0.01;
   Solver solver(s, st);
-  const double cpu_before = thread_cpu_seconds();
+  const double cpu_before = test::thread_cpu_seconds();
   const SolveResult r = solver.solve();
-  const double cpu = thread_cpu_seconds() - cpu_before;
+  const double cpu = test::thread_cpu_seconds() - cpu_before;
   EXPECT_EQ(r.stop, StopReason::OutOfTime);
   EXPECT_TRUE(r.out_of_time);
   EXPECT_LT(r.iterations, default_max_iterations(Method::Dls));
