@@ -231,10 +231,12 @@ struct HullSupport {
 // each non-zero coordinate back to the bit, a zero perhaps with the other sign: the three dot
 // products then compare alike, and the vertex plus a position without a zero coordinate is
 // the turned vertex plus it); `offset` is +0 for the mesh's own frame, which support() adds
+// (always inlined: the GjkStepper constructor called it outlined, 3.9 M instructions of calls and
+// saves in the terrain's 120 steps)
 struct TriangleSupport {
   const Vec3* triangle;
   Vec3 offset;
-  Vec3 operator()(const Vec3& d, std::uint32_t& index, std::uint32_t) const {
+  [[gnu::always_inline]] Vec3 operator()(const Vec3& d, std::uint32_t& index, std::uint32_t) const {
     const double d0 = glm::dot(triangle[0], d), d1 = glm::dot(triangle[1], d), d2 = glm::dot(triangle[2], d);
     index = d1 > d0 ? (d2 > d1 ? 2u : 1u) : (d2 > d0 ? 2u : 0u);
     return triangle[index] + offset;
