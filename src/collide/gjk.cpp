@@ -231,10 +231,12 @@ struct HullSupport {
 // each non-zero coordinate back to the bit, a zero perhaps with the other sign: the three dot
 // products then compare alike, and the vertex plus a position without a zero coordinate is
 // the turned vertex plus it); `offset` is +0 for the mesh's own frame, which support() adds
+// (always inlined: the GjkStepper constructor called it outlined, 3.9 M instructions of calls and
+// saves in the terrain's 120 steps)
 struct TriangleSupport {
   const Vec3* triangle;
   Vec3 offset;
-  Vec3 operator()(const Vec3& d, std::uint32_t& index, std::uint32_t) const {
+  [[gnu::always_inline]] Vec3 operator()(const Vec3& d, std::uint32_t& index, std::uint32_t) const {
     const double d0 = glm::dot(triangle[0], d), d1 = glm::dot(triangle[1], d), d2 = glm::dot(triangle[2], d);
     index = d1 > d0 ? (d2 > d1 ? 2u : 1u) : (d2 > d0 ? 2u : 0u);
     return triangle[index] + offset;
@@ -386,26 +388,30 @@ DistanceResult gjk_distance(const ConvexProxy& a, const ConvexProxy& b) {
   // run to the end
   GjkStepper g(a, b);
   g.run();
-  DistanceResult r;
-  r.iterations = g.iterations();
   Vec3 ca, cb;
   g.closest_points(ca, cb);
-  if (g.overlap()) {
-    r.cores_overlap = true;
-    r.point_a = ca;
-    r.point_b = cb;
-    return r;
-  }
+  // (each field named once, in the returns: a result zeroed first, then filled, was 11
+  // quadwords of `rep stos` a call)
+  if (g.overlap())
+    return DistanceResult{.distance = 0,
+                          .core_distance = 0,
+                          .point_a = ca,
+                          .point_b = cb,
+                          .normal = Vec3(0, 0, 1),
+                          .cores_overlap = true,
+                          .iterations = g.iterations()};
   // the rounded shapes: radii along the core normal
   // v = a - b is the simplex's closest point: its length is the distance estimate
   const Vec3 v = g.closest();
   const double dist = glm::length(v);
-  r.core_distance = dist;
-  r.normal = dist > 0 ? -v / dist : Vec3(0, 0, 1);
-  r.distance = std::max(0.0, dist - a.radius - b.radius);
-  r.point_a = ca + a.radius * r.normal;
-  r.point_b = cb - b.radius * r.normal;
-  return r;
+  const Vec3 normal = dist > 0 ? -v / dist : Vec3(0, 0, 1);
+  return DistanceResult{.distance = std::max(0.0, dist - a.radius - b.radius),
+                        .core_distance = dist,
+                        .point_a = ca + a.radius * normal,
+                        .point_b = cb - b.radius * normal,
+                        .normal = normal,
+                        .cores_overlap = false,
+                        .iterations = g.iterations()};
 }
 
 }  // namespace pba

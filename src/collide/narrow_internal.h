@@ -129,8 +129,18 @@ struct Poly {
   std::uint32_t edge_stride = 0;        // its arrays' length
   bool is_box = false;
   Vec3 half{0, 0, 0};
-  std::array<Vec3, 8> box_vertices{};
-  std::array<HullFace, 6> box_faces{};
+  // A box's own vertices and faces (`vertices` and `faces` point at them), written by
+  // make_box_poly and read through those pointers only: left unwritten until then (the
+  // union's empty constructor), as members with initialisers they were 54 quadwords zeroed
+  // for every Poly, a hull's too (collide_mesh's, manifold's)
+  struct BoxParts {
+    std::array<Vec3, 8> vertices;
+    std::array<HullFace, 6> faces;
+  };
+  union BoxRoom {
+    BoxRoom() {}
+    BoxParts parts;
+  } box;
 
   Poly() = default;
   Poly(const Poly&) = delete;
@@ -149,19 +159,19 @@ inline void make_box_poly(const Vec3& h, Poly& p) {
   p.is_box = true;
   p.half = h;
   for (std::uint32_t i = 0; i < 8; ++i)
-    p.box_vertices[i] = Vec3((i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z);
+    p.box.parts.vertices[i] = Vec3((i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z);
   for (std::uint32_t f = 0; f < 6; ++f) {
     const int axis = int(f / 2);
     const double s = (f & 1) ? 1.0 : -1.0;
     Vec3 n(0.0);
     n[axis] = s;
-    p.box_faces[f] = HullFace{n, h[axis], kBoxTopology.face_edge[f]};
+    p.box.parts.faces[f] = HullFace{n, h[axis], kBoxTopology.face_edge[f]};
   }
-  p.vertices = p.box_vertices.data();
+  p.vertices = p.box.parts.vertices.data();
   p.vertex_count = 8;
   p.edges = kBoxTopology.edges.data();
   p.edge_count = 24;
-  p.faces = p.box_faces.data();
+  p.faces = p.box.parts.faces.data();
   p.face_count = 6;
   p.center = Vec3(0.0);
   p.inner_radius = std::min({h.x, h.y, h.z});

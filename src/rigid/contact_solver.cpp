@@ -1129,11 +1129,24 @@ template <class B>
 void refresh_blocks(SimdPath simd, B* blocks, std::size_t count, const std::uint8_t* refreshed,
                     const Mat3* inv_inertia) {
   constexpr int P = B::kPoints;
-  RefreshInput in{};  // (zeros in the lanes past the last gathered: their results are not put back)
+  // (not zeroed: a flush reads only the lanes up to its count rounded up to the kernels' width,
+  // and the lanes past the count, whose results are not put back, are zeroed at the last flush
+  // (the only partial one); zeroing the whole input was 769 quadwords a call)
+  RefreshInput in;
   RefreshOutput out;
   std::uint32_t at[kLanes];  // each gathered lane's block * kLanes + lane
   int n = 0;
   auto flush = [&] {
+    if (n < kLanes) {
+      const int to = std::min(kLanes, (n + 7) & ~7);  // (8 double lanes, the widest kernel's)
+      auto clear = [&](double* row) { std::fill(row + n, row + to, 0.0); };
+      for (auto& c : in.t)
+        for (double* row : c) clear(row);
+      clear(in.ma), clear(in.mb), clear(in.unit);
+      for (int i = 0; i < 3; ++i) clear(in.ca[i]), clear(in.cb[i]);
+      for (int p = 0; p < 4; ++p) clear(in.x[p]), clear(in.y[p]), clear(in.on[p]);
+      for (int e = 0; e < 9; ++e) clear(in.ia[e]), clear(in.ib[e]);
+    }
     if (simd == SimdPath::Avx512)
       refresh_avx512<P>(in, out, n);
     else if (simd == SimdPath::Avx2)

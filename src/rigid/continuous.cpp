@@ -20,6 +20,7 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "collide/shape_bounds.h"
 #include "contacts.h"
 
 namespace pba::detail {
@@ -166,9 +167,11 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // (from the arrays: the sweep, zeroed and filled, was a fifth of this pass's time in the
     // rain's landing, for the bodies this skips)
     if (!s.bullet_[i] && shift + 2 * (sine / cosine) * (1 + 1e-12) * s.extent_[i] <= 0.5 * s.min_extent_[i]) continue;
-    Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i], 0, s.extent_[i], Vec3(0)};
-    w.angle = 2 * std::atan2(sine, cosine);
-    if (sine > 0) w.axis = Vec3(dq.x, dq.y, dq.z) / sine;
+    // (every field in the braces, none written twice: made with zeros for the angle and the
+    // axis and these set after, the whole 26 quadwords were zeroed first)
+    const double angle = 2 * std::atan2(sine, cosine);
+    const Vec3 axis = sine > 0 ? Vec3(dq.x, dq.y, dq.z) / sine : Vec3(0.0);
+    const Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i], angle, s.extent_[i], axis};
     // (the farthest any point of the body travels in the step, m)
     const double moved = shift + w.angle * w.reach;
     if (!s.bullet_[i] && moved <= 0.5 * s.min_extent_[i]) continue;
@@ -192,10 +195,14 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // with the centre only (see below)
     Sweep core = w;
     core.angle = 0, core.reach = 0;
-    // (set directly: ColliderShape::sphere() validates, and its messages allocate)
-    ColliderShape core_ball;
-    core_ball.type = ShapeType::Sphere;
-    core_ball.radius = 0.5 * s.min_extent_[i];
+    // (its proxy made directly, once for the body, moved to each time asked: a ColliderShape
+    // for it, 26 quadwords zeroed, and a proxy made of it each time were work nothing read)
+    const double core_radius = 0.5 * s.min_extent_[i];
+    ConvexProxy core_ball{.type = ShapeType::Sphere, .radius = core_radius};
+    auto core_at = [&](double t) -> const ConvexProxy& {
+      core_ball.pose.position = core.c0 + t * (core.c1 - core.c0);
+      return core_ball;
+    };
     // (the centre of mass inside one of the body's shapes: its core ball may reach out of a
     // thin hull, which is then stopped up to that much short of the face, never through it)
     auto core_inside = [&] {
@@ -220,10 +227,18 @@ void RigidContacts::continuous(RigidBodySystem& s) {
         toi = 0, into = g0.normal;
     };
     // the path's bounds in the frame of a mesh posed at pb
+    // (a box's bounds, as bounds() makes them, without a ColliderShape made and checked for
+    // it: 26 quadwords zeroed per body and mesh; the path's half extents are finite and > 0)
     auto mesh_box = [&](const Pose& pb) {
-      return bounds(ColliderShape::box(0.5 * (path.hi - path.lo)),
-                    compose(inverse(pb), Pose{0.5 * (path.hi + path.lo)}));
+      const Pose in = compose(inverse(pb), Pose{0.5 * (path.hi + path.lo)});
+      const Vec3 h = detail::rotated_half(in.rotation, 0.5 * (path.hi - path.lo));
+      return Aabb{in.position - h, in.position + h};
     };
+    // a mesh's triangle as a convex piece, for the core's and the shapes' sweeps: made once for
+    // the body, its pose set per mesh and its corners per triangle (made per triangle, it was
+    // 15 quadwords zeroed 57k times in the terrain's run; per mesh, 32k)
+    Vec3 corners[3];
+    ConvexProxy piece{.type = ShapeType::Mesh, .triangle = corners};
     for (const std::uint32_t k : statics) {
       const ShapeProxy& other = proxies[k];
       if (!other.box.overlaps(path)) continue;
@@ -235,6 +250,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       const double off = plane ? sb.shape.offset / glm::length(sb.shape.normal) + glm::dot(nw, pb.position) : 0.0;
       // a mesh's: the path's bounds in its frame (the core's sweep and the shapes' query the same box)
       const Aabb in_mesh = sb.shape.type == ShapeType::Mesh ? mesh_box(pb) : Aabb{};
+      piece.pose = pb;
       // A body that starts the step touching a static shape is left to the discrete contact
       // (advance() returns 1 for it). Turning fast, the manifold made at the start of the step
       // holds corners that turn away within a substep while others come in, and the contact
@@ -250,7 +266,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
         // no core to keep out (above); the shapes' sweeps below
       } else if (plane) {
         auto gap_at = [&](double t) {
-          return Gap{glm::dot(nw, core.c0 + t * (core.c1 - core.c0)) - off - core_ball.radius, -nw};
+          return Gap{glm::dot(nw, core.c0 + t * (core.c1 - core.c0)) - off - core_radius, -nw};
         };
         const Gap g0 = gap_at(0.0);
         if (g0.distance > target + tol)
@@ -260,8 +276,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       } else if (sb.shape.is_convex()) {
         const ConvexProxy pbx = ConvexProxy::of(sb.shape, pb);
         auto gap_at = [&](double t) {
-          const DistanceResult r =
-              gjk_distance(ConvexProxy::of(core_ball, Pose{core.c0 + t * (core.c1 - core.c0)}), pbx);
+          const DistanceResult r = gjk_distance(core_at(t), pbx);
           return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
         };
         core_against(gap_at);
@@ -270,17 +285,14 @@ void RigidContacts::continuous(RigidBodySystem& s) {
         // stays farther from, on one side, than its radius and the slop is skipped
         const TriangleMesh& mesh = *sb.shape.mesh;
         mesh.query(in_mesh, [&](std::uint32_t tri) {
-          Vec3 corners[3];
           for (int c = 0; c < 3; ++c) corners[c] = mesh.vertices()[mesh.triangles()[tri][c]];
           const Vec3 face = pb.rotation * mesh.normal(tri);
           const double plane = glm::dot(face, apply(pb, corners[0]));
           const double h0 = glm::dot(face, core.c0) - plane, h1 = glm::dot(face, core.c1) - plane;
-          const double clear = core_ball.radius + target + tol;
+          const double clear = core_radius + target + tol;
           if ((h0 > clear && h1 > clear) || (h0 < -clear && h1 < -clear)) return;
-          const ConvexProxy piece{.type = ShapeType::Mesh, .triangle = corners, .pose = pb};
           core_against([&](double t) {
-            const DistanceResult r =
-                gjk_distance(ConvexProxy::of(core_ball, Pose{core.c0 + t * (core.c1 - core.c0)}), piece);
+            const DistanceResult r = gjk_distance(core_at(t), piece);
             return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
           });
         });
@@ -315,9 +327,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
           const Quat p0_inv = glm::conjugate(p0.rotation);
           const Vec3 centre0 = sa.shape.type == ShapeType::Hull ? apply(p0, sa.shape.hull->centroid()) : p0.position;
           mesh.query(in_mesh, [&](std::uint32_t tri) {
-            Vec3 corners[3];
             for (int c = 0; c < 3; ++c) corners[c] = mesh.vertices()[mesh.triangles()[tri][c]];
-            ConvexProxy piece{.type = ShapeType::Mesh, .triangle = corners, .pose = pb};
             const Vec3 face = pb.rotation * mesh.normal(tri), corner = apply(pb, corners[0]);
             const std::uint8_t flags = mesh.edge_flags()[tri];
             // a shape farther from the triangle's plane, on its side, than any of its points
