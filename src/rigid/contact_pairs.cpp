@@ -411,12 +411,31 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
 
 #if PBA_EMIT_AVX2
 namespace {
-// the lanes whose double is 0, subnormal, infinite or NaN (all ones), by its exponent: those
-// exact_times_identity() turns down
-[[gnu::target("avx2")]] inline __m256i not_plain(__m256d x) {
+// the lanes whose double's exponent is `e`: 0 (a zero or a subnormal) or all ones (infinite or
+// NaN), which exact_times_identity() turns down
+[[gnu::target("avx2")]] inline __m256i exponent_is(__m256d x, long long e) {
   const __m256i ones = _mm256_set1_epi64x(0x7ff0000000000000);
-  const __m256i e = _mm256_and_si256(_mm256_castpd_si256(x), ones);
-  return _mm256_or_si256(_mm256_cmpeq_epi64(e, _mm256_setzero_si256()), _mm256_cmpeq_epi64(e, ones));
+  return _mm256_cmpeq_epi64(_mm256_and_si256(_mm256_castpd_si256(x), ones), _mm256_set1_epi64x(e));
+}
+[[gnu::target("avx2")]] inline __m256i any_exponent_is(const __m256d q[4], long long e) {
+  return _mm256_or_si256(_mm256_or_si256(exponent_is(q[0], e), exponent_is(q[1], e)),
+                         _mm256_or_si256(exponent_is(q[2], e), exponent_is(q[3], e)));
+}
+
+// glm's p * q of 4 quaternions (w, x, y, z by lane), its sums in its order
+[[gnu::target("avx2")]] inline void times_lanes(const __m256d p[4], const __m256d q[4], __m256d out[4]) {
+  out[0] = _mm256_sub_pd(
+      _mm256_sub_pd(_mm256_sub_pd(_mm256_mul_pd(p[0], q[0]), _mm256_mul_pd(p[1], q[1])), _mm256_mul_pd(p[2], q[2])),
+      _mm256_mul_pd(p[3], q[3]));
+  out[1] = _mm256_sub_pd(
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(p[0], q[1]), _mm256_mul_pd(p[1], q[0])), _mm256_mul_pd(p[2], q[3])),
+      _mm256_mul_pd(p[3], q[2]));
+  out[2] = _mm256_sub_pd(
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(p[0], q[2]), _mm256_mul_pd(p[2], q[0])), _mm256_mul_pd(p[3], q[1])),
+      _mm256_mul_pd(p[1], q[3]));
+  out[3] = _mm256_sub_pd(
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(p[0], q[3]), _mm256_mul_pd(p[3], q[0])), _mm256_mul_pd(p[1], q[2])),
+      _mm256_mul_pd(p[2], q[1]));
 }
 
 // glm::normalize of 4 quaternions (components by lane): the same products and sums in the
@@ -444,7 +463,7 @@ namespace {
   constexpr int L = 4;
   ShapeProxy* proxy[L];
   std::uint32_t index[L], slots[L];
-  alignas(32) double in[15][L];  // v (3), com (3), q (w x y z), extent, half extents (3), ball radius
+  alignas(32) double in[23][L];  // v (3), com (3), q (w x y z), extent, half extents (3), ball radius, principal, local turn
   alignas(32) double fat_box[6][L];
   int ball = 0;
   for (int j = 0; j < L; ++j) {
@@ -472,21 +491,43 @@ namespace {
     in[10][j] = s.extent_[b];
     in[11][j] = def.shape.half_extents.x, in[12][j] = def.shape.half_extents.y, in[13][j] = def.shape.half_extents.z;
     in[14][j] = def.shape.radius;
+    const Quat& principal = s.principal_[b];
+    in[15][j] = principal.w, in[16][j] = principal.x, in[17][j] = principal.y, in[18][j] = principal.z;
+    in[19][j] = def.local.rotation.w, in[20][j] = def.local.rotation.x, in[21][j] = def.local.rotation.y;
+    in[22][j] = def.local.rotation.z;
     const Aabb& f = proxy[j]->fat;
     fat_box[0][j] = f.lo.x, fat_box[1][j] = f.lo.y, fat_box[2][j] = f.lo.z;
     fat_box[3][j] = f.hi.x, fat_box[4][j] = f.hi.y, fat_box[5][j] = f.hi.z;
   }
   const __m256d zero = _mm256_setzero_pd();
   __m256d rot[4] = {_mm256_load_pd(in[6]), _mm256_load_pd(in[7]), _mm256_load_pd(in[8]), _mm256_load_pd(in[9])};
-  // body_frame leaves q conjugate(identity) out only for q's with every component plain, and
-  // shape_frame compose(body, identity) only for such a normalised q: else one by one
-  __m256i odd = _mm256_or_si256(_mm256_or_si256(not_plain(rot[0]), not_plain(rot[1])),
-                                _mm256_or_si256(not_plain(rot[2]), not_plain(rot[3])));
-  normalize_lanes(rot);
-  odd = _mm256_or_si256(odd, _mm256_or_si256(_mm256_or_si256(not_plain(rot[0]), not_plain(rot[1])),
-                                             _mm256_or_si256(not_plain(rot[2]), not_plain(rot[3]))));
-  if (!_mm256_testz_si256(odd, odd)) return false;
-  normalize_lanes(rot);
+  // body_frame leaves q conjugate(principal) out only for q's with every component plain, and
+  // shape_frame compose(body, local) only for such a normalised q: the lanes with a zero (an
+  // unturned body: fall1000's cubes until they first touch) take the products, as there; an
+  // infinite or NaN component goes one by one (the positions' products by the zero vectors
+  // are +0 only for finite turns)
+  constexpr long long kZero = 0, kSpecial = 0x7ff0000000000000;
+  for (int turn = 0; turn < 2; ++turn) {
+    const __m256i special = any_exponent_is(rot, kSpecial);
+    if (!_mm256_testz_si256(special, special)) return false;
+    const __m256i zeros = any_exponent_is(rot, kZero);
+    __m256d plain[4] = {rot[0], rot[1], rot[2], rot[3]};
+    normalize_lanes(plain);
+    if (_mm256_testz_si256(zeros, zeros)) {
+      for (int k = 0; k < 4; ++k) rot[k] = plain[k];
+      continue;
+    }
+    // body_frame's q conjugate(principal), shape_frame's (compose's) r local.rotation
+    const int from = turn == 0 ? 15 : 19;
+    const __m256d flip = _mm256_set1_pd(turn == 0 ? -0.0 : 0.0);
+    const __m256d by[4] = {_mm256_load_pd(in[from]), _mm256_xor_pd(_mm256_load_pd(in[from + 1]), flip),
+                           _mm256_xor_pd(_mm256_load_pd(in[from + 2]), flip),
+                           _mm256_xor_pd(_mm256_load_pd(in[from + 3]), flip)};
+    __m256d product[4];
+    times_lanes(rot, by, product);
+    normalize_lanes(product);
+    for (int k = 0; k < 4; ++k) rot[k] = _mm256_blendv_pd(plain[k], product[k], _mm256_castsi256_pd(zeros));
+  }
 
   const __m256d vx = _mm256_load_pd(in[0]), vy = _mm256_load_pd(in[1]), vz = _mm256_load_pd(in[2]);
   const __m256d extent = _mm256_load_pd(in[10]);
