@@ -270,18 +270,20 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
   moved.clear(), moved_box.clear(), moved_keys.clear();
   std::size_t created = 0;
   // on AVX2 the bodies go by fours through proxies4_avx2 where it takes them (the plain path
-  // and AVX-512 one by one, as before)
+  // and AVX-512 one by one, as before); after a four it turns down, the next try is twice as
+  // far ahead, up to 64 bodies, so that a scene of other shapes or sleepers pays for few tries
 #if PBA_EMIT_AVX2
-  std::size_t next4 = simd == SimdPath::Avx2 ? 0 : n;
+  std::size_t next4 = simd == SimdPath::Avx2 ? 0 : n, back_off = 4;
 #endif
   for (std::size_t i = 0; i < n; ++i) {
 #if PBA_EMIT_AVX2
     if (i == next4) {
-      next4 = i + 4;
       if (i + 4 <= n && proxies4_avx2(s, i, dt)) {
+        next4 = i + 4, back_off = 4;
         i += 3;
         continue;
       }
+      next4 = i + back_off, back_off = std::min<std::size_t>(2 * back_off, 64);
     }
 #endif
     // a body's shapes sit in a block of their own (a vector per body): the first one's lines
