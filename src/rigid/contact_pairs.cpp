@@ -269,7 +269,23 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
   const std::size_t n = s.type_.size();
   moved.clear(), moved_box.clear(), moved_keys.clear();
   std::size_t created = 0;
+  // on AVX2 the bodies go by fours through proxies4_avx2 where it takes them (the plain path
+  // and AVX-512 one by one, as before); after a four it turns down, the next try is twice as
+  // far ahead, up to 64 bodies, so that a scene of other shapes or sleepers pays for few tries
+#if PBA_EMIT_AVX2
+  std::size_t next4 = simd == SimdPath::Avx2 ? 0 : n, back_off = 4;
+#endif
   for (std::size_t i = 0; i < n; ++i) {
+#if PBA_EMIT_AVX2
+    if (i == next4) {
+      if (i + 4 <= n && proxies4_avx2(s, i, dt)) {
+        next4 = i + 4, back_off = 4;
+        i += 3;
+        continue;
+      }
+      next4 = i + back_off, back_off = std::min<std::size_t>(2 * back_off, 64);
+    }
+#endif
     // a body's shapes sit in a block of their own (a vector per body): the first one's lines
     // asked for some bodies ahead (its type, size and local pose: 216 bytes)
     if (i + kBodiesAhead < n) prefetch_lines<sizeof(RigidShapeDef)>(s.shapes_[i + kBodiesAhead].data());
@@ -394,6 +410,217 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
     tree_order(false);
   }
 }
+
+#if PBA_EMIT_AVX2
+namespace {
+// the lanes whose double's exponent is `e`: 0 (a zero or a subnormal) or all ones (infinite or
+// NaN), which exact_times_identity() turns down
+[[gnu::target("avx2")]] inline __m256i exponent_is(__m256d x, long long e) {
+  const __m256i ones = _mm256_set1_epi64x(0x7ff0000000000000);
+  return _mm256_cmpeq_epi64(_mm256_and_si256(_mm256_castpd_si256(x), ones), _mm256_set1_epi64x(e));
+}
+[[gnu::target("avx2")]] inline __m256i any_exponent_is(const __m256d q[4], long long e) {
+  return _mm256_or_si256(_mm256_or_si256(exponent_is(q[0], e), exponent_is(q[1], e)),
+                         _mm256_or_si256(exponent_is(q[2], e), exponent_is(q[3], e)));
+}
+
+// glm's p * q of 4 quaternions (w, x, y, z by lane), its sums in its order
+[[gnu::target("avx2")]] inline void times_lanes(const __m256d p[4], const __m256d q[4], __m256d out[4]) {
+  out[0] = _mm256_sub_pd(
+      _mm256_sub_pd(_mm256_sub_pd(_mm256_mul_pd(p[0], q[0]), _mm256_mul_pd(p[1], q[1])), _mm256_mul_pd(p[2], q[2])),
+      _mm256_mul_pd(p[3], q[3]));
+  out[1] = _mm256_sub_pd(
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(p[0], q[1]), _mm256_mul_pd(p[1], q[0])), _mm256_mul_pd(p[2], q[3])),
+      _mm256_mul_pd(p[3], q[2]));
+  out[2] = _mm256_sub_pd(
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(p[0], q[2]), _mm256_mul_pd(p[2], q[0])), _mm256_mul_pd(p[3], q[1])),
+      _mm256_mul_pd(p[1], q[3]));
+  out[3] = _mm256_sub_pd(
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(p[0], q[3]), _mm256_mul_pd(p[3], q[0])), _mm256_mul_pd(p[1], q[2])),
+      _mm256_mul_pd(p[2], q[1]));
+}
+
+// glm::normalize of 4 quaternions (components by lane): the same products and sums in the
+// same order, the identity where the length is not > 0
+[[gnu::target("avx2")]] inline void normalize_lanes(__m256d q[4]) {
+  // q: w, x, y, z; glm's dot sums (ww + xx) + (yy + zz)
+  const __m256d dot = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(q[0], q[0]), _mm256_mul_pd(q[1], q[1])),
+                                    _mm256_add_pd(_mm256_mul_pd(q[2], q[2]), _mm256_mul_pd(q[3], q[3])));
+  const __m256d len = _mm256_sqrt_pd(dot);
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d none = _mm256_cmp_pd(len, zero, _CMP_LE_OQ);
+  const __m256d inv = _mm256_div_pd(_mm256_set1_pd(1.0), len);
+  q[0] = _mm256_blendv_pd(_mm256_mul_pd(q[0], inv), _mm256_set1_pd(1.0), none);
+  for (int k = 1; k < 4; ++k) q[k] = _mm256_blendv_pd(_mm256_mul_pd(q[k], inv), zero, none);
+}
+}  // namespace
+
+// The loop of update_proxies for 4 bodies, each through the float operations it makes for
+// one, in the same order, with the same identities left out (body_frame, shape_frame), so with
+// the same bits: the body's travel, its rotation normalised twice (body_frame's, then
+// shape_frame's), the shape's tight box (a ball's or a box's, rotated_half's sums), the
+// stretch ahead and the fat-box test. (On fall1000 this function made about 700 scalar
+// instructions a body; the tests that pick the case and the loads stay scalar.)
+[[gnu::target("avx2")]] bool RigidContacts::proxies4_avx2(RigidBodySystem& s, std::size_t i, double dt) {
+  constexpr int L = 4;
+  ShapeProxy* proxy[L];
+  std::uint32_t index[L], slots[L];
+  alignas(32) double in[23][L];  // v (3), com (3), q (w x y z), extent, half extents (3), ball radius, principal, local turn
+  alignas(32) double fat_box[6][L];
+  int ball = 0;
+  for (int j = 0; j < L; ++j) {
+    const std::size_t b = i + static_cast<std::size_t>(j);
+    const std::uint32_t slot = s.owner_[b];
+    if (s.type_[b] != BodyType::Dynamic || s.asleep_[b] || slot >= body_proxies.size() ||
+        body_proxies[slot].size() != 1 || s.shapes_[b].size() != 1)
+      return false;
+    const RigidShapeDef& def = s.shapes_[b][0];
+    const ShapeType type = def.shape.type;
+    if (!((type == ShapeType::Sphere) | (type == ShapeType::Box)) ||
+        !(positive_zero(def.local.position) & is_identity(def.local.rotation) & is_identity(s.principal_[b]) &
+          positive_zero(s.com_local_[b])))
+      return false;
+    const std::uint32_t q = body_proxies[slot][0];
+    if (proxies[q].node < 0) return false;
+    proxy[j] = &proxies[q], index[j] = q, slots[j] = slot;
+    ball |= (type == ShapeType::Sphere) << j;
+    const Vec3& v = s.v_[b];
+    const Vec3& c = s.com_[b];
+    const Quat& r = s.q_[b];
+    in[0][j] = v.x, in[1][j] = v.y, in[2][j] = v.z;
+    in[3][j] = c.x, in[4][j] = c.y, in[5][j] = c.z;
+    in[6][j] = r.w, in[7][j] = r.x, in[8][j] = r.y, in[9][j] = r.z;
+    in[10][j] = s.extent_[b];
+    in[11][j] = def.shape.half_extents.x, in[12][j] = def.shape.half_extents.y, in[13][j] = def.shape.half_extents.z;
+    in[14][j] = def.shape.radius;
+    const Quat& principal = s.principal_[b];
+    in[15][j] = principal.w, in[16][j] = principal.x, in[17][j] = principal.y, in[18][j] = principal.z;
+    in[19][j] = def.local.rotation.w, in[20][j] = def.local.rotation.x, in[21][j] = def.local.rotation.y;
+    in[22][j] = def.local.rotation.z;
+    const Aabb& f = proxy[j]->fat;
+    fat_box[0][j] = f.lo.x, fat_box[1][j] = f.lo.y, fat_box[2][j] = f.lo.z;
+    fat_box[3][j] = f.hi.x, fat_box[4][j] = f.hi.y, fat_box[5][j] = f.hi.z;
+  }
+  const __m256d zero = _mm256_setzero_pd();
+  __m256d rot[4] = {_mm256_load_pd(in[6]), _mm256_load_pd(in[7]), _mm256_load_pd(in[8]), _mm256_load_pd(in[9])};
+  // body_frame leaves q conjugate(principal) out only for q's with every component plain, and
+  // shape_frame compose(body, local) only for such a normalised q: the lanes with a zero (an
+  // unturned body: fall1000's cubes until they first touch) take the products, as there; an
+  // infinite or NaN component goes one by one (the positions' products by the zero vectors
+  // are +0 only for finite turns)
+  constexpr long long kZero = 0, kSpecial = 0x7ff0000000000000;
+  for (int turn = 0; turn < 2; ++turn) {
+    const __m256i special = any_exponent_is(rot, kSpecial);
+    if (!_mm256_testz_si256(special, special)) return false;
+    const __m256i zeros = any_exponent_is(rot, kZero);
+    __m256d plain[4] = {rot[0], rot[1], rot[2], rot[3]};
+    normalize_lanes(plain);
+    if (_mm256_testz_si256(zeros, zeros)) {
+      for (int k = 0; k < 4; ++k) rot[k] = plain[k];
+      continue;
+    }
+    // body_frame's q conjugate(principal), shape_frame's (compose's) r local.rotation
+    const int from = turn == 0 ? 15 : 19;
+    const __m256d flip = _mm256_set1_pd(turn == 0 ? -0.0 : 0.0);
+    const __m256d by[4] = {_mm256_load_pd(in[from]), _mm256_xor_pd(_mm256_load_pd(in[from + 1]), flip),
+                           _mm256_xor_pd(_mm256_load_pd(in[from + 2]), flip),
+                           _mm256_xor_pd(_mm256_load_pd(in[from + 3]), flip)};
+    __m256d product[4];
+    times_lanes(rot, by, product);
+    normalize_lanes(product);
+    for (int k = 0; k < 4; ++k) rot[k] = _mm256_blendv_pd(plain[k], product[k], _mm256_castsi256_pd(zeros));
+  }
+
+  const __m256d vx = _mm256_load_pd(in[0]), vy = _mm256_load_pd(in[1]), vz = _mm256_load_pd(in[2]);
+  const __m256d extent = _mm256_load_pd(in[10]);
+  // speed: 0 for a still body (v == 0), else glm::length's (xx + yy) + zz, its root
+  const __m256d still = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(vx, zero, _CMP_EQ_OQ), _mm256_cmp_pd(vy, zero, _CMP_EQ_OQ)),
+                                      _mm256_cmp_pd(vz, zero, _CMP_EQ_OQ));
+  const __m256d length = _mm256_sqrt_pd(
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)), _mm256_mul_pd(vz, vz)));
+  const __m256d speed = _mm256_blendv_pd(length, zero, still);
+  const __m256d vdt = _mm256_set1_pd(dt);
+  // std::min(a, b) is (b < a ? b : a), vminpd(b, a)
+  const __m256d moves = _mm256_min_pd(extent, _mm256_mul_pd(speed, vdt));
+  _mm256_storeu_pd(&travel[i], moves);
+  const __m256d reach = _mm256_add_pd(_mm256_set1_pd(s.settings_.speculative_distance), moves);
+  // ahead: std::min(2 speed dt, extent) / speed times v, 0 for speed 0
+  const __m256d scale =
+      _mm256_div_pd(_mm256_min_pd(extent, _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), speed), vdt)), speed);
+  const __m256d halted = _mm256_cmp_pd(speed, zero, _CMP_EQ_OQ);
+  const __m256d ahead[3] = {_mm256_blendv_pd(_mm256_mul_pd(scale, vx), zero, halted),
+                            _mm256_blendv_pd(_mm256_mul_pd(scale, vy), zero, halted),
+                            _mm256_blendv_pd(_mm256_mul_pd(scale, vz), zero, halted)};
+
+  // the box's world half widths (rotated_half: glm::mat3_cast's entries, the sums from 0 by
+  // columns), a ball's radius instead in its lanes
+  const __m256d w = rot[0], x = rot[1], y = rot[2], z = rot[3];
+  const __m256d xx = _mm256_mul_pd(x, x), yy = _mm256_mul_pd(y, y), zz = _mm256_mul_pd(z, z);
+  const __m256d xz = _mm256_mul_pd(x, z), xy = _mm256_mul_pd(x, y), yz = _mm256_mul_pd(y, z);
+  const __m256d wx = _mm256_mul_pd(w, x), wy = _mm256_mul_pd(w, y), wz = _mm256_mul_pd(w, z);
+  const __m256d one = _mm256_set1_pd(1.0), two = _mm256_set1_pd(2.0);
+  const __m256d sign = _mm256_set1_pd(-0.0);
+  // r[j][i], j the column
+  __m256d m[3][3];
+  m[0][0] = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(yy, zz)));
+  m[0][1] = _mm256_mul_pd(two, _mm256_add_pd(xy, wz));
+  m[0][2] = _mm256_mul_pd(two, _mm256_sub_pd(xz, wy));
+  m[1][0] = _mm256_mul_pd(two, _mm256_sub_pd(xy, wz));
+  m[1][1] = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(xx, zz)));
+  m[1][2] = _mm256_mul_pd(two, _mm256_add_pd(yz, wx));
+  m[2][0] = _mm256_mul_pd(two, _mm256_add_pd(xz, wy));
+  m[2][1] = _mm256_mul_pd(two, _mm256_sub_pd(yz, wx));
+  m[2][2] = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(xx, yy)));
+  const __m256d h[3] = {_mm256_load_pd(in[11]), _mm256_load_pd(in[12]), _mm256_load_pd(in[13])};
+  const __m256d radius = _mm256_load_pd(in[14]);
+  const __m256d balls = _mm256_castsi256_pd(
+      _mm256_cmpeq_epi64(_mm256_and_si256(_mm256_set1_epi64x(ball), _mm256_setr_epi64x(1, 2, 4, 8)), _mm256_setr_epi64x(1, 2, 4, 8)));
+  alignas(32) double out[9][L];  // position (3), box lo (3), hi (3)
+  alignas(32) double want[6][L];
+  __m256d keep = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  const __m256d margin = _mm256_set1_pd(2 * tree.margin());
+  const __m256d com[3] = {_mm256_load_pd(in[3]), _mm256_load_pd(in[4]), _mm256_load_pd(in[5])};
+  for (int c = 0; c < 3; ++c) {
+    __m256d half = zero;
+    for (int j = 0; j < 3; ++j) half = _mm256_add_pd(half, _mm256_mul_pd(_mm256_andnot_pd(sign, m[j][c]), h[j]));
+    half = _mm256_blendv_pd(half, radius, balls);
+    // shape_frame's position: body.position + 0
+    const __m256d at = _mm256_add_pd(com[c], zero);
+    const __m256d lo = _mm256_sub_pd(_mm256_sub_pd(at, half), reach);
+    const __m256d hi = _mm256_add_pd(_mm256_add_pd(at, half), reach);
+    _mm256_store_pd(out[c], at), _mm256_store_pd(out[3 + c], lo), _mm256_store_pd(out[6 + c], hi);
+    // stretched(box, ahead) (glm::min(a, 0) is (0 < a ? 0 : a), vminpd(0, a); max alike), and
+    // the test: fat contains box, and stretched(want, -ahead) grown by 2 margins contains fat
+    const __m256d want_lo = _mm256_add_pd(lo, _mm256_min_pd(zero, ahead[c]));
+    const __m256d want_hi = _mm256_add_pd(hi, _mm256_max_pd(zero, ahead[c]));
+    _mm256_store_pd(want[c], want_lo), _mm256_store_pd(want[3 + c], want_hi);
+    const __m256d back = _mm256_xor_pd(ahead[c], sign);
+    const __m256d far_lo = _mm256_sub_pd(_mm256_add_pd(want_lo, _mm256_min_pd(zero, back)), margin);
+    const __m256d far_hi = _mm256_add_pd(_mm256_add_pd(want_hi, _mm256_max_pd(zero, back)), margin);
+    const __m256d fat_lo = _mm256_load_pd(fat_box[c]), fat_hi = _mm256_load_pd(fat_box[3 + c]);
+    keep = _mm256_and_pd(keep, _mm256_and_pd(_mm256_cmp_pd(fat_lo, lo, _CMP_LE_OQ), _mm256_cmp_pd(hi, fat_hi, _CMP_LE_OQ)));
+    keep = _mm256_and_pd(keep, _mm256_and_pd(_mm256_cmp_pd(far_lo, fat_lo, _CMP_LE_OQ), _mm256_cmp_pd(fat_hi, far_hi, _CMP_LE_OQ)));
+  }
+  alignas(32) double turn[4][L];
+  for (int k = 0; k < 4; ++k) _mm256_store_pd(turn[k], rot[k]);
+  const int kept = _mm256_movemask_pd(keep);
+  for (int j = 0; j < L; ++j) {
+    const std::size_t b = i + static_cast<std::size_t>(j);
+    if (b + kBodiesAhead < s.type_.size()) prefetch_lines<sizeof(RigidShapeDef)>(s.shapes_[b + kBodiesAhead].data());
+    const std::uint32_t q = index[j];
+    ShapeProxy& p = *proxy[j];
+    shape_poses[q] = {Vec3(out[0][j], out[1][j], out[2][j]), Quat(turn[0][j], turn[1][j], turn[2][j], turn[3][j])};
+    shape_pose_stamp[q] = stamp;
+    p.box = {Vec3(out[3][j], out[4][j], out[5][j]), Vec3(out[6][j], out[7][j], out[8][j])};
+    p.body = static_cast<std::uint32_t>(b), p.shape = 0, p.slot = slots[j];
+    if (kept >> j & 1) continue;
+    moved_keys.push_back(std::uint64_t{1} << 31 | moved.size());
+    moved_box.push_back({Vec3(want[0][j], want[1][j], want[2][j]), Vec3(want[3][j], want[4][j], want[5][j])});
+    moved.push_back(q);
+  }
+  return true;
+}
+#endif
 
 // Puts `moved` in the order of its leaves' parents' indices, stably (`moved_keys[i]`: entry
 // i, with bit 31 set when its leaf is to get the fat box of `moved_box[i]`, which is set on

@@ -401,6 +401,10 @@ struct RigidContacts {
   void remove_body(RigidBodySystem& s, std::uint32_t slot, std::size_t i);
   // update()'s parts
   void update_proxies(RigidBodySystem& s, double dt);
+  // update_proxies' common case for dense bodies i..i+3 at once (AVX2): each dynamic, awake and
+  // not new, with one ball or box at its origin unturned, its principal frame its own, centred;
+  // false, having changed nothing, when one is not (contact_pairs.cpp)
+  bool proxies4_avx2(RigidBodySystem& s, std::size_t i, double dt);
   void find_new_pairs(RigidBodySystem& s);
   /// Puts `moved` in the tree's order (contact_pairs.cpp): by its leaves' parents' node
   /// indices, stably, planes last; `set_boxes`: the leaves flagged in moved_keys get their
