@@ -112,7 +112,7 @@ constexpr BoxTopology make_box_topology() {
 inline constexpr BoxTopology kBoxTopology = make_box_topology();
 
 /// A convex polyhedron in its local frame: vertices, half edges, faces, and a centre.
-/// Boxes fill `storage` (no heap); hulls point at their ConvexHull.
+/// Boxes fill `box.parts` (no heap; make_box_poly); hulls point at their ConvexHull.
 struct Poly {
   const Vec3* vertices = nullptr;
   std::uint32_t vertex_count = 0;

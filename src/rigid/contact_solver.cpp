@@ -110,7 +110,8 @@ typedef float v8f __attribute__((vector_size(32)));
 
 // What filling a block reads of its manifolds, by field and lane (doubles, as the pairs and the
 // bodies hold them; lanes past the block's manifolds and points past a manifold's count hold
-// zeros): gathered lane by lane from the pairs (RigidContacts::fill_block), then computed a
+// zeros): gathered from the pairs (RigidContacts::fill_block: lane by lane, on AVX2 a ContactBlock's
+// whole fours by gather_fill_avx2), then computed a
 // lane type at a time (fill_lanes), so the arithmetic runs on 8 lanes (AVX-512) or 4 (AVX2)
 // at once; the pairs' gather, not the arithmetic, is what is left of its time (it waits on
 // memory: a block's 16 pairs are 16 scattered 640-byte records).
@@ -387,7 +388,11 @@ static_assert(offsetof(ContactPair, t1) == 88 && offsetof(ContactPair, friction)
                   offsetof(ContactPair, rolling) == 184 && offsetof(ContactPair, t2) == 192 &&
                   offsetof(ContactPair, ca) == 216 && offsetof(ContactPair, twist_radius) == 240 &&
                   sizeof(Mat3) == 9 * sizeof(double),
-              "gather_avx2 reads a pair's header as six rows of four doubles from its normal, a point as 4 + 4 + 2");
+              "gather_fill_avx2 reads a pair's header as six rows of four doubles from its normal, a point as "
+              "4 + 4 + 2");
+static_assert(offsetof(SolverPoint, sa) == 24 && offsetof(SolverPoint, sb) == 48 &&
+                  offsetof(SolverPoint, offset) == 72 && sizeof(SolverPoint) == 80 && Manifold::kMaxPoints == 4,
+              "gather_fill_avx2 reads a point's at, sa, sb and offset as rows at these places, four points a pair");
 
 // What fill_block's lane loop copies into `in` for a ContactBlock's lanes [0, lanes) (a multiple
 // of four), four lanes at a time: rows of four doubles from the four pairs (by_color's `index`),
@@ -396,9 +401,10 @@ static_assert(offsetof(ContactPair, t1) == 88 && offsetof(ContactPair, friction)
 // `on ? x : 0` makes them; the centres' differences and the arms by the same subtractions. The
 // same values, so the same bits. A double at a time, the loop's copies took about 250
 // instructions a lane (the pyramids' fill_block), these about 110.
-__attribute__((target("avx2"))) void gather_avx2(FillInput& in, const ContactPair* pairs, const std::uint32_t* index,
-                                                 const std::uint32_t* body_a, const std::uint32_t* body_b,
-                                                 const Mat3* inv_inertia, const Vec3* com, int lanes) {
+__attribute__((target("avx2"))) void gather_fill_avx2(FillInput& in, const ContactPair* pairs,
+                                                      const std::uint32_t* index, const std::uint32_t* body_a,
+                                                      const std::uint32_t* body_b, const Mat3* inv_inertia,
+                                                      const Vec3* com, int lanes) {
   using V = __m256d;
   for (int l0 = 0; l0 < lanes; l0 += 4) {
     const char* p[4];
@@ -933,7 +939,7 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   // (kept, a lane of more than one point reads its bodies from the block, not the pair's key:
   // the fill does not read the pair's first line; a rolling lane's roll still does)
   const bool from_frame = kept && !kOne;
-  // the lanes [0, gathered) whose copies gather_avx2 makes four at a time (a ContactBlock's whole
+  // the lanes [0, gathered) whose copies gather_fill_avx2 makes four at a time (a ContactBlock's whole
   // fours on the AVX2 path; the AVX-512 path's fill_block is as it was)
   int gathered = 0;
 #if PBA_ROWS_AVX2
@@ -980,9 +986,9 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
       lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)) | (kOne ? kOneLane : 0u);
     }
     count[l] = c.count;
-    if (l < gathered)  // (the rest of the lane's copies: gather_avx2's, after this loop)
+    if (l < gathered) {  // (the rest of the lane's copies: gather_fill_avx2's, after this loop)
       for (int p = 0; p < P; ++p) in.active[p][l] = p < c.count ? 1 : 0;
-    else {
+    } else {
       const Vec3 t[3] = {c.t1, c.t2, c.normal};
       const std::uint32_t body_a = k.a[l], body_b = k.b[l];  // (c.a, c.b: written above when not kept)
       const Mat3& ia = inv_inertia[body_a];
@@ -1020,7 +1026,7 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   if constexpr (kOne) k.rolls = rolling_lanes;
 #if PBA_ROWS_AVX2
   if (gathered > 0)
-    gather_avx2(in, pairs.data(), &by_color[first], k.a, k.b, inv_inertia.data(), s.com_.data(), gathered);
+    gather_fill_avx2(in, pairs.data(), &by_color[first], k.a, k.b, inv_inertia.data(), s.com_.data(), gathered);
 #endif
   if (!kept) {
     std::memcpy(masses.ma, in.ma, sizeof in.ma);
@@ -1211,9 +1217,11 @@ void RigidContacts::refresh_inertia(RigidBodySystem& s) {
       return Quat(at[0], at[kFreeLaneWidth], at[2 * kFreeLaneWidth], at[3 * kFreeLaneWidth]);
     };
     std::size_t j = 0;
-    if (lanes) {
+    if (lanes && simd == SimdPath::Avx2) {
       // on AVX2 4 bodies at a time, the test's arithmetic in lanes (its 49 instructions a body
-      // were 2.5% of the terrain's); the positions it leaves, below
+      // were 2.5% of the terrain's); the positions it leaves, below (the other paths' kernels
+      // are not written: all their bodies go by the loop after this, and the list is not
+      // grown and zeroed for nothing)
       const std::size_t was = refresh_list.size();
       refresh_list.resize(was + list.size());  // (within what prepare() reserved)
       const std::size_t far = turned_far_wide(simd, list.data(), list.size(), lanes, inertia_q.data(),

@@ -606,7 +606,8 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // (each point's -mass * mass scale formed once for the sweeps: the same product each sweep
   // formed before. The rigid and relax passes' impulse scale is zero and their mass scale one:
   // their `- 0 * lambda` is left out, which changes no bit, since no impulse is ever -0: they
-  // start at +0 or above, and vmax(lambda + j, 0) gives -0 only from -0 + -0. For the same
+  // start at +0 or above (the fill's carried impulses, `on ? x : 0` and cap_carry's vmin of two
+  // non-negative values), and vmax(lambda + j, 0) gives -0 only from -0 + -0. For the same
   // reason the AVX2 relax pass leaves out its + 0, which turns a -0 speed into +0 and so flips
   // the sign of a zero j, which lambda + j then drops: an add less a point in its chain)
   if constexpr (!kRounds)
@@ -1029,7 +1030,7 @@ PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatPar
 }
 
 // blocks [first, last) on lanes of V, the separations on lanes of D (several parts of a block
-// when they are narrower). No software prefetch: the blocks of a colour lie one after another
+// when they are narrower). No prefetch of the blocks' fields: the blocks of a colour lie one after another
 // and the hardware's streamer fetches them; asking for all the lines of the next block at once
 // stalled the loop on the full fill buffers (measured on the 2870-box pyramid: the whole run
 // 7-8% faster without; the AVX2 path asks for one line of the next block only, below)

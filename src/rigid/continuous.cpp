@@ -171,7 +171,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // axis and these set after, the whole 26 quadwords were zeroed first)
     const double angle = 2 * std::atan2(sine, cosine);
     const Vec3 axis = sine > 0 ? Vec3(dq.x, dq.y, dq.z) / sine : Vec3(0.0);
-    const Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i], angle, s.extent_[i], axis};
+    const Sweep w{s.com0_[i], s.com_[i], s.q0_[i], s.q_[i], s.principal_[i], s.com_local_[i],
+                  angle,      s.extent_[i], axis};
     // (the farthest any point of the body travels in the step, m)
     const double moved = shift + w.angle * w.reach;
     if (!s.bullet_[i] && moved <= 0.5 * s.min_extent_[i]) continue;

@@ -20,7 +20,8 @@
 // Cost (fall1000, all cubes, spent a sixth of its step here under the splitting, half that
 // with the exact turn): 8 bodies in a row, the common case, load and store their fields as
 // whole vectors and a few permutes, and the 64-byte rows of velocities, warm-start changes and
-// motion by whole rows and a transpose on AVX-512; the all-lanes tests use the targets'
+// motion by whole rows and a transpose on AVX-512 (on AVX2 half rows of four and two 4x4
+// transposes); the all-lanes tests use the targets'
 // compare-to-mask instructions; on AVX-512 the positions run two blocks of 8 at once, as the
 // splitting's five sub-flows are one long chain of dependent operations per block.
 //
@@ -34,6 +35,7 @@
 #include "solver.h"
 
 #include <bit>
+#include <cassert>
 #include <cmath>
 
 #include <immintrin.h>
@@ -386,6 +388,7 @@ PBA_LANES void store_rows(double* base, const std::uint32_t* idx, const V in[8],
     v4d r[8];
     for (int k = 0; k < 8; ++k) r[k] = in[k];
     transpose4x4(r), transpose4x4(r + 4);
+    assert(n >= 4 && n <= 8);
     // (n is a constant where this is inlined, 6 to 8: whole first halves, the second's first n -
     // 4; unrolled, or GCC stored the transposed rows on the stack and copied them from there)
 #pragma GCC unroll 4

@@ -12,9 +12,9 @@
 #include <random>
 #include <vector>
 
+#include "cpu_time.h"
 #include "pba/ik.h"
 #include "pba/ik_scenes.h"
-#include "cpu_time.h"
 
 namespace {
 
