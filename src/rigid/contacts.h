@@ -838,6 +838,7 @@ struct RigidContacts {
     double slop;    // the pair's linear slop (m): pair_slop() of its thinner body
     Vec3 n;         // the normal, from a to b
     std::uint32_t pair, a, b;
+    std::uint32_t record;  // the pair's CachedManifold (its preload)
   };
   std::vector<std::uint32_t> deep;
   std::vector<std::uint32_t> preloaded;  // the pairs whose manifold has a preload (emit() lists them)
