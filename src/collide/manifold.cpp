@@ -226,6 +226,24 @@ void convex_gjk(const ColliderShape& a, const Pose& pa, const ColliderShape& b, 
   manifold_from_normal(a, pa, b, pb, n, point_a, point_b, margin, m);
 }
 
+// a ball or capsule (A) against a hull (B): a face of the hull whose plane the core (its
+// centre, or both ends of its segment) lies beyond by more than the radius and the margin
+// separates them by more than the margin, and GJK's distance, never below a separating
+// plane's gap, would find that too: no manifold, without the run. Else GJK (EPA where the
+// cores overlap) as convex_gjk. (On the terrain the capsule-pyramid and ball-pyramid pairs
+// were most of the body pairs GJK ran for: over its 500 steps 52k of their 134k calls end
+// here, and 19k of the 82k GJK runs left find them beyond the margin)
+void core_hull(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb, double margin,
+               Manifold& m) {
+  m.count = 0;
+  const Segment s = a.type == ShapeType::Capsule ? capsule_core(a, pa) : Segment{pa.position, pa.position};
+  const Vec3 p = apply_inverse(pb, s.p), q = apply_inverse(pb, s.q);  // in the hull's frame
+  const double reach = a.radius + margin;
+  for (const ConvexHull::Face& f : b.hull->faces())
+    if (std::min(glm::dot(f.normal, p), glm::dot(f.normal, q)) - f.offset > reach) return;
+  convex_gjk(a, pa, b, pb, margin, m);
+}
+
 // a capsule (A) against a box (B): the closest points of the core segment and the box in
 // the box's frame in closed form (segment_box_closest: a few dozen operations where GJK took
 // three or four iterations), then contact_normal's normal and points and the manifold along
@@ -435,11 +453,11 @@ constexpr PairTable make_pair_table() {
   put<T::Sphere, T::Sphere, closed<sphere_sphere>>(t);
   put<T::Sphere, T::Capsule, closed<sphere_capsule>>(t);
   put<T::Sphere, T::Box, closed<sphere_box>>(t);
-  put<T::Sphere, T::Hull, closed<convex_gjk>>(t);
+  put<T::Sphere, T::Hull, closed<core_hull>>(t);
   put<T::Sphere, T::Plane, closed<convex_plane>>(t);
   put<T::Capsule, T::Capsule, closed<capsule_capsule>>(t);
   put<T::Capsule, T::Box, closed<capsule_box>>(t);
-  put<T::Capsule, T::Hull, closed<convex_gjk>>(t);
+  put<T::Capsule, T::Hull, closed<core_hull>>(t);
   put<T::Capsule, T::Plane, closed<convex_plane>>(t);
   put<T::Box, T::Box, polys>(t);
   put<T::Box, T::Hull, polys>(t);

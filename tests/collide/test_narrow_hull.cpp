@@ -431,3 +431,44 @@ TEST(HullPairs, SatAxisEqualsTheSearchOfEveryFeature) {
   EXPECT_GT(edges, 40);
   EXPECT_LT(skipped, 20);
 }
+
+// A ball or capsule against a hull: collide() leaves out GJK where one of the hull's face
+// planes has the core beyond it by more than the radius and the margin (core_hull). Wherever
+// a face plane shows that, GJK finds the cores farther apart than the radius and the margin
+// too, and there is no manifold; where GJK finds them within it (cores apart), there is one.
+TEST(HullPairs, BallAndCapsuleBeyondAFacePlaneAreBeyondForGjkToo) {
+  std::mt19937_64 rng(20261206);
+  std::uniform_real_distribution<double> size(0.05, 0.5);
+  NarrowPhaseSettings settings;
+  settings.speculative_margin = 0.1;
+  int beyond_plane = 0, within = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const auto h = random_hull(rng);
+    const ColliderShape b = ColliderShape::convex(h);
+    const ColliderShape a =
+        trial % 2 ? ColliderShape::capsule(size(rng), size(rng)) : ColliderShape::sphere(size(rng));
+    const Pose pa{random_vec(rng, 1.8), random_rotation(rng)};
+    const Pose pb{random_vec(rng, 0.3), random_rotation(rng)};
+    const double half = a.type == ShapeType::Capsule ? a.half_height : 0.0;
+    const Vec3 u = pa.rotation * Vec3(0, half, 0);
+    bool plane_apart = false;
+    for (const auto& [n, off] : world(*h, pb).planes)
+      plane_apart |= std::min(glm::dot(n, pa.position - u), glm::dot(n, pa.position + u)) - off - a.radius >
+                     settings.speculative_margin + 1e-12;
+    const DistanceResult g = gjk_distance(ConvexProxy::of(a, pa), ConvexProxy::of(b, pb));
+    const bool gjk_beyond = !g.cores_overlap && g.core_distance - a.radius > settings.speculative_margin;
+    for (const bool swap : {false, true}) {
+      const Manifold m = swap ? collide(b, pb, a, pa, settings) : collide(a, pa, b, pb, settings);
+      if (plane_apart) {
+        EXPECT_TRUE(gjk_beyond) << trial;
+        EXPECT_EQ(m.count, 0) << trial;
+      } else if (!g.cores_overlap && !gjk_beyond) {
+        EXPECT_GE(m.count, 1) << trial;
+      }
+    }
+    beyond_plane += plane_apart;
+    within += !g.cores_overlap && !gjk_beyond;
+  }
+  EXPECT_GT(beyond_plane, 1000);
+  EXPECT_GT(within, 150);
+}
