@@ -357,8 +357,9 @@ int sat_triangle(const Poly& P, PolyAt& at, const Pose& pa, const Vec3 tri[3], c
   // that separates them by no more). GJK's distance is never below the gap along any axis, so
   // GJK would find them beyond the margin too: the same answer without its run. (With the
   // triangle's sides alone a fifth of the runs were saved so; with every axis, scalar, about
-  // half, for about what they saved; with the face axes' spans made once a call and the edge
-  // axes in AVX2 lanes the axes cost a fraction of a run)
+  // half, for about what they saved. With the face axes' spans made once a call and the edge
+  // axes in AVX2 lanes, on the terrain's steps 300-330 the axes cost 0.23 M instructions a
+  // step and saved 0.30 M of GJK; its landing's 120 steps, 20 M of 2,445 M in all)
   auto beyond_any = [&] {
     if (beyond_sides()) return true;
     if (!at.made) at.make(P, pa);

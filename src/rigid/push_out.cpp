@@ -103,8 +103,8 @@ bool RigidContacts::push_out(RigidBodySystem& s, const Vec3& gravity) {
   // pair is read with the lines of the pair some places ahead asked for, and of the
   // manifold's preload a few places ahead, its record read from those lines by then. Read as
   // the blocks gave them, each pair's and manifold's lines were waited on in turn: on the
-  // terrain, which gathers a thousand manifolds a step, the wait for the preload alone was a
-  // quarter of this function's time. The sort below orders them by height and pair alone)
+  // terrain, where the pass runs every step, the wait for the preload alone was a quarter of
+  // this function's time. The sort below orders them by height and pair alone)
   deep.clear();
   auto listed = [&](const auto* array, std::size_t count) {
     for (std::size_t b = 0; b < count; ++b) {
