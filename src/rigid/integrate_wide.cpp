@@ -55,6 +55,35 @@ constexpr double kSmall = 0.39269908169872414;  // pi / 8
 // sequential, so one block alone waits on its own latencies)
 typedef double v16d __attribute__((vector_size(128)));
 
+// Two AVX2 blocks of 4 at once (lanes 0-3 in lo, 4-7 in hi), as AVX-512's v16d is two of 8:
+// every operation is the same one on both halves, so each lane's arithmetic and order are
+// v4d's. The triaxial splitting's five sub-flows are one chain of dependent multiplies and
+// adds per block (the sines' and cosines' series on each), too long for the core to reach
+// the next block's loads and chain while one block's waits; two independent chains side by
+// side fill those latencies (with 16 ymm registers the pair spills more, which costs less).
+struct v4x2 {
+  v4d lo, hi;
+  // lane i (GCC's vectors alias their element type)
+  PBA_LANES double& operator[](int i) { return reinterpret_cast<double*>(this)[i]; }
+  PBA_LANES double operator[](int i) const { return reinterpret_cast<const double*>(this)[i]; }
+};
+static_assert(sizeof(v4x2) == 8 * sizeof(double));
+PBA_LANES v4x2 operator+(const v4x2& a, const v4x2& b) { return {a.lo + b.lo, a.hi + b.hi}; }
+PBA_LANES v4x2 operator-(const v4x2& a, const v4x2& b) { return {a.lo - b.lo, a.hi - b.hi}; }
+PBA_LANES v4x2 operator*(const v4x2& a, const v4x2& b) { return {a.lo * b.lo, a.hi * b.hi}; }
+PBA_LANES v4x2 operator/(const v4x2& a, const v4x2& b) { return {a.lo / b.lo, a.hi / b.hi}; }
+PBA_LANES v4x2 operator-(const v4x2& a) { return {-a.lo, -a.hi}; }
+PBA_LANES v4x2 operator+(const v4x2& a, double b) { return {a.lo + b, a.hi + b}; }
+PBA_LANES v4x2 operator+(double a, const v4x2& b) { return {a + b.lo, a + b.hi}; }
+PBA_LANES v4x2 operator-(double a, const v4x2& b) { return {a - b.lo, a - b.hi}; }
+PBA_LANES v4x2 operator*(const v4x2& a, double b) { return {a.lo * b, a.hi * b}; }
+PBA_LANES v4x2 operator*(double a, const v4x2& b) { return {a * b.lo, a * b.hi}; }
+PBA_LANES v4x2 operator/(double a, const v4x2& b) { return {a / b.lo, a / b.hi}; }
+
+// the lane types of the AVX2 path
+template <class V>
+constexpr bool kAvx2Lanes = std::is_same_v<V, v4d> || std::is_same_v<V, v4x2>;
+
 // Tests and square roots over all lanes, by the targets' instructions (GCC's generic vectors
 // compare into a mask that plain AVX-512F turns back into a vector lane by lane). The
 // AVX-512 ones are out of line: GCC does not inline a target's intrinsics into a template.
@@ -72,6 +101,15 @@ PBA_LANES bool all_within(v4d x, double limit) {
   return __builtin_ia32_movmskpd256(reinterpret_cast<v4d>(le & ge)) == 0xf;
 }
 PBA_LANES v4d sqrt_lanes(v4d x) { return __builtin_ia32_sqrtpd256(x); }
+PBA_LANES bool all_within(const v4x2& x, double limit) {
+  const v4d hi = splat<v4d>(limit), lo = splat<v4d>(-limit);
+  const v4l in_lo = reinterpret_cast<v4l>(__builtin_ia32_cmppd256(x.lo, hi, _CMP_LE_OQ)) &
+                    reinterpret_cast<v4l>(__builtin_ia32_cmppd256(x.lo, lo, _CMP_GE_OQ));
+  const v4l in_hi = reinterpret_cast<v4l>(__builtin_ia32_cmppd256(x.hi, hi, _CMP_LE_OQ)) &
+                    reinterpret_cast<v4l>(__builtin_ia32_cmppd256(x.hi, lo, _CMP_GE_OQ));
+  return __builtin_ia32_movmskpd256(reinterpret_cast<v4d>(in_lo & in_hi)) == 0xf;
+}
+PBA_LANES v4x2 sqrt_lanes(const v4x2& x) { return {__builtin_ia32_sqrtpd256(x.lo), __builtin_ia32_sqrtpd256(x.hi)}; }
 [[gnu::target("avx512f")]] [[gnu::noinline]] bool all_within(v8d x, double limit) {
   return (_mm512_cmp_pd_mask(x, _mm512_set1_pd(limit), _CMP_LE_OQ) &
           _mm512_cmp_pd_mask(x, _mm512_set1_pd(-limit), _CMP_GE_OQ)) == 0xff;
@@ -317,6 +355,9 @@ PBA_LANES void load_lines(const double* at, int line, int n, V out[]) {
       const v8d lo = load<v8d>(p), hi = load<v8d>(p + kFreeBlock);
       std::memcpy(&out[k], &lo, sizeof lo);
       std::memcpy(reinterpret_cast<char*>(&out[k]) + sizeof lo, &hi, sizeof hi);
+    } else if constexpr (std::is_same_v<V, v4x2>) {
+      // (by halves: a copy of the whole went through the stack in 16-byte pieces)
+      out[k] = {load<v4d>(p), load<v4d>(p + 4)};
     } else {
       out[k] = load<V>(p);
     }
@@ -332,6 +373,13 @@ PBA_LANES void store_lines(double* at, int line, int n, const V in[]) {
     // (unrolled: the positions' frame, 4 lines, went through the stack, a loop of 16-byte copies)
 #pragma GCC unroll 4
     for (int k = 0; k < n; ++k) store<v4d>(at + static_cast<std::size_t>(line + k) * kFreeLaneWidth, in[k]);
+    return;
+  } else if constexpr (std::is_same_v<V, v4x2>) {
+#pragma GCC unroll 4
+    for (int k = 0; k < n; ++k) {
+      double* p = at + static_cast<std::size_t>(line + k) * kFreeLaneWidth;
+      store<v4d>(p, in[k].lo), store<v4d>(p + 4, in[k].hi);
+    }
     return;
   }
   for (int k = 0; k < n; ++k) {
@@ -361,6 +409,12 @@ PBA_LANES void load_rows(const double* base, const std::uint32_t* idx, V out[8])
   } else if constexpr (std::is_same_v<V, v8d>) {
     for (int i = 0; i < 8; ++i) out[i] = load<v8d>(base + 8 * static_cast<std::size_t>(idx[i]));
     return transpose8x8(out);
+  } else if constexpr (std::is_same_v<V, v4x2>) {
+    v4d lo[8], hi[8];
+    load_rows<v4d>(base, idx, lo), load_rows<v4d>(base, idx + 4, hi);
+#pragma GCC unroll 8
+    for (int k = 0; k < 8; ++k) out[k] = {lo[k], hi[k]};
+    return;
   } else if constexpr (std::is_same_v<V, v4d>) {
 #pragma GCC unroll 4
     for (int i = 0; i < 4; ++i) {
@@ -383,6 +437,12 @@ PBA_LANES void store_rows(double* base, const std::uint32_t* idx, const V in[8],
     for (int k = 0; k < 8; ++k) r[k] = in[k];
     transpose8x8(r);
     for (int i = 0; i < 8; ++i) store<v8d>(base + 8 * static_cast<std::size_t>(idx[i]), r[i]);
+    return;
+  } else if constexpr (std::is_same_v<V, v4x2>) {
+    v4d lo[8], hi[8];
+#pragma GCC unroll 8
+    for (int k = 0; k < 8; ++k) lo[k] = in[k].lo, hi[k] = in[k].hi;
+    store_rows<v4d>(base, idx, lo, n), store_rows<v4d>(base, idx + 4, hi, n);
     return;
   } else if constexpr (std::is_same_v<V, v4d>) {
     v4d r[8];
@@ -597,7 +657,7 @@ PBA_LANES void store_motion(const std::uint32_t* idx, const FreeMotionArrays& f,
                   splat<V>(0)};
   // (on AVX2 all 8, a whole half row one store, not a pair and a single: the last is zero in
   // every row, as prepare() makes them and AVX-512's whole rows store it)
-  store_rows(f.motion, idx, m, std::is_same_v<V, v4d> ? 8 : 7);
+  store_rows(f.motion, idx, m, kAvx2Lanes<V> ? 8 : 7);
 }
 
 // ... and back, with the motion since the start of the step
@@ -745,7 +805,9 @@ template <FreeRotation R, class V, class W, bool Lanes>
 PBA_LANES void positions_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double* lanes,
                              double h) {
   std::size_t i = 0;
-  for (; i + kWidth<W> <= count; i += kWidth<W>) positions_of<R, W, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
+  // (AVX2's pairs only from the lanes: by body, their loads and stores went lane by lane)
+  if constexpr (Lanes || !std::is_same_v<W, v4x2>)
+    for (; i + kWidth<W> <= count; i += kWidth<W>) positions_of<R, W, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
   for (; i + kWidth<V> <= count; i += kWidth<V>) positions_of<R, V, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
   for (; i < count; ++i) positions_of<R, double, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
 }
@@ -757,13 +819,18 @@ PBA_LANES void positions_lanes(const std::uint32_t* idx, std::size_t count, cons
   else positions_all<R, V, W, false>(idx, count, f, nullptr, h);
 }
 
+// the pairs of blocks the round bodies take too: AVX2's (their turn's series, square root and
+// divide are a chain as long as the splitting's per instruction; on AVX-512 one block)
+template <class V, class W>
+using Paired = std::conditional_t<std::is_same_v<W, v4x2>, W, V>;
+
 // the kinds' kernels on a path: two blocks at once where W is wider (the splitting's long chain)
 template <class V, class W>
 PBA_LANES void positions_kind(FreeRotation kind, const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f,
                               double h, double* lanes) {
   switch (kind) {
     case FreeRotation::Triaxial: return positions_lanes<FreeRotation::Triaxial, V, W>(idx, count, f, lanes, h);
-    case FreeRotation::Round: return positions_lanes<FreeRotation::Round, V>(idx, count, f, lanes, h);
+    case FreeRotation::Round: return positions_lanes<FreeRotation::Round, V, Paired<V, W>>(idx, count, f, lanes, h);
     case FreeRotation::AxialX: return positions_lanes<FreeRotation::AxialX, V>(idx, count, f, lanes, h);
     case FreeRotation::AxialY: return positions_lanes<FreeRotation::AxialY, V>(idx, count, f, lanes, h);
     case FreeRotation::AxialZ: return positions_lanes<FreeRotation::AxialZ, V>(idx, count, f, lanes, h);
@@ -813,7 +880,7 @@ __attribute__((target("avx512f"))) void positions_avx512(FreeRotation kind, cons
 }
 __attribute__((target("avx2"))) void positions_avx2(FreeRotation kind, const std::uint32_t* idx, std::size_t count,
                                                    const FreeMotionArrays& f, double h, double* lanes) {
-  positions_kind<v4d, v4d>(kind, idx, count, f, h, lanes);
+  positions_kind<v4d, v4x2>(kind, idx, count, f, h, lanes);
 }
 __attribute__((target("avx512f"))) void gather_avx512(bool round, const std::uint32_t* idx, std::size_t count,
                                                      const FreeMotionArrays& f, double h, const Vec3& g,
