@@ -778,17 +778,17 @@ PBA_LANES P* lane_at(P* lanes, std::size_t i) {
 // body, the rain's 10,000 bodies 2.5 MB and 640 KB each, past the 512 KB L2; the lines a
 // substep reads are a few of each block's 32, which the core's own prefetch does not follow
 // (positions and velocities waited on their first loads). Lines [first, first + n) of the
-// block and the rows of `rows` (nullptr: none) by body.
+// block and the rows of `rows` and `rows2` (nullptr: none) by body, `stride` doubles a body.
 constexpr std::size_t kAhead = 16;
 PBA_LANES void prefetch_block(const std::uint32_t* idx, std::size_t i, std::size_t count, const double* lanes,
-                              int first, int n, const double* rows, const double* rows2) {
+                              int first, int n, const double* rows, const double* rows2, std::size_t stride = 8) {
   if (i + kAhead + kFreeLaneWidth > count) return;
   const double* at = lanes + free_lane_at(i + kAhead);
   for (int k = 0; k < n; ++k) __builtin_prefetch(at + static_cast<std::size_t>(first + k) * kFreeLaneWidth);
   for (std::size_t b = 0; b < kFreeLaneWidth; ++b) {
     const std::size_t body = idx[i + kAhead + b];
-    if (rows) __builtin_prefetch(rows + 8 * body);
-    if (rows2) __builtin_prefetch(rows2 + 8 * body);
+    if (rows) __builtin_prefetch(rows + stride * body);
+    if (rows2) __builtin_prefetch(rows2 + stride * body);
   }
 }
 
@@ -944,6 +944,13 @@ __attribute__((target("avx2"))) std::size_t turned_far_avx2(const std::uint32_t*
   std::size_t n = 0, j = 0;
   for (; j + 4 <= count; j += 4) {
     const double* at = lanes + free_lane_at(j);
+    if (j % kFreeLaneWidth == 0) {
+      // (the frame's 4 lines and the spread's of the block two on, and its bodies' frames of
+      // the inertia, 32 bytes each: the positions' reasons)
+      prefetch_block(idx, j, count, lanes, kLineQ, 4, nullptr, nullptr);
+      prefetch_block(idx, j, count, lanes, kLineSpread, 1, reinterpret_cast<const double*>(inertia_q), nullptr,
+                     sizeof(Quat) / sizeof(double));
+    }
     v4d q[4], r[4];
     load_lines(at, kLineQ, 4, q);
     load_quat(inertia_q, idx + j, r);
