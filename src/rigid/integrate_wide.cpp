@@ -23,7 +23,9 @@
 // motion by whole rows and a transpose on AVX-512 (on AVX2 half rows of four and two 4x4
 // transposes); the all-lanes tests use the targets'
 // compare-to-mask instructions; on AVX-512 the positions run two blocks of 8 at once, as the
-// splitting's five sub-flows are one long chain of dependent operations per block.
+// splitting's five sub-flows are one long chain of dependent operations per block, and on AVX2
+// two of 4 (v4x2), the round bodies' too; on AVX2 each block of 8 asks for the lines of the
+// block two on (prefetch_block: the lanes and rows are past the L2 in the rain).
 //
 // The soft step's and TGS's substeps read and write the bodies' own fields in the free motion's lanes
 // (solver.h, FreeLine): copied once a step into blocks of 8 of each kind's list (gather), what
@@ -58,9 +60,11 @@ typedef double v16d __attribute__((vector_size(128)));
 // Two AVX2 blocks of 4 at once (lanes 0-3 in lo, 4-7 in hi), as AVX-512's v16d is two of 8:
 // every operation is the same one on both halves, so each lane's arithmetic and order are
 // v4d's. The triaxial splitting's five sub-flows are one chain of dependent multiplies and
-// adds per block (the sines' and cosines' series on each), too long for the core to reach
-// the next block's loads and chain while one block's waits; two independent chains side by
-// side fill those latencies (with 16 ymm registers the pair spills more, which costs less).
+// adds per block (the sines' and cosines' series on each), and a round body's turn one nearly
+// as long for its fewer instructions; too long for the core to reach the next block's loads
+// and chain while one block's waits. Two independent chains side by side fill those latencies
+// (with 16 ymm registers the pair spills more, which costs less: docs/benchmarks.md, "The free
+// motion on AVX2, again").
 struct v4x2 {
   v4d lo, hi;
   // lane i (GCC's vectors alias their element type)
