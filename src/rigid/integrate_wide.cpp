@@ -23,7 +23,9 @@
 // motion by whole rows and a transpose on AVX-512 (on AVX2 half rows of four and two 4x4
 // transposes); the all-lanes tests use the targets'
 // compare-to-mask instructions; on AVX-512 the positions run two blocks of 8 at once, as the
-// splitting's five sub-flows are one long chain of dependent operations per block.
+// splitting's five sub-flows are one long chain of dependent operations per block, and on AVX2
+// two of 4 (v4x2), the round bodies' too; on AVX2 each block of 8 asks for the lines of the
+// block two on (prefetch_block: the lanes and rows are past the L2 in the rain).
 //
 // The soft step's and TGS's substeps read and write the bodies' own fields in the free motion's lanes
 // (solver.h, FreeLine): copied once a step into blocks of 8 of each kind's list (gather), what
@@ -55,6 +57,37 @@ constexpr double kSmall = 0.39269908169872414;  // pi / 8
 // sequential, so one block alone waits on its own latencies)
 typedef double v16d __attribute__((vector_size(128)));
 
+// Two AVX2 blocks of 4 at once (lanes 0-3 in lo, 4-7 in hi), as AVX-512's v16d is two of 8:
+// every operation is the same one on both halves, so each lane's arithmetic and order are
+// v4d's. The triaxial splitting's five sub-flows are one chain of dependent multiplies and
+// adds per block (the sines' and cosines' series on each), and a round body's turn one nearly
+// as long for its fewer instructions; too long for the core to reach the next block's loads
+// and chain while one block's waits. Two independent chains side by side fill those latencies
+// (with 16 ymm registers the pair spills more, which costs less: docs/benchmarks.md, "The free
+// motion on AVX2, again").
+struct v4x2 {
+  v4d lo, hi;
+  // lane i (GCC's vectors alias their element type)
+  PBA_LANES double& operator[](int i) { return reinterpret_cast<double*>(this)[i]; }
+  PBA_LANES double operator[](int i) const { return reinterpret_cast<const double*>(this)[i]; }
+};
+static_assert(sizeof(v4x2) == 8 * sizeof(double));
+PBA_LANES v4x2 operator+(const v4x2& a, const v4x2& b) { return {a.lo + b.lo, a.hi + b.hi}; }
+PBA_LANES v4x2 operator-(const v4x2& a, const v4x2& b) { return {a.lo - b.lo, a.hi - b.hi}; }
+PBA_LANES v4x2 operator*(const v4x2& a, const v4x2& b) { return {a.lo * b.lo, a.hi * b.hi}; }
+PBA_LANES v4x2 operator/(const v4x2& a, const v4x2& b) { return {a.lo / b.lo, a.hi / b.hi}; }
+PBA_LANES v4x2 operator-(const v4x2& a) { return {-a.lo, -a.hi}; }
+PBA_LANES v4x2 operator+(const v4x2& a, double b) { return {a.lo + b, a.hi + b}; }
+PBA_LANES v4x2 operator+(double a, const v4x2& b) { return {a + b.lo, a + b.hi}; }
+PBA_LANES v4x2 operator-(double a, const v4x2& b) { return {a - b.lo, a - b.hi}; }
+PBA_LANES v4x2 operator*(const v4x2& a, double b) { return {a.lo * b, a.hi * b}; }
+PBA_LANES v4x2 operator*(double a, const v4x2& b) { return {a * b.lo, a * b.hi}; }
+PBA_LANES v4x2 operator/(double a, const v4x2& b) { return {a / b.lo, a / b.hi}; }
+
+// the lane types of the AVX2 path
+template <class V>
+constexpr bool kAvx2Lanes = std::is_same_v<V, v4d> || std::is_same_v<V, v4x2>;
+
 // Tests and square roots over all lanes, by the targets' instructions (GCC's generic vectors
 // compare into a mask that plain AVX-512F turns back into a vector lane by lane). The
 // AVX-512 ones are out of line: GCC does not inline a target's intrinsics into a template.
@@ -72,6 +105,15 @@ PBA_LANES bool all_within(v4d x, double limit) {
   return __builtin_ia32_movmskpd256(reinterpret_cast<v4d>(le & ge)) == 0xf;
 }
 PBA_LANES v4d sqrt_lanes(v4d x) { return __builtin_ia32_sqrtpd256(x); }
+PBA_LANES bool all_within(const v4x2& x, double limit) {
+  const v4d hi = splat<v4d>(limit), lo = splat<v4d>(-limit);
+  const v4l in_lo = reinterpret_cast<v4l>(__builtin_ia32_cmppd256(x.lo, hi, _CMP_LE_OQ)) &
+                    reinterpret_cast<v4l>(__builtin_ia32_cmppd256(x.lo, lo, _CMP_GE_OQ));
+  const v4l in_hi = reinterpret_cast<v4l>(__builtin_ia32_cmppd256(x.hi, hi, _CMP_LE_OQ)) &
+                    reinterpret_cast<v4l>(__builtin_ia32_cmppd256(x.hi, lo, _CMP_GE_OQ));
+  return __builtin_ia32_movmskpd256(reinterpret_cast<v4d>(in_lo & in_hi)) == 0xf;
+}
+PBA_LANES v4x2 sqrt_lanes(const v4x2& x) { return {__builtin_ia32_sqrtpd256(x.lo), __builtin_ia32_sqrtpd256(x.hi)}; }
 [[gnu::target("avx512f")]] [[gnu::noinline]] bool all_within(v8d x, double limit) {
   return (_mm512_cmp_pd_mask(x, _mm512_set1_pd(limit), _CMP_LE_OQ) &
           _mm512_cmp_pd_mask(x, _mm512_set1_pd(-limit), _CMP_GE_OQ)) == 0xff;
@@ -317,6 +359,9 @@ PBA_LANES void load_lines(const double* at, int line, int n, V out[]) {
       const v8d lo = load<v8d>(p), hi = load<v8d>(p + kFreeBlock);
       std::memcpy(&out[k], &lo, sizeof lo);
       std::memcpy(reinterpret_cast<char*>(&out[k]) + sizeof lo, &hi, sizeof hi);
+    } else if constexpr (std::is_same_v<V, v4x2>) {
+      // (by halves: a copy of the whole went through the stack in 16-byte pieces)
+      out[k] = {load<v4d>(p), load<v4d>(p + 4)};
     } else {
       out[k] = load<V>(p);
     }
@@ -332,6 +377,13 @@ PBA_LANES void store_lines(double* at, int line, int n, const V in[]) {
     // (unrolled: the positions' frame, 4 lines, went through the stack, a loop of 16-byte copies)
 #pragma GCC unroll 4
     for (int k = 0; k < n; ++k) store<v4d>(at + static_cast<std::size_t>(line + k) * kFreeLaneWidth, in[k]);
+    return;
+  } else if constexpr (std::is_same_v<V, v4x2>) {
+#pragma GCC unroll 4
+    for (int k = 0; k < n; ++k) {
+      double* p = at + static_cast<std::size_t>(line + k) * kFreeLaneWidth;
+      store<v4d>(p, in[k].lo), store<v4d>(p + 4, in[k].hi);
+    }
     return;
   }
   for (int k = 0; k < n; ++k) {
@@ -361,6 +413,12 @@ PBA_LANES void load_rows(const double* base, const std::uint32_t* idx, V out[8])
   } else if constexpr (std::is_same_v<V, v8d>) {
     for (int i = 0; i < 8; ++i) out[i] = load<v8d>(base + 8 * static_cast<std::size_t>(idx[i]));
     return transpose8x8(out);
+  } else if constexpr (std::is_same_v<V, v4x2>) {
+    v4d lo[8], hi[8];
+    load_rows<v4d>(base, idx, lo), load_rows<v4d>(base, idx + 4, hi);
+#pragma GCC unroll 8
+    for (int k = 0; k < 8; ++k) out[k] = {lo[k], hi[k]};
+    return;
   } else if constexpr (std::is_same_v<V, v4d>) {
 #pragma GCC unroll 4
     for (int i = 0; i < 4; ++i) {
@@ -383,6 +441,12 @@ PBA_LANES void store_rows(double* base, const std::uint32_t* idx, const V in[8],
     for (int k = 0; k < 8; ++k) r[k] = in[k];
     transpose8x8(r);
     for (int i = 0; i < 8; ++i) store<v8d>(base + 8 * static_cast<std::size_t>(idx[i]), r[i]);
+    return;
+  } else if constexpr (std::is_same_v<V, v4x2>) {
+    v4d lo[8], hi[8];
+#pragma GCC unroll 8
+    for (int k = 0; k < 8; ++k) lo[k] = in[k].lo, hi[k] = in[k].hi;
+    store_rows<v4d>(base, idx, lo, n), store_rows<v4d>(base, idx + 4, hi, n);
     return;
   } else if constexpr (std::is_same_v<V, v4d>) {
     v4d r[8];
@@ -597,7 +661,7 @@ PBA_LANES void store_motion(const std::uint32_t* idx, const FreeMotionArrays& f,
                   splat<V>(0)};
   // (on AVX2 all 8, a whole half row one store, not a pair and a single: the last is zero in
   // every row, as prepare() makes them and AVX-512's whole rows store it)
-  store_rows(f.motion, idx, m, std::is_same_v<V, v4d> ? 8 : 7);
+  store_rows(f.motion, idx, m, kAvx2Lanes<V> ? 8 : 7);
 }
 
 // ... and back, with the motion since the start of the step
@@ -713,12 +777,40 @@ PBA_LANES P* lane_at(P* lanes, std::size_t i) {
   else return (void)lanes, (void)i, nullptr;
 }
 
+// AVX2: the cache lines a block of 8 bodies `ahead` positions on will read, asked for now (a
+// prefetch: no effect on any result). The lanes are 2 KB a block of 8 and the rows 64 bytes a
+// body, the rain's 10,000 bodies 2.5 MB and 640 KB each, past the 512 KB L2; the lines a
+// substep reads are a few of each block's 32, which the core's own prefetch does not follow
+// (positions and velocities waited on their first loads). Lines [first, first + n) of the
+// block and the rows of `rows` and `rows2` (nullptr: none) by body, `stride` doubles a body.
+constexpr std::size_t kAhead = 16;
+PBA_LANES void prefetch_block(const std::uint32_t* idx, std::size_t i, std::size_t count, const double* lanes,
+                              int first, int n, const double* rows, const double* rows2, std::size_t stride = 8) {
+  if (i + kAhead + kFreeLaneWidth > count) return;
+  const double* at = lanes + free_lane_at(i + kAhead);
+  for (int k = 0; k < n; ++k) __builtin_prefetch(at + static_cast<std::size_t>(first + k) * kFreeLaneWidth);
+  for (std::size_t b = 0; b < kFreeLaneWidth; ++b) {
+    const std::size_t body = idx[i + kAhead + b];
+    if (rows) __builtin_prefetch(rows + stride * body);
+    if (rows2) __builtin_prefetch(rows2 + stride * body);
+  }
+}
+
 template <class V, bool Round, bool Lanes>
 PBA_LANES bool velocities_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f,
                               const double* lanes, double h, const Vec3& g, std::uint32_t* bad) {
   std::size_t i = 0;
-  for (; i + kWidth<V> <= count; i += kWidth<V>)
+  for (; i + kWidth<V> <= count; i += kWidth<V>) {
+    if constexpr (Lanes && std::is_same_v<V, v4d>) {
+      // (kLineQ's 4 lines, then kLineLinear on: 3 + 3 (+ 3 h / I) (+ 2 damping, after h / I's))
+      if (i % kFreeLaneWidth == 0) {
+        if constexpr (!Round) prefetch_block(idx, i, count, lanes, kLineQ, 4, nullptr, nullptr);
+        prefetch_block(idx, i, count, lanes, kLineLinear, f.damped ? 11 : Round ? 6 : 9,
+                       f.stride == 8 ? f.v : nullptr, f.warm ? f.warm[0].v : nullptr);
+      }
+    }
     if (!velocities<V, Round, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h, g, bad)) return false;
+  }
   for (; i < count; ++i)
     if (!velocities<double, Round, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h, g, bad)) return false;
   return true;
@@ -745,7 +837,17 @@ template <FreeRotation R, class V, class W, bool Lanes>
 PBA_LANES void positions_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f, double* lanes,
                              double h) {
   std::size_t i = 0;
-  for (; i + kWidth<W> <= count; i += kWidth<W>) positions_of<R, W, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
+  // (AVX2's pairs only from the lanes: by body, their loads and stores went lane by lane)
+  if constexpr (Lanes && std::is_same_v<W, v4x2>) {
+    for (; i + kWidth<W> <= count; i += kWidth<W>) {
+      // (the pose now and at the step's start, 14 lines, then the moments and their inverses)
+      prefetch_block(idx, i, count, lanes, kLineCom, R == FreeRotation::Round ? 14 : 20,
+                     f.stride == 8 ? f.v : nullptr, f.motion);
+      positions_of<R, W, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
+    }
+  } else if constexpr (!std::is_same_v<W, v4x2>) {
+    for (; i + kWidth<W> <= count; i += kWidth<W>) positions_of<R, W, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
+  }
   for (; i + kWidth<V> <= count; i += kWidth<V>) positions_of<R, V, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
   for (; i < count; ++i) positions_of<R, double, Lanes>(idx + i, f, lane_at<Lanes>(lanes, i), h);
 }
@@ -757,13 +859,18 @@ PBA_LANES void positions_lanes(const std::uint32_t* idx, std::size_t count, cons
   else positions_all<R, V, W, false>(idx, count, f, nullptr, h);
 }
 
+// the pairs of blocks the round bodies take too: AVX2's (their turn's series, square root and
+// divide are a chain as long as the splitting's per instruction; on AVX-512 one block)
+template <class V, class W>
+using Paired = std::conditional_t<std::is_same_v<W, v4x2>, W, V>;
+
 // the kinds' kernels on a path: two blocks at once where W is wider (the splitting's long chain)
 template <class V, class W>
 PBA_LANES void positions_kind(FreeRotation kind, const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f,
                               double h, double* lanes) {
   switch (kind) {
     case FreeRotation::Triaxial: return positions_lanes<FreeRotation::Triaxial, V, W>(idx, count, f, lanes, h);
-    case FreeRotation::Round: return positions_lanes<FreeRotation::Round, V>(idx, count, f, lanes, h);
+    case FreeRotation::Round: return positions_lanes<FreeRotation::Round, V, Paired<V, W>>(idx, count, f, lanes, h);
     case FreeRotation::AxialX: return positions_lanes<FreeRotation::AxialX, V>(idx, count, f, lanes, h);
     case FreeRotation::AxialY: return positions_lanes<FreeRotation::AxialY, V>(idx, count, f, lanes, h);
     case FreeRotation::AxialZ: return positions_lanes<FreeRotation::AxialZ, V>(idx, count, f, lanes, h);
@@ -813,7 +920,7 @@ __attribute__((target("avx512f"))) void positions_avx512(FreeRotation kind, cons
 }
 __attribute__((target("avx2"))) void positions_avx2(FreeRotation kind, const std::uint32_t* idx, std::size_t count,
                                                    const FreeMotionArrays& f, double h, double* lanes) {
-  positions_kind<v4d, v4d>(kind, idx, count, f, h, lanes);
+  positions_kind<v4d, v4x2>(kind, idx, count, f, h, lanes);
 }
 __attribute__((target("avx512f"))) void gather_avx512(bool round, const std::uint32_t* idx, std::size_t count,
                                                      const FreeMotionArrays& f, double h, const Vec3& g,
@@ -841,6 +948,13 @@ __attribute__((target("avx2"))) std::size_t turned_far_avx2(const std::uint32_t*
   std::size_t n = 0, j = 0;
   for (; j + 4 <= count; j += 4) {
     const double* at = lanes + free_lane_at(j);
+    if (j % kFreeLaneWidth == 0) {
+      // (the frame's 4 lines and the spread's of the block two on, and its bodies' frames of
+      // the inertia, 32 bytes each: the positions' reasons)
+      prefetch_block(idx, j, count, lanes, kLineQ, 4, nullptr, nullptr);
+      prefetch_block(idx, j, count, lanes, kLineSpread, 1, reinterpret_cast<const double*>(inertia_q), nullptr,
+                     sizeof(Quat) / sizeof(double));
+    }
     v4d q[4], r[4];
     load_lines(at, kLineQ, 4, q);
     load_quat(inertia_q, idx + j, r);
