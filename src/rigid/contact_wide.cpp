@@ -844,11 +844,24 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
         L.put(c.rolling_impulse[i], on ? j[i] : old[i]);
         e[i] = j[i] - old[i];
       }
-      sym_mul(ia, e, da);
-      sym_mul(ib, e, db);
-      for (int i = 0; i < 3; ++i) {
-        oa[i] = on ? oa[i] - da[i] : oa[i], dwa[i] = on ? dwa[i] - da[i] : dwa[i];
-        ob[i] = on ? ob[i] + db[i] : ob[i], dwb[i] = on ? dwb[i] + db[i] : dwb[i];
+      if constexpr (kYmm) {
+        // (AVX2: side a's turn only where a lane writes side a: after the rolling nothing reads
+        // oa, and dwa only side a's write-back)
+        sym_mul(ib, e, db);
+        for (int i = 0; i < 3; ++i)
+          ob[i] = on ? ob[i] + db[i] : ob[i], dwb[i] = on ? dwb[i] + db[i] : dwb[i];
+        if ((c.write_a >> l0) & kLaneBits<V>) {
+          sym_mul(ia, e, da);
+          for (int i = 0; i < 3; ++i)
+            oa[i] = on ? oa[i] - da[i] : oa[i], dwa[i] = on ? dwa[i] - da[i] : dwa[i];
+        }
+      } else {
+        sym_mul(ia, e, da);
+        sym_mul(ib, e, db);
+        for (int i = 0; i < 3; ++i) {
+          oa[i] = on ? oa[i] - da[i] : oa[i], dwa[i] = on ? dwa[i] - da[i] : dwa[i];
+          ob[i] = on ? ob[i] + db[i] : ob[i], dwb[i] = on ? dwb[i] + db[i] : dwb[i];
+        }
       }
     }
   }
