@@ -639,7 +639,11 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     const auto F = L.again();
     for (int k = 0; k < P; ++k) {
       const V dl = lambda[k] - from[k];
-      sl = sl + dl;
+      // (a one-point lane on the AVX2 path: its step, not 0 + step, the same number, since no
+      // step is -0: x - y is -0 only for x = -0, and no impulse is -0, see the sweeps. An add
+      // less in the chain from the sweeps to the friction, in the pass and each round)
+      if constexpr (kYmm && P == 1) sl = dl;
+      else sl = sl + dl;
       if constexpr (P > 1) sx = sx + dl * F(F.c.x[k]), sy = sy + dl * F(F.c.y[k]);
     }
     V ca[3], cb[3];
@@ -654,7 +658,9 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     for (int k = 0; k < P; ++k)
       before[k] = L(c.impulse[k]);  // (the block's impulses are the pass's start's until the end)
     push(before);
-    for (int k = 0; k < P; ++k) total = total + lambda[k];
+    if constexpr (kYmm && P == 1) total = lambda[0];  // (as sl in push: no impulse is -0)
+    else
+      for (int k = 0; k < P; ++k) total = total + lambda[k];
   } else {
     total = from->total;
   }
@@ -783,7 +789,9 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       sweep(std::true_type{});
       push(before);
       total = zero;
-      for (int k = 0; k < P; ++k) total = total + lambda[k];
+      if constexpr (kYmm && P == 1) total = lambda[0];  // (as above)
+      else
+        for (int k = 0; k < P; ++k) total = total + lambda[k];
       if (it < p.sweeps) friction();
     }
     for (int k = 0; k < P; ++k)
@@ -836,11 +844,24 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
         L.put(c.rolling_impulse[i], on ? j[i] : old[i]);
         e[i] = j[i] - old[i];
       }
-      sym_mul(ia, e, da);
-      sym_mul(ib, e, db);
-      for (int i = 0; i < 3; ++i) {
-        oa[i] = on ? oa[i] - da[i] : oa[i], dwa[i] = on ? dwa[i] - da[i] : dwa[i];
-        ob[i] = on ? ob[i] + db[i] : ob[i], dwb[i] = on ? dwb[i] + db[i] : dwb[i];
+      if constexpr (kYmm) {
+        // (AVX2: side a's turn only where a lane writes side a: after the rolling nothing reads
+        // oa, and dwa only side a's write-back)
+        sym_mul(ib, e, db);
+        for (int i = 0; i < 3; ++i)
+          ob[i] = on ? ob[i] + db[i] : ob[i], dwb[i] = on ? dwb[i] + db[i] : dwb[i];
+        if ((c.write_a >> l0) & kLaneBits<V>) {
+          sym_mul(ia, e, da);
+          for (int i = 0; i < 3; ++i)
+            oa[i] = on ? oa[i] - da[i] : oa[i], dwa[i] = on ? dwa[i] - da[i] : dwa[i];
+        }
+      } else {
+        sym_mul(ia, e, da);
+        sym_mul(ib, e, db);
+        for (int i = 0; i < 3; ++i) {
+          oa[i] = on ? oa[i] - da[i] : oa[i], dwa[i] = on ? dwa[i] - da[i] : dwa[i];
+          ob[i] = on ? ob[i] + db[i] : ob[i], dwb[i] = on ? dwb[i] + db[i] : dwb[i];
+        }
       }
     }
   }
