@@ -66,6 +66,17 @@ std::int32_t DynamicTree::create_proxy(const Aabb& box, std::uint32_t user) {
   return leaf;
 }
 
+std::int32_t DynamicTree::create_proxy_unplaced(const Aabb& box, std::uint32_t user) {
+  require_valid_box(box, "DynamicTree.create_proxy_unplaced(box)");
+  const std::int32_t leaf = allocate_node();
+  Node& n = at(leaf);
+  n.box = box.grown(margin_);
+  n.user = user;
+  n.height = 0;  // (a leaf: rebuild() gathers it with the placed ones)
+  ++leaves_;
+  return leaf;
+}
+
 void DynamicTree::destroy_proxy(std::int32_t node) {
   if (node < 0 || static_cast<std::size_t>(node) >= nodes_.size() || at(node).height != 0)
     throw Error("DynamicTree.destroy_proxy: node " + std::to_string(node) + " is not a live leaf");
@@ -246,7 +257,8 @@ void DynamicTree::keep_height() {
 }
 
 void DynamicTree::rebuild() {
-  if (root_ == kNull) return;
+  // (leaves, not the root: leaves made by create_proxy_unplaced may have no tree yet)
+  if (leaves_ == 0) return;
   // gather the leaves and free every inner node
   build_leaves_.clear();
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
