@@ -594,8 +594,11 @@ void RigidContacts::prepare(RigidBodySystem& s) {
     rows[i] = {{v.x, v.y, v.z}, {w.x, w.y, w.z}, {0, 0}};
   }
   rows[n] = {};
-  motion.assign(8 * (n + 1), 0.0);
-  for (std::size_t i = 0; i <= n; ++i) motion[8 * i + 3] = 1;
+  // (each body's row written once, not zeroed and then its turn's w set in a second sweep:
+  // the rain's 640 KB of rows, past the L2, were read back for that)
+  motion.resize(8 * (n + 1));
+  static constexpr double kStill[8] = {0, 0, 0, 1, 0, 0, 0, 0};  // dp 0, the identity turn
+  for (std::size_t i = 0; i <= n; ++i) std::memcpy(&motion[8 * i], kStill, sizeof kStill);
   warm.assign(n + 1, SolverBody{});
   color(s);
   build(s);
