@@ -154,6 +154,8 @@ class DynamicTree {
  private:
   static constexpr int kStack = 256;  // > height_limit() + 1 for any count that fits memory
   std::int32_t allocate_node();
+  // a leaf node for `box` (checked, `where` naming it in the error) counted but not placed
+  std::int32_t new_leaf(const Aabb& box, std::uint32_t user, std::string_view where);
   void free_node(std::int32_t n);
   void insert_leaf(std::int32_t leaf);
   void remove_leaf(std::int32_t leaf);
