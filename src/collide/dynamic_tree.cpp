@@ -53,17 +53,26 @@ void DynamicTree::clear() {
   leaves_ = 0;
 }
 
-std::int32_t DynamicTree::create_proxy(const Aabb& box, std::uint32_t user) {
-  require_valid_box(box, "DynamicTree.create_proxy(box)");
+std::int32_t DynamicTree::new_leaf(const Aabb& box, std::uint32_t user, std::string_view where) {
+  require_valid_box(box, where);
   const std::int32_t leaf = allocate_node();
   Node& n = at(leaf);
   n.box = box.grown(margin_);
   n.user = user;
-  n.height = 0;
-  insert_leaf(leaf);
+  n.height = 0;  // (a leaf, placed or not: rebuild() gathers every node of height 0)
   ++leaves_;
+  return leaf;
+}
+
+std::int32_t DynamicTree::create_proxy(const Aabb& box, std::uint32_t user) {
+  const std::int32_t leaf = new_leaf(box, user, "DynamicTree.create_proxy(box)");
+  insert_leaf(leaf);
   keep_height();
   return leaf;
+}
+
+std::int32_t DynamicTree::create_proxy_unplaced(const Aabb& box, std::uint32_t user) {
+  return new_leaf(box, user, "DynamicTree.create_proxy_unplaced(box)");
 }
 
 void DynamicTree::destroy_proxy(std::int32_t node) {
@@ -246,7 +255,8 @@ void DynamicTree::keep_height() {
 }
 
 void DynamicTree::rebuild() {
-  if (root_ == kNull) return;
+  // (leaves, not the root: leaves made by create_proxy_unplaced may have no tree yet)
+  if (leaves_ == 0) return;
   // gather the leaves and free every inner node
   build_leaves_.clear();
   for (std::size_t i = 0; i < nodes_.size(); ++i) {

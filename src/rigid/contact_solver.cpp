@@ -394,13 +394,15 @@ static_assert(offsetof(SolverPoint, sa) == 24 && offsetof(SolverPoint, sb) == 48
                   offsetof(SolverPoint, offset) == 72 && sizeof(SolverPoint) == 80 && Manifold::kMaxPoints == 4,
               "gather_fill_avx2 reads a point's at, sa, sb and offset as rows at these places, four points a pair");
 
-// What fill_block's lane loop copies into `in` for a ContactBlock's lanes [0, lanes) (a multiple
-// of four), four lanes at a time: rows of four doubles from the four pairs (by_color's `index`),
-// their bodies' centres and inverse inertias (`body_a`, `body_b`), turned into columns; the
+// What fill_block's lane loop copies into `in` for a block's lanes [0, lanes) (a multiple of
+// four; P: the block's points a lane, 4 or 1), four lanes at a time: rows of four doubles from
+// the four pairs (by_color's `index`), their bodies' centres and inverse inertias (`body_a`,
+// `body_b`), turned into columns; the
 // points past a pair's count (in.active 0, as the lane loop wrote it) masked to +0, as the loop's
 // `on ? x : 0` makes them; the centres' differences and the arms by the same subtractions. The
 // same values, so the same bits. A double at a time, the loop's copies took about 250
 // instructions a lane (the pyramids' fill_block), these about 110.
+template <int P>
 __attribute__((target("avx2"))) void gather_fill_avx2(FillInput& in, const ContactPair* pairs,
                                                       const std::uint32_t* index, const std::uint32_t* body_a,
                                                       const std::uint32_t* body_b, const Mat3* inv_inertia,
@@ -450,8 +452,8 @@ __attribute__((target("avx2"))) void gather_fill_avx2(FillInput& in, const Conta
     };
     inertia(body_a, in.ia), inertia(body_b, in.ib);
     // the points: (at, sa.x), (sa.y, sa.z, sb.x, sb.y), (sb.z, offset), past the count +0 (the
-    // masks from in.active, one comparison a point)
-    for (int k = 0; k < Manifold::kMaxPoints; ++k) {
+    // masks from in.active, one comparison a point); a block's P (fill_lanes reads no more)
+    for (int k = 0; k < P; ++k) {
       const V on = _mm256_cmp_pd(_mm256_loadu_pd(in.active[k] + l0), _mm256_setzero_pd(), _CMP_GT_OQ);
       const std::size_t at = offsetof(ContactPair, points) + static_cast<std::size_t>(k) * sizeof(SolverPoint);
       rows(at, r);
@@ -594,8 +596,11 @@ void RigidContacts::prepare(RigidBodySystem& s) {
     rows[i] = {{v.x, v.y, v.z}, {w.x, w.y, w.z}, {0, 0}};
   }
   rows[n] = {};
-  motion.assign(8 * (n + 1), 0.0);
-  for (std::size_t i = 0; i <= n; ++i) motion[8 * i + 3] = 1;
+  // (each body's row written once, not zeroed and then its turn's w set in a second sweep:
+  // the rain's 640 KB of rows, past the L2, were read back for that)
+  motion.resize(8 * (n + 1));
+  static constexpr double kStill[8] = {0, 0, 0, 1, 0, 0, 0, 0};  // dp 0, the identity turn
+  for (std::size_t i = 0; i <= n; ++i) std::memcpy(&motion[8 * i], kStill, sizeof kStill);
   warm.assign(n + 1, SolverBody{});
   color(s);
   build(s);
@@ -939,12 +944,13 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   // (kept, a lane of more than one point reads its bodies from the block, not the pair's key:
   // the fill does not read the pair's first line; a rolling lane's roll still does)
   const bool from_frame = kept && !kOne;
-  // the lanes [0, gathered) whose copies gather_fill_avx2 makes four at a time (a ContactBlock's whole
-  // fours on the AVX2 path; the AVX-512 path's fill_block is as it was)
+  // the lanes [0, gathered) whose copies gather_fill_avx2 makes four at a time (a block's whole
+  // fours on the AVX2 path, of either kind: a OnePointBlock's lane loop made about 315
+  // instructions a lane in the rain's landing, 7,500 lanes a step; the AVX-512 path's
+  // fill_block is as it was)
   int gathered = 0;
 #if PBA_ROWS_AVX2
-  if constexpr (!kOne)
-    if (simd == SimdPath::Avx2) gathered = k.lanes / 4 * 4;
+  if (simd == SimdPath::Avx2) gathered = k.lanes / 4 * 4;
 #endif
   LaneMasses& masses = (kOne ? one_masses : block_masses)[b];
   if (kept) {
@@ -1026,7 +1032,7 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   if constexpr (kOne) k.rolls = rolling_lanes;
 #if PBA_ROWS_AVX2
   if (gathered > 0)
-    gather_fill_avx2(in, pairs.data(), &by_color[first], k.a, k.b, inv_inertia.data(), s.com_.data(), gathered);
+    gather_fill_avx2<P>(in, pairs.data(), &by_color[first], k.a, k.b, inv_inertia.data(), s.com_.data(), gathered);
 #endif
   if (!kept) {
     std::memcpy(masses.ma, in.ma, sizeof in.ma);

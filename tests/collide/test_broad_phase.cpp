@@ -599,6 +599,56 @@ TEST(DynamicTree, LeafBoxesSetInAnyOrderGiveTheSameTree) {
   }
 }
 
+// leaves made unplaced and then rebuilt (the rigid bodies' first step of many shapes) give the
+// tree a rebuild of inserted leaves gives: the same leaves under the same parents, walked in
+// the same order (only the nodes' indices differ: no inner node was made before the rebuild),
+// invariants kept, the same leaves found by queries; a tree of only unplaced leaves, no root
+// before its rebuild, builds too
+TEST(DynamicTree, UnplacedLeavesRebuiltGiveTheInsertedTree) {
+  Rng rng{83};
+  const double side = 25;
+  std::vector<Aabb> box;
+  for (std::uint32_t i = 0; i < 3000; ++i) box.push_back(random_box(rng, side));
+  for (const std::size_t placed : {std::size_t{0}, std::size_t{16}}) {
+    DynamicTree inserted(0.1), unplaced(0.1);
+    for (std::uint32_t i = 0; i < box.size(); ++i) {
+      inserted.create_proxy(box[i], i);
+      if (i < placed) unplaced.create_proxy(box[i], i);
+      else unplaced.create_proxy_unplaced(box[i], i);
+    }
+    EXPECT_EQ(unplaced.proxy_count(), box.size());
+    inserted.rebuild();
+    unplaced.rebuild();
+    unplaced.validate();
+    // the two trees walked depth first side by side: the same shape, leaves and boxes
+    std::vector<std::pair<std::int32_t, std::int32_t>> stack{{inserted.root(), unplaced.root()}};
+    std::size_t leaves = 0;
+    while (!stack.empty()) {
+      const auto [x, y] = stack.back();
+      stack.pop_back();
+      const DynamicTree::Node &a = inserted.nodes()[static_cast<std::size_t>(x)];
+      const DynamicTree::Node &b = unplaced.nodes()[static_cast<std::size_t>(y)];
+      ASSERT_TRUE(a.box.lo == b.box.lo && a.box.hi == b.box.hi && a.height == b.height && a.is_leaf() == b.is_leaf())
+          << "placed " << placed << ", nodes " << x << " and " << y;
+      if (a.is_leaf()) {
+        ASSERT_EQ(a.user, b.user);
+        ++leaves;
+        continue;
+      }
+      stack.push_back({a.child1, b.child1});
+      stack.push_back({a.child2, b.child2});
+    }
+    EXPECT_EQ(leaves, box.size());
+    for (int q = 0; q < 50; ++q) {
+      const Aabb b = random_box(rng, side);
+      std::vector<std::uint32_t> got[2];
+      inserted.query(b, [&](std::uint32_t u) { return got[0].push_back(u), true; });
+      unplaced.query(b, [&](std::uint32_t u) { return got[1].push_back(u), true; });
+      ASSERT_EQ(got[1], got[0]) << "placed " << placed << ", query " << q;
+    }
+  }
+}
+
 // the slab test against closed forms
 TEST(DynamicTree, SlabTestMatchesClosedForms) {
   const Aabb unit{{0, 0, 0}, {1, 1, 1}};

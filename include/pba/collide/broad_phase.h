@@ -87,6 +87,12 @@ class DynamicTree {
 
   /// Adds a leaf for `box` (finite, lo <= hi) carrying `user`; returns its node index.
   std::int32_t create_proxy(const Aabb& box, std::uint32_t user);
+  /// Adds a leaf for `box` (finite, lo <= hi) carrying `user` without a place in the tree yet;
+  /// returns its node index, which rebuild() keeps. The caller calls rebuild() before the next
+  /// query, move, removal, area_ratio() or validate(): until then no query finds the leaf. For
+  /// a batch of new leaves that a rebuild follows anyway (the rigid bodies' first step of
+  /// 10,000 proxies), whose insertions' searches and rotations would be thrown away.
+  std::int32_t create_proxy_unplaced(const Aabb& box, std::uint32_t user);
   /// Removes the leaf `node` (throws Error if it is not a live leaf).
   void destroy_proxy(std::int32_t node);
   /// Updates the leaf `node` to the tight box `box`. Returns false when `box` still lies in
@@ -148,6 +154,8 @@ class DynamicTree {
  private:
   static constexpr int kStack = 256;  // > height_limit() + 1 for any count that fits memory
   std::int32_t allocate_node();
+  // a leaf node for `box` (checked, `where` naming it in the error) counted but not placed
+  std::int32_t new_leaf(const Aabb& box, std::uint32_t user, std::string_view where);
   void free_node(std::int32_t n);
   void insert_leaf(std::int32_t leaf);
   void remove_leaf(std::int32_t leaf);
