@@ -421,12 +421,16 @@ void polys(const ColliderShape& A, const Pose& PA, const ColliderShape& B, const
   }
 }
 
-template <ShapeType TA, ShapeType TB, AlgoFn F, bool Swap>
+// (`Checked`: the shapes' quick checks, as collide_into's table has them; collide_unchecked_into's
+// table goes without)
+template <ShapeType TA, ShapeType TB, AlgoFn F, bool Swap, bool Checked>
 void pair_entry(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb,
                 const NarrowPhaseSettings& settings, NarrowPhaseCache* cache, Manifold& m) {
-  if (!(looks_valid<TA>(a) & looks_valid<TB>(b))) {
-    check_shape(a, "collide: shape_a");
-    check_shape(b, "collide: shape_b");
+  if constexpr (Checked) {
+    if (!(looks_valid<TA>(a) & looks_valid<TB>(b))) {
+      check_shape(a, "collide: shape_a");
+      check_shape(b, "collide: shape_b");
+    }
   }
   if constexpr (Swap) {
     F(b, pb, a, pa, settings, cache, true, m);
@@ -441,32 +445,34 @@ struct PairTable {
   PairFn fn[kTypes][kTypes] = {};
 };
 
-template <ShapeType TA, ShapeType TB, AlgoFn F>
+template <ShapeType TA, ShapeType TB, AlgoFn F, bool Checked>
 constexpr void put(PairTable& t) {
-  t.fn[int(TA)][int(TB)] = &pair_entry<TA, TB, F, false>;
-  if constexpr (TA != TB) t.fn[int(TB)][int(TA)] = &pair_entry<TB, TA, F, true>;
+  t.fn[int(TA)][int(TB)] = &pair_entry<TA, TB, F, false, Checked>;
+  if constexpr (TA != TB) t.fn[int(TB)][int(TA)] = &pair_entry<TB, TA, F, true, Checked>;
 }
 
+template <bool Checked>
 constexpr PairTable make_pair_table() {
   using T = ShapeType;
   PairTable t{};
-  put<T::Sphere, T::Sphere, closed<sphere_sphere>>(t);
-  put<T::Sphere, T::Capsule, closed<sphere_capsule>>(t);
-  put<T::Sphere, T::Box, closed<sphere_box>>(t);
-  put<T::Sphere, T::Hull, closed<core_hull>>(t);
-  put<T::Sphere, T::Plane, closed<convex_plane>>(t);
-  put<T::Capsule, T::Capsule, closed<capsule_capsule>>(t);
-  put<T::Capsule, T::Box, closed<capsule_box>>(t);
-  put<T::Capsule, T::Hull, closed<core_hull>>(t);
-  put<T::Capsule, T::Plane, closed<convex_plane>>(t);
-  put<T::Box, T::Box, polys>(t);
-  put<T::Box, T::Hull, polys>(t);
-  put<T::Box, T::Plane, closed<convex_plane>>(t);
-  put<T::Hull, T::Hull, polys>(t);
-  put<T::Hull, T::Plane, closed<convex_plane>>(t);
+  put<T::Sphere, T::Sphere, closed<sphere_sphere>, Checked>(t);
+  put<T::Sphere, T::Capsule, closed<sphere_capsule>, Checked>(t);
+  put<T::Sphere, T::Box, closed<sphere_box>, Checked>(t);
+  put<T::Sphere, T::Hull, closed<core_hull>, Checked>(t);
+  put<T::Sphere, T::Plane, closed<convex_plane>, Checked>(t);
+  put<T::Capsule, T::Capsule, closed<capsule_capsule>, Checked>(t);
+  put<T::Capsule, T::Box, closed<capsule_box>, Checked>(t);
+  put<T::Capsule, T::Hull, closed<core_hull>, Checked>(t);
+  put<T::Capsule, T::Plane, closed<convex_plane>, Checked>(t);
+  put<T::Box, T::Box, polys, Checked>(t);
+  put<T::Box, T::Hull, polys, Checked>(t);
+  put<T::Box, T::Plane, closed<convex_plane>, Checked>(t);
+  put<T::Hull, T::Hull, polys, Checked>(t);
+  put<T::Hull, T::Plane, closed<convex_plane>, Checked>(t);
   return t;
 }
-constexpr PairTable kPairTable = make_pair_table();
+constexpr PairTable kPairTable = make_pair_table<true>();
+constexpr PairTable kUncheckedTable = make_pair_table<false>();
 
 }  // namespace
 
@@ -547,6 +553,16 @@ void narrow::collide_into(const ColliderShape& a, const Pose& pose_a, const Coll
       throw Error("collide: no narrow phase for the pair " + std::string(to_string(a.type)) + "-" +
                   std::string(to_string(b.type)) + " (meshes and compounds are traversed by their callers)");
   }
+  m.sub_shape_b = 0;
+  fn(a, pose_a, b, pose_b, settings, cache, m);
+}
+
+void narrow::collide_unchecked_into(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b,
+                                    const Pose& pose_b, const NarrowPhaseSettings& settings, NarrowPhaseCache* cache,
+                                    Manifold& m) {
+  // (a pair of types with no narrow phase, a mesh or a compound, goes to collide_into, which throws)
+  const PairFn fn = kUncheckedTable.fn[unsigned(a.type)][unsigned(b.type)];
+  if (!fn) return collide_into(a, pose_a, b, pose_b, settings, cache, m);
   m.sub_shape_b = 0;
   fn(a, pose_a, b, pose_b, settings, cache, m);
 }

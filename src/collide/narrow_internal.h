@@ -325,6 +325,16 @@ void reduce(const Candidate* c, int count, const Vec3& n, Manifold& m);
 void collide_into(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
                   const NarrowPhaseSettings& settings, NarrowPhaseCache* cache, Manifold& m);
 
+/// collide_into() for input its caller has made sure of: shapes that pass check_shape (the
+/// rigid bodies' are checked when the body is made), poses whose position is finite and
+/// rotation a unit quaternion (a rigid body's, checked every step) and a finite margin >= 0;
+/// the same manifold, without collide_into's quick checks and the pair entries' (in the rain's
+/// landing, 198 -> 50 instructions a closed-form pair around its own algorithm). Shape types
+/// must be ShapeType values; a pair with no narrow phase (a mesh, a compound) throws as
+/// collide() does.
+void collide_unchecked_into(const ColliderShape& a, const Pose& pose_a, const ColliderShape& b, const Pose& pose_b,
+                            const NarrowPhaseSettings& settings, NarrowPhaseCache* cache, Manifold& m);
+
 /// The manifold with A and B exchanged (normal flipped, points swapped).
 inline void flip(Manifold& m) {
   m.normal = -m.normal;

@@ -1333,9 +1333,11 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
       if (merged.count > 0) keep(merged, mesh_a);
     }
   } else {
-    // (into the scratch, not zeroed first: keep reads only its first `count` points)
-    narrow::collide_into(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape,
-                         shape_pose(s, p.proxy_b, b, p.shape_b), ns, &c.narrow, pair_manifold);
+    // (into the scratch, not zeroed first: keep reads only its first `count` points) (without
+    // collide()'s input checks: the shapes were checked when their bodies were made, the poses
+    // are checked every step, check_finite, and set_pose checks them, and the reach is finite)
+    narrow::collide_unchecked_into(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape,
+                                   shape_pose(s, p.proxy_b, b, p.shape_b), ns, &c.narrow, pair_manifold);
     if (pair_manifold.count > 0) keep(pair_manifold, false);
   }
   // the old chain goes back to the pool
