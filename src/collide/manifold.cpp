@@ -372,8 +372,9 @@ namespace {
 // --- the pair table -----------------------------------------------------------------------
 // One function per ordered pair of shape types, found by indexing a table with the two
 // types: a pair costs one indirect call, not a chain of type tests the branch predictor
-// cannot learn when pairs of every kind come mixed (a broad phase's pair list). Each checks
-// its two shapes, runs the pair's algorithm in canonical order (sphere < capsule < box < hull
+// cannot learn when pairs of every kind come mixed (a broad phase's pair list). Each entry of
+// the checked table checks its two shapes (kUncheckedTable's, for collide_unchecked_into, do
+// not), runs the pair's algorithm in canonical order (sphere < capsule < box < hull
 // < plane) and flips the manifold back when it swapped them.
 
 using PairFn = void (*)(const ColliderShape& a, const Pose& pa, const ColliderShape& b, const Pose& pb,

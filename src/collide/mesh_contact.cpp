@@ -407,11 +407,10 @@ int sat_triangle(const Poly& P, PolyAt& at, const Pose& pa, const Vec3 tri[3], c
       return 1;
     }
   }
-  // apart along an axis by no more than the margin (here and below): GJK's case, unless one
-  // of the triangle's sides separates them by more. GJK's distance (never below the true one)
-  // is then beyond the margin too, so the answer is the same without the GJK run: on the
-  // terrain a fifth of these runs were saved so, for a tenth of their cost (scanning all the
-  // remaining axes as well saved half the runs, but cost about as much as it saved)
+  // apart along an axis by no more than the margin (here and below): GJK's case, unless some
+  // axis separates them by more (beyond_any: the triangle's sides, the shape's faces, the edge
+  // axes). GJK's distance (never below the true one) is then beyond the margin too, so the
+  // answer is the same without the GJK run
   if (best > 0) return beyond_any() ? 0 : 2;
   // (the shape's axes made only now: the tests above need its placed vertices alone)
   if (!at.made) at.make(P, pa);

@@ -326,8 +326,10 @@ void collide_into(const ColliderShape& a, const Pose& pose_a, const ColliderShap
                   const NarrowPhaseSettings& settings, NarrowPhaseCache* cache, Manifold& m);
 
 /// collide_into() for input its caller has made sure of: shapes that pass check_shape (the
-/// rigid bodies' are checked when the body is made), poses whose position is finite and
-/// rotation a unit quaternion (a rigid body's, checked every step) and a finite margin >= 0;
+/// rigid bodies' are checked when the body is made, a plane's normal unit there too), poses
+/// whose position is finite and rotation a unit quaternion (a rigid body's: finite by
+/// set_pose's checks and check_finite after every step, unit as body_pose and shape_frame
+/// normalise it) and a finite margin (m) >= 0;
 /// the same manifold, without collide_into's quick checks and the pair entries' (in the rain's
 /// landing, 198 -> 50 instructions a closed-form pair around its own algorithm). Shape types
 /// must be ShapeType values; a pair with no narrow phase (a mesh, a compound) throws as

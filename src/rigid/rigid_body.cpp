@@ -319,6 +319,15 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   // sees convex shapes, planes and meshes only
   std::vector<RigidShapeDef> shapes;
   for (const RigidShapeDef& d : def.shapes) flatten_compound(d, shapes);
+  // a plane's normal must be unit, as collide() asks (ColliderShape::validate takes any
+  // non-zero one, for queries that normalise): the contacts' narrow phase takes it as it is,
+  // unchecked (collide_unchecked_into), so it is refused here, naming the body
+  for (std::size_t k = 0; k < shapes.size(); ++k) {
+    const ColliderShape& s = shapes[k].shape;
+    if (s.type == ShapeType::Plane && !(std::abs(glm::length(s.normal) - 1) <= 1e-6))
+      throw Error(w + ": shape " + std::to_string(k) + ": a plane's normal must be unit (|n| within 1e-6 of 1), got " +
+                  format_vec3(s.normal) + " of length " + format_value(glm::length(s.normal)));
+  }
   // the principal frame of a dynamic body (mass given, or from the shapes); others have no inertia
   Vec3 moments(0), inv(0);
   Quat principal(1, 0, 0, 0);
