@@ -827,8 +827,9 @@ struct RigidContacts {
   /// springs by as much, and takes away the approach of the bodies it moved apart. `gravity`
   /// says which body of a contact supports the other. True when it ran.
   bool push_out(RigidBodySystem& s, const Vec3& gravity);
-  /// push_out's scratch: the deep manifolds (pair indices), by body whether it is pushed, the
-  /// manifolds to sweep, and by body its move.
+  /// push_out's scratch: the deep manifolds (pair indices; in its second round the pairs of
+  /// the pushed bodies, listed from the blocks), by body whether it is pushed, the manifolds to
+  /// sweep, and by body its move.
   struct Ordered {
     double height;  // of the lower body (m; -1e300 for a body that does not move)
     double before;  // the deepest point's separation before the pass (m)

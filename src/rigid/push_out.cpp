@@ -118,9 +118,15 @@ bool RigidContacts::push_out(RigidBodySystem& s, const Vec3& gravity) {
   // a pair's lines that the gather reads: the key (its record and bodies), the normal, the
   // count, and the points (a one-point lane's, the first two of a face's)
   constexpr std::size_t kPairsAhead = 8, kRecordsAhead = 4;
+  // (the lines from the layout: a face's first two points span three lines from `points`)
+  static constexpr std::size_t kPoints = offsetof(ContactPair, points);
+  static_assert(kPoints % 64 == 0 && 2 * sizeof(SolverPoint) <= 3 * 64);
+  static constexpr std::size_t kLines[] = {0, offsetof(ContactPair, normal) / 64 * 64,
+                                           offsetof(ContactPair, count) / 64 * 64, kPoints, kPoints + 64,
+                                           kPoints + 128};
   auto ask_pair = [&](std::uint32_t k) {
     const char* at = reinterpret_cast<const char*>(&pairs[k]);
-    for (const std::size_t line : {0, 64, 192, 256, 320, 384}) __builtin_prefetch(at + line);
+    for (const std::size_t line : kLines) __builtin_prefetch(at + line);
   };
   order.reserve(room);
   order.clear();
