@@ -10,7 +10,7 @@ void read_rigid_settings(const Node& n, RigidSystemDef& def) {
   n.allow_only({"solver", "substeps", "auto_substeps", "auto_substeps_sag", "auto_substeps_sag_fraction",
                 "auto_substeps_least", "iterations", "substep_iterations", "relax_iterations", "manifold_iterations",
                 "contact_hertz", "damping_ratio", "push_out_speed", "baumgarte", "contact_compliance", "linear_slop",
-                "speculative_distance", "restitution_threshold", "friction_mix", "restitution_mix", "warm_starting",
+                "speculative_distance", "reuse_distance", "reuse_angle", "restitution_threshold", "friction_mix", "restitution_mix", "warm_starting",
                 "sleep", "sleep_linear", "sleep_angular", "time_to_sleep", "capacity"});
   ContactSettings& c = def.contacts;
   c.solver = n.choice<RigidSolverType>(
@@ -43,6 +43,9 @@ void read_rigid_settings(const Node& n, RigidSystemDef& def) {
   c.contact_compliance = n.non_negative("contact_compliance", c.contact_compliance);
   c.linear_slop = n.non_negative("linear_slop", c.linear_slop);
   c.speculative_distance = n.non_negative("speculative_distance", c.speculative_distance);
+  // a manifold is carried to the next step while its pair moved less than these (m, rad)
+  c.reuse_distance = n.non_negative("reuse_distance", c.reuse_distance);
+  c.reuse_angle = n.non_negative("reuse_angle", c.reuse_angle);
   c.restitution_threshold = n.non_negative("restitution_threshold", c.restitution_threshold);
   const std::initializer_list<std::pair<const char*, MixRule>> rules = {{"geometric-mean", MixRule::GeometricMean},
                                                                         {"minimum", MixRule::Minimum},

@@ -252,6 +252,20 @@ TEST(RigidScenes, SettingsReachTheWorld) {
   EXPECT_EQ(c.contact_hertz, 60);
 }
 
+// the manifold reuse tests' thresholds: read, 0 allowed (every manifold afresh), negative refused
+TEST(RigidScenes, ReuseDistanceAndAngleAreRead) {
+  auto settings_of = [](const char* json) { return pba::parse_scene(json, "x.json").world.rigid().settings(); };
+  const pba::ContactSettings c =
+      settings_of(R"({"version": 1, "settings": {"rigid": {"reuse_distance": 0.004, "reuse_angle": 0.01}}})");
+  EXPECT_EQ(c.reuse_distance, 0.004);
+  EXPECT_EQ(c.reuse_angle, 0.01);
+  EXPECT_EQ(settings_of(R"({"version": 1, "settings": {"rigid": {"reuse_distance": 0}}})").reuse_distance, 0);
+  EXPECT_EQ(settings_of(R"({"version": 1})").reuse_distance, pba::ContactSettings{}.reuse_distance);
+  EXPECT_NE(error_of(R"({"version": 1, "settings": {"rigid": {"reuse_angle": -1}}})")
+                .find("/settings/rigid/reuse_angle"),
+            std::string::npos);
+}
+
 // every solver of the library is named in scene files, with its own settings
 TEST(RigidScenes, TgsAndXpbdAreReadWithTheirSettings) {
   pba::Scene t = pba::parse_scene(
