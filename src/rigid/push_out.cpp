@@ -88,10 +88,11 @@ bool RigidContacts::push_out(RigidBodySystem& s, const Vec3& gravity) {
   const double g = glm::length(gravity);
   const Vec3 up = g > 0 ? -gravity / g : Vec3(0);
   // the true separation of point p of `c` at the poses now (m): the springs' (offset) plus
-  // the shift they were given
-  auto separation = [&](const ContactPair& c, int p, double shift) {
+  // the shift they were given; `turn_a`, `turn_b`: the bodies' turns since the step's start
+  // (made once for the pair's points: made again for each point, the separations were a
+  // third of this pass's instructions in the rain's landing)
+  auto separation = [&](const ContactPair& c, const Quat& turn_a, const Quat& turn_b, int p, double shift) {
     const SolverPoint& pt = c.points[p];
-    const Quat turn_a = s.q_[c.a] * glm::conjugate(s.q0_[c.a]), turn_b = s.q_[c.b] * glm::conjugate(s.q0_[c.b]);
     return glm::dot(s.com_[c.b] + turn_b * pt.sb - s.com_[c.a] - turn_a * pt.sa, c.normal) + pt.offset + shift;
   };
   // Every manifold touching a pushed body, with its lower body's height (the ground's
@@ -152,8 +153,9 @@ bool RigidContacts::push_out(RigidBodySystem& s, const Vec3& gravity) {
     if (rise > kSupportCos && o.mb > 0 && o.ma > 0) o.ma = 0, o.held = true;
     if (rise < -kSupportCos && o.ma > 0 && o.mb > 0) o.mb = 0, o.held = true;
     const double shift = manifolds[c.record].preload;
-    o.before = separation(c, 0, shift);
-    for (int p = 1; p < c.count; ++p) o.before = std::min(o.before, separation(c, p, shift));
+    const Quat turn_a = s.q_[c.a] * glm::conjugate(s.q0_[c.a]), turn_b = s.q_[c.b] * glm::conjugate(s.q0_[c.b]);
+    o.before = separation(c, turn_a, turn_b, 0, shift);
+    for (int p = 1; p < c.count; ++p) o.before = std::min(o.before, separation(c, turn_a, turn_b, p, shift));
     o.after = 0;
     order.push_back(o);
   }
