@@ -333,6 +333,9 @@ struct RigidProfile {
   std::size_t built = 0;    ///< manifolds (pairs of shapes, or shape and triangle) the narrow phase made
   std::size_t reused = 0;   ///< manifolds carried over from an earlier step (the pair barely moved)
   std::size_t moved = 0;    ///< shape proxies that left their fat bounds and were re-inserted
+  /// pairs of shapes in the broad phase's list when the manifolds were made (their fat boxes
+  /// overlap; a manifold is made or carried for those whose tight boxes do; count)
+  std::size_t shape_pairs = 0;
   /// bodies the continuous pass put back to their time of impact (continuous.cpp; count)
   std::size_t put_back = 0;
   /// manifolds the velocity solver took in blocks of one-point manifolds (a sphere's, a

@@ -400,6 +400,9 @@ struct RigidContacts {
   /// Forgets body `slot` (being destroyed at dense index `i`; the last body moves to `i`).
   void remove_body(RigidBodySystem& s, std::uint32_t slot, std::size_t i);
   // update()'s parts
+  // how far (m) body i's points may travel in the last step by turning: |w| times its reach
+  // over the step, up to its reach (pair_speculative's `turn`; contact_pairs.cpp)
+  static double turn_travel(const RigidBodySystem& s, std::size_t i);
   void update_proxies(RigidBodySystem& s, double dt);
   // update_proxies' common case for dense bodies i..i+3 at once (AVX2): each dynamic, awake and
   // not new, with one ball or box at its origin unturned, its principal frame its own, centred;
