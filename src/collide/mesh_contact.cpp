@@ -735,11 +735,18 @@ int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape
   check_pose(pose_a, "collide_mesh: pose_a");
   check_pose(pose_mesh, "collide_mesh: pose_mesh");
   check_shape(a, "collide_mesh: shape_a");
-  if (!a.is_convex()) throw Error("collide_mesh: shape_a must be convex, got a " + std::string(to_string(a.type)));
-  if (mesh.type != ShapeType::Mesh || !mesh.mesh) throw Error("collide_mesh: mesh must be a triangle mesh with a body");
   const double margin = settings.speculative_margin;
   if (!(margin >= 0 && std::isfinite(margin)))
     require_non_negative(margin, "collide_mesh: NarrowPhaseSettings.speculative_margin");
+  return collide_mesh_unchecked(a, pose_a, mesh, pose_mesh, out, settings, cache, path);
+}
+
+int narrow::collide_mesh_unchecked(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh,
+                                   const Pose& pose_mesh, std::span<Manifold> out, const NarrowPhaseSettings& settings,
+                                   MeshQueryCache* cache, BatchPath path) {
+  if (!a.is_convex()) throw Error("collide_mesh: shape_a must be convex, got a " + std::string(to_string(a.type)));
+  if (mesh.type != ShapeType::Mesh || !mesh.mesh) throw Error("collide_mesh: mesh must be a triangle mesh with a body");
+  const double margin = settings.speculative_margin;
 
   // A mesh that is only moved (its rotation (1, 0, 0, 0) to the bit but for the signs of the
   // zeros; the terrain's): every product with the rotation's vector part is a zero, and x + 0

@@ -1291,8 +1291,11 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     int count = 0;
     for (;;) {
       // (the system's scalar path reaches the mesh's lanes too: the same bits, tested both ways)
-      count = collide_mesh(convex, mesh_a ? pose_b : pose_a, mesh, mesh_a ? pose_a : pose_b, mesh_scratch, ns, near,
-                           simd == SimdPath::Scalar ? BatchPath::Scalar : BatchPath::Best);
+      // (without collide_mesh's input checks, as collide_unchecked_into below: the shapes
+      // were checked when their bodies were made, the poses are finite and unit, the reach finite)
+      count = narrow::collide_mesh_unchecked(convex, mesh_a ? pose_b : pose_a, mesh, mesh_a ? pose_a : pose_b,
+                                             mesh_scratch, ns, near,
+                                             simd == SimdPath::Scalar ? BatchPath::Scalar : BatchPath::Best);
       if (count < static_cast<int>(mesh_scratch.size())) break;
       mesh_scratch.resize(2 * mesh_scratch.size());
     }
