@@ -1111,17 +1111,38 @@ PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatPar
   if (p.warm_next) warm<V, kZmm>(L, r);
 }
 
+// the lines of a block that the start of its pass reads and the hardware's streamer does not
+// foresee: the frame at the block's start, then the arms in its middle and the bodies' indices
+// at its end (17 of its 84 lines). On the 2870-box pyramid, whose blocks come from beyond the
+// L2, those loads held the most samples of the paired kernel over what the 1240-box pyramid's
+// took; asked for one block ahead the kernel took 2-3% less time there, and about the same on
+// the 1240 pyramid. Asking for the points and the anchors too (45 lines) gained nothing on the
+// one and lost on the other (docs/benchmarks.md)
+template <class B>
+PBA_LANES void ask_set_up(const B& c) {
+  auto lines = [](const void* from, std::size_t bytes) __attribute__((always_inline)) {
+    for (std::size_t o = 0; o < bytes; o += 64) __builtin_prefetch(static_cast<const char*>(from) + o);
+  };
+  lines(c.t1, sizeof c.t1 + sizeof c.t2 + sizeof c.n);
+  lines(c.ca, sizeof c.ca + sizeof c.cb);
+  lines(c.a, sizeof c.a + sizeof c.b);
+}
+
 // the same for both halves of a block of 9 to 16 lanes on the AVX2 path: the set-up of each,
 // then their sweeps interleaved point by point (two independent chains of some 22 cycles a
 // point, which one after the other left the core idle), then the finish of each. Each lane
 // does what pass() does, in the same order (the halves' manifolds share no body that either
 // writes: they are of one colour)
+// (`next`: the block after this one in the pass, or null; its first lines are asked for while
+// the sweeps' chains leave the loads idle)
 template <class D, int kMode, class B>
-PBA_LANES void pass_pair(B& c, const AnchorsOf<B::kPoints>& g, const FloatParams& p, const BodyArrays& r) {
+PBA_LANES void pass_pair(B& c, const AnchorsOf<B::kPoints>& g, const FloatParams& p, const BodyArrays& r,
+                         const B* next) {
   constexpr int P = B::kPoints;
   const Lanes<v8f, B> L[2] = {{c, 0}, {c, 8}};
   Swept<v8f, P> mid[2];
   for (int h = 0; h < 2; ++h) pass<v8f, D, kMode, B, kSetUp>(c, g, 8 * h, p, r, &mid[h]);
+  if (next) ask_set_up(*next);
   // (the chains' numbers in arrays of their own, indexed by constants once the loops are
   // unrolled, so that they can live in registers: in the structs, GCC kept the loops and
   // every update went through memory)
@@ -1152,7 +1173,8 @@ constexpr bool kPairs = B::kPoints > 1;
 // when they are narrower). No prefetch of the blocks' fields: the blocks of a colour lie one after another
 // and the hardware's streamer fetches them; asking for all the lines of the next block at once
 // stalled the loop on the full fill buffers (measured on the 2870-box pyramid: the whole run
-// 7-8% faster without; the AVX2 path asks for one line of the next block only, below)
+// 7-8% faster without; the AVX2 path asks for one line of the next block, below, and its
+// paired blocks for the 17 lines that start the next one's pass: ask_set_up)
 template <class V, class D, int kMode, class B>
 PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first, std::size_t last,
                            const FloatParams& p, const BodyArrays& r) {
@@ -1172,7 +1194,7 @@ PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std:
     } else if (kWidth<V> == 16 && lanes <= 8) {
       pass<v8f, D, kMode>(blocks[i], anchors[i], 0, p, r);
     } else if constexpr (std::is_same_v<V, v8f> && kPairs<B>) {
-      if (lanes > 8) pass_pair<D, kMode>(blocks[i], anchors[i], p, r);
+      if (lanes > 8) pass_pair<D, kMode>(blocks[i], anchors[i], p, r, i + 1 < last ? &blocks[i + 1] : nullptr);
       else pass<V, D, kMode>(blocks[i], anchors[i], 0, p, r);
     } else {
       for (int l = 0; l < lanes; l += kWidth<V>) pass<V, D, kMode>(blocks[i], anchors[i], l, p, r);
