@@ -467,6 +467,40 @@ struct Carried {
   MaskOf<V> skip[P], impact;
 };
 
+// the AVX2 path's state of a half-block between the set-up and the sweeps, and between the
+// sweeps and the finish (see pass_pair): the two halves' sweeps run interleaved, point by point
+template <class V, int P>
+struct Swept {
+  V rel[3], oa[3], ob[3];
+  V lambda[P], largest[P], vn[P], bias[P], iscale[P], negm[P];
+  MaskOf<V> skip[P];
+};
+
+// solve()'s parts: the whole pass, its set-up up to the sweeps (into a Swept), or from after
+// the sweeps (from a Swept)
+enum Part : int { kWhole, kSetUp, kFinish };
+
+// point k of a sweep (see solve()): its impulse, and the normal speeds of the points it moves
+// (last: the sweep before the friction, which updates only the points still to come)
+template <int kMode, bool kYmm, bool kLast, class V, class B, int P>
+PBA_LANES void sweep_point(const Lanes<V, B>& F, int k, V (&vn)[P], V (&lambda)[P], V (&largest)[P],
+                           const V (&negm)[P], const V (&bias)[P], const V (&iscale)[P],
+                           const MaskOf<V> (&skip)[P]) {
+  const V zero = splat<V>(0);
+  V j;
+  if constexpr (kMode == kSoft) j = negm[k] * (vn[k] + bias[k]) - iscale[k] * lambda[k];
+  else if constexpr (kMode == kRigid) j = negm[k] * (vn[k] + bias[k]);
+  else if constexpr (kYmm) j = negm[k] * vn[k];  // (the + 0 left out: see solve())
+  else j = negm[k] * (vn[k] + zero);
+  V next = vmax0<kYmm>(lambda[k] + j, zero);
+  if constexpr (kMode == kRelax) next = skip[k] ? lambda[k] : next;
+  const V dl = next - lambda[k];
+  lambda[k] = next;
+  largest[k] = vmax(largest[k], dl);
+#pragma GCC unroll 4
+  for (int m = kLast ? k + 1 : 0; m < P; ++m) vn[m] = vn[m] + F(F.c.k[kK[m][k]]) * dl;
+}
+
 // one pass of the block's lanes: normal points, friction, twist
 // the rounds (below), for lanes of which one lands sliding, from the pass's state: out of
 // line, in a function of its path's target, so that the common pass keeps its registers
@@ -477,10 +511,13 @@ void solve_rounds(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& 
 
 // kRounds: the rounds' instance, which starts from `from` (the pass's state when a lane lands
 // sliding) instead of from the block
-template <class V, int kMode, bool kZmm, class B, bool kRounds = false>
+// kPart: the whole pass, or one of the AVX2 path's two parts around the sweeps (through `mid`)
+template <class V, int kMode, bool kZmm, class B, bool kRounds = false, int kPart = kWhole>
 PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r,
-                     const Carried<V, B::kPoints>* from = nullptr) {
+                     const Carried<V, B::kPoints>* from = nullptr, Swept<V, B::kPoints>* mid = nullptr) {
   constexpr bool kBias = kMode != kRelax;
+  // (the set-up, up to the sweeps, and what follows them)
+  constexpr bool kStart = !kRounds && kPart != kFinish;
   // the AVX2 path (8 floats on 16 ymm registers): its own scheduling where the AVX-512 code
   // must stay as it is
   constexpr bool kYmm = std::is_same_v<V, v8f> && !kZmm;
@@ -494,7 +531,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   double* const base = r.bodies[0].v;
   V t1[3], t2[3], n[3];
   V rel[3], oa[3], ob[3], dwa[3], dwb[3], impulse[3];
-  if constexpr (!kRounds) {
+  if constexpr (kStart) {
     // the bodies, and their velocities in the frame: the relative linear one, each angular one
     V rowa[8], rowb[8];
     if constexpr (P == 1) {  // a static or kinematic side a's row loaded once (see load_side)
@@ -515,6 +552,9 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
     }
     to_frame(t1, t2, n, wa, oa);
     to_frame(t1, t2, n, wb, ob);
+    for (int i = 0; i < 3; ++i) dwa[i] = zero, dwb[i] = zero, impulse[i] = zero;
+  } else if constexpr (kPart == kFinish) {
+    for (int i = 0; i < 3; ++i) rel[i] = mid->rel[i], oa[i] = mid->oa[i], ob[i] = mid->ob[i];
     for (int i = 0; i < 3; ++i) dwa[i] = zero, dwb[i] = zero, impulse[i] = zero;
   } else {
     for (int i = 0; i < 3; ++i) {
@@ -550,11 +590,16 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       lambda[k] = from->lambda[k], largest[k] = from->largest[k], bias[k] = from->bias[k];
       iscale[k] = from->iscale[k], negm[k] = from->negm[k], skip[k] = from->skip[k];
     }
+  } else if constexpr (kPart == kFinish) {
+    for (int k = 0; k < P; ++k) {
+      lambda[k] = mid->lambda[k], largest[k] = mid->largest[k], bias[k] = mid->bias[k];
+      iscale[k] = mid->iscale[k], negm[k] = mid->negm[k], skip[k] = mid->skip[k];
+    }
   }
   V mscale[P];
   const V ma = L(c.ma), mb = L(c.mb);
   const auto fixed = (ma == zero) | (mb == zero);
-  if constexpr (!kRounds) {
+  if constexpr (kStart) {
     for (int k = 0; k < P; ++k) {
       lambda[k] = L(c.impulse[k]);
       largest[k] = L(c.max_impulse[k]);
@@ -594,7 +639,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // sweep, a point's took the turn the points before it gave the body, and a box landing flat
   // recorded corners approaching at 7.0 to 7.7 m/s, which the restitution pass bounced unevenly
   // (written now: nothing below reads them, and held to the end they took four registers)
-  if constexpr (!kRounds) {
+  if constexpr (kStart) {
     normal_speeds();
     if constexpr (kBias)
       for (int k = 0; k < P; ++k) L.put(c.approach[k], vmin(L(c.approach[k]), vn[k]));
@@ -610,8 +655,19 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
   // non-negative values), and vmax(lambda + j, 0) gives -0 only from -0 + -0. For the same
   // reason the AVX2 relax pass leaves out its + 0, which turns a -0 speed into +0 and so flips
   // the sign of a zero j, which lambda + j then drops: an add less a point in its chain)
-  if constexpr (!kRounds)
+  if constexpr (kStart)
     for (int k = 0; k < P; ++k) negm[k] = kMode == kSoft ? -L(c.mass[k]) * mscale[k] : -L(c.mass[k]);
+  if constexpr (kPart == kSetUp) {
+    // (the sweeps are pass_pair's, the two halves' points interleaved)
+    for (int i = 0; i < 3; ++i) mid->rel[i] = rel[i], mid->oa[i] = oa[i], mid->ob[i] = ob[i];
+    for (int k = 0; k < P; ++k) {
+      mid->lambda[k] = lambda[k], mid->largest[k] = largest[k], mid->vn[k] = vn[k], mid->bias[k] = bias[k];
+      mid->iscale[k] = iscale[k], mid->negm[k] = negm[k], mid->skip[k] = skip[k];
+    }
+    return;
+  }
+  // (the same arithmetic as sweep_point's, written out here: through that function the AVX-512
+  // kernels' code changed, GCC 12 allocating their registers otherwise)
   auto sweep = [&](auto last) __attribute__((always_inline)) {
     const auto F = L.again();
     for (int k = 0; k < P; ++k) {
@@ -628,7 +684,7 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       for (int m = last ? k + 1 : 0; m < P; ++m) vn[m] = vn[m] + F(F.c.k[kK[m][k]]) * dl;
     }
   };
-  if constexpr (!kRounds) {
+  if constexpr (!kRounds && kPart == kWhole) {
     for (int it = 1; it < p.sweeps; ++it) sweep(std::false_type{});
     sweep(std::true_type{});
   }
@@ -1007,8 +1063,11 @@ PBA_LANES void separations_of(B& c, const AnchorsOf<B::kPoints>& g, int l0, int 
   for (int l = l0; l < l0 + width; l += kWidth<D>) separations(Lanes<D, B>{c, l}, g, r);
 }
 
-template <class V, class D, int kMode, class B>
-PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatParams& p, const BodyArrays& r) {
+// kPart: the whole pass, or the AVX2 path's part of it before the sweeps or after them (see
+// pass_pair; the state between them in `mid`)
+template <class V, class D, int kMode, class B, int kPart = kWhole>
+PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatParams& p, const BodyArrays& r,
+                    Swept<V, B::kPoints>* mid = nullptr) {
   const Lanes<V, B> L{c, l0};
   // the separations in float, on the pass's own lanes. Each is base + n.dp + the turned
   // anchors' terms, every term small (the step's overlap or gap, and the step's motion), so
@@ -1016,10 +1075,12 @@ PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatPar
   // 4 m step of a 250 m/s body), under the kTouching margin that already absorbs the float
   // velocities' rounding; the doubles cost two or four extra halves of a block and the
   // conversions to them (AVX2: 17.6% of the kernel's instructions, docs/benchmarks.md)
-  if (p.update_sep) separations(L, g, r);
+  if constexpr (kPart != kFinish)
+    if (p.update_sep) separations(L, g, r);
   // (the AVX-512 path: kZmm widens rows with its one-instruction conversion)
   constexpr bool kZmm = std::is_same_v<D, v8d>;
-  solve<V, kMode, kZmm>(L, p, r);
+  solve<V, kMode, kZmm, B, false, kPart>(L, p, r, nullptr, mid);
+  if constexpr (kPart == kSetUp) return;
   // the soft step's relax pass (cap_carry): a point carries to the next substep at most
   // kCarryGrowth times the impulse it solved the substep before, plus what holds its effective
   // mass against gravity for a substep. More is an impact's: the substep's impulse that
@@ -1050,11 +1111,70 @@ PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatPar
   if (p.warm_next) warm<V, kZmm>(L, r);
 }
 
+// the lines of a block that the start of its pass reads and the hardware's streamer does not
+// foresee: the frame at the block's start, then the arms in its middle and the bodies' indices
+// at its end (17 of its 84 lines). On the 2870-box pyramid, whose blocks come from beyond the
+// L2, those loads held the most samples of the paired kernel over what the 1240-box pyramid's
+// took; asked for one block ahead the kernel took 2-3% less time there, and about the same on
+// the 1240 pyramid. Asking for the points and the anchors too (45 lines) gained nothing on the
+// one and lost on the other (docs/benchmarks.md)
+template <class B>
+PBA_LANES void ask_set_up(const B& c) {
+  auto lines = [](const void* from, std::size_t bytes) __attribute__((always_inline)) {
+    for (std::size_t o = 0; o < bytes; o += 64) __builtin_prefetch(static_cast<const char*>(from) + o);
+  };
+  lines(c.t1, sizeof c.t1 + sizeof c.t2 + sizeof c.n);
+  lines(c.ca, sizeof c.ca + sizeof c.cb);
+  lines(c.a, sizeof c.a + sizeof c.b);
+}
+
+// the same for both halves of a block of 9 to 16 lanes on the AVX2 path: the set-up of each,
+// then their sweeps interleaved point by point (two independent chains of some 22 cycles a
+// point, which one after the other left the core idle), then the finish of each. Each lane
+// does what pass() does, in the same order (the halves' manifolds share no body that either
+// writes: they are of one colour)
+// (`next`: the block after this one in the pass, or null; its first lines are asked for while
+// the sweeps' chains leave the loads idle)
+template <class D, int kMode, class B>
+PBA_LANES void pass_pair(B& c, const AnchorsOf<B::kPoints>& g, const FloatParams& p, const BodyArrays& r,
+                         const B* next) {
+  constexpr int P = B::kPoints;
+  const Lanes<v8f, B> L[2] = {{c, 0}, {c, 8}};
+  Swept<v8f, P> mid[2];
+  for (int h = 0; h < 2; ++h) pass<v8f, D, kMode, B, kSetUp>(c, g, 8 * h, p, r, &mid[h]);
+  if (next) ask_set_up(*next);
+  // (the chains' numbers in arrays of their own, indexed by constants once the loops are
+  // unrolled, so that they can live in registers: in the structs, GCC kept the loops and
+  // every update went through memory)
+  v8f vn[2][P], lambda[2][P], largest[2][P];
+  for (int h = 0; h < 2; ++h)
+    for (int k = 0; k < P; ++k) vn[h][k] = mid[h].vn[k], lambda[h][k] = mid[h].lambda[k], largest[h][k] = mid[h].largest[k];
+  auto sweep = [&](auto last) __attribute__((always_inline)) {
+    const Lanes<v8f, B> F[2] = {L[0].again(), L[1].again()};
+#pragma GCC unroll 4
+    for (int k = 0; k < P; ++k)
+#pragma GCC unroll 2
+      for (int h = 0; h < 2; ++h)
+        sweep_point<kMode, true, decltype(last)::value>(F[h], k, vn[h], lambda[h], largest[h], mid[h].negm,
+                                                        mid[h].bias, mid[h].iscale, mid[h].skip);
+  };
+  for (int it = 1; it < p.sweeps; ++it) sweep(std::false_type{});
+  sweep(std::true_type{});
+  for (int h = 0; h < 2; ++h)
+    for (int k = 0; k < P; ++k) mid[h].lambda[k] = lambda[h][k], mid[h].largest[k] = largest[h][k];
+  for (int h = 0; h < 2; ++h) pass<v8f, D, kMode, B, kFinish>(c, g, 8 * h, p, r, &mid[h]);
+}
+
+// which blocks the AVX2 path passes in interleaved halves (pass_pair)
+template <class B>
+constexpr bool kPairs = B::kPoints > 1;
+
 // blocks [first, last) on lanes of V, the separations on lanes of D (several parts of a block
 // when they are narrower). No prefetch of the blocks' fields: the blocks of a colour lie one after another
 // and the hardware's streamer fetches them; asking for all the lines of the next block at once
 // stalled the loop on the full fill buffers (measured on the 2870-box pyramid: the whole run
-// 7-8% faster without; the AVX2 path asks for one line of the next block only, below)
+// 7-8% faster without; the AVX2 path asks for one line of the next block, below, and its
+// paired blocks for the 17 lines that start the next one's pass: ask_set_up)
 template <class V, class D, int kMode, class B>
 PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first, std::size_t last,
                            const FloatParams& p, const BodyArrays& r) {
@@ -1073,6 +1193,9 @@ PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std:
       pass<float, double, kMode>(blocks[i], anchors[i], 0, p, r);
     } else if (kWidth<V> == 16 && lanes <= 8) {
       pass<v8f, D, kMode>(blocks[i], anchors[i], 0, p, r);
+    } else if constexpr (std::is_same_v<V, v8f> && kPairs<B>) {
+      if (lanes > 8) pass_pair<D, kMode>(blocks[i], anchors[i], p, r, i + 1 < last ? &blocks[i + 1] : nullptr);
+      else pass<V, D, kMode>(blocks[i], anchors[i], 0, p, r);
     } else {
       for (int l = 0; l < lanes; l += kWidth<V>) pass<V, D, kMode>(blocks[i], anchors[i], l, p, r);
     }
