@@ -1093,12 +1093,14 @@ PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatPar
 // defer_rounds): each one's block fields and anchors' `last` as at its pass's friction, and its
 // pass's state, copied into lane `count` of `block` and `state`; where each came from; its
 // block's write bits, which are cleared there until the rounds write the lane back
+// (set by pass_blocks, none of it zeroed there: it is made once a colour and pass, 1,800 times a
+// step in pyramid1240, whose one-point lanes never land sliding)
 struct DeferredRounds {
   OnePointBlock* blocks;
   const OnePointAnchors* anchors;
-  int count = 0;
-  bool clean = false;                  // block, anchors and state zeroed (at the first lane)
-  std::uint32_t from[8] = {};          // block index * kLanes + lane
+  int count;
+  bool clean;                          // block, anchors and state zeroed (at the first lane)
+  std::uint32_t from[8];               // block index * kLanes + lane
   OnePointBlock block;                 // lanes [0, count); write_a, write_b, rolls: their bits
   OnePointAnchors lasts;               // (`last` only)
   Carried<v8f, 1> state;
@@ -1181,7 +1183,8 @@ PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std:
   struct None {};
   [[maybe_unused]] std::conditional_t<kDefer, DeferredRounds, None> rounds;  // (not zeroed: see `clean`)
   DeferredRounds* defer = nullptr;
-  if constexpr (kDefer) rounds.blocks = blocks, rounds.anchors = anchors, defer = &rounds;
+  if constexpr (kDefer)
+    rounds.blocks = blocks, rounds.anchors = anchors, rounds.count = 0, rounds.clean = false, defer = &rounds;
   for (std::size_t i = first; i < last; ++i) {
     // a block of one lane (a colour of one manifold: a stack's) by the scalar lane, one of up
     // to eight by 8 floats (the same arithmetic in every lane, so the same bits)
@@ -1201,7 +1204,8 @@ PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std:
       for (int l = 0; l < lanes; l += kWidth<V>) pass<V, D, kMode>(blocks[i], anchors[i], l, p, r, defer);
     }
   }
-  if constexpr (kDefer) flush_rounds<kMode>(rounds, p, r);
+  if constexpr (kDefer)
+    if (rounds.count > 0) flush_rounds<kMode>(rounds, p, r);
 }
 
 template <class V, class D, class B>
