@@ -283,9 +283,15 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
   // pair, its turn alone); two bodies' shares add up to at least their pair's reach. Grown by
   // the setting alone, a speculative_distance of metres made every pair of a scene whose
   // points it then cut to their pair's reach (1,728 boxes at 1000 m: 1.3 s a step and not one
-  // manifold). Only when some body may take less (`thinnest`): else the setting, and the AVX2
-  // fours below, which take the setting's reach.
+  // manifold). Only when some body, static ones too, may take less (`thinnest`): else the
+  // setting. The AVX2 fours below take the setting's reach: four bodies none of which takes less
+  // whatever its turn.
   const bool share = kSpeculativePerHalfSize * thinnest < cs.speculative_distance;
+  [[maybe_unused]] auto setting_reach4 = [&](std::size_t i) {
+    for (std::size_t k = i; k < i + 4; ++k)
+      if (kSpeculativePerHalfSize * s.min_extent_[k] < cs.speculative_distance) return false;
+    return true;
+  };
   auto speculative = [&](std::size_t i) {
     if (!share) return cs.speculative_distance;
     const double thin = s.min_extent_[i], own = std::isinf(thin) ? 0.0 : kSpeculativePerHalfSize * thin;
@@ -295,12 +301,12 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
   // and AVX-512 one by one, as before); after a four it turns down, the next try is twice as
   // far ahead, up to 64 bodies, so that a scene of other shapes or sleepers pays for few tries
 #if PBA_EMIT_AVX2
-  std::size_t next4 = simd == SimdPath::Avx2 && !share ? 0 : n, back_off = 4;
+  std::size_t next4 = simd == SimdPath::Avx2 ? 0 : n, back_off = 4;
 #endif
   for (std::size_t i = 0; i < n; ++i) {
 #if PBA_EMIT_AVX2
     if (i == next4) {
-      if (i + 4 <= n && proxies4_avx2(s, i, dt)) {
+      if (i + 4 <= n && (!share || setting_reach4(i)) && proxies4_avx2(s, i, dt)) {
         next4 = i + 4, back_off = 4;
         i += 3;
         continue;

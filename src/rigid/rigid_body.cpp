@@ -396,7 +396,8 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   name_.push_back(def.name);
   bullet_.push_back(def.bullet ? 1 : 0);
   // the reach of the shapes about the centre of mass, and their thinnest part (planes and
-  // meshes have no finite reach; only dynamic bodies use these)
+  // meshes have no finite reach; the contacts read both for every body: the pairs' speculative
+  // and reuse distances, the broad phase's reach)
   double reach = 0, thin = INFINITY;
   for (const RigidShapeDef& d : shapes) {
     if (d.shape.type == ShapeType::Plane || d.shape.type == ShapeType::Mesh) {
