@@ -151,6 +151,12 @@ bool holds_ball(const RigidShapeDef& d, const Vec3& p, double radius) {
   }
 }
 
+// a plane shape's offset (m) along its world normal `nw` (unit) at pose `pb`: its points x
+// are those with dot(nw, x) = this (the normal given need not be unit)
+double plane_offset(const ColliderShape& plane, const Pose& pb, const Vec3& nw) {
+  return plane.offset / glm::length(plane.normal) + glm::dot(nw, pb.position);
+}
+
 #if PBA_ROWS_AVX2
 // The first test of continuous() below (slow by the bound on the angle) for four bodies (their
 // rotations, centres of mass now and at the step's start, reaches and smallest half sizes),
@@ -215,7 +221,9 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // by the bound skips the arc tangent, as the test below would skip it (rounding is monotone)
     // (from the arrays: the sweep, zeroed and filled, was a fifth of this pass's time in the
     // rain's landing, for the bodies this skips)
-    if (!s.bullet_[i] && shift + 2 * (sine / cosine) * (1 + 1e-12) * s.extent_[i] <= 0.5 * s.min_extent_[i]) continue;
+    // (`travel`: the points' travel bounded so, used again by the statics' scan below)
+    const double travel = shift + 2 * (sine / cosine) * (1 + 1e-12) * s.extent_[i];
+    if (!s.bullet_[i] && travel <= 0.5 * s.min_extent_[i]) continue;
     // stopped within its slop of what it hits (pair_slop: less for a small body)
     const double target = pair_slop(cs, s.min_extent_[i]), tol = 0.25 * target;
     // everything the body can touch on its way: its centre's path grown by its reach (the
@@ -230,7 +238,6 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // a step. The points' travel is bounded from above as in the test above (the angle by
     // 2 s / c); a margin of 1e-9 (relative and in m) stands for the sweeps' rounding.
     {
-      const double travel = shift + 2 * (sine / cosine) * (1 + 1e-12) * s.extent_[i];
       std::size_t near = 0;
       for (; near < statics.size(); ++near) {
         const std::uint32_t k = statics[near];
@@ -241,7 +248,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
         const Pose& pb = shape_pose(s, k, other.body, other.shape);
         // (as the sweep below measures the plane)
         const Vec3 nw = glm::normalize(pb.rotation * sb.shape.normal);
-        const double off = sb.shape.offset / glm::length(sb.shape.normal) + glm::dot(nw, pb.position);
+        const double off = plane_offset(sb.shape, pb, nw);
         // the centre's height at the start less the reach: no point of the body lower
         const double low = glm::dot(nw, s.com0_[i]) - off - s.extent_[i];
         if (!(low - (target + tol) > travel * (1 + 1e-9) + 1e-9)) break;
@@ -325,7 +332,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       // a plane's unit normal and offset in the world (its solid on the negative side)
       const bool plane = sb.shape.type == ShapeType::Plane;
       const Vec3 nw = plane ? glm::normalize(pb.rotation * sb.shape.normal) : Vec3(0.0);
-      const double off = plane ? sb.shape.offset / glm::length(sb.shape.normal) + glm::dot(nw, pb.position) : 0.0;
+      const double off = plane ? plane_offset(sb.shape, pb, nw) : 0.0;
       // a mesh's: the path's bounds in its frame (the core's sweep and the shapes' query the same box)
       const Aabb in_mesh = sb.shape.type == ShapeType::Mesh ? mesh_box(pb) : Aabb{};
       piece.pose = pb;
