@@ -298,10 +298,6 @@ bool narrow::contact_normal(const ConvexProxy& A, const ConvexProxy& B, double m
 
 namespace {
 
-}  // namespace
-
-namespace {
-
 // quick checks of collide()'s input: true means check_pose and check_shape would pass (for a
 // pose, |q| within 1e-6 of 1 tested on |q|^2 a little inside those bounds; a false answer
 // sends the input through the full checks, which decide). Combined with & so a pair costs
