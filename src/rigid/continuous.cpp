@@ -286,10 +286,18 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     if (!s.bullet_[i] && moved <= 0.5 * s.min_extent_[i]) continue;
     // ... or rather the farthest its shapes' cores travel: a ball that rolls or spins moves
     // its surface within itself (see core_reach)
+    // (each convex shape's core reach made once for the body, for this test and every
+    // static's sweeps below: a hull's, from its vertices' bounds, was made again per static)
+    const std::vector<RigidShapeDef>& shapes = s.shapes_[i];
+    constexpr std::size_t kReaches = 8;
+    double reach_of[kReaches];
+    for (std::size_t j = 0; j < std::min(kReaches, shapes.size()); ++j)
+      if (shapes[j].shape.is_convex()) reach_of[j] = core_reach(shapes[j], w.com_local);
+    auto shape_reach = [&](std::size_t j) { return j < kReaches ? reach_of[j] : core_reach(shapes[j], w.com_local); };
     if (!s.bullet_[i]) {
       double core = 0;
-      for (const RigidShapeDef& sa : s.shapes_[i])
-        core = std::max(core, sa.shape.is_convex() ? core_reach(sa, w.com_local) : w.reach);
+      for (std::size_t j = 0; j < shapes.size(); ++j)
+        core = std::max(core, shapes[j].shape.is_convex() ? shape_reach(j) : w.reach);
       if (shift + w.angle * std::min(core, w.reach) <= 0.5 * s.min_extent_[i]) continue;
     }
     double toi = 1;
@@ -311,7 +319,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // (the centre of mass inside one of the body's shapes: its core ball may reach out of a
     // thin hull, which is then stopped up to that much short of the face, never through it)
     auto core_inside = [&] {
-      for (const RigidShapeDef& d : s.shapes_[i])
+      for (const RigidShapeDef& d : shapes)
         if (holds_ball(d, w.com_local, 0.0)) return true;
       return false;
     };
@@ -425,12 +433,13 @@ void RigidContacts::continuous(RigidBodySystem& s) {
           });
         });
       }
-      for (const RigidShapeDef& sa : s.shapes_[i]) {
+      for (std::size_t j = 0; j < shapes.size(); ++j) {
+        const RigidShapeDef& sa = shapes[j];
         if (!sa.shape.is_convex()) continue;
         auto pose_a = [&](double t) { return compose(w.body(t), sa.local); };
         // the shape's own sweep: the body's, turning its core's reach (never more than the body's)
         Sweep ws = w;
-        ws.reach = std::min(w.reach, core_reach(sa, w.com_local));
+        ws.reach = std::min(w.reach, shape_reach(j));
         const double moved_a = shift + ws.angle * ws.reach;  // the farthest its core travels (m)
         // A swept hit matters only when the step left the shape deeper than the slop: one that
         // ends on its side of the surface, within the slop, was stopped by the discrete
