@@ -463,9 +463,14 @@ void RigidContacts::continuous(RigidBodySystem& s) {
           // each triangle the path reaches, as a convex piece in the mesh frame
           const TriangleMesh& mesh = *sb.shape.mesh;
           // the shape at the step's start, once for all the triangles (the advances' first gap too)
-          const Pose p0 = pose_a(0.0), p1 = pose_a(1.0);
+          const Pose p0 = pose_a(0.0);
           const Quat p0_inv = glm::conjugate(p0.rotation);
-          const Vec3 centre0 = sa.shape.type == ShapeType::Hull ? apply(p0, sa.shape.hull->centroid()) : p0.position;
+          // the shape at the step's end and its centre at the start, for the end pose's test:
+          // made when a triangle first asks (in the terrain's landing steps most bodies'
+          // triangles end before it, and the pose's slerp was made for nothing)
+          Pose p1;
+          Vec3 centre0;
+          bool ends_made = false;
           each_triangle(mesh, in_mesh, [&](std::uint32_t tri) {
             for (int c = 0; c < 3; ++c) corners[c] = mesh.vertices()[mesh.triangles()[tri][c]];
             const Vec3 face = pb.rotation * mesh.normal(tri), corner = apply(pb, corners[0]);
@@ -512,6 +517,11 @@ void RigidContacts::continuous(RigidBodySystem& s) {
             // the end pose (as for the plane above): nearest the face or an internal feature,
             // on the side the shape's centre started on and within the slop of the plane, it
             // did not go through (a shape that crossed the triangle ends on its other side)
+            if (!ends_made) {
+              p1 = pose_a(1.0);
+              centre0 = sa.shape.type == ShapeType::Hull ? apply(p0, sa.shape.hull->centroid()) : p0.position;
+              ends_made = true;
+            }
             const DistanceResult r1 = gjk_distance(ConvexProxy::of(sa.shape, p1), piece);
             if (!r1.cores_overlap && internal_feature(corners, apply_inverse(pb, r1.point_b), flags)) {
               const Vec3 n = glm::dot(centre0 - corner, face) >= 0 ? face : -face;
