@@ -55,8 +55,8 @@ struct Gap {
   Vec3 normal;
 };
 
-// How fast (m per step) no point of the swept shape closes on another along the unit normal
-// n faster than: a point at r from the centre moves along n at angle (axis x r) . n <= angle
+// A bound (m per step) on how fast any point of the swept shape closes on another along the
+// unit normal n: a point at r from the centre moves along n at angle (axis x r) . n <= angle
 // |axis x n| |r| per step (turning about n moves nothing along n)
 double closing_along(const Sweep& w, const Vec3& n) {
   return glm::dot(w.c1 - w.c0, n) + w.angle * w.reach * glm::length(glm::cross(w.axis, n));
