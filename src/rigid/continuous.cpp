@@ -55,13 +55,36 @@ struct Gap {
   Vec3 normal;
 };
 
+// A bound (m per step) on how fast any point of the swept shape closes on another along the
+// unit normal n: a point at r from the centre moves along n at angle (axis x r) . n <= angle
+// |axis x n| |r| per step (turning about n moves nothing along n)
+double closing_along(const Sweep& w, const Vec3& n) {
+  return glm::dot(w.c1 - w.c0, n) + w.angle * w.reach * glm::length(glm::cross(w.axis, n));
+}
+
+// advance()'s bound on its passes (see there)
+double advance_limit(const Sweep& w, double tol) {
+  // (kMaxAdvances: see advance())
+  constexpr double kMaxAdvances = 1e6;
+  return tol > 0 ? std::min((glm::length(w.c1 - w.c0) + w.angle * w.reach) / tol + 2, kMaxAdvances) : 50;
+}
+
+// Whether advance() from the gap g at t = 0 (above target + tol) ends at its first pass with
+// 1, no contact in the step: the gap's closing bound carries t past the step's end. The same
+// operations as that pass, so the same answer to the bit (the loop runs once unless its
+// bound is not above 0, a NaN's)
+bool ends_at_first_pass(const Sweep& w, const Gap& g, double target, double tol) {
+  if (!(0 < advance_limit(w, tol))) return false;
+  const double closing = closing_along(w, g.normal);
+  return closing <= 0 || 0 + (g.distance - target) / closing >= 1;
+}
+
 // Conservative advancement of `gap` (a function of t) to within `target` (+ tol) of contact.
 // Returns the fraction of impact, or 1 when the shapes never come that close in the step.
 // A pair already that close at the start is left to the discrete contact (a box sliding on
 // the ground must not be stopped by it).
 template <class GapAt>
 double advance(const Sweep& w, GapAt gap_at, double target, double tol) {
-  const Vec3 dc = w.c1 - w.c0;
   double t = 0;
   Gap g = gap_at(0.0);
   if (g.distance <= target + tol) return 1;
@@ -75,12 +98,9 @@ double advance(const Sweep& w, GapAt gap_at, double target, double tol) {
   // bound was then 3e17 passes, never ended. So it also ends when t stops moving (t is still a
   // time before contact) and after kMaxAdvances passes (more than any approach the slop bounds
   // below 1.2 km a step needs).
-  constexpr double kMaxAdvances = 1e6;
-  const double limit = tol > 0 ? std::min((glm::length(dc) + w.angle * w.reach) / tol + 2, kMaxAdvances) : 50;
+  const double limit = advance_limit(w, tol);
   for (double it = 0; it < limit; ++it) {
-    // a point at r from the centre moves along n at angle (axis x r) . n <= angle |axis x n|
-    // |r| per step: turning about n moves nothing along n
-    const double closing = glm::dot(dc, g.normal) + w.angle * w.reach * glm::length(glm::cross(w.axis, g.normal));
+    const double closing = closing_along(w, g.normal);
     if (closing <= 0) return 1;
     const double next = t + (g.distance - target) / closing;
     if (next >= 1) return 1;
@@ -266,10 +286,18 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     if (!s.bullet_[i] && moved <= 0.5 * s.min_extent_[i]) continue;
     // ... or rather the farthest its shapes' cores travel: a ball that rolls or spins moves
     // its surface within itself (see core_reach)
+    // (each convex shape's core reach made once for the body, for this test and every
+    // static's sweeps below: a hull's, from its vertices' bounds, was made again per static)
+    const std::vector<RigidShapeDef>& shapes = s.shapes_[i];
+    constexpr std::size_t kReaches = 8;
+    double reach_of[kReaches];
+    for (std::size_t j = 0; j < std::min(kReaches, shapes.size()); ++j)
+      if (shapes[j].shape.is_convex()) reach_of[j] = core_reach(shapes[j], w.com_local);
+    auto shape_reach = [&](std::size_t j) { return j < kReaches ? reach_of[j] : core_reach(shapes[j], w.com_local); };
     if (!s.bullet_[i]) {
       double core = 0;
-      for (const RigidShapeDef& sa : s.shapes_[i])
-        core = std::max(core, sa.shape.is_convex() ? core_reach(sa, w.com_local) : w.reach);
+      for (std::size_t j = 0; j < shapes.size(); ++j)
+        core = std::max(core, shapes[j].shape.is_convex() ? shape_reach(j) : w.reach);
       if (shift + w.angle * std::min(core, w.reach) <= 0.5 * s.min_extent_[i]) continue;
     }
     double toi = 1;
@@ -291,7 +319,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // (the centre of mass inside one of the body's shapes: its core ball may reach out of a
     // thin hull, which is then stopped up to that much short of the face, never through it)
     auto core_inside = [&] {
-      for (const RigidShapeDef& d : s.shapes_[i])
+      for (const RigidShapeDef& d : shapes)
         if (holds_ball(d, w.com_local, 0.0)) return true;
       return false;
     };
@@ -306,8 +334,10 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // a core: a T-handle's centre of mass below its ball rests within the slop of the ground)
     auto core_against = [&](auto gap_at) {
       const Gap g0 = gap_at(0.0);
+      // (the advance's first gap is this one: made again there, it was a GJK run a triangle
+      // for nothing, 36 of the terrain's landing steps' 1,350 a step)
       if (g0.distance > target + tol)
-        toi = std::min(toi, advance(core, gap_at, target, tol));
+        toi = std::min(toi, advance(core, [&](double t) { return t == 0.0 ? g0 : gap_at(t); }, target, tol));
       else if (glm::dot(core.c1 - core.c0, g0.normal) > g0.distance + target)
         toi = 0, into = g0.normal;
     };
@@ -324,6 +354,26 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // 15 quadwords zeroed 57k times in the terrain's run; per mesh, 32k)
     Vec3 corners[3];
     ConvexProxy piece{.type = ShapeType::Mesh, .triangle = corners};
+    // The triangles a mesh's tree gives for the path's bounds, listed by the first sweep that
+    // asks (the core's, then each shape's): the same triangles in the same order for each
+    // (query() has no state), without a walk of the tree per sweep. The tree's walk, repeated
+    // for the core and the shape, was some 0.3 M instructions of a landing step's 7 M in this
+    // pass on the terrain. More than the list holds: the tree is walked each time, as before.
+    constexpr std::uint32_t kListed = 128;
+    std::uint32_t listed[kListed];
+    std::uint32_t listed_count = 0;  // kListed + 1: more than that
+    const TriangleMesh* listed_mesh = nullptr;
+    auto each_triangle = [&](const TriangleMesh& mesh, const Aabb& box, auto&& visit) {
+      if (listed_mesh != &mesh) {
+        listed_mesh = &mesh, listed_count = 0;
+        mesh.query(box, [&](std::uint32_t tri) {
+          if (listed_count < kListed) listed[listed_count++] = tri;
+          else listed_count = kListed + 1;
+        });
+      }
+      if (listed_count > kListed) return mesh.query(box, visit);
+      for (std::uint32_t j = 0; j < listed_count; ++j) visit(listed[j]);
+    };
     for (const std::uint32_t k : statics) {
       const ShapeProxy& other = proxies[k];
       if (!other.box.overlaps(path)) continue;
@@ -335,6 +385,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       const double off = plane ? plane_offset(sb.shape, pb, nw) : 0.0;
       // a mesh's: the path's bounds in its frame (the core's sweep and the shapes' query the same box)
       const Aabb in_mesh = sb.shape.type == ShapeType::Mesh ? mesh_box(pb) : Aabb{};
+      listed_mesh = nullptr;  // (a mesh static's triangles listed afresh: each static its own box)
       piece.pose = pb;
       // A body that starts the step touching a static shape is left to the discrete contact
       // (advance() returns 1 for it). Turning fast, the manifold made at the start of the step
@@ -369,7 +420,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
         // each triangle the path reaches, as for the shapes below; one whose plane the core
         // stays farther from, on one side, than its radius and the slop is skipped
         const TriangleMesh& mesh = *sb.shape.mesh;
-        mesh.query(in_mesh, [&](std::uint32_t tri) {
+        each_triangle(mesh, in_mesh, [&](std::uint32_t tri) {
           for (int c = 0; c < 3; ++c) corners[c] = mesh.vertices()[mesh.triangles()[tri][c]];
           const Vec3 face = pb.rotation * mesh.normal(tri);
           const double plane = glm::dot(face, apply(pb, corners[0]));
@@ -382,12 +433,13 @@ void RigidContacts::continuous(RigidBodySystem& s) {
           });
         });
       }
-      for (const RigidShapeDef& sa : s.shapes_[i]) {
+      for (std::size_t j = 0; j < shapes.size(); ++j) {
+        const RigidShapeDef& sa = shapes[j];
         if (!sa.shape.is_convex()) continue;
         auto pose_a = [&](double t) { return compose(w.body(t), sa.local); };
         // the shape's own sweep: the body's, turning its core's reach (never more than the body's)
         Sweep ws = w;
-        ws.reach = std::min(w.reach, core_reach(sa, w.com_local));
+        ws.reach = std::min(w.reach, shape_reach(j));
         const double moved_a = shift + ws.angle * ws.reach;  // the farthest its core travels (m)
         // A swept hit matters only when the step left the shape deeper than the slop: one that
         // ends on its side of the surface, within the slop, was stopped by the discrete
@@ -411,10 +463,15 @@ void RigidContacts::continuous(RigidBodySystem& s) {
           // each triangle the path reaches, as a convex piece in the mesh frame
           const TriangleMesh& mesh = *sb.shape.mesh;
           // the shape at the step's start, once for all the triangles (the advances' first gap too)
-          const Pose p0 = pose_a(0.0), p1 = pose_a(1.0);
+          const Pose p0 = pose_a(0.0);
           const Quat p0_inv = glm::conjugate(p0.rotation);
-          const Vec3 centre0 = sa.shape.type == ShapeType::Hull ? apply(p0, sa.shape.hull->centroid()) : p0.position;
-          mesh.query(in_mesh, [&](std::uint32_t tri) {
+          // the shape at the step's end and its centre at the start, for the end pose's test:
+          // made when a triangle first asks (in the terrain's landing steps most bodies'
+          // triangles end before it, and the pose's slerp was made for nothing)
+          Pose p1;
+          Vec3 centre0;
+          bool ends_made = false;
+          each_triangle(mesh, in_mesh, [&](std::uint32_t tri) {
             for (int c = 0; c < 3; ++c) corners[c] = mesh.vertices()[mesh.triangles()[tri][c]];
             const Vec3 face = pb.rotation * mesh.normal(tri), corner = apply(pb, corners[0]);
             const std::uint8_t flags = mesh.edge_flags()[tri];
@@ -444,16 +501,27 @@ void RigidContacts::continuous(RigidBodySystem& s) {
               return Gap{r.distance, r.normal};
             };
             // A hit is taken only when the shape did not end the step on its side of the
-            // triangle within the slop (below). The advance is made in two parts around that
-            // test, with the same outcome as the advance first: its first gap (a shape already
-            // that close at the start gets no hit: advance() returns 1), then the end pose, then
-            // the rest of the advance from that first gap. On the terrain 45% of the triangles
-            // swept ended on their side, and their advances took four or five gaps (GJK) each.
+            // triangle within the slop (below). The advance is made in parts around that test,
+            // with the same outcome as the advance first: its first gap (a shape already that
+            // close at the start gets no hit: advance() returns 1), its first pass on that gap,
+            // then the end pose, then the rest of the advance from that first gap. On the
+            // terrain 45% of the triangles swept ended on their side, and their advances took
+            // four or five gaps (GJK) each.
             const Gap g0 = gap_at(0.0);
             if (g0.distance <= target + tol) return;
+            // Where the first pass's bound on the shapes' closing speed carries t past the
+            // step's end, the advance gives 1 whatever the end pose: the end pose's GJK is not
+            // run for it. On the terrain's landing steps (130-159) 348 of the 520 triangles a
+            // step that came this far ended so (of the pass's some 1,350 GJK runs a step)
+            if (ends_at_first_pass(ws, g0, target, tol)) return;
             // the end pose (as for the plane above): nearest the face or an internal feature,
             // on the side the shape's centre started on and within the slop of the plane, it
             // did not go through (a shape that crossed the triangle ends on its other side)
+            if (!ends_made) {
+              p1 = pose_a(1.0);
+              centre0 = sa.shape.type == ShapeType::Hull ? apply(p0, sa.shape.hull->centroid()) : p0.position;
+              ends_made = true;
+            }
             const DistanceResult r1 = gjk_distance(ConvexProxy::of(sa.shape, p1), piece);
             if (!r1.cores_overlap && internal_feature(corners, apply_inverse(pb, r1.point_b), flags)) {
               const Vec3 n = glm::dot(centre0 - corner, face) >= 0 ? face : -face;
