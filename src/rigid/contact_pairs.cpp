@@ -637,10 +637,37 @@ namespace {
   }
   alignas(32) double turn[4][L];
   for (int k = 0; k < 4; ++k) _mm256_store_pd(turn[k], rot[k]);
+  // the bodies' rotation matrices for emit (rotation()): glm::mat3_cast of q_ as it stands (not
+  // normalised), its products and sums in its order, so the same bits. Made by the emit that
+  // first needed one, a matrix stored a double at a time was loaded back two at a time, which
+  // waits for the stores to leave (after those loads sat 17% of emit's samples on the 2870
+  // pyramid); made here, it has long left when emit reads it
+  alignas(32) double turned[9][L];
+  {
+    const __m256d qw = _mm256_load_pd(in[6]), qx = _mm256_load_pd(in[7]), qy = _mm256_load_pd(in[8]),
+                  qz = _mm256_load_pd(in[9]);
+    const __m256d qxx = _mm256_mul_pd(qx, qx), qyy = _mm256_mul_pd(qy, qy), qzz = _mm256_mul_pd(qz, qz);
+    const __m256d qxz = _mm256_mul_pd(qx, qz), qxy = _mm256_mul_pd(qx, qy), qyz = _mm256_mul_pd(qy, qz);
+    const __m256d qwx = _mm256_mul_pd(qw, qx), qwy = _mm256_mul_pd(qw, qy), qwz = _mm256_mul_pd(qw, qz);
+    // by column, as a Mat3 holds them
+    const __m256d r[9] = {_mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(qyy, qzz))),
+                          _mm256_mul_pd(two, _mm256_add_pd(qxy, qwz)),
+                          _mm256_mul_pd(two, _mm256_sub_pd(qxz, qwy)),
+                          _mm256_mul_pd(two, _mm256_sub_pd(qxy, qwz)),
+                          _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(qxx, qzz))),
+                          _mm256_mul_pd(two, _mm256_add_pd(qyz, qwx)),
+                          _mm256_mul_pd(two, _mm256_add_pd(qxz, qwy)),
+                          _mm256_mul_pd(two, _mm256_sub_pd(qyz, qwx)),
+                          _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(qxx, qyy)))};
+    for (int e = 0; e < 9; ++e) _mm256_store_pd(turned[e], r[e]);
+  }
   const int kept = _mm256_movemask_pd(keep);
   for (int j = 0; j < L; ++j) {
     const std::size_t b = i + static_cast<std::size_t>(j);
     if (b + kBodiesAhead < s.type_.size()) prefetch_lines<sizeof(RigidShapeDef)>(s.shapes_[b + kBodiesAhead].data());
+    double* matrix = &rotations[b][0][0];
+    for (int e = 0; e < 9; ++e) matrix[e] = turned[e][j];
+    rotation_stamp[b] = stamp;
     const std::uint32_t q = index[j];
     ShapeProxy& p = *proxy[j];
     shape_poses[q] = {Vec3(out[0][j], out[1][j], out[2][j]), Quat(turn[0][j], turn[1][j], turn[2][j], turn[3][j])};
