@@ -1481,6 +1481,9 @@ static_assert(Manifold::kMaxPoints == 4 && sizeof(SolverPoint) == 80 && offsetof
 // are stored (nothing reads a pair's points past its count). The points go out as rows (the 4 x 4
 // transposes of at, sa, sb and offset), their overlaps and ids as they are.
 #if PBA_EMIT_AVX2
+// 1 / count for the counts that are powers of two (index 3 unused: divided)
+constexpr double kInverseCount[Manifold::kMaxPoints + 1] = {0, 1, 0.5, 0, 0.25};
+
 // x in every lane (a broadcast: `0 + x` would make a -0 +0)
 [[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d all(const double& x) { return _mm256_broadcast_sd(&x); }
 
@@ -1528,7 +1531,10 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
     _mm_storeu_pd(to + 8, _mm256_castpd256_pd128(rows[2][k]));
     sum = sum + rows[0][k];  // (its fourth lane, sa.x, is not read)
   }
-  sum = sum / _mm256_set1_pd(static_cast<double>(in.count));
+  // (divided by 2 or 4 as multiplied by 0.5 or 0.25: the same bits, both the exact quotient
+  // rounded once, without a division's latency in this chain; 3 divides)
+  const double scale = kInverseCount[in.count];
+  sum = in.count == 3 ? sum / _mm256_set1_pd(3.0) : sum * _mm256_set1_pd(scale);
   // (the centroid's coordinates broadcast and the distances summed by lane moves, not through
   // memory: this chain's latency ends every emit; the sum in point order, as the scalar loop's
   // 0 + d0 + d1 + ..., where 0 + d0 is d0, a square root being no -0 here)
@@ -1541,7 +1547,7 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
   double twist = _mm_cvtsd_f64(low) + _mm_cvtsd_f64(_mm_unpackhi_pd(low, low));
   if (in.count > 2) twist += _mm_cvtsd_f64(high);  // (count > 1: emit calls this for two to four points)
   if (in.count > 3) twist += _mm_cvtsd_f64(_mm_unpackhi_pd(high, high));
-  twist_radius = twist / in.count;
+  twist_radius = in.count == 3 ? twist / 3.0 : twist * scale;
 }
 
 // three doubles of a Vec3, the fourth lane 0 (a masked load reads nothing past the vector)
