@@ -1479,7 +1479,8 @@ static_assert(Manifold::kMaxPoints == 4 && sizeof(SolverPoint) == 80 && offsetof
 // sum the points in their order, so both give the same bits. The lanes past the count compute
 // on whatever the manifold holds there and are not summed; of them only the overlaps and ids
 // are stored (nothing reads a pair's points past its count). The points go out as rows (the 4 x 4
-// transposes of at, sa, sb and offset), their overlaps and ids as they are.
+// transposes of at, sa, sb and offset), their overlaps and ids as they are. (Inlined into its one
+// caller, emit_frame_points_avx2.)
 #if PBA_EMIT_AVX2
 // 1 / count for the counts that are powers of two (index 3 unused: divided)
 constexpr double kInverseCount[Manifold::kMaxPoints + 1] = {0, 1, 0.5, 0, 0.25};
@@ -1487,8 +1488,8 @@ constexpr double kInverseCount[Manifold::kMaxPoints + 1] = {0, 1, 0.5, 0, 0.25};
 // x in every lane (a broadcast: `0 + x` would make a -0 +0)
 [[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d all(const double& x) { return _mm256_broadcast_sd(&x); }
 
-__attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, ContactPair& out, Vec3& centroid,
-                                                      double& twist_radius) {
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline void emit_points_avx2(const PointsInput& in, ContactPair& out,
+                                                                                 Vec3& centroid, double& twist_radius) {
   using V = __m256d;
   const double* qa = &(*in.qa)[0][0];  // glm's columns, one after another
   const double* qb = &(*in.qb)[0][0];
@@ -1611,6 +1612,33 @@ __attribute__((target("avx2"))) void emit_point_one_avx2(const CachedManifold& r
   const V anchor = (_mm256_setzero_pd() + mid) - com_av;
   _mm256_storeu_pd(&out.ca[0], _mm256_blend_pd(anchor, _mm256_setzero_pd(), 0x8));
 }
+
+// emit's frame and points of a manifold of two to four points on the SIMD paths, in one call:
+// the normal in the world (glm's mat3 * vec3 in the lanes of one vector, the columns times x,
+// y, z summed in that order, as emit_point_one_avx2 turns a core), its tangents (tangent_basis),
+// then emit_points_avx2 and the anchor of friction. The same bits as emit's scalar frame and
+// the call of emit_points_avx2 it replaces; one call, not two with the points' input between
+// them, so the tangents' division and the points' chain of sums, division and square roots
+// that ends each emit (nearly half of emit_points_avx2's samples sat on it) are in flight together.
+__attribute__((target("avx2"))) void emit_frame_points_avx2(const CachedManifold& r, const Mat3& qa, const Mat3& qb,
+                                                            const Vec3& com_a, const Vec3& com_b, double preload,
+                                                            ContactPair& out) {
+  using V = __m256d;
+  V m[3];
+  columns(r.normal_in_b ? qb : qa, m);
+  const V turned = m[0] * all(r.normal.x) + m[1] * all(r.normal.y) + m[2] * all(r.normal.z);
+  const __m128d low = _mm256_castpd256_pd128(turned);
+  const Vec3 n(_mm_cvtsd_f64(low), _mm_cvtsd_f64(_mm_unpackhi_pd(low, low)), _mm_cvtsd_f64(_mm256_extractf128_pd(turned, 1)));
+  out.normal = n;
+  tangent_basis(n, out.t1, out.t2);
+  const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
+                       .radius_a = r.radius_a, .radius_b = r.radius_b, .preload = preload, .count = r.count};
+  Vec3 centroid;
+  double twist_radius;
+  emit_points_avx2(in, out, centroid, twist_radius);
+  out.ca = centroid - com_a;
+  out.twist_radius = twist_radius;
+}
 #endif
 
 }  // namespace
@@ -1702,10 +1730,6 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const Mat3& qb = rotation(s, b);
   const Vec3& com_a = s.com_[a];
   const Vec3& com_b = s.com_[b];
-  const Vec3 n = (r.normal_in_b ? qb : qa) * r.normal;
-  c.normal = n;
-  tangent_basis(n, c.t1, c.t2);
-  const double radius_a = r.radius_a, radius_b = r.radius_b;
   // the springs' shifted rest (the soft step's; the other solvers drop it)
   if (r.preload != 0 && cs.solver != RigidSolverType::SoftStep) own.preload = 0;
   const double preload = r.preload;
@@ -1713,36 +1737,43 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     if (preloaded.size() == preloaded.capacity()) preloaded.reserve(pairs.capacity() + 1);
     preloaded.push_back(static_cast<std::uint32_t>(at_index));
   }
-  // the points: one alone without the centroid's machinery (in the lanes of one AVX2 vector on
-  // the SIMD paths, which writes the anchor of friction and twist radius too), more on the SIMD
-  // paths four at a time (the same bits; the lanes cost what four points do, and are dearer
-  // than scalar code only for one point: two in scalar code, a loop, the centroid's sums, two
-  // square roots and two divisions, took about 325 instructions on the terrain, in the lanes
-  // about 250 with the call)
+  // the normal, its tangents and the points: more than one point on the SIMD paths four at a
+  // time, with the frame, in one call (the same bits; the lanes cost what four points do, and
+  // are dearer than scalar code only for one point: two in scalar code, a loop, the centroid's
+  // sums, two square roots and two divisions, took about 325 instructions on the terrain, in the
+  // lanes about 250 with the call); one alone without the centroid's machinery (in the lanes of
+  // one AVX2 vector on the SIMD paths, which writes the anchor of friction and twist radius too)
   // (each value is computed into a local and stored from there: stored piecewise and read back
   // whole, a Vec3 waited on the store buffer)
 #if PBA_EMIT_AVX2
-  if (r.count == 1 && simd != SimdPath::Scalar) {
-    emit_point_one_avx2(r, qa, qb, com_a, com_b, n.x, n.y, n.z, c);
+  if (r.count > 1 && simd != SimdPath::Scalar) {
+    emit_frame_points_avx2(r, qa, qb, com_a, com_b, preload, c);
   } else
 #endif
   {
-    // (made here: the one that escapes to emit_points_avx2 was stored to the stack for every
-    // manifold, the one-point ones too)
-    const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
-                         .radius_a = radius_a, .radius_b = radius_b, .preload = preload, .count = r.count};
-    Vec3 centroid;
-    double twist_radius;
-    if (r.count == 1)
-      emit_point_one(in, c, centroid, twist_radius);
+    const Vec3 n = (r.normal_in_b ? qb : qa) * r.normal;
+    c.normal = n;
+    tangent_basis(n, c.t1, c.t2);
+    const double radius_a = r.radius_a, radius_b = r.radius_b;
 #if PBA_EMIT_AVX2
-    else if (simd != SimdPath::Scalar)
-      emit_points_avx2(in, c, centroid, twist_radius);
+    if (r.count == 1 && simd != SimdPath::Scalar) {
+      emit_point_one_avx2(r, qa, qb, com_a, com_b, n.x, n.y, n.z, c);
+    } else
 #endif
-    else
-      emit_points_scalar(in, c, centroid, twist_radius);
-    c.ca = centroid - com_a;
-    c.twist_radius = twist_radius;
+    {
+      // (made here: made for a call of emit_points_avx2 it was stored to the stack for every
+      // manifold, the one-point ones too)
+      const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
+                           .radius_a = radius_a, .radius_b = radius_b, .preload = preload, .count = r.count};
+      Vec3 centroid;
+      double twist_radius;
+      if (r.count == 1)
+        emit_point_one(in, c, centroid, twist_radius);
+      else
+        emit_points_scalar(in, c, centroid, twist_radius);
+      c.ca = centroid - com_a;
+      c.twist_radius = twist_radius;
+    }
   }
   // friction carried over, re-projected onto this step's tangents
   c.tangent_impulse[0] = warm ? glm::dot(friction, c.t1) : 0;
