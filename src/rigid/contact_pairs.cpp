@@ -637,10 +637,37 @@ namespace {
   }
   alignas(32) double turn[4][L];
   for (int k = 0; k < 4; ++k) _mm256_store_pd(turn[k], rot[k]);
+  // the bodies' rotation matrices for emit (rotation()): glm::mat3_cast of q_ as it stands (not
+  // normalised), its products and sums in its order, so the same bits. Made by the emit that
+  // first needed one, a matrix stored a double at a time was loaded back two at a time, which
+  // waits for the stores to leave (after those loads sat 17% of emit's samples on the 2870
+  // pyramid); made here, it has long left when emit reads it
+  alignas(32) double turned[9][L];
+  {
+    const __m256d qw = _mm256_load_pd(in[6]), qx = _mm256_load_pd(in[7]), qy = _mm256_load_pd(in[8]),
+                  qz = _mm256_load_pd(in[9]);
+    const __m256d qxx = _mm256_mul_pd(qx, qx), qyy = _mm256_mul_pd(qy, qy), qzz = _mm256_mul_pd(qz, qz);
+    const __m256d qxz = _mm256_mul_pd(qx, qz), qxy = _mm256_mul_pd(qx, qy), qyz = _mm256_mul_pd(qy, qz);
+    const __m256d qwx = _mm256_mul_pd(qw, qx), qwy = _mm256_mul_pd(qw, qy), qwz = _mm256_mul_pd(qw, qz);
+    // by column, as a Mat3 holds them
+    const __m256d r[9] = {_mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(qyy, qzz))),
+                          _mm256_mul_pd(two, _mm256_add_pd(qxy, qwz)),
+                          _mm256_mul_pd(two, _mm256_sub_pd(qxz, qwy)),
+                          _mm256_mul_pd(two, _mm256_sub_pd(qxy, qwz)),
+                          _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(qxx, qzz))),
+                          _mm256_mul_pd(two, _mm256_add_pd(qyz, qwx)),
+                          _mm256_mul_pd(two, _mm256_add_pd(qxz, qwy)),
+                          _mm256_mul_pd(two, _mm256_sub_pd(qyz, qwx)),
+                          _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(qxx, qyy)))};
+    for (int e = 0; e < 9; ++e) _mm256_store_pd(turned[e], r[e]);
+  }
   const int kept = _mm256_movemask_pd(keep);
   for (int j = 0; j < L; ++j) {
     const std::size_t b = i + static_cast<std::size_t>(j);
     if (b + kBodiesAhead < s.type_.size()) prefetch_lines<sizeof(RigidShapeDef)>(s.shapes_[b + kBodiesAhead].data());
+    double* matrix = &rotations[b][0][0];
+    for (int e = 0; e < 9; ++e) matrix[e] = turned[e][j];
+    rotation_stamp[b] = stamp;
     const std::uint32_t q = index[j];
     ShapeProxy& p = *proxy[j];
     shape_poses[q] = {Vec3(out[0][j], out[1][j], out[2][j]), Quat(turn[0][j], turn[1][j], turn[2][j], turn[3][j])};
@@ -1452,13 +1479,17 @@ static_assert(Manifold::kMaxPoints == 4 && sizeof(SolverPoint) == 80 && offsetof
 // sum the points in their order, so both give the same bits. The lanes past the count compute
 // on whatever the manifold holds there and are not summed; of them only the overlaps and ids
 // are stored (nothing reads a pair's points past its count). The points go out as rows (the 4 x 4
-// transposes of at, sa, sb and offset), their overlaps and ids as they are.
+// transposes of at, sa, sb and offset), their overlaps and ids as they are. (Inlined into its one
+// caller, emit_frame_points_avx2.)
 #if PBA_EMIT_AVX2
+// 1 / count for the counts that are powers of two (index 3 unused: divided)
+constexpr double kInverseCount[Manifold::kMaxPoints + 1] = {0, 1, 0.5, 0, 0.25};
+
 // x in every lane (a broadcast: `0 + x` would make a -0 +0)
 [[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d all(const double& x) { return _mm256_broadcast_sd(&x); }
 
-__attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, ContactPair& out, Vec3& centroid,
-                                                      double& twist_radius) {
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline void emit_points_avx2(const PointsInput& in, ContactPair& out,
+                                                                                 Vec3& centroid, double& twist_radius) {
   using V = __m256d;
   const double* qa = &(*in.qa)[0][0];  // glm's columns, one after another
   const double* qb = &(*in.qb)[0][0];
@@ -1501,7 +1532,10 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
     _mm_storeu_pd(to + 8, _mm256_castpd256_pd128(rows[2][k]));
     sum = sum + rows[0][k];  // (its fourth lane, sa.x, is not read)
   }
-  sum = sum / _mm256_set1_pd(static_cast<double>(in.count));
+  // (divided by 2 or 4 as multiplied by 0.5 or 0.25: the same bits, both the exact quotient
+  // rounded once, without a division's latency in this chain; 3 divides)
+  const double scale = kInverseCount[in.count];
+  sum = in.count == 3 ? sum / _mm256_set1_pd(3.0) : sum * _mm256_set1_pd(scale);
   // (the centroid's coordinates broadcast and the distances summed by lane moves, not through
   // memory: this chain's latency ends every emit; the sum in point order, as the scalar loop's
   // 0 + d0 + d1 + ..., where 0 + d0 is d0, a square root being no -0 here)
@@ -1514,7 +1548,7 @@ __attribute__((target("avx2"))) void emit_points_avx2(const PointsInput& in, Con
   double twist = _mm_cvtsd_f64(low) + _mm_cvtsd_f64(_mm_unpackhi_pd(low, low));
   if (in.count > 2) twist += _mm_cvtsd_f64(high);  // (count > 1: emit calls this for two to four points)
   if (in.count > 3) twist += _mm_cvtsd_f64(_mm_unpackhi_pd(high, high));
-  twist_radius = twist / in.count;
+  twist_radius = in.count == 3 ? twist / 3.0 : twist * scale;
 }
 
 // three doubles of a Vec3, the fourth lane 0 (a masked load reads nothing past the vector)
@@ -1577,6 +1611,33 @@ __attribute__((target("avx2"))) void emit_point_one_avx2(const CachedManifold& r
   // the centroid 0 + the point (as the scalar sum) from a's centre, and after it the twist radius 0
   const V anchor = (_mm256_setzero_pd() + mid) - com_av;
   _mm256_storeu_pd(&out.ca[0], _mm256_blend_pd(anchor, _mm256_setzero_pd(), 0x8));
+}
+
+// emit's frame and points of a manifold of two to four points on the SIMD paths, in one call:
+// the normal in the world (glm's mat3 * vec3 in the lanes of one vector, the columns times x,
+// y, z summed in that order, as emit_point_one_avx2 turns a core), its tangents (tangent_basis),
+// then emit_points_avx2 and the anchor of friction. The same bits as emit's scalar frame and
+// the call of emit_points_avx2 it replaces; one call, not two with the points' input between
+// them, so the tangents' division and the points' chain of sums, division and square roots
+// that ends each emit (nearly half of emit_points_avx2's samples sat on it) are in flight together.
+__attribute__((target("avx2"))) void emit_frame_points_avx2(const CachedManifold& r, const Mat3& qa, const Mat3& qb,
+                                                            const Vec3& com_a, const Vec3& com_b, double preload,
+                                                            ContactPair& out) {
+  using V = __m256d;
+  V m[3];
+  columns(r.normal_in_b ? qb : qa, m);
+  const V turned = m[0] * all(r.normal.x) + m[1] * all(r.normal.y) + m[2] * all(r.normal.z);
+  const __m128d low = _mm256_castpd256_pd128(turned);
+  const Vec3 n(_mm_cvtsd_f64(low), _mm_cvtsd_f64(_mm_unpackhi_pd(low, low)), _mm_cvtsd_f64(_mm256_extractf128_pd(turned, 1)));
+  out.normal = n;
+  tangent_basis(n, out.t1, out.t2);
+  const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
+                       .radius_a = r.radius_a, .radius_b = r.radius_b, .preload = preload, .count = r.count};
+  Vec3 centroid;
+  double twist_radius;
+  emit_points_avx2(in, out, centroid, twist_radius);
+  out.ca = centroid - com_a;
+  out.twist_radius = twist_radius;
 }
 #endif
 
@@ -1669,10 +1730,6 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
   const Mat3& qb = rotation(s, b);
   const Vec3& com_a = s.com_[a];
   const Vec3& com_b = s.com_[b];
-  const Vec3 n = (r.normal_in_b ? qb : qa) * r.normal;
-  c.normal = n;
-  tangent_basis(n, c.t1, c.t2);
-  const double radius_a = r.radius_a, radius_b = r.radius_b;
   // the springs' shifted rest (the soft step's; the other solvers drop it)
   if (r.preload != 0 && cs.solver != RigidSolverType::SoftStep) own.preload = 0;
   const double preload = r.preload;
@@ -1680,36 +1737,43 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     if (preloaded.size() == preloaded.capacity()) preloaded.reserve(pairs.capacity() + 1);
     preloaded.push_back(static_cast<std::uint32_t>(at_index));
   }
-  // the points: one alone without the centroid's machinery (in the lanes of one AVX2 vector on
-  // the SIMD paths, which writes the anchor of friction and twist radius too), more on the SIMD
-  // paths four at a time (the same bits; the lanes cost what four points do, and are dearer
-  // than scalar code only for one point: two in scalar code, a loop, the centroid's sums, two
-  // square roots and two divisions, took about 325 instructions on the terrain, in the lanes
-  // about 250 with the call)
+  // the normal, its tangents and the points: more than one point on the SIMD paths four at a
+  // time, with the frame, in one call (the same bits; the lanes cost what four points do, and
+  // are dearer than scalar code only for one point: two in scalar code, a loop, the centroid's
+  // sums, two square roots and two divisions, took about 325 instructions on the terrain, in the
+  // lanes about 250 with the call); one alone without the centroid's machinery (in the lanes of
+  // one AVX2 vector on the SIMD paths, which writes the anchor of friction and twist radius too)
   // (each value is computed into a local and stored from there: stored piecewise and read back
   // whole, a Vec3 waited on the store buffer)
 #if PBA_EMIT_AVX2
-  if (r.count == 1 && simd != SimdPath::Scalar) {
-    emit_point_one_avx2(r, qa, qb, com_a, com_b, n.x, n.y, n.z, c);
+  if (r.count > 1 && simd != SimdPath::Scalar) {
+    emit_frame_points_avx2(r, qa, qb, com_a, com_b, preload, c);
   } else
 #endif
   {
-    // (made here: the one that escapes to emit_points_avx2 was stored to the stack for every
-    // manifold, the one-point ones too)
-    const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
-                         .radius_a = radius_a, .radius_b = radius_b, .preload = preload, .count = r.count};
-    Vec3 centroid;
-    double twist_radius;
-    if (r.count == 1)
-      emit_point_one(in, c, centroid, twist_radius);
+    const Vec3 n = (r.normal_in_b ? qb : qa) * r.normal;
+    c.normal = n;
+    tangent_basis(n, c.t1, c.t2);
+    const double radius_a = r.radius_a, radius_b = r.radius_b;
 #if PBA_EMIT_AVX2
-    else if (simd != SimdPath::Scalar)
-      emit_points_avx2(in, c, centroid, twist_radius);
+    if (r.count == 1 && simd != SimdPath::Scalar) {
+      emit_point_one_avx2(r, qa, qb, com_a, com_b, n.x, n.y, n.z, c);
+    } else
 #endif
-    else
-      emit_points_scalar(in, c, centroid, twist_radius);
-    c.ca = centroid - com_a;
-    c.twist_radius = twist_radius;
+    {
+      // (made here: made for a call of emit_points_avx2 it was stored to the stack for every
+      // manifold, the one-point ones too)
+      const PointsInput in{.core = r.core, .id = r.id, .qa = &qa, .qb = &qb, .com_a = com_a, .com_b = com_b, .n = n,
+                           .radius_a = radius_a, .radius_b = radius_b, .preload = preload, .count = r.count};
+      Vec3 centroid;
+      double twist_radius;
+      if (r.count == 1)
+        emit_point_one(in, c, centroid, twist_radius);
+      else
+        emit_points_scalar(in, c, centroid, twist_radius);
+      c.ca = centroid - com_a;
+      c.twist_radius = twist_radius;
+    }
   }
   // friction carried over, re-projected onto this step's tangents
   c.tangent_impulse[0] = warm ? glm::dot(friction, c.t1) : 0;
