@@ -840,11 +840,22 @@ void RigidContacts::build(RigidBodySystem& s) {
               kept_slop == s.settings_.linear_slop && kept_thinnest == thinnest;
   one_of.resize(pairs.size());
   const bool counted = pair_points.size() >= pairs.size();  // (emit() wrote every pair's)
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
-    const bool one = color_of[i] != kOverflow && (counted ? pair_points[i] : pairs[i].count) == 1;
-    kept = kept && one_of[i] == one;
-    one_of[i] = one;
-    if (one) ++ones_of_color[color_of[i]];
+  {
+    // (through local pointers: the byte stores to one_of may alias any vector's members, and
+    // the loop read them back each pair, 27 instructions a pair on pyramid1240 at rest)
+    const std::size_t m = pairs.size();
+    const std::uint32_t* colour = color_of.data();
+    const std::uint8_t* points = pair_points.data();
+    std::uint8_t* one_out = one_of.data();
+    std::uint32_t* ones_in = ones_of_color.data();
+    bool same = true;
+    for (std::size_t i = 0; i < m; ++i) {
+      const bool one = colour[i] != kOverflow && (counted ? points[i] : pairs[i].count) == 1;
+      same &= one_out[i] == one;
+      one_out[i] = one;
+      if (one) ++ones_in[colour[i]];
+    }
+    kept = kept && same;
   }
   lanes_kept = kept;
   lanes_filled = false;  // (until the blocks are filled below)
