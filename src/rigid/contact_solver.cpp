@@ -81,8 +81,10 @@ void clear_lane(B& b, AnchorsOf<B::kPoints>& g, int l, std::uint32_t spare) {
   b.pair[l] = kNoPair;
 }
 
-// pairs ahead that build() and store() ask for while they work on one
-constexpr std::size_t kPrefetchAhead = 4;
+// pairs ahead (in by_color, the order the blocks are filled in) that fill_block asks for while
+// it works on one: a block's worth, as gather_fill_avx2 reads a block's pairs together (at 4,
+// with the lane loop no longer reading them, it waited on the last lanes' lines)
+constexpr std::size_t kPrefetchAhead = kLanes;
 
 // the lines of a pair the fill reads: the header (without the key's line for a kept lane of a
 // ContactBlock, from_frame, which does not read it) and the points a block holds (P: four for
@@ -94,6 +96,15 @@ void prefetch_pair(const ContactPair& c, bool from_frame) {
   constexpr std::size_t kUsed = offsetof(ContactPair, points) + P * sizeof(SolverPoint);
   if (!from_frame) __builtin_prefetch(p);
   for (std::size_t line = kPairFillStart; line < kUsed; line += 64) __builtin_prefetch(p + line);
+}
+
+// lane l's share of the kLines lines at `p`, to be written: lines l, l + kLanes, ... (l < kLanes)
+template <std::size_t kLines>
+void ask_lines(const void* p, int l) {
+  const char* at = static_cast<const char*>(p) + 64 * static_cast<std::size_t>(l);
+  for (std::size_t line = 0; line + kLanes <= kLines; line += kLanes) __builtin_prefetch(at + 64 * line, 1);
+  if constexpr (kLines % kLanes != 0)
+    if (static_cast<std::size_t>(l) < kLines % kLanes) __builtin_prefetch(at + 64 * (kLines / kLanes * kLanes), 1);
 }
 
 }  // namespace
@@ -398,16 +409,24 @@ static_assert(offsetof(SolverPoint, sa) == 24 && offsetof(SolverPoint, sb) == 48
 // four; P: the block's points a lane, 4 or 1), four lanes at a time: rows of four doubles from
 // the four pairs (by_color's `index`), their bodies' centres and inverse inertias (`body_a`,
 // `body_b`), turned into columns; the
-// points past a pair's count (in.active 0, as the lane loop wrote it) masked to +0, as the loop's
-// `on ? x : 0` makes them; the centres' differences and the arms by the same subtractions. The
-// same values, so the same bits. A double at a time, the loop's copies took about 250
-// instructions a lane (the pyramids' fill_block), these about 110.
+// points past a pair's count masked to +0, as the loop's `on ? x : 0` makes them; the centres'
+// differences and the arms by the same subtractions. The same values, so the same bits. A
+// double at a time, the loop's copies took about 250 instructions a lane (the pyramids'
+// fill_block), these about 110. And what the lane loop read of the pairs for its bookkeeping:
+// each lane's count (`count`, and in.active), its restitution (`restitution`) and bit l of
+// `rolls` where its pair rolls, of `bounces` where its restitution is not 0, so that the lane
+// loop reads no line of these pairs: its reads waited on them (44% of fill_block's samples in
+// the 2870 pyramid, each pair asked for only four lanes ahead), while here the lines come in
+// together, a block ahead.
 template <int P>
 __attribute__((target("avx2"))) void gather_fill_avx2(FillInput& in, const ContactPair* pairs,
                                                       const std::uint32_t* index, const std::uint32_t* body_a,
                                                       const std::uint32_t* body_b, const Mat3* inv_inertia,
-                                                      const Vec3* com, int lanes) {
+                                                      const Vec3* com, int lanes, int* count, double* restitution,
+                                                      std::uint32_t& rolls, std::uint32_t& bounces) {
   using V = __m256d;
+  const __m256i low = _mm256_set1_epi64x(0xffffffff);
+  const __m256i even = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
   for (int l0 = 0; l0 < lanes; l0 += 4) {
     const char* p[4];
     for (int j = 0; j < 4; ++j) p[j] = reinterpret_cast<const char*>(&pairs[index[l0 + j]]);
@@ -424,14 +443,28 @@ __attribute__((target("avx2"))) void gather_fill_avx2(FillInput& in, const Conta
     put(in.t[2][0], r[0]), put(in.t[2][1], r[1]), put(in.t[2][2], r[2]), put(in.t[0][0], r[3]);
     rows(offsetof(ContactPair, normal) + 32, r);  // t1.y, t1.z, friction, restitution
     put(in.t[0][1], r[0]), put(in.t[0][2], r[1]), put(in.friction, r[2]);
+    _mm256_storeu_pd(restitution + l0, r[3]);
+    // (the loop's `restitution != 0`: true for a NaN too)
+    bounces |= static_cast<std::uint32_t>(_mm256_movemask_pd(_mm256_cmp_pd(r[3], _mm256_setzero_pd(), _CMP_NEQ_UQ)))
+               << l0;
     rows(offsetof(ContactPair, normal_impulse), impulse);
     rows(offsetof(ContactPair, tangent_impulse), r);  // the tangents', the twist's, rolling
     put(in.tangent_impulse[0], r[0]), put(in.tangent_impulse[1], r[1]), put(in.twist_impulse, r[2]);
     put(in.rolling, r[3]);
+    rolls |= static_cast<std::uint32_t>(_mm256_movemask_pd(_mm256_cmp_pd(r[3], _mm256_setzero_pd(), _CMP_GT_OQ)))
+             << l0;
     rows(offsetof(ContactPair, t2), r);  // t2, ca.x
     put(in.t[1][0], r[0]), put(in.t[1][1], r[1]), put(in.t[1][2], r[2]), put(in.ca[0], r[3]);
     rows(offsetof(ContactPair, ca) + 8, r);  // ca.y, ca.z, twist_radius, count
     put(in.ca[1], r[0]), put(in.ca[2], r[1]), put(in.twist_radius, r[2]);
+    // the count: the low half of its row's last double (the padding after it is not read)
+    const __m256i points = _mm256_and_si256(_mm256_castpd_si256(r[3]), low);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + l0),
+                     _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(points, even)));
+    if constexpr (P == 1) {  // a one-point lane's rolling impulse (fill_lanes reads it for those only)
+      rows(offsetof(ContactPair, rolling_impulse), r);
+      for (int i = 0; i < 3; ++i) put(in.rolling_impulse[i], r[i]);
+    }
     // the bodies: centres, their differences, and the inverse inertias column by column (glm's
     // order: 4 + 4 + 1 doubles)
     V ca[4], cb[4];
@@ -454,7 +487,9 @@ __attribute__((target("avx2"))) void gather_fill_avx2(FillInput& in, const Conta
     // the points: (at, sa.x), (sa.y, sa.z, sb.x, sb.y), (sb.z, offset), past the count +0 (the
     // masks from in.active, one comparison a point); a block's P (fill_lanes reads no more)
     for (int k = 0; k < P; ++k) {
-      const V on = _mm256_cmp_pd(_mm256_loadu_pd(in.active[k] + l0), _mm256_setzero_pd(), _CMP_GT_OQ);
+      // (in.active: 1 for the points below the count, as the lane loop wrote it)
+      const V on = _mm256_castsi256_pd(_mm256_cmpgt_epi64(points, _mm256_set1_epi64x(k)));
+      put(in.active[k], _mm256_and_pd(on, _mm256_set1_pd(1.0)));
       const std::size_t at = offsetof(ContactPair, points) + static_cast<std::size_t>(k) * sizeof(SolverPoint);
       rows(at, r);
       for (int i = 0; i < 3; ++i) put(in.arm[k][i], _mm256_and_pd(on, r[i] - ca[i]));
@@ -805,11 +840,22 @@ void RigidContacts::build(RigidBodySystem& s) {
               kept_slop == s.settings_.linear_slop && kept_thinnest == thinnest;
   one_of.resize(pairs.size());
   const bool counted = pair_points.size() >= pairs.size();  // (emit() wrote every pair's)
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
-    const bool one = color_of[i] != kOverflow && (counted ? pair_points[i] : pairs[i].count) == 1;
-    kept = kept && one_of[i] == one;
-    one_of[i] = one;
-    if (one) ++ones_of_color[color_of[i]];
+  {
+    // (through local pointers: the byte stores to one_of may alias any vector's members, and
+    // the loop read them back each pair, 27 instructions a pair on pyramid1240 at rest)
+    const std::size_t m = pairs.size();
+    const std::uint32_t* colour = color_of.data();
+    const std::uint8_t* points = pair_points.data();
+    std::uint8_t* one_out = one_of.data();
+    std::uint32_t* ones_in = ones_of_color.data();
+    bool same = true;
+    for (std::size_t i = 0; i < m; ++i) {
+      const bool one = colour[i] != kOverflow && (counted ? points[i] : pairs[i].count) == 1;
+      same &= one_out[i] == one;
+      one_out[i] = one;
+      if (one) ++ones_in[colour[i]];
+    }
+    kept = kept && same;
   }
   lanes_kept = kept;
   lanes_filled = false;  // (until the blocks are filled below)
@@ -938,6 +984,10 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   auto* rows_of_input = reinterpret_cast<double(*)[kLanes]>(&in);
   int count[kLanes] = {};
   std::uint32_t rolling_lanes = 0;  // (bit l: lane l's pair rolls; the result)
+  // bit l: lane l's pair has a restitution, restitution[l] (restitution_lanes takes them in lane
+  // order after the gather)
+  std::uint32_t bounces = 0;
+  double restitution[kLanes];
   // the lanes' bodies, write masks, inverse masses, units and slop: last step's while the
   // layout stands (lanes_kept), else gathered below and kept for the next step
   const bool kept = lanes_kept;
@@ -968,18 +1018,15 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
     if (first + l + kPrefetchAhead < by_color.size())
       prefetch_pair<P>(pairs[by_color[first + l + kPrefetchAhead]], from_frame);
     // and the next block's lines, to be written (the passes left them in the outer caches),
-    // spread over this block's lanes
+    // spread over this block's lanes: lane l asks for lines l, l + kLanes, ... of the block and
+    // of its anchors, the whole strides of kLanes lines without a test (the counts known, so
+    // the loops unroll), then the lanes below the rest (a select and a loop a line were some
+    // 45 instructions a lane, a twelfth of prepare's on pyramid1240 at rest)
     if (b + 1 < count_in_use) {
-      constexpr std::size_t kBlockLines = sizeof(B) / 64, kLines = kBlockLines + sizeof(AnchorsOf<P>) / 64;
-      const char* next_block = reinterpret_cast<const char*>(&block_array[b + 1]);
-      const char* next_anchors = reinterpret_cast<const char*>(&anchor_array[b + 1]);
-      for (std::size_t line = static_cast<std::size_t>(l); line < kLines; line += kLanes)
-        __builtin_prefetch(line < kBlockLines ? next_block + 64 * line : next_anchors + 64 * (line - kBlockLines), 1);
+      ask_lines<sizeof(B) / 64>(&block_array[b + 1], l);
+      ask_lines<sizeof(AnchorsOf<P>) / 64>(&anchor_array[b + 1], l);
     }
     const ContactPair& c = pairs[index];
-    // (a one-point lane's rolling mass is fill_lanes'; the test here, not a call per lane)
-    if constexpr (!kOne)
-      if (c.rolling > 0) set_rolling_mass(index);
     if (!kept) {
       const bool da = moves(s, c.a, s.type_, s.asleep_), db = moves(s, c.b, s.type_, s.asleep_);
       k.a[l] = c.a, k.b[l] = c.b, k.pair[l] = index;
@@ -991,49 +1038,55 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
       k.slop[l] = static_cast<Real>(slop_of(s, c.a, c.b));
       lane_of[index] = static_cast<std::uint32_t>(b * kLanes + static_cast<std::size_t>(l)) | (kOne ? kOneLane : 0u);
     }
+    // (the rest of a gathered lane: gather_fill_avx2's, after this loop)
+    if (l < gathered) continue;
     count[l] = c.count;
-    if (l < gathered) {  // (the rest of the lane's copies: gather_fill_avx2's, after this loop)
-      for (int p = 0; p < P; ++p) in.active[p][l] = p < c.count ? 1 : 0;
-    } else {
-      const Vec3 t[3] = {c.t1, c.t2, c.normal};
-      const std::uint32_t body_a = k.a[l], body_b = k.b[l];  // (c.a, c.b: written above when not kept)
-      const Mat3& ia = inv_inertia[body_a];
-      const Mat3& ib = inv_inertia[body_b];
-      const Vec3& com_a = s.com_[body_a];
-      const Vec3& com_b = s.com_[body_b];
-      const Vec3 dab = com_a - com_b, dba = com_b - com_a;
-      for (int i = 0; i < 3; ++i) {
-        for (int r = 0; r < 3; ++r)
-          in.t[r][i][l] = t[r][i], in.ia[3 * i + r][l] = ia[i][r], in.ib[3 * i + r][l] = ib[i][r];
-        in.dab[i][l] = dab[i], in.dba[i][l] = dba[i], in.ca[i][l] = c.ca[i];
-      }
-      for (int p = 0; p < P; ++p) {
-        const bool on = p < c.count;
-        const SolverPoint& q = c.points[p];
-        const Vec3 arm = on ? q.at - com_a : Vec3(0);
-        in.active[p][l] = on ? 1 : 0;
-        for (int i = 0; i < 3; ++i)
-          in.arm[p][i][l] = arm[i], in.sa[p][i][l] = on ? q.sa[i] : 0, in.sb[p][i][l] = on ? q.sb[i] : 0;
-        in.offset[p][l] = on ? q.offset : 0;
-        in.impulse[p][l] = on ? c.normal_impulse[p] : 0;
-      }
-      in.friction[l] = c.friction, in.twist_radius[l] = c.twist_radius;
-      in.tangent_impulse[0][l] = c.tangent_impulse[0], in.tangent_impulse[1][l] = c.tangent_impulse[1];
-      in.twist_impulse[l] = c.twist_impulse;
-      in.rolling[l] = c.rolling;
+    const Vec3 t[3] = {c.t1, c.t2, c.normal};
+    const std::uint32_t body_a = k.a[l], body_b = k.b[l];  // (c.a, c.b: written above when not kept)
+    const Mat3& ia = inv_inertia[body_a];
+    const Mat3& ib = inv_inertia[body_b];
+    const Vec3& com_a = s.com_[body_a];
+    const Vec3& com_b = s.com_[body_b];
+    const Vec3 dab = com_a - com_b, dba = com_b - com_a;
+    for (int i = 0; i < 3; ++i) {
+      for (int r = 0; r < 3; ++r)
+        in.t[r][i][l] = t[r][i], in.ia[3 * i + r][l] = ia[i][r], in.ib[3 * i + r][l] = ib[i][r];
+      in.dab[i][l] = dab[i], in.dba[i][l] = dba[i], in.ca[i][l] = c.ca[i];
     }
+    for (int p = 0; p < P; ++p) {
+      const bool on = p < c.count;
+      const SolverPoint& q = c.points[p];
+      const Vec3 arm = on ? q.at - com_a : Vec3(0);
+      in.active[p][l] = on ? 1 : 0;
+      for (int i = 0; i < 3; ++i)
+        in.arm[p][i][l] = arm[i], in.sa[p][i][l] = on ? q.sa[i] : 0, in.sb[p][i][l] = on ? q.sb[i] : 0;
+      in.offset[p][l] = on ? q.offset : 0;
+      in.impulse[p][l] = on ? c.normal_impulse[p] : 0;
+    }
+    in.friction[l] = c.friction, in.twist_radius[l] = c.twist_radius;
+    in.tangent_impulse[0][l] = c.tangent_impulse[0], in.tangent_impulse[1][l] = c.tangent_impulse[1];
+    in.twist_impulse[l] = c.twist_impulse;
+    in.rolling[l] = c.rolling;
     // (a one-point lane's: fill_lanes reads it for those only, and it sits in the key's line)
     if constexpr (kOne)
       for (int i = 0; i < 3; ++i) in.rolling_impulse[i][l] = c.rolling_impulse[i];
     if (c.rolling > 0) rolling_lanes |= 1u << l;
-    if (c.restitution != 0)
-      restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), c.restitution, kOne});
+    if (c.restitution != 0) bounces |= 1u << l, restitution[l] = c.restitution;
   }
-  if constexpr (kOne) k.rolls = rolling_lanes;
 #if PBA_ROWS_AVX2
   if (gathered > 0)
-    gather_fill_avx2<P>(in, pairs.data(), &by_color[first], k.a, k.b, inv_inertia.data(), s.com_.data(), gathered);
+    gather_fill_avx2<P>(in, pairs.data(), &by_color[first], k.a, k.b, inv_inertia.data(), s.com_.data(), gathered,
+                        count, restitution, rolling_lanes, bounces);
 #endif
+  // (a one-point lane's rolling mass is fill_lanes')
+  if constexpr (kOne) k.rolls = rolling_lanes;
+  else
+    for (std::uint32_t left = rolling_lanes; left != 0; left &= left - 1)
+      set_rolling_mass(by_color[first + static_cast<std::size_t>(std::countr_zero(left))]);
+  for (std::uint32_t left = bounces; left != 0; left &= left - 1) {
+    const int l = std::countr_zero(left);
+    restitution_lanes.push_back({static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(l), restitution[l], kOne});
+  }
   if (!kept) {
     std::memcpy(masses.ma, in.ma, sizeof in.ma);
     std::memcpy(masses.mb, in.mb, sizeof in.mb);
