@@ -977,31 +977,9 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
   // the pairs with a cache, and of them those whose cache does not follow the last one's in the pool
   std::size_t cached = 0, out_of_order = 0;
   std::uint32_t previous_cache = kNoIndex - 1;
-  // the pool entries of the pairs ahead, on their way from the outer caches while this one is
-  // planned: the pair cache (both lines: `first` sits in the second) two distances ahead, then
-  // its proxies one distance ahead; a touching pair's first cached manifold is asked for when
-  // the walk is a distance before it (asked for in the plan, its six lines a pair crowded out
-  // the plan's own loads: in the rain's landing emit and collide_pair took 25% fewer samples
-  // once it moved, make_manifolds about as many); of it, what emit reads (the carried impulses
-  // after it are read only when no pair entry holds them)
-  const std::size_t count = shape_pairs.size();
-  auto prefetch_ahead = [&](std::size_t k) {
-    if (k + 2 * kPairsAhead < count && shape_pairs[k + 2 * kPairsAhead].cache != kNoIndex)
-      prefetch_lines<sizeof(PairCache)>(&caches[shape_pairs[k + 2 * kPairsAhead].cache]);
-    if (k + kPairsAhead < count) {
-      const ShapePair& ahead = shape_pairs[k + kPairsAhead];
-      prefetch_lines<sizeof(ShapeProxy)>(&proxies[ahead.proxy_a]);
-      prefetch_lines<sizeof(ShapeProxy)>(&proxies[ahead.proxy_b]);
-      // of a pair that may touch, the line of the two shapes' definitions (each body's in a
-      // heap block of its own) that holds the type the plan reads (waiting on it was a fifth
-      // of make_manifolds' own samples in the rain's landing)
-      const std::uint32_t a = s.slot_[ahead.slot_a], b = s.slot_[ahead.slot_b];
-      if (awake_dynamic(a) || awake_dynamic(b)) {
-        __builtin_prefetch(s.shapes_[a].data() + ahead.shape_a);
-        __builtin_prefetch(s.shapes_[b].data() + ahead.shape_b);
-      }
-    }
-  };
+  // (no prefetch of the pairs ahead in the plan's loop: GCC 12 dropped the one written here
+  // from 489d89a on, and forced inline it made the 2870 pyramid's manifold functions take 3-5%
+  // more samples: docs/benchmarks.md, "A resting pile's reused manifolds")
   // the reuse tests' lanes (make_manifolds' scratch, on the stack): by touching pair of the
   // span, its inputs, its place in the span, whether the normal is b's, and the outcome (the
   // lanes padded to a multiple of four with the last pair's)
@@ -1029,7 +1007,6 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
     const std::size_t end = std::min(shape_pairs.size(), first + kSpan);
     std::size_t touching = 0;
     for (std::size_t k = first; k < end; ++k) {
-      prefetch_ahead(k);
       const ShapePair& p = shape_pairs[k];
       const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
       fates[k - first] = fate_of(p, a, b);
@@ -1124,6 +1101,9 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       if (k + kPairsAhead < last && fates[k + kPairsAhead - first] == PairPlan::Fate::Touching) {
         const ShapePair& pair_ahead = shape_pairs[k + kPairsAhead];
         const std::uint32_t ahead = pair_ahead.cache;
+        // (its first cached manifold, what emit reads of it, here and not in the plan's loop,
+        // where its lines crowded out the plan's own loads: in the rain's landing emit and
+        // collide_pair took 25% fewer samples once it moved)
         if (ahead != kNoIndex && caches[ahead].first != kNoIndex)
           prefetch_lines<offsetof(CachedManifold, normal_impulse)>(&manifolds[caches[ahead].first]);
         // the bodies' rotation matrices, which emit turns the points by (the pair's first
@@ -1482,7 +1462,8 @@ static_assert(Manifold::kMaxPoints == 4 && sizeof(SolverPoint) == 80 && offsetof
 // transposes of at, sa, sb and offset), their overlaps and ids as they are. (Inlined into its one
 // caller, emit_frame_points_avx2.)
 #if PBA_EMIT_AVX2
-// 1 / count for the counts that are powers of two (index 3 unused: divided)
+// 1 / count for the counts of two and four (a product by it is the quotient rounded once, the
+// same bits; 0 and 1 never come here, 3 is divided)
 constexpr double kInverseCount[Manifold::kMaxPoints + 1] = {0, 1, 0.5, 0, 0.25};
 
 // x in every lane (a broadcast: `0 + x` would make a -0 +0)
@@ -1546,7 +1527,7 @@ constexpr double kInverseCount[Manifold::kMaxPoints + 1] = {0, 1, 0.5, 0, 0.25};
   const V distance = _mm256_sqrt_pd(dx * dx + dy * dy + dz * dz);
   const __m128d low = _mm256_castpd256_pd128(distance), high = _mm256_extractf128_pd(distance, 1);
   double twist = _mm_cvtsd_f64(low) + _mm_cvtsd_f64(_mm_unpackhi_pd(low, low));
-  if (in.count > 2) twist += _mm_cvtsd_f64(high);  // (count > 1: emit calls this for two to four points)
+  if (in.count > 2) twist += _mm_cvtsd_f64(high);  // (count > 1: emit_frame_points_avx2 calls this for two to four points)
   if (in.count > 3) twist += _mm_cvtsd_f64(_mm_unpackhi_pd(high, high));
   twist_radius = in.count == 3 ? twist / 3.0 : twist * scale;
 }

@@ -99,12 +99,14 @@ void prefetch_pair(const ContactPair& c, bool from_frame) {
 }
 
 // lane l's share of the kLines lines at `p`, to be written: lines l, l + kLanes, ... (l < kLanes)
+// (addresses made only for lines inside the kLines: lane l of a smaller block has none)
 template <std::size_t kLines>
 void ask_lines(const void* p, int l) {
-  const char* at = static_cast<const char*>(p) + 64 * static_cast<std::size_t>(l);
-  for (std::size_t line = 0; line + kLanes <= kLines; line += kLanes) __builtin_prefetch(at + 64 * line, 1);
+  const char* base = static_cast<const char*>(p);
+  const auto lane = static_cast<std::size_t>(l);
+  for (std::size_t line = 0; line + kLanes <= kLines; line += kLanes) __builtin_prefetch(base + 64 * (line + lane), 1);
   if constexpr (kLines % kLanes != 0)
-    if (static_cast<std::size_t>(l) < kLines % kLanes) __builtin_prefetch(at + 64 * (kLines / kLanes * kLanes), 1);
+    if (lane < kLines % kLanes) __builtin_prefetch(base + 64 * (kLines / kLanes * kLanes + lane), 1);
 }
 
 }  // namespace
@@ -398,6 +400,7 @@ static_assert(offsetof(ContactPair, t1) == 88 && offsetof(ContactPair, friction)
                   offsetof(ContactPair, tangent_impulse) == 160 && offsetof(ContactPair, twist_impulse) == 176 &&
                   offsetof(ContactPair, rolling) == 184 && offsetof(ContactPair, t2) == 192 &&
                   offsetof(ContactPair, ca) == 216 && offsetof(ContactPair, twist_radius) == 240 &&
+                  offsetof(ContactPair, count) == 248 && sizeof(ContactPair::count) == 4 &&
                   sizeof(Mat3) == 9 * sizeof(double),
               "gather_fill_avx2 reads a pair's header as six rows of four doubles from its normal, a point as "
               "4 + 4 + 2");
@@ -426,7 +429,7 @@ __attribute__((target("avx2"))) void gather_fill_avx2(FillInput& in, const Conta
                                                       std::uint32_t& rolls, std::uint32_t& bounces) {
   using V = __m256d;
   const __m256i low = _mm256_set1_epi64x(0xffffffff);
-  const __m256i even = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+  const __m256i low_words = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
   for (int l0 = 0; l0 < lanes; l0 += 4) {
     const char* p[4];
     for (int j = 0; j < 4; ++j) p[j] = reinterpret_cast<const char*>(&pairs[index[l0 + j]]);
@@ -460,7 +463,7 @@ __attribute__((target("avx2"))) void gather_fill_avx2(FillInput& in, const Conta
     // the count: the low half of its row's last double (the padding after it is not read)
     const __m256i points = _mm256_and_si256(_mm256_castpd_si256(r[3]), low);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(count + l0),
-                     _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(points, even)));
+                     _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(points, low_words)));
     if constexpr (P == 1) {  // a one-point lane's rolling impulse (fill_lanes reads it for those only)
       rows(offsetof(ContactPair, rolling_impulse), r);
       for (int i = 0; i < 3; ++i) put(in.rolling_impulse[i], r[i]);
@@ -485,9 +488,9 @@ __attribute__((target("avx2"))) void gather_fill_avx2(FillInput& in, const Conta
     };
     inertia(body_a, in.ia), inertia(body_b, in.ib);
     // the points: (at, sa.x), (sa.y, sa.z, sb.x, sb.y), (sb.z, offset), past the count +0 (the
-    // masks from in.active, one comparison a point); a block's P (fill_lanes reads no more)
+    // masks from the lanes' counts, one comparison a point); a block's P (fill_lanes reads no more)
     for (int k = 0; k < P; ++k) {
-      // (in.active: 1 for the points below the count, as the lane loop wrote it)
+      // (in.active: 1 for the points below the count, written here for the gathered lanes)
       const V on = _mm256_castsi256_pd(_mm256_cmpgt_epi64(points, _mm256_set1_epi64x(k)));
       put(in.active[k], _mm256_and_pd(on, _mm256_set1_pd(1.0)));
       const std::size_t at = offsetof(ContactPair, points) + static_cast<std::size_t>(k) * sizeof(SolverPoint);

@@ -174,8 +174,8 @@ TEST(RigidStacking, AHeavyBallOnACubeRaisesItsLoadAsItsWeightSays) {
 //   sag is at least 25 times, 2.8% of a cube, past the whole budget of 2%, and the load (under
 //   (pi / 0.2)^2 times, 0.17) under its bound: back by the sag. (At a fifth alone the ground's
 //   springs soften to 0.4 only: a fresh measure finds the sag within the budget.)
-// (Release build only: 119 s under the address and undefined sanitizers, the asan test preset
-// leaves it out by name, CMakePresets.json; the code it runs is run there by the smaller tests.)
+// (Left out of the asan test preset by name: 119 s under the address and undefined
+// sanitizers; CMakePresets.json. The code it runs is run there by the smaller tests.)
 TEST(RigidStacking, ASofterSpringOrALongerStepSendsAHalvedPileBackAtOnce) {
   struct Case {
     const char* name;

@@ -868,8 +868,8 @@ TEST(RigidStacking, TwentySmallCubesStandAtTheDefaults) {
 // (the 20-stack's is 20 cubes, the pyramid's 10). The raise alone: the halving's budget
 // (auto_substeps_sag_fraction, on by default) is 0 here, since the pyramid, resting, halves a
 // second in (RigidStacking.AtTheDefaultsARestingPileOfOneMetreCubesTakesFourSubstepsThenThree).
-// (Release build only: 89 s under the address and undefined sanitizers, the asan test preset
-// leaves it out by name, CMakePresets.json; the code it runs is run there by the smaller tests.)
+// (Left out of the asan test preset by name: 89 s under the address and undefined
+// sanitizers; CMakePresets.json. The code it runs is run there by the smaller tests.)
 TEST(RigidStacking, WhatStandsAtEightSubstepsKeepsThemAndItsBits) {
   struct Case {
     const char* name;
@@ -1229,8 +1229,8 @@ TEST(RigidStacking, TheBracedModelOfTwoCubesUnderAPlankIsItsClosedForm) {
 // touching (their side contacts carry no load: no level joins them), keeps 8 (each a chain
 // of 20: 0.62), and so does a 10-level square pyramid with a free column of 20 cubes on its
 // top (the column's chain on the pyramid rules: the weakest part). Sleeping off, 3 s.
-// (Release build only: 227 s under the address and undefined sanitizers, the asan test preset
-// leaves it out by name, CMakePresets.json; the code it runs is run there by the smaller tests.)
+// (Left out of the asan test preset by name: 227 s under the address and undefined
+// sanitizers; CMakePresets.json. The code it runs is run there by the smaller tests.)
 TEST(RigidStacking, ABracedPyramidHalvesAndFreeColumnsDoNot) {
   struct Case {
     const char* name;
