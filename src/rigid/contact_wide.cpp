@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <type_traits>
 
@@ -510,12 +511,35 @@ PBA_LANES void sweep_point(const Lanes<V, B>& F, int k, V (&vn)[P], V (&lambda)[
 template <class V, int kMode, bool kZmm, class B>
 void solve_rounds(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r, const Carried<V, B::kPoints>& from);
 
+// The AVX2 one-point pass's lanes that land sliding, gathered from the halves of one colour's
+// blocks into the eight lanes of one rounds' call (DeferredRounds below). In the rain's landing
+// a half that calls the rounds has 1.3 such lanes on average (one lane in 78% of the calls), and
+// the rounds (five iterations of a chain of some 140 cycles over all eight lanes, the others
+// only selected back) were a third of the one-point passes' instructions. A lane's arithmetic
+// is the same in any lane of any call, and the lanes of one colour share no body that moves,
+// so solving a lane's rounds, its row write-back, cap and warm start later in the colour, next
+// to other blocks' lanes, changes no bit. (AVX2 only: the AVX-512 code stays as it is. The
+// ContactBlocks of all colours are passed in one call when no lane rolls, so theirs could not
+// wait past their colour; and their rounds are the four-point kernel's.)
+struct DeferredRounds;
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PBA_DEFER_TARGET __attribute__((target("avx2")))
+#else
+#define PBA_DEFER_TARGET
+#endif
+template <int kMode>
+[[gnu::noinline]] PBA_DEFER_TARGET void defer_rounds(DeferredRounds& d, OnePointBlock& c, int l0,
+                                                     const FloatParams& p, const BodyArrays& r,
+                                                     const Carried<v8f, 1>& state);
+
 // kRounds: the rounds' instance, which starts from `from` (the pass's state when a lane lands
-// sliding) instead of from the block
+// sliding) instead of from the block. defer (the AVX2 one-point pass only): where its lanes
+// that land sliding wait for their rounds (the others go on as they would)
 // kPart: the whole pass, or one of the AVX2 path's two parts around the sweeps (through `mid`)
 template <class V, int kMode, bool kZmm, class B, bool kRounds = false, int kPart = kWhole>
 PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r,
-                     const Carried<V, B::kPoints>* from = nullptr, Swept<V, B::kPoints>* mid = nullptr) {
+                     const Carried<V, B::kPoints>* from = nullptr, Swept<V, B::kPoints>* mid = nullptr,
+                     DeferredRounds* defer = nullptr) {
   constexpr bool kBias = kMode != kRelax;
   // (the set-up, up to the sweeps, and what follows them)
   constexpr bool kStart = !kRounds && kPart != kFinish;
@@ -828,8 +852,18 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
         state.iscale[k] = iscale[k], state.negm[k] = negm[k], state.skip[k] = skip[k];
       }
       state.tj[0] = tj[0], state.tj[1] = tj[1], state.total = total, state.impact = impact;
-      solve_rounds<V, kMode, kZmm>(L, p, r, state);
-      return;
+      if constexpr (kYmm && P == 1) {
+        // (those lanes' write bits cleared until their rounds: the rest of this half's pass
+        // writes nothing of theirs that their rounds will not write again)
+        if (defer) defer_rounds<kMode>(*defer, c, l0, p, r, state);
+        if (!defer) {
+          solve_rounds<V, kMode, kZmm>(L, p, r, state);
+          return;
+        }
+      } else {
+        solve_rounds<V, kMode, kZmm>(L, p, r, state);
+        return;
+      }
     }
   } else {
     impact = from->impact;
@@ -1066,8 +1100,11 @@ PBA_LANES void separations_of(B& c, const AnchorsOf<B::kPoints>& g, int l0, int 
 
 // kPart: the whole pass, or the AVX2 path's part of it before the sweeps or after them (see
 // pass_pair; the state between them in `mid`)
-template <class V, class D, int kMode, class B, int kPart = kWhole>
+// (defer: solve()'s; kRounds: the rounds of lanes that waited, from `from`, then the rest of the
+// pass: flush_rounds)
+template <class V, class D, int kMode, class B, bool kRounds = false, int kPart = kWhole>
 PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatParams& p, const BodyArrays& r,
+                    DeferredRounds* defer = nullptr, const Carried<V, B::kPoints>* from = nullptr,
                     Swept<V, B::kPoints>* mid = nullptr) {
   const Lanes<V, B> L{c, l0};
   // the separations in float, on the pass's own lanes. Each is base + n.dp + the turned
@@ -1076,11 +1113,12 @@ PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatPar
   // 4 m step of a 250 m/s body), under the kTouching margin that already absorbs the float
   // velocities' rounding; the doubles cost two or four extra halves of a block and the
   // conversions to them (AVX2: 17.6% of the kernel's instructions, docs/benchmarks.md)
-  if constexpr (kPart != kFinish)
+  if constexpr (!kRounds && kPart != kFinish)
     if (p.update_sep) separations(L, g, r);
   // (the AVX-512 path: kZmm widens rows with its one-instruction conversion)
   constexpr bool kZmm = std::is_same_v<D, v8d>;
-  solve<V, kMode, kZmm, B, false, kPart>(L, p, r, nullptr, mid);
+  if constexpr (!kRounds) solve<V, kMode, kZmm, B, false, kPart>(L, p, r, nullptr, mid, defer);
+  else solve_rounds<V, kMode, kZmm>(L, p, r, *from);
   if constexpr (kPart == kSetUp) return;
   // the soft step's relax pass (cap_carry): a point carries to the next substep at most
   // kCarryGrowth times the impulse it solved the substep before, plus what holds its effective
@@ -1142,7 +1180,7 @@ PBA_LANES void pass_pair(B& c, const AnchorsOf<B::kPoints>& g, const FloatParams
   constexpr int P = B::kPoints;
   const Lanes<v8f, B> L[2] = {{c, 0}, {c, 8}};
   Swept<v8f, P> mid[2];
-  for (int h = 0; h < 2; ++h) pass<v8f, D, kMode, B, kSetUp>(c, g, 8 * h, p, r, &mid[h]);
+  for (int h = 0; h < 2; ++h) pass<v8f, D, kMode, B, false, kSetUp>(c, g, 8 * h, p, r, nullptr, nullptr, &mid[h]);
   if (next) ask_set_up(*next);
   // (the chains' numbers in arrays of their own, indexed by constants once the loops are
   // unrolled, so that they can live in registers: in the structs, GCC kept the loops and
@@ -1163,12 +1201,100 @@ PBA_LANES void pass_pair(B& c, const AnchorsOf<B::kPoints>& g, const FloatParams
   sweep(std::true_type{});
   for (int h = 0; h < 2; ++h)
     for (int k = 0; k < P; ++k) mid[h].lambda[k] = lambda[h][k], mid[h].largest[k] = largest[h][k];
-  for (int h = 0; h < 2; ++h) pass<v8f, D, kMode, B, kFinish>(c, g, 8 * h, p, r, &mid[h]);
+  for (int h = 0; h < 2; ++h) pass<v8f, D, kMode, B, false, kFinish>(c, g, 8 * h, p, r, nullptr, nullptr, &mid[h]);
 }
 
 // which blocks the AVX2 path passes in interleaved halves (pass_pair)
 template <class B>
 constexpr bool kPairs = B::kPoints > 1;
+
+#if defined(__GNUC__) && defined(__x86_64__)
+// The one-point lanes of a colour that land sliding, waiting for their rounds (see
+// defer_rounds): each one's block fields and anchors' `last` as at its pass's friction, and its
+// pass's state, copied into lane `count` of `block` and `state`; where each came from; its
+// block's write bits, which are cleared there until the rounds write the lane back
+// (set by pass_blocks, none of it zeroed there: it is made once a colour and pass, 1,800 times a
+// step in pyramid1240, whose one-point lanes never land sliding)
+struct DeferredRounds {
+  OnePointBlock* blocks;
+  const OnePointAnchors* anchors;
+  int count;
+  bool clean;                          // block, anchors and state zeroed (at the first lane)
+  std::uint32_t from[8];               // block index * kLanes + lane
+  OnePointBlock block;                 // lanes [0, count); write_a, write_b, rolls: their bits
+  OnePointAnchors lasts;               // (`last` only)
+  Carried<v8f, 1> state;
+};
+
+// lane `lane`'s 4-byte fields of kRows rows of kWidth (a block's or a Carried state's) into lane
+// `at` (unrolled: a load and a store a row)
+template <std::size_t kRows, std::size_t kWidth>
+PBA_LANES void copy_lane(void* to, int at, const void* from, int lane) {
+  unsigned char* const t = static_cast<unsigned char*>(to) + 4 * static_cast<std::size_t>(at);
+  const unsigned char* const f = static_cast<const unsigned char*>(from) + 4 * static_cast<std::size_t>(lane);
+#pragma GCC unroll 128
+  for (std::size_t row = 0; row < kRows; ++row) std::memcpy(t + 4 * kWidth * row, f + 4 * kWidth * row, 4);
+}
+// (the block's rows of kLanes 4-byte fields up to its write bits; Carried's rows of 8)
+inline constexpr std::size_t kBlockRows = offsetof(OnePointBlock, write_a) / (4 * kLanes);
+static_assert(offsetof(OnePointBlock, write_a) % (4 * kLanes) == 0);
+static_assert(sizeof(Carried<v8f, 1>) % sizeof(v8f) == 0 && sizeof(MaskOf<v8f>) == sizeof(v8f));
+
+// the waiting lanes' rounds, as solve_rounds would have run them in their own halves, then
+// their relax pass's cap and their warm start; their fields put back into their blocks
+template <int kMode>
+[[gnu::noinline]] PBA_DEFER_TARGET void flush_rounds(DeferredRounds& d, const FloatParams& p, const BodyArrays& r) {
+  if (d.count == 0) return;
+  OnePointBlock& t = d.block;
+  // (the lanes left select their own; a lane compare, not impact[m] = 0: GCC 12's sanitizer
+  // build made a vector's element at a variable index element 0, see defer_rounds)
+  const v8i lane = {0, 1, 2, 3, 4, 5, 6, 7};
+  d.state.impact = d.state.impact & (lane < d.count);
+  pass<v8f, v4d, kMode, OnePointBlock, true>(t, d.lasts, 0, p, r, nullptr, &d.state);
+  for (int m = 0; m < d.count; ++m) {
+    OnePointBlock& c = d.blocks[d.from[m] / kLanes];
+    const int l = static_cast<int>(d.from[m] % kLanes);
+    c.impulse[0][l] = t.impulse[0][m], c.max_impulse[0][l] = t.max_impulse[0][m];
+    c.tangent_impulse[0][l] = t.tangent_impulse[0][m], c.tangent_impulse[1][l] = t.tangent_impulse[1][m];
+    for (int i = 0; i < 3; ++i) c.rolling_impulse[i][l] = t.rolling_impulse[i][m];
+    d.anchors[d.from[m] / kLanes].last[0][l] = d.lasts.last[0][m];
+    c.write_a |= ((t.write_a >> m) & 1u) << l, c.write_b |= ((t.write_b >> m) & 1u) << l;
+  }
+  t.write_a = t.write_b = t.rolls = 0;
+  d.count = 0;
+}
+
+template <int kMode>
+[[gnu::noinline]] PBA_DEFER_TARGET void defer_rounds(DeferredRounds& d, OnePointBlock& c, int l0,
+                                                     const FloatParams& p, const BodyArrays& r,
+                                                     const Carried<v8f, 1>& state) {
+  // the waiting lanes' bits: the mask's sign bits (its lanes are 0 or -1). Not state.impact[q]
+  // in a loop: the asan+UBSan build (GCC 12, -O2) read element 0 for every q, so that a half
+  // whose first lane landed sent all eight to wait and one whose first did not sent none
+  // (their rounds skipped): other bits than the scalar path's there, the release build's right
+  const std::uint32_t bits = static_cast<std::uint32_t>(__builtin_ia32_movmskps256(reinterpret_cast<v8f>(state.impact)));
+  if (d.count + __builtin_popcount(bits) > 8) flush_rounds<kMode>(d, p, r);
+  if (!d.clean) {
+    std::memset(static_cast<void*>(&d.block), 0, sizeof d.block);
+    std::memset(static_cast<void*>(&d.lasts), 0, sizeof d.lasts);
+    std::memset(static_cast<void*>(&d.state), 0, sizeof d.state);
+    d.clean = true;
+  }
+  const std::size_t index = static_cast<std::size_t>(&c - d.blocks);
+  for (int q = 0; q < 8; ++q) {
+    if (!((bits >> q) & 1)) continue;
+    const int m = d.count++, l = l0 + q;
+    copy_lane<kBlockRows, kLanes>(&d.block, m, &c, l);
+    copy_lane<sizeof state / sizeof(v8f), 8>(&d.state, m, &state, q);
+    d.lasts.last[0][m] = d.anchors[index].last[0][l];
+    d.from[m] = static_cast<std::uint32_t>(index * kLanes + static_cast<std::size_t>(l));
+    const std::uint32_t lane = 1u << l;
+    d.block.write_a |= ((c.write_a & lane) ? 1u : 0u) << m, d.block.write_b |= ((c.write_b & lane) ? 1u : 0u) << m;
+    d.block.rolls |= ((c.rolls & lane) ? 1u : 0u) << m;
+    c.write_a &= ~lane, c.write_b &= ~lane;
+  }
+}
+#endif
 
 // blocks [first, last) on lanes of V, the separations on lanes of D (several parts of a block
 // when they are narrower). No prefetch of the blocks' fields: the blocks of a colour lie one after another
@@ -1179,6 +1305,13 @@ constexpr bool kPairs = B::kPoints > 1;
 template <class V, class D, int kMode, class B>
 PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first, std::size_t last,
                            const FloatParams& p, const BodyArrays& r) {
+  // (the AVX2 one-point pass: its lanes that land sliding solved a colour's eight at a time)
+  constexpr bool kDefer = std::is_same_v<V, v8f> && B::kPoints == 1;
+  struct None {};
+  [[maybe_unused]] std::conditional_t<kDefer, DeferredRounds, None> rounds;  // (not zeroed: see `clean`)
+  DeferredRounds* defer = nullptr;
+  if constexpr (kDefer)
+    rounds.blocks = blocks, rounds.anchors = anchors, rounds.count = 0, rounds.clean = false, defer = &rounds;
   for (std::size_t i = first; i < last; ++i) {
     // a block of one lane (a colour of one manifold: a stack's) by the scalar lane, one of up
     // to eight by 8 floats (the same arithmetic in every lane, so the same bits)
@@ -1198,9 +1331,11 @@ PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std:
       if (lanes > 8) pass_pair<D, kMode>(blocks[i], anchors[i], p, r, i + 1 < last ? &blocks[i + 1] : nullptr);
       else pass<V, D, kMode>(blocks[i], anchors[i], 0, p, r);
     } else {
-      for (int l = 0; l < lanes; l += kWidth<V>) pass<V, D, kMode>(blocks[i], anchors[i], l, p, r);
+      for (int l = 0; l < lanes; l += kWidth<V>) pass<V, D, kMode>(blocks[i], anchors[i], l, p, r, defer);
     }
   }
+  if constexpr (kDefer)
+    if (rounds.count > 0) flush_rounds<kMode>(rounds, p, r);
 }
 
 template <class V, class D, class B>
