@@ -487,6 +487,24 @@ namespace {
   q[0] = _mm256_blendv_pd(_mm256_mul_pd(q[0], inv), _mm256_set1_pd(1.0), none);
   for (int k = 1; k < 4; ++k) q[k] = _mm256_blendv_pd(_mm256_mul_pd(q[k], inv), zero, none);
 }
+// glm::mat3_cast of four quaternions (w, x, y, z, a lane each), its products and sums in its
+// order (the same bits), by column: m[j][i] is column j's row i, as a Mat3 holds them
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline void mat3_cast4(__m256d w, __m256d x, __m256d y,
+                                                                           __m256d z, __m256d (&m)[3][3]) {
+  const __m256d xx = _mm256_mul_pd(x, x), yy = _mm256_mul_pd(y, y), zz = _mm256_mul_pd(z, z);
+  const __m256d xz = _mm256_mul_pd(x, z), xy = _mm256_mul_pd(x, y), yz = _mm256_mul_pd(y, z);
+  const __m256d wx = _mm256_mul_pd(w, x), wy = _mm256_mul_pd(w, y), wz = _mm256_mul_pd(w, z);
+  const __m256d one = _mm256_set1_pd(1.0), two = _mm256_set1_pd(2.0);
+  m[0][0] = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(yy, zz)));
+  m[0][1] = _mm256_mul_pd(two, _mm256_add_pd(xy, wz));
+  m[0][2] = _mm256_mul_pd(two, _mm256_sub_pd(xz, wy));
+  m[1][0] = _mm256_mul_pd(two, _mm256_sub_pd(xy, wz));
+  m[1][1] = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(xx, zz)));
+  m[1][2] = _mm256_mul_pd(two, _mm256_add_pd(yz, wx));
+  m[2][0] = _mm256_mul_pd(two, _mm256_add_pd(xz, wy));
+  m[2][1] = _mm256_mul_pd(two, _mm256_sub_pd(yz, wx));
+  m[2][2] = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(xx, yy)));
+}
 }  // namespace
 
 // The loop of update_proxies for 4 bodies, each through the float operations it makes for
@@ -588,23 +606,9 @@ namespace {
 
   // the box's world half widths (rotated_half: glm::mat3_cast's entries, the sums from 0 by
   // columns), a ball's radius instead in its lanes
-  const __m256d w = rot[0], x = rot[1], y = rot[2], z = rot[3];
-  const __m256d xx = _mm256_mul_pd(x, x), yy = _mm256_mul_pd(y, y), zz = _mm256_mul_pd(z, z);
-  const __m256d xz = _mm256_mul_pd(x, z), xy = _mm256_mul_pd(x, y), yz = _mm256_mul_pd(y, z);
-  const __m256d wx = _mm256_mul_pd(w, x), wy = _mm256_mul_pd(w, y), wz = _mm256_mul_pd(w, z);
-  const __m256d one = _mm256_set1_pd(1.0), two = _mm256_set1_pd(2.0);
   const __m256d sign = _mm256_set1_pd(-0.0);
-  // r[j][i], j the column
-  __m256d m[3][3];
-  m[0][0] = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(yy, zz)));
-  m[0][1] = _mm256_mul_pd(two, _mm256_add_pd(xy, wz));
-  m[0][2] = _mm256_mul_pd(two, _mm256_sub_pd(xz, wy));
-  m[1][0] = _mm256_mul_pd(two, _mm256_sub_pd(xy, wz));
-  m[1][1] = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(xx, zz)));
-  m[1][2] = _mm256_mul_pd(two, _mm256_add_pd(yz, wx));
-  m[2][0] = _mm256_mul_pd(two, _mm256_add_pd(xz, wy));
-  m[2][1] = _mm256_mul_pd(two, _mm256_sub_pd(yz, wx));
-  m[2][2] = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(xx, yy)));
+  __m256d m[3][3];  // r[j][i], j the column
+  mat3_cast4(rot[0], rot[1], rot[2], rot[3], m);
   const __m256d h[3] = {_mm256_load_pd(in[11]), _mm256_load_pd(in[12]), _mm256_load_pd(in[13])};
   const __m256d radius = _mm256_load_pd(in[14]);
   const __m256d balls = _mm256_castsi256_pd(
@@ -644,22 +648,9 @@ namespace {
   // pyramid); made here, it has long left when emit reads it
   alignas(32) double turned[9][L];
   {
-    const __m256d qw = _mm256_load_pd(in[6]), qx = _mm256_load_pd(in[7]), qy = _mm256_load_pd(in[8]),
-                  qz = _mm256_load_pd(in[9]);
-    const __m256d qxx = _mm256_mul_pd(qx, qx), qyy = _mm256_mul_pd(qy, qy), qzz = _mm256_mul_pd(qz, qz);
-    const __m256d qxz = _mm256_mul_pd(qx, qz), qxy = _mm256_mul_pd(qx, qy), qyz = _mm256_mul_pd(qy, qz);
-    const __m256d qwx = _mm256_mul_pd(qw, qx), qwy = _mm256_mul_pd(qw, qy), qwz = _mm256_mul_pd(qw, qz);
-    // by column, as a Mat3 holds them
-    const __m256d r[9] = {_mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(qyy, qzz))),
-                          _mm256_mul_pd(two, _mm256_add_pd(qxy, qwz)),
-                          _mm256_mul_pd(two, _mm256_sub_pd(qxz, qwy)),
-                          _mm256_mul_pd(two, _mm256_sub_pd(qxy, qwz)),
-                          _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(qxx, qzz))),
-                          _mm256_mul_pd(two, _mm256_add_pd(qyz, qwx)),
-                          _mm256_mul_pd(two, _mm256_add_pd(qxz, qwy)),
-                          _mm256_mul_pd(two, _mm256_sub_pd(qyz, qwx)),
-                          _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(qxx, qyy)))};
-    for (int e = 0; e < 9; ++e) _mm256_store_pd(turned[e], r[e]);
+    __m256d r[3][3];
+    mat3_cast4(_mm256_load_pd(in[6]), _mm256_load_pd(in[7]), _mm256_load_pd(in[8]), _mm256_load_pd(in[9]), r);
+    for (int e = 0; e < 9; ++e) _mm256_store_pd(turned[e], r[e / 3][e % 3]);
   }
   const int kept = _mm256_movemask_pd(keep);
   for (int j = 0; j < L; ++j) {
