@@ -210,6 +210,10 @@ void RigidContacts::reorder_caches() {
   free_cache = kNoIndex;
 }
 
+void RigidContacts::make_shape_pose(const RigidBodySystem& s, std::uint32_t q, std::uint32_t i, std::uint32_t k) {
+  shape_poses[q] = shape_frame(s.body_pose(i), s.shapes_[i][k].local), shape_pose_stamp[q] = stamp;
+}
+
 std::uint32_t RigidContacts::new_manifold() {
   if (free_manifold != kNoIndex) {
     const std::uint32_t k = free_manifold;
@@ -929,6 +933,93 @@ __attribute__((target("avx2"))) void reuse_lanes_avx2(const ReuseLane* lane, con
 }
 #endif
 
+#if PBA_EMIT_AVX2
+// collide_pair's turns of a new manifold into the bodies' frames: one point's three turns in
+// three lanes; two to four points a point a lane, each body's turns in one go: each point's
+// cores (a's surface point less radius_a along `n`, from a's centre, turned by conjugate(qa); b's
+// plus radius_b, by conjugate(qb)) into r.core's rows, and the normal `n` turned by
+// conjugate(q_ref) (qa's or qb's: `ref_b`) into r.normal, in a spare lane of that body's turn
+// when there is one. Each lane makes glm's operations in glm's order (the vector sums left to
+// right, quat_turn), so the same bits as the scalar code; the rows' lanes past `count` get
+// point 0's cores or the normal's turn, which no one reads (emit reads the first `count`).
+// (In glm's scalar code, with the conjugates, these turns were some 2.2 M of collide_pair's
+// 6.8 M instructions a step of the rain's landing, about 7,500 manifolds with points; in
+// lanes 1.5 M: docs/benchmarks.md, "The rain's built manifolds' turns in lanes".)
+__attribute__((target("avx2"))) void keep_cores_avx2(const ContactPoint* points, int count, bool flip, const Vec3& n,
+                                                     const Quat& qa, const Quat& qb, bool ref_b, const Vec3& com_a,
+                                                     const Vec3& com_b, double radius_a, double radius_b,
+                                                     CachedManifold& r) {
+  using V = __m256d;
+  auto on_a = [&](const ContactPoint* c) __attribute__((always_inline)) { return flip ? &c->point_b.x : &c->point_a.x; };
+  auto on_b = [&](const ContactPoint* c) __attribute__((always_inline)) { return flip ? &c->point_a.x : &c->point_b.x; };
+  if (count == 1) {
+    // one point (most of the rain's and the terrain's manifolds): its three turns a lane each
+    // (the normal, a's core, b's core; the fourth lane a's core again), the vectors made as
+    // rows (x, y, z and a fourth double no lane's result depends on)
+    V q[4], v[4], t[4];
+    columns4(_mm256_loadu_pd(ref_b ? &qb.x : &qa.x), _mm256_loadu_pd(&qa.x), _mm256_loadu_pd(&qb.x),
+             _mm256_loadu_pd(&qa.x), q);
+    const V sign = _mm256_set1_pd(-0.0);
+    const V nr = row3(n);
+    const V va = (_mm256_loadu_pd(on_a(points)) - _mm256_set1_pd(radius_a) * nr) - row3(com_a);
+    const V vb = (_mm256_loadu_pd(on_b(points)) + _mm256_set1_pd(radius_b) * nr) - row3(com_b);
+    columns4(nr, va, vb, va, v);
+    V rx, ry, rz;
+    detail::lanes::quat_turn(_mm256_xor_pd(q[0], sign), _mm256_xor_pd(q[1], sign), _mm256_xor_pd(q[2], sign), q[3],
+                             v[0], v[1], v[2], rx, ry, rz);
+    columns4(rx, ry, rz, _mm256_setzero_pd(), t);
+    _mm_storeu_pd(&r.normal.x, _mm256_castpd256_pd128(t[0]));
+    _mm_store_sd(&r.normal.z, _mm256_extractf128_pd(t[0], 1));
+    const __m128d alo = _mm256_castpd256_pd128(t[1]), blo = _mm256_castpd256_pd128(t[2]);
+    _mm_store_sd(&r.core[0][0], alo), _mm_storeh_pd(&r.core[1][0], alo);
+    _mm_store_sd(&r.core[2][0], _mm256_extractf128_pd(t[1], 1));
+    _mm_store_sd(&r.core[3][0], blo), _mm_storeh_pd(&r.core[4][0], blo);
+    _mm_store_sd(&r.core[5][0], _mm256_extractf128_pd(t[2], 1));
+    return;
+  }
+  // two to four: a point a lane, a body's turn at a time; the points' rows (x, y, z, and a
+  // fourth double no lane's result depends on), lanes past the count point 0's
+  const ContactPoint* p1 = count > 1 ? &points[1] : &points[0];
+  const ContactPoint* p2 = count > 2 ? &points[2] : &points[0];
+  const ContactPoint* p3 = count > 3 ? &points[3] : &points[0];
+  V pa[4], pb[4];
+  columns4(_mm256_loadu_pd(on_a(points)), _mm256_loadu_pd(on_a(p1)), _mm256_loadu_pd(on_a(p2)),
+           _mm256_loadu_pd(on_a(p3)), pa);
+  columns4(_mm256_loadu_pd(on_b(points)), _mm256_loadu_pd(on_b(p1)), _mm256_loadu_pd(on_b(p2)),
+           _mm256_loadu_pd(on_b(p3)), pb);
+  const V nx = _mm256_set1_pd(n.x), ny = _mm256_set1_pd(n.y), nz = _mm256_set1_pd(n.z);
+  const V ra = _mm256_set1_pd(radius_a), rb = _mm256_set1_pd(radius_b);
+  // (p - radius n) - com and (p + radius n) - com, as glm's vector operations
+  V ax = (pa[0] - ra * nx) - _mm256_set1_pd(com_a.x), ay = (pa[1] - ra * ny) - _mm256_set1_pd(com_a.y),
+    az = (pa[2] - ra * nz) - _mm256_set1_pd(com_a.z);
+  V bx = (pb[0] + rb * nx) - _mm256_set1_pd(com_b.x), by = (pb[1] + rb * ny) - _mm256_set1_pd(com_b.y),
+    bz = (pb[2] + rb * nz) - _mm256_set1_pd(com_b.z);
+  // the normal in lane 3 of its body's turn when the points leave it free
+  const bool spare = count < 4;
+  if (spare) {
+    if (ref_b)
+      bx = _mm256_blend_pd(bx, nx, 8), by = _mm256_blend_pd(by, ny, 8), bz = _mm256_blend_pd(bz, nz, 8);
+    else
+      ax = _mm256_blend_pd(ax, nx, 8), ay = _mm256_blend_pd(ay, ny, 8), az = _mm256_blend_pd(az, nz, 8);
+  }
+  // the conjugates' vector parts (glm::conjugate: -x, -y, -z; w as it is)
+  V cx, cy, cz;
+  detail::lanes::quat_turn(_mm256_set1_pd(-qa.x), _mm256_set1_pd(-qa.y), _mm256_set1_pd(-qa.z), _mm256_set1_pd(qa.w),
+                           ax, ay, az, cx, cy, cz);
+  _mm256_storeu_pd(r.core[0], cx), _mm256_storeu_pd(r.core[1], cy), _mm256_storeu_pd(r.core[2], cz);
+  V dx, dy, dz;
+  detail::lanes::quat_turn(_mm256_set1_pd(-qb.x), _mm256_set1_pd(-qb.y), _mm256_set1_pd(-qb.z), _mm256_set1_pd(qb.w),
+                           bx, by, bz, dx, dy, dz);
+  _mm256_storeu_pd(r.core[3], dx), _mm256_storeu_pd(r.core[4], dy), _mm256_storeu_pd(r.core[5], dz);
+  if (spare) {
+    const double* row = ref_b ? &r.core[3][3] : &r.core[0][3];
+    r.normal = Vec3(row[0], row[Manifold::kMaxPoints], row[2 * Manifold::kMaxPoints]);
+  } else {
+    r.normal = glm::conjugate(ref_b ? qb : qa) * n;
+  }
+}
+#endif
+
 }  // namespace
 
 void RigidContacts::make_manifolds(RigidBodySystem& s) {
@@ -1206,6 +1297,7 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
   const bool in_b = s.type_[a] == BodyType::Dynamic && s.type_[b] != BodyType::Dynamic;
   const Quat qa_inv = glm::conjugate(s.q_[a]), qb_inv = glm::conjugate(s.q_[b]);
   const Quat q_ref_inv = in_b ? qb_inv : qa_inv;
+  const bool lanes = PBA_EMIT_AVX2 && simd != SimdPath::Scalar;
   const bool mesh_pair = sa.shape.type == ShapeType::Mesh || sb.shape.type == ShapeType::Mesh;
   // old points are matched within the pair's slop (less for a small body: pair_slop)
   const double slop = slop_of(s, a, b), slop2 = slop * slop;
@@ -1224,7 +1316,12 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     r.sub = m.sub_shape_b;
     r.count = m.count;
     r.normal_in_b = in_b;
-    r.normal = q_ref_inv * n;
+#if PBA_EMIT_AVX2
+    // (the turns in lanes on the SIMD paths: keep_cores_avx2, the same bits)
+    if (lanes) keep_cores_avx2(m.points.data(), m.count, flip, n, s.q_[a], s.q_[b], in_b, s.com_[a], s.com_[b], radius_a, radius_b, r);
+    else
+#endif
+      r.normal = q_ref_inv * n;
     r.radius_a = radius_a, r.radius_b = radius_b;
     r.friction_mix = cs.friction_mix, r.restitution_mix = cs.restitution_mix;
     r.mixed_friction = mixed_friction, r.mixed_restitution = mixed_restitution, r.mixed_rolling = mixed_rolling;
@@ -1248,9 +1345,12 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     r.rolling = was ? was->rolling : Vec3(0);
     for (int k = 0; k < m.count; ++k) {
       const ContactPoint& cp = m.points[k];
-      const Vec3 core_a = qa_inv * ((flip ? cp.point_b : cp.point_a) - radius_a * n - s.com_[a]);
-      const Vec3 core_b = qb_inv * ((flip ? cp.point_a : cp.point_b) + radius_b * n - s.com_[b]);
-      for (int i = 0; i < 3; ++i) r.core[i][k] = core_a[i], r.core[3 + i][k] = core_b[i];
+      if (!lanes) {
+        const Vec3 core_a = qa_inv * ((flip ? cp.point_b : cp.point_a) - radius_a * n - s.com_[a]);
+        const Vec3 core_b = qb_inv * ((flip ? cp.point_a : cp.point_b) + radius_b * n - s.com_[b]);
+        for (int i = 0; i < 3; ++i) r.core[i][k] = core_a[i], r.core[3 + i][k] = core_b[i];
+      }
+      const Vec3 core_a = r.core_a(k);
       r.id[k] = cp.id;
       r.normal_impulse[k] = 0;
       if (!was) continue;
