@@ -667,6 +667,12 @@ struct RigidContacts {
   // rotation (FreeRotation, integrate_wide.cpp)
   std::array<std::vector<std::uint32_t>, kFreeRotations> moving;
   bool moving_damped = true;  // some of them have linear or angular damping
+  // the soft step's moving bodies that no contact lane holds this step, by kind (split off
+  // `moving` by split_coasting, which leaves the others there), and its scratch by body
+  std::array<std::vector<std::uint32_t>, kFreeRotations> coasting;
+  std::vector<std::uint32_t> drifting;  // the others whose step has a closed form (coast())
+  std::vector<std::uint8_t> in_lanes;
+  std::vector<double> coast_lanes;  // coast()'s free motion lanes of a chunk of them
   // the free motion's lanes over the soft step's and TGS's substeps (solver.h, FreeLine): kind k's blocks
   // from free_lanes.data() + free_lanes_at[k] (64-byte aligned). While live (from
   // gather_free_motion to scatter_free_motion) the moving bodies' centres and frames are the
@@ -703,6 +709,25 @@ struct RigidContacts {
   void gather_free_motion(RigidBodySystem& s, double h, const Vec3& gravity);
   /// Puts the lanes' centres and frames back into the bodies' arrays; the lanes are no longer live.
   void scatter_free_motion(RigidBodySystem& s);
+  /// The soft step, after prepare(): moves the bodies of `moving` that no block's lane writes
+  /// (no contact point this step: nothing in the substeps reads or changes them but their own
+  /// free motion) into `drifting` when their step has a closed form (no damping, no torque,
+  /// and three equal principal moments or no angular velocity: coast()), else into
+  /// `coasting` by kind, each list keeping its order.
+  /// (For the soft step's substeps of h (s) under gravity (m/s^2); a step in which a drifting
+  /// body would pass kMaxRigidSpeed has none: they all coast.)
+  void split_coasting(RigidBodySystem& s, double h, const Vec3& gravity, int substeps);
+  /// A substep's change of body i's velocity when it drifts (m/s): h (gravity scale g +
+  /// inverse mass force), gravity in m/s^2.
+  static Vec3 drift_change(const RigidBodySystem& s, std::uint32_t i, double h, const Vec3& gravity);
+  /// The drifting bodies' step in closed form (their centres and velocities the substeps'
+  /// sums, their frames one turn by the constant angular velocity), then the coasting bodies'
+  /// `substeps` substeps of h (s) under gravity (m/s^2), a chunk of them
+  /// at a time over all the substeps (the free motion's kernels in the substeps' order for
+  /// each body: the same bits as the substeps' sweeps), their motion since the start of the
+  /// step not written (only the contact lanes read it); throws as integrate_velocities does
+  /// when a velocity goes beyond kMaxRigidSpeed (rigid_body.cpp).
+  void coast(RigidBodySystem& s, double h, const Vec3& gravity, int substeps);
   /// The free motion's lanes live over a solver's substeps: gathered when made, the centres and
   /// frames put back when it ends, on an unwind too (the soft step and TGS share it, so no
   /// solver can leave the lanes live past its step, where a later step would read them stale).
