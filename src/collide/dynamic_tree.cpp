@@ -47,6 +47,11 @@ void DynamicTree::free_node(std::int32_t n) {
   free_ = n;
 }
 
+void DynamicTree::reserve(std::size_t leaves) {
+  // a tree of n leaves has n - 1 inner nodes
+  if (leaves > 0) nodes_.reserve(std::max(nodes_.size(), 2 * leaves - 1));
+}
+
 void DynamicTree::clear() {
   nodes_.clear();
   root_ = free_ = kNull;
@@ -257,98 +262,137 @@ void DynamicTree::keep_height() {
 void DynamicTree::rebuild() {
   // (leaves, not the root: leaves made by create_proxy_unplaced may have no tree yet)
   if (leaves_ == 0) return;
-  // gather the leaves and free every inner node
-  build_leaves_.clear();
+  // gather the leaves (with their boxes, and the bounds of their centres) and free every inner
+  // node (the pool grown once for the inner nodes the free ones do not cover: a batch of new
+  // leaves has none)
+  reserve(leaves_);
+  build_items_.clear();
+  build_items_.reserve(leaves_);
+  Vec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
     Node& n = nodes_[i];
     if (n.height == 0) {
-      build_leaves_.push_back(static_cast<std::int32_t>(i));
+      build_items_.push_back({n.box, static_cast<std::int32_t>(i), 0});
+      const Vec3 c = n.box.lo + n.box.hi;
+      lo = glm::min(lo, c);
+      hi = glm::max(hi, c);
     } else if (n.height > 0) {
       free_node(static_cast<std::int32_t>(i));
     }
   }
   // build top-down
-  root_ = build_range(build_leaves_.data(), static_cast<std::int32_t>(build_leaves_.size()), 0);
+  root_ = build_range(build_items_.data(), static_cast<std::int32_t>(build_items_.size()), 0, lo, hi);
   at(root_).parent = kNull;
 }
 
-std::int32_t DynamicTree::build_range(std::int32_t* leaves, std::int32_t count, int depth) {
-  if (count == 1) return leaves[0];
-  // the bounds of the centres (box lo + hi, twice the centre: no rounding) and the longest axis
-  auto centre2 = [&](std::int32_t x, int k) { return at(x).box.lo[k] + at(x).box.hi[k]; };
-  Vec3 lo = at(leaves[0]).box.lo + at(leaves[0]).box.hi, hi = lo;
-  for (std::int32_t i = 1; i < count; ++i) {
-    const Vec3 c = at(leaves[i]).box.lo + at(leaves[i]).box.hi;
-    lo = glm::min(lo, c);
-    hi = glm::max(hi, c);
-  }
+std::int32_t DynamicTree::build_range(BuildItem* items, std::int32_t count, int depth, const Vec3& lo,
+                                      const Vec3& hi) {
+  if (count == 1) return items[0].node;
+  // the longest axis of the centres' bounds (box lo + hi, twice the centre: no rounding)
   const Vec3 d = hi - lo;
   const int axis = d.x >= d.y && d.x >= d.z ? 0 : (d.y >= d.z ? 1 : 2);
+  auto centre2 = [axis](const BuildItem& x) { return x.box.lo[axis] + x.box.hi[axis]; };
 
   // binned SAH (Wald 2007, "On fast construction of SAH-based bounding volume
   // hierarchies"): sort the centres into bins along the axis and split at the plane of
   // least area(left) n_left + area(right) n_right; below a depth limit, or when every
-  // centre falls in one bin, split at the median instead (balanced: the limit holds)
+  // centre falls in one bin, split at the median instead (balanced: the limit holds). Each
+  // bin keeps the bounds of its centres too, so the halves' bounds come from the bins, not a
+  // pass over their leaves
   std::int32_t split = -1;
+  Vec3 lo1, hi1, lo2, hi2;  // the halves' centres' bounds
   const int median_below = height_limit() - static_cast<int>(std::bit_width(static_cast<std::uint32_t>(count))) - 1;
   if (count > 2 && depth < median_below && d[axis] > 0) {
     constexpr int kBins = 16;
+    constexpr double kMax = std::numeric_limits<double>::max();
     struct Bin {
-      Aabb box{Vec3(std::numeric_limits<double>::max()), Vec3(-std::numeric_limits<double>::max())};
+      Aabb box{Vec3(kMax), Vec3(-kMax)};
+      Vec3 lo{kMax}, hi{-kMax};  // its centres' bounds
       std::int32_t count = 0;
     };
     Bin bins[kBins];
     const double scale = kBins / d[axis];
-    auto bin_of = [&](std::int32_t x) {
-      return std::min(kBins - 1, static_cast<int>((centre2(x, axis) - lo[axis]) * scale));
-    };
+    std::uint32_t used = 0;  // the bins that hold a centre, a bit each
     for (std::int32_t i = 0; i < count; ++i) {
-      Bin& bin = bins[bin_of(leaves[i])];
-      bin.box = bin.box.merged(at(leaves[i]).box);
+      BuildItem& x = items[i];
+      const Vec3 c = x.box.lo + x.box.hi;
+      x.bin = std::min(kBins - 1, static_cast<int>((c[axis] - lo[axis]) * scale));
+      Bin& bin = bins[x.bin];
+      bin.box = bin.box.merged(x.box);
+      bin.lo = glm::min(bin.lo, c);
+      bin.hi = glm::max(bin.hi, c);
       ++bin.count;
+      used |= 1u << x.bin;
     }
-    // sweep from the right for the suffix areas, then from the left for the costs
+    // the planes' costs: each plane's left side is the bins below it, its right side the bins
+    // from it up. The planes between two bins that hold centres all cost the same (an empty
+    // bin's box changes no union), and the first of them wins a tie, so only the plane just
+    // above each bin that holds some is costed: the same plane as a sweep of all 15 finds, for
+    // the nodes low in the tree (a few leaves in a few bins) without the empty bins' unions
+    // and areas, which were most of a rebuild's instructions. From the right: the suffix
+    // areas and counts at each used bin; then from the left, the costs
+    int order[kBins], m = 0;
+    for (std::uint32_t u = used; u != 0; u &= u - 1) order[m++] = std::countr_zero(u);
     double right_area[kBins];
     std::int32_t right_count[kBins];
-    Aabb acc = bins[kBins - 1].box;
+    Aabb acc = bins[order[m - 1]].box;
     std::int32_t n = 0;
-    for (int b = kBins - 1; b > 0; --b) {
-      if (b < kBins - 1) acc = acc.merged(bins[b].box);
-      n += bins[b].count;
-      right_area[b] = n > 0 ? acc.area() : 0;
-      right_count[b] = n;
+    for (int k = m - 1; k > 0; --k) {
+      if (k < m - 1) acc = acc.merged(bins[order[k]].box);
+      n += bins[order[k]].count;
+      right_area[k] = acc.area();
+      right_count[k] = n;
     }
     double best = std::numeric_limits<double>::max();
-    int best_plane = -1;
-    Aabb left = bins[0].box;
+    int best_plane = -1, best_k = -1;
+    Aabb left = bins[order[0]].box;
     std::int32_t nl = 0;
-    for (int b = 1; b < kBins; ++b) {
-      if (b > 1) left = left.merged(bins[b - 1].box);
-      nl += bins[b - 1].count;
-      if (nl == 0 || right_count[b] == 0) continue;
-      const double cost = left.area() * nl + right_area[b] * right_count[b];
+    for (int k = 1; k < m; ++k) {
+      if (k > 1) left = left.merged(bins[order[k - 1]].box);
+      nl += bins[order[k - 1]].count;
+      const double cost = left.area() * nl + right_area[k] * right_count[k];
       if (cost < best) {
         best = cost;
-        best_plane = b;
+        best_plane = order[k - 1] + 1, best_k = k;
       }
     }
     if (best_plane > 0) {
-      std::int32_t* mid =
-          std::partition(leaves, leaves + count, [&](std::int32_t x) { return bin_of(x) < best_plane; });
-      split = static_cast<std::int32_t>(mid - leaves);
+      lo1 = lo2 = Vec3(kMax), hi1 = hi2 = Vec3(-kMax);
+      for (int k = 0; k < m; ++k) {
+        Vec3& l = k < best_k ? lo1 : lo2;
+        Vec3& h = k < best_k ? hi1 : hi2;
+        l = glm::min(l, bins[order[k]].lo), h = glm::max(h, bins[order[k]].hi);
+      }
+      BuildItem* mid = std::partition(items, items + count, [best_plane](const BuildItem& x) { return x.bin < best_plane; });
+      split = static_cast<std::int32_t>(mid - items);
     }
   }
   if (split <= 0 || split >= count) {
     // the median centre (ties by node index: a total order, so the result is
     // deterministic); halves of floor and ceil of count / 2 keep the balance within 1
     split = count / 2;
-    std::nth_element(leaves, leaves + split, leaves + count, [&](std::int32_t x, std::int32_t y) {
-      const double cx = centre2(x, axis), cy = centre2(y, axis);
-      return cx < cy || (cx == cy && x < y);
-    });
+    auto before = [&](const BuildItem& x, const BuildItem& y) {
+      const double cx = centre2(x), cy = centre2(y);
+      return cx < cy || (cx == cy && x.node < y.node);
+    };
+    // (two leaves, the most common case, without nth_element's machinery: the lesser first)
+    if (count == 2) {
+      if (before(items[1], items[0])) std::swap(items[0], items[1]);
+    } else {
+      std::nth_element(items, items + split, items + count, before);
+    }
+    auto bounds = [](const BuildItem* first, std::int32_t m, Vec3& l, Vec3& h) {
+      l = h = first[0].box.lo + first[0].box.hi;
+      for (std::int32_t i = 1; i < m; ++i) {
+        const Vec3 c = first[i].box.lo + first[i].box.hi;
+        l = glm::min(l, c), h = glm::max(h, c);
+      }
+    };
+    bounds(items, split, lo1, hi1);
+    bounds(items + split, count - split, lo2, hi2);
   }
-  const std::int32_t c1 = build_range(leaves, split, depth + 1);
-  const std::int32_t c2 = build_range(leaves + split, count - split, depth + 1);
+  const std::int32_t c1 = build_range(items, split, depth + 1, lo1, hi1);
+  const std::int32_t c2 = build_range(items + split, count - split, depth + 1, lo2, hi2);
   const std::int32_t p = allocate_node();
   Node& node = at(p);
   node.child1 = c1;

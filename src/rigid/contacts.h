@@ -335,7 +335,7 @@ struct RigidContacts {
   std::vector<std::uint32_t> statics;         // proxies of static bodies (indices into proxies)
   std::vector<std::uint32_t> unbounded;       // proxies of planes (not in the tree)
   std::vector<std::vector<std::uint32_t>> body_proxies;  // by body slot: its proxies, by shape
-  std::vector<Pose> static_pose;              // by body slot: a static body's pose at its last update
+  std::vector<Pose> static_pose;              // by body slot (up to the last static one): a static body's pose at its last update
   DynamicTree tree{0.1};                      // the bounded proxies' fat boxes
   std::vector<ShapePair> shape_pairs, merged; // the persistent pair list (and merge scratch)
   PairSet pair_set;                           // the pairs in shape_pairs, by proxies
@@ -351,6 +351,7 @@ struct RigidContacts {
   std::vector<std::uint64_t> moved_keys, moved_keys_spare;
   std::vector<std::uint32_t> moved_spare;
   std::vector<std::uint8_t> was_moved;        // scratch: 1 for the proxies in `moved`
+  std::vector<std::int32_t> moved_leaves;     // scratch: the tree leaves of `moved` (find_new_pairs)
   std::vector<PairCache> caches;              // pool
   std::vector<PairCache> caches_spare;        // scratch: the pool in pair order (reorder_caches), as large
   std::vector<CachedManifold> manifolds;      // pool
@@ -390,6 +391,7 @@ struct RigidContacts {
   // of the rain's 5,000 pairs made a step
   std::vector<Pose> shape_poses;
   std::vector<std::uint32_t> shape_pose_stamp;  // the update() that made shape_poses[q]
+  std::size_t bodies_seen = 0;                // the bodies update_proxies() saw last step
   std::size_t reinserted_since_check = 0;     // tree moves since its quality was last checked
   double tree_ratio = 0;                      // the tree's area ratio after its last rebuild
 

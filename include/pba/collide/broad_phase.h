@@ -109,6 +109,11 @@ class DynamicTree {
   /// neighbours, and the shape the tree had still suits them). Throws Error if `node` is not
   /// a live leaf or the box is bad.
   void set_leaf_box(std::int32_t node, const Aabb& box);
+  /// Makes room for `leaves` leaves in all (and the inner nodes above them) at once: the node
+  /// pool grown once rather than doubled by each leaf past its capacity (a batch of new leaves,
+  /// as the rigid bodies' first step of 10,000 proxies: each doubling's copy lands on pages the
+  /// process has not touched yet, and their faults cost more than the copies).
+  void reserve(std::size_t leaves);
   /// Removes every node.
   void clear();
   /// Rebuilds the whole tree top-down over the leaves' fat boxes by the binned surface-area
@@ -145,6 +150,15 @@ class DynamicTree {
   /// Never allocates.
   template <class F>
   void query(const Aabb& box, F&& f) const;
+  /// Calls `f(user_a, user_b)` once for each pair of distinct leaves whose fat boxes overlap
+  /// and of which at least one is in `leaves` (live leaf nodes, each once): the set of pairs
+  /// that a query() of each listed leaf's fat box finds, each pair once rather than from both
+  /// sides, in no set order. One walk of the tree against itself (the subtrees without a
+  /// listed leaf skipped, and a subtree's pairs with another found only where their boxes
+  /// overlap), where the queries walked the top of the tree once for each listed leaf. Its
+  /// scratch grows with the tree; no allocation once grown.
+  template <class F>
+  void query_pairs(std::span<const std::int32_t> leaves, F&& f);
   /// Casts `ray` through the tree: calls `f(user, ray)` for every leaf whose fat box the ray
   /// enters within its current length, nearest subtrees first; `f` returns the new ray
   /// length (m, <= the current one, to clip), or a negative value to stop. Never allocates.
@@ -162,7 +176,16 @@ class DynamicTree {
   std::int32_t balance(std::int32_t a);
   void refit_up(std::int32_t n);
   void keep_height();
-  std::int32_t build_range(std::int32_t* leaves, std::int32_t count, int depth);
+  // a leaf as a rebuild sorts it: its box copied beside its node (the build's passes read
+  // boxes in a row, not a node of the pool each), and its bin in the range's split
+  struct BuildItem {
+    Aabb box;
+    std::int32_t node;
+    std::int32_t bin;
+  };
+  // the subtree over `items` (`count` >= 1 of them, at `depth`, their boxes' centres times 2
+  // within [lo, hi]); its root node
+  std::int32_t build_range(BuildItem* items, std::int32_t count, int depth, const Vec3& lo, const Vec3& hi);
   Node& at(std::int32_t n) { return nodes_[static_cast<std::size_t>(n)]; }
   const Node& at(std::int32_t n) const { return nodes_[static_cast<std::size_t>(n)]; }
 
@@ -171,7 +194,9 @@ class DynamicTree {
   std::int32_t free_ = kNull;
   std::size_t leaves_ = 0;
   double margin_ = 0.1;
-  std::vector<std::int32_t> build_leaves_;  // rebuild scratch
+  std::vector<BuildItem> build_items_;  // rebuild scratch
+  std::vector<std::uint8_t> marked_;    // query_pairs scratch: by node, 1 above a listed leaf
+  std::vector<std::pair<std::int32_t, std::int32_t>> pair_stack_;  // query_pairs scratch
 };
 
 template <class F>
@@ -192,6 +217,52 @@ void DynamicTree::query(const Aabb& box, F&& f) const {
       __builtin_prefetch(&at(n.child1)), __builtin_prefetch(&at(n.child2));
       stack[top++] = n.child1;
       stack[top++] = n.child2;
+    }
+  }
+}
+
+template <class F>
+void DynamicTree::query_pairs(std::span<const std::int32_t> leaves, F&& f) {
+  if (root_ == kNull || leaves.empty()) return;
+  // mark each listed leaf and its ancestors (a walk up stops at the first one marked already)
+  marked_.assign(nodes_.size(), 0);
+  for (const std::int32_t leaf : leaves)
+    for (std::int32_t n = leaf; n != kNull && !marked_[static_cast<std::size_t>(n)]; n = at(n).parent)
+      marked_[static_cast<std::size_t>(n)] = 1;
+  // a stack of tasks: (a, a) the pairs within subtree a, (a, b) those between subtrees a and b
+  pair_stack_.clear();
+  pair_stack_.emplace_back(root_, root_);
+  while (!pair_stack_.empty()) {
+    const auto [ia, ib] = pair_stack_.back();
+    pair_stack_.pop_back();
+    const Node& a = at(ia);
+    if (ia == ib) {
+      if (a.is_leaf() || !marked_[static_cast<std::size_t>(ia)]) continue;
+      pair_stack_.emplace_back(a.child1, a.child2);
+      pair_stack_.emplace_back(a.child2, a.child2);
+      pair_stack_.emplace_back(a.child1, a.child1);
+      continue;
+    }
+    const bool marked_a = marked_[static_cast<std::size_t>(ia)], marked_b = marked_[static_cast<std::size_t>(ib)];
+    if (!(marked_a | marked_b)) continue;
+    const Node& b = at(ib);
+    if (!a.box.overlaps(b.box)) continue;
+    if (a.is_leaf() && b.is_leaf()) {
+      f(a.user, b.user);
+      continue;
+    }
+    // split the marked side down to its listed leaves first, each then a query of the other
+    // side (split an unmarked side against a subtree with few listed leaves, and the walk
+    // paired all of that subtree's nodes with the other's: more than the queries, in the
+    // rain's landing heaps); two marked sides, the taller (a leaf never)
+    const bool split_a = marked_a != marked_b ? (marked_a ? !a.is_leaf() : b.is_leaf())
+                                              : b.is_leaf() || (!a.is_leaf() && a.height >= b.height);
+    if (split_a) {
+      pair_stack_.emplace_back(a.child2, ib);
+      pair_stack_.emplace_back(a.child1, ib);
+    } else {
+      pair_stack_.emplace_back(ia, b.child2);
+      pair_stack_.emplace_back(ia, b.child1);
     }
   }
 }
@@ -369,6 +440,15 @@ class BroadPhase {
   /// until it returns false. Never allocates.
   template <class F>
   void query(const Aabb& box, F&& f) const;
+  /// Calls `f(user_a, user_b)` once for each pair of distinct leaves whose fat boxes overlap
+  /// and of which at least one is in `leaves` (live leaf nodes, each once): the set of pairs
+  /// that a query() of each listed leaf's fat box finds, each pair once rather than from both
+  /// sides, in no set order. One walk of the tree against itself (the subtrees without a
+  /// listed leaf skipped, and a subtree's pairs with another found only where their boxes
+  /// overlap), where the queries walked the top of the tree once for each listed leaf. Its
+  /// scratch grows with the tree; no allocation once grown.
+  template <class F>
+  void query_pairs(std::span<const std::int32_t> leaves, F&& f);
 
  private:
   friend struct detail::BroadPhaseMethods;
