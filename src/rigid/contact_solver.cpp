@@ -1524,12 +1524,15 @@ void RigidContacts::restitution(RigidBodySystem& s, double dt, const Vec3& gravi
     const SolverBody& row = rows[b.body];
     b.pre_v = Vec3(row.v[0], row.v[1], row.v[2]), b.pre_w = Vec3(row.w[0], row.w[1], row.w[2]);
   }
+  // (the lanes that bounce: the test restitution_lane makes first, made here, without the
+  // call for each of the terrain's 5,000 lanes at rest a median step)
   for (const LaneRef& x : restitution_lanes) {
-    if (x.one)
-      restitution_lane(ones[x.block], static_cast<int>(x.lane), x.restitution, threshold, r);
-    else
-      restitution_lane(blocks[x.block], static_cast<int>(x.lane), x.restitution, threshold,
-                       s.settings_.manifold_iterations, r);
+    const int lane = static_cast<int>(x.lane);
+    if (x.one) {
+      if (lane_bounces(ones[x.block], lane, threshold)) restitution_lane(ones[x.block], lane, x.restitution, threshold, r);
+    } else if (lane_bounces(blocks[x.block], lane, threshold)) {
+      restitution_lane(blocks[x.block], lane, x.restitution, threshold, s.settings_.manifold_iterations, r);
+    }
   }
   bound_bounces(s, true);
   bound_bounce_work(s, gravity);
@@ -1581,8 +1584,24 @@ void RigidContacts::find_bounces(RigidBodySystem& s, double h, const Vec3& gravi
   auto moves = [&](std::uint32_t i) { return s.type_[i] == BodyType::Kinematic || dynamic(i); };
   // the bodies that touch a body that moves (by any manifold, with restitution or not)
   shared.assign(n, 0);
-  for (const ContactPair& c : pairs)
-    if (moves(c.a) && moves(c.b)) shared[c.a] = shared[c.b] = 1;
+  auto mark = [&](std::uint32_t a, std::uint32_t b) __attribute__((always_inline)) {
+    if (moves(a) && moves(b)) shared[a] = shared[b] = 1;
+  };
+  if (from_lanes) {
+    // every pair is a lane of a block (build()), which holds its bodies (an empty lane's are
+    // `n`): read there, two lines a block that the lanes' loop below reads again, not the
+    // pairs' first lines, one a pair (the terrain's median steps: 5,000 pairs, their lines
+    // long out of the cache after the fill)
+    auto mark_blocks = [&](const auto* array, std::size_t count) {
+      for (std::size_t k = 0; k < count; ++k)
+        for (int l = 0; l < array[k].lanes; ++l)
+          if (array[k].a[l] < n && array[k].b[l] < n) mark(array[k].a[l], array[k].b[l]);
+    };
+    mark_blocks(blocks.data(), block_count);
+    mark_blocks(ones.data(), one_blocks);
+  } else {
+    for (const ContactPair& c : pairs) mark(c.a, c.b);
+  }
   // (the body's record made apart from the test below, which is inlined where it is called:
   // as one lambda it was a call for each of a lane's two bodies, 10,000 a step on the
   // terrain's median steps, nearly all of them for the terrain itself or a body already listed)

@@ -1544,9 +1544,7 @@ void restitution_lane_of(B& c, int lane, double restitution, double threshold, i
   // its frame, masses and arms are read: the sweeps' test reads only the approach speeds and
   // largest impulses, which they do not change. (Most lanes at rest: the terrain's median
   // steps made this function's 5,000 calls a step, some 0.8 M instructions, for few bounces)
-  bool any = false;
-  for (int k = 0; k < P; ++k) any |= !(L(c.approach[k]) > -threshold || L(c.max_impulse[k]) == 0);
-  if (!any) return;
+  if (!lane_bounces(c, lane, threshold)) return;
   double t1[3], t2[3], n[3], ia[6], ib[6];
   L.frame(t1, t2, n);
   for (int i = 0; i < 6; ++i) ia[i] = L(c.ia[i]), ib[i] = L(c.ib[i]);

@@ -339,6 +339,16 @@ void separation_colored(SimdPath path, OnePointBlock* blocks, const OnePointAnch
                         std::size_t last, const BodyArrays& bodies);
 /// The restitution impulse of one lane of a one-point block (as restitution_lane above).
 void restitution_lane(OnePointBlock& block, int lane, double restitution, double threshold, const BodyArrays& bodies);
+/// Whether a point of lane `lane` of `block` (a ContactBlock or OnePointBlock) approached
+/// faster than `threshold` (m/s) and pushed: restitution_lane leaves the other lanes as they
+/// are, and changes neither of the two (the approach speeds and the largest impulses).
+template <class B>
+inline bool lane_bounces(const B& block, int lane, double threshold) {
+  bool any = false;
+  for (int k = 0; k < B::kPoints; ++k)
+    any |= !(double(block.approach[k][lane]) > -threshold || double(block.max_impulse[k][lane]) == 0);
+  return any;
+}
 /// The approach speeds before the solve of the block's lanes (as approaches above).
 void approaches(SimdPath path, OnePointBlock& block, const int* count, const BodyArrays& bodies);
 
