@@ -48,8 +48,10 @@ void DynamicTree::free_node(std::int32_t n) {
 }
 
 void DynamicTree::reserve(std::size_t leaves) {
-  // a tree of n leaves has n - 1 inner nodes
-  if (leaves > 0) nodes_.reserve(std::max(nodes_.size(), 2 * leaves - 1));
+  // a tree of n leaves has n - 1 inner nodes; at least doubled, so that a leaf added at a time
+  // does not copy the pool each time
+  const std::size_t need = leaves > 0 ? 2 * leaves - 1 : 0;
+  if (need > nodes_.capacity()) nodes_.reserve(std::max(need, 2 * nodes_.capacity()));
 }
 
 void DynamicTree::clear() {
@@ -363,7 +365,8 @@ std::int32_t DynamicTree::build_range(BuildItem* items, std::int32_t count, int 
         Vec3& h = k < best_k ? hi1 : hi2;
         l = glm::min(l, bins[order[k]].lo), h = glm::max(h, bins[order[k]].hi);
       }
-      BuildItem* mid = std::partition(items, items + count, [best_plane](const BuildItem& x) { return x.bin < best_plane; });
+      BuildItem* mid =
+          std::partition(items, items + count, [best_plane](const BuildItem& x) { return x.bin < best_plane; });
       split = static_cast<std::int32_t>(mid - items);
     }
   }

@@ -290,9 +290,14 @@ void RigidContacts::update_proxies(RigidBodySystem& s, double dt) {
       const std::uint32_t slot = s.owner_[i];
       if (slot >= body_proxies.size() || body_proxies[slot].empty()) shapes += s.shapes_[i].size();
     }
-    body_proxies.reserve(s.slot_.size());
-    proxies.reserve(proxies.size() + shapes);
-    moved.reserve(proxies.capacity()), moved_box.reserve(proxies.capacity()), moved_keys.reserve(proxies.capacity());
+    // at least doubled (reserve() alone gives the exact size: a body added each step would copy
+    // every proxy each step)
+    const auto grow = [](auto& v, std::size_t need) {
+      if (need > v.capacity()) v.reserve(std::max(need, 2 * v.capacity()));
+    };
+    grow(body_proxies, s.slot_.size());
+    grow(proxies, proxies.size() + shapes);
+    grow(moved, proxies.capacity()), grow(moved_box, proxies.capacity()), grow(moved_keys, proxies.capacity());
     tree.reserve(tree.proxy_count() + shapes);
   }
   bodies_seen = n;
@@ -1052,8 +1057,7 @@ __attribute__((target("avx2"))) void keep_cores_avx2(const ContactPoint* points,
                            bx, by, bz, dx, dy, dz);
   _mm256_storeu_pd(r.core[3], dx), _mm256_storeu_pd(r.core[4], dy), _mm256_storeu_pd(r.core[5], dz);
   if (spare) {
-    const double* row = ref_b ? &r.core[3][3] : &r.core[0][3];
-    r.normal = Vec3(row[0], row[Manifold::kMaxPoints], row[2 * Manifold::kMaxPoints]);
+    r.normal = ref_b ? r.core_b(3) : r.core_a(3);
   } else {
     r.normal = glm::conjugate(ref_b ? qb : qa) * n;
   }
@@ -1357,12 +1361,16 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     r.sub = m.sub_shape_b;
     r.count = m.count;
     r.normal_in_b = in_b;
-#if PBA_EMIT_AVX2
     // (the turns in lanes on the SIMD paths: keep_cores_avx2, the same bits)
-    if (lanes) keep_cores_avx2(m.points.data(), m.count, flip, n, s.q_[a], s.q_[b], in_b, s.com_[a], s.com_[b], radius_a, radius_b, r);
-    else
+    bool turned = false;
+#if PBA_EMIT_AVX2
+    if (lanes) {
+      keep_cores_avx2(m.points.data(), m.count, flip, n, s.q_[a], s.q_[b], in_b, s.com_[a], s.com_[b], radius_a,
+                      radius_b, r);
+      turned = true;
+    }
 #endif
-      r.normal = glm::conjugate(in_b ? s.q_[b] : s.q_[a]) * n;
+    if (!turned) r.normal = glm::conjugate(in_b ? s.q_[b] : s.q_[a]) * n;
     r.radius_a = radius_a, r.radius_b = radius_b;
     r.friction_mix = cs.friction_mix, r.restitution_mix = cs.restitution_mix;
     r.mixed_friction = mixed_friction, r.mixed_restitution = mixed_restitution, r.mixed_rolling = mixed_rolling;

@@ -1529,7 +1529,8 @@ void RigidContacts::restitution(RigidBodySystem& s, double dt, const Vec3& gravi
   for (const LaneRef& x : restitution_lanes) {
     const int lane = static_cast<int>(x.lane);
     if (x.one) {
-      if (lane_bounces(ones[x.block], lane, threshold)) restitution_lane(ones[x.block], lane, x.restitution, threshold, r);
+      if (lane_bounces(ones[x.block], lane, threshold))
+        restitution_lane(ones[x.block], lane, x.restitution, threshold, r);
     } else if (lane_bounces(blocks[x.block], lane, threshold)) {
       restitution_lane(blocks[x.block], lane, x.restitution, threshold, s.settings_.manifold_iterations, r);
     }

@@ -335,7 +335,8 @@ struct RigidContacts {
   std::vector<std::uint32_t> statics;         // proxies of static bodies (indices into proxies)
   std::vector<std::uint32_t> unbounded;       // proxies of planes (not in the tree)
   std::vector<std::vector<std::uint32_t>> body_proxies;  // by body slot: its proxies, by shape
-  std::vector<Pose> static_pose;              // by body slot (up to the last static one): a static body's pose at its last update
+  // by body slot (up to the last static one): a static body's pose at its last update
+  std::vector<Pose> static_pose;
   DynamicTree tree{0.1};                      // the bounded proxies' fat boxes
   std::vector<ShapePair> shape_pairs, merged; // the persistent pair list (and merge scratch)
   PairSet pair_set;                           // the pairs in shape_pairs, by proxies
@@ -441,6 +442,8 @@ struct RigidContacts {
       make_shape_pose(s, q, i, k);
     return shape_poses[q];
   }
+  /// Makes proxy q's shape pose at this step's start into shape_poses[q] and stamps it
+  /// (shape_pose's out-of-line half).
   void make_shape_pose(const RigidBodySystem& s, std::uint32_t q, std::uint32_t i, std::uint32_t k);
   void settle(std::uint32_t record);
   void settle_all();
@@ -666,14 +669,16 @@ struct RigidContacts {
   std::vector<SolverBody> warm;
   SimdPath simd = best_simd_path();        // the path of the coloured blocks and the free motion
   // the awake dynamic bodies this step (dense indices, ascending), by the kind of their free
-  // rotation (FreeRotation, integrate_wide.cpp)
+  // rotation (FreeRotation, integrate_wide.cpp); in the soft step, after split_coasting, only
+  // those a contact lane holds (refresh_inertia, the free motion's lanes and the passes see
+  // these; the coasting ones are stepped apart by coast())
   std::array<std::vector<std::uint32_t>, kFreeRotations> moving;
   bool moving_damped = true;  // some of them have linear or angular damping
   // the soft step's moving bodies that no contact lane holds this step, by kind (split off
   // `moving` by split_coasting, which leaves the others there), and its scratch by body
   std::array<std::vector<std::uint32_t>, kFreeRotations> coasting;
   std::vector<std::uint32_t> drifting;  // the others whose step has a closed form (coast())
-  std::vector<std::uint8_t> in_lanes;
+  std::vector<std::uint8_t> in_lanes;  // split_coasting's, by body: 0 no lane, 1 a lane writes it, 2 drifts
   std::vector<double> coast_lanes;  // coast()'s free motion lanes of a chunk of them
   // the free motion's lanes over the soft step's and TGS's substeps (solver.h, FreeLine): kind k's blocks
   // from free_lanes.data() + free_lanes_at[k] (64-byte aligned). While live (from

@@ -728,8 +728,8 @@ void detail::RigidContacts::split_coasting(RigidBodySystem& s, double h, const V
   // The drifting ones (2): those whose step has a closed form, coast(): no damping, no torque,
   // and no spin or three equal moments, whose spin then stays as it is. In a step that takes
   // one of them past the speed limit none drifts, so that the limit stops the step in the
-  // substep it is passed, with every body where that substep left it (as it did before the
-  // closed form, and its tests ask; such a step only ends in an exception)
+  // substep it is passed (the coasting chunks' substeps run before the lane bodies', so a
+  // coasting body past the limit is named first; such a step only ends in an exception)
   bool closed = true;
   const double steps = substeps;
   for (std::size_t k = 0; k < moving.size(); ++k) {
@@ -739,7 +739,10 @@ void detail::RigidContacts::split_coasting(RigidBodySystem& s, double h, const V
                            (round || s.w_[i] == Vec3(0))))
         continue;
       in_lanes[i] = 2;
-      closed = closed && speed_ok(get3(rows[i].v) + steps * drift_change(s, i, h, gravity));
+      // the substeps' speeds |v0 + k L| (k = 1..n) are convex in k, so the largest is at an end;
+      // the spin stays as it is
+      const Vec3 v0 = get3(rows[i].v), change = drift_change(s, i, h, gravity);
+      closed = closed && speed_ok(v0 + change) && speed_ok(v0 + steps * change) && speed_ok(get3(rows[i].w));
     }
   }
   for (std::size_t k = 0; k < moving.size(); ++k) {
@@ -800,7 +803,8 @@ void detail::RigidContacts::coast(RigidBodySystem& s, double h, const Vec3& grav
       gather_free_motion_wide(simd, kind, bodies, count, f, h, gravity, lanes);
       for (int n = 0; n < substeps; ++n) {
         if (!integrate_velocities_wide(simd, kind == FreeRotation::Round, bodies, count, f, h, gravity, lanes, &bad)) {
-          // (the message shows the pose now: the chunk's, and the others' at the step's start)
+          // (the message shows the pose now: the drifting bodies' and the earlier chunks' at the
+          // step's end, this chunk's at the substep, the lane bodies' at the step's start)
           scatter_free_motion_wide(simd, bodies, count, f, lanes);
           s.v_[bad] = get3(rows[bad].v), s.w_[bad] = get3(rows[bad].w);
           if (free_lanes_live) scatter_free_motion(s);

@@ -210,6 +210,41 @@ TEST(RigidFreeFall, GravityScaleAndStaticBodies) {
   EXPECT_TRUE(std::isinf(s.mass(ground)));
 }
 
+// A body that touches nothing takes its step in closed form (coast(): no damping or torque, and
+// no spin or three equal moments): the sums of the substeps' own semi-implicit Euler, so the
+// same as the substeps to rounding, under a scaled gravity and a force, for a flat box that
+// does not spin and a ball that does (whose turn about a fixed axis is one exact rotation).
+TEST(RigidFreeFall, ACoastingBodysClosedStepIsItsSubsteps) {
+  const int substeps = 8;
+  RigidBodySystem s({.contacts = {.substeps = substeps, .auto_substeps = false}});
+  const std::vector<pba::RigidShapeDef> slab{{.shape = pba::ColliderShape::box({0.4, 0.1, 0.25})}};
+  const Vec3 v0{1.5, 4, -0.5}, w0{0.3, -2, 1.1}, force{6, -3, 2};
+  const Quat q0 = glm::angleAxis(0.7, glm::normalize(Vec3(1, 2, 3)));
+  auto box = s.create({.pose = {{0, 50, 0}, q0}, .linear_velocity = v0, .shapes = slab, .gravity_scale = 0.37});
+  auto ball = s.create({.pose = {{5, 50, 0}, q0}, .linear_velocity = v0, .angular_velocity = w0, .shapes = kBall});
+  const double dt = 1.0 / 60, h = dt / substeps, m = s.mass(box);
+  Vec3 x = s.center_of_mass(box), v = v0, xb = s.center_of_mass(ball), vb = v0;
+  for (int step = 0; step < 90; ++step) {
+    s.apply_force(box, force);
+    s.step(dt, kG);
+    for (int k = 0; k < substeps; ++k) {
+      v += h * (0.37 * kG + force / m), x += h * v;
+      vb += h * kG, xb += h * vb;
+    }
+  }
+  // rounding only: ~100 ulps of 50 m over 720 substeps
+  EXPECT_LT(glm::length(s.center_of_mass(box) - x), 1e-11);
+  EXPECT_LT(glm::length(s.linear_velocity(box) - v), 1e-12);
+  EXPECT_LT(glm::length(s.center_of_mass(ball) - xb), 1e-11);
+  EXPECT_LT(glm::length(s.linear_velocity(ball) - vb), 1e-12);
+  // the box does not turn; the ball turns |w| t about w, and keeps w exactly
+  EXPECT_LT(std::abs(std::abs(glm::dot(s.pose(box).rotation, q0)) - 1), 1e-14);
+  EXPECT_EQ(s.angular_velocity(box), Vec3(0));
+  EXPECT_EQ(s.angular_velocity(ball), w0);
+  const Quat turned = glm::angleAxis(glm::length(w0) * 90 * dt, glm::normalize(w0)) * q0;
+  EXPECT_GT(std::abs(glm::dot(s.pose(ball).rotation, turned)), 1 - 1e-13);
+}
+
 // implicit damping: v_n = v0 / (1 + h c)^n, which tends to v0 exp(-c t) as h -> 0 (the
 // substeps taken exactly, auto_substeps off: the discrete law is the scheme's at that h)
 TEST(RigidDamping, FollowsItsDiscreteLawAndTheExponential) {

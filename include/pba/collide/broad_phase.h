@@ -109,8 +109,9 @@ class DynamicTree {
   /// neighbours, and the shape the tree had still suits them). Throws Error if `node` is not
   /// a live leaf or the box is bad.
   void set_leaf_box(std::int32_t node, const Aabb& box);
-  /// Makes room for `leaves` leaves in all (and the inner nodes above them) at once: the node
-  /// pool grown once rather than doubled by each leaf past its capacity (a batch of new leaves,
+  /// Makes room for `leaves` leaves in all (and the inner nodes above them) at once, at least
+  /// doubling the pool when it grows: the node pool grown once for a batch rather than doubled
+  /// again and again by its leaves (a batch of new leaves,
   /// as the rigid bodies' first step of 10,000 proxies: each doubling's copy lands on pages the
   /// process has not touched yet, and their faults cost more than the copies).
   void reserve(std::size_t leaves);
@@ -440,15 +441,6 @@ class BroadPhase {
   /// until it returns false. Never allocates.
   template <class F>
   void query(const Aabb& box, F&& f) const;
-  /// Calls `f(user_a, user_b)` once for each pair of distinct leaves whose fat boxes overlap
-  /// and of which at least one is in `leaves` (live leaf nodes, each once): the set of pairs
-  /// that a query() of each listed leaf's fat box finds, each pair once rather than from both
-  /// sides, in no set order. One walk of the tree against itself (the subtrees without a
-  /// listed leaf skipped, and a subtree's pairs with another found only where their boxes
-  /// overlap), where the queries walked the top of the tree once for each listed leaf. Its
-  /// scratch grows with the tree; no allocation once grown.
-  template <class F>
-  void query_pairs(std::span<const std::int32_t> leaves, F&& f);
 
  private:
   friend struct detail::BroadPhaseMethods;
