@@ -725,7 +725,8 @@ struct RigidContacts {
   /// body would pass kMaxRigidSpeed has none: they all coast.)
   void split_coasting(RigidBodySystem& s, double h, const Vec3& gravity, int substeps);
   /// A substep's change of body i's velocity when it drifts (m/s): h (gravity scale g +
-  /// inverse mass force), gravity in m/s^2.
+  /// inverse mass force), gravity in m/s^2. (The linear term of integrate_wide.cpp's
+  /// step_changes, written for one body: a change to either is a change to both.)
   static Vec3 drift_change(const RigidBodySystem& s, std::uint32_t i, double h, const Vec3& gravity);
   /// The drifting bodies' step in closed form (their centres and velocities the substeps'
   /// sums, their frames one turn by the constant angular velocity), then the coasting bodies'
