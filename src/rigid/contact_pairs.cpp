@@ -995,8 +995,12 @@ __attribute__((target("avx2"))) void keep_cores_avx2(const ContactPoint* points,
                                                      const Vec3& com_b, double radius_a, double radius_b,
                                                      CachedManifold& r) {
   using V = __m256d;
-  auto on_a = [&](const ContactPoint* c) __attribute__((always_inline)) { return flip ? &c->point_b.x : &c->point_a.x; };
-  auto on_b = [&](const ContactPoint* c) __attribute__((always_inline)) { return flip ? &c->point_a.x : &c->point_b.x; };
+  auto on_a = [&](const ContactPoint* c) __attribute__((always_inline)) {
+    return flip ? &c->point_b.x : &c->point_a.x;
+  };
+  auto on_b = [&](const ContactPoint* c) __attribute__((always_inline)) {
+    return flip ? &c->point_a.x : &c->point_b.x;
+  };
   if (count == 1) {
     // one point (most of the rain's and the terrain's manifolds): its three turns a lane each
     // (the normal, a's core, b's core; the fourth lane a's core again), the vectors made as

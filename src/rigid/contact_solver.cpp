@@ -1589,14 +1589,14 @@ void RigidContacts::find_bounces(RigidBodySystem& s, double h, const Vec3& gravi
     if (moves(a) && moves(b)) shared[a] = shared[b] = 1;
   };
   if (from_lanes) {
-    // every pair is a lane of a block (build()), which holds its bodies (an empty lane's are
-    // `n`): read there, two lines a block that the lanes' loop below reads again, not the
+    // every pair is a lane of a block (build()), which holds its bodies (a lane past `lanes`,
+    // empty, holds the spare row n; the loop stops before them): read there, two lines a block that the lanes' loop below reads again, not the
     // pairs' first lines, one a pair (the terrain's median steps: 5,000 pairs, their lines
     // long out of the cache after the fill)
     auto mark_blocks = [&](const auto* array, std::size_t count) {
       for (std::size_t k = 0; k < count; ++k)
         for (int l = 0; l < array[k].lanes; ++l)
-          if (array[k].a[l] < n && array[k].b[l] < n) mark(array[k].a[l], array[k].b[l]);
+          mark(array[k].a[l], array[k].b[l]);
     };
     mark_blocks(blocks.data(), block_count);
     mark_blocks(ones.data(), one_blocks);

@@ -612,6 +612,15 @@ namespace {
 
 Vec3 get3(const double* p) { return {p[0], p[1], p[2]}; }
 
+// Grows `storage` (never shrinks it) to hold `doubles` doubles from its first 64-byte line on;
+// returns that line's offset in it (doubles): the free motion's lanes are read by aligned loads
+std::size_t line_aligned(std::vector<double>& storage, std::size_t doubles) {
+  constexpr std::size_t kLine = 64 / sizeof(double);
+  if (storage.size() < doubles + kLine) storage.resize(doubles + kLine);
+  const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(storage.data()) / sizeof(double);
+  return (kLine - at % kLine) % kLine;
+}
+
 }  // namespace
 
 // The arrays of the free motion (src/rigid/integrate_wide.cpp): the velocities in the contact
@@ -682,10 +691,7 @@ void detail::RigidContacts::gather_free_motion(RigidBodySystem& s, double h, con
     free_lanes_at[k] = blocks * kFreeBlock;
     blocks += (moving[k].size() + kFreeLaneWidth - 1) / kFreeLaneWidth;
   }
-  constexpr std::size_t kLine = 64 / sizeof(double);
-  if (free_lanes.size() < blocks * kFreeBlock + kLine) free_lanes.resize(blocks * kFreeBlock + kLine);
-  const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(free_lanes.data()) / sizeof(double);
-  const std::size_t skip = (kLine - at % kLine) % kLine;
+  const std::size_t skip = line_aligned(free_lanes, blocks * kFreeBlock);
   const FreeMotionArrays f = s.free_motion(nullptr, nullptr, nullptr);
   for (std::size_t k = 0; k < moving.size(); ++k) {
     free_lanes_at[k] += skip;
@@ -763,11 +769,9 @@ void detail::RigidContacts::coast(RigidBodySystem& s, double h, const Vec3& grav
   // a chunk's lanes (2 KB a block of 8), rows and warm-start rows (64 bytes a body each) stay
   // in L1 over its substeps (the rain's 10,000 bodies' were 2.5 MB of lanes and 1.3 MB of rows
   // swept 8 times, past the 512 KB L2)
-  constexpr std::size_t kChunk = 32, kLine = 64 / sizeof(double);
-  if (coast_lanes.size() < kChunk / kFreeLaneWidth * kFreeBlock + kLine)
-    coast_lanes.resize(kChunk / kFreeLaneWidth * kFreeBlock + kLine);
-  const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(coast_lanes.data()) / sizeof(double);
-  double* lanes = coast_lanes.data() + (kLine - at % kLine) % kLine;
+  constexpr std::size_t kChunk = 32;
+  const std::size_t skip = line_aligned(coast_lanes, kChunk / kFreeLaneWidth * kFreeBlock);
+  double* lanes = coast_lanes.data() + skip;
   // (no motion: only the contact lanes read it)
   const FreeMotionArrays f = s.free_motion(rows.data(), warm.data(), nullptr);
   std::uint32_t bad = 0;

@@ -350,6 +350,13 @@ Aabb random_box(Rng& rng, double side) {
   return {c - h, c + h};
 }
 
+// `count` leaves of random boxes in a cube of `side` (m), users 0 .. count - 1; their nodes
+std::vector<std::int32_t> random_leaves(DynamicTree& tree, Rng& rng, double side, std::uint32_t count) {
+  std::vector<std::int32_t> node;
+  for (std::uint32_t i = 0; i < count; ++i) node.push_back(tree.create_proxy(random_box(rng, side), i));
+  return node;
+}
+
 // after thousands of moves, teleports, removals and insertions: parents contain their
 // children, heights are consistent and within the limit (validate()), and fat boxes hold
 // their tight boxes
@@ -418,8 +425,7 @@ TEST(DynamicTree, QueryAndRayCastEqualBruteForce) {
   Rng rng{47};
   const double side = 25;
   DynamicTree tree(0.1);
-  std::vector<std::int32_t> node;
-  for (std::uint32_t i = 0; i < 4000; ++i) node.push_back(tree.create_proxy(random_box(rng, side), i));
+  std::vector<std::int32_t> node = random_leaves(tree, rng, side, 4000);
   // move them a little so the tree is not freshly built
   for (std::uint32_t i = 0; i < node.size(); ++i) {
     const Aabb f = tree.fat_box(node[i]);
@@ -657,8 +663,7 @@ TEST(DynamicTree, QueryPairsFindTheListedLeavesQueriesPairsOnce) {
   Rng rng{97};
   const double side = 25;
   DynamicTree tree(0.1);
-  std::vector<std::int32_t> node;
-  for (std::uint32_t i = 0; i < 2500; ++i) node.push_back(tree.create_proxy(random_box(rng, side), i));
+  const std::vector<std::int32_t> node = random_leaves(tree, rng, side, 2500);
   for (int round = 0; round < 8; ++round) {
     if (round == 4) tree.rebuild();
     if (round % 2 == 1)

@@ -110,10 +110,10 @@ class DynamicTree {
   /// a live leaf or the box is bad.
   void set_leaf_box(std::int32_t node, const Aabb& box);
   /// Makes room for `leaves` leaves in all (and the inner nodes above them) at once, at least
-  /// doubling the pool when it grows: the node pool grown once for a batch rather than doubled
-  /// again and again by its leaves (a batch of new leaves,
-  /// as the rigid bodies' first step of 10,000 proxies: each doubling's copy lands on pages the
-  /// process has not touched yet, and their faults cost more than the copies).
+  /// doubling the pool when it grows: the pool grown once for a batch of new leaves rather than
+  /// doubled again and again as they come (the rigid bodies' first step of 10,000 proxies: each
+  /// doubling's copy lands on pages the process has not touched yet, and their faults cost
+  /// more than the copies).
   void reserve(std::size_t leaves);
   /// Removes every node.
   void clear();
