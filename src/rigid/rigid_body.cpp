@@ -200,6 +200,8 @@ void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view
 }
 
 void RigidBodyDef::validate(std::string_view where) const {
+  if (type != BodyType::Static && type != BodyType::Kinematic && type != BodyType::Dynamic)
+    throw Error(field_path(where, "type") + ": unknown body type " + std::to_string(static_cast<int>(type)));
   // the shapes' bounds and the contact rows hold positions as floats (beyond, a step made NaN)
   require_finite(pose.position, field_path(where, "pose.position"));
   require_float(pose.position, field_path(where, "pose.position"));

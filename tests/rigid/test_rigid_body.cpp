@@ -722,6 +722,17 @@ TEST(RigidBadInput, PositionsOutsideTheFloatRangeAreRefusedWhereTheyAreGiven) {
   EXPECT_NEAR(s.pose(b).position.y, 0.5, 1e-3);  // rests on the ground
 }
 
+// A body type outside the enum (a cast from a bad integer, a corrupt save) was taken: the body
+// was neither static, kinematic nor dynamic, type() said "unknown" and mass() infinity. It is
+// refused like an unknown shape type or solver.
+TEST(RigidBadInput, AnUnknownBodyTypeIsRefusedByName) {
+  RigidBodySystem s;
+  const std::string e =
+      error_of([&] { s.create({.name = "odd", .type = static_cast<BodyType>(7), .shapes = kBall}); });
+  EXPECT_NE(e.find("'odd'.type: unknown body type 7"), std::string::npos) << e;
+  EXPECT_EQ(s.size(), 0u);
+}
+
 // Soft contacts scale with the body's mass (impulses are effective mass times a velocity
 // change), so a box dropped on a plane falls and settles the same way at any mass: at the
 // two ends of the accepted range it follows the 1 kg box to float rounding of its masses.
