@@ -55,7 +55,7 @@ std::string_view to_string(BodyType t);
 /// Mass, centre of mass and inertia of a body, in the body's frame.
 struct RigidMass {
   double mass = 1;          ///< kg, finite and > 0 for a dynamic body
-  Vec3 center{0, 0, 0};     ///< centre of mass in the body frame (m)
+  Vec3 center{0, 0, 0};     ///< centre of mass in the body frame (m), within the float range
   Mat3 inertia{1.0};        ///< inertia tensor about the centre of mass, body axes (kg m^2):
                             ///< symmetric positive definite, satisfying the triangle inequality
 
@@ -69,9 +69,10 @@ struct RigidMass {
   static RigidMass sphere(double mass, double r);
   /// The sum of two bodies rigidly joined (parallel-axis theorem).
   RigidMass operator+(const RigidMass& o) const;
-  /// Throws Error naming `where` and the bad field: mass not finite and > 0, a non-finite
-  /// centre, or an inertia that is not symmetric positive definite and physical (each
-  /// principal moment at most the sum of the other two).
+  /// Throws Error naming `where` and the bad field: mass not finite and > 0, a centre not
+  /// finite or outside the float range (|component| <= 3.4e38 m), or an inertia that is not
+  /// symmetric positive definite and physical (each principal moment at most the sum of the
+  /// other two).
   void validate(std::string_view where) const;
 };
 

@@ -155,6 +155,8 @@ RigidMass RigidMass::operator+(const RigidMass& o) const {
 void RigidMass::validate(std::string_view where) const {
   if (!(std::isfinite(mass) && mass > 0)) require_positive(mass, field_path(where, "mass"));
   require_finite(center, field_path(where, "center"));
+  // a position in the body frame, held as a float by the contact rows like a shape's placement
+  require_float(center, field_path(where, "center"));
   const std::string w = field_path(where, "inertia");
   // finite and symmetric to rounding
   double scale = 0;

@@ -722,6 +722,30 @@ TEST(RigidBadInput, PositionsOutsideTheFloatRangeAreRefusedWhereTheyAreGiven) {
   EXPECT_NEAR(s.pose(b).position.y, 0.5, 1e-3);  // rests on the ground
 }
 
+// A given centre of mass is a position in the body frame like a shape's local one: beyond the
+// float range it was taken, and the first step made the body's angular velocity NaN (the
+// contact rows' lever arms are floats); now refused at create, by name.
+TEST(RigidBadInput, AGivenCentreOfMassOutsideTheFloatRangeIsRefusedByName) {
+  RigidBodySystem s;
+  s.create({.type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+  const std::vector<pba::RigidShapeDef> ball{{.shape = pba::ColliderShape::sphere(0.5)}};
+  for (double c : {1e39, -1e300}) {
+    RigidMass m = RigidMass::sphere(1, 0.5);
+    m.center = {c, 0, 0};
+    const std::string e = error_of([&] {
+      s.create({.name = "ball", .pose = {{0, 0.4, 0}}, .shapes = ball, .mass = m});
+    });
+    EXPECT_NE(e.find("'ball'.mass.center: must fit a float"), std::string::npos) << e;
+  }
+  EXPECT_EQ(s.size(), 1u);
+  // within the range it is taken (an off-centre ball), and it steps
+  RigidMass m = RigidMass::sphere(1, 0.5);
+  m.center = {0.2, 0, 0};
+  const auto b = s.create({.name = "ball", .pose = {{0, 0.4, 0}}, .shapes = ball, .mass = m});
+  for (int i = 0; i < 30; ++i) s.step(1.0 / 60, kG);
+  EXPECT_TRUE(std::isfinite(s.pose(b).position.y));
+}
+
 // A body type outside the enum (a cast from a bad integer, a corrupt save) was taken: the body
 // was neither static, kinematic nor dynamic, type() said "unknown" and mass() infinity. It is
 // refused like an unknown shape type or solver.
