@@ -168,7 +168,7 @@ inline constexpr double kMaxParticleSpeed = 9e18;
 void require_particle_speed(double speed, std::string_view where);
 
 /// Positions, velocities and radii are stored as float and the mass as its float inverse,
-/// so each must also fit a float (|x| <= 3.4e38, mass in [2.9e-39, 8.5e37] kg); speeds are
+/// so each must also fit a float (|x| <= 3.4e38, mass in [2.94e-39, 8.5e37] kg); speeds are
 /// at most kMaxParticleSpeed.
 struct ParticleDef {
   Vec3 position{0, 0, 0};  ///< initial position (m), finite as a float

@@ -116,7 +116,7 @@ struct RigidBodyDef {
   Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), |w| <= kMaxRigidSpeed; as linear_velocity
   std::vector<RigidShapeDef> shapes{};  ///< at least one
   /// Dynamic bodies: mass properties; unset means from the shapes' densities. The mass (kg)
-  /// and the principal moments (kg m^2) must each be in [2.9e-39, 8.5e37] (create()). Static
+  /// and the principal moments (kg m^2) must each be in [2.94e-39, 8.5e37] (create()). Static
   /// and kinematic bodies have infinite mass: they neither read nor validate it (scene files
   /// refuse a "mass" on them).
   std::optional<RigidMass> mass{};
@@ -394,7 +394,7 @@ class RigidBodySystem {
 
   /// Creates a body (validates `def`; the Error names `where`, the body's name and the field).
   /// A dynamic body's mass (kg) and principal moments (kg m^2), given or from the shapes,
-  /// must each be in [2.9e-39, 8.5e37] (the contact solver stores them and their inverses as
+  /// must each be in [2.94e-39, 8.5e37] (the contact solver stores them and their inverses as
   /// floats). Compounds, nested ones too, become their leaf shapes.
   RigidBodyId create(const RigidBodyDef& def, std::string_view where = "RigidBodyDef");
   /// Removes a body (throws Error for a stale handle).
