@@ -273,6 +273,23 @@ RigidBodySystem::~RigidBodySystem() = default;
 RigidBodySystem::RigidBodySystem(RigidBodySystem&&) noexcept = default;
 RigidBodySystem& RigidBodySystem::operator=(RigidBodySystem&&) noexcept = default;
 
+namespace {
+
+// A moved-from system's arrays are empty (the move took them, as from a std::vector) but its
+// contact state is null: create() and step() dereferenced it (a moved-from World crashed in
+// add_rigid_body). It is an empty system instead: the state is made afresh where it is
+// written, and read as an empty one where it is only read.
+detail::RigidContacts& contact_state(std::unique_ptr<detail::RigidContacts>& c) {
+  if (!c) c = std::make_unique<detail::RigidContacts>();
+  return *c;
+}
+const detail::RigidContacts& contact_state(const std::unique_ptr<detail::RigidContacts>& c) {
+  static const detail::RigidContacts none;
+  return c ? *c : none;
+}
+
+}  // namespace
+
 std::string_view to_string(RigidSimd s) {
   switch (s) {
     case RigidSimd::Best: return "best";
@@ -298,11 +315,11 @@ void RigidBodySystem::set_simd(RigidSimd path) {
     throw Error("RigidBodySystem::set_simd: this CPU cannot run the " + std::string(to_string(path)) +
                 " path (the widest it runs is " +
                 std::string(best == SimdPath::Avx2 ? "avx2" : "scalar") + ")");
-  contacts_->simd = want;
+  contact_state(contacts_).simd = want;
 }
 
 RigidSimd RigidBodySystem::simd() const {
-  switch (contacts_->simd) {
+  switch (contact_state(contacts_).simd) {
     case detail::SimdPath::Scalar: return RigidSimd::Scalar;
     case detail::SimdPath::Avx2: return RigidSimd::Avx2;
     case detail::SimdPath::Avx512: return RigidSimd::Avx512;
@@ -310,7 +327,7 @@ RigidSimd RigidBodySystem::simd() const {
   return RigidSimd::Scalar;
 }
 
-void RigidBodySystem::set_lane_reuse(bool on) { contacts_->reuse_lanes = on; }
+void RigidBodySystem::set_lane_reuse(bool on) { contact_state(contacts_).reuse_lanes = on; }
 
 void RigidBodySystem::set_substeps(int n) {
   require_count(n, 1, 64, "ContactSettings.substeps");
@@ -418,7 +435,8 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   }
   extent_.push_back(reach);
   min_extent_.push_back(thin);
-  contacts_->thinnest = std::min(contacts_->thinnest, thin);
+  detail::RigidContacts& state = contact_state(contacts_);
+  state.thinnest = std::min(state.thinnest, thin);
   shapes_.push_back(std::move(shapes));
   asleep_.push_back(0);
   sleep_time_.push_back(0);
@@ -828,6 +846,7 @@ void detail::RigidContacts::coast(RigidBodySystem& s, double h, const Vec3& grav
 
 void RigidBodySystem::step(double dt, const Vec3& gravity) {
   if (!failure_.empty()) throw Error(failure_);
+  contact_state(contacts_);
   if (!(std::isfinite(dt) && dt > 0)) require_positive(dt, "RigidBodySystem::step dt");
   if (!is_finite(gravity)) require_finite(gravity, "RigidBodySystem::step gravity");
   if (!(settings_ == validated_)) {
@@ -1062,7 +1081,7 @@ std::size_t RigidBodySystem::awake_count() const {
 
 std::vector<RigidContactPoint> RigidBodySystem::contacts() const {
   std::vector<RigidContactPoint> out;
-  for (const detail::ContactPair& c : contacts_->pairs)
+  for (const detail::ContactPair& c : contact_state(contacts_).pairs)
     for (int k = 0; k < c.count; ++k) {
       const detail::SolverPoint& p = c.points[k];
       RigidContactPoint r;
@@ -1079,12 +1098,12 @@ std::vector<RigidContactPoint> RigidBodySystem::contacts() const {
   return out;
 }
 
-std::size_t RigidBodySystem::manifold_count() const { return contacts_->pairs.size(); }
+std::size_t RigidBodySystem::manifold_count() const { return contact_state(contacts_).pairs.size(); }
 
 RigidManifoldInfo RigidBodySystem::manifold(std::size_t k) const {
-  if (k >= contacts_->pairs.size())
+  if (k >= manifold_count())
     throw Error("RigidBodySystem::manifold: index " + std::to_string(k) + " out of range [0, " +
-                std::to_string(contacts_->pairs.size()) + ")");
+                std::to_string(manifold_count()) + ")");
   const detail::ContactPair& c = contacts_->pairs[k];
   RigidManifoldInfo m;
   m.a = {c.slot_a, ids_.generation(c.slot_a)};

@@ -57,7 +57,7 @@ void RigidBodySystem::draw_shapes(DebugDraw& draw, std::size_t i, Color c, const
 
 void RigidBodySystem::draw_contacts(DebugDraw& draw, const DrawFlags& flags) const {
   // contact points of the last step and their normals
-  if (!(flags.contacts || flags.normals)) return;
+  if (!(flags.contacts || flags.normals) || !contacts_) return;  // (none in a moved-from system)
   for (const detail::ContactPair& cp : contacts_->pairs)
     for (int k = 0; k < cp.count; ++k) {
       const Vec3& at = cp.points[k].at;

@@ -535,6 +535,37 @@ TEST(RigidHandles, DestroyKeepsTheOthersAndRejectsStaleHandles) {
   EXPECT_NE(error_of([&] { s.pose(pba::RigidBodyId{}); }).find("null handle"), std::string::npos);
 }
 
+// A moved-from system is an empty one that works, as a moved-from std::vector is: its contact
+// state went with the move and was left null, so its next create() or step() dereferenced null.
+TEST(RigidHandles, AMovedFromSystemIsAnEmptySystemThatWorks) {
+  auto fill = [](RigidBodySystem& s) {
+    s.create({.type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+    return s.create({.pose = {{0, 0.6, 0}}, .shapes = kBox});
+  };
+  RigidBodySystem a;
+  const auto box = fill(a);
+  a.step(1.0 / 60, kG);
+  RigidBodySystem b = std::move(a);
+  EXPECT_EQ(a.size(), 0u);  // NOLINT(bugprone-use-after-move): the point of the test
+  EXPECT_EQ(a.manifold_count(), 0u);
+  EXPECT_TRUE(a.contacts().empty());
+  EXPECT_FALSE(a.valid(box));
+  a.step(1.0 / 60, kG);
+  const auto again = fill(a);
+  for (int i = 0; i < 60; ++i) a.step(1.0 / 60, kG), b.step(1.0 / 60, kG);
+  EXPECT_NEAR(a.pose(again).position.y, 0.5, 1e-3);  // rests on its ground
+  EXPECT_NEAR(b.pose(box).position.y, 0.5, 1e-3);    // the moved system carries on
+  RigidBodySystem c;
+  c = std::move(b);
+  EXPECT_EQ(b.manifold_count(), 0u);  // NOLINT(bugprone-use-after-move)
+  b.set_lane_reuse(false);
+  EXPECT_EQ(b.simd(), c.simd());
+  const auto third = fill(b);
+  b.step(1.0 / 60, kG);
+  EXPECT_TRUE(b.valid(third));
+  EXPECT_NEAR(c.pose(box).position.y, 0.5, 1e-3);
+}
+
 TEST(RigidBadInput, NamesTheFieldAndTheBody) {
   RigidBodySystem s;
   auto msg = [&](RigidBodyDef d) { return error_of([&] { s.create(d); }); };

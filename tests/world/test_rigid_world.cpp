@@ -66,6 +66,19 @@ TEST(RigidComponent, HandlesPosesAndLifetime) {
   EXPECT_TRUE(w.body_colliders().empty());
 }
 
+// A moved-from World took a rigid body and stepped it (its RigidBodySystem's contact state had
+// gone with the move and add_rigid_body dereferenced null).
+TEST(RigidComponent, AMovedFromWorldTakesBodiesAgain) {
+  World w;
+  ground(w);
+  World v = std::move(w);
+  ground(w);  // NOLINT(bugprone-use-after-move): the point of the test
+  const EntityId e = w.create_entity({.name = "crate", .pose = {{0, 0.6, 0}, pba::Quat(1, 0, 0, 0)}});
+  const RigidBodyId b = w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}));
+  for (int i = 0; i < 60; ++i) w.tick(i / 60.0, 1.0 / 60);
+  EXPECT_NEAR(w.rigid().pose(b).position.y, 0.5, 1e-3);
+}
+
 TEST(RigidComponent, BadInputNamesTheEntityAndTheField) {
   World w;
   const EntityId e = w.create_entity({.name = "crate"});
