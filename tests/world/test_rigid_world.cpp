@@ -79,6 +79,34 @@ TEST(RigidComponent, AMovedFromWorldTakesBodiesAgain) {
   EXPECT_NEAR(w.rigid().pose(b).position.y, 0.5, 1e-3);
 }
 
+// A kinematic path faster than a rigid body may move (kMaxRigidSpeed) was refused with the
+// body's own words, "rigid body 0 set_velocity linear: ...": no entity, no path (a scene
+// file's "kinematic": {"path": "linear", "velocity": [1e30, 0, 0]}). The tick names both.
+TEST(RigidComponent, AKinematicPathTooFastForABodyNamesItsEntity) {
+  World w;
+  ground(w);
+  const EntityId e = w.create_entity({.name = "paddle", .pose = {{0, 1, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}, BodyType::Kinematic));
+  w.add_kinematic(e, {.path = pba::PathType::Linear, .velocity = {1e30, 0, 0}});
+  std::string m = error_of([&] { w.tick(0, 1.0 / 60); });
+  EXPECT_NE(m.find("World::tick: the kinematic path of entity 1 'paddle' moves its rigid body faster than a rigid "
+                   "body may in the tick to t = 0.016666666666666666 s (rigid body"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("1e+30 m/s, above the rigid bodies' limit"), std::string::npos) << m;
+  // a collider on such a path: its stand-in body
+  World c;
+  const EntityId g = c.create_entity({.name = "pusher"});
+  c.add_collider(g, {.shape = ColliderShape::box({0.5, 0.5, 0.5})});
+  c.add_kinematic(g, {.path = pba::PathType::Linear, .velocity = {0, 0, -2e18}});
+  c.add_rigid_body(c.create_entity({.name = "crate", .pose = {{0, 3, 0}, pba::Quat(1, 0, 0, 0)}}),
+                   box_def({0.5, 0.5, 0.5}));
+  m = error_of([&] { c.tick(0, 1.0 / 60); });
+  EXPECT_NE(m.find("the kinematic path of entity 0 'pusher' moves its collider faster than a rigid body may"),
+            std::string::npos)
+      << m;
+}
+
 TEST(RigidComponent, BadInputNamesTheEntityAndTheField) {
   World w;
   const EntityId e = w.create_entity({.name = "crate"});
