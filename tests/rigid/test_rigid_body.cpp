@@ -1070,10 +1070,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0xa6e6f08b76384912ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x3bb0422b4155dc63ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0xafa74a5c0c36312eull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x09fbe74397e15d37ull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0xb760e90f76edec30ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x86aa3435d061e691ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x8fe57c7e02c29d0bull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x4d700756eb5516d6ull) << std::hex << xpbd;
 }
 
 }  // namespace

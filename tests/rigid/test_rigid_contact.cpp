@@ -1920,7 +1920,9 @@ TEST(RigidPairCache, ACarriedOverManifoldSeparatesAsAFreshOneToTheReuseDistance)
 // mm) keeps it at 0.6 degrees (0.91 mm) and not at 0.7 (1.06 mm) with the angle test off;
 // a 1 cm ball (reuse 0.2 mm, r = 17.3 mm) keeps it at 0.65 degrees (0.197 mm) and not at 0.68
 // (0.206 mm). At a reuse distance of 10 mm the 1 m cube (reuse 10 mm) keeps it at 0.65
-// degrees (9.8 mm) and not at 0.68 (10.3 mm).
+// degrees (9.8 mm) and not at 0.68 (10.3 mm). (On a static slab, not a plane: a body's manifold
+// with a plane is carried whatever it turns while its points stay the narrow phase's, the next
+// test.)
 TEST(RigidPairCache, TheReuseAngleNeverBindsAboveTwoThirdsOfADegree) {
   struct Case {
     double half;  // the cube's half size, or the ball's radius (m)
@@ -1940,7 +1942,7 @@ TEST(RigidPairCache, TheReuseAngleNeverBindsAboveTwoThirdsOfADegree) {
                              std::to_string(c.reuse) + " m, turned " + std::to_string(c.turn * 180 / pba::kPi) +
                              " degrees, reuse angle " + std::to_string(c.angle * 180 / pba::kPi);
     RigidBodySystem s({.contacts = {.reuse_distance = c.reuse, .reuse_angle = c.angle}});
-    ground(s);
+    s.create({.name = "slab", .type = BodyType::Static, .pose = {{0, -1, 0}}, .shapes = {box_shape(Vec3(20, 1, 20))}});
     const double up = 0.001;  // within the speculative distance (0.4 of the half size for the 1 cm ball)
     const auto body = s.create({.name = "body", .pose = {{0, c.half + up, 0}},
                                 .shapes = {{.shape = c.ball ? ColliderShape::sphere(c.half) : ColliderShape::box(Vec3(c.half))}}});
@@ -1950,6 +1952,68 @@ TEST(RigidPairCache, TheReuseAngleNeverBindsAboveTwoThirdsOfADegree) {
     s.step(1.0 / 60, Vec3(0));
     EXPECT_EQ(s.profile().reused, c.reused) << what;
     EXPECT_EQ(s.profile().built + s.profile().reused, 1u) << what;
+  }
+}
+
+// A ball's or a box's manifold with a plane is carried, whatever the body slid, turned or rose,
+// while the narrow phase would make the same points (a ball within the reach; a box's corners
+// within the reach the manifold's), the plane's points made again under the body's: its contacts
+// are a fresh manifold's to rounding. A 0.3 m ball and a 0.5 m cube 1 mm up, the plane made
+// before them (its pairs' a) and after (b), slid 7 cm, turned 20 degrees about a tilted axis
+// (the ball) or the vertical (the cube) and raised 5 mm: carried, and each point's position and
+// depth within 1e-12 m of a system that made it afresh at that pose. Raised 3 cm, past the
+// 2 cm speculative distance, the ball is made afresh (no point); the cube tilted by 10 degrees
+// brings other corners within the reach and is made afresh too.
+TEST(RigidPairCache, ABodysManifoldWithAPlaneIsCarriedWhileItsPointsStayTheNarrowPhases) {
+  struct Case {
+    bool ball, plane_first;
+    Vec3 shift;
+    Quat turn;
+    bool carried;
+  };
+  const Quat spin = glm::angleAxis(deg(20), glm::normalize(Vec3(0.3, 1, 0.2)));
+  const Quat yaw = glm::angleAxis(deg(20), Vec3(0, 1, 0)), tilt = glm::angleAxis(deg(10), Vec3(1, 0, 0));
+  const Case cases[] = {
+      {true, true, {0.07, 0.005, 0}, spin, true},    {true, false, {0.07, 0.005, 0}, spin, true},
+      {true, true, {0.07, 0.03, 0}, spin, false},    {false, true, {0.05, 0.005, 0.05}, yaw, true},
+      {false, false, {0.05, 0.005, 0.05}, yaw, true}, {false, true, {0, 0, 0}, tilt, false},
+  };
+  for (const Case& c : cases) {
+    const std::string what = std::string(c.ball ? "ball" : "cube") + (c.plane_first ? ", plane first" : ", plane last") +
+                             ", shift y " + std::to_string(c.shift.y);
+    const RigidShapeDef shape = c.ball ? RigidShapeDef{.shape = ColliderShape::sphere(0.3)} : box_shape(Vec3(0.5));
+    const double half = c.ball ? 0.3 : 0.5, up = 0.001;
+    const Vec3 start{1, half + up, 2};
+    const pba::Pose moved{start + c.shift, c.turn};
+    // (the turned cube's lowest corners lower by the tilt: raised so that the nearest stays 1 mm up)
+    const pba::Pose end = c.ball || c.carried ? moved
+                                              : pba::Pose{moved.position + Vec3(0, half * (std::cos(deg(10)) + std::sin(deg(10))) - half, 0),
+                                                          c.turn};
+    auto make = [&](RigidBodySystem& s, const pba::Pose& pose) {
+      if (c.plane_first) ground(s);
+      const auto body = s.create({.name = "body", .pose = pose, .shapes = {shape}});
+      if (!c.plane_first) ground(s);
+      return body;
+    };
+    RigidBodySystem carried;
+    const auto body = make(carried, {start});
+    carried.step(1.0 / 60, Vec3(0));  // the manifold
+    ASSERT_EQ(carried.contacts().size(), c.ball ? 1u : 4u) << what;
+    carried.set_pose(body, end);
+    carried.step(1.0 / 60, Vec3(0));
+    EXPECT_EQ(carried.profile().reused, c.carried ? 1u : 0u) << what;
+    RigidBodySystem fresh;
+    make(fresh, end);
+    fresh.step(1.0 / 60, Vec3(0));
+    EXPECT_EQ(fresh.profile().built, fresh.contacts().empty() ? 0u : 1u) << what;
+    ASSERT_EQ(carried.contacts().size(), fresh.contacts().size()) << what;
+    for (std::size_t k = 0; k < fresh.contacts().size(); ++k) {
+      const pba::RigidContactPoint& x = carried.contacts()[k];
+      const pba::RigidContactPoint& y = fresh.contacts()[k];
+      EXPECT_EQ(x.id, y.id) << what;
+      EXPECT_NEAR(glm::length(x.position - y.position), 0, 1e-12) << what << ", point " << k;
+      EXPECT_NEAR(x.depth, y.depth, 1e-12) << what << ", point " << k;
+    }
   }
 }
 
