@@ -1068,9 +1068,11 @@ template <class V>
   }
 }
 
+#if PBA_AVX512
 __attribute__((target("avx512f"))) void box_group_avx512(const PairQuery* const* q, Manifold* const* out, int n) {
   box_group<detail::lanes::v8d>(q, out, n);
 }
+#endif
 __attribute__((target("avx2"))) void box_group_avx2(const PairQuery* const* q, Manifold* const* out, int n) {
   box_group<detail::lanes::v4d>(q, out, n);
 }
@@ -1084,11 +1086,13 @@ void collide_boxes_sat_batch(const PairQuery* const* q, Manifold* const* out, in
   // of eight-double vectors into scalar code (a compare and a set per lane), so the eight-lane
   // path measured slower (0.25 against 0.12 us per pair, docs/benchmarks.md); it is kept, and
   // tested to give the same bits, for a compiler that keeps those masks in registers
-  static const bool avx2 = __builtin_cpu_supports("avx2"), avx512 = __builtin_cpu_supports("avx512f");
+  static const bool avx2 = __builtin_cpu_supports("avx2"), avx512 = PBA_AVX512 && __builtin_cpu_supports("avx512f");
   if (path == BatchPath::Best) path = avx2 ? BatchPath::Avx2 : BatchPath::Scalar;
   if (path == BatchPath::Avx512 && !avx512) path = avx2 ? BatchPath::Avx2 : BatchPath::Scalar;
   if (path == BatchPath::Avx2 && !avx2) path = BatchPath::Scalar;
+#if PBA_AVX512
   if (path == BatchPath::Avx512) return box_group_avx512(q, out, n);
+#endif
   if (path == BatchPath::Avx2) return box_group_avx2(q, out, n);
 #endif
   (void)path;

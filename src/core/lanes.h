@@ -12,6 +12,17 @@
 #include <cstring>
 #include <type_traits>
 
+// PBA_AVX512: 1 where the AVX-512 kernels are compiled (GCC on x86-64), 0 where the build
+// leaves them out (CMake's PBA_AVX512=OFF, which the sanitizer presets set: the CI's hosts have
+// no AVX-512, so those builds never ran them, and they were the longest compile of the CI).
+// Without them best_simd_path() and the batched narrow phase never pick AVX-512: the
+// requests fall back to AVX2 or the scalar path as on a CPU without it.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(PBA_NO_AVX512)
+#define PBA_AVX512 1
+#else
+#define PBA_AVX512 0
+#endif
+
 // vector arguments of inline helpers: the ABI note does not apply (everything is inlined)
 #pragma GCC diagnostic ignored "-Wpsabi"
 // GCC 12 takes the lane-by-lane gathers into zeroed vectors for uses of uninitialised ones

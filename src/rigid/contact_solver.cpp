@@ -382,10 +382,12 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
   }
 }
 
+#if PBA_AVX512
 template <class B>
 __attribute__((target("avx512f"))) void fill_avx512(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes) {
   for (int l0 = 0; l0 < lanes; l0 += 8) fill_lanes<v8d>(in, k, g, l0);
 }
+#endif
 template <class B>
 __attribute__((target("avx2"))) void fill_avx2(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes) {
   for (int l0 = 0; l0 < lanes; l0 += 4) fill_lanes<v4d>(in, k, g, l0);
@@ -550,10 +552,12 @@ PBA_LANES void world_inertia_lanes(const InertiaInput& in, double (&out)[9][kLan
       lanes::store(out[3 * j + i] + l0, rd[0][i] * r[0][j] + rd[1][i] * r[1][j] + rd[2][i] * r[2][j]);
 }
 
+#if PBA_AVX512
 __attribute__((target("avx512f"))) void world_inertia_avx512(const InertiaInput& in, double (&out)[9][kLanes],
                                                              int lanes) {
   for (int l0 = 0; l0 < lanes; l0 += 8) world_inertia_lanes<v8d>(in, out, l0);
 }
+#endif
 __attribute__((target("avx2"))) void world_inertia_avx2(const InertiaInput& in, double (&out)[9][kLanes], int lanes) {
   for (int l0 = 0; l0 < lanes; l0 += 4) world_inertia_lanes<v4d>(in, out, l0);
 }
@@ -583,9 +587,12 @@ void RigidContacts::world_inv_inertias(const RigidBodySystem& s, const std::uint
       in.q[0][l] = q.w, in.q[1][l] = q.x, in.q[2][l] = q.y, in.q[3][l] = q.z;
       in.m[0][l] = m.x, in.m[1][l] = m.y, in.m[2][l] = m.z;
     }
+#if PBA_AVX512
     if (simd == SimdPath::Avx512)
       world_inertia_avx512(in, world, lanes);
-    else if (simd == SimdPath::Avx2)
+    else
+#endif
+    if (simd == SimdPath::Avx2)
       world_inertia_avx2(in, world, lanes);
     else
       world_inertia_scalar(in, world, lanes);
@@ -1095,9 +1102,12 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
     std::memcpy(masses.mb, in.mb, sizeof in.mb);
     std::memcpy(masses.unit, in.unit, sizeof in.unit);
   }
+#if PBA_AVX512
   if (simd == SimdPath::Avx512)
     fill_avx512(in, k, g, k.lanes);
-  else if (simd == SimdPath::Avx2)
+  else
+#endif
+  if (simd == SimdPath::Avx2)
     fill_avx2(in, k, g, k.lanes);
   else
     fill_scalar(in, k, g, k.lanes);
@@ -1177,10 +1187,12 @@ PBA_LANES void refresh_lanes(const RefreshInput& in, RefreshOutput& out, int l0)
   }
 }
 
+#if PBA_AVX512
 template <int P>
 __attribute__((target("avx512f"))) void refresh_avx512(const RefreshInput& in, RefreshOutput& out, int lanes) {
   for (int l0 = 0; l0 < lanes; l0 += 8) refresh_lanes<v8d, P>(in, out, l0);
 }
+#endif
 template <int P>
 __attribute__((target("avx2"))) void refresh_avx2(const RefreshInput& in, RefreshOutput& out, int lanes) {
   for (int l0 = 0; l0 < lanes; l0 += 4) refresh_lanes<v4d, P>(in, out, l0);
@@ -1215,9 +1227,12 @@ void refresh_blocks(SimdPath simd, B* blocks, std::size_t count, const std::uint
       for (int p = 0; p < 4; ++p) clear(in.x[p]), clear(in.y[p]), clear(in.on[p]);
       for (int e = 0; e < 9; ++e) clear(in.ia[e]), clear(in.ib[e]);
     }
+#if PBA_AVX512
     if (simd == SimdPath::Avx512)
       refresh_avx512<P>(in, out, n);
-    else if (simd == SimdPath::Avx2)
+    else
+#endif
+    if (simd == SimdPath::Avx2)
       refresh_avx2<P>(in, out, n);
     else
       refresh_scalar<P>(in, out, n);

@@ -1002,6 +1002,8 @@ template <class V, int kMode, bool kZmm, class B>
                                                                           const Carried<V, B::kPoints>& from) {
   solve<V, kMode, kZmm, B, true>(L, p, r, &from);
 }
+#endif
+#if PBA_AVX512
 template <class V, int kMode, bool kZmm, class B>
 [[gnu::noinline]] __attribute__((target("avx512f"))) void solve_rounds_avx512(const Lanes<V, B>& L,
                                                                               const FloatParams& p,
@@ -1015,8 +1017,10 @@ template <class V, int kMode, bool kZmm, class B>
 void solve_rounds(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r, const Carried<V, B::kPoints>& from) {
 #if defined(__GNUC__) && defined(__x86_64__)
   if constexpr (kZmm || std::is_same_v<V, v16f>) {
+#if PBA_AVX512  // (else only the AVX-512 kernels, not built, would take this branch)
     solve_rounds_avx512<V, kMode, kZmm>(L, p, r, from);
     return;
+#endif
   } else if constexpr (!std::is_arithmetic_v<V>) {
     solve_rounds_avx2<V, kMode, kZmm>(L, p, r, from);
     return;
@@ -1374,30 +1378,36 @@ PBA_LANES void separation_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors
 #if defined(__GNUC__) && defined(__x86_64__)
 #define PBA_RIGID_HAVE_X86 1
 // (templates over the block kind, B: ContactBlock or OnePointBlock)
+#if PBA_AVX512
 template <class B>
 __attribute__((target("avx512f"))) void pass_avx512(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first,
                                                    std::size_t last, const PassParams& p, const BodyArrays& r) {
   pass_any<v16f, v8d>(blocks, anchors, first, last, p, r);
 }
+#endif
 template <class B>
 __attribute__((target("avx2"))) void pass_avx2(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first,
                                               std::size_t last, const PassParams& p, const BodyArrays& r) {
   pass_any<v8f, v4d>(blocks, anchors, first, last, p, r);
 }
+#if PBA_AVX512
 template <class B>
 __attribute__((target("avx512f"))) void warm_avx512(B* blocks, std::size_t first, std::size_t last,
                                                     const BodyArrays& r) {
   warm_blocks<v16f>(blocks, first, last, r);
 }
+#endif
 template <class B>
 __attribute__((target("avx2"))) void warm_avx2(B* blocks, std::size_t first, std::size_t last, const BodyArrays& r) {
   warm_blocks<v8f>(blocks, first, last, r);
 }
+#if PBA_AVX512
 template <class B>
 __attribute__((target("avx512f"))) void separation_avx512(B* blocks, const AnchorsOf<B::kPoints>* anchors,
                                                          std::size_t first, std::size_t last, const BodyArrays& r) {
   separation_blocks<v8d>(blocks, anchors, first, last, r);
 }
+#endif
 template <class B>
 __attribute__((target("avx2"))) void separation_avx2(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first,
                                                     std::size_t last, const BodyArrays& r) {
@@ -1411,9 +1421,14 @@ __attribute__((target("avx2"))) void separation_avx2(B* blocks, const AnchorsOf<
 
 SimdPath best_simd_path() {
 #if PBA_RIGID_HAVE_X86
+#if PBA_AVX512
   static const SimdPath best = __builtin_cpu_supports("avx512f") ? SimdPath::Avx512
                                : __builtin_cpu_supports("avx2")  ? SimdPath::Avx2
                                                                  : SimdPath::Scalar;
+#else
+  // (the AVX-512 kernels are not in this build: lanes.h)
+  static const SimdPath best = __builtin_cpu_supports("avx2") ? SimdPath::Avx2 : SimdPath::Scalar;
+#endif
   return best;
 #else
   return SimdPath::Scalar;
@@ -1426,7 +1441,9 @@ template <class B>
 void solve_colored_of(SimdPath path, B* blocks, AnchorsOf<B::kPoints>* anchors, std::size_t first, std::size_t last,
                       const PassParams& p, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
+#if PBA_AVX512
   if (path == SimdPath::Avx512) return pass_avx512(blocks, anchors, first, last, p, bodies);
+#endif
   if (path == SimdPath::Avx2) return pass_avx2(blocks, anchors, first, last, p, bodies);
 #endif
   (void)path;
@@ -1436,7 +1453,9 @@ void solve_colored_of(SimdPath path, B* blocks, AnchorsOf<B::kPoints>* anchors, 
 template <class B>
 void warm_colored_of(SimdPath path, B* blocks, std::size_t first, std::size_t last, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
+#if PBA_AVX512
   if (path == SimdPath::Avx512) return warm_avx512(blocks, first, last, bodies);
+#endif
   if (path == SimdPath::Avx2) return warm_avx2(blocks, first, last, bodies);
 #endif
   (void)path;
@@ -1447,7 +1466,9 @@ template <class B>
 void separation_colored_of(SimdPath path, B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first,
                            std::size_t last, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
+#if PBA_AVX512
   if (path == SimdPath::Avx512) return separation_avx512(blocks, anchors, first, last, bodies);
+#endif
   if (path == SimdPath::Avx2) return separation_avx2(blocks, anchors, first, last, bodies);
 #endif
   (void)path;
@@ -1521,10 +1542,12 @@ PBA_LANES void approach_lanes(B& c, int l0, int filled, const int* count, const 
 }
 
 #if PBA_RIGID_HAVE_X86
+#if PBA_AVX512
 template <class B>
 __attribute__((target("avx512f"))) void approaches_avx512(B& c, int filled, const int* count, const BodyArrays& r) {
   for (int l0 = 0; l0 < filled; l0 += 8) approach_lanes<v8d>(c, l0, filled, count, r);
 }
+#endif
 template <class B>
 __attribute__((target("avx2"))) void approaches_avx2(B& c, int filled, const int* count, const BodyArrays& r) {
   for (int l0 = 0; l0 < filled; l0 += 4) approach_lanes<v4d>(c, l0, filled, count, r);
@@ -1631,7 +1654,9 @@ void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, 
 template <class B>
 void approaches_of(SimdPath path, B& block, const int* count, const BodyArrays& bodies) {
 #if PBA_RIGID_HAVE_X86
+#if PBA_AVX512
   if (path == SimdPath::Avx512) return approaches_avx512(block, block.lanes, count, bodies);
+#endif
   if (path == SimdPath::Avx2) return approaches_avx2(block, block.lanes, count, bodies);
 #endif
   (void)path;

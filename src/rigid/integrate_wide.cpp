@@ -114,6 +114,8 @@ PBA_LANES bool all_within(const v4x2& x, double limit) {
   return __builtin_ia32_movmskpd256(reinterpret_cast<v4d>(in_lo & in_hi)) == 0xf;
 }
 PBA_LANES v4x2 sqrt_lanes(const v4x2& x) { return {__builtin_ia32_sqrtpd256(x.lo), __builtin_ia32_sqrtpd256(x.hi)}; }
+#endif
+#if PBA_AVX512
 [[gnu::target("avx512f")]] [[gnu::noinline]] bool all_within(v8d x, double limit) {
   return (_mm512_cmp_pd_mask(x, _mm512_set1_pd(limit), _CMP_LE_OQ) &
           _mm512_cmp_pd_mask(x, _mm512_set1_pd(-limit), _CMP_GE_OQ)) == 0xff;
@@ -903,38 +905,46 @@ PBA_LANES void scatter_kind(const std::uint32_t* idx, std::size_t count, const F
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #define PBA_RIGID_HAVE_X86 1
+#if PBA_AVX512
 __attribute__((target("avx512f"))) bool velocities_avx512(bool round, const std::uint32_t* idx, std::size_t count,
                                                          const FreeMotionArrays& f, double h, const Vec3& g,
                                                          const double* lanes, std::uint32_t* bad) {
   return velocities_kind<v8d>(round, idx, count, f, lanes, h, g, bad);
 }
+#endif
 __attribute__((target("avx2"))) bool velocities_avx2(bool round, const std::uint32_t* idx, std::size_t count,
                                                     const FreeMotionArrays& f, double h, const Vec3& g,
                                                     const double* lanes, std::uint32_t* bad) {
   return velocities_kind<v4d>(round, idx, count, f, lanes, h, g, bad);
 }
+#if PBA_AVX512
 __attribute__((target("avx512f"))) void positions_avx512(FreeRotation kind, const std::uint32_t* idx,
                                                         std::size_t count, const FreeMotionArrays& f, double h,
                                                         double* lanes) {
   positions_kind<v8d, v16d>(kind, idx, count, f, h, lanes);
 }
+#endif
 __attribute__((target("avx2"))) void positions_avx2(FreeRotation kind, const std::uint32_t* idx, std::size_t count,
                                                    const FreeMotionArrays& f, double h, double* lanes) {
   positions_kind<v4d, v4x2>(kind, idx, count, f, h, lanes);
 }
+#if PBA_AVX512
 __attribute__((target("avx512f"))) void gather_avx512(bool round, const std::uint32_t* idx, std::size_t count,
                                                      const FreeMotionArrays& f, double h, const Vec3& g,
                                                      double* lanes) {
   gather_kind<v8d>(round, idx, count, f, h, g, lanes);
 }
+#endif
 __attribute__((target("avx2"))) void gather_avx2(bool round, const std::uint32_t* idx, std::size_t count,
                                                 const FreeMotionArrays& f, double h, const Vec3& g, double* lanes) {
   gather_kind<v4d>(round, idx, count, f, h, g, lanes);
 }
+#if PBA_AVX512
 __attribute__((target("avx512f"))) void scatter_avx512(const std::uint32_t* idx, std::size_t count,
                                                       const FreeMotionArrays& f, const double* lanes) {
   scatter_kind<v8d>(idx, count, f, lanes);
 }
+#endif
 __attribute__((target("avx2"))) void scatter_avx2(const std::uint32_t* idx, std::size_t count,
                                                  const FreeMotionArrays& f, const double* lanes) {
   scatter_kind<v4d>(idx, count, f, lanes);
@@ -982,7 +992,9 @@ bool integrate_velocities_wide(SimdPath path, bool round, const std::uint32_t* b
                                const FreeMotionArrays& f, double h, const Vec3& gravity, const double* lanes,
                                std::uint32_t* bad) {
 #if PBA_RIGID_HAVE_X86
+#if PBA_AVX512
   if (path == SimdPath::Avx512) return velocities_avx512(round, bodies, count, f, h, gravity, lanes, bad);
+#endif
   if (path == SimdPath::Avx2) return velocities_avx2(round, bodies, count, f, h, gravity, lanes, bad);
 #endif
   (void)path;
@@ -992,7 +1004,9 @@ bool integrate_velocities_wide(SimdPath path, bool round, const std::uint32_t* b
 void integrate_positions_wide(SimdPath path, FreeRotation kind, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, double h, double* lanes) {
 #if PBA_RIGID_HAVE_X86
+#if PBA_AVX512
   if (path == SimdPath::Avx512) return positions_avx512(kind, bodies, count, f, h, lanes);
+#endif
   if (path == SimdPath::Avx2) return positions_avx2(kind, bodies, count, f, h, lanes);
 #endif
   (void)path;
@@ -1003,7 +1017,9 @@ void gather_free_motion_wide(SimdPath path, FreeRotation kind, const std::uint32
                              const FreeMotionArrays& f, double h, const Vec3& gravity, double* lanes) {
   const bool round = kind == FreeRotation::Round;
 #if PBA_RIGID_HAVE_X86
+#if PBA_AVX512
   if (path == SimdPath::Avx512) return gather_avx512(round, bodies, count, f, h, gravity, lanes);
+#endif
   if (path == SimdPath::Avx2) return gather_avx2(round, bodies, count, f, h, gravity, lanes);
 #endif
   (void)path;
@@ -1025,7 +1041,9 @@ std::size_t turned_far_wide(SimdPath path, const std::uint32_t* bodies, std::siz
 void scatter_free_motion_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count, const FreeMotionArrays& f,
                               const double* lanes) {
 #if PBA_RIGID_HAVE_X86
+#if PBA_AVX512
   if (path == SimdPath::Avx512) return scatter_avx512(bodies, count, f, lanes);
+#endif
   if (path == SimdPath::Avx2) return scatter_avx2(bodies, count, f, lanes);
 #endif
   (void)path;
