@@ -919,8 +919,10 @@ bool carried_over(const PairCache& c, double margin, double reuse, double cos_ha
 
 // The plane's point under a body's core, a point a lane (a double, or the four of an AVX2
 // vector), glm's operations in glm's order, so the same bits on every path: `c`, the body's
-// core in its frame, becomes the plane's point in the plane's frame; returned, the core's height
-// above the plane. `p`, `q`: b's centre and frame in a's (q conjugated when the plane is b's);
+// core in its frame, becomes the plane's point in the plane's frame; returned, the core's
+// distance along `n`: its height above the plane when the plane is a (the normal, from a to b,
+// out of the plane), minus it when the plane is b (the normal into the plane): the callers
+// take the sign. `p`, `q`: b's centre and frame in a's (q conjugated when the plane is b's);
 // `o`, `n`: a point on the plane and its unit normal, in the plane's frame.
 template <class V>
 [[gnu::always_inline]] inline V under_core(bool plane_a, const V (&p)[3], const V (&q)[4], const V (&o)[3],
@@ -961,7 +963,7 @@ __attribute__((target("avx2"))) bool under_cores_avx2(CachedManifold& r, bool pl
   V c[3] = {_mm256_loadu_pd(r.core[from]), _mm256_loadu_pd(r.core[from + 1]), _mm256_loadu_pd(r.core[from + 2])};
   const V d = under_core(plane_a, p, q, ov, n, c);
   if (ball_radius > 0) {
-    const double height = _mm256_cvtsd_f64(d);
+    const double height = sign * _mm256_cvtsd_f64(d);  // (the normal points into a plane that is b)
     const double tol = 1e-9 * (1 + std::abs(height) + std::abs(o.x) + std::abs(o.y) + std::abs(o.z));
     if (!(height - ball_radius <= reach - tol)) return false;
   }
@@ -984,7 +986,7 @@ bool under_cores(CachedManifold& r, bool plane_a, const Vec3& rel_position, cons
   double c[Manifold::kMaxPoints][3];
   for (int k = 0; k < r.count; ++k) {
     for (int i = 0; i < 3; ++i) c[k][i] = r.core[from + i][k];
-    const double height = under_core(plane_a, pv, qv, ov, nv, c[k]);
+    const double height = (plane_a ? 1.0 : -1.0) * under_core(plane_a, pv, qv, ov, nv, c[k]);
     const double tol = 1e-9 * (1 + std::abs(height) + std::abs(o.x) + std::abs(o.y) + std::abs(o.z));
     if (ball_radius > 0 && !(height - ball_radius <= reach - tol)) return false;
   }

@@ -1962,7 +1962,8 @@ TEST(RigidPairCache, TheReuseAngleNeverBindsAboveTwoThirdsOfADegree) {
 // before them (its pairs' a) and after (b), slid 7 cm, turned 20 degrees about a tilted axis
 // (the ball) or the vertical (the cube) and raised 5 mm: carried, and each point's position and
 // depth within 1e-12 m of a system that made it afresh at that pose. Raised 3 cm, past the
-// 2 cm speculative distance, the ball is made afresh (no point); the cube tilted by 10 degrees
+// 2 cm speculative distance, the ball is made afresh (no point), the plane made first or last
+// (the manifold's normal then points into the plane: the height is measured against it); the cube tilted by 10 degrees
 // brings other corners within the reach and is made afresh too.
 TEST(RigidPairCache, ABodysManifoldWithAPlaneIsCarriedWhileItsPointsStayTheNarrowPhases) {
   struct Case {
@@ -1975,7 +1976,8 @@ TEST(RigidPairCache, ABodysManifoldWithAPlaneIsCarriedWhileItsPointsStayTheNarro
   const Quat yaw = glm::angleAxis(deg(20), Vec3(0, 1, 0)), tilt = glm::angleAxis(deg(10), Vec3(1, 0, 0));
   const Case cases[] = {
       {true, true, {0.07, 0.005, 0}, spin, true},    {true, false, {0.07, 0.005, 0}, spin, true},
-      {true, true, {0.07, 0.03, 0}, spin, false},    {false, true, {0.05, 0.005, 0.05}, yaw, true},
+      {true, true, {0.07, 0.03, 0}, spin, false},    {true, false, {0.07, 0.03, 0}, spin, false},
+      {false, true, {0.05, 0.005, 0.05}, yaw, true},
       {false, false, {0.05, 0.005, 0.05}, yaw, true}, {false, true, {0, 0, 0}, tilt, false},
   };
   for (const Case& c : cases) {
