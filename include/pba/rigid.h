@@ -245,13 +245,17 @@ struct ContactSettings {
   /// the chord its reach turns through, 2 r sin(angle / 2), so a carried point's separation is
   /// within this of a fresh one's. Finite and >= 0; 0 makes every manifold afresh each step.
   /// On by default (1 mm): resting piles then make almost no manifolds (docs/rigid-bodies.md).
+  /// A ball's or a box's manifold with a plane that this test turns down is still carried while
+  /// the narrow phase would make the same points, its plane points made again (exact on a flat
+  /// plane; with reuse_distance > 0 only).
   double reuse_distance = 0.001;
   /// ... and their relative rotation less than this (rad), finite and >= 0. The distance test
   /// already counts the chord a turn moves the body's reach through; a body's reach is at
   /// least sqrt(3) times its thinnest half size and a pair's reuse distance at most 0.02 of
-  /// it, so whatever reuse_distance is, no pair keeps its manifold past 2 asin(0.01 / sqrt(3))
-  /// = 0.66 degrees of turn, and this test binds only when set below that (Jolt's body pair
-  /// cache allows 2 degrees, with no chord; docs/rigid-bodies.md).
+  /// it, so whatever reuse_distance is, no pair keeps its manifold by this test (the plane's
+  /// carry above aside) past 2 asin(0.01 / sqrt(3)) = 0.66 degrees of turn, and this test
+  /// binds only when set below that (Jolt's body pair cache allows 2 degrees, with no chord;
+  /// docs/rigid-bodies.md).
   double reuse_angle = 0.0175;
   /// Approach speeds (m/s) below this bounce with no restitution, so resting bodies stay put
   /// (finite and >= 0; XPBD also at speeds below 2 |g| h, Mueller et al. 2020).
@@ -276,7 +280,7 @@ struct ContactSettings {
 /// The instructions that run the contact solver's blocks (src/rigid/solver.h). Every path
 /// does the same arithmetic in every lane, so all give the same bits; they differ in speed.
 enum class RigidSimd : std::uint8_t {
-  Best,    ///< the widest this CPU runs (AVX-512, else AVX2, else scalar)
+  Best,    ///< the widest this CPU runs (AVX-512, else AVX2, else scalar) of those the build has
   Scalar,  ///< one manifold at a time
   Avx2,    ///< 4 manifolds at a time (x86-64 with AVX2)
   Avx512,  ///< 8 manifolds at a time (x86-64 with AVX-512F)
@@ -466,7 +470,8 @@ class RigidBodySystem {
   /// Sets the substeps per step, in [1, 64], exactly: it turns ContactSettings::auto_substeps off.
   void set_substeps(int n);
   /// Picks the contact solver's SIMD path (for tests and benchmarks; results do not depend on
-  /// it). Throws Error naming the path when this CPU cannot run it.
+  /// it). Throws Error naming the path when this CPU cannot run it, or this build left it out
+  /// (CMake's PBA_AVX512=OFF leaves out the AVX-512 kernels).
   void set_simd(RigidSimd path);
   /// The SIMD path in use (never Best).
   RigidSimd simd() const;
