@@ -399,7 +399,7 @@ bool App::frame() {
   }
   const PhysicsReadout& pr = physics_->readout();
   ui_.frame_ms.push(static_cast<float>(frame_dt * 1000));
-  ui_.physics_ms.push(static_cast<float>(pr.ticks * pr.tick_wall * 1000));
+  ui_.physics_ms.push(static_cast<float>(pr.frame_tick_wall * 1000));
   ui_.ticks.push(static_cast<float>(pr.ticks));
   ui_.dropped_ms.push(static_cast<float>(pr.dropped * 1000));
 

@@ -62,6 +62,7 @@ void PhysicsLoop::start_thread() {
   stepper_.reset();
   last_thread_ticks_ = 0;
   last_thread_dropped_ = 0;
+  last_thread_wall_ = 0;
   expected_fed_ = 0;
   stamps_ = std::make_unique<SnapshotBuffer<TickStamp>>();
   if (virtual_time_) manual_clock_ = std::make_unique<ManualClock>(0);
@@ -128,6 +129,7 @@ void PhysicsLoop::advance(double frame_dt) {
     readout_.ticks = f.ticks;
     readout_.tick_dt = f.ticks ? f.tick_dt : readout_.tick_dt;
     readout_.tick_wall = tot.tick_wall_median;
+    readout_.frame_tick_wall = f.tick_wall;
     readout_.dropped = f.dropped;
     readout_.dropped_total = dropped_offset_ + tot.dropped_time;
     readout_.sim_time = time_offset_ + stepper_.time();
@@ -157,6 +159,8 @@ void PhysicsLoop::advance(double frame_dt) {
   last_thread_ticks_ = st.totals.ticks;
   readout_.tick_dt = s.fixed_dt;
   readout_.tick_wall = st.totals.tick_wall_median;
+  readout_.frame_tick_wall = st.totals.tick_wall_total - last_thread_wall_;
+  last_thread_wall_ = st.totals.tick_wall_total;
   readout_.dropped = st.totals.dropped_time - last_thread_dropped_;
   last_thread_dropped_ = st.totals.dropped_time;
   readout_.dropped_total = dropped_offset_ + st.totals.dropped_time;

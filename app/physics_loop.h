@@ -18,7 +18,10 @@ class Sample;
 struct PhysicsReadout {
   int ticks = 0;              ///< ticks run in the last frame (thread: since the last frame)
   double tick_dt = 0;         ///< length of the last tick (s)
-  double tick_wall = 0;       ///< median wall-clock time per tick (s)
+  double tick_wall = 0;       ///< median wall-clock time per tick over the last 256 ticks (s)
+  /// wall-clock time spent in the ticks of the last frame (thread: since the last frame), s:
+  /// what the profiler plots (ticks x the median lags a landing's slow steps by 128 ticks)
+  double frame_tick_wall = 0;
   double dropped = 0;         ///< time dropped in the last frame (s)
   double dropped_total = 0;   ///< time dropped since the sample started (s)
   double sim_time = 0;        ///< simulated time (s)
@@ -81,6 +84,7 @@ class PhysicsLoop {
   double dropped_offset_ = 0;   // dropped time before the current stepper or thread began
   double last_thread_dropped_ = 0;
   long long last_thread_ticks_ = 0;
+  double last_thread_wall_ = 0;
   double alpha_ = 1;
   PhysicsReadout readout_;
 };

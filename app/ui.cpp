@@ -200,7 +200,7 @@ void profiler_panel(UiState& ui, const UiFrame& f) {
   ImGui::PushID("drop");
   row("dropped", ui.dropped_ms, "ms", static_cast<float>(p.dropped * 1000));
   ImGui::PopID();
-  ImGui::Text("tick %.2f ms, %.1f us/tick wall", p.tick_dt * 1000, p.tick_wall * 1e6);
+  ImGui::Text("tick %.2f ms, median wall %.2f ms", p.tick_dt * 1000, p.tick_wall * 1000);
   ImGui::Text("sim time %.2f s, dropped %.3f s", p.sim_time, p.dropped_total);
   if (p.lag > 0) ImGui::Text("thread lag %.1f ms", p.lag * 1000);
   if (f.draw)
