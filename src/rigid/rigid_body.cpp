@@ -312,7 +312,7 @@ void RigidBodySystem::set_simd(RigidSimd path) {
     default: throw Error("RigidBodySystem::set_simd: unknown path " + std::to_string(static_cast<int>(path)));
   }
   if (static_cast<int>(want) > static_cast<int>(best))
-    throw Error("RigidBodySystem::set_simd: this CPU cannot run the " + std::string(to_string(path)) +
+    throw Error("RigidBodySystem::set_simd: this CPU and build cannot run the " + std::string(to_string(path)) +
                 " path (the widest it runs is " +
                 std::string(best == SimdPath::Avx2 ? "avx2" : "scalar") + ")");
   contact_state(contacts_).simd = want;

@@ -705,7 +705,7 @@ void World::sync_mirrors(double dt) {
         drive_body(c.mirror, wc.end, dt);
       } catch (const Error& err) {
         throw Error("World::tick: the kinematic path of " + describe(c.owner) +
-                    " moves its collider faster than a rigid body may (" + err.what() + ")");
+                    " cannot drive its collider (" + err.what() + ")");
       }
     } else if (!same_pose(c.mirrored_pose, wc.end)) {
       // a jump moves what rested on it: wake every sleeping body (rare: a user's set_pose)
@@ -809,8 +809,9 @@ void World::step_rigid(double t, double dt) {
     return;
   }
   // a kinematic body on a path reaches the path's pose at the end of the tick
-  // (a path faster than kMaxRigidSpeed is named by its entity and the tick: the body's own
-  // message, "rigid body 0 set_velocity linear: ...", did not say which path or entity)
+  // (a path faster than kMaxRigidSpeed is named by its entity and the tick, the body's own
+  // message, e.g. "rigid body 0 set_velocity linear: ...", kept as the reason: alone it did
+  // not say which path or entity)
   for (const KinematicEntry& k : kinematics_) {
     const EntityRecord& r = records_[k.owner.index];
     if (!rigid_.valid(r.body)) continue;
@@ -818,8 +819,7 @@ void World::step_rigid(double t, double dt) {
       drive_body(r.body, r.pose, dt);
     } catch (const Error& err) {
       throw Error("World::tick: the kinematic path of " + describe(k.owner) +
-                  " moves its rigid body faster than a rigid body may in the tick to t = " + format_value(t + dt) +
-                  " s (" + err.what() + ")");
+                  " cannot drive its rigid body in the tick to t = " + format_value(t + dt) + " s (" + err.what() + ")");
     }
   }
   // where every body starts, for the sweeps
