@@ -651,7 +651,7 @@ detail::FreeMotionArrays RigidBodySystem::free_motion(detail::SolverBody* rows, 
                                                       double* motion) {
   detail::FreeMotionArrays f;
   if (rows) f.v = rows[0].v, f.w = rows[0].w, f.stride = 8;
-  else f.v = &v_[0].x, f.w = &w_[0].x, f.stride = 3;
+  else if (!v_.empty()) f.v = &v_[0].x, f.w = &w_[0].x, f.stride = 3;  // (none: a moved-from system's step)
   f.warm = warm, f.motion = motion;
   f.com = com_.data(), f.com0 = com0_.data(), f.q = q_.data(), f.q0 = q0_.data();
   f.inertia = inertia_.data(), f.inv_inertia = inv_inertia_.data();

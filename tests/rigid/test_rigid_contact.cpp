@@ -2008,10 +2008,11 @@ TEST(RigidPairCache, ABodysManifoldWithAPlaneIsCarriedWhileItsPointsStayTheNarro
     make(fresh, end);
     fresh.step(1.0 / 60, Vec3(0));
     EXPECT_EQ(fresh.profile().built, fresh.contacts().empty() ? 0u : 1u) << what;
-    ASSERT_EQ(carried.contacts().size(), fresh.contacts().size()) << what;
-    for (std::size_t k = 0; k < fresh.contacts().size(); ++k) {
-      const pba::RigidContactPoint& x = carried.contacts()[k];
-      const pba::RigidContactPoint& y = fresh.contacts()[k];
+    const std::vector<pba::RigidContactPoint> kept = carried.contacts(), made = fresh.contacts();  // (copies)
+    ASSERT_EQ(kept.size(), made.size()) << what;
+    for (std::size_t k = 0; k < made.size(); ++k) {
+      const pba::RigidContactPoint& x = kept[k];
+      const pba::RigidContactPoint& y = made[k];
       EXPECT_EQ(x.id, y.id) << what;
       EXPECT_NEAR(glm::length(x.position - y.position), 0, 1e-12) << what << ", point " << k;
       EXPECT_NEAR(x.depth, y.depth, 1e-12) << what << ", point " << k;
