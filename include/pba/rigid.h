@@ -63,9 +63,11 @@ struct RigidMass {
   /// in the body frame (collide module's mass_properties, moved and rotated).
   static RigidMass of_shape(const ColliderShape& s, double density, const Pose& local = {},
                             std::string_view where = "shape");
-  /// A solid box of `mass` kg and half extents `half` (m) about the body origin.
+  /// A solid box of `mass` kg and half extents `half` (m) about the body origin. Throws Error
+  /// naming the argument unless the mass and each half extent are finite and > 0.
   static RigidMass box(double mass, const Vec3& half);
-  /// A solid sphere of `mass` kg and radius `r` (m) about the body origin.
+  /// A solid sphere of `mass` kg and radius `r` (m) about the body origin. Throws Error naming
+  /// the argument unless both are finite and > 0.
   static RigidMass sphere(double mass, double r);
   /// The sum of two bodies rigidly joined (parallel-axis theorem).
   RigidMass operator+(const RigidMass& o) const;

@@ -135,6 +135,10 @@ std::string_view to_string(BodyType t) {
 // mass properties
 
 RigidMass RigidMass::box(double mass, const Vec3& h) {
+  require_positive(mass, "RigidMass::box: mass (kg)");
+  require_positive(h.x, "RigidMass::box: half.x (m)");
+  require_positive(h.y, "RigidMass::box: half.y (m)");
+  require_positive(h.z, "RigidMass::box: half.z (m)");
   const Vec3 d = 2.0 * h;
   const double k = mass / 12;
   Mat3 i(0.0);
@@ -144,7 +148,11 @@ RigidMass RigidMass::box(double mass, const Vec3& h) {
   return {mass, {0, 0, 0}, i};
 }
 
-RigidMass RigidMass::sphere(double mass, double r) { return {mass, {0, 0, 0}, Mat3(0.4 * mass * r * r)}; }
+RigidMass RigidMass::sphere(double mass, double r) {
+  require_positive(mass, "RigidMass::sphere: mass (kg)");
+  require_positive(r, "RigidMass::sphere: r (m)");
+  return {mass, {0, 0, 0}, Mat3(0.4 * mass * r * r)};
+}
 
 RigidMass RigidMass::operator+(const RigidMass& o) const {
   const double m = mass + o.mass;

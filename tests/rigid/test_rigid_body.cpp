@@ -753,6 +753,17 @@ TEST(RigidBadInput, PositionsOutsideTheFloatRangeAreRefusedWhereTheyAreGiven) {
   EXPECT_NEAR(s.pose(b).position.y, 0.5, 1e-3);  // rests on the ground
 }
 
+// RigidMass's box and sphere took a negative or NaN mass or size and returned a negative mass or a
+// NaN inertia (create() refused it later, naming the body's mass, not the factory's argument).
+TEST(RigidBadInput, TheMassFactoriesRefuseANonPositiveMassOrSizeByName) {
+  EXPECT_EQ(error_of([] { RigidMass::box(-1, {0.5, 0.5, 0.5}); }), "RigidMass::box: mass (kg): must be finite and > 0, got -1");
+  EXPECT_EQ(error_of([] { RigidMass::box(1, {0.5, 0, 0.5}); }), "RigidMass::box: half.y (m): must be finite and > 0, got 0");
+  EXPECT_NE(error_of([] { RigidMass::box(1, {0.5, 0.5, NAN}); }).find("RigidMass::box: half.z (m)"), std::string::npos);
+  EXPECT_NE(error_of([] { RigidMass::sphere(1, NAN); }).find("RigidMass::sphere: r (m)"), std::string::npos);
+  EXPECT_EQ(error_of([] { RigidMass::sphere(0, 1); }), "RigidMass::sphere: mass (kg): must be finite and > 0, got 0");
+  EXPECT_NEAR(RigidMass::sphere(2, 0.5).inertia[1][1], 0.2, 1e-15);  // 2/5 m r^2
+}
+
 // A given centre of mass is a position in the body frame like a shape's local one: beyond the
 // float range it was taken, and the first step made the body's angular velocity NaN (the
 // contact rows' lever arms are floats); now refused at create, by name.
