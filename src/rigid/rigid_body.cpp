@@ -854,7 +854,7 @@ void detail::RigidContacts::coast(RigidBodySystem& s, double h, const Vec3& grav
 
 void RigidBodySystem::step(double dt, const Vec3& gravity) {
   if (!failure_.empty()) throw Error(failure_);
-  contact_state(contacts_);
+  contact_state(contacts_);  // a moved-from system's contact state made afresh: the step writes it
   if (!(std::isfinite(dt) && dt > 0)) require_positive(dt, "RigidBodySystem::step dt");
   if (!is_finite(gravity)) require_finite(gravity, "RigidBodySystem::step gravity");
   if (!(settings_ == validated_)) {
