@@ -497,9 +497,9 @@ class World {
   void run_kinematics(double t, double dt);
   void sync(double t, double dt);
   void solve_constraints(double dt);
-  void sync_mirrors(double dt);
+  void sync_mirrors(double t, double dt);
   void destroy_mirror(ColliderEntry& c);
-  void drive_body(RigidBodyId id, const Pose& target, double dt);
+  void drive_body(EntityId owner, std::string_view what, RigidBodyId id, const Pose& target, double t, double dt);
   void step_rigid(double t, double dt);
   // the bodies' shapes as colliders: for the tick (swept from body_begin_), or as they are
   // now (a change between ticks; mutable: body_colliders() makes them on the first read)

@@ -592,7 +592,7 @@ void World::run_kinematics(double t, double dt) {
   }
 }
 
-void World::sync(double /*t*/, double dt) {
+void World::sync(double t, double dt) {
   // colliders sweep from last tick's end pose to this tick's
   for (std::size_t i = 0; i < colliders_.size(); ++i) {
     const EntityRecord& r = records_[colliders_[i].owner.index];
@@ -605,7 +605,7 @@ void World::sync(double /*t*/, double dt) {
     c.angular_velocity = r.angular_velocity;
   }
   // the colliders' stand-ins among the rigid bodies follow them
-  sync_mirrors(dt);
+  sync_mirrors(t, dt);
   // the colliders validated now, so a bad one stops the tick before any body moves; the
   // tick's collision world is built in the rigid stage, once the colliders riding on bodies
   // are where their bodies end the tick (built here as well, it was built twice a tick)
@@ -653,8 +653,12 @@ EntityId World::body_entity(RigidBodyId id) const {
 // the velocities that take kinematic body `id` from its pose now to `target` in dt: the
 // translation over dt, and the rotation q1 q0^-1 as an angle about a fixed axis over dt (a
 // kinematic body's frame is its centre of mass, and it moves at constant velocities, so it
-// ends the step at `target` to rounding)
-void World::drive_body(RigidBodyId id, const Pose& target, double dt) {
+// ends the step at `target` to rounding). A path faster than kMaxRigidSpeed is named by its
+// entity `owner`, what it drives (`what`: its body or its collider's stand-in) and the tick
+// ending at t + dt, the body's own message ("rigid body 0 set_velocity linear: ...") kept as
+// the reason: alone it did not say which path or entity.
+void World::drive_body(EntityId owner, std::string_view what, RigidBodyId id, const Pose& target, double t,
+                       double dt) {
   const Pose now = rigid_.pose(id);
   const Vec3 v = (target.position - now.position) / dt;
   Quat dq = glm::normalize(target.rotation * glm::conjugate(now.rotation));
@@ -662,7 +666,12 @@ void World::drive_body(RigidBodyId id, const Pose& target, double dt) {
   const Vec3 axis(dq.x, dq.y, dq.z);
   const double s = glm::length(axis);
   const Vec3 w = s > 0 ? axis / s * (2 * std::atan2(s, static_cast<double>(dq.w)) / dt) : Vec3(0);
-  rigid_.set_velocity(id, v, w);
+  try {
+    rigid_.set_velocity(id, v, w);
+  } catch (const Error& err) {
+    throw Error("World::tick: the kinematic path of " + describe(owner) + " cannot drive its " + std::string(what) +
+                " in the tick to t = " + format_value(t + dt) + " s (" + err.what() + ")");
+  }
 }
 
 // The World's static colliders are the rigid bodies' static geometry: each collider of an
@@ -670,7 +679,7 @@ void World::drive_body(RigidBodyId id, const Pose& target, double dt) {
 // kinematic when a Kinematic drives the entity (planes stay static: a kinematic body needs
 // a volume), remade when the collider's definition changes and moved with its entity. Only
 // once an entity has a body: a world of particles pays nothing.
-void World::sync_mirrors(double dt) {
+void World::sync_mirrors(double t, double dt) {
   if (entity_bodies_ == 0) return;
   for (std::size_t i = 0; i < colliders_.size(); ++i) {
     ColliderEntry& c = colliders_[i];
@@ -701,12 +710,7 @@ void World::sync_mirrors(double dt) {
     if (type == BodyType::Kinematic) {
       // a teleported collider (set_pose) jumps there instead of sweeping
       if (!same_pose(c.mirrored_pose, wc.begin)) rigid_.set_pose(c.mirror, wc.begin);
-      try {
-        drive_body(c.mirror, wc.end, dt);
-      } catch (const Error& err) {
-        throw Error("World::tick: the kinematic path of " + describe(c.owner) +
-                    " cannot drive its collider (" + err.what() + ")");
-      }
+      drive_body(c.owner, "collider", c.mirror, wc.end, t, dt);
     } else if (!same_pose(c.mirrored_pose, wc.end)) {
       // a jump moves what rested on it: wake every sleeping body (rare: a user's set_pose)
       rigid_.set_pose(c.mirror, wc.end);
@@ -809,18 +813,9 @@ void World::step_rigid(double t, double dt) {
     return;
   }
   // a kinematic body on a path reaches the path's pose at the end of the tick
-  // (a path faster than kMaxRigidSpeed is named by its entity and the tick, the body's own
-  // message, e.g. "rigid body 0 set_velocity linear: ...", kept as the reason: alone it did
-  // not say which path or entity)
   for (const KinematicEntry& k : kinematics_) {
     const EntityRecord& r = records_[k.owner.index];
-    if (!rigid_.valid(r.body)) continue;
-    try {
-      drive_body(r.body, r.pose, dt);
-    } catch (const Error& err) {
-      throw Error("World::tick: the kinematic path of " + describe(k.owner) +
-                  " cannot drive its rigid body in the tick to t = " + format_value(t + dt) + " s (" + err.what() + ")");
-    }
+    if (rigid_.valid(r.body)) drive_body(k.owner, "rigid body", r.body, r.pose, t, dt);
   }
   // where every body starts, for the sweeps
   const std::size_t n = rigid_.size();
