@@ -917,6 +917,13 @@ bool carried_over(const PairCache& c, double margin, double reuse, double cos_ha
 // `reach`: the narrow phase's (m); `rel_position`, `rel_rotation`: b's centre and frame in a's
 // frame now; `lanes`: on the SIMD paths.
 
+// The band about the reach within which a carried point's height is left to the narrow phase:
+// 1e-9 of the magnitudes the height was made from (m): the plane's offset `off` (0 for a ball's,
+// measured in the plane's frame), the height and the point `at` it was measured at
+inline double carry_band(double off, double height, const Vec3& at) {
+  return 1e-9 * (1 + std::abs(off) + std::abs(height) + std::abs(at.x) + std::abs(at.y) + std::abs(at.z));
+}
+
 // The plane's point under a body's core, a point a lane (a double, or the four of an AVX2
 // vector), glm's operations in glm's order, so the same bits on every path: `c`, the body's
 // core in its frame, becomes the plane's point in the plane's frame; returned, the core's
@@ -964,8 +971,7 @@ __attribute__((target("avx2"))) bool under_cores_avx2(CachedManifold& r, bool pl
   const V d = under_core(plane_a, p, q, ov, n, c);
   if (ball_radius > 0) {
     const double height = sign * _mm256_cvtsd_f64(d);  // (the normal points into a plane that is b)
-    const double tol = 1e-9 * (1 + std::abs(height) + std::abs(o.x) + std::abs(o.y) + std::abs(o.z));
-    if (!(height - ball_radius <= reach - tol)) return false;
+    if (!(height - ball_radius <= reach - carry_band(0, height, o))) return false;
   }
   for (int i = 0; i < 3; ++i) _mm256_storeu_pd(r.core[to + i], c[i]);
   return true;
@@ -987,8 +993,7 @@ bool under_cores(CachedManifold& r, bool plane_a, const Vec3& rel_position, cons
   for (int k = 0; k < r.count; ++k) {
     for (int i = 0; i < 3; ++i) c[k][i] = r.core[from + i][k];
     const double height = (plane_a ? 1.0 : -1.0) * under_core(plane_a, pv, qv, ov, nv, c[k]);
-    const double tol = 1e-9 * (1 + std::abs(height) + std::abs(o.x) + std::abs(o.y) + std::abs(o.z));
-    if (ball_radius > 0 && !(height - ball_radius <= reach - tol)) return false;
+    if (ball_radius > 0 && !(height - ball_radius <= reach - carry_band(0, height, o))) return false;
   }
   for (int k = 0; k < r.count; ++k)
     for (int i = 0; i < 3; ++i) r.core[to + i][k] = c[k][i];
@@ -1000,15 +1005,24 @@ bool under_cores(CachedManifold& r, bool plane_a, const Vec3& rel_position, cons
 // the plane's normal in the box's frame (corner i: x, y, z of the signs of bits 1, 2, 4, as
 // box_plane_corners numbers them); the heights' rounding against the narrow phase's is a few
 // ulps of the coordinates. (A ball's is under_cores': its centre, its one core, within the reach
-// of the plane, measured in the plane's frame as the plane's point is made again.)
-bool box_on_plane(CachedManifold& r, bool plane_a, const ColliderShape& plane, const Pose& plane_pose,
-                  const ColliderShape& body, const Pose& body_pose, double reach, const Vec3& rel_position,
-                  const Quat& rel_rotation, bool lanes) {
+// of the plane, measured in the plane's frame as the plane's point is made again.) The plane in
+// the world (`np`, `off`: plane_in_world) is made once a step for all the boxes on it.
+struct WorldPlane {
+  Vec3 np;     // the unit normal
+  double off;  // the offset along it (m)
+};
+WorldPlane plane_in_world(const ColliderShape& plane, const Pose& plane_pose) {
   const Vec3 np = plane_pose.rotation * plane.normal;
-  const double off = plane.offset + glm::dot(np, plane_pose.position);
+  return {np, plane.offset + glm::dot(np, plane_pose.position)};
+}
+
+bool box_on_plane(CachedManifold& r, bool plane_a, const WorldPlane& plane, const ColliderShape& body,
+                  const Pose& body_pose, double reach, const Vec3& rel_position, const Quat& rel_rotation, bool lanes) {
+  const Vec3& np = plane.np;
+  const double off = plane.off;
   const Vec3& at = body_pose.position;
   const double height = glm::dot(np, at) - off;
-  const double tol = 1e-9 * (1 + std::abs(off) + std::abs(height) + std::abs(at.x) + std::abs(at.y) + std::abs(at.z));
+  const double tol = carry_band(off, height, at);
   const Vec3 u = glm::conjugate(body_pose.rotation) * np;
   const Vec3& h = body.half_extents;
   const double ux = h.x * u.x, uy = h.y * u.y, uz = h.z * u.z;
@@ -1234,6 +1248,15 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
   // the pairs with a cache, and of them those whose cache does not follow the last one's in the pool
   std::size_t cached = 0, out_of_order = 0;
   std::uint32_t previous_cache = kNoIndex - 1;
+  // the plane in the world that the last box's carry read, by its proxy (planes are on static
+  // bodies: made once a step for all the boxes on it)
+  std::uint32_t world_plane_proxy = kNoIndex;
+  WorldPlane world_plane{};
+  auto plane_of = [&](std::uint32_t proxy, const RigidShapeDef& plane, std::uint32_t body, std::uint32_t shape) {
+    if (proxy != world_plane_proxy)
+      world_plane = plane_in_world(plane.shape, shape_pose(s, proxy, body, shape)), world_plane_proxy = proxy;
+    return world_plane;
+  };
   // (no prefetch of the pairs ahead in the plan's loop: GCC 12 dropped the one written here
   // from 489d89a on, and forced inline it made the 2870 pyramid's manifold functions take 3-5%
   // more samples: docs/benchmarks.md, "A resting pile's reused manifolds")
@@ -1352,9 +1375,8 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
                 ? under_cores(r, plane_a, plan.rel_position, plan.rel_rotation, plane_a ? r.radius_b : r.radius_a, reach,
                               lanes_path)
                 : body.type == ShapeType::Box &&
-                      box_on_plane(r, plane_a, (plane_a ? sa : sb).shape,
-                                   shape_pose(s, plane_a ? p.proxy_a : p.proxy_b, plane_a ? a : b,
-                                              plane_a ? p.shape_a : p.shape_b),
+                      box_on_plane(r, plane_a, plane_of(plane_a ? p.proxy_a : p.proxy_b, plane_a ? sa : sb, plane_a ? a : b,
+                                                        plane_a ? p.shape_a : p.shape_b),
                                    body, shape_pose(s, plane_a ? p.proxy_b : p.proxy_a, plane_a ? b : a,
                                                     plane_a ? p.shape_b : p.shape_a),
                                    reach, plan.rel_position, plan.rel_rotation, lanes_path)) {

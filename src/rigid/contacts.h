@@ -674,6 +674,7 @@ struct RigidContacts {
   // these; the coasting ones are stepped apart by coast())
   std::array<std::vector<std::uint32_t>, kFreeRotations> moving;
   bool moving_damped = true;  // some of them have linear or angular damping
+  bool moving_torqued = true;  // some of them have a torque other than +0 (all three components' bits zero)
   // the soft step's moving bodies that no contact lane holds this step, by kind (split off
   // `moving` by split_coasting, which leaves the others there), and its scratch by body
   std::array<std::vector<std::uint32_t>, kFreeRotations> coasting;

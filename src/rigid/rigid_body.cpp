@@ -4,6 +4,7 @@
 #include "contacts.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <new>
@@ -666,6 +667,7 @@ detail::FreeMotionArrays RigidBodySystem::free_motion(detail::SolverBody* rows, 
   f.force = force_.data(), f.torque = torque_.data();
   f.inv_mass = inv_mass_.data(), f.gravity_scale = gravity_scale_.data();
   f.lin_damp = lin_damp_.data(), f.ang_damp = ang_damp_.data(), f.damped = contacts_->moving_damped;
+  f.torqued = contacts_->moving_torqued;
   return f;
 }
 
@@ -883,14 +885,18 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   for (auto& list : contacts_->moving) list.clear();
   contacts_->kinematic.clear();
   bool damped = false;
+  std::uint64_t torque_bits = 0;  // (their or: zero when every torque is +0, not -0)
   for (std::size_t i = 0; i < n; ++i) {
     if (type_[i] == BodyType::Kinematic) contacts_->kinematic.push_back(static_cast<std::uint32_t>(i));
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     contacts_->moving[static_cast<std::size_t>(detail::free_rotation(inertia_[i]))].push_back(
         static_cast<std::uint32_t>(i));
     damped = damped || lin_damp_[i] != 0 || ang_damp_[i] != 0;
+    torque_bits |= std::bit_cast<std::uint64_t>(torque_[i].x) | std::bit_cast<std::uint64_t>(torque_[i].y) |
+                   std::bit_cast<std::uint64_t>(torque_[i].z);
   }
   contacts_->moving_damped = damped;
+  contacts_->moving_torqued = torque_bits != 0;
   profile_.collide = total.seconds();
   profile_.integrate = 0;  // integrate_velocities and integrate_positions add to it
   const bool soft = settings_.solver == RigidSolverType::SoftStep;

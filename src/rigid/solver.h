@@ -224,6 +224,7 @@ struct FreeMotionArrays {
   const double* lin_damp = nullptr;
   const double* ang_damp = nullptr;
   bool damped = true;             // false: no body has damping (the divisions by 1 + h c are left out)
+  bool torqued = true;            // false: every body's torque is +0 (AVX2 and plain paths: its turns left out)
   double* motion = nullptr;       // optional: dp and turn since the start of the step, 8 a body
 };
 
