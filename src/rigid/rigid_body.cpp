@@ -994,11 +994,21 @@ void RigidBodySystem::update_sleep(double dt) {
   // top of a 10-box tower swaying at 0.1 m/s, 1 cm either way) kept it awake for seconds
   const double reach = settings_.sleep_linear * settings_.time_to_sleep;
   const double cos_turn = std::cos(0.5 * std::min(settings_.sleep_angular * settings_.time_to_sleep, kPi));
+  // Far out the window cannot see motion: a centre whose coordinate reaches `far` has doubles
+  // spaced at least a step's motion at the linear tolerance apart (2^-52 of it), so a slower
+  // step rounds away (at y = 1e17 m they are 16 m apart: a ball falling there stayed put,
+  // passed the window's test and fell asleep mid-air). Such a body must also be slower than
+  // the tolerances to rest. Nearer in (below 3.7e12 m at 1/60 s) nothing changes.
+  const double far = settings_.sleep_linear * dt * 0x1p52;
+  const double slow_v = settings_.sleep_linear * settings_.sleep_linear;
+  const double slow_w = settings_.sleep_angular * settings_.sleep_angular;
   for (std::size_t i = 0; i < n; ++i) {
     parent_[i] = static_cast<std::uint32_t>(i);
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     const Vec3 d = com_[i] - rest_com_[i];
-    const bool rests = glm::dot(d, d) <= reach * reach && std::abs(glm::dot(q_[i], rest_q_[i])) >= cos_turn;
+    bool rests = glm::dot(d, d) <= reach * reach && std::abs(glm::dot(q_[i], rest_q_[i])) >= cos_turn;
+    if (rests && std::max({std::abs(com_[i].x), std::abs(com_[i].y), std::abs(com_[i].z)}) >= far)
+      rests = glm::dot(v_[i], v_[i]) <= slow_v && glm::dot(w_[i], w_[i]) <= slow_w;
     if (on && rests) {
       sleep_time_[i] += dt;
     } else {
