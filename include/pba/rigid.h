@@ -105,6 +105,12 @@ inline constexpr double kMaxRigidSpeed = 1e18;
 /// the value's unit for the message ("m/s" or "rad/s").
 void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view unit);
 
+/// How far a given centre of mass (RigidBodyDef::mass) may lie outside its body's shapes, in
+/// their sizes (the diagonal of the shapes' bounds in the body frame): 10. A hollow body's
+/// centre lies within its shapes' hull, and a ballast left out of the shapes near them; one
+/// 1e20 m from a 0.5 m ball (a unit slip, a wrong field) is refused at create() by name.
+inline constexpr double kMaxCenterOfMassOffset = 10;
+
 /// Definition of a rigid body. Start from the defaults and change what you need.
 struct RigidBodyDef {
   std::string name{};               ///< optional; used in error messages
@@ -118,7 +124,8 @@ struct RigidBodyDef {
   Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), |w| <= kMaxRigidSpeed; as linear_velocity
   std::vector<RigidShapeDef> shapes{};  ///< at least one
   /// Dynamic bodies: mass properties; unset means from the shapes' densities. The mass (kg)
-  /// and the principal moments (kg m^2) must each be in [2.94e-39, 8.5e37] (create()). Static
+  /// and the principal moments (kg m^2) must each be in [2.94e-39, 8.5e37], and the centre
+  /// (body frame, m) within kMaxCenterOfMassOffset sizes of the shapes (create()). Static
   /// and kinematic bodies have infinite mass: they neither read nor validate it (scene files
   /// refuse a "mass" on them).
   std::optional<RigidMass> mass{};

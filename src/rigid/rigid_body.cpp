@@ -377,6 +377,22 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
     RigidMass m;
     if (def.mass) {
       m = *def.mass;
+      // A centre of mass outside the shapes is legal (a hollow body's lies inside their hull,
+      // a ballast left out of them near it), but one 1e20 m from a 0.5 m ball passed the
+      // float range above and made the first step NaN (the contact rows square the lever
+      // arms): refused beyond kMaxCenterOfMassOffset sizes of the shapes' bounds from them
+      Aabb box = bounds(shapes[0].shape, shapes[0].local);
+      for (std::size_t k = 1; k < shapes.size(); ++k) {
+        const Aabb b = bounds(shapes[k].shape, shapes[k].local);
+        box.lo = glm::min(box.lo, b.lo), box.hi = glm::max(box.hi, b.hi);
+      }
+      const double size = glm::length(box.hi - box.lo);
+      const double out = glm::length(glm::max(glm::max(box.lo - m.center, m.center - box.hi), Vec3(0)));
+      if (!(out <= kMaxCenterOfMassOffset * size))
+        throw Error(field_path(field_path(w, "mass"), "center") + ": " + format_vec3(m.center) + " m lies " +
+                    format_value(out) + " m outside the shapes' bounds " + format_vec3(box.lo) + " to " +
+                    format_vec3(box.hi) + " (body frame): at most " + format_value(kMaxCenterOfMassOffset) +
+                    " times their size (the bounds' diagonal, " + format_value(size) + " m) is allowed");
     } else {
       for (std::size_t k = 0; k < shapes.size(); ++k) {
         const RigidMass part = RigidMass::of_shape(shapes[k].shape, shapes[k].density, shapes[k].local,
