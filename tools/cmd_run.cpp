@@ -29,7 +29,9 @@ constexpr const char* kRunFooter =
     "particle the index within its body. A scene with rigid bodies adds the columns\n"
     "qw,qx,qy,qz and one row per rigid body and step: x,y,z the body frame's origin, vx,vy,vz\n"
     "its velocity, qw..qz its orientation (unit quaternion), particle 0 and body the body's\n"
-    "entity name (empty for the particles' and soft bodies' rows).\n"
+    "entity name (empty for the particles' and soft bodies' rows). --csv - writes the CSV to\n"
+    "standard output and the summary (the final hash too, with --quiet) to standard error, so\n"
+    "the output stays one CSV.\n"
     "--method NAME replaces the integrator of everything the scene integrates, its particles\n"
     "and mass-spring soft bodies: euler, semi-implicit-euler, verlet, velocity-verlet, rk4,\n"
     "implicit-euler.\n"
@@ -142,14 +144,14 @@ std::optional<int> parse(int argc, char** argv, Options& o) {
   std::string steps, every, csv, method;
   app.add_option("scene", o.scene, "the scene file to run")->type_name("SCENE.json");
   app.add_option("--steps", steps, "steps to run, 1..1000000000 (default: 1000)")->type_name("N");
-  app.add_option("--csv", csv, "write the state every K steps, at step 0 and at the last step (columns below)")->type_name("FILE");
+  app.add_option("--csv", csv, "write the state every K steps, at step 0 and at the last step (columns below); - for standard output")->type_name("FILE");
   app.add_option("--every", every, "CSV interval in steps, 1..1000000000 (default: 1); needs --csv")
       ->type_name("K");
   app.add_option("--method", method, "replace the scene's integrators (see below)")->type_name("NAME");
   app.add_option("--builder", o.builder, "run a built-in scene builder instead of a file (see --list)")
       ->type_name("NAME");
   app.add_flag("--list", o.list, "list the built-in scene builders");
-  app.add_flag("--quiet", o.quiet, "print only the final hash, and no progress");
+  app.add_flag("--quiet", o.quiet, "print only the final hash (to standard error with --csv -), and no progress");
   app.footer(kRunFooter);
   std::vector<std::string> args(argv + 1, argv + argc);
   const pba::tools::ParseOutcome p = pba::tools::parse_command_line(app, args);
@@ -300,9 +302,14 @@ int pba_run_command(int argc, char** argv) {
     // the CSV file, with its header and the initial state (the quaternion columns when the
     // scene has rigid bodies)
     const bool rigid = !entity_bodies(w).empty();
-    std::FILE* csv = nullptr;
+    // "-" is standard output (it wrote a file named "-"); the summary then goes to standard
+    // error, so what a pipe reads is one CSV
+    const bool csv_out = o.csv == "-";
+    const std::string csv_name = csv_out ? "standard output" : "'" + o.csv + "'";
+    std::FILE* const out = csv_out ? stderr : stdout;
+    std::FILE* csv = csv_out ? stdout : nullptr;
     if (!o.csv.empty()) {
-      csv = std::fopen(o.csv.c_str(), "w");
+      if (!csv_out) csv = std::fopen(o.csv.c_str(), "w");
       if (!csv) {
         std::fprintf(stderr, "pba run: --csv: cannot write '%s'\n", o.csv.c_str());
         return 1;
@@ -333,39 +340,41 @@ int pba_run_command(int argc, char** argv) {
       }
     } catch (const pba::Error& e) {
       progress.finish();
-      if (csv) std::fclose(csv);
+      if (csv && !csv_out) std::fclose(csv);
+      if (csv_out) std::fflush(csv);
       std::fprintf(stderr, "pba run: %s: %s\n", source.c_str(), e.what());
       return 1;
     }
     progress.finish();
     const double seconds = wall.seconds();
     // a buffered write that failed on the way (a full disk) is kept in the stream's error
-    // flag: fclose returns 0 when its own last flush had nothing left to write
+    // flag: fclose returns 0 when its own last flush had nothing left to write (standard
+    // output is flushed, not closed: the caller may write to it after)
     const bool csv_failed = csv && std::ferror(csv) != 0;
-    if (csv && (std::fclose(csv) != 0 || csv_failed)) {
-      std::fprintf(stderr, "pba run: --csv: error writing '%s'\n", o.csv.c_str());
+    if (csv && ((csv_out ? std::fflush(csv) : std::fclose(csv)) != 0 || csv_failed)) {
+      std::fprintf(stderr, "pba run: --csv: error writing %s\n", csv_name.c_str());
       return 1;
     }
     // the summary
     const double n = static_cast<double>(o.steps);
     if (o.quiet) {
-      std::printf("%016llx\n", static_cast<unsigned long long>(w.hash()));
+      std::fprintf(out, "%016llx\n", static_cast<unsigned long long>(w.hash()));
       return 0;
     }
-    std::printf("scene        %s\n", scene->name.c_str());
-    std::printf("steps        %lld x %.9g s = %.6g s simulated\n", o.steps, w.stepper().settings().fixed_dt, w.time());
-    std::printf("integrators  %s%s\n", integrators(w).c_str(), o.method ? " (from --method)" : "");
-    std::printf("entities     %zu, particles alive %zu, soft-body particles %zu, contacts %.3g per step\n",
-                w.entity_count(), w.particles().size(), soft_particles(w), static_cast<double>(contacts) / n);
+    std::fprintf(out, "scene        %s\n", scene->name.c_str());
+    std::fprintf(out, "steps        %lld x %.9g s = %.6g s simulated\n", o.steps, w.stepper().settings().fixed_dt, w.time());
+    std::fprintf(out, "integrators  %s%s\n", integrators(w).c_str(), o.method ? " (from --method)" : "");
+    std::fprintf(out, "entities     %zu, particles alive %zu, soft-body particles %zu, contacts %.3g per step\n",
+                 w.entity_count(), w.particles().size(), soft_particles(w), static_cast<double>(contacts) / n);
     if (rigid) {
       const std::vector<pba::RigidBodyId> bodies = entity_bodies(w);
       std::size_t awake = 0;
       for (const pba::RigidBodyId id : bodies) awake += w.rigid().type(id) == pba::BodyType::Dynamic && w.rigid().awake(id);
-      std::printf("rigid bodies %zu (%zu dynamic awake at the end), %.3g manifolds per step\n", bodies.size(), awake,
-                  static_cast<double>(rigid_contacts) / n);
+      std::fprintf(out, "rigid bodies %zu (%zu dynamic awake at the end), %.3g manifolds per step\n", bodies.size(),
+                   awake, static_cast<double>(rigid_contacts) / n);
     }
-    std::printf("final hash   %016llx\n", static_cast<unsigned long long>(w.hash()));
-    std::printf("wall time    %.6g s, %.4g ms per step (including CSV output)\n", seconds, seconds / n * 1e3);
+    std::fprintf(out, "final hash   %016llx\n", static_cast<unsigned long long>(w.hash()));
+    std::fprintf(out, "wall time    %.6g s, %.4g ms per step (including CSV output)\n", seconds, seconds / n * 1e3);
     // semi-implicit Euler runs the particles' fused kernel, whose collisions are timed with
     // the integration (a "collide 0" beside contacts said they cost nothing)
     char particle_phases[96];
@@ -375,12 +384,14 @@ int pba_run_command(int argc, char** argv) {
     else
       std::snprintf(particle_phases, sizeof particle_phases, "integrate %.4g, collide %.4g", sum.integrate / n * 1e3,
                     sum.collide / n * 1e3);
-    std::printf("profile      ms per step: kinematic %.4g, sync %.4g, emit %.4g, %s, recycle %.4g, constraints %.4g, "
-                "rigid %.4g, systems %.4g, total %.4g\n",
-                sum.kinematic / n * 1e3, sum.sync / n * 1e3, sum.emit / n * 1e3, particle_phases, sum.recycle / n * 1e3,
-                sum.constraints / n * 1e3, sum.stages[static_cast<std::size_t>(pba::WorldStage::Rigid)] / n * 1e3,
-                sum.systems / n * 1e3, sum.total / n * 1e3);
-    if (!o.csv.empty()) std::printf("csv          %s (every %lld steps)\n", o.csv.c_str(), o.every);
+    std::fprintf(out,
+                 "profile      ms per step: kinematic %.4g, sync %.4g, emit %.4g, %s, recycle %.4g, constraints %.4g, "
+                 "rigid %.4g, systems %.4g, total %.4g\n",
+                 sum.kinematic / n * 1e3, sum.sync / n * 1e3, sum.emit / n * 1e3, particle_phases, sum.recycle / n * 1e3,
+                 sum.constraints / n * 1e3, sum.stages[static_cast<std::size_t>(pba::WorldStage::Rigid)] / n * 1e3,
+                 sum.systems / n * 1e3, sum.total / n * 1e3);
+    if (!o.csv.empty())
+      std::fprintf(out, "csv          %s (every %lld steps)\n", csv_out ? "standard output" : o.csv.c_str(), o.every);
     return 0;
   } catch (const pba::Error& e) {
     std::fprintf(stderr, "pba run: %s\n", e.what());

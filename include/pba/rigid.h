@@ -105,6 +105,12 @@ inline constexpr double kMaxRigidSpeed = 1e18;
 /// the value's unit for the message ("m/s" or "rad/s").
 void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view unit);
 
+/// How far a given centre of mass (RigidBodyDef::mass) may lie outside its body's shapes, in
+/// their sizes (the diagonal of the shapes' bounds in the body frame): 10. A hollow body's
+/// centre lies within its shapes' hull, and a ballast left out of the shapes near them; one
+/// 1e20 m from a 0.5 m ball (a unit slip, a wrong field) is refused at create() by name.
+inline constexpr double kMaxCenterOfMassOffset = 10;
+
 /// Definition of a rigid body. Start from the defaults and change what you need.
 struct RigidBodyDef {
   std::string name{};               ///< optional; used in error messages
@@ -118,7 +124,8 @@ struct RigidBodyDef {
   Vec3 angular_velocity{0, 0, 0};   ///< world angular velocity (rad/s), |w| <= kMaxRigidSpeed; as linear_velocity
   std::vector<RigidShapeDef> shapes{};  ///< at least one
   /// Dynamic bodies: mass properties; unset means from the shapes' densities. The mass (kg)
-  /// and the principal moments (kg m^2) must each be in [2.94e-39, 8.5e37] (create()). Static
+  /// and the principal moments (kg m^2) must each be in [2.94e-39, 8.5e37], and the centre
+  /// (body frame, m) within kMaxCenterOfMassOffset sizes of the shapes (create()). Static
   /// and kinematic bodies have infinite mass: they neither read nor validate it (scene files
   /// refuse a "mass" on them).
   std::optional<RigidMass> mass{};
@@ -268,7 +275,11 @@ struct ContactSettings {
   /// Let resting islands (bodies linked by touching contacts) fall asleep: an island whose
   /// every body has moved slower than the tolerances for `time_to_sleep` stops being
   /// simulated until a contact with an awake body, a force, an impulse or a pose or velocity
-  /// change wakes it. Turned off, the next step wakes every sleeping body.
+  /// change wakes it. Turned off, the next step wakes every sleeping body. "Moved slower"
+  /// is measured over the window (a column rocking 1 cm either way rests), and where the
+  /// positions are too coarse to show a step's motion at `sleep_linear` (a centre beyond
+  /// sleep_linear * dt * 2^52, 3.7e12 m at the defaults and 1/60 s) also by the speed: a body
+  /// falling 1e17 m out stays awake.
   bool sleep = true;
   double sleep_linear = 0.05;    ///< m/s, finite and >= 0 (Box2D's linear sleep tolerance)
   double sleep_angular = 0.0349; ///< rad/s (2 degrees/s), finite and >= 0

@@ -378,6 +378,22 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
     RigidMass m;
     if (def.mass) {
       m = *def.mass;
+      // A centre of mass outside the shapes is legal (a hollow body's lies inside their hull,
+      // a ballast left out of them near it), but one 1e20 m from a 0.5 m ball passed the
+      // float range above and made the first step NaN (the contact rows square the lever
+      // arms): refused beyond kMaxCenterOfMassOffset sizes of the shapes' bounds from them
+      Aabb box = bounds(shapes[0].shape, shapes[0].local);
+      for (std::size_t k = 1; k < shapes.size(); ++k) {
+        const Aabb b = bounds(shapes[k].shape, shapes[k].local);
+        box.lo = glm::min(box.lo, b.lo), box.hi = glm::max(box.hi, b.hi);
+      }
+      const double size = glm::length(box.hi - box.lo);
+      const double out = glm::length(glm::max(glm::max(box.lo - m.center, m.center - box.hi), Vec3(0)));
+      if (!(out <= kMaxCenterOfMassOffset * size))
+        throw Error(field_path(field_path(w, "mass"), "center") + ": " + format_vec3(m.center) + " m lies " +
+                    format_value(out) + " m outside the shapes' bounds " + format_vec3(box.lo) + " to " +
+                    format_vec3(box.hi) + " (body frame): at most " + format_value(kMaxCenterOfMassOffset) +
+                    " times their size (the bounds' diagonal, " + format_value(size) + " m) is allowed");
     } else {
       for (std::size_t k = 0; k < shapes.size(); ++k) {
         const RigidMass part = RigidMass::of_shape(shapes[k].shape, shapes[k].density, shapes[k].local,
@@ -1000,11 +1016,21 @@ void RigidBodySystem::update_sleep(double dt) {
   // top of a 10-box tower swaying at 0.1 m/s, 1 cm either way) kept it awake for seconds
   const double reach = settings_.sleep_linear * settings_.time_to_sleep;
   const double cos_turn = std::cos(0.5 * std::min(settings_.sleep_angular * settings_.time_to_sleep, kPi));
+  // Far out the window cannot see motion: a centre whose coordinate reaches `far` has doubles
+  // spaced at least a step's motion at the linear tolerance apart (2^-52 of it), so a slower
+  // step rounds away (at y = 1e17 m they are 16 m apart: a ball falling there stayed put,
+  // passed the window's test and fell asleep mid-air). Such a body must also be slower than
+  // the tolerances to rest. Nearer in (below 3.7e12 m at 1/60 s) nothing changes.
+  const double far = settings_.sleep_linear * dt * 0x1p52;
+  const double slow_v = settings_.sleep_linear * settings_.sleep_linear;
+  const double slow_w = settings_.sleep_angular * settings_.sleep_angular;
   for (std::size_t i = 0; i < n; ++i) {
     parent_[i] = static_cast<std::uint32_t>(i);
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     const Vec3 d = com_[i] - rest_com_[i];
-    const bool rests = glm::dot(d, d) <= reach * reach && std::abs(glm::dot(q_[i], rest_q_[i])) >= cos_turn;
+    bool rests = glm::dot(d, d) <= reach * reach && std::abs(glm::dot(q_[i], rest_q_[i])) >= cos_turn;
+    if (rests && std::max({std::abs(com_[i].x), std::abs(com_[i].y), std::abs(com_[i].z)}) >= far)
+      rests = glm::dot(v_[i], v_[i]) <= slow_v && glm::dot(w_[i], w_[i]) <= slow_w;
     if (on && rests) {
       sleep_time_[i] += dt;
     } else {

@@ -11,6 +11,15 @@
 namespace pba {
 
 namespace {
+// the entity whose body `id` is, or null: by slot, while the entity holds this very handle (a
+// body destroyed in rigid() directly leaves its slot's owner behind, and the next body made
+// there, in rigid() too, became the entity's: its owner, and the pose each tick wrote into it)
+template <class Records>
+EntityId owner_by_slot(const std::vector<EntityId>& owners, const Records& records, RigidBodyId id) {
+  if (id.index >= owners.size()) return EntityId{};
+  const EntityId e = owners[id.index];
+  return !e.is_null() && records[e.index].body == id ? e : EntityId{};
+}
 
 // the rigid settings, validated with the WorldDef's field names
 RigidSystemDef validated_rigid(const RigidSystemDef& d) {
@@ -480,7 +489,7 @@ RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
 }
 
 bool World::valid(RigidBodyId id) const {
-  return rigid_.valid(id) && id.index < body_owner_.size() && !body_owner_[id.index].is_null();
+  return rigid_.valid(id) && !owner_by_slot(body_owner_, records_, id).is_null();
 }
 
 RigidBodyId World::rigid_body_id(EntityId e) const {
@@ -495,7 +504,7 @@ EntityId World::owner(RigidBodyId id) const {
                 std::to_string(id.generation) + ")");
   if (!valid(id)) throw Error("World::owner(RigidBodyId): rigid body " + std::to_string(id.index) +
                               " belongs to no entity (it stands for a collider, or was made in rigid() directly)");
-  return body_owner_[id.index];
+  return owner_by_slot(body_owner_, records_, id);
 }
 
 namespace {
@@ -645,8 +654,14 @@ void World::destroy_mirror(ColliderEntry& c) {
 
 // the entity a body stands for: its own, or the collider's of a stand-in (null for none)
 EntityId World::body_entity(RigidBodyId id) const {
-  if (id.index < body_owner_.size() && !body_owner_[id.index].is_null()) return body_owner_[id.index];
-  if (id.index < mirror_owner_.size()) return mirror_owner_[id.index];
+  const EntityId own = owner_by_slot(body_owner_, records_, id);
+  if (!own.is_null()) return own;
+  if (id.index < mirror_owner_.size()) {
+    // (a stand-in destroyed in rigid() directly is no longer its collider's either)
+    const EntityId e = mirror_owner_[id.index];
+    const std::uint32_t c = e.is_null() ? kNone : records_[e.index].collider;
+    if (c != kNone && colliders_[c].mirror == id) return e;
+  }
   return EntityId{};
 }
 
@@ -738,7 +753,7 @@ void World::refresh_body_colliders(bool tick) const {
   const std::size_t n = rigid_.size();
   for (std::size_t i = 0; i < n; ++i) {
     const RigidBodyId id = rigid_.id_at(i);
-    const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
+    const EntityId owner = owner_by_slot(body_owner_, records_, id);
     if (owner.is_null()) continue;  // a collider's stand-in: the collider is there already
     const Pose end = rigid_.pose(id);
     const Pose begin = tick && i < body_begin_.size() ? body_begin_[i] : end;
@@ -828,7 +843,7 @@ void World::step_rigid(double t, double dt) {
     // stops the world, naming its entity and the time
     const RigidBodyId id = rigid_.failed_body();
     if (id.is_null()) throw;
-    const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
+    const EntityId owner = owner_by_slot(body_owner_, records_, id);
     failure_ = (owner.is_null() ? std::string("a rigid body") : "the rigid body of " + describe(owner)) +
                " stopped the world in the tick to t = " + format_value(t + dt) + " s (" + err.what() + ")";
     throw Error("World::tick: " + failure_);
@@ -836,7 +851,7 @@ void World::step_rigid(double t, double dt) {
   // whichever system simulates an entity writes its pose: the body, unless a path drives it
   for (std::size_t i = 0; i < n; ++i) {
     const RigidBodyId id = rigid_.id_at(i);
-    const EntityId owner = id.index < body_owner_.size() ? body_owner_[id.index] : EntityId{};
+    const EntityId owner = owner_by_slot(body_owner_, records_, id);
     if (owner.is_null()) continue;
     EntityRecord& r = records_[owner.index];
     if (r.kinematic != kNone || rigid_.type(id) == BodyType::Static) continue;
@@ -1245,7 +1260,7 @@ void World::draw_rigid_bodies(DebugDraw& draw, const DrawFlags& flags, const Rig
                       : rigid_.awake(id)            ? colors.awake
                                                     : colors.asleep;
     // neighbouring entities in three shades of their colour, so the boxes of a stack read apart
-    const float shade = 1.0f - 0.12f * static_cast<float>(body_owner_[id.index].index % 3);
+    const float shade = 1.0f - 0.12f * static_cast<float>(owner_by_slot(body_owner_, records_, id).index % 3);
     rigid_.draw_body(draw, id, {col.r * shade, col.g * shade, col.b * shade, col.a}, flags, options);
   }
   rigid_.draw_contacts(draw, flags);

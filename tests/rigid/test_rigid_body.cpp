@@ -788,6 +788,32 @@ TEST(RigidBadInput, AGivenCentreOfMassOutsideTheFloatRangeIsRefusedByName) {
   EXPECT_TRUE(std::isfinite(s.pose(b).position.y));
 }
 
+// A given centre of mass 1e20 m from a 0.5 m ball was within the float range and taken; the
+// first step then stopped naming the body as non-finite (the contact rows square the lever
+// arms). A centre outside the shapes is legal (a hollow body, a ballast left out of the
+// shapes) but not beyond kMaxCenterOfMassOffset of their sizes: refused at create, by name.
+TEST(RigidBadInput, AGivenCentreOfMassFarOutsideTheShapesIsRefusedByName) {
+  RigidBodySystem s;
+  s.create({.type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+  const std::vector<pba::RigidShapeDef> ball{{.shape = pba::ColliderShape::sphere(0.5)}};
+  for (double c : {1e20, -1e3, 18.0}) {
+    RigidMass m = RigidMass::sphere(1, 0.5);
+    m.center = {0, c, 0};
+    const std::string e = error_of([&] {
+      s.create({.name = "ball", .pose = {{0, 0.4, 0}}, .shapes = ball, .mass = m});
+    });
+    EXPECT_NE(e.find("'ball'.mass.center: (0, " + pba::format_value(c) + ", 0) m lies"), std::string::npos) << e;
+    EXPECT_NE(e.find("at most 10 times their size"), std::string::npos) << e;
+  }
+  EXPECT_EQ(s.size(), 1u);
+  // within ten sizes (the ball's bounds' diagonal is 1.73 m: up to 17.8 m beyond them) it is taken and steps
+  RigidMass m = RigidMass::sphere(1, 0.5);
+  m.center = {0, 15, 0};
+  const auto b = s.create({.name = "ball", .pose = {{0, 0.4, 0}}, .shapes = ball, .mass = m});
+  for (int i = 0; i < 30; ++i) s.step(1.0 / 60, kG);
+  EXPECT_TRUE(std::isfinite(s.pose(b).position.y));
+}
+
 // A body type outside the enum (a cast from a bad integer, a corrupt save) was taken: the body
 // was neither static, kinematic nor dynamic, type() said "unknown" and mass() infinity. It is
 // refused like an unknown shape type or solver.

@@ -2114,6 +2114,28 @@ TEST(RigidSleep, SteadyMotionIsHeldToTheTolerances) {
     }
 }
 
+// Far from the origin a step's motion is lost in the position's rounding (at y = 1e17 m the
+// doubles are 16 m apart): a ball falling there stayed put, passed the rest window's test and
+// fell asleep mid-air after time_to_sleep. Where the positions cannot show a step's motion at
+// the linear tolerance, the body must also be slower than the tolerances to rest: the ball
+// falls on, awake, with its speed growing, while one at rest or gliding slower than the
+// tolerance out there still sleeps.
+TEST(RigidSleep, ABodyFallingFarOutWherePositionsCannotShowItsMotionStaysAwake) {
+  const pba::ContactSettings c{};
+  for (const double y : {1e13, 1e17, -1e17}) {
+    RigidBodySystem s;
+    const auto falling = s.create({.pose = {{0, y, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.5)}}});
+    const auto resting = s.create({.pose = {{10, y, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.5)}}, .gravity_scale = 0});
+    const auto gliding = s.create({.pose = {{20, y, 0}}, .linear_velocity = {0.5 * c.sleep_linear, 0, 0},
+                                   .shapes = {{.shape = ColliderShape::sphere(0.5)}}, .gravity_scale = 0});
+    for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+    EXPECT_TRUE(s.awake(falling)) << y;
+    EXPECT_NEAR(s.linear_velocity(falling).y, 2 * kGravity.y, 1e-9) << y;
+    EXPECT_FALSE(s.awake(resting)) << y;
+    EXPECT_FALSE(s.awake(gliding)) << y;
+  }
+}
+
 // A force, an impulse, a new velocity or pose, or an awake body landing on it wakes a
 // sleeping body and its island (the boxes it rests on), and nothing else.
 TEST(RigidSleep, ForcesImpulsesPosesAndContactsWakeIslands) {

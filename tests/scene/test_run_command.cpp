@@ -2,6 +2,7 @@
 // promises and prints the same hash as the World it ran.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -302,6 +303,42 @@ TEST(RunCommand, ACsvThatCannotBeWrittenExitsOneNamingTheFile) {
     EXPECT_EQ(code, 1) << steps << " steps: " << out << err;
     EXPECT_NE(err.find("pba run: --csv: error writing '/dev/full'"), std::string::npos) << steps << " steps: " << err;
   }
+}
+
+// `--csv -` is standard output, as for most Unix tools (it wrote a file named "-"), and the
+// summary then goes to standard error: what stdout holds is one CSV (the header, then rows of
+// its column count), and the hash, on stderr, is the run's (--quiet's too).
+TEST(RunCommand, CsvDashIsStandardOutputWithTheSummaryOnStandardError) {
+  const std::string stack = std::string(PBA_SCENES_DIR) + "/rigid_stack.json";
+  const std::string hash = quiet_hash({stack, "--steps", "12"});
+  std::filesystem::remove("-");
+  for (const bool quiet : {false, true}) {
+    std::vector<std::string> words{stack, "--steps", "12", "--every", "4", "--csv", "-"};
+    if (quiet) words.push_back("--quiet");
+    testing::internal::CaptureStdout();
+    testing::internal::CaptureStderr();
+    const int rc = run(words);
+    const std::string out = testing::internal::GetCapturedStdout();
+    const std::string err = testing::internal::GetCapturedStderr();
+    ASSERT_EQ(rc, 0) << err;
+    EXPECT_FALSE(std::filesystem::exists("-")) << "a file named '-' was written";
+    std::istringstream in(out);
+    std::string line;
+    std::getline(in, line);
+    EXPECT_EQ(line, "step,time,particle,x,y,z,vx,vy,vz,body,qw,qx,qy,qz") << quiet;
+    int rows = 0;
+    while (std::getline(in, line)) {
+      EXPECT_EQ(std::count(line.begin(), line.end(), ','), 13) << line;
+      ++rows;
+    }
+    EXPECT_GT(rows, 0) << quiet;
+    EXPECT_EQ(out.find(hash), std::string::npos) << quiet;
+    EXPECT_NE(err.find(quiet ? hash + "\n" : "final hash   " + hash), std::string::npos) << quiet << ": " << err;
+    if (!quiet) {
+      EXPECT_NE(err.find("csv          standard output (every 4 steps)"), std::string::npos) << err;
+    }
+  }
+  std::filesystem::remove("-");
 }
 
 // The CSV ends with the final state whatever the interval: 25 steps every 10 write steps 0,

@@ -66,6 +66,36 @@ TEST(RigidComponent, HandlesPosesAndLifetime) {
   EXPECT_TRUE(w.body_colliders().empty());
 }
 
+// Bodies are made and destroyed through the World, but rigid() lets a program destroy an
+// entity's body directly. The World knew bodies by slot alone: the next body made in rigid()
+// took the freed slot and became the entity's (owner() named the crate, valid() said it had
+// an entity, and each tick wrote the new body's pose into the crate's). A body is the entity's
+// only while the entity holds that very handle.
+TEST(RigidComponent, ABodyDestroyedInRigidDirectlyLeavesItsSlotToNoEntity) {
+  World w;
+  ground(w);
+  const EntityId crate = w.create_entity({.name = "crate"});
+  RigidBodyDef d = box_def({0.5, 0.5, 0.5});
+  d.pose.position = {0, 0.5, 0};
+  const RigidBodyId b = w.add_rigid_body(crate, d);
+  for (int i = 0; i < 10; ++i) w.step();
+  const Vec3 at = w.pose(crate).position;
+  w.rigid().destroy(b);
+  EXPECT_TRUE(w.rigid_body_id(crate).is_null());
+  RigidBodyDef ball;
+  ball.pose.position = {6, 5, 0};
+  ball.shapes = {{.shape = ColliderShape::sphere(0.5)}};
+  const RigidBodyId lone = w.rigid().create(ball);
+  ASSERT_EQ(lone.index, b.index);  // the premise: the freed slot
+  EXPECT_FALSE(w.valid(lone));
+  EXPECT_NE(error_of([&] { w.owner(lone); }).find("belongs to no entity"), std::string::npos);
+  for (int i = 0; i < 30; ++i) w.step();
+  EXPECT_EQ(w.pose(crate).position, at);  // the crate's pose is not the ball's
+  EXPECT_LT(w.rigid().pose(lone).position.y, 5);  // the ball falls
+  w.destroy_entity(crate);
+  EXPECT_TRUE(w.rigid().valid(lone));  // and stays when the crate goes
+}
+
 // A moved-from World took a rigid body and stepped it (its RigidBodySystem's contact state had
 // gone with the move and add_rigid_body dereferenced null).
 TEST(RigidComponent, AMovedFromWorldTakesBodiesAgain) {
