@@ -1,0 +1,1 @@
+// the object the suites' precompiled header is made for (tests/CMakeLists.txt): nothing else
