@@ -92,8 +92,9 @@ void check_convex(const ColliderShape& s, const Pose& p, std::string_view where)
   if (!s.is_convex())
     throw Error(field_path(where, "type") + ": must be a sphere, capsule, box or hull, got a " +
                 std::string(to_string(s.type)));
-  check_shape(s, where);
-  check_pose(p, field_path(where, "pose"));
+  // the messages' strings only for bad input: a query never allocates
+  if (!shape_ok(s)) check_shape(s, where);
+  if (!pose_ok(p)) check_pose(p, field_path(where, "pose"));
 }
 
 }  // namespace query
