@@ -39,7 +39,7 @@ enum class JointType : std::uint8_t {
 struct BoneDef {
   std::string name;                 ///< optional, used in error messages and drawing
   int parent = -1;                  ///< index of the parent in SkeletonDef::bones, -1 for the root
-  double length = 1.0;              ///< bone length (m), finite and > 0
+  double length = 1.0;              ///< bone length (m), > 0 and <= 3.4e38 (a float's range)
   Quat rest{1, 0, 0, 0};            ///< rotation of the joint frame relative to the parent bone's frame (unit)
   JointType joint = JointType::Ball;  ///< joint kind
   Vec3 axis{0, 0, 1};               ///< hinge axis in the joint frame (unit); should not be parallel to +X
@@ -54,18 +54,26 @@ struct BoneDef {
 /// Definition of a skeleton: a tree of bones. Built into a Skeleton, which validates it.
 struct SkeletonDef {
   std::vector<BoneDef> bones;       ///< any order; exactly one root; no cycles
-  Vec3 root_position{0, 0, 0};      ///< world position of the root joint (m)
+  Vec3 root_position{0, 0, 0};      ///< world position of the root joint (m), |component| <= 3.4e38
   Quat root_rotation{1, 0, 0, 0};   ///< world rotation of the root's parent frame (unit)
   bool root_free = false;           ///< true: the solvers may also translate the root (3 more DOF)
 };
 
+/// Smallest effector weight (EffectorDef::weight). Weights are relative, and the solvers
+/// compare weighted squared errors: a weight below this underflowed them (a solve
+/// stalled where it started), one above kMaxEffectorWeight overflowed them (the pose came
+/// back non-finite from jacobian_transpose, unmoved from the others).
+inline constexpr double kMinEffectorWeight = 1e-6;
+/// Largest effector weight (see kMinEffectorWeight).
+inline constexpr double kMaxEffectorWeight = 1e6;
+
 /// An end-effector: the tip of a bone pulled toward a target.
 struct EffectorDef {
   int bone = 0;                     ///< bone index (Skeleton order, see Skeleton::index_of)
-  Vec3 target{0, 0, 0};             ///< target position of the bone tip (m), finite
+  Vec3 target{0, 0, 0};             ///< target position of the bone tip (m), finite, |component| <= 3.4e38
   std::optional<Quat> orientation;  ///< optional target world rotation of the bone (unit)
-  double weight = 1.0;              ///< relative importance, finite and > 0
-  std::optional<Vec3> pole;         ///< optional pole position (m) for the two-bone solver
+  double weight = 1.0;              ///< relative importance, in [kMinEffectorWeight, kMaxEffectorWeight]
+  std::optional<Vec3> pole;         ///< optional pole position (m) for the two-bone solver, as target
 };
 
 /// Options for Skeleton::draw.
@@ -137,7 +145,7 @@ class Skeleton {
   void reset_pose();
   /// Root joint position (m) (changes only for a free root).
   const Vec3& root_position() const { return root_position_; }
-  /// Moves the root joint (m). Throws on non-finite values.
+  /// Moves the root joint (m). Throws on values that are not finite or beyond 3.4e38.
   void set_root_position(const Vec3& p);
   /// Root parent frame rotation.
   const Quat& root_rotation() const { return root_rotation_; }
@@ -159,9 +167,11 @@ class Skeleton {
 
   // --- end-effectors ---
   /// Adds an end-effector (allocates; do this at set-up, not per frame). Returns its index.
-  /// Throws on a bad bone index, a non-finite target or a non-positive weight.
+  /// Throws on a bad bone index, a target or pole not finite or beyond 3.4e38, or a weight
+  /// outside [kMinEffectorWeight, kMaxEffectorWeight].
   int add_effector(const EffectorDef& e);
-  /// Adds a position-only effector on `bone` pulled toward `target` (m) with `weight` (> 0).
+  /// Adds a position-only effector on `bone` pulled toward `target` (m) with `weight` (in
+  /// [kMinEffectorWeight, kMaxEffectorWeight]).
   int add_effector(int bone, const Vec3& target, double weight = 1.0);
   /// Removes every end-effector.
   void clear_effectors();
@@ -169,11 +179,12 @@ class Skeleton {
   int effector_count() const { return static_cast<int>(effectors_.size()); }
   /// Definition of effector k (its current target included).
   const EffectorDef& effector(int k) const { return effectors_[k]; }
-  /// Moves effector k's position target (m). Throws pba::Error on non-finite values. Never allocates.
+  /// Moves effector k's position target (m). Throws pba::Error on values that are not finite
+  /// or beyond 3.4e38. Never allocates.
   void set_target(int k, const Vec3& target);
   /// Sets or clears effector k's orientation target. Throws on a non-finite or zero quaternion.
   void set_orientation_target(int k, std::optional<Quat> q);
-  /// Sets effector k's pole position (m) for the two-bone solver.
+  /// Sets effector k's pole position (m) for the two-bone solver (finite, |component| <= 3.4e38).
   void set_pole(int k, std::optional<Vec3> pole);
   /// Position error |tip - target| of effector k (m), valid after forward_kinematics.
   double effector_error(int k) const;

@@ -217,7 +217,7 @@ struct SoftMesh {
 /// A single Hooke spring between two particles (workbook exercise 2).
 struct SpringDef {
   Vec3 a{0, 1, 0};         ///< first end (m), finite
-  Vec3 b{0, 0, 0};         ///< second end (m), finite
+  Vec3 b{0, 0, 0};         ///< second end (m), finite, != a
   Vec3 velocity_b{0, 0, 0};  ///< initial velocity of b (m/s), finite
   double mass = 1;         ///< mass of each free end (kg), finite and > 0
   double stiffness = 100;  ///< k (N/m), finite and > 0; XPBD uses compliance alpha = 1/k

@@ -429,6 +429,9 @@ struct PhysicsThreadStats {
   double lag = 0;              ///< real time (after time_scale, s) owed but not yet simulated
   bool paused = false;         ///< paused right now
   bool running = false;        ///< thread started and not stopped
+  /// A tick or publish threw (a World whose state went non-finite): the thread stopped
+  /// ticking and waits for stop(); PhysicsThread::error() has the message.
+  bool failed = false;
 };
 
 /// Physics on its own thread (workbook 3.1.4): ticks of fixed_dt, paced to real time by a
@@ -490,11 +493,18 @@ class PhysicsThread {
   /// Statistics, copied under the lock.
   PhysicsThreadStats stats() const;
   /// Blocks until at least `ticks` ticks have run in total, or `timeout_s` seconds of real
-  /// time pass (a hang guard); returns true if reached. For tests and tools.
+  /// time pass (a hang guard), or the thread failed; returns true if reached. For tests and
+  /// tools.
   bool wait_for_ticks(long long ticks, double timeout_s) const;
+  /// The message of the exception a tick or publish threw, empty while none has (since the
+  /// last start()). The exception does not escape the thread (that would end the process):
+  /// it is kept here, the thread stops ticking, stats().failed turns true, and stop() joins
+  /// as usual; a World that threw refuses later ticks with the same message.
+  std::string error() const;
 
  private:
   void run();
+  void loop();
 
   TickFn tick_;
   PublishFn publish_;
@@ -511,6 +521,7 @@ class PhysicsThread {
   std::int64_t resume_ns_ = 0;                // guarded: clock time of start() or resume
   bool resumed_ = false;                      // guarded: resume_ns_ is new
   PhysicsThreadStats stats_;                  // guarded: published copy
+  std::string error_;                         // guarded: what a tick or publish threw
   TimeStepper stepper_;                       // physics thread only while running
   std::thread thread_;
 };

@@ -228,8 +228,9 @@ class WorldSystem {
 /// Settings of a World.
 struct WorldDef {
   StepperSettings stepper{};      ///< time stepping (fixed_dt is the tick)
-  /// Gravitational acceleration (m/s^2), finite: the World's, read by every system each
-  /// tick (it replaces particles.forces.gravity and each soft body's forces.gravity).
+  /// Gravitational acceleration (m/s^2), finite and within a float's range (|component| <=
+  /// 3.4e38): the World's, read by every system each tick (it replaces
+  /// particles.forces.gravity and each soft body's forces.gravity).
   Vec3 gravity{0, -9.81, 0};
   ParticleSystemDef particles{};  ///< integrator, drag, wind, capacity (forces.gravity: see gravity)
   /// The rigid bodies: solver, substeps, iterations, sleep and the other contact settings,
@@ -338,8 +339,8 @@ class World {
 
   /// Gravity (m/s^2), read by every system each tick.
   const Vec3& gravity() const { return gravity_; }
-  /// Changes gravity from the next tick on (finite; throws Error naming the value); the
-  /// rigid bodies asleep under the old gravity wake at that tick.
+  /// Changes gravity from the next tick on (finite, |component| <= 3.4e38; throws Error
+  /// naming the value); the rigid bodies asleep under the old gravity wake at that tick.
   void set_gravity(const Vec3& g);
 
   /// The particle system (particles, emitters, forces, integrator).
@@ -382,7 +383,8 @@ class World {
   FrameStats advance(double frame_seconds);
   /// Exactly one tick of fixed_dt (TimeStepper::single_step with the fixed strategy).
   void step();
-  /// One tick from t to t + dt: the stages in their order. advance() and step() call it.
+  /// One tick from t to t + dt (s; t finite, dt finite and > 0, else an Error naming it and
+  /// the world is left as it was): the stages in their order. advance() and step() call it.
   /// Throws Error if the state becomes non-finite (which particle or which body's entity,
   /// when); the world then refuses to tick again and repeats that message.
   void tick(double t, double dt);

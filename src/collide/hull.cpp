@@ -276,13 +276,18 @@ int slot_of(const QhFace& f, std::uint32_t a, std::uint32_t b) {
 // into polygons and vertices left on only two faces (on an edge) are dropped.
 std::shared_ptr<ConvexHull> HullBuilder::quickhull(std::span<const Vec3> points, std::string_view where) {
   const std::string at(where);
-  // validate: a count the indices hold, finite points
+  // validate: a count the indices hold, finite points within a float's range (the
+  // colliders' range; beyond ~1e150 the plane tests' products overflow, and a spread cloud
+  // was called flat or collinear)
   if (points.size() < 4)
     throw Error(at + ": a hull needs at least 4 points that are not coplanar, got " + std::to_string(points.size()) +
                 " points");
   require_count(static_cast<long long>(points.size()), 4, 1ll << 26, field_path(where, "size"));
-  for (std::size_t i = 0; i < points.size(); ++i)
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (is_finite(Vec3f(points[i]))) continue;
     require_finite(points[i], at + "[" + std::to_string(i) + "]");
+    require_float(points[i], at + "[" + std::to_string(i) + "]");
+  }
   const std::uint32_t n = static_cast<std::uint32_t>(points.size());
 
   // centre the cloud; the tolerance scales with its extent (relative 1e-9, far above the

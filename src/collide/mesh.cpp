@@ -225,8 +225,13 @@ std::shared_ptr<const TriangleMesh> TriangleMesh::build(std::span<const Vec3> ve
   if (triangles.empty()) throw Error(field_path(where, "triangles") + ": a mesh needs at least one triangle, got 0");
   require_count(static_cast<long long>(vertices.size()), 3, 1ll << 28, field_path(where, "vertices.size"));
   require_count(static_cast<long long>(triangles.size()), 1, 1ll << 28, field_path(where, "triangles.size"));
-  for (std::size_t i = 0; i < vertices.size(); ++i)
+  // vertices finite and within a float's range (the colliders' range: beyond ~1e150 the
+  // area test's products overflow)
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    if (is_finite(Vec3f(vertices[i]))) continue;
     require_finite(vertices[i], field_path(where, "vertices[" + std::to_string(i) + "]"));
+    require_float(vertices[i], field_path(where, "vertices[" + std::to_string(i) + "]"));
+  }
   auto m = std::make_shared<TriangleMesh>();
   m->vertices_.assign(vertices.begin(), vertices.end());
   m->triangles_.assign(triangles.begin(), triangles.end());

@@ -3,6 +3,7 @@
 // query_shape.cpp; the traversals they share are in query_internal.h.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "pba/collide/query.h"
@@ -12,13 +13,17 @@ namespace pba {
 
 namespace query {
 
+bool fits(double v) { return std::abs(v) <= std::numeric_limits<float>::max(); }
+
+bool fits(const Vec3& v) { return fits(v.x) && fits(v.y) && fits(v.z); }
+
 bool shape_ok(const ColliderShape& s) {
-  auto pos = [](double v) { return std::isfinite(v) && v > 0; };
+  auto pos = [](double v) { return fits(v) && v > 0; };
   switch (s.type) {
-    case ShapeType::Plane: return is_finite(s.normal) && glm::length(s.normal) > 0 && std::isfinite(s.offset);
+    case ShapeType::Plane: return fits(s.normal) && glm::length(s.normal) > 0 && fits(s.offset);
     case ShapeType::Sphere: return pos(s.radius);
     case ShapeType::Box: return pos(s.half_extents.x) && pos(s.half_extents.y) && pos(s.half_extents.z);
-    case ShapeType::Capsule: return pos(s.radius) && std::isfinite(s.half_height) && s.half_height >= 0;
+    case ShapeType::Capsule: return pos(s.radius) && fits(s.half_height) && s.half_height >= 0;
     case ShapeType::Hull: return s.hull != nullptr;
     case ShapeType::Mesh: return s.mesh != nullptr;
     case ShapeType::Compound: return s.compound != nullptr;
@@ -26,15 +31,35 @@ bool shape_ok(const ColliderShape& s) {
   return false;
 }
 
+void check_shape(const ColliderShape& s, std::string_view where) {
+  if (shape_ok(s)) return;
+  s.validate(where);
+  // valid, so a size beyond a float's range
+  switch (s.type) {
+    case ShapeType::Plane:
+      require_float(s.normal, field_path(where, "normal"));
+      require_float(s.offset, field_path(where, "offset"));
+      break;
+    case ShapeType::Sphere: require_float(s.radius, field_path(where, "radius")); break;
+    case ShapeType::Box: require_float(s.half_extents, field_path(where, "half_extents")); break;
+    case ShapeType::Capsule:
+      require_float(s.radius, field_path(where, "radius"));
+      require_float(s.half_height, field_path(where, "half_height"));
+      break;
+    default: break;
+  }
+}
+
 bool pose_ok(const Pose& p) {
   const Quat& q = p.rotation;
   const double n = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
-  return is_finite(p.position) && std::isfinite(n) && std::abs(n - 1) <= 1e-6;
+  return fits(p.position) && std::isfinite(n) && std::abs(n - 1) <= 1e-6;
 }
 
 void check_pose(const Pose& p, std::string_view where) {
   if (pose_ok(p)) return;
   require_finite(p.position, field_path(where, "position"));
+  require_float(p.position, field_path(where, "position"));
   require_unit_quat(p.rotation, field_path(where, "rotation"));
 }
 
@@ -67,7 +92,8 @@ void check_convex(const ColliderShape& s, const Pose& p, std::string_view where)
   if (!s.is_convex())
     throw Error(field_path(where, "type") + ": must be a sphere, capsule, box or hull, got a " +
                 std::string(to_string(s.type)));
-  if (!shape_ok(s)) s.validate(where);
+  // the messages' strings only for bad input: a query never allocates
+  if (!shape_ok(s)) check_shape(s, where);
   if (!pose_ok(p)) check_pose(p, field_path(where, "pose"));
 }
 
@@ -109,7 +135,7 @@ void QueryWorld::build(std::span<const Collider> colliders, std::span<const std:
   for (std::size_t i = 0; i < n; ++i) {
     if (query::shape_ok(colliders[i].shape) && query::pose_ok(colliders[i].end)) continue;
     const std::string w = std::string(where) + "[" + std::to_string(i) + "]";
-    colliders[i].shape.validate(w);
+    query::check_shape(colliders[i].shape, w);
     query::check_pose(colliders[i].end, field_path(w, "end"));
   }
   // copy, then the tree

@@ -12,9 +12,18 @@
 
 namespace pba::query {
 
-/// True when the shape's parameters are valid (ColliderShape::validate would not throw).
+/// True when |v| fits a float (<= 3.4e38; false for NaN): the range of the colliders'
+/// positions and sizes, within which the squared distances the queries compare cannot
+/// overflow (beyond ~1.3e154 they would, and the nearest collider would be missed).
+bool fits(double v);
+/// fits() for every component.
+bool fits(const Vec3& v);
+/// True when the shape's parameters are valid (ColliderShape::validate would not throw)
+/// and its sizes fit a float.
 bool shape_ok(const ColliderShape& s);
-/// True when the pose is finite with a unit rotation (to 1e-6).
+/// Throws Error naming `where` and the field unless shape_ok(s).
+void check_shape(const ColliderShape& s, std::string_view where);
+/// True when the pose's position fits a float and its rotation is unit (to 1e-6).
 bool pose_ok(const Pose& p);
 /// Throws Error naming `where`.position or `where`.rotation unless pose_ok(p).
 void check_pose(const Pose& p, std::string_view where);

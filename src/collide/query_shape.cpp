@@ -386,7 +386,10 @@ std::size_t QueryWorld::overlap_bounds(const Aabb& box, std::span<std::uint32_t>
 // --- distances -------------------------------------------------------------------------
 
 QueryDistance QueryWorld::closest_point(const Vec3& point, double max_distance, const QueryFilter& filter) const {
-  if (!is_finite(point)) require_finite(point, "QueryWorld.closest_point(point)");
+  if (!query::fits(point)) {
+    require_finite(point, "QueryWorld.closest_point(point)");
+    require_float(point, "QueryWorld.closest_point(point)");
+  }
   check_max(max_distance, "QueryWorld.closest_point(max_distance)");
   QueryDistance best;
   const Aabb at{point, point};

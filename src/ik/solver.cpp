@@ -410,8 +410,9 @@ SolveResult Solver::Impl::solve() {
   // ccd.cpp), so for them this never fires; FABRIK's reaching passes are not monotone
   // (and the analytic methods' clamp to a limit may land anywhere), so the driver keeps
   // the given pose when the method ended farther away. Costs are weighted squared errors
-  // (Impl::cost); the orientation part counts for the methods that honour it.
-  if (cost(ori_scale) > given_cost) {
+  // (Impl::cost); the orientation part counts for the methods that honour it. A pose that
+  // went non-finite (a NaN cost compares false) is worse than any: the given pose again.
+  if (!(cost(ori_scale) <= given_cost)) {
     restore_given_pose();
     measure(r);
   }

@@ -79,8 +79,10 @@ SoftBody SoftBody::spring(const SpringDef& sp, const SoftBodyDef& def) {
   if (!(std::isfinite(sp.damping) && sp.damping >= 0)) require_non_negative(sp.damping, "SpringDef.damping");
   if (!std::isfinite(sp.rest_length)) require_finite(sp.rest_length, "SpringDef.rest_length");
   const double dist = glm::length(sp.b - sp.a);
+  // coincident ends give the spring no direction (whatever its rest length), so no force
   if (!(dist > 0))
-    throw Error("SpringDef.b: zero rest length between coincident particles a and b at " + format_vec3(sp.a));
+    throw Error("SpringDef.b: must differ from a (a spring between coincident ends has no direction), both at " +
+                format_vec3(sp.a));
   if (sp.rest_length >= 0 && !(sp.rest_length > 0))
     throw Error("SpringDef.rest_length: must be > 0 (or negative for |b - a|), got " + format_value(sp.rest_length));
   // the spring's k and c replace the body's stretch settings (XPBD: alpha = 1/k)

@@ -7,6 +7,7 @@
 // arrive under one mutex and a condition variable, so every wait is interruptible.
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "pba/time.h"
 
@@ -46,6 +47,8 @@ void PhysicsThread::start(bool start_paused) {
   resumed_ = true;
   stats_.running = true;
   stats_.paused = paused_;
+  stats_.failed = false;
+  error_.clear();
   thread_ = std::thread([this] { run(); });
 }
 
@@ -126,10 +129,34 @@ PhysicsThreadStats PhysicsThread::stats() const {
 bool PhysicsThread::wait_for_ticks(long long ticks, double timeout_s) const {
   std::unique_lock lock(mutex_);
   return progress_.wait_for(lock, std::chrono::duration<double>(timeout_s),
-                            [&] { return stats_.totals.ticks >= ticks; });
+                            [&] { return stats_.totals.ticks >= ticks || stats_.failed; }) &&
+         stats_.totals.ticks >= ticks;
+}
+
+std::string PhysicsThread::error() const {
+  std::lock_guard lock(mutex_);
+  return error_;
 }
 
 void PhysicsThread::run() {
+  // an exception leaving a thread's function ends the process (std::terminate): a World
+  // whose state went non-finite throws from its tick, so keep the message and stop ticking
+  std::string what;
+  try {
+    loop();
+    return;
+  } catch (const std::exception& e) {
+    what = e.what();
+  } catch (...) {
+    what = "PhysicsThread: a tick or publish threw an exception that is not a std::exception";
+  }
+  std::lock_guard lock(mutex_);
+  error_ = std::move(what);
+  stats_.failed = true;
+  progress_.notify_all();
+}
+
+void PhysicsThread::loop() {
   std::unique_lock lock(mutex_);
   std::int64_t last = resume_ns_;
   while (!stop_) {

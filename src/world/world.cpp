@@ -179,9 +179,22 @@ Pose kinematic_pose(const KinematicDef& d, const Pose& start, double t, Vec3* ve
 
 // ---------------------------------------------------------------------------------------
 
+namespace {
+
+// finite and within a float's range: the particles and soft bodies hold gravity as floats,
+// and a larger one accepted here stopped the world for good at the next tick, named as
+// the particle system's ("ParticleSystem.forces.gravity: must fit a float")
+void require_gravity(const Vec3& g, std::string_view where) {
+  if (is_finite(Vec3f(g))) return;
+  require_finite(g, where);
+  require_float(g, where);
+}
+
+}  // namespace
+
 World::World(const WorldDef& def)
     : settings_(def.stepper),
-      gravity_((require_finite(def.gravity, "WorldDef.gravity"), def.gravity)),
+      gravity_((require_gravity(def.gravity, "WorldDef.gravity"), def.gravity)),
       stepper_((def.stepper.validate("WorldDef.stepper"), def.stepper)),
       particles_(def.particles),
       rigid_(validated_rigid(def.rigid)) {
@@ -204,7 +217,7 @@ std::string_view to_string(WorldStage s) {
 }
 
 void World::set_gravity(const Vec3& g) {
-  require_finite(g, "World::set_gravity(g)");
+  require_gravity(g, "World::set_gravity(g)");
   gravity_ = g;
 }
 
@@ -325,9 +338,10 @@ Vec3 World::velocity(EntityId e) const {
 void World::set_pose(EntityId e, const Pose& pose) {
   require_pose(pose, "World::set_pose");
   EntityRecord& r = record(e, "World::set_pose");
-  // a rigid body holds its position as floats: refused before anything moves (the body refused
-  // it after the entity had moved)
-  if (rigid_.valid(r.body)) require_float(pose.position, "World::set_pose.position");
+  // a rigid body and a particle hold their positions as floats: refused before anything
+  // moves (the body, and the particle system naming itself, refused it after the entity had
+  // moved)
+  if (rigid_.valid(r.body) || particles_.valid(r.particle)) require_float(pose.position, "World::set_pose.position");
   r.pose = pose;
   if (particles_.valid(r.particle)) particles_.set_position(particles_.index_of(r.particle), pose.position);
   // a body jumps there (and wakes with its island)
@@ -613,12 +627,14 @@ void World::sync(double t, double dt) {
     c.velocity = r.velocity;
     c.angular_velocity = r.angular_velocity;
   }
+  // the colliders validated now, so a bad one stops the tick before any body moves (their
+  // stand-ins included: validated after them, a collider moved beyond a float's range was
+  // refused by its stand-in as "rigid body 1 'wall' set_pose position"); the tick's
+  // collision world is built in the rigid stage, once the colliders riding on bodies are
+  // where their bodies end the tick (built here as well, it was built twice a tick)
+  validate_colliders();
   // the colliders' stand-ins among the rigid bodies follow them
   sync_mirrors(t, dt);
-  // the colliders validated now, so a bad one stops the tick before any body moves; the
-  // tick's collision world is built in the rigid stage, once the colliders riding on bodies
-  // are where their bodies end the tick (built here as well, it was built twice a tick)
-  validate_colliders();
   collision_stale_ = true;  // until then (a tick that fails midway leaves queries() to rebuild)
   // forcers and emitters follow their entities
   for (std::size_t i = 0; i < forcers_.size(); ++i) {
@@ -714,7 +730,8 @@ void World::sync_mirrors(double t, double dt) {
       d.type = type;
       d.pose = wc.begin;
       d.shapes = {{.shape = c.def.shape, .material = c.def.material}};
-      c.mirror = rigid_.create(d, "collider of " + describe(c.owner));
+      // create() appends the body's name (the entity's) to `where`: the index alone here
+      c.mirror = rigid_.create(d, "collider of entity " + std::to_string(c.owner.index));
       if (mirror_owner_.size() <= c.mirror.index) mirror_owner_.resize(c.mirror.index + 1);
       mirror_owner_[c.mirror.index] = c.owner;
       c.mirror_type = type;
@@ -1161,6 +1178,10 @@ void World::write_particle_poses() {
 
 void World::tick(double t, double dt) {
   if (!failure_.empty()) throw Error("World::tick: the simulation stopped: " + failure_);
+  // a bad t or dt is the caller's, not the state's: refused before any stage moves anything,
+  // so the world stays as it was and may tick again (a stage's own check would stop it)
+  if (!std::isfinite(t)) require_finite(t, "World::tick(t)");
+  if (!(std::isfinite(dt) && dt > 0)) require_positive(dt, "World::tick(dt)");
   Stopwatch total, sw;
   profile_ = {};
   auto stage_done = [&](WorldStage s) {

@@ -367,6 +367,18 @@ TEST(CollideHull, DegenerateCloudsThrowNamingTheInput) {
   EXPECT_EQ(error_of([&] { ConvexHull::build(bad, "rock"); }), "rock[5]: must be finite, got (nan, 0, 0)");
   bad[5] = Vec3(0, std::numeric_limits<double>::infinity(), 0);
   EXPECT_EQ(error_of([&] { ConvexHull::build(bad, "rock"); }), "rock[5]: must be finite, got (0, inf, 0)");
+  // beyond a float's range (the colliders'): until 2026-12-06 a cloud spread over 1e150 m
+  // was called coplanar or collinear (the plane tests' products overflowed)
+  bad[5] = Vec3(0, 0, 1e150);
+  EXPECT_EQ(error_of([&] { ConvexHull::build(bad, "rock"); }),
+            "rock[5]: must fit a float (|component| <= 3.4028234663852886e+38), got (0, 0, 1e+150)");
+  // at the range's edge the hull is built and holds its points
+  std::vector<Vec3> edge;
+  for (int i = 0; i < 8; ++i)
+    edge.push_back(3.4e38 * Vec3(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1));
+  const auto big = ConvexHull::build(edge, "rock");
+  EXPECT_EQ(big->faces().size(), 6u);
+  EXPECT_EQ(big->vertices().size(), 8u);
 }
 
 }  // namespace

@@ -34,6 +34,10 @@ TEST(CollideMesh, BadInputThrowsNamingTheValue) {
   bad[2].y = std::numeric_limits<double>::quiet_NaN();
   const std::vector<Tri> one = {{0, 1, 2}};
   EXPECT_EQ(error_of([&] { TriangleMesh::build(bad, one, "floor"); }), "floor.vertices[2]: must be finite, got (0, nan, 0)");
+  // beyond a float's range (the colliders')
+  bad[2].y = -1e39;
+  EXPECT_EQ(error_of([&] { TriangleMesh::build(bad, one, "floor"); }),
+            "floor.vertices[2]: must fit a float (|component| <= 3.4028234663852886e+38), got (0, -1e+39, 0)");
   EXPECT_EQ(error_of([&] { TriangleMesh::build(std::span<const Vec3>(v.data(), 2), one, "floor"); }),
             "floor.vertices.size: must be an integer in [3, 268435456], got 2");
   // an absurd count is refused before any vertex is read

@@ -365,6 +365,59 @@ TEST(Query, BadInputNamesTheValue) {
   expect_error([&] { q.set_filter(7, {}); }, "collider 7 out of range");
 }
 
+// Positions and sizes up to a float's range (3.4e38, the colliders' range everywhere):
+// the nearest collider is the brute force's, by formulas scaled to stay in range (the
+// queries compare squared distances, so until 2026-12-06 a point beyond ~1.3e154 m found
+// nothing or the wrong collider: now refused by name, as are shapes and poses beyond it).
+TEST(Query, TheFloatRangeIsHeldAndRefusedBeyondByName) {
+  const double edge = 3.4e38, size = 1e37;
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Collider> cs;
+  for (int i = 0; i < 40; ++i) {
+    const Vec3 c = 0.9 * edge * Vec3(u(rng), u(rng), u(rng));
+    cs.push_back(i % 2 ? Collider::sphere(c, size) : Collider::box(c, Vec3(size, 0.5 * size, 2 * size)));
+  }
+  QueryWorld q;
+  q.build(cs);
+  const ColliderShape probe = ColliderShape::sphere(1e30);
+  for (int k = 0; k < 400; ++k) {
+    const Vec3 p = edge * Vec3(u(rng), u(rng), u(rng));
+    // the signed distance in units of `size` (no square leaves the range)
+    double best = INFINITY;
+    std::uint32_t best_i = 0;
+    for (std::uint32_t i = 0; i < cs.size(); ++i) {
+      const Vec3 x = (p - cs[i].end.position) / size;
+      const Vec3 h = i % 2 ? Vec3(0.0) : Vec3(1, 0.5, 2);
+      const double d = glm::length(x - glm::clamp(x, -h, h)) - (i % 2 ? 1 : 0);
+      if (d < best) best = d, best_i = i;
+    }
+    const QueryDistance d = q.closest_point(p, 1e300);
+    ASSERT_TRUE(d.found) << "point " << k;
+    EXPECT_EQ(d.collider, best_i) << "point " << k;
+    EXPECT_NEAR(d.distance / size, best, 1e-9 * std::max(1.0, best)) << "point " << k;
+    const QueryDistance s = q.closest_shape(probe, {p, Quat(1, 0, 0, 0)}, 1e300);
+    ASSERT_TRUE(s.found) << "shape " << k;
+    EXPECT_EQ(s.collider, best_i) << "shape " << k;
+  }
+  // beyond: refused, naming the value
+  const double far = 1e200;
+  const ColliderShape box = ColliderShape::box(Vec3(1));
+  std::uint32_t out[4];
+  expect_error([&] { q.closest_point(Vec3(far, 0, 0), 1e300); }, "closest_point(point): must fit a float");
+  expect_error([&] { q.closest_shape(box, {Vec3(0, far, 0), Quat(1, 0, 0, 0)}, 1); },
+               "closest_shape(shape).pose.position: must fit a float");
+  expect_error([&] { q.overlap(ColliderShape::sphere(far), {}, out); }, "overlap(shape).radius: must fit a float");
+  expect_error([&] { q.shape_cast(box, {Vec3(0, 0, -far), Quat(1, 0, 0, 0)}, Vec3(0, 0, 1), 1); },
+               "shape_cast(shape).pose.position: must fit a float");
+  expect_error([&] { q.overlap(ColliderShape::box(Vec3(1, far, 1)), {}, out); },
+               "overlap(shape).half_extents: must fit a float");
+  std::vector<Collider> beyond{Collider::sphere(Vec3(0.0), 1), Collider::sphere(Vec3(1e39, 0, 0), 1)};
+  expect_error([&] { q.build(beyond, {}, {}, "level"); }, "level[1].end.position: must fit a float");
+  beyond[1] = Collider::sphere(Vec3(0.0), 1e39);
+  expect_error([&] { q.build(beyond, {}, {}, "level"); }, "level[1].radius: must fit a float");
+}
+
 TEST(Query, WorldQueriesFollowTheWorldBetweenTicks) {
   // a ground plane and a box entity moved between ticks: the World's queries follow it, at
   // once (until 2026-12-03 they kept the last tick's colliders until the next tick, so a

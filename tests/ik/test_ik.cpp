@@ -112,7 +112,7 @@ TEST(IkSkeleton, BadTargetsAndSettingsAreRejected) {
   EXPECT_EQ(error_of([&] { s.add_effector(ef); }), "EffectorDef[1].bone: must be a bone index in [0, 1], got 5");
   ef.bone = 0;
   ef.weight = 0;
-  EXPECT_EQ(error_of([&] { s.add_effector(ef); }), "EffectorDef[1].weight: must be finite and > 0, got 0");
+  EXPECT_EQ(error_of([&] { s.add_effector(ef); }), "EffectorDef[1].weight: must be in [1e-06, 1e+06], got 0");
   EXPECT_EQ(s.effector_count(), 1);
   SolverSettings st;
   st.tolerance = -1;
@@ -130,6 +130,70 @@ TEST(IkSkeleton, BadTargetsAndSettingsAreRejected) {
   EXPECT_EQ(error_of([&] { solver.solve(); }),
             "ik::Solver: analytic_1dof: needs exactly one moving joint, a hinge, between the root and "
             "the effector; found 5 moving joints");
+}
+
+// The ranges the solvers hold (2026-12-06): weights in [1e-6, 1e6], lengths and positions
+// within a float's. Until then a weight of 1e-300 left every Jacobian method where it
+// started (the weighted squared error underflowed to 0), one of 1e150 made
+// jacobian_transpose return a non-finite pose with residual 0 and the other Jacobian methods
+// stop unmoved; a target at 1e155 m gave an infinite residual with the chain pointing
+// elsewhere, and a bone of 1e100 m a non-finite pose. At the ranges' edges each iterative
+// method converges on a reachable target; beyond them the value is refused by name.
+TEST(IkSkeleton, WeightsLengthsAndPositionsHoldTheirRangesAndAreRefusedBeyond) {
+  for (Method m : {Method::Ccd, Method::JacobianTranspose, Method::PseudoInverse, Method::Dls, Method::Sdls,
+                   Method::Fabrik}) {
+    for (double w : {kMinEffectorWeight, kMaxEffectorWeight}) {
+      Skeleton s = Skeleton::chain(3, 1.0);
+      s.add_effector(2, Vec3(0.3, 1.2, 0.1), w);
+      const SolveResult r = Solver(s, m).solve();
+      for (const Vec3& t : s.tips()) EXPECT_TRUE(is_finite(t)) << name(m) << " weight " << w;
+      // DLS's damping is absolute (a fraction of the reach), not scaled by the weights: with
+      // every weight far below 1 it damps the step to nothing (a single effector of weight
+      // 1e-3 already ends at the iteration cap), a known limit; the others converge
+      if (m != Method::Dls || w >= 1) {
+        EXPECT_TRUE(r.converged) << name(m) << " weight " << w << " residual " << r.residual;
+      }
+    }
+    // bones and targets at the edge of a float's range, in units of the bone
+    const double big = 1e38;
+    SkeletonDef def;
+    for (int i = 0; i < 3; ++i) def.bones.push_back(BoneDef{.name = "", .parent = i - 1, .length = big});
+    def.root_position = Vec3(3e38, 0, 0);
+    Skeleton s(def);
+    s.add_effector(2, def.root_position + big * Vec3(0.3, 1.2, 0.1));
+    SolverSettings st;
+    st.method = m;
+    st.tolerance = 1e-6 * big;
+    const SolveResult r = Solver(s, st).solve();
+    EXPECT_TRUE(r.converged) << name(m) << " at 1e38 m: residual " << r.residual;
+    for (const Vec3& t : s.tips()) EXPECT_TRUE(is_finite(t)) << name(m);
+  }
+  Skeleton s = Skeleton::chain(3, 1.0);
+  EXPECT_EQ(error_of([&] { s.add_effector(2, Vec3(1, 1, 0), 1e-300); }),
+            "EffectorDef[0].weight: must be in [1e-06, 1e+06], got 1e-300");
+  EXPECT_EQ(error_of([&] { s.add_effector(2, Vec3(1, 1, 0), 1e150); }),
+            "EffectorDef[0].weight: must be in [1e-06, 1e+06], got 1e+150");
+  EXPECT_EQ(error_of([&] { s.add_effector(2, Vec3(0, 1e155, 0)); }),
+            "effector 0 target: must fit a float (|component| <= 3.4028234663852886e+38), got (0, 1e+155, 0)");
+  EXPECT_EQ(s.effector_count(), 0);
+  const int k = s.add_effector(2, Vec3(1, 1, 0));
+  EXPECT_EQ(error_of([&] { s.set_target(k, Vec3(-1e39, 0, 0)); }),
+            "effector 0 target: must fit a float (|component| <= 3.4028234663852886e+38), got (-1e+39, 0, 0)");
+  EXPECT_EQ(s.effector(k).target, Vec3(1, 1, 0));
+  EXPECT_EQ(error_of([&] { s.set_pole(k, Vec3(0, 0, 1e200)); }),
+            "effector 0 pole: must fit a float (|component| <= 3.4028234663852886e+38), got (0, 0, 1e+200)");
+  EXPECT_EQ(error_of([&] { s.set_root_position(Vec3(1e39, 0, 0)); }),
+            "Skeleton::set_root_position: must fit a float (|component| <= 3.4028234663852886e+38), got (1e+39, 0, 0)");
+  SkeletonDef def;
+  def.bones.push_back(BoneDef{.name = "femur", .length = 1e100});
+  EXPECT_EQ(error_of([&] { Skeleton bad(def); }),
+            "SkeletonDef.bones[0] ('femur').length: must fit a float (|v| <= 3.4028234663852886e+38), got 1e+100");
+  def.bones[0].length = 1;
+  def.root_position = Vec3(0, 1e39, 0);
+  EXPECT_EQ(error_of([&] { Skeleton bad(def); }),
+            "SkeletonDef.root_position: must fit a float (|component| <= 3.4028234663852886e+38), got (0, 1e+39, 0)");
+  EXPECT_EQ(error_of([] { Skeleton::chain(2, 1e39); }),
+            "Skeleton::chain length: must fit a float (|v| <= 3.4028234663852886e+38), got 1e+39");
 }
 
 TEST(IkSkeleton, ForwardKinematicsOfAHingeChain) {

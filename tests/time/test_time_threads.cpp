@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -212,6 +214,49 @@ TEST(PhysicsThread, StopFromInsideATickIsAnErrorNotADeadlock) {
   ASSERT_TRUE(physics.wait_for_ticks(1, kHangGuard));
   physics.stop();
   EXPECT_EQ(error, "PhysicsThread.stop: called from the physics thread (from a tick or publish)");
+}
+
+// A tick that throws (a World whose state went non-finite) must not end the process: until
+// 2026-12-06 the exception left the thread's function and std::terminate aborted it. Now the
+// thread keeps the message, stops ticking, and stop() joins as usual; a restart clears it.
+TEST(PhysicsThread, ATickThatThrowsStopsTheThreadWithItsMessage) {
+  pba::ManualClock clock;
+  std::atomic<long long> ticks{0};
+  std::atomic<long long> publishes{0};
+  PhysicsThread physics(
+      fixed(0.01),
+      [&](double t, double) {
+        if (++ticks == 3) throw pba::Error("particle 7 became non-finite at t = " + std::to_string(t));
+      },
+      [&](const pba::TickStamp&) { ++publishes; }, &clock);
+  physics.start(true);
+  physics.step(10);
+  EXPECT_FALSE(physics.wait_for_ticks(10, kHangGuard));  // returns at the failure, not the guard
+  EXPECT_TRUE(physics.stats().failed);
+  EXPECT_EQ(physics.error().rfind("particle 7 became non-finite at t = 0.02", 0), 0u) << physics.error();
+  EXPECT_EQ(ticks.load(), 3);
+  EXPECT_EQ(publishes.load(), 2);
+  EXPECT_TRUE(physics.running());  // until stop() joins
+  physics.stop();
+  EXPECT_FALSE(physics.running());
+  EXPECT_TRUE(physics.stats().failed);
+  // unpaused too, and a throwing publish likewise
+  PhysicsThread loud(
+      fixed(0.01), [](double, double) {}, [](const pba::TickStamp&) { throw std::runtime_error("publish failed"); },
+      &clock);
+  loud.start();
+  clock.advance(0.05);
+  EXPECT_FALSE(loud.wait_for_ticks(1000, kHangGuard));
+  EXPECT_EQ(loud.error(), "publish failed");
+  loud.stop();
+  // a restart clears the failure
+  physics.start(true);
+  EXPECT_FALSE(physics.stats().failed);
+  EXPECT_EQ(physics.error(), "");
+  physics.step(1);
+  ASSERT_TRUE(physics.wait_for_ticks(3, kHangGuard));
+  physics.stop();
+  EXPECT_EQ(ticks.load(), 4);
 }
 
 TEST(PhysicsThread, BadInputIsRejected) {

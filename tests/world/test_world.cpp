@@ -225,6 +225,35 @@ TEST(Forcers, AnEntityBeyondTheFloatsTakesItsForcerThereAndIsRefused) {
   EXPECT_NE(msg.find("float"), std::string::npos) << msg;
 }
 
+// A collider whose entity is moved beyond a float's range is refused at the next tick as the
+// entity's collider, named once. Until 2026-12-06, in a world with rigid bodies, its static
+// stand-in body refused it first ("rigid body 1 'wall' set_pose position: ..."), and a new
+// stand-in named the entity twice ("collider of entity 1 'wall' 'wall'.pose.position").
+TEST(Colliders, AnEntityBeyondTheFloatsIsRefusedNamingItOnce) {
+  World w;
+  pba::RigidBodyDef body;
+  body.pose.position = Vec3(0, 3, 0);
+  body.shapes.push_back({.shape = pba::ColliderShape::sphere(0.5)});
+  w.add_rigid_body(w.create_entity({.name = "ball"}), body);
+  const EntityId wall = w.create_entity({.name = "wall"});
+  w.add_collider(wall, {.shape = pba::ColliderShape::box(Vec3(1))});
+  w.step();
+  w.set_pose(wall, {.position = {1e39, 0, 0}});
+  std::string msg;
+  try {
+    w.step();
+  } catch (const pba::Error& e) {
+    msg = e.what();
+  }
+  EXPECT_EQ(msg.find("'wall'"), msg.rfind("'wall'")) << msg;
+  EXPECT_NE(msg.find("collider of entity 1 'wall'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("must fit a float"), std::string::npos) << msg;
+  // moved back, the world ticks on
+  w.set_pose(wall, {});
+  w.step();
+  EXPECT_EQ(w.ticks(), 2);
+}
+
 // The same for an emitter: its particles are floats, so an emitter whose entity lies beyond
 // a float's range is refused at add_emitter, and one moved there later at the next tick.
 TEST(Emitters, AnEntityBeyondTheFloatsTakesItsEmitterThereAndIsRefused) {
@@ -321,6 +350,77 @@ TEST(Stepping, NonFiniteStateStopsTheWorld) {
   } catch (const pba::Error& err) {
     EXPECT_EQ(std::string(err.what()).rfind("World::tick: the simulation stopped: particle 0", 0), 0u) << err.what();
   }
+}
+
+// A bad tick length or start time is the caller's mistake, not the state's: refused by name
+// before any stage runs, and the world ticks on afterwards. Until 2026-12-06 tick(t, 0) ran
+// the kinematic and rigid stages, then the particle stage's check stopped the world for good
+// ("ParticleSystem::step(dt): must be finite and > 0, got 0", repeated by every later tick).
+TEST(Stepping, ABadTickLengthIsRefusedByNameAndTheWorldTicksOn) {
+  World w;
+  w.add_collider(w.create_entity({.name = "ground"}), {.shape = {.type = pba::ShapeType::Plane}});
+  const EntityId ball = w.create_entity({.name = "ball"});
+  w.add_particle(ball, {.position = {0, 1, 0}, .radius = 0.05});
+  const EntityId box = w.create_entity({.name = "box"});
+  pba::RigidBodyDef body;
+  body.pose.position = Vec3(2, 1, 0);
+  body.shapes.push_back({.shape = pba::ColliderShape::box(Vec3(0.5))});
+  w.add_rigid_body(box, body);
+  const std::uint64_t before = w.hash();
+  auto message = [&](double t, double dt) {
+    try {
+      w.tick(t, dt);
+    } catch (const pba::Error& err) {
+      return std::string(err.what());
+    }
+    return std::string("no error");
+  };
+  const double nan = std::nan(""), inf = INFINITY;
+  EXPECT_EQ(message(0, 0), "World::tick(dt): must be finite and > 0, got 0");
+  EXPECT_EQ(message(0, -0.01), "World::tick(dt): must be finite and > 0, got -0.01");
+  EXPECT_EQ(message(0, nan), "World::tick(dt): must be finite and > 0, got nan");
+  EXPECT_EQ(message(0, inf), "World::tick(dt): must be finite and > 0, got inf");
+  EXPECT_EQ(message(nan, 0.01), "World::tick(t): must be finite, got nan");
+  // nothing moved, nothing counted, and the world ticks on
+  EXPECT_EQ(w.hash(), before);
+  EXPECT_EQ(w.ticks(), 0);
+  EXPECT_EQ(w.time(), 0);
+  for (int i = 0; i < 10; ++i) w.step();
+  EXPECT_EQ(w.ticks(), 10);
+  EXPECT_LT(w.pose(ball).position.y, 1);
+  EXPECT_LT(w.pose(box).position.y, 1);
+}
+
+// Gravity is held as floats by the particles and soft bodies: a finite one beyond a float's
+// range is refused where it is given. Until 2026-12-06 set_gravity took (0, -1e300, 0) and
+// the next tick stopped the world for good, naming "ParticleSystem.forces.gravity".
+TEST(Stepping, GravityBeyondAFloatIsRefusedWhereItIsGiven) {
+  World w;
+  w.add_particle(w.create_entity({.name = "ball"}), {.position = {0, 1, 0}});
+  auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const pba::Error& err) {
+      return std::string(err.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message([&] { w.set_gravity(Vec3(0, -1e300, 0)); }),
+            "World::set_gravity(g): must fit a float (|component| <= 3.4028234663852886e+38), got (0, -1e+300, 0)");
+  EXPECT_EQ(message([&] { w.set_gravity(Vec3(0, std::nan(""), 0)); }),
+            "World::set_gravity(g): must be finite, got (0, nan, 0)");
+  EXPECT_EQ(w.gravity(), Vec3(0, -9.81, 0));
+  w.step();
+  EXPECT_EQ(w.ticks(), 1);
+  EXPECT_EQ(message([] { World bad({.gravity = {1e39, 0, 0}}); }),
+            "WorldDef.gravity: must fit a float (|component| <= 3.4028234663852886e+38), got (1e+39, 0, 0)");
+  // a particle entity moved beyond a float: refused by the World before the entity moves
+  // (until 2026-12-06 the entity's pose moved, then the particle system refused it)
+  const EntityId ball = w.find("ball");
+  const Vec3 at = w.pose(ball).position;
+  EXPECT_EQ(message([&] { w.set_pose(ball, {.position = {0, 1e39, 0}}); }),
+            "World::set_pose.position: must fit a float (|component| <= 3.4028234663852886e+38), got (0, 1e+39, 0)");
+  EXPECT_EQ(w.pose(ball).position, at);
 }
 
 TEST(Stepping, EveryIntegratorIsSelectable) {

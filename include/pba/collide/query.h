@@ -19,7 +19,11 @@
 //   pba::ShapeCastHit s = q.sphere_cast({origin, direction, 10.0}, 0.25);
 //
 // Conventions: metres, world frame. A direction may have any finite non-zero length: it is
-// normalised, and distances are measured along the unit direction.
+// normalised, and distances are measured along the unit direction. Positions and sizes (the
+// colliders', a query point's, a query shape's pose and size) must fit a float (|x| <=
+// 3.4e38), the range of the colliders everywhere in pba: the queries compare squared
+// distances, which would overflow beyond ~1.3e154 m and miss the nearest collider. A value
+// outside it is refused with an Error naming it. A ray's origin may be any finite point.
 #pragma once
 
 #include <cstdint>
@@ -118,7 +122,8 @@ class QueryWorld {
   /// Builds over the colliders of `world` (their owners; every collider in layer 1 with a
   /// full mask). Same size as the last build: refit, no allocation.
   void build(const CollisionWorld& world);
-  /// Builds over `colliders` (validated shapes and poses; an Error names `where`[i]).
+  /// Builds over `colliders` (validated shapes and end poses, within a float's range; an Error
+  /// names `where`[i] and the field).
   /// `owners` and `filters` are empty or parallel to `colliders` (an Error names the one
   /// of the wrong length).
   void build(std::span<const Collider> colliders, std::span<const std::uint32_t> owners = {},
@@ -202,8 +207,9 @@ class QueryWorld {
   std::size_t overlap_bounds(const Aabb& box, std::span<std::uint32_t> out, const QueryFilter& filter = {}) const;
 
   // --- distances ---
-  /// The collider whose surface is nearest `point` (signed distance, point_distance()),
-  /// among those within `max_distance` (finite, >= 0); ties to the lower index.
+  /// The collider whose surface is nearest `point` (|component| <= 3.4e38) by signed
+  /// distance (point_distance()), among those within `max_distance` (finite, >= 0); ties
+  /// to the lower index.
   QueryDistance closest_point(const Vec3& point, double max_distance, const QueryFilter& filter = {}) const;
   /// The collider nearest the convex `shape` at `pose` (GJK distance; 0 when overlapping,
   /// the lower index among overlapping ones) within `max_distance`, with the closest

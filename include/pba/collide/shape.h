@@ -125,8 +125,9 @@ class ConvexHull {
   /// are dropped). The tolerance is 1e-9 of the cloud's extent (sum of its bounding box's
   /// sizes): every input point lies within twice that of the hull, and faces are planar to
   /// it. Vertices are input points, in input order. Throws Error naming `where` for
-  /// non-finite points ("where[i]"), fewer than 4 points, more than 2^26, or a cloud
-  /// that is flat, collinear or a single point within the tolerance (no volume).
+  /// non-finite points or points beyond a float's range (|component| > 3.4e38, the
+  /// colliders' range; "where[i]"), fewer than 4 points, more than 2^26, or a cloud that
+  /// is flat, collinear or a single point within the tolerance (no volume).
   static std::shared_ptr<const ConvexHull> build(std::span<const Vec3> points, std::string_view where = "hull");
   /// The hull of the box |x| <= half.x, |y| <= half.y, |z| <= half.z (6 faces, 8 vertices).
   static std::shared_ptr<const ConvexHull> box(const Vec3& half_extents);
@@ -207,9 +208,10 @@ class TriangleMesh {
   };
 
   /// Builds the mesh (BVH by binned surface-area heuristic, Wald 2007; deterministic).
-  /// Throws Error naming `where` and the field for non-finite vertices, an index out of
-  /// range, a degenerate triangle (|ab x ac| <= 1e-12 times its longest edge squared:
-  /// repeated or collinear corners), no triangles, or more than 2^28 vertices or triangles.
+  /// Throws Error naming `where` and the field for non-finite vertices or vertices beyond a
+  /// float's range (|component| > 3.4e38, the colliders' range), an index out of range, a
+  /// degenerate triangle (|ab x ac| <= 1e-12 times its longest edge squared: repeated or
+  /// collinear corners), no triangles, or more than 2^28 vertices or triangles.
   static std::shared_ptr<const TriangleMesh> build(std::span<const Vec3> vertices,
                                                    std::span<const std::array<std::uint32_t, 3>> triangles,
                                                    std::string_view where = "mesh");
