@@ -256,7 +256,8 @@ struct ContactSettings {
   /// On by default (1 mm): resting piles then make almost no manifolds (docs/rigid-bodies.md).
   /// A ball's or a box's manifold with a plane that this test turns down is still carried while
   /// the narrow phase would make the same points, its plane points made again (exact on a flat
-  /// plane; with reuse_distance > 0 only).
+  /// plane; with reuse_distance > 0 only); so is a ball's one point on a mesh triangle's face
+  /// while no other triangle comes within the reach.
   double reuse_distance = 0.001;
   /// ... and their relative rotation less than this (rad), finite and >= 0. The distance test
   /// already counts the chord a turn moves the body's reach through; a body's reach is at

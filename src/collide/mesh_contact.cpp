@@ -26,15 +26,20 @@ using namespace narrow;
 
 namespace {
 
+// the barycentric weights of the point q (in the triangle's plane): u for a, v for b, w for c
+void weights(const Vec3 t[3], const Vec3& q, double& u, double& v, double& w) {
+  const Vec3 n = glm::cross(t[1] - t[0], t[2] - t[0]);
+  const double nn = glm::dot(n, n);
+  v = glm::dot(glm::cross(q - t[0], t[2] - t[0]), n) / nn;
+  w = glm::dot(glm::cross(t[1] - t[0], q - t[0]), n) / nn;
+  u = 1 - v - w;
+}
+
 // which of the triangle's features the point q (on it) lies on: the mask of edges it
 // touches (ab = 1, bc = 2, ca = 4; 0 = the interior; two bits = a vertex)
 std::uint8_t feature_edges(const Vec3 t[3], const Vec3& q) {
-  const Vec3 n = glm::cross(t[1] - t[0], t[2] - t[0]);
-  const double nn = glm::dot(n, n);
-  // barycentric weights of q: u for a, v for b, w for c
-  const double v = glm::dot(glm::cross(q - t[0], t[2] - t[0]), n) / nn;
-  const double w = glm::dot(glm::cross(t[1] - t[0], q - t[0]), n) / nn;
-  const double u = 1 - v - w;
+  double u, v, w;
+  weights(t, q, u, v, w);
   constexpr double kOn = 1e-9;  // relative: the closest point of GJK is exact to rounding
   std::uint8_t m = 0;
   if (w <= kOn) m |= 1;  // opposite c: edge ab
@@ -728,6 +733,45 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
 }
 
 }  // namespace
+
+bool narrow::ball_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Vec3& centre, double radius,
+                                double reach, const Vec3& toward, const MeshQueryCache& near) {
+  const double scale = 1 + std::max(std::abs(centre.x), std::max(std::abs(centre.y), std::abs(centre.z)));
+  const double tol = 1e-9 * scale;
+  // the triangles collide_mesh would test are the cache's: its box holds the ball's query box
+  // (padded past the rounding of bounds()), and it kept them all
+  const double half = radius + reach + tol;
+  const Aabb box{centre - Vec3(half), centre + Vec3(half)};
+  if (near.mesh != &M || near.count > std::uint32_t(MeshQueryCache::kCapacity) || !near.box.contains(box)) return false;
+  const auto& idx = M.triangles()[t];
+  const Vec3 tri[3] = {M.vertices()[idx[0]], M.vertices()[idx[1]], M.vertices()[idx[2]]};
+  // the manifold's normal is t's face normal, toward the side away from the centre, and the
+  // ball within the reach of t's plane, over t's interior well clear of its edges (feature_edges
+  // then says 0: an internal feature, whose normal is the face's and whose point is the
+  // projection of the ball's deepest point onto the plane)
+  const Vec3 nf = M.normal(t);
+  const double along = glm::dot(toward, nf), height = glm::dot(centre - tri[0], nf);
+  if (!(std::abs(along) >= 1 - 1e-12) || !((along > 0 ? -height : height) > tol)) return false;
+  if (!(std::abs(height) - radius <= reach - tol)) return false;
+  double u, v, w;
+  weights(tri, centre - height * nf, u, v, w);
+  constexpr double kClear = 1e-6;  // a thousand times feature_edges' 1e-9
+  if (!(u >= kClear && v >= kClear && w >= kClear)) return false;
+  // every other triangle that the query box reaches is beyond the reach (collide_triangle's
+  // closed form turns it down: its distance less the radius past the margin)
+  const std::span<const Vec3> vs = M.vertices();
+  for (std::uint32_t k = 0; k < near.count; ++k) {
+    const std::uint32_t o = near.triangles[k];
+    if (o == t) continue;
+    const auto& j = M.triangles()[o];
+    const Vec3 &p = vs[j[0]], &q = vs[j[1]], &r = vs[j[2]];
+    if (!Aabb{glm::min(p, glm::min(q, r)), glm::max(p, glm::max(q, r))}.overlaps(box)) continue;
+    bool interior;
+    const Vec3 d = centre - closest_on_triangle(centre, p, q, r, interior);
+    if (!(std::sqrt(glm::dot(d, d)) - radius > reach + tol)) return false;
+  }
+  return true;
+}
 
 int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
                  std::span<Manifold> out, const NarrowPhaseSettings& settings, MeshQueryCache* cache,

@@ -346,6 +346,17 @@ int collide_mesh_unchecked(const ColliderShape& a, const Pose& pose_a, const Col
                            std::span<Manifold> out, const NarrowPhaseSettings& settings, MeshQueryCache* cache,
                            BatchPath path);
 
+/// Whether collide_mesh_unchecked would make one manifold, and that a point of triangle `t`'s
+/// face, for a ball of `radius` (m) centred at `centre` (the mesh's frame) out to `reach` (m):
+/// its normal `toward` (unit, from the ball into the mesh, the mesh's frame) is t's face
+/// normal, the ball is within the reach of t's plane on the side away from it and over t's
+/// interior clear of its edges, and every other triangle of `near` (the pair's cache, which
+/// must hold the ball's query box and all its triangles) that the query box reaches is beyond
+/// the reach; margins of 1e-9 (relative) keep the answer off the narrow phase's rounding.
+/// False where it cannot tell. (make_manifolds' carry of a ball's manifold on a mesh.)
+bool ball_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Vec3& centre, double radius, double reach,
+                        const Vec3& toward, const MeshQueryCache& near);
+
 /// The manifold with A and B exchanged (normal flipped, points swapped).
 inline void flip(Manifold& m) {
   m.normal = -m.normal;

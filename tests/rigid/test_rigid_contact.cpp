@@ -2020,6 +2020,83 @@ TEST(RigidPairCache, ABodysManifoldWithAPlaneIsCarriedWhileItsPointsStayTheNarro
   }
 }
 
+// A ball's one-point manifold with a mesh is carried, whatever the ball slid along a triangle's
+// face, turned or rose, while the narrow phase would make the same point: the ball over that
+// triangle's interior within the reach of its plane, every other triangle beyond the reach (the
+// triangle's point made again under the ball's centre, as on a plane). Two triangles meeting at
+// a ridge of some 20 degrees, the mesh's body turned 10 degrees and moved, made before the ball
+// (its pairs' a) and after (b); a 0.3 m ball 1 mm over the first triangle's middle, slid 7 cm
+// along it, raised 5 mm and turned 20 degrees: carried, its contact's position and depth within
+// 1e-12 m of a system that made it afresh at that pose. Raised 3 cm, past the 2 cm speculative
+// distance: made afresh (no point). Slid from 15 cm to 5 cm off the ridge, where the second
+// triangle comes within the reach: made afresh too.
+TEST(RigidPairCache, ABallsManifoldWithAMeshIsCarriedWhileItsPointStaysTheNarrowPhases) {
+  // the mesh in its frame: triangle abc, and bdc over the ridge bc, tilted down from it
+  const Vec3 a{0, 0, 0}, b{4, 0, 0.3}, c{0.5, 0.2, 4};
+  const Vec3 n = glm::normalize(glm::cross(b - a, c - a));
+  Vec3 out = glm::normalize(glm::cross(c - b, n));
+  if (glm::dot(out, a - b) > 0) out = -out;
+  const Vec3 d = 0.5 * (b + c) + 3.0 * out - 1.0 * n;
+  const std::vector<Vec3> v{a, b, c, d};
+  const std::vector<std::array<std::uint32_t, 3>> t{{0, 1, 2}, {1, 3, 2}};
+  const auto mesh = pba::TriangleMesh::build(v, t, "ridge");
+  const pba::Pose mesh_pose{{1, -0.5, 2}, glm::angleAxis(deg(10), glm::normalize(Vec3(1, 0, 1)))};
+  auto world = [&](const Vec3& x) { return mesh_pose.position + mesh_pose.rotation * x; };
+  const Vec3 up = mesh_pose.rotation * n, along = mesh_pose.rotation * glm::normalize(b - a);
+  const Vec3 inward = mesh_pose.rotation * -out;
+  const double radius = 0.3;
+  // over the middle of abc, or `off` m off the ridge (the middle of bc), `gap` m from the plane
+  auto middle = [&](double gap) { return world((a + b + c) / 3.0) + (radius + gap) * up; };
+  auto by_ridge = [&](double off, double gap) { return world(0.5 * (b + c)) + off * inward + (radius + gap) * up; };
+  struct Case {
+    bool mesh_first;
+    Vec3 start;
+    pba::Pose end;
+    bool carried;
+  };
+  const Quat spin = glm::angleAxis(deg(20), glm::normalize(Vec3(0.3, 1, 0.2)));
+  std::vector<Case> cases;
+  for (const bool first : {true, false}) {
+    cases.push_back({first, middle(0.001), {middle(0.006) + 0.07 * along, spin}, true});
+    cases.push_back({first, middle(0.001), {middle(0.031), spin}, false});
+    cases.push_back({first, by_ridge(0.15, 0.001), {by_ridge(0.05, 0.001)}, false});
+  }
+  for (const Case& k : cases) {
+    const std::string what = std::string(k.mesh_first ? "mesh first" : "mesh last") + ", carried " +
+                             (k.carried ? "yes" : "no") + ", end " + std::to_string(k.end.position.x) + " " +
+                             std::to_string(k.end.position.y) + " " + std::to_string(k.end.position.z);
+    auto make = [&](RigidBodySystem& s, const pba::Pose& pose) {
+      auto ground = [&] {
+        s.create({.name = "ridge", .type = BodyType::Static, .pose = mesh_pose,
+                  .shapes = {{.shape = ColliderShape::triangles(mesh)}}});
+      };
+      if (k.mesh_first) ground();
+      const auto body = s.create({.name = "ball", .pose = pose, .shapes = {{.shape = ColliderShape::sphere(radius)}}});
+      if (!k.mesh_first) ground();
+      return body;
+    };
+    RigidBodySystem carried;
+    const auto body = make(carried, {k.start});
+    carried.step(1.0 / 60, Vec3(0));  // the manifold
+    ASSERT_EQ(carried.contacts().size(), 1u) << what;
+    carried.set_pose(body, k.end);
+    carried.step(1.0 / 60, Vec3(0));
+    EXPECT_EQ(carried.profile().reused, k.carried ? 1u : 0u) << what;
+    RigidBodySystem fresh;
+    make(fresh, k.end);
+    fresh.step(1.0 / 60, Vec3(0));
+    const std::vector<pba::RigidContactPoint> kept = carried.contacts(), made = fresh.contacts();  // (copies)
+    if (!k.carried && k.end.position == by_ridge(0.05, 0.001)) EXPECT_EQ(made.size(), 2u) << what;  // the premise
+    EXPECT_EQ(kept.size(), made.size()) << what;
+    if (kept.size() != made.size()) continue;
+    for (std::size_t j = 0; j < made.size(); ++j) {
+      EXPECT_EQ(kept[j].id, made[j].id) << what;
+      EXPECT_NEAR(glm::length(kept[j].position - made[j].position), 0, 1e-12) << what << ", point " << j;
+      EXPECT_NEAR(kept[j].depth, made[j].depth, 1e-12) << what << ", point " << j;
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------------------
 // sleeping
 
