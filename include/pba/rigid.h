@@ -279,8 +279,8 @@ struct ContactSettings {
   /// change wakes it. Turned off, the next step wakes every sleeping body. "Moved slower"
   /// is measured over the window (a column rocking 1 cm either way rests), and where the
   /// positions are too coarse to show a step's motion at `sleep_linear` (a centre beyond
-  /// sleep_linear * dt * 2^52, 3.7e12 m at the defaults and 1/60 s) also by the speed: a body
-  /// falling 1e17 m out stays awake.
+  /// sleep_linear * (dt / substeps) * 2^52, 4.7e11 m at the defaults, 1/60 s and 8 substeps)
+  /// also by the speed: a body falling 1e17 m out stays awake.
   bool sleep = true;
   double sleep_linear = 0.05;    ///< m/s, finite and >= 0 (Box2D's linear sleep tolerance)
   double sleep_angular = 0.0349; ///< rad/s (2 degrees/s), finite and >= 0

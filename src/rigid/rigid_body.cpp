@@ -1017,11 +1017,14 @@ void RigidBodySystem::update_sleep(double dt) {
   const double reach = settings_.sleep_linear * settings_.time_to_sleep;
   const double cos_turn = std::cos(0.5 * std::min(settings_.sleep_angular * settings_.time_to_sleep, kPi));
   // Far out the window cannot see motion: a centre whose coordinate reaches `far` has doubles
-  // spaced at least a step's motion at the linear tolerance apart (2^-52 of it), so a slower
-  // step rounds away (at y = 1e17 m they are 16 m apart: a ball falling there stayed put,
-  // passed the window's test and fell asleep mid-air). Such a body must also be slower than
-  // the tolerances to rest. Nearer in (below 3.7e12 m at 1/60 s) nothing changes.
-  const double far = settings_.sleep_linear * dt * 0x1p52;
+  // spaced at least a substep's motion at the linear tolerance apart (2^-52 of it), so a
+  // slower substep rounds away (at y = 1e17 m they are 16 m apart: a ball falling there
+  // stayed put, passed the window's test and fell asleep mid-air). A substep, not a step:
+  // bodies in contact and coasting ones move a substep at a time. Such a body must also be
+  // slower than the tolerances to rest. Nearer in (below 4.7e11 m at the defaults, 1/60 s
+  // and 8 substeps) nothing changes; with sleep_linear = 0, `far` is 0: a body then rests
+  // only when still, by its speeds as by its window.
+  const double far = settings_.sleep_linear * (dt / profile_.substeps) * 0x1p52;
   const double slow_v = settings_.sleep_linear * settings_.sleep_linear;
   const double slow_w = settings_.sleep_angular * settings_.sleep_angular;
   for (std::size_t i = 0; i < n; ++i) {

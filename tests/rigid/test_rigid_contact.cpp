@@ -2213,6 +2213,23 @@ TEST(RigidSleep, ABodyFallingFarOutWherePositionsCannotShowItsMotionStaysAwake) 
   }
 }
 
+// The same far out for a body that moves a substep at a time (a spinning box coasts through
+// the substeps, as a body in contact does): its substep's motion at twice the tolerance,
+// 2.1e-4 m at x = 3e12 m, is under half the doubles' spacing there (4.9e-4 m) and rounds
+// away, though a whole step's would not. It stays awake; at rest out there it sleeps.
+TEST(RigidSleep, ABodyCoastingFarOutWhereASubstepsMotionRoundsAwayStaysAwake) {
+  const pba::ContactSettings c{};
+  RigidBodySystem s;
+  const auto shape = ColliderShape::box({0.5, 0.3, 0.2});
+  const auto coasting = s.create({.pose = {{3e12, 0, 0}}, .linear_velocity = {2 * c.sleep_linear, 0, 0},
+                                  .angular_velocity = {0, 0.5 * c.sleep_angular, 0}, .shapes = {{.shape = shape}},
+                                  .gravity_scale = 0});
+  const auto resting = s.create({.pose = {{3e12, 10, 0}}, .shapes = {{.shape = shape}}, .gravity_scale = 0});
+  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+  EXPECT_TRUE(s.awake(coasting));
+  EXPECT_FALSE(s.awake(resting));
+}
+
 // A force, an impulse, a new velocity or pose, or an awake body landing on it wakes a
 // sleeping body and its island (the boxes it rests on), and nothing else.
 TEST(RigidSleep, ForcesImpulsesPosesAndContactsWakeIslands) {
