@@ -153,6 +153,11 @@ void PhysicsThread::run() {
   std::lock_guard lock(mutex_);
   error_ = std::move(what);
   stats_.failed = true;
+  // the ticks this wake ran before the throw changed the world: count them (the stepper is
+  // this thread's alone, and it has stopped)
+  stats_.totals = stepper_.totals();
+  stats_.time = stepper_.time();
+  stats_.lag = stats_.totals.pending_time;
   progress_.notify_all();
 }
 

@@ -257,6 +257,18 @@ TEST(PhysicsThread, ATickThatThrowsStopsTheThreadWithItsMessage) {
   ASSERT_TRUE(physics.wait_for_ticks(3, kHangGuard));
   physics.stop();
   EXPECT_EQ(ticks.load(), 4);
+  // unpaused, the ticks a failing wake ran before the throw are counted (the stats were left
+  // at the wake before: 0 ticks here, though two had changed the world)
+  std::atomic<long long> bursts{0};
+  PhysicsThread burst(
+      fixed(0.01), [&](double, double) { if (++bursts == 3) throw pba::Error("third tick"); }, nullptr, &clock);
+  burst.start();
+  clock.advance(0.05);
+  EXPECT_FALSE(burst.wait_for_ticks(1000, kHangGuard));
+  EXPECT_EQ(burst.error(), "third tick");
+  EXPECT_EQ(burst.stats().totals.ticks, 2);
+  EXPECT_NEAR(burst.stats().time, 0.02, 1e-12);
+  burst.stop();
 }
 
 TEST(PhysicsThread, BadInputIsRejected) {
