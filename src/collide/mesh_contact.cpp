@@ -734,9 +734,10 @@ bool collide_triangle(const ColliderShape& a, const Pose& pa, const ConvexProxy&
 
 }  // namespace
 
-bool narrow::ball_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Vec3& centre, double radius,
-                                double reach, const Vec3& toward, const MeshQueryCache& near) {
-  const double scale = 1 + std::max(std::abs(centre.x), std::max(std::abs(centre.y), std::abs(centre.z)));
+bool narrow::ball_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Vec3& centre, double world,
+                                double radius, double reach, const Vec3& toward, const MeshQueryCache& near) {
+  const double scale =
+      1 + std::max(world, std::max(std::abs(centre.x), std::max(std::abs(centre.y), std::abs(centre.z))));
   const double tol = 1e-9 * scale;
   // the triangles collide_mesh would test are the cache's: its box holds the ball's query box
   // (padded past the rounding of bounds()), and it kept them all
@@ -751,7 +752,9 @@ bool narrow::ball_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Ve
   // projection of the ball's deepest point onto the plane)
   const Vec3 nf = M.normal(t);
   const double along = glm::dot(toward, nf), height = glm::dot(centre - tri[0], nf);
-  if (!(std::abs(along) >= 1 - 1e-12) || !((along > 0 ? -height : height) > tol)) return false;
+  // (an honest face normal, turned by the bodies' rotations, is within a few ulps of it; an edge
+  // normal taken near the face's, kept while the carry holds, would tilt every point made again)
+  if (!(std::abs(along) >= 1 - 1e-14) || !((along > 0 ? -height : height) > tol)) return false;
   if (!(std::abs(height) - radius <= reach - tol)) return false;
   double u, v, w;
   weights(tri, centre - height * nf, u, v, w);

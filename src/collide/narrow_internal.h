@@ -352,9 +352,12 @@ int collide_mesh_unchecked(const ColliderShape& a, const Pose& pose_a, const Col
 /// normal, the ball is within the reach of t's plane on the side away from it and over t's
 /// interior clear of its edges, and every other triangle of `near` (the pair's cache, which
 /// must hold the ball's query box and all its triangles) that the query box reaches is beyond
-/// the reach; margins of 1e-9 (relative) keep the answer off the narrow phase's rounding.
-/// False where it cannot tell. (make_manifolds' carry of a ball's manifold on a mesh.)
-bool ball_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Vec3& centre, double radius, double reach,
+/// the reach; margins of 1e-9 relative to the larger of the centre's coordinates and `world`
+/// (m: the largest world coordinate of the two poses, whose rounding the narrow phase's centre
+/// carries) keep the answer off the narrow phase's rounding. False where it cannot tell.
+/// (make_manifolds' carry of a ball's manifold on a mesh.)
+bool ball_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Vec3& centre, double world, double radius,
+                        double reach,
                         const Vec3& toward, const MeshQueryCache& near);
 
 /// The manifold with A and B exchanged (normal flipped, points swapped).

@@ -1051,12 +1051,16 @@ bool box_on_plane(CachedManifold& r, bool plane_a, const WorldPlane& plane, cons
 bool ball_on_mesh(CachedManifold& r, bool mesh_a, const ColliderShape& mesh, const Pose& mesh_pose,
                   const Pose& ball_pose, const Quat& q_static, double radius, double reach, const MeshQueryCache& near,
                   const Vec3& rel_position, const Quat& rel_rotation, bool lanes) {
-  if (r.next != kNoIndex || r.count != 1) return false;
+  // (the normal kept in the mesh's body's frame: meshes are static, so the ball is the pair's
+  // moving body; said here so a moving mesh, if ever allowed, is declined, not misread)
+  if (r.next != kNoIndex || r.count != 1 || r.normal_in_b == mesh_a) return false;
   // the normal and the ball's centre in the mesh's frame (the normal from the ball into the mesh)
   const Quat to_mesh = glm::conjugate(mesh_pose.rotation);
   const Vec3 n = to_mesh * (q_static * r.normal);
   const Vec3 centre = to_mesh * (ball_pose.position - mesh_pose.position);
-  return narrow::ball_on_face_alone(*mesh.mesh, r.sub, centre, radius, reach, mesh_a ? -n : n, near) &&
+  const auto largest = [](const Vec3& p) { return std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))); };
+  const double world = std::max(largest(mesh_pose.position), largest(ball_pose.position));
+  return narrow::ball_on_face_alone(*mesh.mesh, r.sub, centre, world, radius, reach, mesh_a ? -n : n, near) &&
          under_cores(r, mesh_a, rel_position, rel_rotation, radius, reach, lanes);
 }
 

@@ -2086,7 +2086,9 @@ TEST(RigidPairCache, ABallsManifoldWithAMeshIsCarriedWhileItsPointStaysTheNarrow
     make(fresh, k.end);
     fresh.step(1.0 / 60, Vec3(0));
     const std::vector<pba::RigidContactPoint> kept = carried.contacts(), made = fresh.contacts();  // (copies)
-    if (!k.carried && k.end.position == by_ridge(0.05, 0.001)) EXPECT_EQ(made.size(), 2u) << what;  // the premise
+    if (!k.carried && k.end.position == by_ridge(0.05, 0.001)) {
+      EXPECT_EQ(made.size(), 2u) << what;  // the premise
+    }
     EXPECT_EQ(kept.size(), made.size()) << what;
     if (kept.size() != made.size()) continue;
     for (std::size_t j = 0; j < made.size(); ++j) {
