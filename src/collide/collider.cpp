@@ -18,8 +18,9 @@ bool unit_quat(const Quat& q) {
          std::abs(glm::length(q) - 1.0) <= 1e-6;
 }
 
-// finite and within a float's range: the particle kernel flattens colliders to floats
-bool fits(double v) { return std::abs(v) <= std::numeric_limits<float>::max(); }
+// finite as a float (require_float's test, so a value it passes is one this passes): the
+// particle kernel flattens colliders to floats
+bool fits(double v) { return std::isfinite(static_cast<float>(v)); }
 bool fits(const Vec3& v) { return fits(v.x) && fits(v.y) && fits(v.z); }
 
 }  // namespace

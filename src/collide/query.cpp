@@ -13,7 +13,7 @@ namespace pba {
 
 namespace query {
 
-bool fits(double v) { return std::abs(v) <= std::numeric_limits<float>::max(); }
+bool fits(double v) { return std::isfinite(static_cast<float>(v)); }
 
 bool fits(const Vec3& v) { return fits(v.x) && fits(v.y) && fits(v.z); }
 

@@ -12,8 +12,9 @@
 
 namespace pba::query {
 
-/// True when |v| fits a float (<= 3.4e38; false for NaN): the range of the colliders'
-/// positions and sizes, within which the squared distances the queries compare cannot
+/// True when v is finite as a float (|v| <= 3.4e38, to the float's rounding; false for NaN):
+/// require_float's test, so what the checks refuse and what they skip agree; the range of the
+/// colliders' positions and sizes, within which the squared distances the queries compare cannot
 /// overflow (beyond ~1.3e154 they would, and the nearest collider would be missed).
 bool fits(double v);
 /// fits() for every component.

@@ -416,6 +416,14 @@ TEST(Query, TheFloatRangeIsHeldAndRefusedBeyondByName) {
   expect_error([&] { q.build(beyond, {}, {}, "level"); }, "level[1].end.position: must fit a float");
   beyond[1] = Collider::sphere(Vec3(0.0), 1e39);
   expect_error([&] { q.build(beyond, {}, {}, "level"); }, "level[1].radius: must fit a float");
+  // the range's rim: just past the float's largest, where a float rounds to it, require_float
+  // takes a value, and so do the queries (a collider there is built and found)
+  const double rim = static_cast<double>(std::numeric_limits<float>::max()) * (1 + 0x1p-30);
+  std::vector<Collider> at_rim{Collider::sphere(Vec3(0.0), 1), Collider::sphere(Vec3(rim, 0, 0), 1)};
+  q.build(at_rim);
+  const QueryDistance r = q.closest_point(Vec3(rim, 0, 0), 1e300);
+  ASSERT_TRUE(r.found);
+  EXPECT_EQ(r.collider, 1u);
 }
 
 TEST(Query, WorldQueriesFollowTheWorldBetweenTicks) {
