@@ -363,6 +363,11 @@ class ParticleSystem {
  public:
   /// Creates an empty system (validates `def`, throws Error naming the bad field).
   explicit ParticleSystem(const ParticleSystemDef& def = {});
+  ParticleSystem(const ParticleSystem&) = default;
+  ParticleSystem& operator=(const ParticleSystem&) = default;
+  ParticleSystem(ParticleSystem&&) noexcept = default;
+  /// Moves `o` in; a self-move keeps the system as it was.
+  ParticleSystem& operator=(ParticleSystem&& o) noexcept;
 
   // ---- settings ----
 

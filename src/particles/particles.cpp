@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <new>
 #include <string>
 
@@ -302,6 +303,13 @@ Vec3 Wind::at(double t) const {
 
 // ---------------------------------------------------------------------------------------
 // the system
+
+// a self-move keeps the system (see World's: a vector moved into itself gives up its elements,
+// and the step then read the broad phase's blocks of particles that were no longer there)
+ParticleSystem& ParticleSystem::operator=(ParticleSystem&& o) noexcept {
+  if (this != &o) std::destroy_at(this), std::construct_at(this, std::move(o));
+  return *this;
+}
 
 ParticleSystem::ParticleSystem(const ParticleSystemDef& def)
     : integ_(def.method), integ_one_(Method::ImplicitEuler), forces_(def.forces), collision_(def.collision) {

@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <new>
 #include <string>
 
@@ -280,7 +281,11 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
 
 RigidBodySystem::~RigidBodySystem() = default;
 RigidBodySystem::RigidBodySystem(RigidBodySystem&&) noexcept = default;
-RigidBodySystem& RigidBodySystem::operator=(RigidBodySystem&&) noexcept = default;
+// a self-move keeps the system (see World's: a vector moved into itself gives up its elements)
+RigidBodySystem& RigidBodySystem::operator=(RigidBodySystem&& o) noexcept {
+  if (this != &o) std::destroy_at(this), std::construct_at(this, std::move(o));
+  return *this;
+}
 
 namespace {
 

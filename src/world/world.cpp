@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "pba/collide/narrow_phase.h"
@@ -223,7 +224,12 @@ void World::set_gravity(const Vec3& g) {
 
 World::~World() = default;
 World::World(World&&) noexcept = default;
-World& World::operator=(World&&) noexcept = default;
+// a self-move keeps the world: member by member, each vector would be emptied (a vector
+// moved into itself gives up its elements) under the counts and handles that still name them
+World& World::operator=(World&& o) noexcept {
+  if (this != &o) std::destroy_at(this), std::construct_at(this, std::move(o));
+  return *this;
+}
 
 World::EntityRecord& World::record(EntityId e, std::string_view where) {
   if (!entities_.valid(e)) entities_.require(e, std::string(where) + ": entity");

@@ -109,6 +109,36 @@ TEST(RigidComponent, AMovedFromWorldTakesBodiesAgain) {
   EXPECT_NEAR(w.rigid().pose(b).position.y, 0.5, 1e-3);
 }
 
+// A self-move (x = std::move(x), here through a reference) keeps the object as it was. Member
+// by member, each vector moved into itself gave up its elements under the counts and handles
+// that still named them: the World and the RigidBodySystem lost their bodies' arrays, and a
+// ParticleSystem's next step read the broad phase's blocks that were gone (UBSan: reference
+// binding to null of type 'BlockBounds').
+TEST(RigidComponent, ASelfMoveKeepsTheWorldAndItsSystems) {
+  World w;
+  ground(w);
+  const EntityId e = w.create_entity({.name = "crate", .pose = {{0, 0.6, 0}, pba::Quat(1, 0, 0, 0)}});
+  const RigidBodyId b = w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}));
+  World& same_world = w;
+  w = std::move(same_world);
+  for (int i = 0; i < 60; ++i) w.tick(i / 60.0, 1.0 / 60);
+  EXPECT_TRUE(w.valid(e));
+  EXPECT_NEAR(w.rigid().pose(b).position.y, 0.5, 1e-3);
+  pba::RigidBodySystem& r = w.rigid();
+  pba::RigidBodySystem& same_rigid = r;
+  r = std::move(same_rigid);
+  EXPECT_EQ(r.size(), 2u);  // the ground and the crate
+  r.step(1.0 / 60, {0, -9.81, 0});
+  EXPECT_NEAR(r.pose(b).position.y, 0.5, 1e-3);
+  pba::ParticleSystem p;
+  p.create({.position = {0, 1, 0}});
+  pba::ParticleSystem& same_particles = p;
+  p = std::move(same_particles);
+  ASSERT_EQ(p.size(), 1u);
+  p.step(0, 0.01, std::span<const pba::Collider>{}, {});
+  EXPECT_LT(p.position(std::size_t{0}).y, 1.0);  // it falls
+}
+
 // A kinematic path faster than a rigid body may move (kMaxRigidSpeed) was refused with the
 // body's own words, "rigid body 0 set_velocity linear: ...": no entity, no path (a scene
 // file's "kinematic": {"path": "linear", "velocity": [1e30, 0, 0]}). The tick names both.
