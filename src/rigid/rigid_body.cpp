@@ -388,10 +388,7 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
       // float range above and made the first step NaN (the contact rows square the lever
       // arms): refused beyond kMaxCenterOfMassOffset sizes of the shapes' bounds from them
       Aabb box = bounds(shapes[0].shape, shapes[0].local);
-      for (std::size_t k = 1; k < shapes.size(); ++k) {
-        const Aabb b = bounds(shapes[k].shape, shapes[k].local);
-        box.lo = glm::min(box.lo, b.lo), box.hi = glm::max(box.hi, b.hi);
-      }
+      for (std::size_t k = 1; k < shapes.size(); ++k) box = box.merged(bounds(shapes[k].shape, shapes[k].local));
       const double size = glm::length(box.hi - box.lo);
       const double out = glm::length(glm::max(glm::max(box.lo - m.center, m.center - box.hi), Vec3(0)));
       if (!(out <= kMaxCenterOfMassOffset * size))
