@@ -129,6 +129,7 @@ double* dense_rhs(DenseSolver& s);     // N
 void dense_solve(DenseSolver& s);      // rhs <- matrix^-1 rhs (partial-pivot LU)
 
 [[noreturn]] void throw_size_mismatch(std::size_t nx, std::size_t nv);
+[[noreturn]] void throw_step_precision(double dt, std::size_t scalar_bytes);
 [[noreturn]] void throw_newton_failure(int iterations, double update, double t, double dt);
 [[noreturn]] void throw_too_many_unknowns(std::size_t n_objects, int dim, std::size_t limit);
 [[noreturn]] void throw_singular(double t, double dt);
@@ -187,7 +188,9 @@ class Integrator {
 
   /// Advances x and v (same size n) from time t to t + dt (dt finite and > 0, seconds),
   /// calling accel(double t, std::span<const V> x, std::span<const V> v, std::span<V> a)
-  /// as often as the method needs. Throws Error for a bad dt or mismatched sizes.
+  /// as often as the method needs. Throws Error for a bad dt or mismatched sizes; dt
+  /// must also be a normal number in the vectors' precision with a finite square:
+  /// [2.2e-308, 1.3e154] s for double vectors, [1.2e-38, 1.8e19] s for float ones.
   template <class Accel>
   void step(double t, double dt, std::span<V> x, std::span<V> v, Accel&& accel);
 
@@ -254,10 +257,13 @@ void Integrator<V>::step(double t, double dt, std::span<V> x, std::span<V> v, Ac
   // validate once per step, never per object
   require_positive(dt, "Integrator::step(dt)");
   require_finite(t, "Integrator::step(t)");
+  // the step in the vectors' precision: normal, with a finite square (a float integrator
+  // rounds 1e-50 to 0 and 1e300 to inf; position Verlet divides by it, the Verlets square it)
+  const Scalar h = static_cast<Scalar>(dt);
+  if (!(std::isnormal(h) && std::isfinite(h * h))) detail::throw_step_precision(dt, sizeof(Scalar));
   if (x.size() != v.size()) detail::throw_size_mismatch(x.size(), v.size());
   ensure_size(x.size());
   if (x.empty()) return;
-  const Scalar h = static_cast<Scalar>(dt);
   switch (method_) {
     case Method::ExplicitEuler: step_explicit_euler(t, h, x, v, accel); break;
     case Method::SemiImplicitEuler: step_semi_implicit_euler(t, h, x, v, accel); break;

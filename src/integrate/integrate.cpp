@@ -87,6 +87,15 @@ void throw_size_mismatch(std::size_t nx, std::size_t nv) {
               std::to_string(nv) + "; they must be the same size");
 }
 
+void throw_step_precision(double dt, std::size_t scalar_bytes) {
+  const bool is_float = scalar_bytes == sizeof(float);
+  const double lo = is_float ? std::numeric_limits<float>::min() : std::numeric_limits<double>::min();
+  const double hi = std::sqrt(is_float ? std::numeric_limits<float>::max() : std::numeric_limits<double>::max());
+  throw Error("Integrator::step(dt): must be in [" + format_value(lo) + ", " + format_value(hi) +
+              "] s for an integrator of " + (is_float ? "float" : "double") +
+              " vectors (the step is used in that precision, divided by and squared), got " + format_value(dt));
+}
+
 void throw_newton_failure(int iterations, double update, double t, double dt) {
   throw Error("implicit Euler: Newton did not converge in " + std::to_string(iterations) +
               " iterations at t = " + format_value(t) + " s, dt = " + format_value(dt) +

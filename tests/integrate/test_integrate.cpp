@@ -70,6 +70,42 @@ TEST(BadInput, StepRejectsBadDtNamingValueAndArgument) {
   }
 }
 
+TEST(BadInput, StepRejectsADtItsPrecisionCannotHold) {
+  // a finite positive dt that rounds to 0 or inf in float, or whose square overflows (or a
+  // subnormal one in double, whose inverse overflows) gave NaN or a silent no-op step; it is
+  // refused, the state untouched
+  auto f = [](double, const auto& x, const auto&) { return -x; };
+  for (Method m : pba::kAllMethods) {
+    pba::Integrator<pba::Vec3f> fi(m);
+    pba::Vec3f x(1, 0, 0), v(0, 0, 0);
+    for (double dt : {1e300, 1e39, 1e20, 1e-50, 1e-39}) {
+      const std::string msg = error_of([&] { fi.step_one(0, dt, x, v, f); });
+      EXPECT_EQ(msg, "Integrator::step(dt): must be in [1.1754943508222875e-38, 18446743523953729536] s for an "
+                     "integrator of float vectors (the step is used in that precision, divided by and squared), got " +
+                         pba::format_value(dt))
+          << pba::name(m);
+    }
+    EXPECT_EQ(x, pba::Vec3f(1, 0, 0));
+    EXPECT_EQ(v, pba::Vec3f(0, 0, 0));
+    pba::Integrator<double> di(m);
+    double xd = 1, vd = 0;
+    for (double dt : {1e-320, 1e155})
+      EXPECT_NE(error_of([&] { di.step_one(0, dt, xd, vd, f); }).find("double vectors (the step is used in that "
+                                                                      "precision, divided by and squared), got " +
+                                                                      pba::format_value(dt)),
+                std::string::npos);
+    EXPECT_EQ(xd, 1.0);
+    // the ends of the float range step and stay finite (the largest with a force-free object,
+    // which the Verlets move by a dt^2 of 3.4e38 times a zero acceleration)
+    fi.step_one(0, std::numeric_limits<float>::min(), x, v, f);
+    EXPECT_TRUE(pba::is_finite(x) && pba::is_finite(v)) << pba::name(m);
+    pba::Vec3f xf(1, 0, 0), vf(0, 0, 0);
+    fi.reset_history();
+    fi.step_one(0, 1.8e19, xf, vf, [](double, const pba::Vec3f&, const pba::Vec3f&) { return pba::Vec3f(0); });
+    EXPECT_EQ(xf, pba::Vec3f(1, 0, 0)) << pba::name(m);
+  }
+}
+
 TEST(BadInput, MismatchedSizesAndSettings) {
   pba::Integrator<pba::Vec3> integ(Method::Rk4);
   std::vector<pba::Vec3> x(3), v(2);
