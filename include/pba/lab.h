@@ -59,9 +59,10 @@ struct Problem {
 Problem projectile(double g = 9.81);
 /// Projectile with linear drag a = g - k v (k in 1/s, > 0); closed form with e^{-kt}.
 Problem projectile_drag(double k = 0.5, double g = 9.81);
-/// Undamped harmonic oscillator x'' = -omega^2 x (omega rad/s, > 0), x0 = 1, v0 = 0.
+/// Undamped harmonic oscillator x'' = -omega^2 x, x0 = 1, v0 = 0; omega (rad/s) in
+/// [1.5e-154, 1.3e154], where omega^2 is a normal double.
 Problem oscillator(double omega = 1.0);
-/// Underdamped oscillator x'' = -omega^2 x - 2 zeta omega x', 0 < zeta < 1.
+/// Underdamped oscillator x'' = -omega^2 x - 2 zeta omega x', 0 < zeta < 1, omega as above.
 Problem damped_oscillator(double omega = 1.0, double zeta = 0.1);
 /// Pendulum theta'' = -(g/L) sin theta released from rest at theta0 (rad, in (0, pi)).
 /// With small_angle, `exact` is the small-angle closed form theta0 cos(omega0 t) and
@@ -119,7 +120,10 @@ struct ConvergenceResult {
   /// Least-squares slope of log(error) against log(dt) over the fitted points; NaN when
   /// fewer than 3 points were usable (all at round-off: the method is exact here).
   double observed_order = std::numeric_limits<double>::quiet_NaN();
-  std::string note;            ///< why the order is NaN, if it is
+  /// Why the order is NaN, if it is: every error at round-off ("exact"), below the model
+  /// error, "diverged" (non-finite) at some dt with the rest at round-off, or "the error
+  /// does not fall with dt" (the tables show "exact", "-", "diverged" and "no conv.").
+  std::string note;
 };
 
 /// Measures the global error at t_end for each dt (the step count is t_end/dt rounded to

@@ -20,6 +20,30 @@ std::string fmt(const char* f, double v) {
   std::snprintf(buf, sizeof buf, f, v);
   return buf;
 }
+
+// The error below which a point is round-off or model error, not truncation: a fixed
+// floor, and n steps each adding ~eps of random rounding (a sqrt(n) walk) with a 100x
+// margin, and 10x the closed form's own error.
+double error_floor(long long steps, double scale, double model_error, const ConvergenceSettings& s) {
+  const double eps = std::numeric_limits<double>::epsilon();
+  const double walk = 100 * std::sqrt(static_cast<double>(steps)) * eps * scale;
+  return std::max({s.roundoff_floor * scale, walk, 10 * model_error});
+}
+
+// The notes measure_convergence gives a NaN order; the tables show them as one word.
+constexpr std::string_view kNoteExact = "error at round-off for every dt (exact for this problem)";
+constexpr std::string_view kNoteModel = "error below the closed form's own model error (or round-off)";
+constexpr std::string_view kNoteDiverged = "diverged";        // "diverged (non-finite) at k of n dt ..."
+constexpr std::string_view kNoteNoFit = "the error does not";  // "... fall with dt ..."
+
+// One word for a convergence result's order: the order, or why there is none.
+std::string order_cell(const ConvergenceResult& c, const char* format) {
+  if (!std::isnan(c.observed_order)) return fmt(format, c.observed_order);
+  if (c.note.rfind(kNoteDiverged, 0) == 0) return "diverged";
+  if (c.note.rfind(kNoteNoFit, 0) == 0) return "no conv.";
+  if (c.note == kNoteModel) return "-";
+  return "exact";
+}
 }  // namespace
 
 void simulate(const Problem& p, Method m, double dt, long long steps, std::vector<double>& x,
@@ -44,15 +68,10 @@ void simulate(const Problem& p, Method m, double dt, long long steps, std::vecto
 double fit_order(std::span<const double> dts, std::span<const double> errors,
                  std::span<const long long> steps, double scale, double model_error,
                  const ConvergenceSettings& s, std::vector<bool>& fitted) {
-  const double eps = std::numeric_limits<double>::epsilon();
-  // usable points: above round-off (a fixed floor, and n steps each adding ~eps of random
-  // rounding, a sqrt(n) walk, with a 100x margin) and above the closed form's model error
+  // usable points: above round-off and above the closed form's model error
   std::vector<bool> usable(dts.size(), false);
-  for (std::size_t i = 0; i < dts.size(); ++i) {
-    const double walk = 100 * std::sqrt(static_cast<double>(steps[i])) * eps * scale;
-    const double floor = std::max({s.roundoff_floor * scale, walk, 10 * model_error});
-    usable[i] = std::isfinite(errors[i]) && errors[i] > floor;
-  }
+  for (std::size_t i = 0; i < dts.size(); ++i)
+    usable[i] = std::isfinite(errors[i]) && errors[i] > error_floor(steps[i], scale, model_error, s);
   // the fit window: consecutive usable points, each halving shrinking the error by at
   // least 1.5x (any order >= 1 gives 2x; less means round-off or model error has taken
   // over, e.g. position Verlet's round-off growth), choosing among windows of the
@@ -140,9 +159,24 @@ ConvergenceResult measure_convergence(const Problem& p, Method m, const Converge
   }
   // the observed order by the lab's fit rule
   r.observed_order = fit_order(r.dts, r.errors, counts, scale, p.model_error, s, r.fitted);
-  if (std::isnan(r.observed_order))
-    r.note = p.model_error > 0 ? "error below the closed form's own model error (or round-off)"
-                               : "error at round-off for every dt (exact for this problem)";
+  if (std::isnan(r.observed_order)) {
+    // why: every point at round-off (or model error), or points that diverged or did not
+    // converge (which are not "exact")
+    std::size_t diverged = 0, above = 0;
+    for (std::size_t i = 0; i < r.errors.size(); ++i) {
+      if (!std::isfinite(r.errors[i])) ++diverged;
+      else if (r.errors[i] > error_floor(counts[i], scale, p.model_error, s)) ++above;
+    }
+    const std::string of = std::to_string(diverged) + " of " + std::to_string(r.errors.size()) + " dt";
+    if (above > 0)
+      r.note = std::string(kNoteNoFit) + " fall with dt (no 3 consecutive dt halvings each shrink it 1.5x)" +
+               (diverged > 0 ? "; diverged (non-finite) at " + of : "");
+    else if (diverged > 0)
+      r.note = std::string(kNoteDiverged) + " (non-finite) at " + of +
+               (diverged < r.errors.size() ? ", the others at round-off" : ": unstable at these step sizes");
+    else
+      r.note = p.model_error > 0 ? kNoteModel : kNoteExact;
+  }
   return r;
 }
 
@@ -397,15 +431,16 @@ std::string summary_table(const LabReport& rep) {
     return fmt("%.4f", z);
   };
   for (Method m : methods) {
-    double obs = kNaN, ef = kNaN, em = kNaN, lim = kNaN, th = theory_stability_limit(m);
+    double ef = kNaN, em = kNaN, lim = kNaN, th = theory_stability_limit(m);
+    std::string obs_cell = "-";
     for (const auto& c : rep.convergence)
-      if (c.method == m && c.problem == head) obs = c.observed_order;
+      if (c.method == m && c.problem == head) obs_cell = order_cell(c, "%.3f");
     for (const auto& e : rep.energy)
       if (e.method == m && e.problem == ehead) ef = e.final_rel_error, em = e.max_abs_rel_error;
     for (const auto& s : rep.stability)
       if (s.method == m) lim = s.limit;
     std::snprintf(line, sizeof line, "%-20s %8s %6d %12s %12s %12s %10s\n", std::string(label(m)).c_str(),
-                  std::isnan(obs) ? "exact" : fmt("%.3f", obs).c_str(), order(m),
+                  obs_cell.c_str(), order(m),
                   fmt("%+.3e", ef).c_str(), fmt("%.3e", em).c_str(),
                   std::isnan(lim) ? "-" : limit_text(lim).c_str(),
                   std::isinf(th) ? "none" : th == 0 ? "0" : fmt("%.4f", th).c_str());
@@ -417,7 +452,8 @@ std::string summary_table(const LabReport& rep) {
     if (std::find(probs.begin(), probs.end(), c.problem) == probs.end()) probs.push_back(c.problem);
   if (!probs.empty()) {
     out += "\nObserved order per problem ('exact' = error at round-off for every dt; '-' = below the\n"
-           "closed form's own model error):\n";
+           "closed form's own model error; 'diverged' = non-finite at some dt, the rest unusable;\n"
+           "'no conv.' = the error does not fall with dt):\n";
     std::snprintf(line, sizeof line, "%-18s", "problem");
     out += line;
     for (Method m : methods) {
@@ -431,9 +467,7 @@ std::string summary_table(const LabReport& rep) {
       for (Method m : methods) {
         std::string cell = " ";
         for (const auto& c : rep.convergence)
-          if (c.problem == pn && c.method == m)
-            cell = std::isnan(c.observed_order) ? (c.note.find("model") != std::string::npos ? "-" : "exact")
-                                                : fmt("%.2f", c.observed_order);
+          if (c.problem == pn && c.method == m) cell = order_cell(c, "%.2f");
         std::snprintf(line, sizeof line, " %9s", cell.c_str());
         out += line;
       }

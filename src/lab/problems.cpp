@@ -1,6 +1,7 @@
 // The lab's standard problems with their closed-form solutions, and the special
 // functions they need (complete elliptic integral, Jacobi elliptic functions).
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "pba/lab.h"
@@ -11,6 +12,14 @@ namespace {
 
 [[noreturn]] void bad_field(const Problem& p, std::string_view field, std::string_view why) {
   throw Error("Problem '" + p.name + "'." + std::string(field) + ": " + std::string(why));
+}
+
+// an angular frequency whose square (the stiffness omega^2) is a normal double: outside
+// [1.5e-154, 1.3e154] rad/s omega^2 underflows to 0 or overflows to inf, and the
+// problem's acceleration is silently 0 or NaN
+void require_omega(double omega, std::string_view where) {
+  require_in_range(omega, std::sqrt(std::numeric_limits<double>::min()), std::sqrt(std::numeric_limits<double>::max()),
+                   where);
 }
 }  // namespace
 
@@ -142,7 +151,7 @@ Problem projectile_drag(double k, double g) {
 }
 
 Problem oscillator(double omega) {
-  require_positive(omega, "oscillator(omega)");
+  require_omega(omega, "oscillator(omega)");
   Problem p;
   p.name = "oscillator";
   p.description = "undamped harmonic oscillator x'' = -omega^2 x (exact: cosine)";
@@ -167,7 +176,7 @@ Problem oscillator(double omega) {
 }
 
 Problem damped_oscillator(double omega, double zeta) {
-  require_positive(omega, "damped_oscillator(omega)");
+  require_omega(omega, "damped_oscillator(omega)");
   require_in_range(zeta, 1e-12, 1 - 1e-12, "damped_oscillator(zeta)");
   Problem p;
   p.name = "damped-oscillator";

@@ -60,6 +60,39 @@ TEST(Convergence, EveryStandardProblemMatchesTheory) {
   }
 }
 
+TEST(Convergence, NoOrderIsReportedAsWhyNotAsExact) {
+  // a stiff x'' = -1e6 x at omega dt = 100, 50, 25: RK4 (stable to 2.83) diverges at every
+  // dt, and a closed form off by 0.5 (a user's mistake) leaves an error that never falls;
+  // both were reported as "exact" (error at round-off) before
+  lab::Problem stiff = lab::oscillator(1000);
+  stiff.name = "stiff";
+  stiff.t_end = 10;
+  stiff.dt_coarse = 0.1;
+  lab::ConvergenceSettings s;
+  s.levels = 3;
+  const auto r = lab::measure_convergence(stiff, Method::Rk4, s);
+  EXPECT_TRUE(std::isnan(r.observed_order));
+  for (double e : r.errors) EXPECT_TRUE(std::isinf(e)) << e;
+  EXPECT_EQ(r.note, "diverged (non-finite) at 3 of 3 dt: unstable at these step sizes");
+  lab::Problem wrong = lab::oscillator();
+  wrong.name = "wrong-exact";
+  wrong.exact = [](double t, std::span<double> x, std::span<double> v) {
+    x[0] = std::cos(t) + 0.5;
+    v[0] = -std::sin(t);
+  };
+  const auto w = lab::measure_convergence(wrong, Method::Rk4);
+  EXPECT_TRUE(std::isnan(w.observed_order));
+  for (double e : w.errors) EXPECT_NEAR(e, 0.5, 1e-3);  // RK4's own error is below 1e-3 here
+  EXPECT_EQ(w.note, "the error does not fall with dt (no 3 consecutive dt halvings each shrink it 1.5x)");
+  // the tables say so too
+  lab::LabReport rep;
+  rep.convergence = {r, w};
+  const std::string table = lab::summary_table(rep);
+  EXPECT_EQ(table.find("   exact"), std::string::npos) << table;  // no right-aligned "exact" cell
+  EXPECT_NE(table.find("stiff               diverged"), std::string::npos) << table;
+  EXPECT_NE(table.find("wrong-exact         no conv."), std::string::npos) << table;
+}
+
 TEST(SpecialFunctions, EllipticKAndJacobiFunctions) {
   // K(0) = pi/2; K(1/2) = Gamma(1/4)^2 / (4 sqrt(pi)) = 1.854074677301372 (A&S table 17.1)
   EXPECT_DOUBLE_EQ(lab::elliptic_k(0.0), std::numbers::pi / 2);
@@ -211,6 +244,14 @@ TEST(BadInput, ProblemsAndSettingsNameTheField) {
             "damped-oscillator, pendulum-small, pendulum-large, orbit, orbit-circular");
   EXPECT_NE(error_of([&] { lab::measure_energy(lab::Problem{}, Method::Rk4); }).find("Problem.name"),
             std::string::npos);
+  // an omega whose square over- or underflows made the acceleration NaN or 0
+  for (double omega : {1e200, 1e-200}) {
+    const std::string range = "must be in [1.4916681462400413e-154, 1.3407807929942596e+154], got " +
+                              pba::format_value(omega);
+    EXPECT_EQ(error_of([&] { lab::oscillator(omega); }), "oscillator(omega): " + range);
+    EXPECT_EQ(error_of([&] { lab::damped_oscillator(omega); }), "damped_oscillator(omega): " + range);
+  }
+  EXPECT_NO_THROW(lab::oscillator(1e150).validate());
 }
 
 TEST(Output, CsvFilesAndSummaryTable) {
