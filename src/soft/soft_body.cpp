@@ -202,7 +202,9 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
       throw Error(idx(where, field, k) + "." + std::string(end) + ": particle " + std::to_string(p) +
                   " does not exist (the mesh has " + std::to_string(n) + " particles)");
   };
-  // constraints: indices, distinct ends, rest lengths
+  // constraints: indices, distinct ends, rest lengths (a normal float whose square is finite)
+  constexpr double kMinLength = std::numeric_limits<float>::min();
+  const double kMaxLength = std::sqrt(static_cast<double>(std::numeric_limits<float>::max()));
   std::vector<SoftConstraint> cons = m.constraints;
   for (std::size_t k = 0; k < cons.size(); ++k) {
     SoftConstraint& c = cons[k];
@@ -221,6 +223,14 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
     } else if (!(c.rest_length > 0)) {
       throw Error(idx(where, "constraints", k) + ".rest_length: must be > 0, got " + format_value(c.rest_length));
     }
+    // the solver keeps rest lengths in float and squares lengths in float
+    if (!(c.rest_length >= kMinLength && c.rest_length <= kMaxLength))
+      throw Error(idx(where, "constraints", k) + ".rest_length: must be in [" + format_value(kMinLength) + ", " +
+                  format_value(kMaxLength) + "] m (kept in float, and squared), got " + format_value(c.rest_length));
+    if (const double d = glm::length(m.positions[c.b] - m.positions[c.a]); !(d <= kMaxLength))
+      throw Error(idx(where, "constraints", k) + ": particles " + std::to_string(c.a) + " and " +
+                  std::to_string(c.b) + " are " + format_value(d) + " m apart, more than " +
+                  format_value(kMaxLength) + " m (the solver squares lengths in float)");
     if (c.a > c.b) std::swap(c.a, c.b);  // a < b, so runs have positive offsets
   }
   // triangles and tetrahedra
@@ -410,6 +420,14 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
   require_finite(t, "SoftBody::step(t)");
   require_positive(dt, "SoftBody::step(dt)");
   s.def.validate("SoftBodyDef");
+  // the substep in float: normal, with a finite square (1e-300 rounded to 0 and 1e300 to
+  // inf, and the state turned NaN)
+  if (const float h = static_cast<float>(dt / s.def.substeps); !(std::isnormal(h) && std::isfinite(h * h)))
+    throw Error("SoftBody::step(dt): the substep dt / SoftBodyDef.substeps = " + format_value(dt) + " / " +
+                std::to_string(s.def.substeps) + " s must be in [" +
+                format_value(std::numeric_limits<float>::min()) + ", " +
+                format_value(std::sqrt(static_cast<double>(std::numeric_limits<float>::max()))) +
+                "] s (it is used in float, divided by and squared)");
   if (s.x.empty()) {
     s.time = t + dt;
     ++s.steps;

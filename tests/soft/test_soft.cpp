@@ -725,6 +725,47 @@ TEST(SoftBadInput, MeshValuesThatOverflowTheFloatState) {
   EXPECT_EQ(error_of([&] { pba::SoftBody::from_mesh(m); }), "");
 }
 
+// lengths the float solver cannot square, and steps whose substep float rounds to 0 or
+// inf, turned the state NaN at the first step (blamed on particle 0); they are refused by
+// name, the state untouched
+TEST(SoftBadInput, LengthsAndStepsBeyondTheFloatSolver) {
+  pba::SoftMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}};
+  m.masses = {1, 1};
+  m.constraints = {{.a = 0, .b = 1, .rest_length = 1e300}};
+  const std::string range = "must be in [1.1754943508222875e-38, 18446743523953729536] m (kept in float, and squared)";
+  EXPECT_EQ(error_of([&] { pba::SoftBody::from_mesh(m); }), "SoftMesh.constraints[0].rest_length: " + range + ", got 1e+300");
+  m.constraints[0].rest_length = 1e-300;  // 0 in float: an infinite strain
+  EXPECT_EQ(error_of([&] { pba::SoftBody::from_mesh(m); }), "SoftMesh.constraints[0].rest_length: " + range + ", got 1e-300");
+  // a rope 1e30 m long: its segments' squares overflow a float
+  std::string msg = error_of([] { pba::SoftBody::rope({.to = {1e30, 2, 0}}); });
+  EXPECT_EQ(msg, "RopeDef.constraints[0].rest_length: " + range + ", got 5.0000000000000005e+28");
+  m.positions[1] = {3e19, 0, 0};
+  m.constraints[0].rest_length = 1;
+  EXPECT_EQ(error_of([&] { pba::SoftBody::from_mesh(m); }),
+            "SoftMesh.constraints[0]: particles 0 and 1 are 3e+19 m apart, more than "
+            "18446743523953729536 m (the solver squares lengths in float)");
+  // the largest allowed length steps and stays finite
+  EXPECT_NO_THROW(pba::SoftBody::rope({.to = {1.8e19, 2, 0}, .segments = 1}).step(0, 1.0 / 60));
+  // the substep in float
+  for (pba::SoftSolver solver : {pba::SoftSolver::Xpbd, pba::SoftSolver::MassSpring}) {
+    pba::SoftBodyDef d;
+    d.solver = solver;
+    pba::SoftBody r = pba::SoftBody::rope({.segments = 4}, d);
+    const std::uint64_t h0 = r.hash();
+    for (double dt : {1e-300, 1e-40, 1e300, 1e21}) {
+      msg = error_of([&] { r.step(0, dt); });
+      EXPECT_EQ(msg, "SoftBody::step(dt): the substep dt / SoftBodyDef.substeps = " + pba::format_value(dt) +
+                         " / 10 s must be in [1.1754943508222875e-38, 18446743523953729536] s (it is used in float, "
+                         "divided by and squared)");
+    }
+    EXPECT_FALSE(r.failed());
+    EXPECT_EQ(r.hash(), h0);
+    r.step(0, 1.0 / 60);
+    EXPECT_TRUE(std::isfinite(r.kinetic_energy()));
+  }
+}
+
 TEST(SoftBadInput, ConstraintsNamingMissingParticles) {
   pba::SoftMesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
