@@ -526,6 +526,16 @@ void solve_volumes(SoftBody::Impl& s, float at, bool use_lambda) {
 
 }  // namespace
 
+// XPBD's damping alpha c / h (Macklin et al. 2016, eq. 26) beyond a float: the solve
+// would divide inf by inf
+[[noreturn]] void SoftBody::Impl::throw_damping_overflow(int kind, double alpha, double h) const {
+  static constexpr const char* kField[3] = {"stretch_compliance", "shear_compliance", "bend_compliance"};
+  throw Error("SoftBodyDef.spring_damping: " + format_value(def.spring_damping) + " N s/m with SoftBodyDef." +
+              kField[kind] + " = " + format_value(alpha) + " m/N gives the XPBD damping alpha c / h = " +
+              format_value(alpha * def.spring_damping / h) + " at the substep h = " + format_value(h) +
+              " s, beyond a float (3.4e38); lower the damping or the compliance");
+}
+
 void SoftBody::Impl::step_xpbd(double t, double dt) {
   const int S = def.substeps;
   const double h = dt / S;
@@ -536,14 +546,20 @@ void SoftBody::Impl::step_xpbd(double t, double dt) {
 #if PBA_SOFT_HAVE_AVX2
   a.avx2 = simd && has_avx2();
 #endif
+  // alpha / h^2 beyond a float is held at the largest float: in the limit the constraint
+  // has no stiffness and its correction is 0 either way, while inf made at * lambda
+  // 0 * inf = NaN once multipliers are kept (iterations > 1 or damping)
+  constexpr double kFloatMax = std::numeric_limits<float>::max();
   bool damp = false;
   for (int k = 0; k < 3; ++k) {
-    a.at[k] = static_cast<float>(alpha[k] / (h * h));
-    a.gamma[k] = static_cast<float>(alpha[k] * def.spring_damping / h);
+    a.at[k] = static_cast<float>(std::min(alpha[k] / (h * h), kFloatMax));
+    const double gamma = alpha[k] * def.spring_damping / h;
+    if (!(gamma <= kFloatMax)) throw_damping_overflow(k, alpha[k], h);
+    a.gamma[k] = static_cast<float>(gamma);
     damp = damp || a.gamma[k] > 0;
   }
   const bool use_lambda = def.iterations > 1 || damp;
-  const float at_volume = static_cast<float>(def.volume_compliance / (h * h));
+  const float at_volume = static_cast<float>(std::min(def.volume_compliance / (h * h), kFloatMax));
   // predict's inputs: gravity, held external accelerations, drag toward the wind
   const Vec3 wind = def.forces.wind.at(t);
   const bool drag = def.forces.linear_drag > 0 || def.forces.quadratic_drag > 0;

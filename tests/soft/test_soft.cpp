@@ -766,6 +766,48 @@ TEST(SoftBadInput, LengthsAndStepsBeyondTheFloatSolver) {
   }
 }
 
+// A compliance whose alpha / h^2 is beyond a float (valid: finite and >= 0) made the
+// multipliers' at * lambda 0 * inf = NaN once they are kept (iterations > 1, or damping);
+// such a constraint now has no stiffness, as in the limit. A damping alpha c / h beyond a
+// float divided inf by inf: it is refused, naming both fields.
+TEST(SoftBadInput, ComplianceAndDampingBeyondAFloat) {
+  auto com_y = [](double compliance) {
+    pba::SoftBodyDef d;
+    d.stretch_compliance = d.bend_compliance = compliance;
+    d.iterations = 2;
+    d.tethers = false;  // (they would hold the particles within reach of the pin)
+    pba::SoftBody r = pba::SoftBody::rope({.segments = 8}, d);
+    for (int i = 0; i < 30; ++i) r.step(i / 60.0, 1.0 / 60);
+    return r.center_of_mass().y;
+  };
+  // alpha / h^2 at h = 1/600 s: 3.6e35 (a float) for 1e30, 3.6e41 and 3.6e305 beyond
+  const double free = com_y(1e30);
+  EXPECT_NEAR(free, 2 - 9.81 * 0.5 * 0.5 / 2, 0.01);  // free fall over 0.5 s
+  EXPECT_NEAR(com_y(1e36), free, 1e-6);
+  EXPECT_NEAR(com_y(1e300), free, 1e-6);
+  pba::JellyDef j;
+  pba::SoftBodyDef jd = pba::jelly_settings(j);
+  jd.volume_compliance = 1e300;  // the jelly's damping keeps multipliers
+  pba::SoftBody jelly = pba::SoftBody::jelly_box(j, jd);
+  for (int i = 0; i < 10; ++i) jelly.step(i / 60.0, 1.0 / 60);
+  EXPECT_TRUE(std::isfinite(jelly.kinetic_energy()));
+  // a jelly of a vanishing Young's modulus: compliances of 1e301 and 3e296 m/N
+  pba::JellyMaterial soft;
+  soft.young = 1e-300;
+  pba::SoftBody mush = pba::SoftBody::jelly_box(j, pba::jelly_settings(j, soft));
+  for (int i = 0; i < 10; ++i) mush.step(i / 60.0, 1.0 / 60);
+  EXPECT_TRUE(std::isfinite(mush.kinetic_energy()));
+  pba::SoftBodyDef d;
+  d.stretch_compliance = 1e-3;
+  d.spring_damping = 1e300;
+  pba::SoftBody r = pba::SoftBody::rope({.segments = 4}, d);
+  EXPECT_EQ(error_of([&] { r.step(0, 0.01); }),
+            "SoftBodyDef.spring_damping: 1e+300 N s/m with SoftBodyDef.stretch_compliance = 0.001 m/N gives the XPBD "
+            "damping alpha c / h = 1e+300 at the substep h = 0.001 s, beyond a float (3.4e38); lower "
+            "the damping or the compliance");
+  EXPECT_FALSE(r.failed());
+}
+
 TEST(SoftBadInput, ConstraintsNamingMissingParticles) {
   pba::SoftMesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
