@@ -129,7 +129,15 @@ ConvergenceResult measure_convergence(const Problem& p, Method m, const Converge
   r.problem = p.name;
   r.method = m;
   const std::size_t n = p.x0.size();
-  // the step counts: dt_coarse / 2^k, rounded so that the run lands exactly on t_end
+  // the step counts: dt_coarse / 2^k, rounded so that the run lands exactly on t_end;
+  // the finest (and an RK4 reference at 8x it) within simulate's 1e9 steps, checked before
+  // llround (whose result beyond a long long is unspecified: 1e20 steps became 1)
+  const double finest = p.t_end / std::ldexp(p.dt_coarse, -(s.levels - 1)) * (p.exact ? 1 : 8);
+  if (!(finest <= 1e9))
+    throw Error("Problem '" + p.name + "': t_end / dt_coarse x 2^(levels - 1)" + (p.exact ? "" : " x 8 (the RK4 reference)") +
+                " = " + format_value(finest) + " steps at the finest level, more than 1e9 (t_end = " +
+                format_value(p.t_end) + " s, dt_coarse = " + format_value(p.dt_coarse) +
+                " s, ConvergenceSettings.levels = " + std::to_string(s.levels) + "); raise dt_coarse or lower levels");
   std::vector<long long> counts;
   for (int k = 0; k < s.levels; ++k)
     counts.push_back(std::max(1LL, std::llround(p.t_end / std::ldexp(p.dt_coarse, -k))));

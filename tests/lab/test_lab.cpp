@@ -252,6 +252,19 @@ TEST(BadInput, ProblemsAndSettingsNameTheField) {
     EXPECT_EQ(error_of([&] { lab::damped_oscillator(omega); }), "damped_oscillator(omega): " + range);
   }
   EXPECT_NO_THROW(lab::oscillator(1e150).validate());
+  // a finest step count beyond a long long was rounded to an unspecified value (1 step of
+  // dt = t_end, measured silently); beyond simulate's 1e9 steps it is refused up front
+  p = lab::oscillator();
+  p.t_end = 1e20;
+  p.dt_coarse = 1;
+  EXPECT_EQ(error_of([&] { lab::measure_convergence(p, Method::Rk4); }),
+            "Problem 'oscillator': t_end / dt_coarse x 2^(levels - 1) = 5.12e+22 steps at the finest level, more "
+            "than 1e9 (t_end = 1e+20 s, dt_coarse = 1 s, ConvergenceSettings.levels = 10); raise dt_coarse or "
+            "lower levels");
+  p.exact = {};
+  p.t_end = 1e6;
+  EXPECT_NE(error_of([&] { lab::measure_convergence(p, Method::Rk4); }).find("x 8 (the RK4 reference) = 4.096e+09"),
+            std::string::npos);
 }
 
 TEST(Output, CsvFilesAndSummaryTable) {
