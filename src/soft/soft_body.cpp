@@ -256,6 +256,20 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
     if (!(std::abs(v) > 0))
       throw Error(idx(where, "tets", k) + ": zero rest volume (particles " + std::to_string(t.a) + ", " +
                   std::to_string(t.b) + ", " + std::to_string(t.c) + ", " + std::to_string(t.d) + " are coplanar)");
+    // the volume solve forms sum_j w_j |grad_j|^2 (grad ~ an edge squared) in float: at
+    // rest it must fit 16 times over, room for the edges to stretch 2x (a 1e12 m jelly's
+    // overflowed at the first step, and the state turned NaN)
+    {
+      const Vec3 e1 = m.positions[t.b] - m.positions[t.a], e2 = m.positions[t.c] - m.positions[t.a],
+                 e3 = m.positions[t.d] - m.positions[t.a];
+      const Vec3 g1 = glm::cross(e2, e3), g2 = glm::cross(e3, e1), g3 = glm::cross(e1, e2), g0 = -(g1 + g2 + g3);
+      const double den = glm::dot(g0, g0) / m.masses[t.a] + glm::dot(g1, g1) / m.masses[t.b] +
+                         glm::dot(g2, g2) / m.masses[t.c] + glm::dot(g3, g3) / m.masses[t.d];
+      if (!(16 * den <= std::numeric_limits<float>::max()))
+        throw Error(idx(where, "tets", k) + ": too large for the float volume solve: sum of |grad V|^2 / mass over "
+                    "its particles is " + format_value(den) + " m^4/kg at rest, over 1/16 of the largest float (" +
+                    "room for a 2x stretch); use smaller tetrahedra or heavier particles");
+    }
     // positive orientation
     if (v < 0) {
       std::swap(t.c, t.d);

@@ -808,6 +808,23 @@ TEST(SoftBadInput, ComplianceAndDampingBeyondAFloat) {
   EXPECT_FALSE(r.failed());
 }
 
+// A jelly 1e12 m across: its volume gradients (edges squared) squared, over the particle
+// masses, overflowed a float at the first step and the state turned NaN; refused by name
+TEST(SoftBadInput, TetrahedraTooLargeForTheFloatVolumeSolve) {
+  pba::JellyDef j;
+  j.size = pba::Vec3(1e12);
+  j.center = pba::Vec3(0, 1e12, 0);
+  const std::string msg = error_of([&] { pba::SoftBody::jelly_box(j); });
+  EXPECT_EQ(msg.rfind("JellyDef.tets[0]: too large for the float volume solve", 0), 0u) << msg;
+  // 1e9 m fits (cells of 2.5e8 m: gradients of about 6e16 m^2, squared, over 1/125 kg, at
+  // four corners: about 1e37, 16 times of which is within 3.4e38) and steps finite
+  j.size = pba::Vec3(1e9);
+  j.center = pba::Vec3(0, 1e9, 0);
+  pba::SoftBody b = pba::SoftBody::jelly_box(j);
+  for (int i = 0; i < 5; ++i) b.step(i / 60.0, 1.0 / 60);
+  EXPECT_TRUE(std::isfinite(b.kinetic_energy()));
+}
+
 TEST(SoftBadInput, ConstraintsNamingMissingParticles) {
   pba::SoftMesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
