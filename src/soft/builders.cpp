@@ -229,6 +229,13 @@ SoftBodyDef jelly_settings(const JellyDef& jd, const JellyMaterial& mat, double 
   // edges: k = 4 G a / 3; volumes: alpha = V0 / lambda_v, lambda_v = K - 16 G / 9 > 0
   const double k = 4 * g * a / 3;
   const double lambda_v = bulk - 16 * g / 9;
+  // a cell or modulus so small that k underflows to 0 (a 1e-200 m box) has no finite
+  // compliance: name the inputs, not the derived field the step would refuse
+  if (!(k > 0 && std::isfinite(1 / k) && std::isfinite(k)))
+    throw Error("jelly_settings: JellyDef.size " + format_vec3(jd.size) + " m in " + std::to_string(jd.nx) + " x " +
+                std::to_string(jd.ny) + " x " + std::to_string(jd.nz) + " cells and JellyMaterial.young " +
+                format_value(mat.young) + " Pa give an edge stiffness k = 4 G a / 3 = " + format_value(k) +
+                " N/m whose compliance 1 / k is not a finite number; use a larger box or a stiffer material");
   SoftBodyDef d;
   d.stretch_compliance = 1 / k;
   d.volume_compliance = (cell / 6) / lambda_v;

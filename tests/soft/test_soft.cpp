@@ -825,6 +825,23 @@ TEST(SoftBadInput, TetrahedraTooLargeForTheFloatVolumeSolve) {
   EXPECT_TRUE(std::isfinite(b.kinetic_energy()));
 }
 
+// A jelly 1e-200 m across: its cells' volume underflows, the edge stiffness is 0 and the
+// derived compliance inf, refused as "SoftBodyDef.stretch_compliance: must be finite" (a
+// field the user never set); jelly_settings names its inputs
+TEST(SoftBadInput, JellySettingsNameTheInputsOfANonFiniteCompliance) {
+  pba::JellyDef j;
+  j.size = pba::Vec3(1e-200);
+  EXPECT_EQ(error_of([&] { pba::jelly_settings(j); }),
+            "jelly_settings: JellyDef.size (1e-200, 1e-200, 1e-200) m in 4 x 4 x 4 cells and JellyMaterial.young 5000 "
+            "Pa give an edge stiffness k = 4 G a / 3 = 0 N/m whose compliance 1 / k is not a finite number; use a "
+            "larger box or a stiffer material");
+  pba::JellyMaterial m;
+  m.young = 1e-320;  // k = 4 G a / 3 = 1e-321 (subnormal): 1 / k overflows
+  EXPECT_NE(error_of([&] { pba::jelly_settings({}, m); }).find("whose compliance 1 / k is not a finite number"),
+            std::string::npos);
+  EXPECT_TRUE(std::isfinite(pba::jelly_settings({}, {.young = 1e-300}).stretch_compliance));
+}
+
 TEST(SoftBadInput, ConstraintsNamingMissingParticles) {
   pba::SoftMesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
