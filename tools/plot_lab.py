@@ -49,9 +49,22 @@ def grid(n):
     return rows, cols
 
 
+def why_no_order(note):
+    # the lab's note for a NaN order, as the summary table's one word
+    if note.startswith("diverged"):
+        return "diverged"
+    if note.startswith("the error does not"):
+        return "no conv."
+    if note.startswith("error below the closed form"):
+        return "-"
+    return "exact"
+
+
 def plot_convergence(plt, d):
     rows = read(os.path.join(d, "convergence.csv"))
-    orders = {(r["problem"], r["method"]): r["observed_order"] for r in read(os.path.join(d, "orders.csv"))}
+    order_rows = read(os.path.join(d, "orders.csv"))
+    orders = {(r["problem"], r["method"]): r["observed_order"] for r in order_rows}
+    notes = {(r["problem"], r["method"]): r.get("note", "") for r in order_rows}
     problems = list(grouped(rows, "problem"))
     nr, nc = grid(len(problems))
     fig, axes = plt.subplots(nr, nc, figsize=(3.6 * nc, 3.0 * nr), squeeze=False)
@@ -66,7 +79,7 @@ def plot_convergence(plt, d):
             if not keep:
                 continue
             o = orders.get((p, m), "nan")
-            lab = f"{m} ({float(o):.2f})" if o not in ("nan", "") else f"{m} (exact)"
+            lab = f"{m} ({float(o):.2f})" if o not in ("nan", "") else f"{m} ({why_no_order(notes.get((p, m), ''))})"
             ax.loglog(*zip(*keep), STYLES.get(m, "-"), marker="o", ms=2.5, lw=1.2,
                       color=COLORS.get(m), label=lab)
             lo_dt, hi_dt = min(lo_dt, min(dt)), max(hi_dt, max(dt))
