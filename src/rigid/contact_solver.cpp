@@ -1425,7 +1425,7 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
   p.sweeps = bias ? cs.manifold_iterations : cs.manifold_iterations - cs.manifold_iterations / 4;
   p.bias = bias, p.soft = soft, p.update_sep = update_sep, p.warm_next = warm_next;
   // the soft step's relax pass caps what each point carries to the next substep: an impact's
-  // impulse is no guess for the next substep's (contact_wide.cpp, pass())
+  // impulse is no guess for the next substep's (contact_wide.h, pass())
   p.cap_carry = soft && !bias;
   p.carry_speed = gravity_speed * h;
   const BodyArrays r = arrays(s);

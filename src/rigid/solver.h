@@ -3,7 +3,7 @@
 // blocks of kLanes manifolds (structure of arrays of floats: half a cache line per field; the
 // separations' anchors in a parallel array), grouped by the colours of the constraint graph
 // so that no two manifolds of a block share a dynamic body;
-// the passes then run over whole blocks with SIMD (contact_wide.cpp), and store() writes the
+// the passes then run over whole blocks with SIMD (contact_wide.h), and store() writes the
 // impulses back to the pairs for next step's warm starting.
 //
 // Each manifold is solved in its contact frame (t1, t2, n): the bodies' velocities are turned
@@ -105,7 +105,7 @@ struct alignas(64) ContactBlock {
 /// corner): the point is the manifold's centroid, so it has no lever arm from it (x = y = 0,
 /// exactly: the pairs' centroid of one point is the point), no twist (its radius is 0, and a
 /// pair carries no twist impulse then) and a K of one entry. The same rows as ContactBlock's
-/// otherwise, so the kernels are one template over both (contact_wide.cpp), and a one-point
+/// otherwise, so the kernels are one template over both (contact_wide.h), and a one-point
 /// lane's normal and friction rows give the bits of the same manifold in a ContactBlock
 /// (whose other three points hold zeros). A one-point lane's rolling resistance (a ball's) is
 /// solved in the block too, right after its friction, with SIMD and in the frame (a
@@ -184,7 +184,7 @@ struct PassParams {
   bool warm_next = false;    // then add the impulses to the warm-start accumulators for the next substep
   double carry_speed = 0;    // |g| h (m/s), the velocity gravity gives in a substep: cap_carry, and a landing
                              // while sliding
-  bool cap_carry = false;    // with update_sep: cap each point's carried impulse (contact_wide.cpp, pass())
+  bool cap_carry = false;    // with update_sep: cap each point's carried impulse (contact_wide.h, pass())
 };
 
 /// A body's velocities as the contact passes and the integration see them: one cache line, so

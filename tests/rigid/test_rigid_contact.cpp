@@ -580,7 +580,7 @@ TEST(RigidFriction, TheStopDistanceOverTheInputRangeIsTheClosedFormLessHalfASubs
 // step) and 0.48 m (TGS) beyond the upper bound, landing at 7.4 m/s at 6 m/s, or stopped
 // short of the lower one (the soft step by 0.06 m; TGS moved 5 cm back at 1 m/s). Their
 // passes solved the friction once, after the points, and the positions took its moment
-// (src/rigid/contact_wide.cpp, solve()); now a manifold whose friction changes the
+// (src/rigid/contact_wide.h, solve()); now a manifold whose friction changes the
 // velocity by more than gravity does in a substep (an impact's) is swept again, points and
 // friction together, and none of the 30 breaks a bound under any solver.
 TEST(RigidFriction, ABoxLandingFlatWhileSlidingStopsWhereCoulombSays) {
