@@ -524,6 +524,25 @@ void solve_volumes(SoftBody::Impl& s, float at, bool use_lambda) {
   }
 }
 
+// The largest alpha / h^2 or gamma the update is given (both are stored as float). Past it
+// the update is its limit to float precision: the terms it leaves out (the constraint value
+// beside alpha lambda / h^2, the 1 beside gamma) weigh under 1e-15 of the ones kept. Without
+// it a compliance or damping so large that alpha / h^2 or gamma overflowed the float
+// (spring_damping 1e300) made (1 + inf)(w_a + w_b) over inf, or 0 inf, NaN, which a pinned
+// particle (w = 0) took too. Far above any compliance or damping in use: no result below it
+// moves.
+constexpr double kMaxScaled = 1e15;
+
+// Brings alpha / h^2 (`at`) and gamma within kMaxScaled by one common factor, so that their
+// ratio gamma / at = beta h (`ratio`), which sets the balance of spring and damper in the
+// update, is kept: a constraint of infinite compliance keeps its damper (eq. 26 divided
+// through by alpha / h^2 tends to dlambda = -(lambda + beta h grad C . dx) / (1 + beta h w)).
+inline void limit_scaled(double& at, double& gamma, double ratio) {
+  if (std::max(at, gamma) <= kMaxScaled) return;
+  if (ratio <= 1) at = kMaxScaled, gamma = kMaxScaled * ratio;
+  else gamma = kMaxScaled, at = kMaxScaled / ratio;
+}
+
 }  // namespace
 
 void SoftBody::Impl::step_xpbd(double t, double dt) {
@@ -538,12 +557,14 @@ void SoftBody::Impl::step_xpbd(double t, double dt) {
 #endif
   bool damp = false;
   for (int k = 0; k < 3; ++k) {
-    a.at[k] = static_cast<float>(alpha[k] / (h * h));
-    a.gamma[k] = static_cast<float>(alpha[k] * def.spring_damping / h);
+    double at = alpha[k] / (h * h), gamma = alpha[k] * def.spring_damping / h;
+    limit_scaled(at, gamma, def.spring_damping * h);
+    a.at[k] = static_cast<float>(at);
+    a.gamma[k] = static_cast<float>(gamma);
     damp = damp || a.gamma[k] > 0;
   }
   const bool use_lambda = def.iterations > 1 || damp;
-  const float at_volume = static_cast<float>(def.volume_compliance / (h * h));
+  const float at_volume = static_cast<float>(std::min(def.volume_compliance / (h * h), kMaxScaled));
   // predict's inputs: gravity, held external accelerations, drag toward the wind
   const Vec3 wind = def.forces.wind.at(t);
   const bool drag = def.forces.linear_drag > 0 || def.forces.quadratic_drag > 0;
