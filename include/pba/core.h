@@ -89,10 +89,19 @@ void require_in_range(double v, double lo, double hi, std::string_view where);
 /// Throws Error unless lo <= v <= hi for an integer count.
 void require_count(long long v, long long lo, long long hi, std::string_view where);
 
-/// Throws Error "<where>: must fit a float (|v| <= 3.4028235e+38), got <v>" unless v is
-/// finite as a float: for values that pass a double check but are stored as float.
+/// True when v is finite as a float: |v| <= 3.4028235e+38 to the float's rounding (a value
+/// up to half a float step beyond rounds to the largest float and fits); false for NaN and
+/// infinity. The one test of "fits a float" in the library: require_float throws exactly when
+/// it is false.
+inline bool fits_float(double v) { return std::isfinite(static_cast<float>(v)); }
+/// fits_float for every component of v.
+inline bool fits_float(const Vec3& v) { return fits_float(v.x) && fits_float(v.y) && fits_float(v.z); }
+/// Throws Error unless fits_float(v), for values stored as float: a non-finite v reads as
+/// require_finite's "<where>: must be finite, got nan", a finite one beyond the range as
+/// "<where>: must fit a float (|v| <= 3.4028234663852886e+38), got 1e+39".
 void require_float(double v, std::string_view where);
-/// Throws Error naming `where` unless every component of v is finite as a float.
+/// Throws Error unless fits_float(v), naming `where` and v as "(x, y, z)": "must be finite"
+/// when a component is NaN or infinite, else "must fit a float".
 void require_float(const Vec3& v, std::string_view where);
 /// Throws Error unless v > 0 and 1 / v is a normal float (v in about [2.9e-39, 8.5e37]):
 /// for a mass stored as its float inverse.

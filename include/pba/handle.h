@@ -67,17 +67,29 @@ class HandlePool {
   bool valid(Id id) const {
     return id.index < generation_.size() && alive_[id.index] && generation_[id.index] == id.generation;
   }
-  /// Throws Error "<where>: stale handle (index i, generation g; slot is now at
-  /// generation h)" or "...: null handle" unless valid(id).
+  /// Throws Error naming `where` unless valid(id). A handle carries no mark of the pool that
+  /// issued it, so a handle of another pool (another World's or system's) is told apart only
+  /// when this pool never issued its index or generation: "<where>: invalid handle (index 7
+  /// was never issued here: a handle of another World or system)"; otherwise the message
+  /// names both possibilities, "<where>: stale handle (index i, generation g; the slot is now
+  /// at generation h[ and free]): destroyed since, or a handle of another World or system";
+  /// or "<where>: null handle".
   void require(Id id, std::string_view where) const {
     if (valid(id)) return;
     if (id.is_null()) throw Error(std::string(where) + ": null handle");
+    static constexpr const char* kOther = ": a handle of another World or system)";
     if (id.index >= generation_.size())
       throw Error(std::string(where) + ": invalid handle (index " + std::to_string(id.index) +
-                  " was never issued)");
+                  " was never issued here" + kOther);
+    // generations only grow (a wrap-around takes 2^32 destroys of one slot)
+    if (id.generation > generation_[id.index] || id.generation == 0)
+      throw Error(std::string(where) + ": invalid handle (index " + std::to_string(id.index) + " at generation " +
+                  std::to_string(id.generation) + " was never issued here, the slot is at generation " +
+                  std::to_string(generation_[id.index]) + kOther);
     throw Error(std::string(where) + ": stale handle (index " + std::to_string(id.index) + ", generation " +
                 std::to_string(id.generation) + "; the slot is now at generation " +
-                std::to_string(generation_[id.index]) + (alive_[id.index] ? "" : " and free") + ")");
+                std::to_string(generation_[id.index]) + (alive_[id.index] ? "" : " and free") +
+                "): destroyed since, or a handle of another World or system");
   }
   /// The current generation of slot `index` (for tests and debugging).
   std::uint32_t generation(std::uint32_t index) const { return generation_.at(index); }

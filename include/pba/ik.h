@@ -271,7 +271,8 @@ struct SolverSettings {
   int max_iterations = 0;           ///< iteration cap, >= 0; 0 picks the method's default
   double tolerance = 1e-4;          ///< converged when every effector is within this distance (m), > 0
   double orientation_tolerance = 1e-3;  ///< converged when orientation errors are below this (rad), > 0
-  double damping = 0.0;             ///< DLS lambda as a fraction of the effectors' reach, >= 0; 0 picks 0.02
+  double damping = 0.0;             ///< DLS lambda as a fraction of the effectors' reach times the root sum of
+                                    ///< squares of their weights (m), >= 0; 0 picks 0.02
   double max_step_angle = 0.0;      ///< Jacobian methods' cap on any joint change per iteration (rad), >= 0;
                                     ///< 0 picks 0.5 (pi/4 for sdls, Buss and Kim's gamma_max)
   bool warm_start = true;           ///< start from the current pose; false starts from the rest pose

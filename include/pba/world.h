@@ -401,6 +401,12 @@ class World {
   /// entities whose particle met a collider's entity during the tick (at the impact, so a
   /// bounce inside one tick counts; resting on it keeps touching). Emitted particles have
   /// no entity and make none. Needs particles().record_contacts() (on by default here).
+  /// The handles are the entities' when the events were made (stage 4): an entity destroyed
+  /// since, by a later stage's system in the same tick or by the caller before reading, stays
+  /// named here by its now stale handle (as Box2D's event ids may be). Check valid(): every
+  /// World call refuses a stale handle with an Error, and an entity that took its slot since
+  /// has a new generation, so an event never names it. The same holds for the end and
+  /// sensor events.
   std::span<const TouchBeginEvent> touch_begin_events() const { return touch_begin_; }
   /// Entity pairs that stopped touching in the last tick: a particle entity after a tick in
   /// which its particle met none of the entity's colliders (a pair stays touching while its

@@ -18,11 +18,6 @@ bool unit_quat(const Quat& q) {
          std::abs(glm::length(q) - 1.0) <= 1e-6;
 }
 
-// finite as a float (require_float's test, so a value it passes is one this passes): the
-// particle kernel flattens colliders to floats
-bool fits(double v) { return std::isfinite(static_cast<float>(v)); }
-bool fits(const Vec3& v) { return fits(v.x) && fits(v.y) && fits(v.z); }
-
 }  // namespace
 
 Collider Collider::plane(const Vec3& normal, double offset, SurfaceMaterial m) {
@@ -56,19 +51,19 @@ Collider Collider::box(const Vec3& center, const Vec3& half_extents, SurfaceMate
 bool Collider::ok() const {
   // motion and material
   const ColliderShape& s = shape;
-  bool good = fits(begin.position) && fits(end.position) && unit_quat(begin.rotation) &&
-              unit_quat(end.rotation) && fits(velocity) && fits(angular_velocity) &&
+  bool good = fits_float(begin.position) && fits_float(end.position) && unit_quat(begin.rotation) &&
+              unit_quat(end.rotation) && fits_float(velocity) && fits_float(angular_velocity) &&
               material.restitution >= 0 && material.restitution <= 1 && std::isfinite(material.friction) &&
               material.friction >= 0;
   // the shape's parameters (a hull, mesh or compound was validated when it was built)
   switch (s.type) {
-    case ShapeType::Plane: return good && fits(s.normal) && glm::length(s.normal) > 0 && fits(s.offset);
-    case ShapeType::Sphere: return good && fits(s.radius) && s.radius > 0;
+    case ShapeType::Plane: return good && fits_float(s.normal) && glm::length(s.normal) > 0 && fits_float(s.offset);
+    case ShapeType::Sphere: return good && fits_float(s.radius) && s.radius > 0;
     case ShapeType::Box:
-      return good && fits(s.half_extents) && s.half_extents.x > 0 && s.half_extents.y > 0 &&
+      return good && fits_float(s.half_extents) && s.half_extents.x > 0 && s.half_extents.y > 0 &&
              s.half_extents.z > 0;
     case ShapeType::Capsule:
-      return good && fits(s.radius) && s.radius > 0 && fits(s.half_height) && s.half_height >= 0;
+      return good && fits_float(s.radius) && s.radius > 0 && fits_float(s.half_height) && s.half_height >= 0;
     case ShapeType::Hull: return good && s.hull != nullptr;
     case ShapeType::Mesh: return good && s.mesh != nullptr;
     case ShapeType::Compound: return good && s.compound != nullptr;
@@ -119,15 +114,15 @@ void Collider::validate(std::string_view where) const {
   if (!is_finite(velocity)) require_finite(velocity, field_path(where, "velocity"));
   if (!is_finite(angular_velocity)) require_finite(angular_velocity, field_path(where, "angular_velocity"));
   // finite doubles that a float cannot hold
-  if (!fits(begin.position)) require_float(begin.position, field_path(where, "position"));
-  if (!fits(end.position)) require_float(end.position, field_path(where, "position"));
-  if (!fits(velocity)) require_float(velocity, field_path(where, "velocity"));
-  if (!fits(angular_velocity)) require_float(angular_velocity, field_path(where, "angular_velocity"));
-  if (!fits(shape.normal)) require_float(shape.normal, field_path(where, "normal"));
-  if (!fits(shape.offset)) require_float(shape.offset, field_path(where, "offset"));
-  if (!fits(shape.radius)) require_float(shape.radius, field_path(where, "radius"));
-  if (!fits(shape.half_extents)) require_float(shape.half_extents, field_path(where, "half_extents"));
-  if (!fits(shape.half_height)) require_float(shape.half_height, field_path(where, "half_height"));
+  if (!fits_float(begin.position)) require_float(begin.position, field_path(where, "position"));
+  if (!fits_float(end.position)) require_float(end.position, field_path(where, "position"));
+  if (!fits_float(velocity)) require_float(velocity, field_path(where, "velocity"));
+  if (!fits_float(angular_velocity)) require_float(angular_velocity, field_path(where, "angular_velocity"));
+  if (!fits_float(shape.normal)) require_float(shape.normal, field_path(where, "normal"));
+  if (!fits_float(shape.offset)) require_float(shape.offset, field_path(where, "offset"));
+  if (!fits_float(shape.radius)) require_float(shape.radius, field_path(where, "radius"));
+  if (!fits_float(shape.half_extents)) require_float(shape.half_extents, field_path(where, "half_extents"));
+  if (!fits_float(shape.half_height)) require_float(shape.half_height, field_path(where, "half_height"));
 }
 
 namespace {

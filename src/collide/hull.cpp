@@ -284,8 +284,7 @@ std::shared_ptr<ConvexHull> HullBuilder::quickhull(std::span<const Vec3> points,
                 " points");
   require_count(static_cast<long long>(points.size()), 4, 1ll << 26, field_path(where, "size"));
   for (std::size_t i = 0; i < points.size(); ++i) {
-    if (is_finite(Vec3f(points[i]))) continue;
-    require_finite(points[i], at + "[" + std::to_string(i) + "]");
+    if (fits_float(points[i])) continue;
     require_float(points[i], at + "[" + std::to_string(i) + "]");
   }
   const std::uint32_t n = static_cast<std::uint32_t>(points.size());

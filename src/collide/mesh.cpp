@@ -228,8 +228,7 @@ std::shared_ptr<const TriangleMesh> TriangleMesh::build(std::span<const Vec3> ve
   // vertices finite and within a float's range (the colliders' range: beyond ~1e150 the
   // area test's products overflow)
   for (std::size_t i = 0; i < vertices.size(); ++i) {
-    if (is_finite(Vec3f(vertices[i]))) continue;
-    require_finite(vertices[i], field_path(where, "vertices[" + std::to_string(i) + "]"));
+    if (fits_float(vertices[i])) continue;
     require_float(vertices[i], field_path(where, "vertices[" + std::to_string(i) + "]"));
   }
   auto m = std::make_shared<TriangleMesh>();

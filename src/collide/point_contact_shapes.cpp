@@ -352,7 +352,7 @@ bool compound_contact(const FlatShape<double>* parts, std::uint32_t n, const Vec
   double best = -kInf;
   for (std::uint32_t i = 0; i < n; ++i) {
     const FlatShape<double>& leaf = parts[i];
-    PointContact<double> q;
+    PointContact<double> q{};  // (set whenever hit is; zeroed so the compiler sees it set)
     const bool hit = leaf.type == ShapeType::Hull ? hull_contact(*leaf.source, x, th, f, q)
                                                   : point_contact(leaf, x.x, x.y, x.z, th, f, q);
     if (hit && q.depth > best) best = q.depth, out = q;

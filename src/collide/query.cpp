@@ -13,17 +13,13 @@ namespace pba {
 
 namespace query {
 
-bool fits(double v) { return std::isfinite(static_cast<float>(v)); }
-
-bool fits(const Vec3& v) { return fits(v.x) && fits(v.y) && fits(v.z); }
-
 bool shape_ok(const ColliderShape& s) {
-  auto pos = [](double v) { return fits(v) && v > 0; };
+  auto pos = [](double v) { return fits_float(v) && v > 0; };
   switch (s.type) {
-    case ShapeType::Plane: return fits(s.normal) && glm::length(s.normal) > 0 && fits(s.offset);
+    case ShapeType::Plane: return fits_float(s.normal) && glm::length(s.normal) > 0 && fits_float(s.offset);
     case ShapeType::Sphere: return pos(s.radius);
     case ShapeType::Box: return pos(s.half_extents.x) && pos(s.half_extents.y) && pos(s.half_extents.z);
-    case ShapeType::Capsule: return pos(s.radius) && fits(s.half_height) && s.half_height >= 0;
+    case ShapeType::Capsule: return pos(s.radius) && fits_float(s.half_height) && s.half_height >= 0;
     case ShapeType::Hull: return s.hull != nullptr;
     case ShapeType::Mesh: return s.mesh != nullptr;
     case ShapeType::Compound: return s.compound != nullptr;
@@ -53,12 +49,11 @@ void check_shape(const ColliderShape& s, std::string_view where) {
 bool pose_ok(const Pose& p) {
   const Quat& q = p.rotation;
   const double n = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
-  return fits(p.position) && std::isfinite(n) && std::abs(n - 1) <= 1e-6;
+  return fits_float(p.position) && std::isfinite(n) && std::abs(n - 1) <= 1e-6;
 }
 
 void check_pose(const Pose& p, std::string_view where) {
   if (pose_ok(p)) return;
-  require_finite(p.position, field_path(where, "position"));
   require_float(p.position, field_path(where, "position"));
   require_unit_quat(p.rotation, field_path(where, "rotation"));
 }

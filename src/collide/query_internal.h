@@ -12,15 +12,10 @@
 
 namespace pba::query {
 
-/// True when v is finite as a float (|v| <= 3.4e38, to the float's rounding; false for NaN):
-/// require_float's test, so what the checks refuse and what they skip agree; the range of the
-/// colliders' positions and sizes, within which the squared distances the queries compare cannot
-/// overflow (beyond ~1.3e154 they would, and the nearest collider would be missed).
-bool fits(double v);
-/// fits() for every component.
-bool fits(const Vec3& v);
 /// True when the shape's parameters are valid (ColliderShape::validate would not throw)
-/// and its sizes fit a float.
+/// and its sizes fit a float (fits_float: the range of the colliders' positions and sizes,
+/// within which the squared distances the queries compare cannot overflow; beyond ~1.3e154
+/// they would, and the nearest collider would be missed).
 bool shape_ok(const ColliderShape& s);
 /// Throws Error naming `where` and the field unless shape_ok(s).
 void check_shape(const ColliderShape& s, std::string_view where);

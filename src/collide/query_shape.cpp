@@ -386,10 +386,7 @@ std::size_t QueryWorld::overlap_bounds(const Aabb& box, std::span<std::uint32_t>
 // --- distances -------------------------------------------------------------------------
 
 QueryDistance QueryWorld::closest_point(const Vec3& point, double max_distance, const QueryFilter& filter) const {
-  if (!query::fits(point)) {
-    require_finite(point, "QueryWorld.closest_point(point)");
-    require_float(point, "QueryWorld.closest_point(point)");
-  }
+  if (!fits_float(point)) require_float(point, "QueryWorld.closest_point(point)");
   check_max(max_distance, "QueryWorld.closest_point(max_distance)");
   QueryDistance best;
   const Aabb at{point, point};

@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "query_internal.h"
 #include "shape_bounds.h"
 
 namespace pba {
@@ -124,9 +125,10 @@ std::shared_ptr<const CompoundShape> CompoundShape::build(std::vector<CompoundCh
     if (ch.shape.type == ShapeType::Plane || ch.shape.type == ShapeType::Mesh)
       throw Error(field_path(at, "shape.type") + ": a compound child must be a sphere, box, capsule, hull or compound, got a " +
                   std::string(to_string(ch.shape.type)));
-    ch.shape.validate(field_path(at, "shape"));
-    require_finite(ch.pose.position, field_path(at, "pose.position"));
-    require_unit_quat(ch.pose.rotation, field_path(at, "pose.rotation"));
+    // held to a float's range as every other shape's sizes and poses are (a collider's, a
+    // body's shape): the bounds, the queries and the contact rows carry them as floats
+    query::check_shape(ch.shape, field_path(at, "shape"));
+    query::check_pose(ch.pose, field_path(at, "pose"));
     const Aabb b = pba::bounds(ch.shape, ch.pose);
     c->local_bounds = i == 0 ? b : c->local_bounds.merged(b);
   }

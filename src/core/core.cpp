@@ -82,14 +82,16 @@ void require_count(long long v, long long lo, long long hi, std::string_view whe
 }
 
 void require_float(double v, std::string_view where) {
-  if (!std::isfinite(static_cast<float>(v)))
-    fail(where, "must fit a float (|v| <= " + format_value(std::numeric_limits<float>::max()) + ")", v);
+  if (fits_float(v)) return;
+  require_finite(v, where);
+  fail(where, "must fit a float (|v| <= " + format_value(std::numeric_limits<float>::max()) + ")", v);
 }
 
 void require_float(const Vec3& v, std::string_view where) {
-  if (!is_finite(Vec3f(v)))
-    throw Error(std::string(where) + ": must fit a float (|component| <= " +
-                format_value(std::numeric_limits<float>::max()) + "), got " + format_vec3(v));
+  if (fits_float(v)) return;
+  require_finite(v, where);
+  throw Error(std::string(where) + ": must fit a float (|component| <= " +
+              format_value(std::numeric_limits<float>::max()) + "), got " + format_vec3(v));
 }
 
 void require_float_inverse(double v, std::string_view where) {

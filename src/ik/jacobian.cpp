@@ -513,7 +513,14 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
   // per-effector error clamp and orientation row scale (m per rad)
   const double clamp = (meth == Method::JacobianTranspose ? 1.0 : 0.3) * reach;
   const double ori_scale = reach;
-  const double lambda0 = (set.damping > 0 ? set.damping : 0.02) * reach;
+  // DLS's damping in the weighted rows' units: a fraction of the reach times the root sum of
+  // squares of the weights (the scale of the weighted J), so that scaling every weight by k
+  // (weights are relative), or splitting an effector into copies of weight w / sqrt(n),
+  // leaves the steps as they were; with the reach alone a lone effector of weight 1e-3 was
+  // damped a thousandfold and ended at the iteration cap
+  double weights2 = 0;
+  for (int k = 0; k < ne; ++k) weights2 += s.effector(k).weight * s.effector(k).weight;
+  const double lambda0 = (set.damping > 0 ? set.damping : 0.02) * reach * std::sqrt(weights2);
   double lambda = lambda0;
   const double step_cap = set.max_step_angle > 0 ? set.max_step_angle
                           : meth == Method::Sdls ? kPi / 4

@@ -26,19 +26,14 @@ void require_unit_quat(const Quat& q, const std::string& where) {
     throw Error(where + ": must be a unit quaternion, got norm " + format_value(n));
 }
 
-// within a float's range (|v| <= 3.4e38; false for NaN): lengths and positions beyond it
-// overflow the solvers' squared errors (their costs, the transpose's step length) and the
-// pose came back non-finite or not pointing at the target
-bool fits(double v) { return std::abs(v) <= std::numeric_limits<float>::max(); }
-bool fits(const Vec3& v) { return fits(v.x) && fits(v.y) && fits(v.z); }
-
 }  // namespace
 
 Skeleton::Skeleton(const SkeletonDef& def) {
   const int n = static_cast<int>(def.bones.size());
   if (n < 1) throw Error("SkeletonDef.bones: must hold at least one bone, got 0");
-  for (int c = 0; c < 3; ++c) require_finite(def.root_position[c], "SkeletonDef.root_position");
-  if (!fits(def.root_position)) require_float(def.root_position, "SkeletonDef.root_position");
+  // lengths and positions beyond a float's range overflow the solvers' squared errors (their
+  // costs, the transpose's step length): the pose came back non-finite or not at the target
+  require_float(def.root_position, "SkeletonDef.root_position");
   require_unit_quat(def.root_rotation, "SkeletonDef.root_rotation");
 
   // validate each bone on its own
@@ -57,7 +52,7 @@ Skeleton::Skeleton(const SkeletonDef& def) {
       root = i;
     }
     require_positive(b.length, bone_where(i, b, "length"));
-    if (!fits(b.length)) require_float(b.length, bone_where(i, b, "length"));
+    if (!fits_float(b.length)) require_float(b.length, bone_where(i, b, "length"));
     require_unit_quat(b.rest, bone_where(i, b, "rest"));
     require_non_negative(b.radius, bone_where(i, b, "radius"));
     if (b.joint == JointType::Hinge) {
@@ -167,7 +162,7 @@ Skeleton::Skeleton(const SkeletonDef& def) {
 Skeleton Skeleton::chain(int n, double length, JointType joint, const BoneDef& joint_template) {
   require_count(n, 1, 1 << 24, "Skeleton::chain n");
   require_positive(length, "Skeleton::chain length");
-  if (!fits(length)) require_float(length, "Skeleton::chain length");
+  require_float(length, "Skeleton::chain length");
   SkeletonDef def;
   def.bones.resize(n, joint_template);
   for (int i = 0; i < n; ++i) {
@@ -255,8 +250,7 @@ void Skeleton::reset_pose() {
 
 void Skeleton::set_root_position(const Vec3& p) {
   fk_dirty_ = true;
-  for (int c = 0; c < 3; ++c) require_finite(p[c], "Skeleton::set_root_position");
-  if (!fits(p)) require_float(p, "Skeleton::set_root_position");
+  require_float(p, "Skeleton::set_root_position");
   root_position_ = p;
 }
 
@@ -351,12 +345,7 @@ void Skeleton::clear_effectors() {
 
 void Skeleton::set_target(int k, const Vec3& target) {
   require_count(k, 0, effector_count() - 1, "Skeleton::set_target effector");
-  for (int c = 0; c < 3; ++c)
-    if (!std::isfinite(target[c]))
-      throw Error("effector " + std::to_string(k) + " target: must be finite, got (" +
-                  format_value(target.x) + ", " + format_value(target.y) + ", " +
-                  format_value(target.z) + ")");
-  if (!fits(target)) require_float(target, "effector " + std::to_string(k) + " target");
+  if (!fits_float(target)) require_float(target, "effector " + std::to_string(k) + " target");
   effectors_[k].target = target;
 }
 
@@ -376,10 +365,7 @@ void Skeleton::set_orientation_target(int k, std::optional<Quat> q) {
 
 void Skeleton::set_pole(int k, std::optional<Vec3> pole) {
   require_count(k, 0, effector_count() - 1, "Skeleton::set_pole effector");
-  if (pole)
-    for (int c = 0; c < 3; ++c)
-      if (!std::isfinite((*pole)[c])) require_finite((*pole)[c], "effector " + std::to_string(k) + " pole");
-  if (pole && !fits(*pole)) require_float(*pole, "effector " + std::to_string(k) + " pole");
+  if (pole && !fits_float(*pole)) require_float(*pole, "effector " + std::to_string(k) + " pole");
   effectors_[k].pole = pole;
 }
 

@@ -199,9 +199,9 @@ namespace {
 // the float state's rules for one particle's values (checked only when the double
 // checks pass, so every message names the first rule broken)
 void require_float_particle(const Vec3& position, double mass, double radius, std::string_view where) {
-  if (!is_finite(Vec3f(position))) require_float(position, field_path(where, "position"));
+  if (!fits_float(position)) require_float(position, field_path(where, "position"));
   if (!std::isnormal(static_cast<float>(1.0 / mass))) require_float_inverse(mass, field_path(where, "mass"));
-  if (!std::isfinite(static_cast<float>(radius))) require_float(radius, field_path(where, "radius"));
+  if (!fits_float(radius)) require_float(radius, field_path(where, "radius"));
 }
 
 }  // namespace
@@ -222,7 +222,7 @@ void ParticleDef::validate(std::string_view where) const {
   if (!(lifetime > 0))
     throw Error(field_path(where, "lifetime") + ": must be > 0 (infinity for immortal), got " + format_value(lifetime));
   require_float_particle(position, mass, radius, where);
-  if (!is_finite(Vec3f(velocity))) require_float(velocity, field_path(where, "velocity"));
+  if (!fits_float(velocity)) require_float(velocity, field_path(where, "velocity"));
   if (glm::length(velocity) > kMaxParticleSpeed)
     require_particle_speed(glm::length(velocity), field_path(where, "velocity"));
 }
@@ -267,12 +267,12 @@ void Forces::validate(std::string_view where) const {
   if (!(std::isfinite(wind.gust_period) && (wind.gust_period) > 0))
     require_positive(wind.gust_period, field_path(where, "wind.gust_period"));
   // the kernels read these as floats
-  if (!is_finite(Vec3f(gravity))) require_float(gravity, field_path(where, "gravity"));
-  if (!std::isfinite(static_cast<float>(linear_drag))) require_float(linear_drag, field_path(where, "linear_drag"));
-  if (!std::isfinite(static_cast<float>(quadratic_drag)))
+  if (!fits_float(gravity)) require_float(gravity, field_path(where, "gravity"));
+  if (!fits_float(linear_drag)) require_float(linear_drag, field_path(where, "linear_drag"));
+  if (!fits_float(quadratic_drag))
     require_float(quadratic_drag, field_path(where, "quadratic_drag"));
   const Vec3 strongest = glm::abs(wind.velocity) + Vec3(wind.gust);
-  if (!is_finite(Vec3f(strongest))) require_float(strongest, field_path(where, "wind.velocity + wind.gust"));
+  if (!fits_float(strongest)) require_float(strongest, field_path(where, "wind.velocity + wind.gust"));
   // (the path is built only on failure: this runs every step, which allocates nothing)
   if (glm::length(strongest) > kMaxParticleSpeed)
     require_particle_speed(glm::length(strongest), field_path(where, "wind.velocity + wind.gust"));
@@ -491,7 +491,6 @@ Color ParticleSystem::color(std::size_t i) const {
 }
 
 void ParticleSystem::set_position(std::size_t i, const Vec3& p) {
-  require_finite(p, "ParticleSystem::set_position");
   require_float(p, "ParticleSystem::set_position");
   require_index(i, size(), "ParticleSystem::set_position");
   hot_[kX][i] = static_cast<float>(p.x);
@@ -502,7 +501,6 @@ void ParticleSystem::set_position(std::size_t i, const Vec3& p) {
 }
 
 void ParticleSystem::set_velocity(std::size_t i, const Vec3& v) {
-  require_finite(v, "ParticleSystem::set_velocity");
   require_float(v, "ParticleSystem::set_velocity");
   require_particle_speed(glm::length(v), "ParticleSystem::set_velocity");
   require_index(i, size(), "ParticleSystem::set_velocity");

@@ -164,7 +164,6 @@ RigidMass RigidMass::operator+(const RigidMass& o) const {
 
 void RigidMass::validate(std::string_view where) const {
   if (!(std::isfinite(mass) && mass > 0)) require_positive(mass, field_path(where, "mass"));
-  require_finite(center, field_path(where, "center"));
   // a position in the body frame, held as a float by the contact rows like a shape's placement
   require_float(center, field_path(where, "center"));
   const std::string w = field_path(where, "inertia");
@@ -215,7 +214,6 @@ void RigidBodyDef::validate(std::string_view where) const {
   if (type != BodyType::Static && type != BodyType::Kinematic && type != BodyType::Dynamic)
     throw Error(field_path(where, "type") + ": unknown body type " + std::to_string(static_cast<int>(type)));
   // the shapes' bounds and the contact rows hold positions as floats (beyond, a step made NaN)
-  require_finite(pose.position, field_path(where, "pose.position"));
   require_float(pose.position, field_path(where, "pose.position"));
   require_unit_quat(pose.rotation, field_path(where, "pose.rotation"));
   require_rigid_speed(linear_velocity, field_path(where, "linear_velocity"), "m/s");
@@ -228,7 +226,6 @@ void RigidBodyDef::validate(std::string_view where) const {
     const RigidShapeDef& d = shapes[k];
     const std::string w = field_path(where, "shapes[" + std::to_string(k) + "]");
     d.shape.validate(field_path(w, "shape"));
-    require_finite(d.local.position, field_path(w, "local.position"));
     require_float(d.local.position, field_path(w, "local.position"));
     require_unit_quat(d.local.rotation, field_path(w, "local.rotation"));
     require_positive(d.density, field_path(w, "density"));
@@ -567,8 +564,8 @@ double RigidBodySystem::kinetic_energy(RigidBodyId id) const {
 
 void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   const std::size_t i = index(id, "RigidBodySystem::set_pose");
-  if (!is_finite(pose.position)) require_finite(pose.position, describe(i) + " set_pose position");
-  require_float(pose.position, describe(i) + " set_pose position");  // as RigidBodyDef::validate
+  // as RigidBodyDef::validate
+  if (!fits_float(pose.position)) require_float(pose.position, describe(i) + " set_pose position");
   if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
   // a static or kinematic body moved wakes the sleeping bodies its shapes' bounds reach,
   // before or after the move (grown by the speculative distance): they rested on it, or it

@@ -36,11 +36,11 @@ int mirrored(int i, int n) {
 // fields of the definition that placed it.
 void require_float_state(const SoftMesh& m, std::string_view where, std::string_view fields) {
   for (std::size_t i = 0; i < m.positions.size(); ++i) {
-    if (!is_finite(Vec3f(m.positions[i])))
+    if (!fits_float(m.positions[i]))
       throw Error(std::string(where) + ": particle " + std::to_string(i) + " at " + format_vec3(m.positions[i]) +
                   " does not fit a float (|coordinate| <= " + format_value(std::numeric_limits<float>::max()) +
                   "); see " + std::string(fields));
-    if (!m.velocities.empty() && !is_finite(Vec3f(m.velocities[i])))
+    if (!m.velocities.empty() && !fits_float(m.velocities[i]))
       require_float(m.velocities[i], field_path(where, "velocity"));
   }
   // the masses a builder gives are equal (split evenly): the first one speaks for all
@@ -72,7 +72,6 @@ SoftBody SoftBody::spring(const SpringDef& sp, const SoftBodyDef& def) {
   // the ends, the mass and the spring constants
   require_finite(sp.a, "SpringDef.a");
   require_finite(sp.b, "SpringDef.b");
-  require_finite(sp.velocity_b, "SpringDef.velocity_b");
   require_float(sp.velocity_b, "SpringDef.velocity_b");
   positive(sp.mass, "SpringDef.mass");
   positive(sp.stiffness, "SpringDef.stiffness");

@@ -183,19 +183,13 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
                 std::to_string(m.constraints.size()) + "), got " + std::to_string(m.colors.size()));
   // particles
   // the state is float columns: positions, velocities and inverse masses must fit a float
-  constexpr double kFloatMax = std::numeric_limits<float>::max();
-  auto fits = [&](const Vec3& v) {
-    return std::abs(v.x) <= kFloatMax && std::abs(v.y) <= kFloatMax && std::abs(v.z) <= kFloatMax;
-  };
   for (std::size_t i = 0; i < n; ++i) {
-    if (!is_finite(m.positions[i])) require_finite(m.positions[i], idx(where, "positions", i));
-    if (!fits(m.positions[i])) require_float(m.positions[i], idx(where, "positions", i));
+    if (!fits_float(m.positions[i])) require_float(m.positions[i], idx(where, "positions", i));
     if (!(std::isfinite(m.masses[i]) && m.masses[i] > 0)) require_positive(m.masses[i], idx(where, "masses", i));
     if (!std::isnormal(static_cast<float>(1 / m.masses[i])))
       require_float_inverse(m.masses[i], idx(where, "masses", i));
-    if (!m.velocities.empty() && !is_finite(m.velocities[i]))
-      require_finite(m.velocities[i], idx(where, "velocities", i));
-    if (!m.velocities.empty() && !fits(m.velocities[i])) require_float(m.velocities[i], idx(where, "velocities", i));
+    if (!m.velocities.empty() && !fits_float(m.velocities[i]))
+      require_float(m.velocities[i], idx(where, "velocities", i));
   }
   auto check_index = [&](std::uint32_t p, std::string_view field, std::size_t k, std::string_view end) {
     if (p >= n)

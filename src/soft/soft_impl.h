@@ -141,9 +141,6 @@ struct SoftBody::Impl {
 
   // solver steps (xpbd.cpp, mass_spring.cpp)
   void step_xpbd(double t, double dt);
-  // Error naming spring_damping and the kind's compliance (0 stretch, 1 shear, 2 bend)
-  // when XPBD's damping alpha c / h does not fit a float
-  [[noreturn]] void throw_damping_overflow(int kind, double alpha, double h) const;
   void step_mass_spring(double t, double dt);
   void update_tethers();  // xpbd.cpp: each particle's nearest pin in the rest shape
   void init_tethers();    // xpbd.cpp, at build: straight or path lengths, and the graph

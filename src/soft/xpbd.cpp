@@ -524,17 +524,26 @@ void solve_volumes(SoftBody::Impl& s, float at, bool use_lambda) {
   }
 }
 
-}  // namespace
+// The largest alpha / h^2 or gamma the update is given (both are stored as float). Past it
+// the update is its limit to float precision: the terms it leaves out (the constraint value
+// beside alpha lambda / h^2, the 1 beside gamma) weigh under 1e-15 of the ones kept. Without
+// it a compliance or damping so large that alpha / h^2 or gamma overflowed the float
+// (spring_damping 1e300) made (1 + inf)(w_a + w_b) over inf, or 0 inf, NaN, which a pinned
+// particle (w = 0) took too. Far above any compliance or damping in use: no result below it
+// moves.
+constexpr double kMaxScaled = 1e15;
 
-// XPBD's damping alpha c / h (Macklin et al. 2016, eq. 26) beyond a float: the solve
-// would divide inf by inf
-[[noreturn]] void SoftBody::Impl::throw_damping_overflow(int kind, double alpha, double h) const {
-  static constexpr const char* kField[3] = {"stretch_compliance", "shear_compliance", "bend_compliance"};
-  throw Error("SoftBodyDef.spring_damping: " + format_value(def.spring_damping) + " N s/m with SoftBodyDef." +
-              kField[kind] + " = " + format_value(alpha) + " m/N gives the XPBD damping alpha c / h = " +
-              format_value(alpha * def.spring_damping / h) + " at the substep h = " + format_value(h) +
-              " s, beyond a float (3.4e38); lower the damping or the compliance");
+// Brings alpha / h^2 (`at`) and gamma within kMaxScaled by one common factor, so that their
+// ratio gamma / at = beta h (`ratio`), which sets the balance of spring and damper in the
+// update, is kept: a constraint of infinite compliance keeps its damper (eq. 26 divided
+// through by alpha / h^2 tends to dlambda = -(lambda + beta h grad C . dx) / (1 + beta h w)).
+inline void limit_scaled(double& at, double& gamma, double ratio) {
+  if (std::max(at, gamma) <= kMaxScaled) return;
+  if (ratio <= 1) at = kMaxScaled, gamma = kMaxScaled * ratio;
+  else gamma = kMaxScaled, at = kMaxScaled / ratio;
 }
+
+}  // namespace
 
 void SoftBody::Impl::step_xpbd(double t, double dt) {
   const int S = def.substeps;
@@ -546,20 +555,16 @@ void SoftBody::Impl::step_xpbd(double t, double dt) {
 #if PBA_SOFT_HAVE_AVX2
   a.avx2 = simd && has_avx2();
 #endif
-  // alpha / h^2 beyond a float is held at the largest float: in the limit the constraint
-  // has no stiffness and its correction is 0 either way, while inf made at * lambda
-  // 0 * inf = NaN once multipliers are kept (iterations > 1 or damping)
-  constexpr double kFloatMax = std::numeric_limits<float>::max();
   bool damp = false;
   for (int k = 0; k < 3; ++k) {
-    a.at[k] = static_cast<float>(std::min(alpha[k] / (h * h), kFloatMax));
-    const double gamma = alpha[k] * def.spring_damping / h;
-    if (!(gamma <= kFloatMax)) throw_damping_overflow(k, alpha[k], h);
+    double at = alpha[k] / (h * h), gamma = alpha[k] * def.spring_damping / h;
+    limit_scaled(at, gamma, def.spring_damping * h);
+    a.at[k] = static_cast<float>(at);
     a.gamma[k] = static_cast<float>(gamma);
     damp = damp || a.gamma[k] > 0;
   }
   const bool use_lambda = def.iterations > 1 || damp;
-  const float at_volume = static_cast<float>(std::min(def.volume_compliance / (h * h), kFloatMax));
+  const float at_volume = static_cast<float>(std::min(def.volume_compliance / (h * h), kMaxScaled));
   // predict's inputs: gravity, held external accelerations, drag toward the wind
   const Vec3 wind = def.forces.wind.at(t);
   const bool drag = def.forces.linear_drag > 0 || def.forces.quadratic_drag > 0;

@@ -186,8 +186,6 @@ namespace {
 // and a larger one accepted here stopped the world for good at the next tick, named as
 // the particle system's ("ParticleSystem.forces.gravity: must fit a float")
 void require_gravity(const Vec3& g, std::string_view where) {
-  if (is_finite(Vec3f(g))) return;
-  require_finite(g, where);
   require_float(g, where);
 }
 
@@ -423,7 +421,7 @@ EmitterId World::add_emitter(EntityId e, const EmitterDef& def) {
   EmitterDef d = def;
   d.pose = compose(r.pose, def.pose);
   // the particles it emits are floats: its pose in the world must fit one
-  if (!is_finite(Vec3f(d.pose.position)))
+  if (!fits_float(d.pose.position))
     require_float(d.pose.position, "emitter of " + describe(e) + " at the entity's pose: position");
   r.emitter = particles_.add_emitter(d, "emitter of " + describe(e));
   r.emitter_local = def.pose;
@@ -521,7 +519,8 @@ EntityId World::owner(RigidBodyId id) const {
   if (!rigid_.valid(id))
     throw Error("World::owner(RigidBodyId): " + std::string(id.is_null() ? "null" : "stale") +
                 " rigid-body handle (index " + std::to_string(id.index) + ", generation " +
-                std::to_string(id.generation) + ")");
+                std::to_string(id.generation) + ")" +
+                (id.is_null() ? "" : ": destroyed since, or a handle of another World or system"));
   if (!valid(id)) throw Error("World::owner(RigidBodyId): rigid body " + std::to_string(id.index) +
                               " belongs to no entity (it stands for a collider, or was made in rigid() directly)");
   return owner_by_slot(body_owner_, records_, id);
@@ -648,7 +647,7 @@ void World::sync(double t, double dt) {
     world_forcers_[i] = forcers_[i].def;
     world_forcers_[i].pose = compose(r.pose, forcers_[i].def.pose);
     // an entity moved out of the floats' range takes its forcer with it: refused by name
-    if (!is_finite(Vec3f(world_forcers_[i].pose.position)))
+    if (!fits_float(world_forcers_[i].pose.position))
       world_forcers_[i].validate("forcer of " + describe(forcers_[i].owner) + " at the entity's pose");
   }
   for (std::size_t i = 0; i < records_.size(); ++i) {
@@ -656,7 +655,7 @@ void World::sync(double t, double dt) {
     if (r.emitter.is_null()) continue;
     const Pose p = compose(r.pose, r.emitter_local);
     // an entity moved beyond a float's range would emit non-finite particles: refused by name
-    if (!is_finite(Vec3f(p.position)))
+    if (!fits_float(p.position))
       require_float(p.position, "emitter of entity " + std::to_string(i) + (r.name.empty() ? "" : " '" + r.name + "'") +
                                     " at the entity's pose: position");
     particles_.set_emitter_pose(r.emitter, p);

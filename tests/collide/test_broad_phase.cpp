@@ -739,11 +739,12 @@ TEST(BroadPhase, BadInputIsNamed) {
   EXPECT_EQ(bp.box(id).hi, Vec3(1, 1, 1));  // a rejected move leaves the box
   bp.destroy_proxy(id);
   EXPECT_EQ(error_of([&] { bp.move_proxy(id, {{0, 0, 0}, {1, 1, 1}}); }),
-            "BroadPhase.move_proxy: stale handle (index 0, generation 1; the slot is now at generation 2 and free)");
+            "BroadPhase.move_proxy: stale handle (index 0, generation 1; the slot is now at generation 2 and free): "
+            "destroyed since, or a handle of another World or system");
   EXPECT_NE(error_of([&] { bp.destroy_proxy(id); }).find("BroadPhase.destroy_proxy: stale handle"), std::string::npos);
   EXPECT_EQ(error_of([&] { bp.set_filter(ProxyId{}, {}); }), "BroadPhase.set_filter: null handle");
   EXPECT_EQ(error_of([&] { (void)bp.user_data(ProxyId{7, 1}); }),
-            "BroadPhase.user_data: invalid handle (index 7 was never issued)");
+            "BroadPhase.user_data: invalid handle (index 7 was never issued here: a handle of another World or system)");
   // a reused slot does not revive the old id
   const ProxyId reused = bp.create_proxy({{0, 0, 0}, {1, 1, 1}});
   EXPECT_EQ(reused.index, id.index);

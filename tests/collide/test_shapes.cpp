@@ -87,6 +87,26 @@ TEST(CollideShapes, CompoundRefusesPlanesMeshesAndEmptyLists) {
             std::string::npos);
 }
 
+// a child is held to the float range every other shape's sizes and poses are held to (the
+// bounds, queries and contact rows carry them as floats): beyond it, refused by name; at its
+// rim (the largest float), taken
+TEST(CollideShapes, CompoundRefusesChildrenBeyondAFloat) {
+  const double fmax = std::numeric_limits<float>::max();
+  const Pose far{{0, -1e300, 0}, {1, 0, 0, 0}};
+  EXPECT_EQ(error_of([&] { CompoundShape::build({{ColliderShape::sphere(1), {}}, {ColliderShape::sphere(1), far}}, "table"); }),
+            "table.children[1].pose.position: must fit a float (|component| <= 3.4028234663852886e+38), got (0, -1e+300, 0)");
+  EXPECT_EQ(error_of([] { CompoundShape::build({{ColliderShape::sphere(1e200), {}}}, "table"); }),
+            "table.children[0].shape.radius: must fit a float (|v| <= 3.4028234663852886e+38), got 1e+200");
+  EXPECT_EQ(error_of([] { CompoundShape::build({{ColliderShape::box({1, 1e39, 1}), {}}}, "table"); }),
+            "table.children[0].shape.half_extents: must fit a float (|component| <= 3.4028234663852886e+38), got (1, 1e+39, 1)");
+  EXPECT_EQ(error_of([] { CompoundShape::build({{ColliderShape::capsule(1e39, 1), {}}}, "table"); }),
+            "table.children[0].shape.half_height: must fit a float (|v| <= 3.4028234663852886e+38), got 1e+39");
+  // the rim is taken, as a collider's is
+  const auto rim = CompoundShape::build({{ColliderShape::sphere(fmax), Pose{{fmax, 0, 0}, {1, 0, 0, 0}}}}, "table");
+  EXPECT_EQ(rim->local_bounds.hi.x, 2 * fmax);
+  EXPECT_EQ(rim->local_bounds.lo.x, 0.0);
+}
+
 // ---------------------------------------------------------------------------
 // the box hull and support
 

@@ -68,6 +68,23 @@ TEST(Validation, FloatLimits) {
   EXPECT_EQ(error_of([&] { pba::require_float(-fmax, "x"); }), "");
   EXPECT_EQ(error_of([] { pba::require_float(1e39, "p.x"); }), "p.x: must fit a float (|v| <= 3.4028234663852886e+38), got 1e+39");
   EXPECT_NE(error_of([] { pba::require_float(pba::Vec3(0, -1e39, 0), "p"); }).find("got (0, -1e+39, 0)"), std::string::npos);
+  // fits_float is require_float's test: a double up to half a float step (2^103) past FLT_MAX
+  // rounds to FLT_MAX and fits; the halfway point rounds (to even) to infinity and does not
+  const double half_step = std::ldexp(1.0, 103);
+  for (const double v : {fmax, -fmax, fmax + half_step / 2, std::nextafter(fmax + half_step, 0.0), fmax + half_step,
+                         -(fmax + half_step), 1e39, 0.0, 1e-300}) {
+    EXPECT_EQ(pba::fits_float(v), std::isfinite(static_cast<float>(v))) << v;
+    EXPECT_EQ(pba::fits_float(v), error_of([&] { pba::require_float(v, "x"); }).empty()) << v;
+    EXPECT_EQ(pba::fits_float(pba::Vec3(0, v, 0)), error_of([&] { pba::require_float(pba::Vec3(0, v, 0), "x"); }).empty());
+  }
+  EXPECT_TRUE(pba::fits_float(std::nextafter(fmax + half_step, 0.0)));
+  EXPECT_FALSE(pba::fits_float(fmax + half_step));
+  // a non-finite value reads as require_finite's message: one call says both
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(pba::fits_float(std::nan("")));
+  EXPECT_EQ(error_of([] { pba::require_float(std::nan(""), "p.x"); }), "p.x: must be finite, got nan");
+  EXPECT_EQ(error_of([&] { pba::require_float(-inf, "p.x"); }), "p.x: must be finite, got -inf");
+  EXPECT_EQ(error_of([&] { pba::require_float(pba::Vec3(1e39, inf, 0), "p"); }), "p: must be finite, got (1e+39, inf, 0)");
   // a mass stored as its float inverse: 1 / m must be a normal float
   EXPECT_EQ(error_of([] { pba::require_float_inverse(1.0, "m"); }), "");
   EXPECT_EQ(error_of([&] { pba::require_float_inverse(1.0 / std::numeric_limits<float>::min(), "m"); }), "");

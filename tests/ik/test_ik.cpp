@@ -147,12 +147,7 @@ TEST(IkSkeleton, WeightsLengthsAndPositionsHoldTheirRangesAndAreRefusedBeyond) {
       s.add_effector(2, Vec3(0.3, 1.2, 0.1), w);
       const SolveResult r = Solver(s, m).solve();
       for (const Vec3& t : s.tips()) EXPECT_TRUE(is_finite(t)) << name(m) << " weight " << w;
-      // DLS's damping is absolute (a fraction of the reach), not scaled by the weights: with
-      // every weight far below 1 it damps the step to nothing (a single effector of weight
-      // 1e-3 already ends at the iteration cap), a known limit; the others converge
-      if (m != Method::Dls || w >= 1) {
-        EXPECT_TRUE(r.converged) << name(m) << " weight " << w << " residual " << r.residual;
-      }
+      EXPECT_TRUE(r.converged) << name(m) << " weight " << w << " residual " << r.residual;
     }
     // bones and targets at the edge of a float's range, in units of the bone
     const double big = 1e38;
@@ -511,6 +506,35 @@ TEST(IkJacobian, OneEffectorPathTakesTheGeneralPathsSteps) {
         // rounding of ~1e-16 per operation over tens of iterations: 1e-9 m on a 1 m chain
         for (int i = 0; i < 12; ++i) ASSERT_NEAR(glm::length(one.tips()[i] - two.tips()[i]), 0, 1e-9) << name(m);
       }
+    }
+  }
+}
+
+// Weights are relative: a lone effector's weight w scales J and e alike, and DLS's damping
+// scales with it (lambda = 0.02 reach sqrt(sum w^2)), so its step (J^T J + lambda^2 I)^-1 J^T e
+// is the weight-1 step for every accepted w: the same iterations, the same pose to rounding
+// (1e-9 m on a 1 m chain, as above). Until 2026-12-06 the damping ignored the weights and a
+// lone effector of weight 1e-3 ended at the iteration cap. Also for two effectors of weight w
+// each.
+TEST(IkJacobian, DlsTakesTheSameStepsWhateverTheWeightsScale) {
+  for (const int effectors : {1, 2}) {
+    auto solve = [&](double w, std::vector<Vec3>& tips) {
+      Skeleton s = scenes::make_chain(12, JointType::Ball, false);
+      scenes::bent_pose(s);
+      s.add_effector(11, Vec3(0.5, 0.6, 0.1), w);
+      if (effectors == 2) s.add_effector(5, Vec3(0.2, 0.3, -0.1), w);
+      const SolveResult r = Solver(s, {Method::Dls}).solve();
+      tips.assign(s.tips().begin(), s.tips().end());
+      return r;
+    };
+    std::vector<Vec3> tips1, tips;
+    const SolveResult r1 = solve(1, tips1);
+    ASSERT_TRUE(r1.converged || effectors == 2);
+    for (const double w : {1e-6, 1e-3, 0.1, 10.0, 1e3, 1e6}) {
+      const SolveResult r = solve(w, tips);
+      EXPECT_EQ(r.converged, r1.converged) << "weight " << w;
+      EXPECT_EQ(r.iterations, r1.iterations) << "weight " << w;
+      for (std::size_t i = 0; i < tips.size(); ++i) ASSERT_NEAR(glm::length(tips[i] - tips1[i]), 0, 1e-9) << w;
     }
   }
 }

@@ -667,6 +667,53 @@ TEST(SoftBadInput, SpringBetweenCoincidentParticles) {
   EXPECT_NE(mesh.find("coincident particles 0 and 1"), std::string::npos) << mesh;
 }
 
+// XPBD constraint damping of any accepted size (spring_damping up to DBL_MAX) keeps a pinned
+// rope finite with its pin exact: until 2026-12-06, 1e300 overflowed the float gamma and
+// (1 + inf)(w_a + w_b) over inf made every particle NaN, the pin too. (What strong damping
+// does to the rope is not asserted here: from c ~ 1e3 up it stretches the rope and raises its
+// energy, a strain of 2 and +485 J in 1 s at 1e6 and beyond, unclamped as clamped: a defect
+// of the damped update of its own, left open.)
+TEST(SoftXpbd, ConstraintDampingOfAnySizeKeepsARopeFinite) {
+  const double dt = 1.0 / 60;
+  for (const double c : {0.0, 1e-3, 1.0, 1e3, 1e6, 1e13, 1e15, 1e20, 1e100, 1e300,
+                         std::numeric_limits<double>::max()}) {
+    SCOPED_TRACE(c);
+    pba::SoftBodyDef d;
+    d.stretch_compliance = 1e-3;  // compliant: the damping applies (eq. 26)
+    d.spring_damping = c;
+    d.iterations = 2;
+    d.tethers = false;
+    pba::SoftBody r = pba::SoftBody::rope({}, d);
+    for (int f = 0; f < 60; ++f) r.step(f * dt, dt);
+    EXPECT_EQ(r.position(0), pba::Vec3(0, 2, 0));  // the pin
+    for (std::size_t i = 0; i < r.size(); ++i)
+      ASSERT_TRUE(pba::is_finite(r.position(i)) && pba::is_finite(r.velocity(i))) << i;
+  }
+}
+
+// Compliance of any accepted size: a rope of infinite compliance (1e300 m/N, stretch and
+// bend, no tethers) exerts no force, so every free particle falls freely, as XPBD's
+// prediction integrates it: after n substeps of h from rest y = y0 - g h^2 n (n + 1) / 2
+// (float rounding: ~1e-6 m over 2 m); before the clamp it was NaN with two iterations.
+TEST(SoftXpbd, InfiniteComplianceLetsARopeFallFreely) {
+  for (const double alpha : {1e300, std::numeric_limits<double>::max()}) {
+    pba::SoftBodyDef d;
+    d.stretch_compliance = d.bend_compliance = alpha;
+    d.iterations = 2;
+    d.tethers = false;
+    pba::SoftBody r = pba::SoftBody::rope({}, d);
+    const double dt = 1.0 / 60, h = dt / d.substeps, g = -d.forces.gravity.y;
+    const int steps = 30;
+    for (int f = 0; f < steps; ++f) r.step(f * dt, dt);
+    const double n = steps * d.substeps;
+    EXPECT_EQ(r.position(0), pba::Vec3(0, 2, 0));
+    for (std::size_t i = 1; i < r.size(); ++i) {
+      EXPECT_NEAR(r.position(i).y, 2 - g * h * h * n * (n + 1) / 2, 1e-5) << i;
+      EXPECT_NEAR(r.position(i).x, i / 20.0, 1e-6) << i;
+    }
+  }
+}
+
 TEST(SoftBadInput, NegativeStiffnessAndCompliance) {
   const std::string k = error_of([] { pba::SoftBody::spring({.stiffness = -5}); });
   EXPECT_NE(k.find("SpringDef.stiffness"), std::string::npos) << k;
@@ -768,9 +815,9 @@ TEST(SoftBadInput, LengthsAndStepsBeyondTheFloatSolver) {
 
 // A compliance whose alpha / h^2 is beyond a float (valid: finite and >= 0) made the
 // multipliers' at * lambda 0 * inf = NaN once they are kept (iterations > 1, or damping);
-// such a constraint now has no stiffness, as in the limit. A damping alpha c / h beyond a
-// float divided inf by inf: it is refused, naming both fields.
-TEST(SoftBadInput, ComplianceAndDampingBeyondAFloat) {
+// such a constraint now has no stiffness, as in the limit (a damping of any size:
+// SoftXpbd.ConstraintDampingOfAnySizeKeepsARopeFinite).
+TEST(SoftBadInput, ComplianceBeyondAFloat) {
   auto com_y = [](double compliance) {
     pba::SoftBodyDef d;
     d.stretch_compliance = d.bend_compliance = compliance;
@@ -797,15 +844,6 @@ TEST(SoftBadInput, ComplianceAndDampingBeyondAFloat) {
   pba::SoftBody mush = pba::SoftBody::jelly_box(j, pba::jelly_settings(j, soft));
   for (int i = 0; i < 10; ++i) mush.step(i / 60.0, 1.0 / 60);
   EXPECT_TRUE(std::isfinite(mush.kinetic_energy()));
-  pba::SoftBodyDef d;
-  d.stretch_compliance = 1e-3;
-  d.spring_damping = 1e300;
-  pba::SoftBody r = pba::SoftBody::rope({.segments = 4}, d);
-  EXPECT_EQ(error_of([&] { r.step(0, 0.01); }),
-            "SoftBodyDef.spring_damping: 1e+300 N s/m with SoftBodyDef.stretch_compliance = 0.001 m/N gives the XPBD "
-            "damping alpha c / h = 1e+300 at the substep h = 0.001 s, beyond a float (3.4e38); lower "
-            "the damping or the compliance");
-  EXPECT_FALSE(r.failed());
 }
 
 // A jelly 1e12 m across: its volume gradients (edges squared) squared, over the particle

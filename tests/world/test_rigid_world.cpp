@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -852,6 +853,59 @@ TEST(Events, RestingContactStaysTouchingWhileAsleep) {
   w.step();
   ASSERT_EQ(w.touch_end_events().size(), 1u);
   EXPECT_EQ(w.touch_end_events()[0].a, g);
+}
+
+// An event names the entities as they were when it was made (stage 4); one destroyed later
+// in the same tick (here by a post-stage system, as a game removes a bullet on impact) keeps
+// its handle in the event, now stale, as Box2D's event ids may be: valid() says so, every
+// World call refuses it with an Error, and the entity that takes its slot has a new
+// generation, so the event never names the newcomer, now or in the ticks after.
+TEST(Events, ATouchNamingAnEntityDestroyedLaterInTheTickHoldsAStaleHandle) {
+  struct Reaper : pba::WorldSystem {
+    EntityId ball, newcomer;
+    std::string_view name() const override { return "reaper"; }
+    void step(World& w, double, double) override {
+      for (const pba::TouchBeginEvent& ev : w.touch_begin_events())
+        if (ev.b == ball && newcomer.is_null()) {
+          w.destroy_entity(ball);
+          newcomer = w.create_entity({.name = "newcomer", .pose = {{5, 3, 0}, pba::Quat(1, 0, 0, 0)}});
+          w.add_rigid_body(newcomer, box_def({0.5, 0.5, 0.5}));
+        }
+    }
+  };
+  World w;
+  const EntityId g = ground(w);
+  const EntityId ball = w.create_entity({.name = "ball", .pose = {{0, 0.6, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_rigid_body(ball, box_def({0.5, 0.5, 0.5}));
+  auto reaper = std::make_unique<Reaper>();
+  Reaper& r = *reaper;
+  r.ball = ball;
+  w.add_system(std::move(reaper));
+  int tick = 0;
+  while (w.touch_begin_events().empty() && tick < 60) w.step(), ++tick;
+  ASSERT_EQ(w.touch_begin_events().size(), 1u);
+  const pba::TouchBeginEvent ev = w.touch_begin_events()[0];
+  EXPECT_EQ(ev.a, g);
+  EXPECT_EQ(ev.b, ball);
+  EXPECT_TRUE(w.valid(ev.a));
+  EXPECT_FALSE(w.valid(ev.b));
+  // the slot is reused (LIFO) at the next generation: the event's handle is not the newcomer's
+  ASSERT_FALSE(r.newcomer.is_null());
+  EXPECT_EQ(r.newcomer.index, ev.b.index);
+  EXPECT_EQ(r.newcomer.generation, ev.b.generation + 1);
+  EXPECT_NE(r.newcomer, ev.b);
+  EXPECT_NE(error_of([&] { (void)w.pose(ev.b); }).find("World::pose: entity: stale handle"), std::string::npos);
+  EXPECT_NE(error_of([&] { w.set_pose(ev.b, {}); }).find("stale handle"), std::string::npos);
+  EXPECT_NE(error_of([&] { (void)w.rigid_body_id(ev.b); }).find("stale handle"), std::string::npos);
+  EXPECT_NE(error_of([&] { w.destroy_entity(ev.b); }).find("stale handle"), std::string::npos);
+  EXPECT_EQ(w.pose(r.newcomer).position, Vec3(5, 3, 0));  // untouched by those calls
+  // the destroyed ball's touch ends silently; the newcomer, falling far away, touches nothing
+  // until it lands, and never inherits the ball's pair
+  for (int i = 0; i < 30; ++i) {
+    w.step();
+    EXPECT_TRUE(w.touch_end_events().empty());
+    for (const pba::TouchBeginEvent& e : w.touch_begin_events()) EXPECT_NE(e.b, ev.b);
+  }
 }
 
 TEST(RigidStage, HashIncludesTheBodiesAndIsDeterministic) {

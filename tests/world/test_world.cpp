@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "error_of.h"
 #include "pba/world.h"
 
 namespace {
@@ -13,6 +14,7 @@ namespace {
 using pba::EntityId;
 using pba::Vec3;
 using pba::World;
+using pba::test_support::error_of;
 
 TEST(Entities, StaleHandleIsRejectedAndGenerationIncrements) {
   World w;
@@ -27,7 +29,8 @@ TEST(Entities, StaleHandleIsRejectedAndGenerationIncrements) {
     FAIL() << "stale handle accepted";
   } catch (const pba::Error& e) {
     EXPECT_EQ(std::string(e.what()),
-              "World::pose: entity: stale handle (index 0, generation 1; the slot is now at generation 2 and free)");
+              "World::pose: entity: stale handle (index 0, generation 1; the slot is now at generation 2 and free): "
+              "destroyed since, or a handle of another World or system");
   }
   // the freed slot is reused with the next generation; the old handle stays stale
   const EntityId c = w.create_entity({.name = "c"});
@@ -41,6 +44,33 @@ TEST(Entities, StaleHandleIsRejectedAndGenerationIncrements) {
   EXPECT_EQ(w.entity_count(), 2u);
   EXPECT_EQ(w.find("c"), c);
   EXPECT_TRUE(w.find("a").is_null());
+}
+
+// a handle carries no mark of the World that issued it: one this World never issued (an index
+// or a generation beyond its slots') is named as another World's; one it could have issued
+// and freed is named as stale or another World's (both possibilities), never as only stale
+TEST(Entities, AnotherWorldsHandleIsNamedAsSuch) {
+  World a, b;
+  const EntityId a0 = a.create_entity({.name = "a0"});
+  b.create_entity({.name = "b0"});
+  b.create_entity({.name = "b1"});
+  const EntityId b2 = b.create_entity({.name = "b2"});
+  // an index this World never issued
+  EXPECT_EQ(error_of([&] { a.pose(b2); }),
+            "World::pose: entity: invalid handle (index 2 was never issued here: a handle of another World or system)");
+  // a generation this slot never had: b's slot 0 recycled twice
+  b.destroy_entity(EntityId{0, 1});
+  b.destroy_entity(b.create_entity({}));
+  const EntityId b0_gen3 = b.create_entity({});
+  EXPECT_EQ(b0_gen3, (EntityId{0, 3}));
+  EXPECT_EQ(error_of([&] { a.set_pose(b0_gen3, {}); }),
+            "World::set_pose: entity: invalid handle (index 0 at generation 3 was never issued here, the slot is at "
+            "generation 1: a handle of another World or system)");
+  // a handle a freed itself: the message names both possibilities
+  a.destroy_entity(a0);
+  EXPECT_EQ(error_of([&] { a.pose(a0); }),
+            "World::pose: entity: stale handle (index 0, generation 1; the slot is now at generation 2 and free): "
+            "destroyed since, or a handle of another World or system");
 }
 
 TEST(Entities, CapacityIsReused) {
