@@ -776,6 +776,105 @@ bool narrow::ball_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Ve
   return true;
 }
 
+int narrow::capsule_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Vec3& p, const Vec3& q, double world,
+                                  double radius, double reach, const Vec3& toward, const MeshQueryCache& near,
+                                  Candidate (&out)[2]) {
+  const auto largest = [](const Vec3& x) { return std::max(std::abs(x.x), std::max(std::abs(x.y), std::abs(x.z))); };
+  const double tol = 1e-9 * (1 + std::max(world, std::max(largest(p), largest(q))));
+  // the triangles collide_mesh would test are the cache's: its box holds the capsule's query
+  // box (its core's ends grown by the radius and the reach, padded past bounds()' rounding)
+  const double half = radius + reach + tol;
+  const Aabb box{glm::min(p, q) - Vec3(half), glm::max(p, q) + Vec3(half)};
+  if (near.mesh != &M || near.count > std::uint32_t(MeshQueryCache::kCapacity) || !near.box.contains(box)) return 0;
+  const auto& idx = M.triangles()[t];
+  const Vec3 tri[3] = {M.vertices()[idx[0]], M.vertices()[idx[1]], M.vertices()[idx[2]]};
+  // the manifold's normal is t's face normal (to a few ulps, as for the ball), toward the side
+  // away from the capsule's centre, and both core ends on the centre's side of t's plane (the
+  // core does not reach the plane: the closed form's case, not EPA's)
+  const Vec3 nf = M.normal(t);
+  const double along_normal = glm::dot(toward, nf);
+  if (!(std::abs(along_normal) >= 1 - 1e-14)) return 0;
+  const double side = along_normal > 0 ? -1.0 : 1.0;  // the centre's side: toward is -side nf
+  const Vec3 use = -side * nf;
+  const double hp = side * glm::dot(p - tri[0], nf), hq = side * glm::dot(q - tri[0], nf);
+  const double hc = side * glm::dot(0.5 * (p + q) - tri[0], nf);
+  if (!(hc > tol && hp > tol && hq > tol)) return 0;
+  // a point clear of t's edges where it meets t's plane along the normal: its barycentric
+  // weights at least `clear`
+  auto over_interior = [&](const Vec3& x, double clear) {
+    double u, v, w;
+    weights(tri, x - glm::dot(x - tri[0], nf) * nf, u, v, w);
+    return u >= clear && v >= clear && w >= clear;
+  };
+  // the deeper end (collide_triangle's: q when the axis runs along the normal, else p) over t's
+  // interior, well clear of its edges: every point of the core is at least that end's height
+  // from t, and an edge's nearest pair is farther by the square of the end's distance from the
+  // edge over twice its height, so the closed form's nearest point on t is that end's
+  // projection, an interior point (feature_edges says 0: the face normal, the internal path).
+  // 1e-4 of the weights, a hundred times the ball's 1e-6: the closed form compares the ends'
+  // and the edges' distances, where the ball's has one point
+  const Vec3 axis = q - p;
+  const double along = glm::dot(axis, use);
+  const double length = glm::length(axis);
+  // (an axis at right angles to the normal to rounding: which end is the deeper is rounding's)
+  if (!(std::abs(along) > tol * (1 + length))) return 0;
+  const int deep = along <= 0 ? 0 : 1;
+  const Vec3& deep_end = deep == 0 ? p : q;
+  if (!over_interior(deep_end, 1e-4)) return 0;
+  // the nearest end within the reach of t's plane (else no contact)
+  if (!((deep == 0 ? hp : hq) - radius <= reach - tol)) return 0;
+  // the deeper end's point (the cap's deepest along the normal) and its projection onto t
+  auto cap_point = [&](std::uint32_t id) {
+    const Vec3 x = deep_end + radius * use;
+    const double d = glm::dot(use, x - tri[0]);
+    return Candidate{x, x - d * use, d, id};
+  };
+  int count = 0;
+  const double flat = 0.05 * length;  // collide_triangle's test for the side line
+  if (!(std::abs(std::abs(along) - flat) > tol * (1 + length))) return 0;
+  if (std::abs(along) < flat) {
+    // lying along the face: the side line's ends (each end moved by the radius at right angles
+    // to the axis, toward the face), which the clip keeps as they are when they lie over t's
+    // interior, each kept while within the reach (the deeper one becomes the cap's point)
+    const Vec3 sideways = glm::normalize(use - (along / glm::dot(axis, axis)) * axis);
+    const Vec3 ends[2] = {p, q};
+    for (std::uint32_t i = 0; i < 2; ++i) {
+      const Vec3 x = ends[i] + radius * sideways;
+      if (!over_interior(x, 1e-6)) return 0;
+      const double d = glm::dot(use, x - tri[0]);
+      if (!(std::abs(d + reach) > tol)) return 0;
+      if (d < -reach) continue;
+      out[count++] = int(i) == deep ? cap_point(i) : Candidate{x, x - d * use, d, i};
+    }
+  } else {
+    // standing off the face: the one point of the internal path, the deeper end's cap point
+    out[count++] = cap_point(0);
+  }
+  if (count == 0 || !(out[0].depth >= -reach + tol) || !(out[count - 1].depth >= -reach + tol)) return 0;
+  // every other triangle that the query box reaches is beyond the reach (collide_triangle's
+  // closed form turns it down: the core's distance less the radius past the margin)
+  const std::span<const Vec3> vs = M.vertices();
+  for (std::uint32_t k = 0; k < near.count; ++k) {
+    const std::uint32_t o = near.triangles[k];
+    if (o == t) continue;
+    const auto& j = M.triangles()[o];
+    const Vec3 other[3] = {vs[j[0]], vs[j[1]], vs[j[2]]};
+    if (!Aabb{glm::min(other[0], glm::min(other[1], other[2])), glm::max(other[0], glm::max(other[1], other[2]))}
+             .overlaps(box))
+      continue;
+    // (first by its plane, as collide_mesh's plane test: both ends beyond the reach on one
+    // side of it, so is the whole core, and the triangle lies in it; the closed form, some
+    // 1,500 instructions, only for the rest)
+    const Vec3 no = M.normal(o);
+    const double beyond = radius + reach + tol, op = glm::dot(p - other[0], no), oq = glm::dot(q - other[0], no);
+    if ((op > beyond && oq > beyond) || (op < -beyond && oq < -beyond)) continue;
+    Vec3 ca, cb;
+    if (!core_triangle_closest(p, q, other, no, ca, cb)) return 0;
+    if (!(glm::length(ca - cb) - radius > reach + tol)) return 0;
+  }
+  return count;
+}
+
 int collide_mesh(const ColliderShape& a, const Pose& pose_a, const ColliderShape& mesh, const Pose& pose_mesh,
                  std::span<Manifold> out, const NarrowPhaseSettings& settings, MeshQueryCache* cache,
                  BatchPath path) {
