@@ -360,22 +360,6 @@ bool ball_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Vec3& cent
                         double reach,
                         const Vec3& toward, const MeshQueryCache& near);
 
-/// What collide_mesh_unchecked would make for a capsule of `radius` (m) whose core runs from
-/// `p` to `q` (the mesh's frame, m), out to `reach` (m), when it makes one manifold, on
-/// triangle `t`'s face: its normal `toward` (unit, from the capsule into the mesh, the mesh's
-/// frame) is t's face normal, the core lies on the side away from it within the reach, its
-/// deeper end over t's interior clear of its edges, and every other triangle of `near` (the
-/// pair's cache, which must hold the capsule's query box and all its triangles) that the query
-/// box reaches is beyond the reach. Then the manifold's points (before the mesh's pose turns
-/// them to the world) go to `out` as collide_triangle makes them: the capsule's point a, the
-/// triangle's b, the depth (m) and the id before its flip bit; returned, their count (2 for a
-/// capsule lying along the face with both ends within the reach, else 1), or 0 where it cannot
-/// tell (margins of 1e-9 relative to the larger of the ends' coordinates and `world`, m, as
-/// for ball_on_face_alone). (make_manifolds' carry of a capsule's manifold on a mesh.)
-int capsule_on_face_alone(const TriangleMesh& M, std::uint32_t t, const Vec3& p, const Vec3& q, double world,
-                          double radius, double reach, const Vec3& toward, const MeshQueryCache& near,
-                          Candidate (&out)[2]);
-
 /// The manifold with A and B exchanged (normal flipped, points swapped).
 inline void flip(Manifold& m) {
   m.normal = -m.normal;

@@ -1064,47 +1064,6 @@ bool ball_on_mesh(CachedManifold& r, bool mesh_a, const ColliderShape& mesh, con
          under_cores(r, mesh_a, rel_position, rel_rotation, radius, reach, lanes);
 }
 
-// The carry for a capsule on a static mesh (the ball's, for a core that is a segment): its
-// manifold is the narrow phase's of one triangle's face (narrow::capsule_on_face_alone: the
-// core on one side of the triangle's plane within the reach, its deeper end over the
-// triangle's interior, every other triangle near it beyond the reach), and that function's
-// points, the same count and ids, are the manifold's; their cores made again as collide_pair
-// keeps them (a capsule lying on a face has two points, its side line's ends, which move in its
-// frame as it rolls about its axis: made again from the points, not moved as a plane's are).
-// On the terrain's settling steps some 99 capsule pairs a step were made anew, most of them
-// rolling or sliding on one face. `mesh_a`: the mesh is a's shape; `q_static`: the mesh's
-// body's rotation (the frame of the manifold's normal); `capsule`: the capsule's shape;
-// `qa`, `qb`, `com_a`, `com_b`: the bodies' rotations and centres of mass now (m).
-bool capsule_on_mesh(CachedManifold& r, bool mesh_a, const ColliderShape& mesh, const Pose& mesh_pose,
-                     const ColliderShape& capsule, const Pose& capsule_pose, const Quat& q_static, const Quat& qa,
-                     const Quat& qb, const Vec3& com_a, const Vec3& com_b, double reach, const MeshQueryCache& near) {
-  // (the normal kept in the mesh's body's frame, as for the ball's)
-  if (r.next != kNoIndex || r.count < 1 || r.count > 2 || r.normal_in_b == mesh_a) return false;
-  const Quat to_mesh = glm::conjugate(mesh_pose.rotation);
-  const Vec3 n = to_mesh * (q_static * r.normal);
-  const narrow::Segment core = narrow::capsule_core(capsule, compose(inverse(mesh_pose), capsule_pose));
-  const auto largest = [](const Vec3& x) { return std::max(std::abs(x.x), std::max(std::abs(x.y), std::abs(x.z))); };
-  const double world = std::max(largest(mesh_pose.position), largest(capsule_pose.position));
-  narrow::Candidate made[2];
-  const int count = narrow::capsule_on_face_alone(*mesh.mesh, r.sub, core.p, core.q, world, capsule.radius, reach,
-                                                  mesh_a ? -n : n, near, made);
-  // the ids collide_pair gives the merged points (the flip bit, the triangle mixed in), in order
-  if (count != r.count) return false;
-  for (int k = 0; k < count; ++k)
-    if (r.id[k] != ((made[k].id | narrow::kIdFlip) ^ (r.sub * 0x9e3779b1u))) return false;
-  // the cores as collide_pair's keep makes them from the points in the world (the normal from
-  // a to b)
-  const Vec3 nw = mesh_pose.rotation * n;
-  const Quat ia = glm::conjugate(qa), ib = glm::conjugate(qb);
-  for (int k = 0; k < count; ++k) {
-    const Vec3 on_capsule = apply(mesh_pose, made[k].a), on_mesh = apply(mesh_pose, made[k].b);
-    const Vec3 core_a = ia * ((mesh_a ? on_mesh : on_capsule) - r.radius_a * nw - com_a);
-    const Vec3 core_b = ib * ((mesh_a ? on_capsule : on_mesh) + r.radius_b * nw - com_b);
-    for (int i = 0; i < 3; ++i) r.core[i][k] = core_a[i], r.core[3 + i][k] = core_b[i];
-  }
-  return true;
-}
-
 // A touching pair's reuse test in a lane (make_manifolds): the bodies (dense indices), its cache
 // (or a blank one), this step's margin and reuse distance (m), and the reach of the body whose
 // points move against the normal's (m).
@@ -1472,23 +1431,6 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
                          s.q_[mesh_a ? a : b], mesh_a ? r.radius_b : r.radius_a, reach, mesh_queries[c.mesh_query],
                          plan.rel_position, plan.rel_rotation, simd != SimdPath::Scalar)) {
           carry(c, reach);
-          continue;
-        }
-      }
-      // a capsule on a mesh with its one triangle's points: carried when the narrow phase would
-      // make them again (the comment before capsule_on_mesh)
-      if (reuse && p.cache != kNoIndex && caches[p.cache].first != kNoIndex &&
-          caches[p.cache].mesh_query != kNoIndex &&
-          ((sa.shape.type == ShapeType::Mesh && sb.shape.type == ShapeType::Capsule) ||
-           (sb.shape.type == ShapeType::Mesh && sa.shape.type == ShapeType::Capsule))) {
-        const bool mesh_a = sa.shape.type == ShapeType::Mesh;
-        PairCache& c = caches[p.cache];
-        const Pose& pose_a = shape_pose(s, p.proxy_a, a, p.shape_a);
-        const Pose& pose_b = shape_pose(s, p.proxy_b, b, p.shape_b);
-        if (capsule_on_mesh(manifolds[c.first], mesh_a, (mesh_a ? sa : sb).shape, mesh_a ? pose_a : pose_b,
-                            (mesh_a ? sb : sa).shape, mesh_a ? pose_b : pose_a, s.q_[mesh_a ? a : b], s.q_[a], s.q_[b],
-                            s.com_[a], s.com_[b], plan.margin + plan.reuse, mesh_queries[c.mesh_query])) {
-          carry(c, plan.margin + plan.reuse);
           continue;
         }
       }
