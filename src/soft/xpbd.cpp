@@ -85,11 +85,11 @@ PBA_SOFT_INLINE void project(float& xa, float& ya, float& za, float& xb, float& 
     const float ddot = dx * ((xb - pxb) - (xa - pxa)) + dy * ((yb - pyb) - (ya - pya)) + dz * ((zb - pzb) - (za - pza));
     const float q = ((1.0f + gamma) * wsum + at) * l2;
     const float num = -c * l - gamma * ddot;
-    s = (q > 0.0f && r > 0.0f) ? num / q : 0.0f;
+    s = (q > 0.0f && r > 0.0f && wsum > 0.0f) ? num / q : 0.0f;
   } else {
     (void)pxa, (void)pya, (void)pza, (void)pxb, (void)pyb, (void)pzb, (void)gamma;
     const float q = (wsum + at) * l;
-    s = (q > 0.0f && r > 0.0f) ? -c / q : 0.0f;
+    s = (q > 0.0f && r > 0.0f && wsum > 0.0f) ? -c / q : 0.0f;
   }
   if constexpr (kLambda) *lam += s * l;
   const float sa = wa * s, sb = wb * s;
@@ -250,7 +250,8 @@ PBA_SOFT_AVX2_INLINE void group_avx2(int k, __m256 own, float* x, float* y, floa
       q = _mm256_mul_ps(_mm256_add_ps(wsum, at), l);
       num = _mm256_xor_ps(c, sign);
     }
-    const __m256 ok = _mm256_and_ps(_mm256_cmp_ps(q, zero, _CMP_GT_OQ), _mm256_cmp_ps(r, zero, _CMP_GT_OQ));
+    const __m256 ok = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(q, zero, _CMP_GT_OQ), _mm256_cmp_ps(r, zero, _CMP_GT_OQ)),
+                                    _mm256_cmp_ps(wsum, zero, _CMP_GT_OQ));
     s = _mm256_blendv_ps(zero, _mm256_div_ps(num, q), ok);
   }
   if constexpr (kLambda && !kRigid)
