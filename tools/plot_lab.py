@@ -55,6 +55,8 @@ def why_no_order(note):
         return "diverged"
     if note.startswith("the error does not"):
         return "no conv."
+    if note.startswith("too few usable points"):
+        return "too few"
     if note.startswith("error below the closed form"):
         return "-"
     return "exact"

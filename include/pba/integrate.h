@@ -100,6 +100,14 @@ struct NewtonStats {
   double last_update = 0;     ///< max|delta v| of the final iteration (m/s)
 };
 
+/// Thrown by an implicit Euler step when Newton does not converge or its system is singular
+/// or non-finite: an Error (its message names t and dt), of its own type so a caller can
+/// fall back on Newton's failure alone and let the step's other refusals (a bad dt) through.
+class NewtonFailure : public Error {
+ public:
+  using Error::Error;
+};
+
 namespace detail {
 // the scalar type and component count of double, glm::vec<L, T>
 template <class V>

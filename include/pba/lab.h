@@ -60,7 +60,8 @@ Problem projectile(double g = 9.81);
 /// Projectile with linear drag a = g - k v (k in 1/s, > 0); closed form with e^{-kt}.
 Problem projectile_drag(double k = 0.5, double g = 9.81);
 /// Undamped harmonic oscillator x'' = -omega^2 x, x0 = 1, v0 = 0; omega (rad/s) in
-/// [1.5e-154, 1.3e154], where omega^2 is a normal double.
+/// [1.5e-154, 1.7e153]: omega^2 a normal double, with room for the energy (2 omega^2) and
+/// the damped acceleration (up to 3 omega^2) to grow 21x in double.
 Problem oscillator(double omega = 1.0);
 /// Underdamped oscillator x'' = -omega^2 x - 2 zeta omega x', 0 < zeta < 1, omega as above.
 Problem damped_oscillator(double omega = 1.0, double zeta = 0.1);
@@ -117,12 +118,16 @@ struct ConvergenceResult {
   std::vector<double> dts;     ///< step sizes (s), coarse to fine
   std::vector<double> errors;  ///< max |x - x_exact| over coordinates at t_end (m or rad)
   std::vector<bool> fitted;    ///< whether each point was used in the fit
-  /// Least-squares slope of log(error) against log(dt) over the fitted points; NaN when
-  /// fewer than 3 points were usable (all at round-off: the method is exact here).
+  /// Least-squares slope of log(error) against log(dt) over the fitted points; NaN when no
+  /// window of 3 consecutive usable points shrinks 1.5x per halving: exact (all at
+  /// round-off), below the model error, diverged, no convergence or too few usable points
+  /// (`note` says which; NaN alone does not mean "exact").
   double observed_order = std::numeric_limits<double>::quiet_NaN();
   /// Why the order is NaN, if it is: every error at round-off ("exact"), below the model
-  /// error, "diverged" (non-finite) at some dt with the rest at round-off, or "the error
-  /// does not fall with dt" (the tables show "exact", "-", "diverged" and "no conv.").
+  /// error, "diverged" (non-finite) at some dt with the rest at round-off, "the error does
+  /// not fall with dt", or "too few usable points: k of n dt, ..." (fewer than 3
+  /// consecutive usable points, with why: levels < 3, diverged or at round-off); the tables
+  /// show "exact", "-", "diverged", "no conv." and "too few".
   std::string note;
 };
 

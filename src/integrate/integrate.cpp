@@ -4,6 +4,8 @@
 
 #include <Eigen/Dense>
 
+#include "core/squarable.h"
+
 namespace pba {
 
 namespace {
@@ -88,16 +90,13 @@ void throw_size_mismatch(std::size_t nx, std::size_t nv) {
 }
 
 void throw_step_precision(double dt, std::size_t scalar_bytes) {
-  const bool is_float = scalar_bytes == sizeof(float);
-  const double lo = is_float ? std::numeric_limits<float>::min() : std::numeric_limits<double>::min();
-  const double hi = std::sqrt(is_float ? std::numeric_limits<float>::max() : std::numeric_limits<double>::max());
-  throw Error("Integrator::step(dt): must be in [" + format_value(lo) + ", " + format_value(hi) +
-              "] s for an integrator of " + (is_float ? "float" : "double") +
-              " vectors (the step is used in that precision, divided by and squared), got " + format_value(dt));
+  constexpr std::string_view why = "the step is used in that precision, divided by and squared";
+  if (scalar_bytes == sizeof(float)) throw_not_squarable<float>(dt, "Integrator::step(dt)", "s for an integrator of float vectors", why);
+  throw_not_squarable<double>(dt, "Integrator::step(dt)", "s for an integrator of double vectors", why);
 }
 
 void throw_newton_failure(int iterations, double update, double t, double dt) {
-  throw Error("implicit Euler: Newton did not converge in " + std::to_string(iterations) +
+  throw NewtonFailure("implicit Euler: Newton did not converge in " + std::to_string(iterations) +
               " iterations at t = " + format_value(t) + " s, dt = " + format_value(dt) +
               " s (last update " + format_value(update) +
               " m/s); reduce dt or raise NewtonSettings.max_iterations");
@@ -113,7 +112,7 @@ void throw_too_many_unknowns(std::size_t n_objects, int dim, std::size_t limit) 
 }
 
 void throw_singular(double t, double dt) {
-  throw Error("implicit Euler: singular or non-finite Newton system at t = " + format_value(t) +
+  throw NewtonFailure("implicit Euler: singular or non-finite Newton system at t = " + format_value(t) +
               " s, dt = " + format_value(dt) + " s (check the acceleration for NaN)");
 }
 

@@ -35,12 +35,14 @@ constexpr std::string_view kNoteExact = "error at round-off for every dt (exact 
 constexpr std::string_view kNoteModel = "error below the closed form's own model error (or round-off)";
 constexpr std::string_view kNoteDiverged = "diverged";        // "diverged (non-finite) at k of n dt ..."
 constexpr std::string_view kNoteNoFit = "the error does not";  // "... fall with dt ..."
+constexpr std::string_view kNoteFew = "too few usable points";  // ": k of n dt, ..."
 
 // One word for a convergence result's order: the order, or why there is none.
 std::string order_cell(const ConvergenceResult& c, const char* format) {
   if (!std::isnan(c.observed_order)) return fmt(format, c.observed_order);
   if (c.note.rfind(kNoteDiverged, 0) == 0) return "diverged";
   if (c.note.rfind(kNoteNoFit, 0) == 0) return "no conv.";
+  if (c.note.rfind(kNoteFew, 0) == 0) return "too few";
   if (c.note == kNoteModel) return "-";
   return "exact";
 }
@@ -168,22 +170,36 @@ ConvergenceResult measure_convergence(const Problem& p, Method m, const Converge
   // the observed order by the lab's fit rule
   r.observed_order = fit_order(r.dts, r.errors, counts, scale, p.model_error, s, r.fitted);
   if (std::isnan(r.observed_order)) {
-    // why: every point at round-off (or model error), or points that diverged or did not
-    // converge (which are not "exact")
-    std::size_t diverged = 0, above = 0;
+    // why: every point at round-off (or model error), points that diverged or did not
+    // converge (which are not "exact"), or too few usable ones to fit (levels = 2, or
+    // only 2 stable step sizes fall: they may well converge, but no order can be fitted)
+    std::size_t diverged = 0, above = 0, run = 0, longest = 0;
     for (std::size_t i = 0; i < r.errors.size(); ++i) {
+      const bool usable = std::isfinite(r.errors[i]) && r.errors[i] > error_floor(counts[i], scale, p.model_error, s);
       if (!std::isfinite(r.errors[i])) ++diverged;
-      else if (r.errors[i] > error_floor(counts[i], scale, p.model_error, s)) ++above;
+      else if (usable) ++above;
+      run = usable ? run + 1 : 0;
+      longest = std::max(longest, run);
     }
-    const std::string of = std::to_string(diverged) + " of " + std::to_string(r.errors.size()) + " dt";
-    if (above > 0)
+    const std::size_t total = r.errors.size(), floor = total - diverged - above;
+    const std::string of = std::to_string(diverged) + " of " + std::to_string(total) + " dt";
+    if (above > 0 && longest < 3) {
+      std::string why;
+      auto add = [&why](const std::string& part) { why += (why.empty() ? "" : "; ") + part; };
+      if (total < 3) add("ConvergenceSettings.levels = " + std::to_string(total));
+      if (diverged > 0) add(std::to_string(diverged) + " diverged (non-finite)");
+      if (floor > 0) add(std::to_string(floor) + (p.model_error > 0 ? " below the model error" : " at round-off"));
+      r.note = std::string(kNoteFew) + ": " + std::to_string(above) + " of " + std::to_string(total) +
+               " dt, 3 consecutive are needed to fit an order (" + why + ")";
+    } else if (above > 0) {
       r.note = std::string(kNoteNoFit) + " fall with dt (no 3 consecutive dt halvings each shrink it 1.5x)" +
                (diverged > 0 ? "; diverged (non-finite) at " + of : "");
-    else if (diverged > 0)
+    } else if (diverged > 0) {
       r.note = std::string(kNoteDiverged) + " (non-finite) at " + of +
-               (diverged < r.errors.size() ? ", the others at round-off" : ": unstable at these step sizes");
-    else
+               (diverged < total ? ", the others at round-off" : ": unstable at these step sizes");
+    } else {
       r.note = p.model_error > 0 ? kNoteModel : kNoteExact;
+    }
   }
   return r;
 }
@@ -351,6 +367,14 @@ std::ofstream open_csv(const std::filesystem::path& path) {
   return f;
 }
 std::string num(double v) { return format_value(v); }
+// a text field as RFC 4180 has it: in double quotes (inner ones doubled) when it holds a
+// comma, a quote or a line break (the notes have commas), or always when asked
+std::string text(std::string_view v, bool always_quoted = false) {
+  if (!always_quoted && v.find_first_of(",\"\r\n") == std::string_view::npos) return std::string(v);
+  std::string out = "\"";
+  for (char ch : v) out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return out + '"';
+}
 }  // namespace
 
 void write_csv(const LabReport& rep, const std::string& dir) {
@@ -364,7 +388,7 @@ void write_csv(const LabReport& rep, const std::string& dir) {
     f << "problem,method,dt,error,fitted\n";
     for (const auto& c : rep.convergence)
       for (std::size_t i = 0; i < c.dts.size(); ++i)
-        f << c.problem << ',' << name(c.method) << ',' << num(c.dts[i]) << ',' << num(c.errors[i]) << ','
+        f << text(c.problem) << ',' << name(c.method) << ',' << num(c.dts[i]) << ',' << num(c.errors[i]) << ','
           << (c.fitted[i] ? 1 : 0) << '\n';
   }
   // observed orders
@@ -372,8 +396,8 @@ void write_csv(const LabReport& rep, const std::string& dir) {
     auto f = open_csv(d / "orders.csv");
     f << "problem,method,observed_order,theory_order,note\n";
     for (const auto& c : rep.convergence)
-      f << c.problem << ',' << name(c.method) << ',' << num(c.observed_order) << ',' << order(c.method)
-        << ',' << c.note << '\n';
+      f << text(c.problem) << ',' << name(c.method) << ',' << num(c.observed_order) << ',' << order(c.method)
+        << ',' << text(c.note) << '\n';
   }
   // energy samples
   {
@@ -381,7 +405,7 @@ void write_csv(const LabReport& rep, const std::string& dir) {
     f << "problem,method,dt,t,rel_energy_error\n";
     for (const auto& e : rep.energy)
       for (std::size_t i = 0; i < e.t.size(); ++i)
-        f << e.problem << ',' << name(e.method) << ',' << num(e.dt) << ',' << num(e.t[i]) << ','
+        f << text(e.problem) << ',' << name(e.method) << ',' << num(e.dt) << ',' << num(e.t[i]) << ','
           << num(e.rel_error[i]) << '\n';
   }
   // stability scan
@@ -399,9 +423,9 @@ void write_csv(const LabReport& rep, const std::string& dir) {
     f << "problem,method,dt,steps,steps_done,final_rel_error,max_abs_rel_error,invariant_max_abs_error,"
          "failure\n";
     for (const auto& e : rep.energy)
-      f << e.problem << ',' << name(e.method) << ',' << num(e.dt) << ',' << e.steps << ',' << e.steps_done
+      f << text(e.problem) << ',' << name(e.method) << ',' << num(e.dt) << ',' << e.steps << ',' << e.steps_done
         << ',' << num(e.final_rel_error) << ',' << num(e.max_abs_rel_error) << ','
-        << num(e.invariant_max_abs_error) << ",\"" << e.failure << "\"\n";
+        << num(e.invariant_max_abs_error) << ',' << text(e.failure, true) << '\n';
   }
 }
 
@@ -460,8 +484,9 @@ std::string summary_table(const LabReport& rep) {
     if (std::find(probs.begin(), probs.end(), c.problem) == probs.end()) probs.push_back(c.problem);
   if (!probs.empty()) {
     out += "\nObserved order per problem ('exact' = error at round-off for every dt; '-' = below the\n"
-           "closed form's own model error; 'diverged' = non-finite at some dt, the rest unusable;\n"
-           "'no conv.' = the error does not fall with dt):\n";
+           "closed form's own model error; 'diverged' = non-finite at some dt, the rest at round-off;\n"
+           "'no conv.' = the error does not fall with dt; 'too few' = fewer than 3 consecutive usable\n"
+           "dt, e.g. only 2 stable ones):\n";
     std::snprintf(line, sizeof line, "%-18s", "problem");
     out += line;
     for (Method m : methods) {

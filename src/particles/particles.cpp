@@ -8,6 +8,7 @@
 #include <new>
 #include <string>
 
+#include "core/squarable.h"
 #include "kernels.h"
 #include "pba/particles.h"
 
@@ -695,6 +696,12 @@ void ParticleSystem::step(double t, double dt, const CollisionWorld& colliders, 
   // validate the step and the settings once
   require_positive(dt, "ParticleSystem::step(dt)");
   require_finite(t, "ParticleSystem::step(t)");
+  // the step in float, as every method's kernel uses it: normal, with a finite square (1e-50
+  // rounded to 0 and made a silent no-op step; the implicit Euler's Integrator refused it
+  // inside the Newton fallback, which swallowed it)
+  if (!detail::squarable<float>(dt))
+    detail::throw_not_squarable<float>(dt, "ParticleSystem::step(dt)", "s",
+                                       "the particles step in float, divide by it and square it");
   forces_.validate("ParticleSystem.forces");
   if (forcers.size() > kMaxForcers)
     throw Error("ParticleSystem::step: at most " + std::to_string(kMaxForcers) + " forcers, got " +
@@ -794,7 +801,7 @@ void ParticleSystem::step_generic(double t, double dt, const CollisionWorld& col
       };
       try {
         integ_one_.step(t, dt, std::span<Vec3f>(&gx_[i], 1), std::span<Vec3f>(&gv_[i], 1), accel);
-      } catch (const Error&) {
+      } catch (const NewtonFailure&) {
         // Newton fails where the force is discontinuous (a forcer volume's edge): that
         // particle takes a semi-implicit Euler step instead, and is counted
         gx_[i] = x0;

@@ -8,6 +8,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/squarable.h"
 #include "soft_impl.h"
 
 namespace pba {
@@ -197,8 +198,8 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
                   " does not exist (the mesh has " + std::to_string(n) + " particles)");
   };
   // constraints: indices, distinct ends, rest lengths (a normal float whose square is finite)
-  constexpr double kMinLength = std::numeric_limits<float>::min();
-  const double kMaxLength = std::sqrt(static_cast<double>(std::numeric_limits<float>::max()));
+  const double kMinLength = detail::squarable_lo<float>();
+  const double kMaxLength = detail::squarable_hi<float>();
   std::vector<SoftConstraint> cons = m.constraints;
   for (std::size_t k = 0; k < cons.size(); ++k) {
     SoftConstraint& c = cons[k];
@@ -219,8 +220,8 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
     }
     // the solver keeps rest lengths in float and squares lengths in float
     if (!(c.rest_length >= kMinLength && c.rest_length <= kMaxLength))
-      throw Error(idx(where, "constraints", k) + ".rest_length: must be in [" + format_value(kMinLength) + ", " +
-                  format_value(kMaxLength) + "] m (kept in float, and squared), got " + format_value(c.rest_length));
+      detail::throw_not_squarable<float>(c.rest_length, idx(where, "constraints", k) + ".rest_length", "m",
+                                         "kept in float, and squared");
     if (const double d = glm::length(m.positions[c.b] - m.positions[c.a]); !(d <= kMaxLength))
       throw Error(idx(where, "constraints", k) + ": particles " + std::to_string(c.a) + " and " +
                   std::to_string(c.b) + " are " + format_value(d) + " m apart, more than " +
@@ -257,6 +258,17 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
       const Vec3 e1 = m.positions[t.b] - m.positions[t.a], e2 = m.positions[t.c] - m.positions[t.a],
                  e3 = m.positions[t.d] - m.positions[t.a];
       const Vec3 g1 = glm::cross(e2, e3), g2 = glm::cross(e3, e1), g3 = glm::cross(e1, e2), g0 = -(g1 + g2 + g3);
+      // each |grad|^2 (an edge to the fourth) is formed in float before the masses divide
+      // it: 1e10 m edges overflowed with 1e12 kg particles, the sum below fitted, and the
+      // volume constraint silently did nothing (a correction of 0 / inf)
+      const Vec3 gs[4] = {g0, g1, g2, g3};
+      const std::uint32_t ids[4] = {t.a, t.b, t.c, t.d};
+      for (int j = 0; j < 4; ++j)
+        if (const double gg = glm::dot(gs[j], gs[j]); !(16 * gg <= std::numeric_limits<float>::max()))
+          throw Error(idx(where, "tets", k) + ": too large for the float volume solve: |grad V|^2 at its particle " +
+                      std::to_string(ids[j]) + " is " + format_value(gg) +
+                      " m^4 at rest, over 1/16 of the largest float (room for a 2x stretch); use smaller "
+                      "tetrahedra (heavier particles do not help: the square is formed before the mass divides it)");
       const double den = glm::dot(g0, g0) / m.masses[t.a] + glm::dot(g1, g1) / m.masses[t.b] +
                          glm::dot(g2, g2) / m.masses[t.c] + glm::dot(g3, g3) / m.masses[t.d];
       if (!(16 * den <= std::numeric_limits<float>::max()))
@@ -430,12 +442,10 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
   s.def.validate("SoftBodyDef");
   // the substep in float: normal, with a finite square (1e-300 rounded to 0 and 1e300 to
   // inf, and the state turned NaN)
-  if (const float h = static_cast<float>(dt / s.def.substeps); !(std::isnormal(h) && std::isfinite(h * h)))
-    throw Error("SoftBody::step(dt): the substep dt / SoftBodyDef.substeps = " + format_value(dt) + " / " +
-                std::to_string(s.def.substeps) + " s must be in [" +
-                format_value(std::numeric_limits<float>::min()) + ", " +
-                format_value(std::sqrt(static_cast<double>(std::numeric_limits<float>::max()))) +
-                "] s (it is used in float, divided by and squared)");
+  if (const double h = dt / s.def.substeps; !detail::squarable<float>(h))
+    detail::throw_not_squarable<float>(h, "SoftBody::step(dt): the substep dt / SoftBodyDef.substeps = " +
+                                              format_value(dt) + " / " + std::to_string(s.def.substeps) + " s",
+                                       "s", "it is used in float, divided by and squared");
   if (s.x.empty()) {
     s.time = t + dt;
     ++s.steps;
@@ -445,6 +455,25 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
   Stopwatch sw;
   s.colliders = colliders.flat_double();
   s.external_accelerations(t);
+  // what predict forms in float: each substep adds a h^2 (gravity and the external
+  // accelerations), and over the step's S substeps a free particle falls a h^2 S (S + 1) / 2
+  // <= a dt^2, which must fit a float (a rope at dt = 1e20 passed the substep check, h^2 =
+  // 1e38, and its g h^2 turned the state non-finite); refused before any particle moves
+  {
+    double a = glm::length(s.def.forces.gravity);
+    if (s.has_aext) {
+      double a2 = 0;
+      for (std::size_t i = 0; i < s.x.size(); ++i) {
+        const double ax = s.ax[i], ay = s.ay[i], az = s.az[i];
+        a2 = std::max(a2, ax * ax + ay * ay + az * az);
+      }
+      a += std::sqrt(a2);
+    }
+    if (!(a * dt * dt <= std::numeric_limits<float>::max()))
+      throw Error("SoftBody::step(dt): dt = " + format_value(dt) + " s with accelerations up to " + format_value(a) +
+                  " m/s^2 (gravity and aerodynamics) moves a particle up to a dt^2 = " + format_value(a * dt * dt) +
+                  " m in one step, beyond a float (3.4e38 m); use a smaller dt");
+  }
   s.profile.forces = sw.seconds();
   s.profile.collide = 0;
   // the solver

@@ -95,6 +95,7 @@ TEST(BadInput, StepRejectsADtItsPrecisionCannotHold) {
                                                                       pba::format_value(dt)),
                 std::string::npos);
     EXPECT_EQ(xd, 1.0);
+    EXPECT_EQ(vd, 0.0);
     // the ends of the float range step and stay finite (the largest with a force-free object,
     // which the Verlets move by a dt^2 of 3.4e38 times a zero acceleration)
     fi.step_one(0, std::numeric_limits<float>::min(), x, v, f);

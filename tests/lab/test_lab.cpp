@@ -8,7 +8,11 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "pba/lab.h"
 
@@ -18,6 +22,16 @@ using pba::Method;
 namespace lab = pba::lab;
 
 using pba::test_support::error_of;
+
+// x'' = -1e6 x to t = 10 s from dt = 0.1 s: omega dt = 100 / 2^k at level k, and RK4 is
+// stable only below 2.83 (k >= 6)
+lab::Problem stiff_oscillator(const std::string& name) {
+  lab::Problem p = lab::oscillator(1000);
+  p.name = name;
+  p.t_end = 10;
+  p.dt_coarse = 0.1;
+  return p;
+}
 
 TEST(Convergence, OscillatorOrdersMatchTheoryWithinATenth) {
   // the issue's headline: 1, 1, 2, 2, 4, 1
@@ -64,10 +78,7 @@ TEST(Convergence, NoOrderIsReportedAsWhyNotAsExact) {
   // a stiff x'' = -1e6 x at omega dt = 100, 50, 25: RK4 (stable to 2.83) diverges at every
   // dt, and a closed form off by 0.5 (a user's mistake) leaves an error that never falls;
   // both were reported as "exact" (error at round-off) before
-  lab::Problem stiff = lab::oscillator(1000);
-  stiff.name = "stiff";
-  stiff.t_end = 10;
-  stiff.dt_coarse = 0.1;
+  const lab::Problem stiff = stiff_oscillator("stiff");
   lab::ConvergenceSettings s;
   s.levels = 3;
   const auto r = lab::measure_convergence(stiff, Method::Rk4, s);
@@ -91,6 +102,40 @@ TEST(Convergence, NoOrderIsReportedAsWhyNotAsExact) {
   EXPECT_EQ(table.find("   exact"), std::string::npos) << table;  // no right-aligned "exact" cell
   EXPECT_NE(table.find("stiff               diverged"), std::string::npos) << table;
   EXPECT_NE(table.find("wrong-exact         no conv."), std::string::npos) << table;
+}
+
+// Fewer than 3 consecutive usable points cannot be fitted, but were reported as "the error
+// does not fall with dt" (no conv.), which need not be true: with levels = 2 (accepted,
+// never fittable) both points fall 16x; RK4 on a stiff oscillator with only the 2 finest of
+// 8 step sizes stable (the reviewer's case) has 2 usable points. The note now says "too few
+// usable points", counts them and says what the others were; the tables show "too few".
+TEST(Convergence, TooFewUsablePointsIsNotNoConvergence) {
+  lab::ConvergenceSettings two;
+  two.levels = 2;
+  const auto r2 = lab::measure_convergence(lab::oscillator(), Method::Rk4, two);
+  EXPECT_TRUE(std::isnan(r2.observed_order));
+  // both errors usable, falling by RK4's 2^4 = 16 per halving (within its pre-asymptotic 20%)
+  ASSERT_EQ(r2.errors.size(), 2u);
+  EXPECT_NEAR(r2.errors[0] / r2.errors[1], 16, 3.2);
+  EXPECT_EQ(r2.note, "too few usable points: 2 of 2 dt, 3 consecutive are needed to fit an order "
+                     "(ConvergenceSettings.levels = 2)");
+  // omega dt = 100 / 2^k, k = 0..7: RK4 is stable below 2.83, so at k = 6 and 7 only
+  const lab::Problem stiff = stiff_oscillator("stiff");
+  lab::ConvergenceSettings eight;
+  eight.levels = 8;
+  const auto r8 = lab::measure_convergence(stiff, Method::Rk4, eight);
+  EXPECT_TRUE(std::isnan(r8.observed_order));
+  for (int k = 0; k < 6; ++k) EXPECT_TRUE(std::isinf(r8.errors[k])) << k;
+  // the 2 stable ones are usable (finite, far above round-off: RK4's phase error over
+  // omega t = 1e4 rad is of order 1 at omega dt = 1.6 and 0.8), but 2 cannot be fitted
+  for (int k = 6; k < 8; ++k) EXPECT_TRUE(std::isfinite(r8.errors[k]) && r8.errors[k] > 1e-3) << r8.errors[k];
+  EXPECT_EQ(r8.note, "too few usable points: 2 of 8 dt, 3 consecutive are needed to fit an order "
+                     "(6 diverged (non-finite))");
+  lab::LabReport rep;
+  rep.convergence = {r8};
+  const std::string table = lab::summary_table(rep);
+  EXPECT_NE(table.find("stiff                too few"), std::string::npos) << table;
+  EXPECT_EQ(table.find("no conv.   "), std::string::npos) << table;
 }
 
 TEST(SpecialFunctions, EllipticKAndJacobiFunctions) {
@@ -244,14 +289,35 @@ TEST(BadInput, ProblemsAndSettingsNameTheField) {
             "damped-oscillator, pendulum-small, pendulum-large, orbit, orbit-circular");
   EXPECT_NE(error_of([&] { lab::measure_energy(lab::Problem{}, Method::Rk4); }).find("Problem.name"),
             std::string::npos);
-  // an omega whose square over- or underflows made the acceleration NaN or 0
-  for (double omega : {1e200, 1e-200}) {
-    const std::string range = "must be in [1.4916681462400413e-154, 1.3407807929942596e+154], got " +
+  // an omega whose square over- or underflows made the acceleration NaN or 0, and one near
+  // sqrt(DBL_MAX) = 1.3e154 overflowed the energy v^2 + w2 x^2 (2 w2) and the damped
+  // -w2 x - c v (up to 3 w2)
+  for (double omega : {1e200, 1.3e154, 2e153, 1e-200}) {
+    const std::string range = "must be in [1.4916681462400413e-154, 1.6759759912428245e+153], got " +
                               pba::format_value(omega);
     EXPECT_EQ(error_of([&] { lab::oscillator(omega); }), "oscillator(omega): " + range);
     EXPECT_EQ(error_of([&] { lab::damped_oscillator(omega); }), "damped_oscillator(omega): " + range);
   }
-  EXPECT_NO_THROW(lab::oscillator(1e150).validate());
+  // at the bound both step, every method at its order, and (the problems depend on omega t
+  // alone) with the energy of omega = 1 times omega^2, to round-off: finite, not inf
+  const double top = std::sqrt(std::numeric_limits<double>::max()) / 8;
+  const std::vector<std::pair<lab::Problem, lab::Problem>> pairs = {
+      {lab::oscillator(top), lab::oscillator(1)}, {lab::damped_oscillator(top), lab::damped_oscillator(1)}};
+  for (const auto& [q, q1] : pairs) {
+    for (Method m : pba::kAllMethods) {
+      SCOPED_TRACE(q.name + " / " + std::string(pba::name(m)));
+      const auto r = lab::measure_convergence(q, m);
+      EXPECT_NEAR(r.observed_order, pba::order(m), 0.1) << r.note;
+      const long long steps = std::llround(q.t_end / q.dt_coarse);
+      std::vector<double> x, v, x1, v1;
+      lab::simulate(q, m, q.dt_coarse, steps, x, v);
+      lab::simulate(q1, m, q1.dt_coarse, steps, x1, v1);
+      const double e = q.energy(x, v), e1 = q1.energy(x1, v1);
+      EXPECT_TRUE(std::isfinite(e)) << e;
+      // ~steps eps of rounding between the two runs, with a wide margin
+      EXPECT_NEAR(e / (top * top) / e1, 1.0, 1e-9) << e << " " << e1;
+    }
+  }
   // a finest step count beyond a long long was rounded to an unspecified value (1 step of
   // dt = t_end, measured silently); beyond simulate's 1e9 steps it is refused up front
   p = lab::oscillator();
@@ -289,6 +355,69 @@ TEST(Output, CsvFilesAndSummaryTable) {
   std::ofstream(file) << "x";
   EXPECT_NE(error_of([&] { lab::write_csv(rep, (file / "sub").string()); }).find("cannot create directory"),
             std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+// Splits one CSV line into its fields by RFC 4180 (fields in double quotes may hold
+// commas; a doubled quote inside one is a quote).
+std::vector<std::string> csv_fields(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char ch = line[i];
+    if (quoted && ch == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+      out.back() += '"';
+      ++i;
+    } else if (ch == '"') {
+      quoted = !quoted;
+    } else if (ch == ',' && !quoted) {
+      out.emplace_back();
+    } else {
+      out.back() += ch;
+    }
+  }
+  return out;
+}
+
+// orders.csv wrote the note unquoted, and the notes of a diverging case have commas
+// ("diverged (non-finite) at 6 of 8 dt, the others at round-off"): 6 fields under a
+// 5-column header. Every row of every file now has its header's field count, and the
+// notes read back whole.
+TEST(Output, EveryCsvRowHasTheHeadersFieldCount) {
+  // x'' = -1e6 x from 1e-300 against an exact 0: RK4 diverges at omega dt = 100 .. 3.1 and
+  // stays at round-off (|x| <= 1e-300) at 1.6 and 0.8
+  lab::Problem tiny = stiff_oscillator("tiny");
+  tiny.x0 = {1e-300};
+  tiny.exact = [](double, std::span<double> x, std::span<double> v) { x[0] = v[0] = 0; };
+  lab::ConvergenceSettings eight;
+  eight.levels = 8;
+  lab::LabReport rep;
+  rep.convergence.push_back(lab::measure_convergence(tiny, Method::Rk4, eight));
+  EXPECT_EQ(rep.convergence.back().note, "diverged (non-finite) at 6 of 8 dt, the others at round-off");
+  rep.convergence.push_back(lab::measure_convergence(stiff_oscillator("stiff"), Method::Rk4, eight));
+  EXPECT_NE(rep.convergence.back().note.find(", 3 consecutive"), std::string::npos);
+  const auto dir = std::filesystem::temp_directory_path() / "pba_test_lab_csv_fields";
+  std::filesystem::remove_all(dir);
+  lab::write_csv(rep, dir.string());
+  for (const char* f : {"convergence.csv", "orders.csv"}) {
+    std::ifstream in(dir / f);
+    std::string header, line;
+    ASSERT_TRUE(std::getline(in, header)) << f;
+    const std::size_t columns = csv_fields(header).size();
+    int rows = 0;
+    while (std::getline(in, line)) {
+      EXPECT_EQ(csv_fields(line).size(), columns) << f << ": " << line;
+      ++rows;
+    }
+    EXPECT_EQ(rows, std::string(f) == "orders.csv" ? 2 : 16) << f;
+  }
+  std::ifstream in(dir / "orders.csv");
+  std::string line;
+  std::getline(in, line);
+  for (const auto& c : rep.convergence) {
+    ASSERT_TRUE(std::getline(in, line));
+    EXPECT_EQ(csv_fields(line).back(), c.note);
+  }
   std::filesystem::remove_all(dir);
 }
 

@@ -444,6 +444,37 @@ TEST(BadInput, EmitterWithNegativeRate) {
   }
 }
 
+// A finite positive dt that rounds to 0 or inf in float, or whose square overflows one,
+// passed ParticleSystem::step's check: the semi-implicit Euler kernel and position Verlet
+// took it unchecked (1e-50 a silent no-op step), and implicit Euler's refusal was swallowed
+// by the Newton fallback (a fallback step with dt 0 or inf, counted as a Newton failure).
+// Every method refuses it now, naming dt and the range, with the state untouched.
+TEST(BadInput, StepRefusesADtAFloatCannotHold) {
+  for (Method m : pba::kAllMethods) {
+    ParticleSystem ps = make_system(m);
+    const auto a = ps.create({.position = {0, 1, 0}, .velocity = {1, 0, 0}});
+    const std::uint64_t h0 = ps.hash();
+    for (double dt : {1e-50, 1e-39, 1e20, 1e39, 1e300}) {
+      std::string msg = "no error";
+      try {
+        ps.step(0, dt, {}, {});
+      } catch (const pba::Error& e) {
+        msg = e.what();
+      }
+      EXPECT_EQ(msg, "ParticleSystem::step(dt): must be in [1.1754943508222875e-38, 18446743523953729536] s (the "
+                     "particles step in float, divide by it and square it), got " + pba::format_value(dt))
+          << pba::name(m);
+    }
+    EXPECT_EQ(ps.hash(), h0) << pba::name(m);
+    EXPECT_EQ(ps.steps(), 0) << pba::name(m);
+    EXPECT_EQ(ps.newton_fallbacks(), 0) << pba::name(m);
+    // an ordinary step is still taken
+    ps.step(0, 1e-3, {}, {});
+    EXPECT_EQ(ps.steps(), 1) << pba::name(m);
+    EXPECT_GT(ps.position(a).x, 0.0) << pba::name(m);
+  }
+}
+
 TEST(BadInput, NonFiniteStateStopsWithParticleAndTime) {
   ParticleSystem ps = make_system(Method::SemiImplicitEuler);
   ps.create({});

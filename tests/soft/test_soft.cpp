@@ -813,8 +813,8 @@ TEST(SoftBadInput, LengthsAndStepsBeyondTheFloatSolver) {
     for (double dt : {1e-300, 1e-40, 1e300, 1e21}) {
       msg = error_of([&] { r.step(0, dt); });
       EXPECT_EQ(msg, "SoftBody::step(dt): the substep dt / SoftBodyDef.substeps = " + pba::format_value(dt) +
-                         " / 10 s must be in [1.1754943508222875e-38, 18446743523953729536] s (it is used in float, "
-                         "divided by and squared)");
+                         " / 10 s: must be in [1.1754943508222875e-38, 18446743523953729536] s (it is used in float, "
+                         "divided by and squared), got " + pba::format_value(dt / 10));
     }
     EXPECT_FALSE(r.failed());
     EXPECT_EQ(r.hash(), h0);
@@ -871,6 +871,63 @@ TEST(SoftBadInput, TetrahedraTooLargeForTheFloatVolumeSolve) {
   pba::SoftBody b = pba::SoftBody::jelly_box(j);
   for (int i = 0; i < 5; ++i) b.step(i / 60.0, 1.0 / 60);
   EXPECT_TRUE(std::isfinite(b.kinetic_energy()));
+}
+
+// The substep check kept h^2 finite (h <= 1.8e19 s), but predict forms g h^2 in float: a
+// default rope stepped with dt = 1e20 (10 substeps of 1e19 s) passed it and failed as
+// "particle 0 became non-finite". The step's fall a dt^2 must fit a float; refused before
+// anything moves. Below the bound a free particle falls by the closed form of S
+// semi-implicit Euler substeps: g h^2 S (S + 1) / 2 = g dt^2 (S + 1) / (2 S).
+TEST(SoftBadInput, StepWhoseFallOverflowsAFloatIsRefused) {
+  pba::SoftBody r = pba::SoftBody::rope({.segments = 4});
+  const std::uint64_t h0 = r.hash();
+  EXPECT_EQ(error_of([&] { r.step(0, 1e20); }),
+            "SoftBody::step(dt): dt = 1e+20 s with accelerations up to 9.81 m/s^2 (gravity and aerodynamics) moves a "
+            "particle up to a dt^2 = 9.81e+40 m in one step, beyond a float (3.4e38 m); use a smaller dt");
+  EXPECT_FALSE(r.failed());
+  EXPECT_EQ(r.hash(), h0);
+  r.step(0, 1.0 / 60);
+  EXPECT_TRUE(std::isfinite(r.kinetic_energy()));
+  // one free particle at dt = 5e18 s (g dt^2 = 2.5e38 fits)
+  pba::SoftMesh m;
+  m.positions = {{0, 0, 0}};
+  m.masses = {1};
+  pba::SoftBody p = pba::SoftBody::from_mesh(m);
+  const double dt = 5e18, S = 10;
+  p.step(0, dt);
+  const double fall = 9.81 * dt * dt * (S + 1) / (2 * S);
+  EXPECT_NEAR(p.position(0).y / -fall, 1.0, 1e-5);  // float rounding over 10 substeps
+}
+
+// The tet-size check above computed sum_j |grad_j V|^2 / m_j in double, but the solver forms
+// each |grad_j V|^2 in float before the mass divides it: a tet of 1e10 m edges with 1e12 kg
+// particles passed (the sum, 4e28, fits) while |grad V|^2 = 1e40 overflowed a float, and the
+// volume solve's correction 0 / inf silently did nothing. It is refused now, naming the tet
+// and the particle; at 1e9 m (|grad V|^2 = 1e36, 16 x fits) a squashed tet is pushed back
+// toward its rest volume.
+TEST(SoftBadInput, TetGradientSquaredMustFitAFloat) {
+  auto mesh = [](double edge) {
+    pba::SoftMesh m;
+    m.positions = {{0, 0, 0}, {edge, 0, 0}, {0, edge, 0}, {0, 0, edge}};
+    m.masses = {1e12, 1e12, 1e12, 1e12};
+    m.tets = {{.a = 0, .b = 1, .c = 2, .d = 3}};
+    return m;
+  };
+  EXPECT_EQ(error_of([&] { pba::SoftBody::from_mesh(mesh(1e10)); }),
+            "SoftMesh.tets[0]: too large for the float volume solve: |grad V|^2 at its particle 0 is 3e+40 m^4 at "
+            "rest, over 1/16 of the largest float (room for a 2x stretch); use smaller tetrahedra (heavier particles "
+            "do not help: the square is formed before the mass divides it)");
+  // at 1e9 m the volume solve works: particle 3 pulled down to half height, no gravity, the
+  // volume constraint (not stiff: one substep's worth) raises the volume back from half
+  pba::SoftMesh m = mesh(1e9);
+  pba::SoftBodyDef d;
+  d.forces.gravity = pba::Vec3(0);
+  pba::SoftBody b = pba::SoftBody::from_mesh(m, d);
+  const double v0 = b.volume();
+  b.set_position(3, pba::Vec3(0, 0, 5e8));
+  EXPECT_NEAR(b.volume() / v0, 0.5, 1e-6);
+  b.step(0, 1.0 / 60);
+  EXPECT_GT(b.volume() / v0, 0.99);
 }
 
 // A jelly 1e-200 m across: its cells' volume underflows, the edge stiffness is 0 and the
