@@ -9,6 +9,8 @@
 #include "pba/collide/narrow_phase.h"
 #include "pba/world.h"
 
+#include "core/squarable.h"
+
 namespace pba {
 
 namespace {
@@ -1187,6 +1189,9 @@ void World::tick(double t, double dt) {
   // so the world stays as it was and may tick again (a stage's own check would stop it)
   if (!std::isfinite(t)) require_finite(t, "World::tick(t)");
   if (!(std::isfinite(dt) && dt > 0)) require_positive(dt, "World::tick(dt)");
+  if (!detail::squarable<float>(dt))
+    detail::throw_not_squarable<float>(dt, "World::tick(dt)", "s",
+                                       "the particles step in float, divide by it and square it");
   Stopwatch total, sw;
   profile_ = {};
   auto stage_done = [&](WorldStage s) {
