@@ -463,7 +463,7 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
     double a = glm::length(s.def.forces.gravity);
     if (s.has_aext) {
       double a2 = 0;
-      for (std::size_t i = 0; i < s.x.size(); ++i) {
+      for (std::size_t i = 0; i < s.n; ++i) {  // (x is padded: n + kSoftPad columns)
         const double ax = s.ax[i], ay = s.ay[i], az = s.az[i];
         a2 = std::max(a2, ax * ax + ay * ay + az * az);
       }
