@@ -30,6 +30,10 @@ bool squarable(double v) {
   return std::isnormal(h) && std::isfinite(h * h);
 }
 
+// the reason a step dt of the particles is held to squarable<float> (ParticleSystem::step,
+// and World::tick before any stage moves)
+inline constexpr std::string_view kParticleStepWhy = "the particles step in float, divide by it and square it";
+
 // Error "<where>: must be in [lo, hi] <unit> (<why>), got <v>"
 template <class T>
 [[noreturn]] void throw_not_squarable(double v, std::string_view where, std::string_view unit, std::string_view why) {

@@ -701,7 +701,7 @@ void ParticleSystem::step(double t, double dt, const CollisionWorld& colliders, 
   // inside the Newton fallback, which swallowed it)
   if (!detail::squarable<float>(dt))
     detail::throw_not_squarable<float>(dt, "ParticleSystem::step(dt)", "s",
-                                       "the particles step in float, divide by it and square it");
+                                       detail::kParticleStepWhy);
   forces_.validate("ParticleSystem.forces");
   if (forcers.size() > kMaxForcers)
     throw Error("ParticleSystem::step: at most " + std::to_string(kMaxForcers) + " forcers, got " +

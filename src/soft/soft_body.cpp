@@ -198,7 +198,6 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
                   " does not exist (the mesh has " + std::to_string(n) + " particles)");
   };
   // constraints: indices, distinct ends, rest lengths (a normal float whose square is finite)
-  const double kMinLength = detail::squarable_lo<float>();
   const double kMaxLength = detail::squarable_hi<float>();
   std::vector<SoftConstraint> cons = m.constraints;
   for (std::size_t k = 0; k < cons.size(); ++k) {
@@ -219,7 +218,7 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
       throw Error(idx(where, "constraints", k) + ".rest_length: must be > 0, got " + format_value(c.rest_length));
     }
     // the solver keeps rest lengths in float and squares lengths in float
-    if (!(c.rest_length >= kMinLength && c.rest_length <= kMaxLength))
+    if (!detail::squarable<float>(c.rest_length))
       detail::throw_not_squarable<float>(c.rest_length, idx(where, "constraints", k) + ".rest_length", "m",
                                          "kept in float, and squared");
     if (const double d = glm::length(m.positions[c.b] - m.positions[c.a]); !(d <= kMaxLength))

@@ -1191,7 +1191,7 @@ void World::tick(double t, double dt) {
   if (!(std::isfinite(dt) && dt > 0)) require_positive(dt, "World::tick(dt)");
   if (!detail::squarable<float>(dt))
     detail::throw_not_squarable<float>(dt, "World::tick(dt)", "s",
-                                       "the particles step in float, divide by it and square it");
+                                       detail::kParticleStepWhy);
   Stopwatch total, sw;
   profile_ = {};
   auto stage_done = [&](WorldStage s) {
