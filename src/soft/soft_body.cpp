@@ -338,7 +338,7 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
     s.w[i] = f(1.0 / m.masses[i]);
   }
   s.n = n;
-  for (auto* col : {&s.x, &s.y, &s.z, &s.w}) col->resize(n + detail::kSoftPad, 0.f);
+  for (auto* col : {&s.x, &s.y, &s.z, &s.w, &s.vx, &s.vy, &s.vz}) col->resize(n + detail::kSoftPad, 0.f);
   s.px = s.x, s.py = s.y, s.pz = s.z;
   // rest shape and tethers (filled before the first step)
   s.rx.assign(s.x.begin(), s.x.begin() + static_cast<std::ptrdiff_t>(n));

@@ -48,8 +48,8 @@ struct Run {
   float rest = -1;
 };
 
-/// Padding (elements) after the particle columns x, y, z, px, py, pz, w and the
-/// constraint columns rest and lambda: the AVX2 kernels load and store whole 8-float
+/// Padding (elements) after the particle columns x, y, z, px, py, pz, w, vx, vy, vz and
+/// the constraint columns rest and lambda: the AVX2 kernels load and store whole 8-float
 /// windows at the ends of runs (writing back the values they loaded in lanes they do
 /// not own), so a window may reach up to 15 elements past the last one.
 inline constexpr std::size_t kSoftPad = 16;
