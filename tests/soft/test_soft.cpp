@@ -495,6 +495,67 @@ TEST(MassSpring, ImplicitEulerSizeLimitIsAClearError) {
   EXPECT_NE(msg.find("1024"), std::string::npos) << msg;
 }
 
+// Stiffness and damping over their whole range under the explicit integrators: a network
+// within the method's stability bound steps on; one whose stiffest spring is past it
+// (omega h = sqrt(k (w_a + w_b)) h >= 2, 2 sqrt 2 for RK4, or c (w_a + w_b) h >= 2) blows up,
+// as the theory says it must, and the Error names the setting and the bound it broke.
+// Until 2026-12-07 it said only "particle ... became non-finite". The rope: 8 segments of
+// 1/9 kg (w_a + w_b = 18 /kg), h = 1/600 s, so omega h = sqrt(18 k) / 600: 0.24 at k = 100
+// (stable; the chain's fastest mode is at most twice a spring's), 7.1 at 1e6.
+TEST(MassSpring, ExplicitBlowUpNamesTheSettingPastItsBound) {
+  const double h = 1.0 / 600, W = 18;
+  for (pba::Method method : {pba::Method::SemiImplicitEuler, pba::Method::VelocityVerlet, pba::Method::Rk4}) {
+    const double bound = method == pba::Method::Rk4 ? 2 * std::sqrt(2.0) : 2.0;
+    for (const double k : {1.0, 100.0, 1e6, 1e10, 1e30, 1e300, std::numeric_limits<double>::max()})
+      for (const double c : {0.0, 1.0, 1e3, 1e300}) {
+        SCOPED_TRACE(testing::Message() << pba::name(method) << ", k " << k << ", c " << c);
+        pba::SoftBodyDef d;
+        d.solver = pba::SoftSolver::MassSpring;
+        d.method = method;
+        d.stretch_stiffness = k;
+        d.bend_stiffness = 1;
+        d.spring_damping = c;
+        pba::SoftBody r = pba::SoftBody::rope({.segments = 8}, d);
+        const bool stiff = std::sqrt(k * W) * h >= bound, damped = c * W * h >= 2;
+        const std::string msg = error_of([&] {
+          for (int f = 0; f < 120; ++f) r.step(f / 60.0, 1.0 / 60);
+        });
+        if (!stiff && !damped) {
+          EXPECT_EQ(msg, "");
+          continue;
+        }
+        EXPECT_NE(msg.find("became non-finite"), std::string::npos) << msg;
+        if (stiff) EXPECT_NE(msg.find("SoftBodyDef.stretch_stiffness = " + pba::format_value(k)), std::string::npos) << msg;
+        if (damped) EXPECT_NE(msg.find("SoftBodyDef.spring_damping = " + pba::format_value(c)), std::string::npos) << msg;
+        EXPECT_NE(msg.find("stability bound"), std::string::npos) << msg;
+      }
+  }
+}
+
+// Cloth aerodynamics of any size: an acceleration beyond a float (C_d or C_l of 1e300 in
+// 5 m/s of wind) is refused by name before anything moves, rather than blamed on the step
+// (`dt ... moves a particle beyond a float`) or found later as a non-finite particle; the
+// body is not failed and steps on once the coefficient is lowered.
+TEST(SoftBadInput, AerodynamicsBeyondAFloatIsNamed) {
+  for (const double coef : {1e300, std::numeric_limits<double>::max()})
+    for (const bool lift : {false, true}) {
+      SCOPED_TRACE(testing::Message() << coef << (lift ? " lift" : " drag"));
+      pba::SoftBodyDef d;
+      d.substeps = 4;
+      (lift ? d.aero.lift : d.aero.drag) = coef;
+      d.forces.wind = {.velocity = {5, 2, 1}};
+      pba::SoftBody f = pba::SoftBody::cloth_grid({.nx = 6, .ny = 5, .pins = pba::ClothPins::FirstColumn}, d);
+      const std::uint64_t h0 = f.hash();
+      const std::string msg = error_of([&] { f.step(0, 1.0 / 60); });
+      EXPECT_EQ(msg.rfind("SoftBodyDef.aero: the aerodynamic force on particle ", 0), 0u) << msg;
+      EXPECT_NE(msg.find(pba::format_value(coef)), std::string::npos) << msg;
+      EXPECT_EQ(f.hash(), h0);
+      EXPECT_FALSE(f.failed());
+      (lift ? f.settings().aero.lift : f.settings().aero.drag) = 1;
+      EXPECT_EQ(error_of([&] { f.step(0, 1.0 / 60); }), "");
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // jelly
 
