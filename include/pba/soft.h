@@ -110,8 +110,10 @@ struct SoftBodyDef {
   /// MassSpring stiffness of the volume force -k_v (V - V0) grad V (N/m^5), finite, >= 0.
   double volume_stiffness = 0;
   /// Damping along every spring (N s/m), finite and >= 0: F = -c ((v_b - v_a) . n) n on b.
-  /// MassSpring: a force. XPBD: constraint damping with beta = c (Macklin et al. 2016,
-  /// eq. 26), applied to compliant constraints (alpha > 0) only.
+  /// MassSpring: a force. XPBD: on compliant constraints (alpha > 0) only, an implicit
+  /// dashpot at the start of each substep of h that takes the relative velocity along the
+  /// constraint u to u / (1 + c h (w_a + w_b)); it only removes energy, and dampers beyond
+  /// about m / h all stop the relative motion within a substep (docs/soft-bodies.md).
   double spring_damping = 0;
 
   /// Gravity, linear and quadratic drag (per particle, relative to the wind) and wind.

@@ -44,6 +44,53 @@ JellyMaterial read_jelly_material(const Node& n) {
   return m;
 }
 
+// A field of a builder's definition and the JSON key it is read from.
+struct FieldKey {
+  const char* field;  // "RopeDef.mass": how the builder names it
+  const char* key;    // "mass"
+};
+
+// Rethrows a builder's Error "<Def>.<field>...: what" under the JSON path of the key that
+// field was read from, "<file>: /soft_bodies/i/<key>: what" (a field within it, such as
+// "JellyDef.size.x", keeps the builder's whole message after the path); a message no
+// field speaks for (a particle beyond a float, set by several fields, which it names)
+// goes under the item's path.
+[[noreturn]] void fail_by_field(const Node& n, const Error& e, std::initializer_list<FieldKey> fields) {
+  const std::string m = e.what();
+  for (const FieldKey& f : fields) {
+    const std::string field = f.field;
+    if (m.rfind(field, 0) != 0 || m.size() == field.size()) continue;
+    const char next = m[field.size()];
+    if (next == ':' && m.compare(field.size(), 2, ": ") == 0) throw Error(n.where(f.key) + m.substr(field.size()));
+    if (next == ' ') throw Error(n.where(f.key) + ":" + m.substr(field.size()));
+    if (next == '.' || next == '[') throw Error(n.where(f.key) + ": " + m);
+  }
+  throw Error(n.where() + ": " + m);
+}
+
+// The fields one solver takes and the other ignores: given for the other solver they are
+// refused by path, with the field that solver takes instead (they used to be read and
+// dropped without a word).
+void refuse_other_solvers_fields(const Node& n, SoftSolver solver) {
+  const bool xpbd = solver == SoftSolver::Xpbd;
+  // the solver's single field: an integrator (mass-spring), iterations (XPBD)
+  const char* single = xpbd ? "integrator" : "iterations";
+  if (n.has(single))
+    n.at(single).fail(xpbd ? "an integrator is the mass-spring solver's (\"solver\": \"mass-spring\"); the XPBD "
+                             "solver projects constraints in \"substeps\" of \"iterations\" sweeps and takes none"
+                           : "constraint iterations are the XPBD solver's; the mass-spring solver integrates in "
+                             "\"substeps\" with its \"integrator\"");
+  // each kind's stiffness (mass-spring, N/m) or compliance (XPBD, m/N), its inverse
+  const std::string mine = xpbd ? "_compliance" : "_stiffness", other = xpbd ? "_stiffness" : "_compliance";
+  for (const char* kind : {"stretch", "shear", "bend", "volume"})
+    if (const std::string key = kind + other; n.has(key.c_str()))
+      n.at(key.c_str())
+          .fail(std::string(xpbd ? "a stiffness (N/m) is the mass-spring solver's (\"solver\": \"mass-spring\")"
+                                 : "a compliance (m/N) is the XPBD solver's (\"solver\": \"xpbd\")") +
+                "; the " + (xpbd ? "XPBD" : "mass-spring") + " solver takes \"" + kind + mine + "\", its inverse (" +
+                (xpbd ? "m/N" : "N/m") + ")");
+}
+
 }  // namespace
 
 // A soft body (pba/soft.h): "type" is "spring", "rope", "cloth" or "jelly"; the solver
@@ -84,13 +131,23 @@ void read_soft_body(const Node& n, World& w) {
   JellyDef j;
   if (type == Type::Jelly) j = read_jelly_shape(n);
   // solver settings (the fields given override the jelly's)
-  SoftBodyDef d = type == Type::Jelly
-                      ? jelly_settings(j, read_jelly_material(n), w.stepper().settings().fixed_dt)
-                      : SoftBodyDef{};
+  SoftBodyDef d;
+  if (type == Type::Jelly) {
+    const JellyMaterial material = read_jelly_material(n);
+    try {
+      d = jelly_settings(j, material, w.stepper().settings().fixed_dt);
+    } catch (const Error& e) {
+      fail_by_field(n, e, {{"jelly_settings: JellyDef.size", "size"}});
+    }
+  }
   d.forces.gravity = w.gravity();
   d.forces.wind = w.particles().forces().wind;
   d.solver = n.choice<SoftSolver>("solver", {{"xpbd", SoftSolver::Xpbd}, {"mass-spring", SoftSolver::MassSpring}},
                                   d.solver);
+  refuse_other_solvers_fields(n, d.solver);
+  // a spring's stiffness sets its compliance (1 / k)
+  if (type == Type::Spring && n.has("stretch_compliance"))
+    n.at("stretch_compliance").fail("a spring's compliance is 1 / \"stiffness\" (N/m): give its stiffness");
   if (n.has("integrator")) d.method = read_method(n.at("integrator"));
   if (type == Type::Spring) d.substeps = 1;  // one integrator step per tick unless asked
   if (n.has("substeps")) d.substeps = static_cast<int>(n.at("substeps").integer(1, 10000));
@@ -136,7 +193,14 @@ void read_soft_body(const Node& n, World& w) {
       sp.damping = d.spring_damping;
       sp.rest_length = n.has("rest_length") ? n.positive("rest_length", 1) : -1;
       sp.fixed_a = n.flag("fixed_a", sp.fixed_a);
-      body = SoftBody::spring(sp, d);
+      try {
+        body = SoftBody::spring(sp, d);
+      } catch (const Error& e) {
+        fail_by_field(n, e,
+                      {{"SpringDef.a", "a"}, {"SpringDef.b", "b"}, {"SpringDef.velocity_b", "velocity_b"},
+                       {"SpringDef.mass", "mass"}, {"SpringDef.stiffness", "stiffness"},
+                       {"SpringDef.damping", "spring_damping"}, {"SpringDef.rest_length", "rest_length"}});
+      }
       break;
     }
     case Type::Rope: {
@@ -149,7 +213,13 @@ void read_soft_body(const Node& n, World& w) {
       r.pin_start = n.flag("pin_start", r.pin_start);
       r.pin_end = n.flag("pin_end", r.pin_end);
       r.bending = n.flag("bending", r.bending);
-      body = SoftBody::rope(r, d);
+      try {
+        body = SoftBody::rope(r, d);
+      } catch (const Error& e) {
+        fail_by_field(n, e,
+                      {{"RopeDef.from", "from"}, {"RopeDef.to", "to"}, {"RopeDef.segments", "segments"},
+                       {"RopeDef.mass", "mass"}});
+      }
       break;
     }
     case Type::Cloth: {
@@ -170,11 +240,24 @@ void read_soft_body(const Node& n, World& w) {
                                    c.pins);
       c.shear = n.flag("shear", c.shear);
       c.bending = n.flag("bending", c.bending);
-      body = SoftBody::cloth_grid(c, d);
+      try {
+        body = SoftBody::cloth_grid(c, d);
+      } catch (const Error& e) {
+        fail_by_field(n, e,
+                      {{"ClothDef.origin", "origin"}, {"ClothDef.edge_u", "edge_u"}, {"ClothDef.edge_v", "edge_v"},
+                       {"ClothDef.nx", "nx"}, {"ClothDef.ny", "ny"}, {"ClothDef.mass", "mass"}});
+      }
       break;
     }
     case Type::Jelly: {
-      body = SoftBody::jelly_box(j, d);
+      try {
+        body = SoftBody::jelly_box(j, d);
+      } catch (const Error& e) {
+        fail_by_field(n, e,
+                      {{"JellyDef.center", "center"}, {"JellyDef.size", "size"}, {"JellyDef.rotation", "rotation"},
+                       {"JellyDef.nx", "cells"}, {"JellyDef.ny", "cells"}, {"JellyDef.nz", "cells"},
+                       {"JellyDef.mass", "mass"}, {"JellyDef.velocity", "velocity"}});
+      }
       break;
     }
   }

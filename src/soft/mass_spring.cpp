@@ -114,6 +114,47 @@ void jacobian(const SoftBody::Impl& s, double t, std::span<const Vec3> x, std::s
 
 }  // namespace
 
+// Why an explicit integrator blew up, in the settings' terms: every stiffness and the
+// damping whose stiffest single spring is already past the method's stability bound at
+// the substep h (docs/soft-bodies.md, "Why stiff springs are hard": omega h < 2 for
+// semi-implicit Euler and both Verlets, 2 sqrt 2 for RK4 on the imaginary axis; a dashpot
+// alone, c W h < 2, and 2.78 for RK4 on the real axis; explicit Euler grows every swing).
+// A network's fastest mode is faster than its stiffest spring, so an empty answer does not
+// make it stable. The failure path only: it builds strings.
+std::string SoftBody::Impl::mass_spring_instability(double h) const {
+  if (def.solver != SoftSolver::MassSpring || def.method == Method::ImplicitEuler) return {};
+  const bool rk4 = def.method == Method::Rk4;
+  const double osc = rk4 ? 2 * std::sqrt(2.0) : 2, damp = rk4 ? 2.785 : 2;
+  // the largest w_a + w_b among the intact springs of each kind
+  double wmax[3] = {0, 0, 0}, wall = 0;
+  for (std::size_t k = 0; k < ca.size(); ++k) {
+    if (broken[k]) continue;
+    const double wsum = double(w[ca[k]]) + double(w[cb[k]]);
+    wmax[kind[k]] = std::max(wmax[kind[k]], wsum);
+    wall = std::max(wall, wsum);
+  }
+  std::string why;
+  const char* names[3] = {"stretch_stiffness", "shear_stiffness", "bend_stiffness"};
+  for (int k = 0; k < 3; ++k) {
+    const double stiff = detail::kind_stiffness(def, static_cast<SoftConstraintKind>(k));
+    const double wh = std::sqrt(stiff * wmax[k]) * h;
+    if (!(stiff > 0 && wmax[k] > 0)) continue;
+    if (def.method == Method::ExplicitEuler || !(wh < osc))
+      why += std::string(why.empty() ? "" : "; ") + "SoftBodyDef." + names[k] + " = " + format_value(stiff) +
+             " N/m gives its stiffest spring omega h = sqrt(k (w_a + w_b)) h = " + format_value(wh) +
+             (def.method == Method::ExplicitEuler ? " (explicit Euler is unstable at any omega h > 0)"
+                                                  : ", past " + std::string(name(def.method)) +
+                                                        "'s stability bound " + format_value(osc));
+  }
+  if (const double cwh = def.spring_damping * wall * h; !(cwh < damp) && wall > 0 && def.spring_damping > 0)
+    why += std::string(why.empty() ? "" : "; ") + "SoftBodyDef.spring_damping = " + format_value(def.spring_damping) +
+           " N s/m gives c (w_a + w_b) h = " + format_value(cwh) + ", past the explicit dashpot's stability bound " +
+           format_value(damp);
+  if (why.empty()) return why;
+  return why + " at the substep h = " + format_value(h) +
+         " s: use more substeps, softer springs, implicit Euler or the XPBD solver";
+}
+
 void SoftBody::Impl::step_mass_spring(double t, double dt) {
   // implicit Euler's dense solve has a size limit: say so in SoftBody's terms
   if (def.method == Method::ImplicitEuler && n * 3 > integ.newton().max_unknowns)

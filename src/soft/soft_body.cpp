@@ -338,7 +338,7 @@ SoftBody SoftBody::from_mesh(const SoftMesh& m, const SoftBodyDef& def, std::str
     s.w[i] = f(1.0 / m.masses[i]);
   }
   s.n = n;
-  for (auto* col : {&s.x, &s.y, &s.z, &s.w}) col->resize(n + detail::kSoftPad, 0.f);
+  for (auto* col : {&s.x, &s.y, &s.z, &s.w, &s.vx, &s.vy, &s.vz}) col->resize(n + detail::kSoftPad, 0.f);
   s.px = s.x, s.py = s.y, s.pz = s.z;
   // rest shape and tethers (filled before the first step)
   s.rx.assign(s.x.begin(), s.x.begin() + static_cast<std::ptrdiff_t>(n));
@@ -491,7 +491,7 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
   if (s.def.tear_strain > 0) s.tear();
   s.time = t + dt;
   ++s.steps;
-  s.check_finite(t + dt);
+  s.check_finite(t + dt, dt / s.def.substeps);
   s.profile.total = total.seconds();
 }
 
@@ -526,11 +526,24 @@ void SoftBody::Impl::external_accelerations(double t) {
     F += (-k * def.aero.lift * area * un / speed) * (u2 * n - un * u);
     const Vec3 third = F * (1.0 / 3.0);
     for (std::uint32_t p : {tr.a, tr.b, tr.c}) {
-      ax[p] += static_cast<float>(third.x * w[p]);
-      ay[p] += static_cast<float>(third.y * w[p]);
-      az[p] += static_cast<float>(third.z * w[p]);
+      // an acceleration beyond a float is the coefficients' doing (C_d = 1e300): named here,
+      // before anything moves, rather than as a step too long or a non-finite particle
+      const Vec3 acc = third * double(w[p]);
+      if (!(std::abs(acc.x) + std::abs(acc.y) + std::abs(acc.z) <= std::numeric_limits<float>::max()))
+        aero_overflow(p, acc, u);
+      ax[p] += static_cast<float>(acc.x);
+      ay[p] += static_cast<float>(acc.y);
+      az[p] += static_cast<float>(acc.z);
     }
   }
+}
+
+void SoftBody::Impl::aero_overflow(std::uint32_t p, const Vec3& acc, const Vec3& u) const {
+  throw Error("SoftBodyDef.aero: the aerodynamic force on particle " + std::to_string(p) + " (air density " +
+              format_value(def.aero.air_density) + " kg/m^3, drag " + format_value(def.aero.drag) + ", lift " +
+              format_value(def.aero.lift) + ", air-relative speed " + format_value(glm::length(u)) +
+              " m/s) accelerates it by " + format_vec3(acc) + " m/s^2, beyond a float (3.4e38): lower the drag and lift "
+              "coefficients");
 }
 
 // Tearing: a constraint whose strain (l - l0)/l0 exceeds tear_strain breaks for good (its
@@ -564,7 +577,7 @@ void SoftBody::Impl::rebuild_triangles() {
   }
 }
 
-void SoftBody::Impl::check_finite(double t) {
+void SoftBody::Impl::check_finite(double t, double h) {
   // one pass with a sum of x - x (0 when finite, nan otherwise), then find the culprit
   float acc = 0.f;
   for (std::size_t i = 0; i < n; ++i)
@@ -575,6 +588,8 @@ void SoftBody::Impl::check_finite(double t) {
     if (is_finite(p) && is_finite(v)) continue;
     failure = "soft body particle " + std::to_string(i) + " became non-finite at t = " + format_value(t) + " s (step " +
               std::to_string(steps) + "): position " + format_vec3(p) + ", velocity " + format_vec3(v);
+    // an explicit integrator past its stability bound: say which settings put it there
+    if (const std::string why = mass_spring_instability(h); !why.empty()) failure += "; unstable: " + why;
     throw Error(failure);
   }
 }

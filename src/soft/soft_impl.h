@@ -48,8 +48,8 @@ struct Run {
   float rest = -1;
 };
 
-/// Padding (elements) after the particle columns x, y, z, px, py, pz, w and the
-/// constraint columns rest and lambda: the AVX2 kernels load and store whole 8-float
+/// Padding (elements) after the particle columns x, y, z, px, py, pz, w, vx, vy, vz and
+/// the constraint columns rest and lambda: the AVX2 kernels load and store whole 8-float
 /// windows at the ends of runs (writing back the values they loaded in lanes they do
 /// not own), so a window may reach up to 15 elements past the last one.
 inline constexpr std::size_t kSoftPad = 16;
@@ -146,9 +146,13 @@ struct SoftBody::Impl {
   void init_tethers();    // xpbd.cpp, at build: straight or path lengths, and the graph
   // shared pieces (soft_body.cpp)
   void external_accelerations(double t);
+  [[noreturn]] void aero_overflow(std::uint32_t p, const Vec3& acc, const Vec3& u) const;  // its Error
   void tear();
   void rebuild_triangles();
-  void check_finite(double t);
+  void check_finite(double t, double h);  // t: end of the step; h: its substep (s)
+  // mass_spring.cpp: the settings past an explicit method's stability bound at substep h
+  // (their names and values), or "" (for check_finite's message)
+  std::string mass_spring_instability(double h) const;
 };
 
 namespace detail {

@@ -3,7 +3,12 @@
 // long-range attachments (tethers) it projects after the constraints are in tethers.cpp.
 //
 // Macklin, Mueller & Chentanez 2016, "XPBD: position-based simulation of compliant
-// constrained dynamics", eqs. 18 (the multiplier update), 26 (damping);
+// constrained dynamics", eq. 18 (the multiplier update). Constraint damping is not their
+// eq. 26 (a damping term in the same update: with one sweep per substep on a chain of
+// strong dampers each damper held the length its constraint started the substep with,
+// the unconverged stretch accumulated and the energy rose, +480 J in 1 s on a 1 kg rope)
+// but an implicit dashpot impulse per constraint on the velocities at the start of each
+// substep, which can only remove energy (damp_sweep);
 // Macklin, Storey, Lu, Terdiman, Chentanez, Jeschke & Mueller 2019, "Small steps in
 // physics simulation" (substeps with one iteration, multipliers reset each substep).
 #include <algorithm>
@@ -33,9 +38,9 @@ struct SolveArgs {
   float* x;
   float* y;
   float* z;
-  const float* px;
-  const float* py;
-  const float* pz;
+  float* vx;  // velocities (m/s), for the dashpots
+  float* vy;
+  float* vz;
   const float* w;
   const std::uint32_t* ca;
   const std::uint32_t* cb;
@@ -43,31 +48,30 @@ struct SolveArgs {
   float* lambda;
   const Run* runs;
   std::size_t n_runs;
-  float at[3];     // alpha / h^2 per constraint kind
-  float gamma[3];  // alpha beta / h per kind (eq. 26), 0 without damping
+  float at[3];      // alpha / h^2 per constraint kind
+  float inv_ch[3];  // 1 / (c h) per kind, the dashpots' slack (0: infinitely strong); infinity: undamped
   bool avx2;       // use the AVX2 interleaved kernels
 };
 
-// One distance constraint C = |x_b - x_a| - l0 (eq. 18 with eq. 26's damping term):
-//   dlambda = (-C - at lambda - gamma grad C . (x - x_prev)) / ((1 + gamma)(w_a + w_b) + at)
+// One distance constraint C = |x_b - x_a| - l0 (eq. 18):
+//   dlambda = (-C - at lambda) / (w_a + w_b + at)
 //   x_a -= w_a dlambda n,  x_b += w_b dlambda n,  n = (x_b - x_a)/l.
 // Written as s = dlambda / l so one division serves both; masked (s = 0) when the
 // constraint is broken (rest <= 0), degenerate (l = 0) or between two pinned particles.
 //
-// Rigid constraints (alpha = 0, no damping) use the squared form C' = (l^2 - l0^2)/(2 l0)
+// Rigid constraints (alpha = 0) use the squared form C' = (l^2 - l0^2)/(2 l0)
 // instead: the same zero set, with the exact gradient d / l0, so one PBD step is
 //   s = (l0^2 - l^2) / (2 (w_a + w_b) l^2),  x_a -= w_a s d,  x_b += w_b s d,
 // a Newton step that needs one division and no square root (the sqrt-free projection of
 // Jakobsen 2001, "Advanced character physics"); it differs from the exact step by the
 // factor (l + l0)/(2 l) = 1 + O(strain), and converges to the same l = l0.
-template <bool kLambda, bool kDamp, bool kRigid = false>
+template <bool kLambda, bool kRigid = false>
 PBA_SOFT_INLINE void project(float& xa, float& ya, float& za, float& xb, float& yb, float& zb, float wa, float wb,
-                             float r, float* lam, float pxa, float pya, float pza, float pxb, float pyb, float pzb,
-                             float at, float gamma) {
+                             float r, float* lam, float at) {
   const float dx = xb - xa, dy = yb - ya, dz = zb - za;
   const float l2 = dx * dx + dy * dy + dz * dz;
   if constexpr (kRigid) {
-    (void)lam, (void)pxa, (void)pya, (void)pza, (void)pxb, (void)pyb, (void)pzb, (void)at, (void)gamma;
+    (void)lam, (void)at;
     const float q = (wa + wb) * l2;
     const float s = (q > 0.0f && r > 0.0f) ? (r * r - l2) / (q + q) : 0.0f;
     const float sa = wa * s, sb = wb * s;
@@ -79,64 +83,84 @@ PBA_SOFT_INLINE void project(float& xa, float& ya, float& za, float& xb, float& 
   const float wsum = wa + wb;
   float c = l - r;
   if constexpr (kLambda) c += at * *lam;
-  float s;
-  if constexpr (kDamp) {
-    // s = (-(C + at lambda) l - gamma d . (dx_b - dx_a)) / (den l^2)
-    const float ddot = dx * ((xb - pxb) - (xa - pxa)) + dy * ((yb - pyb) - (ya - pya)) + dz * ((zb - pzb) - (za - pza));
-    const float q = ((1.0f + gamma) * wsum + at) * l2;
-    const float num = -c * l - gamma * ddot;
-    s = (q > 0.0f && r > 0.0f && wsum > 0.0f) ? num / q : 0.0f;
-  } else {
-    (void)pxa, (void)pya, (void)pza, (void)pxb, (void)pyb, (void)pzb, (void)gamma;
-    const float q = (wsum + at) * l;
-    s = (q > 0.0f && r > 0.0f && wsum > 0.0f) ? -c / q : 0.0f;
-  }
+  const float q = (wsum + at) * l;
+  const float s = (q > 0.0f && r > 0.0f && wsum > 0.0f) ? -c / q : 0.0f;
   if constexpr (kLambda) *lam += s * l;
   const float sa = wa * s, sb = wb * s;
   xa -= sa * dx, ya -= sa * dy, za -= sa * dz;
   xb += sb * dx, yb += sb * dy, zb += sb * dz;
 }
 
+// One dashpot of damping c along the constraint: the implicit impulse P = -c h u' on the
+// relative velocity u = (v_b - v_a) . n leaves u' = u / (1 + c h (w_a + w_b)). The
+// dashpots of a body solve that together, (J M^-1 J^T + 1 / (c h)) P = -J v, by
+// Gauss-Seidel sweeps with the impulses accumulated (P = acc l, d = x_b - x_a, W = w_a + w_b,
+// `slack` = 1/(c h), 0 for an infinitely strong damper):
+//   s = -(d . (v_b - v_a) + slack acc l^2) / ((W + slack) l^2),  acc += s,
+//   v_a -= w_a s d,  v_b += w_b s d
+// (no square root, one division; the first sweep's acc is 0: u' = u / (1 + c h W)). Each
+// step lowers the convex Phi(P) = P^T (J M^-1 J^T + 1/(c h)) P / 2 + P^T J v, from
+// Phi(0) = 0, and the kinetic energy after the impulses is KE + Phi(P) - |P|^2 / (2 c h):
+// whatever the order and the number of sweeps, the dashpots only remove energy, and they
+// never move a particle. Masked as project() is.
+PBA_SOFT_INLINE void dashpot(float xa, float ya, float za, float xb, float yb, float zb, float& vxa, float& vya,
+                             float& vza, float& vxb, float& vyb, float& vzb, float wa, float wb, float r,
+                             float slack, float& acc) {
+  const float dx = xb - xa, dy = yb - ya, dz = zb - za;
+  const float l2 = dx * dx + dy * dy + dz * dz;
+  const float ddot = dx * (vxb - vxa) + dy * (vyb - vya) + dz * (vzb - vza);
+  const float wsum = wa + wb;
+  const float q = (wsum + slack) * l2;
+  const float num = ddot + slack * acc * l2;
+  const float s = (q > 0.0f && r > 0.0f && wsum > 0.0f) ? -num / q : 0.0f;
+  acc += s;
+  const float sa = wa * s, sb = wb * s;
+  vxa -= sa * dx, vya -= sa * dy, vza -= sa * dz;
+  vxb += sb * dx, vyb += sb * dy, vzb += sb * dz;
+}
+
 // a contiguous run: constraint k joins a0 + k and a0 + k + offset; the two index ranges
 // are disjoint (a colour touches a particle once), hence the restrict pointers
-template <bool kLambda, bool kDamp, bool kUniform, bool kRigid>
+template <bool kLambda, bool kUniform, bool kRigid>
 PBA_SOFT_INLINE void run_contiguous(int n, float* PBA_SOFT_RESTRICT xa, float* PBA_SOFT_RESTRICT ya,
                                     float* PBA_SOFT_RESTRICT za, float* PBA_SOFT_RESTRICT xb,
                                     float* PBA_SOFT_RESTRICT yb, float* PBA_SOFT_RESTRICT zb,
-                                    const float* PBA_SOFT_RESTRICT pxa, const float* PBA_SOFT_RESTRICT pya,
-                                    const float* PBA_SOFT_RESTRICT pza, const float* PBA_SOFT_RESTRICT pxb,
-                                    const float* PBA_SOFT_RESTRICT pyb, const float* PBA_SOFT_RESTRICT pzb,
                                     const float* PBA_SOFT_RESTRICT wa, const float* PBA_SOFT_RESTRICT wb,
                                     const float* PBA_SOFT_RESTRICT rest, float ru, float* PBA_SOFT_RESTRICT lam,
-                                    float at, float gamma) {
+                                    float at) {
   for (int k = 0; k < n; ++k) {
     float dummy = 0;
-    project<kLambda, kDamp, kRigid>(xa[k], ya[k], za[k], xb[k], yb[k], zb[k], wa[k], wb[k], kUniform ? ru : rest[k],
-                            kLambda ? lam + k : &dummy, kDamp ? pxa[k] : 0.f, kDamp ? pya[k] : 0.f,
-                            kDamp ? pza[k] : 0.f, kDamp ? pxb[k] : 0.f, kDamp ? pyb[k] : 0.f, kDamp ? pzb[k] : 0.f,
-                            at, gamma);
+    project<kLambda, kRigid>(xa[k], ya[k], za[k], xb[k], yb[k], zb[k], wa[k], wb[k], kUniform ? ru : rest[k],
+                             kLambda ? lam + k : &dummy, at);
   }
 }
 
 // an interleaved run: groups of 2L particles, the first L joined to the next L
-template <int L, bool kLambda, bool kDamp, bool kUniform, bool kRigid>
+template <int L, bool kLambda, bool kUniform, bool kRigid>
 PBA_SOFT_INLINE void run_interleaved(int groups, float* PBA_SOFT_RESTRICT x, float* PBA_SOFT_RESTRICT y,
-                                     float* PBA_SOFT_RESTRICT z, const float* PBA_SOFT_RESTRICT px,
-                                     const float* PBA_SOFT_RESTRICT py, const float* PBA_SOFT_RESTRICT pz,
-                                     const float* PBA_SOFT_RESTRICT w, const float* PBA_SOFT_RESTRICT rest,
-                                     float ru, float* PBA_SOFT_RESTRICT lam, float at, float gamma) {
+                                     float* PBA_SOFT_RESTRICT z, const float* PBA_SOFT_RESTRICT w,
+                                     const float* PBA_SOFT_RESTRICT rest, float ru, float* PBA_SOFT_RESTRICT lam,
+                                     float at) {
   for (int g = 0; g < groups; ++g) {
     for (int j = 0; j < L; ++j) {
       const int a = g * 2 * L + j, b = a + L, c = g * L + j;
       float dummy = 0;
-      project<kLambda, kDamp, kRigid>(x[a], y[a], z[a], x[b], y[b], z[b], w[a], w[b], kUniform ? ru : rest[c],
-                                      kLambda ? lam + c : &dummy, kDamp ? px[a] : 0.f, kDamp ? py[a] : 0.f,
-                                      kDamp ? pz[a] : 0.f, kDamp ? px[b] : 0.f, kDamp ? py[b] : 0.f,
-                                      kDamp ? pz[b] : 0.f, at, gamma);
+      project<kLambda, kRigid>(x[a], y[a], z[a], x[b], y[b], z[b], w[a], w[b], kUniform ? ru : rest[c],
+                               kLambda ? lam + c : &dummy, at);
     }
   }
 }
 
+// the particles (a, b) of constraint k of a run, and its rest length (<= 0: broken)
+inline void run_ends(const Run& run, const std::uint32_t* ca, const std::uint32_t* cb, int k, std::uint32_t& a,
+                     std::uint32_t& b) {
+  const auto kk = static_cast<std::uint32_t>(k);
+  switch (run.type) {
+    case RunType::Contiguous: a = run.a0 + kk, b = a + run.offset; break;
+    case RunType::Interleaved: a = run.a0 + (kk / run.offset) * 2 * run.offset + kk % run.offset, b = a + run.offset; break;
+    case RunType::Indexed: a = ca[run.c0 + kk], b = cb[run.c0 + kk]; break;
+  }
+}
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #define PBA_SOFT_HAVE_AVX2 1
@@ -190,6 +214,34 @@ PBA_SOFT_AVX2_INLINE __m256 keep(__m256 old, __m256 now, __m256 own) {
   else return (void)old, (void)own, now;
 }
 
+// The two ends of 8 constraints: positions, inverse masses, rest lengths (0 in the lanes a
+// tail group does not own, so s = 0 there), d = x_b - x_a and |d|^2.
+struct Ends8 {
+  __m256 xa, xb, ya, yb, za, zb, wa, wb, r, dx, dy, dz, l2;
+};
+template <int L, bool kUniform, bool kTail>
+PBA_SOFT_AVX2_INLINE Ends8 load_ends(int k, __m256 own, const float* x, const float* y, const float* z,
+                                     const float* w, std::uint32_t a, std::uint32_t b, const float* rest, float ru) {
+  Ends8 e;
+  load_ab<L>(x, a, b, k, e.xa, e.xb);
+  load_ab<L>(y, a, b, k, e.ya, e.yb);
+  load_ab<L>(z, a, b, k, e.za, e.zb);
+  load_ab<L>(w, a, b, k, e.wa, e.wb);
+  e.r = kUniform ? _mm256_set1_ps(ru) : perm<L>(_mm256_loadu_ps(rest + k));
+  if constexpr (kTail) e.r = _mm256_and_ps(e.r, own);
+  else (void)own;
+  e.dx = _mm256_sub_ps(e.xb, e.xa), e.dy = _mm256_sub_ps(e.yb, e.ya), e.dz = _mm256_sub_ps(e.zb, e.za);
+  e.l2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e.dx, e.dx), _mm256_mul_ps(e.dy, e.dy)), _mm256_mul_ps(e.dz, e.dz));
+  return e;
+}
+// col_a -= sa d and col_b += sb d in the lanes the group owns, stored back
+template <int L, bool kTail>
+PBA_SOFT_AVX2_INLINE void move_ends(float* col, std::uint32_t a, std::uint32_t b, int k, __m256 va, __m256 vb, __m256 sa,
+                                    __m256 sb, __m256 d, __m256 own) {
+  store_ab<L>(col, a, b, k, keep<kTail>(va, _mm256_sub_ps(va, _mm256_mul_ps(sa, d)), own),
+              keep<kTail>(vb, _mm256_add_ps(vb, _mm256_mul_ps(sb, d)), own));
+}
+
 // 8 constraints k .. k+7 of a contiguous (L = 0) or interleaved (L = 1, 2) run with
 // exactly the scalar project()'s operations in the same order (no fused multiply-adds;
 // sqrt and division are correctly rounded), so both give the same bits. a and b are the
@@ -198,27 +250,17 @@ PBA_SOFT_AVX2_INLINE __m256 keep(__m256 old, __m256 now, __m256 own) {
 // whole windows (the columns are padded by kSoftPad) but gives s = 0 to the other lanes
 // and writes back exactly the values it loaded there, which is much faster than masked
 // moves (microcoded on AMD).
-template <int L, bool kLambda, bool kDamp, bool kUniform, bool kRigid, bool kTail>
-PBA_SOFT_AVX2_INLINE void group_avx2(int k, __m256 own, float* x, float* y, float* z, const float* px,
-                                     const float* py, const float* pz, const float* w, std::uint32_t a,
-                                     std::uint32_t b, const float* rest, float ru, float* lam, float at_s,
-                                     float gamma_s) {
+template <int L, bool kLambda, bool kUniform, bool kRigid, bool kTail>
+PBA_SOFT_AVX2_INLINE void group_avx2(int k, __m256 own, float* x, float* y, float* z, const float* w,
+                                     std::uint32_t a, std::uint32_t b, const float* rest, float ru, float* lam,
+                                     float at_s) {
   const __m256 zero = _mm256_setzero_ps();
-  __m256 xa, xb, ya, yb, za, zb, wa, wb;
-  load_ab<L>(x, a, b, k, xa, xb);
-  load_ab<L>(y, a, b, k, ya, yb);
-  load_ab<L>(z, a, b, k, za, zb);
-  load_ab<L>(w, a, b, k, wa, wb);
-  // lanes the group does not own get r = 0, so s = 0 there
-  __m256 r = kUniform ? _mm256_set1_ps(ru) : perm<L>(_mm256_loadu_ps(rest + k));
-  if constexpr (kTail) r = _mm256_and_ps(r, own);
   // the scalar project(), lane by lane
-  const __m256 dx = _mm256_sub_ps(xb, xa), dy = _mm256_sub_ps(yb, ya), dz = _mm256_sub_ps(zb, za);
-  const __m256 l2 =
-      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+  const Ends8 e = load_ends<L, kUniform, kTail>(k, own, x, y, z, w, a, b, rest, ru);
+  const __m256 wa = e.wa, wb = e.wb, r = e.r, l2 = e.l2;
   __m256 s, l = zero, lv = zero;
   if constexpr (kRigid) {
-    (void)at_s, (void)gamma_s, (void)lam, (void)px, (void)py, (void)pz;
+    (void)at_s, (void)lam;
     const __m256 q = _mm256_mul_ps(_mm256_add_ps(wa, wb), l2);
     const __m256 ok = _mm256_and_ps(_mm256_cmp_ps(q, zero, _CMP_GT_OQ), _mm256_cmp_ps(r, zero, _CMP_GT_OQ));
     s = _mm256_blendv_ps(zero, _mm256_div_ps(_mm256_sub_ps(_mm256_mul_ps(r, r), l2), _mm256_add_ps(q, q)), ok);
@@ -231,56 +273,78 @@ PBA_SOFT_AVX2_INLINE void group_avx2(int k, __m256 own, float* x, float* y, floa
       lv = perm<L>(_mm256_loadu_ps(lam + k));
       c = _mm256_add_ps(c, _mm256_mul_ps(at, lv));
     }
-    __m256 q, num;
-    if constexpr (kDamp) {
-      const __m256 gamma = _mm256_set1_ps(gamma_s), one = _mm256_set1_ps(1.0f);
-      __m256 pxa, pxb, pya, pyb, pza, pzb;
-      load_ab<L>(px, a, b, k, pxa, pxb);
-      load_ab<L>(py, a, b, k, pya, pyb);
-      load_ab<L>(pz, a, b, k, pza, pzb);
-      const __m256 ex = _mm256_sub_ps(_mm256_sub_ps(xb, pxb), _mm256_sub_ps(xa, pxa));
-      const __m256 ey = _mm256_sub_ps(_mm256_sub_ps(yb, pyb), _mm256_sub_ps(ya, pya));
-      const __m256 ez = _mm256_sub_ps(_mm256_sub_ps(zb, pzb), _mm256_sub_ps(za, pza));
-      const __m256 ddot =
-          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, ex), _mm256_mul_ps(dy, ey)), _mm256_mul_ps(dz, ez));
-      q = _mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_add_ps(one, gamma), wsum), at), l2);
-      num = _mm256_sub_ps(_mm256_mul_ps(_mm256_xor_ps(c, sign), l), _mm256_mul_ps(gamma, ddot));
-    } else {
-      (void)px, (void)py, (void)pz, (void)gamma_s;
-      q = _mm256_mul_ps(_mm256_add_ps(wsum, at), l);
-      num = _mm256_xor_ps(c, sign);
-    }
+    const __m256 q = _mm256_mul_ps(_mm256_add_ps(wsum, at), l);
     const __m256 ok = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(q, zero, _CMP_GT_OQ), _mm256_cmp_ps(r, zero, _CMP_GT_OQ)),
                                     _mm256_cmp_ps(wsum, zero, _CMP_GT_OQ));
-    s = _mm256_blendv_ps(zero, _mm256_div_ps(num, q), ok);
+    s = _mm256_blendv_ps(zero, _mm256_div_ps(_mm256_xor_ps(c, sign), q), ok);
   }
   if constexpr (kLambda && !kRigid)
     _mm256_storeu_ps(lam + k, perm<L>(keep<kTail>(lv, _mm256_add_ps(lv, _mm256_mul_ps(s, l)), own)));
   const __m256 sa = _mm256_mul_ps(wa, s), sb = _mm256_mul_ps(wb, s);
-  store_ab<L>(x, a, b, k, keep<kTail>(xa, _mm256_sub_ps(xa, _mm256_mul_ps(sa, dx)), own),
-              keep<kTail>(xb, _mm256_add_ps(xb, _mm256_mul_ps(sb, dx)), own));
-  store_ab<L>(y, a, b, k, keep<kTail>(ya, _mm256_sub_ps(ya, _mm256_mul_ps(sa, dy)), own),
-              keep<kTail>(yb, _mm256_add_ps(yb, _mm256_mul_ps(sb, dy)), own));
-  store_ab<L>(z, a, b, k, keep<kTail>(za, _mm256_sub_ps(za, _mm256_mul_ps(sa, dz)), own),
-              keep<kTail>(zb, _mm256_add_ps(zb, _mm256_mul_ps(sb, dz)), own));
+  move_ends<L, kTail>(x, a, b, k, e.xa, e.xb, sa, sb, e.dx, own);
+  move_ends<L, kTail>(y, a, b, k, e.ya, e.yb, sa, sb, e.dy, own);
+  move_ends<L, kTail>(z, a, b, k, e.za, e.zb, sa, sb, e.dz, own);
+}
+
+// 8 dashpots k .. k+7 of a run, as group_avx2 addresses them, with exactly the scalar
+// dashpot()'s operations in the same order: the same bits. Positions are read, only the
+// velocities are written (their columns padded by kSoftPad too).
+template <int L, bool kUniform, bool kTail>
+PBA_SOFT_AVX2_INLINE void dash_group_avx2(int k, __m256 own, const float* x, const float* y, const float* z,
+                                          float* vx, float* vy, float* vz, const float* w, std::uint32_t a,
+                                          std::uint32_t b, const float* rest, float ru, float slack, float* acc) {
+  const __m256 zero = _mm256_setzero_ps();
+  const Ends8 e = load_ends<L, kUniform, kTail>(k, own, x, y, z, w, a, b, rest, ru);
+  const __m256 wa = e.wa, wb = e.wb, r = e.r, l2 = e.l2, dx = e.dx, dy = e.dy, dz = e.dz;
+  __m256 uxa, uxb, uya, uyb, uza, uzb;
+  load_ab<L>(vx, a, b, k, uxa, uxb);
+  load_ab<L>(vy, a, b, k, uya, uyb);
+  load_ab<L>(vz, a, b, k, uza, uzb);
+  const __m256 ddot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, _mm256_sub_ps(uxb, uxa)),
+                                                  _mm256_mul_ps(dy, _mm256_sub_ps(uyb, uya))),
+                                    _mm256_mul_ps(dz, _mm256_sub_ps(uzb, uza)));
+  const __m256 wsum = _mm256_add_ps(wa, wb), sl = _mm256_set1_ps(slack);
+  const __m256 q = _mm256_mul_ps(_mm256_add_ps(wsum, sl), l2);
+  const __m256 av = perm<L>(_mm256_loadu_ps(acc + k));
+  const __m256 num = _mm256_add_ps(ddot, _mm256_mul_ps(_mm256_mul_ps(sl, av), l2));
+  const __m256 ok = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(q, zero, _CMP_GT_OQ), _mm256_cmp_ps(r, zero, _CMP_GT_OQ)),
+                                  _mm256_cmp_ps(wsum, zero, _CMP_GT_OQ));
+  const __m256 s = _mm256_blendv_ps(zero, _mm256_div_ps(_mm256_xor_ps(num, _mm256_set1_ps(-0.0f)), q), ok);
+  _mm256_storeu_ps(acc + k, perm<L>(keep<kTail>(av, _mm256_add_ps(av, s), own)));
+  const __m256 sa = _mm256_mul_ps(wa, s), sb = _mm256_mul_ps(wb, s);
+  move_ends<L, kTail>(vx, a, b, k, uxa, uxb, sa, sb, dx, own);
+  move_ends<L, kTail>(vy, a, b, k, uya, uyb, sa, sb, dy, own);
+  move_ends<L, kTail>(vz, a, b, k, uza, uzb, sa, sb, dz, own);
+}
+
+// the lanes a tail group owns: constraint j < n - k, in lane order for interleaved runs
+template <int L>
+PBA_SOFT_AVX2_INLINE __m256 tail_lanes(int n, int k) {
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  return perm<L>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(n - k), lane)));
 }
 
 // A whole run with AVX2: groups of 8, then one tail group for the rest.
-template <int L, bool kLambda, bool kDamp, bool kUniform, bool kRigid>
-__attribute__((target("avx2"))) void run_avx2(int n, float* x, float* y, float* z, const float* px, const float* py,
-                                               const float* pz, const float* w, std::uint32_t a, std::uint32_t b,
-                                               const float* rest, float ru, float* lam, float at, float gamma) {
+template <int L, bool kLambda, bool kUniform, bool kRigid>
+__attribute__((target("avx2"))) void run_avx2(int n, float* x, float* y, float* z, const float* w, std::uint32_t a,
+                                               std::uint32_t b, const float* rest, float ru, float* lam, float at) {
   int k = 0;
   for (; k + 8 <= n; k += 8)
-    group_avx2<L, kLambda, kDamp, kUniform, kRigid, false>(k, _mm256_setzero_ps(), x, y, z, px, py, pz, w, a, b,
-                                                          rest, ru, lam, at, gamma);
-  if (k < n) {
-    // constraint j < n - k is owned; in lane order for interleaved runs
-    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    const __m256 own = perm<L>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(n - k), lane)));
-    group_avx2<L, kLambda, kDamp, kUniform, kRigid, true>(k, own, x, y, z, px, py, pz, w, a, b, rest, ru, lam, at,
-                                                         gamma);
-  }
+    group_avx2<L, kLambda, kUniform, kRigid, false>(k, _mm256_setzero_ps(), x, y, z, w, a, b, rest, ru, lam, at);
+  if (k < n) group_avx2<L, kLambda, kUniform, kRigid, true>(k, tail_lanes<L>(n, k), x, y, z, w, a, b, rest, ru, lam, at);
+}
+
+// A whole run of dashpots with AVX2.
+template <int L, bool kUniform>
+__attribute__((target("avx2"))) void dash_run_avx2(int n, const float* x, const float* y, const float* z, float* vx,
+                                                    float* vy, float* vz, const float* w, std::uint32_t a,
+                                                    std::uint32_t b, const float* rest, float ru, float slack,
+                                                    float* acc) {
+  int k = 0;
+  for (; k + 8 <= n; k += 8)
+    dash_group_avx2<L, kUniform, false>(k, _mm256_setzero_ps(), x, y, z, vx, vy, vz, w, a, b, rest, ru, slack, acc);
+  if (k < n)
+    dash_group_avx2<L, kUniform, true>(k, tail_lanes<L>(n, k), x, y, z, vx, vy, vz, w, a, b, rest, ru, slack, acc);
 }
 
 // true when the CPU runs AVX2 (asked once)
@@ -293,24 +357,21 @@ bool has_avx2() {
 #endif
 
 // an indexed run (any mesh): scalar, through the index arrays
-template <bool kLambda, bool kDamp>
-PBA_SOFT_INLINE void run_indexed(int n, float* x, float* y, float* z, const float* px, const float* py,
-                                 const float* pz, const float* w, const std::uint32_t* ca, const std::uint32_t* cb,
-                                 const float* rest, float* lam, float at, float gamma) {
+template <bool kLambda>
+PBA_SOFT_INLINE void run_indexed(int n, float* x, float* y, float* z, const float* w, const std::uint32_t* ca,
+                                 const std::uint32_t* cb, const float* rest, float* lam, float at) {
   for (int k = 0; k < n; ++k) {
     const std::uint32_t a = ca[k], b = cb[k];
     float dummy = 0;
-    project<kLambda, kDamp>(x[a], y[a], z[a], x[b], y[b], z[b], w[a], w[b], rest[k], kLambda ? lam + k : &dummy,
-                            kDamp ? px[a] : 0.f, kDamp ? py[a] : 0.f, kDamp ? pz[a] : 0.f, kDamp ? px[b] : 0.f,
-                            kDamp ? py[b] : 0.f, kDamp ? pz[b] : 0.f, at, gamma);
+    project<kLambda>(x[a], y[a], z[a], x[b], y[b], z[b], w[a], w[b], rest[k], kLambda ? lam + k : &dummy, at);
   }
 }
 
 // one Gauss-Seidel sweep over every run, in solver order
-template <bool kLambda, bool kDamp, bool kUniform, bool kRigid>
+template <bool kLambda, bool kUniform, bool kRigid>
 PBA_SOFT_INLINE void solve_run(const SolveArgs& s, const Run& run) {
   const int kind = static_cast<int>(run.kind);
-  const float at = s.at[kind], gamma = s.gamma[kind], ru = run.rest;
+  const float at = s.at[kind], ru = run.rest;
   const float* rest = s.rest + run.c0;
   float* lam = s.lambda + run.c0;
   const int n = static_cast<int>(run.count);
@@ -319,64 +380,93 @@ PBA_SOFT_INLINE void solve_run(const SolveArgs& s, const Run& run) {
 #if PBA_SOFT_HAVE_AVX2
   if (s.avx2 && run.type != RunType::Indexed) {
     if (run.type == RunType::Contiguous)
-      run_avx2<0, kLambda, kDamp, kUniform, kRigid>(n, s.x, s.y, s.z, s.px, s.py, s.pz, s.w, a, b, rest, ru, lam, at,
-                                                    gamma);
+      run_avx2<0, kLambda, kUniform, kRigid>(n, s.x, s.y, s.z, s.w, a, b, rest, ru, lam, at);
     else if (run.offset == 1)
-      run_avx2<1, kLambda, kDamp, kUniform, kRigid>(n, s.x, s.y, s.z, s.px, s.py, s.pz, s.w, a, b, rest, ru, lam, at,
-                                                    gamma);
+      run_avx2<1, kLambda, kUniform, kRigid>(n, s.x, s.y, s.z, s.w, a, b, rest, ru, lam, at);
     else
-      run_avx2<2, kLambda, kDamp, kUniform, kRigid>(n, s.x, s.y, s.z, s.px, s.py, s.pz, s.w, a, b, rest, ru, lam, at,
-                                                    gamma);
+      run_avx2<2, kLambda, kUniform, kRigid>(n, s.x, s.y, s.z, s.w, a, b, rest, ru, lam, at);
     return;
   }
 #endif
   switch (run.type) {
     case RunType::Contiguous:
-      run_contiguous<kLambda, kDamp, kUniform, kRigid>(n, s.x + a, s.y + a, s.z + a, s.x + b, s.y + b, s.z + b,
-                                                       s.px + a, s.py + a, s.pz + a, s.px + b, s.py + b, s.pz + b,
-                                                       s.w + a, s.w + b, rest, ru, lam, at, gamma);
+      run_contiguous<kLambda, kUniform, kRigid>(n, s.x + a, s.y + a, s.z + a, s.x + b, s.y + b, s.z + b, s.w + a,
+                                                s.w + b, rest, ru, lam, at);
       break;
     case RunType::Interleaved:
       if (run.offset == 1)
-        run_interleaved<1, kLambda, kDamp, kUniform, kRigid>(n, s.x + a, s.y + a, s.z + a, s.px + a, s.py + a,
-                                                             s.pz + a, s.w + a, rest, ru, lam, at, gamma);
+        run_interleaved<1, kLambda, kUniform, kRigid>(n, s.x + a, s.y + a, s.z + a, s.w + a, rest, ru, lam, at);
       else
-        run_interleaved<2, kLambda, kDamp, kUniform, kRigid>(n / 2, s.x + a, s.y + a, s.z + a, s.px + a, s.py + a,
-                                                             s.pz + a, s.w + a, rest, ru, lam, at, gamma);
+        run_interleaved<2, kLambda, kUniform, kRigid>(n / 2, s.x + a, s.y + a, s.z + a, s.w + a, rest, ru, lam, at);
       break;
     case RunType::Indexed:
-      run_indexed<kLambda, kDamp>(n, s.x, s.y, s.z, s.px, s.py, s.pz, s.w, s.ca + run.c0, s.cb + run.c0, rest, lam,
-                                  at, gamma);
+      run_indexed<kLambda>(n, s.x, s.y, s.z, s.w, s.ca + run.c0, s.cb + run.c0, rest, lam, at);
       break;
   }
 }
 
-template <bool kLambda, bool kDamp>
+template <bool kLambda>
 PBA_SOFT_INLINE void sweep(const SolveArgs& s) {
   for (std::size_t r = 0; r < s.n_runs; ++r) {
     const Run& run = s.runs[r];
     const int kind = static_cast<int>(run.kind);
-    const bool rigid = s.at[kind] == 0.0f && s.gamma[kind] == 0.0f && run.type != RunType::Indexed;
+    const bool rigid = s.at[kind] == 0.0f && run.type != RunType::Indexed;
     const bool uniform = run.rest > 0.0f;
     if (rigid) {
-      if (uniform) solve_run<false, false, true, true>(s, run);
-      else solve_run<false, false, false, true>(s, run);
+      if (uniform) solve_run<false, true, true>(s, run);
+      else solve_run<false, false, true>(s, run);
     } else {
-      if (uniform) solve_run<kLambda, kDamp, true, false>(s, run);
-      else solve_run<kLambda, kDamp, false, false>(s, run);
+      if (uniform) solve_run<kLambda, true, false>(s, run);
+      else solve_run<kLambda, false, false>(s, run);
     }
   }
 }
 
 // compiled for AVX2 and for the baseline, same bits: PBA_CLONES (core/clones.h)
 
-PBA_CLONES void sweep_any(const SolveArgs& s, bool lambda, bool damp) {
-  if (lambda) {
-    if (damp) sweep<true, true>(s);
-    else sweep<true, false>(s);
-  } else {
-    if (damp) sweep<false, true>(s);
-    else sweep<false, false>(s);
+PBA_CLONES void sweep_any(const SolveArgs& s, bool lambda) {
+  if (lambda) sweep<true>(s);
+  else sweep<false>(s);
+}
+
+// The dashpots: one Gauss-Seidel sweep, in solver order, over the runs of the damped
+// kinds (inv_ch finite), on the velocities at the start of a substep (before gravity and
+// the other accelerations: a body at rest has no velocity to damp, so its sag is the
+// springs' alone), their impulses accumulated in `lambda` (zeroed before the first).
+// Scalar or AVX2, the same bits.
+PBA_CLONES void damp_sweep(const SolveArgs& s) {
+  for (std::size_t r = 0; r < s.n_runs; ++r) {
+    const Run& run = s.runs[r];
+    const float slack = s.inv_ch[static_cast<int>(run.kind)];
+    if (!(slack < std::numeric_limits<float>::infinity())) continue;
+    const int n = static_cast<int>(run.count);
+    const float* rest = s.rest + run.c0;
+    float* acc = s.lambda + run.c0;
+    const float ru = run.rest;
+#if PBA_SOFT_HAVE_AVX2
+    if (s.avx2 && run.type != RunType::Indexed) {
+      const std::uint32_t a = run.a0, b = run.a0 + run.offset;
+      const int L = run.type == RunType::Contiguous ? 0 : static_cast<int>(run.offset);
+      const bool u = ru > 0.0f;
+      if (L == 0) {
+        if (u) dash_run_avx2<0, true>(n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.w, a, b, rest, ru, slack, acc);
+        else dash_run_avx2<0, false>(n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.w, a, b, rest, ru, slack, acc);
+      } else if (L == 1) {
+        if (u) dash_run_avx2<1, true>(n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.w, a, b, rest, ru, slack, acc);
+        else dash_run_avx2<1, false>(n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.w, a, b, rest, ru, slack, acc);
+      } else {
+        if (u) dash_run_avx2<2, true>(n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.w, a, b, rest, ru, slack, acc);
+        else dash_run_avx2<2, false>(n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.w, a, b, rest, ru, slack, acc);
+      }
+      continue;
+    }
+#endif
+    for (int k = 0; k < n; ++k) {
+      std::uint32_t a = 0, b = 0;
+      run_ends(run, s.ca, s.cb, k, a, b);
+      dashpot(s.x[a], s.y[a], s.z[a], s.x[b], s.y[b], s.z[b], s.vx[a], s.vy[a], s.vz[a], s.vx[b], s.vy[b], s.vz[b],
+              s.w[a], s.w[b], ru > 0.0f ? ru : rest[k], slack, acc[k]);
+    }
   }
 }
 
@@ -525,46 +615,34 @@ void solve_volumes(SoftBody::Impl& s, float at, bool use_lambda) {
   }
 }
 
-// The largest alpha / h^2 or gamma the update is given (both are stored as float). Past it
-// the update is its limit to float precision: the terms it leaves out (the constraint value
-// beside alpha lambda / h^2, the 1 beside gamma) weigh under 1e-15 of the ones kept. Without
-// it a compliance or damping so large that alpha / h^2 or gamma overflowed the float
-// (spring_damping 1e300) made (1 + inf)(w_a + w_b) over inf, or 0 inf, NaN, which a pinned
-// particle (w = 0) took too. Far above any compliance or damping in use: no result below it
-// moves.
+// The largest alpha / h^2 the update is given (stored as float). Past it the update is its
+// limit to float precision: the constraint value it leaves out beside alpha lambda / h^2
+// weighs under 1e-15 of what is kept. Without it a compliance so large that alpha / h^2
+// overflowed the float made the multipliers' 0 inf NaN. Far above any compliance in use:
+// no result below it moves.
 constexpr double kMaxScaled = 1e15;
-
-// Brings alpha / h^2 (`at`) and gamma within kMaxScaled by one common factor, so that their
-// ratio gamma / at = beta h (`ratio`), which sets the balance of spring and damper in the
-// update, is kept: a constraint of infinite compliance keeps its damper (eq. 26 divided
-// through by alpha / h^2 tends to dlambda = -(lambda + beta h grad C . dx) / (1 + beta h w)).
-inline void limit_scaled(double& at, double& gamma, double ratio) {
-  if (std::max(at, gamma) <= kMaxScaled) return;
-  if (ratio <= 1) at = kMaxScaled, gamma = kMaxScaled * ratio;
-  else gamma = kMaxScaled, at = kMaxScaled / ratio;
-}
 
 }  // namespace
 
 void SoftBody::Impl::step_xpbd(double t, double dt) {
   const int S = def.substeps;
   const double h = dt / S;
-  // per-kind alpha / h^2 and damping gamma = alpha beta / h (eq. 26 with beta = c)
+  // per-kind alpha / h^2, and the dashpots' 1 / (c h) on the compliant kinds (infinity:
+  // undamped; 0 where c h is beyond a float, an infinitely strong damper)
   const double alpha[3] = {def.stretch_compliance, def.shear_compliance, def.bend_compliance};
-  SolveArgs a{x.data(), y.data(), z.data(), px.data(), py.data(), pz.data(), w.data(), ca.data(), cb.data(),
+  SolveArgs a{x.data(), y.data(), z.data(), vx.data(), vy.data(), vz.data(), w.data(), ca.data(), cb.data(),
               rest.data(), lambda.data(), runs.data(), runs.size(), {}, {}, false};
 #if PBA_SOFT_HAVE_AVX2
   a.avx2 = simd && has_avx2();
 #endif
+  constexpr float kUndamped = std::numeric_limits<float>::infinity();
   bool damp = false;
   for (int k = 0; k < 3; ++k) {
-    double at = alpha[k] / (h * h), gamma = alpha[k] * def.spring_damping / h;
-    limit_scaled(at, gamma, def.spring_damping * h);
-    a.at[k] = static_cast<float>(at);
-    a.gamma[k] = static_cast<float>(gamma);
-    damp = damp || a.gamma[k] > 0;
+    a.at[k] = static_cast<float>(std::min(alpha[k] / (h * h), kMaxScaled));
+    a.inv_ch[k] = alpha[k] > 0 && def.spring_damping > 0 ? static_cast<float>(1 / (def.spring_damping * h)) : kUndamped;
+    damp = damp || a.inv_ch[k] < kUndamped;
   }
-  const bool use_lambda = def.iterations > 1 || damp;
+  const bool use_lambda = def.iterations > 1;
   const float at_volume = static_cast<float>(std::min(def.volume_compliance / (h * h), kMaxScaled));
   // predict's inputs: gravity, held external accelerations, drag toward the wind
   const Vec3 wind = def.forces.wind.at(t);
@@ -592,8 +670,18 @@ void SoftBody::Impl::step_xpbd(double t, double dt) {
   double collide_s = 0;  // the collisions' time (s)
   for (int sub = 1; sub <= S; ++sub) {
     // predict (with the previous substep's velocity update), then the pins slide toward
-    // their targets (exactly there at the last substep)
-    predict(pa, has_aext, drag, sub > 1);
+    // their targets (exactly there at the last substep); with constraint damping the
+    // velocity update is a pass of its own, and the dashpots act on its velocities
+    if (damp) {
+      if (sub > 1)
+        update_velocities(n, x.data(), y.data(), z.data(), px.data(), py.data(), pz.data(), vx.data(), vy.data(),
+                          vz.data(), vscale, decay);
+      std::fill(lambda.begin(), lambda.end(), 0.f);
+      for (int it = 0; it < def.iterations; ++it) damp_sweep(a);
+      predict(pa, has_aext, drag, false);
+    } else {
+      predict(pa, has_aext, drag, sub > 1);
+    }
     const double f = static_cast<double>(sub) / S;
     for (std::size_t k = 0; k < pins.size(); ++k) {
       const Vec3 p = sub == S ? pin_to[k] : pin_from[k] + (pin_to[k] - pin_from[k]) * f;
@@ -606,7 +694,7 @@ void SoftBody::Impl::step_xpbd(double t, double dt) {
       std::fill(tet_lambda.begin(), tet_lambda.end(), 0.f);
     }
     for (int it = 0; it < def.iterations; ++it) {
-      sweep_any(a, use_lambda, damp);
+      sweep_any(a, use_lambda);
       if (!tets.empty()) solve_volumes(*this, at_volume, use_lambda);
     }
     // long-range attachments, after the constraints (Kim et al. 2012)

@@ -277,7 +277,7 @@ TEST(BadFiles, InputsThatCannotFitNameTheFieldAndTheMemory) {
                 .rfind("scenes/x.json: /emitters/0/max_alive: 200000000 particles would take 47.7 GiB", 0),
             0u);
   EXPECT_EQ(error_of(R"({"version": 1, "soft_bodies": [{"type": "cloth", "nx": 4096, "ny": 4096}]})")
-                .rfind("scenes/x.json: /soft_bodies/0: ClothDef.nx: a 4096 x 4096 cloth (16777216 particles", 0),
+                .rfind("scenes/x.json: /soft_bodies/0/nx: a 4096 x 4096 cloth (16777216 particles", 0),
             0u);
   // capped, it fits and runs: emission costs the particles emitted
   pba::Scene s = pba::parse_scene(R"({"version": 1, "emitters": [{"rate": 1e12, "max_alive": 500}]})", "x.json");

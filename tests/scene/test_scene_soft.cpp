@@ -283,3 +283,69 @@ TEST(SoftBadFiles, FieldsAreNamedByPath) {
   const std::string c = error_of(R"({"version": 1, "cloth": []})");
   EXPECT_NE(c.find("soft_bodies"), std::string::npos) << c;
 }
+
+// A builder's refusal names the JSON path of the field it came from, not only the item
+// (until 2026-12-07: "/soft_bodies/0: RopeDef.mass split among ..."); a refusal several
+// fields decide (a particle beyond a float: "see from and to") stays with the item.
+TEST(SoftBadFiles, BuilderErrorsNameTheFieldsPath) {
+  struct Case {
+    const char* item;  // one soft body
+    const char* want;  // the message's start
+  };
+  for (const Case& c : {
+           Case{R"({"type": "rope", "mass": 1e-300})",
+                "/soft_bodies/0/mass: split among 21 particles (kg each): must be in ["},
+           Case{R"({"type": "cloth", "mass": 1e-300})", "/soft_bodies/0/mass: split among 1024 particles (kg each)"},
+           Case{R"({"type": "jelly", "cells": [1, 1, 1], "mass": 1e300})",
+                "/soft_bodies/0/mass: split among 8 particles (kg each)"},
+           Case{R"({"type": "spring", "velocity_b": [1e39, 0, 0]})", "/soft_bodies/0/velocity_b: must fit a float"},
+           Case{R"({"type": "jelly", "velocity": [0, 1e39, 0]})", "/soft_bodies/0/velocity: must fit a float"},
+           // a box so small its edges have no finite compliance: the size
+           Case{R"({"type": "jelly", "size": [1e-200, 1e-200, 1e-200]})",
+                "/soft_bodies/0/size: (1e-200, 1e-200, 1e-200) m in 4 x 4 x 4 cells and JellyMaterial.young 5000 Pa "
+                "give an edge stiffness k = 4 G a / 3 = 0 N/m"},
+           // several fields decide: the item, and the message names them
+           Case{R"({"type": "rope", "to": [1e40, 2, 0]})", "/soft_bodies/0: RopeDef: particle 1 at "}}) {
+    const std::string msg = error_of(std::string(R"({"version": 1, "soft_bodies": [)") + c.item + "]}");
+    EXPECT_EQ(msg.rfind(std::string("scenes/x.json: ") + c.want, 0), 0u) << msg;
+  }
+  EXPECT_NE(error_of(R"({"version": 1, "soft_bodies": [{"type": "rope", "to": [1e40, 2, 0]}]})").find("see from and to"),
+            std::string::npos);
+}
+
+// A field of the other solver was read and ignored without a word: an integrator on an
+// XPBD body, a stiffness under XPBD, a compliance or iterations under mass-spring, a
+// compliance on a spring (its stiffness sets it). Each is refused by path, saying which
+// solver takes what.
+TEST(SoftBadFiles, TheOtherSolversFieldsAreRefused) {
+  EXPECT_EQ(error_of(R"({"version": 1, "soft_bodies": [{"type": "rope", "integrator": "rk4"}]})"),
+            "scenes/x.json: /soft_bodies/0/integrator: an integrator is the mass-spring solver's (\"solver\": "
+            "\"mass-spring\"); the XPBD solver projects constraints in \"substeps\" of \"iterations\" sweeps and "
+            "takes none");
+  EXPECT_EQ(error_of(R"({"version": 1, "soft_bodies": [{"type": "cloth", "shear_stiffness": 500}]})"),
+            "scenes/x.json: /soft_bodies/0/shear_stiffness: a stiffness (N/m) is the mass-spring solver's "
+            "(\"solver\": \"mass-spring\"); the XPBD solver takes \"shear_compliance\", its inverse (m/N)");
+  // a jelly is XPBD unless told: its material gives compliances
+  EXPECT_NE(error_of(R"({"version": 1, "soft_bodies": [{"type": "jelly", "volume_stiffness": 5}]})")
+                .find("/soft_bodies/0/volume_stiffness: a stiffness (N/m) is the mass-spring solver's"),
+            std::string::npos);
+  EXPECT_EQ(error_of(R"({"version": 1, "soft_bodies": [{"type": "rope", "solver": "mass-spring", "bend_compliance": 0.01}]})"),
+            "scenes/x.json: /soft_bodies/0/bend_compliance: a compliance (m/N) is the XPBD solver's (\"solver\": "
+            "\"xpbd\"); the mass-spring solver takes \"bend_stiffness\", its inverse (N/m)");
+  EXPECT_EQ(error_of(R"({"version": 1, "soft_bodies": [{"type": "cloth", "solver": "mass-spring", "iterations": 4}]})"),
+            "scenes/x.json: /soft_bodies/0/iterations: constraint iterations are the XPBD solver's; the "
+            "mass-spring solver integrates in \"substeps\" with its \"integrator\"");
+  EXPECT_EQ(error_of(R"({"version": 1, "soft_bodies": [{"type": "spring", "stretch_compliance": 0.01}]})"),
+            "scenes/x.json: /soft_bodies/0/stretch_compliance: a spring's compliance is 1 / \"stiffness\" (N/m): "
+            "give its stiffness");
+  // each solver's own fields still read
+  EXPECT_EQ(error_of(R"({"version": 1, "soft_bodies": [{"type": "rope", "solver": "mass-spring", "integrator": "rk4",
+                          "stretch_stiffness": 500, "substeps": 20}]})"),
+            "");
+  EXPECT_EQ(error_of(R"({"version": 1, "soft_bodies": [{"type": "rope", "iterations": 3, "stretch_compliance": 1e-4}]})"),
+            "");
+  // the shipped files use each field with its solver
+  for (const char* f : {"soft_spring.json", "soft_rope.json", "soft_flag.json", "soft_drape.json",
+                        "soft_hull_drape.json", "soft_jelly.json"})
+    EXPECT_NO_THROW(load(f)) << f;
+}

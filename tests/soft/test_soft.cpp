@@ -495,6 +495,67 @@ TEST(MassSpring, ImplicitEulerSizeLimitIsAClearError) {
   EXPECT_NE(msg.find("1024"), std::string::npos) << msg;
 }
 
+// Stiffness and damping over their whole range under the explicit integrators: a network
+// within the method's stability bound steps on; one whose stiffest spring is past it
+// (omega h = sqrt(k (w_a + w_b)) h >= 2, 2 sqrt 2 for RK4, or c (w_a + w_b) h >= 2) blows up,
+// as the theory says it must, and the Error names the setting and the bound it broke.
+// Until 2026-12-07 it said only "particle ... became non-finite". The rope: 8 segments of
+// 1/9 kg (w_a + w_b = 18 /kg), h = 1/600 s, so omega h = sqrt(18 k) / 600: 0.24 at k = 100
+// (stable; the chain's fastest mode is at most twice a spring's), 7.1 at 1e6.
+TEST(MassSpring, ExplicitBlowUpNamesTheSettingPastItsBound) {
+  const double h = 1.0 / 600, W = 18;
+  for (pba::Method method : {pba::Method::SemiImplicitEuler, pba::Method::VelocityVerlet, pba::Method::Rk4}) {
+    const double bound = method == pba::Method::Rk4 ? 2 * std::sqrt(2.0) : 2.0;
+    for (const double k : {1.0, 100.0, 1e6, 1e10, 1e30, 1e300, std::numeric_limits<double>::max()})
+      for (const double c : {0.0, 1.0, 1e3, 1e300}) {
+        SCOPED_TRACE(testing::Message() << pba::name(method) << ", k " << k << ", c " << c);
+        pba::SoftBodyDef d;
+        d.solver = pba::SoftSolver::MassSpring;
+        d.method = method;
+        d.stretch_stiffness = k;
+        d.bend_stiffness = 1;
+        d.spring_damping = c;
+        pba::SoftBody r = pba::SoftBody::rope({.segments = 8}, d);
+        const bool stiff = std::sqrt(k * W) * h >= bound, damped = c * W * h >= 2;
+        const std::string msg = error_of([&] {
+          for (int f = 0; f < 120; ++f) r.step(f / 60.0, 1.0 / 60);
+        });
+        if (!stiff && !damped) {
+          EXPECT_EQ(msg, "");
+          continue;
+        }
+        EXPECT_NE(msg.find("became non-finite"), std::string::npos) << msg;
+        if (stiff) EXPECT_NE(msg.find("SoftBodyDef.stretch_stiffness = " + pba::format_value(k)), std::string::npos) << msg;
+        if (damped) EXPECT_NE(msg.find("SoftBodyDef.spring_damping = " + pba::format_value(c)), std::string::npos) << msg;
+        EXPECT_NE(msg.find("stability bound"), std::string::npos) << msg;
+      }
+  }
+}
+
+// Cloth aerodynamics of any size: an acceleration beyond a float (C_d or C_l of 1e300 in
+// 5 m/s of wind) is refused by name before anything moves, rather than blamed on the step
+// (`dt ... moves a particle beyond a float`) or found later as a non-finite particle; the
+// body is not failed and steps on once the coefficient is lowered.
+TEST(SoftBadInput, AerodynamicsBeyondAFloatIsNamed) {
+  for (const double coef : {1e300, std::numeric_limits<double>::max()})
+    for (const bool lift : {false, true}) {
+      SCOPED_TRACE(testing::Message() << coef << (lift ? " lift" : " drag"));
+      pba::SoftBodyDef d;
+      d.substeps = 4;
+      (lift ? d.aero.lift : d.aero.drag) = coef;
+      d.forces.wind = {.velocity = {5, 2, 1}};
+      pba::SoftBody f = pba::SoftBody::cloth_grid({.nx = 6, .ny = 5, .pins = pba::ClothPins::FirstColumn}, d);
+      const std::uint64_t h0 = f.hash();
+      const std::string msg = error_of([&] { f.step(0, 1.0 / 60); });
+      EXPECT_EQ(msg.rfind("SoftBodyDef.aero: the aerodynamic force on particle ", 0), 0u) << msg;
+      EXPECT_NE(msg.find(pba::format_value(coef)), std::string::npos) << msg;
+      EXPECT_EQ(f.hash(), h0);
+      EXPECT_FALSE(f.failed());
+      (lift ? f.settings().aero.lift : f.settings().aero.drag) = 1;
+      EXPECT_EQ(error_of([&] { f.step(0, 1.0 / 60); }), "");
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // jelly
 
@@ -669,10 +730,8 @@ TEST(SoftBadInput, SpringBetweenCoincidentParticles) {
 
 // XPBD constraint damping of any accepted size (spring_damping up to DBL_MAX) keeps a pinned
 // rope finite with its pin exact: until 2026-12-06, 1e300 overflowed the float gamma and
-// (1 + inf)(w_a + w_b) over inf made every particle NaN, the pin too. (What strong damping
-// does to the rope is not asserted here: from c ~ 1e3 up it stretches the rope and raises its
-// energy, a strain of 2 and +485 J in 1 s at 1e6 and beyond, unclamped as clamped: a defect
-// of the damped update of its own, left open.) The second particle is pinned too and its pin
+// (1 + inf)(w_a + w_b) over inf made every particle NaN, the pin too. (What damping does to
+// the rope's energy: SoftXpbdDamping.ConstraintDampingNeverAddsEnergy.) The second particle is pinned too and its pin
 // moves: the constraint between the two pins has no weight, and where the clamp left
 // alpha / h^2 tiny beside the damping (c h ~ 1e40 .. 1e50) its update divided ~1e15 by a
 // tiny denominator, inf, and 0 * inf gave the pins NaN (the review's find, 2026-12-06): such a
@@ -698,6 +757,149 @@ TEST(SoftXpbd, ConstraintDampingOfAnySizeKeepsARopeFinite) {
     EXPECT_LT(glm::length(r.position(1) - (second + pba::Vec3(0.06, 0, 0))), 1e-6);  // float state
     for (std::size_t i = 0; i < r.size(); ++i)
       ASSERT_TRUE(pba::is_finite(r.position(i)) && pba::is_finite(r.velocity(i))) << i;
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// XPBD constraint damping: one implicit dashpot sweep on the velocities of each substep
+
+// The dashpot alone, in closed form: two free particles of mass m joined by a constraint
+// of no stiffness (k = 1e-300 N/m: alpha / h^2 is held at 1e15, a pull of C / 1e15, below
+// float rounding), no gravity, flying apart along their axis at relative speed u0. Each
+// substep's impulse leaves u' = u / (1 + c h W) with W = 2 / m, so after n substeps
+// u_n = u0 / (1 + c h W)^n, and the centre of mass keeps its velocity u0 / 2 (equal and
+// opposite impulses). Float rounding: v is rebuilt from float positions near 1 m each
+// substep, to a relative 1e-6 over the 60 substeps here; 1e-5 of u0 bounds it. c = 1e300
+// (1 / (c h) = 0 in float) stops the relative motion in the first substep.
+TEST(SoftXpbdDamping, DashpotDecaysTheRelativeVelocityGeometrically) {
+  const double m = 0.5, u0 = 2, dt = 1.0 / 60;
+  for (const double c : {0.0, 0.01, 1.0, 30.0, 1e6, 1e300, std::numeric_limits<double>::max()}) {
+    SCOPED_TRACE(c);
+    pba::SoftBodyDef d;
+    d.substeps = 10;
+    d.forces.gravity = {0, 0, 0};
+    pba::SoftBody s = pba::SoftBody::spring(
+        {.a = {0, 1, 0}, .b = {0.5, 1, 0}, .velocity_b = {u0, 0, 0}, .mass = m, .stiffness = 1e-300, .damping = c,
+         .fixed_a = false},
+        d);
+    const double h = dt / d.substeps, f = 1 / (1 + c * h * 2 / m);
+    for (int step = 1; step <= 6; ++step) {
+      s.step((step - 1) * dt, dt);
+      const double u = s.velocity(1).x - s.velocity(0).x, want = u0 * std::pow(f, step * d.substeps);
+      EXPECT_NEAR(u, want, 1e-5 * u0) << "step " << step;
+      EXPECT_NEAR(0.5 * (s.velocity(0).x + s.velocity(1).x), u0 / 2, 1e-5 * u0) << "step " << step;
+    }
+  }
+}
+
+// One particle of mass m hanging from a pin on a damped XPBD spring (k, c), released at
+// the spring's rest length: the substep is, along the spring (e its extension, u = de/dt,
+// w = 1/m, at = 1 / (k h^2)),
+//   u <- u / (1 + c h w)                 (the dashpot, on the velocity the substep starts with)
+//   e* = e + h (u + g h)                 (predict)
+//   e' = e* at / (w + at),  u = (e' - e) / h   (eq. 18, one iteration)
+// (one substep per step here). The body follows that recurrence, computed here in double,
+// to float rounding, for dampers from none to 1e300: the coordinates near 1 m round by up
+// to ulp / 2 = 6e-8 m at each of the step's three writes (1.1e-5 m over 60 steps if none
+// cancelled), and a position off by d is pulled back only by the part w / (w + at) of d
+// per step, so the float state rests anywhere within ulp (1 + at / w) of the double one
+// (2.4e-6 m): 2e-5 m bounds both. Whatever c, the rest point is the spring's, e = m g / k,
+// to that band: a body at rest has no velocity for its damper (the dashpot applied to the
+// predicted motion, gravity's g h^2 included, would rest at m g / (k (1 + c h w))).
+TEST(SoftXpbdDamping, HangingMassFollowsTheDampedRecurrenceAndRestsAtTheSpringsSag) {
+  const double m = 0.8, k = 150, g = 9.81, dt = 1.0 / 60;
+  for (const double c : {0.0, 0.5, 2 * std::sqrt(k * m), 100.0, 1e8, 1e300}) {
+    SCOPED_TRACE(c);
+    pba::SoftBodyDef d;
+    d.substeps = 1;
+    d.tethers = false;  // (they would hold the mass within its rest length of the pin)
+    pba::SoftBody s = pba::SoftBody::spring({.a = {0, 2, 0}, .b = {0, 1, 0}, .mass = m, .stiffness = k, .damping = c}, d);
+    const double h = dt / d.substeps, w = 1 / m, at = 1 / (k * h * h);
+    double e = 0, u = 0, worst = 0;
+    for (int step = 1; step <= 60; ++step) {
+      s.step((step - 1) * dt, dt);
+      for (int sub = 0; sub < d.substeps; ++sub) {
+        u = u / (1 + c * h * w);
+        const double pred = e + h * (u + g * h), next = pred * at / (w + at);
+        u = (next - e) / h;
+        e = next;
+      }
+      worst = std::max(worst, std::abs((1 - s.position(1).y) - e));
+    }
+    EXPECT_LE(worst, 2e-5);
+    // and on, until it rests: critically damped and beyond, within 40 s (the slowest, a
+    // damper that stops the particle each step, creeps to the sag as (1 + k h^2 w)^-n:
+    // e^-120 of it after 2400 steps)
+    if (c < 2 * std::sqrt(k * m)) continue;
+    for (int step = 61; step <= 2400; ++step) s.step((step - 1) * dt, dt);
+    const double band = std::ldexp(1.0, -23) * (1 + at / w);
+    EXPECT_NEAR(1 - s.position(1).y, m * g / k, band) << "at rest";
+  }
+}
+
+// A 1 kg rope of 20 segments pinned at one end and released horizontally (stretch
+// compliance alpha, bend 1e-4 m/N, two iterations, no tethers): its energy, kinetic +
+// gravity + sum C^2 / (2 alpha), may only fall from step to step, whatever the damping c
+// (a damper only removes energy: dE/dt = -c (dC/dt)^2) and the compliance, from one the
+// substep resolves (alpha / h^2 = 360 N/m at 1e-3, beside w_a + w_b = 42 /kg: one sweep
+// nearly converges it, see jelly_settings) to none at all. (Stiffer, at 1e-6, the
+// undamped solve alone rises 0.76 J: its unconverged C, counted in C^2 / (2 alpha), is
+// not the damper's doing.) Until
+// 2026-12-07 the damping term of eq. 26 in the constraint update did not: from c ~ 100 up
+// the rope stretched and gained energy, a strain of 2 and +480 J in this second at
+// c >= 1e6. Float rounding of the energy: M g ulp(2 m) per step for gravity and as much
+// for the elastic and kinetic terms; 1e-4 J bounds it.
+TEST(SoftXpbdDamping, ConstraintDampingNeverAddsEnergy) {
+  const double dt = 1.0 / 60;
+  for (const double alpha : {1e-3, 1e-2, 1.0, 1e300})
+    for (const double c : {0.0, 1e-3, 1.0, 10.0, 100.0, 1e3, 1e6, 1e15, 1e40, 1e300,
+                           std::numeric_limits<double>::max()}) {
+      SCOPED_TRACE(testing::Message() << "alpha " << alpha << ", c " << c);
+      pba::SoftBodyDef d;
+      d.stretch_compliance = alpha;
+      d.spring_damping = c;
+      d.iterations = 2;
+      d.tethers = false;
+      pba::SoftBody r = pba::SoftBody::rope({}, d);
+      double e = r.kinetic_energy() + r.potential_energy(), rise = 0;
+      for (int f = 0; f < 60; ++f) {
+        r.step(f * dt, dt);
+        const double now = r.kinetic_energy() + r.potential_energy();
+        rise = std::max(rise, now - e);
+        e = now;
+      }
+      EXPECT_LE(rise, 1e-4);
+    }
+}
+
+// A chain of 10 segments (1 kg, stretch compliance alpha, no bending) hanging straight down
+// from its pin, released at its rest length: once the dampers have settled it, segment j
+// carries the n - 1 - j particles below it and is stretched by alpha g m (n - 1 - j), the
+// springs' static sag, whatever the damping. Twenty iterations per step converge the
+// chain's solve (one leaves the Gauss-Seidel sweep's own residual, 6 % at the top); float
+// rounding: coordinates below 2 m round to 1.2e-7 m, and a particle rests anywhere within
+// ulp (1 + at / w) of its float fixed point (see the hanging mass above; at = alpha / h^2,
+// one substep), so a length within twice that.
+TEST(SoftXpbdDamping, SettledChainSagsAsItsSprings) {
+  const double alpha = 1e-2, g = 9.81, dt = 1.0 / 60;
+  const int segments = 10;
+  for (const double c : {3.0, 30.0, 1e4, 1e300}) {
+    SCOPED_TRACE(c);
+    pba::SoftBodyDef d;
+    d.stretch_compliance = alpha;
+    d.spring_damping = c;
+    d.substeps = 1;
+    d.iterations = 20;
+    d.tethers = false;
+    pba::SoftBody r = pba::SoftBody::rope({.from = {0, 2, 0}, .to = {0, 1, 0}, .segments = segments, .bending = false}, d);
+    for (int f = 0; f < 20000; ++f) r.step(f * dt, dt);
+    const double m = 1.0 / (segments + 1), at = alpha / (dt * dt);
+    const double band = 2 * std::ldexp(1.0, -23) * (1 + at * m);
+    for (int j = 0; j < segments; ++j) {
+      const double stretch = r.position(j).y - r.position(j + 1).y - 1.0 / segments;
+      EXPECT_NEAR(stretch, alpha * g * m * (segments - j), band) << "segment " << j;
+    }
+    EXPECT_LT(r.kinetic_energy(), 1e-9);
   }
 }
 
