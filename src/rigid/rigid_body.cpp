@@ -974,13 +974,14 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   profile_.finish = profile_.total - solver_end;
 }
 
+namespace detail {
+
 namespace {
 
 typedef double v4d_sum __attribute__((vector_size(32)));
 
-// Whether every one of `count` doubles from `p` is finite: x - x is +0 for a finite x and NaN
-// for an infinite or NaN one, and a NaN stays NaN through any sum (so the sums' order does not
-// matter). Four sums of four lanes; on AVX2 one instruction a lane group, else two SSE2 halves.
+// all_finite_wide's test: four sums of four lanes (on AVX2 one instruction a lane group, else
+// two SSE2 halves), the last count % 16 one by one
 [[gnu::always_inline]] inline bool all_finite_of(const double* p, std::size_t count) {
   v4d_sum acc[4] = {};
   std::size_t i = 0;
@@ -996,9 +997,14 @@ typedef double v4d_sum __attribute__((vector_size(32)));
   return (all[0] + all[1]) + (all[2] + all[3]) + rest == 0;
 }
 [[gnu::target("avx2")]] bool all_finite_avx2(const double* p, std::size_t count) { return all_finite_of(p, count); }
-bool all_finite_plain(const double* p, std::size_t count) { return all_finite_of(p, count); }
 
 }  // namespace
+
+bool all_finite_wide(SimdPath path, const double* p, std::size_t count) {
+  return path == SimdPath::Scalar ? all_finite_of(p, count) : all_finite_avx2(p, count);
+}
+
+}  // namespace detail
 
 void RigidBodySystem::check_finite() {
   // forces last one step; then look for a body whose state stopped being finite
@@ -1011,10 +1017,8 @@ void RigidBodySystem::check_finite() {
   // asleep; whole arrays in lanes, about a fifth. Only when some number is not finite, the
   // bodies one by one for the first such (the one named, as before)
   static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double));
-  const bool wide = contacts_ && contacts_->simd != detail::SimdPath::Scalar;
-  auto all_finite = [&](const double* p, std::size_t count) {
-    return wide ? all_finite_avx2(p, count) : all_finite_plain(p, count);
-  };
+  const detail::SimdPath path = contacts_ ? contacts_->simd : detail::SimdPath::Scalar;
+  auto all_finite = [&](const double* p, std::size_t count) { return detail::all_finite_wide(path, p, count); };
   if (n == 0 || (all_finite(&com_[0].x, 3 * n) && all_finite(&v_[0].x, 3 * n) &&
                  all_finite(&w_[0].x, 3 * n) &&
                  all_finite(reinterpret_cast<const double*>(q_.data()), 4 * n)))
