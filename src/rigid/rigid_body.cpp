@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <new>
@@ -973,14 +974,57 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   profile_.finish = profile_.total - solver_end;
 }
 
+namespace detail {
+
+namespace {
+
+typedef double v4d_sum __attribute__((vector_size(32)));
+
+// all_finite_wide's test: four sums of four lanes (on AVX2 one instruction a lane group, else
+// two SSE2 halves), the last count % 16 one by one
+[[gnu::always_inline]] inline bool all_finite_of(const double* p, std::size_t count) {
+  v4d_sum acc[4] = {};
+  std::size_t i = 0;
+  for (; i + 16 <= count; i += 16)
+    for (int k = 0; k < 4; ++k) {
+      v4d_sum x;
+      std::memcpy(&x, p + i + 4 * k, sizeof x);
+      acc[k] += x - x;
+    }
+  double rest = 0;
+  for (; i < count; ++i) rest += p[i] - p[i];
+  const v4d_sum all = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+  return (all[0] + all[1]) + (all[2] + all[3]) + rest == 0;
+}
+[[gnu::target("avx2")]] bool all_finite_avx2(const double* p, std::size_t count) { return all_finite_of(p, count); }
+
+}  // namespace
+
+bool all_finite_wide(SimdPath path, const double* p, std::size_t count) {
+  return path == SimdPath::Scalar ? all_finite_of(p, count) : all_finite_avx2(p, count);
+}
+
+}  // namespace detail
+
 void RigidBodySystem::check_finite() {
   // forces last one step; then look for a body whose state stopped being finite
   const std::size_t n = type_.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    force_[i] = Vec3(0);
-    torque_[i] = Vec3(0);
+  std::fill(force_.begin(), force_.end(), Vec3(0));
+  std::fill(torque_.begin(), torque_.end(), Vec3(0));
+  // the centres, velocities and frames as flat arrays of doubles first (Vec3 and Quat are
+  // 3 and 4 doubles without padding): a body at a time, the tests were 0.67 M instructions
+  // of the rain's landing step, and as many in each of its resting steps, its 10,000 bodies
+  // asleep; whole arrays in lanes, about a fifth. Only when some number is not finite, the
+  // bodies one by one for the first such (the one named, as before)
+  static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double));
+  const detail::SimdPath path = contacts_ ? contacts_->simd : detail::SimdPath::Scalar;
+  auto all_finite = [&](const double* p, std::size_t count) { return detail::all_finite_wide(path, p, count); };
+  if (n == 0 || (all_finite(&com_[0].x, 3 * n) && all_finite(&v_[0].x, 3 * n) &&
+                 all_finite(&w_[0].x, 3 * n) &&
+                 all_finite(reinterpret_cast<const double*>(q_.data()), 4 * n)))
+    return;
+  for (std::size_t i = 0; i < n; ++i)
     if (!(is_finite(com_[i]) && is_finite(v_[i]) && is_finite(w_[i]) && finite_quat(q_[i]))) fail(i);
-  }
 }
 
 void RigidBodySystem::fail(std::size_t i) {

@@ -317,6 +317,10 @@ void gather_free_motion_wide(SimdPath path, FreeRotation kind, const std::uint32
 /// Puts the lanes' centres and frames back into the bodies' arrays.
 void scatter_free_motion_wide(SimdPath path, const std::uint32_t* bodies, std::size_t count,
                               const FreeMotionArrays& f, const double* lanes);
+/// Whether each of the `count` doubles from `p` is finite (not infinite, not NaN): x - x summed
+/// in lanes (+0 for every finite x, NaN once one is not), on AVX2 unless `path` is Scalar
+/// (RigidBodySystem::check_finite's test of the bodies' centres, velocities and frames).
+bool all_finite_wide(SimdPath path, const double* p, std::size_t count);
 /// refresh_inertia's test over a kind's free motion lanes (not round bodies; the kind's first
 /// block at `lanes`), several bodies at a time where `path` has a kernel for it (AVX2): the
 /// positions j (ascending) of the bodies bodies[j] whose frame in the lanes q is turned from
