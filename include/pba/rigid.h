@@ -419,6 +419,9 @@ class RigidBodySystem {
   void destroy(RigidBodyId id);
   /// True when `id` names a live body.
   bool valid(RigidBodyId id) const { return ids_.valid(id); }
+  /// Throws Error naming `where` unless valid(id): a null, stale or never issued handle, as
+  /// HandlePool::require says it.
+  void require(RigidBodyId id, std::string_view where) const { ids_.require(id, where); }
   /// Live bodies.
   std::size_t size() const { return type_.size(); }
   /// The handle of the i-th live body, i in [0, size()) (the order changes when bodies are destroyed).

@@ -518,11 +518,8 @@ RigidBodyId World::rigid_body_id(EntityId e) const {
 }
 
 EntityId World::owner(RigidBodyId id) const {
-  if (!rigid_.valid(id))
-    throw Error("World::owner(RigidBodyId): " + std::string(id.is_null() ? "null" : "stale") +
-                " rigid-body handle (index " + std::to_string(id.index) + ", generation " +
-                std::to_string(id.generation) + ")" +
-                (id.is_null() ? "" : ": destroyed since, or a handle of another World or system"));
+  // null, stale or never issued, as the rigid bodies' handle table tells them apart
+  if (!rigid_.valid(id)) rigid_.require(id, "World::owner(RigidBodyId): rigid body");
   if (!valid(id)) throw Error("World::owner(RigidBodyId): rigid body " + std::to_string(id.index) +
                               " belongs to no entity (it stands for a collider, or was made in rigid() directly)");
   return owner_by_slot(body_owner_, records_, id);

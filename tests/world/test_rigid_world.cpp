@@ -63,8 +63,30 @@ TEST(RigidComponent, HandlesPosesAndLifetime) {
   w.destroy_entity(e);
   EXPECT_FALSE(w.valid(b));
   EXPECT_EQ(w.rigid().size(), 0u);
-  EXPECT_NE(error_of([&] { w.owner(b); }).find("stale rigid-body handle"), std::string::npos);
+  EXPECT_EQ(error_of([&] { w.owner(b); }),
+            "World::owner(RigidBodyId): rigid body: stale handle (index 0, generation 1; the slot is now at "
+            "generation 2 and free): destroyed since, or a handle of another World or system");
   EXPECT_TRUE(w.body_colliders().empty());
+}
+
+// World::owner(RigidBodyId) named every handle it refused "stale", also one this World never
+// issued (an index beyond its bodies', a generation beyond the slot's, another World's body):
+// it tells them apart as every other World call does (HandlePool::require).
+TEST(RigidComponent, OwnerNamesAHandleNeverIssuedHereAsSuch) {
+  World w, other;
+  const EntityId e = w.create_entity({.name = "crate"});
+  const RigidBodyId b = w.add_rigid_body(e, box_def({0.5, 0.5, 0.5}));
+  EXPECT_EQ(w.owner(b), e);
+  const RigidBodyId foreign = other.add_rigid_body(other.create_entity({}), box_def({0.5, 0.5, 0.5}));
+  for (int i = 0; i < 2; ++i) other.add_rigid_body(other.create_entity({}), box_def({0.5, 0.5, 0.5}));
+  EXPECT_EQ(error_of([&] { w.owner(RigidBodyId{2, 1}); }),
+            "World::owner(RigidBodyId): rigid body: invalid handle (index 2 was never issued here: a handle of "
+            "another World or system)");
+  EXPECT_EQ(error_of([&] { w.owner(RigidBodyId{0, 5}); }),
+            "World::owner(RigidBodyId): rigid body: invalid handle (index 0 at generation 5 was never issued here, "
+            "the slot is at generation 1: a handle of another World or system)");
+  EXPECT_EQ(error_of([&] { w.owner(RigidBodyId{}); }), "World::owner(RigidBodyId): rigid body: null handle");
+  EXPECT_EQ(w.owner(foreign), e);  // the same index and generation: no handle tells its World
 }
 
 // Bodies are made and destroyed through the World, but rigid() lets a program destroy an
