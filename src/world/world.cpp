@@ -85,6 +85,19 @@ void require_pose(const Pose& p, std::string_view where) {
     throw Error(field_path(where, "rotation") + ": must be a finite unit quaternion");
 }
 
+// Throws unless `placed`, the position of a component placed at `local` in the entity frame
+// (`entity` * local), fits a float: both are finite, but their sum may not fit (or even
+// overflow a double to inf, which require_float read as "must be finite"), so the message
+// names the two terms ("the entity's position (x, y, z) + its rotation * <local_name> (x, y, z)").
+void require_placed_float(const Pose& entity, const Vec3& local, const Vec3& placed, std::string_view local_name,
+                          std::string_view where) {
+  if (fits_float(placed) || !is_finite(local)) return;  // (a non-finite local is the definition's check)
+  require_float_sum(placed,
+                    "the entity's position " + format_vec3(entity.position) + " + its rotation * " +
+                        std::string(local_name) + " " + format_vec3(entity.rotation * local),
+                    where);
+}
+
 double waypoint_length(const KinematicDef& d) {
   double len = 0;
   for (std::size_t i = 1; i < d.waypoints.size(); ++i) len += glm::length(d.waypoints[i] - d.waypoints[i - 1]);
@@ -378,6 +391,7 @@ ParticleId World::add_particle(EntityId e, const ParticleDef& def) {
         " has a rigid body, which moves it; a particle would move it too (give the particle an entity of its own)");
   ParticleDef d = def;
   d.position = r.pose.position + r.pose.rotation * def.position;
+  require_placed_float(r.pose, def.position, d.position, "position", "particle of " + describe(e) + ".position");
   r.particle = particles_.create(d, "particle of " + describe(e));
   ++particle_entities_added_;
   reserve_touch_sets();
@@ -410,6 +424,8 @@ ForcerId World::add_forcer(EntityId e, const Forcer& def) {
   // forcer beyond what the float kernels hold)
   Forcer w = def;
   w.pose = compose(r.pose, def.pose);
+  require_placed_float(r.pose, def.pose.position, w.pose.position, "pose.position",
+                       "forcer of " + describe(e) + " at the entity's pose: position");
   w.validate("forcer of " + describe(e) + " at the entity's pose");
   r.forcer = static_cast<std::uint32_t>(forcers_.size());
   forcers_.push_back({e, def, forcer_ids_.create(e)});
@@ -424,7 +440,8 @@ EmitterId World::add_emitter(EntityId e, const EmitterDef& def) {
   d.pose = compose(r.pose, def.pose);
   // the particles it emits are floats: its pose in the world must fit one
   if (!fits_float(d.pose.position))
-    require_float(d.pose.position, "emitter of " + describe(e) + " at the entity's pose: position");
+    require_placed_float(r.pose, def.pose.position, d.pose.position, "pose.position",
+                         "emitter of " + describe(e) + " at the entity's pose: position");
   r.emitter = particles_.add_emitter(d, "emitter of " + describe(e));
   r.emitter_local = def.pose;
   return r.emitter;
@@ -493,6 +510,7 @@ RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
   RigidBodyDef d = def;
   d.pose = compose(r.pose, def.pose);
   d.pose.rotation = glm::normalize(d.pose.rotation);
+  require_placed_float(r.pose, def.pose.position, d.pose.position, "pose.position", field_path(where, "pose.position"));
   if (d.name.empty()) d.name = r.name;
   // (the system appends the body's name to `where`: the entity's, unless the body has its own)
   const RigidBodyId id =
@@ -647,7 +665,8 @@ void World::sync(double t, double dt) {
     world_forcers_[i].pose = compose(r.pose, forcers_[i].def.pose);
     // an entity moved out of the floats' range takes its forcer with it: refused by name
     if (!fits_float(world_forcers_[i].pose.position))
-      world_forcers_[i].validate("forcer of " + describe(forcers_[i].owner) + " at the entity's pose");
+      require_placed_float(r.pose, forcers_[i].def.pose.position, world_forcers_[i].pose.position, "pose.position",
+                           "forcer of " + describe(forcers_[i].owner) + " at the entity's pose: position");
   }
   for (std::size_t i = 0; i < records_.size(); ++i) {
     const EntityRecord& r = records_[i];
@@ -655,8 +674,9 @@ void World::sync(double t, double dt) {
     const Pose p = compose(r.pose, r.emitter_local);
     // an entity moved beyond a float's range would emit non-finite particles: refused by name
     if (!fits_float(p.position))
-      require_float(p.position, "emitter of entity " + std::to_string(i) + (r.name.empty() ? "" : " '" + r.name + "'") +
-                                    " at the entity's pose: position");
+      require_placed_float(r.pose, r.emitter_local.position, p.position, "pose.position",
+                           "emitter of entity " + std::to_string(i) + (r.name.empty() ? "" : " '" + r.name + "'") +
+                               " at the entity's pose: position");
     particles_.set_emitter_pose(r.emitter, p);
   }
 }

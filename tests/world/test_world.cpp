@@ -311,6 +311,44 @@ TEST(Emitters, AnEntityBeyondTheFloatsTakesItsEmitterThereAndIsRefused) {
   EXPECT_NE(msg.find("float"), std::string::npos) << msg;
 }
 
+// A component placed at a finite offset from a finite entity pose whose sum overflows a double
+// (1e308 + 1e308: an emitter's or a particle's offset is checked once placed) was refused as
+// "must be finite, got (inf, 0, 0)", blaming a value the caller never gave: the message names
+// both terms and says their sum does not fit a float. So too for a finite sum beyond a float
+// (a forcer's, a body's, an emitter's whose entity moved out there, at the next tick).
+TEST(Components, APlacementWhoseSumOverflowsNamesBothTerms) {
+  World w;
+  const EntityId far = w.create_entity({.name = "far", .pose = {.position = {1e308, 0, 0}}});
+  const std::string terms = "the entity's position (1e+308, 0, 0) + its rotation * ";
+  const std::string beyond = " does not fit a float (|component| <= 3.4028234663852886e+38)";
+  EXPECT_EQ(error_of([&] { w.add_emitter(far, {.pose = {.position = {1e308, 0, 0}}, .rate = 10}); }),
+            "emitter of entity 0 'far' at the entity's pose: position: " + terms +
+                "pose.position (1e+308, 0, 0) = (inf, 0, 0)" + beyond);
+  EXPECT_EQ(error_of([&] { w.add_particle(far, {.position = {1e308, 0, 0}}); }),
+            "particle of entity 0 'far'.position: " + terms + "position (1e+308, 0, 0) = (inf, 0, 0)" + beyond);
+  EXPECT_EQ(error_of([&] { w.add_forcer(far, {.pose = {.position = {-1e38, 0, 0}}}); }),
+            "forcer of entity 0 'far' at the entity's pose: position: " + terms +
+                "pose.position (-1e+38, 0, 0) = (1e+308, 0, 0)" + beyond);
+  pba::RigidBodyDef body;
+  body.pose.position = {0, 2e38, 0};
+  body.shapes.push_back({.shape = pba::ColliderShape::sphere(0.5)});
+  const EntityId near = w.create_entity({.name = "near", .pose = {.position = {0, 2e38, 0}}});
+  EXPECT_EQ(error_of([&] { w.add_rigid_body(near, body); }),
+            "rigid body of entity 1 'near'.pose.position: the entity's position (0, 2e+38, 0) + its rotation * "
+            "pose.position (0, 2e+38, 0) = (0, 4e+38, 0)" + beyond);
+  EXPECT_EQ(w.particles().emitter_count(), 0u);
+  EXPECT_EQ(w.particles().size(), 0u);
+  EXPECT_TRUE(w.forcers().empty());
+  EXPECT_EQ(w.rigid().size(), 0u);
+  // placed where it fits, then the entity moved out: refused at the tick, naming both terms
+  const EntityId hose = w.create_entity({.name = "hose"});
+  w.add_emitter(hose, {.pose = {.position = {-1e38, 0, 0}}, .rate = 10});
+  w.set_pose(hose, {.position = {-1e308, 0, 0}});
+  EXPECT_EQ(error_of([&] { w.step(); }),
+            "emitter of entity 2 'hose' at the entity's pose: position: the entity's position (-1e+308, 0, 0) + its "
+            "rotation * pose.position (-1e+38, 0, 0) = (-1e+308, 0, 0)" + beyond);
+}
+
 TEST(Constraints, DistanceIsKept) {
   World w({.stepper = {.fixed_dt = 1.0 / 120}});
   const EntityId anchor = w.create_entity({.pose = {.position = {0, 2, 0}}});
