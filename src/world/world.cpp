@@ -286,10 +286,11 @@ void World::destroy_entity(EntityId e) {
   for (auto& s : systems_) s->on_destroy(e);
   if (particles_.valid(r.particle)) particles_.destroy(r.particle);
   if (!r.emitter.is_null()) particles_.remove_emitter(r.emitter);
+  // (a body destroyed in rigid() directly is still counted in entity_bodies_: see there)
+  if (!r.body.is_null()) --entity_bodies_;
   if (rigid_.valid(r.body)) {
     rigid_.destroy(r.body);
     body_owner_[r.body.index] = EntityId{};
-    --entity_bodies_;
     changed_between_ticks();
   }
   if (r.collider != kNone) {
@@ -517,8 +518,9 @@ RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
       rigid_.create(d, d.name == r.name && !r.name.empty() ? "rigid body of entity " + std::to_string(e.index) : where);
   if (body_owner_.size() <= id.index) body_owner_.resize(id.index + 1);
   body_owner_[id.index] = e;
+  // an entity whose body was destroyed in rigid() directly is counted already
+  if (r.body.is_null()) ++entity_bodies_;
   r.body = id;
-  ++entity_bodies_;
   reserve_touch_sets();
   // from now on the entity is where its body is (a path's entity stays on its path)
   if (r.kinematic == kNone) r.pose = rigid_.pose(id);
