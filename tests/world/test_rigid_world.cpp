@@ -154,6 +154,37 @@ TEST(RigidComponent, ABodyDestroyedInRigidDirectlyLeavesItsSlotToNoEntity) {
   EXPECT_TRUE(w.rigid().valid(lone));  // and stays when the crate goes
 }
 
+// A dynamic body teleported (set_pose) into a sleeping one: a teleport has no velocity, and a
+// slow awake body does not wake a sleeper, so the sleeper held still like a static body through
+// the next step while the solver pushed the teleported body alone out of it (the sleeper woke a
+// step later, when that push made the other fast). Box2D v3 wakes a sleeping body when a
+// contact with it begins; the sleeper now wakes at the next step and takes its share of the push.
+TEST(RigidComponent, ABodyTeleportedIntoASleepingOneWakesItAtTheNextStep) {
+  World w;
+  ground(w);
+  RigidBodyDef d = box_def({0.5, 0.5, 0.5});
+  d.pose.position = {0, 0.5, 0};
+  const RigidBodyId a = w.add_rigid_body(w.create_entity({.name = "sleeper"}), d);
+  d.pose.position = {5, 0.5, 0};
+  const EntityId mover = w.create_entity({.name = "mover"});
+  const RigidBodyId b = w.add_rigid_body(mover, d);
+  for (int i = 0; i < 600 && (w.rigid().awake(a) || w.rigid().awake(b)); ++i) w.step();
+  ASSERT_FALSE(w.rigid().awake(a));
+  ASSERT_FALSE(w.rigid().awake(b));
+  const Vec3 a0 = w.rigid().pose(a).position;
+  // 0.4 m into the sleeper, from the side
+  w.set_pose(mover, {.position = a0 + Vec3(0.6, 0, 0)});
+  EXPECT_TRUE(w.rigid().awake(b));
+  EXPECT_FALSE(w.rigid().awake(a));  // woken through the next step's pairs, not here
+  w.step();
+  EXPECT_TRUE(w.rigid().awake(a));
+  // pushed apart, both moved: the sleeper is no wall
+  for (int i = 0; i < 120; ++i) w.step();
+  const Vec3 pa = w.rigid().pose(a).position, pb = w.rigid().pose(b).position;
+  EXPECT_GT(pb.x - pa.x, 1 - 0.01) << pa.x << " " << pb.x;
+  EXPECT_LT(pa.x, a0.x - 0.01);
+}
+
 // A moved-from World took a rigid body and stepped it (its RigidBodySystem's contact state had
 // gone with the move and add_rigid_body dereferenced null).
 TEST(RigidComponent, AMovedFromWorldTakesBodiesAgain) {
