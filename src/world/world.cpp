@@ -110,6 +110,10 @@ double waypoint_length(const KinematicDef& d) {
 void KinematicDef::validate(std::string_view where) const {
   if (!is_finite(velocity)) require_finite(velocity, field_path(where, "velocity"));
   if (!is_finite(spin)) require_finite(spin, field_path(where, "spin"));
+  // finite components whose length overflows a double: the spin's rate (and, below, the
+  // circle's axis) is that length, and the path's poses turned NaN
+  if (!std::isfinite(glm::length(spin)))
+    throw Error(field_path(where, "spin") + ": its length overflows a double, got " + format_vec3(spin));
   switch (path) {
     case PathType::Linear:
     case PathType::Motor: break;
@@ -118,9 +122,19 @@ void KinematicDef::validate(std::string_view where) const {
       if (!is_finite(center)) require_finite(center, field_path(where, "center"));
       if (!is_finite(axis)) require_finite(axis, field_path(where, "axis"));
       if (glm::length(axis) == 0) throw Error(field_path(where, "axis") + ": must be non-zero, got (0, 0, 0)");
+      if (!std::isfinite(glm::length(axis)))
+        throw Error(field_path(where, "axis") + ": its length overflows a double, got " + format_vec3(axis));
       if (!(std::isfinite(radius) && (radius) > 0)) require_positive(radius, field_path(where, "radius"));
       if (!std::isfinite(angular_speed)) require_finite(angular_speed, field_path(where, "angular_speed"));
       if (!std::isfinite(phase)) require_finite(phase, field_path(where, "phase"));
+      // the circle's points (within radius of center on each axis) and its speed must be
+      // doubles: each finite input, their sum or product overflowed to inf, and the poses to NaN
+      if (!std::isfinite(std::max({std::abs(center.x), std::abs(center.y), std::abs(center.z)}) + radius))
+        throw Error(field_path(where, "radius") + ": a circle of radius " + format_value(radius) + " about center " +
+                    format_vec3(center) + " reaches beyond a double's range");
+      if (!std::isfinite(radius * angular_speed))
+        throw Error(field_path(where, "angular_speed") + ": radius " + format_value(radius) + " m times angular_speed " +
+                    format_value(angular_speed) + " rad/s, the path's speed, overflows a double");
       break;
     case PathType::Waypoints:
       if (waypoints.size() < 2)
@@ -128,6 +142,17 @@ void KinematicDef::validate(std::string_view where) const {
                     std::to_string(waypoints.size()));
       for (std::size_t i = 0; i < waypoints.size(); ++i)
         require_finite(waypoints[i], field_path(where, "waypoints[" + std::to_string(i) + "]"));
+      // a segment whose length overflows a double (points 1e308 either side of the origin)
+      // gave NaN poses along it
+      for (std::size_t i = 0; i < waypoints.size(); ++i) {
+        const std::size_t j = i + 1 == waypoints.size() ? 0 : i + 1;
+        if ((j == 0 && !loop) || std::isfinite(glm::length(waypoints[j] - waypoints[i]))) continue;
+        throw Error(field_path(where, "waypoints") + ": points " + std::to_string(i) + " " +
+                    format_vec3(waypoints[i]) + " and " + std::to_string(j) + " " + format_vec3(waypoints[j]) +
+                    " are farther apart than a double holds");
+      }
+      if (!std::isfinite(waypoint_length(*this)))
+        throw Error(field_path(where, "waypoints") + ": the path's length overflows a double");
       if (!(std::isfinite(speed) && (speed) > 0)) require_positive(speed, field_path(where, "speed"));
       if (waypoint_length(*this) == 0) throw Error(field_path(where, "waypoints") + ": all points coincide");
       break;
@@ -628,6 +653,14 @@ void World::run_kinematics(double t, double dt) {
     EntityRecord& r = records_[k.owner.index];
     Vec3 v;
     const Pose p = kinematic_pose(k.def, k.start_pose, t + dt - k.start, &v, k.length);
+    // a path that runs out of the doubles (a linear path at 1e308 m/s) stops the world by name,
+    // as a non-finite state does: its entity's pose turned inf or NaN unseen
+    if (!is_finite(p.position) || !is_finite(v) || !is_finite(p.rotation)) {
+      failure_ = "the kinematic path of " + describe(k.owner) + " left the range of a double in the tick to t = " +
+                 format_value(t + dt) + " s (position " + format_vec3(p.position) + ", velocity " + format_vec3(v) +
+                 ")";
+      throw Error("World::tick: " + failure_);
+    }
     r.velocity = v;
     r.angular_velocity = k.def.spin;
     r.pose = p;
