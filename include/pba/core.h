@@ -103,6 +103,12 @@ void require_float(double v, std::string_view where);
 /// Throws Error unless fits_float(v), naming `where` and v as "(x, y, z)": "must be finite"
 /// when a component is NaN or infinite, else "must fit a float".
 void require_float(const Vec3& v, std::string_view where);
+/// Throws Error unless fits_float(sum), for a value stored as float that the caller computed
+/// from finite inputs, which `terms` names with their values ("the entity's position
+/// (1e+308, 0, 0) + pose.position (1e+308, 0, 0)"): "<where>: <terms> = (inf, 0, 0) does not fit
+/// a float (|component| <= 3.4028234663852886e+38)". A sum that overflowed a double reads so
+/// too, where require_float's "must be finite" blamed the value, not its finite inputs.
+void require_float_sum(const Vec3& sum, std::string_view terms, std::string_view where);
 /// Throws Error unless v > 0 and 1 / v is a normal float (v in about [2.9e-39, 8.5e37]):
 /// for a mass stored as its float inverse.
 void require_float_inverse(double v, std::string_view where);

@@ -33,8 +33,17 @@ struct Handle {
 /// The slot table behind a family of handles: allocates indices (reusing freed ones in
 /// LIFO order, deterministically), bumps a slot's generation when it is freed, and checks
 /// handles. Growth allocates; create()/destroy() with a reused slot never do.
-template <class Tag>
+///
+/// A slot issues generations 1, 2, ..., kLastGeneration and is then retired for good: its
+/// last handle destroyed, it is never reused, so a generation never wraps around to one a
+/// kept handle still holds (Box2D v3's 16-bit and Jolt's 8-bit generations wrap, and a
+/// handle kept over 65536 or 256 reuses of its slot names the new object). With 32 bits a
+/// slot retires after 4.3e9 destroys, keeping 5 bytes of the table; `kLastGeneration` is a
+/// parameter so that tests can reach it.
+template <class Tag, std::uint32_t kLastGeneration = std::numeric_limits<std::uint32_t>::max()>
 class HandlePool {
+  static_assert(kLastGeneration >= 1, "a slot issues at least generation 1");
+
  public:
   using Id = Handle<Tag>;
 
@@ -44,36 +53,44 @@ class HandlePool {
     if (!free_.empty()) {
       const std::uint32_t i = free_.back();
       free_.pop_back();
-      alive_[i] = 1;
+      alive_[i] = kAlive;
       ++live_;
       return Id{i, generation_[i]};
     }
     // or append a new slot at generation 1
     generation_.push_back(1);
-    alive_.push_back(1);
+    alive_.push_back(kAlive);
     ++live_;
     return Id{static_cast<std::uint32_t>(generation_.size() - 1), 1};
   }
   /// Frees the handle's slot (throws Error naming `where` if the handle is stale or null).
   void destroy(Id id, std::string_view where) {
     require(id, where);
-    // bump the generation so every copy of `id` becomes stale; skip 0 on wrap-around
-    alive_[id.index] = 0;
-    if (++generation_[id.index] == 0) generation_[id.index] = 1;
-    free_.push_back(id.index);
     --live_;
+    // a slot that issued its last generation retires: never reused, so never wrapped around
+    if (generation_[id.index] == kLastGeneration) {
+      alive_[id.index] = kRetired;
+      return;
+    }
+    // bump the generation so every copy of `id` becomes stale
+    alive_[id.index] = kFree;
+    ++generation_[id.index];
+    free_.push_back(id.index);
   }
   /// True when `id` names a live slot with a matching generation.
   bool valid(Id id) const {
-    return id.index < generation_.size() && alive_[id.index] && generation_[id.index] == id.generation;
+    return id.index < generation_.size() && alive_[id.index] == kAlive && generation_[id.index] == id.generation;
   }
   /// Throws Error naming `where` unless valid(id). A handle carries no mark of the pool that
   /// issued it, so a handle of another pool (another World's or system's) is told apart only
   /// when this pool never issued its index or generation: "<where>: invalid handle (index 7
-  /// was never issued here: a handle of another World or system)"; otherwise the message
-  /// names both possibilities, "<where>: stale handle (index i, generation g; the slot is now
-  /// at generation h[ and free]): destroyed since, or a handle of another World or system";
-  /// or "<where>: null handle".
+  /// was never issued here: a handle of another World or system)", or "(index 0 at generation
+  /// 3 was never issued here, the slot is at generation 1[ and free]: ...)" for a generation
+  /// 0, one beyond the slot's, or a free slot's own (bumped at destroy, not issued until the
+  /// slot is reused); otherwise the message names both possibilities, "<where>: stale handle
+  /// (index i, generation g; the slot is now at generation h[ and free]): destroyed since,
+  /// or a handle of another World or system" (a retired slot: "; the slot is retired, its
+  /// generations used up"); or "<where>: null handle".
   void require(Id id, std::string_view where) const {
     if (valid(id)) return;
     if (id.is_null()) throw Error(std::string(where) + ": null handle");
@@ -81,14 +98,19 @@ class HandlePool {
     if (id.index >= generation_.size())
       throw Error(std::string(where) + ": invalid handle (index " + std::to_string(id.index) +
                   " was never issued here" + kOther);
-    // generations only grow (a wrap-around takes 2^32 destroys of one slot)
-    if (id.generation > generation_[id.index] || id.generation == 0)
+    // generations only grow (a slot retires instead of wrapping around); a free slot's own was
+    // never issued (destroy bumped it past the last one issued); a retired slot issued all
+    const std::uint32_t cur = generation_[id.index];
+    const std::uint8_t state = alive_[id.index];
+    const char* and_free = state == kFree ? " and free" : "";
+    if (id.generation == 0 || id.generation > cur || (id.generation == cur && state == kFree))
       throw Error(std::string(where) + ": invalid handle (index " + std::to_string(id.index) + " at generation " +
                   std::to_string(id.generation) + " was never issued here, the slot is at generation " +
-                  std::to_string(generation_[id.index]) + kOther);
+                  std::to_string(cur) + and_free + kOther);
     throw Error(std::string(where) + ": stale handle (index " + std::to_string(id.index) + ", generation " +
-                std::to_string(id.generation) + "; the slot is now at generation " +
-                std::to_string(generation_[id.index]) + (alive_[id.index] ? "" : " and free") +
+                std::to_string(id.generation) +
+                (state == kRetired ? std::string("; the slot is retired, its generations used up")
+                                   : "; the slot is now at generation " + std::to_string(cur) + and_free) +
                 "): destroyed since, or a handle of another World or system");
   }
   /// The current generation of slot `index` (for tests and debugging).
@@ -97,7 +119,7 @@ class HandlePool {
   std::uint32_t generation_unchecked(std::uint32_t index) const { return generation_[index]; }
   /// Live handles.
   std::size_t size() const { return live_; }
-  /// Slots ever issued (live + free): the table's capacity in use.
+  /// Slots ever issued (live, free and retired): the table's capacity in use.
   std::size_t slots() const { return generation_.size(); }
   /// Reserves room for `n` slots so creating up to n handles never allocates.
   void reserve(std::size_t n) {
@@ -108,6 +130,8 @@ class HandlePool {
 
  private:
   std::vector<std::uint32_t> generation_;
+  // a slot's state: alive, free (on free_, at the generation its next handle gets) or retired
+  static constexpr std::uint8_t kFree = 0, kAlive = 1, kRetired = 2;
   std::vector<std::uint8_t> alive_;
   std::vector<std::uint32_t> free_;
   std::size_t live_ = 0;

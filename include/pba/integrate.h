@@ -136,8 +136,11 @@ double* dense_matrix(DenseSolver& s);  // column-major N x N
 double* dense_rhs(DenseSolver& s);     // N
 void dense_solve(DenseSolver& s);      // rhs <- matrix^-1 rhs (partial-pivot LU)
 
-[[noreturn]] void throw_size_mismatch(std::size_t nx, std::size_t nv);
-[[noreturn]] void throw_step_precision(double dt, std::size_t scalar_bytes);
+// Integrator::step's checks, throwing Error naming the value: dt finite and > 0, t finite, dt
+// in the vectors' precision (`scalar_bytes`: 4 for float, 8 for double) normal with a finite
+// square (a float integrator rounds 1e-50 to 0 and 1e300 to inf; position Verlet divides by
+// it, the Verlets square it), and x and v of the same size (nx, nv)
+void check_step(double t, double dt, std::size_t nx, std::size_t nv, std::size_t scalar_bytes);
 [[noreturn]] void throw_newton_failure(int iterations, double update, double t, double dt);
 [[noreturn]] void throw_too_many_unknowns(std::size_t n_objects, int dim, std::size_t limit);
 [[noreturn]] void throw_singular(double t, double dt);
@@ -262,14 +265,9 @@ class Integrator {
 template <class V>
 template <class Accel>
 void Integrator<V>::step(double t, double dt, std::span<V> x, std::span<V> v, Accel&& accel) {
-  // validate once per step, never per object
-  require_positive(dt, "Integrator::step(dt)");
-  require_finite(t, "Integrator::step(t)");
-  // the step in the vectors' precision: normal, with a finite square (a float integrator
-  // rounds 1e-50 to 0 and 1e300 to inf; position Verlet divides by it, the Verlets square it)
+  // validate once per step, never per object (one call, behind the header)
+  detail::check_step(t, dt, x.size(), v.size(), sizeof(Scalar));
   const Scalar h = static_cast<Scalar>(dt);
-  if (!(std::isnormal(h) && std::isfinite(h * h))) detail::throw_step_precision(dt, sizeof(Scalar));
-  if (x.size() != v.size()) detail::throw_size_mismatch(x.size(), v.size());
   ensure_size(x.size());
   if (x.empty()) return;
   switch (method_) {

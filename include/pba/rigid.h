@@ -419,6 +419,9 @@ class RigidBodySystem {
   void destroy(RigidBodyId id);
   /// True when `id` names a live body.
   bool valid(RigidBodyId id) const { return ids_.valid(id); }
+  /// Throws Error naming `where` unless valid(id): a null, stale or never issued handle, as
+  /// HandlePool::require says it.
+  void require(RigidBodyId id, std::string_view where) const { ids_.require(id, where); }
   /// Live bodies.
   std::size_t size() const { return type_.size(); }
   /// The handle of the i-th live body, i in [0, size()) (the order changes when bodies are destroyed).
@@ -456,8 +459,9 @@ class RigidBodySystem {
   /// Moves a body (validated as RigidBodyDef::pose: a unit rotation, a position within the
   /// float range) and wakes it; a static or kinematic body moved also wakes the sleeping
   /// bodies its shapes' bounds reach before or after the move (what rested on it, what it
-  /// jumped into). A kinematic body moved this way has no velocity: what rests on it is not
-  /// carried by friction (give it a velocity for that).
+  /// jumped into), and a dynamic one those its bounds reach at the next step (what it jumped
+  /// into, as Box2D's contact begin wakes them). A kinematic body moved this way has no
+  /// velocity: what rests on it is not carried by friction (give it a velocity for that).
   void set_pose(RigidBodyId id, const Pose& pose);
   /// Sets the centre of mass velocity and the angular velocity (validated) and wakes the
   /// body; a static body never moves, so on one it only validates (make it kinematic to move it).

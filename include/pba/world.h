@@ -544,7 +544,10 @@ class World {
   std::vector<std::unique_ptr<WorldSystem>> systems_;
   RigidBodySystem rigid_;
   std::vector<EntityId> body_owner_;        // by rigid-body handle slot: the entity (null for mirrors)
-  std::size_t entity_bodies_ = 0;           // bodies that belong to entities
+  // entities that hold a body handle: their bodies, and those destroyed in rigid() directly
+  // (the World cannot see that; counted until the entity gets a new body or is destroyed, so
+  // the count, and the touch sets' room it sizes, stay bounded by the entities)
+  std::size_t entity_bodies_ = 0;
   std::vector<Pose> body_begin_;            // by dense body index: the pose at the start of the tick
   mutable std::vector<Collider> body_colliders_;    // the entities' body shapes this tick
   mutable std::vector<std::uint32_t> body_collider_owner_;  // parallel: the entity index

@@ -94,6 +94,12 @@ void require_float(const Vec3& v, std::string_view where) {
               format_value(std::numeric_limits<float>::max()) + "), got " + format_vec3(v));
 }
 
+void require_float_sum(const Vec3& sum, std::string_view terms, std::string_view where) {
+  if (fits_float(sum)) return;
+  throw Error(std::string(where) + ": " + std::string(terms) + " = " + format_vec3(sum) +
+              " does not fit a float (|component| <= " + format_value(std::numeric_limits<float>::max()) + ")");
+}
+
 void require_float_inverse(double v, std::string_view where) {
   // 1 / v rounded to float must be normal: neither infinite nor flushed toward zero
   const float inv = static_cast<float>(1.0 / v);

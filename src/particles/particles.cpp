@@ -273,7 +273,12 @@ void Forces::validate(std::string_view where) const {
   if (!fits_float(quadratic_drag))
     require_float(quadratic_drag, field_path(where, "quadratic_drag"));
   const Vec3 strongest = glm::abs(wind.velocity) + Vec3(wind.gust);
-  if (!fits_float(strongest)) require_float(strongest, field_path(where, "wind.velocity + wind.gust"));
+  // (both inputs are finite here: a sum past 1.8e308 overflowed to inf, which is no fault of theirs)
+  if (!fits_float(strongest))
+    require_float_sum(strongest,
+                      "|wind.velocity| " + format_vec3(glm::abs(wind.velocity)) + " + wind.gust " +
+                          format_value(wind.gust),
+                      where);
   // (the path is built only on failure: this runs every step, which allocates nothing)
   if (glm::length(strongest) > kMaxParticleSpeed)
     require_particle_speed(glm::length(strongest), field_path(where, "wind.velocity + wind.gust"));

@@ -832,14 +832,30 @@ void RigidContacts::find_new_pairs(RigidBodySystem& s) {
 // A body moving faster than the sleep tolerances (or a moving kinematic one) whose bounds
 // reach a sleeping body wakes its island. A slow awake body does not: it rests on the sleeper
 // as on a static body (waking on any overlap let two slow neighbours wake each other forever).
-// A woken body is still (sleep zeroed its velocity), so one pass wakes all that this step can.
+// A dynamic body that set_pose moved since the last step counts as moving, once: a teleport
+// has no velocity, and one into a sleeping stack left the stack asleep, holding still like a
+// static body while the solver pushed the teleported body alone out of it (Box2D v3 wakes a
+// sleeping body when a contact with it begins). A woken body is still (sleep zeroed its
+// velocity), so one pass wakes all that this step can.
 void RigidContacts::wake_touched(RigidBodySystem& s) {
   const ContactSettings& cs = s.settings_;
-  if (std::find(s.asleep_.begin(), s.asleep_.end(), std::uint8_t{1}) == s.asleep_.end()) return;
+  if (std::find(s.asleep_.begin(), s.asleep_.end(), std::uint8_t{1}) == s.asleep_.end()) {
+    jumped.clear();
+    return;
+  }
+  // the bodies that jumped, by dense index (a slot destroyed since, or taken by another body
+  // since, is skipped, or wakes what that body touches: harmless)
+  const std::size_t n = s.type_.size();
+  if (!jumped.empty()) {
+    if (jumped_flag.size() < n) jumped_flag.resize(n, 0);
+    for (const std::uint32_t slot : jumped)
+      if (slot < s.slot_.size() && s.slot_[slot] < n && s.owner_[s.slot_[slot]] == slot) jumped_flag[s.slot_[slot]] = 1;
+  }
   const double lin2 = cs.sleep_linear * cs.sleep_linear, ang2 = cs.sleep_angular * cs.sleep_angular;
   auto moving = [&](std::uint32_t i) {
     const double v2 = glm::dot(s.v_[i], s.v_[i]), w2 = glm::dot(s.w_[i], s.w_[i]);
-    if (s.type_[i] == BodyType::Dynamic) return !s.asleep_[i] && (v2 > lin2 || w2 > ang2);
+    if (s.type_[i] == BodyType::Dynamic)
+      return !s.asleep_[i] && (v2 > lin2 || w2 > ang2 || (!jumped.empty() && jumped_flag[i]));
     return s.type_[i] == BodyType::Kinematic && (v2 > 0 || w2 > 0);
   };
   for (const ShapePair& p : shape_pairs) {
@@ -848,6 +864,9 @@ void RigidContacts::wake_touched(RigidBodySystem& s) {
     const std::uint32_t sleeper = s.asleep_[a] ? a : b, other = s.asleep_[a] ? b : a;
     if (moving(other) && proxies[p.proxy_a].box.overlaps(proxies[p.proxy_b].box)) s.wake_island(sleeper);
   }
+  for (const std::uint32_t slot : jumped)
+    if (slot < s.slot_.size() && s.slot_[slot] < n) jumped_flag[s.slot_[slot]] = 0;
+  jumped.clear();
 }
 
 // ---------------------------------------------------------------------------------------

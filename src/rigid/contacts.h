@@ -352,6 +352,10 @@ struct RigidContacts {
   std::vector<std::uint64_t> moved_keys, moved_keys_spare;
   std::vector<std::uint32_t> moved_spare;
   std::vector<std::uint8_t> was_moved;        // scratch: 1 for the proxies in `moved`
+  // the handle slots of the dynamic bodies set_pose moved since the last step (wake_touched
+  // wakes the sleepers they jumped into), and wake_touched's flags of them by dense body
+  std::vector<std::uint32_t> jumped;
+  std::vector<std::uint8_t> jumped_flag;
   std::vector<std::int32_t> moved_leaves;     // scratch: the tree leaves of `moved` (find_new_pairs)
   std::vector<PairCache> caches;              // pool
   std::vector<PairCache> caches_spare;        // scratch: the pool in pair order (reorder_caches), as large

@@ -581,7 +581,11 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   com_[i] = apply(pose, com_local_[i]);
   q_[i] = glm::normalize(pose.rotation * principal_[i]);
   wake_island(i);
-  if (!fixed) return;
+  // a dynamic body wakes what it jumped into through next step's pairs (wake_touched)
+  if (!fixed) {
+    contact_state(contacts_).jumped.push_back(id.index);
+    return;
+  }
   for (const RigidShapeDef& d : shapes_[i])
     reach = reach.merged(bounds(d.shape, detail::shape_frame(body_pose(i), d.local)));
   reach = reach.grown(settings_.speculative_distance);

@@ -85,6 +85,19 @@ void require_pose(const Pose& p, std::string_view where) {
     throw Error(field_path(where, "rotation") + ": must be a finite unit quaternion");
 }
 
+// Throws unless `placed`, the position of a component placed at `local` in the entity frame
+// (`entity` * local), fits a float: both are finite, but their sum may not fit (or even
+// overflow a double to inf, which require_float read as "must be finite"), so the message
+// names the two terms ("the entity's position (x, y, z) + its rotation * <local_name> (x, y, z)").
+void require_placed_float(const Pose& entity, const Vec3& local, const Vec3& placed, std::string_view local_name,
+                          std::string_view where) {
+  if (fits_float(placed) || !is_finite(local)) return;  // (a non-finite local is the definition's check)
+  require_float_sum(placed,
+                    "the entity's position " + format_vec3(entity.position) + " + its rotation * " +
+                        std::string(local_name) + " " + format_vec3(entity.rotation * local),
+                    where);
+}
+
 double waypoint_length(const KinematicDef& d) {
   double len = 0;
   for (std::size_t i = 1; i < d.waypoints.size(); ++i) len += glm::length(d.waypoints[i] - d.waypoints[i - 1]);
@@ -97,6 +110,10 @@ double waypoint_length(const KinematicDef& d) {
 void KinematicDef::validate(std::string_view where) const {
   if (!is_finite(velocity)) require_finite(velocity, field_path(where, "velocity"));
   if (!is_finite(spin)) require_finite(spin, field_path(where, "spin"));
+  // finite components whose length overflows a double: the spin's rate (and, below, the
+  // circle's axis) is that length, and the path's poses turned NaN
+  if (!std::isfinite(glm::length(spin)))
+    throw Error(field_path(where, "spin") + ": its length overflows a double, got " + format_vec3(spin));
   switch (path) {
     case PathType::Linear:
     case PathType::Motor: break;
@@ -105,9 +122,19 @@ void KinematicDef::validate(std::string_view where) const {
       if (!is_finite(center)) require_finite(center, field_path(where, "center"));
       if (!is_finite(axis)) require_finite(axis, field_path(where, "axis"));
       if (glm::length(axis) == 0) throw Error(field_path(where, "axis") + ": must be non-zero, got (0, 0, 0)");
+      if (!std::isfinite(glm::length(axis)))
+        throw Error(field_path(where, "axis") + ": its length overflows a double, got " + format_vec3(axis));
       if (!(std::isfinite(radius) && (radius) > 0)) require_positive(radius, field_path(where, "radius"));
       if (!std::isfinite(angular_speed)) require_finite(angular_speed, field_path(where, "angular_speed"));
       if (!std::isfinite(phase)) require_finite(phase, field_path(where, "phase"));
+      // the circle's points (within radius of center on each axis) and its speed must be
+      // doubles: each finite input, their sum or product overflowed to inf, and the poses to NaN
+      if (!std::isfinite(std::max({std::abs(center.x), std::abs(center.y), std::abs(center.z)}) + radius))
+        throw Error(field_path(where, "radius") + ": a circle of radius " + format_value(radius) + " about center " +
+                    format_vec3(center) + " reaches beyond a double's range");
+      if (!std::isfinite(radius * angular_speed))
+        throw Error(field_path(where, "angular_speed") + ": radius " + format_value(radius) + " m times angular_speed " +
+                    format_value(angular_speed) + " rad/s, the path's speed, overflows a double");
       break;
     case PathType::Waypoints:
       if (waypoints.size() < 2)
@@ -115,6 +142,17 @@ void KinematicDef::validate(std::string_view where) const {
                     std::to_string(waypoints.size()));
       for (std::size_t i = 0; i < waypoints.size(); ++i)
         require_finite(waypoints[i], field_path(where, "waypoints[" + std::to_string(i) + "]"));
+      // a segment whose length overflows a double (points 1e308 either side of the origin)
+      // gave NaN poses along it
+      for (std::size_t i = 0; i < waypoints.size(); ++i) {
+        const std::size_t j = i + 1 == waypoints.size() ? 0 : i + 1;
+        if ((j == 0 && !loop) || std::isfinite(glm::length(waypoints[j] - waypoints[i]))) continue;
+        throw Error(field_path(where, "waypoints") + ": points " + std::to_string(i) + " " +
+                    format_vec3(waypoints[i]) + " and " + std::to_string(j) + " " + format_vec3(waypoints[j]) +
+                    " are farther apart than a double holds");
+      }
+      if (!std::isfinite(waypoint_length(*this)))
+        throw Error(field_path(where, "waypoints") + ": the path's length overflows a double");
       if (!(std::isfinite(speed) && (speed) > 0)) require_positive(speed, field_path(where, "speed"));
       if (waypoint_length(*this) == 0) throw Error(field_path(where, "waypoints") + ": all points coincide");
       break;
@@ -273,10 +311,11 @@ void World::destroy_entity(EntityId e) {
   for (auto& s : systems_) s->on_destroy(e);
   if (particles_.valid(r.particle)) particles_.destroy(r.particle);
   if (!r.emitter.is_null()) particles_.remove_emitter(r.emitter);
+  // (a body destroyed in rigid() directly is still counted in entity_bodies_: see there)
+  if (!r.body.is_null()) --entity_bodies_;
   if (rigid_.valid(r.body)) {
     rigid_.destroy(r.body);
     body_owner_[r.body.index] = EntityId{};
-    --entity_bodies_;
     changed_between_ticks();
   }
   if (r.collider != kNone) {
@@ -378,6 +417,7 @@ ParticleId World::add_particle(EntityId e, const ParticleDef& def) {
         " has a rigid body, which moves it; a particle would move it too (give the particle an entity of its own)");
   ParticleDef d = def;
   d.position = r.pose.position + r.pose.rotation * def.position;
+  require_placed_float(r.pose, def.position, d.position, "position", "particle of " + describe(e) + ".position");
   r.particle = particles_.create(d, "particle of " + describe(e));
   ++particle_entities_added_;
   reserve_touch_sets();
@@ -410,6 +450,8 @@ ForcerId World::add_forcer(EntityId e, const Forcer& def) {
   // forcer beyond what the float kernels hold)
   Forcer w = def;
   w.pose = compose(r.pose, def.pose);
+  require_placed_float(r.pose, def.pose.position, w.pose.position, "pose.position",
+                       "forcer of " + describe(e) + " at the entity's pose: position");
   w.validate("forcer of " + describe(e) + " at the entity's pose");
   r.forcer = static_cast<std::uint32_t>(forcers_.size());
   forcers_.push_back({e, def, forcer_ids_.create(e)});
@@ -424,7 +466,8 @@ EmitterId World::add_emitter(EntityId e, const EmitterDef& def) {
   d.pose = compose(r.pose, def.pose);
   // the particles it emits are floats: its pose in the world must fit one
   if (!fits_float(d.pose.position))
-    require_float(d.pose.position, "emitter of " + describe(e) + " at the entity's pose: position");
+    require_placed_float(r.pose, def.pose.position, d.pose.position, "pose.position",
+                         "emitter of " + describe(e) + " at the entity's pose: position");
   r.emitter = particles_.add_emitter(d, "emitter of " + describe(e));
   r.emitter_local = def.pose;
   return r.emitter;
@@ -493,14 +536,16 @@ RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
   RigidBodyDef d = def;
   d.pose = compose(r.pose, def.pose);
   d.pose.rotation = glm::normalize(d.pose.rotation);
+  require_placed_float(r.pose, def.pose.position, d.pose.position, "pose.position", field_path(where, "pose.position"));
   if (d.name.empty()) d.name = r.name;
   // (the system appends the body's name to `where`: the entity's, unless the body has its own)
   const RigidBodyId id =
       rigid_.create(d, d.name == r.name && !r.name.empty() ? "rigid body of entity " + std::to_string(e.index) : where);
   if (body_owner_.size() <= id.index) body_owner_.resize(id.index + 1);
   body_owner_[id.index] = e;
+  // an entity whose body was destroyed in rigid() directly is counted already
+  if (r.body.is_null()) ++entity_bodies_;
   r.body = id;
-  ++entity_bodies_;
   reserve_touch_sets();
   // from now on the entity is where its body is (a path's entity stays on its path)
   if (r.kinematic == kNone) r.pose = rigid_.pose(id);
@@ -518,11 +563,8 @@ RigidBodyId World::rigid_body_id(EntityId e) const {
 }
 
 EntityId World::owner(RigidBodyId id) const {
-  if (!rigid_.valid(id))
-    throw Error("World::owner(RigidBodyId): " + std::string(id.is_null() ? "null" : "stale") +
-                " rigid-body handle (index " + std::to_string(id.index) + ", generation " +
-                std::to_string(id.generation) + ")" +
-                (id.is_null() ? "" : ": destroyed since, or a handle of another World or system"));
+  // null, stale or never issued, as the rigid bodies' handle table tells them apart
+  if (!rigid_.valid(id)) rigid_.require(id, "World::owner(RigidBodyId): rigid body");
   if (!valid(id)) throw Error("World::owner(RigidBodyId): rigid body " + std::to_string(id.index) +
                               " belongs to no entity (it stands for a collider, or was made in rigid() directly)");
   return owner_by_slot(body_owner_, records_, id);
@@ -611,6 +653,14 @@ void World::run_kinematics(double t, double dt) {
     EntityRecord& r = records_[k.owner.index];
     Vec3 v;
     const Pose p = kinematic_pose(k.def, k.start_pose, t + dt - k.start, &v, k.length);
+    // a path that runs out of the doubles (a linear path at 1e308 m/s) stops the world by name,
+    // as a non-finite state does: its entity's pose turned inf or NaN unseen
+    if (!is_finite(p.position) || !is_finite(v) || !is_finite(p.rotation)) {
+      failure_ = "the kinematic path of " + describe(k.owner) + " left the range of a double in the tick to t = " +
+                 format_value(t + dt) + " s (position " + format_vec3(p.position) + ", velocity " + format_vec3(v) +
+                 ")";
+      throw Error("World::tick: " + failure_);
+    }
     r.velocity = v;
     r.angular_velocity = k.def.spin;
     r.pose = p;
@@ -650,7 +700,8 @@ void World::sync(double t, double dt) {
     world_forcers_[i].pose = compose(r.pose, forcers_[i].def.pose);
     // an entity moved out of the floats' range takes its forcer with it: refused by name
     if (!fits_float(world_forcers_[i].pose.position))
-      world_forcers_[i].validate("forcer of " + describe(forcers_[i].owner) + " at the entity's pose");
+      require_placed_float(r.pose, forcers_[i].def.pose.position, world_forcers_[i].pose.position, "pose.position",
+                           "forcer of " + describe(forcers_[i].owner) + " at the entity's pose: position");
   }
   for (std::size_t i = 0; i < records_.size(); ++i) {
     const EntityRecord& r = records_[i];
@@ -658,8 +709,9 @@ void World::sync(double t, double dt) {
     const Pose p = compose(r.pose, r.emitter_local);
     // an entity moved beyond a float's range would emit non-finite particles: refused by name
     if (!fits_float(p.position))
-      require_float(p.position, "emitter of entity " + std::to_string(i) + (r.name.empty() ? "" : " '" + r.name + "'") +
-                                    " at the entity's pose: position");
+      require_placed_float(r.pose, r.emitter_local.position, p.position, "pose.position",
+                           "emitter of entity " + std::to_string(i) + (r.name.empty() ? "" : " '" + r.name + "'") +
+                               " at the entity's pose: position");
     particles_.set_emitter_pose(r.emitter, p);
   }
 }

@@ -174,6 +174,52 @@ TEST(Kinematic, PathsFollowTheirClosedForms) {
               1e-9);
 }
 
+// A path of finite numbers whose poses are not finite: waypoints 2e308 apart, a circle reaching
+// past 1.8e308 or turning at a speed past it, a spin or axis whose length overflows. Each was
+// accepted and gave its entity a NaN or inf pose with no error (add_kinematic evaluates the path
+// at its start); now each is refused by field. A linear path that runs out of the doubles in time
+// stops the world at that tick naming its entity, as a non-finite state does (its entity's pose
+// turned inf unseen).
+TEST(Kinematic, APathBeyondTheDoublesIsRefusedByNameNeverANaNPose) {
+  World w;
+  const EntityId e = w.create_entity({.name = "mover"});
+  auto refused = [&](const pba::KinematicDef& d) {
+    const std::string m = error_of([&] { w.add_kinematic(e, d); });
+    EXPECT_TRUE(w.kinematic_id(e).is_null()) << m;
+    EXPECT_TRUE(pba::is_finite(w.pose(e).position)) << m;
+    return m;
+  };
+  using pba::PathType;
+  EXPECT_EQ(refused({.path = PathType::Waypoints, .waypoints = {{-1e308, 0, 0}, {1e308, 0, 0}}, .loop = false}),
+            "kinematic of entity 0 'mover'.waypoints: points 0 (-1e+308, 0, 0) and 1 (1e+308, 0, 0) are farther "
+            "apart than a double holds");
+  EXPECT_EQ(refused({.path = PathType::Circular, .center = {1e308, 0, 0}, .radius = 1e308}),
+            "kinematic of entity 0 'mover'.radius: a circle of radius 1e+308 about center (1e+308, 0, 0) reaches "
+            "beyond a double's range");
+  EXPECT_EQ(refused({.path = PathType::Circular, .radius = 1e300, .angular_speed = 1e10}),
+            "kinematic of entity 0 'mover'.angular_speed: radius 1e+300 m times angular_speed 1e+10 rad/s, the path's "
+            "speed, overflows a double");
+  EXPECT_EQ(refused({.path = PathType::Circular, .axis = {1e308, 1e308, 0}}),
+            "kinematic of entity 0 'mover'.axis: its length overflows a double, got (1e+308, 1e+308, 0)");
+  EXPECT_EQ(refused({.path = PathType::Motor, .spin = {0, 1e308, 1e308}}),
+            "kinematic of entity 0 'mover'.spin: its length overflows a double, got (0, 1e+308, 1e+308)");
+  // the largest that fit are taken
+  w.add_kinematic(e, {.path = PathType::Circular, .center = {1e307, 0, 0}, .radius = 1e307, .angular_speed = 1});
+  w.step();
+  EXPECT_TRUE(pba::is_finite(w.pose(e).position));
+  // a path that leaves the doubles in time stops the world at that tick
+  const EntityId runaway = w.create_entity({.name = "runaway", .pose = {.position = {1.79e308, 0, 0}}});
+  w.add_kinematic(runaway, {.path = PathType::Linear, .velocity = {1e308, 0, 0}});
+  const std::string m = error_of([&] { w.step(); });
+  EXPECT_EQ(m.rfind("World::tick: the kinematic path of entity 1 'runaway' left the range of a double in the tick "
+                    "to t = 0.03333",
+                    0),
+            0u)
+      << m;
+  EXPECT_NE(m.find("position (inf, 0, 0)"), std::string::npos) << m;
+  EXPECT_NE(error_of([&] { w.step(); }).find("the simulation stopped"), std::string::npos);
+}
+
 TEST(Kinematic, MovingColliderLiftsAParticle) {
   World w({.stepper = {.fixed_dt = 1.0 / 120}});
   const EntityId lift = w.create_entity({.name = "lift"});
@@ -309,6 +355,44 @@ TEST(Emitters, AnEntityBeyondTheFloatsTakesItsEmitterThereAndIsRefused) {
   }
   EXPECT_NE(msg.find("moved hose"), std::string::npos) << msg;
   EXPECT_NE(msg.find("float"), std::string::npos) << msg;
+}
+
+// A component placed at a finite offset from a finite entity pose whose sum overflows a double
+// (1e308 + 1e308: an emitter's or a particle's offset is checked once placed) was refused as
+// "must be finite, got (inf, 0, 0)", blaming a value the caller never gave: the message names
+// both terms and says their sum does not fit a float. So too for a finite sum beyond a float
+// (a forcer's, a body's, an emitter's whose entity moved out there, at the next tick).
+TEST(Components, APlacementWhoseSumOverflowsNamesBothTerms) {
+  World w;
+  const EntityId far = w.create_entity({.name = "far", .pose = {.position = {1e308, 0, 0}}});
+  const std::string terms = "the entity's position (1e+308, 0, 0) + its rotation * ";
+  const std::string beyond = " does not fit a float (|component| <= 3.4028234663852886e+38)";
+  EXPECT_EQ(error_of([&] { w.add_emitter(far, {.pose = {.position = {1e308, 0, 0}}, .rate = 10}); }),
+            "emitter of entity 0 'far' at the entity's pose: position: " + terms +
+                "pose.position (1e+308, 0, 0) = (inf, 0, 0)" + beyond);
+  EXPECT_EQ(error_of([&] { w.add_particle(far, {.position = {1e308, 0, 0}}); }),
+            "particle of entity 0 'far'.position: " + terms + "position (1e+308, 0, 0) = (inf, 0, 0)" + beyond);
+  EXPECT_EQ(error_of([&] { w.add_forcer(far, {.pose = {.position = {-1e38, 0, 0}}}); }),
+            "forcer of entity 0 'far' at the entity's pose: position: " + terms +
+                "pose.position (-1e+38, 0, 0) = (1e+308, 0, 0)" + beyond);
+  pba::RigidBodyDef body;
+  body.pose.position = {0, 2e38, 0};
+  body.shapes.push_back({.shape = pba::ColliderShape::sphere(0.5)});
+  const EntityId near = w.create_entity({.name = "near", .pose = {.position = {0, 2e38, 0}}});
+  EXPECT_EQ(error_of([&] { w.add_rigid_body(near, body); }),
+            "rigid body of entity 1 'near'.pose.position: the entity's position (0, 2e+38, 0) + its rotation * "
+            "pose.position (0, 2e+38, 0) = (0, 4e+38, 0)" + beyond);
+  EXPECT_EQ(w.particles().emitter_count(), 0u);
+  EXPECT_EQ(w.particles().size(), 0u);
+  EXPECT_TRUE(w.forcers().empty());
+  EXPECT_EQ(w.rigid().size(), 0u);
+  // placed where it fits, then the entity moved out: refused at the tick, naming both terms
+  const EntityId hose = w.create_entity({.name = "hose"});
+  w.add_emitter(hose, {.pose = {.position = {-1e38, 0, 0}}, .rate = 10});
+  w.set_pose(hose, {.position = {-1e308, 0, 0}});
+  EXPECT_EQ(error_of([&] { w.step(); }),
+            "emitter of entity 2 'hose' at the entity's pose: position: the entity's position (-1e+308, 0, 0) + its "
+            "rotation * pose.position (-1e+38, 0, 0) = (-1e+308, 0, 0)" + beyond);
 }
 
 TEST(Constraints, DistanceIsKept) {
