@@ -221,8 +221,31 @@ struct Lanes {
   }
 };
 
-// the transpose of 8 rows of 8 floats or doubles (core/lanes.h)
-PBA_LANES void transpose(v8f r[8]) { pba::detail::lanes::transpose8x8(r); }
+// the transpose of 8 rows of 8 floats, in the shuffles AVX2 has: unpcklps and unpckhps of row
+// pairs, shufps of those, vperm2f128 of the 128-bit halves (24 shuffles). core/lanes.h's
+// transpose8x8 pairs the rows' even and odd elements first, one instruction each for doubles
+// (AVX-512's vunpcklpd) but two for floats (vpermilps and vblendps: 32 shuffles); the passes
+// transpose each body row gathered and each change written back, 12 times a half-block and
+// substep in the four-point pair. Only data moves: the same numbers as transpose8x8's
+PBA_LANES void transpose(v8f r[8]) {
+  v8f t[8], u[8];
+  for (int i = 0; i < 4; ++i) {
+    t[2 * i] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v8i{0, 8, 1, 9, 4, 12, 5, 13});
+    t[2 * i + 1] = __builtin_shuffle(r[2 * i], r[2 * i + 1], v8i{2, 10, 3, 11, 6, 14, 7, 15});
+  }
+  // u[4 h + j]: rows 4 h to 4 h + 3 of columns j (low half) and j + 4 (high half)
+  for (int h = 0; h < 2; ++h) {
+    const v8f* s = t + 4 * h;
+    u[4 * h] = __builtin_shuffle(s[0], s[2], v8i{0, 1, 8, 9, 4, 5, 12, 13});
+    u[4 * h + 1] = __builtin_shuffle(s[0], s[2], v8i{2, 3, 10, 11, 6, 7, 14, 15});
+    u[4 * h + 2] = __builtin_shuffle(s[1], s[3], v8i{0, 1, 8, 9, 4, 5, 12, 13});
+    u[4 * h + 3] = __builtin_shuffle(s[1], s[3], v8i{2, 3, 10, 11, 6, 7, 14, 15});
+  }
+  for (int j = 0; j < 4; ++j) {
+    r[j] = __builtin_shuffle(u[j], u[j + 4], v8i{0, 1, 2, 3, 8, 9, 10, 11});
+    r[j + 4] = __builtin_shuffle(u[j], u[j + 4], v8i{4, 5, 6, 7, 12, 13, 14, 15});
+  }
+}
 
 // ... in 16 floats, of the two halves apart (rows i and i + 8 share vector i)
 PBA_LANES void transpose(v16f r[8]) {
@@ -623,10 +646,9 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
       iscale[k] = from->iscale[k], negm[k] = from->negm[k], skip[k] = from->skip[k];
     }
   } else if constexpr (kPart == kFinish) {
-    for (int k = 0; k < P; ++k) {
-      lambda[k] = mid->lambda[k], largest[k] = mid->largest[k], bias[k] = mid->bias[k];
-      iscale[k] = mid->iscale[k], negm[k] = mid->negm[k], skip[k] = mid->skip[k];
-    }
+    // (the sweeps' bias, scales and skips only for a landing's rounds, read from `mid` there:
+    // copied here, GCC loaded and stored all sixteen each finish, some 40 instructions)
+    for (int k = 0; k < P; ++k) lambda[k] = mid->lambda[k], largest[k] = mid->largest[k];
   }
   V mscale[P];
   const V ma = L(c.ma), mb = L(c.mb);
@@ -855,8 +877,13 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
         state.dwa[i] = dwa[i], state.dwb[i] = dwb[i], state.impulse[i] = impulse[i];
       }
       for (int k = 0; k < P; ++k) {
-        state.lambda[k] = lambda[k], state.largest[k] = largest[k], state.bias[k] = bias[k];
-        state.iscale[k] = iscale[k], state.negm[k] = negm[k], state.skip[k] = skip[k];
+        state.lambda[k] = lambda[k], state.largest[k] = largest[k];
+        if constexpr (kPart == kFinish) {
+          state.bias[k] = mid->bias[k], state.iscale[k] = mid->iscale[k];
+          state.negm[k] = mid->negm[k], state.skip[k] = mid->skip[k];
+        } else {
+          state.bias[k] = bias[k], state.iscale[k] = iscale[k], state.negm[k] = negm[k], state.skip[k] = skip[k];
+        }
       }
       state.tj[0] = tj[0], state.tj[1] = tj[1], state.total = total, state.impact = impact;
       if constexpr (kYmm && P == 1) {
