@@ -609,21 +609,33 @@ void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f, const Vec3& p) 
   if (!is_finite(f)) require_finite(f, describe(i) + " apply_force force");
   if (!is_finite(p)) require_finite(p, describe(i) + " apply_force point");
   if (type_[i] != BodyType::Dynamic) return;
-  force_[i] += f;
-  torque_[i] += glm::cross(p - com_[i], f);
+  // finite parts can sum, or turn about a far point, to an infinite force or torque: refused
+  // here by name (the step would stop the system with the body 'non-finite', naming no force)
+  const Vec3 force = force_[i] + f, torque = torque_[i] + glm::cross(p - com_[i], f);
+  if (!is_finite(force)) require_finite(force, describe(i) + " apply_force: the force summed for the next step");
+  if (!is_finite(torque)) require_finite(torque, describe(i) + " apply_force: the torque summed for the next step");
+  force_[i] = force, torque_[i] = torque;
   wake_island(i);
 }
 
 void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f) {
   const std::size_t i = index(id, "RigidBodySystem::apply_force");
   if (!is_finite(f)) require_finite(f, describe(i) + " apply_force force");
-  if (type_[i] == BodyType::Dynamic) force_[i] += f, wake_island(i);
+  if (type_[i] != BodyType::Dynamic) return;
+  const Vec3 force = force_[i] + f;
+  if (!is_finite(force)) require_finite(force, describe(i) + " apply_force: the force summed for the next step");
+  force_[i] = force;
+  wake_island(i);
 }
 
 void RigidBodySystem::apply_torque(RigidBodyId id, const Vec3& t) {
   const std::size_t i = index(id, "RigidBodySystem::apply_torque");
   if (!is_finite(t)) require_finite(t, describe(i) + " apply_torque torque");
-  if (type_[i] == BodyType::Dynamic) torque_[i] += t, wake_island(i);
+  if (type_[i] != BodyType::Dynamic) return;
+  const Vec3 torque = torque_[i] + t;
+  if (!is_finite(torque)) require_finite(torque, describe(i) + " apply_torque: the torque summed for the next step");
+  torque_[i] = torque;
+  wake_island(i);
 }
 
 void RigidBodySystem::apply_impulse(RigidBodyId id, const Vec3& j, const Vec3& p) {

@@ -364,4 +364,43 @@ TEST(RigidParamsMixed, WhatANewUserTriesRestsWhereStaticsSays) {
   }
 }
 
+// ---------------------------------------------------------------------------------------
+// bad input
+
+// Forces and torques are checked finite one by one, but their sum for the next step, and a
+// finite force's moment about a far point, can overflow: 1e308 N applied twice, 1e200 N at
+// 1e200 m. Those were taken, and the step then stopped the system for good with the body
+// "became non-finite", naming no force. Now the call is refused by name, and the body and the
+// system go on as before it (the step runs: free fall, g dt).
+TEST(RigidParamsBadInput, AForceOrTorqueSummingPastTheDoublesIsRefusedByName) {
+  RigidBodySystem s;
+  const auto b = s.create({.name = "crate", .pose = {{0, 5, 0}}, .shapes = {{.shape = ColliderShape::box(Vec3(0.5))}}});
+  auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string twice = message([&] {
+    s.apply_force(b, {1e308, 0, 0});
+    s.apply_force(b, {1e308, 0, 0});
+  });
+  EXPECT_NE(twice.find("'crate' apply_force: the force summed for the next step: must be finite"), std::string::npos) << twice;
+  const std::string moment = message([&] { s.apply_force(b, {1e200, 0, 0}, {0, 1e200, 0}); });
+  EXPECT_NE(moment.find("'crate' apply_force: the torque summed for the next step: must be finite"), std::string::npos) << moment;
+  const std::string torque = message([&] {
+    s.apply_torque(b, {0, 1e308, 0});
+    s.apply_torque(b, {0, 1e308, 0});
+  });
+  EXPECT_NE(torque.find("'crate' apply_torque: the torque summed for the next step: must be finite"), std::string::npos) << torque;
+  // the first 1e308 N and 1e308 N m were taken (finite): cancelled, the box falls freely
+  s.apply_force(b, {-1e308, 0, 0});
+  s.apply_torque(b, {0, -1e308, 0});
+  ASSERT_NO_THROW(s.step(1.0 / 60, kGravity));
+  EXPECT_NEAR(s.linear_velocity(b).y, -kG / 60, 1e-12);
+  EXPECT_EQ(s.linear_velocity(b).x, 0);
+}
+
 }  // namespace pba
