@@ -284,7 +284,10 @@ struct ContactSettings {
   bool sleep = true;
   double sleep_linear = 0.05;    ///< m/s, finite and >= 0 (Box2D's linear sleep tolerance)
   double sleep_angular = 0.0349; ///< rad/s (2 degrees/s), finite and >= 0
-  double time_to_sleep = 0.5;    ///< s, finite and >= 0
+  /// s, finite and >= 0: how long an island must rest to fall asleep; a window shorter than
+  /// the step (0 included) is the step's: a body then rests when its mean speed over the step
+  /// is within the tolerances
+  double time_to_sleep = 0.5;
 
   /// Throws Error naming `where` and the bad field.
   void validate(std::string_view where) const;

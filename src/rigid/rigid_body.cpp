@@ -614,21 +614,33 @@ void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f, const Vec3& p) 
   if (!is_finite(f)) require_finite(f, describe(i) + " apply_force force");
   if (!is_finite(p)) require_finite(p, describe(i) + " apply_force point");
   if (type_[i] != BodyType::Dynamic) return;
-  force_[i] += f;
-  torque_[i] += glm::cross(p - com_[i], f);
+  // finite parts can sum, or turn about a far point, to an infinite force or torque: refused
+  // here by name (the step would stop the system with the body 'non-finite', naming no force)
+  const Vec3 force = force_[i] + f, torque = torque_[i] + glm::cross(p - com_[i], f);
+  if (!is_finite(force)) require_finite(force, describe(i) + " apply_force: the force summed for the next step");
+  if (!is_finite(torque)) require_finite(torque, describe(i) + " apply_force: the torque summed for the next step");
+  force_[i] = force, torque_[i] = torque;
   wake_island(i);
 }
 
 void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f) {
   const std::size_t i = index(id, "RigidBodySystem::apply_force");
   if (!is_finite(f)) require_finite(f, describe(i) + " apply_force force");
-  if (type_[i] == BodyType::Dynamic) force_[i] += f, wake_island(i);
+  if (type_[i] != BodyType::Dynamic) return;
+  const Vec3 force = force_[i] + f;
+  if (!is_finite(force)) require_finite(force, describe(i) + " apply_force: the force summed for the next step");
+  force_[i] = force;
+  wake_island(i);
 }
 
 void RigidBodySystem::apply_torque(RigidBodyId id, const Vec3& t) {
   const std::size_t i = index(id, "RigidBodySystem::apply_torque");
   if (!is_finite(t)) require_finite(t, describe(i) + " apply_torque torque");
-  if (type_[i] == BodyType::Dynamic) torque_[i] += t, wake_island(i);
+  if (type_[i] != BodyType::Dynamic) return;
+  const Vec3 torque = torque_[i] + t;
+  if (!is_finite(torque)) require_finite(torque, describe(i) + " apply_torque: the torque summed for the next step");
+  torque_[i] = torque;
+  wake_island(i);
 }
 
 void RigidBodySystem::apply_impulse(RigidBodyId id, const Vec3& j, const Vec3& p) {
@@ -1061,8 +1073,15 @@ void RigidBodySystem::update_sleep(double dt) {
   // its mean speed exceeds them); an oscillation about a pose now rests when its amplitude is
   // within half that distance, where the instantaneous speeds of a slowly rocking column (the
   // top of a 10-box tower swaying at 0.1 m/s, 1 cm either way) kept it awake for seconds
-  const double reach = settings_.sleep_linear * settings_.time_to_sleep;
-  const double cos_turn = std::cos(0.5 * std::min(settings_.sleep_angular * settings_.time_to_sleep, kPi));
+  // The window is at least the step that measures it: with time_to_sleep under dt (0 is
+  // valid) a window of time_to_sleep allowed no motion at all, every body failed it, and its
+  // slow time of 0 still reached time_to_sleep, so every awake body fell asleep at the end of
+  // each step, a ball in free fall or a box sliding at 3 m/s frozen where it was. Over one
+  // step the window's test is the mean speed's against the tolerances, and a body must pass
+  // it once to sleep (its slow time is then dt). Windows of a step or longer are as before.
+  const double window = std::max(settings_.time_to_sleep, dt);
+  const double reach = settings_.sleep_linear * window;
+  const double cos_turn = std::cos(0.5 * std::min(settings_.sleep_angular * window, kPi));
   // Far out the window cannot see motion: a centre whose coordinate reaches `far` has doubles
   // spaced at least a substep's motion at the linear tolerance apart (2^-52 of it), so a
   // slower substep rounds away (at y = 1e17 m they are 16 m apart: a ball falling there
@@ -1127,7 +1146,7 @@ void RigidBodySystem::update_sleep(double dt) {
   for (std::size_t i = 0; on && i < n; ++i) {
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     const std::uint32_t r = parent_[i];
-    if (island_slow_[r] < settings_.time_to_sleep) continue;
+    if (island_slow_[r] < window) continue;
     asleep_[i] = 1;
     v_[i] = Vec3(0);
     w_[i] = Vec3(0);
