@@ -71,7 +71,7 @@ struct FieldKey {
 // The fields one solver takes and the other ignores: given for the other solver they are
 // refused by path, with the field that solver takes instead (they used to be read and
 // dropped without a word).
-void refuse_other_solvers_fields(const Node& n, SoftSolver solver) {
+void refuse_other_solvers_fields(const Node& n, SoftSolver solver, bool spring) {
   const bool xpbd = solver == SoftSolver::Xpbd;
   // the solver's single field: an integrator (mass-spring), iterations (XPBD)
   const char* single = xpbd ? "integrator" : "iterations";
@@ -82,13 +82,15 @@ void refuse_other_solvers_fields(const Node& n, SoftSolver solver) {
                              "\"substeps\" with its \"integrator\"");
   // each kind's stiffness (mass-spring, N/m) or compliance (XPBD, m/N), its inverse
   const std::string mine = xpbd ? "_compliance" : "_stiffness", other = xpbd ? "_stiffness" : "_compliance";
-  for (const char* kind : {"stretch", "shear", "bend", "volume"})
+  // (a spring's stretch under either solver is its "stiffness", N/m)
+  for (const std::string kind : {"stretch", "shear", "bend", "volume"})
     if (const std::string key = kind + other; n.has(key.c_str()))
       n.at(key.c_str())
           .fail(std::string(xpbd ? "a stiffness (N/m) is the mass-spring solver's (\"solver\": \"mass-spring\")"
                                  : "a compliance (m/N) is the XPBD solver's (\"solver\": \"xpbd\")") +
-                "; the " + (xpbd ? "XPBD" : "mass-spring") + " solver takes \"" + kind + mine + "\", its inverse (" +
-                (xpbd ? "m/N" : "N/m") + ")");
+                "; the " + (xpbd ? "XPBD" : "mass-spring") + " solver takes " +
+                (spring && kind == "stretch" ? std::string("a spring's \"stiffness\" (N/m)")
+                                             : "\"" + kind + mine + "\", its inverse (" + (xpbd ? "m/N" : "N/m") + ")"));
 }
 
 }  // namespace
@@ -137,14 +139,15 @@ void read_soft_body(const Node& n, World& w) {
     try {
       d = jelly_settings(j, material, w.stepper().settings().fixed_dt);
     } catch (const Error& e) {
-      fail_by_field(n, e, {{"jelly_settings: JellyDef.size", "size"}});
+      // size, cells and material decide it together (the message names them): the item
+      throw Error(n.where() + ": " + e.what());
     }
   }
   d.forces.gravity = w.gravity();
   d.forces.wind = w.particles().forces().wind;
   d.solver = n.choice<SoftSolver>("solver", {{"xpbd", SoftSolver::Xpbd}, {"mass-spring", SoftSolver::MassSpring}},
                                   d.solver);
-  refuse_other_solvers_fields(n, d.solver);
+  refuse_other_solvers_fields(n, d.solver, type == Type::Spring);
   // a spring's stiffness sets its compliance (1 / k)
   if (type == Type::Spring && n.has("stretch_compliance"))
     n.at("stretch_compliance").fail("a spring's compliance is 1 / \"stiffness\" (N/m): give its stiffness");

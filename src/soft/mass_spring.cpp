@@ -2,7 +2,10 @@
 // held aerodynamic accelerations and a velocity-proportional damping force, integrated
 // by pba::Integrator<Vec3> with any pba::Method (double precision), then velocity-level
 // collisions. The float columns mirror the double state after each step.
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 #include "soft_impl.h"
 
@@ -114,45 +117,103 @@ void jacobian(const SoftBody::Impl& s, double t, std::span<const Vec3> x, std::s
 
 }  // namespace
 
-// Why an explicit integrator blew up, in the settings' terms: every stiffness and the
-// damping whose stiffest single spring is already past the method's stability bound at
-// the substep h (docs/soft-bodies.md, "Why stiff springs are hard": omega h < 2 for
-// semi-implicit Euler and both Verlets, 2 sqrt 2 for RK4 on the imaginary axis; a dashpot
-// alone, c W h < 2, and 2.78 for RK4 on the real axis; explicit Euler grows every swing).
-// A network's fastest mode is faster than its stiffest spring, so an empty answer does not
-// make it stable. The failure path only: it builds strings.
+// One damped spring's amplification under each explicit method: the kernels of
+// include/pba/integrate.h on x'' = -omega^2 x - (z / h) x', written in x and u = h v (and,
+// for position Verlet, its history D = x_n - x_{n-1} and cached A = a_n h^2) so that p =
+// (omega h)^2 and z are all that is left. Applying the step to each unit state gives the
+// matrix's columns; ||M^(2^j)||^(1/2^j) then gives its spectral radius.
+double detail::mass_spring_radius(Method m, double p, double z) {
+  if (m == Method::ImplicitEuler) return 0;
+  if (!(std::isfinite(p) && std::isfinite(z))) return std::numeric_limits<double>::infinity();
+  using State = std::array<double, 3>;
+  const auto acc = [p, z](double x, double u) { return -p * x - z * u; };  // a h^2
+  const auto step = [&](State s) -> State {
+    const double x = s[0], u = s[1];
+    switch (m) {
+      case Method::ExplicitEuler: return {x + u, u + acc(x, u), 0};
+      case Method::SemiImplicitEuler: {
+        const double un = u + acc(x, u);
+        return {x + un, un, 0};
+      }
+      case Method::PositionVerlet: {  // s = (x_n, D_n, A_n); the predictor D_{n+1} + A_n / 2
+        const double xn = x + u + s[2], dn = u + s[2];
+        return {xn, dn, acc(xn, dn + s[2] / 2)};
+      }
+      case Method::VelocityVerlet: {
+        const double a0 = acc(x, u), xn = x + u + a0 / 2, a1 = acc(xn, u + a0);
+        return {xn, u + (a0 + a1) / 2, 0};
+      }
+      default: {  // RK4: the four stages as the kernel takes them
+        const double a1 = acc(x, u), x2 = x + u / 2, u2 = u + a1 / 2, a2 = acc(x2, u2);
+        const double x3 = x + u2 / 2, u3 = u + a2 / 2, a3 = acc(x3, u3);
+        const double x4 = x + u3, u4 = u + a3, a4 = acc(x4, u4);
+        return {x + (u + 2 * u2 + 2 * u3 + u4) / 6, u + (a1 + 2 * a2 + 2 * a3 + a4) / 6, 0};
+      }
+    }
+  };
+  double M[3][3];
+  for (int c = 0; c < 3; ++c) {
+    State e{0, 0, 0};
+    e[c] = 1;
+    const State col = step(e);
+    for (int r = 0; r < 3; ++r) M[r][c] = col[r];
+  }
+  // repeated squaring with the norm taken out each time: log ||M^(2^j)|| / 2^j
+  double logr = 0, scale = 1;
+  for (int j = 0; j < 48; ++j) {
+    double norm = 0;
+    for (auto& row : M)
+      for (double e : row) norm = std::isfinite(e) ? std::max(norm, std::abs(e)) : std::abs(e) + e;  // nan stays
+    if (!std::isfinite(norm)) return std::numeric_limits<double>::infinity();  // a huge p or z overflowed
+    if (norm == 0) return 0;
+    logr += std::log(norm) * scale;
+    double S[3][3] = {};
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k) S[r][c] += (M[r][k] / norm) * (M[k][c] / norm);
+    std::copy(&S[0][0], &S[0][0] + 9, &M[0][0]);
+    scale /= 2;
+  }
+  return std::exp(logr);
+}
+
+// Why an explicit integrator blew up, in the settings' terms: for each kind's stiffest
+// spring (the largest w_a + w_b) the method's amplification of the spring and its damper
+// together (detail::mass_spring_radius; docs/soft-bodies.md, "Why stiff springs are hard").
+// Above 1 the settings are named: the stiffness, the damping, or both when neither alone
+// is past the bound. A network's fastest mode is faster than its stiffest spring, so an
+// empty answer does not make it stable. The failure path only: it builds strings.
 std::string SoftBody::Impl::mass_spring_instability(double h) const {
   if (def.solver != SoftSolver::MassSpring || def.method == Method::ImplicitEuler) return {};
-  const bool rk4 = def.method == Method::Rk4;
-  const double osc = rk4 ? 2 * std::sqrt(2.0) : 2, damp = rk4 ? 2.785 : 2;
+  constexpr double kGrows = 1 + 1e-9;  // round-off in a radius of exactly 1
   // the largest w_a + w_b among the intact springs of each kind
-  double wmax[3] = {0, 0, 0}, wall = 0;
-  for (std::size_t k = 0; k < ca.size(); ++k) {
-    if (broken[k]) continue;
-    const double wsum = double(w[ca[k]]) + double(w[cb[k]]);
-    wmax[kind[k]] = std::max(wmax[kind[k]], wsum);
-    wall = std::max(wall, wsum);
-  }
+  double wmax[3] = {0, 0, 0};
+  for (std::size_t k = 0; k < ca.size(); ++k)
+    if (!broken[k]) wmax[kind[k]] = std::max(wmax[kind[k]], double(w[ca[k]]) + double(w[cb[k]]));
   std::string why;
   const char* names[3] = {"stretch_stiffness", "shear_stiffness", "bend_stiffness"};
+  const double c = def.spring_damping;
   for (int k = 0; k < 3; ++k) {
     const double stiff = detail::kind_stiffness(def, static_cast<SoftConstraintKind>(k));
-    const double wh = std::sqrt(stiff * wmax[k]) * h;
-    if (!(stiff > 0 && wmax[k] > 0)) continue;
-    if (def.method == Method::ExplicitEuler || !(wh < osc))
-      why += std::string(why.empty() ? "" : "; ") + "SoftBodyDef." + names[k] + " = " + format_value(stiff) +
-             " N/m gives its stiffest spring omega h = sqrt(k (w_a + w_b)) h = " + format_value(wh) +
-             (def.method == Method::ExplicitEuler ? " (explicit Euler is unstable at any omega h > 0)"
-                                                  : ", past " + std::string(name(def.method)) +
-                                                        "'s stability bound " + format_value(osc));
+    const double wh = std::sqrt(stiff * wmax[k]) * h, z = c * wmax[k] * h;
+    if (!(wmax[k] > 0 && (stiff > 0 || c > 0))) continue;
+    const double r = detail::mass_spring_radius(def.method, wh * wh, z);
+    if (!(r > kGrows)) continue;
+    // the spring alone or the damper alone past the bound names that one; else both
+    const bool spring = detail::mass_spring_radius(def.method, wh * wh, 0) > kGrows;
+    const bool damper = detail::mass_spring_radius(def.method, 0, z) > kGrows;
+    const bool say_k = stiff > 0 && (spring || !damper), say_c = c > 0 && (damper || !spring);
+    why += std::string(why.empty() ? "" : "; ");
+    if (say_k) why += "SoftBodyDef." + std::string(names[k]) + " = " + format_value(stiff) + " N/m";
+    if (say_k && say_c) why += " with ";
+    if (say_c) why += "SoftBodyDef.spring_damping = " + format_value(c) + " N s/m";
+    why += std::string(say_k && say_c ? " give" : " gives") + " its stiffest spring omega h = sqrt(k (w_a + w_b)) h = " +
+           format_value(wh) + " and c (w_a + w_b) h = " + format_value(z) + ": an amplification of " + format_value(r) +
+           " per substep, past " + std::string(name(def.method)) + "'s stability bound 1";
   }
-  if (const double cwh = def.spring_damping * wall * h; !(cwh < damp) && wall > 0 && def.spring_damping > 0)
-    why += std::string(why.empty() ? "" : "; ") + "SoftBodyDef.spring_damping = " + format_value(def.spring_damping) +
-           " N s/m gives c (w_a + w_b) h = " + format_value(cwh) + ", past the explicit dashpot's stability bound " +
-           format_value(damp);
   if (why.empty()) return why;
   return why + " at the substep h = " + format_value(h) +
-         " s: use more substeps, softer springs, implicit Euler or the XPBD solver";
+         " s: use more substeps, softer springs, less damping, implicit Euler or the XPBD solver";
 }
 
 void SoftBody::Impl::step_mass_spring(double t, double dt) {

@@ -168,6 +168,13 @@ inline double kind_stiffness(const SoftBodyDef& d, SoftConstraintKind k) {
   return v[static_cast<int>(k)];
 }
 
+/// The spectral radius (dimensionless, per substep) of an explicit mass-spring method's
+/// amplification matrix on one damped spring, x'' = -omega^2 x - (z / h) x', with
+/// p = (omega h)^2 = k (w_a + w_b) h^2 and z = c (w_a + w_b) h: above 1 the spring's
+/// state grows every substep. Each matrix is read off the kernels in include/pba/integrate.h
+/// (position Verlet's state is x_n, x_n - x_{n-1} and its cached a_n h^2). Implicit Euler: 0.
+double mass_spring_radius(Method m, double p, double z);
+
 /// Internal access to a body's state, for tests (e.g. the scalar and AVX2 kernels must
 /// give the same bits).
 struct SoftAccess {
