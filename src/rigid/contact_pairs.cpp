@@ -839,8 +839,12 @@ void RigidContacts::find_new_pairs(RigidBodySystem& s) {
 // velocity), so one pass wakes all that this step can.
 void RigidContacts::wake_touched(RigidBodySystem& s) {
   const ContactSettings& cs = s.settings_;
-  if (std::find(s.asleep_.begin(), s.asleep_.end(), std::uint8_t{1}) == s.asleep_.end()) {
+  auto forget_jumped = [&] {
+    for (const std::uint32_t slot : jumped) jumped_slot[slot] = 0;
     jumped.clear();
+  };
+  if (std::find(s.asleep_.begin(), s.asleep_.end(), std::uint8_t{1}) == s.asleep_.end()) {
+    forget_jumped();
     return;
   }
   // the bodies that jumped, by dense index (a slot destroyed since, or taken by another body
@@ -866,7 +870,7 @@ void RigidContacts::wake_touched(RigidBodySystem& s) {
   }
   for (const std::uint32_t slot : jumped)
     if (slot < s.slot_.size() && s.slot_[slot] < n) jumped_flag[s.slot_[slot]] = 0;
-  jumped.clear();
+  forget_jumped();
 }
 
 // ---------------------------------------------------------------------------------------

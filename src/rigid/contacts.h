@@ -353,8 +353,11 @@ struct RigidContacts {
   std::vector<std::uint32_t> moved_spare;
   std::vector<std::uint8_t> was_moved;        // scratch: 1 for the proxies in `moved`
   // the handle slots of the dynamic bodies set_pose moved since the last step (wake_touched
-  // wakes the sleepers they jumped into), and wake_touched's flags of them by dense body
+  // wakes the sleepers they jumped into), each once (jumped_slot: 1 for a slot listed, by
+  // handle slot; jumped holds room for every slot, so set_pose allocates only as slots are
+  // issued), and wake_touched's flags of them by dense body
   std::vector<std::uint32_t> jumped;
+  std::vector<std::uint8_t> jumped_slot;
   std::vector<std::uint8_t> jumped_flag;
   std::vector<std::int32_t> moved_leaves;     // scratch: the tree leaves of `moved` (find_new_pairs)
   std::vector<PairCache> caches;              // pool
@@ -919,6 +922,10 @@ struct RigidContacts {
   static BodyView view(RigidBodySystem& s, std::size_t i) {
     return {&s.v_[i], &s.w_[i], &s.com_[i], &s.q_[i], s.asleep_[i] ? 0.0 : s.inv_mass_[i]};
   }
+  /// For the tests of check_finite's call sites: writes `value` into number `component` of
+  /// dense body i's centre (which 0, m), velocity (1, m/s), angular velocity (2, rad/s) or
+  /// frame (3, the quaternion's four numbers), then runs check_finite (which throws naming the body).
+  static void poison_and_check(RigidBodySystem& s, int which, std::size_t i, int component, double value);
 };
 
 }  // namespace pba::detail

@@ -583,7 +583,16 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   wake_island(i);
   // a dynamic body wakes what it jumped into through next step's pairs (wake_touched)
   if (!fixed) {
-    contact_state(contacts_).jumped.push_back(id.index);
+    detail::RigidContacts& c = contact_state(contacts_);
+    if (c.jumped_slot.size() < slot_.size()) {
+      c.jumped_slot.resize(slot_.size(), 0);
+      c.jumped.reserve(slot_.size());
+    }
+    // once a slot until the step (a body set_pose moved a million times held a million entries)
+    if (!c.jumped_slot[id.index]) {
+      c.jumped_slot[id.index] = 1;
+      c.jumped.push_back(id.index);
+    }
     return;
   }
   for (const RigidShapeDef& d : shapes_[i])
@@ -1012,12 +1021,19 @@ typedef double v4d_sum __attribute__((vector_size(32)));
   const v4d_sum all = (acc[0] + acc[1]) + (acc[2] + acc[3]);
   return (all[0] + all[1]) + (all[2] + all[3]) + rest == 0;
 }
+#if defined(__GNUC__) && defined(__x86_64__)  // (PBA_RIGID_HAVE_X86 of contact_wide.h)
 [[gnu::target("avx2")]] bool all_finite_avx2(const double* p, std::size_t count) { return all_finite_of(p, count); }
+#endif
 
 }  // namespace
 
 bool all_finite_wide(SimdPath path, const double* p, std::size_t count) {
+#if defined(__GNUC__) && defined(__x86_64__)
   return path == SimdPath::Scalar ? all_finite_of(p, count) : all_finite_avx2(p, count);
+#else
+  (void)path;  // a wide path is never chosen here (best_simd_path)
+  return all_finite_of(p, count);
+#endif
 }
 
 }  // namespace detail
@@ -1041,6 +1057,17 @@ void RigidBodySystem::check_finite() {
     return;
   for (std::size_t i = 0; i < n; ++i)
     if (!(is_finite(com_[i]) && is_finite(v_[i]) && is_finite(w_[i]) && finite_quat(q_[i]))) fail(i);
+}
+
+void detail::RigidContacts::poison_and_check(RigidBodySystem& s, int which, std::size_t i, int component,
+                                             double value) {
+  switch (which) {
+    case 0: s.com_.at(i)[component] = value; break;
+    case 1: s.v_.at(i)[component] = value; break;
+    case 2: s.w_.at(i)[component] = value; break;
+    default: s.q_.at(i)[component] = value; break;
+  }
+  s.check_finite();
 }
 
 void RigidBodySystem::fail(std::size_t i) {

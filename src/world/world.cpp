@@ -98,10 +98,35 @@ void require_placed_float(const Pose& entity, const Vec3& local, const Vec3& pla
                     where);
 }
 
+// |v| whatever its scale: glm::length (the same bits) while its squares are normal doubles;
+// beyond (a component past ~1.3e154 overflowed them to an infinite length, one below ~1e-154
+// underflowed them to 0), by the largest |component| first
+double scaled_length(const Vec3& v) {
+  const double l = glm::length(v);
+  if (l > 1e-140 && l < 1e140) return l;
+  const double m = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  if (!(m > 0) || !std::isfinite(m)) return m;
+  return m * glm::length(v / m);
+}
+
+// v / |v| (v non-zero and finite): glm::normalize's bits while its squares are normal doubles
+Vec3 scaled_unit(const Vec3& v) {
+  const double l = glm::length(v);
+  return l > 1e-140 && l < 1e140 ? glm::normalize(v) : v / scaled_length(v);
+}
+
+// whether any collider (World's ColliderEntry) has a live stand-in body in `rigid`
+template <class ColliderEntries>
+bool any_stand_in(const ColliderEntries& colliders, const RigidBodySystem& rigid) {
+  for (const auto& c : colliders)
+    if (rigid.valid(c.mirror)) return true;
+  return false;
+}
+
 double waypoint_length(const KinematicDef& d) {
   double len = 0;
-  for (std::size_t i = 1; i < d.waypoints.size(); ++i) len += glm::length(d.waypoints[i] - d.waypoints[i - 1]);
-  if (d.loop && d.waypoints.size() > 1) len += glm::length(d.waypoints.front() - d.waypoints.back());
+  for (std::size_t i = 1; i < d.waypoints.size(); ++i) len += scaled_length(d.waypoints[i] - d.waypoints[i - 1]);
+  if (d.loop && d.waypoints.size() > 1) len += scaled_length(d.waypoints.front() - d.waypoints.back());
   return len;
 }
 
@@ -112,7 +137,7 @@ void KinematicDef::validate(std::string_view where) const {
   if (!is_finite(spin)) require_finite(spin, field_path(where, "spin"));
   // finite components whose length overflows a double: the spin's rate (and, below, the
   // circle's axis) is that length, and the path's poses turned NaN
-  if (!std::isfinite(glm::length(spin)))
+  if (!std::isfinite(scaled_length(spin)))
     throw Error(field_path(where, "spin") + ": its length overflows a double, got " + format_vec3(spin));
   switch (path) {
     case PathType::Linear:
@@ -121,8 +146,8 @@ void KinematicDef::validate(std::string_view where) const {
     case PathType::Circular:
       if (!is_finite(center)) require_finite(center, field_path(where, "center"));
       if (!is_finite(axis)) require_finite(axis, field_path(where, "axis"));
-      if (glm::length(axis) == 0) throw Error(field_path(where, "axis") + ": must be non-zero, got (0, 0, 0)");
-      if (!std::isfinite(glm::length(axis)))
+      if (scaled_length(axis) == 0) throw Error(field_path(where, "axis") + ": must be non-zero, got (0, 0, 0)");
+      if (!std::isfinite(scaled_length(axis)))
         throw Error(field_path(where, "axis") + ": its length overflows a double, got " + format_vec3(axis));
       if (!(std::isfinite(radius) && (radius) > 0)) require_positive(radius, field_path(where, "radius"));
       if (!std::isfinite(angular_speed)) require_finite(angular_speed, field_path(where, "angular_speed"));
@@ -141,12 +166,13 @@ void KinematicDef::validate(std::string_view where) const {
         throw Error(field_path(where, "waypoints") + ": needs at least 2 points, got " +
                     std::to_string(waypoints.size()));
       for (std::size_t i = 0; i < waypoints.size(); ++i)
-        require_finite(waypoints[i], field_path(where, "waypoints[" + std::to_string(i) + "]"));
+        if (!is_finite(waypoints[i]))
+          require_finite(waypoints[i], field_path(where, "waypoints[" + std::to_string(i) + "]"));
       // a segment whose length overflows a double (points 1e308 either side of the origin)
       // gave NaN poses along it
       for (std::size_t i = 0; i < waypoints.size(); ++i) {
         const std::size_t j = i + 1 == waypoints.size() ? 0 : i + 1;
-        if ((j == 0 && !loop) || std::isfinite(glm::length(waypoints[j] - waypoints[i]))) continue;
+        if ((j == 0 && !loop) || std::isfinite(scaled_length(waypoints[j] - waypoints[i]))) continue;
         throw Error(field_path(where, "waypoints") + ": points " + std::to_string(i) + " " +
                     format_vec3(waypoints[i]) + " and " + std::to_string(j) + " " + format_vec3(waypoints[j]) +
                     " are farther apart than a double holds");
@@ -175,7 +201,7 @@ Pose kinematic_pose(const KinematicDef& d, const Pose& start, double t, Vec3* ve
       break;
     case PathType::Circular: {
       // a basis (u, w) of the circle's plane
-      const Vec3 a = glm::normalize(d.axis);
+      const Vec3 a = scaled_unit(d.axis);
       const Vec3 helper = std::abs(a.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
       const Vec3 u = glm::normalize(glm::cross(a, helper));
       const Vec3 w = glm::cross(a, u);
@@ -199,7 +225,7 @@ Pose kinematic_pose(const KinematicDef& d, const Pose& start, double t, Vec3* ve
       }
       for (std::size_t i = 0; i < segments; ++i) {
         const Vec3 a = d.waypoints[i], b = d.waypoints[(i + 1) % n];
-        const double len = glm::length(b - a);
+        const double len = scaled_length(b - a);
         if (s <= len || i + 1 == segments) {
           const double f = len > 0 ? std::min(s / len, 1.0) : 0.0;
           p.position = a + (b - a) * f;
@@ -212,7 +238,7 @@ Pose kinematic_pose(const KinematicDef& d, const Pose& start, double t, Vec3* ve
     }
   }
   // spin about world axes: q(t) = exp(spin t) q0
-  const double w = glm::length(d.spin);
+  const double w = scaled_length(d.spin);
   if (w > 0) p.rotation = glm::normalize(glm::angleAxis(w * t, d.spin / w) * start.rotation);
   if (velocity) *velocity = v;
   return p;
@@ -649,6 +675,19 @@ void World::step() {
 
 void World::run_kinematics(double t, double dt) {
   // each path's pose at the end of the tick, in closed form
+  // World::kinematic hands out the definitions, changeable between ticks: checked again here,
+  // by field and before any path moves (a NaN stopped the world as "left the range of a
+  // double", emptied waypoints were read out of bounds), and a path's length recomputed (it
+  // went stale). validate allocates only to throw: an empty `where`, named on the way out (its
+  // messages are field_path(where, field), "" giving ".field").
+  for (KinematicEntry& k : kinematics_) {
+    try {
+      k.def.validate("");
+    } catch (const Error& err) {
+      throw Error("kinematic of " + describe(k.owner) + err.what());
+    }
+    if (k.def.path == PathType::Waypoints) k.length = waypoint_length(k.def);
+  }
   for (KinematicEntry& k : kinematics_) {
     EntityRecord& r = records_[k.owner.index];
     Vec3 v;
@@ -698,10 +737,16 @@ void World::sync(double t, double dt) {
     const EntityRecord& r = records_[forcers_[i].owner.index];
     world_forcers_[i] = forcers_[i].def;
     world_forcers_[i].pose = compose(r.pose, forcers_[i].def.pose);
-    // an entity moved out of the floats' range takes its forcer with it: refused by name
-    if (!fits_float(world_forcers_[i].pose.position))
+    // an entity moved out of the floats' range takes its forcer with it: refused by name;
+    // so is a forcer whose pose was changed between ticks (World::forcer hands out its
+    // definition) to a non-finite one, by its own check (require_placed_float takes a
+    // non-finite local for the definition's, which add_forcer alone ran)
+    if (!fits_float(world_forcers_[i].pose.position) || !is_finite(forcers_[i].def.pose.rotation)) {
+      if (!is_finite(forcers_[i].def.pose.position) || !is_finite(forcers_[i].def.pose.rotation))
+        forcers_[i].def.validate("forcer of " + describe(forcers_[i].owner));
       require_placed_float(r.pose, forcers_[i].def.pose.position, world_forcers_[i].pose.position, "pose.position",
                            "forcer of " + describe(forcers_[i].owner) + " at the entity's pose: position");
+    }
   }
   for (std::size_t i = 0; i < records_.size(); ++i) {
     const EntityRecord& r = records_[i];
@@ -770,7 +815,9 @@ void World::drive_body(EntityId owner, std::string_view what, RigidBodyId id, co
 // a volume), remade when the collider's definition changes and moved with its entity. Only
 // once an entity has a body: a world of particles pays nothing.
 void World::sync_mirrors(double t, double dt) {
-  if (entity_bodies_ == 0) return;
+  // (stand-ins made while an entity had a body keep following their entities after the last
+  // entity body is gone: destroyed in rigid() directly, then its entity, the count drops to 0)
+  if (entity_bodies_ == 0 && !any_stand_in(colliders_, rigid_)) return;
   for (std::size_t i = 0; i < colliders_.size(); ++i) {
     ColliderEntry& c = colliders_[i];
     const EntityRecord& r = records_[c.owner.index];
@@ -1309,7 +1356,7 @@ std::uint64_t World::hash() const {
     const Pose& p = records_[k.owner.index].pose;
     h = hash_bytes(&p.position, sizeof(p.position), h);
   }
-  if (entity_bodies_ > 0) h = rigid_.hash() ^ (h * 0x9e3779b97f4a7c15ull);
+  if (entity_bodies_ > 0 || any_stand_in(colliders_, rigid_)) h = rigid_.hash() ^ (h * 0x9e3779b97f4a7c15ull);
   for (const auto& s : systems_) h = s->hash(h);
   return h;
 }

@@ -17,6 +17,7 @@
 
 #include "pba/rigid.h"
 #include "rigid/body_frame.h"  // the identity shortcuts, tested directly
+#include "rigid/contacts.h"    // check_finite's call sites, through a seam
 #include "rigid/solver.h"      // check_finite's flat test, tested directly
 
 #include "error_of.h"
@@ -923,7 +924,7 @@ TEST(RigidDivergence, TheFlatFiniteTestFindsEveryNonFiniteNumberWhereverItIs) {
   const double bad[] = {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
                         std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::quiet_NaN()};
   std::vector<SimdPath> paths{SimdPath::Scalar};
-  if (__builtin_cpu_supports("avx2")) paths.push_back(SimdPath::Avx2);
+  if (pba::detail::best_simd_path() != SimdPath::Scalar) paths.push_back(SimdPath::Avx2);  // (x86 with AVX2)
   for (const SimdPath path : paths)
     for (std::size_t count = 0; count <= 41; ++count) {
       std::vector<double> x(count);
@@ -937,6 +938,32 @@ TEST(RigidDivergence, TheFlatFiniteTestFindsEveryNonFiniteNumberWhereverItIs) {
           x[i] = was;
         }
     }
+}
+
+// check_finite's call sites: the arrays it scans (the centres, velocities and angular
+// velocities, 3 numbers a body, and the frames, 4) and their counts. A NaN or an infinity in
+// any number of any of 7 bodies (21 and 28 numbers: a group of 16 and the rest) stops the
+// system naming that body; with none, it passes.
+TEST(RigidDivergence, CheckFiniteNamesTheBodyOfANonFiniteNumberInEachArray) {
+  const int sizes[] = {3, 3, 3, 4};
+  for (int which = 0; which < 4; ++which)
+    for (std::size_t i = 0; i < 7; ++i)
+      for (int c = 0; c < sizes[which]; ++c)
+        for (const double bad : {std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::infinity()}) {
+          RigidBodySystem s;
+          std::vector<pba::RigidBodyId> ids;
+          for (int k = 0; k < 7; ++k)
+            ids.push_back(s.create({.name = "b" + std::to_string(k), .pose = {{3.0 * k, 1, 0}}, .shapes = kBall}));
+          s.step(1.0 / 60, kG);
+          const std::string m = error_of([&] { pba::detail::RigidContacts::poison_and_check(s, which, i, c, bad); });
+          const std::string name = "rigid body " + std::to_string(i) + " 'b" + std::to_string(i) + "' became non-finite";
+          EXPECT_EQ(m.rfind(name, 0), 0u) << which << " " << i << " " << c << ": " << m;
+          EXPECT_EQ(s.failed_body(), ids[i]);
+        }
+  RigidBodySystem s;
+  for (int k = 0; k < 7; ++k) s.create({.pose = {{3.0 * k, 1, 0}}, .shapes = kBall});
+  pba::detail::RigidContacts::poison_and_check(s, 0, 6, 2, 1e308);  // large, finite: passes
+  EXPECT_TRUE(s.failed_body().is_null());
 }
 
 // Speeds beyond kMaxRigidSpeed would overflow the contacts' float rows and poison the bodies

@@ -10,4 +10,8 @@
 namespace pba::test_support {
 /// Number of calls to the global operator new (and new[]) since program start.
 extern std::atomic<long long> g_allocations;
+/// Bytes the blocks from the global operator new hold now (each block's malloc_usable_size,
+/// added at new and taken off at delete): a heap measure that does not read the C heap's own
+/// statistics, which a sanitizer's allocator leaves at 0.
+extern std::atomic<long long> g_live_bytes;
 }  // namespace pba::test_support

@@ -199,10 +199,12 @@ TEST(Kinematic, APathBeyondTheDoublesIsRefusedByNameNeverANaNPose) {
   EXPECT_EQ(refused({.path = PathType::Circular, .radius = 1e300, .angular_speed = 1e10}),
             "kinematic of entity 0 'mover'.angular_speed: radius 1e+300 m times angular_speed 1e+10 rad/s, the path's "
             "speed, overflows a double");
-  EXPECT_EQ(refused({.path = PathType::Circular, .axis = {1e308, 1e308, 0}}),
-            "kinematic of entity 0 'mover'.axis: its length overflows a double, got (1e+308, 1e+308, 0)");
-  EXPECT_EQ(refused({.path = PathType::Motor, .spin = {0, 1e308, 1e308}}),
-            "kinematic of entity 0 'mover'.spin: its length overflows a double, got (0, 1e+308, 1e+308)");
+  // (lengths 2.1e308; an axis (1e308, 1e308, 0), 1.4e308 long, is an axis: refused until the
+  // lengths were scaled, their squares overflowing)
+  EXPECT_EQ(refused({.path = PathType::Circular, .axis = {1.5e308, 1.5e308, 0}}),
+            "kinematic of entity 0 'mover'.axis: its length overflows a double, got (1.5e+308, 1.5e+308, 0)");
+  EXPECT_EQ(refused({.path = PathType::Motor, .spin = {0, 1.5e308, 1.5e308}}),
+            "kinematic of entity 0 'mover'.spin: its length overflows a double, got (0, 1.5e+308, 1.5e+308)");
   // the largest that fit are taken
   w.add_kinematic(e, {.path = PathType::Circular, .center = {1e307, 0, 0}, .radius = 1e307, .angular_speed = 1});
   w.step();
@@ -218,6 +220,65 @@ TEST(Kinematic, APathBeyondTheDoublesIsRefusedByNameNeverANaNPose) {
       << m;
   EXPECT_NE(m.find("position (inf, 0, 0)"), std::string::npos) << m;
   EXPECT_NE(error_of([&] { w.step(); }).find("the simulation stopped"), std::string::npos);
+}
+
+// World::kinematic hands out the definition, changeable between ticks: a change is checked at
+// the next tick by field, the world unmoved and able to tick again once it is mended, and a
+// waypoint path's length follows its points. Until the fix only add_kinematic checked: a NaN
+// velocity stopped the world for good ("left the range of a double"), emptied waypoints were
+// read out of bounds, and lengthened waypoints kept the old length (the path ended early).
+TEST(Kinematic, ADefinitionChangedBetweenTicksIsCheckedAndItsLengthFollows) {
+  World w({.stepper = {.fixed_dt = 0.25}});
+  const EntityId e = w.create_entity({.name = "slider"});
+  w.add_kinematic(e, {.path = pba::PathType::Linear, .velocity = {1, 0, 0}});
+  const EntityId way = w.create_entity({.name = "way"});
+  w.add_kinematic(way, {.path = pba::PathType::Waypoints, .waypoints = {{0, 0, 0}, {1, 0, 0}}, .speed = 1,
+                        .loop = false});
+  w.step();
+  w.kinematic(e).velocity = {NAN, 0, 0};
+  EXPECT_EQ(error_of([&] { w.step(); }), "kinematic of entity 0 'slider'.velocity: must be finite, got (nan, 0, 0)");
+  EXPECT_EQ(w.time(), 0.25);
+  EXPECT_EQ(w.pose(e).position, Vec3(0.25, 0, 0));
+  w.kinematic(e).velocity = {1, 0, 0};
+  w.kinematic(way).waypoints.clear();
+  EXPECT_EQ(error_of([&] { w.step(); }), "kinematic of entity 1 'way'.waypoints: needs at least 2 points, got 0");
+  EXPECT_EQ(w.pose(e).position, Vec3(0.25, 0, 0));  // no path moved
+  // 1 m long when added, 10 m now: at 1 m/s it is 3 m along at t = 3 s (the stale 1 m length
+  // stopped it at the last point, (10, 0, 0))
+  w.kinematic(way).waypoints = {{0, 0, 0}, {10, 0, 0}};
+  while (w.time() < 3) w.step();
+  EXPECT_EQ(w.time(), 3.0);
+  EXPECT_NEAR(w.pose(way).position.x, 3.0, 1e-12);
+  EXPECT_EQ(w.pose(e).position, Vec3(3, 0, 0));
+}
+
+// Lengths of vectors whose squares leave the doubles: glm::length overflowed from about 1.34e154
+// a component and underflowed below about 1e-154, so an axis or spin of 1e155 and waypoints
+// 1e155 apart were refused as "its length overflows a double" (or "farther apart than a double
+// holds"), an axis of 1e-170 as "must be non-zero". Each is a path, followed in closed form.
+TEST(Kinematic, VectorsBeyondTheSquaresRangeAreTakenAtTheirLength) {
+  World w({.stepper = {.fixed_dt = 0.25}});
+  using pba::PathType;
+  const double half_pi = 1.5707963267948966;
+  const EntityId big = w.create_entity({});
+  w.add_kinematic(big, {.path = PathType::Circular, .axis = {1e155, 0, 0}, .radius = 2, .angular_speed = half_pi});
+  const EntityId small = w.create_entity({});
+  w.add_kinematic(small, {.path = PathType::Circular, .axis = {0, 0, -1e-170}, .radius = 2, .angular_speed = half_pi});
+  const EntityId way = w.create_entity({});
+  w.add_kinematic(way, {.path = PathType::Waypoints, .waypoints = {{0, 0, 0}, {0, 1e155, 0}}, .speed = 4, .loop = false});
+  const EntityId spin = w.create_entity({});
+  w.add_kinematic(spin, {.path = PathType::Motor, .spin = {0, 1e155, 0}});
+  for (int i = 0; i < 4; ++i) w.step();
+  // a quarter turn a second for 1 s, on circles of radius 2 about the x and z axes
+  EXPECT_EQ(w.pose(big).position.x, 0);
+  EXPECT_NEAR(glm::length(w.pose(big).position), 2, 1e-12);
+  EXPECT_EQ(w.pose(small).position.z, 0);
+  EXPECT_NEAR(glm::length(w.pose(small).position), 2, 1e-12);
+  EXPECT_NEAR(glm::length(w.pose(way).position - Vec3(0, 4, 0)), 0, 1e-12);  // 4 m/s for 1 s along +y
+  // turned about +y alone (its angle is 1e155 rad)
+  const pba::Quat q = w.pose(spin).rotation;
+  EXPECT_TRUE(pba::is_finite(q));
+  EXPECT_NEAR(q.w * q.w + q.y * q.y, 1, 1e-12);
 }
 
 TEST(Kinematic, MovingColliderLiftsAParticle) {
@@ -299,6 +360,31 @@ TEST(Forcers, AnEntityBeyondTheFloatsTakesItsForcerThereAndIsRefused) {
   }
   EXPECT_NE(msg.find("moved fan"), std::string::npos) << msg;
   EXPECT_NE(msg.find("float"), std::string::npos) << msg;
+}
+
+// World::forcer hands out the definition, changeable between ticks: a NaN position or
+// rotation set there is refused at the next tick by the forcer's field, with the world unmoved
+// (from 2026-12-07's placement check until the fix, a NaN position passed it unchecked, taken
+// for the definition's own check, which add_forcer alone ran).
+TEST(Forcers, ANonFinitePoseSetBetweenTicksIsRefusedByField) {
+  World w;
+  const EntityId fan = w.create_entity({.name = "fan"});
+  w.add_forcer(fan, {});
+  const EntityId p = w.create_entity({});
+  w.add_particle(p, {.position = {0, 0, 0}});
+  w.step();
+  const double t = w.time();
+  w.forcer(fan).pose.position = {NAN, 0, 0};
+  EXPECT_EQ(error_of([&] { w.step(); }), "forcer of entity 0 'fan'.position: must be finite, got (nan, 0, 0)");
+  EXPECT_EQ(w.time(), t);
+  w.forcer(fan).pose.position = {0, 0, 0};
+  w.forcer(fan).pose.rotation = pba::Quat(NAN, 0, 0, 0);
+  const std::string msg = error_of([&] { w.step(); });
+  EXPECT_EQ(msg.rfind("forcer of entity 0 'fan'.rotation: ", 0), 0u) << msg;
+  EXPECT_EQ(w.time(), t);
+  w.forcer(fan).pose.rotation = pba::Quat(1, 0, 0, 0);
+  w.step();  // refused, not stopped: the world ticks again once the forcer is mended
+  EXPECT_GT(w.time(), t);
 }
 
 // A collider whose entity is moved beyond a float's range is refused at the next tick as the
