@@ -456,22 +456,34 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
   s.external_accelerations(t);
   // what predict forms in float: each substep adds a h^2 (gravity and the external
   // accelerations), and over the step's S substeps a free particle falls a h^2 S (S + 1) / 2
-  // <= a dt^2, which must fit a float (a rope at dt = 1e20 passed the substep check, h^2 =
-  // 1e38, and its g h^2 turned the state non-finite); refused before any particle moves
+  // <= a dt^2. The constraints square the distances between particles in float, so that
+  // travel must be squarable there (<= sqrt(FLT_MAX), 1.8e19 m): a rope at dt = 1e20 passed the
+  // substep check, h^2 = 1e38, and its g h^2 turned the state non-finite; a cloth whose
+  // aerodynamics accelerated it by 1e31 m/s^2 was flung 1e27 m in a step, and its squared
+  // lengths made its pins NaN. Refused before any particle moves, naming the aerodynamics
+  // when they alone go past the bound
   {
-    double a = glm::length(s.def.forces.gravity);
-    if (s.has_aext) {
-      double a2 = 0;
+    const double bound = detail::squarable_hi<float>(), g = glm::length(s.def.forces.gravity);
+    double a2 = 0;
+    std::size_t worst = 0;
+    if (s.has_aext)
       for (std::size_t i = 0; i < s.n; ++i) {  // (x is padded: n + kSoftPad columns)
-        const double ax = s.ax[i], ay = s.ay[i], az = s.az[i];
-        a2 = std::max(a2, ax * ax + ay * ay + az * az);
+        const double ax = s.ax[i], ay = s.ay[i], az = s.az[i], q = ax * ax + ay * ay + az * az;
+        if (q > a2) a2 = q, worst = i;
       }
-      a += std::sqrt(a2);
-    }
-    if (!(a * dt * dt <= std::numeric_limits<float>::max()))
+    const double aero = std::sqrt(a2), a = g + aero;
+    if (!(aero * dt * dt <= bound))
+      throw Error("SoftBodyDef.aero: the aerodynamic force on particle " + std::to_string(worst) + " (air density " +
+                  format_value(s.def.aero.air_density) + " kg/m^3, drag " + format_value(s.def.aero.drag) +
+                  ", lift " + format_value(s.def.aero.lift) + ") accelerates it by " + format_value(aero) +
+                  " m/s^2, which moves it up to a dt^2 = " + format_value(aero * dt * dt) + " m in one step of " +
+                  format_value(dt) + " s, beyond what the float solve squares (" + format_value(bound) +
+                  " m): lower the drag and lift coefficients");
+    if (!(a * dt * dt <= bound))
       throw Error("SoftBody::step(dt): dt = " + format_value(dt) + " s with accelerations up to " + format_value(a) +
                   " m/s^2 (gravity and aerodynamics) moves a particle up to a dt^2 = " + format_value(a * dt * dt) +
-                  " m in one step, beyond a float (3.4e38 m); use a smaller dt");
+                  " m in one step, beyond what the float solve squares (" + format_value(bound) +
+                  " m); use a smaller dt");
   }
   s.profile.forces = sw.seconds();
   s.profile.collide = 0;
@@ -526,14 +538,20 @@ void SoftBody::Impl::external_accelerations(double t) {
     F += (-k * def.aero.lift * area * un / speed) * (u2 * n - un * u);
     const Vec3 third = F * (1.0 / 3.0);
     for (std::uint32_t p : {tr.a, tr.b, tr.c}) {
+      // a pinned corner takes none (w = 0; an infinite force would make it 0 * inf = NaN;
+      // adding its +0 or -0 changed no bit of its +0 sum)
+      if (w[p] == 0) continue;
       // an acceleration beyond a float is the coefficients' doing (C_d = 1e300): named here,
-      // before anything moves, rather than as a step too long or a non-finite particle
+      // before anything moves, rather than as a step too long or a non-finite particle; the
+      // triangles' shares too, whose float sum can overflow where none of them does (a grid's
+      // inner particle takes six)
       const Vec3 acc = third * double(w[p]);
       if (!(std::abs(acc.x) + std::abs(acc.y) + std::abs(acc.z) <= std::numeric_limits<float>::max()))
         aero_overflow(p, acc, u);
-      ax[p] += static_cast<float>(acc.x);
-      ay[p] += static_cast<float>(acc.y);
-      az[p] += static_cast<float>(acc.z);
+      const float sx = ax[p] + static_cast<float>(acc.x), sy = ay[p] + static_cast<float>(acc.y),
+                  sz = az[p] + static_cast<float>(acc.z);
+      if (!(std::isfinite(sx) && std::isfinite(sy) && std::isfinite(sz))) aero_overflow(p, Vec3(sx, sy, sz), u);
+      ax[p] = sx, ay[p] = sy, az[p] = sz;
     }
   }
 }

@@ -665,6 +665,32 @@ TEST(SoftBadInput, AerodynamicsBeyondAFloatIsNamed) {
     }
 }
 
+// The shares of a particle's triangles are each within a float where their sum is not (a cloth
+// grid's inner particle takes six equal ones when the cloth faces the wind at rest), and a
+// pinned corner takes none even when the force is infinite (0 * inf): across the coefficients'
+// whole range, a step either goes on or names the aerodynamics, never a "smaller dt" or a
+// non-finite particle. (Before: 1e37 to 1e38 per share summed to inf, blamed on the dt; drag
+// 1.8e308 made the pinned corner's share NaN.)
+TEST(SoftBadInput, AerodynamicsSummedBeyondAFloatIsNamedAtEveryCoefficient) {
+  int named = 0;
+  for (int k = 120; k <= 1232; ++k) {  // 1e30 .. 1e308 by a quarter decade, and DBL_MAX
+    const double coef = k == 1232 ? std::numeric_limits<double>::max() : std::pow(10.0, k / 4.0);
+    for (const bool lift : {false, true}) {
+      SCOPED_TRACE(testing::Message() << coef << (lift ? " lift" : " drag"));
+      pba::SoftBodyDef d;
+      d.substeps = 4;
+      (lift ? d.aero.lift : d.aero.drag) = coef;
+      d.forces.wind = {.velocity = {1, 2, 5}};
+      pba::SoftBody f = pba::SoftBody::cloth_grid({.nx = 4, .ny = 4, .pins = pba::ClothPins::FirstColumn}, d);
+      const std::string msg = error_of([&] { f.step(0, 1.0 / 60); });
+      if (msg.empty()) continue;
+      ++named;
+      EXPECT_EQ(msg.rfind("SoftBodyDef.aero: the aerodynamic force on particle ", 0), 0u) << msg;
+    }
+  }
+  EXPECT_GT(named, 0);
+}
+
 // ---------------------------------------------------------------------------------------
 // jelly
 
@@ -1192,25 +1218,29 @@ TEST(SoftBadInput, TetrahedraTooLargeForTheFloatVolumeSolve) {
 
 // The substep check kept h^2 finite (h <= 1.8e19 s), but predict forms g h^2 in float: a
 // default rope stepped with dt = 1e20 (10 substeps of 1e19 s) passed it and failed as
-// "particle 0 became non-finite". The step's fall a dt^2 must fit a float; refused before
-// anything moves. Below the bound a free particle falls by the closed form of S
+// "particle 0 became non-finite". The step's fall a dt^2 must be squarable in float (the
+// constraints square the distances between particles: <= 1.8e19 m); refused before anything
+// moves. Below the bound a free particle falls by the closed form of S
 // semi-implicit Euler substeps: g h^2 S (S + 1) / 2 = g dt^2 (S + 1) / (2 S).
 TEST(SoftBadInput, StepWhoseFallOverflowsAFloatIsRefused) {
   pba::SoftBody r = pba::SoftBody::rope({.segments = 4});
   const std::uint64_t h0 = r.hash();
   EXPECT_EQ(error_of([&] { r.step(0, 1e20); }),
             "SoftBody::step(dt): dt = 1e+20 s with accelerations up to 9.81 m/s^2 (gravity and aerodynamics) moves a "
-            "particle up to a dt^2 = 9.81e+40 m in one step, beyond a float (3.4e38 m); use a smaller dt");
+            "particle up to a dt^2 = 9.81e+40 m in one step, beyond what the float solve squares (" +
+                pba::format_value(std::sqrt(double(std::numeric_limits<float>::max()))) + " m); use a smaller dt");
   EXPECT_FALSE(r.failed());
   EXPECT_EQ(r.hash(), h0);
   r.step(0, 1.0 / 60);
   EXPECT_TRUE(std::isfinite(r.kinetic_energy()));
-  // one free particle at dt = 5e18 s (g dt^2 = 2.5e38 fits)
+  // one free particle at dt = 1.3e9 s (g dt^2 = 1.66e19 is squarable), and just past that
   pba::SoftMesh m;
   m.positions = {{0, 0, 0}};
   m.masses = {1};
+  pba::SoftBody q = pba::SoftBody::from_mesh(m);
+  EXPECT_NE(error_of([&] { q.step(0, 1.4e9); }), "");  // g dt^2 = 1.92e19
   pba::SoftBody p = pba::SoftBody::from_mesh(m);
-  const double dt = 5e18, S = 10;
+  const double dt = 1.3e9, S = 10;
   p.step(0, dt);
   const double fall = 9.81 * dt * dt * (S + 1) / (2 * S);
   EXPECT_NEAR(p.position(0).y / -fall, 1.0, 1e-5);  // float rounding over 10 substeps
