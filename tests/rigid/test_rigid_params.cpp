@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "pba/rigid.h"
 #include "pba/rigid_scenes.h"
@@ -290,6 +291,50 @@ TEST(RigidParamsSleep, AWindowShorterThanAStepHoldsTheStepsSpeedToTheTolerances)
   const double h = 1.0 / 240, n = 240;
   EXPECT_TRUE(s.awake(ball));
   EXPECT_NEAR(s.center_of_mass(ball).y, 100 - kG * h * h * n * (n + 1) / 2, 1e-9);
+}
+
+// A window of a step still froze bodies in flight: over a window W a body starting from rest
+// moves g W^2 / 2, and one across the apex of a throw or a bounce as little as 0.086 g W^2,
+// both within sleep_linear * W for W of a step. At 1/240 s a ball dropped from rest slept
+// after its first step (its mean speed g dt / 2 = 0.02 m/s), one thrown up at 3 m/s at 1/60 s
+// froze at its apex, and 116 of 120 bouncing balls froze at an apex. A body's window is now
+// at least 16 sleep_linear / |g| (82 ms here), so each stays awake in flight at time_to_sleep
+// 0 and 0.02 s, on symplectic Euler's closed form; and a ball come to rest on the ground
+// still falls asleep, within that window of when it stopped moving.
+TEST(RigidParamsSleep, AShortWindowDoesNotFreezeABodyInFlight) {
+  for (const double window : {0.0, 0.02}) {
+    const std::string what = "time_to_sleep " + std::to_string(window);
+    // dropped from rest at 1/240 s (one substep: h = dt) and thrown up at 3 m/s at 1/60 s,
+    // through its apex at 0.31 s, each for 1 s: y_n = y0 + v0 n h - g h^2 n (n + 1) / 2
+    for (const auto& [dt, v0] : {std::pair{1.0 / 240, 0.0}, std::pair{1.0 / 60, 3.0}}) {
+      RigidBodySystem s({.contacts = {.substeps = 1, .auto_substeps = false, .time_to_sleep = window}});
+      const auto ball = s.create({.pose = {{0, 100, 0}}, .linear_velocity = {0, v0, 0},
+                                  .shapes = {{.shape = ColliderShape::sphere(0.5)}}});
+      const int n = static_cast<int>(std::lround(1 / dt));
+      int awake = 0;
+      for (int i = 0; i < n; ++i) s.step(dt, kGravity), awake += s.awake(ball);
+      EXPECT_EQ(awake, n) << what << " v0 " << v0;
+      EXPECT_NEAR(s.center_of_mass(ball).y, 100 + v0 * n * dt - kG * dt * dt * n * (n + 1) / 2, 1e-9)
+          << what << " v0 " << v0;
+    }
+    // bouncing balls (e 1, 0.8, 0.5 from 0.3 and 1.7 m) at 1/60 s: none sleeps while more
+    // than 1 cm above the ground; the ones that stop bouncing (e < 1) sleep by 8 s
+    for (const double e : {1.0, 0.8, 0.5})
+    for (const double h : {0.3, 1.7}) {
+      RigidBodySystem s({.contacts = {.time_to_sleep = window}});
+      ground(s, 0.5, e);
+      const auto ball = s.create({.pose = {{0, h + 0.2, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.2), .material = {.restitution = e}}}});
+      double frozen_at = -1;
+      for (int i = 0; i < 480; ++i) {
+        s.step(1.0 / 60, kGravity);
+        if (!s.awake(ball) && frozen_at < 0 && s.center_of_mass(ball).y - 0.2 > 0.01) frozen_at = s.center_of_mass(ball).y - 0.2;
+      }
+      EXPECT_LT(frozen_at, 0) << what << " e " << e << " h " << h << ": asleep at height " << frozen_at;
+      if (e < 1) {
+        EXPECT_FALSE(s.awake(ball)) << what << " e " << e << " h " << h;
+      }
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------------------
