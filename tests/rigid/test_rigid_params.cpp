@@ -56,11 +56,13 @@ void ground(RigidBodySystem& s, double mu, double e = 0, double angle = 0) {
 // restitution and elastic collisions
 
 // A ball dropped from h onto a ground of the same e rebounds to e^2 h. The apex is read from
-// the state at the end of the bounce step, y + vy^2 / (2 g). The bound is symplectic Euler's
-// at the step h_s of the solver (the substep; sequential impulses: the step): the fall reaches
-// the ground with its speed off by at most g h_s / 2 of the closed form's v = sqrt(2 g h), so
-// the apex by e^2 v h_s / 2, and the rise loses at most e v h_s / 2 more, so
-// |apex - e^2 h| <= (e + e^2) v h_s / 2. Measured: within 0.5 of it, every solver and rate.
+// the state at the end of the bounce step, y + vy^2 / (2 g), in closed form: the rise adds no
+// error. The bound is symplectic Euler's at the step h_s of the solver (the substep;
+// sequential impulses: the step): the fall reaches the ground with its speed off by at most
+// g h_s / 2 of the closed form's v = sqrt(2 g h), so the rebound's by e g h_s / 2 and the apex
+// (e v)^2 / (2 g) by e^2 v h_s / 2 to first order; the second order, e^2 g h_s^2 / 8, is
+// g h_s / (4 v) of that, at most 2.6% here (0.5 m at 1/30 s). So |apex - e^2 h| <=
+// 1.05 e^2 v h_s / 2. Measured: within 0.996 of e^2 v h_s / 2, every solver and rate.
 TEST(RigidParamsRestitution, TheApexIsESquaredOfTheDropAtOtherRatesUnderEverySolver) {
   const double r = 0.2;
   for (const Rate& rate : kRates)
@@ -78,16 +80,18 @@ TEST(RigidParamsRestitution, TheApexIsESquaredOfTheDropAtOtherRatesUnderEverySol
       if (vy > 0) apex = y + vy * vy / (2 * kG);
     }
     const double v = std::sqrt(2 * kG * h);
-    EXPECT_NEAR(apex, e * e * h, (e + e * e) * v * hs / 2) << describe(solver, rate) << " e = " << e << " h = " << h;
+    EXPECT_NEAR(apex, e * e * h, 1.05 * e * e * v * hs / 2) << describe(solver, rate) << " e = " << e << " h = " << h;
   }
 }
 
 // Head on, masses m_a and m_b (ratios 3 and 100), e = 1 and 0.5: each leaves at
 // v_c - e (v - v_c) (v_c the centre of mass's velocity), and the momentum is kept. Balls meet
-// at one point through both centres, so no step rate enters: the 1e-3 m/s and 1e-5
-// (measured 1e-7 and 8e-8 at every rate, every solver).
+// at one point through both centres, so no step rate enters (one rate, 1/60 s; measured
+// 9.4e-8 m/s and 7.5e-8 at every rate, every solver). What is left is the rounding of the
+// contact's float rows, 2^-24 = 6e-8 of the 2 m/s they carry per operation: 1e-6 m/s and
+// 1e-6 of the momentum allow a few such roundings and nothing of the scheme.
 TEST(RigidParamsRestitution, UnequalMassesLeaveAHeadOnCollisionAtNewtonsVelocities) {
-  for (const Rate& rate : kRates)
+  const Rate rate{1.0 / 60, 0};
   for (const auto solver : kRigidSolvers)
   for (const double ratio : {3.0, 100.0})
   for (const double e : {1.0, 0.5}) {
@@ -101,10 +105,10 @@ TEST(RigidParamsRestitution, UnequalMassesLeaveAHeadOnCollisionAtNewtonsVelociti
     const Vec3 p0 = ma * s.linear_velocity(a) + mb * s.linear_velocity(b);
     for (int i = 0; i < static_cast<int>(1.5 / rate.dt); ++i) s.step(rate.dt, Vec3(0));
     const std::string what = describe(solver, rate) + " ratio " + std::to_string(ratio) + " e " + std::to_string(e);
-    EXPECT_NEAR(s.linear_velocity(a).x, vc - e * (2 - vc), 1e-3) << what;
-    EXPECT_NEAR(s.linear_velocity(b).x, vc - e * (-1 - vc), 1e-3) << what;
+    EXPECT_NEAR(s.linear_velocity(a).x, vc - e * (2 - vc), 1e-6) << what;
+    EXPECT_NEAR(s.linear_velocity(b).x, vc - e * (-1 - vc), 1e-6) << what;
     const Vec3 p1 = ma * s.linear_velocity(a) + mb * s.linear_velocity(b);
-    EXPECT_LT(glm::length(p1 - p0) / glm::length(p0), 1e-5) << what;
+    EXPECT_LT(glm::length(p1 - p0) / glm::length(p0), 1e-6) << what;
   }
 }
 
@@ -113,9 +117,10 @@ TEST(RigidParamsRestitution, UnequalMassesLeaveAHeadOnCollisionAtNewtonsVelociti
 
 // A flat box (0.5 x 0.1 x 0.5 m: it tips only past 79 degrees) on an incline of mu 0.2 and
 // 0.9, 4 degrees under the friction angle (stays: under 1 mm in 5 s, the issue's) and 10 over
-// it (slides at g (sin - mu cos): the 2%), every rate, every solver. Symplectic Euler's
-// velocity is exact under a constant force; what is left is the contact's settling (measured:
-// within 3e-3 at every rate). XPBD only at substeps of 1/480 s or shorter (found and left,
+// it (slides at g (sin - mu cos): the 2%, a chosen bound, not derived), every rate,
+// every solver. Symplectic Euler's velocity is exact under a constant force; what is left is
+// the contact's settling (measured: within 2.7e-3 at every rate). Sleep is off in the staying
+// case, so a creep under the tolerances (2 mm/s) cannot sleep away and pass. XPBD only at substeps of 1/480 s or shorter (found and left,
 // docs/rigid-bodies.md, known limits, "XPBD, a sliding box's fresh manifold"): at 1/240 s
 // (1/30 s, 8 substeps) the box sank 0.62 mm in the step its plane manifold was made afresh,
 // and pushing it out cost mu times that impulse: 5.5% of the acceleration at mu 0.9, 52 deg.
@@ -135,6 +140,7 @@ TEST(RigidParamsFriction, ABoxOnAnInclineStaysOrSlidesAtCoulombsRateAtOtherRates
     const std::string what = describe(solver, rate) + " mu " + std::to_string(mu) + " at " + std::to_string(theta * 180 / kPi);
     const double x0 = glm::dot(s.center_of_mass(box), down);
     if (offset < 0) {
+      s.settings().sleep = false;
       for (int i = 0; i < static_cast<int>(5 / rate.dt); ++i) s.step(rate.dt, kGravity);
       EXPECT_LT(std::abs(glm::dot(s.center_of_mass(box), down) - x0), 1e-3) << what;
       continue;
@@ -151,13 +157,15 @@ TEST(RigidParamsFriction, ABoxOnAnInclineStaysOrSlidesAtCoulombsRateAtOtherRates
 // Euler's steps leave: each changes the velocity before moving by it, so the box stops short
 // by the sum of h_s dv / 2 over the steps (h_s the step the solver took, dv the speed lost in
 // it; RigidFriction.TheStopDistanceOverTheInputRangeIsTheClosedFormLessHalfASubstepsTravel at
-// 60 Hz); it goes straight. mu 0.2 and 0.9, 1 and 6 m/s, two directions, every rate and solver.
+// 60 Hz); it goes straight. mu 0.2 and 0.9, 1 and 6 m/s, every rate and solver, in one
+// direction off the axes (RigidFriction.SlidingStopDistanceIsTheSameInTwelveDirections covers
+// the directions). Measured short by up to 1.00018 times that sum: the 1.001 covers it.
 TEST(RigidParamsFriction, TheStopDistanceIsTheClosedFormLessHalfAStepsTravelAtOtherRates) {
   for (const Rate& rate : kRates)
   for (const auto solver : kRigidSolvers)
   for (const double mu : {0.2, 0.9})
-  for (const double v : {1.0, 6.0})
-  for (const double a : {0.0, 2.5}) {
+  for (const double v : {1.0, 6.0}) {
+    const double a = 2.5;
     RigidBodySystem s = system_at(solver, rate);
     ground(s, mu);
     const Vec3 dir{std::cos(a), 0, std::sin(a)};
@@ -184,7 +192,8 @@ TEST(RigidParamsFriction, TheStopDistanceIsTheClosedFormLessHalfAStepsTravelAtOt
 // rolling axis (5/7 g sin theta for the ball; the capsule's from its inertia), 10 and 35
 // degrees, every rate and solver. Measured from the velocity between 0.5 s and 1.5 s;
 // symplectic Euler's velocity is exact at a constant acceleration, and the soft contact's
-// sag g cos(theta) / w^2 moves the contact point (measured under 2e-3 everywhere): 1e-2.
+// sag g cos(theta) / w^2 moves the contact point (measured under 7.5e-4 everywhere): 1e-2, a
+// chosen bound, not derived.
 TEST(RigidParamsFriction, ABallAndACapsuleRollAtTheirClosedFormAtOtherRates) {
   const double r = 0.3;
   for (const Rate& rate : kRates)
@@ -352,8 +361,11 @@ TEST(RigidParamsSleep, AShortWindowDoesNotFreezeABodyInFlight) {
 //   rests on the ground, and the box it carried, left hanging, lands on it;
 // - the middle of a 3-stack destroyed while touching both others: the top falls onto the
 //   bottom and rests there (centre 1.5 m); the bottom destroyed: the top rests on the ground.
-// Rest heights within the slop (5 mm) of the closed form. Measured 2026-12-07: all within
-// 0.5 mm; push-outs at 0.8 (soft step), 3.0, 1.5 and 1.9 m/s.
+// Rest heights within the slop (5 mm) of the closed form. Measured 2026-12-07: within 0.5 mm
+// but under sequential impulses, whose teleported box rests sunk the whole slop (its contact
+// pushes out only past the slop: y = 0.495000000358, 3.6e-10 m inside the slop), so that box
+// is held to [0.5 - slop - 1e-5, 0.5 + 1e-4]: sunk at most the slop (and 10 um of solver
+// residual), never floating; push-outs at 0.8 (soft step), 3.0, 1.5 and 1.9 m/s.
 TEST(RigidParamsMixed, WhatANewUserTriesRestsWhereStaticsSays) {
   for (const auto solver : kRigidSolvers) {
     const std::string what{to_string(solver)};
@@ -392,7 +404,8 @@ TEST(RigidParamsMixed, WhatANewUserTriesRestsWhereStaticsSays) {
       }
       const double kept = solver == RigidSolverType::SequentialImpulse ? 1.01 : 1.0;
       EXPECT_LT(fastest, kept * s.settings().push_out_speed) << what;
-      EXPECT_NEAR(s.center_of_mass(stack[0]).y, 0.5, slop) << what;
+      EXPECT_GE(s.center_of_mass(stack[0]).y, 0.5 - slop - 1e-5) << what;
+      EXPECT_LE(s.center_of_mass(stack[0]).y, 0.5 + 1e-4) << what;
       EXPECT_NEAR(s.center_of_mass(stack[1]).y, 1.5, 2 * slop) << what;
     }
     {
