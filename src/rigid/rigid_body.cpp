@@ -618,7 +618,7 @@ void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f, const Vec3& p) 
   // here by name (the step would stop the system with the body 'non-finite', naming no force)
   const Vec3 force = force_[i] + f, torque = torque_[i] + glm::cross(p - com_[i], f);
   if (!is_finite(force)) require_finite(force, describe(i) + " apply_force: the force summed for the next step");
-  if (!is_finite(torque)) require_finite(torque, describe(i) + " apply_force: the torque summed for the next step");
+  if (!is_finite(torque)) require_finite(torque, describe(i) + " apply_force: the force's moment about the centre of mass, or the torque summed for the next step");
   force_[i] = force, torque_[i] = torque;
   wake_island(i);
 }

@@ -447,7 +447,7 @@ TEST(RigidParamsBadInput, AForceOrTorqueSummingPastTheDoublesIsRefusedByName) {
   });
   EXPECT_NE(twice.find("'crate' apply_force: the force summed for the next step: must be finite"), std::string::npos) << twice;
   const std::string moment = message([&] { s.apply_force(b, {1e200, 0, 0}, {0, 1e200, 0}); });
-  EXPECT_NE(moment.find("'crate' apply_force: the torque summed for the next step: must be finite"), std::string::npos) << moment;
+  EXPECT_NE(moment.find("'crate' apply_force: the force's moment about the centre of mass, or the torque summed for the next step: must be finite"), std::string::npos) << moment;
   const std::string torque = message([&] {
     s.apply_torque(b, {0, 1e308, 0});
     s.apply_torque(b, {0, 1e308, 0});
