@@ -284,9 +284,9 @@ struct ContactSettings {
   bool sleep = true;
   double sleep_linear = 0.05;    ///< m/s, finite and >= 0 (Box2D's linear sleep tolerance)
   double sleep_angular = 0.0349; ///< rad/s (2 degrees/s), finite and >= 0
-  /// s, finite and >= 0: how long an island must rest to fall asleep; a window shorter than
-  /// the step (0 included) is the step's: a body then rests when its mean speed over the step
-  /// is within the tolerances
+  /// s, finite and >= 0: how long an island must rest to fall asleep; a body's window is at
+  /// least the step, and 16 sleep_linear / |gravity * gravity_scale| (82 ms at the defaults,
+  /// at most 1 s), so a ball dropped or thrown stays awake with 0 (docs/rigid-bodies.md)
   double time_to_sleep = 0.5;
 
   /// Throws Error naming `where` and the bad field.
@@ -609,7 +609,7 @@ class RigidBodySystem {
   std::vector<Quat> rest_q_;
   std::vector<std::uint32_t> island_;
   std::vector<std::uint32_t> parent_;  // union-find scratch
-  std::vector<double> island_slow_;    // scratch: the island's shortest slow time
+  std::vector<double> island_slow_;    // scratch: the island's least slow time past its window, s
   // start of the step, for the contact solver's separation updates
   std::vector<Vec3> com0_;
   std::vector<Quat> q0_;

@@ -627,7 +627,7 @@ void RigidBodySystem::apply_force(RigidBodyId id, const Vec3& f, const Vec3& p) 
   // here by name (the step would stop the system with the body 'non-finite', naming no force)
   const Vec3 force = force_[i] + f, torque = torque_[i] + glm::cross(p - com_[i], f);
   if (!is_finite(force)) require_finite(force, describe(i) + " apply_force: the force summed for the next step");
-  if (!is_finite(torque)) require_finite(torque, describe(i) + " apply_force: the torque summed for the next step");
+  if (!is_finite(torque)) require_finite(torque, describe(i) + " apply_force: the force's moment about the centre of mass, or the torque summed for the next step");
   force_[i] = force, torque_[i] = torque;
   wake_island(i);
 }
@@ -1103,12 +1103,33 @@ void RigidBodySystem::update_sleep(double dt) {
   // The window is at least the step that measures it: with time_to_sleep under dt (0 is
   // valid) a window of time_to_sleep allowed no motion at all, every body failed it, and its
   // slow time of 0 still reached time_to_sleep, so every awake body fell asleep at the end of
-  // each step, a ball in free fall or a box sliding at 3 m/s frozen where it was. Over one
-  // step the window's test is the mean speed's against the tolerances, and a body must pass
-  // it once to sleep (its slow time is then dt). Windows of a step or longer are as before.
-  const double window = std::max(settings_.time_to_sleep, dt);
-  const double reach = settings_.sleep_linear * window;
-  const double cos_turn = std::cos(0.5 * std::min(settings_.sleep_angular * window, kPi));
+  // each step. A step is not enough under gravity either. Under an acceleration a a body
+  // starting from rest moves a W^2 / 2 over a window W, within sleep_linear * W while
+  // W <= 2 sleep_linear / a; across a turning point (the apex of a throw or a bounce) the
+  // least it strays from where the window began, at any of the window's steps, is when the
+  // window starts (sqrt(2) - 1) W before the apex: (3 - 2 sqrt(2)) a W^2 / 2 = 0.086 a W^2 up
+  // at the apex and as far down at the end (a W^2 / 8 with the apex in the middle), within
+  // sleep_linear * W while W <= 11.7 sleep_linear / a. At 1/240 s a ball dropped from rest
+  // slept after its first step, and thrown or bouncing balls froze at their apexes. So a
+  // body's window is also at least 16 sleep_linear / a, a = |gravity * gravity_scale| (82 ms
+  // at the defaults and 9.81 m/s^2): 16, not 11.7, as the steps only sample the path (its
+  // apex strays 1.37 times the reach). That floor is capped at kMaxGravityWindow for a near
+  // 0 (a body then sleeps at most a second after it stops; a flight under less than
+  // 16 sleep_linear / 1 s, 0.8 m/s^2 at the defaults, can rest at its apex); with no
+  // acceleration there is no floor. The default
+  // 0.5 s is longer than the floor at 9.81 m/s^2 and keeps its bits.
+  constexpr double kMaxGravityWindow = 1;  // s
+  const double base = std::max(settings_.time_to_sleep, dt);
+  const double base_reach = settings_.sleep_linear * base;
+  const double base_cos_turn = std::cos(0.5 * std::min(settings_.sleep_angular * base, kPi));
+  const double g = glm::length(gravity_);
+  // the body's window: the base, or longer under a weak enough acceleration
+  auto window_of = [&](std::size_t i) {
+    const double a = g * std::abs(gravity_scale_[i]);
+    const double floor_reach = 16 * settings_.sleep_linear;   // m/s: the floor's a * W
+    if (a == 0 || floor_reach <= a * base) return base;        // sleep_linear 0 included
+    return std::max(base, a * kMaxGravityWindow > floor_reach ? floor_reach / a : kMaxGravityWindow);
+  };
   // Far out the window cannot see motion: a centre whose coordinate reaches `far` has doubles
   // spaced at least a substep's motion at the linear tolerance apart (2^-52 of it), so a
   // slower substep rounds away (at y = 1e17 m they are 16 m apart: a ball falling there
@@ -1123,6 +1144,12 @@ void RigidBodySystem::update_sleep(double dt) {
   for (std::size_t i = 0; i < n; ++i) {
     parent_[i] = static_cast<std::uint32_t>(i);
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    const double window = window_of(i);
+    double reach = base_reach, cos_turn = base_cos_turn;
+    if (window != base) {
+      reach = settings_.sleep_linear * window;
+      cos_turn = std::cos(0.5 * std::min(settings_.sleep_angular * window, kPi));
+    }
     const Vec3 d = com_[i] - rest_com_[i];
     bool rests = glm::dot(d, d) <= reach * reach && std::abs(glm::dot(q_[i], rest_q_[i])) >= cos_turn;
     if (rests && std::max({std::abs(com_[i].x), std::abs(com_[i].y), std::abs(com_[i].z)}) >= far)
@@ -1160,20 +1187,21 @@ void RigidBodySystem::update_sleep(double dt) {
         sleep_time_[other] = 0;
     }
   }
-  // the shortest slow time of each island (its root: the island's smallest index)
+  // the least slow time past its body's window of each island (its root: the island's
+  // smallest index); the island sleeps when that is >= 0 (a - b >= 0 exactly when a >= b)
   for (std::size_t i = 0; i < n; ++i) island_slow_[i] = INFINITY;
   for (std::size_t i = 0; i < n; ++i) {
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     const std::uint32_t r = find(static_cast<std::uint32_t>(i));
     parent_[i] = r;
-    island_slow_[r] = std::min(island_slow_[r], sleep_time_[i]);
+    island_slow_[r] = std::min(island_slow_[r], sleep_time_[i] - window_of(i));
   }
   // islands slow for long enough fall asleep, their members linked in a ring from the root
   // (which comes first in index order)
   for (std::size_t i = 0; on && i < n; ++i) {
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     const std::uint32_t r = parent_[i];
-    if (island_slow_[r] < window) continue;
+    if (island_slow_[r] < 0) continue;
     asleep_[i] = 1;
     v_[i] = Vec3(0);
     w_[i] = Vec3(0);

@@ -898,6 +898,8 @@ TEST(RigidCompound, ANestedCompoundMovesAsItsLeavesAtTheComposedPoses) {
   EXPECT_NEAR(ball_a.position.y, 0.7, 0.01);       // the ball rests on the table top (0.6) by its radius
 }
 
+// The body reaches non-finite here by its position only (a finite velocity for an overflowing
+// time); a velocity that overflows is RigidDivergence.AnOverflowingVelocityIsReportedNonFinite.
 TEST(RigidDivergence, ANonFiniteBodyStopsTheSystemWithItsNameAndTime) {
   RigidBodySystem s({.contacts = {.substeps = 1}});
   s.create({.name = "calm", .pose = {{0.5, 0, 0}}, .shapes = kBall});  // close: a speculative pair
@@ -910,6 +912,18 @@ TEST(RigidDivergence, ANonFiniteBodyStopsTheSystemWithItsNameAndTime) {
   EXPECT_NE(m.find("rigid body 1 'wild' became non-finite in the step to t = 1e+300 s"), std::string::npos) << m;
   EXPECT_EQ(error_of([&] { s.step(0.5, kG); }), m);  // and refuses to go on
   EXPECT_EQ(s.failed_body(), wild);
+}
+
+// gravity times a step that overflows gives an infinite velocity: the step stops the system
+// with the body's name, "became non-finite" (not "went faster": infinity is no speed), and its
+// velocity
+TEST(RigidDivergence, AnOverflowingVelocityIsReportedNonFinite) {
+  RigidBodySystem s({.contacts = {.substeps = 1}});
+  const auto b = s.create({.name = "stone", .shapes = kBall});
+  const std::string m = error_of([&] { s.step(1e300, Vec3(0, -1e10, 0)); });
+  EXPECT_NE(m.find("rigid body 0 'stone' became non-finite in the step to t = 1e+300 s"), std::string::npos) << m;
+  EXPECT_NE(m.find("velocity (0, -inf, 0)"), std::string::npos) << m;
+  EXPECT_EQ(s.failed_body(), b);
 }
 
 // check_finite's test of the bodies' centres, velocities and frames as flat arrays: every

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "pba/rigid.h"
 #include "pba/rigid_scenes.h"
@@ -55,11 +56,13 @@ void ground(RigidBodySystem& s, double mu, double e = 0, double angle = 0) {
 // restitution and elastic collisions
 
 // A ball dropped from h onto a ground of the same e rebounds to e^2 h. The apex is read from
-// the state at the end of the bounce step, y + vy^2 / (2 g). The bound is symplectic Euler's
-// at the step h_s of the solver (the substep; sequential impulses: the step): the fall reaches
-// the ground with its speed off by at most g h_s / 2 of the closed form's v = sqrt(2 g h), so
-// the apex by e^2 v h_s / 2, and the rise loses at most e v h_s / 2 more, so
-// |apex - e^2 h| <= (e + e^2) v h_s / 2. Measured: within 0.5 of it, every solver and rate.
+// the state at the end of the bounce step, y + vy^2 / (2 g), in closed form: the rise adds no
+// error. The bound is symplectic Euler's at the step h_s of the solver (the substep;
+// sequential impulses: the step): the fall reaches the ground with its speed off by at most
+// g h_s / 2 of the closed form's v = sqrt(2 g h), so the rebound's by e g h_s / 2 and the apex
+// (e v)^2 / (2 g) by e^2 v h_s / 2 to first order; the second order, e^2 g h_s^2 / 8, is
+// g h_s / (4 v) of that, at most 2.6% here (0.5 m at 1/30 s). So |apex - e^2 h| <=
+// 1.05 e^2 v h_s / 2. Measured: within 0.996 of e^2 v h_s / 2, every solver and rate.
 TEST(RigidParamsRestitution, TheApexIsESquaredOfTheDropAtOtherRatesUnderEverySolver) {
   const double r = 0.2;
   for (const Rate& rate : kRates)
@@ -77,16 +80,18 @@ TEST(RigidParamsRestitution, TheApexIsESquaredOfTheDropAtOtherRatesUnderEverySol
       if (vy > 0) apex = y + vy * vy / (2 * kG);
     }
     const double v = std::sqrt(2 * kG * h);
-    EXPECT_NEAR(apex, e * e * h, (e + e * e) * v * hs / 2) << describe(solver, rate) << " e = " << e << " h = " << h;
+    EXPECT_NEAR(apex, e * e * h, 1.05 * e * e * v * hs / 2) << describe(solver, rate) << " e = " << e << " h = " << h;
   }
 }
 
 // Head on, masses m_a and m_b (ratios 3 and 100), e = 1 and 0.5: each leaves at
 // v_c - e (v - v_c) (v_c the centre of mass's velocity), and the momentum is kept. Balls meet
-// at one point through both centres, so no step rate enters: the 1e-3 m/s and 1e-5
-// (measured 1e-7 and 8e-8 at every rate, every solver).
+// at one point through both centres, so no step rate enters (one rate, 1/60 s; measured
+// 9.4e-8 m/s and 7.5e-8 at every rate, every solver). What is left is the rounding of the
+// contact's float rows, 2^-24 = 6e-8 of the 2 m/s they carry per operation: 1e-6 m/s and
+// 1e-6 of the momentum allow a few such roundings and nothing of the scheme.
 TEST(RigidParamsRestitution, UnequalMassesLeaveAHeadOnCollisionAtNewtonsVelocities) {
-  for (const Rate& rate : kRates)
+  const Rate rate{1.0 / 60, 0};
   for (const auto solver : kRigidSolvers)
   for (const double ratio : {3.0, 100.0})
   for (const double e : {1.0, 0.5}) {
@@ -100,10 +105,10 @@ TEST(RigidParamsRestitution, UnequalMassesLeaveAHeadOnCollisionAtNewtonsVelociti
     const Vec3 p0 = ma * s.linear_velocity(a) + mb * s.linear_velocity(b);
     for (int i = 0; i < static_cast<int>(1.5 / rate.dt); ++i) s.step(rate.dt, Vec3(0));
     const std::string what = describe(solver, rate) + " ratio " + std::to_string(ratio) + " e " + std::to_string(e);
-    EXPECT_NEAR(s.linear_velocity(a).x, vc - e * (2 - vc), 1e-3) << what;
-    EXPECT_NEAR(s.linear_velocity(b).x, vc - e * (-1 - vc), 1e-3) << what;
+    EXPECT_NEAR(s.linear_velocity(a).x, vc - e * (2 - vc), 1e-6) << what;
+    EXPECT_NEAR(s.linear_velocity(b).x, vc - e * (-1 - vc), 1e-6) << what;
     const Vec3 p1 = ma * s.linear_velocity(a) + mb * s.linear_velocity(b);
-    EXPECT_LT(glm::length(p1 - p0) / glm::length(p0), 1e-5) << what;
+    EXPECT_LT(glm::length(p1 - p0) / glm::length(p0), 1e-6) << what;
   }
 }
 
@@ -112,9 +117,10 @@ TEST(RigidParamsRestitution, UnequalMassesLeaveAHeadOnCollisionAtNewtonsVelociti
 
 // A flat box (0.5 x 0.1 x 0.5 m: it tips only past 79 degrees) on an incline of mu 0.2 and
 // 0.9, 4 degrees under the friction angle (stays: under 1 mm in 5 s, the issue's) and 10 over
-// it (slides at g (sin - mu cos): the 2%), every rate, every solver. Symplectic Euler's
-// velocity is exact under a constant force; what is left is the contact's settling (measured:
-// within 3e-3 at every rate). XPBD only at substeps of 1/480 s or shorter (found and left,
+// it (slides at g (sin - mu cos): the 2%, a chosen bound, not derived), every rate,
+// every solver. Symplectic Euler's velocity is exact under a constant force; what is left is
+// the contact's settling (measured: within 2.7e-3 at every rate). Sleep is off in the staying
+// case, so a creep under the tolerances (2 mm/s) cannot sleep away and pass. XPBD only at substeps of 1/480 s or shorter (found and left,
 // docs/rigid-bodies.md, known limits, "XPBD, a sliding box's fresh manifold"): at 1/240 s
 // (1/30 s, 8 substeps) the box sank 0.62 mm in the step its plane manifold was made afresh,
 // and pushing it out cost mu times that impulse: 5.5% of the acceleration at mu 0.9, 52 deg.
@@ -134,6 +140,7 @@ TEST(RigidParamsFriction, ABoxOnAnInclineStaysOrSlidesAtCoulombsRateAtOtherRates
     const std::string what = describe(solver, rate) + " mu " + std::to_string(mu) + " at " + std::to_string(theta * 180 / kPi);
     const double x0 = glm::dot(s.center_of_mass(box), down);
     if (offset < 0) {
+      s.settings().sleep = false;
       for (int i = 0; i < static_cast<int>(5 / rate.dt); ++i) s.step(rate.dt, kGravity);
       EXPECT_LT(std::abs(glm::dot(s.center_of_mass(box), down) - x0), 1e-3) << what;
       continue;
@@ -150,13 +157,15 @@ TEST(RigidParamsFriction, ABoxOnAnInclineStaysOrSlidesAtCoulombsRateAtOtherRates
 // Euler's steps leave: each changes the velocity before moving by it, so the box stops short
 // by the sum of h_s dv / 2 over the steps (h_s the step the solver took, dv the speed lost in
 // it; RigidFriction.TheStopDistanceOverTheInputRangeIsTheClosedFormLessHalfASubstepsTravel at
-// 60 Hz); it goes straight. mu 0.2 and 0.9, 1 and 6 m/s, two directions, every rate and solver.
+// 60 Hz); it goes straight. mu 0.2 and 0.9, 1 and 6 m/s, every rate and solver, in one
+// direction off the axes (RigidFriction.SlidingStopDistanceIsTheSameInTwelveDirections covers
+// the directions). Measured short by up to 1.00018 times that sum: the 1.001 covers it.
 TEST(RigidParamsFriction, TheStopDistanceIsTheClosedFormLessHalfAStepsTravelAtOtherRates) {
   for (const Rate& rate : kRates)
   for (const auto solver : kRigidSolvers)
   for (const double mu : {0.2, 0.9})
-  for (const double v : {1.0, 6.0})
-  for (const double a : {0.0, 2.5}) {
+  for (const double v : {1.0, 6.0}) {
+    const double a = 2.5;
     RigidBodySystem s = system_at(solver, rate);
     ground(s, mu);
     const Vec3 dir{std::cos(a), 0, std::sin(a)};
@@ -183,7 +192,8 @@ TEST(RigidParamsFriction, TheStopDistanceIsTheClosedFormLessHalfAStepsTravelAtOt
 // rolling axis (5/7 g sin theta for the ball; the capsule's from its inertia), 10 and 35
 // degrees, every rate and solver. Measured from the velocity between 0.5 s and 1.5 s;
 // symplectic Euler's velocity is exact at a constant acceleration, and the soft contact's
-// sag g cos(theta) / w^2 moves the contact point (measured under 2e-3 everywhere): 1e-2.
+// sag g cos(theta) / w^2 moves the contact point (measured under 7.5e-4 everywhere): 1e-2, a
+// chosen bound, not derived.
 TEST(RigidParamsFriction, ABallAndACapsuleRollAtTheirClosedFormAtOtherRates) {
   const double r = 0.3;
   for (const Rate& rate : kRates)
@@ -292,6 +302,50 @@ TEST(RigidParamsSleep, AWindowShorterThanAStepHoldsTheStepsSpeedToTheTolerances)
   EXPECT_NEAR(s.center_of_mass(ball).y, 100 - kG * h * h * n * (n + 1) / 2, 1e-9);
 }
 
+// A window of a step still froze bodies in flight: over a window W a body starting from rest
+// moves g W^2 / 2, and one across the apex of a throw or a bounce as little as 0.086 g W^2,
+// both within sleep_linear * W for W of a step. At 1/240 s a ball dropped from rest slept
+// after its first step (its mean speed g dt / 2 = 0.02 m/s), one thrown up at 3 m/s at 1/60 s
+// froze at its apex, and 116 of 120 bouncing balls froze at an apex. A body's window is now
+// at least 16 sleep_linear / |g| (82 ms here), so each stays awake in flight at time_to_sleep
+// 0 and 0.02 s, on symplectic Euler's closed form; and a ball come to rest on the ground
+// still falls asleep, within that window of when it stopped moving.
+TEST(RigidParamsSleep, AShortWindowDoesNotFreezeABodyInFlight) {
+  for (const double window : {0.0, 0.02}) {
+    const std::string what = "time_to_sleep " + std::to_string(window);
+    // dropped from rest at 1/240 s (one substep: h = dt) and thrown up at 3 m/s at 1/60 s,
+    // through its apex at 0.31 s, each for 1 s: y_n = y0 + v0 n h - g h^2 n (n + 1) / 2
+    for (const auto& [dt, v0] : {std::pair{1.0 / 240, 0.0}, std::pair{1.0 / 60, 3.0}}) {
+      RigidBodySystem s({.contacts = {.substeps = 1, .auto_substeps = false, .time_to_sleep = window}});
+      const auto ball = s.create({.pose = {{0, 100, 0}}, .linear_velocity = {0, v0, 0},
+                                  .shapes = {{.shape = ColliderShape::sphere(0.5)}}});
+      const int n = static_cast<int>(std::lround(1 / dt));
+      int awake = 0;
+      for (int i = 0; i < n; ++i) s.step(dt, kGravity), awake += s.awake(ball);
+      EXPECT_EQ(awake, n) << what << " v0 " << v0;
+      EXPECT_NEAR(s.center_of_mass(ball).y, 100 + v0 * n * dt - kG * dt * dt * n * (n + 1) / 2, 1e-9)
+          << what << " v0 " << v0;
+    }
+    // bouncing balls (e 1, 0.8, 0.5 from 0.3 and 1.7 m) at 1/60 s: none sleeps while more
+    // than 1 cm above the ground; the ones that stop bouncing (e < 1) sleep by 8 s
+    for (const double e : {1.0, 0.8, 0.5})
+    for (const double h : {0.3, 1.7}) {
+      RigidBodySystem s({.contacts = {.time_to_sleep = window}});
+      ground(s, 0.5, e);
+      const auto ball = s.create({.pose = {{0, h + 0.2, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.2), .material = {.restitution = e}}}});
+      double frozen_at = -1;
+      for (int i = 0; i < 480; ++i) {
+        s.step(1.0 / 60, kGravity);
+        if (!s.awake(ball) && frozen_at < 0 && s.center_of_mass(ball).y - 0.2 > 0.01) frozen_at = s.center_of_mass(ball).y - 0.2;
+      }
+      EXPECT_LT(frozen_at, 0) << what << " e " << e << " h " << h << ": asleep at height " << frozen_at;
+      if (e < 1) {
+        EXPECT_FALSE(s.awake(ball)) << what << " e " << e << " h " << h;
+      }
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------------------
 // mixed scenes
 
@@ -307,8 +361,11 @@ TEST(RigidParamsSleep, AWindowShorterThanAStepHoldsTheStepsSpeedToTheTolerances)
 //   rests on the ground, and the box it carried, left hanging, lands on it;
 // - the middle of a 3-stack destroyed while touching both others: the top falls onto the
 //   bottom and rests there (centre 1.5 m); the bottom destroyed: the top rests on the ground.
-// Rest heights within the slop (5 mm) of the closed form. Measured 2026-12-07: all within
-// 0.5 mm; push-outs at 0.8 (soft step), 3.0, 1.5 and 1.9 m/s.
+// Rest heights within the slop (5 mm) of the closed form. Measured 2026-12-07: within 0.5 mm
+// but under sequential impulses, whose teleported box rests sunk the whole slop (its contact
+// pushes out only past the slop: y = 0.495000000358, 3.6e-10 m inside the slop), so that box
+// is held to [0.5 - slop - 1e-5, 0.5 + 1e-4]: sunk at most the slop (and 10 um of solver
+// residual), never floating; push-outs at 0.8 (soft step), 3.0, 1.5 and 1.9 m/s.
 TEST(RigidParamsMixed, WhatANewUserTriesRestsWhereStaticsSays) {
   for (const auto solver : kRigidSolvers) {
     const std::string what{to_string(solver)};
@@ -347,7 +404,8 @@ TEST(RigidParamsMixed, WhatANewUserTriesRestsWhereStaticsSays) {
       }
       const double kept = solver == RigidSolverType::SequentialImpulse ? 1.01 : 1.0;
       EXPECT_LT(fastest, kept * s.settings().push_out_speed) << what;
-      EXPECT_NEAR(s.center_of_mass(stack[0]).y, 0.5, slop) << what;
+      EXPECT_GE(s.center_of_mass(stack[0]).y, 0.5 - slop - 1e-5) << what;
+      EXPECT_LE(s.center_of_mass(stack[0]).y, 0.5 + 1e-4) << what;
       EXPECT_NEAR(s.center_of_mass(stack[1]).y, 1.5, 2 * slop) << what;
     }
     {
@@ -389,7 +447,7 @@ TEST(RigidParamsBadInput, AForceOrTorqueSummingPastTheDoublesIsRefusedByName) {
   });
   EXPECT_NE(twice.find("'crate' apply_force: the force summed for the next step: must be finite"), std::string::npos) << twice;
   const std::string moment = message([&] { s.apply_force(b, {1e200, 0, 0}, {0, 1e200, 0}); });
-  EXPECT_NE(moment.find("'crate' apply_force: the torque summed for the next step: must be finite"), std::string::npos) << moment;
+  EXPECT_NE(moment.find("'crate' apply_force: the force's moment about the centre of mass, or the torque summed for the next step: must be finite"), std::string::npos) << moment;
   const std::string torque = message([&] {
     s.apply_torque(b, {0, 1e308, 0});
     s.apply_torque(b, {0, 1e308, 0});
