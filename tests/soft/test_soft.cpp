@@ -641,6 +641,17 @@ TEST(MassSpring, ExplicitBlowUpNamesTheSettingPastItsBound) {
       }
 }
 
+namespace {
+// a cloth pinned along its first column, drag or lift `coef`, in a steady wind (m/s)
+pba::SoftBody aero_cloth(double coef, bool lift, pba::Vec3 wind, int nx, int ny) {
+  pba::SoftBodyDef d;
+  d.substeps = 4;
+  (lift ? d.aero.lift : d.aero.drag) = coef;
+  d.forces.wind = {.velocity = wind};
+  return pba::SoftBody::cloth_grid({.nx = nx, .ny = ny, .pins = pba::ClothPins::FirstColumn}, d);
+}
+}  // namespace
+
 // Cloth aerodynamics of any size: an acceleration beyond a float (C_d or C_l of 1e300 in
 // 5 m/s of wind) is refused by name before anything moves, rather than blamed on the step
 // (`dt ... moves a particle beyond a float`) or found later as a non-finite particle; the
@@ -649,11 +660,7 @@ TEST(SoftBadInput, AerodynamicsBeyondAFloatIsNamed) {
   for (const double coef : {1e300, std::numeric_limits<double>::max()})
     for (const bool lift : {false, true}) {
       SCOPED_TRACE(testing::Message() << coef << (lift ? " lift" : " drag"));
-      pba::SoftBodyDef d;
-      d.substeps = 4;
-      (lift ? d.aero.lift : d.aero.drag) = coef;
-      d.forces.wind = {.velocity = {5, 2, 1}};
-      pba::SoftBody f = pba::SoftBody::cloth_grid({.nx = 6, .ny = 5, .pins = pba::ClothPins::FirstColumn}, d);
+      pba::SoftBody f = aero_cloth(coef, lift, {5, 2, 1}, 6, 5);
       const std::uint64_t h0 = f.hash();
       const std::string msg = error_of([&] { f.step(0, 1.0 / 60); });
       EXPECT_EQ(msg.rfind("SoftBodyDef.aero: the aerodynamic force on particle ", 0), 0u) << msg;
@@ -665,23 +672,19 @@ TEST(SoftBadInput, AerodynamicsBeyondAFloatIsNamed) {
     }
 }
 
-// The shares of a particle's triangles are each within a float where their sum is not (a cloth
-// grid's inner particle takes six equal ones when the cloth faces the wind at rest), and a
-// pinned corner takes none even when the force is infinite (0 * inf): across the coefficients'
-// whole range, a step either goes on or names the aerodynamics, never a "smaller dt" or a
-// non-finite particle. (Before: 1e37 to 1e38 per share summed to inf, blamed on the dt; drag
-// 1.8e308 made the pinned corner's share NaN.)
+// Across the coefficients' whole range a step either goes on or names the aerodynamics, never a
+// "smaller dt" or a non-finite particle: a share within a float can fling a particle farther
+// than the float solve squares (before: every coefficient from 1e30 to 3.2e37 flung the cloth
+// ~1e27 m and more, and its pins 'became non-finite'), the shares of a particle's triangles can
+// each fit a float where their sum does not (a grid's inner particle takes up to six), and a
+// pinned corner takes none even when the force is infinite (0 * inf).
 TEST(SoftBadInput, AerodynamicsSummedBeyondAFloatIsNamedAtEveryCoefficient) {
   int named = 0;
-  for (int k = 120; k <= 1232; ++k) {  // 1e30 .. 1e308 by a quarter decade, and DBL_MAX
+  for (int k = 120; k <= 1232; ++k) {  // 1e30 .. 10^307.75 by quarter decades, then DBL_MAX
     const double coef = k == 1232 ? std::numeric_limits<double>::max() : std::pow(10.0, k / 4.0);
     for (const bool lift : {false, true}) {
       SCOPED_TRACE(testing::Message() << coef << (lift ? " lift" : " drag"));
-      pba::SoftBodyDef d;
-      d.substeps = 4;
-      (lift ? d.aero.lift : d.aero.drag) = coef;
-      d.forces.wind = {.velocity = {1, 2, 5}};
-      pba::SoftBody f = pba::SoftBody::cloth_grid({.nx = 4, .ny = 4, .pins = pba::ClothPins::FirstColumn}, d);
+      pba::SoftBody f = aero_cloth(coef, lift, {1, 2, 5}, 4, 4);
       const std::string msg = error_of([&] { f.step(0, 1.0 / 60); });
       if (msg.empty()) continue;
       ++named;
