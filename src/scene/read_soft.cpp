@@ -68,6 +68,16 @@ struct FieldKey {
   throw Error(n.where() + ": " + m);
 }
 
+// build(), a builder's call, with its Error put under the JSON path of the field it names
+template <class Build>
+SoftBody build_by_field(const Node& n, std::initializer_list<FieldKey> fields, Build build) {
+  try {
+    return build();
+  } catch (const Error& e) {
+    fail_by_field(n, e, fields);
+  }
+}
+
 // The fields one solver takes and the other ignores: given for the other solver they are
 // refused by path, with the field that solver takes instead (they used to be read and
 // dropped without a word).
@@ -196,14 +206,11 @@ void read_soft_body(const Node& n, World& w) {
       sp.damping = d.spring_damping;
       sp.rest_length = n.has("rest_length") ? n.positive("rest_length", 1) : -1;
       sp.fixed_a = n.flag("fixed_a", sp.fixed_a);
-      try {
-        body = SoftBody::spring(sp, d);
-      } catch (const Error& e) {
-        fail_by_field(n, e,
-                      {{"SpringDef.a", "a"}, {"SpringDef.b", "b"}, {"SpringDef.velocity_b", "velocity_b"},
-                       {"SpringDef.mass", "mass"}, {"SpringDef.stiffness", "stiffness"},
-                       {"SpringDef.damping", "spring_damping"}, {"SpringDef.rest_length", "rest_length"}});
-      }
+      body = build_by_field(n,
+                            {{"SpringDef.a", "a"}, {"SpringDef.b", "b"}, {"SpringDef.velocity_b", "velocity_b"},
+                             {"SpringDef.mass", "mass"}, {"SpringDef.stiffness", "stiffness"},
+                             {"SpringDef.damping", "spring_damping"}, {"SpringDef.rest_length", "rest_length"}},
+                            [&] { return SoftBody::spring(sp, d); });
       break;
     }
     case Type::Rope: {
@@ -216,13 +223,10 @@ void read_soft_body(const Node& n, World& w) {
       r.pin_start = n.flag("pin_start", r.pin_start);
       r.pin_end = n.flag("pin_end", r.pin_end);
       r.bending = n.flag("bending", r.bending);
-      try {
-        body = SoftBody::rope(r, d);
-      } catch (const Error& e) {
-        fail_by_field(n, e,
-                      {{"RopeDef.from", "from"}, {"RopeDef.to", "to"}, {"RopeDef.segments", "segments"},
-                       {"RopeDef.mass", "mass"}});
-      }
+      body = build_by_field(n,
+                            {{"RopeDef.from", "from"}, {"RopeDef.to", "to"}, {"RopeDef.segments", "segments"},
+                             {"RopeDef.mass", "mass"}},
+                            [&] { return SoftBody::rope(r, d); });
       break;
     }
     case Type::Cloth: {
@@ -243,24 +247,19 @@ void read_soft_body(const Node& n, World& w) {
                                    c.pins);
       c.shear = n.flag("shear", c.shear);
       c.bending = n.flag("bending", c.bending);
-      try {
-        body = SoftBody::cloth_grid(c, d);
-      } catch (const Error& e) {
-        fail_by_field(n, e,
-                      {{"ClothDef.origin", "origin"}, {"ClothDef.edge_u", "edge_u"}, {"ClothDef.edge_v", "edge_v"},
-                       {"ClothDef.nx", "nx"}, {"ClothDef.ny", "ny"}, {"ClothDef.mass", "mass"}});
-      }
+      body = build_by_field(n,
+                            {{"ClothDef.origin", "origin"}, {"ClothDef.edge_u", "edge_u"},
+                             {"ClothDef.edge_v", "edge_v"}, {"ClothDef.nx", "nx"}, {"ClothDef.ny", "ny"},
+                             {"ClothDef.mass", "mass"}},
+                            [&] { return SoftBody::cloth_grid(c, d); });
       break;
     }
     case Type::Jelly: {
-      try {
-        body = SoftBody::jelly_box(j, d);
-      } catch (const Error& e) {
-        fail_by_field(n, e,
-                      {{"JellyDef.center", "center"}, {"JellyDef.size", "size"}, {"JellyDef.rotation", "rotation"},
-                       {"JellyDef.nx", "cells"}, {"JellyDef.ny", "cells"}, {"JellyDef.nz", "cells"},
-                       {"JellyDef.mass", "mass"}, {"JellyDef.velocity", "velocity"}});
-      }
+      body = build_by_field(n,
+                            {{"JellyDef.center", "center"}, {"JellyDef.size", "size"},
+                             {"JellyDef.rotation", "rotation"}, {"JellyDef.nx", "cells"}, {"JellyDef.ny", "cells"},
+                             {"JellyDef.nz", "cells"}, {"JellyDef.mass", "mass"}, {"JellyDef.velocity", "velocity"}},
+                            [&] { return SoftBody::jelly_box(j, d); });
       break;
     }
   }
