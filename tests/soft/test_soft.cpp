@@ -1758,3 +1758,82 @@ TEST(SoftLimits, ValuesThatOverflowAFloatAreRefusedByName) {
                 .find("SpringDef.velocity_b: must fit a float"),
             std::string::npos);
 }
+
+// ---------------------------------------------------------------------------------------
+// settings at the ends of their ranges (2026-12-07)
+
+// XPBD drag of any size toward the wind: the implicit velocity u_w + (v - u_w + h g) /
+// (1 + h k), k = (b + c |v - u_w|) w, tends to the wind's velocity as k grows (the exact
+// relaxation e^(-k t) does too), and at k = inf is the wind's. A free particle in a 5 m/s
+// wind under gravity ends the step at the wind's velocity to float rounding (the fall's
+// share h g / (1 + h k) is under 1e-26 m/s; quadratic drag within one substep's fall g h)
+// and a cloth pinned along a row (its pins' k is 0) steps on finite. Until 2026-12-07 the
+// form (v + h (g + k u_w)) / (1 + h k) overflowed its k u_w and made the state NaN at step
+// 1 (the particle from 1e35, the cloth from 1e37; quadratic 3.4e38 also made the pins' k
+// = c |u - u_w| 0 = inf 0 NaN).
+TEST(SoftXpbd, DragOfAnySizeRelaxesToTheWindAtOnce) {
+  const pba::Vec3 wind(5, 0, -2);
+  for (const bool quadratic : {false, true})
+    for (const double b : {1e30, 1e35, 1e37, 3.4e38}) {  // (beyond a float: refused by Forces::validate)
+      SCOPED_TRACE(testing::Message() << (quadratic ? "quadratic " : "linear ") << b);
+      pba::SoftBodyDef d;
+      (quadratic ? d.forces.quadratic_drag : d.forces.linear_drag) = b;
+      d.forces.wind.velocity = wind;
+      pba::SoftMesh m;
+      m.positions = {{0, 1, 0}};
+      m.masses = {1e-3};  // w = 1000: k = 1e3 b
+      pba::SoftBody p = pba::SoftBody::from_mesh(m, d);
+      // (quadratic drag's k is taken at the substep's start: where the relative speed is
+      // 0 it is 0, and gravity acts for that substep, g h = 0.016 m/s)
+      const double slack = quadratic ? 9.81 / 600 : 0.0;
+      for (int f = 0; f < 3; ++f) {
+        ASSERT_EQ(error_of([&] { p.step(f / 60.0, 1.0 / 60); }), "");
+        EXPECT_LE(glm::length(p.velocity(0) - wind), slack + 1e-5) << pba::format_vec3(p.velocity(0));
+      }
+      // it travelled with the wind: 3 steps of 1/60 s at 5.4 m/s
+      EXPECT_NEAR(glm::length(p.position(0) - pba::Vec3(0, 1, 0)), glm::length(wind) * 3 / 60, slack / 60 + 1e-5);
+      pba::SoftBody r = pba::SoftBody::cloth_grid({.nx = 8, .ny = 8}, d);
+      for (int f = 0; f < 3; ++f) ASSERT_EQ(error_of([&] { r.step(f / 60.0, 1.0 / 60); }), "");
+      EXPECT_TRUE(std::isfinite(r.kinetic_energy()));
+    }
+}
+
+// The collision thickness pushes a touching particle that far out of a collider, it moves
+// on at that speed, and the float solver squares the lengths between particles: a
+// thickness of 1e30 m (finite and >= 0, so accepted) turned an XPBD cloth lying on the
+// ground NaN at the first step, 4e18 m one dropped on a sphere. Past sqrt(FLT_MAX) / 64 =
+// 2.9e17 m it is refused by name, at build and between steps; at that bound cloths on a
+// plane and on a sphere step on finite under both solvers, and a denormal acts as 0.
+TEST(SoftBadInput, ThicknessBeyondTheFloatSolverIsNamed) {
+  const double bound = std::sqrt(double(std::numeric_limits<float>::max())) / 64;
+  const pba::Collider ground = pba::Collider::plane({0, 1, 0}, 0);
+  for (const double th : {std::nextafter(bound, 1e300), 4e18, 1e30, 1e300, std::numeric_limits<double>::max()}) {
+    SCOPED_TRACE(th);
+    pba::SoftBodyDef d;
+    d.thickness = th;
+    const std::string expect = "SoftBodyDef.thickness: must be at most " + pba::format_value(bound) +
+                               " m, sqrt(FLT_MAX) / 64 (a contact pushes a particle this far out of a collider, and "
+                               "the float solver squares the lengths between particles), got " + pba::format_value(th);
+    EXPECT_EQ(error_of([&] { pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4}, d); }), expect);
+    pba::SoftBody c = pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4});
+    c.settings().thickness = th;
+    EXPECT_EQ(error_of([&] { c.step(0, 1.0 / 60, std::span(&ground, 1)); }), expect);
+    EXPECT_FALSE(c.failed());
+  }
+  const pba::Collider ball = pba::Collider::sphere({0, 0.5, 0}, 0.3);
+  for (const pba::SoftSolver solver : {pba::SoftSolver::Xpbd, pba::SoftSolver::MassSpring})
+    for (const double th : {bound, 1e-310}) {
+      SCOPED_TRACE(testing::Message() << th << (solver == pba::SoftSolver::Xpbd ? " xpbd" : " mass-spring"));
+      pba::SoftBodyDef d;
+      d.thickness = th;
+      d.solver = solver;
+      pba::SoftBody c = pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4}, d);
+      pba::SoftBody s = pba::SoftBody::cloth_grid(
+          {.origin = {-0.5, 0.7, -0.5}, .nx = 8, .ny = 8, .pins = pba::ClothPins::None}, d);
+      for (int f = 0; f < 30; ++f) {
+        ASSERT_EQ(error_of([&] { c.step(f / 60.0, 1.0 / 60, std::span(&ground, 1)); }), "");
+        ASSERT_EQ(error_of([&] { s.step(f / 60.0, 1.0 / 60, std::span(&ball, 1)); }), "");
+      }
+    }
+}
+
