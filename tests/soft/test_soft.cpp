@@ -1984,3 +1984,29 @@ TEST(MassSpring, ImplicitEulerNewtonFailureNamesTheSetting) {
     EXPECT_EQ(msg.find("SoftBodyDef.bend_stiffness"), std::string::npos) << msg;
   }
 }
+
+// Values the builders turn into a setting that the settings' check then refuses named
+// that setting, a field the caller never set: a spring of k = 1e-310 N/m (> 0, but its
+// XPBD compliance 1 / k is inf) was "SoftBodyDef.stretch_compliance: ... got inf", a
+// jelly of damping time 1e307 s (c = tau k = inf) "SoftBodyDef.spring_damping". Each
+// now names its input; at the ends of the accepted range they build and step finite.
+TEST(SoftBadInput, DerivedSettingsNameTheirInputs) {
+  for (const double k : {1e-310, 4e-324}) {
+    const std::string msg = error_of([&] { pba::SoftBody::spring({.stiffness = k}); });
+    EXPECT_EQ(msg.rfind("SpringDef.stiffness: must be at least 5.562684646268003e-309 N/m", 0), 0u) << msg;
+  }
+  for (const double k : {1e-308, std::numeric_limits<double>::max()}) {
+    pba::SoftBody s = pba::SoftBody::spring({.stiffness = k});
+    EXPECT_EQ(error_of([&] { s.step(0, 1.0 / 60); }), "") << k;
+  }
+  for (const double tau : {1e307, std::numeric_limits<double>::max()}) {  // k = 298 N/m
+    const std::string msg = error_of([&] { pba::jelly_settings({}, {.damping_time = tau}); });
+    EXPECT_EQ(msg.rfind("JellyMaterial.damping_time: " + pba::format_value(tau) +
+                            " s gives the edges the damping c = tau k = inf N s/m",
+                        0),
+              0u)
+        << msg;
+  }
+  pba::SoftBody j = pba::SoftBody::jelly_box({}, pba::jelly_settings({}, {.damping_time = 1e300}));
+  EXPECT_EQ(error_of([&] { j.step(0, 1.0 / 60); }), "");
+}
