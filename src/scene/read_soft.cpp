@@ -44,16 +44,16 @@ JellyMaterial read_jelly_material(const Node& n) {
   return m;
 }
 
-// A field of a builder's definition and the JSON key (and item of its array) it is read from.
+// A field of a builder's definition and the JSON key (and the part of it) it is read from.
 struct FieldKey {
-  const char* field;  // "RopeDef.mass": how the builder names it
-  const char* key;    // "mass"
-  int item = -1;      // "JellyDef.nx" is "cells" item 0; -1: the key itself
+  const char* field;          // "RopeDef.mass": how the builder names it
+  const char* key;            // "mass"
+  const char* sub = nullptr;  // "JellyDef.nx" is "cells" item "0", "...linear_drag" "drag" "linear"
 };
 
 // The settings every type reads under their own names (the builders validate them as
 // "SoftBodyDef.<field>"; the reader's own checks refuse most values first, not all: a
-// thickness beyond what the float solver squares).
+// thickness beyond what the float solver squares, a drag beyond a float).
 constexpr FieldKey kSettingsKeys[] = {
     {"SoftBodyDef.substeps", "substeps"},
     {"SoftBodyDef.iterations", "iterations"},
@@ -70,6 +70,8 @@ constexpr FieldKey kSettingsKeys[] = {
     {"SoftBodyDef.thickness", "thickness"},
     {"SoftBodyDef.friction", "friction"},
     {"SoftBodyDef.damping", "damping"},
+    {"SoftBodyDef.forces.linear_drag", "drag", "linear"},
+    {"SoftBodyDef.forces.quadratic_drag", "drag", "quadratic"},
 };
 
 // Rethrows a builder's Error "<Def>.<field>...: what" under the JSON path of the key that
@@ -82,7 +84,7 @@ constexpr FieldKey kSettingsKeys[] = {
   const auto rethrow = [&](const FieldKey& f) {
     const std::string field = f.field;
     if (m.rfind(field, 0) != 0 || m.size() == field.size()) return;
-    const std::string where = n.where(f.key) + (f.item >= 0 ? "/" + std::to_string(f.item) : "");
+    const std::string where = n.where(f.key) + (f.sub ? "/" + std::string(f.sub) : "");
     const char next = m[field.size()];
     if (next == ':' && m.compare(field.size(), 2, ": ") == 0) throw Error(where + m.substr(field.size()));
     if (next == ' ') throw Error(where + ":" + m.substr(field.size()));
@@ -281,10 +283,10 @@ void read_soft_body(const Node& n, World& w) {
     }
     case Type::Jelly: {
       body = build_by_field(n,
-                            {{"JellyDef.center", "center"}, {"JellyDef.size.x", "size", 0},
-                             {"JellyDef.size.y", "size", 1}, {"JellyDef.size.z", "size", 2}, {"JellyDef.size", "size"},
-                             {"JellyDef.rotation", "rotation"}, {"JellyDef.nx", "cells", 0},
-                             {"JellyDef.ny", "cells", 1}, {"JellyDef.nz", "cells", 2}, {"JellyDef.mass", "mass"},
+                            {{"JellyDef.center", "center"}, {"JellyDef.size.x", "size", "0"},
+                             {"JellyDef.size.y", "size", "1"}, {"JellyDef.size.z", "size", "2"}, {"JellyDef.size", "size"},
+                             {"JellyDef.rotation", "rotation"}, {"JellyDef.nx", "cells", "0"},
+                             {"JellyDef.ny", "cells", "1"}, {"JellyDef.nz", "cells", "2"}, {"JellyDef.mass", "mass"},
                              {"JellyDef.velocity", "velocity"}},
                             [&] { return SoftBody::jelly_box(j, d); });
       break;
