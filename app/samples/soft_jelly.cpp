@@ -201,8 +201,8 @@ class JellySample final : public OneBodySample {
   PlotHistory hist_{1, 6.0};  // volume (% of rest) over the last 6 s
   // the material the settings come from: the default but for a damping time of 5 ms (a
   // damping ratio of about 0.08 for the sway), with which the cube dropped from 1.4 m,
-  // tilted 0.1 rad, bounces 5 cm, wobbles and rests within 0.2 m of where it landed
-  // (the default 2.5 ms rolls it 0.6 m)
+  // tilted 0.1 rad, hops 4 cm, rocks and rests 2 cm from where it landed after 3 s (the
+  // default 2.5 ms rolls it 1.1 m; measured 2026-12-07, docs/soft-bodies.md)
   JellyMaterial mat_{.damping_time = 5e-3};
   SoftBodyDef derived_;       // jelly_settings(shape(), mat_, the app's dt)
   double needed_ = 0;         // substeps the mass-spring network needs (mass_spring())

@@ -44,27 +44,54 @@ JellyMaterial read_jelly_material(const Node& n) {
   return m;
 }
 
-// A field of a builder's definition and the JSON key it is read from.
+// A field of a builder's definition and the JSON key (and the part of it) it is read from.
 struct FieldKey {
-  const char* field;  // "RopeDef.mass": how the builder names it
-  const char* key;    // "mass"
+  const char* field;          // "RopeDef.mass": how the builder names it
+  const char* key;            // "mass"
+  const char* sub = nullptr;  // "JellyDef.nx" is "cells" item "0", "...linear_drag" "drag" "linear"
+};
+
+// The settings every type reads under their own names (the builders validate them as
+// "SoftBodyDef.<field>"; the reader's own checks refuse most values first, not all: a
+// thickness beyond what the float solver squares, a drag beyond a float).
+constexpr FieldKey kSettingsKeys[] = {
+    {"SoftBodyDef.substeps", "substeps"},
+    {"SoftBodyDef.iterations", "iterations"},
+    {"SoftBodyDef.stretch_compliance", "stretch_compliance"},
+    {"SoftBodyDef.shear_compliance", "shear_compliance"},
+    {"SoftBodyDef.bend_compliance", "bend_compliance"},
+    {"SoftBodyDef.volume_compliance", "volume_compliance"},
+    {"SoftBodyDef.stretch_stiffness", "stretch_stiffness"},
+    {"SoftBodyDef.shear_stiffness", "shear_stiffness"},
+    {"SoftBodyDef.bend_stiffness", "bend_stiffness"},
+    {"SoftBodyDef.volume_stiffness", "volume_stiffness"},
+    {"SoftBodyDef.spring_damping", "spring_damping"},
+    {"SoftBodyDef.tear_strain", "tear_strain"},
+    {"SoftBodyDef.thickness", "thickness"},
+    {"SoftBodyDef.friction", "friction"},
+    {"SoftBodyDef.damping", "damping"},
+    {"SoftBodyDef.forces.linear_drag", "drag", "linear"},
+    {"SoftBodyDef.forces.quadratic_drag", "drag", "quadratic"},
 };
 
 // Rethrows a builder's Error "<Def>.<field>...: what" under the JSON path of the key that
 // field was read from, "<file>: /soft_bodies/i/<key>: what" (a field within it, such as
-// "JellyDef.size.x", keeps the builder's whole message after the path); a message no
-// field speaks for (a particle beyond a float, set by several fields, which it names)
-// goes under the item's path.
+// "RopeDef.constraints[0].rest_length", keeps the builder's whole message after the path);
+// a message no field speaks for (a particle beyond a float, set by several fields, which
+// it names) goes under the item's path.
 [[noreturn]] void fail_by_field(const Node& n, const Error& e, std::initializer_list<FieldKey> fields) {
   const std::string m = e.what();
-  for (const FieldKey& f : fields) {
+  const auto rethrow = [&](const FieldKey& f) {
     const std::string field = f.field;
-    if (m.rfind(field, 0) != 0 || m.size() == field.size()) continue;
+    if (m.rfind(field, 0) != 0 || m.size() == field.size()) return;
+    const std::string where = n.where(f.key) + (f.sub ? "/" + std::string(f.sub) : "");
     const char next = m[field.size()];
-    if (next == ':' && m.compare(field.size(), 2, ": ") == 0) throw Error(n.where(f.key) + m.substr(field.size()));
-    if (next == ' ') throw Error(n.where(f.key) + ":" + m.substr(field.size()));
-    if (next == '.' || next == '[') throw Error(n.where(f.key) + ": " + m);
-  }
+    if (next == ':' && m.compare(field.size(), 2, ": ") == 0) throw Error(where + m.substr(field.size()));
+    if (next == ' ') throw Error(where + ":" + m.substr(field.size()));
+    if (next == '.' || next == '[') throw Error(where + ": " + m);
+  };
+  for (const FieldKey& f : fields) rethrow(f);
+  for (const FieldKey& f : kSettingsKeys) rethrow(f);
   throw Error(n.where() + ": " + m);
 }
 
@@ -256,9 +283,11 @@ void read_soft_body(const Node& n, World& w) {
     }
     case Type::Jelly: {
       body = build_by_field(n,
-                            {{"JellyDef.center", "center"}, {"JellyDef.size", "size"},
-                             {"JellyDef.rotation", "rotation"}, {"JellyDef.nx", "cells"}, {"JellyDef.ny", "cells"},
-                             {"JellyDef.nz", "cells"}, {"JellyDef.mass", "mass"}, {"JellyDef.velocity", "velocity"}},
+                            {{"JellyDef.center", "center"}, {"JellyDef.size.x", "size", "0"},
+                             {"JellyDef.size.y", "size", "1"}, {"JellyDef.size.z", "size", "2"}, {"JellyDef.size", "size"},
+                             {"JellyDef.rotation", "rotation"}, {"JellyDef.nx", "cells", "0"},
+                             {"JellyDef.ny", "cells", "1"}, {"JellyDef.nz", "cells", "2"}, {"JellyDef.mass", "mass"},
+                             {"JellyDef.velocity", "velocity"}},
                             [&] { return SoftBody::jelly_box(j, d); });
       break;
     }

@@ -75,6 +75,11 @@ SoftBody SoftBody::spring(const SpringDef& sp, const SoftBodyDef& def) {
   require_float(sp.velocity_b, "SpringDef.velocity_b");
   positive(sp.mass, "SpringDef.mass");
   positive(sp.stiffness, "SpringDef.stiffness");
+  // XPBD uses the compliance 1 / k: a denormal k (1e-310) made it inf, refused as
+  // SoftBodyDef.stretch_compliance, a field the caller never set
+  if (!std::isfinite(1 / sp.stiffness))
+    throw Error("SpringDef.stiffness: must be at least " + format_value(1 / std::numeric_limits<double>::max()) +
+                " N/m (XPBD uses its compliance 1 / k, which must be finite), got " + format_value(sp.stiffness));
   if (!(std::isfinite(sp.damping) && sp.damping >= 0)) require_non_negative(sp.damping, "SpringDef.damping");
   if (!std::isfinite(sp.rest_length)) require_finite(sp.rest_length, "SpringDef.rest_length");
   const double dist = glm::length(sp.b - sp.a);
@@ -235,6 +240,13 @@ SoftBodyDef jelly_settings(const JellyDef& jd, const JellyMaterial& mat, double 
                 std::to_string(jd.ny) + " x " + std::to_string(jd.nz) + " cells and JellyMaterial.young " +
                 format_value(mat.young) + " Pa give an edge stiffness k = 4 G a / 3 = " + format_value(k) +
                 " N/m whose compliance 1 / k is not a finite number; use a larger box or a stiffer material");
+  // a damping time so long that c = tau k overflows (1e300 s) would be refused as
+  // SoftBodyDef.spring_damping, a field the caller never set: name the input
+  if (!std::isfinite(mat.damping_time * k))
+    throw Error("JellyMaterial.damping_time: " + format_value(mat.damping_time) +
+                " s gives the edges the damping c = tau k = " + format_value(mat.damping_time * k) +
+                " N s/m with k = " + format_value(k) +
+                " N/m, not a finite number; use a shorter damping time");
   SoftBodyDef d;
   d.stretch_compliance = 1 / k;
   d.volume_compliance = (cell / 6) / lambda_v;

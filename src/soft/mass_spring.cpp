@@ -177,19 +177,77 @@ double detail::mass_spring_radius(Method m, double p, double z) {
   return std::exp(logr);
 }
 
+namespace {
+
+// The stiffest elements the diagnoses look at: the largest w_a + w_b among the intact
+// springs of each kind, the lightest free particle's w and the largest sum of w |grad V|^2
+// over a tetrahedron's corners in the rest shape (the volume force -k_v (V - V0) grad V is
+// then a spring of (omega h)^2 = k_v sum w |grad V|^2 h^2: the one non-zero eigenvalue of
+// M^-1 k_v g g^T). The failure path only.
+struct Stiffest {
+  double spring_w[3] = {0, 0, 0};  // 1/kg
+  double particle_w = 0;           // 1/kg
+  double tet_g = 0;                // m^4/kg
+};
+Stiffest stiffest(const SoftBody::Impl& s) {
+  Stiffest st;
+  for (std::size_t k = 0; k < s.ca.size(); ++k)
+    if (!s.broken[k])
+      st.spring_w[s.kind[k]] = std::max(st.spring_w[s.kind[k]], double(s.w[s.ca[k]]) + double(s.w[s.cb[k]]));
+  for (std::size_t i = 0; i < s.n; ++i) st.particle_w = std::max(st.particle_w, double(s.w[i]));
+  for (const SoftTet& t : s.tets) {
+    const std::uint32_t id[4] = {t.a, t.b, t.c, t.d};
+    Vec3 p[4];
+    for (int j = 0; j < 4; ++j) p[j] = Vec3(s.rx[id[j]], s.ry[id[j]], s.rz[id[j]]);
+    const Vec3 e1 = p[1] - p[0], e2 = p[2] - p[0], e3 = p[3] - p[0];
+    Vec3 g[4];
+    g[1] = glm::cross(e2, e3) / 6.0, g[2] = glm::cross(e3, e1) / 6.0, g[3] = glm::cross(e1, e2) / 6.0;
+    g[0] = -(g[1] + g[2] + g[3]);
+    double sum = 0;
+    for (int j = 0; j < 4; ++j) sum += double(s.w[id[j]]) * glm::dot(g[j], g[j]);
+    st.tet_g = std::max(st.tet_g, sum);
+  }
+  return st;
+}
+
+// The per-particle dampers: the damping rate d (a = -d v), linear drag b w and quadratic
+// drag c |u| w (a = -(b + c |u|) w u, u relative to the wind) on the lightest free
+// particle, each x'' = -(z / h) x' with z = rate h; quadratic drag's rate at the fastest
+// particle's air speed at the step's start plus gravity's g h over one substep (a body at
+// rest in still air takes that much before its drag acts).
+struct Rate {
+  const char* field;  // in SoftBodyDef
+  double value;
+  const char* unit;
+  const char* what;
+  double rate;  // 1/s
+};
+std::array<Rate, 3> particle_rates(const SoftBody::Impl& s, double wfree, double h) {
+  const SoftBodyDef& d = s.def;
+  const double speed = s.ms_air_speed + glm::length(d.forces.gravity) * h;
+  return {Rate{"damping", d.damping, "1/s", "its rate d", d.damping},
+          Rate{"forces.linear_drag", d.forces.linear_drag, "kg/s", "its lightest particle's rate b w",
+               d.forces.linear_drag * wfree},
+          Rate{"forces.quadratic_drag", d.forces.quadratic_drag, "kg/m",
+               "its lightest particle's rate c |u| w (|u| = the fastest air speed at the step's start + g h)",
+               d.forces.quadratic_drag * speed * wfree}};
+}
+
+}  // namespace
+
 // Why an explicit integrator blew up, in the settings' terms: for each kind's stiffest
 // spring (the largest w_a + w_b) the method's amplification of the spring and its damper
-// together (detail::mass_spring_radius; docs/soft-bodies.md, "Why stiff springs are hard").
-// Above 1 the settings are named: the stiffness, the damping, or both when neither alone
-// is past the bound. A network's fastest mode is faster than its stiffest spring, so an
-// empty answer does not make it stable. The failure path only: it builds strings.
+// together (detail::mass_spring_radius; docs/soft-bodies.md, "Why stiff springs are hard"),
+// then the dampers on single particles (damping and drag, on the lightest particle) and
+// the stiffest tetrahedron's volume force. Above 1 the settings are named: the stiffness,
+// the damping, or both when neither alone is past the bound. A network's fastest mode is
+// faster than its stiffest spring, so an empty answer does not make it stable. The
+// failure path only: it builds strings.
 std::string SoftBody::Impl::mass_spring_instability(double h) const {
   if (def.solver != SoftSolver::MassSpring || def.method == Method::ImplicitEuler) return {};
   constexpr double kGrows = 1 + 1e-9;  // round-off in a radius of exactly 1
-  // the largest w_a + w_b among the intact springs of each kind
-  double wmax[3] = {0, 0, 0};
-  for (std::size_t k = 0; k < ca.size(); ++k)
-    if (!broken[k]) wmax[kind[k]] = std::max(wmax[kind[k]], double(w[ca[k]]) + double(w[cb[k]]));
+  const Stiffest st = stiffest(*this);
+  const double* wmax = st.spring_w;
   std::string why;
   const char* names[3] = {"stretch_stiffness", "shear_stiffness", "bend_stiffness"};
   const double c = def.spring_damping;
@@ -211,9 +269,83 @@ std::string SoftBody::Impl::mass_spring_instability(double h) const {
            format_value(wh) + " and c (w_a + w_b) h = " + format_value(z) + ": an amplification of " + format_value(r) +
            " per substep, past " + std::string(name(def.method)) + "'s stability bound 1";
   }
+  // the per-particle dampers, together and each alone
+  if (st.particle_w > 0) {
+    const std::array<Rate, 3> rates = particle_rates(*this, st.particle_w, h);
+    double total = 0;
+    for (const Rate& r : rates) total += r.rate;
+    const double r_all = total > 0 ? detail::mass_spring_radius(def.method, 0, total * h) : 0;
+    if (r_all > kGrows) {
+      // each one past the bound alone, or all of them when none is
+      bool alone[3], any = false;
+      for (int k = 0; k < 3; ++k) {
+        alone[k] = detail::mass_spring_radius(def.method, 0, rates[k].rate * h) > kGrows;
+        any = any || alone[k];
+      }
+      std::string list;
+      int named = 0;
+      for (int k = 0; k < 3; ++k) {
+        if (!(rates[k].value > 0) || (any && !alone[k])) continue;
+        list += std::string(list.empty() ? "" : " with ") + "SoftBodyDef." + rates[k].field + " = " +
+                format_value(rates[k].value) + " " + rates[k].unit + " (" + rates[k].what + " = " +
+                format_value(rates[k].rate) + " /s)";
+        ++named;
+      }
+      why += std::string(why.empty() ? "" : "; ") + list + (named > 1 ? " damp" : " damps") +
+             " the velocity at z = rate h = " + format_value(total * h) + ": an amplification of " +
+             format_value(r_all) + " per substep, past " + std::string(name(def.method)) + "'s stability bound 1";
+    }
+  }
+  // the volume force of the stiffest tetrahedron
+  if (def.volume_stiffness > 0 && st.tet_g > 0) {
+    const double gmax = st.tet_g;
+    const double wh = std::sqrt(def.volume_stiffness * gmax) * h;
+    if (const double r = detail::mass_spring_radius(def.method, wh * wh, 0); r > kGrows)
+      why += std::string(why.empty() ? "" : "; ") + "SoftBodyDef.volume_stiffness = " +
+             format_value(def.volume_stiffness) + " N/m^5 gives its stiffest tetrahedron omega h = sqrt(k_v sum w "
+             "|grad V|^2) h = " + format_value(wh) + ": an amplification of " + format_value(r) +
+             " per substep, past " + std::string(name(def.method)) + "'s stability bound 1";
+  }
   if (why.empty()) return why;
   return why + " at the substep h = " + format_value(h) +
-         " s: use more substeps, softer springs, less damping, implicit Euler or the XPBD solver";
+         " s: use more substeps, softer springs, less damping or drag, implicit Euler or the XPBD solver";
+}
+
+// Why implicit Euler's Newton solve failed, in the settings' terms. Its system J = I - h
+// (h da/dx + da/dv) holds, beside the identity, (omega h)^2 = k (w_a + w_b) h^2 and z = c
+// (w_a + w_b) h for the stiffest spring of each kind, z = rate h for the per-particle
+// dampers and k_v sum w |grad V|^2 h^2 for the stiffest tetrahedron. Implicit Euler is
+// stable at any of them, but the solve is not exact: its rounding grows with them, and
+// measured on an 8-segment rope at h = 1/600 s Newton still met its tolerance at (omega
+// h)^2 = 5e9 and no longer at 5e11 (singular from about 1e95). Every term above 1 (past
+// an explicit method's reach, where the system stops being near the identity) is named,
+// or "" when none is.
+std::string SoftBody::Impl::newton_failure_why(double h) const {
+  const Stiffest st = stiffest(*this);
+  std::string why;
+  const auto add = [&](const std::string& field, double value, const char* unit, const std::string& what, double q) {
+    if (!(value > 0) || q <= 1) return;  // (nan and inf are past it)
+    why += std::string(why.empty() ? "" : "; ") + "SoftBodyDef." + field + " = " + format_value(value) + " " + unit +
+           " gives " + what + " = " + format_value(q);
+  };
+  const char* names[3] = {"stretch_stiffness", "shear_stiffness", "bend_stiffness"};
+  double wspring = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double stiff = detail::kind_stiffness(def, static_cast<SoftConstraintKind>(k));
+    add(names[k], stiff, "N/m", "its stiffest spring (omega h)^2 = k (w_a + w_b) h^2", stiff * st.spring_w[k] * h * h);
+    wspring = std::max(wspring, st.spring_w[k]);
+  }
+  add("spring_damping", def.spring_damping, "N s/m", "its stiffest spring c (w_a + w_b) h",
+      def.spring_damping * wspring * h);
+  for (const Rate& r : particle_rates(*this, st.particle_w, h))
+    add(r.field, r.value, r.unit, std::string(r.what) + " times h", r.rate * h);
+  if (!tets.empty())
+    add("volume_stiffness", def.volume_stiffness, "N/m^5",
+        "its stiffest tetrahedron (omega h)^2 = k_v sum w |grad V|^2 h^2", def.volume_stiffness * st.tet_g * h * h);
+  if (why.empty()) return why;
+  return "the Newton system I - h (h da/dx + da/dv) at the substep h = " + format_value(h) +
+         " s holds, beside the identity, " + why + " (its rounding grows with them): use softer springs, less "
+         "damping or drag, more substeps, or the XPBD solver (whose compliance 0 is a rigid constraint)";
 }
 
 void SoftBody::Impl::step_mass_spring(double t, double dt) {
@@ -242,6 +374,14 @@ void SoftBody::Impl::step_mass_spring(double t, double dt) {
     integ.reset_history();
     ms_valid = true;
   }
+  // quadratic drag's rate depends on the air speed: the fastest free particle's, for the
+  // blow-up diagnosis (one pass, with quadratic drag only)
+  ms_air_speed = 0;
+  if (def.forces.quadratic_drag > 0) {
+    const Vec3 wind = def.forces.wind.at(t);
+    for (std::size_t i = 0; i < n; ++i)
+      if (w[i] > 0) ms_air_speed = std::max(ms_air_speed, glm::length(msv[i] - wind));
+  }
   const int S = def.substeps;
   const double h = dt / S;
   auto accel = [this](double tt, std::span<const Vec3> xs, std::span<const Vec3> vs, std::span<Vec3> as) {
@@ -249,8 +389,17 @@ void SoftBody::Impl::step_mass_spring(double t, double dt) {
   };
   double collide_s = 0;
   for (int sub = 1; sub <= S; ++sub) {
-    // integrate, then pins slide to their targets at the pin velocity
-    integ.step(t + (sub - 1) * h, h, std::span<Vec3>(msx), std::span<Vec3>(msv), accel);
+    // integrate, then pins slide to their targets at the pin velocity; a failed Newton
+    // solve names the settings that put it past double precision, and the next step
+    // starts again from the float columns (this step's earlier substeps are not kept)
+    try {
+      integ.step(t + (sub - 1) * h, h, std::span<Vec3>(msx), std::span<Vec3>(msv), accel);
+    } catch (const NewtonFailure& e) {
+      ms_valid = false;
+      const std::string why = newton_failure_why(h);
+      if (why.empty()) throw;
+      throw NewtonFailure(std::string(e.what()) + "; " + why);
+    }
     const double f = static_cast<double>(sub) / S;
     for (std::size_t k = 0; k < pins.size(); ++k) {
       msx[pins[k]] = sub == S ? pin_to[k] : pin_from[k] + (pin_to[k] - pin_from[k]) * f;

@@ -35,6 +35,9 @@ double tet_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 // ---------------------------------------------------------------------------------------
 // settings
 
+// The largest collision thickness (m): see SoftBodyDef::validate.
+const double kMaxThickness = detail::squarable_hi<float>() / 64;
+
 void SoftBodyDef::validate(std::string_view where) const {
   // solver and counts
   if (solver != SoftSolver::MassSpring && solver != SoftSolver::Xpbd)
@@ -66,6 +69,15 @@ void SoftBodyDef::validate(std::string_view where) const {
   non_negative(aero.lift, where, "aero.lift");
   non_negative(tear_strain, where, "tear_strain");
   non_negative(thickness, where, "thickness");
+  // a contact pushes a particle the thickness out of the collider, and the solver squares
+  // the lengths between particles in float: a 1e30 m thickness flung the particles
+  // touching a collider 1e30 m and their constraints' squares made the state NaN (XPBD
+  // cloth on a sphere from 4e18 m, sqrt(FLT_MAX) / 4.6: a particle pushed out moves on at
+  // that speed, and one on the far side is pushed the other way). Room for 64 thicknesses
+  if (!(thickness <= kMaxThickness))
+    throw Error(field_path(where, "thickness") + ": must be at most " + format_value(kMaxThickness) +
+                " m, sqrt(FLT_MAX) / 64 (a contact pushes a particle this far out of a collider, and the float "
+                "solver squares the lengths between particles), got " + format_value(thickness));
   non_negative(friction, where, "friction");
   non_negative(damping, where, "damping");
 }

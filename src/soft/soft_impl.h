@@ -124,6 +124,10 @@ struct SoftBody::Impl {
   std::vector<Vec3> msx, msv;
   bool ms_valid = false;  // msx/msv mirror x/v
   bool jacobian_set = false;  // the analytic jacobian is installed in integ
+  // the fastest free particle's speed relative to the air at the start of the last
+  // mass-spring step (m/s), measured only with quadratic drag: its rate c |u| w
+  // (mass_spring_instability)
+  double ms_air_speed = 0;
 
   // ---- solver options ----
   bool simd = true;  // use the explicit AVX2 kernels when the CPU has them (same bits either way)
@@ -153,6 +157,9 @@ struct SoftBody::Impl {
   // mass_spring.cpp: the settings past an explicit method's stability bound at substep h
   // (their names and values), or "" (for check_finite's message)
   std::string mass_spring_instability(double h) const;
+  // mass_spring.cpp: the settings that put implicit Euler's Newton system at substep h past
+  // double precision (their names and values), or "" (for a NewtonFailure's message)
+  std::string newton_failure_why(double h) const;
 };
 
 namespace detail {

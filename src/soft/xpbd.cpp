@@ -479,8 +479,11 @@ PBA_CLONES void damp_sweep(const SolveArgs& s) {
 // h v under half a float step of x (g h^2 from rest at 300 substeps of 1/60 s, 1.5 m from
 // the origin) is lost every substep and the body hangs in the air; with it the velocity
 // is exact to float rounding and only the positions are quantised. Linear and quadratic
-// drag toward the wind are implicit in v: v' = (v + h (g + a_ext + k u_w)) / (1 + h k)
-// with k = (b + c |v - u_w|) w, which damps without ever overshooting the wind.
+// drag toward the wind are implicit in v: v' = u_w + (v - u_w + h (g + a_ext)) / (1 + h k)
+// with k = (b + c |v - u_w|) w, which damps without ever overshooting the wind; a drag
+// beyond a float (k = inf) takes v to the wind's velocity at once, its limit. (Written as
+// (v + h (g + a_ext + k u_w)) / (1 + h k) until 2026-12-07, whose k u_w overflowed and
+// inf 0 made the state NaN at the first step: a drag of 1e35 on a 1 g particle in wind.)
 struct PredictArgs {
   float* x;
   float* y;
@@ -526,12 +529,15 @@ PBA_SOFT_INLINE void predict_impl(std::size_t n, float* PBA_SOFT_RESTRICT x, flo
     if constexpr (kExt) fx += ax[i], fy += ay[i], fz += az[i];
     float nvx, nvy, nvz;
     if constexpr (kDrag) {
+      // (u_w + (u - u_w + h f) / (1 + h k): no k u_w to overflow, and k = inf gives the
+      // wind's velocity; k = b w + c (|u - u_w| w), so a pinned particle's k is 0, never
+      // c |u - u_w| = inf times 0)
       const float rx = ux - wx, ry = uy - wy, rz = uz - wz;
-      const float k = (b + c * std::sqrt(rx * rx + ry * ry + rz * rz)) * w[i];
+      const float k = b * w[i] + c * (std::sqrt(rx * rx + ry * ry + rz * rz) * w[i]);
       const float inv = 1.0f / (1.0f + h * k);
-      nvx = (ux + h * (fx + k * wx)) * inv;
-      nvy = (uy + h * (fy + k * wy)) * inv;
-      nvz = (uz + h * (fz + k * wz)) * inv;
+      nvx = wx + (rx + h * fx) * inv;
+      nvy = wy + (ry + h * fy) * inv;
+      nvz = wz + (rz + h * fz) * inv;
     } else {
       (void)b, (void)c, (void)wx, (void)wy, (void)wz;
       nvx = ux + h * fx, nvy = uy + h * fy, nvz = uz + h * fz;

@@ -308,7 +308,15 @@ TEST(SoftBadFiles, BuilderErrorsNameTheFieldsPath) {
                 "JellyMaterial.young 5000 Pa give an edge stiffness k = 4 G a / 3 = 0 N/m"},
            Case{R"({"type": "jelly", "material": {"young": 1e-308}})", "/soft_bodies/0: jelly_settings: JellyDef.size "},
            // several fields decide: the item, and the message names them
-           Case{R"({"type": "rope", "to": [1e40, 2, 0]})", "/soft_bodies/0: RopeDef: particle 1 at "}}) {
+           Case{R"({"type": "rope", "to": [1e40, 2, 0]})", "/soft_bodies/0: RopeDef: particle 1 at "},
+           // a setting the builder refuses (the reader checks >= 0 only): its own path
+           // (before 2026-12-07 a 1e30 m thickness was not refused at all)
+           Case{R"({"type": "cloth", "thickness": 1e30})",
+                "/soft_bodies/0/thickness: must be at most 288230367561777024 m, sqrt(FLT_MAX) / 64 (a contact"},
+           // (until 2026-12-07 "/soft_bodies/0: SoftBodyDef.forces.linear_drag: ...")
+           Case{R"({"type": "rope", "drag": {"linear": 1e39}})", "/soft_bodies/0/drag/linear: must fit a float"},
+           Case{R"({"type": "jelly", "drag": {"quadratic": 1e39}})",
+                "/soft_bodies/0/drag/quadratic: must fit a float"}}) {
     const std::string msg = error_of(std::string(R"({"version": 1, "soft_bodies": [)") + c.item + "]}");
     EXPECT_EQ(msg.rfind(std::string("scenes/x.json: ") + c.want, 0), 0u) << msg;
   }

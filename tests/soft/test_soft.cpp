@@ -1758,3 +1758,255 @@ TEST(SoftLimits, ValuesThatOverflowAFloatAreRefusedByName) {
                 .find("SpringDef.velocity_b: must fit a float"),
             std::string::npos);
 }
+
+// ---------------------------------------------------------------------------------------
+// settings at the ends of their ranges (2026-12-07)
+
+namespace {
+// the Error of `frames` steps of 1/60 s without colliders, or ""
+std::string error_of_frames(pba::SoftBody& b, int frames) {
+  return error_of([&] {
+    for (int f = 0; f < frames; ++f) b.step(f / 60.0, 1.0 / 60);
+  });
+}
+}  // namespace
+
+// XPBD drag of any size toward the wind: the implicit velocity u_w + (v - u_w + h g) /
+// (1 + h k), k = (b + c |v - u_w|) w, tends to the wind's velocity as k grows (the exact
+// relaxation e^(-k t) does too), and at k = inf is the wind's. A free particle in a 5 m/s
+// wind under gravity ends the step at the wind's velocity to float rounding (the fall's
+// share h g / (1 + h k) is under 1e-26 m/s; quadratic drag within one substep's fall g h)
+// and a cloth pinned along a row (its pins' k is 0) steps on finite. Until 2026-12-07 the
+// form (v + h (g + k u_w)) / (1 + h k) overflowed its k u_w and made the state NaN at step
+// 1 (the particle from 1e35, the cloth from 1e37; quadratic 3.4e38 also made the pins' k
+// = c |u - u_w| 0 = inf 0 NaN).
+TEST(SoftXpbd, DragOfAnySizeRelaxesToTheWindAtOnce) {
+  const pba::Vec3 wind(5, 0, -2);
+  for (const bool quadratic : {false, true})
+    for (const double b : {1e30, 1e35, 1e37, 3.4e38}) {  // (beyond a float: refused by Forces::validate)
+      SCOPED_TRACE(testing::Message() << (quadratic ? "quadratic " : "linear ") << b);
+      pba::SoftBodyDef d;
+      (quadratic ? d.forces.quadratic_drag : d.forces.linear_drag) = b;
+      d.forces.wind.velocity = wind;
+      pba::SoftMesh m;
+      m.positions = {{0, 1, 0}};
+      m.masses = {1e-3};  // w = 1000: k = 1e3 b
+      pba::SoftBody p = pba::SoftBody::from_mesh(m, d);
+      // (quadratic drag's k is taken at the substep's start: where the relative speed is
+      // 0 it is 0, and gravity acts for that substep, g h = 0.016 m/s)
+      const double slack = quadratic ? 9.81 / 600 : 0.0;
+      for (int f = 0; f < 3; ++f) {
+        ASSERT_EQ(error_of([&] { p.step(f / 60.0, 1.0 / 60); }), "");
+        EXPECT_LE(glm::length(p.velocity(0) - wind), slack + 1e-5) << pba::format_vec3(p.velocity(0));
+      }
+      // it travelled with the wind: 3 steps of 1/60 s at 5.4 m/s
+      EXPECT_NEAR(glm::length(p.position(0) - pba::Vec3(0, 1, 0)), glm::length(wind) * 3 / 60, slack / 60 + 1e-5);
+      pba::SoftBody r = pba::SoftBody::cloth_grid({.nx = 8, .ny = 8}, d);
+      for (int f = 0; f < 3; ++f) ASSERT_EQ(error_of([&] { r.step(f / 60.0, 1.0 / 60); }), "");
+      EXPECT_TRUE(std::isfinite(r.kinetic_energy()));
+    }
+}
+
+// Damping and drag over their whole range under every explicit integrator: a free
+// particle of 1 g (w = 1000 /kg) in a 5 m/s wind, h = 1/600 s, is a damper alone, u' =
+// -(z / h) u with z = rate h: the damping d itself, linear drag b w, quadratic drag c |u|
+// w (|u| = 5 m/s, the air speed at the start). Its blow-up must name the setting, and
+// below the bound (radius <= 1) it must step on. Until 2026-12-07 these were outside the
+// diagnosis: a drag of 1e30 blew up saying only "particle 0 became non-finite".
+TEST(MassSpring, ExplicitBlowUpNamesTheDampingOrDragPastItsBound) {
+  const double h = 1.0 / 600, w = 1000, speed = 5;
+  struct Setting {
+    const char* name;
+    double rate_per_unit;  // z / (value h)
+  };
+  for (const Setting st : {Setting{"damping", 1}, Setting{"forces.linear_drag", w},
+                           Setting{"forces.quadratic_drag", w * speed}})
+    for (pba::Method method : {pba::Method::ExplicitEuler, pba::Method::SemiImplicitEuler,
+                               pba::Method::PositionVerlet, pba::Method::VelocityVerlet, pba::Method::Rk4})
+      for (const double z : {0.5, 0.9, 1.1, 1.9, 2.2, 2.7, 2.9, 4.0, 1e30, 1e300}) {
+        // (drag coefficients fit a float: Forces::validate)
+        const double cap = std::string(st.name) == "damping" ? std::numeric_limits<double>::max()
+                                                             : double(std::numeric_limits<float>::max());
+        const double value = std::min(z / (st.rate_per_unit * h), cap);
+        SCOPED_TRACE(testing::Message() << st.name << " = " << value << ", " << pba::name(method));
+        pba::SoftBodyDef d;
+        d.solver = pba::SoftSolver::MassSpring;
+        d.method = method;
+        d.forces.gravity = pba::Vec3(0);
+        d.forces.wind.velocity = {speed, 0, 0};
+        const std::string field = st.name;
+        if (field == "damping") {
+          d.damping = value;
+          d.forces.wind.velocity = {0, 0, 0};
+        } else {
+          (field == "forces.linear_drag" ? d.forces.linear_drag : d.forces.quadratic_drag) = value;
+        }
+        pba::SoftMesh m;
+        m.positions = {{0, 0, 0}};
+        m.velocities = {{0, field == "damping" ? speed : 0.0, 0}};
+        m.masses = {1 / w};
+        pba::SoftBody p = pba::SoftBody::from_mesh(m, d);
+        const double zz = value * st.rate_per_unit * h;
+        const double radius = pba::detail::mass_spring_radius(method, 0, zz);
+        // quadratic drag is not linear: its rate follows the speed, which overshoots within
+        // RK4's stages and falls as it damps, so near the bound the linear answer does not
+        // hold; well on either side it does
+        if (field == "forces.quadratic_drag" && zz > 0.5 && zz < 4) continue;
+        const std::string msg = error_of_frames(p, 200);
+        if (radius <= 1) {
+          EXPECT_EQ(msg, "");
+        }
+        if (radius > 1.01) {
+          EXPECT_NE(msg.find("became non-finite"), std::string::npos) << msg;
+        }
+        if (msg.empty()) continue;
+        EXPECT_GT(radius, 1);
+        EXPECT_NE(msg.find("unstable: SoftBodyDef." + field + " = " + pba::format_value(value)), std::string::npos)
+            << msg;
+        EXPECT_NE(msg.find("stability bound 1"), std::string::npos) << msg;
+      }
+}
+
+// The volume force -k_v (V - V0) grad V of one tetrahedron is a spring of (omega h)^2 =
+// k_v sum_j w_j |grad_j V|^2 h^2 (the one non-zero eigenvalue of M^-1 k_v g g^T): a
+// jelly of one cell whose volume stiffness puts its stiffest tetrahedron past an explicit
+// method's bound blows up naming SoftBodyDef.volume_stiffness (before 2026-12-07 the
+// blow-up named nothing). Well within it ((omega h)^2 = 0.01) the cube steps on; between
+// the two the six tetrahedra sharing particles are faster than any one of them, so a
+// blow-up there may name nothing (as for springs: an empty answer is not stability).
+TEST(MassSpring, ExplicitBlowUpNamesTheVolumeStiffnessPastItsBound) {
+  const double h = 1.0 / 600;
+  for (pba::Method method : {pba::Method::SemiImplicitEuler, pba::Method::VelocityVerlet, pba::Method::Rk4})
+    for (const double p2 : {0.01, 5.0, 9.0, 100.0, 1e30, 1e300}) {
+      pba::SoftBodyDef d;
+      d.solver = pba::SoftSolver::MassSpring;
+      d.method = method;
+      d.forces.gravity = pba::Vec3(0);
+      d.stretch_stiffness = 1;  // keeps the cell's shape: omega h = 8e-4
+      d.shear_stiffness = d.bend_stiffness = 0;
+      const pba::JellyDef jd{.size = {1, 1, 1}, .nx = 1, .ny = 1, .nz = 1, .mass = 8};
+      pba::SoftBody j = pba::SoftBody::jelly_box(jd, d);
+      // the stiffest tetrahedron's sum of w |grad V|^2, from the public state
+      double g = 0;
+      for (const pba::SoftTet& t : j.tets()) {
+        const std::uint32_t id[4] = {t.a, t.b, t.c, t.d};
+        const pba::Vec3 e1 = j.position(t.b) - j.position(t.a), e2 = j.position(t.c) - j.position(t.a),
+                        e3 = j.position(t.d) - j.position(t.a);
+        pba::Vec3 gr[4] = {{}, glm::cross(e2, e3) / 6.0, glm::cross(e3, e1) / 6.0, glm::cross(e1, e2) / 6.0};
+        gr[0] = -(gr[1] + gr[2] + gr[3]);
+        double sum = 0;
+        for (int k = 0; k < 4; ++k) sum += j.inverse_mass(id[k]) * glm::dot(gr[k], gr[k]);
+        g = std::max(g, sum);
+      }
+      const double kv = std::min(p2 / (g * h * h), std::numeric_limits<double>::max());
+      SCOPED_TRACE(testing::Message() << pba::name(method) << ", (omega h)^2 " << p2 << ", k_v " << kv);
+      j.settings().volume_stiffness = kv;
+      j.set_velocity(0, {0.01, -0.02, 0.03});  // squash a corner
+      const double radius = pba::detail::mass_spring_radius(method, p2, 0);
+      const std::string msg = error_of_frames(j, 600);
+      if (p2 <= 0.01) {
+        EXPECT_EQ(msg, "");
+      }
+      if (radius > 1.01) {
+        EXPECT_NE(msg.find("became non-finite"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("unstable: SoftBodyDef.volume_stiffness = " + pba::format_value(kv)), std::string::npos)
+            << msg;
+      }
+    }
+}
+
+// The collision thickness pushes a touching particle that far out of a collider, it moves
+// on at that speed, and the float solver squares the lengths between particles: a
+// thickness of 1e30 m (finite and >= 0, so accepted) turned an XPBD cloth lying on the
+// ground NaN at the first step, 4e18 m one dropped on a sphere. Past sqrt(FLT_MAX) / 64 =
+// 2.9e17 m it is refused by name, at build and between steps; at that bound cloths on a
+// plane and on a sphere step on finite under both solvers, and a denormal acts as 0.
+TEST(SoftBadInput, ThicknessBeyondTheFloatSolverIsNamed) {
+  const double bound = std::sqrt(double(std::numeric_limits<float>::max())) / 64;
+  const pba::Collider ground = pba::Collider::plane({0, 1, 0}, 0);
+  for (const double th : {std::nextafter(bound, 1e300), 4e18, 1e30, 1e300, std::numeric_limits<double>::max()}) {
+    SCOPED_TRACE(th);
+    pba::SoftBodyDef d;
+    d.thickness = th;
+    const std::string expect = "SoftBodyDef.thickness: must be at most " + pba::format_value(bound) +
+                               " m, sqrt(FLT_MAX) / 64 (a contact pushes a particle this far out of a collider, and "
+                               "the float solver squares the lengths between particles), got " + pba::format_value(th);
+    EXPECT_EQ(error_of([&] { pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4}, d); }), expect);
+    pba::SoftBody c = pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4});
+    c.settings().thickness = th;
+    EXPECT_EQ(error_of([&] { c.step(0, 1.0 / 60, std::span(&ground, 1)); }), expect);
+    EXPECT_FALSE(c.failed());
+  }
+  const pba::Collider ball = pba::Collider::sphere({0, 0.5, 0}, 0.3);
+  for (const pba::SoftSolver solver : {pba::SoftSolver::Xpbd, pba::SoftSolver::MassSpring})
+    for (const double th : {bound, 1e-310}) {
+      SCOPED_TRACE(testing::Message() << th << (solver == pba::SoftSolver::Xpbd ? " xpbd" : " mass-spring"));
+      pba::SoftBodyDef d;
+      d.thickness = th;
+      d.solver = solver;
+      pba::SoftBody c = pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4}, d);
+      pba::SoftBody s = pba::SoftBody::cloth_grid(
+          {.origin = {-0.5, 0.7, -0.5}, .nx = 8, .ny = 8, .pins = pba::ClothPins::None}, d);
+      for (int f = 0; f < 30; ++f) {
+        ASSERT_EQ(error_of([&] { c.step(f / 60.0, 1.0 / 60, std::span(&ground, 1)); }), "");
+        ASSERT_EQ(error_of([&] { s.step(f / 60.0, 1.0 / 60, std::span(&ball, 1)); }), "");
+      }
+    }
+}
+
+// Implicit Euler is stable at any stiffness, but its Newton system I - h (h da/dx +
+// da/dv) holds (omega h)^2 = k (w_a + w_b) h^2 beside the identity, and its rounding
+// grows with it: on this rope Newton stops meeting its tolerance between k = 1e14 and
+// 1e16 N/m ((omega h)^2 = 5e9 and 5e11) and the system is singular from about 1e100.
+// The Error names the setting (until 2026-12-07 it said only "did not converge ... raise
+// NewtonSettings.max_iterations", a setting a soft body does not have, or "singular or
+// non-finite Newton system ... (check the acceleration for NaN)"); below that the rope
+// steps on, its springs unstretched.
+TEST(MassSpring, ImplicitEulerNewtonFailureNamesTheSetting) {
+  for (const double k : {1e6, 1e12, 1e30, 1e100, 1e300, std::numeric_limits<double>::max()}) {
+    SCOPED_TRACE(k);
+    pba::SoftBodyDef d;
+    d.solver = pba::SoftSolver::MassSpring;
+    d.method = pba::Method::ImplicitEuler;
+    d.stretch_stiffness = k;
+    pba::SoftBody r = pba::SoftBody::rope({.segments = 8}, d);  // w_a + w_b = 18 /kg
+    const double p = k * 18 / (600.0 * 600.0);
+    const std::string msg = error_of([&] {
+      for (int f = 0; f < 30; ++f) r.step(f / 60.0, 1.0 / 60);
+    });
+    if (msg.empty()) {
+      EXPECT_LT(r.strain_stats().max, 1e-3);
+      continue;
+    }
+    EXPECT_GT(p, 1) << msg;
+    EXPECT_NE(msg.find("implicit Euler"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("SoftBodyDef.stretch_stiffness = " + pba::format_value(k) + " N/m"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("SoftBodyDef.bend_stiffness"), std::string::npos) << msg;
+  }
+}
+
+// Values the builders turn into a setting that the settings' check then refuses named
+// that setting, a field the caller never set: a spring of k = 1e-310 N/m (> 0, but its
+// XPBD compliance 1 / k is inf) was "SoftBodyDef.stretch_compliance: ... got inf", a
+// jelly of damping time 1e307 s (c = tau k = inf) "SoftBodyDef.spring_damping". Each
+// now names its input; at the ends of the accepted range they build and step finite.
+TEST(SoftBadInput, DerivedSettingsNameTheirInputs) {
+  for (const double k : {1e-310, 4e-324}) {
+    const std::string msg = error_of([&] { pba::SoftBody::spring({.stiffness = k}); });
+    EXPECT_EQ(msg.rfind("SpringDef.stiffness: must be at least 5.562684646268003e-309 N/m", 0), 0u) << msg;
+  }
+  for (const double k : {1e-308, std::numeric_limits<double>::max()}) {
+    pba::SoftBody s = pba::SoftBody::spring({.stiffness = k});
+    EXPECT_EQ(error_of([&] { s.step(0, 1.0 / 60); }), "") << k;
+  }
+  for (const double tau : {1e307, std::numeric_limits<double>::max()}) {  // k = 298 N/m
+    const std::string msg = error_of([&] { pba::jelly_settings({}, {.damping_time = tau}); });
+    EXPECT_EQ(msg.rfind("JellyMaterial.damping_time: " + pba::format_value(tau) +
+                            " s gives the edges the damping c = tau k = inf N s/m",
+                        0),
+              0u)
+        << msg;
+  }
+  pba::SoftBody j = pba::SoftBody::jelly_box({}, pba::jelly_settings({}, {.damping_time = 1e300}));
+  EXPECT_EQ(error_of([&] { j.step(0, 1.0 / 60); }), "");
+}
