@@ -1428,6 +1428,7 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
   // impulse is no guess for the next substep's (contact_wide.h, pass())
   p.cap_carry = soft && !bias;
   p.carry_speed = gravity_speed * h;
+  p.one_colour = true;  // (colour() passes a colour's blocks, or some of them, a call)
   const BodyArrays r = arrays(s);
   // the overflow, one manifold at a time; rolling resistance after its manifold's friction
   std::size_t next_roll = colored_rolls;  // the overflow's lanes that roll, in lane order
@@ -1470,7 +1471,9 @@ void RigidContacts::pass(RigidBodySystem& s, double h, bool bias, bool soft, boo
   // the bands bottom up; within each, its colours first to last on even steps and last to
   // first on odd ones
   if (!backward && colored_rolls == 0 && one_blocks == 0) {
-    solve_colored(simd, blocks.data(), anchors.data(), 0, colored_blocks, p, r);
+    PassParams all = p;  // (every colour's blocks in one call)
+    all.one_colour = false;
+    solve_colored(simd, blocks.data(), anchors.data(), 0, colored_blocks, all, r);
   } else if (!backward) {
     for (std::uint32_t c = 0; c < color_count.size(); ++c) colour(c);
   } else {

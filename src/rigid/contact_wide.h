@@ -398,7 +398,7 @@ PBA_LANES void add_rows(double* base, const std::uint32_t* index, std::uint32_t 
 struct FloatParams {
   float inv_h, bias_rate[2], mass_scale[2], impulse_scale[2], push_out, baumgarte_h, carry_speed;
   int sweeps;
-  bool update_sep, warm_next, cap_carry;
+  bool update_sep, warm_next, cap_carry, defer;
   explicit FloatParams(const PassParams& p)
       : inv_h(static_cast<float>(p.inv_h)),
         bias_rate{static_cast<float>(p.bias_rate[0]), static_cast<float>(p.bias_rate[1])},
@@ -410,7 +410,8 @@ struct FloatParams {
         sweeps(p.sweeps),
         update_sep(p.update_sep),
         warm_next(p.warm_next),
-        cap_carry(p.cap_carry && p.update_sep) {}
+        cap_carry(p.cap_carry && p.update_sep),
+        defer(p.one_colour) {}
 };
 
 // world = x0 t1 + x1 t2 + x2 n
@@ -488,6 +489,19 @@ enum Mode : int { kSoft, kRigid, kRelax };
 template <class V>
 using MaskOf = decltype(std::declval<V>() == std::declval<V>());
 
+// how many lanes of an AVX2 comparison's mask (M: MaskOf<v8f>) are set (its lanes are 0 or -1:
+// the sign bits)
+template <class M>
+PBA_LANES int lanes_set(const M& m) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  return __builtin_popcount(static_cast<unsigned>(__builtin_ia32_movmskps256(reinterpret_cast<v8f>(m))));
+#else
+  int n = 0;
+  for (int i = 0; i < 8; ++i) n += m[i] != 0;
+  return n;
+#endif
+}
+
 // what solve() hands the rounds when a lane lands sliding: its state after the pass's sweeps
 // and friction (in the frame), from which the rounds go on (they solved the pass again from
 // the block, to the same numbers, before: a quarter of their instructions on the terrain and
@@ -541,35 +555,37 @@ PBA_LANES void sweep_point(const Lanes<V, B>& F, int k, V (&vn)[P], V (&lambda)[
 template <class V, int kMode, bool kZmm, class B>
 void solve_rounds(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r, const Carried<V, B::kPoints>& from);
 
-// The AVX2 one-point pass's lanes that land sliding, gathered from the halves of one colour's
-// blocks into the eight lanes of one rounds' call (DeferredRounds below). In the rain's landing
-// a half that calls the rounds has 1.3 such lanes on average (one lane in 78% of the calls), and
+// The AVX2 pass's lanes that land sliding, gathered from the halves of one colour's blocks into
+// the eight lanes of one rounds' call (DeferredRounds below). In the rain's landing a one-point
+// half that calls the rounds has 1.3 such lanes on average (one lane in 78% of the calls), and
 // the rounds (five iterations of a chain of some 140 cycles over all eight lanes, the others
-// only selected back) were a third of the one-point passes' instructions. A lane's arithmetic
-// is the same in any lane of any call, and the lanes of one colour share no body that moves,
-// so solving a lane's rounds, its row write-back, cap and warm start later in the colour, next
-// to other blocks' lanes, changes no bit. (AVX2 only: the AVX-512 code stays as it is. The
-// ContactBlocks of all colours are passed in one call when no lane rolls, so theirs could not
-// wait past their colour; and their rounds are the four-point kernel's.)
+// only selected back) were a third of the one-point passes' instructions; the four-point
+// rounds were 6.7 M instructions of a landing step against the four-point pass's 11.4 M. A
+// lane's arithmetic is the same in any lane of any call, and the lanes of one colour share no
+// body that moves, so solving a lane's rounds, its row write-back, cap and warm start later in
+// the colour, next to other blocks' lanes, changes no bit. (AVX2 only: the AVX-512 code stays
+// as it is. Only within a call over one colour's blocks, FloatParams::defer: the ContactBlocks
+// of all colours are passed in one call when no lane rolls, and theirs could not wait past
+// their colour)
+template <class B>
 struct DeferredRounds;
 #if defined(__GNUC__) && defined(__x86_64__)
 #define PBA_DEFER_TARGET __attribute__((target("avx2")))
 #else
 #define PBA_DEFER_TARGET
 #endif
-template <int kMode>
-[[gnu::noinline]] PBA_DEFER_TARGET void defer_rounds(DeferredRounds& d, OnePointBlock& c, int l0,
-                                                     const FloatParams& p, const BodyArrays& r,
-                                                     const Carried<v8f, 1>& state);
+template <int kMode, class B>
+[[gnu::noinline]] PBA_DEFER_TARGET void defer_rounds(DeferredRounds<B>& d, B& c, int l0, const FloatParams& p,
+                                                     const BodyArrays& r, const Carried<v8f, B::kPoints>& state);
 
 // kRounds: the rounds' instance, which starts from `from` (the pass's state when a lane lands
-// sliding) instead of from the block. defer (the AVX2 one-point pass only): where its lanes
-// that land sliding wait for their rounds (the others go on as they would)
+// sliding) instead of from the block. defer (the AVX2 pass only): where its lanes that land
+// sliding wait for their rounds (the others go on as they would)
 // kPart: the whole pass, or one of the AVX2 path's two parts around the sweeps (through `mid`)
 template <class V, int kMode, bool kZmm, class B, bool kRounds = false, int kPart = kWhole>
 PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArrays& r,
                      const Carried<V, B::kPoints>* from = nullptr, Swept<V, B::kPoints>* mid = nullptr,
-                     DeferredRounds* defer = nullptr) {
+                     DeferredRounds<B>* defer = nullptr) {
   constexpr bool kBias = kMode != kRelax;
   // (the set-up, up to the sweeps, and what follows them)
   constexpr bool kStart = !kRounds && kPart != kFinish;
@@ -886,11 +902,16 @@ PBA_LANES void solve(const Lanes<V, B>& L, const FloatParams& p, const BodyArray
         }
       }
       state.tj[0] = tj[0], state.tj[1] = tj[1], state.total = total, state.impact = impact;
-      if constexpr (kYmm && P == 1) {
+      if constexpr (kYmm) {
         // (those lanes' write bits cleared until their rounds: the rest of this half's pass
-        // writes nothing of theirs that their rounds will not write again)
-        if (defer) defer_rounds<kMode>(*defer, c, l0, p, r, state);
-        if (!defer) {
+        // writes nothing of theirs that their rounds will not write again, or put back. A
+        // four-point half with more than kDeferLanes such lanes has its rounds now: copying
+        // a four-point lane to wait costs some 400 instructions, a rounds' call some 2,400,
+        // and the 1240 pyramid's first steps land whole halves, whose waiting cost it 2.3%)
+        constexpr int kDeferLanes = P == 1 ? 8 : 3;
+        const bool wait = defer && (kDeferLanes >= 8 || lanes_set(impact) <= kDeferLanes);
+        if (wait) defer_rounds<kMode>(*defer, c, l0, p, r, state);
+        if (!wait) {
           solve_rounds<V, kMode, kZmm>(L, p, r, state);
           return;
         }
@@ -1142,7 +1163,7 @@ PBA_LANES void separations_of(B& c, const AnchorsOf<B::kPoints>& g, int l0, int 
 // pass: flush_rounds)
 template <class V, class D, int kMode, class B, bool kRounds = false, int kPart = kWhole>
 PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatParams& p, const BodyArrays& r,
-                    DeferredRounds* defer = nullptr, const Carried<V, B::kPoints>* from = nullptr,
+                    DeferredRounds<B>* defer = nullptr, const Carried<V, B::kPoints>* from = nullptr,
                     Swept<V, B::kPoints>* mid = nullptr) {
   const Lanes<V, B> L{c, l0};
   // the separations in float, on the pass's own lanes. Each is base + n.dp + the turned
@@ -1211,10 +1232,10 @@ PBA_LANES void ask_set_up(const B& c) {
 // does what pass() does, in the same order (the halves' manifolds share no body that either
 // writes: they are of one colour)
 // (`next`: the block after this one in the pass, or null; its first lines are asked for while
-// the sweeps' chains leave the loads idle)
+// the sweeps' chains leave the loads idle. defer: pass()'s)
 template <class D, int kMode, class B>
 PBA_LANES void pass_pair(B& c, const AnchorsOf<B::kPoints>& g, const FloatParams& p, const BodyArrays& r,
-                         const B* next) {
+                         const B* next, DeferredRounds<B>* defer) {
   constexpr int P = B::kPoints;
   const Lanes<v8f, B> L[2] = {{c, 0}, {c, 8}};
   Swept<v8f, P> mid[2];
@@ -1239,7 +1260,7 @@ PBA_LANES void pass_pair(B& c, const AnchorsOf<B::kPoints>& g, const FloatParams
   sweep(std::true_type{});
   for (int h = 0; h < 2; ++h)
     for (int k = 0; k < P; ++k) mid[h].lambda[k] = lambda[h][k], mid[h].largest[k] = largest[h][k];
-  for (int h = 0; h < 2; ++h) pass<v8f, D, kMode, B, false, kFinish>(c, g, 8 * h, p, r, nullptr, nullptr, &mid[h]);
+  for (int h = 0; h < 2; ++h) pass<v8f, D, kMode, B, false, kFinish>(c, g, 8 * h, p, r, defer, nullptr, &mid[h]);
 }
 
 // which blocks the AVX2 path passes in interleaved halves (pass_pair)
@@ -1247,21 +1268,22 @@ template <class B>
 constexpr bool kPairs = B::kPoints > 1;
 
 #if defined(__GNUC__) && defined(__x86_64__)
-// The one-point lanes of a colour that land sliding, waiting for their rounds (see
-// defer_rounds): each one's block fields and anchors' `last` as at its pass's friction, and its
-// pass's state, copied into lane `count` of `block` and `state`; where each came from; its
-// block's write bits, which are cleared there until the rounds write the lane back
-// (set by pass_blocks, none of it zeroed there: it is made once a colour and pass, 1,800 times a
-// step in pyramid1240, whose one-point lanes never land sliding)
+// The lanes of a colour that land sliding, waiting for their rounds (see defer_rounds): each
+// one's block fields and anchors' `last` as at its pass's friction, and its pass's state, copied
+// into lane `count` of `block` and `state`; where each came from; its block's write bits, which
+// are cleared there until the rounds write the lane back (set by pass_blocks, none of it zeroed
+// there: it is made once a colour and pass, 1,800 times a step in pyramid1240, whose one-point
+// lanes never land sliding)
+template <class B>
 struct DeferredRounds {
-  OnePointBlock* blocks;
-  const OnePointAnchors* anchors;
+  B* blocks;
+  const AnchorsOf<B::kPoints>* anchors;
   int count;
   bool clean;                          // block, anchors and state zeroed (at the first lane)
   std::uint32_t from[8];               // block index * kLanes + lane
-  OnePointBlock block;                 // lanes [0, count); write_a, write_b, rolls: their bits
-  OnePointAnchors lasts;               // (`last` only)
-  Carried<v8f, 1> state;
+  B block;                             // lanes [0, count); write_a, write_b (rolls): their bits
+  AnchorsOf<B::kPoints> lasts;         // (`last` only)
+  Carried<v8f, B::kPoints> state;
 };
 
 // lane `lane`'s 4-byte fields of kRows rows of kWidth (a block's or a Carried state's) into lane
@@ -1273,39 +1295,49 @@ PBA_LANES void copy_lane(void* to, int at, const void* from, int lane) {
 #pragma GCC unroll 128
   for (std::size_t row = 0; row < kRows; ++row) std::memcpy(t + 4 * kWidth * row, f + 4 * kWidth * row, 4);
 }
-// (the block's rows of kLanes 4-byte fields up to its write bits; Carried's rows of 8)
-inline constexpr std::size_t kBlockRows = offsetof(OnePointBlock, write_a) / (4 * kLanes);
+// (a block's rows of kLanes 4-byte fields up to its write bits; Carried's rows of 8)
+template <class B>
+inline constexpr std::size_t kBlockRows = offsetof(B, write_a) / (4 * kLanes);
 static_assert(offsetof(OnePointBlock, write_a) % (4 * kLanes) == 0);
+static_assert(offsetof(ContactBlock, write_a) % (4 * kLanes) == 0);
 static_assert(sizeof(Carried<v8f, 1>) % sizeof(v8f) == 0 && sizeof(MaskOf<v8f>) == sizeof(v8f));
+static_assert(sizeof(Carried<v8f, 4>) % sizeof(v8f) == 0);
 
 // the waiting lanes' rounds, as solve_rounds would have run them in their own halves, then
 // their relax pass's cap and their warm start; their fields put back into their blocks
-template <int kMode>
-[[gnu::noinline]] PBA_DEFER_TARGET void flush_rounds(DeferredRounds& d, const FloatParams& p, const BodyArrays& r) {
+template <int kMode, class B>
+[[gnu::noinline]] PBA_DEFER_TARGET void flush_rounds(DeferredRounds<B>& d, const FloatParams& p, const BodyArrays& r) {
+  constexpr int P = B::kPoints;
   if (d.count == 0) return;
-  OnePointBlock& t = d.block;
+  B& t = d.block;
   // (the lanes left select their own; a lane compare, not impact[m] = 0: GCC 12's sanitizer
   // build made a vector's element at a variable index element 0, see defer_rounds)
   const v8i lane = {0, 1, 2, 3, 4, 5, 6, 7};
   d.state.impact = d.state.impact & (lane < d.count);
-  pass<v8f, v4d, kMode, OnePointBlock, true>(t, d.lasts, 0, p, r, nullptr, &d.state);
+  pass<v8f, v4d, kMode, B, true>(t, d.lasts, 0, p, r, nullptr, &d.state);
   for (int m = 0; m < d.count; ++m) {
-    OnePointBlock& c = d.blocks[d.from[m] / kLanes];
+    B& c = d.blocks[d.from[m] / kLanes];
     const int l = static_cast<int>(d.from[m] % kLanes);
-    c.impulse[0][l] = t.impulse[0][m], c.max_impulse[0][l] = t.max_impulse[0][m];
+    for (int k = 0; k < P; ++k) {
+      c.impulse[k][l] = t.impulse[k][m], c.max_impulse[k][l] = t.max_impulse[k][m];
+      d.anchors[d.from[m] / kLanes].last[k][l] = d.lasts.last[k][m];
+    }
     c.tangent_impulse[0][l] = t.tangent_impulse[0][m], c.tangent_impulse[1][l] = t.tangent_impulse[1][m];
-    for (int i = 0; i < 3; ++i) c.rolling_impulse[i][l] = t.rolling_impulse[i][m];
-    d.anchors[d.from[m] / kLanes].last[0][l] = d.lasts.last[0][m];
+    if constexpr (P == 1)
+      for (int i = 0; i < 3; ++i) c.rolling_impulse[i][l] = t.rolling_impulse[i][m];
+    else
+      c.twist_impulse[l] = t.twist_impulse[m];  // (its half's pass went on to write one from before the rounds)
     c.write_a |= ((t.write_a >> m) & 1u) << l, c.write_b |= ((t.write_b >> m) & 1u) << l;
   }
-  t.write_a = t.write_b = t.rolls = 0;
+  t.write_a = t.write_b = 0;
+  if constexpr (P == 1) t.rolls = 0;
   d.count = 0;
 }
 
-template <int kMode>
-[[gnu::noinline]] PBA_DEFER_TARGET void defer_rounds(DeferredRounds& d, OnePointBlock& c, int l0,
-                                                     const FloatParams& p, const BodyArrays& r,
-                                                     const Carried<v8f, 1>& state) {
+template <int kMode, class B>
+[[gnu::noinline]] PBA_DEFER_TARGET void defer_rounds(DeferredRounds<B>& d, B& c, int l0, const FloatParams& p,
+                                                     const BodyArrays& r, const Carried<v8f, B::kPoints>& state) {
+  constexpr int P = B::kPoints;
   // the waiting lanes' bits: the mask's sign bits (its lanes are 0 or -1). Not state.impact[q]
   // in a loop: the asan+UBSan build (GCC 12, -O2) read element 0 for every q, so that a half
   // whose first lane landed sent all eight to wait and one whose first did not sent none
@@ -1322,13 +1354,13 @@ template <int kMode>
   for (int q = 0; q < 8; ++q) {
     if (!((bits >> q) & 1)) continue;
     const int m = d.count++, l = l0 + q;
-    copy_lane<kBlockRows, kLanes>(&d.block, m, &c, l);
+    copy_lane<kBlockRows<B>, kLanes>(&d.block, m, &c, l);
     copy_lane<sizeof state / sizeof(v8f), 8>(&d.state, m, &state, q);
-    d.lasts.last[0][m] = d.anchors[index].last[0][l];
+    for (int k = 0; k < P; ++k) d.lasts.last[k][m] = d.anchors[index].last[k][l];
     d.from[m] = static_cast<std::uint32_t>(index * kLanes + static_cast<std::size_t>(l));
     const std::uint32_t lane = 1u << l;
     d.block.write_a |= ((c.write_a & lane) ? 1u : 0u) << m, d.block.write_b |= ((c.write_b & lane) ? 1u : 0u) << m;
-    d.block.rolls |= ((c.rolls & lane) ? 1u : 0u) << m;
+    if constexpr (P == 1) d.block.rolls |= ((c.rolls & lane) ? 1u : 0u) << m;
     c.write_a &= ~lane, c.write_b &= ~lane;
   }
 }
@@ -1343,13 +1375,13 @@ template <int kMode>
 template <class V, class D, int kMode, class B>
 PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std::size_t first, std::size_t last,
                            const FloatParams& p, const BodyArrays& r) {
-  // (the AVX2 one-point pass: its lanes that land sliding solved a colour's eight at a time)
-  constexpr bool kDefer = std::is_same_v<V, v8f> && B::kPoints == 1;
+  // (the AVX2 pass over one colour's blocks: its lanes that land sliding solved eight at a time)
+  constexpr bool kDefer = std::is_same_v<V, v8f>;
   struct None {};
-  [[maybe_unused]] std::conditional_t<kDefer, DeferredRounds, None> rounds;  // (not zeroed: see `clean`)
-  DeferredRounds* defer = nullptr;
+  [[maybe_unused]] std::conditional_t<kDefer, DeferredRounds<B>, None> rounds;  // (not zeroed: see `clean`)
+  DeferredRounds<B>* defer = nullptr;
   if constexpr (kDefer)
-    rounds.blocks = blocks, rounds.anchors = anchors, rounds.count = 0, rounds.clean = false, defer = &rounds;
+    if (p.defer) rounds.blocks = blocks, rounds.anchors = anchors, rounds.count = 0, rounds.clean = false, defer = &rounds;
   for (std::size_t i = first; i < last; ++i) {
     // a block of one lane (a colour of one manifold: a stack's) by the scalar lane, one of up
     // to eight by 8 floats (the same arithmetic in every lane, so the same bits)
@@ -1366,14 +1398,14 @@ PBA_LANES void pass_blocks(B* blocks, const AnchorsOf<B::kPoints>* anchors, std:
     } else if (kWidth<V> == 16 && lanes <= 8) {
       pass<v8f, D, kMode>(blocks[i], anchors[i], 0, p, r);
     } else if constexpr (std::is_same_v<V, v8f> && kPairs<B>) {
-      if (lanes > 8) pass_pair<D, kMode>(blocks[i], anchors[i], p, r, i + 1 < last ? &blocks[i + 1] : nullptr);
-      else pass<V, D, kMode>(blocks[i], anchors[i], 0, p, r);
+      if (lanes > 8) pass_pair<D, kMode>(blocks[i], anchors[i], p, r, i + 1 < last ? &blocks[i + 1] : nullptr, defer);
+      else pass<V, D, kMode>(blocks[i], anchors[i], 0, p, r, defer);
     } else {
       for (int l = 0; l < lanes; l += kWidth<V>) pass<V, D, kMode>(blocks[i], anchors[i], l, p, r, defer);
     }
   }
   if constexpr (kDefer)
-    if (rounds.count > 0) flush_rounds<kMode>(rounds, p, r);
+    if (defer && rounds.count > 0) flush_rounds<kMode>(rounds, p, r);
 }
 
 template <class V, class D, class B>

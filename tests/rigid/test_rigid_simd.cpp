@@ -155,6 +155,83 @@ TEST(RigidSimd, BlocksOfOnePointManifoldsGiveTheSameBitsOnEveryPath) {
   }
 }
 
+// Forty 1 m boxes dropped flat side by side (from 1.5 m, thrown down at 0, 2 or 5 m/s), each
+// in its own lane along x, two of every three moving sideways at 1 to 8 m/s (mu = 0.5, e = 0):
+// they land together, so the ground's colour holds forty four-point manifolds (blocks of 16,
+// whose halves the AVX2 path solves together, and one of 8) of which most land while sliding in
+// the same substep (the rounds; the AVX2 path's such lanes wait for them to the colour's end,
+// eight at a time, beside the lanes that land straight). The same bits on every path, under
+// each solver; and each box, alone on its part of the ground, stops where Coulomb's law puts it
+// (the bounds and their reasons: RigidFriction.ABoxLandingFlatWhileSlidingStopsWhereCoulombSays)
+namespace {
+struct Landing {
+  std::uint64_t hash = 0;
+  int widest = 0;                 // the most four-point manifolds a colour held
+  std::vector<double> travel;     // each box's travel along its direction from its touch (m)
+  std::vector<double> height;     // each box's centre's height at the end (m)
+};
+constexpr int kLandingBoxes = 40;
+constexpr double kLandingMu = 0.5, kLandingDrop = 2.0;
+double landing_vx(int i) { return i % 3 == 0 ? 0.0 : 1.0 + 7.0 * (i % 8) / 7.0; }
+double landing_vy(int i) { return 2.5 * (i % 3 == 1 ? 0 : i % 3 == 2 ? 1 : 2); }
+double landing_sign(int i) { return i % 2 ? -1.0 : 1.0; }
+double touch_time(double vy) { return (-vy + std::sqrt(vy * vy + 2 * 9.81 * (kLandingDrop - 0.5))) / 9.81; }
+
+Landing run_landing(RigidSolverType solver, RigidSimd path) {
+  RigidBodySystem s({.contacts = {.solver = solver}});
+  s.set_simd(path);
+  pba::rigid_scenes::ground(s, kLandingMu);
+  std::vector<pba::RigidBodyId> boxes;
+  for (int i = 0; i < kLandingBoxes; ++i)
+    boxes.push_back(s.create({.pose = {{0, kLandingDrop, 3.0 * i}},
+                              .linear_velocity = {landing_sign(i) * landing_vx(i), -landing_vy(i), 0},
+                              .shapes = {{.shape = ColliderShape::box(Vec3(0.5)), .material = {.restitution = 0, .friction = kLandingMu}}}}));
+  Landing out;
+  for (int step = 0; step < 180; ++step) {
+    s.step(1.0 / 60, kGravity);
+    std::map<int, int> fours;
+    for (std::size_t k = 0; k < s.manifold_count(); ++k) {
+      const pba::RigidManifoldInfo m = s.manifold(k);
+      if (m.color >= 0 && m.points > 1) out.widest = std::max(out.widest, ++fours[m.color]);
+    }
+  }
+  for (int i = 0; i < kLandingBoxes; ++i) {
+    const Vec3 p = s.center_of_mass(boxes[i]);
+    out.travel.push_back(landing_sign(i) * p.x - landing_vx(i) * touch_time(landing_vy(i)));
+    out.height.push_back(p.y);
+  }
+  out.hash = s.hash();
+  return out;
+}
+}  // namespace
+
+TEST(RigidSimd, BoxesLandingWhileSlidingTogetherGiveTheSameBitsOnEveryPath) {
+  const double g = 9.81, dt = 1.0 / 60;
+  for (const RigidSolverType solver : pba::kRigidSolvers) {
+    const Landing scalar = run_landing(solver, RigidSimd::Scalar);
+    if (solver == RigidSolverType::SoftStep) {
+      EXPECT_GT(scalar.widest, 32);
+    }
+    const RigidBodySystem settings({.contacts = {.solver = solver}});
+    const double h = solver == RigidSolverType::SequentialImpulse ? dt : dt / settings.settings().substeps;
+    for (int i = 0; i < kLandingBoxes; ++i) {
+      const double vx = landing_vx(i), land = landing_vy(i) + g * touch_time(landing_vy(i));
+      const double slide = std::pow(std::max(vx - kLandingMu * land, 0.0), 2) / (2 * kLandingMu * g);
+      const double least = std::pow(std::max(vx - kLandingMu * (land + g * dt), 0.0), 2) / (2 * kLandingMu * g) - vx * h / 2;
+      if (vx > 0) {  // (the straight landings are the lanes that do not slide: only on their faces below)
+        EXPECT_LE(scalar.travel[i], slide + 1.5 * vx * dt) << to_string(solver) << " box " << i;
+        EXPECT_GE(scalar.travel[i], least - 1.5 * vx * dt) << to_string(solver) << " box " << i;
+      }
+      EXPECT_NEAR(scalar.height[i], 0.5, 0.01) << to_string(solver) << " box " << i;  // on its face
+    }
+    for (const RigidSimd p : paths()) {
+      const Landing other = run_landing(solver, p);
+      EXPECT_EQ(other.hash, scalar.hash) << to_string(solver) << " on " << to_string(p);
+      EXPECT_EQ(other.widest, scalar.widest) << to_string(solver) << " on " << to_string(p);
+    }
+  }
+}
+
 // The approach speeds before the solve (prepare's, a lane type at a time) on every path: a
 // unit cube rising at 3 m/s and turning at 2 rad/s about x under a ceiling, and a ball rising at
 // 3 m/s, each a centimetre below it. Gravity and the passes' impulses only slow their closing
