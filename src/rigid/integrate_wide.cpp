@@ -509,6 +509,19 @@ PBA_LANES void step_changes(const std::uint32_t* idx, const FreeMotionArrays& f,
   if (f.damped) damp[0] = 1.0 + h * load1<V>(f.lin_damp, idx), damp[1] = 1.0 + h * load1<V>(f.ang_damp, idx);
 }
 
+// A force too large for the contacts' float rows (or for a double) stops here, before contacts
+// can spread it to others: whether the lanes' velocities r (v, then w) are within
+// kMaxRigidSpeed (a NaN fails); else false, and the first body past it in *bad
+template <class V>
+PBA_LANES bool speeds_within(const std::uint32_t* idx, const V r[8], std::uint32_t* bad) {
+  const V v2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2], w2 = r[3] * r[3] + r[4] * r[4] + r[5] * r[5];
+  constexpr double limit2 = kMaxRigidSpeed * kMaxRigidSpeed;
+  if (all_within(v2, limit2) && all_within(w2, limit2)) return true;
+  for (int i = 0; i < kWidth<V>; ++i)
+    if (!(get(v2, i) <= limit2 && get(w2, i) <= limit2)) return *bad = idx[i], false;
+  return true;
+}
+
 // The lanes' velocities; false (and the first bad body in *bad) when one is not finite. Round
 // bodies (Round: all three principal moments equal) take the torque's change of w as h torque
 // / I, without turning it into the principal frame and back. Lanes: what stays the same over
@@ -566,15 +579,50 @@ PBA_LANES bool velocities(const std::uint32_t* idx, const FreeMotionArrays& f, c
     store_rows(warm, idx, zero, 8);
   }
   store_velocities(f, idx, r);
-  // a force too large for the contacts' float rows (or for a double) stops here, before
-  // contacts can spread it to others: |v| and |w| within kMaxRigidSpeed (a NaN fails)
-  const V v2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2], w2 = r[3] * r[3] + r[4] * r[4] + r[5] * r[5];
-  constexpr double limit2 = kMaxRigidSpeed * kMaxRigidSpeed;
-  if (all_within(v2, limit2) && all_within(w2, limit2)) return true;
-  for (int i = 0; i < kWidth<V>; ++i)
-    if (!(get(v2, i) <= limit2 && get(w2, i) <= limit2)) return *bad = idx[i], false;
-  return true;
+  return speeds_within(idx, r, bad);
 }
+
+// The velocities of the 4 bodies idx[0..3] from the lanes at `at` on AVX2 without a torque or
+// damping, into the contact solver's rows (f.stride 8), by whole half rows: each body's (v, w0)
+// and (w1, w2, spare) plus the change of v with +0 for w, then its warm start (whose row is then
+// zeroed, spares too). These are velocities<v4d, ..., Torqued = false>'s additions, lane for
+// lane and in its order, with its transposes left out (the rows' two 4x4 each way and the warm
+// start's, ~50 instructions a body of a velocities substep): only the change of v, 3 lines, is
+// turned into rows. The speed limit's test: with every component within kMaxRigidSpeed / 2,
+// |v|^2 and |w|^2 are at most 3/4 of the limit's square (their three roundings far within), so
+// they pass; else (a large, infinite or NaN number) the lanes' test, on the rows as stored.
+#if defined(__GNUC__) && defined(__x86_64__)
+PBA_LANES bool velocities_rows(const std::uint32_t* idx, const FreeMotionArrays& f, const double* at,
+                               std::uint32_t* bad) {
+  v4d change[4];
+  load_lines(at, kLineLinear, 3, change);
+  change[3] = splat<v4d>(0);
+  transpose4x4(change);  // (body b's (x, y, z, +0))
+  const v4d zero = splat<v4d>(0), half = splat<v4d>(0.5 * kMaxRigidSpeed);
+  const v4l sign = reinterpret_cast<v4l>(splat<v4d>(-0.0));
+  const auto magnitude = [&](v4d x) { return reinterpret_cast<v4d>(reinterpret_cast<v4l>(x) & ~sign); };
+  const v4l spares = {0, 0, -1, -1};  // (a second half's last two numbers are not tested)
+  v4l within = ~v4l{};
+#pragma GCC unroll 4
+  for (int b = 0; b < 4; ++b) {
+    double* row = f.v + 8 * static_cast<std::size_t>(idx[b]);
+    v4d lo = load<v4d>(row) + change[b], hi = load<v4d>(row + 4) + zero;
+    if (f.warm) {
+      double* warm = f.warm[0].v + 8 * static_cast<std::size_t>(idx[b]);
+      lo = lo + load<v4d>(warm), hi = hi + load<v4d>(warm + 4);
+      store<v4d>(warm, zero), store<v4d>(warm + 4, zero);
+    }
+    store<v4d>(row, lo);
+    std::memcpy(row + 4, &hi, 2 * sizeof(double));
+    within &= reinterpret_cast<v4l>(__builtin_ia32_cmppd256(magnitude(lo), half, _CMP_LE_OQ)) &
+              (reinterpret_cast<v4l>(__builtin_ia32_cmppd256(magnitude(hi), half, _CMP_LE_OQ)) | spares);
+  }
+  if (__builtin_ia32_movmskpd256(reinterpret_cast<v4d>(within)) == 0xf) return true;
+  v4d r[8];
+  load_rows(f.v, idx, r);
+  return speeds_within(idx, r, bad);
+}
+#endif
 
 // The lanes of a kind from the bodies' arrays, once a step
 template <class V, bool Round>
@@ -817,6 +865,8 @@ template <class V, bool Round, bool Lanes, bool Torqued>
 PBA_LANES bool velocities_all(const std::uint32_t* idx, std::size_t count, const FreeMotionArrays& f,
                               const double* lanes, double h, const Vec3& g, std::uint32_t* bad) {
   std::size_t i = 0;
+  // (AVX2 without a torque or damping: by rows, velocities_rows)
+  [[maybe_unused]] const bool rows = f.stride == 8 && !f.damped;
   for (; i + kWidth<V> <= count; i += kWidth<V>) {
     if constexpr (Lanes && std::is_same_v<V, v4d>) {
       // (kLineQ's 4 lines, then kLineLinear on: 3 + 3 (+ 3 h / I), and the damping's 2; without a
@@ -828,6 +878,14 @@ PBA_LANES bool velocities_all(const std::uint32_t* idx, std::size_t count, const
         if (f.damped) prefetch_block(idx, i, count, lanes, kLineDamp, 2, nullptr, nullptr);
       }
     }
+#if defined(__GNUC__) && defined(__x86_64__)
+    if constexpr (Lanes && !Torqued && std::is_same_v<V, v4d>) {
+      if (rows) {
+        if (!velocities_rows(idx + i, f, lane_at<Lanes>(lanes, i), bad)) return false;
+        continue;
+      }
+    }
+#endif
     if (!velocities<V, Round, Lanes, Torqued>(idx + i, f, lane_at<Lanes>(lanes, i), h, g, bad)) return false;
   }
   for (; i < count; ++i)

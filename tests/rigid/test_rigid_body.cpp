@@ -1147,6 +1147,47 @@ TEST(RigidDivergence, ABodyPastTheSpeedLimitInATriaxialBlockIsNamedAndLeftWhereI
   }
 }
 
+// The same for bodies the contact lanes hold (the soft step's velocities by rows on AVX2 without
+// a torque or damping, integrate_wide.cpp's velocities_rows, whose test passes every component
+// within half the limit and leaves the rest to the exact one): 16 triaxial boxes resting on the
+// ground (warm starts in their rows), a force on the 14th giving it a = f / m with f = 0.75 or
+// 1.5 of the limit times m / dt. Its speed after substep k is k h a (k/8 of that), past half
+// the limit from the 6th substep: at 0.75 the step passes and the box leaves at 0.75 of the
+// limit (friction and the contacts take under 1 m/s off it), the same bits on every path; at
+// 1.5 the 6th substep stops it, naming the box.
+TEST(RigidDivergence, ABodyInContactPastHalfTheSpeedLimitPassesAndPastItIsNamed) {
+  for (const double over : {0.75, 1.5}) {
+    std::uint64_t first = 0;
+    for (const pba::RigidSimd path : {pba::RigidSimd::Scalar, pba::RigidSimd::Avx2, pba::RigidSimd::Avx512}) {
+      RigidBodySystem s({.contacts = {.substeps = 8, .auto_substeps = false, .sleep = false}});
+      if (!error_of([&] { s.set_simd(path); }).empty()) continue;  // (a path this CPU lacks)
+      s.create({.type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 0)}}});
+      std::vector<pba::RigidBodyId> boxes;
+      for (int i = 0; i < 16; ++i)
+        boxes.push_back(s.create({.name = "box" + std::to_string(i), .pose = {{1.0 * i, 0.2, 0}},
+                                  .shapes = {{.shape = pba::ColliderShape::box({0.3, 0.2, 0.4})}}}));
+      for (int i = 0; i < 20; ++i) s.step(1.0 / 60, kG);
+      const pba::RigidBodyId b = boxes[13];
+      s.apply_force(b, {over * pba::kMaxRigidSpeed * 60 * s.mass(b), 0, 0});
+      const std::string m = error_of([&] { s.step(1.0 / 60, kG); });
+      const std::string what = std::string(to_string(path)) + " at " + std::to_string(over) + ": " + m;
+      if (over > 1) {
+        EXPECT_NE(m.find("rigid body 14 'box13' went faster than kMaxRigidSpeed"), std::string::npos) << what;
+        EXPECT_EQ(s.failed_body(), b) << what;
+        continue;
+      }
+      EXPECT_EQ(m, "") << what;
+      EXPECT_NEAR(s.linear_velocity(b).x, over * pba::kMaxRigidSpeed, 1.0) << what;
+      for (const pba::RigidBodyId id : boxes) {
+        EXPECT_TRUE(pba::is_finite(s.linear_velocity(id))) << what;
+        EXPECT_TRUE(pba::is_finite(s.angular_velocity(id))) << what;
+      }
+      if (path == pba::RigidSimd::Scalar) first = s.hash();
+      EXPECT_EQ(s.hash(), first) << what;
+    }
+  }
+}
+
 // A pile of tumbling boxes and balls on the ground, and a free-flying T-handle: the same
 // inputs give the same bits, and each solver's hash is pinned (glibc's sin/cos,
 // -ffp-contract=off; a change of these numbers is a change of behaviour).
