@@ -280,7 +280,8 @@ struct ContactSettings {
   /// is measured over the window (a column rocking 1 cm either way rests), and where the
   /// positions are too coarse to show a step's motion at `sleep_linear` (a centre beyond
   /// sleep_linear * (dt / substeps) * 2^52, 4.7e11 m at the defaults, 1/60 s and 8 substeps)
-  /// also by the speed: a body falling 1e17 m out stays awake.
+  /// also by the speed: a body falling 1e17 m out stays awake. A body pushed by a force or
+  /// torque in a step (apply_force, apply_torque) does not rest in it.
   bool sleep = true;
   double sleep_linear = 0.05;    ///< m/s, finite and >= 0 (Box2D's linear sleep tolerance)
   double sleep_angular = 0.0349; ///< rad/s (2 degrees/s), finite and >= 0
@@ -427,8 +428,12 @@ class RigidBodySystem {
   void require(RigidBodyId id, std::string_view where) const { ids_.require(id, where); }
   /// Live bodies.
   std::size_t size() const { return type_.size(); }
-  /// The handle of the i-th live body, i in [0, size()) (the order changes when bodies are destroyed).
-  RigidBodyId id_at(std::size_t i) const { return {owner_.at(i), ids_.generation(owner_.at(i))}; }
+  /// The handle of the i-th live body, i in [0, size()) (the order changes when bodies are
+  /// destroyed). Throws Error naming `i` and the range outside it.
+  RigidBodyId id_at(std::size_t i) const {
+    if (i >= owner_.size()) id_out_of_range(i);
+    return {owner_[i], ids_.generation(owner_[i])};
+  }
 
   /// The body frame's pose.
   Pose pose(RigidBodyId id) const;
@@ -462,9 +467,13 @@ class RigidBodySystem {
   /// Moves a body (validated as RigidBodyDef::pose: a unit rotation, a position within the
   /// float range) and wakes it; a static or kinematic body moved also wakes the sleeping
   /// bodies its shapes' bounds reach before or after the move (what rested on it, what it
-  /// jumped into), and a dynamic one those its bounds reach at the next step (what it jumped
-  /// into, as Box2D's contact begin wakes them). A kinematic body moved this way has no
-  /// velocity: what rests on it is not carried by friction (give it a velocity for that).
+  /// jumped into), and a dynamic one those its shapes touch (closer than
+  /// ContactSettings::speculative_distance) before the move at once (what rested on it, in
+  /// its island or not) and after it at the next step (what it jumped into, as Box2D's
+  /// contact begin wakes them; a sleeper only near it sleeps on). The cost is the broad
+  /// phase's query of the body's bounds, not a scan of the bodies. A kinematic body moved
+  /// this way has no velocity: what rests on it is not carried by friction (give it a
+  /// velocity for that).
   void set_pose(RigidBodyId id, const Pose& pose);
   /// Sets the centre of mass velocity and the angular velocity (validated) and wakes the
   /// body; a static body never moves, so on one it only validates (make it kinematic to move it).
@@ -549,6 +558,7 @@ class RigidBodySystem {
  private:
   friend struct detail::RigidContacts;
   std::size_t index(RigidBodyId id, std::string_view where) const;
+  [[noreturn]] void id_out_of_range(std::size_t i) const;  // id_at's Error
   // the body frame of dense body i, from its principal frame and centre of mass (defined in
   // src/rigid/body_frame.h with detail::body_frame, which leaves out the identities' products
   // where they give the same bits; inline for update_proxies, which makes one an awake body a step)
@@ -569,6 +579,13 @@ class RigidBodySystem {
   [[noreturn]] void fail(std::size_t i);
   void update_sleep(double dt);
   void wake_island(std::size_t i);
+  // whether shape shape_i of dense body i and shape shape_k of body k (both solid) are closer
+  // than the speculative distance at their poses now (the narrow phase: a manifold with points)
+  bool shapes_touch(std::size_t i, std::size_t shape_i, std::size_t k, std::size_t shape_k) const;
+  // wakes the sleeping bodies (found by the broad phase's tree) whose shapes' bounds overlap
+  // `reach` (world, m), or that body i's shapes touch at its pose now (shapes_touch)
+  void wake_reached(const Aabb& reach);
+  void wake_touching(std::size_t i);
 
   ContactSettings settings_{};
   ContactSettings validated_{};  // the settings last validated (validation builds messages)

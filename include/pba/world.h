@@ -330,9 +330,12 @@ class World {
   ParticleId particle(EntityId e) const;
   /// The entity's emitter handle, or the null handle.
   EmitterId emitter(EntityId e) const;
-  /// The entity's collider definition, changeable between ticks (throws if it has none).
+  /// The entity's collider definition, changeable between ticks (throws if it has none);
+  /// the next tick checks it (a sensor's too) and refuses a bad field by name before any
+  /// body moves.
   ColliderDef& collider(EntityId e);
-  /// The entity's forcer definition, changeable between ticks (throws if it has none).
+  /// The entity's forcer definition, changeable between ticks (throws if it has none); the
+  /// next tick checks every field and refuses a bad one by name before anything moves.
   Forcer& forcer(EntityId e);
   /// The entity's kinematic definition, changeable between ticks (throws if it has none).
   KinematicDef& kinematic(EntityId e);
@@ -449,7 +452,7 @@ class World {
   // collision_ cleared and given the colliders (sensors push nothing): the tick's collision
   // world starts so (step_rigid), and so does rebuild_collision
   void collide_colliders();
-  // every collider but the sensors validated, an Error naming its entity (sync, before the
+  // every collider validated, sensors too, an Error naming its entity (sync, before the
   // rigid stage moves anything; collide_colliders)
   void validate_colliders();
   // whether an extension system is registered at `stage`

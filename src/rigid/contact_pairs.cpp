@@ -832,11 +832,13 @@ void RigidContacts::find_new_pairs(RigidBodySystem& s) {
 // A body moving faster than the sleep tolerances (or a moving kinematic one) whose bounds
 // reach a sleeping body wakes its island. A slow awake body does not: it rests on the sleeper
 // as on a static body (waking on any overlap let two slow neighbours wake each other forever).
-// A dynamic body that set_pose moved since the last step counts as moving, once: a teleport
-// has no velocity, and one into a sleeping stack left the stack asleep, holding still like a
-// static body while the solver pushed the teleported body alone out of it (Box2D v3 wakes a
-// sleeping body when a contact with it begins). A woken body is still (sleep zeroed its
-// velocity), so one pass wakes all that this step can.
+// A dynamic body that set_pose moved since the last step counts as moving, once, for the
+// sleepers it touches (the narrow phase finds a point closer than the speculative distance):
+// a teleport has no velocity, and one into a sleeping stack left the stack asleep, holding
+// still like a static body while the solver pushed the teleported body alone out of it
+// (Box2D v3 wakes a sleeping body when a contact with it begins touching); a sleeper whose
+// bounds it only reaches (a ball by a box's corner) sleeps on. A woken body is still (sleep
+// zeroed its velocity), so one pass wakes all that this step can.
 void RigidContacts::wake_touched(RigidBodySystem& s) {
   const ContactSettings& cs = s.settings_;
   auto forget_jumped = [&] {
@@ -856,17 +858,27 @@ void RigidContacts::wake_touched(RigidBodySystem& s) {
       if (slot < s.slot_.size() && s.slot_[slot] < n && s.owner_[s.slot_[slot]] == slot) jumped_flag[s.slot_[slot]] = 1;
   }
   const double lin2 = cs.sleep_linear * cs.sleep_linear, ang2 = cs.sleep_angular * cs.sleep_angular;
+  // 0: not moving; 1: moving (faster than the tolerances, or a moving kinematic body);
+  // 2: only teleported (wakes what it touches)
   auto moving = [&](std::uint32_t i) {
     const double v2 = glm::dot(s.v_[i], s.v_[i]), w2 = glm::dot(s.w_[i], s.w_[i]);
-    if (s.type_[i] == BodyType::Dynamic)
-      return !s.asleep_[i] && (v2 > lin2 || w2 > ang2 || (!jumped.empty() && jumped_flag[i]));
-    return s.type_[i] == BodyType::Kinematic && (v2 > 0 || w2 > 0);
+    if (s.type_[i] == BodyType::Dynamic) {
+      if (s.asleep_[i]) return 0;
+      if (v2 > lin2 || w2 > ang2) return 1;
+      return !jumped.empty() && jumped_flag[i] ? 2 : 0;
+    }
+    return s.type_[i] == BodyType::Kinematic && (v2 > 0 || w2 > 0) ? 1 : 0;
   };
   for (const ShapePair& p : shape_pairs) {
     const std::uint32_t a = s.slot_[p.slot_a], b = s.slot_[p.slot_b];
     if (s.asleep_[a] == s.asleep_[b]) continue;
-    const std::uint32_t sleeper = s.asleep_[a] ? a : b, other = s.asleep_[a] ? b : a;
-    if (moving(other) && proxies[p.proxy_a].box.overlaps(proxies[p.proxy_b].box)) s.wake_island(sleeper);
+    const bool a_sleeps = s.asleep_[a];
+    const std::uint32_t sleeper = a_sleeps ? a : b, other = a_sleeps ? b : a;
+    const int how = moving(other);
+    if (how == 0 || !proxies[p.proxy_a].box.overlaps(proxies[p.proxy_b].box)) continue;
+    if (how == 2 && !s.shapes_touch(other, a_sleeps ? p.shape_b : p.shape_a, sleeper, a_sleeps ? p.shape_a : p.shape_b))
+      continue;
+    s.wake_island(sleeper);
   }
   for (const std::uint32_t slot : jumped)
     if (slot < s.slot_.size() && s.slot_[slot] < n) jumped_flag[s.slot_[slot]] = 0;

@@ -503,6 +503,12 @@ void RigidBodySystem::destroy(RigidBodyId id) {
   }
 }
 
+void RigidBodySystem::id_out_of_range(std::size_t i) const {
+  // (a std::out_of_range from the vector's at() before, whose message named no call)
+  throw Error("RigidBodySystem::id_at: index " + std::to_string(i) + " out of range [0, " +
+              std::to_string(owner_.size()) + ")");
+}
+
 std::size_t RigidBodySystem::index(RigidBodyId id, std::string_view where) const {
   ids_.require(id, where);
   return slot_[id.index];
@@ -563,21 +569,67 @@ double RigidBodySystem::kinetic_energy(RigidBodyId id) const {
   return 0.5 * glm::dot(v_[i], v_[i]) / inv_mass_[i] + 0.5 * glm::dot(wb, inertia_[i] * wb);
 }
 
+bool RigidBodySystem::shapes_touch(std::size_t i, std::size_t shape_i, std::size_t k, std::size_t shape_k) const {
+  // the narrow phase at the poses now, with the speculative distance as its margin: a point
+  // comes out when the shapes are closer than it (both solid: dynamic bodies' shapes)
+  const RigidShapeDef& a = shapes_[i][shape_i];
+  const RigidShapeDef& b = shapes_[k][shape_k];
+  const Manifold m = collide(a.shape, detail::shape_frame(body_pose(i), a.local), b.shape,
+                             detail::shape_frame(body_pose(k), b.local),
+                             NarrowPhaseSettings{.speculative_margin = settings_.speculative_distance});
+  return m.count > 0;
+}
+
+// The sleepers' proxies are in the broad phase's tree, each fat box around its shape (a
+// sleeper does not move: set_pose and set_velocity wake it first), so a query of a box finds
+// every sleeper near it in O(log n + found): a scan of every body's bounds made each set_pose
+// of a platform O(n).
+void RigidBodySystem::wake_reached(const Aabb& reach) {
+  const detail::RigidContacts& c = contact_state(contacts_);
+  c.tree.query(reach, [&](std::uint32_t q) {
+    const detail::ShapeProxy& p = c.proxies[q];
+    const std::size_t k = p.body;
+    if (k >= type_.size() || !asleep_[k]) return true;
+    const RigidShapeDef& o = shapes_[k][p.shape];
+    if (reach.overlaps(bounds(o.shape, detail::shape_frame(body_pose(k), o.local)))) wake_island(k);
+    return true;
+  });
+}
+
+void RigidBodySystem::wake_touching(std::size_t i) {
+  const detail::RigidContacts& c = contact_state(contacts_);
+  const Pose body = body_pose(i);
+  for (std::size_t m = 0; m < shapes_[i].size(); ++m) {
+    const RigidShapeDef& d = shapes_[i][m];
+    const Aabb near = bounds(d.shape, detail::shape_frame(body, d.local)).grown(settings_.speculative_distance);
+    c.tree.query(near, [&](std::uint32_t q) {
+      const detail::ShapeProxy& p = c.proxies[q];
+      const std::size_t k = p.body;
+      if (k != i && k < type_.size() && asleep_[k] && shapes_touch(i, m, k, p.shape)) wake_island(k);
+      return true;
+    });
+  }
+}
+
 void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   const std::size_t i = index(id, "RigidBodySystem::set_pose");
   // as RigidBodyDef::validate
   if (!fits_float(pose.position)) require_float(pose.position, describe(i) + " set_pose position");
   if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
-  // a static or kinematic body moved wakes the sleeping bodies its shapes' bounds reach,
-  // before or after the move (grown by the speculative distance): they rested on it, or it
-  // jumped into them, and nothing else would wake them (the ground lowered under a sleeping
-  // stack left it floating; a kinematic wall stepped by set_pose has no velocity, so it went
-  // through a sleeping box as if it were not there)
+  // what rested on the body wakes: nothing else would (the ground lowered under a sleeping
+  // stack left it floating; a box asleep on an awake box teleported away hung in the air, as
+  // each slept in its own island). A static or kinematic body wakes the sleeping bodies its
+  // shapes' bounds reach, before or after the move (grown by the speculative distance): they
+  // rested on it, or it jumped into them (a kinematic wall stepped by set_pose has no
+  // velocity, so it went through a sleeping box as if it were not there); a dynamic one
+  // those its shapes touch before the move (closer than the speculative distance)
   const bool fixed = type_[i] != BodyType::Dynamic;
   Aabb reach{Vec3(std::numeric_limits<double>::infinity()), Vec3(-std::numeric_limits<double>::infinity())};
   if (fixed)
     for (const RigidShapeDef& d : shapes_[i])
       reach = reach.merged(bounds(d.shape, detail::shape_frame(body_pose(i), d.local)));
+  else
+    wake_touching(i);
   com_[i] = apply(pose, com_local_[i]);
   q_[i] = glm::normalize(pose.rotation * principal_[i]);
   wake_island(i);
@@ -597,15 +649,7 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   }
   for (const RigidShapeDef& d : shapes_[i])
     reach = reach.merged(bounds(d.shape, detail::shape_frame(body_pose(i), d.local)));
-  reach = reach.grown(settings_.speculative_distance);
-  for (std::size_t k = 0; k < type_.size(); ++k) {
-    if (!asleep_[k]) continue;
-    for (const RigidShapeDef& d : shapes_[k])
-      if (reach.overlaps(bounds(d.shape, detail::shape_frame(body_pose(k), d.local)))) {
-        wake_island(k);
-        break;
-      }
-  }
+  wake_reached(reach.grown(settings_.speculative_distance));
 }
 
 void RigidBodySystem::set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular) {
@@ -993,6 +1037,8 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
   contacts_->store();
   check_finite();
   update_sleep(dt);
+  std::fill(force_.begin(), force_.end(), Vec3(0));
+  std::fill(torque_.begin(), torque_.end(), Vec3(0));
   time_ += dt;
   profile_.total = total.seconds();
   profile_.solve = profile_.total - profile_.collide;
@@ -1039,10 +1085,9 @@ bool all_finite_wide(SimdPath path, const double* p, std::size_t count) {
 }  // namespace detail
 
 void RigidBodySystem::check_finite() {
-  // forces last one step; then look for a body whose state stopped being finite
+  // look for a body whose state stopped being finite (the forces, which last one step, are
+  // cleared after update_sleep has seen which bodies they pushed)
   const std::size_t n = type_.size();
-  std::fill(force_.begin(), force_.end(), Vec3(0));
-  std::fill(torque_.begin(), torque_.end(), Vec3(0));
   // the centres, velocities and frames as flat arrays of doubles first (Vec3 and Quat are
   // 3 and 4 doubles without padding): a body at a time, the tests were 0.67 M instructions
   // of the rain's landing step, and as many in each of its resting steps, its 10,000 bodies
@@ -1154,7 +1199,12 @@ void RigidBodySystem::update_sleep(double dt) {
     bool rests = glm::dot(d, d) <= reach * reach && std::abs(glm::dot(q_[i], rest_q_[i])) >= cos_turn;
     if (rests && std::max({std::abs(com_[i].x), std::abs(com_[i].y), std::abs(com_[i].z)}) >= far)
       rests = glm::dot(v_[i], v_[i]) <= slow_v && glm::dot(w_[i], w_[i]) <= slow_w;
-    if (on && rests) {
+    // a body a force or torque pushed this step does not rest (Box2D v3 resets the sleep time
+    // of a body a force is applied to): with time_to_sleep 0 and no gravity floor on its
+    // window, a box pushed from rest by a steady force moved within the one-step window,
+    // fell asleep at the step's end with its velocity zeroed, and never gathered speed
+    const bool pushed = force_[i] != Vec3(0) || torque_[i] != Vec3(0);
+    if (on && rests && !pushed) {
       sleep_time_[i] += dt;
     } else {
       sleep_time_[i] = 0;

@@ -907,9 +907,11 @@ const QueryWorld& World::queries() {
 }
 
 void World::validate_colliders() {
+  // sensors too: they push nothing, but their shapes are tested against the bodies and the
+  // particles each tick (a sensor's radius set to NaN between ticks went unchecked, and the
+  // narrow phase stopped the tick naming no collider, or the sensor silently sensed nothing)
   for (std::size_t i = 0; i < world_colliders_.size(); ++i)
-    if (!colliders_[i].def.sensor && !world_colliders_[i].ok())
-      world_colliders_[i].validate("collider of " + describe(colliders_[i].owner));
+    if (!world_colliders_[i].ok()) world_colliders_[i].validate("collider of " + describe(colliders_[i].owner));
 }
 
 void World::collide_colliders() {
@@ -1297,6 +1299,18 @@ void World::tick(double t, double dt) {
     profile_.stages[static_cast<std::size_t>(s)] = sw.seconds();
     sw.reset();
   };
+  // World::forcer hands out the definitions, changeable between ticks: checked again here by
+  // field, before anything moves (a strength or radius set to NaN or inf went on unchecked,
+  // add_forcer alone having validated them, and pushed the particles in it to NaN or stopped
+  // the rigid bodies naming a body's apply_force). The pose is checked at its entity's pose
+  // (sync). validate allocates only to throw: an empty `where`, named on the way out
+  for (const ForcerEntry& f : forcers_) {
+    try {
+      f.def.validate("");
+    } catch (const Error& err) {
+      throw Error("forcer of " + describe(f.owner) + err.what());
+    }
+  }
   // 1. kinematic: paths, motors and thrusters
   run_kinematics(t, dt);
   profile_.kinematic = sw.seconds();

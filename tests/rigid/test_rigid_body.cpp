@@ -537,6 +537,21 @@ TEST(RigidHandles, DestroyKeepsTheOthersAndRejectsStaleHandles) {
   EXPECT_NE(error_of([&] { s.pose(pba::RigidBodyId{}); }).find("null handle"), std::string::npos);
 }
 
+// id_at's index is refused with a pba::Error naming it and the range (a std::out_of_range
+// from the vector's at() before, which named neither the call nor the range), at both ends:
+// size() is one past the last body, and the largest index is far past it.
+TEST(RigidHandles, AnIndexPastTheBodiesIsRefusedByName) {
+  RigidBodySystem s;
+  EXPECT_EQ(error_of([&] { s.id_at(0); }), "RigidBodySystem::id_at: index 0 out of range [0, 0)");
+  const auto a = s.create({.shapes = kBall});
+  const auto b = s.create({.pose = {{2, 0, 0}}, .shapes = kBall});
+  EXPECT_EQ(s.id_at(0), a);
+  EXPECT_EQ(s.id_at(1), b);
+  EXPECT_EQ(error_of([&] { s.id_at(2); }), "RigidBodySystem::id_at: index 2 out of range [0, 2)");
+  EXPECT_EQ(error_of([&] { s.id_at(SIZE_MAX); }),
+            "RigidBodySystem::id_at: index " + std::to_string(SIZE_MAX) + " out of range [0, 2)");
+}
+
 // A moved-from system is an empty one that works, as a moved-from std::vector is: its contact
 // state went with the move and was left null, so its next create() or step() dereferenced null.
 TEST(RigidHandles, AMovedFromSystemIsAnEmptySystemThatWorks) {

@@ -2387,6 +2387,95 @@ TEST(RigidSleep, AForceWakesASleepingBodyAndActs) {
   EXPECT_NEAR(s.linear_velocity(box).y - v10, 2 * g * 20 * dt, 1e-9 * g);
 }
 
+// A dynamic body teleported (set_pose) wakes at the next step the sleepers it touches (a
+// contact closer than the speculative distance begins, as Box2D v3 wakes them), not those
+// whose bounds it only reaches: a ball put by a sleeping box's top edge, 6.6 cm off it (its
+// bounds overlap the box's), leaves it asleep; put 7.6 cm into it, it wakes the box (and not
+// a box apart). Until 2026-12-07 any overlap of the bounds woke the sleeper.
+TEST(RigidSleep, ATeleportedBodyWakesOnlyTheSleepersItTouches) {
+  RigidBodySystem s;
+  pba::rigid_scenes::ground(s, 0.5);
+  const auto box = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+  const auto apart = pba::rigid_scenes::box(s, {5, 0.5, 0}, Vec3(0.5));
+  // weightless, so it stays where it is put
+  const auto ball = s.create({.pose = {{20, 5, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.5)}}, .gravity_scale = 0});
+  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+  ASSERT_FALSE(s.awake(box) || s.awake(apart));
+  const Vec3 edge = s.center_of_mass(box) + Vec3(0.5, 0.5, 0);  // the top edge nearest the ball
+  // the ball's centre sqrt(0.32) = 0.566 m out from the edge: its surface 6.6 cm off it
+  s.set_pose(ball, {edge + Vec3(0.4, 0.4, 0)});
+  ASSERT_GT(std::sqrt(0.32) - 0.5, 3 * s.settings().speculative_distance);
+  ASSERT_TRUE(s.shape_bounds(ball)[0].overlaps(s.shape_bounds(box)[0]));  // the premise
+  for (int i = 0; i < 10; ++i) s.step(1.0 / 60, kGravity);
+  EXPECT_FALSE(s.awake(box));
+  EXPECT_EQ(s.linear_velocity(ball), Vec3(0));  // nothing touched it either
+  // into the box: 7.6 cm deep at the edge
+  s.set_pose(ball, {edge + Vec3(0.3, 0.3, 0)});
+  EXPECT_FALSE(s.awake(box));  // at the next step's pairs
+  s.step(1.0 / 60, kGravity);
+  EXPECT_TRUE(s.awake(box));
+  EXPECT_FALSE(s.awake(apart));
+}
+
+// A body moved away by set_pose wakes what rested on it, in its island or not. A box that
+// came to rest on a sleeping box (a slow awake body rests on a sleeper as on a static body,
+// so each slept in its own island) hung in the air when the box under it was teleported
+// away; now it wakes and falls to the ground (its centre 1 m lower, within the contacts' sag).
+// So does a box asleep on a kinematic platform teleported sideways (kinematic and static
+// bodies join no island).
+TEST(RigidSleep, ABodyMovedAwayWakesWhatRestedOnItInAnyIsland) {
+  RigidBodySystem s;
+  pba::rigid_scenes::ground(s, 0.5);
+  const auto low = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+  ASSERT_FALSE(s.awake(low));
+  const auto high = pba::rigid_scenes::box(s, s.center_of_mass(low) + Vec3(0, 1, 0), Vec3(0.5));
+  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+  ASSERT_FALSE(s.awake(low) || s.awake(high));  // the premise: both asleep, the top one on the low one
+  const double y_high = s.center_of_mass(high).y;
+  ASSERT_NEAR(y_high, 1.5, 1e-3);
+  s.set_pose(low, {{5, 0.5, 0}});
+  EXPECT_TRUE(s.awake(high));
+  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+  EXPECT_NEAR(s.center_of_mass(high).y, y_high - 1, 1e-3);
+
+  RigidBodySystem k;
+  const auto platform = k.create({.type = BodyType::Kinematic, .pose = {{0, -0.1, 0}}, .shapes = {box_shape({2, 0.1, 2})}});
+  const auto rider = pba::rigid_scenes::box(k, {0, 0.5, 0}, Vec3(0.5));
+  for (int i = 0; i < 120; ++i) k.step(1.0 / 60, kGravity);
+  ASSERT_FALSE(k.awake(rider));
+  k.set_pose(platform, {{10, -0.1, 0}});
+  EXPECT_TRUE(k.awake(rider));
+  for (int i = 0; i < 30; ++i) k.step(1.0 / 60, kGravity);
+  EXPECT_NEAR(k.linear_velocity(rider).y, kGravity.y * 0.5, 1e-9);  // in free fall: g t
+}
+
+// A body pushed by a force or torque in a step does not rest in it (Box2D v3 resets the sleep
+// time of a body a force is applied to). With time_to_sleep 0 and no gravity on the body (so
+// its rest window is the step), a box pushed from rest by a steady force moved within the
+// window each step, fell asleep at the step's end with its velocity zeroed, and the next
+// force woke it from rest again: it never gathered speed. Now it gains F / m dt a step, the
+// closed form of constant acceleration (v = a t, which symplectic Euler gives exactly), and
+// a ball under a steady torque tau / I dt.
+TEST(RigidSleep, ASteadyForceFromRestIsNotLostToSleep) {
+  RigidBodySystem s({.contacts = {.time_to_sleep = 0}});
+  const auto box = s.create({.shapes = {box_shape(Vec3(0.5))}, .gravity_scale = 0});
+  const auto ball = s.create({.pose = {{5, 0, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.5)}}, .gravity_scale = 0});
+  const double a = 1, alpha = 1, dt = 1.0 / 60;  // m/s^2, rad/s^2, s
+  const double inertia = s.world_inertia(ball)[1][1];
+  for (int i = 0; i < 60; ++i) {
+    s.apply_force(box, {s.mass(box) * a, 0, 0});
+    s.apply_torque(ball, {0, inertia * alpha, 0});
+    s.step(dt, kGravity);
+  }
+  EXPECT_TRUE(s.awake(box) && s.awake(ball));
+  EXPECT_NEAR(s.linear_velocity(box).x, a * 60 * dt, 1e-12);
+  EXPECT_NEAR(s.angular_velocity(ball).y, alpha * 60 * dt, 1e-12);
+  // left alone, they coast at well above the tolerances and stay awake
+  s.step(dt, kGravity);
+  EXPECT_TRUE(s.awake(box) && s.awake(ball));
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------

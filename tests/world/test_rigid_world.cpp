@@ -858,6 +858,33 @@ TEST(Events, ASensorReportsOneEnterAndOneLeaveAtTheClosedFormTimes) {
   EXPECT_NEAR(w.velocity(ball).y, -g * w.time(), 0.02 * g * w.time());  // unhindered
 }
 
+// A sensor collider's shape changed between ticks (World::collider hands out its definition)
+// is checked at the next tick like any collider's, by field and before anything moves: a box
+// sensor's half extent set to NaN went unchecked (the check passed over sensors, which push
+// nothing) and the tick stopped in the narrow phase's sensor test naming no collider.
+TEST(Events, ASensorsShapeChangedBetweenTicksIsRefusedByField) {
+  World w;
+  const EntityId sensor = w.create_entity({.name = "gate", .pose = {{0, 2, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_collider(sensor, {.shape = ColliderShape::box({1, 0.5, 1}), .sensor = true});
+  const EntityId ball = w.create_entity({.name = "ball", .pose = {{0, 2, 0}, pba::Quat(1, 0, 0, 0)}});
+  RigidBodyDef d;
+  d.shapes = {{.shape = ColliderShape::sphere(0.25)}};
+  w.add_rigid_body(ball, d);
+  w.step();
+  ASSERT_EQ(w.sensor_enter_events().size(), 1u);  // the premise: the ball is in it
+  const double t = w.time();
+  const Vec3 at = w.pose(ball).position;
+  w.collider(sensor).shape.half_extents.y = NAN;
+  const std::string msg = pba::test_support::error_of([&] { w.step(); });
+  EXPECT_EQ(msg.rfind("collider of entity 0 'gate'", 0), 0u) << msg;
+  EXPECT_NE(msg.find("half_extents"), std::string::npos) << msg;
+  EXPECT_EQ(w.time(), t);
+  EXPECT_EQ(w.pose(ball).position, at);
+  w.collider(sensor).shape.half_extents.y = 0.5;
+  w.step();  // refused, not stopped
+  EXPECT_GT(w.time(), t);
+}
+
 // A ball bouncing on the ground (e = 0.8) gives one touch begin and one touch end per bounce:
 // the k-th impact at t_1 + sum of the flights 2 e^j v_1 / g (j = 1..k-1) with v_1 = sqrt(2 g h),
 // approach speed e^(k-1) v_1; bounces faster than the restitution threshold (1 m/s) leave

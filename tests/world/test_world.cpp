@@ -387,6 +387,34 @@ TEST(Forcers, ANonFinitePoseSetBetweenTicksIsRefusedByField) {
   EXPECT_GT(w.time(), t);
 }
 
+// The same for the forcer's other fields: a strength set to NaN, or a radius to infinity,
+// between ticks is refused at the next tick by the field, before anything moves (until
+// 2026-12-07 only the pose was checked again: the NaN strength pushed the particle in the
+// fan to NaN, and the world stopped naming the particle, not the forcer).
+TEST(Forcers, ANonFiniteStrengthOrRadiusSetBetweenTicksIsRefusedByField) {
+  World w;
+  const EntityId fan = w.create_entity({.name = "fan"});
+  w.add_forcer(fan, {.shape = pba::ForcerShape::Sphere, .radius = 2});
+  const EntityId p = w.create_entity({});
+  w.add_particle(p, {.position = {0, 0, 0}});
+  w.step();
+  const double t = w.time();
+  const Vec3 at = w.pose(p).position;
+  w.forcer(fan).strength = NAN;
+  EXPECT_EQ(error_of([&] { w.step(); }), "forcer of entity 0 'fan'.strength: must be finite, got nan");
+  EXPECT_EQ(w.time(), t);
+  EXPECT_EQ(w.pose(p).position, at);
+  w.forcer(fan).strength = 1;
+  w.forcer(fan).radius = INFINITY;
+  const std::string msg = error_of([&] { w.step(); });
+  EXPECT_EQ(msg.rfind("forcer of entity 0 'fan'.radius: ", 0), 0u) << msg;
+  EXPECT_EQ(w.time(), t);
+  w.forcer(fan).radius = 2;
+  w.step();  // refused, not stopped
+  EXPECT_GT(w.time(), t);
+  EXPECT_TRUE(pba::is_finite(w.pose(p).position));
+}
+
 // A collider whose entity is moved beyond a float's range is refused at the next tick as the
 // entity's collider, named once. Until 2026-12-06, in a world with rigid bodies, its static
 // stand-in body refused it first ("rigid body 1 'wall' set_pose position: ..."), and a new
