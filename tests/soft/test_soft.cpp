@@ -1807,6 +1807,38 @@ TEST(SoftXpbd, DragOfAnySizeRelaxesToTheWindAtOnce) {
     }
 }
 
+// XPBD drag too weak for a float in a strong wind: a 1 g particle (w = 1000 /kg) at 0.1
+// m/s in a 300 m/s wind with k = b w = 1e-9 /s (or quadratic c |u - u_w| w the same) gains
+// h k |u - u_w| = 5e-10 m/s a substep toward the wind, under half a float's spacing at 0.1
+// m/s (3.7e-9), so each substep rounds it away: the particle keeps the bits of its twin
+// without drag, and its velocity the closed form u_w + (u - u_w) e^(-k t) (which has moved
+// 3e-7 m/s in 1 s) to 1e-6 m/s. Until 2026-12-07 the drag was evaluated as u_w + (u - u_w
+// + h g) / (1 + h k), whose u - u_w rounds at 300 m/s's spacing (3e-5): 0.1 became
+// 0.099994 at the first substep.
+TEST(SoftXpbd, WeakDragInStrongWindKeepsTheVelocitysBits) {
+  const double wind = 300, u0 = 0.1, k = 1e-9, w = 1000;
+  for (const bool quadratic : {false, true}) {
+    SCOPED_TRACE(quadratic ? "quadratic" : "linear");
+    pba::SoftMesh m;
+    m.positions = {{0, 1, 0}};
+    m.velocities = {{u0, 0, 0}};
+    m.masses = {1 / w};
+    pba::SoftBodyDef free;
+    free.forces.wind.velocity = {wind, 0, 0};
+    pba::SoftBodyDef dragged = free;
+    (quadratic ? dragged.forces.quadratic_drag : dragged.forces.linear_drag) =
+        quadratic ? k / (w * (wind - u0)) : k / w;
+    pba::SoftBody a = pba::SoftBody::from_mesh(m, free), b = pba::SoftBody::from_mesh(m, dragged);
+    for (int f = 0; f < 60; ++f) {
+      a.step(f / 60.0, 1.0 / 60);
+      b.step(f / 60.0, 1.0 / 60);
+    }
+    EXPECT_EQ(b.position(0), a.position(0)) << pba::format_vec3(b.position(0) - a.position(0));
+    EXPECT_EQ(b.velocity(0), a.velocity(0)) << pba::format_vec3(b.velocity(0) - a.velocity(0));
+    EXPECT_NEAR(b.velocity(0).x, wind + (u0 - wind) * std::exp(-k * 1.0), 1e-6);
+  }
+}
+
 // Damping and drag over their whole range under every explicit integrator: a free
 // particle of 1 g (w = 1000 /kg) in a 5 m/s wind, h = 1/600 s, is a damper alone, u' =
 // -(z / h) u with z = rate h: the damping d itself, linear drag b w, quadratic drag c |u|
