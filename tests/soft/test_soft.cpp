@@ -1899,6 +1899,39 @@ TEST(MassSpring, ExplicitBlowUpNamesTheDampingOrDragPastItsBound) {
       }
 }
 
+// A blow-up that springs past their bound cause names them, not a tiny quadratic drag:
+// the drag's rate c |u| w follows the air speed, which the blow-up grows over a few steps
+// (this cloth at one substep of 1/60 s, omega h = 6 for its stiffest spring, reached 1e37
+// m/s; until 2026-12-07 a drag of 1e-9 kg/m was then named as a rate of 6e22 /s). The
+// quadratic drag is named only when nothing else is: alone past its bound it still is,
+// with the air speed its rate was taken at.
+TEST(MassSpring, ExplicitBlowUpOfSpringsDoesNotBlameATinyQuadraticDrag) {
+  for (const double c : {1e-9, 1e-6}) {
+    SCOPED_TRACE(c);
+    pba::SoftBodyDef d;
+    d.solver = pba::SoftSolver::MassSpring;
+    d.substeps = 1;
+    d.forces.quadratic_drag = c;
+    pba::SoftBody s = pba::SoftBody::cloth_grid({.origin = {-0.5, 0.7, -0.5}, .nx = 8, .ny = 8}, d);
+    const std::string msg = error_of_frames(s, 600);
+    EXPECT_NE(msg.find("unstable: SoftBodyDef.stretch_stiffness = 1000 N/m"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("quadratic_drag"), std::string::npos) << msg;
+  }
+  // quadratic drag alone past its bound: a 1 g particle 5 m/s from the wind, z = c |u| w h = 30
+  pba::SoftBodyDef d;
+  d.solver = pba::SoftSolver::MassSpring;
+  d.forces.gravity = pba::Vec3(0);
+  d.forces.wind.velocity = {5, 0, 0};
+  d.forces.quadratic_drag = 3.6;  // kg/m: z = 3.6 * 5 * 1000 / 600
+  pba::SoftMesh m;
+  m.positions = {{0, 0, 0}};
+  m.masses = {1e-3};
+  pba::SoftBody p = pba::SoftBody::from_mesh(m, d);
+  const std::string msg = error_of_frames(p, 60);
+  EXPECT_NE(msg.find("unstable: SoftBodyDef.forces.quadratic_drag = 3.6 kg/m"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("the fastest air speed at the step's start + g h = 5 m/s"), std::string::npos) << msg;
+}
+
 // The volume force -k_v (V - V0) grad V of one tetrahedron is a spring of (omega h)^2 =
 // k_v sum_j w_j |grad_j V|^2 h^2 (the one non-zero eigenvalue of M^-1 k_v g g^T): a
 // jelly of one cell whose volume stiffness puts its stiffest tetrahedron past an explicit
