@@ -53,7 +53,8 @@ struct FieldKey {
 
 // The settings every type reads under their own names (the builders validate them as
 // "SoftBodyDef.<field>"; the reader's own checks refuse most values first, not all: a
-// thickness beyond what the float solver squares, a drag beyond a float).
+// drag beyond a float; a thickness past what one substep's push keeps finite is refused at
+// the step, which knows the substep).
 constexpr FieldKey kSettingsKeys[] = {
     {"SoftBodyDef.substeps", "substeps"},
     {"SoftBodyDef.iterations", "iterations"},

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "error_of.h"
+#include "pba/particles.h"
 #include "pba/soft.h"
 #include "soft/soft_impl.h"
 
@@ -1980,43 +1981,73 @@ TEST(MassSpring, ExplicitBlowUpNamesTheVolumeStiffnessPastItsBound) {
     }
 }
 
-// The collision thickness pushes a touching particle that far out of a collider, it moves
-// on at that speed, and the float solver squares the lengths between particles: a
-// thickness of 1e30 m (finite and >= 0, so accepted) turned an XPBD cloth lying on the
-// ground NaN at the first step, 4e18 m one dropped on a sphere. Past sqrt(FLT_MAX) / 64 =
-// 2.9e17 m it is refused by name, at build and between steps; at that bound cloths on a
-// plane and on a sphere step on finite under both solvers, and a denormal acts as 0.
-TEST(SoftBadInput, ThicknessBeyondTheFloatSolverIsNamed) {
-  const double bound = std::sqrt(double(std::numeric_limits<float>::max())) / 64;
+// The collision thickness pushes a touching particle up to that far out of a collider in
+// one substep h, and it leaves at thickness / h; the float solver squares that speed (drag)
+// and the lengths it moves the particle. So the thickness is at most kMaxParticleSpeed h
+// (9e18 m/s, the particles' limit), checked at each step by name before anything moves:
+// a finite thickness builds. Until 2026-12-07 the bound was sqrt(FLT_MAX) / 64 = 2.9e17 m
+// at every h, refused at build, and an XPBD cloth on a sphere at 1/600 s left it at 7.9e19
+// m/s; 2e17 m is past the new bound at that substep. At the bound the XPBD cloths on a
+// plane and on a sphere (in a 3 m/s wind with quadratic drag 1e-3 kg/m too) step on, no
+// particle faster than kMaxParticleSpeed; a mass-spring cloth steps on without drag, and
+// with that drag its explicit integrator is past its bound at the push's speed (z = c
+// (thickness / h) w h), which the blow-up names. A denormal thickness acts as 0.
+TEST(SoftBadInput, ThicknessBeyondWhatOneSubstepsPushKeepsFiniteIsNamed) {
+  const double h = (1.0 / 60) / 10, bound = pba::kMaxParticleSpeed * h;  // the default 10 substeps
   const pba::Collider ground = pba::Collider::plane({0, 1, 0}, 0);
-  for (const double th : {std::nextafter(bound, 1e300), 4e18, 1e30, 1e300, std::numeric_limits<double>::max()}) {
+  for (const double th : {std::nextafter(bound, 1e300), 2e17, 1e30, 1e300, std::numeric_limits<double>::max()}) {
     SCOPED_TRACE(th);
     pba::SoftBodyDef d;
     d.thickness = th;
-    const std::string expect = "SoftBodyDef.thickness: must be at most " + pba::format_value(bound) +
-                               " m, sqrt(FLT_MAX) / 64 (a contact pushes a particle this far out of a collider, and "
-                               "the float solver squares the lengths between particles), got " + pba::format_value(th);
-    EXPECT_EQ(error_of([&] { pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4}, d); }), expect);
-    pba::SoftBody c = pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4});
-    c.settings().thickness = th;
+    const std::string expect = "SoftBodyDef.thickness: must be at most kMaxParticleSpeed h = 9e+18 m/s * " +
+                               pba::format_value(h) + " s = " + pba::format_value(bound) +
+                               " m at the substep h = dt / substeps (a contact pushes a particle this far out of a "
+                               "collider in one substep, which it leaves at thickness / h, and the float solver "
+                               "squares that speed), got " + pba::format_value(th) + " m";
+    pba::SoftBody c = pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4}, d);
+    const pba::Vec3 before = c.position(0);
     EXPECT_EQ(error_of([&] { c.step(0, 1.0 / 60, std::span(&ground, 1)); }), expect);
     EXPECT_FALSE(c.failed());
+    EXPECT_EQ(c.position(0), before);
+    EXPECT_EQ(c.steps(), 0);
   }
+  // (not finite: refused at build)
+  pba::SoftBodyDef inf;
+  inf.thickness = std::numeric_limits<double>::infinity();
+  EXPECT_NE(error_of([&] { pba::SoftBody::cloth_grid({.nx = 4, .ny = 4}, inf); }).find("SoftBodyDef.thickness"),
+            std::string::npos);
   const pba::Collider ball = pba::Collider::sphere({0, 0.5, 0}, 0.3);
   for (const pba::SoftSolver solver : {pba::SoftSolver::Xpbd, pba::SoftSolver::MassSpring})
-    for (const double th : {bound, 1e-310}) {
-      SCOPED_TRACE(testing::Message() << th << (solver == pba::SoftSolver::Xpbd ? " xpbd" : " mass-spring"));
-      pba::SoftBodyDef d;
-      d.thickness = th;
-      d.solver = solver;
-      pba::SoftBody c = pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4}, d);
-      pba::SoftBody s = pba::SoftBody::cloth_grid(
-          {.origin = {-0.5, 0.7, -0.5}, .nx = 8, .ny = 8, .pins = pba::ClothPins::None}, d);
-      for (int f = 0; f < 30; ++f) {
-        ASSERT_EQ(error_of([&] { c.step(f / 60.0, 1.0 / 60, std::span(&ground, 1)); }), "");
-        ASSERT_EQ(error_of([&] { s.step(f / 60.0, 1.0 / 60, std::span(&ball, 1)); }), "");
+    for (const bool drag : {false, true})
+      for (const double th : {bound, 1e-310}) {
+        SCOPED_TRACE(testing::Message() << th << (solver == pba::SoftSolver::Xpbd ? " xpbd" : " mass-spring")
+                                        << (drag ? " drag" : ""));
+        pba::SoftBodyDef d;
+        d.thickness = th;
+        d.solver = solver;
+        if (drag) d.forces.quadratic_drag = 1e-3, d.forces.wind.velocity = {3, 0, 0};
+        pba::SoftBody c = pba::SoftBody::cloth_grid({.origin = {-0.5, 0.01, 0}, .nx = 4, .ny = 4}, d);
+        pba::SoftBody s = pba::SoftBody::cloth_grid(
+            {.origin = {-0.5, 0.7, -0.5}, .nx = 8, .ny = 8, .pins = pba::ClothPins::None}, d);
+        std::string msg;
+        double fastest = 0;
+        for (int f = 0; f < 30 && msg.empty(); ++f) {
+          msg = error_of([&] {
+            c.step(f / 60.0, 1.0 / 60, std::span(&ground, 1));
+            s.step(f / 60.0, 1.0 / 60, std::span(&ball, 1));
+          });
+          if (!msg.empty()) break;
+          for (std::size_t i = 0; i < s.size(); ++i) fastest = std::max(fastest, glm::length(s.velocity(i)));
+          for (std::size_t i = 0; i < c.size(); ++i) fastest = std::max(fastest, glm::length(c.velocity(i)));
+        }
+        if (solver == pba::SoftSolver::MassSpring && drag && th == bound) {
+          EXPECT_NE(msg.find("unstable: SoftBodyDef.forces.quadratic_drag = 0.001 kg/m"), std::string::npos) << msg;
+          EXPECT_NE(msg.find("+ thickness / h (a contact's push) = "), std::string::npos) << msg;
+          continue;
+        }
+        EXPECT_EQ(msg, "");
+        EXPECT_LE(fastest, pba::kMaxParticleSpeed * (1 + 1e-6));
       }
-    }
 }
 
 // Implicit Euler is stable at any stiffness, but its Newton system I - h (h da/dx +
