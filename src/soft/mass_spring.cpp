@@ -6,6 +6,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <string_view>
 
 #include "soft_impl.h"
 
@@ -330,16 +332,18 @@ std::string SoftBody::Impl::mass_spring_instability(double h) const {
 // (h da/dx + da/dv) holds, beside the identity, (omega h)^2 = k (w_a + w_b) h^2 and z = c
 // (w_a + w_b) h for the stiffest spring of each kind, z = rate h for the per-particle
 // dampers and k_v sum w |grad V|^2 h^2 for the stiffest tetrahedron. Implicit Euler is
-// stable at any of them, but the solve is not exact: its rounding grows with them, and
-// measured on an 8-segment rope at h = 1/600 s Newton still met its tolerance at (omega
-// h)^2 = 5e9 and no longer at 5e11 (singular from about 1e95). Every term above 1 (past
-// an explicit method's reach, where the system stops being near the identity) is named,
-// or "" when none is.
+// stable at any of them, but the solve is not exact: its rounding grows with them. At h =
+// 1/600 s, stiffness in half decades, Newton still met its tolerance at (omega h)^2 =
+// 1.6e10 and no longer at 5e10 on an 8-segment rope (on a 6 x 6 cloth 6.3e10 and 2e11),
+// and the system was singular from k = 1e88 N/m, (omega h)^2 = 5e83. Each term above
+// kNewtonTrouble = 1e8, over two decades below that onset, is named with its size (a
+// term under it is not what failed), or "" when none is.
 std::string SoftBody::Impl::newton_failure_why(double h) const {
+  constexpr double kNewtonTrouble = 1e8;
   const Stiffest st = stiffest(*this);
   std::string why;
   const auto add = [&](const std::string& field, double value, const char* unit, const std::string& what, double q) {
-    if (!(value > 0) || q <= 1) return;  // (nan and inf are past it)
+    if (!(value > 0) || q <= kNewtonTrouble) return;  // (nan and inf are past it)
     why += std::string(why.empty() ? "" : "; ") + "SoftBodyDef." + field + " = " + format_value(value) + " " + unit +
            " gives " + what + " = " + format_value(q);
   };
@@ -410,10 +414,14 @@ void SoftBody::Impl::step_mass_spring(double t, double dt) {
     try {
       integ.step(t + (sub - 1) * h, h, std::span<Vec3>(msx), std::span<Vec3>(msv), accel);
     } catch (const NewtonFailure& e) {
+      // (without the integrator's advice to raise NewtonSettings.max_iterations, which a
+      // soft body does not have)
       ms_valid = false;
+      std::string what = e.what();
+      constexpr std::string_view kIterations = "; reduce dt or raise NewtonSettings.max_iterations";
+      if (what.ends_with(kIterations)) what.resize(what.size() - kIterations.size());
       const std::string why = newton_failure_why(h);
-      if (why.empty()) throw;
-      throw NewtonFailure(std::string(e.what()) + "; " + why);
+      throw NewtonFailure(what + (why.empty() ? "" : "; " + why));
     }
     const double f = static_cast<double>(sub) / S;
     for (std::size_t k = 0; k < pins.size(); ++k) {
