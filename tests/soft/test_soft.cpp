@@ -1815,7 +1815,7 @@ TEST(SoftXpbd, DragOfAnySizeRelaxesToTheWindAtOnce) {
 // without drag, and its velocity the closed form u_w + (u - u_w) e^(-k t) (which has moved
 // 3e-7 m/s in 1 s) to 1e-6 m/s. Until 2026-12-07 the drag was evaluated as u_w + (u - u_w
 // + h g) / (1 + h k), whose u - u_w rounds at 300 m/s's spacing (3e-5): 0.1 became
-// 0.099994 at the first substep.
+// 0.100006 at the first substep.
 TEST(SoftXpbd, WeakDragInStrongWindKeepsTheVelocitysBits) {
   const double wind = 300, u0 = 0.1, k = 1e-9, w = 1000;
   for (const bool quadratic : {false, true}) {
