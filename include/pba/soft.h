@@ -147,7 +147,9 @@ struct SoftBodyDef {
   /// tether is a shortcut through the cloth, which would keep holding a piece that has
   /// torn away from its pins.
   bool tethers = true;
-  /// Collision thickness (m): particles are kept this far outside colliders; in [0, sqrt(FLT_MAX) / 64 = 2.9e17].
+  /// Collision thickness (m): particles are kept this far outside colliders; finite, >= 0 and,
+  /// checked at each step, at most kMaxParticleSpeed h (9e18 m/s times the substep h = dt /
+  /// substeps: a push of the thickness in one substep is a speed of thickness / h).
   double thickness = 0.01;
   /// Coulomb friction coefficient against colliders, finite and >= 0; each contact uses
   /// the larger of this and the collider material's friction.

@@ -53,7 +53,8 @@ struct FieldKey {
 
 // The settings every type reads under their own names (the builders validate them as
 // "SoftBodyDef.<field>"; the reader's own checks refuse most values first, not all: a
-// thickness beyond what the float solver squares, a drag beyond a float).
+// drag beyond a float; a thickness past what one substep's push keeps finite is refused at
+// the step, which knows the substep).
 constexpr FieldKey kSettingsKeys[] = {
     {"SoftBodyDef.substeps", "substeps"},
     {"SoftBodyDef.iterations", "iterations"},
@@ -176,8 +177,12 @@ void read_soft_body(const Node& n, World& w) {
     try {
       d = jelly_settings(j, material, w.stepper().settings().fixed_dt);
     } catch (const Error& e) {
-      // size, cells and material decide it together (the message names them): the item
-      throw Error(n.where() + ": " + e.what());
+      // a material field alone (a damping time whose c = tau k overflows): its path under
+      // "material"; size, cells and material together (the message names them): the item
+      fail_by_field(n, e,
+                    {{"JellyMaterial.young", "material", "young"},
+                     {"JellyMaterial.poisson", "material", "poisson"},
+                     {"JellyMaterial.damping_time", "material", "damping_time"}});
     }
   }
   d.forces.gravity = w.gravity();

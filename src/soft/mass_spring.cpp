@@ -6,6 +6,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <string_view>
 
 #include "soft_impl.h"
 
@@ -213,23 +215,31 @@ Stiffest stiffest(const SoftBody::Impl& s) {
 // The per-particle dampers: the damping rate d (a = -d v), linear drag b w and quadratic
 // drag c |u| w (a = -(b + c |u|) w u, u relative to the wind) on the lightest free
 // particle, each x'' = -(z / h) x' with z = rate h; quadratic drag's rate at the fastest
-// particle's air speed at the step's start plus gravity's g h over one substep (a body at
-// rest in still air takes that much before its drag acts).
+// particle's air speed at the step's start (the last state check_finite passed) plus
+// gravity's g h over one substep (a body at rest in still air takes that much before its
+// drag acts) plus, with colliders, thickness / h (a contact pushes a particle up to the
+// thickness out in one substep: a cloth on a sphere with 1e3 m of thickness, c = 1e-3 kg/m
+// and 10 substeps blew up at step 1 naming nothing). The failure path only: it builds
+// strings.
 struct Rate {
   const char* field;  // in SoftBodyDef
   double value;
   const char* unit;
-  const char* what;
+  std::string what;
   double rate;  // 1/s
 };
+constexpr int kQuadraticDrag = 2;  // its index in particle_rates
 std::array<Rate, 3> particle_rates(const SoftBody::Impl& s, double wfree, double h) {
   const SoftBodyDef& d = s.def;
-  const double speed = s.ms_air_speed + glm::length(d.forces.gravity) * h;
+  const double push = s.colliders.empty() ? 0.0 : d.thickness / h;
+  const double speed = s.ms_air_speed + glm::length(d.forces.gravity) * h + push;
   return {Rate{"damping", d.damping, "1/s", "its rate d", d.damping},
           Rate{"forces.linear_drag", d.forces.linear_drag, "kg/s", "its lightest particle's rate b w",
                d.forces.linear_drag * wfree},
           Rate{"forces.quadratic_drag", d.forces.quadratic_drag, "kg/m",
-               "its lightest particle's rate c |u| w (|u| = the fastest air speed at the step's start + g h)",
+               "its lightest particle's rate c |u| w (|u| = the fastest air speed at the step's start + g h" +
+                   std::string(push > 0 ? " + thickness / h (a contact's push)" : "") + " = " + format_value(speed) +
+                   " m/s)",
                d.forces.quadratic_drag * speed * wfree}};
 }
 
@@ -239,8 +249,9 @@ std::array<Rate, 3> particle_rates(const SoftBody::Impl& s, double wfree, double
 // spring (the largest w_a + w_b) the method's amplification of the spring and its damper
 // together (detail::mass_spring_radius; docs/soft-bodies.md, "Why stiff springs are hard"),
 // then the dampers on single particles (damping and drag, on the lightest particle) and
-// the stiffest tetrahedron's volume force. Above 1 the settings are named: the stiffness,
-// the damping, or both when neither alone is past the bound. A network's fastest mode is
+// the stiffest tetrahedron's volume force, and quadratic drag when none of these is named.
+// Above 1 the settings are named: the stiffness, the damping, or both when neither alone
+// is past the bound. A network's fastest mode is
 // faster than its stiffest spring, so an empty answer does not make it stable. The
 // failure path only: it builds strings.
 std::string SoftBody::Impl::mass_spring_instability(double h) const {
@@ -269,33 +280,38 @@ std::string SoftBody::Impl::mass_spring_instability(double h) const {
            format_value(wh) + " and c (w_a + w_b) h = " + format_value(z) + ": an amplification of " + format_value(r) +
            " per substep, past " + std::string(name(def.method)) + "'s stability bound 1";
   }
-  // the per-particle dampers, together and each alone
-  if (st.particle_w > 0) {
-    const std::array<Rate, 3> rates = particle_rates(*this, st.particle_w, h);
+  // the per-particle dampers, together and each alone; quadratic drag only when nothing
+  // else is named: its rate follows the air speed, which a blow-up of anything grows (a
+  // cloth of springs past their bound reached 1e30 m/s over a few steps, and a quadratic
+  // drag of 1e-9 kg/m then read as a rate of 6e22 /s)
+  const auto dampers = [&](bool quadratic) {
+    if (!(st.particle_w > 0)) return;
+    std::array<Rate, 3> rates = particle_rates(*this, st.particle_w, h);
+    if (!quadratic) rates[kQuadraticDrag].rate = 0, rates[kQuadraticDrag].value = 0;
     double total = 0;
     for (const Rate& r : rates) total += r.rate;
     const double r_all = total > 0 ? detail::mass_spring_radius(def.method, 0, total * h) : 0;
-    if (r_all > kGrows) {
-      // each one past the bound alone, or all of them when none is
-      bool alone[3], any = false;
-      for (int k = 0; k < 3; ++k) {
-        alone[k] = detail::mass_spring_radius(def.method, 0, rates[k].rate * h) > kGrows;
-        any = any || alone[k];
-      }
-      std::string list;
-      int named = 0;
-      for (int k = 0; k < 3; ++k) {
-        if (!(rates[k].value > 0) || (any && !alone[k])) continue;
-        list += std::string(list.empty() ? "" : " with ") + "SoftBodyDef." + rates[k].field + " = " +
-                format_value(rates[k].value) + " " + rates[k].unit + " (" + rates[k].what + " = " +
-                format_value(rates[k].rate) + " /s)";
-        ++named;
-      }
-      why += std::string(why.empty() ? "" : "; ") + list + (named > 1 ? " damp" : " damps") +
-             " the velocity at z = rate h = " + format_value(total * h) + ": an amplification of " +
-             format_value(r_all) + " per substep, past " + std::string(name(def.method)) + "'s stability bound 1";
+    if (!(r_all > kGrows)) return;
+    // each one past the bound alone, or all of them when none is
+    bool alone[3], any = false;
+    for (int k = 0; k < 3; ++k) {
+      alone[k] = detail::mass_spring_radius(def.method, 0, rates[k].rate * h) > kGrows;
+      any = any || alone[k];
     }
-  }
+    std::string list;
+    int named = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (!(rates[k].value > 0) || (any && !alone[k])) continue;
+      list += std::string(list.empty() ? "" : " with ") + "SoftBodyDef." + rates[k].field + " = " +
+              format_value(rates[k].value) + " " + rates[k].unit + " (" + rates[k].what + " = " +
+              format_value(rates[k].rate) + " /s)";
+      ++named;
+    }
+    why += std::string(why.empty() ? "" : "; ") + list + (named > 1 ? " damp" : " damps") +
+           " the velocity at z = rate h = " + format_value(total * h) + ": an amplification of " + format_value(r_all) +
+           " per substep, past " + std::string(name(def.method)) + "'s stability bound 1";
+  };
+  dampers(false);
   // the volume force of the stiffest tetrahedron
   if (def.volume_stiffness > 0 && st.tet_g > 0) {
     const double gmax = st.tet_g;
@@ -306,6 +322,7 @@ std::string SoftBody::Impl::mass_spring_instability(double h) const {
              "|grad V|^2) h = " + format_value(wh) + ": an amplification of " + format_value(r) +
              " per substep, past " + std::string(name(def.method)) + "'s stability bound 1";
   }
+  if (why.empty() && def.forces.quadratic_drag > 0) dampers(true);
   if (why.empty()) return why;
   return why + " at the substep h = " + format_value(h) +
          " s: use more substeps, softer springs, less damping or drag, implicit Euler or the XPBD solver";
@@ -315,16 +332,18 @@ std::string SoftBody::Impl::mass_spring_instability(double h) const {
 // (h da/dx + da/dv) holds, beside the identity, (omega h)^2 = k (w_a + w_b) h^2 and z = c
 // (w_a + w_b) h for the stiffest spring of each kind, z = rate h for the per-particle
 // dampers and k_v sum w |grad V|^2 h^2 for the stiffest tetrahedron. Implicit Euler is
-// stable at any of them, but the solve is not exact: its rounding grows with them, and
-// measured on an 8-segment rope at h = 1/600 s Newton still met its tolerance at (omega
-// h)^2 = 5e9 and no longer at 5e11 (singular from about 1e95). Every term above 1 (past
-// an explicit method's reach, where the system stops being near the identity) is named,
-// or "" when none is.
+// stable at any of them, but the solve is not exact: its rounding grows with them. At h =
+// 1/600 s, stiffness in half decades, Newton still met its tolerance at (omega h)^2 =
+// 1.6e10 and no longer at 5e10 on an 8-segment rope (on a 6 x 6 cloth 6.3e10 and 2e11),
+// and the system was singular from k = 1e88 N/m, (omega h)^2 = 5e83. Each term above
+// kNewtonTrouble = 1e8, over two decades below that onset, is named with its size (a
+// term under it is not what failed), or "" when none is.
 std::string SoftBody::Impl::newton_failure_why(double h) const {
+  constexpr double kNewtonTrouble = 1e8;
   const Stiffest st = stiffest(*this);
   std::string why;
   const auto add = [&](const std::string& field, double value, const char* unit, const std::string& what, double q) {
-    if (!(value > 0) || q <= 1) return;  // (nan and inf are past it)
+    if (!(value > 0) || q <= kNewtonTrouble) return;  // (nan and inf are past it)
     why += std::string(why.empty() ? "" : "; ") + "SoftBodyDef." + field + " = " + format_value(value) + " " + unit +
            " gives " + what + " = " + format_value(q);
   };
@@ -395,10 +414,14 @@ void SoftBody::Impl::step_mass_spring(double t, double dt) {
     try {
       integ.step(t + (sub - 1) * h, h, std::span<Vec3>(msx), std::span<Vec3>(msv), accel);
     } catch (const NewtonFailure& e) {
+      // (without the integrator's advice to raise NewtonSettings.max_iterations, which a
+      // soft body does not have)
       ms_valid = false;
+      std::string what = e.what();
+      constexpr std::string_view kIterations = "; reduce dt or raise NewtonSettings.max_iterations";
+      if (what.ends_with(kIterations)) what.resize(what.size() - kIterations.size());
       const std::string why = newton_failure_why(h);
-      if (why.empty()) throw;
-      throw NewtonFailure(std::string(e.what()) + "; " + why);
+      throw NewtonFailure(what + (why.empty() ? "" : "; " + why));
     }
     const double f = static_cast<double>(sub) / S;
     for (std::size_t k = 0; k < pins.size(); ++k) {

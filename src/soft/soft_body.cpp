@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "core/squarable.h"
+#include "pba/particles.h"
 #include "soft_impl.h"
 
 namespace pba {
@@ -34,9 +35,6 @@ double tet_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 
 // ---------------------------------------------------------------------------------------
 // settings
-
-// The largest collision thickness (m): see SoftBodyDef::validate.
-const double kMaxThickness = detail::squarable_hi<float>() / 64;
 
 void SoftBodyDef::validate(std::string_view where) const {
   // solver and counts
@@ -68,16 +66,7 @@ void SoftBodyDef::validate(std::string_view where) const {
   non_negative(aero.drag, where, "aero.drag");
   non_negative(aero.lift, where, "aero.lift");
   non_negative(tear_strain, where, "tear_strain");
-  non_negative(thickness, where, "thickness");
-  // a contact pushes a particle the thickness out of the collider, and the solver squares
-  // the lengths between particles in float: a 1e30 m thickness flung the particles
-  // touching a collider 1e30 m and their constraints' squares made the state NaN (XPBD
-  // cloth on a sphere from 4e18 m, sqrt(FLT_MAX) / 4.6: a particle pushed out moves on at
-  // that speed, and one on the far side is pushed the other way). Room for 64 thicknesses
-  if (!(thickness <= kMaxThickness))
-    throw Error(field_path(where, "thickness") + ": must be at most " + format_value(kMaxThickness) +
-                " m, sqrt(FLT_MAX) / 64 (a contact pushes a particle this far out of a collider, and the float "
-                "solver squares the lengths between particles), got " + format_value(thickness));
+  non_negative(thickness, where, "thickness");  // (its bound depends on the substep: step)
   non_negative(friction, where, "friction");
   non_negative(damping, where, "damping");
 }
@@ -457,6 +446,20 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
     detail::throw_not_squarable<float>(h, "SoftBody::step(dt): the substep dt / SoftBodyDef.substeps = " +
                                               format_value(dt) + " / " + std::to_string(s.def.substeps) + " s",
                                        "s", "it is used in float, divided by and squared");
+  // A contact pushes a touching particle up to the thickness out of a collider within one
+  // substep h, and the solver takes its velocity from that displacement: it leaves at up
+  // to thickness / h. The drag squares the speed relative to the wind in float and the
+  // constraints the lengths the next substep moves it, so that speed must stay within
+  // kMaxParticleSpeed (half of sqrt(FLT_MAX), the particles' own limit): thickness <=
+  // kMaxParticleSpeed h. (Until 2026-12-07 the bound was sqrt(FLT_MAX) / 64 = 2.9e17 m at
+  // every h, and an XPBD cloth on a sphere left it at 7.9e19 m/s at 1/600 s; 1e30 m made a
+  // cloth on the ground NaN at the first step.) Refused before anything moves.
+  if (const double h = dt / s.def.substeps, most = kMaxParticleSpeed * h; !(s.def.thickness <= most))
+    throw Error("SoftBodyDef.thickness: must be at most kMaxParticleSpeed h = " + format_value(kMaxParticleSpeed) +
+                " m/s * " + format_value(h) + " s = " + format_value(most) +
+                " m at the substep h = dt / substeps (a contact pushes a particle this far out of a collider in one "
+                "substep, which it leaves at thickness / h, and the float solver squares that speed), got " +
+                format_value(s.def.thickness) + " m");
   if (s.x.empty()) {
     s.time = t + dt;
     ++s.steps;

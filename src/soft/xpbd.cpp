@@ -481,9 +481,12 @@ PBA_CLONES void damp_sweep(const SolveArgs& s) {
 // is exact to float rounding and only the positions are quantised. Linear and quadratic
 // drag toward the wind are implicit in v: v' = u_w + (v - u_w + h (g + a_ext)) / (1 + h k)
 // with k = (b + c |v - u_w|) w, which damps without ever overshooting the wind; a drag
-// beyond a float (k = inf) takes v to the wind's velocity at once, its limit. (Written as
+// beyond a float (k = inf) takes v to the wind's velocity at once, its limit. It is
+// evaluated as v - (h k / (1 + h k)) (v - u_w) + h (g + a_ext) / (1 + h k) while h k < 1,
+// whose rounding is float's on |v| (as without drag), not on |u_w|. (Written as
 // (v + h (g + a_ext + k u_w)) / (1 + h k) until 2026-12-07, whose k u_w overflowed and
-// inf 0 made the state NaN at the first step: a drag of 1e35 on a 1 g particle in wind.)
+// inf 0 made the state NaN at the first step: a drag of 1e35 on a 1 g particle in wind;
+// then as the wind's form at every k, which lost v's bits below eps |u_w| per substep.)
 struct PredictArgs {
   float* x;
   float* y;
@@ -529,15 +532,22 @@ PBA_SOFT_INLINE void predict_impl(std::size_t n, float* PBA_SOFT_RESTRICT x, flo
     if constexpr (kExt) fx += ax[i], fy += ay[i], fz += az[i];
     float nvx, nvy, nvz;
     if constexpr (kDrag) {
-      // (u_w + (u - u_w + h f) / (1 + h k): no k u_w to overflow, and k = inf gives the
-      // wind's velocity; k = b w + c (|u - u_w| w), so a pinned particle's k is 0, never
-      // c |u - u_w| = inf times 0)
+      // (u - t r + h f / (1 + h k) with r = u - u_w and t = h k / (1 + h k) while h k < 1,
+      // else u_w + (r + h f) / (1 + h k): each form rounds to the velocity it is nearer,
+      // so weak drag keeps u to its own rounding (k = 0 keeps it exactly, not to u_w's)
+      // and strong drag gives the wind's (k = inf exactly it); no k u_w to overflow; k =
+      // b w + c (|r| w), so a pinned particle's k is 0, never c |r| = inf times 0)
       const float rx = ux - wx, ry = uy - wy, rz = uz - wz;
       const float k = b * w[i] + c * (std::sqrt(rx * rx + ry * ry + rz * rz) * w[i]);
-      const float inv = 1.0f / (1.0f + h * k);
-      nvx = wx + (rx + h * fx) * inv;
-      nvy = wy + (ry + h * fy) * inv;
-      nvz = wz + (rz + h * fz) * inv;
+      const float hk = h * k;
+      const float inv = 1.0f / (1.0f + hk);
+      const float t = hk * inv;  // (NaN at k = inf, where the wind's form is taken)
+      const bool weak = hk < 1.0f;
+      const float sx = ux - t * rx + h * fx * inv, sy = uy - t * ry + h * fy * inv, sz = uz - t * rz + h * fz * inv;
+      const float lx = wx + (rx + h * fx) * inv, ly = wy + (ry + h * fy) * inv, lz = wz + (rz + h * fz) * inv;
+      nvx = weak ? sx : lx;
+      nvy = weak ? sy : ly;
+      nvz = weak ? sz : lz;
     } else {
       (void)b, (void)c, (void)wx, (void)wy, (void)wz;
       nvx = ux + h * fx, nvy = uy + h * fy, nvz = uz + h * fz;
