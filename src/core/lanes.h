@@ -41,7 +41,7 @@ constexpr int kWidth = sizeof(V) / sizeof(double);
 
 #define PBA_LANES [[gnu::always_inline]] inline
 
-/// x in every lane.
+/// x in every lane (as 0 + x: -0.0 comes out +0, so a sign mask is not made with it).
 template <class V>
 PBA_LANES V splat(double x) {
   if constexpr (std::is_same_v<V, double>) return x;

@@ -315,7 +315,7 @@ struct RigidContacts {
   // far in it at its pose of the last substep (refresh_inertia)
   std::vector<Mat3> inv_inertia;
   std::vector<Quat> inertia_q;          // by dense body: the orientation inv_inertia is of
-  std::vector<std::uint8_t> refreshed;  // scratch of refresh_inertia, by body (and a last spare row): 1 when refreshed
+  std::vector<std::uint8_t> refreshed;  // scratch of refresh_inertia, by body (and the spare row, and 3 bytes the gathers read past it): 1 when refreshed
   std::vector<std::uint32_t> refresh_list;  // scratch of refresh_inertia: the bodies it refreshed
   std::size_t continuous_hits = 0;     // bodies put back to a time of impact, all steps
   double impulse_h = 0;  // the time step (s) the carried impulses were accumulated over; 0: none yet

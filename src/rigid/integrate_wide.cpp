@@ -39,6 +39,7 @@
 #include <bit>
 #include <cassert>
 #include <cmath>
+#include <limits>
 
 #include <immintrin.h>
 
@@ -599,7 +600,8 @@ PBA_LANES bool velocities_rows(const std::uint32_t* idx, const FreeMotionArrays&
   change[3] = splat<v4d>(0);
   transpose4x4(change);  // (body b's (x, y, z, +0))
   const v4d zero = splat<v4d>(0), half = splat<v4d>(0.5 * kMaxRigidSpeed);
-  const v4l sign = reinterpret_cast<v4l>(splat<v4d>(-0.0));
+  // (the sign bit alone: splat(-0.0) is 0 + -0.0 = +0, no mask)
+  const v4l sign = v4l{} + std::numeric_limits<long long>::min();
   const auto magnitude = [&](v4d x) { return reinterpret_cast<v4d>(reinterpret_cast<v4l>(x) & ~sign); };
   const v4l spares = {0, 0, -1, -1};  // (a second half's last two numbers are not tested)
   v4l within = ~v4l{};
@@ -1052,7 +1054,8 @@ __attribute__((target("avx2"))) std::size_t turned_far_avx2(const std::uint32_t*
     load_quat(inertia_q, idx + j, r);
     const v4d spread = load<v4d>(at + kLineSpread * kFreeLaneWidth);
     const v4d dot = (q[0] * r[0] + q[1] * r[1]) + (q[2] * r[2] + q[3] * r[3]);
-    const v4d c = reinterpret_cast<v4d>(reinterpret_cast<v4l>(dot) & ~reinterpret_cast<v4l>(splat<v4d>(-0.0)));
+    // |dot| as the scalar test's std::abs: the sign bit cleared (splat(-0.0) is +0, no mask)
+    const v4d c = reinterpret_cast<v4d>(reinterpret_cast<v4l>(dot) & ~(v4l{} + std::numeric_limits<long long>::min()));
     const v4d turn = 8.0 * (1.0 - c) * spread * spread;
     // (a NaN is not within, as in the scalar test)
     int out = ~__builtin_ia32_movmskpd256(__builtin_ia32_cmppd256(turn, splat<v4d>(limit), _CMP_LE_OQ)) & 0xf;
