@@ -579,11 +579,21 @@ class RigidBodySystem {
   [[noreturn]] void fail(std::size_t i);
   void update_sleep(double dt);
   void wake_island(std::size_t i);
+  // wakes sleeping body i's island and lists its bodies as jumped (list_jumped): next step
+  // wakes the sleepers they touch, one island a step up a chain of sleeping islands
+  void wake_island_listed(std::size_t i);
+  // lists handle slot `slot` for the next step's wake_touched, once
+  void list_jumped(std::uint32_t slot);
+  // the margin (m) within which two shapes touch for waking: the speculative distance or the
+  // linear slop, whichever is larger, plus 1 um (a body rests at a gap of 0 or 1e-11 m when
+  // both are 0, and a point comes out only closer than the margin)
+  double touch_margin() const;
   // whether shape shape_i of dense body i and shape shape_k of body k (both solid) are closer
-  // than the speculative distance at their poses now (the narrow phase: a manifold with points)
+  // than touch_margin() at their poses now (the narrow phase: a manifold with points)
   bool shapes_touch(std::size_t i, std::size_t shape_i, std::size_t k, std::size_t shape_k) const;
-  // wakes the sleeping bodies (found by the broad phase's tree) whose shapes' bounds overlap
-  // `reach` (world, m), or that body i's shapes touch at its pose now (shapes_touch)
+  // wake the sleeping bodies (found by the broad phase's tree) whose shapes' bounds overlap
+  // `reach` (world, m), or that body i's shapes touch at its pose now (shapes_touch), and
+  // list them as jumped (wake_island_listed)
   void wake_reached(const Aabb& reach);
   void wake_touching(std::size_t i);
 

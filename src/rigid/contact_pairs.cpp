@@ -852,7 +852,11 @@ void RigidContacts::wake_touched(RigidBodySystem& s) {
   // the bodies that jumped, by dense index (a slot destroyed since, or taken by another body
   // since, is skipped, or wakes what that body touches: harmless)
   const std::size_t n = s.type_.size();
-  if (!jumped.empty()) {
+  // the sleepers a jumped body wakes are listed after these for the next step (one island a
+  // step up a chain of sleeping islands: their bodies are still, so as moving bodies they
+  // would wake nothing)
+  const std::size_t listed = jumped.size();
+  if (listed > 0) {
     if (jumped_flag.size() < n) jumped_flag.resize(n, 0);
     for (const std::uint32_t slot : jumped)
       if (slot < s.slot_.size() && s.slot_[slot] < n && s.owner_[s.slot_[slot]] == slot) jumped_flag[s.slot_[slot]] = 1;
@@ -865,7 +869,7 @@ void RigidContacts::wake_touched(RigidBodySystem& s) {
     if (s.type_[i] == BodyType::Dynamic) {
       if (s.asleep_[i]) return 0;
       if (v2 > lin2 || w2 > ang2) return 1;
-      return !jumped.empty() && jumped_flag[i] ? 2 : 0;
+      return listed > 0 && jumped_flag[i] ? 2 : 0;
     }
     return s.type_[i] == BodyType::Kinematic && (v2 > 0 || w2 > 0) ? 1 : 0;
   };
@@ -878,11 +882,17 @@ void RigidContacts::wake_touched(RigidBodySystem& s) {
     if (how == 0 || !proxies[p.proxy_a].box.overlaps(proxies[p.proxy_b].box)) continue;
     if (how == 2 && !s.shapes_touch(other, a_sleeps ? p.shape_b : p.shape_a, sleeper, a_sleeps ? p.shape_a : p.shape_b))
       continue;
-    s.wake_island(sleeper);
+    if (how == 2)
+      s.wake_island_listed(sleeper);
+    else
+      s.wake_island(sleeper);
   }
-  for (const std::uint32_t slot : jumped)
+  for (std::size_t j = 0; j < listed; ++j) {
+    const std::uint32_t slot = jumped[j];
     if (slot < s.slot_.size() && s.slot_[slot] < n) jumped_flag[s.slot_[slot]] = 0;
-  forget_jumped();
+    jumped_slot[slot] = 0;
+  }
+  jumped.erase(jumped.begin(), jumped.begin() + static_cast<std::ptrdiff_t>(listed));
 }
 
 // ---------------------------------------------------------------------------------------

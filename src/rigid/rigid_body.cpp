@@ -569,15 +569,49 @@ double RigidBodySystem::kinetic_energy(RigidBodyId id) const {
   return 0.5 * glm::dot(v_[i], v_[i]) / inv_mass_[i] + 0.5 * glm::dot(wb, inertia_[i] * wb);
 }
 
+double RigidBodySystem::touch_margin() const {
+  return std::max(settings_.speculative_distance, settings_.linear_slop) + 1e-6;
+}
+
 bool RigidBodySystem::shapes_touch(std::size_t i, std::size_t shape_i, std::size_t k, std::size_t shape_k) const {
-  // the narrow phase at the poses now, with the speculative distance as its margin: a point
-  // comes out when the shapes are closer than it (both solid: dynamic bodies' shapes)
+  // the narrow phase at the poses now, with touch_margin() as its margin: a point comes out
+  // when the shapes are closer than it (both solid: dynamic bodies' shapes). The speculative
+  // distance alone missed a body resting on it when that is 0 (XPBD rests at a gap of exactly
+  // 0, the impulse solver at 1.4e-11 m)
   const RigidShapeDef& a = shapes_[i][shape_i];
   const RigidShapeDef& b = shapes_[k][shape_k];
   const Manifold m = collide(a.shape, detail::shape_frame(body_pose(i), a.local), b.shape,
                              detail::shape_frame(body_pose(k), b.local),
-                             NarrowPhaseSettings{.speculative_margin = settings_.speculative_distance});
+                             NarrowPhaseSettings{.speculative_margin = touch_margin()});
   return m.count > 0;
+}
+
+void RigidBodySystem::list_jumped(std::uint32_t slot) {
+  detail::RigidContacts& c = contact_state(contacts_);
+  if (c.jumped_slot.size() < slot_.size()) {
+    c.jumped_slot.resize(slot_.size(), 0);
+    c.jumped.reserve(slot_.size());
+  }
+  // once a slot until the step (a body set_pose moved a million times held a million entries)
+  if (!c.jumped_slot[slot]) {
+    c.jumped_slot[slot] = 1;
+    c.jumped.push_back(slot);
+  }
+}
+
+// A sleeper woken because a body was teleported away from under it (or into it) is still, so
+// what sleeps on it in another island (a box placed on a sleeping box sleeps in its own island)
+// would wait for it to move faster than sleep_linear: with a loose sleep_linear the top of a
+// chain hung in the air. Listed as jumped, each woken body wakes what it touches next step.
+void RigidBodySystem::wake_island_listed(std::size_t i) {
+  if (asleep_[i]) {
+    std::size_t k = i;
+    do {
+      list_jumped(owner_[k]);
+      k = island_[k];
+    } while (k != i);
+  }
+  wake_island(i);
 }
 
 // The sleepers' proxies are in the broad phase's tree, each fat box around its shape (a
@@ -591,7 +625,7 @@ void RigidBodySystem::wake_reached(const Aabb& reach) {
     const std::size_t k = p.body;
     if (k >= type_.size() || !asleep_[k]) return true;
     const RigidShapeDef& o = shapes_[k][p.shape];
-    if (reach.overlaps(bounds(o.shape, detail::shape_frame(body_pose(k), o.local)))) wake_island(k);
+    if (reach.overlaps(bounds(o.shape, detail::shape_frame(body_pose(k), o.local)))) wake_island_listed(k);
     return true;
   });
 }
@@ -601,11 +635,11 @@ void RigidBodySystem::wake_touching(std::size_t i) {
   const Pose body = body_pose(i);
   for (std::size_t m = 0; m < shapes_[i].size(); ++m) {
     const RigidShapeDef& d = shapes_[i][m];
-    const Aabb near = bounds(d.shape, detail::shape_frame(body, d.local)).grown(settings_.speculative_distance);
+    const Aabb near = bounds(d.shape, detail::shape_frame(body, d.local)).grown(touch_margin());
     c.tree.query(near, [&](std::uint32_t q) {
       const detail::ShapeProxy& p = c.proxies[q];
       const std::size_t k = p.body;
-      if (k != i && k < type_.size() && asleep_[k] && shapes_touch(i, m, k, p.shape)) wake_island(k);
+      if (k != i && k < type_.size() && asleep_[k] && shapes_touch(i, m, k, p.shape)) wake_island_listed(k);
       return true;
     });
   }
@@ -619,37 +653,32 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   // what rested on the body wakes: nothing else would (the ground lowered under a sleeping
   // stack left it floating; a box asleep on an awake box teleported away hung in the air, as
   // each slept in its own island). A static or kinematic body wakes the sleeping bodies its
-  // shapes' bounds reach, before or after the move (grown by the speculative distance): they
-  // rested on it, or it jumped into them (a kinematic wall stepped by set_pose has no
-  // velocity, so it went through a sleeping box as if it were not there); a dynamic one
-  // those its shapes touch before the move (closer than the speculative distance)
+  // shapes' bounds reach, before or after the move (grown by touch_margin()): they rested on
+  // it, or it jumped into them (a kinematic wall stepped by set_pose has no velocity, so it
+  // went through a sleeping box as if it were not there); a dynamic one those its shapes
+  // touch before the move (closer than touch_margin()). Each woken body is listed as jumped,
+  // so what sleeps on it wakes next step
   const bool fixed = type_[i] != BodyType::Dynamic;
-  Aabb reach{Vec3(std::numeric_limits<double>::infinity()), Vec3(-std::numeric_limits<double>::infinity())};
-  if (fixed)
+  // a fixed body's reach: its shapes' bounds before the move, then after it, each grown by
+  // touch_margin() (one box spanning both poses woke every sleeper between them: 2514
+  // for 6 within reach on a platform moved across a floor of boxes)
+  auto wake_around = [&] {
+    Aabb reach{Vec3(std::numeric_limits<double>::infinity()), Vec3(-std::numeric_limits<double>::infinity())};
     for (const RigidShapeDef& d : shapes_[i])
       reach = reach.merged(bounds(d.shape, detail::shape_frame(body_pose(i), d.local)));
+    wake_reached(reach.grown(touch_margin()));
+  };
+  if (fixed)
+    wake_around();
   else
     wake_touching(i);
   com_[i] = apply(pose, com_local_[i]);
   q_[i] = glm::normalize(pose.rotation * principal_[i]);
   wake_island(i);
-  // a dynamic body wakes what it jumped into through next step's pairs (wake_touched)
-  if (!fixed) {
-    detail::RigidContacts& c = contact_state(contacts_);
-    if (c.jumped_slot.size() < slot_.size()) {
-      c.jumped_slot.resize(slot_.size(), 0);
-      c.jumped.reserve(slot_.size());
-    }
-    // once a slot until the step (a body set_pose moved a million times held a million entries)
-    if (!c.jumped_slot[id.index]) {
-      c.jumped_slot[id.index] = 1;
-      c.jumped.push_back(id.index);
-    }
-    return;
-  }
-  for (const RigidShapeDef& d : shapes_[i])
-    reach = reach.merged(bounds(d.shape, detail::shape_frame(body_pose(i), d.local)));
-  wake_reached(reach.grown(settings_.speculative_distance));
+  if (fixed)
+    wake_around();
+  else
+    list_jumped(id.index);  // it wakes what it jumped into through next step's pairs (wake_touched)
 }
 
 void RigidBodySystem::set_velocity(RigidBodyId id, const Vec3& linear, const Vec3& angular) {
@@ -1199,8 +1228,8 @@ void RigidBodySystem::update_sleep(double dt) {
     bool rests = glm::dot(d, d) <= reach * reach && std::abs(glm::dot(q_[i], rest_q_[i])) >= cos_turn;
     if (rests && std::max({std::abs(com_[i].x), std::abs(com_[i].y), std::abs(com_[i].z)}) >= far)
       rests = glm::dot(v_[i], v_[i]) <= slow_v && glm::dot(w_[i], w_[i]) <= slow_w;
-    // a body a force or torque pushed this step does not rest (Box2D v3 resets the sleep time
-    // of a body a force is applied to): with time_to_sleep 0 and no gravity floor on its
+    // a body a force or torque pushed this step does not rest (pba's own rule: a force means
+    // the caller is moving it): with time_to_sleep 0 and no gravity floor on its
     // window, a box pushed from rest by a steady force moved within the one-step window,
     // fell asleep at the step's end with its velocity zeroed, and never gathered speed
     const bool pushed = force_[i] != Vec3(0) || torque_[i] != Vec3(0);

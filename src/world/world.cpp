@@ -1311,6 +1311,14 @@ void World::tick(double t, double dt) {
       throw Error("forcer of " + describe(f.owner) + err.what());
     }
   }
+  // the colliders' definitions likewise (World::collider hands them out; sync checked them
+  // only after run_kinematics had moved the kinematic entities, so a refused tick left them
+  // a tick ahead), each with last tick's poses: its pose is checked in sync
+  for (std::size_t i = 0; i < colliders_.size(); ++i) {
+    Collider c = world_colliders_[i];
+    c.shape = colliders_[i].def.shape, c.material = colliders_[i].def.material;
+    if (!c.ok()) c.validate("collider of " + describe(colliders_[i].owner));
+  }
   // 1. kinematic: paths, motors and thrusters
   run_kinematics(t, dt);
   profile_.kinematic = sw.seconds();

@@ -2450,8 +2450,96 @@ TEST(RigidSleep, ABodyMovedAwayWakesWhatRestedOnItInAnyIsland) {
   EXPECT_NEAR(k.linear_velocity(rider).y, kGravity.y * 0.5, 1e-9);  // in free fall: g t
 }
 
-// A body pushed by a force or torque in a step does not rest in it (Box2D v3 resets the sleep
-// time of a body a force is applied to). With time_to_sleep 0 and no gravity on the body (so
+// With speculative_distance 0 (valid) a body moved from under a sleeper still wakes it: the
+// touch test's margin was the speculative distance alone, and a body rests at a gap of
+// exactly 0 (XPBD) or 1.4e-11 m (sequential impulses), not closer than 0, so a ball asleep on
+// a box teleported away, or on a kinematic platform moved sideways, hung in the air. The
+// margin is now the speculative distance or the linear slop, whichever is larger, plus 1 um.
+TEST(RigidSleep, ABodyMovedAwayWakesWhatRestedOnItAtSpeculativeDistanceZero) {
+  const double dt = 1.0 / 60;
+  for (const auto solver : kAll) {
+    SCOPED_TRACE(std::string(pba::to_string(solver)));
+    for (const double slop : {0.0, 0.005}) {
+      SCOPED_TRACE(slop);
+      pba::RigidSystemDef def = with(solver);
+      def.contacts.speculative_distance = 0, def.contacts.linear_slop = slop;
+      RigidBodySystem s(def);
+      pba::rigid_scenes::ground(s, 0.5);
+      const auto box = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+      for (int i = 0; i < 600 && s.awake_count() > 0; ++i) s.step(dt, kGravity);
+      const auto ball = s.create({.pose = {s.center_of_mass(box) + Vec3(0, 0.8, 0)}, .shapes = {{.shape = ColliderShape::sphere(0.3)}}});
+      for (int i = 0; i < 600 && s.awake_count() > 0; ++i) s.step(dt, kGravity);
+      ASSERT_FALSE(s.awake(box) || s.awake(ball));  // the premise: the ball asleep on the box
+      s.set_pose(box, {{5, 0.5, 0}});
+      EXPECT_TRUE(s.awake(ball));
+      for (int i = 0; i < 120; ++i) s.step(dt, kGravity);
+      EXPECT_NEAR(s.center_of_mass(ball).y, 0.3, 0.01);  // on the ground, within the sag
+
+      RigidBodySystem k(def);
+      const auto platform = k.create({.type = BodyType::Kinematic, .pose = {{0, -0.1, 0}}, .shapes = {box_shape({2, 0.1, 2})}});
+      const auto rider = k.create({.pose = {{0, 0.3, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.3)}}});
+      for (int i = 0; i < 600 && k.awake(rider); ++i) k.step(dt, kGravity);
+      ASSERT_FALSE(k.awake(rider));
+      k.set_pose(platform, {{10, -0.1, 0}});
+      EXPECT_TRUE(k.awake(rider));
+    }
+  }
+}
+
+// A chain of sleepers each in its own island (C came to rest on sleeping B, B on sleeping A)
+// wakes up the chain when A is teleported away: B wakes at once, and each woken body wakes
+// what it touches at the next step. Before, C waited for B to move faster than sleep_linear,
+// so with sleep_linear 1 m/s B fell 1 m below C, asleep in the air. Both come to rest 1 m
+// lower (on the ground, within the contacts' sag).
+TEST(RigidSleep, AChainOfSleepingIslandsWakesWhenItsBaseIsMovedAway) {
+  const double dt = 1.0 / 60;
+  RigidBodySystem s({.contacts = {.sleep_linear = 1.0}});
+  pba::rigid_scenes::ground(s, 0.5);
+  auto settle = [&] {
+    for (int i = 0; i < 900 && s.awake_count() > 0; ++i) s.step(dt, kGravity);
+  };
+  const auto a = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+  settle();
+  const auto b = pba::rigid_scenes::box(s, s.center_of_mass(a) + Vec3(0, 1, 0), Vec3(0.5));
+  settle();
+  const auto c = pba::rigid_scenes::box(s, s.center_of_mass(b) + Vec3(0, 1, 0), Vec3(0.5));
+  settle();
+  ASSERT_FALSE(s.awake(a) || s.awake(b) || s.awake(c));  // the premise
+  const double yb = s.center_of_mass(b).y, yc = s.center_of_mass(c).y;
+  ASSERT_NEAR(yc, 2.5, 1e-3);
+  s.set_pose(a, {{5, 0.5, 0}});
+  EXPECT_TRUE(s.awake(b));
+  s.step(dt, kGravity);
+  EXPECT_TRUE(s.awake(c));  // one island a step
+  for (int i = 0; i < 180; ++i) s.step(dt, kGravity);
+  EXPECT_NEAR(s.center_of_mass(b).y, yb - 1, 1e-3);
+  EXPECT_NEAR(s.center_of_mass(c).y, yc - 1, 2e-3);
+}
+
+// A kinematic body teleported by set_pose wakes the sleepers its bounds reach before the move
+// and those they reach after it, not every sleeper in the box spanning both poses: a platform
+// jumped diagonally across a row of sleeping boxes (each its own island, 2 m apart) woke the
+// whole row; now only the box by its old pose and the box by its new one wake.
+TEST(RigidSleep, AKinematicTeleportWakesOnlyWhatItReachesAtEitherEnd) {
+  RigidBodySystem s;
+  pba::rigid_scenes::ground(s, 0.5);
+  std::vector<pba::RigidBodyId> row;
+  for (int i = -5; i <= 5; ++i) row.push_back(pba::rigid_scenes::box(s, {2.0 * i, 0.5, 0}, Vec3(0.5)));
+  const auto by_start = pba::rigid_scenes::box(s, {-20, 0.5, -8.6}, Vec3(0.5));
+  const auto by_end = pba::rigid_scenes::box(s, {20, 0.5, 8.6}, Vec3(0.5));
+  // a wall by by_start's +z face, 1 cm off it (within the speculative distance)
+  const auto wall = s.create({.type = BodyType::Kinematic, .pose = {{-20, 1, -10}}, .shapes = {box_shape({1, 1, 0.89})}});
+  for (int i = 0; i < 300; ++i) s.step(1.0 / 60, kGravity);
+  for (const auto id : row) ASSERT_FALSE(s.awake(id));
+  ASSERT_FALSE(s.awake(by_start) || s.awake(by_end));
+  s.set_pose(wall, {{20, 1, 10}});
+  EXPECT_TRUE(s.awake(by_start));
+  EXPECT_TRUE(s.awake(by_end));
+  for (const auto id : row) EXPECT_FALSE(s.awake(id));
+}
+
+// A body pushed by a force or torque in a step does not rest in it (pba's own rule: a force
+// means the caller is moving it). With time_to_sleep 0 and no gravity on the body (so
 // its rest window is the step), a box pushed from rest by a steady force moved within the
 // window each step, fell asleep at the step's end with its velocity zeroed, and the next
 // force woke it from rest again: it never gathered speed. Now it gains F / m dt a step, the

@@ -160,7 +160,8 @@ TEST(RigidSimd, BlocksOfOnePointManifoldsGiveTheSameBitsOnEveryPath) {
 // they land together, so the ground's colour holds forty four-point manifolds (blocks of 16,
 // whose halves the AVX2 path solves together, and one of 8) of which most land while sliding in
 // the same substep (the rounds; the AVX2 path's such lanes wait for them to the colour's end,
-// eight at a time, beside the lanes that land straight). The same bits on every path, under
+// eight at a time, beside the lanes that land straight; a ball resting apart makes every
+// step pass a colour a call, where they wait). The same bits on every path, under
 // each solver; and each box, alone on its part of the ground, stops where Coulomb's law puts it
 // (the bounds and their reasons: RigidFriction.ABoxLandingFlatWhileSlidingStopsWhereCoulombSays)
 namespace {
@@ -186,6 +187,10 @@ Landing run_landing(RigidSolverType solver, RigidSimd path) {
     boxes.push_back(s.create({.pose = {{0, kLandingDrop, 3.0 * i}},
                               .linear_velocity = {landing_sign(i) * landing_vx(i), -landing_vy(i), 0},
                               .shapes = {{.shape = ColliderShape::box(Vec3(0.5)), .material = {.restitution = 0, .friction = kLandingMu}}}}));
+  // a ball resting on the ground apart: its one-point manifold has the solver pass each colour
+  // in its own call every step (without it the forward steps passed every colour in one call,
+  // where no lane waits, and only the backward steps deferred)
+  s.create({.pose = {{0, 0.5, -10}}, .shapes = {{.shape = ColliderShape::sphere(0.5)}}});
   Landing out;
   for (int step = 0; step < 180; ++step) {
     s.step(1.0 / 60, kGravity);
