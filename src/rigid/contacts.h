@@ -917,7 +917,18 @@ struct RigidContacts {
   /// XPBD: one manifold's positional contacts and static friction, solved as a block.
   // (h: the substep, s; max_push: the most of a point's overlap at the start of the substep
   // pushed out in it, m)
-  void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push);
+  // (relax: the points' rows alone, the overlap now pushed out by at most max_push and the
+  // poses moved without a multiplier kept, for relax_overlap; fixed: 1, 2 hold body a, b still)
+  void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push, bool relax,
+               int fixed);
+  /// XPBD after a switch from another solver: the overlap up to the linear slop pushed out by
+  /// moving the poses alone, from the fixed bodies up (src/rigid/xpbd_rigid.cpp).
+  void relax_overlap(RigidBodySystem& s, double h);
+  std::vector<int> relax_level;            // relax_overlap: by dense body, contacts from a fixed body
+  std::vector<std::uint32_t> relax_order;  // relax_overlap: the pairs from the fixed bodies up
+  /// No solver yet (last_solver before the first step).
+  static constexpr RigidSolverType kNoSolver = static_cast<RigidSolverType>(255);
+  RigidSolverType last_solver = kNoSolver;  ///< the solver of the last step
   /// Body i's solver state.
   static BodyView view(RigidBodySystem& s, std::size_t i) {
     return {&s.v_[i], &s.w_[i], &s.com_[i], &s.q_[i], s.asleep_[i] ? 0.0 : s.inv_mass_[i]};

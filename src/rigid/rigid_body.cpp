@@ -1054,6 +1054,7 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
     integrate_positions(dt, c.rows.data(), c.motion.data());
     c.refresh_inertia(*this);
   }
+  c.last_solver = settings_.solver;
   if (settings_.solver != RigidSolverType::Xpbd) {
     c.restitution(*this, dt, gravity);
     c.finish_velocities(*this);  // the solver's rows back to the system's arrays

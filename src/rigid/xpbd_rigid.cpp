@@ -119,12 +119,16 @@ Vec3 material_motion(const Vec3& x, const Vec3& x_start, const Quat& q, const Qu
 // slowly on a face: the first point corrected turns the body, the friction at the centroid
 // sees the turn as slip, and what is left, divided by h into a velocity, rocks a stack (a box
 // on a 25 degree slope, mu 0.5, crept at 1.3 cm/s with one sweep of each).
-void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push) {
+void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push,
+                            bool relax, int fixed) {
   constexpr int kRows = Manifold::kMaxPoints + 3;
   const ContactSettings& cs = s.settings_;
   auto a = view(s, c.a), b = view(s, c.b);
-  const Mat3& ia = inv_inertia[c.a];
-  const Mat3& ib = inv_inertia[c.b];
+  static const Mat3 kFixed(0.0);
+  const Mat3& ia = fixed & 1 ? kFixed : inv_inertia[c.a];
+  const Mat3& ib = fixed & 2 ? kFixed : inv_inertia[c.b];
+  if (fixed & 1) a.inv_mass = 0;
+  if (fixed & 2) b.inv_mass = 0;
   if (a.inv_mass == 0 && b.inv_mass == 0) return;
   // the rows: a change of constraint lb.dxb + ab.dthb - la.dxa - aa.dtha, and its error now
   Vec3 la[kRows], aa[kRows], lb[kRows], ab[kRows];
@@ -132,6 +136,7 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
   const Quat ta = turned(*a.q, s.q0_[c.a]), tb = turned(*b.q, s.q0_[c.b]);
   Vec3 ca(0), cb(0), core_a(0), core_b(0);
   const int n = c.count;
+  bool overlap = false;
   for (int j = 0; j < n; ++j) {
     const SolverPoint& p = c.points[j];
     Vec3 ra, rb;
@@ -141,6 +146,12 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
     la[j] = lb[j] = c.normal;
     aa[j] = glm::cross(ra, c.normal), ab[j] = glm::cross(rb, c.normal);
     error[j] = glm::dot((*b.com + tb * p.sb) - (*a.com + ta * p.sa), c.normal) + p.offset;
+    if (relax) {
+      // relax_overlap: the overlap, at most max_push of it, pushed out by the poses alone
+      error[j] = std::max(error[j], -max_push);
+      overlap = overlap || error[j] < 0;
+      continue;
+    }
     // overlap the substep began with is pushed out at most push_out_speed h a substep (what
     // this substep's motion closed is undone in full): projected at once and made a velocity
     // by step 3, 0.8 m of overlap flung two boxes apart at 380 m/s. (Only a point overlapping
@@ -152,35 +163,38 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
       if (start < -max_push) error[j] += -max_push - start;
     }
   }
+  if (relax && !overlap) return;
   ca /= static_cast<double>(n), cb /= static_cast<double>(n);
   core_a /= static_cast<double>(n), core_b /= static_cast<double>(n);
-  // static friction: the tangential motion in the substep of the material points at the
-  // centroid (material_motion); twist: the relative turn about the normal since the substep
-  // began
-  const Vec3 moved =
-      material_motion(*b.com, x_start[c.b], *b.q, q_start[c.b], *b.w, q_free[c.b], h, core_b, cb - core_b) -
-      material_motion(*a.com, x_start[c.a], *a.q, q_start[c.a], *a.w, q_free[c.a], h, core_a, ca - core_a);
-  const Vec3 tangent[2] = {c.t1, c.t2};
-  for (int d = 0; d < 2; ++d) {
-    la[n + d] = lb[n + d] = tangent[d];
-    // on a face (three or more points) static friction translates only: the points block
-    // the turn its lever would give, and with the turn in, what the sweep over the manifolds
-    // left of it became a rocking velocity (the 20-stack fell at 15 s, and even at 32
-    // substeps). The price: static friction on a face carries no moment, so a box held on a
-    // slope does not tip (docs/rigid-bodies.md)
-    const bool face = n >= 3;
-    aa[n + d] = face ? Vec3(0) : glm::cross(ca, tangent[d]);
-    ab[n + d] = face ? Vec3(0) : glm::cross(cb, tangent[d]);
-    error[n + d] = glm::dot(moved, tangent[d]);
+  if (!relax) {  // (the friction rows; relax_overlap solves the points alone)
+    // static friction: the tangential motion in the substep of the material points at the
+    // centroid (material_motion); twist: the relative turn about the normal since the substep
+    // began
+    const Vec3 moved =
+        material_motion(*b.com, x_start[c.b], *b.q, q_start[c.b], *b.w, q_free[c.b], h, core_b, cb - core_b) -
+        material_motion(*a.com, x_start[c.a], *a.q, q_start[c.a], *a.w, q_free[c.a], h, core_a, ca - core_a);
+    const Vec3 tangent[2] = {c.t1, c.t2};
+    for (int d = 0; d < 2; ++d) {
+      la[n + d] = lb[n + d] = tangent[d];
+      // on a face (three or more points) static friction translates only: the points block
+      // the turn its lever would give, and with the turn in, what the sweep over the manifolds
+      // left of it became a rocking velocity (the 20-stack fell at 15 s, and even at 32
+      // substeps). The price: static friction on a face carries no moment, so a box held on a
+      // slope does not tip (docs/rigid-bodies.md)
+      const bool face = n >= 3;
+      aa[n + d] = face ? Vec3(0) : glm::cross(ca, tangent[d]);
+      ab[n + d] = face ? Vec3(0) : glm::cross(cb, tangent[d]);
+      error[n + d] = glm::dot(moved, tangent[d]);
+    }
+    la[n + 2] = lb[n + 2] = Vec3(0);
+    aa[n + 2] = ab[n + 2] = c.normal;
+    error[n + 2] = glm::dot(rotation_vector(*b.q * glm::conjugate(q_start[c.b])) -
+                                rotation_vector(*a.q * glm::conjugate(q_start[c.a])),
+                            c.normal);
   }
-  la[n + 2] = lb[n + 2] = Vec3(0);
-  aa[n + 2] = ab[n + 2] = c.normal;
-  error[n + 2] = glm::dot(rotation_vector(*b.q * glm::conjugate(q_start[c.b])) -
-                              rotation_vector(*a.q * glm::conjugate(q_start[c.a])),
-                          c.normal);
-  const bool friction = c.friction > 0;
+  const bool friction = !relax && c.friction > 0;
   const bool twist = friction && c.twist_radius > 0;
-  const int rows = n + 3;
+  const int rows = relax ? n : n + 3;
   // K = J M^-1 J^T
   double k[kRows][kRows];
   for (int r = 0; r < rows; ++r)
@@ -234,6 +248,51 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
   x.twist += lambda[n + 2];
 }
 
+// A switch to XPBD from another solver: the overlap its contacts rest at, up to the linear
+// slop (the soft step's spring deflection, sequential impulses' slop; 1.7 and 3.7 mm deep at
+// the bottom of a 10-stack), is pushed out by moving the poses alone, before the first
+// substep. XPBD leaves no slop: left to the substeps, the push-out of that overlap was a
+// substep's correction each, which step 3 made a velocity, and a resting 10-stack switched to
+// XPBD jumped to 0.27 m/s (from the soft step) and 0.46 m/s (sequential impulses), its top
+// up by more than the overlaps below it (RigidSolvers.SwitchingToXpbdLeavesARestingStackResting).
+// Relaxed here, the stack starts as XPBD starts a stack of touching boxes.
+// Position-only Gauss-Seidel converges slowly up a column (the sweeps needed grow as its height
+// squared), so the manifolds are taken from the fixed bodies up (shock propagation, Guendelman,
+// Bridson and Fedkiw 2003): each body's level is its distance in contacts from a fixed body,
+// and a manifold between levels moves only its upper body; a column is relaxed in one sweep,
+// and `kRelaxSweeps` take the turns the points' levers give.
+void RigidContacts::relax_overlap(RigidBodySystem& s, double h) {
+  constexpr int kRelaxSweeps = 4;
+  const std::size_t n = s.type_.size();
+  constexpr int kFloating = std::numeric_limits<int>::max();
+  // each body's level: 0 for the fixed bodies (static, kinematic, asleep), else one more than
+  // the lowest of the bodies it touches
+  relax_level.assign(n, kFloating);
+  for (std::size_t i = 0; i < n; ++i)
+    if (view(s, i).inv_mass == 0) relax_level[i] = 0;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (const ContactPair& c : pairs) {
+      int& la = relax_level[c.a];
+      int& lb = relax_level[c.b];
+      if (la != kFloating && la + 1 < lb) lb = la + 1, changed = true;
+      if (lb != kFloating && lb + 1 < la) la = lb + 1, changed = true;
+    }
+  }
+  relax_order.resize(pairs.size());
+  for (std::size_t k = 0; k < pairs.size(); ++k) relax_order[k] = static_cast<std::uint32_t>(k);
+  auto low = [&](std::uint32_t k) { return std::min(relax_level[pairs[k].a], relax_level[pairs[k].b]); };
+  std::stable_sort(relax_order.begin(), relax_order.end(),
+                   [&](std::uint32_t x, std::uint32_t y) { return low(x) < low(y); });
+  for (int sweep = 0; sweep < kRelaxSweeps; ++sweep)
+    for (const std::uint32_t k : relax_order) {
+      ContactPair& c = pairs[k];
+      const int la = relax_level[c.a], lb = relax_level[c.b];
+      XpbdPair scratch{};
+      project(s, c, scratch, h, 0, s.settings_.linear_slop, true, la < lb ? 1 : lb < la ? 2 : 0);
+    }
+}
+
 void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity) {
   const ContactSettings& cs = s.settings_;
   const std::size_t n = s.type_.size();
@@ -247,6 +306,8 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
   const double threshold = std::max(cs.restitution_threshold, 2 * glm::length(gravity) * h);
   x_start.resize(n), x_free.resize(n), q_start.resize(n), q_free.resize(n);
   xpbd.resize(pairs.size());
+  // after another solver: the overlap it rested at pushed out by the poses alone
+  if (last_solver != RigidSolverType::Xpbd && last_solver != kNoSolver) relax_overlap(s, h);
   for (int sub = 0; sub < substeps; ++sub) {
     // 1. free motion from the saved poses
     for (std::size_t i = 0; i < n; ++i) x_start[i] = s.com_[i], q_start[i] = s.q_[i];
@@ -278,7 +339,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
     for (int it = 0; it < cs.substep_iterations; ++it)
       for (std::size_t k = 0; k < pairs.size(); ++k) {
         const std::size_t m = (sub + it) % 2 ? pairs.size() - 1 - k : k;
-        project(s, pairs[m], xpbd[m], h, alpha, cs.push_out_speed * h);
+        project(s, pairs[m], xpbd[m], h, alpha, cs.push_out_speed * h, false, 0);
       }
     // 3. velocities from the corrections of the poses
     for (std::size_t i = 0; i < n; ++i) {

@@ -168,6 +168,43 @@ TEST(RigidSolvers, SwitchingSolversLiveKeepsTheStateValid) {
   EXPECT_NEAR(s.center_of_mass(ball).y, 0.2, 0.01);
 }
 
+// A 10-stack resting under each other solver, switched to XPBD: it stays resting. XPBD leaves
+// no slop and its contacts are rigid, so it pushes out the overlap the others rest at (the
+// soft step's spring deflection, 1.7 mm at the bottom; sequential impulses' 3.7 mm; TGS's
+// 0.2 mm). Bounds: every body slower than one step of free fall gives, g dt = 0.16 m/s (a
+// stack of touching boxes created under XPBD settles into its own overlaps at up to 0.13 m/s,
+// measured), and the top rises by no more than the overlaps under it add up to (pushing them
+// out lifts it by that; more is a hop). XPBD made the push-out a velocity: the stack jumped
+// to 0.27 m/s from the soft step and 0.46 m/s from sequential impulses, its top 9.4 and
+// 18 mm up (the overlaps under it 7.9 and 11 mm); now the switch pushes that overlap out by
+// the poses alone (measured 0.137, 0.130 and 0.137 m/s; 6.5, 9.6 and 0 mm).
+TEST(RigidSolvers, SwitchingToXpbdLeavesARestingStackResting) {
+  for (const auto from : {RigidSolverType::SoftStep, RigidSolverType::SequentialImpulse, RigidSolverType::Tgs}) {
+    RigidBodySystem s({.contacts = {.solver = from, .sleep = false}});
+    const auto boxes = pba::rigid_scenes::vertical_stack(s, 10);
+    for (int i = 0; i < 180; ++i) s.step(1.0 / 60, kGravity);
+    // the overlaps under the top box: the deepest point of each manifold (every one of the
+    // column's is under it)
+    double under = 0;
+    for (const auto b : boxes) {
+      double deepest = 0;  // of the manifold with the body below b: the one where b is the upper body
+      for (const auto& c : s.contacts())
+        if ((c.b == b && c.normal.y > 0.5) || (c.a == b && c.normal.y < -0.5)) deepest = std::max(deepest, c.depth);
+      under += deepest;
+    }
+    const double y0 = s.center_of_mass(boxes.back()).y;
+    s.settings().solver = RigidSolverType::Xpbd;
+    double fastest = 0, highest = y0;
+    for (int i = 0; i < 60; ++i) {
+      s.step(1.0 / 60, kGravity);
+      for (const auto b : boxes) fastest = std::max(fastest, glm::length(s.linear_velocity(b)));
+      highest = std::max(highest, s.center_of_mass(boxes.back()).y);
+    }
+    EXPECT_LT(fastest, kG / 60) << to_string(from);
+    EXPECT_LE(highest - y0, under) << to_string(from);
+  }
+}
+
 // Bodies that start overlapping are pushed apart no faster than push_out_speed under every
 // solver: two unit boxes side by side on the ground, 0.8 m into each other, and a 0.3 m ball
 // on the ground with its centre inside a third. XPBD projected the whole overlap in one
