@@ -82,6 +82,10 @@ struct Solver::Impl {
   std::vector<Quat> given_q;
   std::vector<double> given_angle;
   Vec3 given_root{0};
+  // a Jacobian method's stalled pose, kept while it tries once more from a bent one (solve)
+  std::vector<Quat> stalled_q;
+  std::vector<double> stalled_angle;
+  Vec3 stalled_root{0};
 
   explicit Impl(Skeleton& s, const SolverSettings& st) : sk(&s), set(st) { prepare(); }
 
@@ -118,6 +122,12 @@ struct Solver::Impl {
     A::root_position(*sk) = given_root;
     sk->forward_kinematics();
   }
+
+  // bends every active joint by `delta` rad, the signs in pairs (+ + - - ...) so that hinges
+  // alternating between two axes, and ball joints, zig-zag in each plane: the tips come
+  // closer to the root by the second order of delta and drift sideways by one bone's
+  // length times delta at most. Clamped to the limits; forward kinematics left stale.
+  void bend_active_joints(double delta);
 
   // whether a method honours orientation targets (FABRIK and the Jacobian family)
   static bool honours_orientation(Method m) {

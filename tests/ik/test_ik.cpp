@@ -539,6 +539,60 @@ TEST(IkJacobian, DlsTakesTheSameStepsWhateverTheWeightsScale) {
   }
 }
 
+// The rest pose, a straight chain, toward a target on its line short of the tip, behind the
+// root or at the root: every column of J (r_j x (e - p_j), the tip moving across the chain)
+// is square to the error (along the chain), so J^T e = 0 and the pose is stationary for the
+// whole Jacobian family, although it is a saddle or a maximum of the error and the target
+// is reachable (a free chain folds onto any point within its length). The methods used to
+// stop there untouched, Stalled, 0.5 m, 1.5 m and 1 m from these targets of a 1 m chain;
+// CCD and FABRIK reached them. Unlimited chains of 2 ball joints and of 10 ball joints or
+// hinges: all must converge. (Two hinges on crossed axes cannot reach the line short of
+// the tip, so the hinge chain is the longer one.)
+TEST(IkJacobian, StraightChainLeavesTheSaddleOfATargetOnItsLine) {
+  for (Method m : {Method::JacobianTranspose, Method::PseudoInverse, Method::Dls, Method::Sdls}) {
+    for (const auto& [n, jt] : {std::pair{2, JointType::Ball}, std::pair{10, JointType::Ball},
+                                std::pair{10, JointType::Hinge}}) {
+      for (const double x : {0.5, -0.5, 0.0}) {
+        Skeleton s = scenes::make_chain(n, jt, false);
+        s.add_effector(n - 1, Vec3(x, 0, 0));
+        const SolveResult r = Solver(s, {m}).solve();
+        EXPECT_TRUE(r.converged) << name(m) << " n " << n << " x " << x << ": residual " << r.residual << " after "
+                                 << r.iterations << " iterations, " << name(r.stop);
+        EXPECT_LE(s.max_effector_error(), 1e-4) << name(m) << " n " << n << " x " << x;
+      }
+    }
+  }
+}
+
+// The bend that leaves a saddle is kept only when it ends closer: at the closest pose of an
+// unreachable target behind a limited root hinge (a true minimum, where J^T e = 0 as well)
+// every Jacobian method ends where it stalls without the bend, the straight chain at the
+// end of the root hinge's range pointing nearest the target, within the limits.
+TEST(IkJacobian, TheBendKeepsATrueMinimum) {
+  for (Method m : {Method::JacobianTranspose, Method::PseudoInverse, Method::Dls, Method::Sdls}) {
+    SkeletonDef def;
+    def.bones.resize(3);
+    for (int i = 0; i < 3; ++i) {
+      def.bones[i].parent = i - 1;
+      def.bones[i].length = 1.0 / 3;
+      def.bones[i].joint = JointType::Hinge;
+      def.bones[i].min_angle = -0.5;
+      def.bones[i].max_angle = 0.5;
+    }
+    Skeleton s(def);
+    // far behind on the -Y side: every hinge at its lower limit curls the chain toward it
+    s.add_effector(2, Vec3(-3, -3, 0));
+    const SolveResult r = Solver(s, {m}).solve();
+    ASSERT_TRUE(s.within_limits());
+    EXPECT_FALSE(r.converged);
+    // the closest pose of the three hinges, each in [-0.5, 0.5]: all at -0.5 (angles -0.5,
+    // -1, -1.5 from +X), the tip's distance from the target in closed form
+    Vec3 tip(0);
+    for (int i = 1; i <= 3; ++i) tip += Vec3(std::cos(-0.5 * i), std::sin(-0.5 * i), 0) / 3.0;
+    EXPECT_NEAR(r.residual, glm::length(Vec3(-3, -3, 0) - tip), 1e-6) << name(m);
+  }
+}
+
 // ---------------------------------------------------------------------------
 // analytic solvers
 
