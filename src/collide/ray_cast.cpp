@@ -194,9 +194,8 @@ LocalHit ray_mesh(const Vec3& o, const Vec3& d, const TriangleMesh& m, double ma
 
 }  // namespace
 
-namespace {
+namespace query {
 
-// ray_cast() on a checked ray (finite origin, unit direction, max_distance >= 0)
 RayHit ray_cast_unit(const ColliderShape& s, const Pose& p, const Ray& ray) {
   RayHit out;
   if (s.type == ShapeType::Compound) {
@@ -231,17 +230,18 @@ RayHit ray_cast_unit(const ColliderShape& s, const Pose& p, const Ray& ray) {
   return out;
 }
 
-}  // namespace
+}  // namespace query
 
 // The closed forms above take |direction| = 1 (the sphere's and the capsule's quadratics, the
 // distances they return): a ray of direction (0, -2, 0) straight at a sphere missed it, and
 // a box's or a hull's distance came back in units of the direction's length. The ray is
-// checked as the world queries check theirs: a unit direction (to 4 ulps) is used as it is,
-// so their hits stay the same bits; another finite non-zero one is normalised; a non-finite
+// checked as the world queries check theirs (which then test their candidates with
+// ray_cast_unit, unchecked): a unit direction (to 4 ulps) is used as it is, so the hits equal
+// the world queries' bit for bit; another finite non-zero one is normalised; a non-finite
 // origin or direction, a zero direction or a negative max_distance is an Error (a NaN origin
 // used to be a silent miss).
 RayHit ray_cast(const ColliderShape& s, const Pose& p, const Ray& ray) {
-  return ray_cast_unit(s, p, query::checked_ray(ray, "ray_cast(ray)"));
+  return query::ray_cast_unit(s, p, query::checked_ray(ray, "ray_cast(ray)"));
 }
 
 }  // namespace pba
