@@ -150,6 +150,7 @@ void Solver::Impl::prepare() {
   Skeleton& s = *sk;
   if (prepared_version == s.effector_version()) return;
   prepared_version = s.effector_version();
+  carry_valid = false;
   n = s.bone_count();
   ne = s.effector_count();
   const auto parents = s.parents();
@@ -483,6 +484,7 @@ Solver& Solver::operator=(Solver&&) noexcept = default;
 void Solver::set_settings(const SolverSettings& settings) {
   settings.validate();
   impl_->set = settings;
+  impl_->carry_valid = false;
 }
 const SolverSettings& Solver::settings() const { return impl_->set; }
 void Solver::set_method(Method m) {
