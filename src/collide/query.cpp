@@ -267,7 +267,7 @@ QueryRayHit QueryWorld::ray_cast(const Ray& ray_in, const QueryFilter& filter) c
   // each candidate against the ray clipped to the best hit so far; ties to the lower index
   auto test = [&](std::uint32_t i, double max_t) {
     if (!accepts(filter, i)) return max_t;
-    const RayHit h = pba::ray_cast(shapes_[i], poses_[i], {ray.origin, ray.direction, max_t});
+    const RayHit h = query::ray_cast_unit(shapes_[i], poses_[i], {ray.origin, ray.direction, max_t});
     if (h.hit && before(h.distance, i, best)) best = to_query_hit(h, i, owners_[i]);
     return best.hit ? best.distance : max_t;
   };
@@ -283,7 +283,7 @@ QueryRayHit QueryWorld::ray_cast_any(const Ray& ray_in, const QueryFilter& filte
   // the first accepted hit stops the traversal
   auto test = [&](std::uint32_t i, double max_t) {
     if (!accepts(filter, i)) return max_t;
-    const RayHit h = pba::ray_cast(shapes_[i], poses_[i], ray);
+    const RayHit h = query::ray_cast_unit(shapes_[i], poses_[i], ray);
     if (!h.hit) return max_t;
     found = to_query_hit(h, i, owners_[i]);
     return -1.0;
@@ -303,7 +303,7 @@ std::size_t QueryWorld::ray_cast_all(const Ray& ray_in, std::span<QueryRayHit> o
   };
   auto test = [&](std::uint32_t i, double max_t) {
     if (!accepts(filter, i)) return max_t;
-    const RayHit h = pba::ray_cast(shapes_[i], poses_[i], ray);
+    const RayHit h = query::ray_cast_unit(shapes_[i], poses_[i], ray);
     if (h.hit) query::insert_sorted(out, total++, to_query_hit(h, i, owners_[i]), less);
     return max_t;
   };

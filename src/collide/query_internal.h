@@ -27,6 +27,9 @@ void check_pose(const Pose& p, std::string_view where);
 Vec3 unit_direction(const Vec3& d, std::string_view where);
 /// The ray with a unit direction; an Error names `where`.origin, .direction or .max_distance.
 Ray checked_ray(const Ray& r, std::string_view where);
+/// pba::ray_cast() on a ray already checked (checked_ray: finite origin, unit direction,
+/// max_distance >= 0), for the world queries' candidates: the same hit, without the check.
+RayHit ray_cast_unit(const ColliderShape& s, const Pose& p, const Ray& ray);
 /// Throws Error naming `where` unless `s` is a valid convex shape at a valid pose `p`.
 void check_convex(const ColliderShape& s, const Pose& p, std::string_view where);
 

@@ -145,7 +145,7 @@ Cast sphere_closed_form(const ColliderShape& s, const Pose& p, const Ray& path, 
     grown.offset = s.offset / len + r;
   }
   // (a ball about its centre: its rotation plays no part)
-  const RayHit h = ray_cast(grown, s.type == ShapeType::Sphere ? Pose{p.position, Quat(1, 0, 0, 0)} : p, path);
+  const RayHit h = query::ray_cast_unit(grown, s.type == ShapeType::Sphere ? Pose{p.position, Quat(1, 0, 0, 0)} : p, path);
   if (!h.hit) return {};
   if (h.distance == 0 && h.normal == -d) return overlap_at_start(s, p, o, d);
   return {true, h.distance, h.point - r * h.normal, h.normal};

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "pba/collide/shape.h"
+#include "query_internal.h"
 
 namespace pba {
 
@@ -193,13 +194,15 @@ LocalHit ray_mesh(const Vec3& o, const Vec3& d, const TriangleMesh& m, double ma
 
 }  // namespace
 
-RayHit ray_cast(const ColliderShape& s, const Pose& p, const Ray& ray) {
+namespace query {
+
+RayHit ray_cast_unit(const ColliderShape& s, const Pose& p, const Ray& ray) {
   RayHit out;
   if (s.type == ShapeType::Compound) {
     // the closest child; the feature is the child's index
     const auto& ch = s.compound->children;
     for (std::uint32_t i = 0; i < ch.size(); ++i) {
-      RayHit h = ray_cast(ch[i].shape, compose(p, ch[i].pose), ray);
+      RayHit h = ray_cast_unit(ch[i].shape, compose(p, ch[i].pose), ray);
       if (h.hit && (!out.hit || h.distance < out.distance)) out = h, out.feature = i;
     }
     return out;
@@ -225,6 +228,20 @@ RayHit ray_cast(const ColliderShape& s, const Pose& p, const Ray& ray) {
   out.normal = h.inside ? -ray.direction : p.rotation * h.n;
   out.feature = h.feature;
   return out;
+}
+
+}  // namespace query
+
+// The closed forms above take |direction| = 1 (the sphere's and the capsule's quadratics, the
+// distances they return): a ray of direction (0, -2, 0) straight at a sphere missed it, and
+// a box's or a hull's distance came back in units of the direction's length. The ray is
+// checked as the world queries check theirs (which then test their candidates with
+// ray_cast_unit, unchecked): a unit direction (to 4 ulps) is used as it is, so the hits equal
+// the world queries' bit for bit; another finite non-zero one is normalised; a non-finite
+// origin or direction, a zero direction or a negative max_distance is an Error (a NaN origin
+// used to be a silent miss).
+RayHit ray_cast(const ColliderShape& s, const Pose& p, const Ray& ray) {
+  return query::ray_cast_unit(s, p, query::checked_ray(ray, "ray_cast(ray)"));
 }
 
 }  // namespace pba

@@ -548,6 +548,14 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
   // large residual, whose curvature J^T J lacks (Nocedal and Wright 2006, sec. 10.3), and
   // the transpose's gradient steps converge slowly; DLS stops at a stationary pose.
   double gamma = step_cap, scale = 1;
+  // a warm start continues the shortening of a solve of the same method that ran out of
+  // iterations (carry_valid, Impl): the step it was about to try, not the full one again
+  if (carry_valid && set.warm_start && carry_method == meth) {
+    lambda = carry_lambda * lambda0;
+    gamma = carry_gamma * step_cap;
+    scale = carry_scale;
+  }
+  carry_valid = false;
   bool line_search = meth == Method::JacobianTranspose || meth == Method::PseudoInverse;
   double prev_cost = cost(ori_scale);
   compact = m == 3 && meth != Method::Sdls;
@@ -668,6 +676,13 @@ void Solver::Impl::jacobian(SolveResult& r, Method meth) {
     }
   }
   measure(r);
+  if (!r.converged && r.iterations >= cap && meth == set.method) {
+    carry_valid = true;
+    carry_method = meth;
+    carry_lambda = lambda / lambda0;
+    carry_gamma = gamma / step_cap;
+    carry_scale = scale;
+  }
 }
 
 // weighted sum of squared errors (orientation errors scaled to metres)

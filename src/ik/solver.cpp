@@ -150,6 +150,7 @@ void Solver::Impl::prepare() {
   Skeleton& s = *sk;
   if (prepared_version == s.effector_version()) return;
   prepared_version = s.effector_version();
+  carry_valid = false;
   n = s.bone_count();
   ne = s.effector_count();
   const auto parents = s.parents();
@@ -317,6 +318,25 @@ void Solver::Impl::prepare() {
   saved_angle.assign(n, 0.0);
   given_q.assign(n, Quat(1, 0, 0, 0));
   given_angle.assign(n, 0.0);
+  stalled_q.assign(n, Quat(1, 0, 0, 0));
+  stalled_angle.assign(n, 0.0);
+}
+
+void Solver::Impl::bend_active_joints(double delta) {
+  Skeleton& s = *sk;
+  const auto types = s.joint_types();
+  int k = 0;
+  for (int j : active_fwd) {
+    if (types[j] == JointType::Fixed) continue;
+    const double d = (k++ / 2) % 2 == 0 ? delta : -delta;
+    if (types[j] == JointType::Hinge) {
+      A::angle(s)[j] += d;
+    } else {
+      // about the joint frame's Z, across the bone (+X)
+      A::q(s)[j] = detail::qmul(A::q(s)[j], Quat(std::cos(0.5 * d), 0, 0, std::sin(0.5 * d)));
+    }
+    A::clamp_joint(s, j);
+  }
 }
 
 // -------------------------------------------------------------------------
@@ -401,7 +421,30 @@ SolveResult Solver::Impl::solve() {
     case Method::JacobianTranspose:
     case Method::PseudoInverse:
     case Method::Dls:
-    case Method::Sdls: jacobian(r, set.method); break;
+    case Method::Sdls: {
+      jacobian(r, set.method);
+      // A pose where every column of J is square to the error is stationary for the whole
+      // family, be it a minimum or not: the straight chain (the rest pose) toward a target
+      // on its line short of the tip, behind the root or at it is a saddle or a maximum of
+      // the error, and the methods stopped there untouched (0.5 m from a target half way
+      // along a 1 m chain). Once per solve, a stalled pose is bent by 0.2 rad per joint
+      // (bend_active_joints) and solved again; the better of the two poses is kept, so a
+      // true minimum (the closest pose of an unreachable target) comes back as it was.
+      measure(r);
+      if (r.converged || r.out_of_time || r.iterations >= max_iterations()) break;
+      const double stalled_cost = cost(ori_scale);
+      for (int j : active_fwd) stalled_q[j] = A::q(s)[j], stalled_angle[j] = A::angle(s)[j];
+      stalled_root = A::root_position(s);
+      bend_active_joints(0.2);
+      s.forward_kinematics();
+      jacobian(r, set.method);
+      if (!(cost(ori_scale) < stalled_cost)) {
+        for (int j : active_fwd) A::q(s)[j] = stalled_q[j], A::angle(s)[j] = stalled_angle[j];
+        A::root_position(s) = stalled_root;
+        s.forward_kinematics();
+      }
+      break;
+    }
     case Method::Fabrik: fabrik(r); break;
   }
   measure(r);
@@ -441,6 +484,7 @@ Solver& Solver::operator=(Solver&&) noexcept = default;
 void Solver::set_settings(const SolverSettings& settings) {
   settings.validate();
   impl_->set = settings;
+  impl_->carry_valid = false;
 }
 const SolverSettings& Solver::settings() const { return impl_->set; }
 void Solver::set_method(Method m) {

@@ -82,6 +82,17 @@ struct Solver::Impl {
   std::vector<Quat> given_q;
   std::vector<double> given_angle;
   Vec3 given_root{0};
+  // A Jacobian solve that ended at its iteration cap hands its shortening (DLS's damping over
+  // lambda0, SDLS's cap over its default, the line search's scale) to the next warm-started
+  // solve of the same method (jacobian): with a budget of one or two iterations a frame, each
+  // solve used to start from the full step again, have it rejected, and end where it began.
+  bool carry_valid = false;
+  Method carry_method = Method::Dls;
+  double carry_lambda = 1, carry_gamma = 1, carry_scale = 1;
+  // a Jacobian method's stalled pose, kept while it tries once more from a bent one (solve)
+  std::vector<Quat> stalled_q;
+  std::vector<double> stalled_angle;
+  Vec3 stalled_root{0};
 
   explicit Impl(Skeleton& s, const SolverSettings& st) : sk(&s), set(st) { prepare(); }
 
@@ -118,6 +129,12 @@ struct Solver::Impl {
     A::root_position(*sk) = given_root;
     sk->forward_kinematics();
   }
+
+  // bends every active joint by `delta` rad, the signs in pairs (+ + - - ...) so that hinges
+  // alternating between two axes, and ball joints, zig-zag in each plane: the tips come
+  // closer to the root by the second order of delta and drift sideways by one bone's
+  // length times delta at most. Clamped to the limits; forward kinematics left stale.
+  void bend_active_joints(double delta);
 
   // whether a method honours orientation targets (FABRIK and the Jacobian family)
   static bool honours_orientation(Method m) {

@@ -212,6 +212,43 @@ double brute_triangle(const Ray& r, const Vec3& a, const Vec3& b, const Vec3& c)
   return u >= 0 && v >= 0 && u + v <= 1 ? t : kInf;
 }
 
+// A direction of any finite non-zero length is the ray along its unit direction: the same
+// hit, its distance in metres (the closed forms took |d| = 1: a ray of direction (0, -2, 0)
+// straight at a sphere of radius 1 from 5 m above missed it, and a box gave distance 2 for
+// its 4 m). Bad rays are Errors naming the field (a NaN origin was a silent miss).
+TEST(CollideRay, AnyDirectionLengthHitsAsTheUnitOneAndBadRaysAreErrors) {
+  Vec3 corners[8];
+  for (int i = 0; i < 8; ++i) corners[i] = Vec3(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);
+  const ColliderShape shapes[] = {ColliderShape::sphere(1), ColliderShape::box(Vec3(1)),
+                                  ColliderShape::capsule(0.5, 0.5), ColliderShape::convex(ConvexHull::build(corners)),
+                                  ColliderShape::plane(Vec3(0, 1, 0), 1)};
+  const Pose pose{Vec3(0.25, -0.5, 0.125), glm::angleAxis(0.3, glm::normalize(Vec3(1, 2, 3)))};
+  for (const ColliderShape& s : shapes) {
+    const Vec3 o = pose.position + Vec3(0.1, 5, -0.05);
+    const RayHit unit = ray_cast(s, pose, Ray{o, Vec3(0, -1, 0), 10});
+    ASSERT_TRUE(unit.hit) << to_string(s.type);
+    for (const double len : {2.0, 1e-3, 1e6}) {
+      const RayHit h = ray_cast(s, pose, Ray{o, Vec3(0, -len, 0), 10});
+      ASSERT_TRUE(h.hit) << to_string(s.type) << " |d| " << len;
+      EXPECT_NEAR(h.distance, unit.distance, 1e-12) << to_string(s.type) << " |d| " << len;
+      EXPECT_NEAR(glm::length(h.point - unit.point), 0, 1e-12) << to_string(s.type);
+      EXPECT_NEAR(glm::length(h.normal - unit.normal), 0, 1e-12) << to_string(s.type);
+    }
+    // max_distance is in metres too: 0.1 m short of the hit misses
+    EXPECT_FALSE(ray_cast(s, pose, Ray{o, Vec3(0, -2, 0), unit.distance - 0.1}).hit) << to_string(s.type);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(ray_cast(s, pose, Ray{Vec3(nan, 0, 0), Vec3(0, -1, 0), 10}), Error);
+    EXPECT_THROW(ray_cast(s, pose, Ray{o, Vec3(0), 10}), Error);
+    EXPECT_THROW(ray_cast(s, pose, Ray{o, Vec3(0, -kInf, 0), 10}), Error);
+    EXPECT_THROW(ray_cast(s, pose, Ray{o, Vec3(0, -1, 0), -1}), Error);
+    try {
+      ray_cast(s, pose, Ray{o, Vec3(0), 10});
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("ray_cast(ray).direction"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(CollideRay, HullEqualsBruteForceOverFaces) {
   std::mt19937_64 rng(9);
   std::vector<Vec3> cloud;

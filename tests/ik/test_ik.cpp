@@ -539,6 +539,84 @@ TEST(IkJacobian, DlsTakesTheSameStepsWhateverTheWeightsScale) {
   }
 }
 
+// The rest pose, a straight chain, toward a target on its line short of the tip, behind the
+// root or at the root: every column of J (r_j x (e - p_j), the tip moving across the chain)
+// is square to the error (along the chain), so J^T e = 0 and the pose is stationary for the
+// whole Jacobian family, although it is a saddle or a maximum of the error and the target
+// is reachable (a free chain folds onto any point within its length). The methods used to
+// stop there untouched, Stalled, 0.5 m, 1.5 m and 1 m from these targets of a 1 m chain;
+// CCD and FABRIK reached them. Unlimited chains of 2 ball joints and of 10 ball joints or
+// hinges: all must converge. (Two hinges on crossed axes cannot reach the line short of
+// the tip, so the hinge chain is the longer one.)
+TEST(IkJacobian, StraightChainLeavesTheSaddleOfATargetOnItsLine) {
+  for (Method m : {Method::JacobianTranspose, Method::PseudoInverse, Method::Dls, Method::Sdls}) {
+    for (const auto& [n, jt] : {std::pair{2, JointType::Ball}, std::pair{10, JointType::Ball},
+                                std::pair{10, JointType::Hinge}}) {
+      for (const double x : {0.5, -0.5, 0.0}) {
+        Skeleton s = scenes::make_chain(n, jt, false);
+        s.add_effector(n - 1, Vec3(x, 0, 0));
+        const SolveResult r = Solver(s, {m}).solve();
+        EXPECT_TRUE(r.converged) << name(m) << " n " << n << " x " << x << ": residual " << r.residual << " after "
+                                 << r.iterations << " iterations, " << name(r.stop);
+        EXPECT_LE(s.max_effector_error(), 1e-4) << name(m) << " n " << n << " x " << x;
+      }
+    }
+  }
+}
+
+// A budget of one or two iterations a frame (SolverSettings::max_iterations) spreads a solve
+// over frames with warm starts. From the rest pose of a 100-bone chain the full step of DLS
+// and of the pseudo-inverse raises the error and is rejected; each solve used to start from
+// the full step again, so the chain never moved (0.77 m away after 200 frames). A solve that
+// runs out of iterations now hands its shortening to the next: every Jacobian method
+// converges within 12 frames of 1 iteration (measured: at most 7), as a single solve does in
+// at most 8 iterations.
+TEST(IkJacobian, AnIterationAFrameProgressesFromAStraightChain) {
+  for (Method m : {Method::JacobianTranspose, Method::PseudoInverse, Method::Dls, Method::Sdls}) {
+    for (const int cap : {1, 2}) {
+      Skeleton s = scenes::make_chain(100, JointType::Ball, false);
+      s.add_effector(99, Vec3(0.3, 0.5, 0.2));
+      SolverSettings st{m};
+      st.max_iterations = cap;
+      Solver solver(s, st);
+      const int frames = m == Method::JacobianTranspose ? 40 : 12;
+      SolveResult r;
+      for (int f = 0; f < frames && !r.converged; ++f) r = solver.solve();
+      EXPECT_TRUE(r.converged) << name(m) << " cap " << cap << ": residual " << r.residual << " after " << frames
+                               << " frames";
+    }
+  }
+}
+
+// The bend that leaves a saddle is kept only when it ends closer: at the closest pose of an
+// unreachable target behind a limited root hinge (a true minimum, where J^T e = 0 as well)
+// every Jacobian method ends where it stalls without the bend, the straight chain at the
+// end of the root hinge's range pointing nearest the target, within the limits.
+TEST(IkJacobian, TheBendKeepsATrueMinimum) {
+  for (Method m : {Method::JacobianTranspose, Method::PseudoInverse, Method::Dls, Method::Sdls}) {
+    SkeletonDef def;
+    def.bones.resize(3);
+    for (int i = 0; i < 3; ++i) {
+      def.bones[i].parent = i - 1;
+      def.bones[i].length = 1.0 / 3;
+      def.bones[i].joint = JointType::Hinge;
+      def.bones[i].min_angle = -0.5;
+      def.bones[i].max_angle = 0.5;
+    }
+    Skeleton s(def);
+    // far behind on the -Y side: every hinge at its lower limit curls the chain toward it
+    s.add_effector(2, Vec3(-3, -3, 0));
+    const SolveResult r = Solver(s, {m}).solve();
+    ASSERT_TRUE(s.within_limits());
+    EXPECT_FALSE(r.converged);
+    // the closest pose of the three hinges, each in [-0.5, 0.5]: all at -0.5 (angles -0.5,
+    // -1, -1.5 from +X), the tip's distance from the target in closed form
+    Vec3 tip(0);
+    for (int i = 1; i <= 3; ++i) tip += Vec3(std::cos(-0.5 * i), std::sin(-0.5 * i), 0) / 3.0;
+    EXPECT_NEAR(r.residual, glm::length(Vec3(-3, -3, 0) - tip), 1e-6) << name(m);
+  }
+}
+
 // ---------------------------------------------------------------------------
 // analytic solvers
 
