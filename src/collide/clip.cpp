@@ -67,18 +67,20 @@ std::uint32_t most_aligned_face(const Poly& poly, const Quat& rotation, const Ve
 }
 
 int clip_faces(const WorldFace& ref, const ClipPoint* incident, int incident_count, bool incident_is_segment,
-               const Vec3& dir, double shift, double margin, bool ref_is_a, Candidate* out) {
+               const Vec3& dir, double shift, double margin, bool ref_is_a, Candidate* out, bool sides_along_dir) {
   std::array<ClipPoint, kMaxPolygon> buf_a, buf_b;
   ClipPoint* in = buf_a.data();
   ClipPoint* next = buf_b.data();
   int n = std::min(incident_count, kMaxPolygon);
   for (int i = 0; i < n; ++i) in[i] = incident[i];
 
-  // one side plane per reference edge: normal (edge x face normal) points out of the face
+  // one side plane per reference edge: normal (edge x face normal, or edge x dir) points out
+  // of the face
+  const Vec3 along = sides_along_dir ? dir : ref.normal;
   for (int k = 0; k < ref.count && n > 0; ++k) {
     const Vec3 p = ref.pts[std::size_t(k)].p;
     const Vec3 q = ref.pts[std::size_t((k + 1) % ref.count)].p;
-    const Vec3 s = glm::cross(q - p, ref.normal);
+    const Vec3 s = glm::cross(q - p, along);
     const std::uint32_t plane = kSideLabel | ref.half_edges[std::size_t(k)];
     if (incident_is_segment) {
       // a segment: move the outside end to the plane

@@ -308,9 +308,12 @@ struct Candidate {
 /// of `ref`, then writes into `out` every point whose depth along `dir` (unit, pointing
 /// from the reference body into the incident one) is >= -margin; `ref_is_a` decides which
 /// of Candidate::a / b is the reference surface. `shift` moves each incident point by
-/// -shift dir first (the incident core's radius). Returns the candidate count.
+/// -shift dir first (the incident core's radius). The side planes contain the reference
+/// face's edges and its normal, or `dir` when `sides_along_dir` (every kept point's foot
+/// along dir then lies on the reference face). Returns the candidate count.
 int clip_faces(const WorldFace& ref, const ClipPoint* incident, int incident_count, bool incident_is_segment,
-               const Vec3& dir, double shift, double margin, bool ref_is_a, Candidate* out);
+               const Vec3& dir, double shift, double margin, bool ref_is_a, Candidate* out,
+               bool sides_along_dir = false);
 
 /// Reduces candidates to at most 4 (deepest, farthest from it, largest triangle, largest
 /// quadrilateral; Gregorius 2015 "Robust contact creation for physics simulations") and

@@ -409,9 +409,28 @@ void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose&
     const Vec3 q2 = apply(pb, b.vertices[b.edges[ee.edge_b + 1].origin]);
     Vec3 ca, cb;
     closest_segments(p1, q1, p2, q2, ca, cb);
-    m.normal = pa.rotation * ee.normal;
-    m.count = 1;
-    m.points[0] = {ca, cb, glm::dot(ca - cb, m.normal), edge_pair_id(ee.edge_a, ee.edge_b)};
+    const Vec3 n = pa.rotation * ee.normal;
+    // and B's face most anti-parallel to the axis clipped along the axis by the sides of A's
+    // face most parallel to it, its points measured along the axis to A's face plane (the
+    // feet on A's face, so no deeper than the axis's penetration) and kept within
+    // the margin, less any within a thousandth of the bodies' size of the edge point (the
+    // contact edges' crossing, found again): up to four in all, the reduction's (Jolt's
+    // manifold between two faces; a box meeting another edge first gets points where its
+    // faces are about to close, not one it can turn about)
+    WorldFace rf, inf;
+    world_face(a, pa, most_aligned_face(a, pa.rotation, n, nullptr), rf);
+    world_face(b, pb, incident_face(b, pb.rotation, n), inf);
+    std::array<Candidate, kMaxPolygon + 1> cand;
+    cand[0] = {ca, cb, glm::dot(ca - cb, n), edge_pair_id(ee.edge_a, ee.edge_b)};
+    const int clipped = clip_faces(rf, inf.pts.data(), inf.count, false, n, 0.0, margin, true, cand.data() + 1, true);
+    const double near = 1e-3 * (a.outer_radius + b.outer_radius);
+    int kept = 1;
+    for (int i = 1; i <= clipped; ++i) {
+      const Vec3 d = cand[std::size_t(i)].b - cb;
+      if (glm::dot(d, d) < near * near) continue;
+      cand[std::size_t(kept++)] = cand[std::size_t(i)];
+    }
+    reduce(cand.data(), kept, n, m);
     return;
   }
   const bool ref_a = !(fb.separation > kRelFace * fa.separation + kAbs);

@@ -317,7 +317,13 @@ Vec3 column(const double (&R)[3][3], int j) { return Vec3(R[j][0], R[j][1], R[j]
 
 // The edge-edge axis ek = 3 ei + ej (separation ee, above the faces' by the hysteresis): the
 // cache takes the supporting edges; beyond the margin nothing, else the closest points of
-// the two edges (one point). Shared by the single pair and the lanes (the same bits).
+// the two edges and, as Jolt's manifold between two faces does for any axis, the points of
+// B's face most anti-parallel to the axis clipped by the sides of A's face most parallel to
+// it, each measured along the axis to A's face plane and kept within the margin (up to four
+// in all, the reduction's; the two edges lie on those faces, so the closest points are the
+// deepest). A box meeting another edge first gets points where its faces are about to close,
+// not one it can turn about. Shared by the single pair and the lanes (the same bits); the
+// same points as sat.cpp's edge contact on the boxes' hulls.
 [[gnu::always_inline]] inline void edge_contact(const BoxPair& p, int ek, double ee, double margin, const Pose& pa,
                                                 SatCache* cache, Manifold& m) {
   const int ei = ek / 3, ej = ek % 3;
@@ -345,11 +351,91 @@ Vec3 column(const double (&R)[3][3], int j) { return Vec3(R[j][0], R[j][1], R[j]
   const Vec3 b0 = R * corner(p.hb, vb) + tv, b1 = b0 + 2 * p.hb[ej] * column(p.R, ej);
   Vec3 ca, cb;
   closest_segments(a0, a1, b0, b1, ca, cb);
+  const Vec3 cb_local = cb;
   m.normal = pa.rotation * axis;
   ca = apply(pa, ca);
   cb = apply(pa, cb);
-  m.count = 1;
-  m.points[0] = {ca, cb, glm::dot(ca - cb, m.normal), edge_pair_id(edge_a, edge_b)};
+  const ContactPoint edge_point{ca, cb, glm::dot(ca - cb, m.normal), edge_pair_id(edge_a, edge_b)};
+  // the reference face: A's most parallel to the axis (the first of equals in face order);
+  // the incident face: B's most anti-parallel to it
+  int fr_i = 0, fi_i = 0;
+  double best_r = -INFINITY, best_i = -INFINITY;
+  for (int f = 0; f < 6; ++f) {
+    const double sign = (f & 1) ? 1.0 : -1.0;
+    keep_max(sign * axis[f / 2], f, best_r, fr_i);
+    keep_max(-(sign * glm::dot(column(p.R, f / 2), axis)), f, best_i, fi_i);
+  }
+  const std::uint32_t fr = std::uint32_t(fr_i), fi = std::uint32_t(fi_i);
+  const int k0 = int(fr / 2), k1 = kNext[k0], k2 = kPrev[k0], k = int(fi / 2), j1 = kNext[k], j2 = kPrev[k];
+  const double s0 = double(int(fr & 1) * 2 - 1), cosine = s0 * axis[k0];
+  // B's face in A's face coordinates (u, v, w) = (x[k1], x[k2], x[k0]), as the face contact's,
+  // then sheared along the axis, (u, v) + (w_ref - w) (gu, gv), onto A's face plane: the sides
+  // then clip along the axis, so every kept point's foot lies on A's face and its depth along
+  // the axis is at most the axes' penetration (the foot in A, the point in B)
+  std::array<FacePoint, 4> quad;
+  std::array<FacePoint, 25> pts;
+  std::array<double, 25> depth;
+  const double hk = p.hb[k] * double(int(fi & 1) * 2 - 1);
+  const int perm[3] = {k1, k2, k0};
+  const double w_ref = s0 * p.ha[k0], gu = axis[k1] / axis[k0], gv = axis[k2] / axis[k0];
+  double c[3], e1[3], e2[3], corners[4][3];
+  for (int r = 0; r < 3; ++r) {
+    c[r] = p.t[perm[r]] + p.R[k][perm[r]] * hk;
+    e1[r] = p.R[j1][perm[r]] * p.hb[j1];
+    e2[r] = p.R[j2][perm[r]] * p.hb[j2];
+  }
+  for (int r = 0; r < 3; ++r) {
+    const double lo = c[r] - e1[r], hi1 = c[r] + e1[r];
+    corners[0][r] = lo - e2[r], corners[1][r] = lo + e2[r], corners[2][r] = hi1 - e2[r], corners[3][r] = hi1 + e2[r];
+  }
+  auto shear = [&](double* x, double w0) { x[0] += (w0 - x[2]) * gu, x[1] += (w0 - x[2]) * gv; };
+  shear(c, w_ref), shear(e1, 0.0), shear(e2, 0.0);
+  for (auto& x : corners) shear(x, w_ref);
+  for (std::size_t i = 0; i < 4; ++i) {
+    const FaceLoopCorner& q = kFaceLoops.face[fi][i];
+    const double* x = corners[q.corner];
+    quad[i] = {x[0], x[1], x[2], q.vertex, q.edge};
+  }
+  // the edge point first (B's point in face coordinates), then the clipped points within the
+  // margin along the axis, less any within a thousandth of the boxes' size of the edge point
+  // (the crossing of the two contact edges, found again by the clipping)
+  pts[0] = {cb_local[k1], cb_local[k2], cb_local[k0], edge_point.id, 0};
+  depth[0] = edge_point.depth;
+  const int clipped = clip_face_rect(quad.data(), c, e1, e2, fr, p.ha[k1], p.ha[k2], p.ha[k0], s0, INFINITY,
+                                     pts.data() + 1, depth.data() + 1);
+  const double near = 1e-3 * (std::sqrt(p.ha[0] * p.ha[0] + p.ha[1] * p.ha[1] + p.ha[2] * p.ha[2]) +
+                              std::sqrt(p.hb[0] * p.hb[0] + p.hb[1] * p.hb[1] + p.hb[2] * p.hb[2]));
+  int kept = 1;
+  for (int i = 1; i <= clipped; ++i) {
+    // back from the foot on A's face to the point on B's
+    pts[std::size_t(i)].u -= (w_ref - pts[std::size_t(i)].w) * gu;
+    pts[std::size_t(i)].v -= (w_ref - pts[std::size_t(i)].w) * gv;
+    const double d = depth[std::size_t(i)] / cosine;
+    const double du = pts[std::size_t(i)].u - pts[0].u, dv = pts[std::size_t(i)].v - pts[0].v,
+                 dw = pts[std::size_t(i)].w - pts[0].w;
+    if (!(d >= -margin) || du * du + dv * dv + dw * dw < near * near) continue;
+    pts[std::size_t(kept)] = pts[std::size_t(i)];
+    depth[std::size_t(kept)] = d;
+    ++kept;
+  }
+  int pick[4];
+  const int count = reduce_face_points(pts.data(), depth.data(), kept, pick);
+  for (int i = 0; i < count; ++i) {
+    const int j = pick[i];
+    if (j == 0) {
+      m.points[std::size_t(i)] = edge_point;
+      continue;
+    }
+    const FacePoint& q = pts[std::size_t(j)];
+    Vec3 x(0.0);
+    x[k1] = q.u, x[k2] = q.v, x[k0] = q.w;
+    ContactPoint& out = m.points[std::size_t(i)];
+    out.point_b = apply(pa, x);
+    out.depth = depth[std::size_t(j)];
+    out.point_a = out.point_b + out.depth * m.normal;
+    out.id = q.id;
+  }
+  m.count = count;
 }
 
 // The face contact after the clipping: `in` (the clipped points in the reference face's

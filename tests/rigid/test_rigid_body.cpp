@@ -1259,10 +1259,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0xb760e90f76edec30ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x86aa3435d061e691ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x8fe57c7e02c29d0bull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x4d700756eb5516d6ull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x2ea557fbf50debc7ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x2091b31d2609d418ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x53a5e00577238c2bull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0xf8e2fcc35547856cull) << std::hex << xpbd;
 }
 
 }  // namespace
