@@ -18,10 +18,13 @@ namespace {
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 
+[[noreturn]] void index_error(std::size_t i, std::size_t n, std::string_view where) {
+  throw Error(std::string(where) + ": particle index " + std::to_string(i) + " out of range (" + std::to_string(n) +
+              " particles)");
+}
+
 void require_index(std::size_t i, std::size_t n, std::string_view where) {
-  if (i >= n)
-    throw Error(std::string(where) + ": particle index " + std::to_string(i) + " out of range (" + std::to_string(n) +
-                " particles)");
+  if (i >= n) index_error(i, n, where);
 }
 
 
@@ -486,7 +489,17 @@ void ParticleSystem::clear() {
   history_dirty_ = true;
 }
 
+void ParticleSystem::index_out_of_range(std::size_t i, const char* call) const { index_error(i, size(), call); }
+
+EmitterId ParticleSystem::emitter_at(std::size_t slot) const {
+  if (slot >= emitters_.size())
+    throw Error("ParticleSystem::emitter_at: emitter slot " + std::to_string(slot) + " out of range (" +
+                std::to_string(emitters_.size()) + " emitters)");
+  return emitters_[slot].id;
+}
+
 Color ParticleSystem::color(std::size_t i) const {
+  check_index(i, "ParticleSystem::color");
   // blend birth to death colour by the fraction of life lived
   const Color a = unpack(color0_[i]);
   if (!std::isfinite(death_[i])) return a;
