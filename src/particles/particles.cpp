@@ -361,7 +361,13 @@ void ParticleSystem::count_uniform(float inv_mass, float radius, int sign) {
 }
 
 void ParticleSystem::set_method(Method m) {
-  integ_.set_method(m);
+  // a value outside the enum is refused naming this call (the integrator's "pba::Method:
+  // invalid value 99" did not say which call passed it)
+  try {
+    integ_.set_method(m);
+  } catch (const Error& err) {
+    throw Error(std::string("ParticleSystem::set_method(m): ") + err.what());
+  }
   history_dirty_ = true;
 }
 

@@ -378,4 +378,14 @@ TEST(Storage, EveryAccessorByIndexRefusesOneOutOfRange) {
   EXPECT_EQ(error_of([&] { (void)ps.emitter_at(0); }), "ParticleSystem::emitter_at: emitter slot 0 out of range (0 emitters)");
 }
 
+// A setter's Error names the call and the value: an integration method outside the enum was
+// refused as "pba::Method: invalid value 99", naming no call. The method is kept.
+TEST(Storage, ASetMethodOutsideTheEnumNamesTheCall) {
+  ParticleSystem ps;
+  ps.set_method(pba::Method::VelocityVerlet);
+  EXPECT_EQ(error_of([&] { ps.set_method(static_cast<pba::Method>(99)); }),
+            "ParticleSystem::set_method(m): pba::Method: invalid value 99");
+  EXPECT_EQ(ps.method(), pba::Method::VelocityVerlet);
+}
+
 }  // namespace
