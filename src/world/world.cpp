@@ -1329,11 +1329,14 @@ void World::tick(double t, double dt) {
   }
   // the colliders' definitions likewise (World::collider hands them out; sync checked them
   // only after run_kinematics had moved the kinematic entities, so a refused tick left them
-  // a tick ahead), each with last tick's poses: its pose is checked in sync
+  // a tick ahead): the shape and material read in place (its pose is checked in sync; a copy
+  // of the Collider to ask ok() copied the shape's shared hull, mesh or compound, two atomic
+  // counts a collider a tick), and copied with last tick's poses only to name the bad field
   for (std::size_t i = 0; i < colliders_.size(); ++i) {
+    if (Collider::shape_ok(colliders_[i].def.shape, colliders_[i].def.material)) continue;
     Collider c = world_colliders_[i];
     c.shape = colliders_[i].def.shape, c.material = colliders_[i].def.material;
-    if (!c.ok()) c.validate("collider of " + describe(colliders_[i].owner));
+    c.validate("collider of " + describe(colliders_[i].owner));
   }
   // 1. kinematic: paths, motors and thrusters
   run_kinematics(t, dt);
