@@ -40,14 +40,24 @@ struct Handle {
 /// handle kept over 65536 or 256 reuses of its slot names the new object). With 32 bits a
 /// slot retires after 4.3e9 destroys, keeping 5 bytes of the table; `kLastGeneration` is a
 /// parameter so that tests can reach it.
-template <class Tag, std::uint32_t kLastGeneration = std::numeric_limits<std::uint32_t>::max()>
+///
+/// The table holds at most `kMaxSlots` slots, indices 0 .. kMaxSlots - 1: by default
+/// 0xFFFFFFFF, so the last index issued is 0xFFFFFFFE and the null handle's kNullIndex is
+/// never handed out. Past it create() throws Error (a parameter, as kLastGeneration, so that
+/// tests can reach it).
+template <class Tag, std::uint32_t kLastGeneration = std::numeric_limits<std::uint32_t>::max(),
+          std::uint32_t kMaxSlots = Handle<Tag>::kNullIndex>
 class HandlePool {
   static_assert(kLastGeneration >= 1, "a slot issues at least generation 1");
+  static_assert(kMaxSlots >= 1 && kMaxSlots <= Handle<Tag>::kNullIndex,
+                "the null handle's index is never a slot's");
 
  public:
   using Id = Handle<Tag>;
 
-  /// Issues a handle, reusing the most recently freed slot if any.
+  /// Issues a handle, reusing the most recently freed slot if any. Throws Error when every
+  /// one of the kMaxSlots slots is live or retired (the next index would be kMaxSlots; at
+  /// the default, the null handle's 0xFFFFFFFF, which handed out as a live handle read as null).
   Id create() {
     // reuse a freed slot (its generation was bumped at destroy)
     if (!free_.empty()) {
@@ -57,7 +67,12 @@ class HandlePool {
       ++live_;
       return Id{i, generation_[i]};
     }
-    // or append a new slot at generation 1
+    // or append a new slot at generation 1, while there is an index for it
+    if (generation_.size() >= kMaxSlots)
+      throw Error("HandlePool::create: every one of the " + std::to_string(kMaxSlots) +
+                  " slots is live or retired (" + std::to_string(live_) + " live): index " +
+                  std::to_string(generation_.size()) + " is past the last, " + std::to_string(kMaxSlots - 1) +
+                  " (0xFFFFFFFF is the null handle's)");
     generation_.push_back(1);
     alive_.push_back(kAlive);
     ++live_;

@@ -123,7 +123,11 @@ class Skeleton {
   /// Joint type per bone.
   std::span<const JointType> joint_types() const { return type_; }
   /// Definition of bone i (stored order), as given (parent index remapped to stored order).
-  const BoneDef& bone_def(int i) const { return defs_[i]; }
+  /// Throws pba::Error naming i and the bone count unless 0 <= i < bone_count().
+  const BoneDef& bone_def(int i) const {
+    if (i < 0 || i >= bone_count()) index_out_of_range(i, bone_count(), "bone", "Skeleton::bone_def");
+    return defs_[i];
+  }
   /// Sum of all bone lengths (m).
   double total_length() const { return total_length_; }
   /// Sum of the lengths from the root to the tip of `bone` (m): the reach of that tip.
@@ -177,8 +181,12 @@ class Skeleton {
   void clear_effectors();
   /// Number of end-effectors.
   int effector_count() const { return static_cast<int>(effectors_.size()); }
-  /// Definition of effector k (its current target included).
-  const EffectorDef& effector(int k) const { return effectors_[k]; }
+  /// Definition of effector k (its current target included). Throws pba::Error naming k and
+  /// the effector count unless 0 <= k < effector_count().
+  const EffectorDef& effector(int k) const {
+    if (k < 0 || k >= effector_count()) index_out_of_range(k, effector_count(), "effector", "Skeleton::effector");
+    return effectors_[k];
+  }
   /// Moves effector k's position target (m). Throws pba::Error on values that are not finite
   /// or beyond 3.4e38. Never allocates.
   void set_target(int k, const Vec3& target);
@@ -186,7 +194,8 @@ class Skeleton {
   void set_orientation_target(int k, std::optional<Quat> q);
   /// Sets effector k's pole position (m) for the two-bone solver (finite, |component| <= 3.4e38).
   void set_pole(int k, std::optional<Vec3> pole);
-  /// Position error |tip - target| of effector k (m), valid after forward_kinematics.
+  /// Position error |tip - target| of effector k (m), valid after forward_kinematics. Throws
+  /// pba::Error naming k and the effector count unless 0 <= k < effector_count().
   double effector_error(int k) const;
   /// Largest position error over all effectors (m); 0 without effectors.
   double max_effector_error() const;
@@ -201,6 +210,8 @@ class Skeleton {
 
  private:
   friend struct SolverAccess;  // the solvers in src/ik work on these arrays in place
+  // the Error of an index out of range: the call, the index and how many there are
+  [[noreturn]] static void index_out_of_range(int i, int count, const char* what, const char* call);
   void clamp_joint(int i);
 
   std::vector<BoneDef> defs_;

@@ -407,22 +407,41 @@ class ParticleSystem {
   std::size_t size() const { return hot_.size(); }
   /// Reserved capacity in particles.
   std::size_t capacity() const { return hot_.capacity(); }
-  /// Position of particle i (m).
-  Vec3 position(std::size_t i) const { return {hot_[kX][i], hot_[kY][i], hot_[kZ][i]}; }
+  /// Position of particle i (m). The accessors by index throw pba::Error naming the call, i and
+  /// size() unless i < size().
+  Vec3 position(std::size_t i) const {
+    check_index(i, "ParticleSystem::position");
+    return {hot_[kX][i], hot_[kY][i], hot_[kZ][i]};
+  }
   /// Velocity of particle i (m/s).
-  Vec3 velocity(std::size_t i) const { return {hot_[kVX][i], hot_[kVY][i], hot_[kVZ][i]}; }
+  Vec3 velocity(std::size_t i) const {
+    check_index(i, "ParticleSystem::velocity");
+    return {hot_[kVX][i], hot_[kVY][i], hot_[kVZ][i]};
+  }
   /// Position of a tracked particle (throws Error for a stale handle).
   Vec3 position(ParticleId id) const { return position(index_of(id)); }
   /// Velocity of a tracked particle (throws Error for a stale handle).
   Vec3 velocity(ParticleId id) const { return velocity(index_of(id)); }
   /// Mass of particle i (kg).
-  double mass(std::size_t i) const { return 1.0 / static_cast<double>(hot_[kInvMass][i]); }
+  double mass(std::size_t i) const {
+    check_index(i, "ParticleSystem::mass");
+    return 1.0 / static_cast<double>(hot_[kInvMass][i]);
+  }
   /// Radius of particle i (m).
-  double radius(std::size_t i) const { return hot_[kRadius][i]; }
+  double radius(std::size_t i) const {
+    check_index(i, "ParticleSystem::radius");
+    return hot_[kRadius][i];
+  }
   /// Age of particle i (s) at the current time().
-  double age(std::size_t i) const { return time_ - birth_[i]; }
+  double age(std::size_t i) const {
+    check_index(i, "ParticleSystem::age");
+    return time_ - birth_[i];
+  }
   /// Lifetime of particle i (s; infinity for immortal particles).
-  double lifetime(std::size_t i) const { return death_[i] - birth_[i]; }
+  double lifetime(std::size_t i) const {
+    check_index(i, "ParticleSystem::lifetime");
+    return death_[i] - birth_[i];
+  }
   /// Simulated time (s) at the end of the last step (or the start time of the next).
   double time() const { return time_; }
   /// Colour of particle i now: the birth colour blended toward the end colour over its life.
@@ -458,9 +477,13 @@ class ParticleSystem {
   /// Live emitters.
   std::size_t emitter_count() const { return emitters_.size(); }
   /// The emitter at slot `slot` (0 .. emitter_count() - 1; slots shift when one is removed).
-  EmitterId emitter_at(std::size_t slot) const { return emitters_[slot].id; }
+  /// Throws pba::Error naming the slot and emitter_count() beyond them.
+  EmitterId emitter_at(std::size_t slot) const;
   /// Where particle i came from: its emitter's slot + 1, or 0 for a particle created by itself.
-  std::uint32_t source(std::size_t i) const { return source_[i]; }
+  std::uint32_t source(std::size_t i) const {
+    check_index(i, "ParticleSystem::source");
+    return source_[i];
+  }
 
   // ---- stepping ----
 
@@ -529,6 +552,12 @@ class ParticleSystem {
                      std::span<Vec3f> a) const;
 
  private:
+  // the accessors' check of a particle index: a cold throw out of line (an index out of range
+  // read past the columns, undefined behaviour)
+  void check_index(std::size_t i, const char* call) const {
+    if (i >= size()) index_out_of_range(i, call);
+  }
+  [[noreturn]] void index_out_of_range(std::size_t i, const char* call) const;
   struct EmitterState {
     EmitterId id;
     EmitterDef def;

@@ -526,6 +526,7 @@ class World {
   void update_sensor_events();
   void forget_pairs(EntityId e);
   EntityId body_entity(RigidBodyId id) const;
+  void pin_kinematic_particles();
   void write_particle_poses();
   void run_systems(WorldStage stage, double t, double dt);
   template <class Entry>

@@ -49,12 +49,14 @@ Collider Collider::box(const Vec3& center, const Vec3& half_extents, SurfaceMate
 }
 
 bool Collider::ok() const {
-  // motion and material
-  const ColliderShape& s = shape;
-  bool good = fits_float(begin.position) && fits_float(end.position) && unit_quat(begin.rotation) &&
-              unit_quat(end.rotation) && fits_float(velocity) && fits_float(angular_velocity) &&
-              material.restitution >= 0 && material.restitution <= 1 && std::isfinite(material.friction) &&
-              material.friction >= 0;
+  // motion, then the shape and material
+  return fits_float(begin.position) && fits_float(end.position) && unit_quat(begin.rotation) &&
+         unit_quat(end.rotation) && fits_float(velocity) && fits_float(angular_velocity) && shape_ok(shape, material);
+}
+
+bool Collider::shape_ok(const ColliderShape& s, const SurfaceMaterial& material) {
+  const bool good = material.restitution >= 0 && material.restitution <= 1 && std::isfinite(material.friction) &&
+                    material.friction >= 0;
   // the shape's parameters (a hull, mesh or compound was validated when it was built)
   switch (s.type) {
     case ShapeType::Plane: return good && fits_float(s.normal) && glm::length(s.normal) > 0 && fits_float(s.offset);

@@ -184,6 +184,13 @@ int Skeleton::find(std::string_view name) const {
   return -1;
 }
 
+// an index into the skeleton's bones or effectors, checked before it is read (an index out of
+// range was undefined behaviour in bone_def and effector)
+void Skeleton::index_out_of_range(int i, int count, const char* what, const char* call) {
+  throw Error(std::string(call) + ": " + what + " index " + std::to_string(i) + " out of range (the skeleton has " +
+              std::to_string(count) + " " + what + (count == 1 ? "" : "s") + ")");
+}
+
 double Skeleton::reach(int bone) const {
   require_count(bone, 0, bone_count() - 1, "Skeleton::reach bone");
   return reach_[bone];
@@ -370,6 +377,7 @@ void Skeleton::set_pole(int k, std::optional<Vec3> pole) {
 }
 
 double Skeleton::effector_error(int k) const {
+  if (k < 0 || k >= effector_count()) index_out_of_range(k, effector_count(), "effector", "Skeleton::effector_error");
   return glm::length(tip_[effectors_[k].bone] - effectors_[k].target);
 }
 

@@ -18,10 +18,13 @@ namespace {
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 
+[[noreturn]] void index_error(std::size_t i, std::size_t n, std::string_view where) {
+  throw Error(std::string(where) + ": particle index " + std::to_string(i) + " out of range (" + std::to_string(n) +
+              " particles)");
+}
+
 void require_index(std::size_t i, std::size_t n, std::string_view where) {
-  if (i >= n)
-    throw Error(std::string(where) + ": particle index " + std::to_string(i) + " out of range (" + std::to_string(n) +
-                " particles)");
+  if (i >= n) index_error(i, n, where);
 }
 
 
@@ -358,7 +361,13 @@ void ParticleSystem::count_uniform(float inv_mass, float radius, int sign) {
 }
 
 void ParticleSystem::set_method(Method m) {
-  integ_.set_method(m);
+  // a value outside the enum is refused naming this call (the integrator's "pba::Method:
+  // invalid value 99" did not say which call passed it)
+  try {
+    integ_.set_method(m);
+  } catch (const Error& err) {
+    throw Error(std::string("ParticleSystem::set_method(m): ") + err.what());
+  }
   history_dirty_ = true;
 }
 
@@ -486,7 +495,17 @@ void ParticleSystem::clear() {
   history_dirty_ = true;
 }
 
+void ParticleSystem::index_out_of_range(std::size_t i, const char* call) const { index_error(i, size(), call); }
+
+EmitterId ParticleSystem::emitter_at(std::size_t slot) const {
+  if (slot >= emitters_.size())
+    throw Error("ParticleSystem::emitter_at: emitter slot " + std::to_string(slot) + " out of range (" +
+                std::to_string(emitters_.size()) + " emitters)");
+  return emitters_[slot].id;
+}
+
 Color ParticleSystem::color(std::size_t i) const {
+  check_index(i, "ParticleSystem::color");
   // blend birth to death colour by the fraction of life lived
   const Color a = unpack(color0_[i]);
   if (!std::isfinite(death_[i])) return a;

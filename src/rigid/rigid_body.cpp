@@ -342,7 +342,9 @@ RigidSimd RigidBodySystem::simd() const {
 void RigidBodySystem::set_lane_reuse(bool on) { contact_state(contacts_).reuse_lanes = on; }
 
 void RigidBodySystem::set_substeps(int n) {
-  require_count(n, 1, 64, "ContactSettings.substeps");
+  // the call named, not the settings' field (the call sets it: "ContactSettings.substeps" sent
+  // the reader to a struct the caller never wrote)
+  require_count(n, 1, 64, "RigidBodySystem::set_substeps(n)");
   settings_.substeps = n;
   settings_.auto_substeps = false;
 }

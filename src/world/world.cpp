@@ -1257,7 +1257,10 @@ void World::solve_constraints(double dt) {
     const Vec3 d = xb - xa;
     const double len = glm::length(d);
     if (len <= 0) continue;
-    const double wa = 1 / particles_.mass(a), wb = 1 / particles_.mass(b);
+    // a particle on a path gives way to nothing (its inverse mass 0): it stays on its path
+    const double wa = records_[c.owner.index].kinematic != kNone ? 0 : 1 / particles_.mass(a);
+    const double wb = records_[c.def.other.index].kinematic != kNone ? 0 : 1 / particles_.mass(b);
+    if (wa + wb == 0) continue;
     const Vec3 corr = c.def.stiffness * (len - c.def.rest_length) / (len * (wa + wb)) * d;
     particles_.set_position(a, xa + wa * corr);
     particles_.set_position(b, xb - wb * corr);
@@ -1273,6 +1276,19 @@ void World::run_systems(WorldStage stage, double t, double dt) {
   for (auto& s : systems_)
     if (s->stage() == stage) s->step(*this, t, dt);
   profile_.systems += sw.seconds();
+}
+
+// a particle whose entity a path drives is on the path's pose at the end of the tick: the
+// particle stage integrated it on from there (v dt ahead, and pulled by gravity), so it is
+// put back, its velocity the path's (a distance constraint does not move it either)
+void World::pin_kinematic_particles() {
+  for (const KinematicEntry& k : kinematics_) {
+    const EntityRecord& r = records_[k.owner.index];
+    if (r.particle.is_null() || !particles_.valid(r.particle)) continue;
+    const std::size_t i = particles_.index_of(r.particle);
+    particles_.set_position(i, r.pose.position);
+    particles_.set_velocity(i, r.velocity);
+  }
 }
 
 // whichever system simulates an entity writes its pose: the particle system for
@@ -1313,11 +1329,14 @@ void World::tick(double t, double dt) {
   }
   // the colliders' definitions likewise (World::collider hands them out; sync checked them
   // only after run_kinematics had moved the kinematic entities, so a refused tick left them
-  // a tick ahead), each with last tick's poses: its pose is checked in sync
+  // a tick ahead): the shape and material read in place (its pose is checked in sync; a copy
+  // of the Collider to ask ok() copied the shape's shared hull, mesh or compound, two atomic
+  // counts a collider a tick), and copied with last tick's poses only to name the bad field
   for (std::size_t i = 0; i < colliders_.size(); ++i) {
+    if (Collider::shape_ok(colliders_[i].def.shape, colliders_[i].def.material)) continue;
     Collider c = world_colliders_[i];
     c.shape = colliders_[i].def.shape, c.material = colliders_[i].def.material;
-    if (!c.ok()) c.validate("collider of " + describe(colliders_[i].owner));
+    c.validate("collider of " + describe(colliders_[i].owner));
   }
   // 1. kinematic: paths, motors and thrusters
   run_kinematics(t, dt);
@@ -1349,6 +1368,7 @@ void World::tick(double t, double dt) {
   profile_.integrate = pp.integrate;
   profile_.collide = pp.collide;
   profile_.recycle = pp.recycle;
+  pin_kinematic_particles();
   write_particle_poses();
   // what began and stopped touching (bodies and particle entities), what entered and left
   // the sensors: bodies (moved in the rigid stage) and particles

@@ -86,6 +86,36 @@ TEST(HandlePool, ASlotRetiresAfterItsLastGenerationAndNeverWrapsAround) {
   EXPECT_FALSE(p.valid(ids[0]));
 }
 
+// The slot table ends before the null handle's index: with every slot live or retired,
+// create() throws instead of appending a slot at index kMaxSlots. At the default, 0xFFFFFFFF
+// slots, the next index was the null handle's 0xFFFFFFFF, handed out as a live handle that
+// read as null (is_null) and as "never issued" to require. The pool's third parameter
+// reaches the end in three slots; a freed slot is still reused, and the pool is unchanged by
+// the refusal.
+TEST(HandlePool, APoolWhoseSlotsAreUsedUpRefusesInsteadOfIssuingTheNullIndex) {
+  pba::HandlePool<TestTag, 2, 3> p;
+  const Id a = p.create(), b = p.create(), c = p.create();
+  EXPECT_EQ(c, (Id{2, 1}));
+  const std::string full =
+      "HandlePool::create: every one of the 3 slots is live or retired (3 live): index 3 is past the last, 2 (0xFFFFFFFF "
+      "is the null handle's)";
+  EXPECT_EQ(error_of([&] { p.create(); }), full);
+  EXPECT_EQ(p.size(), 3u);
+  EXPECT_EQ(p.slots(), 3u);
+  // a freed slot is reused, at its next generation; once it retires the pool is full again
+  p.destroy(b, "destroy");
+  const Id b2 = p.create();
+  EXPECT_EQ(b2, (Id{1, 2}));
+  p.destroy(b2, "destroy");  // generation 2 is the last: slot 1 retires
+  EXPECT_EQ(error_of([&] { p.create(); }),
+            "HandlePool::create: every one of the 3 slots is live or retired (2 live): index 3 is past the last, 2 "
+            "(0xFFFFFFFF is the null handle's)");
+  EXPECT_TRUE(p.valid(a));
+  EXPECT_TRUE(p.valid(c));
+  // the default pool's last slot index is one below the null handle's
+  static_assert(Id::kNullIndex == 0xFFFFFFFFu);
+}
+
 // The full 32-bit pool: generation 1 is the first, a handle of a full slot table's last index
 // is refused by index, and the null handle by name.
 TEST(HandlePool, TheNullHandleAndIndicesBeyondTheTableAreNamed) {

@@ -132,6 +132,29 @@ TEST(IkSkeleton, BadTargetsAndSettingsAreRejected) {
             "the effector; found 5 moving joints");
 }
 
+// Every index-taking accessor of a Skeleton refuses an index out of range by name, with the
+// count. Until the fix bone_def(i), effector(k) and effector_error(k) read past their arrays
+// (undefined behaviour: garbage or a crash); the setters and reach already checked.
+TEST(IkSkeleton, IndicesOutOfRangeAreRefusedNamingTheCallAndTheCount) {
+  Skeleton s(two_bones());
+  EXPECT_EQ(error_of([&] { (void)s.bone_def(2); }), "Skeleton::bone_def: bone index 2 out of range (the skeleton has 2 bones)");
+  EXPECT_EQ(error_of([&] { (void)s.bone_def(-1); }),
+            "Skeleton::bone_def: bone index -1 out of range (the skeleton has 2 bones)");
+  EXPECT_EQ(error_of([&] { (void)s.effector(0); }),
+            "Skeleton::effector: effector index 0 out of range (the skeleton has 0 effectors)");
+  s.add_effector(1, Vec3(0.5, 0.5, 0));
+  EXPECT_EQ(s.effector(0).bone, 1);
+  EXPECT_EQ(s.bone_def(1).parent, 0);
+  EXPECT_EQ(error_of([&] { (void)s.effector(1); }),
+            "Skeleton::effector: effector index 1 out of range (the skeleton has 1 effector)");
+  EXPECT_EQ(error_of([&] { (void)s.effector_error(3); }),
+            "Skeleton::effector_error: effector index 3 out of range (the skeleton has 1 effector)");
+  EXPECT_EQ(error_of([&] { s.set_target(1, Vec3(0)); }),
+            "Skeleton::set_target effector: must be an integer in [0, 0], got 1");
+  EXPECT_EQ(error_of([&] { s.set_hinge_angle(2, 0); }), "Skeleton::set_hinge_angle bone: must be an integer in [0, 1], got 2");
+  EXPECT_EQ(error_of([&] { (void)s.reach(-1); }), "Skeleton::reach bone: must be an integer in [0, 1], got -1");
+}
+
 // The ranges the solvers hold (2026-12-06): weights in [1e-6, 1e6], lengths and positions
 // within a float's. Until then a weight of 1e-300 left every Jacobian method where it
 // started (the weighted squared error underflowed to 0), one of 1e150 made

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "error_of.h"
 #include "pba/particles.h"
 
 namespace {
@@ -21,6 +22,7 @@ using pba::ParticleSystem;
 using pba::Pose;
 using pba::Quat;
 using pba::Vec3;
+using pba::test_support::error_of;
 
 // a fixed LCG, so every run builds the same scene
 struct Rng {
@@ -356,6 +358,34 @@ TEST(Storage, IndexOutOfRangeIsAnError) {
     EXPECT_STREQ(e.what(), "ParticleSystem::set_position: particle index 3 out of range (1 particles)");
   }
   EXPECT_THROW(ps.set_velocity(1, Vec3(0)), pba::Error);
+}
+
+// The getters by index check it as the setters do. Until the fix position(i), velocity(i),
+// mass, radius, age, lifetime, colour, source and emitter_at read past their columns
+// (undefined behaviour) for an index out of range.
+TEST(Storage, EveryAccessorByIndexRefusesOneOutOfRange) {
+  ParticleSystem ps;
+  ps.spawn({.position = {1, 2, 3}});
+  EXPECT_EQ(ps.position(0), Vec3(1, 2, 3));
+  EXPECT_EQ(error_of([&] { (void)ps.position(1); }), "ParticleSystem::position: particle index 1 out of range (1 particles)");
+  EXPECT_EQ(error_of([&] { (void)ps.velocity(1); }), "ParticleSystem::velocity: particle index 1 out of range (1 particles)");
+  EXPECT_EQ(error_of([&] { (void)ps.mass(7); }), "ParticleSystem::mass: particle index 7 out of range (1 particles)");
+  EXPECT_EQ(error_of([&] { (void)ps.radius(1); }), "ParticleSystem::radius: particle index 1 out of range (1 particles)");
+  EXPECT_EQ(error_of([&] { (void)ps.age(1); }), "ParticleSystem::age: particle index 1 out of range (1 particles)");
+  EXPECT_EQ(error_of([&] { (void)ps.lifetime(1); }), "ParticleSystem::lifetime: particle index 1 out of range (1 particles)");
+  EXPECT_EQ(error_of([&] { (void)ps.color(1); }), "ParticleSystem::color: particle index 1 out of range (1 particles)");
+  EXPECT_EQ(error_of([&] { (void)ps.source(1); }), "ParticleSystem::source: particle index 1 out of range (1 particles)");
+  EXPECT_EQ(error_of([&] { (void)ps.emitter_at(0); }), "ParticleSystem::emitter_at: emitter slot 0 out of range (0 emitters)");
+}
+
+// A setter's Error names the call and the value: an integration method outside the enum was
+// refused as "pba::Method: invalid value 99", naming no call. The method is kept.
+TEST(Storage, ASetMethodOutsideTheEnumNamesTheCall) {
+  ParticleSystem ps;
+  ps.set_method(pba::Method::VelocityVerlet);
+  EXPECT_EQ(error_of([&] { ps.set_method(static_cast<pba::Method>(99)); }),
+            "ParticleSystem::set_method(m): pba::Method: invalid value 99");
+  EXPECT_EQ(ps.method(), pba::Method::VelocityVerlet);
 }
 
 }  // namespace

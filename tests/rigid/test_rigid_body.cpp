@@ -639,7 +639,11 @@ TEST(RigidBadInput, NamesTheFieldAndTheBody) {
             std::string::npos);
   EXPECT_NE(error_of([&] { s.step(0, kG); }).find("dt: must be finite and > 0, got 0"), std::string::npos);
   EXPECT_NE(error_of([&] { s.step(0.01, {0, NAN, 0}); }).find("gravity"), std::string::npos);
-  EXPECT_NE(error_of([&] { s.set_substeps(0); }).find("substeps"), std::string::npos);
+  // a setter's Error names the call and the value (until the fix set_substeps named the
+  // settings' field, "ContactSettings.substeps", which the caller never wrote)
+  EXPECT_EQ(error_of([&] { s.set_substeps(0); }), "RigidBodySystem::set_substeps(n): must be an integer in [1, 64], got 0");
+  EXPECT_EQ(error_of([&] { s.set_substeps(65); }),
+            "RigidBodySystem::set_substeps(n): must be an integer in [1, 64], got 65");
   EXPECT_NE(error_of([&] { RigidBodySystem bad({.contacts = {.substeps = 65}}); }).find("contacts.substeps"),
             std::string::npos);
   s.settings().contact_hertz = -1;

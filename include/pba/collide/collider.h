@@ -46,6 +46,10 @@ struct Collider {
   /// True when validate() would not throw (no allocation: the hot paths check this first
   /// and build the message only for a bad collider).
   bool ok() const;
+  /// True when the shape's parameters and the material pass validate() (the poses and
+  /// velocities aside): ok() without a Collider, read in place (no copy of the shape's
+  /// shared hull, mesh or compound).
+  static bool shape_ok(const ColliderShape& shape, const SurfaceMaterial& material);
   /// Draws the surface at its end pose: the shape when `flags.shapes` (hull faces and
   /// edges, mesh triangles, compound children too), its world bounds when `flags.aabbs`.
   void draw(DebugDraw& draw, Color c, const DrawFlags& flags = {}) const;
