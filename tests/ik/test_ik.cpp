@@ -617,6 +617,55 @@ TEST(IkJacobian, TheBendKeepsATrueMinimum) {
   }
 }
 
+// The bend runs only on the line it is for (Impl::on_line_saddle). Off the line a stall is
+// a true minimum, where the bend and its second solve were paid on every solve and thrown
+// away (review of d53039a: 100 warm frames of a limited ten-ball chain toward an
+// unreachable target took 4306 DLS iterations instead of 691). Two true minima with closed
+// forms: three hinges in [-0.5, 0.5] toward a target far behind (all at -0.5), and a planar
+// chain of four free hinges about Z toward a target 0.5 m above its plane (the tip under the
+// target, 0.5 m away). A warm solve from the pose the last one returned starts stationary:
+// its first accepted step stalls, DLS's at once and the others' after one hand-over to DLS,
+// so it must take at most 2 iterations (before the fix: 5 to 8, the bend's second solve).
+TEST(IkJacobian, AStallOffTheLineIsNotBent) {
+  SkeletonDef curl, planar;
+  curl.bones.resize(3);
+  for (int i = 0; i < 3; ++i) {
+    curl.bones[i].parent = i - 1;
+    curl.bones[i].length = 1.0 / 3;
+    curl.bones[i].joint = JointType::Hinge;
+    curl.bones[i].min_angle = -0.5;
+    curl.bones[i].max_angle = 0.5;
+  }
+  planar.bones.resize(4);
+  for (int i = 0; i < 4; ++i) {
+    planar.bones[i].parent = i - 1;
+    planar.bones[i].length = 0.25;
+    planar.bones[i].joint = JointType::Hinge;
+  }
+  Vec3 curled_tip(0);
+  for (int i = 1; i <= 3; ++i) curled_tip += Vec3(std::cos(-0.5 * i), std::sin(-0.5 * i), 0) / 3.0;
+  const struct {
+    const SkeletonDef* def;
+    Vec3 target;
+    double closest;
+  } cases[] = {{&curl, Vec3(-3, -3, 0), glm::length(Vec3(-3, -3, 0) - curled_tip)},
+               {&planar, Vec3(0.3, 0.4, 0.5), 0.5}};
+  for (Method m : {Method::JacobianTranspose, Method::PseudoInverse, Method::Dls, Method::Sdls}) {
+    for (const auto& c : cases) {
+      Skeleton s(*c.def);
+      s.add_effector(s.bone_count() - 1, c.target);
+      Solver solver(s, {m});
+      const SolveResult r1 = solver.solve();
+      ASSERT_TRUE(s.within_limits());
+      EXPECT_FALSE(r1.converged);
+      EXPECT_NEAR(r1.residual, c.closest, 1e-6) << name(m) << " bones " << s.bone_count();
+      const SolveResult r2 = solver.solve();
+      EXPECT_LE(r2.iterations, 2) << name(m) << " bones " << s.bone_count();
+      EXPECT_EQ(r2.stop, StopReason::Stalled) << name(m) << " bones " << s.bone_count();
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------
 // analytic solvers
 
