@@ -477,9 +477,13 @@ SolveResult Solver::Impl::solve() {
       s.forward_kinematics();
       jacobian(r, set.method);
       if (!(cost(ori_scale) < stalled_cost)) {
+        // back to the stationary pose: the solve stalled there, whatever the second run hit,
+        // and the shortening that run may have handed on belongs to the pose thrown away
         for (int j : active_fwd) A::q(s)[j] = stalled_q[j], A::angle(s)[j] = stalled_angle[j];
         A::root_position(s) = stalled_root;
         s.forward_kinematics();
+        r.stop = StopReason::Stalled;
+        carry_valid = false;
       }
       break;
     }
