@@ -430,6 +430,11 @@ SolveResult Solver::Impl::solve() {
     deadline = std::chrono::steady_clock::now() +
                std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                    std::chrono::duration<double>(std::min(set.max_seconds, 1e9)));
+  // a pose changed since the last solve (reset_pose, set_joint_rotation, ...: the dirty
+  // flag; every solve leaves it clear) is not the one the last capped solve was shortening
+  // its step on: no carry. (A caller that runs forward_kinematics itself after changing the
+  // pose clears the flag, and the carry stays: a shorter first step, never a worse pose.)
+  if (s.kinematics_dirty()) carry_valid = false;
   if (!set.warm_start) s.reset_pose();
   // every solver leaves kinematics current, so a warm start usually skips this pass
   if (s.kinematics_dirty()) s.forward_kinematics();
