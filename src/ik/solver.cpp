@@ -339,6 +339,44 @@ void Solver::Impl::bend_active_joints(double delta) {
   }
 }
 
+// A Jacobian column of joint j for effector k is w (a_j x (e - p_j)) per axis a_j (a
+// ball's three, a hinge's one), so J^T e = 0 where the error d = e - t of every effector is
+// parallel to e - p_j for every moving joint on its path: the chain straight along the
+// error. With the target short of the tip (d . (e - p_j) > 0, the target inside the reach
+// of the line), folding the chain brings the tip closer: a saddle or a maximum, which the
+// bend leaves. With the target beyond the tip the straight chain reaches farthest toward
+// it (a true minimum); poses off the line stall only at true minima (a joint limit, a
+// target out of a hinge chain's plane, effectors pulling apart), where the bend and its
+// second solve were paid and thrown away. The cost of a stationary pose is quadratic in a
+// tilt phi off it, changing by about phi^2 of itself, so the stall test (an accepted step
+// changing the cost by at most stall_ratio of it) cannot tell a pose within
+// sqrt(stall_ratio) rad of the line from one on it: that is the tolerance on the sine of
+// the angle between d and e - p_j, and 1e-9 at least (a million times the rounding of a
+// position from forward kinematics).
+bool Solver::Impl::on_line_saddle() const {
+  const Skeleton& s = *sk;
+  const auto types = s.joint_types();
+  const double tol = std::max(std::sqrt(set.stall_ratio), 1e-9);
+  bool any = false;
+  for (int k = 0; k < ne; ++k) {
+    const EffectorDef& ef = s.effector(k);
+    const Vec3 tip = s.tips()[ef.bone];
+    const Vec3 d = tip - ef.target;
+    const double dl = glm::length(d);
+    if (!(dl > 0)) continue;
+    for (int i = path_off[k]; i < path_off[k + 1]; ++i) {
+      const int j = path[i];
+      if (types[j] == JointType::Fixed) continue;
+      const Vec3 a = tip - s.starts()[j];
+      const double al = glm::length(a);
+      if (!(al > 0)) continue;
+      if (!(glm::dot(a, d) > 0) || !(glm::length(glm::cross(a, d)) <= tol * al * dl)) return false;
+    }
+    any = true;
+  }
+  return any;
+}
+
 // -------------------------------------------------------------------------
 // analytic: one hinge aims the effector at the target (workbook 2.3, ik_1dof):
 // the angle between v1 = e - p and v2 = t - p, projected on the hinge plane,
@@ -392,6 +430,11 @@ SolveResult Solver::Impl::solve() {
     deadline = std::chrono::steady_clock::now() +
                std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                    std::chrono::duration<double>(std::min(set.max_seconds, 1e9)));
+  // a pose changed since the last solve (reset_pose, set_joint_rotation, ...: the dirty
+  // flag; every solve leaves it clear) is not the one the last capped solve was shortening
+  // its step on: no carry. (A caller that runs forward_kinematics itself after changing the
+  // pose clears the flag, and the carry stays: a shorter first step, never a worse pose.)
+  if (s.kinematics_dirty()) carry_valid = false;
   if (!set.warm_start) s.reset_pose();
   // every solver leaves kinematics current, so a warm start usually skips this pass
   if (s.kinematics_dirty()) s.forward_kinematics();
@@ -427,11 +470,11 @@ SolveResult Solver::Impl::solve() {
       // family, be it a minimum or not: the straight chain (the rest pose) toward a target
       // on its line short of the tip, behind the root or at it is a saddle or a maximum of
       // the error, and the methods stopped there untouched (0.5 m from a target half way
-      // along a 1 m chain). Once per solve, a stalled pose is bent by 0.2 rad per joint
-      // (bend_active_joints) and solved again; the better of the two poses is kept, so a
-      // true minimum (the closest pose of an unreachable target) comes back as it was.
+      // along a 1 m chain). Once per solve, a pose stalled on such a line (on_line_saddle)
+      // is bent by 0.2 rad per joint (bend_active_joints) and solved again; the better of
+      // the two poses is kept. Stalls off the line are true minima and end here.
       measure(r);
-      if (r.converged || r.out_of_time || r.iterations >= max_iterations()) break;
+      if (r.converged || r.out_of_time || r.iterations >= max_iterations() || !on_line_saddle()) break;
       const double stalled_cost = cost(ori_scale);
       for (int j : active_fwd) stalled_q[j] = A::q(s)[j], stalled_angle[j] = A::angle(s)[j];
       stalled_root = A::root_position(s);
@@ -439,9 +482,13 @@ SolveResult Solver::Impl::solve() {
       s.forward_kinematics();
       jacobian(r, set.method);
       if (!(cost(ori_scale) < stalled_cost)) {
+        // back to the stationary pose: the solve stalled there, whatever the second run hit,
+        // and the shortening that run may have handed on belongs to the pose thrown away
         for (int j : active_fwd) A::q(s)[j] = stalled_q[j], A::angle(s)[j] = stalled_angle[j];
         A::root_position(s) = stalled_root;
         s.forward_kinematics();
+        r.stop = StopReason::Stalled;
+        carry_valid = false;
       }
       break;
     }

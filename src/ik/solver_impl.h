@@ -136,6 +136,12 @@ struct Solver::Impl {
   // length times delta at most. Clamped to the limits; forward kinematics left stale.
   void bend_active_joints(double delta);
 
+  // whether a stalled pose is the saddle the bend is for (solve): every effector with a
+  // position error has it along the line through its tip and every moving joint on its
+  // path, pointing from the target toward the tip and the joints (the target short of the
+  // tip, behind the root or at it). Forward kinematics current.
+  bool on_line_saddle() const;
+
   // whether a method honours orientation targets (FABRIK and the Jacobian family)
   static bool honours_orientation(Method m) {
     return m == Method::Fabrik || m == Method::Dls || m == Method::Sdls || m == Method::PseudoInverse ||
