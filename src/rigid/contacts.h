@@ -917,9 +917,9 @@ struct RigidContacts {
   /// XPBD: one manifold's positional contacts and static friction, solved as a block.
   // (h: the substep, s; max_push: the most of a point's overlap at the start of the substep
   // pushed out in it, m)
-  // (relax: the points' rows alone, for relax_overlap: of the overlap a point began the step
-  // with, what is beyond `allow` (m), at most max_push of it, pushed out by the poses alone, no
-  // multiplier kept; fixed: 1, 2 hold body a, b still)
+  // (relax: the points' rows alone, for relax_overlap: a point that began the step touching
+  // brought to the overlap `allow` (m), moved at most max_push either way, by the poses alone,
+  // no multiplier kept; fixed: 1, 2 hold body a, b still)
   void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push, bool relax,
                int fixed, double allow = 0);
   /// XPBD after a switch from another solver, for substeps of h (s) under gravity (m/s^2): the

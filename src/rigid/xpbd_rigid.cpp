@@ -265,14 +265,15 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
 // none, the stack fell back into XPBD's own overlap (a 20-stack at 0.30 m/s).
 // XPBD's own overlap at rest: with no compliance, what one sweep a substep leaves of the
 // gravity drop g h^2 that every body's free motion adds. Measured in a stack of equal boxes
-// built under XPBD, a contact rests (g h^2) times the number of boxes it carries deep (the
-// bottom two contacts share theirs: the last sweep of a step runs down), n (n + 1) / 2 g h^2
-// summed under the top of an n-stack (2.3 mm at 10, 8.9 mm at 20, at 8 substeps of 1/60 s):
-// a contact carrying force F on a body of mass m rests F h^2 / m deep, plus the compliance's
-// alpha F (spread over the points). The relaxation estimates F for each manifold from the
-// weight above it (each body's weight and what it carries, split evenly over the manifolds
-// under it), leaves that much of each point's overlap and pushes out what is beyond it, up to
-// the pair's slop (slop_of; the other solvers rest within it).
+// built under XPBD, a contact rests (g h^2) times the number of boxes it carries deep (at a
+// step's start the ground's contact holds none and the one above it both theirs), n (n + 1) /
+// 2 g h^2 summed under the top of an n-stack (2.3 mm at 10, 8.9 mm at 20, at 8 substeps of
+// 1/60 s): a contact carrying force F on a body of mass m rests F h^2 / m deep, plus the
+// compliance's alpha F (spread over the points). The relaxation estimates F for each manifold
+// from the weight above it (each body's weight and what it carries, split evenly over the
+// manifolds under it) and brings each touching point to that overlap, both ways (what is
+// beyond it pushed out; a point shallower set into it, where XPBD would let it fall), moving it
+// at most the pair's slop (slop_of; the other solvers rest within it).
 // Position-only Gauss-Seidel converges slowly up a column (the sweeps needed grow as its height
 // squared), so the manifolds are taken from the fixed bodies up (shock propagation, Guendelman,
 // Bridson and Fedkiw 2003): each body's level is its distance in touching manifolds from a
