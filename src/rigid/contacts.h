@@ -917,15 +917,22 @@ struct RigidContacts {
   /// XPBD: one manifold's positional contacts and static friction, solved as a block.
   // (h: the substep, s; max_push: the most of a point's overlap at the start of the substep
   // pushed out in it, m)
-  // (relax: the points' rows alone, the overlap now pushed out by at most max_push and the
-  // poses moved without a multiplier kept, for relax_overlap; fixed: 1, 2 hold body a, b still)
+  // (relax: the points' rows alone, for relax_overlap: a point that began the step touching
+  // brought to the overlap `allow` (m), moved at most max_push either way, by the poses alone,
+  // no multiplier kept; fixed: 1, 2 hold body a, b still)
   void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push, bool relax,
-               int fixed);
-  /// XPBD after a switch from another solver: the overlap up to the linear slop pushed out by
-  /// moving the poses alone, from the fixed bodies up (src/rigid/xpbd_rigid.cpp).
-  void relax_overlap(RigidBodySystem& s, double h);
-  std::vector<int> relax_level;            // relax_overlap: by dense body, contacts from a fixed body
-  std::vector<std::uint32_t> relax_order;  // relax_overlap: the pairs from the fixed bodies up
+               int fixed, double allow = 0);
+  /// XPBD after a switch from another solver, for substeps of h (s) under gravity (m/s^2): the
+  /// overlap brought to XPBD's own at rest by moving the poses alone, from the fixed bodies up
+  /// (src/rigid/xpbd_rigid.cpp).
+  void relax_overlap(RigidBodySystem& s, double h, const Vec3& gravity);
+  // relax_overlap's scratch: by dense body, the touching manifolds (relax_start into
+  // relax_adjacent), the level (contacts from a fixed body), the weight carried (kg) and the
+  // bodies breadth first; by pair, the overlap left (m; -1: apart); the pairs from the fixed
+  // bodies up and the counting sort's buckets
+  std::vector<std::uint32_t> relax_start, relax_adjacent, relax_queue, relax_order, relax_bucket;
+  std::vector<int> relax_level;
+  std::vector<double> relax_carried, relax_allow;
   /// No solver yet (last_solver before the first step).
   static constexpr RigidSolverType kNoSolver = static_cast<RigidSolverType>(255);
   RigidSolverType last_solver = kNoSolver;  ///< the solver of the last step

@@ -982,6 +982,14 @@ void RigidBodySystem::step(double dt, const Vec3& gravity) {
     if (!settings_.sleep && validated_.sleep)
       for (std::size_t i = 0; i < type_.size(); ++i)
         if (asleep_[i]) wake_island(i);
+    // a switch to XPBD from another solver wakes the sleepers too: the switch step brings the
+    // overlap the old solver rested at to XPBD's own (RigidContacts::relax_overlap), but only
+    // in the pairs that reach the solver; an island asleep through it kept the old overlap,
+    // which XPBD, woken, pushed out as a velocity (a 10-stack asleep under sequential
+    // impulses jumped to 0.45 m/s)
+    if (settings_.solver == RigidSolverType::Xpbd && validated_.solver != RigidSolverType::Xpbd)
+      for (std::size_t i = 0; i < type_.size(); ++i)
+        if (asleep_[i]) wake_island(i);
     validated_ = settings_;
   }
   // a change of gravity wakes the sleepers it acts on (as set_gravity does in Box2D v3): an

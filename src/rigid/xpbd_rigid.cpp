@@ -120,7 +120,7 @@ Vec3 material_motion(const Vec3& x, const Vec3& x_start, const Quat& q, const Qu
 // sees the turn as slip, and what is left, divided by h into a velocity, rocks a stack (a box
 // on a 25 degree slope, mu 0.5, crept at 1.3 cm/s with one sweep of each).
 void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push,
-                            bool relax, int fixed) {
+                            bool relax, int fixed, double allow) {
   constexpr int kRows = Manifold::kMaxPoints + 3;
   const ContactSettings& cs = s.settings_;
   auto a = view(s, c.a), b = view(s, c.b);
@@ -147,9 +147,15 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
     aa[j] = glm::cross(ra, c.normal), ab[j] = glm::cross(rb, c.normal);
     error[j] = glm::dot((*b.com + tb * p.sb) - (*a.com + ta * p.sa), c.normal) + p.offset;
     if (relax) {
-      // relax_overlap: the overlap, at most max_push of it, pushed out by the poses alone
-      error[j] = std::max(error[j], -max_push);
-      overlap = overlap || error[j] < 0;
+      // relax_overlap: a point that began the step touching (at the poses of the step's start)
+      // is brought to the overlap `allow`, moved at most max_push, both ways (x: scratch, its
+      // multipliers' bound lifted); a point apart is kept apart
+      const double start = glm::dot((s.com0_[c.b] + p.sb) - (s.com0_[c.a] + p.sa), c.normal) + p.offset;
+      if (start <= 0) {
+        error[j] -= start + std::clamp(-start - allow, -max_push, max_push);
+        x.normal[j] = std::numeric_limits<double>::max();  // (finite: alpha 0 times it)
+      }
+      overlap = overlap || error[j] != 0;
       continue;
     }
     // overlap the substep began with is pushed out at most push_out_speed h a substep (what
@@ -241,55 +247,126 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
     dxb += (b.inv_mass * lambda[r]) * lb[r], dtb += lambda[r] * ab[r];
   }
   *a.com += dxa, *b.com += dxb;
-  turn(*a.q, ia * dta);
-  turn(*b.q, ib * dtb);
+  // (a body relax_overlap holds, or one that cannot move, keeps its rotation's bits: turn()
+  // renormalises)
+  if (!relax || a.inv_mass != 0) turn(*a.q, ia * dta);
+  if (!relax || b.inv_mass != 0) turn(*b.q, ib * dtb);
   for (int j = 0; j < n; ++j) x.normal[j] += lambda[j];
   x.friction += lambda[n] * c.t1 + lambda[n + 1] * c.t2;
   x.twist += lambda[n + 2];
 }
 
-// A switch to XPBD from another solver: the overlap its contacts rest at, up to the linear
-// slop (the soft step's spring deflection, sequential impulses' slop; 1.7 and 3.7 mm deep at
-// the bottom of a 10-stack), is pushed out by moving the poses alone, before the first
-// substep. XPBD leaves no slop: left to the substeps, the push-out of that overlap was a
-// substep's correction each, which step 3 made a velocity, and a resting 10-stack switched to
-// XPBD jumped to 0.27 m/s (from the soft step) and 0.46 m/s (sequential impulses), its top
-// up by more than the overlaps below it (RigidSolvers.SwitchingToXpbdLeavesARestingStackResting).
-// Relaxed here, the stack starts as XPBD starts a stack of touching boxes.
+// A switch to XPBD from another solver: the overlap its contacts rest at (the soft step's
+// spring deflection, sequential impulses' slop; 1.7 and 3.7 mm deep at the bottom of a
+// 10-stack) is brought to the overlap XPBD itself rests at by moving the poses alone, before
+// the first substep. Left to the substeps, overlap beyond XPBD's own was pushed out a substep's
+// correction at a time, which step 3 made a velocity (a resting 10-stack switched to XPBD
+// jumped to 0.27 m/s from the soft step and 0.46 m/s from sequential impulses); pushed out to
+// none, the stack fell back into XPBD's own overlap (a 20-stack at 0.30 m/s).
+// XPBD's own overlap at rest: with no compliance, what one sweep a substep leaves of the
+// gravity drop g h^2 that every body's free motion adds. Measured in a stack of equal boxes
+// built under XPBD, a contact rests (g h^2) times the number of boxes it carries deep (at a
+// step's start the ground's contact holds none and the one above it both theirs), n (n + 1) /
+// 2 g h^2 summed under the top of an n-stack (2.3 mm at 10, 8.9 mm at 20, at 8 substeps of
+// 1/60 s): a contact carrying force F on a body of mass m rests F h^2 / m deep, plus the
+// compliance's alpha F (spread over the points). The relaxation estimates F for each manifold
+// from the weight above it (each body's weight and what it carries, split evenly over the
+// manifolds under it) and brings each touching point to that overlap, both ways (what is
+// beyond it pushed out; a point shallower set into it, where XPBD would let it fall), moving it
+// at most the pair's slop (slop_of; the other solvers rest within it).
 // Position-only Gauss-Seidel converges slowly up a column (the sweeps needed grow as its height
 // squared), so the manifolds are taken from the fixed bodies up (shock propagation, Guendelman,
-// Bridson and Fedkiw 2003): each body's level is its distance in contacts from a fixed body,
-// and a manifold between levels moves only its upper body; a column is relaxed in one sweep,
-// and `kRelaxSweeps` take the turns the points' levers give.
-void RigidContacts::relax_overlap(RigidBodySystem& s, double h) {
+// Bridson and Fedkiw 2003): each body's level is its distance in touching manifolds from a
+// fixed body (a breadth-first search over the bodies' manifolds), and a manifold between
+// levels moves only its upper body; a column is relaxed in one sweep, and `kRelaxSweeps` take
+// the turns the points' levers give.
+void RigidContacts::relax_overlap(RigidBodySystem& s, double h, const Vec3& gravity) {
   constexpr int kRelaxSweeps = 4;
-  const std::size_t n = s.type_.size();
   constexpr int kFloating = std::numeric_limits<int>::max();
-  // each body's level: 0 for the fixed bodies (static, kinematic, asleep), else one more than
-  // the lowest of the bodies it touches
-  relax_level.assign(n, kFloating);
-  for (std::size_t i = 0; i < n; ++i)
-    if (view(s, i).inv_mass == 0) relax_level[i] = 0;
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (const ContactPair& c : pairs) {
-      int& la = relax_level[c.a];
-      int& lb = relax_level[c.b];
-      if (la != kFloating && la + 1 < lb) lb = la + 1, changed = true;
-      if (lb != kFloating && lb + 1 < la) la = lb + 1, changed = true;
+  const std::size_t n = s.type_.size(), m = pairs.size();
+  // the touching manifolds (some point not apart at the step's start) by body: relax_start[i]
+  // to relax_start[i + 1] in relax_adjacent
+  relax_start.assign(n + 1, 0);
+  relax_allow.assign(m, -1);  // -1: apart, left out; else the overlap (m) left to a point
+  for (std::size_t k = 0; k < m; ++k) {
+    const ContactPair& c = pairs[k];
+    for (int j = 0; j < c.count; ++j) {
+      const SolverPoint& p = c.points[j];
+      if (glm::dot((s.com0_[c.b] + p.sb) - (s.com0_[c.a] + p.sa), c.normal) + p.offset <= 0) {
+        relax_allow[k] = 0, ++relax_start[c.a], ++relax_start[c.b];
+        break;
+      }
     }
   }
-  relax_order.resize(pairs.size());
-  for (std::size_t k = 0; k < pairs.size(); ++k) relax_order[k] = static_cast<std::uint32_t>(k);
-  auto low = [&](std::uint32_t k) { return std::min(relax_level[pairs[k].a], relax_level[pairs[k].b]); };
-  std::stable_sort(relax_order.begin(), relax_order.end(),
-                   [&](std::uint32_t x, std::uint32_t y) { return low(x) < low(y); });
+  for (std::size_t i = 1; i <= n; ++i) relax_start[i] += relax_start[i - 1];
+  relax_adjacent.resize(relax_start[n]);
+  for (std::size_t k = 0; k < m; ++k)
+    if (relax_allow[k] == 0) {
+      relax_adjacent[--relax_start[pairs[k].a]] = static_cast<std::uint32_t>(k);
+      relax_adjacent[--relax_start[pairs[k].b]] = static_cast<std::uint32_t>(k);
+    }
+  // each body's level, breadth first from the fixed bodies (static, kinematic, asleep): 0 for
+  // those, else one more than the lowest of the bodies it touches; relax_queue: the bodies
+  // reached, by level
+  relax_level.assign(n, kFloating);
+  relax_queue.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    if (view(s, i).inv_mass == 0 && relax_start[i] < relax_start[i + 1])
+      relax_level[i] = 0, relax_queue.push_back(static_cast<std::uint32_t>(i));
+  for (std::size_t head = 0; head < relax_queue.size(); ++head) {
+    const std::uint32_t u = relax_queue[head];
+    for (std::uint32_t e = relax_start[u]; e < relax_start[u + 1]; ++e) {
+      const ContactPair& c = pairs[relax_adjacent[e]];
+      const std::uint32_t v = c.a == u ? c.b : c.a;
+      if (relax_level[v] == kFloating) relax_level[v] = relax_level[u] + 1, relax_queue.push_back(v);
+    }
+  }
+  // the weight each body carries, from the top down (its mass and the shares of the bodies on
+  // it), and each manifold's overlap left: the upper body's share of it, F, times h^2 / m and
+  // the compliance over the points
+  relax_carried.assign(n, 0);
+  for (std::size_t r = relax_queue.size(); r-- > 0;) {
+    const std::uint32_t u = relax_queue[r];
+    const int level = relax_level[u];
+    if (level == 0) continue;
+    relax_carried[u] += 1 / s.inv_mass_[u];
+    int supports = 0;
+    for (std::uint32_t e = relax_start[u]; e < relax_start[u + 1]; ++e) {
+      const ContactPair& c = pairs[relax_adjacent[e]];
+      supports += relax_level[c.a == u ? c.b : c.a] < level;
+    }
+    const double share = relax_carried[u] / supports;  // (kg; a body at level > 0 has a support)
+    for (std::uint32_t e = relax_start[u]; e < relax_start[u + 1]; ++e) {
+      const std::uint32_t k = relax_adjacent[e];
+      const ContactPair& c = pairs[k];
+      const std::uint32_t v = c.a == u ? c.b : c.a;
+      if (relax_level[v] >= level) continue;
+      if (relax_level[v] > 0) relax_carried[v] += share;
+      const double force = share * std::abs(glm::dot(gravity, c.normal));  // N
+      relax_allow[k] = force * (h * h * s.inv_mass_[u] + s.settings_.contact_compliance / c.count);
+    }
+  }
+  // the touching manifolds from the fixed bodies up (a counting sort by the lower level; those
+  // of bodies no fixed body is reached from last)
+  std::size_t levels = 0;
+  for (const std::uint32_t u : relax_queue) levels = std::max(levels, static_cast<std::size_t>(relax_level[u]) + 1);
+  relax_bucket.assign(levels + 2, 0);
+  auto bucket = [&](const ContactPair& c) {
+    const int low = std::min(relax_level[c.a], relax_level[c.b]);
+    return low == kFloating ? levels : static_cast<std::size_t>(low);
+  };
+  for (std::size_t k = 0; k < m; ++k)
+    if (relax_allow[k] >= 0) ++relax_bucket[bucket(pairs[k]) + 1];
+  for (std::size_t l = 1; l < relax_bucket.size(); ++l) relax_bucket[l] += relax_bucket[l - 1];
+  relax_order.resize(relax_bucket.back());
+  for (std::size_t k = 0; k < m; ++k)
+    if (relax_allow[k] >= 0) relax_order[relax_bucket[bucket(pairs[k])]++] = static_cast<std::uint32_t>(k);
   for (int sweep = 0; sweep < kRelaxSweeps; ++sweep)
     for (const std::uint32_t k : relax_order) {
       ContactPair& c = pairs[k];
       const int la = relax_level[c.a], lb = relax_level[c.b];
       XpbdPair scratch{};
-      project(s, c, scratch, h, 0, s.settings_.linear_slop, true, la < lb ? 1 : lb < la ? 2 : 0);
+      project(s, c, scratch, h, 0, slop_of(s, c.a, c.b), true, la < lb ? 1 : lb < la ? 2 : 0, relax_allow[k]);
     }
 }
 
@@ -307,7 +384,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
   x_start.resize(n), x_free.resize(n), q_start.resize(n), q_free.resize(n);
   xpbd.resize(pairs.size());
   // after another solver: the overlap it rested at pushed out by the poses alone
-  if (last_solver != RigidSolverType::Xpbd && last_solver != kNoSolver) relax_overlap(s, h);
+  if (last_solver != RigidSolverType::Xpbd && last_solver != kNoSolver) relax_overlap(s, h, gravity);
   for (int sub = 0; sub < substeps; ++sub) {
     // 1. free motion from the saved poses
     for (std::size_t i = 0; i < n; ++i) x_start[i] = s.com_[i], q_start[i] = s.q_[i];
