@@ -119,7 +119,12 @@ int clip_faces(const WorldFace& ref, const ClipPoint* incident, int incident_cou
   int count = 0;
   for (int i = 0; i < n; ++i) {
     const Vec3 qs = in[i].p - shift * dir;
-    const double t = (ref.offset - glm::dot(ref.normal, qs)) / cosine;
+    const double gap = ref.offset - glm::dot(ref.normal, qs);
+    // with the sides along dir (an edge contact's face points), a point outside the plane
+    // takes its gap to the plane times the cosine, as the box path's (sat_box.cpp): never
+    // more than its true distance to the reference body, nor more than the closing along dir
+    // that brings it to the plane along the plane's normal
+    const double t = sides_along_dir && gap < 0 ? gap * cosine : gap / cosine;
     if (t < -margin) continue;
     const Vec3 on_ref = qs + t * dir;
     Candidate& c = out[count++];

@@ -310,7 +310,9 @@ struct Candidate {
 /// of Candidate::a / b is the reference surface. `shift` moves each incident point by
 /// -shift dir first (the incident core's radius). The side planes contain the reference
 /// face's edges and its normal, or `dir` when `sides_along_dir` (every kept point's foot
-/// along dir then lies on the reference face). Returns the candidate count.
+/// along dir then lies on the reference face, and a point outside the face's plane at a gap g
+/// (m) to it reads the gap g cosine instead of g / cosine, cosine between dir and the face
+/// normal: never above its true distance). Returns the candidate count.
 int clip_faces(const WorldFace& ref, const ClipPoint* incident, int incident_count, bool incident_is_segment,
                const Vec3& dir, double shift, double margin, bool ref_is_a, Candidate* out,
                bool sides_along_dir = false);

@@ -412,7 +412,8 @@ void collide_polys_sat(const Poly& a, const Pose& pa, const Poly& b, const Pose&
     const Vec3 n = pa.rotation * ee.normal;
     // and B's face most anti-parallel to the axis clipped along the axis by the sides of A's
     // face most parallel to it, its points measured along the axis to A's face plane (the
-    // feet on A's face, so no deeper than the axis's penetration) and kept within
+    // feet on A's face, so no deeper than the axis's penetration; a gap, the point outside
+    // the plane, as the gap to the plane times the cosine: clip_faces) and kept within
     // the margin, less any within a thousandth of the bodies' size of the edge point (the
     // contact edges' crossing, found again): up to four in all, the reduction's (Jolt's
     // manifold between two faces; a box meeting another edge first gets points where its

@@ -410,7 +410,12 @@ Vec3 column(const double (&R)[3][3], int j) { return Vec3(R[j][0], R[j][1], R[j]
     // back from the foot on A's face to the point on B's
     pts[std::size_t(i)].u -= (w_ref - pts[std::size_t(i)].w) * gu;
     pts[std::size_t(i)].v -= (w_ref - pts[std::size_t(i)].w) * gv;
-    const double d = depth[std::size_t(i)] / cosine;
+    // the depth along the axis; a gap (the point still outside A's face plane) is the gap to
+    // the plane times the cosine instead: a closing along the axis by that much, made along
+    // the plane's normal, brings the point to the plane and no further (gap / cosine, the gap
+    // along the axis, let a face closing along its own normal sink gap (1 / cosine^2 - 1)
+    // within the step), and the true distance to A is no less than the gap to the plane
+    const double d = depth[std::size_t(i)] >= 0 ? depth[std::size_t(i)] / cosine : depth[std::size_t(i)] * cosine;
     const double du = pts[std::size_t(i)].u - pts[0].u, dv = pts[std::size_t(i)].v - pts[0].v,
                  dw = pts[std::size_t(i)].w - pts[0].w;
     if (!(d >= -margin) || du * du + dv * dv + dw * dw < near * near) continue;

@@ -1263,10 +1263,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x2ea557fbf50debc7ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x2091b31d2609d418ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0x53a5e00577238c2bull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0xf8e2fcc35547856cull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x77e4ec491f68bdaeull) << std::hex << soft;
+  EXPECT_EQ(si, 0xcb3af7b896d414aeull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x01ed5cd5d03a44c3ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x7f51a74e8de6ac79ull) << std::hex << xpbd;
 }
 
 }  // namespace
