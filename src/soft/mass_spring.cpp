@@ -328,30 +328,6 @@ std::string SoftBody::Impl::mass_spring_instability(double h) const {
          " s: use more substeps, softer springs, less damping or drag, implicit Euler or the XPBD solver";
 }
 
-// A contact pushes a touching particle up to the thickness out of a collider in one substep
-// h, and it leaves at up to thickness / h: quadratic drag c then damps it at the rate c
-// (thickness / h) w, z = rate h = c thickness w per substep whatever h (w the lightest free
-// particle's). An explicit method's damper is stable only up to its bound (z <= 2 for the
-// Euler methods); past it the first deep contact blew the body up, named only after the
-// fact (a cloth of 64 particles with c = 1e-3 kg/m from about 30 m of thickness). Refused
-// before anything moves. Implicit Euler and the XPBD solver take any drag.
-void SoftBody::Impl::check_contact_drag() const {
-  const double c = def.forces.quadratic_drag;
-  if (def.solver != SoftSolver::MassSpring || def.method == Method::ImplicitEuler || !(c > 0 && def.thickness > 0))
-    return;
-  double wmax = 0;
-  for (std::size_t i = 0; i < n; ++i) wmax = std::max(wmax, double(w[i]));
-  const double z = c * def.thickness * wmax;
-  constexpr double kGrows = 1 + 1e-9;  // round-off in a radius of exactly 1
-  const double r = detail::mass_spring_radius(def.method, 0, z);
-  if (!(r > kGrows)) return;
-  throw Error("SoftBodyDef.forces.quadratic_drag: " + format_value(c) + " kg/m with SoftBodyDef.thickness " +
-              format_value(def.thickness) + " m damps the lightest particle (w = " + format_value(wmax) +
-              " /kg) a contact pushes out at thickness / h at z = c thickness w = " + format_value(z) +
-              " per substep: an amplification of " + format_value(r) + ", past " + std::string(name(def.method)) +
-              "'s stability bound 1 (use less drag, a thinner thickness, implicit Euler or the XPBD solver)");
-}
-
 // Why implicit Euler's Newton solve failed, in the settings' terms. Its system J = I - h
 // (h da/dx + da/dv) holds, beside the identity, (omega h)^2 = k (w_a + w_b) h^2 and z = c
 // (w_a + w_b) h for the stiffest spring of each kind, z = rate h for the per-particle

@@ -468,7 +468,6 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
   // per-step inputs: colliders, wind and aerodynamics
   Stopwatch sw;
   s.colliders = colliders.flat_double();
-  if (!s.colliders.empty()) s.check_contact_drag();
   s.external_accelerations(t);
   // what predict forms in float: each substep adds a h^2 (gravity and the external
   // accelerations), and over the step's S substeps a free particle falls a h^2 S (S + 1) / 2
