@@ -447,8 +447,10 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
                                               format_value(dt) + " / " + std::to_string(s.def.substeps) + " s",
                                        "s", "it is used in float, divided by and squared");
   // A contact pushes a touching particle up to the thickness out of a collider within one
-  // substep h, and the solver takes its velocity from that displacement: it leaves at up
-  // to thickness / h. The drag squares the speed relative to the wind in float and the
+  // substep h. The XPBD solver takes its velocity from that displacement: it leaves at up
+  // to thickness / h. The mass-spring solver keeps only the velocity out of the surface,
+  // but a thick curved collider pushes neighbours out by different amounts and the
+  // stretched springs pull them back at speeds of that order. The drag squares the speed relative to the wind in float and the
   // constraints the lengths the next substep moves it, so that speed must stay within
   // kMaxParticleSpeed (half of sqrt(FLT_MAX), the particles' own limit): thickness <=
   // kMaxParticleSpeed h. (Until 2026-12-07 the bound was sqrt(FLT_MAX) / 64 = 2.9e17 m at
@@ -468,7 +470,6 @@ void SoftBody::step(double t, double dt, const CollisionWorld& colliders) {
   // per-step inputs: colliders, wind and aerodynamics
   Stopwatch sw;
   s.colliders = colliders.flat_double();
-  if (!s.colliders.empty()) s.check_contact_drag();
   s.external_accelerations(t);
   // what predict forms in float: each substep adds a h^2 (gravity and the external
   // accelerations), and over the step's S substeps a free particle falls a h^2 S (S + 1) / 2

@@ -157,8 +157,6 @@ struct SoftBody::Impl {
   // mass_spring.cpp: the settings past an explicit method's stability bound at substep h
   // (their names and values), or "" (for check_finite's message)
   std::string mass_spring_instability(double h) const;
-  // throws when a contact's push would damp past the explicit integrator's bound (with colliders)
-  void check_contact_drag() const;
   // mass_spring.cpp: the settings that put implicit Euler's Newton system at substep h past
   // double precision (their names and values), or "" (for a NewtonFailure's message)
   std::string newton_failure_why(double h) const;

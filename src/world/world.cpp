@@ -1033,6 +1033,11 @@ void one_per_pair(std::vector<Record>& v) {
             [](const Record& x, const Record& y) { return x.key != y.key ? x.key < y.key : x.approach > y.approach; });
   v.erase(std::unique(v.begin(), v.end(), [](const Record& x, const Record& y) { return x.key == y.key; }), v.end());
 }
+// true when a sphere of radius r (m) about x may reach into bounds b: b grown by r holds x
+bool sphere_in_bounds(const Aabb& b, const Vec3& x, double r) {
+  return !(x.x < b.lo.x - r || x.y < b.lo.y - r || x.z < b.lo.z - r || x.x > b.hi.x + r || x.y > b.hi.y + r ||
+           x.z > b.hi.z + r);
+}
 // Room for `need` elements in each vector, at least doubling (so a tick with more pairs than
 // ever before allocates once, not every tick); sets that swap each tick grow together.
 template <class... V>
@@ -1083,12 +1088,48 @@ void World::update_rigid_touches() {
 // impact and rebound fall inside one tick is seen: the kernels record it at the impact,
 // not from where the tick left the particle. Emitted particles have no entity and record
 // nothing. Sorted by key, one record per pair (the fastest approach).
+//
+// A particle whose entity a path drives touches at the pose pin_kinematic_particles put it
+// on: the particle stage moved it on from there and met the colliders where it would have
+// gone (until 2026-12-07 a particle on a path at 10 m/s toward a wall began touching it a
+// tick early, 5 cm short, and one held 1 mm above the ground, which gravity pulled into it
+// each tick, touched it for good). It is tested as a sensor tests a particle: its sphere
+// against each collider's shape at the end of the tick, touching while the signed distance
+// from its centre is at most its radius, at the closest surface point, the approach speed
+// the path's velocity into the surface relative to the surface's. A path that crosses a
+// thin collider within one tick is not seen (as by a sensor). As the kernels, it keeps the
+// first kMaxParticleContacts colliders it meets (the room reserve_touch_sets made).
 void World::update_particle_touches() {
   particle_touching_.clear();
   const std::span<const std::uint32_t> owners = collision_.owners();
+  const std::span<const Collider> colliders = collision_.colliders();
+  const auto at_path_pose = [&](std::uint32_t e, std::size_t i) {
+    const Vec3 x = particles_.position(i), v = particles_.velocity(i);
+    const double r = particles_.radius(i);
+    std::size_t met = 0;
+    for (std::size_t k = 0; k < colliders.size() && met < kMaxParticleContacts; ++k) {
+      const std::uint32_t o = owners[k];
+      if (o == CollisionWorld::kNoOwner || o == e || !entities_.valid({o, entities_.generation(o)})) continue;
+      const Collider& c = colliders[k];
+      if (!sphere_in_bounds(bounds(c.shape, c.end), x, r)) continue;
+      const PointDistance d = point_distance(c.shape, c.end, x);
+      if (!(d.distance <= r)) continue;
+      const Vec3 surface = c.velocity + glm::cross(c.angular_velocity, d.point - c.end.position);
+      const double vn = glm::dot(v - surface, d.normal);
+      // the normal out of the collider, toward the particle; the event's from the smaller
+      // entity index to the larger
+      particle_touching_.push_back({e < o ? pair_key(e, o) : pair_key(o, e), e < o ? -d.normal : d.normal, d.point,
+                                    vn < 0 ? -vn : 0.0});
+      ++met;
+    }
+  };
   for (std::uint32_t e = 0; e < records_.size(); ++e) {
     const ParticleId pid = records_[e].particle;
     if (pid.is_null() || !particles_.valid(pid)) continue;
+    if (records_[e].kinematic != kNone) {
+      at_path_pose(e, particles_.index_of(pid));
+      continue;
+    }
     for (const ParticleContact& c : particles_.contacts(pid)) {
       const std::uint32_t o = c.collider < owners.size() ? owners[c.collider] : CollisionWorld::kNoOwner;
       if (o == CollisionWorld::kNoOwner || o == e || !entities_.valid({o, entities_.generation(o)})) continue;
@@ -1177,10 +1218,7 @@ void World::update_sensor_events() {
     auto overlaps = [&](std::size_t p) {
       const Vec3 x = particles_.position(p);
       const double r = particles_.radius(p);
-      if (x.x < sb.lo.x - r || x.y < sb.lo.y - r || x.z < sb.lo.z - r || x.x > sb.hi.x + r ||
-          x.y > sb.hi.y + r || x.z > sb.hi.z + r)
-        return false;
-      return point_distance(sc.shape, sc.end, x).distance <= r;
+      return sphere_in_bounds(sb, x, r) && point_distance(sc.shape, sc.end, x).distance <= r;
     };
     // particle entities
     for (std::uint32_t e = 0; e < records_.size(); ++e) {

@@ -422,4 +422,73 @@ TEST(ParticleTouch, AParticleMeetingSixWallsRecordsTheFirstFour) {
   EXPECT_GE(ps.contacts(), 4u);
 }
 
+// A particle entity on a path touches where the path puts it, not where the particle stage
+// would have taken it. A particle of radius r = 0.05 m at 10 m/s (dt = 0.01 s: 0.1 m a
+// tick) toward a slab whose faces are at x = 1 and 1.2 m is within r of it from tick 10 (x =
+// 1.0) to tick 12 (x = 1.2, its far face), so the touch begins at tick 10, at the slab's near
+// face with the path's speed, and ends at tick 13 (x = 1.3, 0.1 m past it). Before the fix
+// the particle stage had integrated it a tick on (and met the slab there): the touch began
+// at tick 9, with the particle 5 cm short of the slab.
+TEST(ParticleTouch, AParticleOnAPathTouchesWhereThePathPutsIt) {
+  const double r = 0.05;
+  World w({.stepper = {.fixed_dt = 0.01}});
+  const EntityId slab = w.create_entity({.name = "slab", .pose = {.position = {1.1, 0, 0}}});
+  w.add_collider(slab, {.shape = ColliderShape::box({0.1, 1, 1})});
+  const EntityId p = w.create_entity({.name = "runner"});
+  w.add_particle(p, {.radius = r});
+  w.add_kinematic(p, {.path = pba::PathType::Linear, .velocity = {10, 0, 0}});
+  int begin_tick = -1, end_tick = -1;
+  for (int n = 1; n <= 20; ++n) {
+    w.step();
+    for (const pba::TouchBeginEvent& ev : w.touch_begin_events()) {
+      EXPECT_EQ(begin_tick, -1) << "a second begin at tick " << n;
+      begin_tick = n;
+      EXPECT_EQ(ev.a, slab);
+      EXPECT_EQ(ev.b, p);
+      EXPECT_LE(1 - w.pose(p).position.x, r) << "began touching short of the slab";
+      EXPECT_NEAR(ev.normal.x, -1, 1e-6);  // out of the near face, toward the particle
+      EXPECT_NEAR(ev.point.x, 1, 1e-6);
+      EXPECT_NEAR(ev.approach_speed, 10, 1e-5);
+    }
+    for (const pba::TouchEndEvent& ev : w.touch_end_events()) {
+      EXPECT_EQ(end_tick, -1) << "a second end at tick " << n;
+      end_tick = n;
+      EXPECT_EQ(ev.b, p);
+    }
+  }
+  EXPECT_EQ(begin_tick, 10);
+  EXPECT_EQ(end_tick, 13);
+}
+
+// A particle held still by a motor path 1 mm above the ground (radius 0.05 m, centre at
+// 0.051 m) never touches it, though gravity pulls the particle stage's copy into it each
+// tick (before the fix it touched from tick 1 for good); 1 mm into the ground (0.049 m) it
+// touches from tick 1 and never stops, at approach speed 0 (it is not moving).
+TEST(ParticleTouch, AParticleHeldByAMotorTouchesOnlyWithinItsRadius) {
+  for (const double y : {0.051, 0.049}) {
+    SCOPED_TRACE(y);
+    World w({.stepper = {.fixed_dt = 1 / 60.0}});
+    const EntityId ground = w.create_entity({.name = "ground"});
+    w.add_collider(ground, {.shape = ColliderShape::plane({0, 1, 0}, 0)});
+    const EntityId p = w.create_entity({.name = "hover", .pose = {.position = {0, y, 0}}});
+    w.add_particle(p, {.radius = 0.05});
+    w.add_kinematic(p, {.path = pba::PathType::Motor});
+    int begins = 0, ends = 0;
+    for (int n = 1; n <= 30; ++n) {
+      w.step();
+      for (const pba::TouchBeginEvent& ev : w.touch_begin_events()) {
+        ++begins;
+        EXPECT_EQ(n, 1);
+        EXPECT_EQ(ev.a, ground);
+        EXPECT_NEAR(ev.normal.y, 1, 1e-12);
+        EXPECT_EQ(ev.approach_speed, 0);
+      }
+      ends += static_cast<int>(w.touch_end_events().size());
+    }
+    EXPECT_NEAR(w.pose(p).position.y, y, 1e-7);
+    EXPECT_EQ(begins, y > 0.05 ? 0 : 1);
+    EXPECT_EQ(ends, 0);
+  }
+}
+
 }  // namespace
