@@ -501,7 +501,7 @@ std::string summary_table(const LabReport& rep) {
     out += "\nObserved order per problem ('exact' = error at round-off for every dt; '-' = below the\n"
            "closed form's own model error; 'diverged' = non-finite at some dt, the rest at round-off;\n"
            "'no conv.' = the error does not fall with dt; 'too few' = fewer than 3 consecutive usable\n"
-           "dt, e.g. only 2 stable ones):\n";
+           "dt, e.g. only 2 stable or only 2 above the model error):\n";
     std::snprintf(line, sizeof line, "%-18s", "problem");
     out += line;
     for (Method m : methods) {
