@@ -457,7 +457,7 @@ class IntegratorLab final : public Sample {
       pt.failure = job_.failure;
       pt.done = true;
       line.done = job_level_ + 1;
-      fit_order(line);
+      fit_order(line, m);
       job_active_ = false;
       if (++job_method_ == kMethodCount) job_method_ = 0, ++job_level_;
     }
@@ -502,7 +502,7 @@ class IntegratorLab final : public Sample {
 
   // the lab's order fit (lab::fit_order, the rule lab::measure_convergence uses) over
   // the points measured so far
-  void fit_order(ConvLine& line) const {
+  void fit_order(ConvLine& line, Method m) const {
     const std::size_t count = static_cast<std::size_t>(line.done);
     std::vector<double> dts(count), errors(count);
     std::vector<long long> steps(count);
@@ -514,7 +514,7 @@ class IntegratorLab final : public Sample {
     double scale = 1;
     for (double xr : x_ref_) scale = std::max(scale, std::abs(xr));
     std::vector<bool> fitted;
-    line.order = lab::fit_order(dts, errors, steps, scale, problem().model_error,
+    line.order = lab::fit_order(m, dts, errors, steps, scale, problem().model_error,
                                 lab::ConvergenceSettings{}, fitted);
     for (std::size_t i = 0; i < line.pts.size(); ++i) line.pts[i].fitted = i < count && fitted[i];
   }

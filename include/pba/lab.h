@@ -102,9 +102,12 @@ void simulate(const Problem& p, Method m, double dt, long long steps, std::vecto
 /// Settings for the convergence study.
 struct ConvergenceSettings {
   int levels = 10;  ///< number of step sizes: dt_coarse / 2^k, k = 0..levels-1; [2, 20]
-  /// Errors below max(roundoff_floor * scale, 100 sqrt(steps) eps scale, 10 model_error)
-  /// (scale = max(1, |x_exact|)) are round-off or model error, not truncation, and are
-  /// not fitted. The fit window is fit_points (at least 3) consecutive usable points whose
+  /// Errors below max(roundoff_floor * scale, w(n) eps scale, 10 model_error)
+  /// (scale = max(1, |x_exact|), n steps) are round-off or model error, not truncation,
+  /// and are not fitted. w(n) is how n steps' roundings accumulate in x, with a margin:
+  /// 100 sqrt(n) for the methods that carry x and v; 10 sqrt(n (n + 1) (2n + 1) / 6)
+  /// ~ 10 n^(3/2) / sqrt(3) for position Verlet, whose velocity is a difference of
+  /// positions (each rounding is integrated twice). The fit window is fit_points (at least 3) consecutive usable points whose
   /// every halving shrinks the error by >= 1.5x, chosen where the local slopes agree best.
   /// Valid: [0, 1).
   double roundoff_floor = 1e-13;
@@ -136,13 +139,14 @@ struct ConvergenceResult {
 ConvergenceResult measure_convergence(const Problem& p, Method m, const ConvergenceSettings& s = {});
 
 /// The lab's rule for the observed order of convergence, for callers that measure the
-/// points themselves (the samples app fills them in a few per frame). dts (s), errors and
+/// points themselves (the samples app fills them in a few per frame). m is the method that
+/// made the points (its round-off floor depends on it, see ConvergenceSettings). dts (s), errors and
 /// steps are coarse to fine, one entry per measured point; scale = max(1, |x_exact|) at
 /// t_end; model_error is the reference's own error (Problem::model_error). Usable points
 /// and the fit window follow ConvergenceSettings. Sets fitted[i] for the points used.
 /// Returns the least-squares slope of log(error) against log(dt), or NaN when fewer than
 /// 3 points are usable.
-double fit_order(std::span<const double> dts, std::span<const double> errors,
+double fit_order(Method m, std::span<const double> dts, std::span<const double> errors,
                  std::span<const long long> steps, double scale, double model_error,
                  const ConvergenceSettings& s, std::vector<bool>& fitted);
 
