@@ -66,7 +66,7 @@ struct Aabb {
 /// A ray: the points origin + s direction for s in [0, max_distance].
 struct Ray {
   Vec3 origin{0, 0, 0};     ///< start (m), finite
-  Vec3 direction{0, 0, 1};  ///< unit direction
+  Vec3 direction{0, 0, 1};  ///< unit direction (pba::ray_cast and QueryWorld normalise a finite non-zero one)
   double max_distance = 1;  ///< length (m), finite and >= 0
 };
 
@@ -383,11 +383,16 @@ struct PointDistance {
 /// takes the triangle's normal.
 PointDistance point_distance(const ColliderShape& s, const Pose& p, const Vec3& world_point);
 
-/// Casts a ray (world frame) against the shape at pose `p`. A ray starting inside a solid
-/// hits at distance 0 with the normal exactly -ray.direction. The feature is the face of
-/// a box (ConvexHull::box order) or hull, the triangle of a mesh (two-sided: the normal
-/// faces the ray; the closest hit, ties to the lower index), the child of a compound.
-/// Never allocates.
+/// Casts a ray (world frame) against the shape at pose `p`. The direction need not be
+/// unit: a finite non-zero one is normalised (a unit one, to 4 ulps, is used as it is, so
+/// the hits equal the QueryWorld's bit for bit), and distance and max_distance are metres
+/// along it whatever its length. A non-finite origin or direction, a zero direction or a
+/// max_distance that is negative or not finite throws pba::Error naming the field
+/// ("ray_cast(ray).direction: ..."). A ray starting inside a solid hits at distance 0 with
+/// the normal exactly minus the normalised direction. The feature is the face of a box
+/// (ConvexHull::box order) or hull, the triangle of a mesh (two-sided: the normal faces
+/// the ray; the closest hit, ties to the lower index), the child of a compound. Never
+/// allocates on valid input.
 RayHit ray_cast(const ColliderShape& s, const Pose& p, const Ray& ray);
 
 }  // namespace pba
