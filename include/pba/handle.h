@@ -72,7 +72,7 @@ class HandlePool {
       throw Error("HandlePool::create: every one of the " + std::to_string(kMaxSlots) +
                   " slots is live or retired (" + std::to_string(live_) + " live): index " +
                   std::to_string(generation_.size()) + " is past the last, " + std::to_string(kMaxSlots - 1) +
-                  " (0xFFFFFFFF is the null handle's)");
+                  (kMaxSlots == Handle<Tag>::kNullIndex ? " (0xFFFFFFFF is the null handle's)" : ""));
     generation_.push_back(1);
     alive_.push_back(kAlive);
     ++live_;
