@@ -220,12 +220,17 @@ double OptionNumber(const SampleContext& ctx, const std::string& key, double fal
 }
 
 int OptionInteger(const SampleContext& ctx, const std::string& key, int fallback, int lo, int hi) {
-  const double x = OptionNumber(ctx, key, fallback, lo, hi);
-  // a count or a size given with a fraction is a mistake, not a number to round
-  if (x != std::floor(x)) {
+  const std::string v = ctx.option(key, "");
+  if (v.empty() && !ctx.options.count(key)) return fallback;
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  // a count or a size given with a fraction is a mistake, not a number to round; out of its
+  // range or no number at all, it is refused as the integer it must be too (it was "expected a
+  // number in" the range, which a fraction within it also is)
+  if (v.empty() || end != v.c_str() + v.size() || !std::isfinite(x) || x < lo || x > hi || x != std::floor(x)) {
     char buf[160];
     std::snprintf(buf, sizeof buf, ": expected an integer in [%d, %d]", lo, hi);
-    throw Error("--option " + key + "=" + ctx.option(key, "") + buf);
+    throw Error("--option " + key + "=" + v + buf);
   }
   return static_cast<int>(x);
 }

@@ -97,6 +97,11 @@ void read_rigid_body(const Node& n, World& w) {
   for (const char* key : {"linear_velocity", "angular_velocity"})
     if (d.type == BodyType::Static && n.has(key) && n.vec(key, Vec3(0)) != Vec3(0))
       n.at(key).fail("a \"static\" body does not move (make it \"kinematic\" to give it a velocity)");
+  // nor would a path's body's: the kinematic stage sets its velocities from the path every tick
+  for (const char* key : {"linear_velocity", "angular_velocity"})
+    if (n.has("kinematic") && n.has(key) && n.vec(key, Vec3(0)) != Vec3(0))
+      n.at(key).fail("a body on a \"kinematic\" path moves as the path says (give the velocity in " +
+                     n.at("kinematic").path() + ")");
   // the shapes: at least one; planes only on static bodies
   const Node shapes = n.at("shapes");
   shapes.require_array();

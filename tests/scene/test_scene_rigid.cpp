@@ -180,6 +180,29 @@ TEST(RigidScenes, BadFieldsAreNamedByPath) {
             "give it a velocity)");
   EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"type": "static", "angular_velocity": [0, 0, 0], "shapes": [{"type": "box"}]}]})"),
             "");
+  // a body driven by a kinematic path takes its velocities from the path at every tick, so a
+  // velocity of its own was dropped without a word (a paddle given 5 m/s on a 1 m/s path ran at
+  // 1 m/s, its CSV row showing 5 at step 0 only; a motor's spin about z given as 7 rad/s did not
+  // turn it): refused like a static body's, at its field; a zero velocity is still taken
+  EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"type": "kinematic", "linear_velocity": [5, 0, 0], "shapes": [{"type": "box"}],
+                         "kinematic": {"path": "linear", "velocity": [1, 0, 0]}}]})"),
+            "scenes/x.json: /rigid_bodies/0/linear_velocity: a body on a \"kinematic\" path moves as the path says "
+            "(give the velocity in /rigid_bodies/0/kinematic)");
+  EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"type": "kinematic", "angular_velocity": [0, 0, 7], "shapes": [{"type": "box"}],
+                         "kinematic": {"path": "motor", "spin": [0, 2, 0]}}]})"),
+            "scenes/x.json: /rigid_bodies/0/angular_velocity: a body on a \"kinematic\" path moves as the path says "
+            "(give the velocity in /rigid_bodies/0/kinematic)");
+  EXPECT_EQ(error_of(R"({"version": 1, "rigid_bodies": [{"type": "kinematic", "linear_velocity": [0, 0, 0], "shapes": [{"type": "box"}],
+                         "kinematic": {"path": "linear", "velocity": [1, 0, 0]}}]})"),
+            "");
+  // without a path a kinematic body keeps the velocity it is given
+  {
+    pba::Scene k = pba::parse_scene(
+        R"({"version": 1, "rigid_bodies": [{"name": "k", "type": "kinematic", "linear_velocity": [5, 0, 0], "shapes": [{"type": "box"}]}]})",
+        "x.json");
+    for (int i = 0; i < 6; ++i) k.world.step();
+    EXPECT_EQ(k.world.rigid().linear_velocity(k.world.rigid_body_id(k.world.find("k"))), pba::Vec3(5, 0, 0));
+  }
   // a speed beyond kMaxRigidSpeed (the contact rows' float range) is refused at its field
   const std::string fast = error_of(R"({"version": 1, "rigid_bodies": [{"angular_velocity": [0, 3e20, 0], "shapes": [{"type": "box"}]}]})");
   EXPECT_EQ(fast.rfind("scenes/x.json: /rigid_bodies/0/angular_velocity: (0, 3e+20, 0) has a magnitude of 3e+20 rad/s, "
