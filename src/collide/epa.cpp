@@ -3,7 +3,9 @@
 // final tetrahedron, which holds the origin, the face of the polytope nearest the origin
 // is replaced by the support point of A - B along its normal until the support point
 // lies on that face. For polytope cores the Minkowski difference has finitely many faces,
-// so the loop ends on one of them and the depth is exact up to kEpaTolerance.
+// so the loop ends on one of them and the depth is exact up to kEpaTolerance (or 1e-13 of
+// the shapes' world coordinates, where that is more: their rounding).
+#include <algorithm>
 #include <cmath>
 
 #include "narrow_internal.h"
@@ -84,16 +86,31 @@ double off_hull(const std::array<SimplexVertex, 4>& s, int n, const Vec3& w) {
   return std::abs(glm::dot(nrm, w - s[0].w)) / std::max(glm::length(nrm), 1e-300);
 }
 
+// The rounding scale of the points of A - B (m): the largest coordinate of the world support
+// points they are differences of (a world position rounds to about 1e-16 of itself, and so do
+// the differences, however small). EPA's tolerances grow with it beyond 1 km, below which they
+// are the fixed ones: at 1e12 m a deep capsule-box pair's gain never fell below 1e-10 m, the
+// polytope filled with rounding-level slivers and the pair came out as no contact.
+double rounding_scale(const std::array<SimplexVertex, 4>& s, int n) {
+  double big = 0;
+  for (int i = 0; i < n; ++i) {
+    const Vec3 &a = s[std::size_t(i)].a, &b = s[std::size_t(i)].b;
+    big = std::max({big, std::abs(a.x), std::abs(a.y), std::abs(a.z), std::abs(b.x), std::abs(b.y), std::abs(b.z)});
+  }
+  return big;
+}
+
 // grows a GJK simplex of 1-3 points (origin on it) to a tetrahedron by supports along
-// directions off its affine hull
-bool complete_tetrahedron(const ConvexProxy& a, const ConvexProxy& b, std::array<SimplexVertex, 4>& s, int& n) {
+// directions off its affine hull (by more than `off`, m)
+bool complete_tetrahedron(const ConvexProxy& a, const ConvexProxy& b, std::array<SimplexVertex, 4>& s, int& n,
+                          double off) {
   static const Vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   while (n < 4) {
     bool grown = false;
     if (n == 1) {
       for (const Vec3& d : axes) {
         const SimplexVertex w = support_point(a, b, d);
-        if (off_hull(s, n, w.w) > 1e-9) {
+        if (off_hull(s, n, w.w) > off) {
           s[std::size_t(n++)] = w;
           grown = true;
           break;
@@ -107,7 +124,7 @@ bool complete_tetrahedron(const ConvexProxy& a, const ConvexProxy& b, std::array
       for (int k = 0; k < 6 && !grown; ++k) {
         const double ang = kPi * k / 3;
         const SimplexVertex w = support_point(a, b, std::cos(ang) * u + std::sin(ang) * v);
-        if (off_hull(s, n, w.w) > 1e-9) {
+        if (off_hull(s, n, w.w) > off) {
           s[std::size_t(n++)] = w;
           grown = true;
         }
@@ -116,7 +133,7 @@ bool complete_tetrahedron(const ConvexProxy& a, const ConvexProxy& b, std::array
       const Vec3 nrm = glm::normalize(glm::cross(s[1].w - s[0].w, s[2].w - s[0].w));
       for (const Vec3& d : {nrm, -nrm}) {
         const SimplexVertex w = support_point(a, b, d);
-        if (off_hull(s, n, w.w) > 1e-9) {
+        if (off_hull(s, n, w.w) > off) {
           s[std::size_t(n++)] = w;
           grown = true;
           break;
@@ -145,7 +162,11 @@ PenetrationResult narrow::epa_from_gjk(const GjkStepper& g) {
   std::array<SimplexVertex, 4> s{};
   int n = int(g.simplex().size());
   for (int i = 0; i < n; ++i) s[std::size_t(i)] = g.simplex()[std::size_t(i)];
-  if (!complete_tetrahedron(a, b, s, n)) {
+  // the tolerances: 1e-9 m off the hull, kEpaTolerance of gain, or 1e-12 and 1e-13 of the
+  // rounding scale where that is more (the same as ever up to 1 km)
+  const double scale = rounding_scale(s, n);
+  const double off = std::max(1e-9, 1e-12 * scale), tolerance = std::max(kEpaTolerance, 1e-13 * scale);
+  if (!complete_tetrahedron(a, b, s, n, off)) {
     // touching cores with a flat difference: zero depth along any direction
     Vec3 ca, cb;
     g.closest_points(ca, cb);
@@ -191,7 +212,7 @@ PenetrationResult narrow::epa_from_gjk(const GjkStepper& g) {
     // support along its normal: on the face means the face is part of the boundary
     const SimplexVertex w = support_point(a, b, face.normal, &P.verts[std::size_t(face.v[0])]);
     const double gain = glm::dot(face.normal, w.w) - face.dist;
-    if (gain <= kEpaTolerance || P.nv >= kMaxVertices || it >= 200) break;
+    if (gain <= tolerance || P.nv >= kMaxVertices || it >= 200) break;
     // the faces w sees (and the nearest) leave; the others close up, in order
     int ns = 0, kept = 0;
     for (int q = 0; q < P.nl; ++q) {

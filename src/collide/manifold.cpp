@@ -11,7 +11,11 @@ namespace pba {
 using namespace narrow;
 
 namespace {
-constexpr double kHuge = 1.7976931348623157e308;  // the largest finite double
+// the colliders' range, a float's (|x| <= 3.4e38 m, docs/collision.md): positions and sizes
+// within it keep every product the pairs form finite (a fourth power of 3.4e38 is 1.3e154;
+// at 1e300 m a box pair's went NaN); the quick checks' bound, a value a little beyond it that
+// still rounds to a finite float goes through the full checks, which take it
+constexpr double kHuge = 3.4028234663852886e38;  // the largest float
 }  // namespace
 
 narrow::Segment narrow::capsule_core(const ColliderShape& s, const Pose& p) {
@@ -333,6 +337,7 @@ void narrow::check_pose(const Pose& p, const char* where) {
   const double qn = glm::length(p.rotation);
   if (!is_finite(p.position)) require_finite(p.position, std::string(where) + ".position");
   if (!(std::abs(qn - 1) <= 1e-6)) require_unit_quat(p.rotation, std::string(where) + ".rotation");
+  if (!fits_float(p.position)) require_float(p.position, std::string(where) + ".position");
 }
 
 void narrow::check_shape(const ColliderShape& s, const char* where) {
@@ -341,15 +346,20 @@ void narrow::check_shape(const ColliderShape& s, const char* where) {
   switch (s.type) {
     case ShapeType::Sphere:
       if (!(s.radius > 0 && std::isfinite(s.radius))) require_positive(s.radius, w() + ".radius");
+      if (!fits_float(s.radius)) require_float(s.radius, w() + ".radius");
       break;
     case ShapeType::Capsule:
       if (!(s.radius > 0 && std::isfinite(s.radius))) require_positive(s.radius, w() + ".radius");
       if (!(s.half_height >= 0 && std::isfinite(s.half_height))) require_non_negative(s.half_height, w() + ".half_height");
+      if (!fits_float(s.radius)) require_float(s.radius, w() + ".radius");
+      if (!fits_float(s.half_height)) require_float(s.half_height, w() + ".half_height");
       break;
     case ShapeType::Box:
-      for (int k = 0; k < 3; ++k)
+      for (int k = 0; k < 3; ++k) {
         if (!(s.half_extents[k] > 0 && std::isfinite(s.half_extents[k])))
           require_positive(s.half_extents[k], w() + ".half_extents[" + std::to_string(k) + "]");
+        if (!fits_float(s.half_extents[k])) require_float(s.half_extents[k], w() + ".half_extents[" + std::to_string(k) + "]");
+      }
       break;
     case ShapeType::Hull:
       if (!s.hull || s.hull->vertices().empty()) throw Error(w() + ".hull: missing hull body");
@@ -358,6 +368,7 @@ void narrow::check_shape(const ColliderShape& s, const char* where) {
       if (!is_finite(s.normal) || !std::isfinite(s.offset) || std::abs(glm::length(s.normal) - 1) > 1e-6)
         throw Error(w() + ".normal/offset: plane must have a finite unit normal and offset, got normal " +
                     format_vec3(s.normal) + ", offset " + format_value(s.offset));
+      if (!fits_float(s.offset)) require_float(s.offset, w() + ".offset");
       break;
     default: break;
   }

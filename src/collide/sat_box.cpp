@@ -840,22 +840,23 @@ PBA_LANES void gather_pairs(const PairQuery* const* q, int n, PairLanes<V>& P) {
 }
 
 // collide()'s quick input checks (manifold.cpp) into o.valid: unit quaternions to within
-// 0.9e-6, finite positions, a finite margin >= 0, finite half extents > 0; a pair that fails
-// them takes collide(), whose full checks throw or pass it. And the bounding spheres apart
-// into o.far (d: xb - xa)
+// 0.9e-6, positions and half extents > 0 within the float range (|x| <= 3.4e38), a finite
+// margin >= 0; a pair that fails them takes collide(), whose full checks throw or pass it.
+// And the bounding spheres apart into o.far (d: xb - xa)
 template <class V>
 PBA_LANES void checks_and_spheres(const PairLanes<V>& P, const V (&d)[3], BoxLanes<kWidth<V>>& o) {
   using M = LaneMask<V>;
   const V zero = splat<V>(0), one = splat<V>(1);
   {
     constexpr double kHuge = std::numeric_limits<double>::max();
+    constexpr double kFloat = std::numeric_limits<float>::max();  // the colliders' range
     constexpr double kLo = (1 - 0.9e-6) * (1 - 0.9e-6), kHi = (1 + 0.9e-6) * (1 + 0.9e-6);
     const V qa2 = P.qa[0] * P.qa[0] + P.qa[1] * P.qa[1] + P.qa[2] * P.qa[2] + P.qa[3] * P.qa[3];
     const V qb2 = P.qb[0] * P.qb[0] + P.qb[1] * P.qb[1] + P.qb[2] * P.qb[2] + P.qb[3] * P.qb[3];
     M ok = (qa2 >= kLo) & (qa2 <= kHi) & (qb2 >= kLo) & (qb2 <= kHi) & (P.margin >= 0) & (P.margin <= kHuge);
     for (int k = 0; k < 3; ++k)
-      ok &= (vabs(P.xa[k]) <= kHuge) & (vabs(P.xb[k]) <= kHuge) & (P.ha[k] > 0) & (P.ha[k] <= kHuge) &
-            (P.hb[k] > 0) & (P.hb[k] <= kHuge);
+      ok &= (vabs(P.xa[k]) <= kFloat) & (vabs(P.xb[k]) <= kFloat) & (P.ha[k] > 0) & (P.ha[k] <= kFloat) &
+            (P.hb[k] > 0) & (P.hb[k] <= kFloat);
     store(o.valid, ok ? one : zero);
   }
   const V r = vsqrt(P.ha[0] * P.ha[0] + P.ha[1] * P.ha[1] + P.ha[2] * P.ha[2]) +

@@ -227,6 +227,23 @@ void RigidBodyDef::validate(std::string_view where) const {
     const RigidShapeDef& d = shapes[k];
     const std::string w = field_path(where, "shapes[" + std::to_string(k) + "]");
     d.shape.validate(field_path(w, "shape"));
+    // the sizes too are the colliders' (a float's): a static plane's offset of 1e39 m or a
+    // capsule 1e300 m long was taken, and the first contact made the other body's NaN (a
+    // dynamic body's shapes that large make a mass or inertia outside a float's, which the
+    // mass check refuses with the hint to scale the shapes)
+    if (type != BodyType::Dynamic) {
+      const std::string ws = field_path(w, "shape");
+      switch (d.shape.type) {
+        case ShapeType::Plane: require_float(d.shape.offset, field_path(ws, "offset")); break;
+        case ShapeType::Sphere: require_float(d.shape.radius, field_path(ws, "radius")); break;
+        case ShapeType::Box: require_float(d.shape.half_extents, field_path(ws, "half_extents")); break;
+        case ShapeType::Capsule:
+          require_float(d.shape.radius, field_path(ws, "radius"));
+          require_float(d.shape.half_height, field_path(ws, "half_height"));
+          break;
+        default: break;  // hulls, meshes and compounds hold their points to it when built
+      }
+    }
     require_float(d.local.position, field_path(w, "local.position"));
     require_unit_quat(d.local.rotation, field_path(w, "local.rotation"));
     require_positive(d.density, field_path(w, "density"));

@@ -774,6 +774,40 @@ TEST(RigidBadInput, PositionsOutsideTheFloatRangeAreRefusedWhereTheyAreGiven) {
   EXPECT_NEAR(s.pose(b).position.y, 0.5, 1e-3);  // rests on the ground
 }
 
+// A static (or kinematic) body's shape sizes had no bound but finiteness, as a dynamic body's
+// mass bounds them: a ground plane's offset of 1e39 m or a capsule 1e300 m long was taken, and
+// the first step stopped naming the ball that touched it ("'ball' became non-finite", its
+// angular velocity NaN). Refused at create, naming the shape's field, as the colliders' range
+// (a float's) has it; a static shape at the largest float is taken and holds a ball up.
+TEST(RigidBadInput, StaticShapeSizesOutsideTheFloatRangeAreRefusedByName) {
+  RigidBodySystem s;
+  const std::string fit = ": must fit a float (|v| <= 3.4028234663852886e+38), got ";
+  EXPECT_EQ(error_of([&] {
+              s.create({.name = "ground", .type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::plane({0, 1, 0}, 1e39)}}});
+            }),
+            "RigidBodyDef 'ground'.shapes[0].shape.offset" + fit + "1e+39");
+  EXPECT_EQ(error_of([&] {
+              s.create({.name = "pole", .type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::capsule(1e300, 1)}}});
+            }),
+            "RigidBodyDef 'pole'.shapes[0].shape.half_height" + fit + "1e+300");
+  EXPECT_EQ(error_of([&] {
+              s.create({.name = "moon", .type = BodyType::Kinematic, .shapes = {{.shape = pba::ColliderShape::sphere(1e39)}}});
+            }),
+            "RigidBodyDef 'moon'.shapes[0].shape.radius" + fit + "1e+39");
+  const std::string box = error_of([&] {
+    s.create({.name = "slab", .type = BodyType::Static, .shapes = {{.shape = pba::ColliderShape::box({1e39, 1, 1})}}});
+  });
+  EXPECT_EQ(box.rfind("RigidBodyDef 'slab'.shapes[0].shape.half_extents: must fit a float", 0), 0u) << box;
+  EXPECT_EQ(s.size(), 0u);
+  // the largest float is in the range: a slab that wide and 1 m thick holds a ball on its top
+  const double edge = 3.4e38;
+  s.create({.name = "slab", .type = BodyType::Static, .pose = {{0, -1, 0}},
+            .shapes = {{.shape = pba::ColliderShape::box({edge, 1, edge})}}});
+  const auto ball = s.create({.name = "ball", .pose = {{0, 0.5, 0}}, .shapes = {{.shape = pba::ColliderShape::sphere(0.5)}}});
+  for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kG);
+  EXPECT_NEAR(s.pose(ball).position.y, 0.5, 1e-3);  // rests on the slab's top face at y = 0
+}
+
 // RigidMass's box and sphere took a negative or NaN mass or size and returned a negative mass or a
 // NaN inertia (create() refused it later, naming the body's mass, not the factory's argument).
 TEST(RigidBadInput, TheMassFactoriesRefuseANonPositiveMassOrSizeByName) {
