@@ -1124,11 +1124,11 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   for (int l = k.lanes; l < used; ++l) clear_lane(k, g, l, spare);
   // the normal velocities before the solve (a lane type at a time), of a block with a lane that
   // has a restitution: the restitution pass reads them. The other blocks' are made when asked
-  // for (solver_report, from rows0), and the biased passes' running minimum of the points'
-  // normal velocities starts from +inf there: the minimum of both is the number the minimum
-  // from them gives, to the bit (a min that keeps the first of equal numbers, a NaN first
-  // included; see solver_report). Made for every block, they were 3% of the 1240 pyramid's
-  // resting step and 2% of the 1000 fallen boxes', read by no one
+  // for (solver_report, from the step's starting velocities), and the biased passes' running
+  // minimum of the points' normal velocities starts from +inf there: the minimum of both is
+  // the number the minimum from them gives, to the bit (a min that keeps the first of equal
+  // numbers, a NaN first included; see solver_report). Made for every block, they were 3% of
+  // the 1240 pyramid's resting step and 2% of the 1000 fallen boxes', read by no one
   if (bounces != 0) {
     approaches(simd, k, count, arrays(s));
   } else {
