@@ -1431,7 +1431,8 @@ bool RigidContacts::solver_report(std::size_t k, int p, double& approach, double
   };
   if (lane_of[k] & kOneLane) {  // a one-point lane: its other points are none (zeros, as a ContactBlock's)
     const OnePointBlock& b = ones[lane / kLanes];
-    approach = p == 0 ? before(b, b.approach[0][l], [&](auto... v) { return approach_at(b, static_cast<int>(l), v...); }) : 0;
+    auto at = [&](auto... v) { return approach_at(b, static_cast<int>(l), v...); };
+    approach = p == 0 ? before(b, b.approach[0][l], at) : 0;
     max_impulse = p == 0 ? static_cast<double>(b.max_impulse[0][l]) * b.unit[l] : 0;
     return true;
   }
