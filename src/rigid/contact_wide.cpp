@@ -189,6 +189,19 @@ void approaches(SimdPath path, OnePointBlock& block, const int* count, const Bod
   approaches_of(path, block, count, bodies);
 }
 
+Real approach_at(const ContactBlock& block, int lane, int p, const double* va, const double* wa, const double* vb,
+                 const double* wb) {
+  double vn[ContactBlock::kPoints];
+  point_normal_velocities(Lanes<double, ContactBlock>{const_cast<ContactBlock&>(block), lane}, va, wa, vb, wb, vn);
+  return static_cast<Real>(vn[p]);
+}
+Real approach_at(const OnePointBlock& block, int lane, const double* va, const double* wa, const double* vb,
+                 const double* wb) {
+  double vn[1];
+  point_normal_velocities(Lanes<double, OnePointBlock>{const_cast<OnePointBlock&>(block), lane}, va, wa, vb, wb, vn);
+  return static_cast<Real>(vn[0]);
+}
+
 void restitution_lane(ContactBlock& c, int lane, double restitution, double threshold, int sweeps,
                       const BodyArrays& bodies) {
   restitution_lane_of(c, lane, restitution, threshold, sweeps, bodies);

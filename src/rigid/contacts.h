@@ -672,6 +672,12 @@ struct RigidContacts {
   // motion since the start of the step (dp, then the turn w, x, y, z), and the warm-start
   // velocity changes for the next integration
   std::vector<SolverBody> rows;
+  // the velocities and angular velocities the step started from, which prepare() made the
+  // rows of (swapped out of the system's arrays by finish_velocities, which writes those
+  // anew: no copy), while `start_kept`: the approach speeds before the solve of the lanes that
+  // do not bounce are made from them when asked for (solver_report), not by every prepare
+  std::vector<Vec3> start_v, start_w;
+  bool start_kept = false;
   std::vector<double> motion;
   std::vector<SolverBody> warm;
   SimdPath simd = best_simd_path();        // the path of the coloured blocks and the free motion

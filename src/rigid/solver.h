@@ -253,6 +253,14 @@ void separation_colored(SimdPath path, ContactBlock* blocks, const AnchorBlock* 
                         std::size_t last, const BodyArrays& bodies);
 /// The same for one lane (scalar).
 void separation_lane(ContactBlock& block, const AnchorBlock& anchors, int lane, const BodyArrays& bodies);
+/// The approach speed before the solve (m/s) of point `p` of the block's lane `lane` at the
+/// velocities va, vb (m/s) and angular velocities wa, wb (rad/s) of its bodies a and b, 3
+/// numbers each: the number approaches() makes for it at those (the same bits on every path).
+Real approach_at(const ContactBlock& block, int lane, int p, const double* va, const double* wa, const double* vb,
+                 const double* wb);
+/// The same for a lane of a one-point block (its one point).
+Real approach_at(const OnePointBlock& block, int lane, const double* va, const double* wa, const double* vb,
+                 const double* wb);
 /// The restitution impulses of one lane's points that approached faster than `threshold` and
 /// pushed (scalar; the lanes with restitution, in order), swept `sweeps` times over the points:
 /// they are coupled through the bodies' turn, and one sweep in order spun a box that landed flat.
