@@ -732,6 +732,32 @@ TEST(RigidFriction, ABoxTipsWhenTheSlopeExceedsItsAspectRatio) {
   }
 }
 
+// The same under XPBD at substep_iterations = 4 (tipping() turns the box once a substep, after
+// the last iteration): the box tips 2 and 10 degrees past atan(w / h), and 2 degrees below it
+// stands where it was put (mu 1.5 > tan theta: it sticks; a slip of 1 mm over 3 s would be
+// sliding). Until 2026-12-07 the turn was given after each iteration, the later iterations'
+// blocks undid it, and the box stood past the angle and slid 0.11-0.14 m down the slope.
+TEST(RigidFriction, AnXpbdBoxTipsAndDoesNotSlideWithSeveralIterations) {
+  const double w = 0.5, h = 1.0, critical = std::atan(w / h);
+  for (const double offset : {-deg(2), deg(2), deg(10)}) {
+    const double theta = critical + offset;
+    RigidBodySystem s({.contacts = {.solver = pba::RigidSolverType::Xpbd, .substep_iterations = 4}});
+    ground(s, 1.5, 0, theta);
+    const Quat q = glm::angleAxis(theta, Vec3(0, 0, 1));
+    const Vec3 n{-std::sin(theta), std::cos(theta), 0}, down{-std::cos(theta), -std::sin(theta), 0};
+    auto box = s.create({.pose = {0.5 * h * n, q}, .shapes = {box_shape({w / 2, h / 2, 0.25}, 1.5)}});
+    for (int i = 0; i < 180; ++i) s.step(1.0 / 60, kGravity);
+    const double tilt = std::acos(std::clamp(glm::dot(s.pose(box).rotation * Vec3(0, 1, 0), n), -1.0, 1.0));
+    if (offset < 0) {
+      EXPECT_LT(tilt, deg(1)) << "should stand at " << theta * 180 / pba::kPi;
+      EXPECT_LT(std::abs(glm::dot(s.center_of_mass(box) - 0.5 * h * n, down)), 1e-3)
+          << "should not slide at " << theta * 180 / pba::kPi;
+    } else {
+      EXPECT_GT(tilt, deg(45)) << "should tip at " << theta * 180 / pba::kPi;
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------------------
 // stacking
 
