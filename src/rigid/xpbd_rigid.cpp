@@ -50,6 +50,7 @@
 #include "contacts.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -119,11 +120,11 @@ Vec3 material_motion(const Vec3& x, const Vec3& x_start, const Quat& q, const Qu
 // up, holds nothing); beyond it the pressure sits at the face's edge and what is left,
 // (1 - tau) M, turns the body about it (tau: the share the face carries): a box held on a
 // slope by friction tips once tan(theta) > width / height. The multipliers and friction are
-// the substep's totals; the body's own sign (b gets +f, a gets -f) is the caller's. `pivot`:
-// the lever (m) to where the pressure then sits, centroid + extent u (set where it returns
-// other than 0).
+// the substep's totals; the body's own sign (b gets +f, a gets -f) is the caller's. `edge`,
+// `share`: the two points (j, j for one) between which the pressure then sits, at `share` of
+// the way from the first to the second (set where it returns other than 0; -1 if nowhere).
 Vec3 tipping(const ContactPair& c, const Vec3* levers, const Vec3& centroid, const double* normal, const bool* touching,
-             const Vec3& f, Vec3& pivot) {
+             const Vec3& f, std::array<int, 2>& edge, double& share) {
   double total = 0;
   Vec3 pressure(0);
   for (int j = 0; j < c.count; ++j) total += normal[j], pressure += normal[j] * (levers[j] - centroid);
@@ -133,43 +134,54 @@ Vec3 tipping(const ContactPair& c, const Vec3* levers, const Vec3& centroid, con
   const Vec3 shift = -glm::cross(c.normal, moment) / total;
   const double length = glm::length(shift);
   if (length == 0) return Vec3(0);
-  pivot = centroid;
+  edge = {-1, -1};
   if (!std::isfinite(length)) return moment;  // (a friction coefficient near the largest double)
-  const Vec3 u = shift / length;
-  double extent = -std::numeric_limits<double>::max();
-  for (int j = 0; j < c.count; ++j)
-    if (touching[j] || normal[j] > 0) extent = std::max(extent, glm::dot(levers[j] - centroid, u));
-  const double carried = std::clamp((extent - glm::dot(pressure, u) / total) / length, 0.0, 1.0);
-  pivot = centroid + extent * u;
+  // where a ray from the pressure's centre along u leaves the touching points' polygon: the
+  // largest crossing of a segment between two of them (the polygon's edges among them; the
+  // centre, a mean of touching points, lies within it). The farthest touching point along u
+  // instead, a corner off the ray, made a box turned 30 degrees about the slope's normal tip
+  // at 35 degrees, not 30
+  const Vec3 u = shift / length, v = glm::cross(c.normal, u);
+  const Vec3 from = pressure / total;
+  double reach = 0;  // along u from the pressure's centre (m)
+  for (int i = 0; i < c.count; ++i) {
+    if (!touching[i] && !(normal[i] > 0)) continue;
+    const Vec3 qi = levers[i] - centroid - from;
+    const double ai = glm::dot(qi, u), bi = glm::dot(qi, v);
+    if (bi == 0 && ai >= reach) reach = ai, edge = {i, i}, share = 0;
+    for (int j = i + 1; j < c.count; ++j) {
+      if (!touching[j] && !(normal[j] > 0)) continue;
+      const Vec3 qj = levers[j] - centroid - from;
+      const double aj = glm::dot(qj, u), bj = glm::dot(qj, v);
+      if ((bi < 0 && bj > 0) || (bi > 0 && bj < 0)) {
+        const double at = bi / (bi - bj), crossing = ai + at * (aj - ai);
+        if (crossing >= reach) reach = crossing, edge = {i, j}, share = at;
+      }
+    }
+  }
+  const double carried = std::clamp(reach / length, 0.0, 1.0);
   return (1 - carried) * moment;
 }
 
 // A body's turn by the angular impulse `moment` (kg m^2, tipping()'s) about its centre, added
-// to `dt` (kg m^2), and the face's pressure, which then sits at the edge at `pivot` (the lever
-// to it, m; `centroid`: the points' centroid), moved there: the substep's normal multipliers
-// `total_normal` (this block's totals; the change from the substep's so far, `normal`, is
-// `lambda`) go to the points at that edge (within 1e-3 of the points' spread along the shift
-// from the centroid), their sum kept. Left where the block put them, the multipliers of the
-// points away from the edge let the next iteration's block pull those points back into the
-// fixed body (a multiplier may fall to 0) and so undo the turn: at substep_iterations 4 a box
-// 2-10 degrees past its tipping angle on a mu 1.5 slope stood, and slid 0.11-0.14 m down it.
-// (Turned about the edge instead, the edge pushed out along the normal with the turn, the box
-// tipped too, but thin rods dropped on the ground gained 1-18% of their energy.)
-void tip(const Vec3& moment, const Vec3& pivot, const Vec3& centroid, int count, const Vec3* levers,
-         const double* total_normal, const double* normal, double* lambda, Vec3& dt) {
+// to `dt` (kg m^2), and the face's pressure, which then sits at the face's edge, moved there:
+// the substep's normal multipliers `total_normal` (this block's totals; the change from the
+// substep's so far, `normal`, is `lambda`) go to the two points `edge` that the pressure's
+// centre lies between (the first `1 - share` of them, the second `share`), their sum kept.
+// Left where the block put them, the multipliers of the points away from the edge let the
+// next iteration's block pull those points back into the fixed body (a multiplier may fall to
+// 0) and so undo the turn: at substep_iterations 4 a box 2-10 degrees past its tipping angle
+// on a mu 1.5 slope stood, and slid 0.11-0.14 m down it. (Turned about the edge instead, the
+// edge pushed out along the normal with the turn, the box tipped too, but thin rods dropped on
+// the ground gained 1-18% of their energy.)
+void tip(const Vec3& moment, const std::array<int, 2>& edge, double share, int count, const double* total_normal,
+         const double* normal, double* lambda, Vec3& dt) {
   dt += moment;
-  if (moment == Vec3(0)) return;
-  const double extent = glm::length(pivot - centroid);
-  if (!(extent > 0) || !std::isfinite(extent)) return;
-  const Vec3 u = (pivot - centroid) / extent;
-  double low = extent, sum = 0;
-  for (int j = 0; j < count; ++j) low = std::min(low, glm::dot(levers[j] - centroid, u)), sum += total_normal[j];
-  const double edge = extent - 1e-3 * (extent - low);
-  int at = 0;
-  for (int j = 0; j < count; ++j) at += glm::dot(levers[j] - centroid, u) >= edge;
-  if (at == 0) return;
-  for (int j = 0; j < count; ++j)
-    lambda[j] = (glm::dot(levers[j] - centroid, u) >= edge ? sum / at : 0.0) - normal[j];
+  if (moment == Vec3(0) || edge[0] < 0) return;
+  double sum = 0;
+  for (int j = 0; j < count; ++j) sum += total_normal[j];
+  for (int j = 0; j < count; ++j) lambda[j] = -normal[j];
+  lambda[edge[0]] += (1 - share) * sum, lambda[edge[1]] += share * sum;
 }
 
 }  // namespace
@@ -336,12 +348,12 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
       touching[j] = error[j] <= 0;
     }
     const Vec3 f_after = x.friction + lambda[n] * c.t1 + lambda[n + 1] * c.t2;
-    Vec3 pivot(0);
+    std::array<int, 2> edge{-1, -1};
+    double share = 0;
     if (a.inv_mass == 0 && b.inv_mass > 0)
-      tip(tipping(c, b_levers, cb, after, touching, f_after, pivot), pivot, cb, n, b_levers, after, x.normal, lambda,
-          dtb);
+      tip(tipping(c, b_levers, cb, after, touching, f_after, edge, share), edge, share, n, after, x.normal, lambda, dtb);
     if (b.inv_mass == 0 && a.inv_mass > 0)
-      tip(-tipping(c, a_levers, ca, after, touching, f_after, pivot), pivot, ca, n, a_levers, after, x.normal, lambda,
+      tip(-tipping(c, a_levers, ca, after, touching, f_after, edge, share), edge, share, n, after, x.normal, lambda,
           dta);
   }
   *a.com += dxa, *b.com += dxb;
