@@ -20,10 +20,11 @@
 // - Friction acts on the manifold as a whole ("patch friction", as in the other solvers): one
 //   tangential constraint at the points' centroid and one twist constraint about the normal,
 //   within mu times the sum of the points' normal multipliers. On a face it translates, and
-//   only the part of its moment the face's pressure cannot carry turns the body (on a fixed
-//   body: tipping()). The paper's per-point static friction under Gauss-Seidel lets the
-//   first point of a face contact take the whole tangential correction against only its
-//   share of the load, so a box resting below the friction angle slips.
+//   only the part of its moment the face's pressure cannot carry turns the body (on a body of
+//   inverse mass 0, and only while the face sticks: tipping()). The paper's per-point static
+//   friction under Gauss-Seidel lets the first point of a face contact take the whole
+//   tangential correction against only its share of the load, so a box resting below the
+//   friction angle slips.
 // - Overlap a point begins a substep with is pushed out by at most push_out_speed h in it, as
 //   the other solvers push it out at push_out_speed; projected at once, it became a velocity
 //   of overlap / h (two boxes created 0.8 m into each other flew apart at 380 m/s).
@@ -118,8 +119,9 @@ Vec3 material_motion(const Vec3& x, const Vec3& x_start, const Quat& q, const Qu
 // face carries it while that shift stays within the extent along delta of the points that
 // touch (`touching`: a point the manifold keeps apart, such as a 24-gon's next vertices 2 cm
 // up, holds nothing); beyond it the pressure sits at the face's edge and what is left,
-// (1 - tau) M, turns the body about it (tau: the share the face carries): a box held on a
-// slope by friction tips once tan(theta) > width / height. The multipliers and friction are
+// (1 - tau) M (tau: the share the face carries), turns the body about its centre (the pivot at
+// the edge comes from the next substep's point rows): a box held on a slope by friction tips
+// once tan(theta) > width / height. The multipliers and friction are
 // the substep's totals; the body's own sign (b gets +f, a gets -f) is the caller's. `edge`,
 // `share`: the two points (j, j for one) between which the pressure then sits, at `share` of
 // the way from the first to the second (set where it returns other than 0; -1 if nowhere).
@@ -328,19 +330,21 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
   }
   if (first && friction && n >= 3 && sticks) {
     // a face's static friction translates (above); the part of its moment that the face's
-    // pressure cannot carry turns a body on a fixed one about its centre (tipping; the pivot
-    // at the face's edge comes from the next substep's point rows), once a substep, in its
-    // first iteration, the face's pressure moved to that edge (tip() above) so that the later
-    // iterations' blocks keep the turn. Given after each iteration as the totals' tipping less
-    // the iteration's start's, with the pressure left where the blocks put it, the later
+    // pressure cannot carry turns a body on a fixed one (inverse mass 0 here: static,
+    // kinematic, or a dynamic body asleep) about its centre (tipping; the pivot at the face's
+    // edge comes from the next substep's point rows), once a substep, in its first iteration,
+    // the face's pressure moved to that edge (tip() above) so that the later iterations'
+    // blocks keep the turn. Given after each iteration as the totals' tipping less the
+    // iteration's start's, with the pressure left where the blocks put it, the later
     // iterations undid the turn, and at substep_iterations 4 a box 2-10 degrees past its
     // tipping angle on a mu 1.5 slope did not tip and slid 0.11-0.14 m. Bodies on dynamic ones
-    // keep translating only:
-    // there each body's share is carried by its other contacts, which the sweep over the
-    // manifolds does not see here, and given in full, the moments felled the 10- and 20-stacks.
-    // Only while the face sticks: sliding, the velocity pass's friction acts at the centroid
-    // with its lever; given here too, rods 1 mm x 4 m dropped at 10 and 30 degrees still
-    // rocked with 2-27 times the 2% of their energy the bound leaves them after 9 s
+    // keep translating only: there each body's share is carried by its other contacts, which
+    // the sweep over the manifolds does not see here, and given in full, the moments felled
+    // the 10- and 20-stacks. Only while the face sticks: given here while sliding, rods 1 mm x
+    // 4 m dropped at 10 and 30 degrees still rocked with 2-27 times the 2% of their energy the
+    // bound leaves them after 9 s. (A sliding face's moment is so lost: the velocity pass's
+    // friction is capped at mu times the normal impulse less the static friction's, about 0
+    // once that is clamped; docs/rigid-bodies.md, "XPBD, tipping".)
     double after[Manifold::kMaxPoints];
     bool touching[Manifold::kMaxPoints];
     for (int j = 0; j < n; ++j) {
@@ -351,7 +355,8 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
     std::array<int, 2> edge{-1, -1};
     double share = 0;
     if (a.inv_mass == 0 && b.inv_mass > 0)
-      tip(tipping(c, b_levers, cb, after, touching, f_after, edge, share), edge, share, n, after, x.normal, lambda, dtb);
+      tip(tipping(c, b_levers, cb, after, touching, f_after, edge, share), edge, share, n, after, x.normal, lambda,
+          dtb);
     if (b.inv_mass == 0 && a.inv_mass > 0)
       tip(-tipping(c, a_levers, ca, after, touching, f_after, edge, share), edge, share, n, after, x.normal, lambda,
           dta);
