@@ -925,9 +925,10 @@ struct RigidContacts {
   // pushed out in it, m)
   // (relax: the points' rows alone, for relax_overlap: a point that began the step touching
   // brought to the overlap `allow` (m), moved at most max_push either way, by the poses alone,
-  // no multiplier kept; fixed: 1, 2 hold body a, b still)
+  // no multiplier kept; fixed: 1, 2 hold body a, b still; first: the substep's first
+  // iteration, which turns a tipping body)
   void project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push, bool relax,
-               int fixed, double allow = 0);
+               int fixed, double allow, bool first);
   /// XPBD after a switch from another solver, for substeps of h (s) under gravity (m/s^2): the
   /// overlap brought to XPBD's own at rest by moving the poses alone, from the fixed bodies up
   /// (src/rigid/xpbd_rigid.cpp).

@@ -20,10 +20,11 @@
 // - Friction acts on the manifold as a whole ("patch friction", as in the other solvers): one
 //   tangential constraint at the points' centroid and one twist constraint about the normal,
 //   within mu times the sum of the points' normal multipliers. On a face it translates, and
-//   only the part of its moment the face's pressure cannot carry turns the body (on a fixed
-//   body: tipping()). The paper's per-point static friction under Gauss-Seidel lets the
-//   first point of a face contact take the whole tangential correction against only its
-//   share of the load, so a box resting below the friction angle slips.
+//   only the part of its moment the face's pressure cannot carry turns the body (on a body of
+//   inverse mass 0, and only while the face sticks: tipping()). The paper's per-point static
+//   friction under Gauss-Seidel lets the first point of a face contact take the whole
+//   tangential correction against only its share of the load, so a box resting below the
+//   friction angle slips.
 // - Overlap a point begins a substep with is pushed out by at most push_out_speed h in it, as
 //   the other solvers push it out at push_out_speed; projected at once, it became a velocity
 //   of overlap / h (two boxes created 0.8 m into each other flew apart at 380 m/s).
@@ -50,6 +51,7 @@
 #include "contacts.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -117,11 +119,14 @@ Vec3 material_motion(const Vec3& x, const Vec3& x_start, const Quat& q, const Qu
 // face carries it while that shift stays within the extent along delta of the points that
 // touch (`touching`: a point the manifold keeps apart, such as a 24-gon's next vertices 2 cm
 // up, holds nothing); beyond it the pressure sits at the face's edge and what is left,
-// (1 - tau) M, turns the body about it (tau: the share the face carries): a box held on a
-// slope by friction tips once tan(theta) > width / height. The multipliers and friction are
-// the substep's totals; the body's own sign (b gets +f, a gets -f) is the caller's.
+// (1 - tau) M (tau: the share the face carries), turns the body about its centre (the pivot at
+// the edge comes from the next substep's point rows): a box held on a slope by friction tips
+// once tan(theta) > width / height. The multipliers and friction are
+// the substep's totals; the body's own sign (b gets +f, a gets -f) is the caller's. `edge`,
+// `share`: the two points (j, j for one) between which the pressure then sits, at `share` of
+// the way from the first to the second (set where it returns other than 0; -1 if nowhere).
 Vec3 tipping(const ContactPair& c, const Vec3* levers, const Vec3& centroid, const double* normal, const bool* touching,
-             const Vec3& f) {
+             const Vec3& f, std::array<int, 2>& edge, double& share) {
   double total = 0;
   Vec3 pressure(0);
   for (int j = 0; j < c.count; ++j) total += normal[j], pressure += normal[j] * (levers[j] - centroid);
@@ -131,13 +136,54 @@ Vec3 tipping(const ContactPair& c, const Vec3* levers, const Vec3& centroid, con
   const Vec3 shift = -glm::cross(c.normal, moment) / total;
   const double length = glm::length(shift);
   if (length == 0) return Vec3(0);
+  edge = {-1, -1};
   if (!std::isfinite(length)) return moment;  // (a friction coefficient near the largest double)
-  const Vec3 u = shift / length;
-  double extent = -std::numeric_limits<double>::max();
-  for (int j = 0; j < c.count; ++j)
-    if (touching[j] || normal[j] > 0) extent = std::max(extent, glm::dot(levers[j] - centroid, u));
-  const double carried = std::clamp((extent - glm::dot(pressure, u) / total) / length, 0.0, 1.0);
+  // where a ray from the pressure's centre along u leaves the touching points' polygon: the
+  // largest crossing of a segment between two of them (the polygon's edges among them; the
+  // centre, a mean of touching points, lies within it). The farthest touching point along u
+  // instead, a corner off the ray, made a box turned 30 degrees about the slope's normal tip
+  // at 35 degrees, not 30
+  const Vec3 u = shift / length, v = glm::cross(c.normal, u);
+  const Vec3 from = pressure / total;
+  double reach = 0;  // along u from the pressure's centre (m)
+  for (int i = 0; i < c.count; ++i) {
+    if (!touching[i] && !(normal[i] > 0)) continue;
+    const Vec3 qi = levers[i] - centroid - from;
+    const double ai = glm::dot(qi, u), bi = glm::dot(qi, v);
+    if (bi == 0 && ai >= reach) reach = ai, edge = {i, i}, share = 0;
+    for (int j = i + 1; j < c.count; ++j) {
+      if (!touching[j] && !(normal[j] > 0)) continue;
+      const Vec3 qj = levers[j] - centroid - from;
+      const double aj = glm::dot(qj, u), bj = glm::dot(qj, v);
+      if ((bi < 0 && bj > 0) || (bi > 0 && bj < 0)) {
+        const double at = bi / (bi - bj), crossing = ai + at * (aj - ai);
+        if (crossing >= reach) reach = crossing, edge = {i, j}, share = at;
+      }
+    }
+  }
+  const double carried = std::clamp(reach / length, 0.0, 1.0);
   return (1 - carried) * moment;
+}
+
+// A body's turn by the angular impulse `moment` (kg m^2, tipping()'s) about its centre, added
+// to `dt` (kg m^2), and the face's pressure, which then sits at the face's edge, moved there:
+// the substep's normal multipliers `total_normal` (this block's totals; the change from the
+// substep's so far, `normal`, is `lambda`) go to the two points `edge` that the pressure's
+// centre lies between (the first `1 - share` of them, the second `share`), their sum kept.
+// Left where the block put them, the multipliers of the points away from the edge let the
+// next iteration's block pull those points back into the fixed body (a multiplier may fall to
+// 0) and so undo the turn: at substep_iterations 4 a box 2-10 degrees past its tipping angle
+// on a mu 1.5 slope stood, and slid 0.11-0.14 m down it. (Turned about the edge instead, the
+// edge pushed out along the normal with the turn, the box tipped too, but thin rods dropped on
+// the ground gained 1-18% of their energy.)
+void tip(const Vec3& moment, const std::array<int, 2>& edge, double share, int count, const double* total_normal,
+         const double* normal, double* lambda, Vec3& dt) {
+  dt += moment;
+  if (moment == Vec3(0) || edge[0] < 0) return;
+  double sum = 0;
+  for (int j = 0; j < count; ++j) sum += total_normal[j];
+  for (int j = 0; j < count; ++j) lambda[j] = -normal[j];
+  lambda[edge[0]] += (1 - share) * sum, lambda[edge[1]] += share * sum;
 }
 
 }  // namespace
@@ -153,7 +199,7 @@ Vec3 tipping(const ContactPair& c, const Vec3* levers, const Vec3& centroid, con
 // sees the turn as slip, and what is left, divided by h into a velocity, rocks a stack (a box
 // on a 25 degree slope, mu 0.5, crept at 1.3 cm/s with one sweep of each).
 void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, double h, double alpha, double max_push,
-                            bool relax, int fixed, double allow) {
+                            bool relax, int fixed, double allow, bool first) {
   constexpr int kRows = Manifold::kMaxPoints + 3;
   const ContactSettings& cs = s.settings_;
   auto a = view(s, c.a), b = view(s, c.b);
@@ -282,26 +328,38 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
     dxa -= (a.inv_mass * lambda[r]) * la[r], dta -= lambda[r] * aa[r];
     dxb += (b.inv_mass * lambda[r]) * lb[r], dtb += lambda[r] * ab[r];
   }
-  if (friction && n >= 3 && sticks) {
+  if (first && friction && n >= 3 && sticks) {
     // a face's static friction translates (above); the part of its moment that the face's
-    // pressure cannot carry turns a body on a fixed one (tipping), as the substep's totals
-    // less what the sweeps before this one gave. Bodies on dynamic ones keep translating only:
-    // there each body's share is carried by its other contacts, which the sweep over the
-    // manifolds does not see here, and given in full, the moments felled the 10- and 20-stacks.
-    // Only while the face sticks: sliding, the velocity pass's friction acts at the centroid
-    // with its lever; given here too, rods 1 mm x 4 m dropped at 10 and 30 degrees still
-    // rocked with 2-27 times the 2% of their energy the bound leaves them after 9 s
-    double before[Manifold::kMaxPoints], after[Manifold::kMaxPoints];
+    // pressure cannot carry turns a body on a fixed one (inverse mass 0 here: static,
+    // kinematic, or a dynamic body asleep) about its centre (tipping; the pivot at the face's
+    // edge comes from the next substep's point rows), once a substep, in its first iteration,
+    // the face's pressure moved to that edge (tip() above) so that the later iterations'
+    // blocks keep the turn. Given after each iteration as the totals' tipping less the
+    // iteration's start's, with the pressure left where the blocks put it, the later
+    // iterations undid the turn, and at substep_iterations 4 a box 2-10 degrees past its
+    // tipping angle on a mu 1.5 slope did not tip and slid 0.11-0.14 m. Bodies on dynamic ones
+    // keep translating only: there each body's share is carried by its other contacts, which
+    // the sweep over the manifolds does not see here, and given in full, the moments felled
+    // the 10- and 20-stacks. Only while the face sticks: given here while sliding, rods 1 mm x
+    // 4 m dropped at 10 and 30 degrees still rocked with 2-27 times the 2% of their energy the
+    // bound leaves them after 9 s. (A sliding face's moment is so lost: the velocity pass's
+    // friction is capped at mu times the normal impulse less the static friction's, about 0
+    // once that is clamped; docs/rigid-bodies.md, "XPBD, tipping".)
+    double after[Manifold::kMaxPoints];
     bool touching[Manifold::kMaxPoints];
     for (int j = 0; j < n; ++j) {
-      before[j] = x.normal[j], after[j] = x.normal[j] + lambda[j];
+      after[j] = x.normal[j] + lambda[j];
       touching[j] = error[j] <= 0;
     }
-    const Vec3 f_before = x.friction, f_after = x.friction + lambda[n] * c.t1 + lambda[n + 1] * c.t2;
+    const Vec3 f_after = x.friction + lambda[n] * c.t1 + lambda[n + 1] * c.t2;
+    std::array<int, 2> edge{-1, -1};
+    double share = 0;
     if (a.inv_mass == 0 && b.inv_mass > 0)
-      dtb += tipping(c, b_levers, cb, after, touching, f_after) - tipping(c, b_levers, cb, before, touching, f_before);
+      tip(tipping(c, b_levers, cb, after, touching, f_after, edge, share), edge, share, n, after, x.normal, lambda,
+          dtb);
     if (b.inv_mass == 0 && a.inv_mass > 0)
-      dta -= tipping(c, a_levers, ca, after, touching, f_after) - tipping(c, a_levers, ca, before, touching, f_before);
+      tip(-tipping(c, a_levers, ca, after, touching, f_after, edge, share), edge, share, n, after, x.normal, lambda,
+          dta);
   }
   *a.com += dxa, *b.com += dxb;
   // (a body relax_overlap holds, or one that cannot move, keeps its rotation's bits: turn()
@@ -447,7 +505,7 @@ void RigidContacts::relax_overlap(RigidBodySystem& s, double h, const Vec3& grav
       ContactPair& c = pairs[k];
       const int la = relax_level[c.a], lb = relax_level[c.b];
       XpbdPair scratch{};
-      project(s, c, scratch, h, 0, slop_of(s, c.a, c.b), true, la < lb ? 1 : lb < la ? 2 : 0, relax_allow[k]);
+      project(s, c, scratch, h, 0, slop_of(s, c.a, c.b), true, la < lb ? 1 : lb < la ? 2 : 0, relax_allow[k], false);
     }
 }
 
@@ -497,7 +555,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
     for (int it = 0; it < cs.substep_iterations; ++it)
       for (std::size_t k = 0; k < pairs.size(); ++k) {
         const std::size_t m = (sub + it) % 2 ? pairs.size() - 1 - k : k;
-        project(s, pairs[m], xpbd[m], h, alpha, cs.push_out_speed * h, false, 0);
+        project(s, pairs[m], xpbd[m], h, alpha, cs.push_out_speed * h, false, 0, 0, it == 0);
       }
     // 3. velocities from the corrections of the poses
     for (std::size_t i = 0; i < n; ++i) {

@@ -732,6 +732,56 @@ TEST(RigidFriction, ABoxTipsWhenTheSlopeExceedsItsAspectRatio) {
   }
 }
 
+// The same under XPBD at substep_iterations = 4 (tipping() turns the box once a substep, after
+// the last iteration): the box tips 2 and 10 degrees past atan(w / h), and 2 degrees below it
+// stands where it was put (mu 1.5 > tan theta: it sticks; a slip of 1 mm over 3 s would be
+// sliding). Until 2026-12-07 the turn was given after each iteration, the later iterations'
+// blocks undid it, and the box stood past the angle and slid 0.11-0.14 m down the slope.
+TEST(RigidFriction, AnXpbdBoxTipsAndDoesNotSlideWithSeveralIterations) {
+  const double w = 0.5, h = 1.0, critical = std::atan(w / h);
+  for (const double offset : {-deg(2), deg(2), deg(10)}) {
+    const double theta = critical + offset;
+    RigidBodySystem s({.contacts = {.solver = pba::RigidSolverType::Xpbd, .substep_iterations = 4}});
+    ground(s, 1.5, 0, theta);
+    const Quat q = glm::angleAxis(theta, Vec3(0, 0, 1));
+    const Vec3 n{-std::sin(theta), std::cos(theta), 0}, down{-std::cos(theta), -std::sin(theta), 0};
+    auto box = s.create({.pose = {0.5 * h * n, q}, .shapes = {box_shape({w / 2, h / 2, 0.25}, 1.5)}});
+    for (int i = 0; i < 180; ++i) s.step(1.0 / 60, kGravity);
+    const double tilt = std::acos(std::clamp(glm::dot(s.pose(box).rotation * Vec3(0, 1, 0), n), -1.0, 1.0));
+    if (offset < 0) {
+      EXPECT_LT(tilt, deg(1)) << "should stand at " << theta * 180 / pba::kPi;
+      EXPECT_LT(std::abs(glm::dot(s.center_of_mass(box) - 0.5 * h * n, down)), 1e-3)
+          << "should not slide at " << theta * 180 / pba::kPi;
+    } else {
+      EXPECT_GT(tilt, deg(45)) << "should tip at " << theta * 180 / pba::kPi;
+    }
+  }
+}
+
+// A box on a square footing (0.5 x 1 x 0.5 m) turned 30 degrees about the slope's normal
+// (mu 1.5): the pressure's centre leaves the footing down the slope through the middle of an
+// edge, 0.25 / cos 30 = 0.289 m from the centre, so it tips once tan theta > 0.289 / 0.5
+// (30 degrees), whatever the corner farther along the slope (0.342 m, 34.3 degrees). Under
+// XPBD, whose tipping() measured the face to that corner until 2026-12-07 (it tipped at 35).
+TEST(RigidFriction, ATurnedBoxTipsWhereItsFootingEndsDownTheSlope) {
+  const double critical = std::atan(0.25 / std::cos(deg(30)) / 0.5);  // 30 degrees
+  for (const double offset : {-deg(2), deg(2)}) {
+    const double theta = critical + offset;
+    RigidBodySystem s({.contacts = {.solver = pba::RigidSolverType::Xpbd, .sleep = false}});
+    ground(s, 1.5, 0, theta);
+    const Quat q = glm::angleAxis(theta, Vec3(0, 0, 1)) * glm::angleAxis(deg(30), Vec3(0, 1, 0));
+    const Vec3 n{-std::sin(theta), std::cos(theta), 0};
+    auto box = s.create({.pose = {0.5 * n, q}, .shapes = {box_shape({0.25, 0.5, 0.25}, 1.5)}});
+    for (int i = 0; i < 300; ++i) s.step(1.0 / 60, kGravity);
+    const double tilt = std::acos(std::clamp(glm::dot(s.pose(box).rotation * Vec3(0, 1, 0), n), -1.0, 1.0));
+    if (offset < 0) {
+      EXPECT_LT(tilt, deg(1)) << "should stand at " << theta * 180 / pba::kPi;
+    } else {
+      EXPECT_GT(tilt, deg(45)) << "should tip at " << theta * 180 / pba::kPi;
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------------------
 // stacking
 
