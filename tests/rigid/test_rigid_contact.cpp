@@ -229,6 +229,24 @@ TEST(RigidRestitution, EqualMassesSwapVelocitiesInAnElasticHeadOnCollision) {
   }
 }
 
+// The threshold is the least approach speed that bounces (ContactSettings: speeds below it
+// lose their bounce): a ball meeting a wall at exactly the threshold, 1 m/s, e = 0.5, no
+// gravity, leaves at e times it, 0.5 m/s, under every solver. XPBD tested `approach <
+// -threshold` and stopped it dead (0 m/s) where the other three bounced at `<=`. The approach
+// is -1 exactly (the ball's velocity is exact and the normal axis-aligned), and the solvers
+// give e times it back to rounding (1e-9), as the head-on collision above to 1e-3.
+TEST(RigidRestitution, ABallMeetingAWallAtExactlyTheThresholdBounces) {
+  for (const auto solver : kAll) {
+    RigidBodySystem s({.contacts = {.solver = solver, .restitution_threshold = 1, .sleep = false}});
+    s.create({.name = "wall", .type = BodyType::Static,
+              .shapes = {{.shape = ColliderShape::plane({-1, 0, 0}, -2), .material = {.restitution = 0.5, .friction = 0}}}});
+    const auto ball = s.create({.linear_velocity = {1, 0, 0},
+                                .shapes = {{.shape = ColliderShape::sphere(0.25), .material = {.restitution = 0.5, .friction = 0}}}});
+    for (int i = 0; i < 180; ++i) s.step(1.0 / 60, Vec3(0));
+    EXPECT_NEAR(s.linear_velocity(ball).x, -0.5, 1e-3) << to_string(solver);
+  }
+}
+
 // Slender bodies bouncing on a static ground (docs/rigid-bodies.md, "Thin rods that bounce"):
 // a collision with a body that does not move cannot raise a body's mechanical energy
 // (kinetic + m g y, the ground at y = 0). A body dropped from rest with its lowest point 0.5 m
