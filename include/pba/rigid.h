@@ -278,10 +278,10 @@ struct ContactSettings {
   /// simulated until a contact with an awake body, a force, an impulse or a pose or velocity
   /// change wakes it. Turned off, the next step wakes every sleeping body. "Moved slower"
   /// is measured over the window (a column rocking 1 cm either way rests), and where the
-  /// positions are too coarse to show a step's motion at `sleep_linear` (a centre beyond
-  /// sleep_linear * (dt / substeps) * 2^52, 4.7e11 m at the defaults, 1/60 s and 8 substeps)
-  /// also by the speed: a body falling 1e17 m out stays awake. A body pushed by a force or
-  /// torque in a step (apply_force, apply_torque) does not rest in it.
+  /// positions are too coarse to show a step's motion at `sleep_linear` (beyond
+  /// sleep_linear * (dt / substeps) * 2^52, 4.7e11 m at the defaults) also by the speed. A
+  /// body pushed by a force or torque in a step does not rest in it, nor does one speeding
+  /// up steadily since its window began (a box sliding or tipping slowly from rest).
   bool sleep = true;
   double sleep_linear = 0.05;    ///< m/s, finite and >= 0 (Box2D's linear sleep tolerance)
   double sleep_angular = 0.0349; ///< rad/s (2 degrees/s), finite and >= 0
@@ -631,9 +631,11 @@ class RigidBodySystem {
   // (a ring of dense indices; an awake body points to itself)
   std::vector<std::uint8_t> asleep_;
   std::vector<double> sleep_time_;
-  // where the body's current rest window began: its centre of mass and principal frame then
+  // where the body's current rest window began: its centre of mass and principal frame then,
+  // and its velocities then (m/s, rad/s: a body speeding up since does not rest)
   std::vector<Vec3> rest_com_;
   std::vector<Quat> rest_q_;
+  std::vector<Vec3> rest_v_, rest_w_;
   std::vector<std::uint32_t> island_;
   std::vector<std::uint32_t> parent_;  // union-find scratch
   std::vector<double> island_slow_;    // scratch: the island's least slow time past its window, s

@@ -298,7 +298,8 @@ class World {
   /// to the entity pose (the body starts at entity pose * def.pose; from then on the
   /// entity's pose is the body's). An unnamed body takes the entity's name. A Kinematic
   /// component drives only a kinematic body, so a static or dynamic body on an entity with
-  /// one is refused, and so is a body on an entity with a particle (both would move it).
+  /// one is refused, and so is a body on an entity with a particle (both would move it), or
+  /// a body with velocities of its own on an entity with a Kinematic (the path sets them).
   /// Errors name the entity and the field.
   RigidBodyId add_rigid_body(EntityId e, const RigidBodyDef& def);
 

@@ -271,7 +271,7 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
     ids_.reserve(n);
     for (auto* v : {&slot_, &owner_}) v->reserve(n);
     type_.reserve(n);
-    for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_, &rest_com_})
+    for (auto* v : {&com_, &v_, &w_, &force_, &torque_, &inv_inertia_, &inertia_, &com_local_, &com0_, &rest_com_, &rest_v_, &rest_w_})
       v->reserve(n);
     for (auto* v : {&q_, &principal_, &q0_, &rest_q_}) v->reserve(n);
     for (auto* v :
@@ -486,6 +486,8 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   sleep_time_.push_back(0);
   rest_com_.push_back(com_.back());
   rest_q_.push_back(q_.back());
+  rest_v_.push_back(v_.back());
+  rest_w_.push_back(w_.back());
   island_.push_back(static_cast<std::uint32_t>(type_.size() - 1));
   parent_.push_back(0);
   island_slow_.push_back(0);
@@ -507,6 +509,7 @@ void RigidBodySystem::destroy(RigidBodyId id) {
   fill(com_local_), fill(principal_), fill(name_), fill(bullet_), fill(extent_), fill(min_extent_), fill(shapes_);
   fill(com0_), fill(q0_);
   fill(asleep_), fill(sleep_time_), fill(island_), fill(parent_), fill(island_slow_), fill(rest_com_), fill(rest_q_);
+  fill(rest_v_), fill(rest_w_);
   const std::uint32_t moved = owner_[last];
   owner_[i] = moved;
   owner_.pop_back();
@@ -518,7 +521,7 @@ void RigidBodySystem::destroy(RigidBodyId id) {
   // the islands' indices moved: wake everyone (rare; the next step finds the islands again)
   for (std::size_t k = 0; k < type_.size(); ++k) {
     asleep_[k] = 0, sleep_time_[k] = 0, island_[k] = static_cast<std::uint32_t>(k);
-    rest_com_[k] = com_[k], rest_q_[k] = q_[k];
+    rest_com_[k] = com_[k], rest_q_[k] = q_[k], rest_v_[k] = v_[k], rest_w_[k] = w_[k];
   }
 }
 
@@ -1204,7 +1207,7 @@ void RigidBodySystem::update_sleep(double dt) {
     for (std::size_t i = 0; i < n; ++i) {
       if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
       sleep_time_[i] = 0;
-      rest_com_[i] = com_[i], rest_q_[i] = q_[i];
+      rest_com_[i] = com_[i], rest_q_[i] = q_[i], rest_v_[i] = v_[i], rest_w_[i] = w_[i];
     }
     profile_.islands = clock.seconds();
     return;
@@ -1257,6 +1260,36 @@ void RigidBodySystem::update_sleep(double dt) {
   const double far = settings_.sleep_linear * (dt / profile_.substeps) * 0x1p52;
   const double slow_v = settings_.sleep_linear * settings_.sleep_linear;
   const double slow_w = settings_.sleep_angular * settings_.sleep_angular;
+  // A body speeding up is not at rest, though its window holds it: from rest under an
+  // acceleration a it moves a W^2 / 2 over a window W, within the reach sleep_linear * W
+  // while a <= 2 sleep_linear / W (0.2 m/s^2 at the defaults), and a box on a slope half a
+  // degree past its friction angle, or tipping slowly past its critical one, fell asleep
+  // after 1 cm and never woke. Against the velocities the window began with (v0, w0), a
+  // steady acceleration shows as its excess motion e = d - v0 t, t the window's age, and the
+  // change of velocity dv = v - v0 = a t with dv . e = a^2 t^3 / 2 = 2 |e|^2 / t (the steps'
+  // sums: 2 t / (t + dt) of it); a body that settles or coasts has dv . e <= |e|^2 / t (1 when
+  // dv came at the window's start) and one rocking about a pose only at moments. So a body
+  // whose speed grew (|v| > |v0|), by more than a quarter of the tolerance (below that its
+  // solver's noise), with dv . e >= 1.5 |e|^2 / t, is speeding up and does not fall asleep in
+  // the step; the same for the turn (e the turn since the window began less w0 t). Its window
+  // goes on: a body rocking about a pose still rests at a step it is not speeding up, and one
+  // sliding leaves the window's reach. The least acceleration seen is the one that changes
+  // the speed by a quarter of the tolerance over the window: sleep_linear / (4 W), 0.025
+  // m/s^2 at the defaults (0.017 rad/s^2 for the turn)
+  const double speeding_v = 0.0625 * slow_v, speeding_w = 0.0625 * slow_w;
+  auto speeding = [&](std::size_t i, const Vec3& d, double t) {
+    auto grows = [&](const Vec3& v, const Vec3& v0, const Vec3& moved, double floor) {
+      const Vec3 dv = v - v0, e = moved - v0 * t;
+      return glm::dot(dv, dv) > floor && glm::dot(v, v) > glm::dot(v0, v0) &&
+             glm::dot(dv, e) * t >= 1.5 * glm::dot(e, e);
+    };
+    if (grows(v_[i], rest_v_[i], d, speeding_v)) return true;
+    // the turn since the window began as a rotation vector, 2 sin(angle / 2) times the axis
+    // (the angle is within the window's sleep_angular * W, where that is the angle to 1e-4)
+    const Quat turn = q_[i] * glm::conjugate(rest_q_[i]);
+    const Vec3 angle = (turn.w < 0 ? -2.0 : 2.0) * Vec3(turn.x, turn.y, turn.z);
+    return grows(w_[i], rest_w_[i], angle, speeding_w);
+  };
   for (std::size_t i = 0; i < n; ++i) {
     parent_[i] = static_cast<std::uint32_t>(i);
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
@@ -1275,11 +1308,15 @@ void RigidBodySystem::update_sleep(double dt) {
     // window, a box pushed from rest by a steady force moved within the one-step window,
     // fell asleep at the step's end with its velocity zeroed, and never gathered speed
     const bool pushed = force_[i] != Vec3(0) || torque_[i] != Vec3(0);
+    island_slow_[i] = INFINITY;
     if (rests && !pushed) {
       sleep_time_[i] += dt;
+      // within reach but speeding up: its window goes on, and it does not fall asleep in
+      // this step (island_slow_, read below before its island's least is gathered there)
+      if (speeding(i, d, sleep_time_[i])) island_slow_[i] = -INFINITY;
     } else {
       sleep_time_[i] = 0;
-      rest_com_[i] = com_[i], rest_q_[i] = q_[i];
+      rest_com_[i] = com_[i], rest_q_[i] = q_[i], rest_v_[i] = v_[i], rest_w_[i] = w_[i];
     }
   }
   auto find = [&](std::uint32_t i) {
@@ -1303,12 +1340,17 @@ void RigidBodySystem::update_sleep(double dt) {
   }
   // the least slow time past its body's window of each island (its root: the island's
   // smallest index); the island sleeps when that is >= 0 (a - b >= 0 exactly when a >= b)
-  for (std::size_t i = 0; i < n; ++i) island_slow_[i] = INFINITY;
+  // (island_slow_[i] holds -infinity for a body speeding up, else infinity, until i is
+  // reached: the root is an island's smallest index, so only the entries before i have been
+  // written to)
+  for (std::size_t i = 0; i < n; ++i)
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) island_slow_[i] = INFINITY;
   for (std::size_t i = 0; i < n; ++i) {
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     const std::uint32_t r = find(static_cast<std::uint32_t>(i));
     parent_[i] = r;
-    island_slow_[r] = std::min(island_slow_[r], sleep_time_[i] - window_of(i));
+    const double slow = island_slow_[i] < 0 ? -INFINITY : sleep_time_[i] - window_of(i);
+    island_slow_[r] = std::min(island_slow_[r], slow);
   }
   // islands slow for long enough fall asleep, their members linked in a ring from the root
   // (which comes first in index order)
@@ -1332,14 +1374,14 @@ void RigidBodySystem::update_sleep(double dt) {
 void RigidBodySystem::wake_island(std::size_t i) {
   // a new rest window for the body, or for each body around its island's ring
   if (!asleep_[i]) {
-    sleep_time_[i] = 0, rest_com_[i] = com_[i], rest_q_[i] = q_[i];
+    sleep_time_[i] = 0, rest_com_[i] = com_[i], rest_q_[i] = q_[i], rest_v_[i] = v_[i], rest_w_[i] = w_[i];
     return;
   }
   std::size_t k = i;
   do {
     const std::size_t next = island_[k];
     asleep_[k] = 0, sleep_time_[k] = 0, island_[k] = static_cast<std::uint32_t>(k);
-    rest_com_[k] = com_[k], rest_q_[k] = q_[k];
+    rest_com_[k] = com_[k], rest_q_[k] = q_[k], rest_v_[k] = v_[k], rest_w_[k] = w_[k];
     k = next;
   } while (k != i);
 }

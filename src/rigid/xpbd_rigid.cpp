@@ -628,7 +628,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
           levers(c.points[j], s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
           const Vec3 dvj = *b.v + glm::cross(*b.w, rb) - *a.v - glm::cross(*a.w, ra);
           const double approach = x.approach[j];
-          const double e = approach < -threshold ? c.restitution : 0;
+          const double e = approach <= -threshold ? c.restitution : 0;
           const double target = x.normal[j] == 0 ? 0.0 : std::max(-e * approach, 0.0);  // see above
           const double m = effective_mass(a.inv_mass, b.inv_mass, ia, ib, ra, rb, c.normal);
           const double dvn = target - glm::dot(dvj, c.normal);

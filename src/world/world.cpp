@@ -559,6 +559,14 @@ RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
   if (r.kinematic != kNone && def.type != BodyType::Kinematic)
     throw Error(field_path(where, "type") + ": the entity has a Kinematic, which drives only a kinematic body, got " +
                 std::string(to_string(def.type)));
+  // nor would its own velocities: the kinematic stage sets them from the path every tick (the
+  // scene reader refuses them the same way, src/scene/read_rigid.cpp)
+  if (r.kinematic != kNone)
+    for (const auto& [field, v] : {std::pair<const char*, Vec3>{"linear_velocity", def.linear_velocity},
+                                   std::pair<const char*, Vec3>{"angular_velocity", def.angular_velocity}})
+      if (v != Vec3(0))
+        throw Error(field_path(where, field) + ": the entity has a Kinematic, and a body on a kinematic path moves as "
+                    "the path says (give the velocity in its KinematicDef), got " + format_vec3(v));
   RigidBodyDef d = def;
   d.pose = compose(r.pose, def.pose);
   d.pose.rotation = glm::normalize(d.pose.rotation);

@@ -229,6 +229,24 @@ TEST(RigidRestitution, EqualMassesSwapVelocitiesInAnElasticHeadOnCollision) {
   }
 }
 
+// The threshold is the least approach speed that bounces (ContactSettings: speeds below it
+// lose their bounce): a ball meeting a wall at exactly the threshold, 1 m/s, e = 0.5, no
+// gravity, leaves at e times it, 0.5 m/s, under every solver. XPBD tested `approach <
+// -threshold` and stopped it dead (0 m/s) where the other three bounced at `<=`. The approach
+// is -1 exactly (the ball's velocity is exact and the normal axis-aligned); the bounce is
+// checked to 1e-3, as the head-on collision above.
+TEST(RigidRestitution, ABallMeetingAWallAtExactlyTheThresholdBounces) {
+  for (const auto solver : kAll) {
+    RigidBodySystem s({.contacts = {.solver = solver, .restitution_threshold = 1, .sleep = false}});
+    s.create({.name = "wall", .type = BodyType::Static,
+              .shapes = {{.shape = ColliderShape::plane({-1, 0, 0}, -2), .material = {.restitution = 0.5, .friction = 0}}}});
+    const auto ball = s.create({.linear_velocity = {1, 0, 0},
+                                .shapes = {{.shape = ColliderShape::sphere(0.25), .material = {.restitution = 0.5, .friction = 0}}}});
+    for (int i = 0; i < 180; ++i) s.step(1.0 / 60, Vec3(0));
+    EXPECT_NEAR(s.linear_velocity(ball).x, -0.5, 1e-3) << to_string(solver);
+  }
+}
+
 // Slender bodies bouncing on a static ground (docs/rigid-bodies.md, "Thin rods that bounce"):
 // a collision with a body that does not move cannot raise a body's mechanical energy
 // (kinetic + m g y, the ground at y = 0). A body dropped from rest with its lowest point 0.5 m
@@ -2613,6 +2631,78 @@ TEST(RigidSleep, ASteadyForceFromRestIsNotLostToSleep) {
   // left alone, they coast at well above the tolerances and stay awake
   s.step(dt, kGravity);
   EXPECT_TRUE(s.awake(box) && s.awake(ball));
+}
+
+// A body speeding up is not at rest (RigidBodySystem::update_sleep). A 0.2 m cube on a plane
+// half a degree steeper than atan(mu) slides from rest at a = g (sin theta - mu cos theta),
+// 0.087 m/s^2 at mu 0.2 and 0.11 at 0.8: it moved a t^2 / 2 = 1.2 cm over the 0.5 s window,
+// within the window's reach (sleep_linear x time_to_sleep, 2.5 cm), fell asleep at 0.54 s and
+// never woke (at 3 s it had covered 3.2-3.8% of a t^2 / 2) under every solver. Now it never
+// falls asleep, so with sleeping on it takes the path it takes with sleeping off to the bit,
+// and that path is the closed form's: symplectic Euler's velocity is exact under a constant
+// force once the contact has settled (0.5 s; the soft step's and TGS's first step leaves it
+// 1.6e-3-8.1e-3 m/s ahead, a constant), so the acceleration from the velocities at 0.5 and
+// 3 s is a to 1e-3 (the incline tests above; measured: 5e-6), and the distance between them
+// is v(0.5) T + a T^2 / 2 plus the integrator's lead a T h / 2, h the step or the substep
+// (at most dt), to that 1e-3 of a T^2 / 2.
+TEST(RigidSleep, ABoxSlidingSlowlyFromRestDoesNotFallAsleep) {
+  const double dt = 1.0 / 60, T = 2.5;
+  for (const auto solver : kAll)
+  for (const double mu : {0.2, 0.8}) {
+    const double theta = std::atan(mu) + deg(0.5);
+    const double a = kG * (std::sin(theta) - mu * std::cos(theta));
+    Incline on(theta, mu, solver, Vec3(0.1)), off(theta, mu, solver, Vec3(0.1));
+    off.s.settings().sleep = false;
+    const std::string what = std::string(to_string(solver)) + " mu " + std::to_string(mu);
+    auto speed = [&] { return glm::dot(on.s.linear_velocity(on.box), on.down); };
+    double v0 = 0, x0 = 0;
+    for (int i = 1; i <= 180; ++i) {
+      on.s.step(dt, kGravity), off.s.step(dt, kGravity);
+      ASSERT_EQ(on.s.hash(), off.s.hash()) << what << " at step " << i << (on.s.awake(on.box) ? "" : ", asleep");
+      if (i == 30) v0 = speed(), x0 = on.along();
+    }
+    EXPECT_TRUE(on.s.awake(on.box)) << what;
+    EXPECT_NEAR((speed() - v0) / T, a, 1e-3 * a) << what;
+    const double free = v0 * T + a * T * T / 2, moved = on.along() - x0;
+    EXPECT_GE(moved, free - 1e-3 * a * T * T / 2) << what;
+    EXPECT_LE(moved, free + a * T * dt / 2 + 1e-3 * a * T * T / 2) << what;
+  }
+}
+
+// The same for the turn: a box of width w and height h on a high-friction slope (mu 1.5) a
+// quarter and half a degree past its critical angle atan(w / h) tips from rest about its lower
+// edge as an inverted pendulum, I phi'' = m g r sin(delta + phi) (r the half diagonal, I =
+// 4/3 m r^2 about the edge), turning by delta (cosh(lambda t) - 1) at first, lambda^2 = 3 g / (4 r):
+// about 1 degree over the first 0.5 s, within the window's turn (sleep_angular x
+// time_to_sleep, 1 degree). XPBD's box with sleeping on still stood at 27.2 degrees after 30 s
+// (it tips at 26.6). With sleeping on it takes the path it takes with sleeping off to the bit
+// and tips past 45 degrees; the closed form's time to 45 degrees, from the pendulum's energy,
+// is 1.63 s at a quarter degree and 1.44 s at a half (the solvers: 1.53-1.85 s and 1.40-1.55 s,
+// XPBD the slowest), checked by 3 s as the test of the tipping above (past 45 degrees it lands
+// on its side and may rest there).
+TEST(RigidSleep, ABoxTippingSlowlyFromRestDoesNotFallAsleep) {
+  const double w = 0.5, h = 1.0, critical = std::atan(w / h);
+  for (const auto solver : kAll)
+  for (const double offset : {deg(0.25), deg(0.5)}) {
+    const double theta = critical + offset;
+    const Vec3 n{-std::sin(theta), std::cos(theta), 0};
+    const std::string what = std::string(to_string(solver)) + " at " + std::to_string(theta * 180 / pba::kPi);
+    RigidBodySystem on(with(solver)), off(with(solver));
+    off.settings().sleep = false;
+    pba::RigidBodyId box;
+    for (RigidBodySystem* s : {&on, &off}) {
+      ground(*s, 1.5, 0, theta);
+      box = s->create({.pose = {0.5 * h * n, glm::angleAxis(theta, Vec3(0, 0, 1))},
+                       .shapes = {box_shape({w / 2, h / 2, 0.25}, 1.5)}});
+    }
+    // (until it is past 45 degrees: it then lands on its side and may rest there)
+    auto tilt = [&] { return std::acos(std::clamp(glm::dot(on.pose(box).rotation * Vec3(0, 1, 0), n), -1.0, 1.0)); };
+    for (int i = 1; i <= 180 && tilt() <= deg(45); ++i) {
+      on.step(1.0 / 60, kGravity), off.step(1.0 / 60, kGravity);
+      ASSERT_EQ(on.hash(), off.hash()) << what << " at step " << i << (on.awake(box) ? "" : ", asleep");
+    }
+    EXPECT_GT(tilt(), deg(45)) << what;
+  }
 }
 
 }  // namespace
