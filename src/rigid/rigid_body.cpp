@@ -291,11 +291,15 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
     for (auto& list : contacts_->moving) list.reserve(n);
     for (auto& list : contacts_->coasting) list.reserve(n);
     contacts_->drifting.reserve(n);
+    // the spare velocity arrays finish_velocities swaps with v_ and w_ (reserved in the first
+    // step, they asked for 48 B a body of capacity there, a bare std::bad_alloc from step())
+    contacts_->start_v.reserve(n), contacts_->start_w.reserve(n);
     name_.reserve(n);
     bullet_.reserve(n);
     shapes_.reserve(n);
   } catch (const std::bad_alloc&) {
-    // the largest capacity, 2^26 bodies, reserves some 36 GB of address space: where the
+    // the largest capacity, 2^26 bodies, reserves some 38 GiB of address space (the process's
+    // VmSize 38920 MiB after construction and after a step, 2026-12-07: 608 B a body): where the
     // memory (or a limit on it) cannot give that, say which value asked for it
     throw Error("RigidSystemDef.capacity: cannot reserve room for " + std::to_string(n) +
                 " bodies: out of memory; give a smaller capacity (the arrays grow "
