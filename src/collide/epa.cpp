@@ -3,7 +3,7 @@
 // final tetrahedron, which holds the origin, the face of the polytope nearest the origin
 // is replaced by the support point of A - B along its normal until the support point
 // lies on that face. For polytope cores the Minkowski difference has finitely many faces,
-// so the loop ends on one of them and the depth is exact up to kEpaTolerance (or 1e-13 of
+// so the loop ends on one of them and the depth is exact up to kEpaTolerance (or 1e-15 of
 // the shapes' world coordinates, where that is more: their rounding).
 #include <algorithm>
 #include <cmath>
@@ -88,9 +88,9 @@ double off_hull(const std::array<SimplexVertex, 4>& s, int n, const Vec3& w) {
 
 // The rounding scale of the points of A - B (m): the largest coordinate of the world support
 // points they are differences of (a world position rounds to about 1e-16 of itself, and so do
-// the differences, however small). EPA's tolerances grow with it beyond 1 km, below which they
-// are the fixed ones: at 1e12 m a deep capsule-box pair's gain never fell below 1e-10 m, the
-// polytope filled with rounding-level slivers and the pair came out as no contact.
+// the differences, however small). EPA's tolerances grow with it beyond 100 km, below which
+// they are the fixed ones: at 1e12 m a deep capsule-box pair's gain never fell below 1e-10 m,
+// the polytope filled with rounding-level slivers and the pair came out as no contact.
 double rounding_scale(const std::array<SimplexVertex, 4>& s, int n) {
   double big = 0;
   for (int i = 0; i < n; ++i) {
@@ -162,10 +162,12 @@ PenetrationResult narrow::epa_from_gjk(const GjkStepper& g) {
   std::array<SimplexVertex, 4> s{};
   int n = int(g.simplex().size());
   for (int i = 0; i < n; ++i) s[std::size_t(i)] = g.simplex()[std::size_t(i)];
-  // the tolerances: 1e-9 m off the hull, kEpaTolerance of gain, or 1e-12 and 1e-13 of the
-  // rounding scale where that is more (the same as ever up to 1 km)
+  // the tolerances: 1e-9 m off the hull, kEpaTolerance of gain, or 1e-14 and 1e-15 of the
+  // rounding scale where that is more (the same as ever up to 100 km). Some 45 and 4.5 ulps
+  // of the scale: enough for the rounding, and no looser (1e-12 and 1e-13 ended a 1 cm pair
+  // at 1e10 m with its depth 0.15 of its size off and its normal flipped)
   const double scale = rounding_scale(s, n);
-  const double off = std::max(1e-9, 1e-12 * scale), tolerance = std::max(kEpaTolerance, 1e-13 * scale);
+  const double off = std::max(1e-9, 1e-14 * scale), tolerance = std::max(kEpaTolerance, 1e-15 * scale);
   if (!complete_tetrahedron(a, b, s, n, off)) {
     // touching cores with a flat difference: zero depth along any direction
     Vec3 ca, cb;

@@ -1797,8 +1797,9 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
   } else {
     // (into the scratch, not zeroed first: keep reads only its first `count` points) (without
     // collide()'s input checks: the shapes were checked when their bodies were made, a plane's
-    // normal unit; the poses are finite by set_pose's checks and check_finite after each step,
-    // their rotations unit as body_pose and shape_frame normalise them; the reach is finite)
+    // normal unit; the shapes' frames within a float's range, by create's and set_pose's checks
+    // of each (pose + turned local offset) and check_finite's after each step, their rotations
+    // unit as body_pose and shape_frame normalise them; the reach is finite)
     narrow::collide_unchecked_into(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape,
                                    shape_pose(s, p.proxy_b, b, p.shape_b), ns, &c.narrow, pair_manifold);
     if (pair_manifold.count > 0) keep(pair_manifold, false);

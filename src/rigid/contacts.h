@@ -322,6 +322,10 @@ struct RigidContacts {
   // the least smallest half size of any body created (m; not raised when one is destroyed):
   // whether some pair may take less than the settings' slop (pair_slop)
   double thinnest = std::numeric_limits<double>::infinity();
+  // the farthest any body's shape frame lies from its centre of mass (m; of every body created,
+  // not lowered when one is destroyed): check_finite holds the centres within a float's range
+  // less this, so every shape's frame is within it
+  double frame_reach = 0;
   /// The linear slop (m) of the pair of bodies a, b (dense indices): pair_slop() of the
   /// thinner when some body may be small enough to take less (`thinnest`), else the setting.
   double slop_of(const RigidBodySystem& s, std::uint32_t a, std::uint32_t b) const {
@@ -951,6 +955,9 @@ struct RigidContacts {
   /// dense body i's centre (which 0, m), velocity (1, m/s), angular velocity (2, rad/s) or
   /// frame (3, the quaternion's four numbers), then runs check_finite (which throws naming the body).
   static void poison_and_check(RigidBodySystem& s, int which, std::size_t i, int component, double value);
+  /// Whether dense body i's centre and every one of its shapes' frames fit a float (the
+  /// colliders' range; check_finite's and fail's test, one body at a time).
+  static bool in_float_range(const RigidBodySystem& s, std::size_t i);
 };
 
 }  // namespace pba::detail

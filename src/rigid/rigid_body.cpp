@@ -227,11 +227,12 @@ void RigidBodyDef::validate(std::string_view where) const {
     const RigidShapeDef& d = shapes[k];
     const std::string w = field_path(where, "shapes[" + std::to_string(k) + "]");
     d.shape.validate(field_path(w, "shape"));
-    // the sizes too are the colliders' (a float's): a static plane's offset of 1e39 m or a
-    // capsule 1e300 m long was taken, and the first contact made the other body's NaN (a
-    // dynamic body's shapes that large make a mass or inertia outside a float's, which the
-    // mass check refuses with the hint to scale the shapes)
-    if (type != BodyType::Dynamic) {
+    // the sizes too are the colliders' (a float's), whatever the body's type: a static plane's
+    // offset of 1e39 m or a capsule 1e300 m long was taken, and the first contact made the
+    // other body's NaN; a dynamic box that long with a given mass (no mass from the shapes to
+    // overflow) was taken, and its first step stopped with the narrow phase's message, which
+    // names no body (a capsule's stepped on without a word)
+    {
       const std::string ws = field_path(w, "shape");
       switch (d.shape.type) {
         case ShapeType::Plane: require_float(d.shape.offset, field_path(ws, "offset")); break;
@@ -245,6 +246,14 @@ void RigidBodyDef::validate(std::string_view where) const {
       }
     }
     require_float(d.local.position, field_path(w, "local.position"));
+    // and so is the shape's frame in the world: the body's pose plus its turned local offset
+    // (3e38 + 1e38 m was taken, and the first contact stopped with the narrow phase's message)
+    const Vec3 placed = pose.position + pose.rotation * d.local.position;
+    if (!fits_float(placed))
+      require_float_sum(placed,
+                        "pose.position " + format_vec3(pose.position) + " + pose.rotation * local.position " +
+                            format_vec3(pose.rotation * d.local.position),
+                        w);
     require_unit_quat(d.local.rotation, field_path(w, "local.rotation"));
     require_positive(d.density, field_path(w, "density"));
     require_in_range(d.material.restitution, 0, 1, field_path(w, "material.restitution"));
@@ -282,11 +291,15 @@ RigidBodySystem::RigidBodySystem(const RigidSystemDef& def) : contacts_(std::mak
     for (auto& list : contacts_->moving) list.reserve(n);
     for (auto& list : contacts_->coasting) list.reserve(n);
     contacts_->drifting.reserve(n);
+    // the spare velocity arrays finish_velocities swaps with v_ and w_ (reserved in the first
+    // step, they asked for 48 B a body of capacity there, a bare std::bad_alloc from step())
+    contacts_->start_v.reserve(n), contacts_->start_w.reserve(n);
     name_.reserve(n);
     bullet_.reserve(n);
     shapes_.reserve(n);
   } catch (const std::bad_alloc&) {
-    // the largest capacity, 2^26 bodies, reserves some 36 GB of address space: where the
+    // the largest capacity, 2^26 bodies, reserves some 38 GiB of address space (the process's
+    // VmSize 38920 MiB after construction and after a step, 2026-12-07: 608 B a body): where the
     // memory (or a limit on it) cannot give that, say which value asked for it
     throw Error("RigidSystemDef.capacity: cannot reserve room for " + std::to_string(n) +
                 " bodies: out of memory; give a smaller capacity (the arrays grow "
@@ -481,6 +494,8 @@ RigidBodyId RigidBodySystem::create(const RigidBodyDef& def, std::string_view wh
   min_extent_.push_back(thin);
   detail::RigidContacts& state = contact_state(contacts_);
   state.thinnest = std::min(state.thinnest, thin);
+  for (const RigidShapeDef& d : shapes)
+    state.frame_reach = std::max(state.frame_reach, glm::length(d.local.position - com_local));
   shapes_.push_back(std::move(shapes));
   asleep_.push_back(0);
   sleep_time_.push_back(0);
@@ -672,6 +687,16 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   // as RigidBodyDef::validate
   if (!fits_float(pose.position)) require_float(pose.position, describe(i) + " set_pose position");
   if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
+  for (std::size_t k = 0; k < shapes_[i].size(); ++k) {
+    // each shape's frame in the world too (as RigidBodyDef::validate)
+    const Vec3& local = shapes_[i][k].local.position;
+    const Vec3 placed = pose.position + pose.rotation * local;
+    if (!fits_float(placed))
+      require_float_sum(placed,
+                        "position " + format_vec3(pose.position) + " + rotation * shapes[" + std::to_string(k) +
+                            "].local.position " + format_vec3(pose.rotation * local),
+                        describe(i) + " set_pose");
+  }
   // what rested on the body wakes: nothing else would (the ground lowered under a sleeping
   // stack left it floating; a box asleep on an awake box teleported away hung in the air, as
   // each slept in its own island). A static or kinematic body wakes the sleeping bodies its
@@ -1127,8 +1152,30 @@ typedef double v4d_sum __attribute__((vector_size(32)));
   const v4d_sum all = (acc[0] + acc[1]) + (acc[2] + acc[3]);
   return (all[0] + all[1]) + (all[2] + all[3]) + rest == 0;
 }
+typedef long long v4l_mask __attribute__((vector_size(32)));
+
+// all_within_wide's test: -limit <= x <= limit as lane masks and-ed in four groups (a NaN
+// fails both compares), the last count % 16 one by one
+[[gnu::always_inline]] inline bool all_within_of(const double* p, std::size_t count, double limit) {
+  v4l_mask acc[4] = {{-1, -1, -1, -1}, {-1, -1, -1, -1}, {-1, -1, -1, -1}, {-1, -1, -1, -1}};
+  const v4d_sum hi = {limit, limit, limit, limit}, lo = -hi;
+  std::size_t i = 0;
+  for (; i + 16 <= count; i += 16)
+    for (int k = 0; k < 4; ++k) {
+      v4d_sum x;
+      std::memcpy(&x, p + i + 4 * k, sizeof x);
+      acc[k] &= (x <= hi) & (x >= lo);
+    }
+  bool ok = true;
+  for (; i < count; ++i) ok &= std::abs(p[i]) <= limit;
+  const v4l_mask all = (acc[0] & acc[1]) & (acc[2] & acc[3]);
+  return ok & ((all[0] & all[1] & all[2] & all[3]) == -1);
+}
 #if defined(__GNUC__) && defined(__x86_64__)  // (PBA_RIGID_HAVE_X86 of contact_wide.h)
 [[gnu::target("avx2")]] bool all_finite_avx2(const double* p, std::size_t count) { return all_finite_of(p, count); }
+[[gnu::target("avx2")]] bool all_within_avx2(const double* p, std::size_t count, double limit) {
+  return all_within_of(p, count, limit);
+}
 #endif
 
 }  // namespace
@@ -1139,6 +1186,15 @@ bool all_finite_wide(SimdPath path, const double* p, std::size_t count) {
 #else
   (void)path;  // a wide path is never chosen here (best_simd_path)
   return all_finite_of(p, count);
+#endif
+}
+
+bool all_within_wide(SimdPath path, const double* p, std::size_t count, double limit) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  return path == SimdPath::Scalar ? all_within_of(p, count, limit) : all_within_avx2(p, count, limit);
+#else
+  (void)path;
+  return all_within_of(p, count, limit);
 #endif
 }
 
@@ -1156,12 +1212,28 @@ void RigidBodySystem::check_finite() {
   static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double));
   const detail::SimdPath path = contacts_ ? contacts_->simd : detail::SimdPath::Scalar;
   auto all_finite = [&](const double* p, std::size_t count) { return detail::all_finite_wide(path, p, count); };
-  if (n == 0 || (all_finite(&com_[0].x, 3 * n) && all_finite(&v_[0].x, 3 * n) &&
+  // the centres within the float range less the farthest shape frame from any centre (the
+  // colliders' range, which the narrow phase holds every shape's frame to: a body a step
+  // carried past it went on, and two balls out there passed through each other), finite
+  // too by the same compares; beyond that bound, each body's frames one by one
+  const double limit =
+      static_cast<double>(std::numeric_limits<float>::max()) - (contacts_ ? contacts_->frame_reach : 0.0);
+  if (n == 0 || (detail::all_within_wide(path, &com_[0].x, 3 * n, limit) && all_finite(&v_[0].x, 3 * n) &&
                  all_finite(&w_[0].x, 3 * n) &&
                  all_finite(reinterpret_cast<const double*>(q_.data()), 4 * n)))
     return;
   for (std::size_t i = 0; i < n; ++i)
     if (!(is_finite(com_[i]) && is_finite(v_[i]) && is_finite(w_[i]) && finite_quat(q_[i]))) fail(i);
+  for (std::size_t i = 0; i < n; ++i)
+    if (!detail::RigidContacts::in_float_range(*this, i)) fail(i);
+}
+
+bool detail::RigidContacts::in_float_range(const RigidBodySystem& s, std::size_t i) {
+  if (!fits_float(s.com_[i])) return false;
+  const Pose body = s.body_pose(i);
+  for (const RigidShapeDef& d : s.shapes_[i])
+    if (!fits_float(detail::shape_frame(body, d.local).position)) return false;
+  return true;
 }
 
 void detail::RigidContacts::poison_and_check(RigidBodySystem& s, int which, std::size_t i, int component,
@@ -1179,7 +1251,11 @@ void RigidBodySystem::fail(std::size_t i) {
   const bool finite = is_finite(com_[i]) && is_finite(v_[i]) && is_finite(w_[i]) && finite_quat(q_[i]);
   failed_ = id_at(i);
   failure_ = describe(i) +
-             (finite ? " went faster than kMaxRigidSpeed (" + format_value(kMaxRigidSpeed) +
+             (finite && !detail::RigidContacts::in_float_range(*this, i)
+                  ? " left the float range (a position's |component| <= " +
+                        format_value(std::numeric_limits<float>::max()) +
+                        " m, the colliders' range, for its centre and every shape's frame)"
+              : finite ? " went faster than kMaxRigidSpeed (" + format_value(kMaxRigidSpeed) +
                            " m/s or rad/s, the contacts' float rows' limit: a force or torque, the gravity "
                            "times the body's gravity_scale, or the time step too large)"
                      : std::string(" became non-finite")) +

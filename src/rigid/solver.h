@@ -331,6 +331,10 @@ void scatter_free_motion_wide(SimdPath path, const std::uint32_t* bodies, std::s
 /// in lanes (+0 for every finite x, NaN once one is not), on AVX2 unless `path` is Scalar
 /// (RigidBodySystem::check_finite's test of the bodies' centres, velocities and frames).
 bool all_finite_wide(SimdPath path, const double* p, std::size_t count);
+/// Whether each of the `count` doubles from `p` has |x| <= `limit` (false at a NaN): two
+/// compares a lane, on AVX2 unless `path` is Scalar (RigidBodySystem::check_finite's test of
+/// the bodies' centres against the float range).
+bool all_within_wide(SimdPath path, const double* p, std::size_t count, double limit);
 /// refresh_inertia's test over a kind's free motion lanes (not round bodies; the kind's first
 /// block at `lanes`), several bodies at a time where `path` has a kernel for it (AVX2): the
 /// positions j (ascending) of the bodies bodies[j] whose frame in the lanes q is turned from

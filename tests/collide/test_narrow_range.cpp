@@ -82,8 +82,12 @@ bool finite(const Manifold& m) {
 
 // Every pair type (sphere, capsule, box, hull, plane; a mesh as B) at three overlapping poses,
 // by SAT and by GJK/EPA, scaled by s from 1e-6 to 1e37 (positions and sizes together, and the
-// margin): the manifold is the scale-1 one times s, to 1e-6 of the size (exact but for
-// rounding, which scales too). Until 2026-12-07 EPA's fixed 1e-10 m tolerances failed from
+// margin): the manifold is the scale-1 one times s, exact but for rounding, which scales too.
+// The manifold is some tens of roundings of coordinates of about the shapes' size (each half
+// an ulp of it, 2^-53 of the size), grown by SAT's and EPA's cross products and clipping; the
+// worst measured is 54 ulps of the size (1.2e-14, a hull-sphere pair); allowed are 512 ulps
+// (2^-43 = 1.1e-13 of the size), so a rounding-level change passes and a tolerance-level
+// one fails. Until 2026-12-07 EPA's fixed 1e-10 m tolerances failed from
 // 1e9 m: a deep capsule-box pair's depth was 0.2 (of 0.42) at 1e9 and it had no contact at
 // 1e12; a box-hull pair's points were 0.9 sizes off at 1e20. (Below 1 m the SAT of two boxes or
 // hulls may choose another face: its hysteresis, faces before edges, has an absolute 2.5 mm
@@ -96,6 +100,7 @@ TEST(NarrowRange, EveryPairScalesExactlyOverTheRange) {
   const Pose pa{Vec3(0.05, -0.02, 0.4), axis_angle(Vec3(0.2, 0.1, 1), 0.4)};
   const Shapes one = make_shapes(1);
   const double scales[] = {1e-6, 1e-3, 1e3, 1e6, 1e9, 1e12, 1e15, 1e20, 1e25, 1e30, 1e37};
+  const double tolerance = std::ldexp(1.0, -43);  // 512 ulps of the scale-1 size
   int fails = 0;
   for (double s : scales) {
     const Shapes big = make_shapes(s);
@@ -129,7 +134,7 @@ TEST(NarrowRange, EveryPairScalesExactlyOverTheRange) {
                 worst = std::max(worst, std::abs(m1[q].points[c].depth - ms[q].points[c].depth / s));
               }
             }
-            if (!ok || worst > 1e-6) {
+            if (!ok || worst > tolerance) {
               ++fails;
               std::printf("%s-%s %s s=%g k=%zu: manifolds %zu/%zu counts %d/%d finite %d worst %g\n", kNames[i],
                           kNames[j], method == ConvexMethod::Sat ? "sat" : "gjk", s, k, m1.size(), ms.size(),
@@ -139,6 +144,51 @@ TEST(NarrowRange, EveryPairScalesExactlyOverTheRange) {
           }
       }
   }
+  EXPECT_EQ(fails, 0);
+}
+
+// Small shapes far out: 1 cm boxes, capsules and hulls by GJK/EPA at x0 = 1e8 .. 3e10 m, each
+// pair at 20 poses, against the same pair at the origin. EPA stops within its tolerance,
+// 1e-15 of the coordinates (4.5-9 ulps of x0), of the Minkowski difference's boundary, and the
+// world points it works on round to half an ulp of x0: the depth is off by some ulps of x0
+// and the normal, the tilt of a face spanning the shapes' size h, by some ulps of x0 over h.
+// Allowed are 32 ulps of x0 in m for the depth and over h for the normal (measured worst: 1.2
+// and 8 ulps). Until 2026-12-07 EPA's tolerances were 1e-12 and 1e-13 of the coordinates (45
+// and 450 ulps): at 1e9 m the depth was off by 250 ulps and at 1e10 m a normal flipped.
+TEST(NarrowRange, SmallShapesFarOutKeepTheirAccuracy) {
+  const double h = 0.005;  // half size (m)
+  const std::vector<Vec3> hp = hull_points(h);
+  const ColliderShape shapes[3] = {ColliderShape::box(Vec3(1, 0.8, 0.6) * h), ColliderShape::capsule(0.6 * h, 0.8 * h),
+                                   ColliderShape::convex(ConvexHull::build(hp, "small hull"))};
+  const NarrowPhaseSettings st{.speculative_margin = 0, .method = ConvexMethod::GjkEpa};
+  int fails = 0, pairs = 0;
+  for (double x0 : {1e8, 1e9, 1e10, 3e10}) {
+    const double ulp = std::ldexp(1.0, std::ilogb(x0) - 52);  // of x0 (m)
+    double worst_depth = 0, worst_normal = 0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        for (int k = 0; k < 20; ++k) {
+          const Quat r0 = axis_angle(Vec3(0.2, 0.1 + k, 1), 0.3 * k), r1 = axis_angle(Vec3(1, 2, 3 - k), 0.7 + 0.1 * k);
+          const Vec3 off = Vec3(0.3, 0.2, 0.9 + 0.02 * k) * h;
+          const Manifold m0 = collide(shapes[i], {Vec3(0.0), r0}, shapes[j], {off, r1}, st);
+          const Manifold m1 = collide(shapes[i], {Vec3(x0, 0, 0), r0}, shapes[j], {Vec3(x0, 0, 0) + off, r1}, st);
+          if (m0.count == 0) continue;
+          ++pairs;
+          if (m1.count == 0 || !finite(m1)) {
+            std::printf("x0=%g %d-%d k=%d: no contact far out\n", x0, i, j, k);
+            ++fails;
+            continue;
+          }
+          double d0 = 0, d1 = 0;
+          for (int c = 0; c < m0.count; ++c) d0 = std::max(d0, m0.points[c].depth);
+          for (int c = 0; c < m1.count; ++c) d1 = std::max(d1, m1.points[c].depth);
+          worst_depth = std::max(worst_depth, std::abs(d1 - d0) / ulp);
+          worst_normal = std::max(worst_normal, glm::length(m1.normal - m0.normal) * h / ulp);
+        }
+    std::printf("x0=%g: worst depth error %.3g ulps, normal error %.3g ulps/h\n", x0, worst_depth, worst_normal);
+    fails += worst_depth > 32 || worst_normal > 32;
+  }
+  EXPECT_GT(pairs, 100);  // most poses overlap
   EXPECT_EQ(fails, 0);
 }
 

@@ -706,14 +706,16 @@ TEST(RigidBadInput, MassesAndMomentsOutsideTheFloatRangeAreRefusedByName) {
 TEST(RigidBadInput, ShapesTooSmallOrLargeForAMassSayWhatToChange) {
   RigidBodySystem s;
   const std::string hint = "the shapes' sizes and densities make the body too small or light, or too large or heavy";
-  for (const pba::ColliderShape& shape :
-       {pba::ColliderShape::sphere(1e-300), pba::ColliderShape::box({1e300, 1, 1}), pba::ColliderShape::sphere(1e300),
-        pba::ColliderShape::capsule(1e300, 0.2)}) {
+  for (const pba::ColliderShape& shape : {pba::ColliderShape::sphere(1e-300), pba::ColliderShape::box({1e-300, 1, 1})}) {
     const std::string m = error_of([&] { s.create({.name = "b", .shapes = {{.shape = shape}}}); });
     const std::string what = std::string(to_string(shape.type)) + ": " + m;
     EXPECT_NE(m.find("'b'.mass (from the shapes)."), std::string::npos) << what;
     EXPECT_NE(m.find(hint), std::string::npos) << what;
   }
+  // (sizes past a float's, 1e300 m, are refused before their mass by the colliders' range,
+  // naming the size: RigidBadInput.DynamicShapeSizesOutsideTheFloatRangeAreRefusedByName)
+  EXPECT_EQ(error_of([&] { s.create({.name = "b", .shapes = {{.shape = pba::ColliderShape::capsule(1e300, 0.2)}}}); }),
+            "RigidBodyDef 'b'.shapes[0].shape.half_height: must fit a float (|v| <= 3.4028234663852886e+38), got 1e+300");
   // a density that overflows the mass gets the hint too
   const std::string m = error_of(
       [&] { s.create({.name = "b", .shapes = {{.shape = pba::ColliderShape::sphere(1), .density = 1e308}}}); });
@@ -806,6 +808,66 @@ TEST(RigidBadInput, StaticShapeSizesOutsideTheFloatRangeAreRefusedByName) {
   const auto ball = s.create({.name = "ball", .pose = {{0, 0.5, 0}}, .shapes = {{.shape = pba::ColliderShape::sphere(0.5)}}});
   for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kG);
   EXPECT_NEAR(s.pose(ball).position.y, 0.5, 1e-3);  // rests on the slab's top face at y = 0
+}
+
+// A dynamic body's shape sizes were left to its mass to bound ("a dynamic body's such shapes
+// are refused by their mass"), which a given mass does not do: a box of half extents
+// (1e39, 0.5, 0.5) with `.mass = RigidMass{}` was created, and its first step stopped with the
+// narrow phase's "collide: shape_b.half_extents[0] ..." naming no body; a capsule 2e39 m long
+// stepped on without a word. Every body type's sizes are refused at create now, by name.
+TEST(RigidBadInput, DynamicShapeSizesOutsideTheFloatRangeAreRefusedByName) {
+  RigidBodySystem s;
+  s.create({.name = "ground", .type = BodyType::Static, .pose = {{0, -1, 0}},
+            .shapes = {{.shape = pba::ColliderShape::box({10, 1, 10})}}});
+  const std::string fit = ": must fit a float (|v| <= 3.4028234663852886e+38), got 1e+39";
+  for (const bool given : {true, false}) {
+    const std::optional<RigidMass> mass = given ? std::optional<RigidMass>(RigidMass{}) : std::nullopt;
+    EXPECT_EQ(error_of([&] {
+                s.create({.name = "rod", .pose = {{0, 0.5, 0}}, .shapes = {{.shape = pba::ColliderShape::capsule(1e39, 0.5)}},
+                          .mass = mass});
+              }),
+              "RigidBodyDef 'rod'.shapes[0].shape.half_height" + fit);
+    EXPECT_EQ(error_of([&] {
+                s.create({.name = "orb", .pose = {{0, 0.5, 0}}, .shapes = {{.shape = pba::ColliderShape::sphere(1e39)}},
+                          .mass = mass});
+              }),
+              "RigidBodyDef 'orb'.shapes[0].shape.radius" + fit);
+    const std::string box = error_of([&] {
+      s.create({.name = "beam", .pose = {{0, 0.5, 0}}, .shapes = {{.shape = pba::ColliderShape::box({1e39, 0.5, 0.5})}},
+                .mass = mass});
+    });
+    EXPECT_EQ(box.rfind("RigidBodyDef 'beam'.shapes[0].shape.half_extents: must fit a float", 0), 0u) << box;
+  }
+  EXPECT_EQ(s.size(), 1u);
+  // the largest float is in the range: a beam that long with a given mass is taken
+  s.create({.name = "beam", .pose = {{0, 0.5, 0}}, .shapes = {{.shape = pba::ColliderShape::box({3.4e38, 0.5, 0.5})}},
+            .mass = RigidMass{}});
+  EXPECT_EQ(s.size(), 2u);
+}
+
+// A shape's frame in the world is its body's position plus its turned local offset: each was
+// held to a float's range, their sum not (a static box at 3e38 m + 1e38 m was created, and
+// the ball on it stopped the first step with the narrow phase's "collide: pose_a.position"
+// naming no body; a sphere pair stepped). Refused at create and set_pose, naming both terms,
+// as the World refuses an entity's component placed past it; the rotation counts.
+TEST(RigidBadInput, AShapesFrameOutsideTheFloatRangeIsRefusedAtCreateAndSetPose) {
+  RigidBodySystem s;
+  const std::vector<pba::RigidShapeDef> off{{.shape = pba::ColliderShape::plane({0, 1, 0}, 0), .local = {{1e38, 0, 0}}}};
+  EXPECT_EQ(error_of([&] { s.create({.name = "ground", .type = BodyType::Static, .pose = {{3e38, 0, 0}}, .shapes = off}); }),
+            "RigidBodyDef 'ground'.shapes[0]: pose.position (3e+38, 0, 0) + pose.rotation * local.position "
+            "(1e+38, 0, 0) = (4e+38, 0, 0) does not fit a float (|component| <= 3.4028234663852886e+38)");
+  EXPECT_EQ(s.size(), 0u);
+  // turned half a turn about y the offset points back: 2e38 m, taken (the plane's normal stays)
+  const Quat half(0, 0, 1, 0);
+  const auto ground = s.create({.name = "ground", .type = BodyType::Static, .pose = {{3e38, 0, 0}, half}, .shapes = off});
+  const auto crate = s.create({.name = "crate", .pose = {{2e38, 0.5, 0}}, .shapes = kBox});
+  for (int i = 0; i < 60; ++i) s.step(1.0 / 60, kG);
+  EXPECT_NEAR(s.pose(crate).position.y, 0.5, 1e-3);  // rests on the ground
+  EXPECT_EQ(error_of([&] { s.set_pose(ground, {{3e38, 0, 0}}); }),
+            "rigid body 0 'ground' set_pose: position (3e+38, 0, 0) + rotation * shapes[0].local.position "
+            "(1e+38, 0, 0) = (4e+38, 0, 0) does not fit a float (|component| <= 3.4028234663852886e+38)");
+  EXPECT_EQ(s.pose(ground).position, Vec3(3e38, 0, 0));  // left as it was
+  EXPECT_EQ(s.pose(ground).rotation, half);
 }
 
 // RigidMass's box and sphere took a negative or NaN mass or size and returned a negative mass or a
@@ -979,32 +1041,54 @@ TEST(RigidDivergence, AnOverflowingVelocityIsReportedNonFinite) {
   EXPECT_EQ(s.failed_body(), b);
 }
 
+namespace {
+// `test` (path, numbers, count) holds for arrays of 0 to 41 of `good` (a group of 16 lanes,
+// two, and the rest past them), on the plain path and on AVX2, and fails with any one of them
+// made any of `bad`
+template <class Test>
+void expect_every_bad_number_found(Test test, const std::vector<double>& good, const std::vector<double>& bad) {
+  using pba::detail::SimdPath;
+  std::vector<SimdPath> paths{SimdPath::Scalar};
+  if (pba::detail::best_simd_path() != SimdPath::Scalar) paths.push_back(SimdPath::Avx2);  // (x86 with AVX2)
+  for (const SimdPath path : paths)
+    for (std::size_t count = 0; count <= 41; ++count) {
+      std::vector<double> x(count);
+      for (std::size_t i = 0; i < count; ++i) x[i] = good[i % good.size()];
+      EXPECT_TRUE(test(path, x.data(), count)) << count;
+      for (std::size_t i = 0; i < count; ++i)
+        for (const double b : bad) {
+          const double was = x[i];
+          x[i] = b;
+          EXPECT_FALSE(test(path, x.data(), count)) << count << " " << i << " " << b;
+          x[i] = was;
+        }
+    }
+}
+}  // namespace
+
 // check_finite's test of the bodies' centres, velocities and frames as flat arrays: every
 // infinite or NaN number is found at every place (the lanes' groups of 16 and the rest past
 // them, on the plain path and on AVX2), and no finite one is taken for it, however large or
 // small (the step's own guards stop most non-finite states first, so the system rarely gets
 // there: the test is of the arrays' scan itself).
 TEST(RigidDivergence, TheFlatFiniteTestFindsEveryNonFiniteNumberWhereverItIs) {
-  using pba::detail::SimdPath;
   const double big = std::numeric_limits<double>::max(), tiny = std::numeric_limits<double>::denorm_min();
-  const double finite[] = {0.0, -0.0, 1.0, -2.5, big, -big, tiny, -tiny, 1e-300, 6.02e23};
-  const double bad[] = {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-                        std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::quiet_NaN()};
-  std::vector<SimdPath> paths{SimdPath::Scalar};
-  if (pba::detail::best_simd_path() != SimdPath::Scalar) paths.push_back(SimdPath::Avx2);  // (x86 with AVX2)
-  for (const SimdPath path : paths)
-    for (std::size_t count = 0; count <= 41; ++count) {
-      std::vector<double> x(count);
-      for (std::size_t i = 0; i < count; ++i) x[i] = finite[i % std::size(finite)];
-      EXPECT_TRUE(pba::detail::all_finite_wide(path, x.data(), count)) << count;
-      for (std::size_t i = 0; i < count; ++i)
-        for (const double b : bad) {
-          const double was = x[i];
-          x[i] = b;
-          EXPECT_FALSE(pba::detail::all_finite_wide(path, x.data(), count)) << count << " " << i << " " << b;
-          x[i] = was;
-        }
-    }
+  expect_every_bad_number_found(pba::detail::all_finite_wide, {0.0, -0.0, 1.0, -2.5, big, -big, tiny, -tiny, 1e-300, 6.02e23},
+                                {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                                 std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::quiet_NaN()});
+}
+
+// check_finite's range test of the centres over the same lanes: -limit <= x <= limit for every
+// number (the limit itself passes; the next double beyond it, an infinity or a NaN anywhere
+// fails).
+TEST(RigidDivergence, TheFlatRangeTestFindsEveryNumberBeyondTheLimitWhereverItIs) {
+  const double limit = 3e38, over = std::nextafter(limit, INFINITY);
+  auto within = [&](pba::detail::SimdPath path, const double* p, std::size_t count) {
+    return pba::detail::all_within_wide(path, p, count, limit);
+  };
+  expect_every_bad_number_found(within, {0.0, -0.0, 1.0, -2.5, limit, -limit, 1e-300, 6.02e23},
+                                {over, -over, 1e300, std::numeric_limits<double>::infinity(),
+                                 -std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()});
 }
 
 // check_finite's call sites: the arrays it scans (the centres, velocities and angular
@@ -1029,8 +1113,52 @@ TEST(RigidDivergence, CheckFiniteNamesTheBodyOfANonFiniteNumberInEachArray) {
         }
   RigidBodySystem s;
   for (int k = 0; k < 7; ++k) s.create({.pose = {{3.0 * k, 1, 0}}, .shapes = kBall});
-  pba::detail::RigidContacts::poison_and_check(s, 0, 6, 2, 1e308);  // large, finite: passes
+  pba::detail::RigidContacts::poison_and_check(s, 0, 6, 2, 3.4e38);  // large, in the float range: passes
   EXPECT_TRUE(s.failed_body().is_null());
+  // a centre finite but past the float range (the colliders') stops it too, naming the body
+  const std::string m = error_of([&] { pba::detail::RigidContacts::poison_and_check(s, 0, 6, 2, 1e308); });
+  EXPECT_EQ(m.rfind("rigid body 6 left the float range", 0), 0u) << m;
+}
+
+// check_finite tested finiteness only: a body a step carried past a float's range went on
+// (two balls out at 1e39 m then passed through each other without a word; boxes stopped with
+// the narrow phase's message, naming no body). Now the step stops naming the body, when its
+// centre or one of its shapes' frames has left the range; up to its edge it steps on.
+TEST(RigidDivergence, ABodyCarriedPastTheFloatRangeStopsTheSystemNamingIt) {
+  {
+    RigidBodySystem s;
+    const auto a = s.create({.name = "a", .linear_velocity = {1e17, 0, 0}, .shapes = kBall});
+    s.create({.name = "b", .pose = {{0, 3, 0}}, .linear_velocity = {1e17, 0, 0}, .shapes = kBall});
+    const std::string m = error_of([&] { s.step(1e22, Vec3(0)); });
+    EXPECT_EQ(m.rfind("rigid body 0 'a' left the float range (a position's |component| <= 3.4028234663852886e+38 m", 0),
+              0u)
+        << m;
+    EXPECT_NE(m.find("in the step to t = 1e+22 s: position (1e+39, 0, 0)"), std::string::npos) << m;
+    EXPECT_EQ(s.failed_body(), a);
+  }
+  {
+    // the centre in the range, a shape's frame 1e38 m from it not: two balls at +-1e38 m
+    // about a given centre of mass, carried from 2e38 m to 3e38 m
+    RigidBodySystem s;
+    s.create({.name = "still", .shapes = kBall});
+    const auto pair = s.create({.name = "dumbbell", .pose = {{2e38, 0, 0}}, .linear_velocity = {1e17, 0, 0},
+                                .shapes = {{.shape = pba::ColliderShape::sphere(0.5), .local = {{1e38, 0, 0}}},
+                                           {.shape = pba::ColliderShape::sphere(0.5), .local = {{-1e38, 0, 0}}}},
+                                .mass = RigidMass{}});
+    const std::string m = error_of([&] { s.step(1e21, Vec3(0)); });
+    EXPECT_EQ(m.rfind("rigid body 1 'dumbbell' left the float range", 0), 0u) << m;
+    EXPECT_NE(m.find("in the step to t = 1e+21 s: position (2.9999999999999997e+38, 0, 0)"), std::string::npos) << m;
+    EXPECT_EQ(s.failed_body(), pair);
+  }
+  {
+    // to the edge: a ball carried to 3.4e38 m steps on
+    RigidBodySystem s;
+    const auto a = s.create({.name = "a", .linear_velocity = {1e17, 0, 0}, .shapes = kBall});
+    s.step(3.4e21, Vec3(0));
+    EXPECT_EQ(s.pose(a).position.x, 3.4e38);
+    s.step(1.0 / 60, kG);
+    EXPECT_TRUE(s.failed_body().is_null());
+  }
 }
 
 // Speeds beyond kMaxRigidSpeed would overflow the contacts' float rows and poison the bodies

@@ -307,8 +307,8 @@ struct PenetrationResult {
 PenetrationResult epa_penetration(const ConvexProxy& a, const ConvexProxy& b);
 
 /// EPA stops when the support distance along the nearest face's normal exceeds the face's
-/// distance by less than this (m), or than 1e-13 of the shapes' largest world coordinate
-/// where that is more (their rounding, beyond 1 km): the depth is then within it of the exact one.
+/// distance by less than this (m), or than 1e-15 of the shapes' largest world coordinate
+/// where that is more (their rounding, beyond 100 km): the depth is then within it of the exact one.
 inline constexpr double kEpaTolerance = 1e-10;
 
 }  // namespace pba
