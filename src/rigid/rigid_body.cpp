@@ -1,6 +1,7 @@
 // Rigid bodies: definitions, mass properties, storage and free motion.
 #include "pba/rigid.h"
 
+#include "collide/query_internal.h"
 #include "contacts.h"
 
 #include <algorithm>
@@ -198,6 +199,27 @@ namespace {
 // |v| <= kMaxRigidSpeed, without building a message (false for NaN; |v|^2 overflows to inf
 // only far beyond the limit)
 bool speed_ok(const Vec3& v) { return glm::dot(v, v) <= kMaxRigidSpeed * kMaxRigidSpeed; }
+
+// The one test of a shape's frame against the float range, at create (RigidBodyDef::validate),
+// at set_pose and after each step (in_float_range): the position of the frame in the world
+// for the body frame at `body`, as shape_frame places it for the narrow phase, whose bounds
+// and contact rows hold it as floats (beyond, a step made NaN, or stopped with the narrow
+// phase's message, which names no body)
+bool frame_fits_float(const Pose& body, const RigidShapeDef& d) {
+  return fits_float(detail::shape_frame(body, d.local).position);
+}
+
+// Throws Error unless frame_fits_float for shapes[k], the shape `d`, naming `what` (the pose
+// checked, as the caller knows it) and both terms of the sum: "<what>: position (3e+38, 0, 0)
+// + rotation * shapes[0].local.position (1e+38, 0, 0) = (4e+38, 0, 0) does not fit a float
+// (|component| <= 3.4028234663852886e+38)"
+void require_frame_float(const Pose& body, const RigidShapeDef& d, std::size_t k, std::string_view what) {
+  if (frame_fits_float(body, d)) return;
+  require_float_sum(detail::shape_frame(body, d.local).position,
+                    "position " + format_vec3(body.position) + " + rotation * shapes[" + std::to_string(k) +
+                        "].local.position " + format_vec3(body.rotation * d.local.position),
+                    what);
+}
 }  // namespace
 
 void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view unit) {
@@ -226,34 +248,17 @@ void RigidBodyDef::validate(std::string_view where) const {
   for (std::size_t k = 0; k < shapes.size(); ++k) {
     const RigidShapeDef& d = shapes[k];
     const std::string w = field_path(where, "shapes[" + std::to_string(k) + "]");
-    d.shape.validate(field_path(w, "shape"));
-    // the sizes too are the colliders' (a float's), whatever the body's type: a static plane's
-    // offset of 1e39 m or a capsule 1e300 m long was taken, and the first contact made the
-    // other body's NaN; a dynamic box that long with a given mass (no mass from the shapes to
-    // overflow) was taken, and its first step stopped with the narrow phase's message, which
-    // names no body (a capsule's stepped on without a word)
-    {
-      const std::string ws = field_path(w, "shape");
-      switch (d.shape.type) {
-        case ShapeType::Plane: require_float(d.shape.offset, field_path(ws, "offset")); break;
-        case ShapeType::Sphere: require_float(d.shape.radius, field_path(ws, "radius")); break;
-        case ShapeType::Box: require_float(d.shape.half_extents, field_path(ws, "half_extents")); break;
-        case ShapeType::Capsule:
-          require_float(d.shape.radius, field_path(ws, "radius"));
-          require_float(d.shape.half_height, field_path(ws, "half_height"));
-          break;
-        default: break;  // hulls, meshes and compounds hold their points to it when built
-      }
-    }
+    // valid, and its sizes the colliders' (a float's) as the queries and compounds check
+    // them, whatever the body's type: a static plane's offset of 1e39 m or a capsule 1e300 m
+    // long was taken, and the first contact made the other body's NaN; a dynamic box that
+    // long with a given mass (no mass from the shapes to overflow) was taken, and its first
+    // step stopped with the narrow phase's message, which names no body (hulls, meshes and
+    // compounds hold their points to it when built)
+    query::check_shape(d.shape, field_path(w, "shape"));
     require_float(d.local.position, field_path(w, "local.position"));
     // and so is the shape's frame in the world: the body's pose plus its turned local offset
     // (3e38 + 1e38 m was taken, and the first contact stopped with the narrow phase's message)
-    const Vec3 placed = pose.position + pose.rotation * d.local.position;
-    if (!fits_float(placed))
-      require_float_sum(placed,
-                        "pose.position " + format_vec3(pose.position) + " + pose.rotation * local.position " +
-                            format_vec3(pose.rotation * d.local.position),
-                        w);
+    require_frame_float(pose, d, k, field_path(where, "pose"));
     require_unit_quat(d.local.rotation, field_path(w, "local.rotation"));
     require_positive(d.density, field_path(w, "density"));
     require_in_range(d.material.restitution, 0, 1, field_path(w, "material.restitution"));
@@ -687,16 +692,9 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   // as RigidBodyDef::validate
   if (!fits_float(pose.position)) require_float(pose.position, describe(i) + " set_pose position");
   if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
-  for (std::size_t k = 0; k < shapes_[i].size(); ++k) {
-    // each shape's frame in the world too (as RigidBodyDef::validate)
-    const Vec3& local = shapes_[i][k].local.position;
-    const Vec3 placed = pose.position + pose.rotation * local;
-    if (!fits_float(placed))
-      require_float_sum(placed,
-                        "position " + format_vec3(pose.position) + " + rotation * shapes[" + std::to_string(k) +
-                            "].local.position " + format_vec3(pose.rotation * local),
-                        describe(i) + " set_pose");
-  }
+  // each shape's frame in the world too (as RigidBodyDef::validate)
+  for (std::size_t k = 0; k < shapes_[i].size(); ++k)
+    if (!frame_fits_float(pose, shapes_[i][k])) require_frame_float(pose, shapes_[i][k], k, describe(i) + " set_pose");
   // what rested on the body wakes: nothing else would (the ground lowered under a sleeping
   // stack left it floating; a box asleep on an awake box teleported away hung in the air, as
   // each slept in its own island). A static or kinematic body wakes the sleeping bodies its
@@ -1232,7 +1230,7 @@ bool detail::RigidContacts::in_float_range(const RigidBodySystem& s, std::size_t
   if (!fits_float(s.com_[i])) return false;
   const Pose body = s.body_pose(i);
   for (const RigidShapeDef& d : s.shapes_[i])
-    if (!fits_float(detail::shape_frame(body, d.local).position)) return false;
+    if (!frame_fits_float(body, d)) return false;
   return true;
 }
 
