@@ -290,7 +290,10 @@ class World {
   ForcerId add_forcer(EntityId e, const Forcer& def);
   /// Makes the entity an emitter; `def.pose` is relative to the entity pose.
   EmitterId add_emitter(EntityId e, const EmitterDef& def);
-  /// Drives the entity by a path, motor or thruster, from the current time.
+  /// Drives the entity by a path, motor or thruster, from the current time. The entity's
+  /// rigid body, if it has one, must be kinematic and at rest: a static or dynamic body, or a
+  /// kinematic one with a velocity of its own (the path sets it), is refused, naming the
+  /// entity (and the velocity).
   KinematicId add_kinematic(EntityId e, const KinematicDef& def);
   /// Constrains the entity's particle to another particle entity.
   ConstraintId add_constraint(EntityId e, const ConstraintDef& def);

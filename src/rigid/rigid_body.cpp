@@ -1,6 +1,7 @@
 // Rigid bodies: definitions, mass properties, storage and free motion.
 #include "pba/rigid.h"
 
+#include "collide/query_internal.h"
 #include "contacts.h"
 
 #include <algorithm>
@@ -198,6 +199,27 @@ namespace {
 // |v| <= kMaxRigidSpeed, without building a message (false for NaN; |v|^2 overflows to inf
 // only far beyond the limit)
 bool speed_ok(const Vec3& v) { return glm::dot(v, v) <= kMaxRigidSpeed * kMaxRigidSpeed; }
+
+// The one test of a shape's frame against the float range, at create (RigidBodyDef::validate),
+// at set_pose and after each step (in_float_range): the position of the frame in the world
+// for the body frame at `body`, as shape_frame places it for the narrow phase, whose bounds
+// and contact rows hold it as floats (beyond, a step made NaN, or stopped with the narrow
+// phase's message, which names no body)
+bool frame_fits_float(const Pose& body, const RigidShapeDef& d) {
+  return fits_float(detail::shape_frame(body, d.local).position);
+}
+
+// Throws Error unless frame_fits_float for shapes[k], the shape `d`, naming `what` (the pose
+// checked, as the caller knows it) and both terms of the sum: "<what>: position (3e+38, 0, 0)
+// + rotation * shapes[0].local.position (1e+38, 0, 0) = (4e+38, 0, 0) does not fit a float
+// (|component| <= 3.4028234663852886e+38)"
+void require_frame_float(const Pose& body, const RigidShapeDef& d, std::size_t k, std::string_view what) {
+  if (frame_fits_float(body, d)) return;
+  require_float_sum(detail::shape_frame(body, d.local).position,
+                    "position " + format_vec3(body.position) + " + rotation * shapes[" + std::to_string(k) +
+                        "].local.position " + format_vec3(body.rotation * d.local.position),
+                    what);
+}
 }  // namespace
 
 void require_rigid_speed(const Vec3& v, std::string_view where, std::string_view unit) {
@@ -226,34 +248,17 @@ void RigidBodyDef::validate(std::string_view where) const {
   for (std::size_t k = 0; k < shapes.size(); ++k) {
     const RigidShapeDef& d = shapes[k];
     const std::string w = field_path(where, "shapes[" + std::to_string(k) + "]");
-    d.shape.validate(field_path(w, "shape"));
-    // the sizes too are the colliders' (a float's), whatever the body's type: a static plane's
-    // offset of 1e39 m or a capsule 1e300 m long was taken, and the first contact made the
-    // other body's NaN; a dynamic box that long with a given mass (no mass from the shapes to
-    // overflow) was taken, and its first step stopped with the narrow phase's message, which
-    // names no body (a capsule's stepped on without a word)
-    {
-      const std::string ws = field_path(w, "shape");
-      switch (d.shape.type) {
-        case ShapeType::Plane: require_float(d.shape.offset, field_path(ws, "offset")); break;
-        case ShapeType::Sphere: require_float(d.shape.radius, field_path(ws, "radius")); break;
-        case ShapeType::Box: require_float(d.shape.half_extents, field_path(ws, "half_extents")); break;
-        case ShapeType::Capsule:
-          require_float(d.shape.radius, field_path(ws, "radius"));
-          require_float(d.shape.half_height, field_path(ws, "half_height"));
-          break;
-        default: break;  // hulls, meshes and compounds hold their points to it when built
-      }
-    }
+    // valid, and its sizes the colliders' (a float's) as the queries and compounds check
+    // them, whatever the body's type: a static plane's offset of 1e39 m or a capsule 1e300 m
+    // long was taken, and the first contact made the other body's NaN; a dynamic box that
+    // long with a given mass (no mass from the shapes to overflow) was taken, and its first
+    // step stopped with the narrow phase's message, which names no body (hulls, meshes and
+    // compounds hold their points to it when built)
+    query::check_shape(d.shape, field_path(w, "shape"));
     require_float(d.local.position, field_path(w, "local.position"));
     // and so is the shape's frame in the world: the body's pose plus its turned local offset
     // (3e38 + 1e38 m was taken, and the first contact stopped with the narrow phase's message)
-    const Vec3 placed = pose.position + pose.rotation * d.local.position;
-    if (!fits_float(placed))
-      require_float_sum(placed,
-                        "pose.position " + format_vec3(pose.position) + " + pose.rotation * local.position " +
-                            format_vec3(pose.rotation * d.local.position),
-                        w);
+    require_frame_float(pose, d, k, field_path(where, "pose"));
     require_unit_quat(d.local.rotation, field_path(w, "local.rotation"));
     require_positive(d.density, field_path(w, "density"));
     require_in_range(d.material.restitution, 0, 1, field_path(w, "material.restitution"));
@@ -687,16 +692,9 @@ void RigidBodySystem::set_pose(RigidBodyId id, const Pose& pose) {
   // as RigidBodyDef::validate
   if (!fits_float(pose.position)) require_float(pose.position, describe(i) + " set_pose position");
   if (!unit_quat(pose.rotation)) require_unit_quat(pose.rotation, describe(i) + " set_pose rotation");
-  for (std::size_t k = 0; k < shapes_[i].size(); ++k) {
-    // each shape's frame in the world too (as RigidBodyDef::validate)
-    const Vec3& local = shapes_[i][k].local.position;
-    const Vec3 placed = pose.position + pose.rotation * local;
-    if (!fits_float(placed))
-      require_float_sum(placed,
-                        "position " + format_vec3(pose.position) + " + rotation * shapes[" + std::to_string(k) +
-                            "].local.position " + format_vec3(pose.rotation * local),
-                        describe(i) + " set_pose");
-  }
+  // each shape's frame in the world too (as RigidBodyDef::validate)
+  for (std::size_t k = 0; k < shapes_[i].size(); ++k)
+    if (!frame_fits_float(pose, shapes_[i][k])) require_frame_float(pose, shapes_[i][k], k, describe(i) + " set_pose");
   // what rested on the body wakes: nothing else would (the ground lowered under a sleeping
   // stack left it floating; a box asleep on an awake box teleported away hung in the air, as
   // each slept in its own island). A static or kinematic body wakes the sleeping bodies its
@@ -1232,7 +1230,7 @@ bool detail::RigidContacts::in_float_range(const RigidBodySystem& s, std::size_t
   if (!fits_float(s.com_[i])) return false;
   const Pose body = s.body_pose(i);
   for (const RigidShapeDef& d : s.shapes_[i])
-    if (!fits_float(detail::shape_frame(body, d.local).position)) return false;
+    if (!frame_fits_float(body, d)) return false;
   return true;
 }
 
@@ -1366,9 +1364,17 @@ void RigidBodySystem::update_sleep(double dt) {
     const Vec3 angle = (turn.w < 0 ? -2.0 : 2.0) * Vec3(turn.x, turn.y, turn.z);
     return grows(w_[i], rest_w_[i], angle, speeding_w);
   };
+  // the awake dynamic bodies lie in [lo, hi): the islands are gathered and put to sleep
+  // there only (at the end of the 1000 falling boxes' run most bodies sleep, and each loop
+  // over them all was about 10 instructions a body)
+  std::size_t lo = n, hi = 0;
   for (std::size_t i = 0; i < n; ++i) {
     parent_[i] = static_cast<std::uint32_t>(i);
-    if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
+    if (type_[i] != BodyType::Dynamic || asleep_[i]) {
+      island_slow_[i] = INFINITY;  // no island's: never a root's least
+      continue;
+    }
+    lo = std::min(lo, i), hi = i + 1;
     const double window = window_of(i);
     double reach = base_reach, cos_turn = base_cos_turn;
     if (window != base) {
@@ -1384,14 +1390,20 @@ void RigidBodySystem::update_sleep(double dt) {
     // window, a box pushed from rest by a steady force moved within the one-step window,
     // fell asleep at the step's end with its velocity zeroed, and never gathered speed
     const bool pushed = force_[i] != Vec3(0) || torque_[i] != Vec3(0);
-    island_slow_[i] = INFINITY;
+    // its slow time past its window (island_slow_, read below before its island's least is
+    // gathered there): the island sleeps only when each member's is >= 0
     if (rests && !pushed) {
       sleep_time_[i] += dt;
+      island_slow_[i] = sleep_time_[i] - window;
       // within reach but speeding up: its window goes on, and it does not fall asleep in
-      // this step (island_slow_, read below before its island's least is gathered there)
-      if (speeding(i, d, sleep_time_[i])) island_slow_[i] = -INFINITY;
+      // this step. Tested only for a body whose window is full: before that the island
+      // stays awake whatever the test says (the test for every resting body each step was
+      // an eighth of update_sleep's instructions on the 1000 falling boxes, a quarter under
+      // TGS, where they stay awake)
+      if (island_slow_[i] >= 0 && speeding(i, d, sleep_time_[i])) island_slow_[i] = -INFINITY;
     } else {
       sleep_time_[i] = 0;
+      island_slow_[i] = -window;
       rest_com_[i] = com_[i], rest_q_[i] = q_[i], rest_v_[i] = v_[i], rest_w_[i] = w_[i];
     }
   }
@@ -1411,26 +1423,23 @@ void RigidBodySystem::update_sleep(double dt) {
       const std::uint32_t other = da ? c.a : c.b, k = da ? c.b : c.a;
       if ((da || db) && type_[k] == BodyType::Kinematic &&
           (glm::dot(v_[k], v_[k]) > 0 || glm::dot(w_[k], w_[k]) > 0))
-        sleep_time_[other] = 0;
+        sleep_time_[other] = 0, island_slow_[other] = -INFINITY;
     }
   }
   // the least slow time past its body's window of each island (its root: the island's
   // smallest index); the island sleeps when that is >= 0 (a - b >= 0 exactly when a >= b)
-  // (island_slow_[i] holds -infinity for a body speeding up, else infinity, until i is
-  // reached: the root is an island's smallest index, so only the entries before i have been
-  // written to)
-  for (std::size_t i = 0; i < n; ++i)
-    if (type_[i] != BodyType::Dynamic || asleep_[i]) island_slow_[i] = INFINITY;
-  for (std::size_t i = 0; i < n; ++i) {
+  // (island_slow_[i] holds body i's own until i is reached: the root is an island's smallest
+  // index, so only the entries before i have been written to. A body a moving kinematic body
+  // touches holds -infinity, where its slow time was 0 less its window: as negative)
+  for (std::size_t i = lo; i < hi; ++i) {
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     const std::uint32_t r = find(static_cast<std::uint32_t>(i));
     parent_[i] = r;
-    const double slow = island_slow_[i] < 0 ? -INFINITY : sleep_time_[i] - window_of(i);
-    island_slow_[r] = std::min(island_slow_[r], slow);
+    island_slow_[r] = std::min(island_slow_[r], island_slow_[i]);
   }
   // islands slow for long enough fall asleep, their members linked in a ring from the root
   // (which comes first in index order)
-  for (std::size_t i = 0; on && i < n; ++i) {
+  for (std::size_t i = lo; i < hi; ++i) {
     if (type_[i] != BodyType::Dynamic || asleep_[i]) continue;
     const std::uint32_t r = parent_[i];
     if (island_slow_[r] < 0) continue;

@@ -505,6 +505,17 @@ KinematicId World::add_kinematic(EntityId e, const KinematicDef& def) {
   if (rigid_.valid(r.body) && rigid_.type(r.body) != BodyType::Kinematic)
     throw Error("World::add_kinematic: " + describe(e) + " has a " + std::string(to_string(rigid_.type(r.body))) +
                 " rigid body, which a Kinematic cannot drive (only a kinematic body follows a path)");
+  // nor one with velocities of its own: the kinematic stage sets them from the path every
+  // tick, so they were dropped silently (add_rigid_body refuses them on an entity with a
+  // Kinematic, in the other order of adding)
+  if (rigid_.valid(r.body)) {
+    const Vec3 v = rigid_.linear_velocity(r.body), w = rigid_.angular_velocity(r.body);
+    if (v != Vec3(0) || w != Vec3(0))
+      throw Error("World::add_kinematic: " + describe(e) + " has a kinematic rigid body moving at " + format_vec3(v) +
+                  " m/s and " + format_vec3(w) +
+                  " rad/s, and a body on a kinematic path moves as the path says (give the velocity in the "
+                  "KinematicDef, or stop the body first: rigid().set_velocity(body, {0, 0, 0}, {0, 0, 0}))");
+  }
   def.validate("kinematic of " + describe(e));
   r.kinematic = static_cast<std::uint32_t>(kinematics_.size());
   KinematicEntry k{

@@ -848,13 +848,14 @@ TEST(RigidBadInput, DynamicShapeSizesOutsideTheFloatRangeAreRefusedByName) {
 // A shape's frame in the world is its body's position plus its turned local offset: each was
 // held to a float's range, their sum not (a static box at 3e38 m + 1e38 m was created, and
 // the ball on it stopped the first step with the narrow phase's "collide: pose_a.position"
-// naming no body; a sphere pair stepped). Refused at create and set_pose, naming both terms,
-// as the World refuses an entity's component placed past it; the rotation counts.
+// naming no body; a sphere pair stepped). Refused at create and set_pose, naming the pose
+// and both terms in one form, as the World refuses an entity's component placed past it; the
+// rotation counts.
 TEST(RigidBadInput, AShapesFrameOutsideTheFloatRangeIsRefusedAtCreateAndSetPose) {
   RigidBodySystem s;
   const std::vector<pba::RigidShapeDef> off{{.shape = pba::ColliderShape::plane({0, 1, 0}, 0), .local = {{1e38, 0, 0}}}};
   EXPECT_EQ(error_of([&] { s.create({.name = "ground", .type = BodyType::Static, .pose = {{3e38, 0, 0}}, .shapes = off}); }),
-            "RigidBodyDef 'ground'.shapes[0]: pose.position (3e+38, 0, 0) + pose.rotation * local.position "
+            "RigidBodyDef 'ground'.pose: position (3e+38, 0, 0) + rotation * shapes[0].local.position "
             "(1e+38, 0, 0) = (4e+38, 0, 0) does not fit a float (|component| <= 3.4028234663852886e+38)");
   EXPECT_EQ(s.size(), 0u);
   // turned half a turn about y the offset points back: 2e38 m, taken (the plane's normal stays)

@@ -360,6 +360,32 @@ TEST(ParticleTouch, DestroyedEntitiesEndTheirTouchesSilently) {
   EXPECT_LT(w.pose(b).position.y, 0.05);
 }
 
+// Steps w `ticks` times and returns the ticks (counted from 1) that reported a particle
+// entity's one touch begin and end, -1 for none; a second of either fails the test. Each
+// begin event is handed to check_begin (with w at the end of its tick); each end must be the
+// particle `b`'s.
+struct TouchTicks {
+  int begin = -1, end = -1;
+};
+template <class CheckBegin>
+TouchTicks one_touch(World& w, int ticks, EntityId b, CheckBegin check_begin) {
+  TouchTicks t;
+  for (int n = 1; n <= ticks; ++n) {
+    w.step();
+    for (const pba::TouchBeginEvent& ev : w.touch_begin_events()) {
+      EXPECT_EQ(t.begin, -1) << "a second begin at tick " << n;
+      t.begin = n;
+      check_begin(ev);
+    }
+    for (const pba::TouchEndEvent& ev : w.touch_end_events()) {
+      EXPECT_EQ(t.end, -1) << "a second end at tick " << n;
+      t.end = n;
+      EXPECT_EQ(ev.b, b);
+    }
+  }
+  return t;
+}
+
 // A kinematic collider that runs into a particle at rest begins the touch at the tick the
 // closed form gives, with its speed as the approach speed (the collider's velocity counts);
 // an elastic hit sends the particle off at twice the collider's speed (the collider is
@@ -377,25 +403,14 @@ TEST(ParticleTouch, AKinematicColliderBeginsATouchAtTheClosedFormTickWithItsSpee
   w.add_particle(ball, {.radius = r});
   const int expected = static_cast<int>(std::ceil((-x0 - (R + r)) / v / dt));
   ASSERT_EQ(expected, 44);
-  int begin_tick = -1, end_tick = -1;
-  for (int n = 1; n <= 60; ++n) {
-    w.step();
-    for (const pba::TouchBeginEvent& ev : w.touch_begin_events()) {
-      EXPECT_EQ(begin_tick, -1) << "a second begin at tick " << n;
-      begin_tick = n;
-      EXPECT_EQ(ev.a, paddle);
-      EXPECT_EQ(ev.b, ball);
-      EXPECT_NEAR(ev.normal.x, 1, 1e-6);
-      EXPECT_NEAR(ev.approach_speed, v, 1e-5 * v);
-    }
-    for (const pba::TouchEndEvent& ev : w.touch_end_events()) {
-      EXPECT_EQ(end_tick, -1) << "a second end at tick " << n;
-      end_tick = n;
-      EXPECT_EQ(ev.b, ball);
-    }
-  }
-  EXPECT_EQ(begin_tick, expected);
-  EXPECT_EQ(end_tick, expected + 1);
+  const TouchTicks t = one_touch(w, 60, ball, [&](const pba::TouchBeginEvent& ev) {
+    EXPECT_EQ(ev.a, paddle);
+    EXPECT_EQ(ev.b, ball);
+    EXPECT_NEAR(ev.normal.x, 1, 1e-6);
+    EXPECT_NEAR(ev.approach_speed, v, 1e-5 * v);
+  });
+  EXPECT_EQ(t.begin, expected);
+  EXPECT_EQ(t.end, expected + 1);
   // and the ball flies off at 2 v (float state: 1e-5 relative)
   EXPECT_NEAR(w.velocity(ball).x, 2 * v, 1e-5 * v);
 }
@@ -437,27 +452,16 @@ TEST(ParticleTouch, AParticleOnAPathTouchesWhereThePathPutsIt) {
   const EntityId p = w.create_entity({.name = "runner"});
   w.add_particle(p, {.radius = r});
   w.add_kinematic(p, {.path = pba::PathType::Linear, .velocity = {10, 0, 0}});
-  int begin_tick = -1, end_tick = -1;
-  for (int n = 1; n <= 20; ++n) {
-    w.step();
-    for (const pba::TouchBeginEvent& ev : w.touch_begin_events()) {
-      EXPECT_EQ(begin_tick, -1) << "a second begin at tick " << n;
-      begin_tick = n;
-      EXPECT_EQ(ev.a, slab);
-      EXPECT_EQ(ev.b, p);
-      EXPECT_LE(1 - w.pose(p).position.x, r) << "began touching short of the slab";
-      EXPECT_NEAR(ev.normal.x, -1, 1e-6);  // out of the near face, toward the particle
-      EXPECT_NEAR(ev.point.x, 1, 1e-6);
-      EXPECT_NEAR(ev.approach_speed, 10, 1e-5);
-    }
-    for (const pba::TouchEndEvent& ev : w.touch_end_events()) {
-      EXPECT_EQ(end_tick, -1) << "a second end at tick " << n;
-      end_tick = n;
-      EXPECT_EQ(ev.b, p);
-    }
-  }
-  EXPECT_EQ(begin_tick, 10);
-  EXPECT_EQ(end_tick, 13);
+  const TouchTicks t = one_touch(w, 20, p, [&](const pba::TouchBeginEvent& ev) {
+    EXPECT_EQ(ev.a, slab);
+    EXPECT_EQ(ev.b, p);
+    EXPECT_LE(1 - w.pose(p).position.x, r) << "began touching short of the slab";
+    EXPECT_NEAR(ev.normal.x, -1, 1e-6);  // out of the near face, toward the particle
+    EXPECT_NEAR(ev.point.x, 1, 1e-6);
+    EXPECT_NEAR(ev.approach_speed, 10, 1e-5);
+  });
+  EXPECT_EQ(t.begin, 10);
+  EXPECT_EQ(t.end, 13);
 }
 
 // A particle held still by a motor path 1 mm above the ground (radius 0.05 m, centre at

@@ -302,6 +302,35 @@ TEST(RigidComponent, ABodysOwnVelocityOnAKinematicPathIsRefusedByName) {
   EXPECT_EQ(w.rigid().linear_velocity(body), Vec3(1, 0, 0));
 }
 
+// The other order of adding: a kinematic body with a velocity of its own given a Kinematic.
+// The path set the body's velocities from the first tick, so its own were dropped silently
+// (a body at 5 m/s put on a 1 m/s path moved at 1). Refused as add_rigid_body refuses them,
+// naming the entity and the body's velocities, the entity left without a Kinematic; the body
+// stopped, the path takes it: x = 1 m/s * 1/60 s after a tick.
+TEST(RigidComponent, AKinematicOnABodyWithItsOwnVelocityIsRefusedByName) {
+  World w;
+  const EntityId k = w.create_entity({.name = "paddle"});
+  RigidBodyDef d = box_def({1, 1, 1}, BodyType::Kinematic);
+  d.linear_velocity = {5, 0, 0};
+  const pba::RigidBodyId body = w.add_rigid_body(k, d);
+  const pba::KinematicDef path{.path = pba::PathType::Linear, .velocity = {1, 0, 0}};
+  std::string m = error_of([&] { w.add_kinematic(k, path); });
+  EXPECT_EQ(m.rfind("World::add_kinematic: entity 0 'paddle' has a kinematic rigid body moving at (5, 0, 0) m/s and "
+                    "(0, 0, 0) rad/s, and a body on a kinematic path moves as the path says",
+                    0),
+            0u)
+      << m;
+  EXPECT_TRUE(w.kinematic_id(k).is_null());
+  w.rigid().set_velocity(body, Vec3(0), {0, 0, 2});
+  m = error_of([&] { w.add_kinematic(k, path); });
+  EXPECT_NE(m.find("moving at (0, 0, 0) m/s and (0, 0, 2) rad/s"), std::string::npos) << m;
+  w.rigid().set_velocity(body, Vec3(0), Vec3(0));
+  w.add_kinematic(k, path);
+  w.tick(0, 1.0 / 60);
+  EXPECT_EQ(w.rigid().linear_velocity(body), Vec3(1, 0, 0));
+  EXPECT_NEAR(w.rigid().pose(body).position.x, 1.0 / 60, 1e-12);
+}
+
 // Free fall under the World's gravity: the soft step's substeps are symplectic Euler steps of
 // h = dt / substeps, so after m substeps y = y0 + v0 m h - g h^2 m (m + 1) / 2 exactly (up to
 // rounding, 1e-12 m here); a later set_gravity applies from the next tick.
