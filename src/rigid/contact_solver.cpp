@@ -388,9 +388,24 @@ __attribute__((target("avx512f"))) void fill_avx512(const FillInput& in, B& k, A
   for (int l0 = 0; l0 < lanes; l0 += 8) fill_lanes<v8d>(in, k, g, l0);
 }
 #endif
+// (next, next_anchors: the block filled after this one and its anchors, or null: their lines
+// asked for to be written, a quarter with each group of four lanes. A group writes 16 bytes of
+// each of a block's rows, so the first wrote to every one of its lines while none was in the
+// cache, the store queue full)
 template <class B>
-__attribute__((target("avx2"))) void fill_avx2(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes) {
-  for (int l0 = 0; l0 < lanes; l0 += 4) fill_lanes<v4d>(in, k, g, l0);
+__attribute__((target("avx2"))) void fill_avx2(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes,
+                                              const B* next, const AnchorsOf<B::kPoints>* next_anchors) {
+  constexpr std::size_t kLines = sizeof(B) / 64, kAnchorLines = sizeof(AnchorsOf<B::kPoints>) / 64;
+  for (int l0 = 0; l0 < lanes; l0 += 4) {
+    if (next) {
+      const std::size_t q = static_cast<std::size_t>(l0 / 4);
+      for (std::size_t line = q * kLines / 4; line < (q + 1) * kLines / 4; ++line)
+        __builtin_prefetch(reinterpret_cast<const char*>(next) + 64 * line, 1);
+      for (std::size_t line = q * kAnchorLines / 4; line < (q + 1) * kAnchorLines / 4; ++line)
+        __builtin_prefetch(reinterpret_cast<const char*>(next_anchors) + 64 * line, 1);
+    }
+    fill_lanes<v4d>(in, k, g, l0);
+  }
 }
 template <class B>
 void fill_scalar(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, int lanes) {
@@ -1118,7 +1133,8 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
   else
 #endif
   if (simd == SimdPath::Avx2)
-    fill_avx2(in, k, g, k.lanes);
+    fill_avx2(in, k, g, k.lanes, b + 1 < count_in_use ? &block_array[b + 1] : nullptr,
+              b + 1 < count_in_use ? &anchor_array[b + 1] : nullptr);
   else
     fill_scalar(in, k, g, k.lanes);
   for (int l = k.lanes; l < used; ++l) clear_lane(k, g, l, spare);
