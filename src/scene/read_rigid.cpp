@@ -102,7 +102,7 @@ void read_rigid_body(const Node& n, World& w) {
     if (n.has("kinematic") && n.has(key) && n.vec(key, Vec3(0)) != Vec3(0))
       n.at(key).fail("a body on a \"kinematic\" path moves as the path says (give the velocity in " +
                      n.at("kinematic").path() + ")");
-  // the shapes: at least one; planes only on static bodies
+  // the shapes: at least one; planes and meshes only on static bodies
   const Node shapes = n.at("shapes");
   shapes.require_array();
   if (shapes.size() == 0) shapes.fail("a body needs at least one shape, got none");
@@ -110,8 +110,9 @@ void read_rigid_body(const Node& n, World& w) {
     const Node s = shapes.item(i);
     s.require_object();
     d.shapes.push_back(read_rigid_shape(s));
-    if (d.type != BodyType::Static && d.shapes.back().shape.type == ShapeType::Plane)
-      s.at("type").fail("a plane has no volume, so only a \"static\" body can have one");
+    const ShapeType type = d.shapes.back().shape.type;
+    if (d.type != BodyType::Static && (type == ShapeType::Plane || type == ShapeType::Mesh))
+      s.at("type").fail("a " + std::string(to_string(type)) + " has no volume, so only a \"static\" body can have one");
   }
   // a given mass scales the shapes' mass properties (density ratios kept): m I / M about the same centre
   if (n.has("mass")) {

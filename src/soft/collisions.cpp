@@ -92,6 +92,17 @@ std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double) {
         const double lt = glm::length(dx), lim = mu * depth;
         p -= lt <= lim ? dx : dx * (lim / lt);
       }
+      // the push gives no speed of its own (the velocity update reads x - x_prev): a
+      // particle that began the substep inside the thickness leaves it no faster than the
+      // surface, as the mass-spring contact does
+      {
+        const Vec3 prev(s.px[i], s.py[i], s.pz[i]);
+        const double out = glm::dot(p - prev, nrm) - glm::dot(vs, nrm) * h;
+        if (out > 0) {
+          const Vec3 q = prev + nrm * out;
+          s.px[i] = static_cast<float>(q.x), s.py[i] = static_cast<float>(q.y), s.pz[i] = static_cast<float>(q.z);
+        }
+      }
       s.x[i] = static_cast<float>(p.x), s.y[i] = static_cast<float>(p.y), s.z[i] = static_cast<float>(p.z);
     }
   }

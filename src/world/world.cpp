@@ -830,9 +830,9 @@ void World::drive_body(EntityId owner, std::string_view what, RigidBodyId id, co
 
 // The World's static colliders are the rigid bodies' static geometry: each collider of an
 // entity without a body has a stand-in body with its shape and material, static, or
-// kinematic when a Kinematic drives the entity (planes stay static: a kinematic body needs
-// a volume), remade when the collider's definition changes and moved with its entity. Only
-// once an entity has a body: a world of particles pays nothing.
+// kinematic when a Kinematic drives the entity (planes and meshes stay static and jump: a
+// kinematic body needs a volume), remade when the collider's definition changes and moved
+// with its entity. Only once an entity has a body: a world of particles pays nothing.
 void World::sync_mirrors(double t, double dt) {
   // (stand-ins made while an entity had a body keep following their entities after the last
   // entity body is gone: destroyed in rigid() directly, then its entity, the count drops to 0)
@@ -843,8 +843,9 @@ void World::sync_mirrors(double t, double dt) {
     const Collider& wc = world_colliders_[i];
     // what the stand-in should be: none for an entity with a body, or for a sensor
     const bool wanted = !rigid_.valid(r.body) && !c.def.sensor;
-    const BodyType type =
-        r.kinematic != kNone && c.def.shape.type != ShapeType::Plane ? BodyType::Kinematic : BodyType::Static;
+    // (a plane's or a mesh's stays static and jumps: a kinematic body needs a volume)
+    const bool solid = c.def.shape.type != ShapeType::Plane && c.def.shape.type != ShapeType::Mesh;
+    const BodyType type = r.kinematic != kNone && solid ? BodyType::Kinematic : BodyType::Static;
     if (rigid_.valid(c.mirror) && (!wanted || c.mirror_type != type || !same_collider(c.mirrored, c.def)))
       destroy_mirror(c);
     if (!wanted) continue;

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -1086,6 +1088,34 @@ TEST(RigidStage, HashIncludesTheBodiesAndIsDeterministic) {
   };
   EXPECT_EQ(run(0), run(0));
   EXPECT_NE(run(0), run(0.1));
+}
+
+// A Kinematic on a mesh collider's entity (a moving floor of triangles) made its stand-in a
+// kinematic mesh body once any entity had a body, which the rigid bodies refuse (a mesh has no
+// volume): the first tick threw "collider of entity 0.shapes[0].shape: a mesh has no volume"
+// though the user made no body of a mesh. A mesh stand-in stays static and jumps with its
+// entity, as a plane's does; particles still meet the collider where its path puts it.
+TEST(RigidStage, AMovingMeshColliderBesideABodyStepsAndCarriesParticles) {
+  World w({.stepper = {.fixed_dt = 1.0 / 120}});
+  const std::vector<Vec3> v = {{-2, 0, -2}, {2, 0, -2}, {2, 0, 2}, {-2, 0, 2}};
+  const std::vector<std::array<std::uint32_t, 3>> tri = {{0, 2, 1}, {0, 3, 2}};
+  const EntityId floor = w.create_entity({.name = "lift"});
+  w.add_collider(floor, {.shape = ColliderShape::triangles(pba::TriangleMesh::build(v, tri)),
+                         .material = {.restitution = 0, .friction = 0.6}});
+  const double rise = 0.5;  // m/s
+  w.add_kinematic(floor, {.path = pba::PathType::Linear, .velocity = {0, rise, 0}});
+  const EntityId p = w.create_entity({.name = "bead"});
+  const double r = 0.05;
+  w.add_particle(p, {.position = {0, r, 0}, .radius = r});
+  // a body far from the lift: the World now makes stand-ins of its colliders
+  const EntityId crate = w.create_entity({.name = "crate", .pose = {{10, 5, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_rigid_body(crate, box_def({0.5, 0.5, 0.5}));
+  for (int i = 0; i < 120; ++i) ASSERT_EQ(error_of([&] { w.step(); }), "") << "tick " << i;
+  // the lift rose 0.5 m in 1 s and the bead rode it, resting on top (within the particle
+  // contact's slop of its radius), and the crate fell freely beside it
+  EXPECT_NEAR(w.pose(floor).position.y, rise * 1.0, 1e-12);
+  EXPECT_NEAR(w.pose(p).position.y, rise * 1.0 + r, 1e-3);
+  EXPECT_LT(w.pose(crate).position.y, 5 - 0.5 * 9.81 * 1.0 * 0.9);
 }
 
 }  // namespace
