@@ -28,7 +28,12 @@ bool contact(const FlatShape<double>& c, const Vec3& p, double th, double f, Vec
 // "Unified particle physics for real-time applications", section 6.1, eqs. 23-24): the
 // particle is projected out along the normal by the depth d, then its tangential
 // displacement over the substep relative to the surface, dx_t, is removed entirely when
-// |dx_t| < mu d (static friction) and shortened by mu d otherwise (kinetic friction).
+// |dx_t| < mu s (static friction) and shortened by mu s otherwise (kinetic friction). s is
+// the part of the push that stops the substep's approach (the normal impulse times h^2 / m):
+// s = d for a particle that entered the thickness in this substep. The rest of the push, out
+// of a thickness the particle began the substep inside, only corrects the position: x_prev
+// moves with it, so it gives no speed and takes none (a particle moving out keeps its own
+// speed), as the mass-spring contact does.
 std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double) {
   if (s.colliders.empty()) return 0;
   std::size_t contacts = 0;
@@ -82,26 +87,24 @@ std::size_t collide_particles(SoftBody::Impl& s, double f, double h, double) {
       double depth;
       if (!contact(c, p, th, f, nrm, depth, vs)) continue;
       ++contacts;
-      // push out along the normal
+      const Vec3 prev(s.px[i], s.py[i], s.pz[i]);
+      // the substep's normal displacement relative to the surface before the push (< 0
+      // approaching): the push's first -dn0 stops the approach (the normal impulse), the
+      // rest, out, only corrects the position
+      const double dn0 = glm::dot(p - prev, nrm) - glm::dot(vs, nrm) * h;
+      const double out = depth + std::min(0.0, dn0);
+      const double stop = depth - std::max(0.0, out);
       p += nrm * depth;
-      // friction on the tangential displacement relative to the surface
       if (mu > 0) {
-        const Vec3 prev(s.px[i], s.py[i], s.pz[i]);
         Vec3 dx = (p - prev) - vs * h;
         dx -= glm::dot(dx, nrm) * nrm;
-        const double lt = glm::length(dx), lim = mu * depth;
+        const double lt = glm::length(dx), lim = mu * stop;
         p -= lt <= lim ? dx : dx * (lim / lt);
       }
-      // the push gives no speed of its own (the velocity update reads x - x_prev): a
-      // particle that began the substep inside the thickness leaves it no faster than the
-      // surface, as the mass-spring contact does
-      {
-        const Vec3 prev(s.px[i], s.py[i], s.pz[i]);
-        const double out = glm::dot(p - prev, nrm) - glm::dot(vs, nrm) * h;
-        if (out > 0) {
-          const Vec3 q = prev + nrm * out;
-          s.px[i] = static_cast<float>(q.x), s.py[i] = static_cast<float>(q.y), s.pz[i] = static_cast<float>(q.z);
-        }
+      // x_prev moves by the correction, so the velocity update (x - x_prev) / h sees none of it
+      if (out > 0) {
+        const Vec3 q = prev + nrm * out;
+        s.px[i] = static_cast<float>(q.x), s.py[i] = static_cast<float>(q.y), s.pz[i] = static_cast<float>(q.z);
       }
       s.x[i] = static_cast<float>(p.x), s.y[i] = static_cast<float>(p.y), s.z[i] = static_cast<float>(p.z);
     }

@@ -450,6 +450,52 @@ ParticleId World::add_particle(EntityId e, const ParticleDef& def) {
   return r.particle;
 }
 
+// A plane or mesh collider moved by a Kinematic (not a sensor, which has no stand-in): its
+// stand-in among the rigid bodies is static and jumps along the path each tick (a kinematic
+// body needs a volume), so it neither carries nor pushes a rigid body with its speed (a crate
+// on a mesh floor moving at 1 m/s lagged 2 m after 2 s; a lift pushed crates out of it with no
+// speed), and each jump woke every sleeping body. Refused beside a dynamic rigid body, in
+// whichever order they are added: add_collider, add_kinematic, add_rigid_body (and the tick,
+// for a collider or body changed in place).
+namespace {
+bool moving_floor_shape(const ColliderDef& c) {
+  return !c.sensor && (c.shape.type == ShapeType::Plane || c.shape.type == ShapeType::Mesh);
+}
+
+// the first dynamic rigid body (null if none)
+RigidBodyId first_dynamic_body(const RigidBodySystem& rigid) {
+  for (std::size_t k = 0; k < rigid.size(); ++k)
+    if (rigid.type(rigid.id_at(k)) == BodyType::Dynamic) return rigid.id_at(k);
+  return {};
+}
+
+// the first plane or mesh collider on a Kinematic path (colliders.size() if none)
+template <class Colliders, class Records, class Index>
+std::size_t first_moving_floor(const Colliders& colliders, const Records& records, Index none) {
+  for (std::size_t i = 0; i < colliders.size(); ++i)
+    if (records[colliders[i].owner.index].kinematic != none && moving_floor_shape(colliders[i].def)) return i;
+  return colliders.size();
+}
+
+[[noreturn]] void refuse_moving_floor(std::string_view where, const std::string& floor, ShapeType type,
+                                      const std::string& body) {
+  throw Error(std::string(where) + ": " + floor + " has a " + std::string(to_string(type)) +
+              " collider on a Kinematic path, which cannot carry or push rigid bodies (it jumps along the path "
+              "with no speed), beside " + body +
+              ": give the moving floor a box or hull collider (a plane or mesh on a path moves particles, cloth "
+              "and jelly only)");
+}
+
+// the dynamic body's words for refuse_moving_floor (describe: the World's words for its entity)
+template <class Records, class Describe>
+std::string dynamic_body_words(const std::vector<EntityId>& body_owner, const Records& records, RigidBodyId b,
+                               Describe describe) {
+  const EntityId owner = owner_by_slot(body_owner, records, b);
+  return owner.is_null() ? "dynamic rigid body " + std::to_string(b.index) + " (made in rigid() directly)"
+                         : "the dynamic rigid body of " + describe(owner);
+}
+}  // namespace
+
 ColliderId World::add_collider(EntityId e, const ColliderDef& def) {
   EntityRecord& r = record(e, "World::add_collider");
   if (r.collider != kNone) throw Error("World::add_collider: " + describe(e) + " already has a collider");
@@ -459,6 +505,10 @@ ColliderId World::add_collider(EntityId e, const ColliderDef& def) {
   c.material = def.material;
   c.begin = c.end = r.pose;
   c.validate("collider of " + describe(e));
+  if (r.kinematic != kNone && moving_floor_shape(def))
+    if (const RigidBodyId b = first_dynamic_body(rigid_); !b.is_null())
+      refuse_moving_floor("World::add_collider", describe(e), def.shape.type,
+                          dynamic_body_words(body_owner_, records_, b, [&](EntityId o) { return describe(o); }));
   if (def.shape.type == ShapeType::Plane) c.shape.normal = glm::normalize(def.shape.normal);
   r.collider = static_cast<std::uint32_t>(colliders_.size());
   colliders_.push_back({e, def, collider_ids_.create(e)});
@@ -517,6 +567,10 @@ KinematicId World::add_kinematic(EntityId e, const KinematicDef& def) {
                   "KinematicDef, or stop the body first: rigid().set_velocity(body, {0, 0, 0}, {0, 0, 0}))");
   }
   def.validate("kinematic of " + describe(e));
+  if (r.collider != kNone && moving_floor_shape(colliders_[r.collider].def))
+    if (const RigidBodyId b = first_dynamic_body(rigid_); !b.is_null())
+      refuse_moving_floor("World::add_kinematic", describe(e), colliders_[r.collider].def.shape.type,
+                          dynamic_body_words(body_owner_, records_, b, [&](EntityId o) { return describe(o); }));
   r.kinematic = static_cast<std::uint32_t>(kinematics_.size());
   KinematicEntry k{
       e, kinematic_ids_.create(e), def, time_, r.pose, def.path == PathType::Waypoints ? waypoint_length(def) : 0.0};
@@ -578,6 +632,10 @@ RigidBodyId World::add_rigid_body(EntityId e, const RigidBodyDef& def) {
       if (v != Vec3(0))
         throw Error(field_path(where, field) + ": the entity has a Kinematic, and a body on a kinematic path moves as "
                     "the path says (give the velocity in its KinematicDef), got " + format_vec3(v));
+  if (def.type == BodyType::Dynamic)
+    if (const std::size_t f = first_moving_floor(colliders_, records_, kNone); f < colliders_.size())
+      refuse_moving_floor("World::add_rigid_body", describe(colliders_[f].owner), colliders_[f].def.shape.type,
+                          "the dynamic rigid body of " + describe(e));
   RigidBodyDef d = def;
   d.pose = compose(r.pose, def.pose);
   d.pose.rotation = glm::normalize(d.pose.rotation);
@@ -846,6 +904,12 @@ void World::sync_mirrors(double t, double dt) {
     // (a plane's or a mesh's stays static and jumps: a kinematic body needs a volume)
     const bool solid = c.def.shape.type != ShapeType::Plane && c.def.shape.type != ShapeType::Mesh;
     const BodyType type = r.kinematic != kNone && solid ? BodyType::Kinematic : BodyType::Static;
+    // such a floor on a path carries no rigid body: refused beside a dynamic one (add_collider
+    // and the others refuse it; here a collider or body changed in place since)
+    if (wanted && r.kinematic != kNone && !solid)
+      if (const RigidBodyId b = first_dynamic_body(rigid_); !b.is_null())
+        refuse_moving_floor("World::tick", describe(c.owner), c.def.shape.type,
+                            dynamic_body_words(body_owner_, records_, b, [&](EntityId o) { return describe(o); }));
     if (rigid_.valid(c.mirror) && (!wanted || c.mirror_type != type || !same_collider(c.mirrored, c.def)))
       destroy_mirror(c);
     if (!wanted) continue;
@@ -870,11 +934,10 @@ void World::sync_mirrors(double t, double dt) {
       if (!same_pose(c.mirrored_pose, wc.begin)) rigid_.set_pose(c.mirror, wc.begin);
       drive_body(c.owner, "collider", c.mirror, wc.end, t, dt);
     } else if (!same_pose(c.mirrored_pose, wc.end)) {
-      // a jump moves what rested on it: wake every sleeping body (rare: a user's set_pose)
+      // a jump (a user's set_pose) moves what rested on it: set_pose wakes the sleeping bodies
+      // the stand-in's bounds reach before or after the move (every sleeping body in the
+      // World was woken here, at each jump)
       rigid_.set_pose(c.mirror, wc.end);
-      for (std::size_t k = 0; k < rigid_.size(); ++k)
-        if (rigid_.type(rigid_.id_at(k)) == BodyType::Dynamic && !rigid_.awake(rigid_.id_at(k)))
-          rigid_.wake(rigid_.id_at(k));
     }
     c.mirrored_pose = wc.end;
   }

@@ -1093,9 +1093,11 @@ TEST(RigidStage, HashIncludesTheBodiesAndIsDeterministic) {
 // A Kinematic on a mesh collider's entity (a moving floor of triangles) made its stand-in a
 // kinematic mesh body once any entity had a body, which the rigid bodies refuse (a mesh has no
 // volume): the first tick threw "collider of entity 0.shapes[0].shape: a mesh has no volume"
-// though the user made no body of a mesh. A mesh stand-in stays static and jumps with its
-// entity, as a plane's does; particles still meet the collider where its path puts it.
-TEST(RigidStage, AMovingMeshColliderBesideABodyStepsAndCarriesParticles) {
+// though the user made no body of a mesh. A mesh's stand-in stays static and jumps with its
+// entity, as a plane's does; particles still meet the collider where its path puts it: a bead
+// rides the lift up 0.5 m/s for 1 s, resting on top (within the particle contact's slop of its
+// radius).
+TEST(RigidStage, AMovingMeshColliderCarriesParticles) {
   World w({.stepper = {.fixed_dt = 1.0 / 120}});
   const std::vector<Vec3> v = {{-2, 0, -2}, {2, 0, -2}, {2, 0, 2}, {-2, 0, 2}};
   const std::vector<std::array<std::uint32_t, 3>> tri = {{0, 2, 1}, {0, 3, 2}};
@@ -1107,15 +1109,103 @@ TEST(RigidStage, AMovingMeshColliderBesideABodyStepsAndCarriesParticles) {
   const EntityId p = w.create_entity({.name = "bead"});
   const double r = 0.05;
   w.add_particle(p, {.position = {0, r, 0}, .radius = r});
-  // a body far from the lift: the World now makes stand-ins of its colliders
-  const EntityId crate = w.create_entity({.name = "crate", .pose = {{10, 5, 0}, pba::Quat(1, 0, 0, 0)}});
-  w.add_rigid_body(crate, box_def({0.5, 0.5, 0.5}));
+  // a kinematic body beside it: the World makes stand-ins of its colliders
+  w.add_rigid_body(w.create_entity({.name = "sign", .pose = {{10, 5, 0}, pba::Quat(1, 0, 0, 0)}}),
+                   box_def({0.5, 0.5, 0.5}, BodyType::Kinematic));
   for (int i = 0; i < 120; ++i) ASSERT_EQ(error_of([&] { w.step(); }), "") << "tick " << i;
-  // the lift rose 0.5 m in 1 s and the bead rode it, resting on top (within the particle
-  // contact's slop of its radius), and the crate fell freely beside it
   EXPECT_NEAR(w.pose(floor).position.y, rise * 1.0, 1e-12);
   EXPECT_NEAR(w.pose(p).position.y, rise * 1.0 + r, 1e-3);
-  EXPECT_LT(w.pose(crate).position.y, 5 - 0.5 * 9.81 * 1.0 * 0.9);
+}
+
+// That stand-in jumps along the path with no speed, so it neither carried nor pushed rigid
+// bodies: a crate on a mesh floor moving sideways at 1 m/s (friction 0.8) lagged 2.000 m after
+// 2 s where a box floor leaves it v^2 / (2 mu g) = 0.063 m behind, and a lift pushed crates up
+// out of it with no speed; each jump also woke every sleeping body in the World. A plane did
+// the same. A plane or mesh collider on a Kinematic path beside a dynamic rigid body is
+// refused, naming the floor and the body and suggesting a box or hull collider, at whichever
+// call completes the combination (and at the tick, for a collider changed in place); a box
+// floor, a sensor, and kinematic bodies beside the floor are accepted.
+TEST(RigidStage, AMovingPlaneOrMeshColliderIsRefusedBesideDynamicBodies) {
+  const std::vector<Vec3> v = {{-2, 0, -2}, {2, 0, -2}, {2, 0, 2}, {-2, 0, 2}};
+  const std::vector<std::array<std::uint32_t, 3>> tri = {{0, 2, 1}, {0, 3, 2}};
+  const ColliderShape mesh = ColliderShape::triangles(pba::TriangleMesh::build(v, tri));
+  const ColliderShape plane = ColliderShape::plane({0, 1, 0}, 0);
+  const pba::KinematicDef path{.path = pba::PathType::Linear, .velocity = {1, 0, 0}};
+  const auto crate = [](World& w) {
+    return w.create_entity({.name = "crate", .pose = {{0, 1, 0}, pba::Quat(1, 0, 0, 0)}});
+  };
+  const auto refused = [](const std::string& m, const std::string& call, const char* type) {
+    EXPECT_EQ(m.rfind(call + ": entity 0 'conveyor' has a " + type + " collider on a Kinematic path, which cannot "
+                      "carry or push rigid bodies", 0), 0u) << m;
+    EXPECT_NE(m.find("beside the dynamic rigid body of entity 1 'crate': give the moving floor a box or hull "
+                     "collider"), std::string::npos) << m;
+  };
+  for (const ColliderShape& shape : {mesh, plane}) {
+    const char* type = shape.type == pba::ShapeType::Mesh ? "mesh" : "plane";
+    SCOPED_TRACE(type);
+    {  // the collider and its path first, then the body
+      World w;
+      const EntityId f = w.create_entity({.name = "conveyor"});
+      w.add_collider(f, {.shape = shape});
+      w.add_kinematic(f, path);
+      const EntityId c = crate(w);
+      refused(error_of([&] { w.add_rigid_body(c, box_def({0.5, 0.5, 0.5})); }), "World::add_rigid_body", type);
+      EXPECT_TRUE(w.rigid_body_id(c).is_null());  // nothing added
+      w.add_rigid_body(c, box_def({0.5, 0.5, 0.5}, BodyType::Kinematic));  // a kinematic one is fine
+      for (int i = 0; i < 10; ++i) w.step();
+    }
+    {  // the collider, the body, then the path
+      World w;
+      const EntityId f = w.create_entity({.name = "conveyor"});
+      w.add_collider(f, {.shape = shape});
+      w.add_rigid_body(crate(w), box_def({0.5, 0.5, 0.5}));
+      refused(error_of([&] { w.add_kinematic(f, path); }), "World::add_kinematic", type);
+      EXPECT_FALSE(w.valid(w.kinematic_id(f)));
+      for (int i = 0; i < 10; ++i) w.step();  // a still floor is fine
+    }
+    {  // the path, the body, then the collider
+      World w;
+      const EntityId f = w.create_entity({.name = "conveyor"});
+      w.add_kinematic(f, path);
+      w.add_rigid_body(crate(w), box_def({0.5, 0.5, 0.5}));
+      refused(error_of([&] { w.add_collider(f, {.shape = shape}); }), "World::add_collider", type);
+      EXPECT_FALSE(w.valid(w.collider_id(f)));
+      // a sensor of the shape on the path is fine (it has no stand-in)
+      w.add_collider(f, {.shape = shape, .sensor = true});
+      for (int i = 0; i < 10; ++i) w.step();
+    }
+    {  // a box floor changed in place to the shape: refused at the tick
+      World w;
+      const EntityId f = w.create_entity({.name = "conveyor"});
+      w.add_collider(f, {.shape = ColliderShape::box({2, 0.1, 2})});
+      w.add_kinematic(f, path);
+      w.add_rigid_body(crate(w), box_def({0.5, 0.5, 0.5}));
+      w.step();
+      w.collider(f).shape = shape;
+      refused(error_of([&] { w.step(); }), "World::tick", type);
+    }
+  }
+}
+
+// A collider the user moves by set_pose wakes the sleeping bodies it reached before or after
+// the jump (set_pose's own rule), not every sleeping body in the World: each jump of a sign
+// 20 m away woke a box asleep on the ground, so a World with a collider moved every tick
+// never slept.
+TEST(RigidStage, AColliderMovedBySetPoseWakesOnlyWhatItReaches) {
+  World w;
+  const EntityId sign = w.create_entity({.name = "sign", .pose = {{20, 1, 0}, pba::Quat(1, 0, 0, 0)}});
+  w.add_collider(sign, {.shape = ColliderShape::box({0.5, 0.5, 0.5})});
+  const auto [e, b] = box_asleep_on_the_ground(w);
+  ASSERT_FALSE(w.rigid().awake(b));  // the premise
+  for (int i = 0; i < 60; ++i) {
+    w.set_pose(sign, {{20, 1 + 0.01 * i, 0}, pba::Quat(1, 0, 0, 0)});
+    w.step();
+    ASSERT_FALSE(w.rigid().awake(b)) << "tick " << i;  // was awake from the first jump on
+  }
+  // the sign set down on the box wakes it
+  w.set_pose(sign, {{0, 1.45, 0}, pba::Quat(1, 0, 0, 0)});
+  w.step();
+  EXPECT_TRUE(w.rigid().awake(b));
 }
 
 }  // namespace
