@@ -284,7 +284,8 @@ class World {
   /// Gives the entity a particle; `def.position` is taken relative to the entity pose.
   /// Refused on an entity with a rigid body (both would move it).
   ParticleId add_particle(EntityId e, const ParticleDef& def);
-  /// Makes the entity a collision surface.
+  /// Makes the entity a collision surface. A plane or mesh (not a sensor) on an entity with
+  /// a Kinematic is refused once the World has a dynamic rigid body (see add_kinematic).
   ColliderId add_collider(EntityId e, const ColliderDef& def);
   /// Makes the entity a Forcer volume; `def.pose` is relative to the entity pose.
   ForcerId add_forcer(EntityId e, const Forcer& def);
@@ -293,7 +294,11 @@ class World {
   /// Drives the entity by a path, motor or thruster, from the current time. The entity's
   /// rigid body, if it has one, must be kinematic and at rest: a static or dynamic body, or a
   /// kinematic one with a velocity of its own (the path sets it), is refused, naming the
-  /// entity (and the velocity).
+  /// entity (and the velocity). A plane or mesh collider (not a sensor) on a path jumps among
+  /// the rigid bodies with no speed, carrying and pushing none, so it is refused beside a
+  /// dynamic rigid body, naming both, by whichever of add_collider, add_kinematic and
+  /// add_rigid_body completes the pair (give a moving floor a box or hull collider);
+  /// particles and soft bodies ride it.
   KinematicId add_kinematic(EntityId e, const KinematicDef& def);
   /// Constrains the entity's particle to another particle entity.
   ConstraintId add_constraint(EntityId e, const ConstraintDef& def);
@@ -302,8 +307,9 @@ class World {
   /// entity's pose is the body's). An unnamed body takes the entity's name. A Kinematic
   /// component drives only a kinematic body, so a static or dynamic body on an entity with
   /// one is refused, and so is a body on an entity with a particle (both would move it), or
-  /// a body with velocities of its own on an entity with a Kinematic (the path sets them).
-  /// Errors name the entity and the field.
+  /// a body with velocities of its own on an entity with a Kinematic (the path sets them),
+  /// and a dynamic body in a World with a plane or mesh collider on a Kinematic path (see
+  /// add_kinematic). Errors name the entity and the field.
   RigidBodyId add_rigid_body(EntityId e, const RigidBodyDef& def);
 
   /// True when the handle names a live component (false once its entity is destroyed).
