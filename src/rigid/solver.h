@@ -185,6 +185,7 @@ struct PassParams {
   double carry_speed = 0;    // |g| h (m/s), the velocity gravity gives in a substep: cap_carry, and a landing
                              // while sliding
   bool cap_carry = false;    // with update_sep: cap each point's carried impulse (contact_wide.h, pass())
+  bool cap_total = false;    // cap_carry on the manifold's total, not each point's (TGS)
   bool one_colour = false;   // the call's blocks are of one colour: the AVX2 path's lanes that land sliding may
                              // wait to the call's end for their rounds (contact_wide.h, DeferredRounds)
 };
