@@ -7,7 +7,9 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "pba/rigid.h"
@@ -246,6 +248,15 @@ inline std::vector<RigidBodyId> convex_vs_mesh(RigidBodySystem& s, int n = 100, 
   return out;
 }
 
+/// `label` followed by the coefficient `c` rounded to two decimals ("e=0.56" for 5/9): the row's
+/// and the ramp's body names, which the Solver lab writes over the bodies (cutting
+/// std::to_string to four characters read 5/9 as 0.55).
+inline std::string coefficient_name(const std::string& label, double c) {
+  char digits[32];
+  std::snprintf(digits, sizeof digits, "%.2f", c);
+  return label + digits;
+}
+
 /// A row of `n` balls of radius 0.2 m dropped from 2 m, restitution 0 ... 1 left to right, on
 /// a ground of restitution 0 (restitutions mix by the maximum unless the settings say otherwise,
 /// so each contact has its ball's).
@@ -255,7 +266,7 @@ inline std::vector<RigidBodyId> restitution_row(RigidBodySystem& s, int n = 6) {
   for (int i = 0; i < n; ++i) {
     const double e = n > 1 ? static_cast<double>(i) / (n - 1) : 1.0;
     out.push_back(
-        s.create({.name = "ball e=" + std::to_string(e).substr(0, 4),
+        s.create({.name = coefficient_name("ball e=", e),
                   .pose = {{(i - 0.5 * (n - 1)) * 0.8, 2.2, 0}},
                   .shapes = {{.shape = ColliderShape::sphere(0.2), .material = {.restitution = e, .friction = 0}}}}));
   }
@@ -275,7 +286,7 @@ inline std::vector<RigidBodyId> friction_ramp(RigidBodySystem& s, double angle =
     // along the slope's upper part, side by side in z; friction mixes as sqrt(1 * mu^2) = mu
     const Vec3 p =
         0.25 * normal + Vec3(std::cos(angle), std::sin(angle), 0) * 3.0 + Vec3(0, 0, (i - 0.5 * (n - 1)) * 0.9);
-    out.push_back(s.create({.name = "box mu=" + std::to_string(mu).substr(0, 4),
+    out.push_back(s.create({.name = coefficient_name("box mu=", mu),
                             .pose = {p, q},
                             .shapes = {{.shape = ColliderShape::box(Vec3(0.25)),
                                         .material = {.restitution = 0, .friction = mu * mu}}}}));

@@ -260,7 +260,8 @@ struct Solver::Impl {
   Quat twist_for_hinge_child(int i, const Quat& F, const Quat& sw, const Vec3& st, const Quat& tw_old);
 
   // FABRIK on one chain of unlimited ball joints, on contiguous joint positions
-  void fabrik_chain(SolveResult& r);
+  // (true: it handed over, damped least squares takes the remaining iterations)
+  bool fabrik_chain(SolveResult& r);
 
   // an unreachable target on a path of unlimited ball joints: straighten toward it
   bool straighten_if_unreachable(SolveResult& r);

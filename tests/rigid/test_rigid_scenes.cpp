@@ -297,4 +297,37 @@ TEST(RigidScenes, TheFrictionRampsBoxesStickOrSlideByTheirMu) {
   }
 }
 
+// The row's and the ramp's bodies are named for their coefficient ("ball e=0.56", "box
+// mu=0.30"), which the Solver lab writes over each of them: the name must state the body's own
+// coefficient to its two decimals, rounded (within 0.005), for every size the lab offers (2-12
+// balls, 1-8 boxes). Until 2026-12-07 the names cut the coefficient to four characters: in the
+// lab's 10-ball row e = 5/9, 6/9, 7/9 and 8/9 read 0.55, 0.66, 0.77 and 0.88, and the 0.66 ball
+// rose 2% higher than its label's e^2 says (0.444 against 0.436 of the drop).
+double named_coefficient(const std::string& name, const std::string& key) {
+  const std::size_t at = name.find(key);
+  if (at == std::string::npos) return std::nan("");
+  return std::stod(name.substr(at + key.size()));
+}
+
+TEST(RigidScenes, TheRowAndTheRampNameEachBodysCoefficientRounded) {
+  // half a unit of the second decimal; a tie (e = 1/8 named 0.12) is that far once the name's
+  // decimal is read back as a double, so its rounding (1e-17) is allowed on top
+  const double half_unit = 0.005 + 1e-15;
+  for (int n = 2; n <= 12; ++n) {
+    RigidBodySystem s({.capacity = 16});
+    for (const auto b : pba::rigid_scenes::restitution_row(s, n)) {
+      const double e = s.shapes(b)[0].material.restitution;
+      EXPECT_NEAR(named_coefficient(s.name(b), "e="), e, half_unit) << s.name(b) << " of " << n << " balls, e = " << e;
+    }
+  }
+  for (int n = 1; n <= 8; ++n) {
+    RigidBodySystem s({.capacity = 16});
+    for (const auto b : pba::rigid_scenes::friction_ramp(s, 0.3805, n)) {
+      // the ramp's friction is 1 and the mix the geometric mean: the contact's mu is the root
+      const double mu = std::sqrt(s.shapes(b)[0].material.friction);
+      EXPECT_NEAR(named_coefficient(s.name(b), "mu="), mu, half_unit) << s.name(b) << " of " << n << " boxes, mu = " << mu;
+    }
+  }
+}
+
 }  // namespace
