@@ -1422,12 +1422,12 @@ void RigidBodySystem::update_sleep(double dt) {
   // strictly inside the limit (a box 1 degree under atan(mu): 0.91 of it at mu 0.2, 0.96 at
   // 0.8). The speed that grew tells a slider from a body held at its limit by other contacts
   // (a box leaning on another: clamped each step while the other holds it still, five such
-  // boxes never slept) and from XPBD's resting pairs, whose stored normal impulse (the
+  // boxes were awake at 5 s) and from XPBD's resting pairs, whose stored normal impulse (the
   // position solve's) is not the load its static friction holds (a two-box stack's upper pair
   // at 2e5 times it); a slider that slows down stops within its window anyway. Grew by more
   // than the float rows' rounding of a step's fall, 2^-20 g |gravity_scale| dt (1.6e-7 m/s
   // at the defaults): bodies held still in the rain's heaps, friction at the limit, drift at
-  // 1e-10-1e-8 m/s and kept 64 bodies awake for ever; a slider gains a W over its window (a
+  // 1e-10-1e-8 m/s and kept 64 bodies awake at 10 s; a slider gains a W over its window (a
   // slide of 3e-7 m/s^2 is seen). "At" the
   // limit is within 2^-20 of it either way: the soft step's and TGS's float rows put a sliding
   // manifold within 2e-7 of it, XPBD's exactly (measured). With no friction (mu 0) or no load
