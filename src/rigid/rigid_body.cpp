@@ -1428,11 +1428,11 @@ void RigidBodySystem::update_sleep(double dt) {
   // than the float rows' rounding of a step's fall, 2^-20 g |gravity_scale| dt (1.6e-7 m/s
   // at the defaults): bodies held still in the rain's heaps, friction at the limit, drift at
   // 1e-10-1e-8 m/s and kept 64 bodies awake at 10 s; a slider gains a W over its window (a
-  // slide of 3e-7 m/s^2 is seen). "At" the
-  // limit is within 2^-20 of it either way: the soft step's and TGS's float rows put a sliding
-  // manifold within 2e-7 of it, XPBD's exactly (measured). With no friction (mu 0) or no load
-  // (a speculative manifold) the limit is 0 and nothing slides. Tested only for a manifold
-  // whose awake bodies' windows are all full (before that the island stays awake anyway)
+  // slide of 3e-7 m/s^2 is seen). "At" the limit is within 2^-20 of it either way: the soft
+  // step's and TGS's float rows put a sliding manifold within 2e-7 of it, XPBD's exactly
+  // (measured). With no friction (mu 0) or no load (a speculative manifold) the limit is 0
+  // and nothing slides. Tested only for a manifold whose awake bodies' windows are all full
+  // (before that the island stays awake anyway)
   constexpr double kBelow = 1 - 0x1p-20, kAbove = 1 + 0x1p-20;
   auto sliding = [](const detail::ContactPair& c) {
     double load = 0;
