@@ -1595,6 +1595,45 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
   s.profile_.built = built, s.profile_.reused = reused, s.profile_.shape_pairs = shape_pairs.size();
 }
 
+namespace {
+
+// A ball pair's speculative point made where the balls touch (docs/rigid-bodies.md, "Oblique
+// impacts of fast bodies"): centres ca, cb (m) moving at va, vb (m/s) over the step dt (s), radii
+// ra, rb (m). A pair that closes and does not touch yet has its normal of the start of the step
+// (the line of centres now) turned to the line of centres at the first t in [0, dt] where
+// |d + v t| = ra + rb under the relative motion d + v t (the touch), or, when the line misses,
+// at the closest approach in [0, dt]. Along it the speculative point's separation is
+// (d + v t) . n - (ra + rb) - t v . n = -t v . n at the start of the step, so the solver's plane
+// is reached at the touch exactly, and pushes along the line of centres there; along the normal
+// of the closest approach the plane is not reached in the step at all. (The line of centres of
+// the start, which the narrow phase gives, is first order in the step: a glancing impact pushed
+// 3.6 degrees off at 60 Hz.) Exact for the relative linear motion; gravity the same on both
+// bodies keeps it linear, a turning body's ball off its centre of mass is taken at its velocity
+// now. Touching or parting pairs keep the narrow phase's normal.
+void touch_normal(const Vec3& ca, const Vec3& va, const Vec3& cb, const Vec3& vb, double ra, double rb, double dt,
+                  Manifold& m) {
+  const Vec3 d = cb - ca, v = vb - va;
+  const double r = ra + rb;
+  const double closing = glm::dot(d, v);   // half of the quadratic's linear coefficient
+  const double gap = glm::dot(d, d) - r * r;  // its constant
+  if (!(closing < 0 && gap > 0)) return;
+  const double vv = glm::dot(v, v);
+  const double disc = closing * closing - vv * gap;
+  // the first root (in the form without cancellation), else the closest approach
+  double t = disc >= 0 ? gap / (std::sqrt(disc) - closing) : -closing / vv;
+  t = std::min(t, dt);
+  const Vec3 line = d + t * v;
+  const double length = glm::length(line);
+  if (!(length > 0)) return;
+  const Vec3 n = line / length;
+  m.normal = n;
+  m.points[0].point_a = ca + ra * n;
+  m.points[0].point_b = cb - rb * n;
+  m.points[0].depth = r - glm::dot(d, n);
+}
+
+}  // namespace
+
 // The narrow phase for one pair out to `reach` (m): its speculative margin plus its reuse
 // distance (so the manifold stays good while the pair closes by that much; pair_reuse), into
 // the pair's cache: each new point takes the impulse of the old point (of the same triangle)
@@ -1802,6 +1841,13 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     // unit as body_pose and shape_frame normalise them; the reach is finite)
     narrow::collide_unchecked_into(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape,
                                    shape_pose(s, p.proxy_b, b, p.shape_b), ns, &c.narrow, pair_manifold);
+    // two balls: the normal of their touch in this step (touch_normal)
+    if (pair_manifold.count == 1 && sa.shape.type == ShapeType::Sphere && sb.shape.type == ShapeType::Sphere) {
+      const Vec3 ca = shape_pose(s, p.proxy_a, a, p.shape_a).position;
+      const Vec3 cb = shape_pose(s, p.proxy_b, b, p.shape_b).position;
+      touch_normal(ca, s.v_[a] + glm::cross(s.w_[a], ca - s.com_[a]), cb, s.v_[b] + glm::cross(s.w_[b], cb - s.com_[b]),
+                   sa.shape.radius, sb.shape.radius, s.last_dt_, pair_manifold);
+    }
     if (pair_manifold.count > 0) keep(pair_manifold, false);
   }
   // the old chain goes back to the pool

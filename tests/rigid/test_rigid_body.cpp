@@ -1426,10 +1426,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x77e4ec491f68bdaeull) << std::hex << soft;
-  EXPECT_EQ(si, 0xcb3af7b896d414aeull) << std::hex << si;
-  EXPECT_EQ(tgs, 0xfb4dabb91bd6ef3aull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x7f51a74e8de6ac79ull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x9bb7fc6e38ff7239ull) << std::hex << soft;
+  EXPECT_EQ(si, 0x81cef11dbaaab481ull) << std::hex << si;
+  EXPECT_EQ(tgs, 0xbf4914ea41568d01ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0xa4c837a3bbf48425ull) << std::hex << xpbd;
 }
 
 }  // namespace
