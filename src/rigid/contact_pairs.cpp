@@ -818,7 +818,12 @@ void RigidContacts::find_new_pairs(RigidBodySystem& s) {
       pair_set.prefetch(pair_key(ahead.proxy_a, ahead.proxy_b));
     }
     const ShapePair& c = candidates[i];
-    if (pair_set.insert(pair_key(c.proxy_a, c.proxy_b))) found.push_back(c);
+    if (pair_set.insert(pair_key(c.proxy_a, c.proxy_b))) {
+      found.push_back(c);
+      ShapePair& f = found.back();
+      f.type_a = s.shapes_[proxies[c.proxy_a].body][c.shape_a].shape.type;
+      f.type_b = s.shapes_[proxies[c.proxy_b].body][c.shape_b].shape.type;
+    }
   }
   for (const std::uint32_t p : moved) was_moved[p] = 0;
   if (found.empty()) return;
@@ -1452,13 +1457,16 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       const ShapePair& p = shape_pairs[k];
       const std::uint32_t a = lanes[t].a, b = lanes[t].b;
       if (rel_made) lane_pose(t, plan.rel_position, plan.rel_rotation);
-      const RigidShapeDef& sa = s.shapes_[a][p.shape_a];
-      const RigidShapeDef& sb = s.shapes_[b][p.shape_b];
+      // (the shapes' definitions read only on the paths that need them; their kinds are the pair's)
+      auto shape_a = [&]() -> const RigidShapeDef& { return s.shapes_[a][p.shape_a]; };
+      auto shape_b = [&]() -> const RigidShapeDef& { return s.shapes_[b][p.shape_b]; };
       // a ball or a box on a plane with its points: carried when the narrow phase would make
       // them again, the plane's points made again (the comment before under_core)
-      if (reuse && p.cache != kNoIndex && (sa.shape.type == ShapeType::Plane || sb.shape.type == ShapeType::Plane) &&
+      if (reuse && p.cache != kNoIndex && (p.type_a == ShapeType::Plane || p.type_b == ShapeType::Plane) &&
           caches[p.cache].first != kNoIndex) {
-        const bool plane_a = sa.shape.type == ShapeType::Plane;
+        const bool plane_a = p.type_a == ShapeType::Plane;
+        const RigidShapeDef& sa = shape_a();
+        const RigidShapeDef& sb = shape_b();
         const ColliderShape& body = (plane_a ? sb : sa).shape;
         PairCache& c = caches[p.cache];
         CachedManifold& r = manifolds[c.first];
@@ -1481,27 +1489,27 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
       // (the comment before ball_on_mesh)
       if (reuse && p.cache != kNoIndex && caches[p.cache].first != kNoIndex &&
           caches[p.cache].mesh_query != kNoIndex &&
-          ((sa.shape.type == ShapeType::Mesh && sb.shape.type == ShapeType::Sphere) ||
-           (sb.shape.type == ShapeType::Mesh && sa.shape.type == ShapeType::Sphere))) {
-        const bool mesh_a = sa.shape.type == ShapeType::Mesh;
+          ((p.type_a == ShapeType::Mesh && p.type_b == ShapeType::Sphere) ||
+           (p.type_b == ShapeType::Mesh && p.type_a == ShapeType::Sphere))) {
+        const bool mesh_a = p.type_a == ShapeType::Mesh;
         PairCache& c = caches[p.cache];
         CachedManifold& r = manifolds[c.first];
         const double reach = plan.margin + plan.reuse;
         const Pose& pose_a = shape_pose(s, p.proxy_a, a, p.shape_a);
         const Pose& pose_b = shape_pose(s, p.proxy_b, b, p.shape_b);
-        if (ball_on_mesh(r, mesh_a, (mesh_a ? sa : sb).shape, mesh_a ? pose_a : pose_b, mesh_a ? pose_b : pose_a,
+        if (ball_on_mesh(r, mesh_a, (mesh_a ? shape_a() : shape_b()).shape, mesh_a ? pose_a : pose_b, mesh_a ? pose_b : pose_a,
                          s.q_[mesh_a ? a : b], mesh_a ? r.radius_b : r.radius_a, reach, mesh_queries[c.mesh_query],
                          plan.rel_position, plan.rel_rotation, simd != SimdPath::Scalar)) {
           carry(c, reach);
           continue;
         }
       }
-      if (sa.shape.type != ShapeType::Box || sb.shape.type != ShapeType::Box) continue;
+      if (p.type_a != ShapeType::Box || p.type_b != ShapeType::Box) continue;
       plan.batched = static_cast<std::uint32_t>(box_queries.size());
       NarrowPhaseCache* narrow = &fresh_narrow[plan.batched];
       if (p.cache == kNoIndex) *narrow = NarrowPhaseCache{};
       else narrow = &caches[p.cache].narrow;
-      box_queries.push_back({&sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), &sb.shape,
+      box_queries.push_back({&shape_a().shape, shape_pose(s, p.proxy_a, a, p.shape_a), &shape_b().shape,
                              shape_pose(s, p.proxy_b, b, p.shape_b), plan.margin + plan.reuse, narrow});
       if (box_queries.size() == kBoxes) {
         last = k + 1;
@@ -1526,12 +1534,16 @@ void RigidContacts::make_manifolds(RigidBodySystem& s) {
         // shapes' definitions that holds the materials collide_pair mixes (update() sized
         // `rotations` for every body), the latter only for a pair made anew: a carried-over
         // manifold holds its mixed material, and emit() reads the shapes only when the mix
-        // rules changed
+        // rules changed; and the shapes' first lines (their kinds and sizes, which collide_pair
+        // and the narrow phase read first: the plan no longer reads them, the pair's kinds
+        // serving it)
         const std::uint32_t a = s.slot_[pair_ahead.slot_a], b = s.slot_[pair_ahead.slot_b];
         prefetch_lines<sizeof(Mat3)>(&rotations[a]), prefetch_lines<sizeof(Mat3)>(&rotations[b]);
         if (!plans[k + kPairsAhead - first].same) {
-          __builtin_prefetch(&s.shapes_[a][pair_ahead.shape_a].material);
-          __builtin_prefetch(&s.shapes_[b][pair_ahead.shape_b].material);
+          const RigidShapeDef& sa = s.shapes_[a][pair_ahead.shape_a];
+          const RigidShapeDef& sb = s.shapes_[b][pair_ahead.shape_b];
+          __builtin_prefetch(&sa), __builtin_prefetch(&sa.material);
+          __builtin_prefetch(&sb), __builtin_prefetch(&sb.material);
           // a mesh pair made anew: its triangles near the shape (collide_mesh's first load;
           // a sixth of its samples on the terrain waited on it)
           if (ahead != kNoIndex && caches[ahead].mesh_query != kNoIndex)

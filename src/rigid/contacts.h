@@ -154,6 +154,11 @@ struct ShapePair {
   std::uint32_t slot_a = 0, slot_b = 0, shape_a = 0, shape_b = 0;  // key, as in ContactPair
   std::uint32_t proxy_a = 0, proxy_b = 0;                          // ShapeProxy indices
   std::uint32_t cache = kNoIndex;  // its PairCache, once the narrow phase has seen it
+  // the two shapes' kinds (a shape's never changes), set when the pair is found: the plan of
+  // make_manifolds picks a pair's path by them without reading the shapes' definitions, which
+  // lie anywhere in memory (its wait on b's, a line a pair made anew, was 15% of its samples
+  // on the terrain; collide_pair reads them later, asked for some pairs ahead)
+  ShapeType type_a = ShapeType::Plane, type_b = ShapeType::Plane;
   bool operator<(const ShapePair& o) const {
     if (slot_a != o.slot_a) return slot_a < o.slot_a;
     if (slot_b != o.slot_b) return slot_b < o.slot_b;
