@@ -663,6 +663,7 @@ void RigidContacts::prepare(RigidBodySystem& s) {
   static constexpr double kStill[8] = {0, 0, 0, 1, 0, 0, 0, 0};  // dp 0, the identity turn
   for (std::size_t i = 0; i <= n; ++i) std::memcpy(&motion[8 * i], kStill, sizeof kStill);
   warm.assign(n + 1, SolverBody{});
+  if (s.settings_.solver != RigidSolverType::SequentialImpulse) carry_fresh_slides(s);
   color(s);
   build(s);
   built = has_colors = lanes_valid = true;
@@ -1781,6 +1782,90 @@ void RigidContacts::bound_bounces(RigidBodySystem& s, bool from_rows) {
     } else {
       s.v_[i] = vf, s.w_[i] = wf;
     }
+  }
+}
+
+void RigidContacts::carry_fresh_slides(const RigidBodySystem& s) {
+  // A manifold's friction acts at the contact plane, below the centres, so it turns the bodies
+  // too, and its normal points hold that turn; solved once each a pass, friction and points
+  // converge by about 0.6 a pass from what they carry in. A cube set down at rest on a slope
+  // past atan(mu) carried nothing into its first step, slid 1.6-8.1 mm/s ahead of a t in it,
+  // and friction at its limit never took that back (docs/rigid-bodies.md). Where the manifold
+  // must slide (gravity's pull along the plane over mu times its press), the converged
+  // impulses are known before the step: the press stopped, the friction at the cone against
+  // the pull; within the cone the friction sticks and the later steps take back what the
+  // first leaves, so nothing is carried there (a pile on level ground keeps its bits).
+  // Only gravity is counted, on a manifold between a moving body and one that does not.
+  const double h = impulse_h;
+  if (!(h > 0)) return;
+  auto pull = [&](std::uint32_t i) {
+    return moves(s, i, s.type_, s.asleep_) ? s.gravity_ * (s.gravity_scale_[i] * h) : Vec3(0);
+  };
+  auto velocity = [&](std::uint32_t i, const Vec3& at) {
+    return moves(s, i, s.type_, s.asleep_) ? s.v_[i] + glm::cross(s.w_[i], at - s.com_[i]) : Vec3(0);
+  };
+  constexpr double kTouchingGap = 1e-6;  // (m: the kernels' kTouching, contact_wide.h)
+  // (a body held by more than one manifold shares its weight among them as the passes find:
+  // one's share is not known before, so those carry nothing; each body's pairs, up to 2)
+  pairs_of.assign(s.type_.size(), 0);
+  for (const ContactPair& c : pairs) {
+    pairs_of[c.a] = static_cast<std::uint8_t>(std::min(pairs_of[c.a] + 1, 2));
+    pairs_of[c.b] = static_cast<std::uint8_t>(std::min(pairs_of[c.b] + 1, 2));
+  }
+  for (ContactPair& c : pairs) {
+    const std::uint32_t held = moves(s, c.b, s.type_, s.asleep_) ? c.b : c.a;
+    if (pairs_of[held] != 1) continue;
+    if (!(c.friction > 0) || c.count == 0 || c.tangent_impulse[0] != 0 || c.tangent_impulse[1] != 0) continue;
+    int touching = 0;
+    bool carried = false;
+    for (int k = 0; k < c.count; ++k)
+      carried = carried || c.normal_impulse[k] != 0, touching += -c.depth[k] <= kTouchingGap ? 1 : 0;
+    if (carried || touching == 0) continue;
+    const double ma = moves(s, c.a, s.type_, s.asleep_) ? s.inv_mass_[c.a] : 0;
+    const double mb = moves(s, c.b, s.type_, s.asleep_) ? s.inv_mass_[c.b] : 0;
+    const Vec3 dv = pull(c.b) - pull(c.a);
+    const double press = -glm::dot(dv, c.normal);  // (b onto a: > 0)
+    if (!(press > 0) || !((ma > 0) != (mb > 0))) continue;  // (one body moves: `held`)
+    const Vec3 slide = dv + press * c.normal;
+    const double along = glm::length(slide);
+    if (!(along > c.friction * press)) continue;  // within the cone: sticks
+    // at rest: the bodies' relative velocity at the centroid no more than a substep's pull
+    const Vec3 at = s.com_[c.a] + c.ca;
+    if (glm::length(velocity(c.b, at) - velocity(c.a, at)) > glm::length(dv)) continue;
+    const double normal = press / (ma + mb), friction = c.friction * normal / along;
+    const Vec3 f = -friction * slide;
+    c.tangent_impulse[0] = glm::dot(f, c.t1);
+    c.tangent_impulse[1] = glm::dot(f, c.t2);
+    // the press shared out so that it and the friction turn the moving body by nothing (a
+    // sliding box slides without turning): from an even share over the touching points, plus
+    // the least change that holds the turn, d_k = q_k . l with q_k = (p_k - m) x n (m the
+    // touching points' mean, so the changes sum to none) and sum_k q_k q_k^T l = -(the even
+    // share's and the friction's moment about the centre); an even share where the points lie
+    // on a line or a point would pull (the body tips: the passes find its share)
+    bool on[Manifold::kMaxPoints];
+    Vec3 m(0);
+    for (int k = 0; k < c.count; ++k)
+      if ((on[k] = -c.depth[k] <= kTouchingGap)) m += c.points[k].at;
+    m /= touching;
+    const Vec3& com = s.com_[held];
+    const double even = normal / touching;
+    Vec3 moment = glm::cross(at - com, f);  // (the friction acts at the centroid)
+    double q[Manifold::kMaxPoints][2] = {}, mm[3] = {0, 0, 0};
+    for (int k = 0; k < c.count; ++k) {
+      if (!on[k]) continue;
+      const Vec3 qk = glm::cross(c.points[k].at - m, c.normal);
+      moment += glm::cross(c.points[k].at - com, c.normal) * even;
+      q[k][0] = glm::dot(qk, c.t1), q[k][1] = glm::dot(qk, c.t2);
+      mm[0] += q[k][0] * q[k][0], mm[1] += q[k][0] * q[k][1], mm[2] += q[k][1] * q[k][1];
+    }
+    const double det = mm[0] * mm[2] - mm[1] * mm[1];
+    const double r0 = -glm::dot(moment, c.t1), r1 = -glm::dot(moment, c.t2);
+    const double l0 = det > 0 ? (mm[2] * r0 - mm[1] * r1) / det : 0;
+    const double l1 = det > 0 ? (mm[0] * r1 - mm[1] * r0) / det : 0;
+    bool pushes = det > 0;
+    for (int k = 0; k < c.count; ++k) pushes = pushes && (!on[k] || even + q[k][0] * l0 + q[k][1] * l1 >= 0);
+    for (int k = 0; k < c.count; ++k)
+      c.normal_impulse[k] = !on[k] ? 0 : pushes ? even + q[k][0] * l0 + q[k][1] * l1 : even;
   }
 }
 

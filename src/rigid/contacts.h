@@ -675,6 +675,7 @@ struct RigidContacts {
   // `ones`), while lanes_valid: the blocks keep
   // the approach speeds and largest impulses of the last step for manifold() until the next prepare
   std::vector<std::uint32_t> lane_of;
+  std::vector<std::uint8_t> pairs_of;  // by body: its pairs this step, up to 2 (carry_fresh_slides)
   static constexpr std::uint32_t kOneLane = 0x80000000u;
   bool lanes_valid = false;
   // by body, and a last spare row for empty lanes: the velocities while the solver runs, the
@@ -828,6 +829,14 @@ struct RigidContacts {
   /// from impulses too large or too small by their ratio (a 5-stack switched from sequential
   /// impulses to TGS was kicked to 0.19 m/s).
   void carry_impulses(double h);
+  /// Starts the soft step's and TGS's manifolds that are set down at rest on a slope past their
+  /// friction angle from the impulses that hold them there, not from none (docs/rigid-bodies.md,
+  /// "A start-up slide on a slope"): a pair that carries nothing, touches, and whose bodies'
+  /// gravity over a substep (impulse_h) presses b onto a along the normal with less than
+  /// 1 / mu times its slide along the plane, carries the normal impulse that stops the press and
+  /// the friction mu times it against the slide (N s per substep), where it is the moving body's
+  /// only pair. Others keep none.
+  void carry_fresh_slides(const RigidBodySystem& s);
   /// Restitution for points that approached faster than the threshold, then the energy bound
   /// of the bodies that bounced off fixed bodies only (bound_bounces; dt: the step, s).
   void restitution(RigidBodySystem& s, double dt, const Vec3& gravity);

@@ -586,6 +586,47 @@ TEST(RigidFriction, AFlatBoxOnAnInclineStaysOrSlidesOverTheInputRange) {
   }
 }
 
+// A 0.2 m cube set down at rest, touching, on a slope half a degree and 10 degrees past
+// atan(mu) (mu 0.2 and 0.8), sleeping off, under the soft step and TGS: it slides at
+// a = g (sin - mu cos) from its first substep. Each substep of h adds a h to the velocity and
+// then moves by it (symplectic Euler), so after steps 1, 2, 3 the velocity is a t exactly (held
+// to 1% of a dt: the float passes' rounding), and after n substeps the distance is
+// a t^2 / 2 (n + 1) / n: held between the closed form a t^2 / 2 and the scheme's
+// a t^2 / 2 (n + 2) / n at 3 s. The soft step and TGS gave the cube a slide of its own in its
+// first step, 1.6-8.1 mm/s, which friction at its limit never took back, so the distance ran
+// 1.3-5% ahead at 3 s (docs/rigid-bodies.md, "A start-up slide on a slope"): a manifold's
+// friction, acting below the centre, turns the cube, and the first step carried no converged
+// impulses in. Now such a manifold starts from the impulses that hold it (carry_fresh_slides).
+// (The soft step half a degree over keeps 0.04-0.30 mm/s, the cube's settling into the soft
+// contacts' springs, not the friction's start: left out here, docs/rigid-bodies.md)
+TEST(RigidFriction, ACubeSetDownOnASlopeSlidesAtTheCoulombAccelerationFromItsFirstStep) {
+  const double dt = 1.0 / 60;
+  for (const auto solver : {pba::RigidSolverType::SoftStep, pba::RigidSolverType::Tgs})
+  for (const double mu : {0.2, 0.8})
+  for (const double offset : {0.5, 10.0}) {
+    if (solver == pba::RigidSolverType::SoftStep && offset < 1) continue;
+    const double theta = std::atan(mu) + deg(offset);
+    const double a = kG * (std::sin(theta) - mu * std::cos(theta));
+    Incline in(theta, mu, solver, Vec3(0.1));
+    in.s.settings().sleep = false;
+    const std::string what = std::string(to_string(solver)) + " mu " + std::to_string(mu) + " theta = atan(mu) + " +
+                             std::to_string(offset) + " deg";
+    const double x0 = in.along();
+    int n = 0;  // the substeps taken
+    for (int i = 1; i <= 180; ++i) {
+      in.s.step(dt, kGravity);
+      n += in.s.profile().substeps;
+      if (i <= 3) {
+        const double speed = glm::dot(in.s.linear_velocity(in.box), in.down);
+        EXPECT_NEAR(speed, a * i * dt, 1e-2 * a * dt) << what << " step " << i;
+      }
+    }
+    const double t = 180 * dt, closed = a * t * t / 2;
+    EXPECT_GT(in.along() - x0, closed) << what;
+    EXPECT_LT(in.along() - x0, closed * (n + 2) / n) << what;
+  }
+}
+
 // A box sliding at v on level ground stops after v^2 / (2 mu g), whatever the direction.
 TEST(RigidFriction, SlidingStopDistanceIsTheSameInTwelveDirections) {
   const double v = 4, mu = 0.5, expected = v * v / (2 * mu * kG);
