@@ -2867,6 +2867,62 @@ TEST(RigidSleep, ABoxHeldByStaticFrictionOnASlopeFallsAsleep) {
   }
 }
 
+// Creep is rest, though friction sits at its limit (RigidBodySystem::update_sleep): the rule
+// above kept a manifold's bodies awake when one was faster than its window began by more than
+// the rounding of a step's fall (1.6e-7 m/s), and soft-step square pyramids of 6 and 10
+// levels, set down at rest, slept at 5.35 and 5.48 s (sequential impulses' 10 levels at 0.92
+// s), where before that rule they slept at 0.52 s, one window (time_to_sleep, 0.5 s) and a
+// step; with sleeping off they move 1 mm in all after it. The gain must now show at least
+// sleep_linear / (64 W) of acceleration (1.6e-3 m/s^2). So each sleeps within two windows
+// (1 s: one in which the pile settles, one in which it rests), and sleeps on. XPBD's pyramid
+// of 6 levels did not sleep in 20 s before the rule either (91 of its boxes awake): not
+// this rule's, left out.
+TEST(RigidSleep, ACreepingPyramidFallsAsleepWithinTwoWindows) {
+  const double dt = 1.0 / 60;
+  const long steps = std::lround(2 * ContactSettings{}.time_to_sleep / dt);  // two windows
+  for (const auto solver : {pba::RigidSolverType::SoftStep, pba::RigidSolverType::SequentialImpulse,
+                            pba::RigidSolverType::Tgs})
+    for (const int levels : {6, 10}) {
+      RigidBodySystem s(with(solver));
+      const auto boxes = pba::rigid_scenes::square_pyramid(s, levels);
+      const std::string what = std::string(to_string(solver)) + " " + std::to_string(levels) + " levels";
+      auto awake = [&] {
+        return std::count_if(boxes.begin(), boxes.end(), [&](pba::RigidBodyId b) { return s.awake(b); });
+      };
+      long i = 0;
+      while (awake() > 0 && i < steps) s.step(dt, kGravity), ++i;
+      EXPECT_EQ(awake(), 0) << what << " at " << i * dt << " s";
+      for (int k = 0; k < 120; ++k) s.step(dt, kGravity);
+      EXPECT_EQ(awake(), 0) << what << " 2 s later";
+    }
+}
+
+// The same for a box set down at rest on a slope at exactly atan(mu): its friction sits at the
+// limit and, with sleeping off, it does not speed up: it coasts, slowing, at the speed its first
+// step gave it (at mu 0.5: 4.8 mm/s under the soft step, 0.44 mm/s under sequential
+// impulses). Under the rule's first floor it slept at 5.7 s (soft step) and 5.3 s (TGS) and
+// never under sequential impulses (0.52 s before the rule). Now it sleeps within two windows
+// under every solver, and sleeps on, within the window's reach (sleep_linear x time_to_sleep,
+// 2.5 cm) of where it was set down.
+TEST(RigidSleep, ABoxSetDownAtItsFrictionAngleFallsAsleepWithinTwoWindows) {
+  const ContactSettings defaults;
+  const double dt = 1.0 / 60;
+  const long steps = std::lround(2 * defaults.time_to_sleep / dt);  // two windows
+  const double reach = defaults.sleep_linear * defaults.time_to_sleep;
+  for (const auto solver : kAll)
+    for (const double mu : {0.2, 0.5, 0.8}) {
+      Incline in(std::atan(mu), mu, solver, Vec3(0.1));
+      const std::string what = std::string(to_string(solver)) + " mu " + std::to_string(mu);
+      const double x0 = in.along();
+      long i = 0;
+      while (in.s.awake(in.box) && i < steps) in.s.step(dt, kGravity), ++i;
+      EXPECT_FALSE(in.s.awake(in.box)) << what << " at " << i * dt << " s";
+      for (int k = 0; k < 120; ++k) in.s.step(dt, kGravity);
+      EXPECT_FALSE(in.s.awake(in.box)) << what << " 2 s later";
+      EXPECT_LT(std::abs(in.along() - x0), reach) << what;
+    }
+}
+
 // The same for the turn: a box of width w and height h on a high-friction slope (mu 1.5) a
 // quarter and half a degree past its critical angle atan(w / h) tips from rest about its lower
 // edge as an inverted pendulum, I phi'' = m g r sin(delta + phi) (r the half diagonal, I =
