@@ -2191,6 +2191,7 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     c.restitution = r.mixed_restitution;
     c.rolling = r.mixed_rolling;
     c.count = r.count;
+    c.balls = p.type_a == ShapeType::Sphere && p.type_b == ShapeType::Sphere ? 1u : 0u;  // (the shapes' kinds)
     if (pair_points.size() <= at_index) pair_points.resize(pairs.capacity());  // (grows with the pairs)
     pair_points[at_index] = static_cast<std::uint8_t>(r.count);
   }

@@ -141,6 +141,7 @@ struct FillInput {
   double offset[4][kLanes], impulse[4][kLanes];
   double friction[kLanes], twist_radius[kLanes], tangent_impulse[2][kLanes], twist_impulse[kLanes];
   double rolling[kLanes], rolling_impulse[3][kLanes];  // rolling resistance (one-point blocks' lanes)
+  double balls[kLanes];  // 1 for two balls (ContactPair::balls), else 0
 };
 // A lane's impulse unit from its bodies' inverse masses' sum (1/kg): 2^-e where the sum is
 // f 2^e with f in [0.5, 1) (std::frexp's exponent), 1 for a sum of 0. Read from the sum's
@@ -327,6 +328,19 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
   for (int i = 0; i < 3; ++i)
     dab[i] = from<V>(in.dab[i], l0), dba[i] = from<V>(in.dba[i], l0), cw[i] = from<V>(in.ca[i], l0);
   for (int i = 0; i < 3; ++i) d[i] = dot3(dab, t[i]), ca[i] = dot3(cw, t[i]);
+  // two balls (a lane of one point): each body's arm goes from its own ball's centre along n,
+  // so its tangential part is the ball's centre's from the centre of mass (the point's sa, sb
+  // in the frame; 0 for a ball on its body's centre), not the shared point's, which is off the
+  // line of centres when the normal is the touch's (touch_normal): a frictionless push then has
+  // no moment about either centre. a's centroid there, b's (ca + d) at sb's
+  const auto balls = from<V>(in.balls, l0) > zero, plain = from<V>(in.balls, l0) == zero;
+  V core_a[3], core_b[3], ball_a[2];
+  for (int i = 0; i < 3; ++i) core_a[i] = from<V>(in.sa[0][i], l0), core_b[i] = from<V>(in.sb[0][i], l0);
+  for (int i = 0; i < 2; ++i) {
+    ball_a[i] = dot3(core_a, t[i]);
+    d[i] = balls ? dot3(core_b, t[i]) - ball_a[i] : d[i];
+    ca[i] = balls ? ball_a[i] : ca[i];
+  }
   for (int i = 0; i < 3; ++i) put(k.ca[i], l0, ca[i]), put(k.cb[i], l0, ca[i] + d[i]);
   // the points (their arms, anchors, separations and carried impulses), then the rows their
   // bodies' inverse inertias enter (inertia_rows)
@@ -338,15 +352,18 @@ PBA_LANES void fill_lanes(const FillInput& in, B& k, AnchorsOf<B::kPoints>& g, i
     V arm[3], sa[3], sb[3];
     for (int i = 0; i < 3; ++i)
       arm[i] = from<V>(in.arm[p][i], l0), sa[i] = from<V>(in.sa[p][i], l0), sb[i] = from<V>(in.sb[p][i], l0);
-    const V x = keep(on[p], dot3(arm, t[0])), y = keep(on[p], dot3(arm, t[1]));
+    V x = dot3(arm, t[0]), y = dot3(arm, t[1]);
+    if (p == 0) x = balls ? ball_a[0] : x, y = balls ? ball_a[1] : y;  // (two balls: at the centroid)
+    x = keep(on[p], x), y = keep(on[p], y);
     px[p] = x, py[p] = y;
     const V za = dot3(sa, t[2]), zb = dot3(sb, t[2]);
     put(g.za[p], l0, keep(on[p], za)), put(g.zb[p], l0, keep(on[p], zb));
     // the core anchors' tangential offsets from the contact point (half the step from a's
-    // surface point to b's; zero where the narrow phase puts them on one normal)
+    // surface point to b's; zero where the narrow phase puts them on one normal, and for two
+    // balls, whose arms are their cores' already)
     V e[3];
     for (int i = 0; i < 3; ++i) e[i] = lanes::splat<V>(0.5) * ((sb[i] + dba[i]) - sa[i]);
-    put(g.ex[p], l0, keep(on[p], dot3(e, t[0]))), put(g.ey[p], l0, keep(on[p], dot3(e, t[1])));
+    put(g.ex[p], l0, keep(on[p], keep(plain, dot3(e, t[0])))), put(g.ey[p], l0, keep(on[p], keep(plain, dot3(e, t[1]))));
     // the separation at the start of the step (the kernels add the bodies' motion since)
     const V sep = keep(on[p], base + from<V>(in.offset[p], l0) + zb - za);
     put(k.sep[p], l0, sep), put(g.base[p], l0, sep);
@@ -418,9 +435,10 @@ static_assert(offsetof(ContactPair, t1) == 88 && offsetof(ContactPair, friction)
                   offsetof(ContactPair, rolling) == 184 && offsetof(ContactPair, t2) == 192 &&
                   offsetof(ContactPair, ca) == 216 && offsetof(ContactPair, twist_radius) == 240 &&
                   offsetof(ContactPair, count) == 248 && sizeof(ContactPair::count) == 4 &&
+                  offsetof(ContactPair, balls) == 252 && sizeof(ContactPair::balls) == 4 &&
                   sizeof(Mat3) == 9 * sizeof(double),
-              "gather_fill_avx2 reads a pair's header as six rows of four doubles from its normal, a point as "
-              "4 + 4 + 2");
+              "gather_fill_avx2 reads a pair's header as six rows of four doubles from its normal (the count and "
+              "the balls' flag in the last double), a point as 4 + 4 + 2");
 static_assert(offsetof(SolverPoint, sa) == 24 && offsetof(SolverPoint, sb) == 48 &&
                   offsetof(SolverPoint, offset) == 72 && sizeof(SolverPoint) == 80 && Manifold::kMaxPoints == 4,
               "gather_fill_avx2 reads a point's at, sa, sb and offset as rows at these places, four points a pair");
@@ -477,10 +495,14 @@ __attribute__((target("avx2"))) void gather_fill_avx2(FillInput& in, const Conta
     put(in.t[1][0], r[0]), put(in.t[1][1], r[1]), put(in.t[1][2], r[2]), put(in.ca[0], r[3]);
     rows(offsetof(ContactPair, ca) + 8, r);  // ca.y, ca.z, twist_radius, count
     put(in.ca[1], r[0]), put(in.ca[2], r[1]), put(in.twist_radius, r[2]);
-    // the count: the low half of its row's last double (the padding after it is not read)
+    // the count: the low half of its row's last double
     const __m256i points = _mm256_and_si256(_mm256_castpd_si256(r[3]), low);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(count + l0),
                      _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(points, low_words)));
+    // two balls: the high half of that double, not 0
+    const __m256i balls = _mm256_srli_epi64(_mm256_castpd_si256(r[3]), 32);
+    put(in.balls, _mm256_andnot_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(balls, _mm256_setzero_si256())),
+                                   _mm256_set1_pd(1.0)));
     if constexpr (P == 1) {  // a one-point lane's rolling impulse (fill_lanes reads it for those only)
       rows(offsetof(ContactPair, rolling_impulse), r);
       for (int i = 0; i < 3; ++i) put(in.rolling_impulse[i], r[i]);
@@ -1103,6 +1125,7 @@ std::uint32_t RigidContacts::fill_block(RigidBodySystem& s, B* block_array, Anch
     in.tangent_impulse[0][l] = c.tangent_impulse[0], in.tangent_impulse[1][l] = c.tangent_impulse[1];
     in.twist_impulse[l] = c.twist_impulse;
     in.rolling[l] = c.rolling;
+    in.balls[l] = c.balls != 0 ? 1 : 0;
     // (a one-point lane's: fill_lanes reads it for those only, and it sits in the key's line)
     if constexpr (kOne)
       for (int i = 0; i < 3; ++i) in.rolling_impulse[i][l] = c.rolling_impulse[i];

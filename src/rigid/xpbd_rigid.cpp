@@ -80,11 +80,17 @@ Quat turned(const Quat& now, const Quat& start) { return now * glm::conjugate(st
 // stays along the normal (a rolling ball's contact stays below its centre, a box's corner
 // turns with the box; the paper's fixed material points, r = q r_local, let a ball rolling
 // at 12 rad/s push 11 degrees off its contact by the end of a 60 Hz step)
-// (com0_a, com0_b: the centres at the start of the step, which the point's anchors are from)
-void levers(const SolverPoint& p, const Vec3& com0_a, const Vec3& com0_b, const Quat& ta, const Quat& tb, Vec3& ra,
-            Vec3& rb) {
-  ra = ta * p.sa + ((p.at - com0_a) - p.sa);
-  rb = tb * p.sb + ((p.at - com0_b) - p.sb);
+// (com0_a, com0_b: the centres at the start of the step, which the point's anchors are from).
+// Two balls' steps are the normal's parts of those to the shared point, which lies off the line
+// of centres when the normal is the touch's (touch_normal): each arm then goes from its ball's
+// centre along the normal, and a frictionless push has no moment about either centre.
+void levers(const ContactPair& c, int j, const Vec3& com0_a, const Vec3& com0_b, const Quat& ta, const Quat& tb,
+            Vec3& ra, Vec3& rb) {
+  const SolverPoint& p = c.points[j];
+  Vec3 step_a = (p.at - com0_a) - p.sa, step_b = (p.at - com0_b) - p.sb;
+  if (c.balls != 0) step_a = glm::dot(step_a, c.normal) * c.normal, step_b = glm::dot(step_b, c.normal) * c.normal;
+  ra = ta * p.sa + step_a;
+  rb = tb * p.sb + step_b;
 }
 
 // how far the body's material point at the contact has moved in the substep, the lever to it
@@ -220,7 +226,7 @@ void RigidContacts::project(RigidBodySystem& s, ContactPair& c, XpbdPair& x, dou
   for (int j = 0; j < n; ++j) {
     const SolverPoint& p = c.points[j];
     Vec3 ra, rb;
-    levers(p, s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
+    levers(c, j, s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
     a_levers[j] = ra, b_levers[j] = rb;
     ca += ra, cb += rb;
     core_a += ta * p.sa, core_b += tb * p.sb;
@@ -535,7 +541,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       const Quat ta = turned(s.q_[c.a], s.q0_[c.a]), tb = turned(s.q_[c.b], s.q0_[c.b]);
       for (int j = 0; j < c.count; ++j) {
         Vec3 ra, rb;
-        levers(c.points[j], s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
+        levers(c, j, s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
         const Vec3 dv = s.v_[c.b] + glm::cross(s.w_[c.b], rb) - s.v_[c.a] - glm::cross(s.w_[c.a], ra);
         xpbd[k].approach[j] = glm::dot(dv, c.normal);
       }
@@ -614,7 +620,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       Vec3 ca(0), cb(0);
       for (int j = 0; j < c.count; ++j) {
         Vec3 ra, rb;
-        levers(c.points[j], s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
+        levers(c, j, s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
         ca += ra, cb += rb;
       }
       ca /= static_cast<double>(c.count), cb /= static_cast<double>(c.count);
@@ -625,7 +631,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
       auto points = [&] {
         for (int j = 0; j < c.count; ++j) {
           Vec3 ra, rb;
-          levers(c.points[j], s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
+          levers(c, j, s.com0_[c.a], s.com0_[c.b], ta, tb, ra, rb);
           const Vec3 dvj = *b.v + glm::cross(*b.w, rb) - *a.v - glm::cross(*a.w, ra);
           const double approach = x.approach[j];
           const double e = approach <= -threshold ? c.restitution : 0;

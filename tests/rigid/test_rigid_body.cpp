@@ -1426,10 +1426,10 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_NE(soft, tgs);
   EXPECT_NE(soft, xpbd);
   EXPECT_NE(tgs, xpbd);
-  EXPECT_EQ(soft, 0x9bb7fc6e38ff7239ull) << std::hex << soft;
-  EXPECT_EQ(si, 0x81cef11dbaaab481ull) << std::hex << si;
-  EXPECT_EQ(tgs, 0xbf4914ea41568d01ull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0xa4c837a3bbf48425ull) << std::hex << xpbd;
+  EXPECT_EQ(soft, 0x02b3ea33af8fd58aull) << std::hex << soft;
+  EXPECT_EQ(si, 0xa79c906b21f6e86cull) << std::hex << si;
+  EXPECT_EQ(tgs, 0x78942a7a2de45e46ull) << std::hex << tgs;
+  EXPECT_EQ(xpbd, 0x7cd20c6e3f6a971aull) << std::hex << xpbd;
 }
 
 }  // namespace
