@@ -433,6 +433,18 @@ PBA_LANES void to_frame(const V t1[3], const V t2[3], const V n[3], const V v[3]
 // by less than this, which the sway tests hold)
 constexpr float kCarryGrowth = 1.5f;
 
+// TGS's (on the manifold's total): at most this times the last substep's. A resting manifold's
+// total changes by far less; a landing manifold, which held nothing the substep before, still
+// carries only what holds it against gravity; the loaded manifolds below it carry more of the
+// impulse the landing passed down, which pushes back out the overlap the landing's substep
+// left them within the slop (TGS's bias only acts beyond it). Measured on Jolt's pyramid
+// (TGS, 100 steps; its sag is left by the landings, the same at 500 steps) and the dropped
+// column of ten (asleep after): 1.5, its top sags 24.8 mm, the column asleep at 2.03 s; 3,
+// 14.7 mm; 6, 9.4 mm; 8, 3.4 mm (1.87 s); 10, 1.5 mm (1.72 s, its boxes within 1.5 cm of
+// their line); 20, 1.8 mm. Carried whole (before 2026-12-07) it sagged 0.6 mm and the
+// columns never slept (docs/rigid-bodies.md, "What a substep carries to the next")
+constexpr float kCarryGrowthTgs = 10.0f;
+
 // the separation (m) below which a point counts as touching (see solve())
 constexpr float kTouching = 1e-6f;
 
@@ -1200,14 +1212,15 @@ PBA_LANES void pass(B& c, const AnchorsOf<B::kPoints>& g, int l0, const FloatPar
         // TGS: the manifold's total, its points' shares kept. Its rigid contacts hold a load
         // by the carried impulse alone within the slop, and the one sweep a substep moves
         // the load between a face's corners: capped point by point, a corner that took none
-        // in one substep carried almost none to the next, and Jolt's pyramid sank 3.4 cm
+        // in one substep carried almost none to the next, and Jolt's pyramid sank 3.4 cm.
+        // Growing up to kCarryGrowthTgs times a substep (1.5 sank it 2.5 cm by its landings)
         V before = zero, hold = zero;
         for (int k = 0; k < B::kPoints; ++k) {
           const V l = L(c.impulse[k]);
           all = all + l, before = before + L(g.last[k]), hold = hold + L(c.mass[k]);
           L.put(g.last[k], l);
         }
-        kept = vmin(all, before * splat<V>(kCarryGrowth) + hold * splat<V>(p.carry_speed));
+        kept = vmin(all, before * splat<V>(kCarryGrowthTgs) + hold * splat<V>(p.carry_speed));
         const V share = all > zero ? kept / all : splat<V>(1);
         for (int k = 0; k < B::kPoints; ++k) L.put(c.impulse[k], L(c.impulse[k]) * share);
       } else {
