@@ -132,7 +132,9 @@ struct RigidBodyDef {
   double linear_damping = 0;        ///< 1/s, finite and >= 0: dv/dt = -c v
   double angular_damping = 0;       ///< 1/s, finite and >= 0: dw/dt = -c w
   double gravity_scale = 1;         ///< multiplies the system's gravity, finite
-  bool bullet = false;              ///< fast body: continuous collision against static geometry
+  /// fast body: continuous collision against static geometry and, swept after the other bodies,
+  /// against the moving non-bullet bodies at their poses at the step's end (not other bullets)
+  bool bullet = false;
 
   /// Throws Error naming `where` and the bad field.
   void validate(std::string_view where) const;

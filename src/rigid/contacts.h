@@ -328,6 +328,10 @@ struct RigidContacts {
   std::vector<std::uint8_t> refreshed;  // scratch of refresh_inertia, by body (and the spare row, and 3 bytes the gathers read past it): 1 when refreshed
   std::vector<std::uint32_t> refresh_list;  // scratch of refresh_inertia: the bodies it refreshed
   std::size_t continuous_hits = 0;     // bodies put back to a time of impact, all steps
+  // scratch of continuous(): the moving (dynamic, kinematic) non-bullet bodies whose bounds
+  // a bullet's path reaches (dense indices), swept against at their poses at the step's end
+  std::vector<std::uint32_t> bullet_targets;
+  std::vector<std::uint32_t> late_bullets;  // scratch of continuous(): the awake bullets, swept last
   double impulse_h = 0;  // the time step (s) the carried impulses were accumulated over; 0: none yet
   // the least smallest half size of any body created (m; not raised when one is destroyed):
   // whether some pair may take less than the settings' slop (pair_slop)
@@ -893,8 +897,9 @@ struct RigidContacts {
   };
   std::vector<Bounce> bounces;
   std::vector<std::uint8_t> shared;  // by body, scratch of find_bounces (1: touches a body that moves; 2: listed)
-  /// Sweeps fast bodies (and bullets) against static shapes and puts each back at its first
-  /// time of impact (continuous.cpp).
+  /// Sweeps fast bodies (and bullets) against static shapes, and bullets also against the
+  /// moving non-bullet bodies at their poses at the step's end, and puts each back at its
+  /// first time of impact (continuous.cpp).
   void continuous(RigidBodySystem& s);
   /// The soft step's position pass after its substeps (push_out.cpp): when some point
   /// overlaps more than the linear slop at the poses now (or a manifold's springs have a
