@@ -360,14 +360,23 @@ void RigidContacts::continuous(RigidBodySystem& s) {
     // comes within the slop; or, when it starts the step within the slop and its centre's path
     // goes on into the piece, the start of the step, moving no more into it (only a body with
     // a core: a T-handle's centre of mass below its ball rests within the slop of the ground)
-    auto core_against = [&](auto gap_at) {
+    // (`keep_out` false: a moving target, whose contact shares the momentum, sets no `into`)
+    auto core_against = [&](auto gap_at, bool keep_out = true) {
       const Gap g0 = gap_at(0.0);
       // (the advance's first gap is this one: made again there, it was a GJK run a triangle
       // for nothing, 36 of the terrain's landing steps' 1,350 a step)
       if (g0.distance > target + tol)
         toi = std::min(toi, advance(core, [&](double t) { return t == 0.0 ? g0 : gap_at(t); }, target, tol));
-      else if (glm::dot(core.c1 - core.c0, g0.normal) > g0.distance + target)
+      else if (keep_out && glm::dot(core.c1 - core.c0, g0.normal) > g0.distance + target)
         toi = 0, into = g0.normal;
+    };
+    // a convex shape sa of the body, swept with ws, against a convex piece pbx that stays put:
+    // the fraction of the step at which they come within the slop (1: not in the step)
+    auto shape_against = [&](const Sweep& ws, const RigidShapeDef& sa, const ConvexProxy& pbx) {
+      return advance(ws, [&](double t) {
+        const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, compose(w.body(t), sa.local)), pbx);
+        return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
+      }, target, tol);
     };
     // the path's bounds in the frame of a mesh posed at pb
     // (a box's bounds, as bounds() makes them, without a ColliderShape made and checked for
@@ -561,11 +570,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
             if (hit < toi) toi = hit;
           });
         } else if (sb.shape.is_convex()) {
-          const ConvexProxy pbx = ConvexProxy::of(sb.shape, pb);
-          toi = std::min(toi, advance(ws, [&](double t) {
-            const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, pose_a(t)), pbx);
-            return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
-          }, target, tol));
+          toi = std::min(toi, shape_against(ws, sa, ConvexProxy::of(sb.shape, pb)));
         }
       }
     }
@@ -581,24 +586,16 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       for (const RigidShapeDef& sb : s.shapes_[j]) {
         if (!sb.shape.is_convex()) continue;
         const ConvexProxy pbx = ConvexProxy::of(sb.shape, shape_frame(body_b, sb.local));
-        if (has_core) {
-          auto gap_at = [&](double t) {
+        if (has_core)
+          core_against([&](double t) {
             const DistanceResult r = gjk_distance(core_at(t), pbx);
             return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
-          };
-          const Gap g0 = gap_at(0.0);
-          if (g0.distance > target + tol)
-            toi = std::min(toi, advance(core, [&](double t) { return t == 0.0 ? g0 : gap_at(t); }, target, tol));
-        }
+          }, false);
         for (std::size_t a = 0; a < shapes.size(); ++a) {
-          const RigidShapeDef& sa = shapes[a];
-          if (!sa.shape.is_convex()) continue;
+          if (!shapes[a].shape.is_convex()) continue;
           Sweep ws = w;
           ws.reach = std::min(w.reach, shape_reach(a));
-          toi = std::min(toi, advance(ws, [&](double t) {
-            const DistanceResult r = gjk_distance(ConvexProxy::of(sa.shape, compose(w.body(t), sa.local)), pbx);
-            return Gap{r.cores_overlap ? 0.0 : r.distance, r.normal};
-          }, target, tol));
+          toi = std::min(toi, shape_against(ws, shapes[a], pbx));
         }
       }
     }
