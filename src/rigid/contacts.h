@@ -332,6 +332,20 @@ struct RigidContacts {
   // a bullet's path reaches (dense indices), swept against at their poses at the step's end
   std::vector<std::uint32_t> bullet_targets;
   std::vector<std::uint32_t> late_bullets;  // scratch of continuous(): the awake bullets, swept last
+  // scratch of continuous(), made once a step that has bullets (bullet_targets_prepare): the
+  // moving non-bullet bodies whose bounding box at the step's end (their centre of mass +-
+  // their reach) sticks out of every one of their shapes' fat boxes in the tree by more than
+  // kTargetSlack, or that have no shape in the tree (dense indices, ascending): each bullet tests
+  // them one by one. Every other moving body's end box lies within target_excess (m) of one
+  // of its fat boxes, so a tree query of a bullet's path grown by that much finds it.
+  std::vector<std::uint32_t> loose_targets;
+  double target_excess = 0;
+  /// For the tests: when set, continuous() also finds each bullet's moving targets by the
+  /// scan of every body that the tree's query replaced, and throws pba::Error naming the
+  /// bullet and the body when the two lists differ (off: the scan is not made).
+  static inline bool check_bullet_targets = false;
+  /// For the tests: the targets that check found in both lists, all steps (counted when set).
+  static inline std::size_t checked_targets = 0;
   double impulse_h = 0;  // the time step (s) the carried impulses were accumulated over; 0: none yet
   // the least smallest half size of any body created (m; not raised when one is destroyed):
   // whether some pair may take less than the settings' slop (pair_slop)
@@ -901,6 +915,11 @@ struct RigidContacts {
   /// moving non-bullet bodies at their poses at the step's end, and puts each back at its
   /// first time of impact (continuous.cpp).
   void continuous(RigidBodySystem& s);
+  // continuous()'s parts for the bullets (continuous.cpp): how far the moving bodies' boxes at
+  // the step's end stick out of their fat boxes (once a step), and bullet i's moving targets
+  // along `path` (its path's bounds grown by its reach), into bullet_targets
+  void prepare_targets(const RigidBodySystem& s);
+  void find_targets(const RigidBodySystem& s, std::size_t i, const Aabb& path);
   /// The soft step's position pass after its substeps (push_out.cpp): when some point
   /// overlaps more than the linear slop at the poses now (or a manifold's springs have a
   /// shifted rest), moves the bodies of the manifolds that touch those bodies apart (without

@@ -25,6 +25,7 @@
 #include <cmath>
 #include <cstddef>
 #include <span>
+#include <string>
 
 #include <glm/gtc/quaternion.hpp>
 
@@ -218,7 +219,83 @@ __attribute__((target("avx2"))) int slow4_avx2(const Quat* q, const Quat* q0, co
 }
 #endif
 
+// a moving target's box at the step's end, as the bullets' search takes it: its centre of mass
+// `c` with its reach `r` on every side (m)
+Aabb end_box(const Vec3& c, double r) { return {c - Vec3(r), c + Vec3(r)}; }
+
+// how far (m) box `b` sticks out of box `fat` on its farthest side (0 when inside; NaN stays NaN)
+double sticks_out(const Aabb& b, const Aabb& fat) {
+  const Vec3 lo = fat.lo - b.lo, hi = b.hi - fat.hi;
+  return std::max({0.0, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
+}
+
+// A body whose end box sticks out of its fat boxes by more than this (m) is tested by each
+// bullet directly instead of through the tree (see prepare_targets): the tree's query grows by
+// the most any other body sticks out, and one fast or long body would grow every bullet's query.
+// Any value gives the same targets; this one keeps the queries near their paths' size.
+constexpr double kTargetSlack = 0.5;
+
 }  // namespace
+
+// The tree's fat boxes were made at the step's start from the poses then (grown by the
+// speculative distance and the step's travel at the velocity then, and stretched along it),
+// but the bullets' targets are taken at their poses at the step's end: a body that sped up
+// in the step, or moved farther than its size, or a sleeper whose fat box was made before
+// its last step of motion, may end outside its boxes. So each moving body's end box is
+// measured once a step against its shapes' fat boxes: how far it sticks out of the one it
+// sticks out of least. Those within kTargetSlack count in target_excess, the most of them;
+// the others (and bodies with no shape in the tree) are listed in loose_targets.
+void RigidContacts::prepare_targets(const RigidBodySystem& s) {
+  loose_targets.clear();
+  target_excess = 0;
+  for (std::size_t j = 0; j < s.type_.size(); ++j) {
+    if (s.type_[j] == BodyType::Static || s.bullet_[j]) continue;
+    const std::uint32_t slot = s.owner_[j];
+    double least = INFINITY;
+    if (slot < body_proxies.size())
+      for (const std::uint32_t q : body_proxies[slot])
+        if (proxies[q].node >= 0) least = std::min(least, sticks_out(end_box(s.com_[j], s.extent_[j]), tree.fat_box(proxies[q].node)));
+    if (least <= kTargetSlack)
+      target_excess = std::max(target_excess, least);
+    else
+      loose_targets.push_back(static_cast<std::uint32_t>(j));  // (NaN too: tested directly, as the scan did)
+  }
+}
+
+// Bullet i's moving targets whose end boxes its path reaches, into bullet_targets by dense
+// index, ascending, each once: the list the scan of every body made (the same sweeps in the
+// same order, so the same bits), from a query of the tree and the loose list. A body whose end
+// box overlaps the path lies within target_excess of one of its fat boxes, which then overlaps
+// the path grown by that much: the query is grown by it and by a margin for the rounding of
+// the excess and of the growth (1e-12 of the coordinates, some 4,500 ulps), and its hits are
+// held to the scan's own test.
+void RigidContacts::find_targets(const RigidBodySystem& s, std::size_t i, const Aabb& path) {
+  auto take = [&](std::uint32_t j) {
+    if (s.type_[j] != BodyType::Static && !s.bullet_[j] && end_box(s.com_[j], s.extent_[j]).overlaps(path)) bullet_targets.push_back(j);
+  };
+  Aabb query = path.grown(target_excess);
+  const Vec3 round = 1e-12 * (glm::max(glm::abs(query.lo), glm::abs(query.hi)) + Vec3(1.0));
+  query.lo -= round, query.hi += round;
+  tree.query(query, [&](std::uint32_t q) {
+    take(proxies[q].body);
+    return true;
+  });
+  for (const std::uint32_t j : loose_targets) take(j);
+  std::sort(bullet_targets.begin(), bullet_targets.end());
+  bullet_targets.erase(std::unique(bullet_targets.begin(), bullet_targets.end()), bullet_targets.end());
+  if (!check_bullet_targets) return;
+  std::uint32_t at = 0;
+  for (std::uint32_t j = 0; j < s.type_.size(); ++j) {
+    if (s.type_[j] == BodyType::Static || s.bullet_[j] || !end_box(s.com_[j], s.extent_[j]).overlaps(path)) continue;
+    if (at >= bullet_targets.size() || bullet_targets[at] != j)
+      throw Error("continuous: the broad phase's tree missed " + s.describe(j) + " as a target of the bullet " +
+                  s.describe(i));
+    ++at, ++checked_targets;
+  }
+  if (at != bullet_targets.size())
+    throw Error("continuous: the broad phase's tree gave " + s.describe(bullet_targets[at]) +
+                ", which the scan does not, as a target of the bullet " + s.describe(i));
+}
 
 void RigidContacts::continuous(RigidBodySystem& s) {
   const ContactSettings& cs = s.settings_;
@@ -293,14 +370,13 @@ void RigidContacts::continuous(RigidBodySystem& s) {
         if (!(low - (target + tol) > travel * (1 + 1e-9) + 1e-9)) break;
       }
       // a bullet's moving targets: the non-bullet dynamic and kinematic bodies (asleep too)
-      // whose bounding balls about their centres of mass at the step's end the path reaches
+      // whose bounding boxes about their centres of mass at the step's end (reach on every
+      // side) the path reaches, found through the broad phase's tree (see find_targets)
       bullet_targets.clear();
-      if (late)
-        for (std::size_t j = 0; j < n; ++j) {
-          if (s.type_[j] == BodyType::Static || s.bullet_[j]) continue;
-          const Vec3 r(s.extent_[j]);
-          if (Aabb{s.com_[j] - r, s.com_[j] + r}.overlaps(path)) bullet_targets.push_back(static_cast<std::uint32_t>(j));
-        }
+      if (late) {
+        if (k == n) prepare_targets(s);
+        find_targets(s, i, path);
+      }
       if (near == statics.size() && bullet_targets.empty()) continue;
     }
     // (every field in the braces, none written twice: made with zeros for the angle and the

@@ -13,6 +13,7 @@
 #include "pba/rigid.h"
 #include "closed_box_check.h"
 #include "pba/rigid_scenes.h"
+#include "rigid/contacts.h"  // the bullets' targets cross-checked against the scan, through a seam
 
 using pba::BodyType;
 using pba::ColliderShape;
@@ -467,4 +468,70 @@ TEST(RigidContinuous, ABulletHitsABodyCrossingItsPath) {
         EXPECT_EQ(s.linear_velocity(plate).x, 0.0) << pba::to_string(solver);
       }
     }
+}
+
+// A bullet finds its moving targets through the broad phase's tree (RigidContacts::find_targets)
+// instead of a scan of every body. The tree's fat boxes are made at the step's start, the
+// targets taken at their poses at its end, so the tree is queried with the path grown by the
+// most any body's end box sticks out of its fat boxes, and the bodies sticking out by more
+// (fast, long or many-shaped ones) are tested directly. With the scan kept as a cross-check
+// (check_bullet_targets: it throws naming the bullet and the body when the lists differ), on
+// random scenes of every kind of body the tree's way may get wrong: fast bodies that leave
+// their fat boxes within the step, bodies sped up or turned by contacts, sleepers, kinematic
+// bodies, a two-ball dumbbell whose balls' fat boxes leave its middle uncovered, long
+// capsules, bullets among them at up to 300 m/s under gravity in a closed box. Every solver,
+// 4 scenes each, 90 steps: the two lists never differ, and the check compared many targets
+// in every scene.
+TEST(RigidContinuous, TheBroadPhaseFindsEveryMovingTargetTheScanFinds) {
+  using pba::detail::RigidContacts;
+  RigidContacts::check_bullet_targets = true;
+  RigidContacts::checked_targets = 0;
+  std::size_t bullets_hit = 0;
+  for (const RigidSolverType solver : pba::kRigidSolvers)
+    for (unsigned seed = 1; seed <= 4; ++seed) {
+      RigidBodySystem s({.contacts = {.solver = solver}});
+      std::srand(seed);
+      auto uniform = [](double lo, double hi) { return lo + (hi - lo) * (std::rand() / (RAND_MAX + 1.0)); };
+      auto point = [&](double h) { return Vec3(uniform(-h, h), uniform(0.3, 2 * h), uniform(-h, h)); };
+      // a closed box 8 m across: ground, roof and four walls 0.2 m thick
+      const double h = 4;
+      for (int k = 0; k < 6; ++k) {
+        const int axis = k / 2;
+        Vec3 c(0, h, 0), half(h + 0.2, h + 0.2, h + 0.2);
+        c[axis] += (k % 2 ? 1 : -1) * (h + 0.1);
+        half[axis] = 0.1;
+        s.create({.name = "wall", .type = BodyType::Static, .pose = {c}, .shapes = {{.shape = ColliderShape::box(half)}}});
+      }
+      for (int b = 0; b < 120; ++b) {
+        const int kind = std::rand() % 6;
+        pba::RigidBodyDef d{.name = "body " + std::to_string(b), .pose = {point(h - 0.6)}};
+        d.pose.rotation = glm::normalize(Quat(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)));
+        const double speed = std::rand() % 4 == 0 ? uniform(20, 120) : uniform(0, 3);
+        d.linear_velocity = speed * glm::normalize(Vec3(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)));
+        d.angular_velocity = Vec3(uniform(-10, 10), uniform(-10, 10), uniform(-10, 10));
+        if (kind == 0) d.shapes = {{.shape = ColliderShape::sphere(uniform(0.03, 0.3))}};
+        if (kind == 1) d.shapes = {{.shape = ColliderShape::box(Vec3(uniform(0.005, 0.5), uniform(0.05, 0.5), 0.3))}};
+        if (kind == 2) d.shapes = {{.shape = ColliderShape::capsule(uniform(0.2, 1.2), 0.05)}};
+        if (kind == 3)  // a dumbbell: two balls 1.2 m apart
+          d.shapes = {{.shape = ColliderShape::sphere(0.1), .local = {{-0.6, 0, 0}}},
+                      {.shape = ColliderShape::sphere(0.1), .local = {{0.6, 0, 0}}}};
+        if (kind == 4) {  // a kinematic plate sliding
+          d.type = BodyType::Kinematic;
+          d.shapes = {{.shape = ColliderShape::box(Vec3(0.4, 0.01, 0.4))}};
+          d.linear_velocity = Vec3(uniform(-2, 2), 0, uniform(-2, 2));
+        }
+        if (kind == 5) {  // a bullet
+          d.shapes = {{.shape = ColliderShape::sphere(0.025)}};
+          d.linear_velocity = uniform(50, 300) * glm::normalize(Vec3(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)));
+          d.bullet = true;
+        }
+        s.create(d);
+      }
+      const std::size_t before = RigidContacts::checked_targets;
+      for (int i = 0; i < 90; ++i) s.step(1.0 / 60, Vec3(0, -9.81, 0));
+      bullets_hit += RigidContacts::checked_targets > before;
+    }
+  RigidContacts::check_bullet_targets = false;
+  EXPECT_GT(RigidContacts::checked_targets, 1000u);
+  EXPECT_EQ(bullets_hit, 16u);  // every scene's bullets had targets
 }
