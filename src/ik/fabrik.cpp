@@ -247,7 +247,12 @@ void Solver::Impl::fabrik(SolveResult& r) {
       }
       r.iterations = it + 1;
       measure_tips(r);
-      if (!r.converged && stalled(prev, r.residual)) break;
+      // as below: a fixed point of the passes (effectors pulling apart, or one target near
+      // the reach) goes on to damped least squares, which stops at once at a stationary pose
+      if (!r.converged && stalled(prev, r.residual)) {
+        handover = true;
+        break;
+      }
       prev = r.residual;
       continue;
     }
@@ -428,7 +433,14 @@ bool Solver::Impl::fabrik_chain(SolveResult& r) {
     r.iterations = it + 1;
     r.residual = glm::length(end - target);
     r.converged = r.residual <= tol;
-    if (!r.converged && stalled(prev, r.residual)) break;
+    // a fixed point of the passes short of a reachable target (the straight chain toward an
+    // unreachable one is taken before, straighten_if_unreachable) is not known to be a
+    // stationary pose of the error: damped least squares goes on, and stops at once if it is
+    // (this break used to end the solve there, as the other loop's once did)
+    if (!r.converged && stalled(prev, r.residual)) {
+      handover = true;
+      break;
+    }
     prev = r.residual;
     // as on the other loop, damped least squares takes the remaining iterations when the
     // passes creep (toward a target near the reach: 1000 iterations ended 0.16-2.9 mm short of
@@ -462,7 +474,7 @@ bool Solver::Impl::fabrik_chain(SolveResult& r) {
 bool Solver::Impl::straighten_if_unreachable(SolveResult& r) {
   Skeleton& s = *sk;
   if (ne != 1 || s.root_free() || s.effector(0).orientation) return false;
-  if (!all_free_balls) return straighten_mixed(r);
+  if (!all_free_balls) return straighten_mixed(r) || bend_mixed_near_reach(r);
   const int L = static_cast<int>(active_fwd.size());
   auto& start = A::start(s);
   auto& tip = A::tip(s);
@@ -473,19 +485,139 @@ bool Solver::Impl::straighten_if_unreachable(SolveResult& r) {
   // then within half the tolerance of it (converged, with room for the rounding of forward
   // kinematics), where the iterations, at the singular straight pose, crept (FABRIK 0.5 mm
   // short of a target 1e-6 m inside a 10-bone chain's reach after its 1000 iterations; CCD,
-  // DLS, SDLS and the pseudo-inverse 0.2 mm on 100 bones)
+  // DLS, SDLS and the pseudo-inverse 0.2 mm on 100 bones); a target farther inside, within
+  // kNearReachBand of the reach, is met by the chain bent once (bend_near_reach)
   const double near = std::max(path_reach - 0.5 * set.tolerance, 0.0);
-  if (!(d2 > near * near)) return false;
-  // the straight path, then the rotations and forward kinematics from it
-  const Vec3 u = d / std::sqrt(d2);
-  Vec3 p = root;
-  for (int k = 0; k < L; ++k) {
-    const int i = active_fwd[k];
-    start[i] = p;
-    p += u * cl[k];
-    tip[i] = p;
+  const double dist = std::sqrt(d2);
+  if (dist > near) {
+    // the straight path, then the rotations and forward kinematics from it
+    const Vec3 u = d / dist;
+    Vec3 p = root;
+    for (int k = 0; k < L; ++k) {
+      const int i = active_fwd[k];
+      start[i] = p;
+      p += u * cl[k];
+      tip[i] = p;
+    }
+  } else if (!bend_near_reach(d, dist)) {
+    return false;
   }
   rebuild_rotations(nullptr);
+  r.iterations = 1;
+  measure(r);
+  return true;
+}
+
+// A target just inside the reach of a path (farther from its first moving joint than
+// (1 - kNearReachBand) of the length from there): every pose that meets it is nearly
+// straight, a near-singular pose where the iterative methods creep. Measured from the bent
+// pose on 1 m chains, free ball joints: the transpose 0.5-4 mm short of targets 1e-3 to
+// 1e-2 m inside 3- and 10-bone chains after its 2000 iterations; CCD, DLS, SDLS and the
+// pseudo-inverse 0.1-0.3 mm short of targets 1e-4 m inside 100 bones and 1-6 mm short of
+// 1e-4 to 1e-3 m inside 1000 bones after their 1000; chains mixing hinges and ball joints,
+// the same from 1e-6 m inside. A pose that meets it exactly: the path split at a joint
+// near its middle into two straight parts of lengths a and b, bent there (law of cosines:
+// the first part makes the angle alpha with the line from the first joint p0 to the target,
+// cos alpha = (a^2 + d^2 - b^2) / (2 a d)), in the plane of the current bend at that joint
+// (any plane when it is on the line). `split` is the index in active_fwd of the joint to
+// bend at, `first` that of the path's first moving joint; false when |a - b| >= d.
+bool Solver::Impl::near_reach_bend(int first, int split, const Vec3& d, double dist, NearReachBend& out) const {
+  const Skeleton& s = *sk;
+  double a = 0, reach = 0;
+  for (int k = first; k < static_cast<int>(active_fwd.size()); ++k) (k < split ? a : reach) += cl[k];
+  const double b = reach;
+  if (!(std::abs(a - b) < dist) || !(a > 0) || !(b > 0)) return false;
+  const Vec3 p0 = s.starts()[active_fwd[first]];
+  const Vec3 u = d / dist;
+  // the bend's side: the split joint's offset across the line, else any normal
+  Vec3 w = s.starts()[active_fwd[split]] - p0;
+  w -= glm::dot(w, u) * u;
+  double wl = glm::length(w);
+  if (!(wl > 1e-9 * (a + b))) {
+    w = glm::cross(u, std::abs(u.x) < 0.6 ? Vec3(1, 0, 0) : Vec3(0, 1, 0));
+    wl = glm::length(w);
+  }
+  w /= wl;
+  const double c = std::clamp((a * a + dist * dist - b * b) / (2 * a * dist), -1.0, 1.0);
+  out.u1 = c * u + std::sqrt(std::max(1 - c * c, 0.0)) * w;
+  out.mid = p0 + a * out.u1;
+  out.u2 = glm::normalize(s.effector(0).target - out.mid);
+  return true;
+}
+
+// the index in active_fwd, after `first`, of the joint of kind Ball (any moving kind when
+// `any`) whose start is nearest the middle of the path from `first` on; -1 if none
+int Solver::Impl::middle_joint(int first, bool any) const {
+  const auto types = sk->joint_types();
+  const int L = static_cast<int>(active_fwd.size());
+  double reach = 0;
+  for (int k = first; k < L; ++k) reach += cl[k];
+  int best = -1;
+  double a = 0, best_gap = 1e300;
+  for (int k = first; k < L; ++k) {
+    const JointType jt = types[active_fwd[k]];
+    if (k > first && (jt == JointType::Ball || (any && jt != JointType::Fixed)) &&
+        std::abs(a - 0.5 * reach) < best_gap)
+      best = k, best_gap = std::abs(a - 0.5 * reach);
+    a += cl[k];
+  }
+  return best;
+}
+
+// free ball joints: the path's positions bent once (near_reach_bend), rotations rebuilt
+// by the caller from start and tip; true when it did
+bool Solver::Impl::bend_near_reach(const Vec3& d, double dist) {
+  if (!(dist > (1 - kNearReachBand) * path_reach)) return false;
+  const int k0 = middle_joint(0, true);
+  NearReachBend g;
+  if (k0 < 0 || !near_reach_bend(0, k0, d, dist, g)) return false;
+  auto& start = A::start(*sk);
+  auto& tip = A::tip(*sk);
+  Vec3 p = start[active_fwd[0]];
+  for (int k = 0; k < static_cast<int>(active_fwd.size()); ++k) {
+    const int i = active_fwd[k];
+    if (k == k0) p = g.mid;
+    start[i] = p;
+    p += (k < k0 ? g.u1 : g.u2) * cl[k];
+    tip[i] = p;
+  }
+  return true;
+}
+
+// a path mixing joints whose first moving joint is a ball joint and every later joint can
+// hold zero (straight_first, no hinge before it): that ball joint aims the first part, the
+// ball joint nearest the middle bends toward the target, every other joint at zero, when
+// both directions are inside their cones; true (a final pose, forward kinematics current)
+// when it did
+bool Solver::Impl::bend_mixed_near_reach(SolveResult& r) {
+  Skeleton& s = *sk;
+  if (straight_first < 0 || straight_hinge >= 0) return false;
+  const int f = active_fwd[straight_first];
+  const Vec3 d = s.effector(0).target - s.starts()[f];
+  const double dist = glm::length(d);
+  if (!(dist > (1 - kNearReachBand) * straight_reach) || !(dist <= straight_reach)) return false;
+  const int k0 = middle_joint(straight_first, false);
+  NearReachBend g;
+  if (k0 < 0 || !near_reach_bend(straight_first, k0, d, dist, g)) return false;
+  const int m0 = active_fwd[k0];
+  const auto& limited = A::limited(s);
+  // the first ball joint's swing toward u1, the middle one's from u1 to u2 (its frame is
+  // the first one's world rotation: every joint between at zero, identity rests)
+  const Quat Ff = frame(f);
+  const Vec3 l1 = detail::rotate_inv(Ff, g.u1);
+  if (limited[f] && l1.x < std::cos(A::swing(s)[f])) return false;
+  const Quat qf = detail::from_to(Vec3(1, 0, 0), l1);
+  const Vec3 l2 = detail::rotate_inv(detail::qmul(Ff, qf), g.u2);
+  if (limited[m0] && l2.x < std::cos(A::swing(s)[m0])) return false;
+  auto& q = A::q(s);
+  auto& angle = A::angle(s);
+  for (int k = straight_first; k < static_cast<int>(active_fwd.size()); ++k) {
+    const int i = active_fwd[k];
+    q[i] = k == straight_first ? qf : k == k0 ? detail::from_to(Vec3(1, 0, 0), l2) : Quat(1, 0, 0, 0);
+    angle[i] = 0;
+    A::clamp_joint(s, i);
+  }
+  s.forward_kinematics();
   r.iterations = 1;
   measure(r);
   return true;

@@ -441,7 +441,8 @@ SolveResult Solver::Impl::solve() {
   SolveResult r;
   measure(r);
   if (ne == 0 || r.converged) return r;
-  // the straight chain toward an unreachable target is the closest reachable pose: final
+  // the straight chain toward an unreachable target is the closest reachable pose, and the
+  // chain bent once meets a target just inside the reach (bend_near_reach): final
   if (honours_unreachable_shortcut(set.method) && straighten_if_unreachable(r)) {
     r.stop = r.converged ? StopReason::Converged : StopReason::Stalled;
     return r;

@@ -267,6 +267,20 @@ struct Solver::Impl {
   bool straighten_if_unreachable(SolveResult& r);
   // the same on a path mixing joints, aimed by its first moving joint, a ball joint
   bool straighten_mixed(SolveResult& r);
+  // a target within kNearReachBand of the reach of such a path (bend_near_reach)
+  static constexpr double kNearReachBand = 0.05;
+  // the path bent once at a joint to meet a target near its reach (near_reach_bend): the
+  // first part's direction, the bend's position (m) and the second part's direction
+  struct NearReachBend {
+    Vec3 u1{0}, mid{0}, u2{0};
+  };
+  bool near_reach_bend(int first, int split, const Vec3& d, double dist, NearReachBend& out) const;
+  // index in active_fwd of the ball (or, with `any`, moving) joint nearest the path's middle
+  int middle_joint(int first, bool any) const;
+  // free ball joints: the path bent once to meet a target d (|d| = dist, m) from its root
+  bool bend_near_reach(const Vec3& d, double dist);
+  // mixed joints after a first ball joint: the same by joint rotations, when the cones allow
+  bool bend_mixed_near_reach(SolveResult& r);
 
   // residual from the tips only (positions-only FABRIK keeps world rotations stale)
   void measure_tips(SolveResult& r) const {
