@@ -25,6 +25,13 @@ namespace pba::detail {
 /// of scratch, in L1.
 inline constexpr int kBlock = static_cast<int>(kParticleBlock);
 
+// True when q is a unit quaternion within require_unit_quat's 1e-6 (false for a non-finite
+// one): the validators of definitions checked at every step test this first and build the
+// field path of the message only when it fails, so a valid step does not allocate.
+inline bool is_unit_quat(const Quat& q) {
+  return std::abs(std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z) - 1) <= 1e-6;
+}
+
 /// Gravity, drag and the wind at one time, in float.
 struct ForceParams {
   float gx, gy, gz;  // gravity (m/s^2)

@@ -2,6 +2,7 @@
 // recycling. The fused kernel is in kernels.cpp; shapes and forcers in shapes.cpp.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -233,6 +234,10 @@ void ParticleDef::validate(std::string_view where) const {
 
 void EmitterDef::validate(std::string_view where) const {
   if (!is_finite(pose.position)) require_finite(pose.position, field_path(where, "position"));
+  // the emission cone turns with the pose: a zero quaternion (normalised to the identity)
+  // or a non-finite one (non-finite particles, named by particle) is refused by name
+  if (!detail::is_unit_quat(pose.rotation))
+    require_unit_quat(pose.rotation, field_path(where, "rotation"));
   if (!is_finite(direction)) require_finite(direction, field_path(where, "direction"));
   if (glm::length(direction) == 0) throw Error(field_path(where, "direction") + ": must be non-zero, got (0, 0, 0)");
   if (!((spread) >= (0) && (spread) <= (kPi))) require_in_range(spread, 0, kPi, field_path(where, "spread"));
@@ -730,6 +735,15 @@ void ParticleSystem::step(double t, double dt, const CollisionWorld& colliders, 
   if (forcers.size() > kMaxForcers)
     throw Error("ParticleSystem::step: at most " + std::to_string(kMaxForcers) + " forcers, got " +
                 std::to_string(forcers.size()));
+  // the forcers and the collision settings, which the caller may change between steps (a
+  // non-finite one would turn into a non-finite particle, named by the particle, or into a
+  // threshold that never applies); named by index, without allocating when they are valid
+  for (std::size_t i = 0; i < forcers.size(); ++i) {
+    char where[48];
+    std::snprintf(where, sizeof where, "ParticleSystem::step forcers[%zu]", i);
+    forcers[i].validate(where);
+  }
+  require_finite(collision_.restitution_threshold, "ParticleSystem.collision.restitution_threshold");
   time_ = t;
   forcers_now_ = forcers;
   const double g = glm::length(forces_.gravity);

@@ -3,13 +3,17 @@
 #include <cmath>
 #include <string>
 
+#include "kernels.h"
 #include "pba/particles.h"
 
 namespace pba {
 
 void Forcer::validate(std::string_view where) const {
   if (!is_finite(pose.position)) require_finite(pose.position, field_path(where, "position"));
-  require_unit_quat(pose.rotation, field_path(where, "rotation"));
+  // (field_path builds a string: only when a check fails, so a step that validates its
+  // forcers does not allocate)
+  if (!detail::is_unit_quat(pose.rotation))
+    require_unit_quat(pose.rotation, field_path(where, "rotation"));
   if (shape == ForcerShape::Box) {
     if (!(std::isfinite(half_extents.x) && (half_extents.x) > 0))
       require_positive(half_extents.x, field_path(where, "half_extents.x"));
@@ -34,14 +38,14 @@ void Forcer::validate(std::string_view where) const {
   if (!((pulse_duration) >= (0) && (pulse_duration) <= (pulse_period > 0 ? pulse_period : 1e300)))
     require_in_range(pulse_duration, 0, pulse_period > 0 ? pulse_period : 1e300, field_path(where, "pulse_duration"));
   // the forcer kernels work in floats: finite doubles a float cannot hold are refused too
-  require_float(pose.position, field_path(where, "position"));
-  require_float(half_extents, field_path(where, "half_extents"));
-  require_float(radius, field_path(where, "radius"));
-  require_float(half_height, field_path(where, "half_height"));
-  require_float(direction, field_path(where, "direction"));
-  require_float(strength, field_path(where, "strength"));
-  require_float(pull, field_path(where, "pull"));
-  require_float(softening, field_path(where, "softening"));
+  if (!fits_float(pose.position)) require_float(pose.position, field_path(where, "position"));
+  if (!fits_float(half_extents)) require_float(half_extents, field_path(where, "half_extents"));
+  if (!fits_float(radius)) require_float(radius, field_path(where, "radius"));
+  if (!fits_float(half_height)) require_float(half_height, field_path(where, "half_height"));
+  if (!fits_float(direction)) require_float(direction, field_path(where, "direction"));
+  if (!fits_float(strength)) require_float(strength, field_path(where, "strength"));
+  if (!fits_float(pull)) require_float(pull, field_path(where, "pull"));
+  if (!fits_float(softening)) require_float(softening, field_path(where, "softening"));
 }
 
 bool Forcer::active(double t) const {

@@ -766,6 +766,9 @@ void SoftBody::grab(std::size_t i, const Vec3& target) {
 }
 
 void SoftBody::move_grab(const Vec3& target) {
+  // named by this call (set_pin_target's check named set_pin_target), and refused with
+  // nothing grabbed too: a bad target is the caller's bug either way
+  require_finite(target, "SoftBody::move_grab(target)");
   if (impl_->grab == kNoParticle) return;
   set_pin_target(impl_->grab, target);
 }

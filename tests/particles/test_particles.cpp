@@ -6,6 +6,7 @@
 #include <limits>
 #include <vector>
 
+#include "error_of.h"
 #include "pba/particles.h"
 #include "pba/world.h"
 
@@ -526,6 +527,53 @@ TEST(BadInput, StepRefusesADtAFloatCannotHold) {
     EXPECT_EQ(ps.steps(), 1) << pba::name(m);
     EXPECT_GT(ps.position(a).x, 0.0) << pba::name(m);
   }
+}
+
+// Settings a caller changes between steps, and forcers handed to ParticleSystem::step
+// directly (without a World, which validates its own), were used unchecked: a NaN
+// restitution threshold made every impact bounce (NaN compares false: no resting contact,
+// silently), a forcer with a NaN strength stopped the step naming a particle rather than
+// the forcer, a sphere forcer of radius 0 or a zero rotation acted nowhere, silently, and an
+// emitter turned by a zero quaternion emitted along its unturned axis (glm normalises it to
+// the identity). Each is refused by name now, before the state changes.
+TEST(BadInput, StepRefusesBadForcersThresholdAndEmitterRotation) {
+  auto message = [](auto&& f) { return pba::test_support::error_of(f); };
+  const double nan = std::nan("");
+  ParticleSystem ps = make_system(Method::SemiImplicitEuler);
+  ps.create({.position = {0, 1, 0}});
+  const std::uint64_t h0 = ps.hash();
+  auto step_with = [&](const pba::Forcer& f) {
+    return message([&] { ps.step(0, 0.01, {}, std::span<const pba::Forcer>(&f, 1)); });
+  };
+  pba::Forcer fan;
+  EXPECT_EQ(step_with(fan), "");  // the default forcer is valid
+  ps = make_system(Method::SemiImplicitEuler);
+  ps.create({.position = {0, 1, 0}});
+  fan.strength = nan;
+  EXPECT_EQ(step_with(fan), "ParticleSystem::step forcers[0].strength: must be finite, got nan");
+  pba::Forcer sphere{.shape = pba::ForcerShape::Sphere, .radius = 0};
+  EXPECT_EQ(step_with(sphere), "ParticleSystem::step forcers[0].radius: must be finite and > 0, got 0");
+  pba::Forcer turned{.pose = {{0, 0, 0}, {0, 0, 0, 0}}};
+  EXPECT_EQ(step_with(turned),
+            "ParticleSystem::step forcers[0].rotation: must be a finite unit quaternion, got (0, 0, 0, 0)");
+  EXPECT_EQ(ps.hash(), h0);
+  EXPECT_EQ(ps.steps(), 0);
+  ps.collision().restitution_threshold = nan;
+  EXPECT_EQ(message([&] { ps.step(0, 0.01, {}, {}); }),
+            "ParticleSystem.collision.restitution_threshold: must be finite, got nan");
+  ps.collision().restitution_threshold = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(message([&] { ps.step(0, 0.01, {}, {}); }),
+            "ParticleSystem.collision.restitution_threshold: must be finite, got inf");
+  EXPECT_EQ(ps.hash(), h0);
+  ps.collision().restitution_threshold = -1;
+  EXPECT_EQ(message([&] { ps.step(0, 0.01, {}, {}); }), "");
+  // an emitter's rotation: at creation and when its pose is set between steps
+  EXPECT_EQ(message([&] { ps.add_emitter({.pose = {{0, 0, 0}, {0, 0, 0, 0}}}, "sparks"); }),
+            "sparks.rotation: must be a finite unit quaternion, got (0, 0, 0, 0)");
+  const auto e = ps.add_emitter({}, "sparks");
+  ps.set_emitter_pose(e, {{0, 0, 0}, {nan, 0, 0, 0}});
+  EXPECT_EQ(message([&] { ps.step(0.01, 0.01, {}, {}); }),
+            "emitter.rotation: must be a finite unit quaternion, got (nan, 0, 0, 0)");
 }
 
 TEST(BadInput, NonFiniteStateStopsWithParticleAndTime) {

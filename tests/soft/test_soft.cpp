@@ -1101,6 +1101,18 @@ TEST(SoftBadInput, NegativeStiffnessAndCompliance) {
   }
 }
 
+// move_grab with a non-finite target was refused by the set_pin_target it calls, naming
+// that call, and passed silently when nothing was grabbed
+TEST(SoftBadInput, MoveGrabNamesItself) {
+  pba::SoftBody rope = pba::SoftBody::rope({});
+  const double nan = std::nan("");
+  EXPECT_EQ(error_of([&] { rope.move_grab({nan, 0, 0}); }), "SoftBody::move_grab(target): must be finite, got (nan, 0, 0)");
+  rope.grab(3, rope.position(3));
+  EXPECT_EQ(error_of([&] { rope.move_grab({0, std::numeric_limits<double>::infinity(), 0}); }),
+            "SoftBody::move_grab(target): must be finite, got (0, inf, 0)");
+  EXPECT_EQ(error_of([&] { rope.move_grab({0, 1, 0}); }), "");
+}
+
 TEST(SoftBadInput, ClothGridSmallerThan2x2) {
   const std::string msg = error_of([] { pba::SoftBody::cloth_grid({.nx = 1, .ny = 5}); });
   EXPECT_NE(msg.find("ClothDef.nx"), std::string::npos) << msg;
