@@ -613,17 +613,12 @@ void RigidContacts::world_inv_inertias(const RigidBodySystem& s, const std::uint
   const bool clamp = s.settings_.solver != RigidSolverType::Xpbd;
   InertiaInput in{};  // (zeros in the lanes past the last body)
   double world[9][kLanes];
-  for (std::size_t first = 0; first < count; first += kLanes) {
-    const int lanes = static_cast<int>(std::min<std::size_t>(kLanes, count - first));
-    for (int l = 0; l < lanes; ++l) {
-      const std::size_t i = bodies ? bodies[first + static_cast<std::size_t>(l)] : first + static_cast<std::size_t>(l);
-      const Quat& q = s.q_[i];
-      inertia_q[i] = q;
-      Vec3 m = s.inv_inertia_[i];
-      if (clamp) m = glm::min(m, Vec3(kSolverInertiaRatio * std::min({m.x, m.y, m.z})));
-      in.q[0][l] = q.w, in.q[1][l] = q.x, in.q[2][l] = q.y, in.q[3][l] = q.z;
-      in.m[0][l] = m.x, in.m[1][l] = m.y, in.m[2][l] = m.z;
-    }
+  // the awake bodies' frames, kLanes at a time (a sleeping body holds still like a static one
+  // until something wakes it: its inverse inertia is zero, and its frame is not made; the
+  // lanes are independent, so which bodies share a group moves no bit)
+  std::uint32_t group[kLanes];
+  int lanes = 0;
+  auto flush = [&] {
 #if PBA_AVX512
     if (simd == SimdPath::Avx512)
       world_inertia_avx512(in, world, lanes);
@@ -634,17 +629,29 @@ void RigidContacts::world_inv_inertias(const RigidBodySystem& s, const std::uint
     else
       world_inertia_scalar(in, world, lanes);
     for (int l = 0; l < lanes; ++l) {
-      const std::size_t i = bodies ? bodies[first + static_cast<std::size_t>(l)] : first + static_cast<std::size_t>(l);
-      Mat3& o = inv_inertia[i];
-      // a sleeping body holds still like a static one until something wakes it
-      if (s.asleep_[i]) {
-        o = Mat3(0.0);
-        continue;
-      }
+      Mat3& o = inv_inertia[group[l]];
       for (int c = 0; c < 3; ++c)
         for (int r = 0; r < 3; ++r) o[c][r] = world[3 * c + r][l];
     }
+    lanes = 0;
+  };
+  for (std::size_t j = 0; j < count; ++j) {
+    const std::uint32_t i = bodies ? bodies[j] : static_cast<std::uint32_t>(j);
+    const Quat& q = s.q_[i];
+    inertia_q[i] = q;
+    if (s.asleep_[i]) {
+      inv_inertia[i] = Mat3(0.0);
+      continue;
+    }
+    Vec3 m = s.inv_inertia_[i];
+    if (clamp) m = glm::min(m, Vec3(kSolverInertiaRatio * std::min({m.x, m.y, m.z})));
+    const auto l = static_cast<std::size_t>(lanes);
+    group[l] = i;
+    in.q[0][l] = q.w, in.q[1][l] = q.x, in.q[2][l] = q.y, in.q[3][l] = q.z;
+    in.m[0][l] = m.x, in.m[1][l] = m.y, in.m[2][l] = m.z;
+    if (++lanes == kLanes) flush();
   }
+  if (lanes > 0) flush();
 }
 
 void RigidContacts::prepare(RigidBodySystem& s) {
