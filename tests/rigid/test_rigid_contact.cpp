@@ -2496,37 +2496,42 @@ TEST(RigidSleep, ABodyCoastingFarOutWhereASubstepsMotionRoundsAwayStaysAwake) {
 }
 
 // A force, an impulse, a new velocity or pose, or an awake body landing on it wakes a
-// sleeping body and its island (the boxes it rests on), and nothing else.
+// sleeping body and its island (the boxes it rests on), and nothing else, under every solver
+// (until 2026-12-07 the soft step's only: XPBD's, whose velocities come from its position
+// corrections, is now checked to wake and fall asleep again the same way).
 TEST(RigidSleep, ForcesImpulsesPosesAndContactsWakeIslands) {
-  RigidBodySystem s;
-  pba::rigid_scenes::ground(s, 0.5);
-  auto low = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
-  auto high = pba::rigid_scenes::box(s, {0, 1.5, 0}, Vec3(0.5));
-  auto apart = pba::rigid_scenes::box(s, {5, 0.5, 0}, Vec3(0.5));
-  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
-  ASSERT_FALSE(s.awake(low) || s.awake(high) || s.awake(apart));
-  // a force on the top box wakes the stack it stands on, not the box apart
-  s.apply_force(high, {0, 1, 0});
-  EXPECT_TRUE(s.awake(high));
-  EXPECT_TRUE(s.awake(low));
-  EXPECT_FALSE(s.awake(apart));
-  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
-  ASSERT_FALSE(s.awake(high));
-  s.apply_impulse(apart, {0, 0, 1}, {5, 1, 0});
-  EXPECT_TRUE(s.awake(apart));
-  EXPECT_FALSE(s.awake(low));
-  for (int i = 0; i < 180; ++i) s.step(1.0 / 60, kGravity);
-  ASSERT_FALSE(s.awake(apart));
-  s.set_velocity(low, {0, 0, 0}, {0, 0.1, 0});
-  EXPECT_TRUE(s.awake(high));
-  for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
-  // a ball dropped on the sleeping box wakes it when they touch
-  ASSERT_FALSE(s.awake(apart));
-  auto ball = s.create({.pose = {{5, 3, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.2)}}});
-  bool woke = false;
-  for (int i = 0; i < 60 && !woke; ++i) s.step(1.0 / 60, kGravity), woke = s.awake(apart);
-  EXPECT_TRUE(woke);
-  EXPECT_GT(s.center_of_mass(ball).y, 1.0 + 0.15);  // it landed on the box, not in it
+  for (const auto solver : kAll) {
+    SCOPED_TRACE(std::string(to_string(solver)));
+    RigidBodySystem s(with(solver));
+    pba::rigid_scenes::ground(s, 0.5);
+    auto low = pba::rigid_scenes::box(s, {0, 0.5, 0}, Vec3(0.5));
+    auto high = pba::rigid_scenes::box(s, {0, 1.5, 0}, Vec3(0.5));
+    auto apart = pba::rigid_scenes::box(s, {5, 0.5, 0}, Vec3(0.5));
+    for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+    ASSERT_FALSE(s.awake(low) || s.awake(high) || s.awake(apart));
+    // a force on the top box wakes the stack it stands on, not the box apart
+    s.apply_force(high, {0, 1, 0});
+    EXPECT_TRUE(s.awake(high));
+    EXPECT_TRUE(s.awake(low));
+    EXPECT_FALSE(s.awake(apart));
+    for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+    ASSERT_FALSE(s.awake(high));
+    s.apply_impulse(apart, {0, 0, 1}, {5, 1, 0});
+    EXPECT_TRUE(s.awake(apart));
+    EXPECT_FALSE(s.awake(low));
+    for (int i = 0; i < 180; ++i) s.step(1.0 / 60, kGravity);
+    ASSERT_FALSE(s.awake(apart));
+    s.set_velocity(low, {0, 0, 0}, {0, 0.1, 0});
+    EXPECT_TRUE(s.awake(high));
+    for (int i = 0; i < 120; ++i) s.step(1.0 / 60, kGravity);
+    // a ball dropped on the sleeping box wakes it when they touch
+    ASSERT_FALSE(s.awake(apart));
+    auto ball = s.create({.pose = {{5, 3, 0}}, .shapes = {{.shape = ColliderShape::sphere(0.2)}}});
+    bool woke = false;
+    for (int i = 0; i < 60 && !woke; ++i) s.step(1.0 / 60, kGravity), woke = s.awake(apart);
+    EXPECT_TRUE(woke);
+    EXPECT_GT(s.center_of_mass(ball).y, 1.0 + 0.15);  // it landed on the box, not in it
+  }
   // with sleeping off nothing sleeps
   RigidBodySystem t({.contacts = {.sleep = false}});
   pba::rigid_scenes::vertical_stack(t, 3);
