@@ -470,11 +470,19 @@ bool Solver::Impl::fabrik_chain(SolveResult& r) {
 // (Aristidou and Lasenby 2011, Algorithm 1, tests this first), which the iterative methods
 // only approach slowly (DLS, SDLS and CCD need more than their caps at 1000 bones). Every
 // bone on the path turns, by its shortest arc, onto the root-target direction; returns
-// true when it did (the result is then final: no iteration improves on it).
+// true when it did (the result is then final: no iteration improves on it). The given pose
+// (given_q, solve()) is saved before: a shortcut whose result misses gives it back and
+// returns false, and the iterations go on from it.
 bool Solver::Impl::straighten_if_unreachable(SolveResult& r) {
   Skeleton& s = *sk;
   if (ne != 1 || s.root_free() || s.effector(0).orientation) return false;
-  if (!all_free_balls) return straighten_mixed(r) || bend_mixed_near_reach(r);
+  // a target within kNearReachBand of the reach is bent for up front only from a pose given
+  // farther from it than the band is wide (a cold start, where a jump is expected anyway); a
+  // pose given nearer (a warm start tracking a moving target) iterates first, from where it
+  // is, and is bent only when the iterations end short (solve(), bend_to_rescue): the bend
+  // turns the joints by up to tenths of a radian whatever the target's move
+  const bool cold = r.residual > kNearReachBand * path_reach;
+  if (!all_free_balls) return straighten_mixed(r) || (cold && bend_or_give_back(r));
   const int L = static_cast<int>(active_fwd.size());
   auto& start = A::start(s);
   auto& tip = A::tip(s);
@@ -489,23 +497,53 @@ bool Solver::Impl::straighten_if_unreachable(SolveResult& r) {
   // kNearReachBand of the reach, is met by the chain bent once (bend_near_reach)
   const double near = std::max(path_reach - 0.5 * set.tolerance, 0.0);
   const double dist = std::sqrt(d2);
-  if (dist > near) {
-    // the straight path, then the rotations and forward kinematics from it
-    const Vec3 u = d / dist;
-    Vec3 p = root;
-    for (int k = 0; k < L; ++k) {
-      const int i = active_fwd[k];
-      start[i] = p;
-      p += u * cl[k];
-      tip[i] = p;
-    }
-  } else if (!bend_near_reach(d, dist)) {
-    return false;
+  if (!(dist > near)) return cold && bend_or_give_back(r);
+  // the straight path, then the rotations and forward kinematics from it
+  const Vec3 u = d / dist;
+  Vec3 p = root;
+  for (int k = 0; k < L; ++k) {
+    const int i = active_fwd[k];
+    start[i] = p;
+    p += u * cl[k];
+    tip[i] = p;
   }
   rebuild_rotations(nullptr);
   r.iterations = 1;
   measure(r);
   return true;
+}
+
+// A target within kNearReachBand of the reach, one effector, a fixed root: the path bent
+// once (bend_near_reach on free ball joints, bend_mixed_near_reach on mixed ones), forward
+// kinematics current and r measured; false, the pose possibly changed, when it was not
+// bent (the callers give a pose back)
+bool Solver::Impl::bend_if_near_reach(SolveResult& r) {
+  Skeleton& s = *sk;
+  if (ne != 1 || s.root_free() || s.effector(0).orientation) return false;
+  if (!all_free_balls) {
+    if (!bend_mixed_near_reach()) return false;
+  } else {
+    const Vec3 d = s.effector(0).target - s.starts()[active_fwd[0]];
+    const double dist = glm::length(d);
+    if (!(dist <= path_reach) || !bend_near_reach(d, dist)) return false;
+    rebuild_rotations(nullptr);
+  }
+  measure(r);
+  return true;
+}
+
+// the bend up front (straighten_if_unreachable): kept, as final, only when it meets the
+// target within the tolerance; else the given pose back and false (the iterations go on:
+// the reviewer's chains whose first ball joint's twist range excludes 0, or cones that
+// clamp, are such misses)
+bool Solver::Impl::bend_or_give_back(SolveResult& r) {
+  if (bend_if_near_reach(r) && r.converged) {
+    r.iterations = 1;
+    return true;
+  }
+  restore_given_pose();
+  measure(r);
+  return false;
 }
 
 // A target just inside the reach of a path (farther from its first moving joint than
@@ -584,12 +622,32 @@ bool Solver::Impl::bend_near_reach(const Vec3& d, double dist) {
   return true;
 }
 
+// the rescue (solve(), after the method): a method that ended short of a target within
+// kNearReachBand of the reach, where the iterations creep, takes the bend from the pose it
+// ended in; kept with one more iteration counted when it converges, else that pose back
+void Solver::Impl::bend_to_rescue(SolveResult& r) {
+  Skeleton& s = *sk;
+  for (int j : active_fwd) stalled_q[j] = A::q(s)[j], stalled_angle[j] = A::angle(s)[j];
+  stalled_root = A::root_position(s);
+  const int iterations = r.iterations;
+  if (bend_if_near_reach(r) && r.converged) {
+    r.iterations = iterations + 1;
+    carry_valid = false;  // a Jacobian method's step shortening belongs to the pose it left
+    return;
+  }
+  for (int j : active_fwd) A::q(s)[j] = stalled_q[j], A::angle(s)[j] = stalled_angle[j];
+  A::root_position(s) = stalled_root;
+  s.forward_kinematics();
+  measure(r);
+}
+
 // a path mixing joints whose first moving joint is a ball joint and every later joint can
 // hold zero (straight_first, no hinge before it): that ball joint aims the first part, the
 // ball joint nearest the middle bends toward the target, every other joint at zero, when
-// both directions are inside their cones; true (a final pose, forward kinematics current)
-// when it did
-bool Solver::Impl::bend_mixed_near_reach(SolveResult& r) {
+// both directions are inside their cones; true when it did (forward kinematics current;
+// the caller measures the result: a clamp may have moved the tip, see below). False may
+// leave the pose changed.
+bool Solver::Impl::bend_mixed_near_reach() {
   Skeleton& s = *sk;
   if (straight_first < 0 || straight_hinge >= 0) return false;
   const int f = active_fwd[straight_first];
@@ -601,25 +659,27 @@ bool Solver::Impl::bend_mixed_near_reach(SolveResult& r) {
   if (k0 < 0 || !near_reach_bend(straight_first, k0, d, dist, g)) return false;
   const int m0 = active_fwd[k0];
   const auto& limited = A::limited(s);
-  // the first ball joint's swing toward u1, the middle one's from u1 to u2 (its frame is
-  // the first one's world rotation: every joint between at zero, identity rests)
-  const Quat Ff = frame(f);
-  const Vec3 l1 = detail::rotate_inv(Ff, g.u1);
+  // the first ball joint's swing toward u1, every later joint at zero
+  const Vec3 l1 = detail::rotate_inv(frame(f), g.u1);
   if (limited[f] && l1.x < std::cos(A::swing(s)[f])) return false;
-  const Quat qf = detail::from_to(Vec3(1, 0, 0), l1);
-  const Vec3 l2 = detail::rotate_inv(detail::qmul(Ff, qf), g.u2);
-  if (limited[m0] && l2.x < std::cos(A::swing(s)[m0])) return false;
   auto& q = A::q(s);
   auto& angle = A::angle(s);
   for (int k = straight_first; k < static_cast<int>(active_fwd.size()); ++k) {
     const int i = active_fwd[k];
-    q[i] = k == straight_first ? qf : k == k0 ? detail::from_to(Vec3(1, 0, 0), l2) : Quat(1, 0, 0, 0);
+    q[i] = k == straight_first ? detail::from_to(Vec3(1, 0, 0), l1) : Quat(1, 0, 0, 0);
     angle[i] = 0;
     A::clamp_joint(s, i);
   }
+  // the clamp moves a twist range that excludes 0 to its nearer end: the swing (the first
+  // part's direction) stays, the frame turns about it, so the middle joint's direction is
+  // taken in its frame after the clamp (taken before, the second part turned about u1 with
+  // the twist and the tip missed by up to 0.54 m, review of 2026-12-07)
   s.forward_kinematics();
-  r.iterations = 1;
-  measure(r);
+  const Vec3 l2 = detail::rotate_inv(frame(m0), g.u2);
+  if (limited[m0] && l2.x < std::cos(A::swing(s)[m0])) return false;
+  q[m0] = detail::from_to(Vec3(1, 0, 0), l2);
+  A::clamp_joint(s, m0);
+  s.forward_kinematics();
   return true;
 }
 
@@ -692,8 +752,16 @@ bool Solver::Impl::straighten_mixed(SolveResult& r) {
     angle[i] = 0;
   }
   s.forward_kinematics();
-  r.iterations = 1;
   measure(r);
+  // final only when the tip lies where the straight path's does, |d| - straight_reach from
+  // the target (a clamp that moved it: the given pose back, the iterations go on)
+  if (!(r.residual <= std::sqrt(glm::dot(target - s.starts()[f], target - s.starts()[f])) - straight_reach +
+                          set.tolerance)) {
+    restore_given_pose();
+    measure(r);
+    return false;
+  }
+  r.iterations = 1;
   return true;
 }
 

@@ -441,18 +441,21 @@ SolveResult Solver::Impl::solve() {
   SolveResult r;
   measure(r);
   if (ne == 0 || r.converged) return r;
-  // the straight chain toward an unreachable target is the closest reachable pose, and the
-  // chain bent once meets a target just inside the reach (bend_near_reach): final
-  if (honours_unreachable_shortcut(set.method) && straighten_if_unreachable(r)) {
-    r.stop = r.converged ? StopReason::Converged : StopReason::Stalled;
-    return r;
-  }
-  // the pose given, to return it when the method ends farther away (see below)
+  // the pose given, to return it when the method ends farther away (see below) or a
+  // shortcut misses
   const bool orients = honours_orientation(set.method);
   const double ori_scale = orients ? std::max(largest_reach(), 1e-9) : 0.0;
   const double given_cost = cost(ori_scale);
   for (int j : active_fwd) given_q[j] = A::q(s)[j], given_angle[j] = A::angle(s)[j];
   given_root = A::root_position(s);
+  // the straight chain toward an unreachable target is the closest reachable pose, and the
+  // chain bent once, from a pose given far from it, meets a target just inside the reach
+  // (bend_near_reach): final when it does; a shortcut that misses falls through
+  const bool shortcuts = honours_unreachable_shortcut(set.method);
+  if (shortcuts && straighten_if_unreachable(r)) {
+    r.stop = r.converged ? StopReason::Converged : StopReason::Stalled;
+    return r;
+  }
   switch (set.method) {
     case Method::Analytic1Dof: analytic_1dof(r); break;
     case Method::Analytic3Dof: analytic_3dof(r); break;
@@ -507,6 +510,10 @@ SolveResult Solver::Impl::solve() {
     restore_given_pose();
     measure(r);
   }
+  // the rescue: a method that ended short of a target within kNearReachBand of the reach
+  // (creeping at the near-straight poses that meet it) is bent once from where it ended,
+  // kept when that converges (one more iteration), else the method's pose back
+  if (!r.converged && shortcuts && ne == 1) bend_to_rescue(r);
   // why it stopped
   if (r.converged) r.stop = StopReason::Converged;
   else if (r.out_of_time) r.stop = StopReason::OutOfTime;

@@ -280,7 +280,13 @@ struct Solver::Impl {
   // free ball joints: the path bent once to meet a target d (|d| = dist, m) from its root
   bool bend_near_reach(const Vec3& d, double dist);
   // mixed joints after a first ball joint: the same by joint rotations, when the cones allow
-  bool bend_mixed_near_reach(SolveResult& r);
+  bool bend_mixed_near_reach();
+  // either bend, forward kinematics current and r measured; false when not bent
+  bool bend_if_near_reach(SolveResult& r);
+  // the bend up front, kept only when it converged (else the given pose back, false)
+  bool bend_or_give_back(SolveResult& r);
+  // the bend after a method ended short, kept only when it converged (else the pose back)
+  void bend_to_rescue(SolveResult& r);
 
   // residual from the tips only (positions-only FABRIK keeps world rotations stale)
   void measure_tips(SolveResult& r) const {
