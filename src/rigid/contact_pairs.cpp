@@ -1644,6 +1644,75 @@ void touch_normal(const Vec3& ca, const Vec3& va, const Vec3& cb, const Vec3& vb
   m.points[0].depth = r - glm::dot(d, n);
 }
 
+// a ball or a capsule: a segment (a point for a ball) swept by its radius
+bool rounded(ShapeType t) { return t == ShapeType::Sphere || t == ShapeType::Capsule; }
+
+// The segment of a ball's or a capsule's core at `pose` (m), p to q: a ball's centre at both ends,
+// a capsule's axis (its local y, from -half_height to +half_height)
+void core_segment(const ColliderShape& shape, const Pose& pose, Vec3& p, Vec3& q) {
+  const Vec3 half = shape.type == ShapeType::Capsule ? pose.rotation * Vec3(0, shape.half_height, 0) : Vec3(0);
+  p = pose.position - half, q = pose.position + half;
+}
+
+// touch_normal for a ball or a capsule against a capsule (docs/rigid-bodies.md, "Oblique impacts
+// of fast bodies"): the cores are the segments a0-a1 and b0-b1 (m; a ball's a point) translating
+// at va, vb (m/s) over the step dt (s), their radii ra, rb (m). Under the relative motion the
+// cores' distance less ra + rb, f(t) = |closest points of a and (b + v t)| - (ra + rb), is convex
+// in t (the distance of the point -v t from the convex set b - a) and its slope is v along the
+// closest points' unit line. A pair that closes and does not touch yet takes the normal of the
+// first root of f in [0, dt] (the touch), found by Newton's method from t = 0: on a convex f
+// falling to a root Newton's steps climb monotonically and never pass it, so it ends at the
+// touch or at dt (still closing) or where the slope turns (past the closest approach: the cores
+// miss), where the closest approach is bisected on the slope's sign. The point's cores are the
+// closest points there taken back to the start of the step (each a point of its body, which
+// translates), so its separation along n is f(t) - t v . n, reached at the touch exactly, as
+// the balls' (touch_normal), and along the normal of the closest approach never. On a capsule's
+// side the normal is perpendicular to its axis. Exact for the relative translation; a turning
+// capsule's axis is taken as it is now, its core at its centre's velocity now.
+void touch_cores(const Vec3& a0, const Vec3& a1, const Vec3& va, const Vec3& b0, const Vec3& b1, const Vec3& vb,
+                 double ra, double rb, double dt, Manifold& m) {
+  const Vec3 v = vb - va;
+  const double r = ra + rb;
+  Vec3 qa, qb, line;
+  double length = 0;
+  // f at t, its slope into `slope`; the closest points (b's taken back by v t) into qa, qb
+  const auto at = [&](double t, double& slope) {
+    narrow::closest_segments(a0, a1, b0 + t * v, b1 + t * v, qa, qb);
+    line = qb - qa, qb -= t * v;
+    length = glm::length(line);
+    slope = length > 0 ? glm::dot(line, v) / length : 0;
+    return length - r;
+  };
+  double slope = 0, f = at(0, slope);
+  if (!(slope < 0 && f > 0)) return;
+  double t = 0, past = -1;  // (past: a t beyond the closest approach, if one was met)
+  for (int k = 0; k < 40 && f > 1e-12 * r && t < dt; ++k) {
+    const double next = std::min(t - f / slope, dt);
+    if (!(next > t)) break;
+    double rising = 0;
+    const double g = at(next, rising);
+    if (!(rising < 0)) {
+      past = next;
+      break;
+    }
+    t = next, f = g, slope = rising;
+  }
+  if (past >= 0)  // the cores miss: the closest approach between t (falling) and past (rising)
+    for (int k = 0; k < 50; ++k) {
+      const double mid = 0.5 * (t + past);
+      double rising = 0;
+      at(mid, rising);
+      (rising < 0 ? t : past) = mid;
+    }
+  at(t, slope);
+  if (!(length > 0)) return;
+  const Vec3 n = line / length;
+  m.normal = n;
+  m.points[0].point_a = qa + ra * n;
+  m.points[0].point_b = qb - rb * n;
+  m.points[0].depth = r - glm::dot(qb - qa, n);
+}
+
 }  // namespace
 
 // The narrow phase for one pair out to `reach` (m): its speculative margin plus its reuse
@@ -1853,12 +1922,19 @@ void RigidContacts::collide_pair(RigidBodySystem& s, const ShapePair& p, PairCac
     // unit as body_pose and shape_frame normalise them; the reach is finite)
     narrow::collide_unchecked_into(sa.shape, shape_pose(s, p.proxy_a, a, p.shape_a), sb.shape,
                                    shape_pose(s, p.proxy_b, b, p.shape_b), ns, &c.narrow, pair_manifold);
-    // two balls: the normal of their touch in this step (touch_normal)
-    if (pair_manifold.count == 1 && sa.shape.type == ShapeType::Sphere && sb.shape.type == ShapeType::Sphere) {
-      const Vec3 ca = shape_pose(s, p.proxy_a, a, p.shape_a).position;
-      const Vec3 cb = shape_pose(s, p.proxy_b, b, p.shape_b).position;
-      touch_normal(ca, s.v_[a] + glm::cross(s.w_[a], ca - s.com_[a]), cb, s.v_[b] + glm::cross(s.w_[b], cb - s.com_[b]),
-                   sa.shape.radius, sb.shape.radius, s.last_dt_, pair_manifold);
+    // two balls, or a ball or a capsule and a capsule, with one point: the normal of their touch
+    // in this step (touch_normal, touch_cores)
+    if (pair_manifold.count == 1 && rounded(sa.shape.type) && rounded(sb.shape.type)) {
+      const Pose pose_a = shape_pose(s, p.proxy_a, a, p.shape_a), pose_b = shape_pose(s, p.proxy_b, b, p.shape_b);
+      const Vec3 ca = pose_a.position, cb = pose_b.position;
+      const Vec3 va = s.v_[a] + glm::cross(s.w_[a], ca - s.com_[a]), vb = s.v_[b] + glm::cross(s.w_[b], cb - s.com_[b]);
+      if (sa.shape.type == ShapeType::Sphere && sb.shape.type == ShapeType::Sphere) {
+        touch_normal(ca, va, cb, vb, sa.shape.radius, sb.shape.radius, s.last_dt_, pair_manifold);
+      } else {
+        Vec3 a0, a1, b0, b1;
+        core_segment(sa.shape, pose_a, a0, a1), core_segment(sb.shape, pose_b, b0, b1);
+        touch_cores(a0, a1, va, b0, b1, vb, sa.shape.radius, sb.shape.radius, s.last_dt_, pair_manifold);
+      }
     }
     if (pair_manifold.count > 0) keep(pair_manifold, false);
   }
@@ -2191,7 +2267,7 @@ void RigidContacts::emit(RigidBodySystem& s, const ShapePair& p, std::uint32_t r
     c.restitution = r.mixed_restitution;
     c.rolling = r.mixed_rolling;
     c.count = r.count;
-    c.balls = p.type_a == ShapeType::Sphere && p.type_b == ShapeType::Sphere ? 1u : 0u;  // (the shapes' kinds)
+    c.balls = rounded(p.type_a) && rounded(p.type_b) && r.count == 1 ? 1u : 0u;  // (the shapes' kinds)
     if (pair_points.size() <= at_index) pair_points.resize(pairs.capacity());  // (grows with the pairs)
     pair_points[at_index] = static_cast<std::uint8_t>(r.count);
   }

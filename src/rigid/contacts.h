@@ -81,10 +81,10 @@ struct alignas(64) ContactPair {
   Vec3 ca{0, 0, 0};           // friction anchor (the points' centroid) from a's centre of mass (m)
   double twist_radius = 0;    // mean distance of the points from the centroid (m)
   int count = 0;              // points
-  // 1 for two balls: the solver's lever arms go from each ball's centre along the normal (the
-  // tangential parts of the points' sa, sb: fill_lanes, xpbd_rigid.cpp's levers), not to the
-  // shared point `at`, which lies off the line of centres when the normal is the touch's
-  // (touch_normal), so a frictionless push has no moment about either centre; else 0
+  // 1 for two balls, or a ball or capsule and a capsule, with one point: the lever arms go from each core point
+  // (a ball's centre, a point of a capsule's axis) along the normal (the tangential parts of the points' sa, sb:
+  // fill_lanes, xpbd_rigid.cpp's levers), not to the shared point `at`, off the cores' line when the normal is
+  // the touch's (touch_normal, touch_cores), so a frictionless push has no moment about either core; else 0
   std::uint32_t balls = 0;
   // ---- lines 4-8: the points; line 9: their overlaps and feature ids, which the fill does not read
   SolverPoint points[Manifold::kMaxPoints];
