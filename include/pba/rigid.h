@@ -272,8 +272,10 @@ struct ContactSettings {
   /// Approach speeds (m/s) below this bounce with no restitution, so resting bodies stay put
   /// (finite and >= 0; XPBD also at speeds below 2 |g| h, Mueller et al. 2020).
   double restitution_threshold = 1;
-  MixRule friction_mix = MixRule::GeometricMean;   ///< how friction coefficients combine
-  MixRule restitution_mix = MixRule::Maximum;      ///< how restitutions combine
+  /// how friction coefficients combine (a value outside the enum is refused by name)
+  MixRule friction_mix = MixRule::GeometricMean;
+  /// how restitutions combine (a value outside the enum is refused by name)
+  MixRule restitution_mix = MixRule::Maximum;
   bool warm_starting = true;     ///< start from last step's impulses (matched by feature id)
   /// Let resting islands (bodies linked by touching contacts) fall asleep: an island whose
   /// every body has moved slower than the tolerances for `time_to_sleep` stops being

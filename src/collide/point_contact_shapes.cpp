@@ -7,6 +7,7 @@
 
 #include "hull_face.h"
 #include "point_contact.h"
+#include "query_internal.h"
 
 namespace pba::detail {
 
@@ -317,7 +318,7 @@ bool hull_contact(const Collider& c, const Vec3& x, double th, double f, PointCo
     set_point(c, p, p.rotation * n, th - sep, x, out);
     return true;
   }
-  const PointDistance d = point_distance(c.shape, p, x);
+  const PointDistance d = query::point_distance_unchecked(c.shape, p, x);
   if (!(d.distance < th)) return false;
   set_point(c, p, d.normal, th - d.distance, x, out);
   return true;

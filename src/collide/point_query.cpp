@@ -7,6 +7,7 @@
 #include "hull_face.h"
 #include "narrow_internal.h"
 #include "pba/collide/shape.h"
+#include "query_internal.h"
 
 namespace pba {
 
@@ -147,13 +148,23 @@ PointDistance mesh_distance(const Vec3& x, const TriangleMesh& m) {
 }  // namespace
 
 PointDistance point_distance(const ColliderShape& s, const Pose& p, const Vec3& world_point) {
+  // a NaN point gave a box's distance as -inf (deep inside), a NaN pose NaN, a point beyond
+  // a float's range an infinite distance at the shape's centre: refused by name, as the
+  // QueryWorld's closest_point() refuses them (the library's own callers, whose points and
+  // poses are checked where they come in, take the unchecked query::point_distance_unchecked)
+  if (!fits_float(world_point)) require_float(world_point, "point_distance(world_point)");
+  query::check_pose(p, "point_distance(pose)");
+  return query::point_distance_unchecked(s, p, world_point);
+}
+
+PointDistance query::point_distance_unchecked(const ColliderShape& s, const Pose& p, const Vec3& world_point) {
   if (s.type == ShapeType::Compound) {
     // the nearest child; the feature is the child's index
     const auto& ch = s.compound->children;
     PointDistance best;
     best.distance = kInf;
     for (std::uint32_t i = 0; i < ch.size(); ++i) {
-      PointDistance d = point_distance(ch[i].shape, compose(p, ch[i].pose), world_point);
+      PointDistance d = point_distance_unchecked(ch[i].shape, compose(p, ch[i].pose), world_point);
       if (d.distance < best.distance) best = d, best.feature = i;
     }
     return best;

@@ -30,6 +30,9 @@ Ray checked_ray(const Ray& r, std::string_view where);
 /// pba::ray_cast() on a ray already checked (checked_ray: finite origin, unit direction,
 /// max_distance >= 0), for the world queries' candidates: the same hit, without the check.
 RayHit ray_cast_unit(const ColliderShape& s, const Pose& p, const Ray& ray);
+/// pba::point_distance() without its checks of the point and the pose, for the library's
+/// callers whose points and poses are checked where they come in (the same result).
+PointDistance point_distance_unchecked(const ColliderShape& s, const Pose& p, const Vec3& world_point);
 /// Throws Error naming `where` unless `s` is a valid convex shape at a valid pose `p`.
 void check_convex(const ColliderShape& s, const Pose& p, std::string_view where);
 

@@ -117,7 +117,7 @@ Cast sphere_box(const Vec3& o, const Vec3& d, const Vec3& h, double r, double ma
 
 // a sphere's overlap at its start: the closest point on the target, the normal -d
 Cast overlap_at_start(const ColliderShape& s, const Pose& p, const Vec3& o, const Vec3& d) {
-  return {true, 0, point_distance(s, p, o).point, -d};
+  return {true, 0, query::point_distance_unchecked(s, p, o).point, -d};
 }
 
 // the sphere of radius r whose centre moves along `path` against a sphere, capsule, box or
@@ -398,7 +398,7 @@ QueryDistance QueryWorld::closest_point(const Vec3& point, double max_distance, 
   };
   auto test = [&](std::uint32_t i) {
     if (query::box_distance2(bounds_[i], at) > bound2() || !accepts(filter, i)) return;
-    const PointDistance pd = point_distance(shapes_[i], poses_[i], point);
+    const PointDistance pd = query::point_distance_unchecked(shapes_[i], poses_[i], point);
     if (pd.distance <= max_distance && first(best.found, pd.distance, i, best.distance, best.collider))
       best = {true, pd.distance, pd.point, point, pd.normal, i, owners_[i]};
   };

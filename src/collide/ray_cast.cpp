@@ -241,6 +241,8 @@ RayHit ray_cast_unit(const ColliderShape& s, const Pose& p, const Ray& ray) {
 // origin or direction, a zero direction or a negative max_distance is an Error (a NaN origin
 // used to be a silent miss).
 RayHit ray_cast(const ColliderShape& s, const Pose& p, const Ray& ray) {
+  // a NaN pose missed silently, a non-unit rotation scaled the shape: refused by name
+  query::check_pose(p, "ray_cast(pose)");
   return query::ray_cast_unit(s, p, query::checked_ray(ray, "ray_cast(ray)"));
 }
 

@@ -103,6 +103,11 @@ RigidSolverType parse_rigid_solver(std::string_view text, std::string_view where
 void ContactSettings::validate(std::string_view where) const {
   if (static_cast<std::size_t>(solver) >= kRigidSolvers.size())
     throw Error(field_path(where, "solver") + ": unknown solver " + std::to_string(static_cast<int>(solver)));
+  // a MixRule cast from a number outside the enum mixed as "the first shape's value" unnoticed
+  for (const auto& [rule, name] : {std::pair{friction_mix, "friction_mix"}, std::pair{restitution_mix, "restitution_mix"}})
+    if (static_cast<int>(rule) > static_cast<int>(MixRule::Product))
+      throw Error(field_path(where, name) + ": unknown mix rule " + std::to_string(static_cast<int>(rule)) +
+                  " (valid: 0 geometric mean, 1 minimum, 2 maximum, 3 average, 4 product)");
   require_count(substeps, 1, 64, field_path(where, "substeps"));
   require_count(iterations, 1, 1000, field_path(where, "iterations"));
   require_count(substep_iterations, 1, 100, field_path(where, "substep_iterations"));

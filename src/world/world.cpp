@@ -9,6 +9,7 @@
 #include "pba/collide/narrow_phase.h"
 #include "pba/world.h"
 
+#include "collide/query_internal.h"
 #include "core/squarable.h"
 
 namespace pba {
@@ -1195,7 +1196,7 @@ void World::update_particle_touches() {
       if (o == CollisionWorld::kNoOwner || o == e || !entities_.valid({o, entities_.generation(o)})) continue;
       const Collider& c = colliders[k];
       if (!sphere_in_bounds(bounds(c.shape, c.end), x, r)) continue;
-      const PointDistance d = point_distance(c.shape, c.end, x);
+      const PointDistance d = query::point_distance_unchecked(c.shape, c.end, x);
       if (!(d.distance <= r)) continue;
       const Vec3 surface = c.velocity + glm::cross(c.angular_velocity, d.point - c.end.position);
       const double vn = glm::dot(v - surface, d.normal);
@@ -1301,7 +1302,7 @@ void World::update_sensor_events() {
     auto overlaps = [&](std::size_t p) {
       const Vec3 x = particles_.position(p);
       const double r = particles_.radius(p);
-      return sphere_in_bounds(sb, x, r) && point_distance(sc.shape, sc.end, x).distance <= r;
+      return sphere_in_bounds(sb, x, r) && query::point_distance_unchecked(sc.shape, sc.end, x).distance <= r;
     };
     // particle entities
     for (std::uint32_t e = 0; e < records_.size(); ++e) {

@@ -214,4 +214,34 @@ TEST(CollidePoint, CompoundIsTheNearestChild) {
   EXPECT_NEAR(in.distance, -0.25, 1e-15);
 }
 
+// A point or a pose that is not a number, beyond a float's range or not a rotation is
+// refused by name, as QueryWorld::closest_point() refuses it. Before 2026-12-07 a NaN point
+// gave a box's distance as -inf (deep inside it), a NaN pose a NaN distance, and a point at
+// 1e300 m an infinite distance with the sphere's centre as its closest point.
+TEST(CollidePoint, BadPointsAndPosesAreErrorsNamingTheArgument) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const ColliderShape shapes[] = {ColliderShape::sphere(1), ColliderShape::box(Vec3(1)), ColliderShape::capsule(0.5, 0.5)};
+  auto message = [](auto f) {
+    try {
+      f();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  for (const ColliderShape& s : shapes) {
+    EXPECT_NE(message([&] { point_distance(s, Pose{}, Vec3(nan, 0, 0)); }).find("point_distance(world_point)"),
+              std::string::npos) << to_string(s.type);
+    EXPECT_NE(message([&] { point_distance(s, Pose{}, Vec3(1e300, 0, 0)); }).find("point_distance(world_point)"),
+              std::string::npos) << to_string(s.type);
+    EXPECT_NE(message([&] { point_distance(s, Pose{{nan, 0, 0}}, Vec3(3, 0, 0)); }).find("point_distance(pose).position"),
+              std::string::npos) << to_string(s.type);
+    EXPECT_NE(message([&] { point_distance(s, Pose{{0, 0, 0}, Quat(2, 0, 0, 0)}, Vec3(3, 0, 0)); })
+                  .find("point_distance(pose).rotation"),
+              std::string::npos) << to_string(s.type);
+    // the float range's edge is still a point: 3e38 m from a unit shape at the origin
+    EXPECT_NEAR(point_distance(s, Pose{}, Vec3(3e38, 0, 0)).distance, 3e38, 1e23) << to_string(s.type);
+  }
+}
+
 }  // namespace

@@ -246,6 +246,16 @@ TEST(CollideRay, AnyDirectionLengthHitsAsTheUnitOneAndBadRaysAreErrors) {
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find("ray_cast(ray).direction"), std::string::npos) << e.what();
     }
+    // a pose that is not a number or not a rotation is refused by name too (a NaN pose
+    // missed silently, a rotation of length 2 scaled the shape, before 2026-12-07)
+    for (const Pose& bad : {Pose{Vec3(nan, 0, 0)}, Pose{Vec3(0), Quat(2, 0, 0, 0)}, Pose{Vec3(0), Quat(0, 0, 0, 0)}}) {
+      try {
+        ray_cast(s, bad, Ray{o, Vec3(0, -1, 0), 10});
+        ADD_FAILURE() << to_string(s.type) << ": no error for a bad pose";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("ray_cast(pose)"), std::string::npos) << e.what();
+      }
+    }
   }
 }
 

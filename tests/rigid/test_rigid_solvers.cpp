@@ -47,6 +47,19 @@ TEST(RigidSolvers, NewSettingsAreValidatedByName) {
   EXPECT_NE(msg({.contact_compliance = NAN}).find("contact_compliance"), std::string::npos);
   EXPECT_NE(msg({.solver = static_cast<RigidSolverType>(9)}).find("contacts.solver: unknown solver 9"),
             std::string::npos);
+  // a mix rule outside the enum (a cast from a number) is refused by name, at construction
+  // and between steps; it mixed as the first shape's coefficient before 2026-12-07
+  EXPECT_NE(msg({.friction_mix = static_cast<pba::MixRule>(42)}).find("contacts.friction_mix: unknown mix rule 42"),
+            std::string::npos);
+  EXPECT_NE(msg({.restitution_mix = static_cast<pba::MixRule>(5)}).find("contacts.restitution_mix: unknown mix rule 5"),
+            std::string::npos);
+  EXPECT_EQ(msg({.friction_mix = pba::MixRule::Product, .restitution_mix = pba::MixRule::Product}), "");
+  {
+    RigidBodySystem m;
+    m.settings().restitution_mix = static_cast<pba::MixRule>(200);
+    EXPECT_NE(error_of([&] { m.step(1.0 / 60, kGravity); }).find("settings.restitution_mix: unknown mix rule 200"),
+              std::string::npos);
+  }
   // and between steps, by the settings' name
   RigidBodySystem s;
   s.settings().solver = RigidSolverType::Xpbd;

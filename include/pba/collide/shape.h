@@ -380,7 +380,10 @@ struct PointDistance {
 /// closest point and its normal (exact for every shape; a compound gives the nearest
 /// child's, which is exact outside and the deepest child's depth inside). A point at the
 /// centre of a sphere or on a capsule's core takes the local +Y normal; a point on a mesh
-/// takes the triangle's normal.
+/// takes the triangle's normal. Throws pba::Error naming the argument for a point that is not
+/// finite or beyond a float's range (|component| > 3.4e38 m, as QueryWorld::closest_point),
+/// or a pose whose position is so or whose rotation is not unit (to 1e-6)
+/// ("point_distance(pose).rotation: ...").
 PointDistance point_distance(const ColliderShape& s, const Pose& p, const Vec3& world_point);
 
 /// Casts a ray (world frame) against the shape at pose `p`. The direction need not be
@@ -388,7 +391,8 @@ PointDistance point_distance(const ColliderShape& s, const Pose& p, const Vec3& 
 /// the hits equal the QueryWorld's bit for bit), and distance and max_distance are metres
 /// along it whatever its length. A non-finite origin or direction, a zero direction or a
 /// max_distance that is negative or not finite throws pba::Error naming the field
-/// ("ray_cast(ray).direction: ..."). A ray starting inside a solid hits at distance 0 with
+/// ("ray_cast(ray).direction: ..."), and so does a pose whose position is not finite or
+/// beyond a float's range or whose rotation is not unit to 1e-6 ("ray_cast(pose).rotation"). A ray starting inside a solid hits at distance 0 with
 /// the normal exactly minus the normalised direction. The feature is the face of a box
 /// (ConvexHull::box order) or hull, the triangle of a mesh (two-sided: the normal faces
 /// the ray; the closest hit, ties to the lower index), the child of a compound. Never
