@@ -332,7 +332,7 @@ struct RigidContacts {
   // a bullet's path reaches (dense indices), swept against at their poses at the step's end
   std::vector<std::uint32_t> bullet_targets;
   std::vector<std::uint32_t> late_bullets;  // scratch of continuous(): the awake bullets, swept last
-  // scratch of continuous(), made once a step that has bullets (bullet_targets_prepare): the
+  // scratch of continuous(), made once a step that has bullets (prepare_targets): the
   // moving non-bullet bodies whose bounding box at the step's end (their centre of mass +-
   // their reach) sticks out of every one of their shapes' fat boxes in the tree by more than
   // kTargetSlack, or that have no shape in the tree (dense indices, ascending): each bullet tests

@@ -223,7 +223,10 @@ __attribute__((target("avx2"))) int slow4_avx2(const Quat* q, const Quat* q0, co
 // `c` with its reach `r` on every side (m)
 Aabb end_box(const Vec3& c, double r) { return {c - Vec3(r), c + Vec3(r)}; }
 
-// how far (m) box `b` sticks out of box `fat` on its farthest side (0 when inside; NaN stays NaN)
+// how far (m) box `b` sticks out of box `fat` on its farthest side (0 when inside). A NaN
+// coordinate does not carry through: std::max keeps the first of the largest, and no comparison
+// with a NaN is true, so the NaN sides are skipped. That changes no target: a box with a NaN
+// corner overlaps() nothing, so neither the tree's way nor the scan takes its body.
 double sticks_out(const Aabb& b, const Aabb& fat) {
   const Vec3 lo = fat.lo - b.lo, hi = b.hi - fat.hi;
   return std::max({0.0, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
@@ -258,7 +261,7 @@ void RigidContacts::prepare_targets(const RigidBodySystem& s) {
     if (least <= kTargetSlack)
       target_excess = std::max(target_excess, least);
     else
-      loose_targets.push_back(static_cast<std::uint32_t>(j));  // (NaN too: tested directly, as the scan did)
+      loose_targets.push_back(static_cast<std::uint32_t>(j));
   }
 }
 
@@ -314,6 +317,8 @@ void RigidContacts::continuous(RigidBodySystem& s) {
   for (std::size_t k = 0; k < n + late_bullets.size(); ++k) {
     const bool late = k >= n;
     const std::size_t i = late ? late_bullets[k - n] : k;
+    // once a step with bullets, before the first of them, whatever it skips
+    if (k == n) prepare_targets(s);
     if (s.type_[i] != BodyType::Dynamic || s.asleep_[i]) continue;
     if (!late && s.bullet_[i]) {
       late_bullets.push_back(static_cast<std::uint32_t>(i));
@@ -373,10 +378,7 @@ void RigidContacts::continuous(RigidBodySystem& s) {
       // whose bounding boxes about their centres of mass at the step's end (reach on every
       // side) the path reaches, found through the broad phase's tree (see find_targets)
       bullet_targets.clear();
-      if (late) {
-        if (k == n) prepare_targets(s);
-        find_targets(s, i, path);
-      }
+      if (late) find_targets(s, i, path);
       if (near == statics.size() && bullet_targets.empty()) continue;
     }
     // (every field in the braces, none written twice: made with zeros for the angle and the

@@ -1429,7 +1429,7 @@ TEST(RigidDeterminism, SameInputsSameBitsPinnedPerSolver) {
   EXPECT_EQ(soft, 0x02b3ea33af8fd58aull) << std::hex << soft;
   EXPECT_EQ(si, 0xa79c906b21f6e86cull) << std::hex << si;
   EXPECT_EQ(tgs, 0x28634e1bc006c629ull) << std::hex << tgs;
-  EXPECT_EQ(xpbd, 0x7cd20c6e3f6a971aull) << std::hex << xpbd;
+  EXPECT_EQ(xpbd, 0x0f10f3b5996d53fcull) << std::hex << xpbd;
 }
 
 }  // namespace

@@ -485,6 +485,10 @@ TEST(RigidContinuous, ABulletHitsABodyCrossingItsPath) {
 TEST(RigidContinuous, TheBroadPhaseFindsEveryMovingTargetTheScanFinds) {
   using pba::detail::RigidContacts;
   RigidContacts::check_bullet_targets = true;
+  // (off again however the test ends, a throw too: the flag is static and other tests run after)
+  struct CheckOff {
+    ~CheckOff() { RigidContacts::check_bullet_targets = false; }
+  } check_off;
   RigidContacts::checked_targets = 0;
   std::size_t bullets_hit = 0;
   for (const RigidSolverType solver : pba::kRigidSolvers)
@@ -531,7 +535,6 @@ TEST(RigidContinuous, TheBroadPhaseFindsEveryMovingTargetTheScanFinds) {
       for (int i = 0; i < 90; ++i) s.step(1.0 / 60, Vec3(0, -9.81, 0));
       bullets_hit += RigidContacts::checked_targets > before;
     }
-  RigidContacts::check_bullet_targets = false;
   EXPECT_GT(RigidContacts::checked_targets, 1000u);
   EXPECT_EQ(bullets_hit, 16u);  // every scene's bullets had targets
 }
