@@ -952,13 +952,18 @@ void RigidContacts::build(RigidBodySystem& s) {
   one_blocks = next_one;
   for (std::size_t c = 0; c < colors; ++c) s.profile_.one_point += ones_of_color[c];
   const auto spare = static_cast<std::uint32_t>(s.type_.size());
+  // the empty lanes past a block's lane type's last group: those below it, fill_block's lane
+  // type writes and then clears itself (by the same clear_lane, so the same bits), and nothing
+  // reads them in between; cleared here as well, they were written twice a step
+  const int width = simd == SimdPath::Avx512 ? 8 : simd == SimdPath::Avx2 ? 4 : 1;
   auto lay_out = [&](auto* array, auto* anchor_array, std::size_t from, std::size_t to, std::uint32_t left) {
     for (std::size_t b = from; b < to; ++b) {
       auto& k = array[b];
       k.lanes = static_cast<int>(std::min<std::uint32_t>(left, kLanes));
       left -= static_cast<std::uint32_t>(k.lanes);
       if (!kept) k.write_a = k.write_b = 0;  // (kept: last step's, which fill_block leaves)
-      for (int l = k.lanes; l < kLanes; ++l) clear_lane(k, anchor_array[b], l, spare);
+      for (int l = std::min((k.lanes + width - 1) / width * width, kLanes); l < kLanes; ++l)
+        clear_lane(k, anchor_array[b], l, spare);
     }
   };
   for (std::size_t c = 0; c <= colors; ++c) {
