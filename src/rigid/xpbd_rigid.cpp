@@ -553,7 +553,7 @@ void RigidContacts::step_xpbd(RigidBodySystem& s, double dt, const Vec3& gravity
     // 120 m/s had its contacts' corrections turned through an inverse inertia its own had
     // left: each substep's turn, kept as an angular velocity by step 3, came out along a light
     // axis, and it spun up fiftyfold a substep to 2e8 rad/s within one 60 Hz step
-    // (RigidXpbd.AThinBoxTumblingIntoABoxDoesNotSpinUp)
+    // (RigidSolvers.AThinBoxTumblingIntoABoxDoesNotSpinUp)
     refresh_inertia(s);
     for (std::size_t i = 0; i < n; ++i) x_free[i] = s.com_[i], q_free[i] = s.q_[i];
     for (XpbdPair& x : xpbd) {
